@@ -1,0 +1,300 @@
+"""K-means and the cluster-count selection of the paper's eq. (2).
+
+State generation clusters a handful of placements thousands of times (every
+object × every candidate reference × every cluster count), so K-means here is
+a small vectorised NumPy implementation that runs all seeded restarts at once;
+scikit-learn's ``KMeans`` is used as a cross-check in the tests only (it costs
+~10 ms a call on such data against well under 1 ms here, see
+``benchmarks/learning.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from demoplan import rotations
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+__all__ = [
+    "Clustering",
+    "KMeansResult",
+    "PositionSpace",
+    "RotationSpace",
+    "Space",
+    "kmeans",
+    "select_clustering",
+    "spread_of",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class KMeansResult:
+    """Best of the restarts: labels ``(n,)``, centres ``(c, d)``, inertia (sum of squares)."""
+
+    labels: IntArray
+    centres: FloatArray
+    inertia: float
+
+
+def kmeans(
+    points: FloatArray,
+    n_clusters: int,
+    *,
+    n_init: int = 4,
+    max_iter: int = 100,
+    rng: np.random.Generator | int | None = None,
+) -> KMeansResult:
+    """Lloyd's K-means with k-means++ seeding, all ``n_init`` restarts vectorised.
+
+    Parameters
+    ----------
+    points : array of shape (n, d)
+    n_clusters : number of clusters c, ``1 <= c <= n``
+    n_init : number of seeded restarts run side by side; the lowest inertia wins
+    rng : generator or seed for the k-means++ seeding
+    """
+    x = np.asarray(points, dtype=float)
+    n = x.shape[0]
+    if not 1 <= n_clusters <= n:
+        raise ValueError(f"n_clusters must be in 1..{n}, got {n_clusters}")
+    if n_clusters == 1:
+        centre = x.mean(axis=0, keepdims=True)
+        return KMeansResult(np.zeros(n, dtype=np.intp), centre, float(((x - centre) ** 2).sum()))
+    generator = np.random.default_rng(rng)
+    sq_norms = (x * x).sum(axis=1)
+    centres = _kmeans_plus_plus(x, sq_norms, n_clusters, n_init, generator)
+    restarts = np.arange(n_init)[:, None]
+    labels = np.full((n_init, n), -1, dtype=np.intp)
+    for _ in range(max_iter):
+        # Squared distances (restarts, n, c) without forming differences.
+        dist = (
+            sq_norms[None, :, None]
+            - 2.0 * np.einsum("nd,rcd->rnc", x, centres)
+            + (centres * centres).sum(axis=2)[:, None, :]
+        )
+        new_labels = dist.argmin(axis=2)
+        if np.array_equal(new_labels, labels):
+            break
+        labels = new_labels
+        one_hot = np.zeros((n_init, n, n_clusters))
+        one_hot[restarts, np.arange(n)[None, :], labels] = 1.0
+        counts = one_hot.sum(axis=1)
+        sums = np.einsum("rnc,nd->rcd", one_hot, x)
+        empty = counts == 0
+        if empty.any():
+            # Re-seed an empty cluster at the point farthest from its centre.
+            nearest = dist[restarts, np.arange(n)[None, :], labels]
+            for r, c in zip(*np.nonzero(empty), strict=True):
+                far = int(nearest[r].argmax())
+                sums[r, c] = x[far]
+                counts[r, c] = 1.0
+                nearest[r, far] = -1.0
+        centres = sums / counts[:, :, None]
+    diffs = x[None, :, :] - centres[restarts, labels]
+    inertia = (diffs * diffs).sum(axis=(1, 2))
+    best = int(inertia.argmin())
+    return KMeansResult(labels[best].copy(), centres[best].copy(), float(inertia[best]))
+
+
+def _kmeans_plus_plus(
+    x: FloatArray,
+    sq_norms: FloatArray,
+    n_clusters: int,
+    n_init: int,
+    generator: np.random.Generator,
+) -> FloatArray:
+    n, d = x.shape
+    centres = np.empty((n_init, n_clusters, d))
+    first = generator.integers(n, size=n_init)
+    centres[:, 0] = x[first]
+    closest = ((x[None, :, :] - centres[:, :1]) ** 2).sum(axis=2)
+    for k in range(1, n_clusters):
+        totals = closest.sum(axis=1, keepdims=True)
+        u = generator.random((n_init, 1)) * totals
+        cumulative = np.cumsum(closest, axis=1)
+        pick = (cumulative < u).sum(axis=1)
+        # All points coincide with chosen centres: pick any not yet chosen.
+        degenerate = totals[:, 0] <= 0
+        pick[degenerate] = k % n
+        pick = np.minimum(pick, n - 1)
+        centres[:, k] = x[pick]
+        new = sq_norms[None, :] - 2.0 * np.einsum("nd,rd->rn", x, centres[:, k])
+        new += (centres[:, k] ** 2).sum(axis=1)[:, None]
+        closest = np.minimum(closest, np.maximum(new, 0.0))
+    return centres
+
+
+def spread_of(deviations: FloatArray) -> float:
+    """Trace of the sample covariance (n − 1 in the denominator); 0 for one sample.
+
+    The SPEC's reading of the paper's |cov|: the determinant degenerates when
+    there are no more demonstrations than dimensions, the trace does not.
+    """
+    n = deviations.shape[0]
+    if n < 2:
+        return 0.0
+    centred = deviations - deviations.mean(axis=0)
+    return float((centred * centred).sum() / (n - 1))
+
+
+class Space:
+    """Values to cluster: their K-means embedding, cluster means and spreads."""
+
+    embedded: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.embedded.shape[0])
+
+    def stats(self, members: IntArray) -> tuple[tuple[float, ...], float]:
+        """Mean and spread of the values at ``members``."""
+        raise NotImplementedError
+
+    def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
+        """Distance between two means (for the separation threshold)."""
+        raise NotImplementedError
+
+
+class PositionSpace(Space):
+    """Relative positions ``(n, 3)`` in metres; spread in m²."""
+
+    def __init__(self, values: FloatArray):
+        self.values = np.asarray(values, dtype=float)
+        self.embedded = self.values
+
+    def stats(self, members: IntArray) -> tuple[tuple[float, ...], float]:
+        subset = self.values[members]
+        mean = subset.mean(axis=0)
+        return tuple(float(v) for v in mean), spread_of(subset)
+
+    def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
+        return math.dist(a, b)
+
+
+class RotationSpace(Space):
+    """Relative orientations ``(n, 4)`` as quaternions; spread in deg².
+
+    Clustered in the chordal embedding (flattened matrices); a cluster's mean
+    is the chordal L2 mean rotation and its spread the trace of the sample
+    covariance of the members' rotation vectors about that mean (degrees).
+    """
+
+    def __init__(self, quats: FloatArray):
+        self.values = np.asarray(quats, dtype=float)
+        self.embedded = rotations.matrices_from_quats(self.values)
+
+    def stats(self, members: IntArray) -> tuple[tuple[float, ...], float]:
+        subset = self.values[members]
+        mean = rotations.mean_quat(subset)
+        return mean, spread_of(rotations.deviations_from_mean(subset, mean))
+
+    def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
+        return rotations.angle_between(a, b)
+
+
+@dataclass(frozen=True, slots=True)
+class Clustering:
+    """The chosen clustering of one object's placements towards one reference.
+
+    ``score`` is the paper's eq. (2) inner term: the largest per-cluster spread.
+    ``tried`` maps each cluster count that was evaluated to its score, or to
+    ``None`` when its centres lay closer than the separation threshold.
+    """
+
+    n_clusters: int
+    labels: tuple[int, ...]
+    means: tuple[tuple[float, ...], ...]
+    spreads: tuple[float, ...]
+    score: float
+    tried: tuple[tuple[int, float | None], ...]
+
+
+def select_clustering(
+    space: Space,
+    *,
+    separation: float,
+    noise: float,
+    n_init: int = 4,
+    seed: int = 0,
+) -> Clustering:
+    """Pick the cluster count c ∈ 1..N for one reference (paper eq. 2).
+
+    For c = 1, 2, … the values are clustered with K-means; a clustering whose
+    means lie closer than ``separation`` is rejected, and the one with the
+    lowest maximum per-cluster spread wins. Spreads whose square roots (RMS
+    deviations) differ by less than ``noise`` are ties, and ties go to fewer
+    clusters. The scan stops at the first rejected c (more centres on the
+    same data only crowd closer) and once a score is below the noise level
+    (no larger c could then win); ``tests/test_clustering.py`` checks this
+    against the full scan.
+
+    The values are put in a canonical (sorted) order before clustering, so the
+    result does not depend on the order the demonstrations arrived in.
+    """
+    order = np.lexsort(space.embedded.T[::-1])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(order.size)
+    canonical = space.embedded[order]
+    n = len(space)
+    n_distinct = len(np.unique(np.round(canonical, 12), axis=0))
+
+    candidates: list[tuple[int, IntArray, list[tuple[float, ...]], list[float]]] = []
+    tried: list[tuple[int, float | None]] = []
+    for c in range(1, n + 1):
+        if c > n_distinct:
+            break
+        if c == 1:
+            sorted_labels = np.zeros(n, dtype=np.intp)
+        else:
+            sorted_labels = kmeans(canonical, c, n_init=n_init, rng=seed + c).labels
+        # Compact the labels in case a restart ended with an empty cluster.
+        _, labels = np.unique(sorted_labels[inverse], return_inverse=True)
+        means, spreads = _cluster_stats(space, labels, int(labels.max()) + 1)
+        if c > 1 and _closest_pair(space.distance, means) < separation:
+            tried.append((c, None))
+            break
+        score = max(spreads)
+        tried.append((c, score))
+        candidates.append((c, labels, means, spreads))
+        if math.sqrt(score) < noise:
+            break
+
+    best_root = min(math.sqrt(max(s)) for _, _, _, s in candidates)
+    for c, labels, means, spreads in candidates:  # ascending c: ties go to fewer clusters
+        if math.sqrt(max(spreads)) - best_root < noise:
+            return Clustering(
+                n_clusters=c,
+                labels=tuple(int(v) for v in labels),
+                means=tuple(means),
+                spreads=tuple(spreads),
+                score=max(spreads),
+                tried=tuple(tried),
+            )
+    raise AssertionError("unreachable: the minimum is always within noise of itself")
+
+
+def _cluster_stats(
+    space: Space, labels: IntArray, n_clusters: int
+) -> tuple[list[tuple[float, ...]], list[float]]:
+    means: list[tuple[float, ...]] = []
+    spreads: list[float] = []
+    for k in range(n_clusters):
+        mean, spread = space.stats(np.flatnonzero(labels == k))
+        means.append(mean)
+        spreads.append(spread)
+    return means, spreads
+
+
+def _closest_pair(
+    distance: Callable[[Sequence[float], Sequence[float]], float],
+    means: Sequence[Sequence[float]],
+) -> float:
+    return min(
+        distance(means[a], means[b]) for a in range(len(means)) for b in range(a + 1, len(means))
+    )

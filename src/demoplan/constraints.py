@@ -1,0 +1,152 @@
+"""Task generalization (paper §IV.B, Fig. 2; SPEC §5).
+
+Every ordered pair (X, Y) with X before Y in some demonstration is a
+constraint "X before Y"; a pair also seen in the other order, in any
+demonstration, is contradicted and removed for good, so the result does not
+depend on the order the demonstrations arrive in. Redundant (transitive)
+constraints are kept: the paper notes they prune the planner's search.
+
+Repeated moves of one object in a demonstration (Table I: the knife goes up
+and down while cutting) visit the same state several times. Each visit is
+numbered — the first is the state id itself, later ones ``C#2``, ``C#3`` — and
+constraints relate visits, so a demonstration never contradicts itself
+(C before D before C#2 rather than C < D and D < C).
+
+Teacher-given constraints (the journal version of the paper) are never
+removed; a learned constraint that reverses one is dropped, and a
+demonstration that contradicts one is reported.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from demoplan.errors import InputError
+from demoplan.model import State, visit_label
+
+__all__ = [
+    "ConstraintSet",
+    "goal_states",
+    "learn_constraints",
+    "ordered_pairs",
+    "parse_requirements",
+    "visit_sequence",
+]
+
+Pair = tuple[str, str]
+_REQUIREMENT = re.compile(r"^\s*([A-Za-z0-9_.\-#]+)\s*<\s*([A-Za-z0-9_.\-#]+)\s*$")
+
+
+@dataclass(frozen=True, slots=True)
+class ConstraintSet:
+    """Constraints over visit labels, and what the teacher's requirements found.
+
+    ``constraints`` : learned (uncontradicted) plus required pairs, sorted.
+    ``contradicted`` : pairs seen in both orders (each once, as (X, Y) with X < Y).
+    ``violations`` : ``(demonstration index, X, Y)`` where a required X < Y was
+    demonstrated the other way round.
+    """
+
+    constraints: tuple[Pair, ...]
+    contradicted: tuple[Pair, ...]
+    violations: tuple[tuple[int, str, str], ...]
+
+
+def visit_sequence(sequence: Sequence[str]) -> tuple[str, ...]:
+    """State ids → visit labels: ``A C D C`` → ``A C D C#2``."""
+    seen: dict[str, int] = {}
+    labels = []
+    for state in sequence:
+        seen[state] = seen.get(state, 0) + 1
+        labels.append(visit_label(state, seen[state]))
+    return tuple(labels)
+
+
+def ordered_pairs(sequence: Sequence[str]) -> set[Pair]:
+    """Every (X, Y) with X visited before Y in one demonstration."""
+    visits = visit_sequence(sequence)
+    return {(visits[a], visits[b]) for a in range(len(visits)) for b in range(a + 1, len(visits))}
+
+
+def learn_constraints(
+    sequences: Iterable[Sequence[str]], required: Iterable[Pair] = ()
+) -> ConstraintSet:
+    """Constraints from state sequences (paper §IV.B) plus teacher requirements."""
+    sequences = [tuple(s) for s in sequences]
+    seen: set[Pair] = set()
+    for sequence in sequences:
+        seen |= ordered_pairs(sequence)
+    contradicted = {pair for pair in seen if (pair[1], pair[0]) in seen}
+    required_set = set(required)
+    learned = seen - contradicted - {(y, x) for x, y in required_set}
+    violations = []
+    for index, sequence in enumerate(sequences):
+        demonstrated = ordered_pairs(sequence)
+        violations += [(index, x, y) for x, y in sorted(required_set) if (y, x) in demonstrated]
+    return ConstraintSet(
+        constraints=tuple(sorted(learned | required_set, key=_pair_key)),
+        contradicted=tuple(sorted({_unordered(p) for p in contradicted}, key=_pair_key)),
+        violations=tuple(violations),
+    )
+
+
+def goal_states(sequence: Sequence[str], states: Sequence[State]) -> tuple[str, ...]:
+    """The state set a demonstration ends in: each moved object's last state."""
+    object_of = {s.id: s.object for s in states}
+    last: dict[str, str] = {}
+    for state_id in sequence:
+        last[object_of[state_id]] = state_id
+    return tuple(sorted(set(last.values()), key=label_key))
+
+
+def parse_requirements(texts: Iterable[str], states: Sequence[State]) -> tuple[Pair, ...]:
+    """Teacher requirements ``"A<B"`` → pairs of visit labels.
+
+    Each side is a state id (``C``), a visit label (``C#2``) or an object name,
+    which stands for every state of that object (``plate<napkin``).
+    """
+    by_object: dict[str, list[str]] = {}
+    for state in states:
+        by_object.setdefault(state.object, []).append(state.id)
+    ids = {state.id for state in states}
+    pairs: set[Pair] = set()
+    for text in texts:
+        match = _REQUIREMENT.match(text)
+        if not match:
+            raise InputError(f"expected a requirement like 'A<B', got {text!r}", field="require")
+        sides = [_expand(token, ids, by_object, text) for token in match.groups()]
+        for x in sides[0]:
+            for y in sides[1]:
+                if x == y:
+                    raise InputError(f"{text!r} requires {x} before itself", field="require")
+                pairs.add((x, y))
+    return tuple(sorted(pairs, key=_pair_key))
+
+
+def _expand(token: str, ids: set[str], by_object: dict[str, list[str]], text: str) -> list[str]:
+    if token.split("#")[0] in ids:
+        return [token]
+    if token in by_object:
+        return by_object[token]
+    known = ", ".join(sorted(ids, key=label_key) + sorted(by_object))
+    raise InputError(
+        f"{text!r}: {token!r} is neither a state id nor an object (known: {known})",
+        field="require",
+    )
+
+
+def label_key(label: str) -> tuple[int, str, int]:
+    """Sort key of visit labels: A < B < … < Z < AA, and C < C#2 < C#3."""
+    state, _, occurrence = label.partition("#")
+    return (len(state), state, int(occurrence or 1))
+
+
+def _pair_key(pair: Pair) -> tuple[tuple[int, str, int], tuple[int, str, int]]:
+    return (label_key(pair[0]), label_key(pair[1]))
+
+
+def _unordered(pair: Pair) -> Pair:
+    a, b = pair
+    return (a, b) if label_key(a) <= label_key(b) else (b, a)

@@ -1,0 +1,245 @@
+"""Demonstration files (SPEC §3 ``demoplan/demonstration-1`` / ``demonstrations-1``).
+
+Files are validated with pydantic schemas; any problem becomes one
+:class:`~demoplan.errors.InputError` naming the file, the field and what was
+expected. Lengths are converted to metres (``"units": {"length": "cm"}``),
+orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
+from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw
+
+__all__ = [
+    "check_demonstrations",
+    "demonstration_to_dict",
+    "demonstrations_from_document",
+    "load_demonstrations",
+    "pose_from_dict",
+    "pose_to_dict",
+]
+
+_LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrations
+
+
+class _Schema(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class UnitsSchema(_Schema):
+    length: Literal["m", "cm", "mm"] = "m"
+    angle: Literal["deg", "rad"] = "deg"
+
+
+class PoseSchema(_Schema):
+    position: list[float] = Field(min_length=2, max_length=3)
+    yaw: float | None = None
+    rpy: list[float] | None = Field(default=None, min_length=3, max_length=3)
+    quat: list[float] | None = Field(default=None, min_length=4, max_length=4)
+
+    @model_validator(mode="after")
+    def _one_orientation(self) -> PoseSchema:
+        given = [k for k in ("yaw", "rpy", "quat") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give one orientation (yaw, rpy or quat), got {' and '.join(given)}")
+        if self.quat is not None and math.hypot(*self.quat) < 1e-9:
+            raise ValueError("quat must be a non-zero quaternion [x, y, z, w]")
+        return self
+
+
+class StepSchema(PoseSchema):
+    object: str = Field(min_length=1)
+
+
+class ObjectSchema(_Schema):
+    shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
+    size: list[float] = Field(min_length=3, max_length=3)
+
+    @field_validator("size")
+    @classmethod
+    def _positive(cls, size: list[float]) -> list[float]:
+        if any(v <= 0 for v in size):
+            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
+        return size
+
+
+class DemonstrationSchema(_Schema):
+    format: str | None = None
+    name: str | None = None
+    description: str | None = None
+    units: UnitsSchema = UnitsSchema()
+    objects: dict[str, ObjectSchema] = {}
+    landmarks: dict[str, PoseSchema] = {}
+    initial: dict[str, PoseSchema] = {}
+    steps: list[StepSchema] = Field(min_length=1)
+
+
+class DemonstrationsSchema(_Schema):
+    format: str
+    description: str | None = None
+    units: UnitsSchema | None = None
+    demonstrations: list[dict[str, Any]] = Field(min_length=1)
+
+
+def pose_from_dict(data: PoseSchema, units: UnitsSchema) -> Pose:
+    """A validated pose → :class:`Pose` in metres and a unit quaternion."""
+    scale = _LENGTH_SCALE[units.length]
+    x, y, *rest = (v * scale for v in data.position)
+    z = rest[0] if rest else 0.0
+    to_deg = math.degrees if units.angle == "rad" else float
+    orientation = None
+    if data.yaw is not None:
+        orientation = quat_from_yaw(to_deg(data.yaw))
+    elif data.rpy is not None:
+        orientation = quat_from_rpy([to_deg(v) for v in data.rpy])
+    elif data.quat is not None:
+        orientation = canonical_quat(data.quat)
+    return Pose(position=(x, y, z), orientation=orientation)
+
+
+def pose_to_dict(pose: Pose) -> dict[str, Any]:
+    """A pose as written by demoplan: metres, and ``quat`` (exact) when oriented."""
+    out: dict[str, Any] = {"position": list(pose.position)}
+    if pose.orientation is not None:
+        out["quat"] = list(pose.orientation)
+    return out
+
+
+def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
+    """A demonstration in the SPEC's file form (metres, quaternions)."""
+    out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
+    if demo.objects:
+        out["objects"] = {n: {"shape": g.shape, "size": list(g.size)} for n, g in demo.objects}
+    if demo.landmarks:
+        out["landmarks"] = {n: pose_to_dict(p) for n, p in demo.landmarks}
+    if demo.initial:
+        out["initial"] = {n: pose_to_dict(p) for n, p in demo.initial}
+    out["steps"] = [{"object": s.object, **pose_to_dict(s.pose)} for s in demo.steps]
+    return out
+
+
+def demonstrations_from_document(data: dict[str, Any], source: str) -> list[Demonstration]:
+    """Parse a ``demonstration-1`` or ``demonstrations-1`` document."""
+    kind, _ = check_format(data, {"demonstration", "demonstrations"}, source)
+    if kind == "demonstration":
+        return [_one(data, source, prefix="", default_name=Path(source).stem)]
+    try:
+        collection = DemonstrationsSchema.model_validate(data)
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source) from None
+    demos = []
+    for index, item in enumerate(collection.demonstrations):
+        if not isinstance(item, dict):
+            raise InputError(
+                "expected a demonstration object", source=source, field=f"demonstrations[{index}]"
+            )
+        if collection.units is not None and "units" not in item:
+            item = {**item, "units": collection.units.model_dump()}
+        if "format" in item:
+            check_format(item, {"demonstration"}, f"{source}: demonstrations[{index}]")
+        demos.append(
+            _one(item, source, f"demonstrations[{index}]", f"{Path(source).stem}-{index + 1}")
+        )
+    return demos
+
+
+def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> Demonstration:
+    try:
+        parsed = DemonstrationSchema.model_validate(data)
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source, prefix) from None
+    where = f"{prefix}." if prefix else ""
+    units = parsed.units
+    scale = _LENGTH_SCALE[units.length]
+    objects = tuple(
+        (name, ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale)))
+        for name, g in parsed.objects.items()
+    )
+    for index, step in enumerate(parsed.steps):
+        if parsed.objects and step.object not in parsed.objects:
+            raise InputError(
+                f"unknown object {step.object!r}; expected one of {sorted(parsed.objects)}",
+                source=source,
+                field=f"{where}steps[{index}].object",
+            )
+        if step.object in parsed.landmarks:
+            raise InputError(
+                f"{step.object!r} is a landmark (static) and cannot be moved",
+                source=source,
+                field=f"{where}steps[{index}].object",
+            )
+    steps = tuple(
+        Step(s.object, pose_from_dict(PoseSchema(**s.model_dump(exclude={"object"})), units))
+        for s in parsed.steps
+    )
+    return Demonstration(
+        name=parsed.name or default_name,
+        steps=steps,
+        objects=objects,
+        landmarks=tuple((n, pose_from_dict(p, units)) for n, p in parsed.landmarks.items()),
+        initial=tuple((n, pose_from_dict(p, units)) for n, p in parsed.initial.items()),
+        source=f"{source}: {prefix}" if prefix else source,
+    )
+
+
+def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
+    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order)."""
+    demos: list[Demonstration] = []
+    for path in map(Path, paths):
+        if path.is_dir():
+            files = sorted(
+                p for p in path.iterdir() if p.suffix.lower() in {".json", ".yaml", ".yml"}
+            )
+            if not files:
+                raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+        else:
+            files = [path]
+        for file in files:
+            demos += demonstrations_from_document(read_document(file), str(file))
+    check_demonstrations(demos)
+    return demos
+
+
+def check_demonstrations(demos: Sequence[Demonstration]) -> None:
+    """Cross-demonstration checks: at least one, consistent geometry, objects vs landmarks."""
+    if not demos:
+        raise InputError("no demonstrations given; at least one expected", field="demonstrations")
+    geometry: dict[str, tuple[ObjectGeometry, str]] = {}
+    landmarks: dict[str, str] = {}
+    for demo in demos:
+        source = demo.source or demo.name
+        for name, shape in demo.objects:
+            if name in geometry:
+                known, where = geometry[name]
+                if known.shape != shape.shape or any(
+                    abs(a - b) > GEOMETRY_TOLERANCE for a, b in zip(known.size, shape.size, strict=True)
+                ):
+                    raise InputError(
+                        f"{shape.shape} {list(shape.size)} differs from {known.shape} "
+                        f"{list(known.size)} in {where}; one geometry per object expected",
+                        source=source,
+                        field=f"objects.{name}",
+                    )
+            else:
+                geometry[name] = (shape, source)
+        for name, _ in demo.landmarks:
+            landmarks.setdefault(name, source)
+    for demo in demos:
+        for step in demo.steps:
+            if step.object in landmarks:
+                raise InputError(
+                    f"{step.object!r} is moved here but is a landmark in {landmarks[step.object]}",
+                    source=demo.source or demo.name,
+                    field="steps",
+                )

@@ -1,0 +1,166 @@
+"""Value types shared by every pipeline stage.
+
+Frozen, slotted dataclasses with tuples inside, so that values hash and
+compare. Positions are metres ``(x, y, z)`` in the world frame (z up, table
+top at z = 0, the point is the centre of the object's bottom face); orientations
+are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (SPEC §2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from demoplan.rotations import Quaternion, rpy_from_quat
+
+Vector3 = tuple[float, float, float]
+
+__all__ = [
+    "Demonstration",
+    "ObjectGeometry",
+    "Pose",
+    "State",
+    "StateOrientation",
+    "StatePosition",
+    "Step",
+    "TaskModel",
+    "Vector3",
+    "visit_label",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """An object's resting pose: position (m) and optional orientation."""
+
+    position: Vector3
+    orientation: Quaternion | None = None
+
+    @property
+    def rpy(self) -> tuple[float, float, float] | None:
+        """Orientation as extrinsic x-y-z Euler angles in degrees, or ``None``."""
+        return None if self.orientation is None else rpy_from_quat(self.orientation)
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectGeometry:
+    """Shape and size (metres, x/y/z extents; a cylinder's x and y are its diameter)."""
+
+    shape: str
+    size: Vector3
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """One subtask of a segmented demonstration: ``object`` moved and released at ``pose``."""
+
+    object: str
+    pose: Pose
+
+
+@dataclass(frozen=True, slots=True)
+class Demonstration:
+    """A segmented demonstration (SPEC §3 ``demoplan/demonstration-1``)."""
+
+    name: str
+    steps: tuple[Step, ...]
+    objects: tuple[tuple[str, ObjectGeometry], ...] = ()
+    landmarks: tuple[tuple[str, Pose], ...] = ()
+    initial: tuple[tuple[str, Pose], ...] = ()
+    source: str | None = field(default=None, compare=False)
+
+    @property
+    def moved_objects(self) -> tuple[str, ...]:
+        """Objects moved in this demonstration, in order of their first move."""
+        return tuple(dict.fromkeys(step.object for step in self.steps))
+
+    def landmark_poses(self) -> dict[str, Pose]:
+        return dict(self.landmarks)
+
+    def initial_poses(self) -> dict[str, Pose]:
+        return dict(self.initial)
+
+    def geometry(self) -> dict[str, ObjectGeometry]:
+        return dict(self.objects)
+
+
+@dataclass(frozen=True, slots=True)
+class StatePosition:
+    """Where a state puts its object: ``value`` (m) relative to ``reference``.
+
+    ``reference`` is ``None`` for an absolute (world-frame) position, else the
+    object or landmark whose placement is subtracted (paper eq. 1: x_i − x_j,
+    world axes). ``spread`` is the trace of the sample covariance of the
+    members' relative positions (m²).
+    """
+
+    reference: str | None
+    value: Vector3
+    spread: float
+
+
+@dataclass(frozen=True, slots=True)
+class StateOrientation:
+    """How a state orients its object: ``value`` relative to ``reference``.
+
+    ``value`` is the mean rotation ``R_ref⁻¹·R_obj`` (``None`` when the object's
+    orientation was never observed); ``spread`` is the trace of the sample
+    covariance of the members' rotation vectors about that mean (deg²).
+    """
+
+    reference: str | None
+    value: Quaternion | None
+    spread: float
+
+    @property
+    def rpy(self) -> tuple[float, float, float] | None:
+        return None if self.value is None else rpy_from_quat(self.value)
+
+
+@dataclass(frozen=True, slots=True)
+class State:
+    """A quantised subtask (paper §IV.A): object, placement, and its statistics.
+
+    ``members`` are the ``(demonstration, step)`` indices (0-based) that were
+    quantised to this state.
+    """
+
+    id: str
+    object: str
+    position: StatePosition
+    orientation: StateOrientation
+    members: tuple[tuple[int, int], ...]
+
+
+def visit_label(state_id: str, occurrence: int) -> str:
+    """Label of a state's ``occurrence``-th visit in one demonstration.
+
+    The first visit is the state id itself (so models without repeated moves
+    read exactly like the paper's); later ones are ``"C#2"``, ``"C#3"``, ….
+    """
+    return state_id if occurrence == 1 else f"{state_id}#{occurrence}"
+
+
+@dataclass(frozen=True, slots=True)
+class TaskModel:
+    """A learned task model (SPEC §3 ``demoplan/model-1``).
+
+    ``constraints`` are pairs of visit labels ``(X, Y)`` meaning "X before Y";
+    ``goals[k]`` is the set of states demonstration k ends in.
+    ``teacher_constraints`` are the pairs a teacher required; ``violations``
+    lists, per demonstration, the teacher constraints it contradicts.
+    """
+
+    states: tuple[State, ...]
+    sequences: tuple[tuple[str, ...], ...]
+    constraints: tuple[tuple[str, str], ...]
+    goals: tuple[tuple[str, ...], ...]
+    demonstrations: tuple[Demonstration, ...]
+    teacher_constraints: tuple[tuple[str, str], ...] = ()
+    violations: tuple[tuple[int, str, str], ...] = ()
+    settings: tuple[tuple[str, float | int | str], ...] = ()
+
+    def state(self, state_id: str) -> State:
+        for state in self.states:
+            if state.id == state_id:
+                return state
+        raise KeyError(state_id)

@@ -1,0 +1,115 @@
+"""Orientation conversions and the rotation statistics state generation needs.
+
+Names follow ``<target>_from_<source>``. Quaternions are ``(x, y, z, w)`` with
+``w >= 0`` (canonical sign); Euler angles are extrinsic x-y-z (roll, pitch,
+yaw) in degrees, as SPEC §2 defines ``rpy``.
+
+Orientations are compared as rotations, never as raw Euler differences: the
+deviation of a rotation from a mean is the rotation vector of
+``mean⁻¹ · rotation`` (the log map), so yaw 179° and −179° are 2° apart and
+gimbal lock does not distort distances.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+Quaternion = tuple[float, float, float, float]
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "Quaternion",
+    "angle_between",
+    "canonical_quat",
+    "deviations_from_mean",
+    "matrices_from_quats",
+    "mean_quat",
+    "quat_from_rpy",
+    "quat_from_yaw",
+    "relative_quats",
+    "rpy_from_quat",
+]
+
+
+def canonical_quat(quat: Sequence[float]) -> Quaternion:
+    """Return the unit quaternion with ``w >= 0`` for ``quat`` (x, y, z, w)."""
+    q = np.asarray(quat, dtype=float)
+    norm = float(np.linalg.norm(q))
+    if abs(norm - 1.0) > 1e-12:  # already-unit quaternions stay bit-exact (file round trips)
+        q = q / norm
+    if q[3] < 0 or (q[3] == 0 and next((v for v in q[:3] if v != 0), 0.0) < 0):
+        q = -q
+    return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+
+
+def quat_from_yaw(yaw_deg: float) -> Quaternion:
+    """Planar orientation (rotation about world z) as a quaternion."""
+    return canonical_quat(Rotation.from_euler("z", yaw_deg, degrees=True).as_quat())
+
+
+def quat_from_rpy(rpy_deg: Sequence[float]) -> Quaternion:
+    """Extrinsic x-y-z Euler angles (roll, pitch, yaw) in degrees → quaternion."""
+    return canonical_quat(Rotation.from_euler("xyz", list(rpy_deg), degrees=True).as_quat())
+
+
+def rpy_from_quat(quat: Sequence[float]) -> tuple[float, float, float]:
+    """Quaternion → extrinsic x-y-z Euler angles in degrees (yaw in (−180, 180])."""
+    with np.errstate(all="ignore"):
+        import warnings
+
+        with warnings.catch_warnings():
+            # Gimbal lock only makes the split between roll and yaw arbitrary.
+            warnings.simplefilter("ignore", UserWarning)
+            r, p, y = Rotation.from_quat(list(quat)).as_euler("xyz", degrees=True)
+    return (_clean_angle(r), _clean_angle(p), _clean_angle(y))
+
+
+def _clean_angle(angle: float) -> float:
+    wrapped = (float(angle) + 180.0) % 360.0 - 180.0
+    if wrapped == -180.0:
+        wrapped = 180.0
+    return 0.0 if abs(wrapped) < 1e-9 else wrapped
+
+
+def matrices_from_quats(quats: FloatArray) -> FloatArray:
+    """``(n, 4)`` quaternions → ``(n, 9)`` flattened rotation matrices.
+
+    The flattened matrix is the chordal embedding of SO(3): Euclidean
+    distance there is ``2√2·sin(θ/2)`` for a relative rotation angle θ, so
+    K-means can run on it directly without the q / −q ambiguity.
+    """
+    return np.asarray(Rotation.from_quat(quats).as_matrix().reshape(len(quats), 9), dtype=float)
+
+
+def relative_quats(reference: FloatArray, target: FloatArray) -> FloatArray:
+    """Orientation of each ``target`` in the frame of ``reference``: ``R_ref⁻¹ · R_target``."""
+    rel = Rotation.from_quat(reference).inv() * Rotation.from_quat(target)
+    return _canonical_rows(np.asarray(rel.as_quat(), dtype=float))
+
+
+def mean_quat(quats: FloatArray) -> Quaternion:
+    """Chordal L2 mean rotation of ``(n, 4)`` quaternions (scipy's ``Rotation.mean``)."""
+    return canonical_quat(Rotation.from_quat(quats).mean().as_quat())
+
+
+def deviations_from_mean(quats: FloatArray, mean: Sequence[float]) -> FloatArray:
+    """Rotation vectors (degrees) of ``mean⁻¹ · q`` for each row: ``(n, 3)``."""
+    dev = Rotation.from_quat(list(mean)).inv() * Rotation.from_quat(quats)
+    return np.degrees(np.asarray(dev.as_rotvec(), dtype=float)).reshape(len(quats), 3)
+
+
+def angle_between(a: Sequence[float], b: Sequence[float]) -> float:
+    """Geodesic angle in degrees between two orientations."""
+    rel = Rotation.from_quat(list(a)).inv() * Rotation.from_quat(list(b))
+    return float(np.degrees(rel.magnitude()))
+
+
+def _canonical_rows(quats: FloatArray) -> FloatArray:
+    flip = quats[:, 3] < 0
+    quats = quats.copy()
+    quats[flip] *= -1.0
+    return quats

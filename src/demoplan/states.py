@@ -1,0 +1,327 @@
+"""State generation (paper §IV.A, eq. 1–2; SPEC §5).
+
+Every step of every demonstration is a *placement* of one object. For each
+object, every candidate reference — absolute, every other object, every
+landmark — is scored: the object's placements are expressed relative to the
+candidate (x_i − x_j, or R_j⁻¹·R_i for orientations) and clustered with
+K-means for c = 1..N (:func:`demoplan.clustering.select_clustering`, eq. 2).
+Each placement then takes, among the candidates *available at that step*
+(absolute, landmarks, objects already moved in that demonstration), the one
+with the lowest score — "positions can only be specified towards already
+placed objects". Ties (scores whose RMS differs by less than the measurement
+noise) go to fewer clusters, then to absolute, then to the nearest reference.
+
+Position and orientation choose their references independently. A state is
+(object, position reference and cluster, orientation reference and cluster);
+states are lettered A, B, … in order of first appearance over the
+demonstrations in the order given, steps in order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from demoplan import rotations
+from demoplan.clustering import (
+    Clustering,
+    PositionSpace,
+    RotationSpace,
+    Space,
+    select_clustering,
+)
+from demoplan.model import Demonstration, Pose, State, StateOrientation, StatePosition
+
+__all__ = [
+    "ReferenceScore",
+    "StateGeneration",
+    "StateGenerationSettings",
+    "generate_states",
+    "state_letters",
+]
+
+Kind = Literal["position", "orientation"]
+
+
+@dataclass(frozen=True, slots=True)
+class StateGenerationSettings:
+    """Settings of state generation (documented defaults, docs/learning.md).
+
+    position_noise : RMS placement noise in metres; spreads whose RMS differs
+        by less than this are ties.
+    orientation_noise : the same for orientations, in degrees.
+    position_separation : cluster means closer than this (m) reject a clustering.
+    orientation_separation : the same for orientations (degrees, geodesic).
+    n_init : K-means restarts per call.
+    seed : seed of the K-means restarts.
+    """
+
+    position_noise: float = 0.003
+    orientation_noise: float = 0.5
+    position_separation: float = 0.05
+    orientation_separation: float = 15.0
+    n_init: int = 4
+    seed: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class ReferenceScore:
+    """How well one candidate reference explains one object's placements.
+
+    ``reference`` is ``None`` for absolute; ``distance`` is the mean distance
+    (m, or degrees for orientation) between object and reference, used to
+    break ties towards the nearest reference.
+    """
+
+    object: str
+    kind: Kind
+    reference: str | None
+    clustering: Clustering
+    distance: float
+
+    @property
+    def rms(self) -> float:
+        return math.sqrt(self.clustering.score)
+
+
+@dataclass(frozen=True, slots=True)
+class StateGeneration:
+    """States, each demonstration as a state sequence, and the scores behind them."""
+
+    states: tuple[State, ...]
+    sequences: tuple[tuple[str, ...], ...]
+    scores: tuple[ReferenceScore, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class _Placement:
+    demo: int
+    step: int
+    pose: Pose
+
+
+class _World:
+    """Per-demonstration lookup of where every object and landmark was."""
+
+    def __init__(self, demonstrations: Sequence[Demonstration]):
+        self.moves: list[dict[str, list[tuple[int, Pose]]]] = []
+        self.landmarks = [d.landmark_poses() for d in demonstrations]
+        self.initial = [d.initial_poses() for d in demonstrations]
+        for demo in demonstrations:
+            moves: dict[str, list[tuple[int, Pose]]] = {}
+            for index, step in enumerate(demo.steps):
+                moves.setdefault(step.object, []).append((index, step.pose))
+            self.moves.append(moves)
+
+    def pose(self, demo: int, name: str, step: int) -> Pose | None:
+        """``name``'s placement when ``step`` happens (SPEC §5).
+
+        The placement current at the step; for an object placed only after the
+        step, its first placement; for one never moved, its initial pose.
+        """
+        if name in self.landmarks[demo]:
+            return self.landmarks[demo][name]
+        history = self.moves[demo].get(name)
+        if history:
+            before = [pose for index, pose in history if index < step]
+            return before[-1] if before else history[0][1]
+        return self.initial[demo].get(name)
+
+    def available(self, demo: int, name: str, step: int) -> bool:
+        """Whether ``name`` may serve as a reference at ``step`` of ``demo``."""
+        if name in self.landmarks[demo]:
+            return True
+        history = self.moves[demo].get(name)
+        if history:
+            return history[0][0] < step
+        return name in self.initial[demo]
+
+
+def generate_states(
+    demonstrations: Sequence[Demonstration],
+    settings: StateGenerationSettings | None = None,
+) -> StateGeneration:
+    """Quantise every step of ``demonstrations`` to a state (paper §IV.A).
+
+    Returns the states (lettered by first appearance), each demonstration as a
+    sequence of state ids, and every candidate reference's score.
+    """
+    settings = settings or StateGenerationSettings()
+    world = _World(demonstrations)
+    placements: dict[str, list[_Placement]] = {}
+    for d, demo in enumerate(demonstrations):
+        for s, step in enumerate(demo.steps):
+            placements.setdefault(step.object, []).append(_Placement(d, s, step.pose))
+    names = sorted(
+        set(placements)
+        | {name for demo in demonstrations for name, _ in demo.landmarks}
+        | {name for demo in demonstrations for name, _ in demo.initial}
+    )
+
+    keys: dict[tuple[int, int], tuple[object, ...]] = {}
+    relative: dict[tuple[str, Kind, str | None], np.ndarray] = {}
+    all_scores: list[ReferenceScore] = []
+    for obj, own in placements.items():
+        candidates = [None, *(n for n in names if n != obj)]
+        position_scores = _score_references(
+            obj, "position", own, candidates, world, settings, relative
+        )
+        orientation_scores = _score_references(
+            obj, "orientation", own, candidates, world, settings, relative
+        )
+        all_scores += position_scores + orientation_scores
+        for index, placement in enumerate(own):
+            pos = _choose(position_scores, placement, world, settings.position_noise)
+            pos_key = (pos.reference, pos.clustering.labels[index])
+            ori_key: tuple[str | None, int] = (None, -1)  # orientation unknown
+            if orientation_scores:
+                ori = _choose(orientation_scores, placement, world, settings.orientation_noise)
+                ori_key = (ori.reference, ori.clustering.labels[index])
+            keys[(placement.demo, placement.step)] = (obj, *pos_key, *ori_key)
+
+    letters: dict[tuple[object, ...], str] = {}
+    members: dict[str, list[tuple[int, int]]] = {}
+    sequences: list[tuple[str, ...]] = []
+    for d, demo in enumerate(demonstrations):
+        sequence = []
+        for s in range(len(demo.steps)):
+            key = keys[(d, s)]
+            if key not in letters:
+                letters[key] = state_letters(len(letters))
+            sequence.append(letters[key])
+            members.setdefault(letters[key], []).append((d, s))
+        sequences.append(tuple(sequence))
+
+    states = []
+    for key, letter in letters.items():
+        obj, pos_ref, _, ori_ref, ori_label = key
+        assert isinstance(obj, str)
+        index = [i for i, p in enumerate(placements[obj]) if (p.demo, p.step) in members[letter]]
+        states.append(
+            State(
+                id=letter,
+                object=obj,
+                position=_position(relative[(obj, "position", _ref(pos_ref))][index], pos_ref),
+                orientation=_orientation(
+                    relative.get((obj, "orientation", _ref(ori_ref))), index, ori_ref, ori_label
+                ),
+                members=tuple(members[letter]),
+            )
+        )
+    return StateGeneration(tuple(states), tuple(sequences), tuple(all_scores))
+
+
+def state_letters(index: int) -> str:
+    """0 → ``A``, 25 → ``Z``, 26 → ``AA``, 27 → ``AB``, … (SPEC §3)."""
+    letters = ""
+    index += 1
+    while index:
+        index, rest = divmod(index - 1, 26)
+        letters = chr(ord("A") + rest) + letters
+    return letters
+
+
+def _ref(reference: object) -> str | None:
+    assert reference is None or isinstance(reference, str)
+    return reference
+
+
+def _score_references(
+    obj: str,
+    kind: Kind,
+    own: list[_Placement],
+    candidates: list[str | None],
+    world: _World,
+    settings: StateGenerationSettings,
+    relative: dict[tuple[str, Kind, str | None], np.ndarray],
+) -> list[ReferenceScore]:
+    """Eq. (2) for every candidate reference that is defined at every placement."""
+    if kind == "orientation" and any(p.pose.orientation is None for p in own):
+        return []
+    noise = settings.position_noise if kind == "position" else settings.orientation_noise
+    separation = (
+        settings.position_separation if kind == "position" else settings.orientation_separation
+    )
+    scores = []
+    for reference in candidates:
+        values = _relative_values(kind, own, reference, world)
+        if values is None:
+            continue
+        relative[(obj, kind, reference)] = values
+        space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
+        clustering = select_clustering(
+            space, separation=separation, noise=noise, n_init=settings.n_init, seed=settings.seed
+        )
+        scores.append(ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, values)))
+    return scores
+
+
+def _relative_values(
+    kind: Kind, own: list[_Placement], reference: str | None, world: _World
+) -> np.ndarray | None:
+    if kind == "position":
+        positions = np.array([p.pose.position for p in own], dtype=float)
+        if reference is None:
+            return positions
+        ref_poses = [world.pose(p.demo, reference, p.step) for p in own]
+        if any(r is None for r in ref_poses):
+            return None
+        return positions - np.array([r.position for r in ref_poses if r is not None])
+    quats = np.array([p.pose.orientation for p in own], dtype=float)
+    if reference is None:
+        return quats
+    ref_quats = []
+    for p in own:
+        pose = world.pose(p.demo, reference, p.step)
+        if pose is None or pose.orientation is None:
+            return None
+        ref_quats.append(pose.orientation)
+    return rotations.relative_quats(np.array(ref_quats, dtype=float), quats)
+
+
+def _mean_distance(kind: Kind, values: np.ndarray) -> float:
+    if kind == "position":
+        return float(np.linalg.norm(values, axis=1).mean())
+    return float(np.degrees(2.0 * np.arccos(np.clip(np.abs(values[:, 3]), 0.0, 1.0))).mean())
+
+
+def _choose(
+    scores: list[ReferenceScore], placement: _Placement, world: _World, noise: float
+) -> ReferenceScore:
+    """The reference of one placement: the best-scoring candidate available at its step."""
+    available = [
+        s
+        for s in scores
+        if s.reference is None or world.available(placement.demo, s.reference, placement.step)
+    ]
+    best = min(s.rms for s in available)
+    tied = [s for s in available if s.rms - best < noise]
+    return min(
+        tied,
+        key=lambda s: (
+            s.clustering.n_clusters,
+            s.reference is not None,
+            s.distance,
+            s.reference or "",
+        ),
+    )
+
+
+def _position(values: np.ndarray, reference: object) -> StatePosition:
+    mean, spread = PositionSpace(values).stats(np.arange(len(values)))
+    x, y, z = (float(v) for v in mean)
+    return StatePosition(reference=_ref(reference), value=(x, y, z), spread=spread)
+
+
+def _orientation(
+    values: np.ndarray | None, index: list[int], reference: object, label: object
+) -> StateOrientation:
+    if values is None or label == -1:
+        return StateOrientation(reference=None, value=None, spread=0.0)
+    mean, spread = RotationSpace(values[index]).stats(np.arange(len(index)))
+    qx, qy, qz, qw = mean
+    return StateOrientation(reference=_ref(reference), value=(qx, qy, qz, qw), spread=spread)
