@@ -1,0 +1,272 @@
+"""The ``demoplan`` command line (SPEC §4).
+
+Commands only parse options, call the library and render what it returns with
+rich. ``--json`` output goes to stdout and nothing else does; a domain error
+becomes one line on stderr and the exit code of SPEC §4.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from demoplan import __version__
+from demoplan.demonstrations import load_demonstrations
+from demoplan.errors import DemoplanError, InputError
+from demoplan.learning import TaskModelLearner
+from demoplan.model import TaskModel
+from demoplan.modelfile import load_model, model_to_dict, save_model
+from demoplan.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
+
+app = typer.Typer(
+    name="demoplan",
+    help="Learn pick-and-place task models from human demonstrations and plan them in new scenes.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+_stdout = Console(soft_wrap=False, width=None if sys.stdout.isatty() else 140)
+_stderr = Console(stderr=True, soft_wrap=True)
+
+
+@contextmanager
+def _reported_errors() -> Iterator[None]:
+    """Turn a demoplan error into one line on stderr and its exit code."""
+    try:
+        yield
+    except DemoplanError as exc:
+        message = " ".join(str(exc).split())
+        _stderr.print(f"demoplan: error: {message}", markup=False, highlight=False)
+        raise typer.Exit(exc.exit_code) from None
+
+
+def _version(value: bool) -> None:
+    if value:
+        _stdout.print(f"demoplan {__version__}", markup=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version.")
+    ] = False,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")] = False,
+) -> None:
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.WARNING,
+        format="demoplan: %(levelname)s: %(message)s",
+        stream=sys.stderr,
+        force=True,
+    )
+
+
+def _print_json(data: Any) -> None:
+    sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n")
+
+
+def _print_model(model: TaskModel, decimals: int) -> None:
+    states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
+    for column in STATE_HEADER:
+        states.add_column(column, no_wrap=column != "Relative Orientation")
+    for row in state_rows(model, decimals):
+        states.add_row(*row)
+    _stdout.print(states)
+    sequences = Table(title="State sequences (Tables III and V)", title_justify="left")
+    for column in ("Demonstration", "Sequence", "Goal states"):
+        sequences.add_column(column)
+    for row in sequence_rows(model):
+        sequences.add_row(*row)
+    _stdout.print(sequences)
+    _stdout.print(
+        f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
+        markup=False,
+        highlight=False,
+    )
+    if model.teacher_constraints:
+        _stdout.print(
+            f"Teacher constraints: {constraint_text(model.teacher_constraints)}",
+            markup=False,
+            highlight=False,
+        )
+    for index, x, y in model.violations:
+        _stdout.print(
+            f"Demonstration {index + 1} contradicts the teacher's {x}<{y}",
+            markup=False,
+            highlight=False,
+        )
+
+
+def _read_requirements(path: Path) -> list[str]:
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read requirements ({exc})", source=str(path)) from None
+    return [line.split("#")[0].strip() for line in lines if line.split("#")[0].strip()]
+
+
+@app.command()
+def learn(
+    demos: Annotated[
+        list[Path],
+        typer.Argument(help="Demonstration files or folders (with --update: the new ones).", show_default=False),
+    ],
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Model file to write.", show_default=False)
+    ] = None,
+    update: Annotated[
+        Path | None,
+        typer.Option(help="Existing model to extend with DEMOS (written back unless -o).", show_default=False),
+    ] = None,
+    require: Annotated[
+        list[str] | None,
+        typer.Option(help="Teacher constraint 'A<B' (state ids or object names); repeatable.", show_default=False),
+    ] = None,
+    require_file: Annotated[
+        Path | None, typer.Option(help="File of teacher constraints, one 'A<B' per line.", show_default=False)
+    ] = None,
+    position_noise: Annotated[
+        float | None, typer.Option(help="RMS placement noise in m (default 0.003).", show_default=False)
+    ] = None,
+    orientation_noise: Annotated[
+        float | None, typer.Option(help="RMS orientation noise in degrees (default 0.5).", show_default=False)
+    ] = None,
+    position_separation: Annotated[
+        float | None, typer.Option(help="Minimum distance between clusters in m (default 0.05).", show_default=False)
+    ] = None,
+    orientation_separation: Annotated[
+        float | None, typer.Option(help="Minimum angle between clusters in degrees (default 15).", show_default=False)
+    ] = None,
+    json_output: Annotated[bool, typer.Option("--json", help="Print the model as JSON on stdout.")] = False,
+    decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions in the tables.")] = 2,
+) -> None:
+    """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    with _reported_errors():
+        settings: dict[str, Any] = {}
+        requirements: list[str] = []
+        previous = []
+        if update is not None:
+            model = load_model(update)
+            if not model.demonstrations:
+                raise InputError(
+                    "model holds no demonstrations to update; relearn from the demonstration files",
+                    source=str(update),
+                    field="demonstrations",
+                )
+            previous = list(model.demonstrations)
+            stored = dict(model.settings)
+            settings = {k: v for k, v in stored.items() if k in _LEARNER_SETTINGS}
+            requirements = [r for r in str(stored.get("require", "")).split(";") if r]
+        elif output is None:
+            raise typer.BadParameter("give -o MODEL (or --update MODEL)", param_hint="'-o'")
+        overrides = {
+            "position_noise": position_noise,
+            "orientation_noise": orientation_noise,
+            "position_separation": position_separation,
+            "orientation_separation": orientation_separation,
+        }
+        settings.update({k: v for k, v in overrides.items() if v is not None})
+        requirements += list(require or [])
+        if require_file is not None:
+            requirements += _read_requirements(require_file)
+        new = load_demonstrations(demos)
+        learner = TaskModelLearner(require=requirements, **_typed_settings(settings))
+        learner.fit(previous + new)
+        model = learner.model_
+        target = output or update
+        assert target is not None
+        save_model(model, target)
+        if json_output:
+            _print_json(_model_json(model))
+        else:
+            _print_model(model, decimals)
+            _stdout.print(
+                f"Learned from {len(model.demonstrations)} demonstrations; wrote {target}",
+                markup=False,
+                highlight=False,
+            )
+
+
+_LEARNER_SETTINGS = {
+    "position_noise": float,
+    "orientation_noise": float,
+    "position_separation": float,
+    "orientation_separation": float,
+    "n_init": int,
+    "seed": int,
+}
+
+
+def _typed_settings(settings: dict[str, Any]) -> dict[str, Any]:
+    typed = {}
+    for key, value in settings.items():
+        kind = _LEARNER_SETTINGS[key]
+        try:
+            typed["random_state" if key == "seed" else key] = kind(value)
+        except (TypeError, ValueError):
+            raise InputError(f"expected a number, got {value!r}", field=f"settings.{key}") from None
+    return typed
+
+
+def _model_json(model: TaskModel) -> dict[str, Any]:
+    data = model_to_dict(model)
+    data["demonstrations"] = [d.name for d in model.demonstrations]
+    return data
+
+
+@app.command()
+def show(
+    model_path: Annotated[Path, typer.Argument(metavar="MODEL", help="A model file written by 'learn'.")],
+    json_output: Annotated[bool, typer.Option("--json", help="Print the model as JSON on stdout.")] = False,
+    decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
+) -> None:
+    """Print a model as the paper's tables: states, sequences, constraints."""
+    with _reported_errors():
+        model = load_model(model_path)
+        if json_output:
+            _print_json(_model_json(model))
+        else:
+            _print_model(model, decimals)
+
+
+@app.command()
+def experiments(
+    out: Annotated[Path, typer.Option(help="Folder for the report.")] = Path("demoplan-report"),
+) -> None:
+    """Reproduce the paper's experiments and write a report (tables, figures, models)."""
+    from demoplan.experiments import run_experiments
+
+    with _reported_errors():
+        with _stdout.status("Running the paper's experiments…") as status:
+            result = run_experiments(out, progress=lambda text: status.update(text))
+        table = Table(title="Paper vs. demoplan", title_justify="left")
+        for column in ("Experiment", "Check", "Paper", "demoplan", "Match"):
+            table.add_column(column)
+        for check in result.checks:
+            table.add_row(
+                check.experiment, check.name, check.paper, check.ours, "yes" if check.ok else "NO"
+            )
+        _stdout.print(table)
+        _stdout.print(f"Report: {result.report}", markup=False, highlight=False)
+        if not all(c.ok for c in result.checks):
+            raise typer.Exit(1)
+
+
+def main() -> None:
+    """Entry point of the ``demoplan`` command."""
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

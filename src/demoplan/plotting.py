@@ -1,0 +1,93 @@
+"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left).
+
+matplotlib is imported lazily (the ``plot`` extra); every function takes an
+optional ``ax`` and returns the axes it drew on.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+from demoplan.model import Demonstration, ObjectGeometry, Pose
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+__all__ = ["plot_demonstration"]
+
+_PALETTE = {
+    "red": "#d62728",
+    "green": "#2ca02c",
+    "blue": "#1f77b4",
+    "yellow": "#e6c619",
+    "wood": "#b5875a",
+}
+_CYCLE = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860", "#da8bc3", "#8c8c8c"]
+
+
+def _colour(name: str, index: int) -> str:
+    return _PALETTE.get(name, _CYCLE[index % len(_CYCLE)])
+
+
+def _footprint(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
+    from matplotlib import patches
+
+    x, y, _ = pose.position
+    size = geometry.size if geometry else (0.03, 0.03, 0.03)
+    yaw = 0.0
+    if pose.orientation is not None:
+        qx, qy, qz, qw = pose.orientation
+        yaw = math.degrees(math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
+    if geometry is not None and geometry.shape in {"cylinder", "sphere"}:
+        return patches.Ellipse((x, y), size[0], size[1], angle=yaw, fc=colour, ec="k", alpha=alpha, lw=0.8)
+    return patches.Rectangle(
+        (x - size[0] / 2, y - size[1] / 2),
+        size[0],
+        size[1],
+        angle=yaw,
+        rotation_point="center",
+        fc=colour,
+        ec="k",
+        alpha=alpha,
+        lw=0.8,
+    )
+
+
+def plot_demonstration(demo: Demonstration, ax: Axes | None = None, *, title: str | None = None) -> Axes:
+    """Draw one demonstration from above: initial poses faint, each step's placement
+    solid and numbered in the order it happened, an arrow for every move."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    geometry = demo.geometry()
+    names = sorted({*demo.moved_objects, *(n for n, _ in demo.initial)})  # stable colours
+    current = demo.initial_poses()
+    for name, pose in demo.landmarks:
+        ax.add_patch(_footprint(pose, geometry.get(name), "#cccccc", 0.5))
+        ax.annotate(name, pose.position[:2], ha="center", va="center", fontsize=7, color="0.3")
+    for name, pose in demo.initial:
+        ax.add_patch(_footprint(pose, geometry.get(name), _colour(name, names.index(name)), 0.2))
+    for number, step in enumerate(demo.steps, start=1):
+        colour = _colour(step.object, names.index(step.object))
+        start = current.get(step.object)
+        x, y, _ = step.pose.position
+        if start is not None:
+            ax.annotate(
+                "", (x, y), start.position[:2],
+                arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
+            )
+        ax.add_patch(_footprint(step.pose, geometry.get(step.object), colour, 0.85))
+        ax.annotate(
+            f"{number} {step.object}", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7
+        )
+        current[step.object] = step.pose
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.08)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_title(title or demo.name, fontsize=9)
+    return ax

@@ -1,0 +1,95 @@
+"""The model as the paper's tables (Tables II–V), as plain rows.
+
+Functions here return rows of strings; the command line renders them with
+rich and the experiment report as Markdown, so both show the same numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from demoplan.constraints import label_key
+from demoplan.model import State, TaskModel
+
+__all__ = [
+    "STATE_HEADER",
+    "constraint_text",
+    "format_orientation",
+    "format_position",
+    "sequence_rows",
+    "state_rows",
+]
+
+STATE_HEADER = (
+    "State",
+    "Object",
+    "Relative Position",
+    "Relative Orientation",
+    "Position [m]",
+    "Orientation [deg]",
+    "Spread (RMS)",
+    "Members",
+)
+
+
+def _number(value: float, decimals: int) -> str:
+    text = f"{value:.{decimals}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0 else text  # no "-0.00"
+
+
+def format_position(state: State, decimals: int = 2) -> str:
+    """``(x, y)`` for planar states at table height, else ``(x, y, z)``."""
+    x, y, z = state.position.value
+    values = (x, y) if abs(z) < 0.5 * 10**-decimals else (x, y, z)
+    return "(" + ", ".join(_number(v, decimals) for v in values) + ")"
+
+
+def format_orientation(state: State, decimals: int = 0) -> str:
+    """θ for a rotation about z only (as Table IV), else (roll, pitch, yaw); blank when unknown."""
+    rpy = state.orientation.rpy
+    if rpy is None:
+        return ""
+    roll, pitch, yaw = rpy
+    if abs(roll) < 1e-6 and abs(pitch) < 1e-6:
+        return _number(yaw, decimals)
+    return "(" + ", ".join(_number(v, decimals) for v in rpy) + ")"
+
+
+def _spread(state: State) -> str:
+    parts = [f"{1000 * math.sqrt(state.position.spread):.1f} mm"]
+    if state.orientation.value is not None:
+        parts.append(f"{math.sqrt(state.orientation.spread):.1f}°")
+    return ", ".join(parts)
+
+
+def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
+    """One row per state, as Tables II and IV (plus spread and member count)."""
+    return [
+        (
+            s.id,
+            s.object.capitalize(),
+            (s.position.reference or "").capitalize(),
+            (s.orientation.reference or "").capitalize(),
+            format_position(s, decimals),
+            format_orientation(s),
+            _spread(s),
+            str(len(s.members)),
+        )
+        for s in model.states
+    ]
+
+
+def sequence_rows(model: TaskModel) -> list[tuple[str, str, str]]:
+    """Tables III and V: demonstration, its state sequence, its goal states."""
+    names = [d.name for d in model.demonstrations] or [""] * len(model.sequences)
+    return [
+        (f"Demonstration {k + 1}" + (f" ({names[k]})" if names[k] else ""), "-".join(seq), ", ".join(goal))
+        for k, (seq, goal) in enumerate(zip(model.sequences, model.goals, strict=True))
+    ]
+
+
+def constraint_text(pairs: Sequence[tuple[str, str]]) -> str:
+    """``A<B, A<C, …`` in label order."""
+    ordered = sorted(pairs, key=lambda p: (label_key(p[0]), label_key(p[1])))
+    return ", ".join(f"{x}<{y}" for x, y in ordered)
