@@ -53,7 +53,7 @@ class TaskModelLearner:
         orientation_noise: float = 0.5,
         position_separation: float = 0.05,
         orientation_separation: float = 15.0,
-        n_init: int = 4,
+        n_init: int = 8,
         random_state: int = 0,
         require: Sequence[str] = (),
     ):

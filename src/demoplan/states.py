@@ -64,7 +64,7 @@ class StateGenerationSettings:
     orientation_noise: float = 0.5
     position_separation: float = 0.05
     orientation_separation: float = 15.0
-    n_init: int = 4
+    n_init: int = 8
     seed: int = 0
 
 
