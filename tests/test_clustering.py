@@ -52,7 +52,9 @@ def test_kmeans_is_as_good_as_scikit_learn_on_arbitrary_data() -> None:
         ours = kmeans(points, c, rng=seed)
         theirs = sklearn_cluster.KMeans(n_clusters=c, n_init=4, random_state=0).fit(points)
         assert len(np.unique(ours.labels)) == c
-        recomputed = sum(((points[ours.labels == k] - ours.centres[k]) ** 2).sum() for k in range(c))
+        recomputed = sum(
+            ((points[ours.labels == k] - ours.centres[k]) ** 2).sum() for k in range(c)
+        )
         assert ours.inertia == pytest.approx(recomputed)
         if theirs.inertia_ > 0:
             ratios.append(ours.inertia / theirs.inertia_)
@@ -91,7 +93,11 @@ def _full_scan(space: PositionSpace, separation: float, noise: float) -> tuple[i
         labels = kmeans(space.embedded, c, rng=c).labels if c > 1 else np.zeros(len(space), int)
         stats = [space.stats(np.flatnonzero(labels == k)) for k in np.unique(labels)]
         means = [m for m, _ in stats]
-        if c > 1 and min(math.dist(a, b) for i, a in enumerate(means) for b in means[i + 1 :]) < separation:
+        if (
+            c > 1
+            and min(math.dist(a, b) for i, a in enumerate(means) for b in means[i + 1 :])
+            < separation
+        ):
             continue
         results.append((c, max(s for _, s in stats)))
     best = min(math.sqrt(s) for _, s in results)
@@ -139,7 +145,10 @@ def test_early_stop_keeps_continuous_scatter_coarse() -> None:
 def test_two_groups_ten_centimetres_apart_become_two_clusters() -> None:
     rng = np.random.default_rng(1)
     values = np.concatenate(
-        [[0.0, 0.14, 0.0] + rng.normal(0, 0.002, (3, 3)), [0.14, 0.0, 0.0] + rng.normal(0, 0.002, (2, 3))]
+        [
+            [0.0, 0.14, 0.0] + rng.normal(0, 0.002, (3, 3)),
+            [0.14, 0.0, 0.0] + rng.normal(0, 0.002, (2, 3)),
+        ]
     )
     chosen = select_clustering(PositionSpace(values), separation=0.05, noise=0.003)
     assert chosen.n_clusters == 2
@@ -170,7 +179,5 @@ def test_result_does_not_depend_on_the_order_of_values() -> None:
     b = select_clustering(PositionSpace(values[order]), separation=0.05, noise=0.003)
     assert a.n_clusters == b.n_clusters and a.score == pytest.approx(b.score)
     partition_a = {frozenset(np.flatnonzero(np.array(a.labels) == k)) for k in set(a.labels)}
-    partition_b = {
-        frozenset(order[np.flatnonzero(np.array(b.labels) == k)]) for k in set(b.labels)
-    }
+    partition_b = {frozenset(order[np.flatnonzero(np.array(b.labels) == k)]) for k in set(b.labels)}
     assert partition_a == partition_b

@@ -25,8 +25,15 @@ def test_fig_2_nine_constraints_b_and_e_unconstrained_redundant_a_g_kept() -> No
     assert ("A", "G") in result.constraints  # redundant given A<B, B<G, but kept
     assert result.contradicted == (("B", "E"),)
     assert set(result.constraints) == {
-        ("A", "B"), ("A", "E"), ("A", "F"), ("A", "G"),
-        ("B", "F"), ("B", "G"), ("E", "F"), ("E", "G"), ("F", "G"),
+        ("A", "B"),
+        ("A", "E"),
+        ("A", "F"),
+        ("A", "G"),
+        ("B", "F"),
+        ("B", "G"),
+        ("E", "F"),
+        ("E", "G"),
+        ("F", "G"),
     }
 
 
@@ -60,7 +67,11 @@ def test_teacher_constraints_are_never_removed_and_violations_reported() -> None
 
 def _state(state_id: str, obj: str) -> State:
     return State(
-        state_id, obj, StatePosition(None, (0.0, 0.0, 0.0), 0.0), StateOrientation(None, None, 0.0), ()
+        state_id,
+        obj,
+        StatePosition(None, (0.0, 0.0, 0.0), 0.0),
+        StateOrientation(None, None, 0.0),
+        (),
     )
 
 

@@ -18,11 +18,17 @@ def _signature(model: TaskModel, label: str) -> tuple[object, ...]:
     state_id, _, occurrence = label.partition("#")
     state = model.state(state_id)
     value = tuple(round(v, 9) for v in state.position.value)
-    orientation = None if state.orientation.value is None else tuple(
-        round(v, 6) for v in state.orientation.value
+    orientation = (
+        None
+        if state.orientation.value is None
+        else tuple(round(v, 6) for v in state.orientation.value)
     )
     return (
-        state.object, state.position.reference, value, state.orientation.reference, orientation,
+        state.object,
+        state.position.reference,
+        value,
+        state.orientation.reference,
+        orientation,
         int(occurrence or 1),
     )
 

@@ -46,7 +46,9 @@ def set_table() -> TaskModelLearner:
 
 @pytest.fixture(scope="module")
 def blocks() -> TaskModelLearner:
-    return TaskModelLearner().fit(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    return TaskModelLearner().fit(
+        load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    )
 
 
 def test_experiment_1_reproduces_table_ii(set_table: TaskModelLearner) -> None:
@@ -68,7 +70,9 @@ def test_experiment_1_state_j_exists_because_the_glass_was_placed_first(
     """The fork is relative to the glass only in demonstration 2, the only one in
     which the glass was already placed (paper §V.A)."""
     fork_scores = {
-        s.reference: s.rms for s in set_table.reference_scores_ if s.object == "fork" and s.kind == "position"
+        s.reference: s.rms
+        for s in set_table.reference_scores_
+        if s.object == "fork" and s.kind == "position"
     }
     assert fork_scores["glass"] < fork_scores["plate"] < fork_scores[None]
     state_j = next(s for s in set_table.states_ if s.id == "J")
@@ -233,7 +237,15 @@ def test_an_object_moved_twice_uses_its_current_placement_as_reference() -> None
 
 def test_state_letters_follow_the_spec() -> None:
     assert [state_letters(i) for i in (0, 1, 25, 26, 27, 51, 52, 701, 702)] == [
-        "A", "B", "Z", "AA", "AB", "AZ", "BA", "ZZ", "AAA",
+        "A",
+        "B",
+        "Z",
+        "AA",
+        "AB",
+        "AZ",
+        "BA",
+        "ZZ",
+        "AAA",
     ]
 
 

@@ -11,8 +11,8 @@ from demoplan.model import Demonstration, Pose, State, Step, TaskModel
 from demoplan.modelfile import load_model, save_model
 
 __all__ = [
-    "DemoplanError",
     "Demonstration",
+    "DemoplanError",
     "InputError",
     "NoPlanError",
     "Pose",

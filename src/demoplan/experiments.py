@@ -129,7 +129,8 @@ def compare_with_paper(
     checks = []
     ours = {s.id: s for s in model.states}
     for row in table:
-        paper = f"{_describe(row.object, row.position_reference, row.orientation_reference)} {_paper_values(row)}"
+        described = _describe(row.object, row.position_reference, row.orientation_reference)
+        paper = f"{described} {_paper_values(row)}"
         state = ours.get(row.id)
         if state is None:
             checks.append(Check(experiment, f"State {row.id}", paper, "missing", False))
@@ -210,7 +211,9 @@ def run_experiments(
             table,
             sequences,
             n_constraints,
-            None if n_constraints == PAPER_CONSTRAINTS_EXPERIMENT_1 else "5 by the rule (text: four)",
+            None
+            if n_constraints == PAPER_CONSTRAINTS_EXPERIMENT_1
+            else "5 by the rule (text: four)",
         )
         checks += found
         notify(f"{title}: plotting")
@@ -229,7 +232,9 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        logger.warning("matplotlib is not installed; the report has no figures (pip install demoplan[plot])")
+        logger.warning(
+            "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
+        )
         return None
     from demoplan.plotting import plot_demonstration
 
@@ -237,7 +242,9 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
     fig, axes = plt.subplots(1, len(demos), figsize=(4.2 * len(demos), 4.4), squeeze=False)
     for k, (demo, ax) in enumerate(zip(demos, axes[0], strict=True)):
         plot_demonstration(demo, ax, title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}")
-    fig.suptitle(f"{title}: the demonstrations from above (numbers: order of the moves)", fontsize=10)
+    fig.suptitle(
+        f"{title}: the demonstrations from above (numbers: order of the moves)", fontsize=10
+    )
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(f".{path.name}.tmp.png")
@@ -254,10 +261,16 @@ def _section(
     if figure:
         lines.append(f"![{title}]({figure})\n")
     lines += ["| Check | Paper | demoplan | Match |", "|---|---|---|---|"]
-    lines += [f"| {c.name} | {c.paper} | {c.ours} | {'yes' if c.ok else '**NO**'} |" for c in checks]
+    lines += [
+        f"| {c.name} | {c.paper} | {c.ours} | {'yes' if c.ok else '**NO**'} |" for c in checks
+    ]
     lines += ["", "| Demonstration | Sequence | Goal states |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in sequence_rows(model)]
-    lines += ["", f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}", ""]
+    lines += [
+        "",
+        f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
+        "",
+    ]
     return "\n".join(lines)
 
 

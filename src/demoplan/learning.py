@@ -106,7 +106,12 @@ class TaskModelLearner:
         for index, x, y in constraint_set.violations:
             logger.warning(
                 "demonstration %d (%s) puts %s before %s, against the teacher's %s<%s",
-                index + 1, demos[index].name, y, x, x, y,
+                index + 1,
+                demos[index].name,
+                y,
+                x,
+                x,
+                y,
             )
         self._scores = generation.scores
         self._model = TaskModel(

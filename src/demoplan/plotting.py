@@ -40,7 +40,9 @@ def _footprint(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: 
         qx, qy, qz, qw = pose.orientation
         yaw = math.degrees(math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
     if geometry is not None and geometry.shape in {"cylinder", "sphere"}:
-        return patches.Ellipse((x, y), size[0], size[1], angle=yaw, fc=colour, ec="k", alpha=alpha, lw=0.8)
+        return patches.Ellipse(
+            (x, y), size[0], size[1], angle=yaw, fc=colour, ec="k", alpha=alpha, lw=0.8
+        )
     return patches.Rectangle(
         (x - size[0] / 2, y - size[1] / 2),
         size[0],
@@ -54,7 +56,9 @@ def _footprint(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: 
     )
 
 
-def plot_demonstration(demo: Demonstration, ax: Axes | None = None, *, title: str | None = None) -> Axes:
+def plot_demonstration(
+    demo: Demonstration, ax: Axes | None = None, *, title: str | None = None
+) -> Axes:
     """Draw one demonstration from above: initial poses faint, each step's placement
     solid and numbered in the order it happened, an arrow for every move."""
     import matplotlib.pyplot as plt
@@ -75,7 +79,9 @@ def plot_demonstration(demo: Demonstration, ax: Axes | None = None, *, title: st
         x, y, _ = step.pose.position
         if start is not None:
             ax.annotate(
-                "", (x, y), start.position[:2],
+                "",
+                (x, y),
+                start.position[:2],
                 arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
             )
         ax.add_patch(_footprint(step.pose, geometry.get(step.object), colour, 0.85))

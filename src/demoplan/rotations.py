@@ -99,7 +99,8 @@ def mean_quat(quats: FloatArray) -> Quaternion:
 def deviations_from_mean(quats: FloatArray, mean: Sequence[float]) -> FloatArray:
     """Rotation vectors (degrees) of ``mean⁻¹ · q`` for each row: ``(n, 3)``."""
     dev = Rotation.from_quat(list(mean)).inv() * Rotation.from_quat(quats)
-    return np.degrees(np.asarray(dev.as_rotvec(), dtype=float)).reshape(len(quats), 3)
+    rotvecs = np.asarray(dev.as_rotvec(), dtype=float).reshape(len(quats), 3)
+    return np.asarray(np.degrees(rotvecs), dtype=float)
 
 
 def angle_between(a: Sequence[float], b: Sequence[float]) -> float:

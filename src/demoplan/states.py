@@ -98,6 +98,18 @@ class StateGeneration:
 
 
 @dataclass(frozen=True, slots=True)
+class _StateKey:
+    """What makes a state: object, position reference and cluster, orientation
+    reference and cluster (cluster −1: orientation unknown)."""
+
+    object: str
+    position_reference: str | None
+    position_cluster: int
+    orientation_reference: str | None
+    orientation_cluster: int
+
+
+@dataclass(frozen=True, slots=True)
 class _Placement:
     demo: int
     step: int
@@ -162,7 +174,7 @@ def generate_states(
         | {name for demo in demonstrations for name, _ in demo.initial}
     )
 
-    keys: dict[tuple[int, int], tuple[object, ...]] = {}
+    keys: dict[tuple[int, int], _StateKey] = {}
     relative: dict[tuple[str, Kind, str | None], np.ndarray] = {}
     all_scores: list[ReferenceScore] = []
     for obj, own in placements.items():
@@ -176,14 +188,15 @@ def generate_states(
         all_scores += position_scores + orientation_scores
         for index, placement in enumerate(own):
             pos = _choose(position_scores, placement, world, settings.position_noise)
-            pos_key = (pos.reference, pos.clustering.labels[index])
-            ori_key: tuple[str | None, int] = (None, -1)  # orientation unknown
+            ori_reference, ori_cluster = None, -1  # orientation unknown
             if orientation_scores:
                 ori = _choose(orientation_scores, placement, world, settings.orientation_noise)
-                ori_key = (ori.reference, ori.clustering.labels[index])
-            keys[(placement.demo, placement.step)] = (obj, *pos_key, *ori_key)
+                ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
+            keys[(placement.demo, placement.step)] = _StateKey(
+                obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
+            )
 
-    letters: dict[tuple[object, ...], str] = {}
+    letters: dict[_StateKey, str] = {}
     members: dict[str, list[tuple[int, int]]] = {}
     sequences: list[tuple[str, ...]] = []
     for d, demo in enumerate(demonstrations):
@@ -198,16 +211,21 @@ def generate_states(
 
     states = []
     for key, letter in letters.items():
-        obj, pos_ref, _, ori_ref, ori_label = key
-        assert isinstance(obj, str)
-        index = [i for i, p in enumerate(placements[obj]) if (p.demo, p.step) in members[letter]]
+        obj = key.object
+        chosen = set(members[letter])
+        rows = [i for i, p in enumerate(placements[obj]) if (p.demo, p.step) in chosen]
+        position = relative[(obj, "position", key.position_reference)][rows]
+        orientation = relative.get((obj, "orientation", key.orientation_reference))
         states.append(
             State(
                 id=letter,
                 object=obj,
-                position=_position(relative[(obj, "position", _ref(pos_ref))][index], pos_ref),
+                position=_position(position, key.position_reference),
                 orientation=_orientation(
-                    relative.get((obj, "orientation", _ref(ori_ref))), index, ori_ref, ori_label
+                    None
+                    if key.orientation_cluster == -1 or orientation is None
+                    else orientation[rows],
+                    key.orientation_reference,
                 ),
                 members=tuple(members[letter]),
             )
@@ -223,11 +241,6 @@ def state_letters(index: int) -> str:
         index, rest = divmod(index - 1, 26)
         letters = chr(ord("A") + rest) + letters
     return letters
-
-
-def _ref(reference: object) -> str | None:
-    assert reference is None or isinstance(reference, str)
-    return reference
 
 
 def _score_references(
@@ -256,7 +269,9 @@ def _score_references(
         clustering = select_clustering(
             space, separation=separation, noise=noise, n_init=settings.n_init, seed=settings.seed
         )
-        scores.append(ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, values)))
+        scores.append(
+            ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, values))
+        )
     return scores
 
 
@@ -270,7 +285,8 @@ def _relative_values(
         ref_poses = [world.pose(p.demo, reference, p.step) for p in own]
         if any(r is None for r in ref_poses):
             return None
-        return positions - np.array([r.position for r in ref_poses if r is not None])
+        reference_positions = np.array([r.position for r in ref_poses if r is not None])
+        return np.asarray(positions - reference_positions, dtype=float)
     quats = np.array([p.pose.orientation for p in own], dtype=float)
     if reference is None:
         return quats
@@ -311,17 +327,17 @@ def _choose(
     )
 
 
-def _position(values: np.ndarray, reference: object) -> StatePosition:
+def _position(values: np.ndarray, reference: str | None) -> StatePosition:
+    """A state's mean relative position and its spread (members only)."""
     mean, spread = PositionSpace(values).stats(np.arange(len(values)))
     x, y, z = (float(v) for v in mean)
-    return StatePosition(reference=_ref(reference), value=(x, y, z), spread=spread)
+    return StatePosition(reference=reference, value=(x, y, z), spread=spread)
 
 
-def _orientation(
-    values: np.ndarray | None, index: list[int], reference: object, label: object
-) -> StateOrientation:
-    if values is None or label == -1:
+def _orientation(values: np.ndarray | None, reference: str | None) -> StateOrientation:
+    """A state's mean relative orientation and its spread; unknown when ``values`` is None."""
+    if values is None:
         return StateOrientation(reference=None, value=None, spread=0.0)
-    mean, spread = RotationSpace(values[index]).stats(np.arange(len(index)))
+    mean, spread = RotationSpace(values).stats(np.arange(len(values)))
     qx, qy, qz, qw = mean
-    return StateOrientation(reference=_ref(reference), value=(qx, qy, qz, qw), spread=spread)
+    return StateOrientation(reference=reference, value=(qx, qy, qz, qw), spread=spread)

@@ -84,7 +84,11 @@ def sequence_rows(model: TaskModel) -> list[tuple[str, str, str]]:
     """Tables III and V: demonstration, its state sequence, its goal states."""
     names = [d.name for d in model.demonstrations] or [""] * len(model.sequences)
     return [
-        (f"Demonstration {k + 1}" + (f" ({names[k]})" if names[k] else ""), "-".join(seq), ", ".join(goal))
+        (
+            f"Demonstration {k + 1}" + (f" ({names[k]})" if names[k] else ""),
+            "-".join(seq),
+            ", ".join(goal),
+        )
         for k, (seq, goal) in enumerate(zip(model.sequences, model.goals, strict=True))
     ]
 
