@@ -258,3 +258,25 @@ def test_each_state_keeps_its_statistics() -> None:
             assert demos[d].steps[s].object == state.object
             assert generation.sequences[d][s] == state.id
         assert state.position.spread >= 0
+
+
+@pytest.mark.parametrize("noise", [0.002, 0.0025, 0.003, 0.0035])
+def test_experiment_1_does_not_hang_on_the_exact_noise_setting(noise: float) -> None:
+    demos = load_demonstrations([EXAMPLES / "set_table"])
+    learner = TaskModelLearner(position_noise=noise).fit(demos)
+    assert list(learner.sequences_) == TABLE_III
+    assert [(s.object, s.position.reference) for s in learner.states_] == [
+        (o, r) for _, o, r, _ in TABLE_II
+    ]
+
+
+@pytest.mark.parametrize(("noise", "angular_noise"), [(0.002, 0.5), (0.004, 0.6), (0.003, 0.55)])
+def test_experiment_2_does_not_hang_on_the_exact_noise_settings(
+    noise: float, angular_noise: float
+) -> None:
+    demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    learner = TaskModelLearner(position_noise=noise, orientation_noise=angular_noise).fit(demos)
+    assert list(learner.sequences_) == TABLE_V
+    assert [(s.position.reference, s.orientation.reference) for s in learner.states_] == [
+        (r, o) for _, _, r, o, _, _ in TABLE_IV
+    ]
