@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,6 +21,7 @@ from rich.console import Console
 from rich.table import Table
 
 from demoplan import __version__
+from demoplan.constraints import parse_requirements_syntax
 from demoplan.demonstrations import load_demonstrations
 from demoplan.errors import DemoplanError, InputError
 from demoplan.learning import TaskModelLearner
@@ -36,8 +38,8 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-_stdout = Console(soft_wrap=False, width=None if sys.stdout.isatty() else 140)
-_stderr = Console(stderr=True, soft_wrap=True)
+_stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
+_stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
 
 @contextmanager
@@ -62,7 +64,9 @@ def _main(
     version: Annotated[
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version.")
     ] = False,
-    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")
+    ] = False,
 ) -> None:
     logging.basicConfig(
         level=logging.INFO if verbose else logging.WARNING,
@@ -93,6 +97,7 @@ def _print_model(model: TaskModel, decimals: int) -> None:
         f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     if model.teacher_constraints:
         _stdout.print(
@@ -113,43 +118,67 @@ def _read_requirements(path: Path) -> list[str]:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read requirements ({exc})", source=str(path)) from None
-    return [line.split("#")[0].strip() for line in lines if line.split("#")[0].strip()]
+    # A comment starts at a '#' after whitespace; 'C#2' is a visit label.
+    kept = (re.split(r"(?:^|\s)#", line, maxsplit=1)[0].strip() for line in lines)
+    return [line for line in kept if line]
 
 
 @app.command()
 def learn(
     demos: Annotated[
         list[Path],
-        typer.Argument(help="Demonstration files or folders (with --update: the new ones).", show_default=False),
+        typer.Argument(
+            metavar="DEMO",
+            help="Demonstration files or folders (with --update: the new ones).",
+            show_default=False,
+        ),
     ],
     output: Annotated[
         Path | None, typer.Option("--output", "-o", help="Model file to write.", show_default=False)
     ] = None,
     update: Annotated[
         Path | None,
-        typer.Option(help="Existing model to extend with DEMOS (written back unless -o).", show_default=False),
+        typer.Option(
+            help="Existing model to extend with DEMOS (written back unless -o).", show_default=False
+        ),
     ] = None,
     require: Annotated[
         list[str] | None,
-        typer.Option(help="Teacher constraint 'A<B' (state ids or object names); repeatable.", show_default=False),
+        typer.Option(
+            help="Teacher constraint 'A<B' (state ids or object names); repeatable.",
+            show_default=False,
+        ),
     ] = None,
     require_file: Annotated[
-        Path | None, typer.Option(help="File of teacher constraints, one 'A<B' per line.", show_default=False)
+        Path | None,
+        typer.Option(help="File of teacher constraints, one 'A<B' per line.", show_default=False),
     ] = None,
     position_noise: Annotated[
-        float | None, typer.Option(help="RMS placement noise in m (default 0.003).", show_default=False)
+        float | None,
+        typer.Option(help="RMS placement noise in m (default 0.003).", show_default=False),
     ] = None,
     orientation_noise: Annotated[
-        float | None, typer.Option(help="RMS orientation noise in degrees (default 0.5).", show_default=False)
+        float | None,
+        typer.Option(help="RMS orientation noise in degrees (default 0.5).", show_default=False),
     ] = None,
     position_separation: Annotated[
-        float | None, typer.Option(help="Minimum distance between clusters in m (default 0.05).", show_default=False)
+        float | None,
+        typer.Option(
+            help="Minimum distance between clusters in m (default 0.05).", show_default=False
+        ),
     ] = None,
     orientation_separation: Annotated[
-        float | None, typer.Option(help="Minimum angle between clusters in degrees (default 15).", show_default=False)
+        float | None,
+        typer.Option(
+            help="Minimum angle between clusters in degrees (default 15).", show_default=False
+        ),
     ] = None,
-    json_output: Annotated[bool, typer.Option("--json", help="Print the model as JSON on stdout.")] = False,
-    decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions in the tables.")] = 2,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the model as JSON on stdout.")
+    ] = False,
+    decimals: Annotated[
+        int, typer.Option(min=0, max=6, help="Decimals of positions in the tables.")
+    ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
     with _reported_errors():
@@ -180,6 +209,11 @@ def learn(
         requirements += list(require or [])
         if require_file is not None:
             requirements += _read_requirements(require_file)
+            try:
+                parse_requirements_syntax(requirements)
+            except InputError as exc:
+                raise InputError(str(exc), source=str(require_file)) from None
+        requirements = list(dict.fromkeys(requirements))
         new = load_demonstrations(demos)
         learner = TaskModelLearner(require=requirements, **_typed_settings(settings))
         learner.fit(previous + new)
@@ -227,8 +261,12 @@ def _model_json(model: TaskModel) -> dict[str, Any]:
 
 @app.command()
 def show(
-    model_path: Annotated[Path, typer.Argument(metavar="MODEL", help="A model file written by 'learn'.")],
-    json_output: Annotated[bool, typer.Option("--json", help="Print the model as JSON on stdout.")] = False,
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="A model file written by 'learn'.")
+    ],
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the model as JSON on stdout.")
+    ] = False,
     decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
 ) -> None:
     """Print a model as the paper's tables: states, sequences, constraints."""

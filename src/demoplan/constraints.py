@@ -32,6 +32,7 @@ __all__ = [
     "learn_constraints",
     "ordered_pairs",
     "parse_requirements",
+    "parse_requirements_syntax",
     "visit_sequence",
 ]
 
@@ -101,6 +102,17 @@ def goal_states(sequence: Sequence[str], states: Sequence[State]) -> tuple[str, 
     return tuple(sorted(set(last.values()), key=label_key))
 
 
+def parse_requirements_syntax(texts: Iterable[str]) -> list[tuple[str, str]]:
+    """Split ``"X<Y"`` texts into their two sides, or raise an InputError."""
+    sides = []
+    for text in texts:
+        match = _REQUIREMENT.match(text)
+        if not match:
+            raise InputError(f"expected a requirement like 'A<B', got {text!r}", field="require")
+        sides.append((match.group(1), match.group(2)))
+    return sides
+
+
 def parse_requirements(texts: Iterable[str], states: Sequence[State]) -> tuple[Pair, ...]:
     """Teacher requirements ``"A<B"`` → pairs of visit labels.
 
@@ -112,11 +124,9 @@ def parse_requirements(texts: Iterable[str], states: Sequence[State]) -> tuple[P
         by_object.setdefault(state.object, []).append(state.id)
     ids = {state.id for state in states}
     pairs: set[Pair] = set()
-    for text in texts:
-        match = _REQUIREMENT.match(text)
-        if not match:
-            raise InputError(f"expected a requirement like 'A<B', got {text!r}", field="require")
-        sides = [_expand(token, ids, by_object, text) for token in match.groups()]
+    texts = list(texts)
+    for text, tokens in zip(texts, parse_requirements_syntax(texts), strict=True):
+        sides = [_expand(token, ids, by_object, text) for token in tokens]
         for x in sides[0]:
             for y in sides[1]:
                 if x == y:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -33,6 +33,11 @@ _LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrations
 
 
+# A number is a JSON number: not a string ("1.5") nor a boolean (true), which
+# pydantic's lax mode would otherwise turn into 1.5 and 1.0.
+Number = Annotated[float, Field(strict=True)]
+
+
 class _Schema(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
@@ -43,10 +48,10 @@ class UnitsSchema(_Schema):
 
 
 class PoseSchema(_Schema):
-    position: list[float] = Field(min_length=2, max_length=3)
-    yaw: float | None = None
-    rpy: list[float] | None = Field(default=None, min_length=3, max_length=3)
-    quat: list[float] | None = Field(default=None, min_length=4, max_length=4)
+    position: list[Number] = Field(min_length=2, max_length=3)
+    yaw: Number | None = None
+    rpy: list[Number] | None = Field(default=None, min_length=3, max_length=3)
+    quat: list[Number] | None = Field(default=None, min_length=4, max_length=4)
 
     @model_validator(mode="after")
     def _one_orientation(self) -> PoseSchema:
@@ -64,7 +69,7 @@ class StepSchema(PoseSchema):
 
 class ObjectSchema(_Schema):
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
-    size: list[float] = Field(min_length=3, max_length=3)
+    size: list[Number] = Field(min_length=3, max_length=3)
 
     @field_validator("size")
     @classmethod
@@ -82,14 +87,28 @@ class DemonstrationSchema(_Schema):
     objects: dict[str, ObjectSchema] = {}
     landmarks: dict[str, PoseSchema] = {}
     initial: dict[str, PoseSchema] = {}
-    steps: list[StepSchema] = Field(min_length=1)
+    steps: list[StepSchema]
+
+    @field_validator("steps")
+    @classmethod
+    def _not_empty(cls, steps: list[StepSchema]) -> list[StepSchema]:
+        if not steps:
+            raise ValueError("empty demonstration; at least one step expected")
+        return steps
 
 
 class DemonstrationsSchema(_Schema):
     format: str
     description: str | None = None
     units: UnitsSchema | None = None
-    demonstrations: list[dict[str, Any]] = Field(min_length=1)
+    demonstrations: list[dict[str, Any]]
+
+    @field_validator("demonstrations")
+    @classmethod
+    def _not_empty(cls, demos: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        if not demos:
+            raise ValueError("no demonstrations; at least one expected")
+        return demos
 
 
 def pose_from_dict(data: PoseSchema, units: UnitsSchema) -> Pose:
@@ -198,11 +217,18 @@ def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
     demos: list[Demonstration] = []
     for path in map(Path, paths):
         if path.is_dir():
+            # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
             files = sorted(
-                p for p in path.iterdir() if p.suffix.lower() in {".json", ".yaml", ".yml"}
+                p
+                for p in path.iterdir()
+                if p.suffix.lower() in {".json", ".yaml", ".yml"}
+                and not p.name.startswith(".")
+                and p.is_file()
             )
             if not files:
-                raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+                raise InputError(
+                    "folder holds no .json or .yaml demonstration files", source=str(path)
+                )
         else:
             files = [path]
         for file in files:
@@ -223,11 +249,12 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
             if name in geometry:
                 known, where = geometry[name]
                 if known.shape != shape.shape or any(
-                    abs(a - b) > GEOMETRY_TOLERANCE for a, b in zip(known.size, shape.size, strict=True)
+                    abs(a - b) > GEOMETRY_TOLERANCE
+                    for a, b in zip(known.size, shape.size, strict=True)
                 ):
                     raise InputError(
-                        f"{shape.shape} {list(shape.size)} differs from {known.shape} "
-                        f"{list(known.size)} in {where}; one geometry per object expected",
+                        f"{shape.shape} {_metres(shape.size)} differs from {known.shape} "
+                        f"{_metres(known.size)} in {where}; one geometry per object expected",
                         source=source,
                         field=f"objects.{name}",
                     )
@@ -236,10 +263,15 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
         for name, _ in demo.landmarks:
             landmarks.setdefault(name, source)
     for demo in demos:
-        for step in demo.steps:
+        for index, step in enumerate(demo.steps):
             if step.object in landmarks:
                 raise InputError(
-                    f"{step.object!r} is moved here but is a landmark in {landmarks[step.object]}",
+                    f"{step.object!r} is moved here but is a landmark (static) in "
+                    f"{landmarks[step.object]}; a movable object expected",
                     source=demo.source or demo.name,
-                    field="steps",
+                    field=f"steps[{index}].object",
                 )
+
+
+def _metres(size: Sequence[float]) -> str:
+    return "[" + ", ".join(f"{v:.6g}" for v in size) + "] m"

@@ -8,10 +8,12 @@ write leaves the old one in place.
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -40,6 +42,7 @@ def read_document(path: Path) -> dict[str, Any]:
     NaN and ±Infinity literals are refused: JSON does not have them and a
     pose made of them is meaningless.
     """
+    path = Path(path)
     source = str(path)
     try:
         size = path.stat().st_size
@@ -48,51 +51,60 @@ def read_document(path: Path) -> dict[str, Any]:
     if size > MAX_FILE_BYTES:
         raise InputError(f"file is {size} bytes; at most {MAX_FILE_BYTES} expected", source=source)
     try:
-        text = path.read_text(encoding="utf-8")
+        # utf-8-sig: a byte-order mark (as some Windows editors write) is not an error.
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read file as UTF-8 text ({exc})", source=source) from None
     if path.suffix.lower() in {".yaml", ".yml"}:
         data = _parse_yaml(text, source)
     else:
         try:
-            data = json.loads(text, parse_constant=_refuse_constant)
-        except _NonFiniteError as exc:
-            raise InputError(f"{exc} is not a number; finite numbers expected", source=source) from None
+            # NaN / Infinity literals become floats here and are refused below
+            # with the field they stand in; so is a number that overflows (1e999).
+            data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise InputError(
                 f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}", source=source
             ) from None
         except RecursionError:
             raise InputError("JSON nested too deeply", source=source) from None
+        except ValueError as exc:  # e.g. an integer literal beyond Python's digit limit
+            raise InputError(f"malformed JSON: {str(exc).splitlines()[0]}", source=source) from None
     if not isinstance(data, dict):
-        raise InputError(f"expected a JSON object at top level, got {type(data).__name__}", source=source)
+        raise InputError(
+            f"expected an object (mapping) at top level, got {type(data).__name__}", source=source
+        )
+    try:
+        _check_finite(data, source, "")
+    except RecursionError:
+        raise InputError("document nested too deeply", source=source) from None
     return data
-
-
-class _NonFiniteError(ValueError):
-    pass
-
-
-def _refuse_constant(name: str) -> float:
-    raise _NonFiniteError(name)
 
 
 def _parse_yaml(text: str, source: str) -> Any:
     try:
-        import yaml
+        yaml: Any = importlib.import_module("yaml")  # Any: PyYAML ships no type stubs
     except ImportError:  # pragma: no cover - yaml is a dependency
         raise InputError("reading YAML needs PyYAML (pip install pyyaml)", source=source) from None
     try:
-        data = yaml.safe_load(text)
+        return yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise InputError(f"malformed YAML: {str(exc).splitlines()[0]}", source=source) from None
-    _check_finite(data, source, "")
-    return data
+        mark = getattr(exc, "problem_mark", None)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        where = f" at line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
+        raise InputError(
+            f"malformed YAML{where}: {' '.join(str(problem).split())}", source=source
+        ) from None
+    except RecursionError:
+        raise InputError("YAML nested too deeply", source=source) from None
 
 
 def _check_finite(value: Any, source: str, where: str) -> None:
     if isinstance(value, float) and not math.isfinite(value):
-        raise InputError(f"{value} is not a finite number", source=source, field=where or None)
+        shown = "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+        raise InputError(
+            f"{shown} is not a number; a finite number expected", source=source, field=where or None
+        )
     if isinstance(value, dict):
         for key, item in value.items():
             _check_finite(item, source, f"{where}.{key}" if where else str(key))
@@ -105,11 +117,17 @@ def check_format(data: dict[str, Any], kinds: set[str], source: str) -> tuple[st
     """Check ``data["format"]`` names one of ``kinds`` at a version this release reads."""
     tag = data.get("format")
     expected = " or ".join(f"'demoplan/{k}-{FORMAT_VERSION}'" for k in sorted(kinds))
-    if not isinstance(tag, str):
+    if tag is None:
         raise InputError(f"missing format tag; expected {expected}", source=source, field="format")
+    if not isinstance(tag, str):
+        raise InputError(
+            f"expected a string such as {expected}, got {tag!r}", source=source, field="format"
+        )
     match = _FORMAT.match(tag)
     if not match or match.group(1) not in kinds:
-        raise InputError(f"unknown format {tag!r}; expected {expected}", source=source, field="format")
+        raise InputError(
+            f"unknown format {tag!r}; expected {expected}", source=source, field="format"
+        )
     version = int(match.group(2))
     if version > FORMAT_VERSION:
         raise InputError(
@@ -150,9 +168,17 @@ def dump_json(data: Any) -> str:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temp file in the same folder + rename)."""
+    """Write ``text`` to ``path`` atomically (temp file in the same folder + rename).
+
+    The new file gets the old file's permissions, or the usual ones for a new
+    file (0666 less the umask) — not the 0600 of a bare temporary file. Any
+    failure leaves ``path`` as it was, removes the temporary file and raises
+    :class:`InputError` naming ``path``.
+    """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path()
+    if path.is_dir():
+        raise InputError("is a folder; a file name expected", source=str(path))
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
@@ -160,10 +186,52 @@ def write_atomic(path: Path, text: str) -> None:
         raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            _set_mode(handle.fileno(), path)
             handle.write(text)
             handle.flush()
             os.fsync(handle.fileno())
         Path(tmp).replace(path)
-    except BaseException:
+    except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
         raise
+    _sync_folder(folder)
+
+
+def _set_mode(fd: int, path: Path) -> None:
+    """Give the temporary file ``path``'s permissions, or a new file's (0666 & ~umask)."""
+    if not hasattr(os, "fchmod"):  # pragma: no cover - Windows before 3.13
+        return
+    try:
+        mode = stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        mode = 0o666 & ~_umask()
+    os.fchmod(fd, mode)
+
+
+def _umask() -> int:
+    # Linux tells the umask without changing it (os.umask would, racing other threads).
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return umask
+
+
+def _sync_folder(folder: Path) -> None:
+    """Best effort: make the rename itself durable (POSIX)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

@@ -9,10 +9,12 @@ them, the learning settings, and the demonstrations themselves, so that
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from demoplan.constraints import label_key
 from demoplan.demonstrations import demonstration_to_dict, demonstrations_from_document
@@ -24,10 +26,24 @@ from demoplan.fileio import (
     read_document,
     write_atomic,
 )
-from demoplan.model import State, StateOrientation, StatePosition, TaskModel
+from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
 from demoplan.rotations import canonical_quat, quat_from_rpy
 
 __all__ = ["load_model", "model_from_dict", "model_to_dict", "save_model"]
+
+
+# JSON numbers only: pydantic's lax mode would read "0.5" and true as numbers.
+Number = Annotated[float, Field(strict=True)]
+Integer = Annotated[int, Field(strict=True)]
+_LABEL = re.compile(r"^[A-Z]+(?:#[1-9][0-9]*)?$")  # a state id, or a visit label "C#2"
+# Learning settings demoplan itself reads back (``learn --update``) and their types.
+_NUMBER_SETTINGS = {
+    "position_noise",
+    "orientation_noise",
+    "position_separation",
+    "orientation_separation",
+}
+_INTEGER_SETTINGS = {"n_init", "seed"}
 
 
 class _Schema(BaseModel):
@@ -36,15 +52,29 @@ class _Schema(BaseModel):
 
 class _PositionSchema(_Schema):
     reference: str | None
-    value: list[float] = Field(min_length=2, max_length=3)
-    spread: float = 0.0
+    value: list[Number] = Field(min_length=2, max_length=3)
+    spread: Number = 0.0
 
 
 class _OrientationSchema(_Schema):
     reference: str | None = None
-    value: list[float] | None = Field(default=None, min_length=1, max_length=3)
-    quat: list[float] | None = Field(default=None, min_length=4, max_length=4)
-    spread: float = 0.0
+    value: list[Number] | None = Field(default=None, min_length=1, max_length=3)
+    quat: list[Number] | None = Field(default=None, min_length=4, max_length=4)
+    spread: Number = 0.0
+
+    @field_validator("value")
+    @classmethod
+    def _yaw_or_rpy(cls, value: list[float] | None) -> list[float] | None:
+        if value is not None and len(value) == 2:
+            raise ValueError(f"expected [yaw] or [roll, pitch, yaw] in degrees, got {value}")
+        return value
+
+    @field_validator("quat")
+    @classmethod
+    def _non_zero(cls, quat: list[float] | None) -> list[float] | None:
+        if quat is not None and math.hypot(*quat) < 1e-9:
+            raise ValueError("quat must be a non-zero quaternion [x, y, z, w]")
+        return quat
 
 
 class _StateSchema(_Schema):
@@ -52,7 +82,12 @@ class _StateSchema(_Schema):
     object: str = Field(min_length=1)
     position: _PositionSchema
     orientation: _OrientationSchema = _OrientationSchema()
-    members: list[list[int]] = []
+    members: list[tuple[Integer, Integer]] = []
+
+
+class _ViolationSchema(_Schema):
+    demonstration: Integer = Field(ge=0)
+    required: tuple[str, str]
 
 
 class _ModelSchema(_Schema):
@@ -62,8 +97,23 @@ class _ModelSchema(_Schema):
     constraints: list[list[str]]
     goals: list[list[str]]
     teacher_constraints: list[list[str]] = []
-    settings: dict[str, float | int | str] = {}
+    violations: list[_ViolationSchema] = []
+    settings: dict[str, Any] = {}
     demonstrations: list[dict[str, Any]] = []
+
+    @field_validator("settings")
+    @classmethod
+    def _typed_settings(cls, settings: dict[str, Any]) -> dict[str, Any]:
+        for key, value in settings.items():
+            if isinstance(value, bool) or not isinstance(value, float | int | str):
+                raise ValueError(f"{key} must be a number or a string, got {value!r}")
+            if key in _NUMBER_SETTINGS and (
+                isinstance(value, str) or not math.isfinite(value) or value < 0
+            ):
+                raise ValueError(f"{key} must be a non-negative number, got {value!r}")
+            if key in _INTEGER_SETTINGS and not isinstance(value, int):
+                raise ValueError(f"{key} must be an integer, got {value!r}")
+        return settings
 
 
 def model_to_dict(model: TaskModel) -> dict[str, Any]:
@@ -75,9 +125,7 @@ def model_to_dict(model: TaskModel) -> dict[str, Any]:
         "constraints": [list(c) for c in model.constraints],
         "goals": [list(g) for g in model.goals],
         "teacher_constraints": [list(c) for c in model.teacher_constraints],
-        "violations": [
-            {"demonstration": d, "required": [x, y]} for d, x, y in model.violations
-        ],
+        "violations": [{"demonstration": d, "required": [x, y]} for d, x, y in model.violations],
         "settings": dict(model.settings),
         "demonstrations": [demonstration_to_dict(d) for d in model.demonstrations],
     }
@@ -113,12 +161,17 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
     states = tuple(_state_from_schema(s) for s in parsed.states)
     ids = [s.id for s in states]
     if len(set(ids)) != len(ids):
-        raise InputError("state ids must be unique", source=source, field="states")
+        duplicate = next(i for i in ids if ids.count(i) > 1)
+        raise InputError(
+            f"state id {duplicate!r} appears twice; unique ids expected",
+            source=source,
+            field="states",
+        )
     known = set(ids)
 
     def check(labels: list[str], field: str) -> tuple[str, ...]:
         for label in labels:
-            if label.split("#")[0] not in known:
+            if not _LABEL.match(label) or label.split("#")[0] not in known:
                 raise InputError(
                     f"{label!r} is not a state of this model (states: {', '.join(ids)})",
                     source=source,
@@ -135,15 +188,40 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
             out.append((x, y))
         return tuple(out)
 
+    sequences = tuple(check(s, f"sequences[{i}]") for i, s in enumerate(parsed.sequences))
+    if len(parsed.goals) != len(sequences):
+        raise InputError(
+            f"{len(parsed.goals)} goals for {len(sequences)} sequences; one goal per "
+            "demonstration expected",
+            source=source,
+            field="goals",
+        )
     demos = []
     if parsed.demonstrations:
         demos = demonstrations_from_document(
             {"format": "demoplan/demonstrations-1", "demonstrations": parsed.demonstrations},
             source,
         )
+        if len(demos) != len(sequences):
+            raise InputError(
+                f"{len(demos)} demonstrations for {len(sequences)} sequences; one sequence per "
+                "demonstration expected",
+                source=source,
+                field="demonstrations",
+            )
+        _check_references(states, demos, source)
+    for index, violation in enumerate(parsed.violations):
+        if violation.demonstration >= len(sequences):
+            raise InputError(
+                f"demonstration {violation.demonstration} does not exist; an index below "
+                f"{len(sequences)} expected",
+                source=source,
+                field=f"violations[{index}].demonstration",
+            )
+        check(list(violation.required), f"violations[{index}].required")
     return TaskModel(
         states=states,
-        sequences=tuple(check(s, f"sequences[{i}]") for i, s in enumerate(parsed.sequences)),
+        sequences=sequences,
         constraints=pairs(parsed.constraints, "constraints"),
         goals=tuple(
             tuple(sorted(check(g, f"goals[{i}]"), key=label_key))
@@ -152,12 +230,30 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         demonstrations=tuple(demos),
         teacher_constraints=pairs(parsed.teacher_constraints, "teacher_constraints"),
         violations=tuple(
-            (int(v["demonstration"]), str(v["required"][0]), str(v["required"][1]))
-            for v in data.get("violations", [])
-            if isinstance(v, dict)
+            (v.demonstration, v.required[0], v.required[1]) for v in parsed.violations
         ),
         settings=tuple(parsed.settings.items()),
     )
+
+
+def _check_references(states: tuple[State, ...], demos: list[Demonstration], source: str) -> None:
+    """Every reference must be something the demonstrations know: an object or landmark."""
+    names = {s.object for s in states}
+    for demo in demos:
+        names |= {n for n, _ in demo.objects} | {n for n, _ in demo.landmarks}
+        names |= {n for n, _ in demo.initial} | set(demo.moved_objects)
+    for index, state in enumerate(states):
+        for kind, reference in (
+            ("position", state.position.reference),
+            ("orientation", state.orientation.reference),
+        ):
+            if reference is not None and reference not in names:
+                raise InputError(
+                    f"unknown reference {reference!r}; null (absolute) or one of "
+                    f"{sorted(names)} expected",
+                    source=source,
+                    field=f"states[{index}].{kind}.reference",
+                )
 
 
 def _state_from_schema(state: _StateSchema) -> State:
@@ -178,7 +274,7 @@ def _state_from_schema(state: _StateSchema) -> State:
         orientation=StateOrientation(
             orientation.reference if quat is not None else None, quat, orientation.spread
         ),
-        members=tuple((m[0], m[1]) for m in state.members if len(m) == 2),
+        members=tuple((m[0], m[1]) for m in state.members),
     )
 
 

@@ -1,0 +1,524 @@
+"""The command line (SPEC §4): learn / show, exit codes, one-line errors, outputs."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.modelfile import load_model, model_to_dict
+from tests.helpers import EXAMPLES
+
+SET_TABLE = EXAMPLES / "set_table"
+DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
+# Without the script (an unusual install), run the same entry point through python.
+COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
+
+
+def invoke(*args: str | Path) -> Any:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def demo(steps: list[dict[str, Any]] | None = None, **fields: Any) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        "format": "demoplan/demonstration-1",
+        "steps": steps if steps is not None else [{"object": "plate", "position": [0.5, 0.4]}],
+    }
+    data.update(fields)
+    return data
+
+
+def raw(step: str) -> str:
+    """Demonstration JSON text around one step's raw JSON (for literals json.dumps refuses)."""
+    return '{"format": "demoplan/demonstration-1", "steps": [' + step + "]}"
+
+
+def write(path: Path, data: Any) -> Path:
+    path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
+    return path
+
+
+def assert_one_line_error(result: Any, *fragments: str) -> str:
+    """Exit 1, exactly one line on stderr naming every fragment, no traceback."""
+    assert result.exit_code == 1, (result.exit_code, result.stdout, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    line: str = lines[0]
+    assert line.startswith("demoplan: error: ")
+    assert "Traceback" not in result.stderr
+    for fragment in fragments:
+        assert fragment in line, (fragment, line)
+    return line
+
+
+@pytest.fixture(scope="module")
+def model_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("model") / "set_table.json"
+    result = invoke("learn", SET_TABLE, "-o", path)
+    assert result.exit_code == 0, result.stderr
+    return path
+
+
+# --- bad input: exit 1, one line naming file, field and expectation --------------------
+
+BAD_INPUTS: list[tuple[str, Any, list[str]]] = [
+    (
+        "malformed JSON",
+        '{"format": "demoplan/demonstration-1", "steps": [',
+        ["malformed JSON at line 1"],
+    ),
+    ("missing position", demo([{"object": "plate"}]), ["steps[0].position", "required"]),
+    (
+        "NaN",
+        raw('{"object": "a", "position": [NaN, 0]}'),
+        ["steps[0].position[0]", "NaN", "finite number expected"],
+    ),
+    (
+        "Infinity",
+        raw('{"object": "a", "position": [0, Infinity]}'),
+        ["steps[0].position[1]", "Infinity", "finite number expected"],
+    ),
+    (
+        "-Infinity",
+        raw('{"object": "a", "position": [0, 0], "yaw": -Infinity}'),
+        ["steps[0].yaw", "-Infinity", "finite number expected"],
+    ),
+    (
+        "unknown kind",
+        demo(format="demoplan/recipe-1"),
+        ["format", "unknown format 'demoplan/recipe-1'", "expected 'demoplan/demonstration-1'"],
+    ),
+    ("newer version", demo(format="demoplan/demonstration-2"), ["format", "version 2", "newer"]),
+    ("empty demonstration", demo([]), ["steps", "at least one step expected"]),
+    (
+        "zero quaternion",
+        demo([{"object": "a", "position": [0, 0], "quat": [0, 0, 0, 0]}]),
+        ["steps[0]", "non-zero quaternion"],
+    ),
+    (
+        "wrong-length position",
+        demo([{"object": "a", "position": [0, 0, 0, 0]}]),
+        ["steps[0].position", "at most 3"],
+    ),
+    (
+        "two orientations",
+        demo([{"object": "a", "position": [0, 0], "yaw": 90, "rpy": [0, 0, 90]}]),
+        ["steps[0]", "give one orientation"],
+    ),
+    (
+        "step object not in objects",
+        demo([{"object": "cup", "position": [0, 0]}], objects={"plate": {"size": [0.1, 0.1, 0.1]}}),
+        ["steps[0].object", "unknown object 'cup'", "expected one of ['plate']"],
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("text", "fragments"), [b[1:] for b in BAD_INPUTS], ids=[b[0] for b in BAD_INPUTS]
+)
+@pytest.mark.parametrize("json_flag", [False, True], ids=["text", "json"])
+def test_bad_demonstration_exits_1_with_one_line(
+    tmp_path: Path, text: Any, fragments: list[str], json_flag: bool
+) -> None:
+    bad = write(tmp_path / "bad.json", text)
+    out = tmp_path / "model.json"
+    result = invoke("learn", bad, "-o", out, *(["--json"] if json_flag else []))
+    assert_one_line_error(result, str(bad), *fragments)
+    assert result.stdout == ""
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]  # no temp file either
+
+
+def test_inconsistent_geometry_across_two_files(tmp_path: Path) -> None:
+    one = write(
+        tmp_path / "one.json",
+        demo(objects={"plate": {"shape": "cylinder", "size": [0.26, 0.26, 0.02]}}),
+    )
+    two = write(
+        tmp_path / "two.json",
+        demo(objects={"plate": {"shape": "cylinder", "size": [0.3, 0.3, 0.02]}}),
+    )
+    result = invoke("learn", one, two, "-o", tmp_path / "m.json", "--json")
+    assert_one_line_error(
+        result, str(two), "objects.plate", str(one), "one geometry per object expected"
+    )
+    assert result.stdout == ""
+
+
+def test_missing_file_and_empty_folder(tmp_path: Path) -> None:
+    result = invoke("learn", tmp_path / "nope.json", "-o", tmp_path / "m.json", "--json")
+    assert_one_line_error(result, "nope.json", "cannot read file")
+    assert result.stdout == ""
+    (tmp_path / "empty").mkdir()
+    result = invoke("learn", tmp_path / "empty", "-o", tmp_path / "m.json", "--json")
+    assert_one_line_error(result, str(tmp_path / "empty"), "no .json or .yaml demonstration files")
+    assert result.stdout == ""
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_output_onto_a_folder_is_bad_input(tmp_path: Path) -> None:
+    (tmp_path / "out").mkdir()
+    result = invoke("learn", SET_TABLE / "demonstration-1.json", "-o", tmp_path / "out", "--json")
+    assert result.exit_code == 1
+    assert "is a folder" in result.stderr
+    assert result.stdout == ""
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["learn"], "Missing argument"),
+        (["learn", str(SET_TABLE)], "-o"),
+        (["learn", str(SET_TABLE), "-o", "m.json", "--no-such-option"], "No such option"),
+        (["show"], "Missing argument"),
+        (["frobnicate"], "No such command"),
+    ],
+)
+def test_usage_errors_exit_2(
+    tmp_path: Path, args: list[str], message: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    result = invoke(*args)
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    assert message in result.stderr
+    assert result.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+# --- the same through a real process -----------------------------------------------------
+
+
+def run(*args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*COMMAND, *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=60,
+        check=False,
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "fragments"),
+    [
+        (
+            raw('{"object": "a", "position": [NaN, 0]}'),
+            ["steps[0].position[0]", "NaN"],
+        ),
+        (demo([{"object": "plate"}]), ["steps[0].position", "required"]),
+        (
+            raw('{"object": "a", "position": [' + "9" * 5000 + ", 0]}"),
+            ["malformed JSON"],
+        ),
+    ],
+    ids=["nan", "missing-position", "huge-integer"],
+)
+def test_process_prints_one_line_and_no_traceback(
+    tmp_path: Path, text: Any, fragments: list[str]
+) -> None:
+    bad = write(tmp_path / "bad.json", text)
+    done = run("learn", "bad.json", "-o", "model.json", "--json", cwd=tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stdout == ""
+    assert "Traceback" not in done.stderr
+    lines = done.stderr.splitlines()
+    assert len(lines) == 1, done.stderr
+    assert lines[0].startswith("demoplan: error: bad.json: ")
+    for fragment in fragments:
+        assert fragment in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [bad.name]
+
+
+def test_process_usage_error_and_model_error(tmp_path: Path) -> None:
+    done = run("learn", cwd=tmp_path)
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    model = write(tmp_path / "model.json", {"format": "demoplan/model-2"})
+    done = run("show", model.name, "--json", cwd=tmp_path)
+    assert done.returncode == 1
+    assert done.stdout == ""
+    assert done.stderr.splitlines() == [
+        "demoplan: error: model.json: format: 'demoplan/model-2' is version 2, newer than this "
+        "demoplan reads (up to 1); upgrade demoplan"
+    ]
+
+
+# --- outputs are never half-written ------------------------------------------------------
+
+
+def test_failed_learn_leaves_the_existing_model_unchanged(tmp_path: Path) -> None:
+    good = write(tmp_path / "good.json", demo())
+    bad = write(tmp_path / "bad.json", demo([{"object": "plate", "position": [0, float("nan")]}]))
+    model = tmp_path / "model.json"
+    model.write_text("precious\n")
+    result = invoke("learn", good, bad, "-o", model)
+    assert_one_line_error(result, "bad.json", "steps[0].position[1]")
+    assert model.read_text() == "precious\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json", "good.json", "model.json"]
+
+
+def test_failed_update_leaves_the_model_unchanged(tmp_path: Path, model_file: Path) -> None:
+    model = tmp_path / "model.json"
+    model.write_bytes(model_file.read_bytes())
+    bad = write(tmp_path / "bad.json", demo([]))
+    result = invoke("learn", "--update", model, bad)
+    assert_one_line_error(result, "bad.json", "steps")
+    assert model.read_bytes() == model_file.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json", "model.json"]
+
+
+def test_learn_writes_atomically_and_replaces(tmp_path: Path) -> None:
+    model = tmp_path / "model.json"
+    model.write_text("old\n")
+    result = invoke("learn", SET_TABLE, "-o", model)
+    assert result.exit_code == 0, result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json"]  # no temp files left
+    data = json.loads(model.read_text())
+    assert data["format"] == "demoplan/model-1"
+    assert "Learned from 3 demonstrations" in result.stdout
+
+
+# --- learn and show ------------------------------------------------------------------------
+
+
+def test_learn_writes_the_spec_model(model_file: Path) -> None:
+    data = json.loads(model_file.read_text())
+    assert data["format"] == "demoplan/model-1"
+    assert [s["id"] for s in data["states"]] == list("ABCDEFGHIJ")
+    for state in data["states"]:
+        assert set(state) >= {"id", "object", "position", "orientation"}
+        assert set(state["position"]) >= {"reference", "value"}
+        assert set(state["orientation"]) >= {"reference", "value"}
+    assert data["states"][0]["object"] == "plate"
+    assert data["states"][0]["position"]["reference"] is None
+    assert data["sequences"] == [
+        ["A", "B", "C", "D", "E", "F", "G"],
+        ["A", "E", "H", "I", "J", "F", "G"],
+        ["A", "C", "B", "F", "E", "D", "G"],
+    ]
+    assert len(data["constraints"]) == 32
+    assert ["A", "B"] in data["constraints"]
+    assert ["B", "C"] not in data["constraints"]  # seen both ways
+    assert data["goals"][0] == ["A", "B", "C", "D", "E", "F", "G"]
+
+
+def test_learn_json_prints_only_json(tmp_path: Path) -> None:
+    result = invoke("learn", SET_TABLE, "-o", tmp_path / "m.json", "--json")
+    assert result.exit_code == 0
+    data = json.loads(result.stdout)
+    assert data["format"] == "demoplan/model-1"
+    assert len(data["constraints"]) == 32
+
+
+def test_show_json_is_valid_json_only(model_file: Path) -> None:
+    result = invoke("show", model_file, "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)  # nothing but JSON on stdout
+    assert {"states", "sequences", "constraints", "goals"} <= set(data)
+    saved = json.loads(model_file.read_text())
+    for key in ("states", "sequences", "constraints", "goals"):
+        assert data[key] == saved[key]
+
+
+def test_show_prints_tables(model_file: Path) -> None:
+    result = invoke("show", model_file)
+    assert result.exit_code == 0, result.stderr
+    assert "Constraints (32)" in result.stdout
+    assert "States" in result.stdout
+    assert "A-E-H-I-J-F-G" in result.stdout
+    for obj in ("Plate", "Knife", "Fork", "Spoon", "Glass", "Food", "Napkin"):
+        assert obj in result.stdout
+
+
+BAD_MODELS = [
+    (
+        "unknown state in a constraint",
+        lambda d: d["constraints"].append(["A", "ZZ"]),
+        ["constraints[32]", "'ZZ' is not a state"],
+    ),
+    (
+        "wrong format",
+        lambda d: d.update(format="demoplan/demonstration-1"),
+        ["format", "expected 'demoplan/model-1'"],
+    ),
+    (
+        "newer version",
+        lambda d: d.update(format="demoplan/model-2"),
+        ["format", "version 2", "newer"],
+    ),
+    (
+        "violation without pair",
+        lambda d: d.update(violations=[{"demonstration": 0}]),
+        ["violations[0].required"],
+    ),
+    (
+        "two-number orientation",
+        lambda d: d["states"][0].update(orientation={"reference": None, "value": [1, 2]}),
+        ["states[0].orientation.value"],
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("edit", "fragments"), [b[1:] for b in BAD_MODELS], ids=[b[0] for b in BAD_MODELS]
+)
+@pytest.mark.parametrize("command", ["show", "show-json", "update"])
+def test_bad_model_file_exits_1(
+    tmp_path: Path, model_file: Path, edit: Any, fragments: list[str], command: str
+) -> None:
+    data = json.loads(model_file.read_text())
+    edit(data)
+    bad = write(tmp_path / "model.json", data)
+    before = bad.read_bytes()
+    if command == "update":
+        result = invoke("learn", "--update", bad, SET_TABLE / "demonstration-3.json", "--json")
+    else:
+        result = invoke("show", bad, *(["--json"] if command == "show-json" else []))
+    assert_one_line_error(result, str(bad), *fragments)
+    assert result.stdout == ""
+    assert bad.read_bytes() == before
+
+
+def test_show_of_a_demonstration_or_garbage(tmp_path: Path) -> None:
+    result = invoke("show", SET_TABLE / "demonstration-1.json")
+    assert_one_line_error(result, "demonstration-1.json", "format", "expected 'demoplan/model-1'")
+    result = invoke("show", write(tmp_path / "m.json", "{"), "--json")
+    assert_one_line_error(result, "m.json", "malformed JSON")
+    assert result.stdout == ""
+
+
+# --- learn --update ------------------------------------------------------------------------
+
+
+def test_update_equals_learning_all_at_once(tmp_path: Path, model_file: Path) -> None:
+    partial = tmp_path / "partial.json"
+    first = invoke(
+        "learn",
+        SET_TABLE / "demonstration-1.json",
+        SET_TABLE / "demonstration-2.json",
+        "-o",
+        partial,
+    )
+    assert first.exit_code == 0, first.stderr
+    assert len(load_model(partial).sequences) == 2
+    updated = invoke("learn", "--update", partial, SET_TABLE / "demonstration-3.json")
+    assert updated.exit_code == 0, updated.stderr
+    assert "Constraints (32)" in updated.stdout
+    incremental = model_to_dict(load_model(partial))
+    at_once = model_to_dict(load_model(model_file))
+    for key in ("states", "sequences", "constraints", "goals", "settings", "demonstrations"):
+        assert incremental[key] == at_once[key], key
+
+
+def test_update_to_another_output_keeps_the_input(tmp_path: Path) -> None:
+    partial = tmp_path / "partial.json"
+    assert invoke("learn", SET_TABLE / "demonstration-1.json", "-o", partial).exit_code == 0
+    before = partial.read_bytes()
+    result = invoke(
+        "learn",
+        "--update",
+        partial,
+        SET_TABLE / "demonstration-2.json",
+        "-o",
+        tmp_path / "two.json",
+    )
+    assert result.exit_code == 0, result.stderr
+    assert partial.read_bytes() == before
+    assert len(load_model(tmp_path / "two.json").demonstrations) == 2
+
+
+# --- teacher constraints -------------------------------------------------------------------
+
+
+def test_require_state_ids(tmp_path: Path) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, "--require", "B<A")
+    assert result.exit_code == 0, result.stderr
+    model = load_model(out)
+    assert ("B", "A") in model.teacher_constraints
+    assert ("B", "A") in model.constraints
+    assert ("A", "B") not in model.constraints  # the teacher wins over the demonstrations
+    # Demonstrations 1 and 3 put the plate (A) before the knife (B).
+    assert {(d, x, y) for d, x, y in model.violations} == {(0, "B", "A"), (2, "B", "A")}
+    assert "Demonstration 1 contradicts the teacher's B<A" in result.stdout
+    assert "Demonstration 3 contradicts the teacher's B<A" in result.stdout
+    saved = json.loads(out.read_text())
+    assert {"demonstration": 0, "required": ["B", "A"]} in saved["violations"]
+
+
+def test_require_holding_constraint_has_no_violation(tmp_path: Path) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, "--require", "plate<napkin", "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["teacher_constraints"] == [["A", "G"]]  # plate is A, napkin G
+    assert ["A", "G"] in data["constraints"]
+    assert data["violations"] == []
+
+
+def test_require_object_names_contradicted(tmp_path: Path) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, "--require", "napkin<plate")
+    assert result.exit_code == 0, result.stderr
+    model = load_model(out)
+    assert model.teacher_constraints == (("G", "A"),)
+    assert len(model.violations) == 3  # every demonstration puts the plate first
+    assert "contradicts the teacher's G<A" in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("requirement", "fragment"),
+    [
+        ("nonsense", "expected a requirement like 'A<B'"),
+        ("plate<teapot", "'teapot' is neither"),
+        ("A<A", "before itself"),
+    ],
+)
+def test_bad_require_exits_1(tmp_path: Path, requirement: str, fragment: str) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, "--require", requirement, "--json")
+    assert_one_line_error(result, "require", fragment)
+    assert result.stdout == ""
+    assert not out.exists()
+
+
+def test_update_keeps_the_teacher_constraints(tmp_path: Path) -> None:
+    partial = tmp_path / "partial.json"
+    args = ["learn", SET_TABLE / "demonstration-1.json", SET_TABLE / "demonstration-2.json"]
+    assert invoke(*args, "-o", partial, "--require", "plate<napkin").exit_code == 0
+    assert invoke("learn", "--update", partial, SET_TABLE / "demonstration-3.json").exit_code == 0
+    assert load_model(partial).teacher_constraints == (("A", "G"),)
+
+
+# --- YAML ----------------------------------------------------------------------------------
+
+
+def test_yaml_demonstrations_are_accepted(tmp_path: Path) -> None:
+    import yaml
+
+    folder = tmp_path / "demos"
+    folder.mkdir()
+    for source in sorted(SET_TABLE.glob("*.json")):
+        data = json.loads(source.read_text())
+        (folder / f"{source.stem}.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
+    result = invoke("learn", folder, "-o", tmp_path / "m.json", "--json")
+    assert result.exit_code == 0, result.stderr
+    from_yaml = json.loads(result.stdout)
+    from_json = json.loads(invoke("learn", SET_TABLE, "-o", tmp_path / "j.json", "--json").stdout)
+    for key in ("states", "sequences", "constraints", "goals"):
+        assert from_yaml[key] == from_json[key]
+
+
+def test_bad_yaml_exits_1(tmp_path: Path) -> None:
+    bad = write(tmp_path / "bad.yaml", "format: demoplan/demonstration-1\nsteps: [\n")
+    result = invoke("learn", bad, "-o", tmp_path / "m.json", "--json")
+    assert_one_line_error(result, "bad.yaml", "malformed YAML")
+    assert result.stdout == ""
