@@ -236,14 +236,22 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
             "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
         )
         return None
-    from demoplan.plotting import plot_demonstration
+    from demoplan.plotting import plot_constraints, plot_demonstration
 
     demos = model.demonstrations
-    fig, axes = plt.subplots(1, len(demos), figsize=(4.2 * len(demos), 4.4), squeeze=False)
-    for k, (demo, ax) in enumerate(zip(demos, axes[0], strict=True)):
-        plot_demonstration(demo, ax, title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}")
+    fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
+    grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
+    for k, demo in enumerate(demos):
+        plot_demonstration(
+            demo,
+            fig.add_subplot(grid[0, k]),
+            title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}",
+        )
+    plot_constraints(model, fig.add_subplot(grid[1, :]))
     fig.suptitle(
-        f"{title}: the demonstrations from above (numbers: order of the moves)", fontsize=10
+        f"{title}: the demonstrations from above (numbers: order of the moves), "
+        "and the constraints learned",
+        fontsize=10,
     )
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
