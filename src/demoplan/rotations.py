@@ -30,7 +30,10 @@ __all__ = [
     "mean_quat",
     "quat_from_rpy",
     "quat_from_yaw",
+    "quat_inverse",
+    "quat_multiply",
     "relative_quats",
+    "rotvecs_from_quats",
     "rpy_from_quat",
 ]
 
@@ -75,6 +78,38 @@ def _clean_angle(angle: float) -> float:
     return 0.0 if abs(wrapped) < 1e-9 else wrapped
 
 
+def quat_multiply(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Hamilton product of ``(..., 4)`` quaternions (x, y, z, w): the rotation ``a·b``."""
+    ax, ay, az, aw = np.moveaxis(np.asarray(a, dtype=float), -1, 0)
+    bx, by, bz, bw = np.moveaxis(np.asarray(b, dtype=float), -1, 0)
+    product: FloatArray = np.stack(
+        [
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz,
+        ],
+        axis=-1,
+    )
+    return product
+
+
+def quat_inverse(q: FloatArray) -> FloatArray:
+    """Inverse (conjugate) of unit quaternions ``(..., 4)``."""
+    inverse: FloatArray = np.asarray(q, dtype=float) * np.array([-1.0, -1.0, -1.0, 1.0])
+    return inverse
+
+
+def rotvecs_from_quats(quats: FloatArray) -> FloatArray:
+    """``(n, 4)`` unit quaternions → ``(n, 3)`` rotation vectors (radians, angle ≤ π)."""
+    q = _canonical_rows(np.asarray(quats, dtype=float).reshape(-1, 4))
+    sine = np.linalg.norm(q[:, :3], axis=1)
+    angle = 2.0 * np.arctan2(sine, q[:, 3])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(sine > 1e-12, angle / sine, 2.0)
+    return np.asarray(q[:, :3] * scale[:, None], dtype=float)
+
+
 def matrices_from_quats(quats: FloatArray) -> FloatArray:
     """``(n, 4)`` quaternions → ``(n, 9)`` flattened rotation matrices.
 
@@ -82,31 +117,51 @@ def matrices_from_quats(quats: FloatArray) -> FloatArray:
     distance there is ``2√2·sin(θ/2)`` for a relative rotation angle θ, so
     K-means can run on it directly without the q / −q ambiguity.
     """
-    return np.asarray(Rotation.from_quat(quats).as_matrix().reshape(len(quats), 9), dtype=float)
+    x, y, z, w = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    return np.stack(
+        [
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - z * w),
+            2 * (x * z + y * w),
+            2 * (x * y + z * w),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - x * w),
+            2 * (x * z - y * w),
+            2 * (y * z + x * w),
+            1 - 2 * (x * x + y * y),
+        ],
+        axis=1,
+    )
 
 
 def relative_quats(reference: FloatArray, target: FloatArray) -> FloatArray:
     """Orientation of each ``target`` in the frame of ``reference``: ``R_ref⁻¹ · R_target``."""
-    rel = Rotation.from_quat(reference).inv() * Rotation.from_quat(target)
-    return _canonical_rows(np.asarray(rel.as_quat(), dtype=float))
+    return _canonical_rows(quat_multiply(quat_inverse(reference), target))
 
 
 def mean_quat(quats: FloatArray) -> Quaternion:
-    """Chordal L2 mean rotation of ``(n, 4)`` quaternions (scipy's ``Rotation.mean``)."""
-    return canonical_quat(Rotation.from_quat(quats).mean().as_quat())
+    """Chordal L2 mean rotation of ``(n, 4)`` quaternions.
+
+    The eigenvector of the largest eigenvalue of ``Σ q·qᵀ`` (Markley et al.,
+    "Averaging Quaternions", 2007), as scipy's ``Rotation.mean``; q and −q
+    count alike.
+    """
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    _, vectors = np.linalg.eigh(q.T @ q)
+    return canonical_quat([float(v) for v in vectors[:, -1]])
 
 
 def deviations_from_mean(quats: FloatArray, mean: Sequence[float]) -> FloatArray:
     """Rotation vectors (degrees) of ``mean⁻¹ · q`` for each row: ``(n, 3)``."""
-    dev = Rotation.from_quat(list(mean)).inv() * Rotation.from_quat(quats)
-    rotvecs = np.asarray(dev.as_rotvec(), dtype=float).reshape(len(quats), 3)
-    return np.asarray(np.degrees(rotvecs), dtype=float)
+    relative = quat_multiply(quat_inverse(np.asarray(mean, dtype=float)), quats)
+    return np.asarray(np.degrees(rotvecs_from_quats(relative)), dtype=float)
 
 
 def angle_between(a: Sequence[float], b: Sequence[float]) -> float:
     """Geodesic angle in degrees between two orientations."""
-    rel = Rotation.from_quat(list(a)).inv() * Rotation.from_quat(list(b))
-    return float(np.degrees(rel.magnitude()))
+    relative = quat_multiply(quat_inverse(np.asarray(a, dtype=float)), np.asarray(b, dtype=float))
+    # atan2 rather than arccos(|w|): exact near 0°, where arccos loses half the digits.
+    return float(np.degrees(2.0 * np.arctan2(np.linalg.norm(relative[:3]), abs(relative[3]))))
 
 
 def _canonical_rows(quats: FloatArray) -> FloatArray:
