@@ -28,7 +28,9 @@ __all__ = [
     "RotationSpace",
     "Space",
     "kmeans",
+    "kmeans_batch",
     "select_clustering",
+    "select_clusterings",
     "spread_of",
 ]
 
@@ -50,59 +52,89 @@ def kmeans(
     max_iter: int = 100,
     rng: np.random.Generator | int | None = None,
 ) -> KMeansResult:
-    """Lloyd's K-means with k-means++ seeding, all ``n_init`` restarts vectorised.
+    """Lloyd's K-means with greedy k-means++ seeding and Hartigan refinement.
 
     Parameters
     ----------
     points : array of shape (n, d)
     n_clusters : number of clusters c, ``1 <= c <= n``
-    n_init : number of seeded restarts run side by side; the lowest inertia wins
-    rng : generator or seed for the k-means++ seeding
+    n_init : number of seeded restarts, run side by side; the lowest inertia wins
+    rng : generator or seed for the seeding
     """
     x = np.asarray(points, dtype=float)
     n = x.shape[0]
     if not 1 <= n_clusters <= n:
         raise ValueError(f"n_clusters must be in 1..{n}, got {n_clusters}")
     if n_clusters == 1:
-        centre = x.mean(axis=0, keepdims=True)
-        return KMeansResult(np.zeros(n, dtype=np.intp), centre, float(((x - centre) ** 2).sum()))
-    generator = np.random.default_rng(rng)
-    sq_norms = (x * x).sum(axis=1)
-    centres = _kmeans_plus_plus(x, sq_norms, n_clusters, n_init, generator)
-    restarts = np.arange(n_init)[:, None]
-    labels = np.full((n_init, n), -1, dtype=np.intp)
+        labels = np.zeros(n, dtype=np.intp)
+    else:
+        generator = np.random.default_rng(rng)
+        labels = kmeans_batch(x[None], n_clusters, n_init, max_iter, generator)[0]
+    centres = np.stack([x[labels == k].mean(axis=0) for k in range(n_clusters)])
+    residual = x - centres[labels]
+    return KMeansResult(labels, centres, float((residual * residual).sum()))
+
+
+def kmeans_batch(
+    points: FloatArray,
+    n_clusters: int,
+    n_init: int,
+    max_iter: int,
+    generator: np.random.Generator,
+) -> IntArray:
+    """K-means on B data sets of equal shape at once: ``(B, n, d)`` → labels ``(B, n)``.
+
+    State generation clusters one object's placements towards every candidate
+    reference for the same c; running them (and every restart) as one batch
+    of array operations removes most of NumPy's per-call overhead.
+    """
+    batch, n, _ = points.shape
+    x = np.repeat(points, n_init, axis=0)  # (B·R, n, d): every restart its own copy
+    items = np.arange(batch * n_init)[:, None]
+    sq_norms = (x * x).sum(axis=2)
+    centres = _kmeans_plus_plus(x, sq_norms, n_clusters, generator)
+    labels = np.full((batch * n_init, n), -1, dtype=np.intp)
+    moving = np.arange(batch * n_init)  # restarts whose labels still change
     for _ in range(max_iter):
-        # Squared distances (restarts, n, c) without forming differences.
+        xs, cs = x[moving], centres[moving]
+        # Squared distances (moving, n, c) without forming differences.
         dist = (
-            sq_norms[None, :, None]
-            - 2.0 * np.matmul(x, centres.transpose(0, 2, 1))
-            + (centres * centres).sum(axis=2)[:, None, :]
+            sq_norms[moving][:, :, None]
+            - 2.0 * np.matmul(xs, cs.transpose(0, 2, 1))
+            + (cs * cs).sum(axis=2)[:, None, :]
         )
         new_labels = dist.argmin(axis=2)
-        if np.array_equal(new_labels, labels):
+        changed = (new_labels != labels[moving]).any(axis=1)
+        if not changed.any():
             break
-        labels = new_labels
-        one_hot = np.zeros((n_init, n, n_clusters))
-        one_hot[restarts, np.arange(n)[None, :], labels] = 1.0
+        moving, xs, dist, new_labels = (
+            moving[changed],
+            xs[changed],
+            dist[changed],
+            new_labels[changed],
+        )
+        labels[moving] = new_labels
+        rows = np.arange(len(moving))[:, None]
+        one_hot = np.zeros((len(moving), n, n_clusters))
+        one_hot[rows, np.arange(n)[None, :], new_labels] = 1.0
         counts = one_hot.sum(axis=1)
-        sums = np.matmul(one_hot.transpose(0, 2, 1), x)
+        sums = np.matmul(one_hot.transpose(0, 2, 1), xs)
         empty = counts == 0
         if empty.any():
             # Re-seed an empty cluster at the point farthest from its centre.
-            nearest = dist[restarts, np.arange(n)[None, :], labels]
+            nearest = dist[rows, np.arange(n)[None, :], new_labels]
             for r, c in zip(*np.nonzero(empty), strict=True):
                 far = int(nearest[r].argmax())
-                sums[r, c] = x[far]
+                sums[r, c] = xs[r, far]
                 counts[r, c] = 1.0
                 nearest[r, far] = -1.0
-        centres = sums / counts[:, :, None]
-    diffs = x[None, :, :] - centres[restarts, labels]
-    inertia = (diffs * diffs).sum(axis=(1, 2))
-    best = int(inertia.argmin())
-    refined = _hartigan_refine(x, labels[best].copy(), n_clusters)
-    centres_best = np.stack([x[refined == k].mean(axis=0) for k in range(n_clusters)])
-    residual = x - centres_best[refined]
-    return KMeansResult(refined, centres_best, float((residual * residual).sum()))
+        centres[moving] = sums / counts[:, :, None]
+    diffs = x - centres[items, labels]
+    inertia = (diffs * diffs).sum(axis=(1, 2)).reshape(batch, n_init)
+    best = inertia.argmin(axis=1) + np.arange(batch) * n_init
+    return np.stack(
+        [_hartigan_refine(points[b], labels[best[b]].copy(), n_clusters) for b in range(batch)]
+    )
 
 
 def _hartigan_refine(x: FloatArray, labels: IntArray, n_clusters: int) -> IntArray:
@@ -146,38 +178,38 @@ def _kmeans_plus_plus(
     x: FloatArray,
     sq_norms: FloatArray,
     n_clusters: int,
-    n_init: int,
     generator: np.random.Generator,
 ) -> FloatArray:
-    """Greedy k-means++ seeding (as scikit-learn): each new centre is the best of
-    ``2 + ln(c)`` candidates drawn with probability ∝ squared distance."""
-    n, d = x.shape
+    """Greedy k-means++ seeding (as scikit-learn) for ``(items, n, d)`` data: each
+    new centre is the best of ``2 + ln(c)`` candidates drawn ∝ squared distance."""
+    items, n, d = x.shape
     trials = 2 + int(math.log(n_clusters))
-    restarts = np.arange(n_init)[:, None]
-    centres = np.empty((n_init, n_clusters, d))
-    centres[:, 0] = x[generator.integers(n, size=n_init)]
+    rows = np.arange(items)
+    centres = np.empty((items, n_clusters, d))
+    centres[:, 0] = x[rows, generator.integers(n, size=items)]
     closest = np.maximum(
-        sq_norms[None, :] - 2.0 * (centres[:, 0] @ x.T) + (centres[:, 0] ** 2).sum(axis=1)[:, None],
+        sq_norms
+        - 2.0 * np.einsum("ind,id->in", x, centres[:, 0])
+        + (centres[:, 0] ** 2).sum(axis=1)[:, None],
         0.0,
     )
     for k in range(1, n_clusters):
         totals = closest.sum(axis=1, keepdims=True)
         cumulative = np.cumsum(closest, axis=1)
-        u = generator.random((n_init, trials)) * totals
+        u = generator.random((items, trials)) * totals
         picks = np.minimum((cumulative[:, None, :] < u[:, :, None]).sum(axis=2), n - 1)
-        degenerate = totals[:, 0] <= 0  # every point sits on a centre already
-        picks[degenerate] = k % n
-        candidates = x[picks]  # (restarts, trials, d)
+        picks[totals[:, 0] <= 0] = k % n  # every point already sits on a centre
+        candidates = x[rows[:, None], picks]  # (items, trials, d)
         distances = np.maximum(
-            sq_norms[None, None, :]
-            - 2.0 * np.matmul(candidates, x.T)
+            sq_norms[:, None, :]
+            - 2.0 * np.matmul(candidates, x.transpose(0, 2, 1))
             + (candidates**2).sum(axis=2)[:, :, None],
             0.0,
         )
         updated = np.minimum(closest[:, None, :], distances)
         best = updated.sum(axis=2).argmin(axis=1)
-        centres[:, k] = candidates[restarts[:, 0], best]
-        closest = updated[restarts[:, 0], best]
+        centres[:, k] = candidates[rows, best]
+        closest = updated[rows, best]
     return centres
 
 
@@ -197,6 +229,7 @@ def spread_of(deviations: FloatArray) -> float:
 class Space:
     """Values to cluster: their K-means embedding, cluster means and spreads."""
 
+    values: FloatArray
     embedded: FloatArray
 
     def __len__(self) -> int:
@@ -290,48 +323,82 @@ def select_clustering(
     The values are put in a canonical (sorted) order before clustering, so the
     result does not depend on the order the demonstrations arrived in.
     """
-    order = np.lexsort(space.embedded.T[::-1])
-    inverse = np.empty_like(order)
-    inverse[order] = np.arange(order.size)
-    canonical = space.embedded[order]
-    n = len(space)
-    n_distinct = 1 + int(np.count_nonzero(np.any(np.diff(canonical, axis=0) != 0, axis=1)))
+    (clustering,) = select_clusterings(
+        [space], separation=separation, noise=noise, n_init=n_init, seed=seed
+    )
+    return clustering
 
-    candidates: list[tuple[int, IntArray, list[tuple[float, ...]], list[float]]] = []
-    tried: list[tuple[int, float | None]] = []
-    for c in range(1, n + 1):
-        if c > n_distinct:
-            break
-        if c == 1:
-            sorted_labels = np.zeros(n, dtype=np.intp)
-        else:
-            sorted_labels = kmeans(canonical, c, n_init=n_init, rng=seed + c).labels
-        labels = sorted_labels[inverse]
+
+class _Scan:
+    """One space's progress through the cluster counts of :func:`select_clusterings`."""
+
+    def __init__(self, space: Space):
+        self.space = space
+        order = np.lexsort(space.embedded.T[::-1])
+        self.inverse = np.empty_like(order)
+        self.inverse[order] = np.arange(order.size)
+        self.canonical = space.embedded[order]
+        steps = np.any(np.diff(self.canonical, axis=0) != 0, axis=1)
+        self.n_distinct = 1 + int(np.count_nonzero(steps))
+        self.accepted: list[tuple[int, IntArray, list[tuple[float, ...]], list[float]]] = []
+        self.tried: list[tuple[int, float | None]] = []
+        self.done = False
+
+    def consider(self, c: int, sorted_labels: IntArray, separation: float, noise: float) -> None:
+        labels = sorted_labels[self.inverse]
         present = np.bincount(labels, minlength=c) > 0
         if not present.all():  # compact the labels if a cluster ended empty
             labels = (np.cumsum(present) - 1)[labels]
-        means, spreads = _cluster_stats(space, labels, int(present.sum()))
-        if c > 1 and _closest_pair(space.distance, means) < separation:
-            tried.append((c, None))
-            break
+        means, spreads = _cluster_stats(self.space, labels, int(present.sum()))
+        if c > 1 and _closest_pair(self.space.distance, means) < separation:
+            self.tried.append((c, None))
+            self.done = True
+            return
         score = max(spreads)
-        tried.append((c, score))
-        candidates.append((c, labels, means, spreads))
-        if math.sqrt(score) < noise:
-            break
+        self.tried.append((c, score))
+        self.accepted.append((c, labels, means, spreads))
+        self.done = math.sqrt(score) < noise or c + 1 > self.n_distinct
 
-    best_root = min(math.sqrt(max(s)) for _, _, _, s in candidates)
-    for c, labels, means, spreads in candidates:  # ascending c: ties go to fewer clusters
-        if math.sqrt(max(spreads)) - best_root < noise:
-            return Clustering(
-                n_clusters=c,
-                labels=tuple(int(v) for v in labels),
-                means=tuple(means),
-                spreads=tuple(spreads),
-                score=max(spreads),
-                tried=tuple(tried),
-            )
-    raise AssertionError("unreachable: the minimum is always within noise of itself")
+    def result(self, noise: float) -> Clustering:
+        best_root = min(math.sqrt(max(s)) for _, _, _, s in self.accepted)
+        for c, labels, means, spreads in self.accepted:  # ascending c: ties go to fewer
+            if math.sqrt(max(spreads)) - best_root < noise:
+                return Clustering(
+                    n_clusters=c,
+                    labels=tuple(int(v) for v in labels),
+                    means=tuple(means),
+                    spreads=tuple(spreads),
+                    score=max(spreads),
+                    tried=tuple(self.tried),
+                )
+        raise AssertionError("unreachable: the minimum is always within noise of itself")
+
+
+def select_clusterings(
+    spaces: Sequence[Space],
+    *,
+    separation: float,
+    noise: float,
+    n_init: int = 8,
+    seed: int = 0,
+) -> list[Clustering]:
+    """:func:`select_clustering` for several spaces of the same size and kind at
+    once (one object towards every candidate reference), K-means batched."""
+    scans = [_Scan(space) for space in spaces]
+    n = len(spaces[0]) if spaces else 0
+    for c in range(1, n + 1):
+        active = [scan for scan in scans if not scan.done]
+        if not active:
+            break
+        if c == 1:
+            batch_labels = np.zeros((len(active), n), dtype=np.intp)
+        else:
+            generator = np.random.default_rng(seed + c)
+            data = np.stack([scan.canonical for scan in active])
+            batch_labels = kmeans_batch(data, c, n_init, 100, generator)
+        for scan, labels in zip(active, batch_labels, strict=True):
+            scan.consider(c, labels, separation, noise)
+    return [scan.result(noise) for scan in scans]
 
 
 def _cluster_stats(

@@ -20,6 +20,7 @@ demonstrations in the order given, steps in order.
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -32,7 +33,7 @@ from demoplan.clustering import (
     PositionSpace,
     RotationSpace,
     Space,
-    select_clustering,
+    select_clusterings,
 )
 from demoplan.model import Demonstration, Pose, State, StateOrientation, StatePosition
 
@@ -120,13 +121,16 @@ class _World:
     """Per-demonstration lookup of where every object and landmark was."""
 
     def __init__(self, demonstrations: Sequence[Demonstration]):
-        self.moves: list[dict[str, list[tuple[int, Pose]]]] = []
+        # Per demonstration and object: the step indices of its moves, and its poses.
+        self.moves: list[dict[str, tuple[list[int], list[Pose]]]] = []
         self.landmarks = [d.landmark_poses() for d in demonstrations]
         self.initial = [d.initial_poses() for d in demonstrations]
         for demo in demonstrations:
-            moves: dict[str, list[tuple[int, Pose]]] = {}
+            moves: dict[str, tuple[list[int], list[Pose]]] = {}
             for index, step in enumerate(demo.steps):
-                moves.setdefault(step.object, []).append((index, step.pose))
+                steps, poses = moves.setdefault(step.object, ([], []))
+                steps.append(index)
+                poses.append(step.pose)
             self.moves.append(moves)
 
     def pose(self, demo: int, name: str, step: int) -> Pose | None:
@@ -139,8 +143,9 @@ class _World:
             return self.landmarks[demo][name]
         history = self.moves[demo].get(name)
         if history:
-            before = [pose for index, pose in history if index < step]
-            return before[-1] if before else history[0][1]
+            steps, poses = history
+            moved_before = bisect_left(steps, step)
+            return poses[moved_before - 1] if moved_before else poses[0]
         return self.initial[demo].get(name)
 
     def available(self, demo: int, name: str, step: int) -> bool:
@@ -259,20 +264,22 @@ def _score_references(
     separation = (
         settings.position_separation if kind == "position" else settings.orientation_separation
     )
-    scores = []
+    references: list[str | None] = []
+    spaces: list[Space] = []
     for reference in candidates:
         values = _relative_values(kind, own, reference, world)
         if values is None:
             continue
         relative[(obj, kind, reference)] = values
-        space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
-        clustering = select_clustering(
-            space, separation=separation, noise=noise, n_init=settings.n_init, seed=settings.seed
-        )
-        scores.append(
-            ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, values))
-        )
-    return scores
+        references.append(reference)
+        spaces.append(PositionSpace(values) if kind == "position" else RotationSpace(values))
+    clusterings = select_clusterings(
+        spaces, separation=separation, noise=noise, n_init=settings.n_init, seed=settings.seed
+    )
+    return [
+        ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, space.values))
+        for reference, space, clustering in zip(references, spaces, clusterings, strict=True)
+    ]
 
 
 def _relative_values(
