@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -60,3 +62,23 @@ def _shuffled_order(rng: np.random.Generator, references: list[int | None]) -> l
         order.append(pick)
         remaining.remove(pick)
     return order
+
+
+def demo(steps: list[dict[str, Any]] | None = None, **fields: Any) -> dict[str, Any]:
+    """A minimal valid demonstration document, with ``fields`` overriding."""
+    data: dict[str, Any] = {
+        "format": "demoplan/demonstration-1",
+        "steps": steps if steps is not None else [{"object": "plate", "position": [0.5, 0.4]}],
+    }
+    data.update(fields)
+    return data
+
+
+def raw(step: str) -> str:
+    """Demonstration JSON text around one step's raw JSON (for literals json.dumps refuses)."""
+    return '{"format": "demoplan/demonstration-1", "steps": [' + step + "]}"
+
+
+def write(path: Path, data: Any) -> Path:
+    path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
+    return path

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.modelfile import load_model, model_to_dict
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, demo, raw, write
 
 SET_TABLE = EXAMPLES / "set_table"
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
@@ -23,25 +23,6 @@ COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demo
 
 def invoke(*args: str | Path) -> Any:
     return CliRunner().invoke(app, [str(a) for a in args])
-
-
-def demo(steps: list[dict[str, Any]] | None = None, **fields: Any) -> dict[str, Any]:
-    data: dict[str, Any] = {
-        "format": "demoplan/demonstration-1",
-        "steps": steps if steps is not None else [{"object": "plate", "position": [0.5, 0.4]}],
-    }
-    data.update(fields)
-    return data
-
-
-def raw(step: str) -> str:
-    """Demonstration JSON text around one step's raw JSON (for literals json.dumps refuses)."""
-    return '{"format": "demoplan/demonstration-1", "steps": [' + step + "]}"
-
-
-def write(path: Path, data: Any) -> Path:
-    path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
-    return path
 
 
 def assert_one_line_error(result: Any, *fragments: str) -> str:

@@ -23,29 +23,9 @@ from demoplan.fileio import check_format, read_document, write_atomic
 from demoplan.model import TaskModel
 from demoplan.modelfile import model_from_dict, model_to_dict
 from demoplan.rotations import angle_between
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, demo, raw, write
 
 SET_TABLE = EXAMPLES / "set_table"
-
-
-def demo(steps: list[dict[str, Any]] | None = None, **fields: Any) -> dict[str, Any]:
-    """A minimal valid demonstration document, with ``fields`` overriding."""
-    data: dict[str, Any] = {
-        "format": "demoplan/demonstration-1",
-        "steps": steps if steps is not None else [{"object": "plate", "position": [0.5, 0.4]}],
-    }
-    data.update(fields)
-    return data
-
-
-def raw(step: str) -> str:
-    """Demonstration JSON text around one step's raw JSON (for literals json.dumps refuses)."""
-    return '{"format": "demoplan/demonstration-1", "steps": [' + step + "]}"
-
-
-def write(path: Path, data: Any) -> Path:
-    path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
-    return path
 
 
 def load_one(tmp_path: Path, data: Any, name: str = "demo.json") -> Any:
