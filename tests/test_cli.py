@@ -503,3 +503,11 @@ def test_bad_yaml_exits_1(tmp_path: Path) -> None:
     result = invoke("learn", bad, "-o", tmp_path / "m.json", "--json")
     assert_one_line_error(result, "bad.yaml", "malformed YAML")
     assert result.stdout == ""
+
+
+def test_show_prints_the_column_units() -> None:
+    """Headers such as "Position [m]" are text, not rich markup."""
+    model = EXAMPLES / "blocks" / "demonstrations.json"
+    result = invoke("learn", model, "-o", "/dev/null")
+    assert result.exit_code == 0
+    assert "Position [m]" in result.stdout and "Orientation [deg]" in result.stdout

@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
 from demoplan.model import Demonstration, Pose, Step
@@ -280,3 +282,24 @@ def test_experiment_2_does_not_hang_on_the_exact_noise_settings(
     assert [(s.position.reference, s.orientation.reference) for s in learner.states_] == [
         (r, o) for _, _, r, o, _, _ in TABLE_IV
     ]
+
+
+@given(
+    offsets=st.lists(st.floats(-2.0, 2.0), min_size=2, max_size=8),
+    centre=st.sampled_from([180.0, -180.0, 179.0, 0.0, 90.0]),
+)
+@settings(max_examples=60, deadline=None)
+def test_yaws_a_few_degrees_apart_are_one_state_wherever_they_wrap(
+    offsets: list[float], centre: float
+) -> None:
+    """Yaws within ±2° of a centre (across the ±180° seam too) are one state whose
+    mean is the centre on the circle."""
+    yaws = [((centre + d + 180.0) % 360.0) - 180.0 for d in offsets]
+    demos = [
+        Demonstration(f"d{k}", (Step("box", Pose((0.3, 0.2, 0.0), quat_from_yaw(yaw))),))
+        for k, yaw in enumerate(yaws)
+    ]
+    (state,) = TaskModelLearner().fit(demos).states_
+    assert state.orientation.value is not None
+    mean_offset = sum(offsets) / len(offsets)
+    assert angle_between(state.orientation.value, quat_from_yaw(centre + mean_offset)) < 0.01

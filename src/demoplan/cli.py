@@ -19,6 +19,7 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from demoplan import __version__
 from demoplan.constraints import parse_requirements_syntax
@@ -82,16 +83,16 @@ def _print_json(data: Any) -> None:
 
 def _print_model(model: TaskModel, decimals: int) -> None:
     states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
-    for column in STATE_HEADER:
-        states.add_column(column, no_wrap=column != "Relative Orientation")
+    for column in STATE_HEADER:  # Text: "[m]" is not rich markup
+        states.add_column(Text(column), no_wrap=column != "Relative Orientation")
     for row in state_rows(model, decimals):
-        states.add_row(*row)
+        states.add_row(*map(Text, row))
     _stdout.print(states)
     sequences = Table(title="State sequences (Tables III and V)", title_justify="left")
     for column in ("Demonstration", "Sequence", "Goal states"):
         sequences.add_column(column)
     for row in sequence_rows(model):
-        sequences.add_row(*row)
+        sequences.add_row(*map(Text, row))
     _stdout.print(sequences)
     _stdout.print(
         f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
@@ -292,9 +293,8 @@ def experiments(
         for column in ("Experiment", "Check", "Paper", "demoplan", "Match"):
             table.add_column(column)
         for check in result.checks:
-            table.add_row(
-                check.experiment, check.name, check.paper, check.ours, "yes" if check.ok else "NO"
-            )
+            cells = (check.experiment, check.name, check.paper, check.ours)
+            table.add_row(*map(Text, cells), "yes" if check.ok else "NO")
         _stdout.print(table)
         _stdout.print(f"Report: {result.report}", markup=False, highlight=False)
         if not all(c.ok for c in result.checks):
