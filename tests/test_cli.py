@@ -505,9 +505,9 @@ def test_bad_yaml_exits_1(tmp_path: Path) -> None:
     assert result.stdout == ""
 
 
-def test_show_prints_the_column_units() -> None:
+def test_show_prints_the_column_units(tmp_path: Path) -> None:
     """Headers such as "Position [m]" are text, not rich markup."""
     model = EXAMPLES / "blocks" / "demonstrations.json"
-    result = invoke("learn", model, "-o", "/dev/null")
+    result = invoke("learn", model, "-o", tmp_path / "model.json")
     assert result.exit_code == 0
     assert "Position [m]" in result.stdout and "Orientation [deg]" in result.stdout

@@ -686,3 +686,20 @@ def test_read_document_refuses_non_objects(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="expected an object"):
         read_document(write(tmp_path / "x.yaml", "- 1\n- 2\n"))
     assert read_document(write(tmp_path / "x.json", '{"a": 1.5}')) == {"a": 1.5}
+
+
+def test_write_atomic_writes_into_a_pipe_instead_of_replacing_it(tmp_path: Path) -> None:
+    """-o on a device or FIFO writes into it; renaming over it would replace it."""
+    import threading
+
+    from demoplan.fileio import write_atomic
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    received: list[str] = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_text()))
+    reader.start()
+    write_atomic(fifo, "hello\n")
+    reader.join(timeout=5)
+    assert received == ["hello\n"]
+    assert stat.S_ISFIFO(fifo.stat().st_mode)

@@ -170,6 +170,9 @@ def dump_json(data: Any) -> str:
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically (temp file in the same folder + rename).
 
+    A path that exists and is not a regular file (``/dev/null``, a pipe) is
+    written into directly instead.
+
     The new file gets the old file's permissions, or the usual ones for a new
     file (0666 less the umask) — not the 0600 of a bare temporary file. Any
     failure leaves ``path`` as it was, removes the temporary file and raises
@@ -179,6 +182,15 @@ def write_atomic(path: Path, text: str) -> None:
     folder = path.parent if str(path.parent) else Path()
     if path.is_dir():
         raise InputError("is a folder; a file name expected", source=str(path))
+    if path.exists() and not path.is_file():
+        # A device or pipe (-o /dev/null, -o /dev/stdout): write into it; renaming
+        # a file over it would replace the device itself.
+        try:
+            with path.open("w", encoding="utf-8") as handle:
+                handle.write(text)
+        except OSError as exc:
+            raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
+        return
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
