@@ -56,3 +56,25 @@ def test_rpy_round_trip_and_canonical_sign() -> None:
     assert q[3] >= 0
     assert rotations.rpy_from_quat(q) == pytest.approx((10.0, -20.0, 170.0))
     assert rotations.canonical_quat([0.0, 0.0, -0.6, -0.8]) == pytest.approx((0.0, 0.0, 0.6, 0.8))
+
+
+angles = st.floats(-179.9, 179.9)
+
+
+@given(angles, st.floats(-89.0, 89.0), angles)
+@settings(max_examples=100, deadline=None)
+def test_euler_conversions_match_scipy_extrinsic_xyz(roll: float, pitch: float, yaw: float) -> None:
+    ours = rotations.quat_from_rpy([roll, pitch, yaw])
+    theirs = Rotation.from_euler("xyz", [roll, pitch, yaw], degrees=True).as_quat()
+    assert rotations.angle_between(ours, theirs) < 1e-6
+    assert rotations.rpy_from_quat(ours) == pytest.approx((roll, pitch, yaw), abs=1e-6)
+
+
+@given(angles, st.sampled_from([90.0, -90.0]), angles)
+@settings(max_examples=50, deadline=None)
+def test_euler_at_gimbal_lock_gives_the_same_rotation(
+    roll: float, pitch: float, yaw: float
+) -> None:
+    q = rotations.quat_from_rpy([roll, pitch, yaw])
+    again = rotations.quat_from_rpy(rotations.rpy_from_quat(q))
+    assert rotations.angle_between(q, again) < 1e-6

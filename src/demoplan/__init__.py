@@ -1,21 +1,47 @@
 """demoplan: learn pick-and-place task models from a few human demonstrations.
 
 Implements "Learning Task Models from Multiple Human Demonstrations": state
-generation (§IV.A), task generalization (§IV.B), planning and execution.
+generation (§IV.A), task generalization (§IV.B) and task planning (§IV.C).
+Names are imported on first use, so ``demoplan solve`` does not pay for NumPy.
 """
 
-from demoplan.demonstrations import load_demonstrations
-from demoplan.errors import DemoplanError, InputError, NoPlanError
-from demoplan.learning import TaskModelLearner, learn
-from demoplan.model import Demonstration, Pose, State, Step, TaskModel
-from demoplan.modelfile import load_model, save_model
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+__version__ = "0.1.0"
+
+_EXPORTS = {
+    "DemoplanError": "demoplan.errors",
+    "InputError": "demoplan.errors",
+    "NoPlanError": "demoplan.errors",
+    "LimitReachedError": "demoplan.errors",
+    "Demonstration": "demoplan.model",
+    "Pose": "demoplan.model",
+    "State": "demoplan.model",
+    "Step": "demoplan.model",
+    "TaskModel": "demoplan.model",
+    "TaskModelLearner": "demoplan.learning",
+    "learn": "demoplan.learning",
+    "load_demonstrations": "demoplan.demonstrations",
+    "load_model": "demoplan.modelfile",
+    "save_model": "demoplan.modelfile",
+    "Problem": "demoplan.planning.problem",
+    "Plan": "demoplan.planning.problem",
+    "load_problem": "demoplan.planning.xml",
+    "solve": "demoplan.planning.search",
+}
 
 __all__ = [
     "Demonstration",
     "DemoplanError",
     "InputError",
+    "LimitReachedError",
     "NoPlanError",
+    "Plan",
     "Pose",
+    "Problem",
     "State",
     "Step",
     "TaskModel",
@@ -23,7 +49,23 @@ __all__ = [
     "learn",
     "load_demonstrations",
     "load_model",
+    "load_problem",
     "save_model",
+    "solve",
 ]
 
-__version__ = "0.1.0"
+if TYPE_CHECKING:
+    from demoplan.demonstrations import load_demonstrations
+    from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
+    from demoplan.learning import TaskModelLearner, learn
+    from demoplan.model import Demonstration, Pose, State, Step, TaskModel
+    from demoplan.modelfile import load_model, save_model
+    from demoplan.planning.problem import Plan, Problem
+    from demoplan.planning.search import solve
+    from demoplan.planning.xml import load_problem
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'demoplan' has no attribute {name!r}")

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
@@ -22,13 +22,10 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
-from demoplan.constraints import parse_requirements_syntax
-from demoplan.demonstrations import load_demonstrations
 from demoplan.errors import DemoplanError, InputError
-from demoplan.learning import TaskModelLearner
-from demoplan.model import TaskModel
-from demoplan.modelfile import load_model, model_to_dict, save_model
-from demoplan.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
+
+if TYPE_CHECKING:
+    from demoplan.model import TaskModel
 
 app = typer.Typer(
     name="demoplan",
@@ -82,6 +79,8 @@ def _print_json(data: Any) -> None:
 
 
 def _print_model(model: TaskModel, decimals: int) -> None:
+    from demoplan.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
+
     states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
     for column in STATE_HEADER:  # Text: "[m]" is not rich markup
         states.add_column(Text(column), no_wrap=column != "Relative Orientation")
@@ -182,6 +181,11 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    from demoplan.constraints import parse_requirements_syntax
+    from demoplan.demonstrations import load_demonstrations
+    from demoplan.learning import TaskModelLearner
+    from demoplan.modelfile import load_model, save_model
+
     with _reported_errors():
         settings: dict[str, Any] = {}
         requirements: list[str] = []
@@ -255,6 +259,8 @@ def _typed_settings(settings: dict[str, Any]) -> dict[str, Any]:
 
 
 def _model_json(model: TaskModel) -> dict[str, Any]:
+    from demoplan.modelfile import model_to_dict
+
     data = model_to_dict(model)
     data["demonstrations"] = [d.name for d in model.demonstrations]
     return data
@@ -271,6 +277,8 @@ def show(
     decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
 ) -> None:
     """Print a model as the paper's tables: states, sequences, constraints."""
+    from demoplan.modelfile import load_model
+
     with _reported_errors():
         model = load_model(model_path)
         if json_output:

@@ -16,11 +16,12 @@ import re
 import stat
 import tempfile
 from pathlib import Path
-from typing import Any
-
-from pydantic import ValidationError
+from typing import TYPE_CHECKING, Any
 
 from demoplan.errors import InputError
+
+if TYPE_CHECKING:
+    from pydantic import ValidationError
 
 __all__ = [
     "FORMAT_VERSION",

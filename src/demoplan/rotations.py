@@ -12,11 +12,11 @@ gimbal lock does not distort distances.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 Quaternion = tuple[float, float, float, float]
 FloatArray = NDArray[np.float64]
@@ -51,24 +51,43 @@ def canonical_quat(quat: Sequence[float]) -> Quaternion:
 
 def quat_from_yaw(yaw_deg: float) -> Quaternion:
     """Planar orientation (rotation about world z) as a quaternion."""
-    return canonical_quat(Rotation.from_euler("z", yaw_deg, degrees=True).as_quat())
+    half = math.radians(yaw_deg) / 2.0
+    return canonical_quat([0.0, 0.0, math.sin(half), math.cos(half)])
 
 
 def quat_from_rpy(rpy_deg: Sequence[float]) -> Quaternion:
-    """Extrinsic x-y-z Euler angles (roll, pitch, yaw) in degrees → quaternion."""
-    return canonical_quat(Rotation.from_euler("xyz", list(rpy_deg), degrees=True).as_quat())
+    """Extrinsic x-y-z Euler angles (roll, pitch, yaw) in degrees → quaternion.
+
+    Extrinsic x-y-z is ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+    """
+    roll, pitch, yaw = (math.radians(v) / 2.0 for v in rpy_deg)
+    qx = np.array([math.sin(roll), 0.0, 0.0, math.cos(roll)])
+    qy = np.array([0.0, math.sin(pitch), 0.0, math.cos(pitch)])
+    qz = np.array([0.0, 0.0, math.sin(yaw), math.cos(yaw)])
+    q = quat_multiply(qz, quat_multiply(qy, qx))
+    return canonical_quat([float(v) for v in q])
 
 
 def rpy_from_quat(quat: Sequence[float]) -> tuple[float, float, float]:
-    """Quaternion → extrinsic x-y-z Euler angles in degrees (yaw in (−180, 180])."""
-    with np.errstate(all="ignore"):
-        import warnings
+    """Quaternion → extrinsic x-y-z Euler angles in degrees (yaw in (−180, 180]).
 
-        with warnings.catch_warnings():
-            # Gimbal lock only makes the split between roll and yaw arbitrary.
-            warnings.simplefilter("ignore", UserWarning)
-            r, p, y = Rotation.from_quat(list(quat)).as_euler("xyz", degrees=True)
-    return (_clean_angle(r), _clean_angle(p), _clean_angle(y))
+    At gimbal lock (pitch ±90°) only roll − yaw (or roll + yaw) is defined;
+    roll is then reported as 0.
+    """
+    m = matrices_from_quats(np.asarray([quat], dtype=float))[0]
+    cos_pitch = math.hypot(float(m[0]), float(m[3]))
+    pitch = math.atan2(-float(m[6]), cos_pitch)  # atan2, not asin: exact near ±90°
+    if cos_pitch < 1e-9:
+        roll = 0.0
+        yaw = math.atan2(-float(m[1]), float(m[4]))
+    else:
+        roll = math.atan2(float(m[7]), float(m[8]))
+        yaw = math.atan2(float(m[3]), float(m[0]))
+    return (
+        _clean_angle(math.degrees(roll)),
+        _clean_angle(math.degrees(pitch)),
+        _clean_angle(math.degrees(yaw)),
+    )
 
 
 def _clean_angle(angle: float) -> float:

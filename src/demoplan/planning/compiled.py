@@ -1,0 +1,156 @@
+"""A problem compiled to integers and bitmasks for fast search.
+
+Locations, objects and grasps become indices; a set of locations is an int
+bitmask, so an operator's collision test is one ``&``. Shared by every search.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from demoplan.planning.problem import Action, Problem
+
+__all__ = ["Compiled", "compile_problem"]
+
+
+@dataclass(frozen=True, slots=True)
+class Compiled:
+    """Indices and masks of a :class:`Problem` (see the module docstring)."""
+
+    problem: Problem
+    objects: tuple[str, ...]
+    locations: tuple[str, ...]
+    grasps: tuple[str, ...]
+    grasps_of: tuple[tuple[int, ...], ...]  # object -> allowed grasp indices
+    block: tuple[tuple[int, ...], ...]  # [location][grasp] -> locations that block it (mask)
+    below: tuple[int, ...]  # location -> the location it stands on, or -1
+    above: tuple[int, ...]  # location -> mask of locations standing on it
+    exclusive: tuple[int, ...]  # location -> mask of locations that exclude it
+    start: tuple[int, ...]  # object -> start location
+    goal: tuple[int, ...]  # object -> final location, or -1
+    subgoal_object: tuple[int, ...]
+    subgoal_location: tuple[int, ...]
+    subgoal_before: tuple[int, ...]  # subgoal -> mask of subgoals that must be reached first
+    subgoals_of: tuple[tuple[int, ...], ...]  # object -> its subgoals in order
+    all_subgoals: int
+    start_reached: int
+    plain: int  # mask of interchangeable free-space locations (no fact mentions them)
+
+    def grasp_ok(self, occupied: int, obj: int, location: int, grasp: int) -> bool:
+        others = occupied & ~(1 << location)
+        return not (others & self.block[location][grasp]) and not (occupied & self.above[location])
+
+    def put_ok(self, others: int, location: int, grasp: int) -> bool:
+        """PUT_DOWN at ``location`` with ``grasp`` while ``others`` are occupied."""
+        bit = 1 << location
+        if (
+            others & bit
+            or others & self.block[location][grasp]
+            or others & self.exclusive[location]
+        ):
+            return False
+        support = self.below[location]
+        return support < 0 or bool(others >> support & 1)
+
+    def reach(self, obj: int, location: int, reached: int) -> int:
+        """Subgoals reached by putting ``obj`` down at ``location`` (at most one)."""
+        for s in self.subgoals_of[obj]:
+            if (
+                self.subgoal_location[s] == location
+                and not reached >> s & 1
+                and self.subgoal_before[s] & ~reached == 0
+            ):
+                return reached | 1 << s
+        return reached
+
+    def move_actions(self, obj: int, source: int, target: int, grasp: int) -> tuple[Action, Action]:
+        o, g = self.objects[obj], self.grasps[grasp]
+        return (
+            Action("GRASP", o, self.locations[source], g),
+            Action("PUT_DOWN", o, self.locations[target], g),
+        )
+
+
+def compile_problem(problem: Problem) -> Compiled:
+    """Index a problem; the masks are what :mod:`demoplan.planning.search` tests."""
+    objects, locations, grasps = problem.objects, problem.locations, problem.grasps
+    loc_index = {name: i for i, name in enumerate(locations)}
+    grasp_index = {name: i for i, name in enumerate(grasps)}
+    obj_index = {name: i for i, name in enumerate(objects)}
+    grasps_of = tuple(
+        tuple(sorted(grasp_index[g] for o, g in problem.allowed if o == name)) for name in objects
+    )
+    block = [[0] * len(grasps) for _ in locations]
+    for la, lb, g in problem.collisions:
+        if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
+            block[loc_index[la]][grasp_index[g]] |= 1 << loc_index[lb]
+    below = [-1] * len(locations)
+    above = [0] * len(locations)
+    for upper, lower in problem.supports:
+        below[loc_index[upper]] = loc_index[lower]
+        above[loc_index[lower]] |= 1 << loc_index[upper]
+    exclusive = [0] * len(locations)
+    for a, b in problem.exclusions:
+        exclusive[loc_index[a]] |= 1 << loc_index[b]
+        exclusive[loc_index[b]] |= 1 << loc_index[a]
+    start = [0] * len(objects)
+    for obj, loc in problem.initial:
+        start[obj_index[obj]] = loc_index[loc]
+    goal = [-1] * len(objects)
+    for obj, loc in problem.goal:
+        goal[obj_index[obj]] = loc_index[loc]
+    sub_index = {s.id: i for i, s in enumerate(problem.subgoals)}
+    before = [0] * len(problem.subgoals)
+    for a, b in problem.precedences:
+        before[sub_index[b]] |= 1 << sub_index[a]
+    subgoals_of: list[list[int]] = [[] for _ in objects]
+    for i, s in enumerate(problem.subgoals):
+        subgoals_of[obj_index[s.object]].append(i)
+
+    mentioned = set()
+    for la, lb, _ in problem.collisions:
+        mentioned |= {la, lb}
+    for pair in problem.supports | problem.exclusions:
+        mentioned |= set(pair)
+    mentioned |= {loc for _, loc in problem.goal} | {s.location for s in problem.subgoals}
+    plain = 0
+    for name in problem.freespace - mentioned:
+        plain |= 1 << loc_index[name]
+
+    compiled = Compiled(
+        problem=problem,
+        objects=objects,
+        locations=locations,
+        grasps=grasps,
+        grasps_of=grasps_of,
+        block=tuple(tuple(row) for row in block),
+        below=tuple(below),
+        above=tuple(above),
+        exclusive=tuple(exclusive),
+        start=tuple(start),
+        goal=tuple(goal),
+        subgoal_object=tuple(obj_index[s.object] for s in problem.subgoals),
+        subgoal_location=tuple(loc_index[s.location] for s in problem.subgoals),
+        subgoal_before=tuple(before),
+        subgoals_of=tuple(tuple(s) for s in subgoals_of),
+        all_subgoals=(1 << len(problem.subgoals)) - 1,
+        start_reached=0,
+        plain=plain,
+    )
+    reached = 0
+    for sid in problem.reached:
+        reached |= 1 << sub_index[sid]
+    # A subgoal already true at the start counts if its predecessors are reached too
+    # (at most one per object: a second visit needs a second put-down).
+    counted: set[int] = set()
+    changed = True
+    while changed:
+        changed = False
+        for index, at in enumerate(start):
+            if index in counted:
+                continue
+            updated = compiled.reach(index, at, reached)
+            if updated != reached:
+                reached, changed = updated, True
+                counted.add(index)
+    return replace(compiled, start_reached=reached)

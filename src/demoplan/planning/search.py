@@ -1,0 +1,403 @@
+"""Optimal search for GRASP / PUT_DOWN plans (paper §IV.C).
+
+Two strategies, each one function, chosen from :data:`SEARCHES`:
+
+- :func:`breadth_first_search` — the paper's method and our reference: BFS
+  over the primitive GRASP and PUT_DOWN actions, so the first plan found is
+  shortest. Exponential; for small problems and for checking the other.
+- :func:`astar_search` — the default: A* over *moves* (a GRASP and the
+  PUT_DOWN that follows it). Every plan alternates the two actions (the hand
+  holds one object and must end empty), so a plan of k moves has 2k actions
+  and shortest in moves is shortest in actions. Its heuristic is admissible
+  (see :func:`_heuristic`), so A* returns a shortest plan; states are
+  deduplicated on a tuple of object locations in which interchangeable
+  free-space locations — mentioned by no collision, support or exclusion
+  fact and no goal — are one symmetric class.
+
+Both return a :class:`SearchOutcome`; :func:`solve` turns it into a
+:class:`~demoplan.planning.problem.Plan` or raises NoPlanError (exit 3) /
+LimitReachedError (exit 4).
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.planning.compiled import Compiled, compile_problem
+from demoplan.planning.problem import Action, Plan, Problem
+
+__all__ = [
+    "SEARCHES",
+    "Budget",
+    "SearchOutcome",
+    "astar_search",
+    "breadth_first_search",
+    "explain_unsolvable",
+    "solve",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class Budget:
+    """Limits of one search: expanded states and wall-clock seconds (None: no limit)."""
+
+    max_nodes: int | None = None
+    timeout: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class SearchOutcome:
+    """What a search found: ``actions`` (None when there is no plan or a limit hit)."""
+
+    actions: tuple[Action, ...] | None
+    expanded: int
+    generated: int
+    exhausted: bool  # the whole reachable space was searched without finding a plan
+    limit: str | None = None  # which budget stopped the search
+    bound: int = 0  # the f-bound (in actions) reached when a limit stopped A*
+
+
+# BFS state: object locations (-1 for the held one), held (object, grasp) or None, reached.
+_BfsState = tuple[tuple[int, ...], tuple[int, int] | None, int]
+
+
+class _Clock:
+    def __init__(self, budget: Budget):
+        self.budget = budget
+        self.deadline = None if budget.timeout is None else time.monotonic() + budget.timeout
+
+    def stop(self, expanded: int) -> str | None:
+        if self.budget.max_nodes is not None and expanded >= self.budget.max_nodes:
+            return f"--max-nodes {self.budget.max_nodes}"
+        if self.deadline is not None and expanded % 128 == 0 and time.monotonic() > self.deadline:
+            return f"--timeout {self.budget.timeout:g} s"
+        return None
+
+
+def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchOutcome:
+    """The paper's breadth-first search over primitive GRASP / PUT_DOWN actions."""
+    c = compile_problem(problem)
+    clock = _Clock(budget)
+    n_locations = len(c.locations)
+    start: _BfsState = (c.start, None, c.start_reached)
+    parents: dict[_BfsState, tuple[_BfsState, Action] | None] = {start: None}
+    queue = deque([start])
+    expanded = 0
+    while queue:
+        state = queue.popleft()
+        positions, held, reached = state
+        if held is None and _is_goal(c, positions, reached):
+            return SearchOutcome(_unwind(parents, state), expanded, len(parents), False)
+        limit = clock.stop(expanded)
+        if limit:
+            return SearchOutcome(None, expanded, len(parents), False, limit)
+        expanded += 1
+        occupied = 0
+        for location in positions:
+            if location >= 0:
+                occupied |= 1 << location
+        successors: list[tuple[_BfsState, Action]] = []
+        if held is None:
+            for obj, location in enumerate(positions):
+                for grasp in c.grasps_of[obj]:
+                    if c.grasp_ok(occupied, obj, location, grasp):
+                        moved = positions[:obj] + (-1,) + positions[obj + 1 :]
+                        action = Action(
+                            "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
+                        )
+                        successors.append(((moved, (obj, grasp), reached), action))
+        else:
+            obj, grasp = held
+            for location in range(n_locations):
+                if c.put_ok(occupied, location, grasp):
+                    placed = positions[:obj] + (location,) + positions[obj + 1 :]
+                    action = Action(
+                        "PUT_DOWN", c.objects[obj], c.locations[location], c.grasps[grasp]
+                    )
+                    successors.append(((placed, None, c.reach(obj, location, reached)), action))
+        for successor, action in successors:
+            if successor not in parents:
+                parents[successor] = (state, action)
+                queue.append(successor)
+    return SearchOutcome(None, expanded, len(parents), True)
+
+
+def _is_goal(c: Compiled, positions: tuple[int, ...], reached: int) -> bool:
+    if reached != c.all_subgoals:
+        return False
+    return all(goal < 0 or goal == at for goal, at in zip(c.goal, positions, strict=True))
+
+
+def _unwind(
+    parents: dict[_BfsState, tuple[_BfsState, Action] | None], state: _BfsState
+) -> tuple[Action, ...]:
+    actions: list[Action] = []
+    link = parents[state]
+    while link is not None:
+        state, action = link
+        actions.append(action)
+        link = parents[state]
+    return tuple(reversed(actions))
+
+
+def astar_search(problem: Problem, budget: Budget = Budget()) -> SearchOutcome:
+    """A* over moves with an admissible heuristic; returns a shortest plan."""
+    return _AStar(compile_problem(problem), budget).run()
+
+
+class _AStar:
+    def __init__(self, c: Compiled, budget: Budget):
+        self.c = c
+        self.clock = _Clock(budget)
+        n_locations = len(c.locations)
+        # Locations whose occupation blocks every grasp an object has at a location
+        # (and the location standing on it): such an occupant must move first.
+        self.clear_grasp = [
+            [
+                (_all_of([c.block[loc][g] for g in c.grasps_of[obj]]) if c.grasps_of[obj] else 0)
+                | c.above[loc]
+                for loc in range(n_locations)
+            ]
+            for obj in range(len(c.objects))
+        ]
+        self.clear_put = [
+            [
+                (_all_of([c.block[loc][g] for g in c.grasps_of[obj]]) if c.grasps_of[obj] else 0)
+                | c.exclusive[loc]
+                for loc in range(n_locations)
+            ]
+            for obj in range(len(c.objects))
+        ]
+        self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
+        self.parent: dict[
+            tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
+        ] = {}
+
+    def heuristic(self, positions: tuple[int, ...], reached: int) -> int:
+        """Admissible lower bound on the moves still needed.
+
+        Each move moves one object, so a sum of per-object lower bounds is a
+        lower bound. An object needs as many moves as it has unreached
+        subgoals (each is reached by putting it down), and at least one if it
+        is not at its final location. An object that needs none of its own
+        still needs one if it occupies a location some needy object must
+        reach (its final location or an unreached subgoal's), stands on a
+        needy object, or blocks *every* grasp a needy object has at its
+        current location or at its final location.
+        """
+        c = self.c
+        total = 0
+        must_clear = 0
+        idle = 0
+        for obj, location in enumerate(positions):
+            pending = 0
+            for s in c.subgoals_of[obj]:
+                if not reached >> s & 1:
+                    pending += 1
+                    must_clear |= 1 << c.subgoal_location[s]
+            goal = c.goal[obj]
+            away = goal >= 0 and goal != location
+            need = pending if pending > away else int(away)
+            if need:
+                total += need
+                must_clear |= self.clear_grasp[obj][location]
+                if away:
+                    must_clear |= (1 << goal) | self.clear_put[obj][goal]
+            else:
+                idle |= 1 << location
+        return total + (idle & must_clear).bit_count()
+
+    def key(self, positions: tuple[int, ...], reached: int) -> tuple[int, ...]:
+        plain = self.c.plain
+        if not plain:
+            return (*positions, reached)
+        return (*(-1 if plain >> p & 1 else p for p in positions), reached)
+
+    def run(self) -> SearchOutcome:
+        c = self.c
+        start = (c.start, c.start_reached)
+        start_key = self.key(*start)
+        best_g = {start_key: 0}
+        parent = self.parent
+        parent[start_key] = None
+        concrete = {start_key: start}
+        h0 = self.heuristic(*start)
+        heap = [(h0, h0, 0, start_key)]
+        counter = 0
+        expanded = 0
+        bound = h0
+        n_locations = len(c.locations)
+        grasps_of, block, above, exclusive, below = (
+            c.grasps_of,
+            c.block,
+            c.above,
+            c.exclusive,
+            c.below,
+        )
+        plain = c.plain
+        while heap:
+            f, h, _, key = heapq.heappop(heap)
+            g = best_g[key]
+            if f > g + h:  # a stale entry: the state was reached more cheaply since
+                continue
+            positions, reached = concrete[key]
+            if h == 0 and _is_goal(c, positions, reached):
+                return SearchOutcome(self.unwind(key), expanded, len(best_g), False)
+            limit = self.clock.stop(expanded)
+            if limit:
+                return SearchOutcome(None, expanded, len(best_g), False, limit, 2 * bound)
+            expanded += 1
+            bound = max(bound, f)
+            occupied = 0
+            for location in positions:
+                occupied |= 1 << location
+            free_plain = -1  # one free interchangeable location stands for all of them
+            for location in self.plain_locations:
+                if not occupied >> location & 1:
+                    free_plain = location
+                    break
+            for obj, source in enumerate(positions):
+                others = occupied & ~(1 << source)
+                if occupied & above[source]:
+                    continue
+                for grasp in grasps_of[obj]:
+                    if others & block[source][grasp]:
+                        continue
+                    for target in range(n_locations):
+                        if target == source:
+                            # Put back where it was: useful only to reach a subgoal late.
+                            if c.reach(obj, target, reached) == reached:
+                                continue
+                        elif plain >> target & 1 and (target != free_plain or plain >> source & 1):
+                            continue
+                        if (
+                            others >> target & 1
+                            or others & block[target][grasp]
+                            or others & exclusive[target]
+                        ):
+                            continue
+                        support = below[target]
+                        if support >= 0 and not others >> support & 1:
+                            continue
+                        moved = positions[:obj] + (target,) + positions[obj + 1 :]
+                        now_reached = (
+                            c.reach(obj, target, reached) if c.subgoals_of[obj] else reached
+                        )
+                        child = self.key(moved, now_reached)
+                        if best_g.get(child, 1 << 60) <= g + 1:
+                            continue
+                        best_g[child] = g + 1
+                        parent[child] = (key, (obj, source, target, grasp))
+                        concrete[child] = (moved, now_reached)
+                        child_h = self.heuristic(moved, now_reached)
+                        counter += 1
+                        heapq.heappush(heap, (g + 1 + child_h, child_h, counter, child))
+        return SearchOutcome(None, expanded, len(best_g), True)
+
+    def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:
+        actions: list[Action] = []
+        link = self.parent[key]
+        while link is not None:
+            key, (obj, source, target, grasp) = link
+            actions[:0] = self.c.move_actions(obj, source, target, grasp)
+            link = self.parent[key]
+        return tuple(actions)
+
+
+def _all_of(masks: list[int]) -> int:
+    result = masks[0]
+    for mask in masks[1:]:
+        result &= mask
+    return result
+
+
+SEARCHES: dict[str, Callable[[Problem, Budget], SearchOutcome]] = {
+    "astar": astar_search,
+    "bfs": breadth_first_search,
+}
+
+
+def explain_unsolvable(problem: Problem) -> list[str]:
+    """Reasons, where they can be shown without search, why no plan exists."""
+    c = compile_problem(problem)
+    reasons = []
+    finals: dict[int, int] = {}
+    for obj, goal in enumerate(c.goal):
+        if goal < 0:
+            continue
+        if goal in finals:
+            first, second = c.objects[finals[goal]], c.objects[obj]
+            reasons.append(f"{first} and {second} must both end at {c.locations[goal]}")
+        finals[goal] = obj
+    for obj, name in enumerate(c.objects):
+        needs_move = (c.goal[obj] >= 0 and c.goal[obj] != c.start[obj]) or any(
+            not c.start_reached >> s & 1 for s in c.subgoals_of[obj]
+        )
+        if needs_move and not c.grasps_of[obj]:
+            reasons.append(f"{name} must move but allows no grasp")
+    cycle = _precedence_cycle(problem)
+    if cycle:
+        reasons.append(f"subgoals must come before themselves: {' < '.join(cycle)}")
+    return reasons
+
+
+def _precedence_cycle(problem: Problem) -> list[str]:
+    after: dict[str, list[str]] = {}
+    for a, b in problem.precedences:
+        after.setdefault(a, []).append(b)
+    state: dict[str, int] = {}
+    path: list[str] = []
+
+    def visit(node: str) -> list[str]:
+        state[node] = 1
+        path.append(node)
+        for nxt in after.get(node, []):
+            if state.get(nxt) == 1:
+                return [*path[path.index(nxt) :], nxt]
+            if nxt not in state:
+                found = visit(nxt)
+                if found:
+                    return found
+        state[node] = 2
+        path.pop()
+        return []
+
+    for node in sorted(after):
+        if node not in state:
+            found = visit(node)
+            if found:
+                return found
+    return []
+
+
+def solve(
+    problem: Problem,
+    search: str = "astar",
+    budget: Budget = Budget(),
+) -> Plan:
+    """A shortest plan, or NoPlanError (with the reason) / LimitReachedError."""
+    if search not in SEARCHES:
+        raise ValueError(f"unknown search {search!r}; one of {sorted(SEARCHES)}")
+    reasons = explain_unsolvable(problem)
+    if reasons:
+        raise NoPlanError("no plan: " + "; ".join(reasons))
+    started = time.perf_counter()
+    outcome = SEARCHES[search](problem, budget)
+    seconds = time.perf_counter() - started
+    if outcome.actions is not None:
+        return Plan(outcome.actions, outcome.expanded, outcome.generated, seconds, search)
+    if outcome.limit:
+        raise LimitReachedError(
+            f"{outcome.limit} reached after expanding {outcome.expanded} states "
+            f"({outcome.generated} generated, {seconds:.2f} s) with no plan yet"
+            + (f"; every plan needs at least {outcome.bound} actions" if outcome.bound else "")
+        )
+    raise NoPlanError(
+        f"no plan: search space exhausted after {outcome.expanded} states "
+        "(every reachable arrangement tried)"
+    )

@@ -1,0 +1,225 @@
+"""The paper's XML problem format (§IV.C; SPEC §3), read safely with defusedxml.
+
+A file in the paper's form stays valid::
+
+    <problem>
+      <object name="box" type="Object"/>
+      <object name="loc264" type="Location"/>
+      <object name="freespace1" type="Location"/>
+      <object name="grasp6" type="Grasp"/>
+      <state>
+        <arg name="box loc264"/>          <!-- object at location -->
+        <arg name="box grasp6"/>          <!-- grasp allowed for the object -->
+        <arg name="loc264 loc293 grasp6"/> <!-- collision fact -->
+        <arg name="hand-empty"/>
+      </state>
+      <goal><arg name="box loc293"/></goal>
+    </problem>
+
+Extensions (documented in docs/planning.md): a Location may carry
+``freespace="true"`` (names starting with ``freespace`` count as free space
+too); state args ``support UPPER LOWER``, ``exclusive LA LB``, ``reached ID``;
+goal args ``subgoal ID OBJECT LOCATION`` and ``before ID1 ID2``.
+
+Parsing refuses DTDs, entity declarations and external references
+(``defusedxml``), so an entity bomb fails at once instead of expanding.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from xml.etree.ElementTree import Element, ParseError, SubElement, indent, tostring
+
+import defusedxml
+import defusedxml.ElementTree as SafeElementTree
+
+from demoplan.errors import InputError
+from demoplan.planning.problem import Problem, Subgoal
+
+__all__ = ["load_problem", "problem_from_xml", "problem_to_xml", "save_problem"]
+
+MAX_XML_BYTES = 32 * 1024 * 1024
+_TYPES = {"object": "Object", "location": "Location", "grasp": "Grasp"}
+
+
+def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
+    """Parse the paper's XML into a checked :class:`Problem`."""
+    try:
+        root = SafeElementTree.fromstring(text, forbid_dtd=True)
+    except defusedxml.DefusedXmlException as exc:
+        raise InputError(
+            f"refused: {type(exc).__name__} "
+            "(DTDs, entities and external references are not allowed)",
+            source=source,
+        ) from None
+    except ParseError as exc:
+        line, column = exc.position
+        raise InputError(
+            f"malformed XML at line {line} column {column + 1}", source=source
+        ) from None
+    if root.tag != "problem":
+        raise InputError(f"root element <{root.tag}>; <problem> expected", source=source)
+    kinds: dict[str, str] = {}
+    freespace: list[str] = []
+    for index, element in enumerate(root.findall("object")):
+        name, kind = element.get("name"), element.get("type", "")
+        where = f"object[{index}]"
+        if not name or not name.strip() or len(name.split()) != 1:
+            raise InputError("expected a name without spaces", source=source, field=f"{where}.name")
+        if kind.lower() not in _TYPES:
+            raise InputError(
+                f"type {kind!r}; Object, Location or Grasp expected",
+                source=source,
+                field=f"{where}.type",
+            )
+        if name in kinds:
+            raise InputError(f"{name!r} declared twice", source=source, field=where)
+        kinds[name] = _TYPES[kind.lower()]
+        marked = element.get("freespace", "").lower() in {"true", "1", "yes"}
+        if kinds[name] == "Location" and (marked or name.lower().startswith("freespace")):
+            freespace.append(name)
+    for child in root:
+        if child.tag not in {"object", "state", "goal"}:
+            raise InputError(
+                f"unknown element <{child.tag}>; <object>, <state> or <goal> expected",
+                source=source,
+            )
+    states, goals = root.findall("state"), root.findall("goal")
+    if len(states) != 1 or len(goals) > 1:
+        raise InputError("expected one <state> and at most one <goal>", source=source)
+
+    allowed: list[tuple[str, str]] = []
+    collisions: list[tuple[str, str, str]] = []
+    initial: list[tuple[str, str]] = []
+    supports: list[tuple[str, str]] = []
+    exclusions: list[tuple[str, str]] = []
+    reached: list[str] = []
+    hand_empty = False
+    for index, tokens in _args(states[0], source, "state"):
+        where = f"state/arg[{index}]"
+        types = [kinds.get(t) for t in tokens]
+        if tokens == ["hand-empty"]:
+            hand_empty = True
+        elif types == ["Object", "Location"]:
+            initial.append((tokens[0], tokens[1]))
+        elif types == ["Object", "Grasp"]:
+            allowed.append((tokens[0], tokens[1]))
+        elif types == ["Location", "Location", "Grasp"]:
+            collisions.append((tokens[0], tokens[1], tokens[2]))
+        elif tokens[0] in {"support", "exclusive"} and types[1:] == ["Location", "Location"]:
+            (supports if tokens[0] == "support" else exclusions).append((tokens[1], tokens[2]))
+        elif tokens[0] == "reached" and len(tokens) == 2:
+            reached.append(tokens[1])
+        else:
+            raise InputError(_unknown_arg(tokens, types), source=source, field=where)
+    if not hand_empty:
+        raise InputError("the state must hold 'hand-empty'", source=source, field="state")
+
+    goal: list[tuple[str, str]] = []
+    subgoals: list[Subgoal] = []
+    precedences: list[tuple[str, str]] = []
+    for index, tokens in _args(goals[0], source, "goal") if goals else []:
+        where = f"goal/arg[{index}]"
+        types = [kinds.get(t) for t in tokens]
+        if types == ["Object", "Location"]:
+            goal.append((tokens[0], tokens[1]))
+        elif tokens[0] == "subgoal" and types[2:] == ["Object", "Location"] and len(tokens) == 4:
+            subgoals.append(Subgoal(tokens[1], tokens[2], tokens[3]))
+        elif tokens[0] == "before" and len(tokens) == 3:
+            precedences.append((tokens[1], tokens[2]))
+        else:
+            raise InputError(_unknown_arg(tokens, types), source=source, field=where)
+
+    return Problem.create(
+        objects=[n for n, k in kinds.items() if k == "Object"],
+        locations=[n for n, k in kinds.items() if k == "Location"],
+        grasps=[n for n, k in kinds.items() if k == "Grasp"],
+        allowed=allowed,
+        collisions=collisions,
+        initial=initial,
+        goal=goal,
+        freespace=freespace,
+        supports=supports,
+        exclusions=exclusions,
+        subgoals=subgoals,
+        precedences=precedences,
+        reached=reached,
+        name=root.get("name") or Path(source).stem,
+        source=source,
+    )
+
+
+def _args(parent: Element, source: str, where: str) -> list[tuple[int, list[str]]]:
+    out = []
+    for index, element in enumerate(parent):
+        if element.tag != "arg":
+            raise InputError(
+                f'<{element.tag}>; <arg name="..."/> expected', source=source, field=where
+            )
+        tokens = (element.get("name") or "").split()
+        if not tokens:
+            raise InputError("empty arg", source=source, field=f"{where}/arg[{index}]")
+        out.append((index, tokens))
+    return out
+
+
+def _unknown_arg(tokens: list[str], types: list[str | None]) -> str:
+    undeclared = [t for t, k in zip(tokens, types, strict=True) if k is None]
+    if undeclared and tokens[0] not in {"support", "exclusive", "reached", "subgoal", "before"}:
+        return f"{' '.join(tokens)!r}: {undeclared} not declared as Object, Location or Grasp"
+    shape = " ".join(k or "?" for k in types)
+    return f"{' '.join(tokens)!r} ({shape}) is not a known fact"
+
+
+def load_problem(path: str | Path) -> Problem:
+    """Read a problem file."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_XML_BYTES:
+            raise InputError(
+                f"file is {size} bytes; at most {MAX_XML_BYTES} expected", source=str(path)
+            )
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read file ({exc})", source=str(path)) from None
+    return problem_from_xml(text, str(path))
+
+
+def problem_to_xml(problem: Problem) -> str:
+    """The problem in the paper's XML (extensions only where the problem uses them)."""
+    root = Element("problem", {"name": problem.name})
+    for name in problem.objects:
+        SubElement(root, "object", {"name": name, "type": "Object"})
+    for name in problem.locations:
+        attributes = {"name": name, "type": "Location"}
+        if name in problem.freespace and not name.lower().startswith("freespace"):
+            attributes["freespace"] = "true"
+        SubElement(root, "object", attributes)
+    for name in problem.grasps:
+        SubElement(root, "object", {"name": name, "type": "Grasp"})
+    state = SubElement(root, "state")
+    rows = [f"{o} {loc}" for o, loc in problem.initial]
+    rows += [f"{o} {g}" for o, g in sorted(problem.allowed)]
+    rows += [f"{a} {b} {g}" for a, b, g in sorted(problem.collisions)]
+    rows += [f"support {a} {b}" for a, b in sorted(problem.supports)]
+    rows += [f"exclusive {a} {b}" for a, b in sorted(problem.exclusions)]
+    rows += [f"reached {s}" for s in sorted(problem.reached)]
+    rows.append("hand-empty")
+    for row in rows:
+        SubElement(state, "arg", {"name": row})
+    goal = SubElement(root, "goal")
+    rows = [f"{o} {loc}" for o, loc in problem.goal]
+    rows += [f"subgoal {s.id} {s.object} {s.location}" for s in problem.subgoals]
+    rows += [f"before {a} {b}" for a, b in sorted(problem.precedences)]
+    for row in rows:
+        SubElement(goal, "arg", {"name": row})
+    indent(root)
+    return tostring(root, encoding="unicode") + "\n"
+
+
+def save_problem(problem: Problem, path: str | Path) -> None:
+    """Write ``problem`` as XML, atomically."""
+    from demoplan.fileio import write_atomic
+
+    write_atomic(Path(path), problem_to_xml(problem))
