@@ -23,7 +23,7 @@ class Compiled:
     grasps: tuple[str, ...]
     grasps_of: tuple[tuple[int, ...], ...]  # object -> allowed grasp indices
     block: tuple[tuple[int, ...], ...]  # [location][grasp] -> locations that block it (mask)
-    below: tuple[int, ...]  # location -> the location it stands on, or -1
+    below: tuple[int, ...]  # location -> mask of the locations it stands on (all needed)
     above: tuple[int, ...]  # location -> mask of locations standing on it
     exclusive: tuple[int, ...]  # location -> mask of locations that exclude it
     start: tuple[int, ...]  # object -> start location
@@ -50,7 +50,7 @@ class Compiled:
         ):
             return False
         support = self.below[location]
-        return support < 0 or bool(others >> support & 1)
+        return others & support == support
 
     def reach(self, obj: int, location: int, reached: int) -> int:
         """Subgoals reached by putting ``obj`` down at ``location`` (at most one)."""
@@ -84,10 +84,10 @@ def compile_problem(problem: Problem) -> Compiled:
     for la, lb, g in problem.collisions:
         if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
             block[loc_index[la]][grasp_index[g]] |= 1 << loc_index[lb]
-    below = [-1] * len(locations)
+    below = [0] * len(locations)
     above = [0] * len(locations)
     for upper, lower in problem.supports:
-        below[loc_index[upper]] = loc_index[lower]
+        below[loc_index[upper]] |= 1 << loc_index[lower]
         above[loc_index[lower]] |= 1 << loc_index[upper]
     exclusive = [0] * len(locations)
     for a, b in problem.exclusions:

@@ -6,7 +6,8 @@ impossible while another object stands at lb — the initial placement and the
 goal. Beyond the paper's example it can say:
 
 - ``supports (upper, lower)``: a location above the table holds an object only
-  while ``lower`` is occupied, and the object at ``lower`` cannot be grasped
+  while ``lower`` is occupied (while *every* lower location listed for it is,
+  for a block bridging two), and the object at ``lower`` cannot be grasped
   while ``upper`` is occupied (stacking);
 - ``exclusions (la, lb)``: overlapping locations that cannot both be occupied;
 - ``subgoals`` with ``precedences``: subgoal X (an object put down at a

@@ -155,24 +155,6 @@ class _AStar:
         self.c = c
         self.clock = _Clock(budget)
         n_locations = len(c.locations)
-        # Locations whose occupation blocks every grasp an object has at a location
-        # (and the location standing on it): such an occupant must move first.
-        self.clear_grasp = [
-            [
-                (_all_of([c.block[loc][g] for g in c.grasps_of[obj]]) if c.grasps_of[obj] else 0)
-                | c.above[loc]
-                for loc in range(n_locations)
-            ]
-            for obj in range(len(c.objects))
-        ]
-        self.clear_put = [
-            [
-                (_all_of([c.block[loc][g] for g in c.grasps_of[obj]]) if c.grasps_of[obj] else 0)
-                | c.exclusive[loc]
-                for loc in range(n_locations)
-            ]
-            for obj in range(len(c.objects))
-        ]
         self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
         self.parent: dict[
             tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
@@ -181,36 +163,75 @@ class _AStar:
     def heuristic(self, positions: tuple[int, ...], reached: int) -> int:
         """Admissible lower bound on the moves still needed.
 
-        Each move moves one object, so a sum of per-object lower bounds is a
-        lower bound. An object needs as many moves as it has unreached
-        subgoals (each is reached by putting it down), and at least one if it
-        is not at its final location. An object that needs none of its own
-        still needs one if it occupies a location some needy object must
-        reach (its final location or an unreached subgoal's), stands on a
-        needy object, or blocks *every* grasp a needy object has at its
-        current location or at its final location.
+        Each move moves one object, so a sum of lower bounds on the moves of
+        disjoint groups of objects is a lower bound. A *needy* object needs as
+        many moves as it has unreached subgoals (each is reached by putting it
+        down), and at least one if it is not at its final location. An *idle*
+        object (needing none of its own) needs one when it is in the way: for
+        each place a needy object must be grasped from or put down at, the
+        idle objects that block a grasp there form a set U — when every grasp
+        is blocked, some object of U must move. Pairwise disjoint sets U need
+        distinct movers, so the number of such sets picked greedily (smallest
+        first, disjoint from those picked) is added.
         """
         c = self.c
         total = 0
-        must_clear = 0
         idle = 0
+        needy: list[tuple[int, int, int]] = []  # (object, location, target) pairs to check
         for obj, location in enumerate(positions):
             pending = 0
             for s in c.subgoals_of[obj]:
                 if not reached >> s & 1:
                     pending += 1
-                    must_clear |= 1 << c.subgoal_location[s]
+                    needy.append((obj, location, c.subgoal_location[s]))
             goal = c.goal[obj]
             away = goal >= 0 and goal != location
             need = pending if pending > away else int(away)
             if need:
                 total += need
-                must_clear |= self.clear_grasp[obj][location]
                 if away:
-                    must_clear |= (1 << goal) | self.clear_put[obj][goal]
+                    needy.append((obj, location, goal))
             else:
                 idle |= 1 << location
-        return total + (idle & must_clear).bit_count()
+        if not idle or not needy:
+            return total
+        block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
+        blocking_sets = []
+        seen = set()
+        for obj, location, target in needy:
+            grasps = grasps_of[obj]
+            if not grasps:
+                continue
+            if obj not in seen:  # grasping it where it stands
+                seen.add(obj)
+                union = 0
+                for g in grasps:
+                    hit = (block[location][g] | above[location]) & idle
+                    if not hit:
+                        union = 0
+                        break
+                    union |= hit
+                if union:
+                    blocking_sets.append(union)
+            union = 0  # putting it down at the target
+            for g in grasps:
+                hit = (block[target][g] | exclusive[target] | 1 << target) & idle
+                if not hit:
+                    union = 0
+                    break
+                union |= hit
+            if union:
+                blocking_sets.append(union)
+        if not blocking_sets:
+            return total
+        blocking_sets.sort(key=int.bit_count)
+        taken = 0
+        extra = 0
+        for union in blocking_sets:
+            if not union & taken:
+                taken |= union
+                extra += 1
+        return total + extra
 
     def key(self, positions: tuple[int, ...], reached: int) -> tuple[int, ...]:
         plain = self.c.plain
@@ -282,7 +303,7 @@ class _AStar:
                         ):
                             continue
                         support = below[target]
-                        if support >= 0 and not others >> support & 1:
+                        if others & support != support:
                             continue
                         moved = positions[:obj] + (target,) + positions[obj + 1 :]
                         now_reached = (
