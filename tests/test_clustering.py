@@ -114,13 +114,13 @@ def _full_scan(space: PositionSpace, separation: float, noise: float) -> tuple[i
 def test_early_stop_agrees_with_the_full_scan_on_separated_placements(
     seed: int, groups: int, per: int, scatter: float
 ) -> None:
-    """Where placements form groups (here ≥ 3× the separation apart), stopping at
-    the first rejected cluster count gives eq. (2)'s full-scan answer."""
+    """Where placements form groups (here ≥ 1.2× the separation apart), the scan
+    that stops after a few rejected cluster counts gives eq. (2)'s full-scan answer."""
     rng = np.random.default_rng(seed)
     means = [rng.uniform(-0.5, 0.5, 3) * [1, 1, 0]]
     while len(means) < groups:
         candidate = rng.uniform(-0.5, 0.5, 3) * [1, 1, 0]
-        if all(math.dist(candidate, m) > 0.15 for m in means):
+        if all(math.dist(candidate, m) > 0.06 for m in means):
             means.append(candidate)
     values = np.concatenate([m + rng.normal(0, scatter, (per, 3)) * [1, 1, 0] for m in means])
     space = PositionSpace(values)
@@ -140,6 +140,26 @@ def test_early_stop_keeps_continuous_scatter_coarse() -> None:
     chosen = select_clustering(space, separation=0.05, noise=0.003, seed=0)
     full_c, _ = _full_scan(space, 0.05, 0.003)
     assert chosen.n_clusters < full_c
+
+
+@pytest.mark.parametrize("corners", [3, 4])
+def test_groups_at_the_corners_of_a_polygon_are_found(corners: int) -> None:
+    """Three (four) spots 5.5 cm apart: the merged clusterings of two (three)
+    groups are rejected, c = 3 (4) is not — the scan must not stop early."""
+    rng = np.random.default_rng(0)
+    radius = 0.055 / (2 * math.sin(math.pi / corners))
+    spots = [
+        [
+            radius * math.cos(2 * math.pi * k / corners),
+            radius * math.sin(2 * math.pi * k / corners),
+            0,
+        ]
+        for k in range(corners)
+    ]
+    values = np.concatenate([s + rng.normal(0, 0.0005, (3, 3)) * [1, 1, 0] for s in spots])
+    chosen = select_clustering(PositionSpace(values), separation=0.05, noise=0.003)
+    assert chosen.n_clusters == corners
+    assert _full_scan(PositionSpace(values), 0.05, 0.003)[0] == corners
 
 
 def test_two_groups_ten_centimetres_apart_become_two_clusters() -> None:

@@ -7,6 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from demoplan.constraints import (
+    anchor_requirements,
     goal_states,
     learn_constraints,
     ordered_pairs,
@@ -76,17 +77,36 @@ def _state(state_id: str, obj: str) -> State:
 
 
 STATES = [_state("A", "plate"), _state("B", "knife"), _state("C", "napkin"), _state("D", "knife")]
+SEQUENCES = [["A", "B", "C", "C"], ["A", "D", "C"]]
 
 
 def test_requirements_accept_state_ids_visits_and_object_names() -> None:
-    assert parse_requirements(["A<B", " C#2 < A "], STATES) == (("A", "B"), ("C#2", "A"))
-    assert parse_requirements(["knife<napkin"], STATES) == (("B", "C"), ("D", "C"))
+    assert parse_requirements(["A<B", " C#2 < A "], STATES, SEQUENCES) == (
+        ("A", "B"),
+        ("C#2", "A"),
+    )
+    assert parse_requirements(["knife<napkin"], STATES, SEQUENCES) == (("B", "C"), ("D", "C"))
+    # @d.s: the state of step s of demonstration d (1-based), here D and C#2.
+    assert parse_requirements(["@2.2<@1.4"], STATES, SEQUENCES) == (("D", "C#2"),)
 
 
-@pytest.mark.parametrize("text", ["A", "A<", "A<<B", "A<Q", "A<A", "spoon<A"])
+def test_requirements_are_anchored_to_steps_for_updates() -> None:
+    assert anchor_requirements(["A<C#2", "knife<C"], SEQUENCES) == ["@1.1<@1.4", "knife<@1.3"]
+
+
+def test_cyclic_requirements_are_refused() -> None:
+    with pytest.raises(InputError, match="cycle"):
+        parse_requirements(["A<B", "B<C", "C<A"], STATES, SEQUENCES)
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["A", "A<", "A<<B", "A<Q", "A<A", "spoon<A", "C#x<A", "A#2#3<B", "C#0<A", "A<A#2", "@3.1<A"],
+)
 def test_bad_requirements_are_refused(text: str) -> None:
+    """Unknown names, visits never made (A#2), malformed labels, steps that do not exist."""
     with pytest.raises(InputError, match="require"):
-        parse_requirements([text], STATES)
+        parse_requirements([text], STATES, SEQUENCES)
 
 
 def test_goal_is_the_state_set_a_demonstration_ends_in() -> None:

@@ -13,6 +13,7 @@ import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -155,22 +156,34 @@ def learn(
     ] = None,
     position_noise: Annotated[
         float | None,
-        typer.Option(help="RMS placement noise in m (default 0.003).", show_default=False),
+        typer.Option(
+            min=0.0,
+            help="RMS placement noise in m (default 0.003).",
+            show_default=False,
+        ),
     ] = None,
     orientation_noise: Annotated[
         float | None,
-        typer.Option(help="RMS orientation noise in degrees (default 0.5).", show_default=False),
+        typer.Option(
+            min=0.0,
+            help="RMS orientation noise in degrees (default 0.5).",
+            show_default=False,
+        ),
     ] = None,
     position_separation: Annotated[
         float | None,
         typer.Option(
-            help="Minimum distance between clusters in m (default 0.05).", show_default=False
+            min=0.0,
+            help="Minimum distance between clusters in m (default 0.05).",
+            show_default=False,
         ),
     ] = None,
     orientation_separation: Annotated[
         float | None,
         typer.Option(
-            help="Minimum angle between clusters in degrees (default 15).", show_default=False
+            min=0.0,
+            help="Minimum angle between clusters in degrees (default 15).",
+            show_default=False,
         ),
     ] = None,
     json_output: Annotated[
@@ -183,48 +196,47 @@ def learn(
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
     from demoplan.constraints import parse_requirements_syntax
     from demoplan.demonstrations import load_demonstrations
-    from demoplan.learning import TaskModelLearner
+    from demoplan.learning import learn as learn_model
+    from demoplan.learning import update as update_model
     from demoplan.modelfile import load_model, save_model
+    from demoplan.states import StateGenerationSettings
 
     with _reported_errors():
-        settings: dict[str, Any] = {}
-        requirements: list[str] = []
-        previous = []
-        if update is not None:
-            model = load_model(update)
-            if not model.demonstrations:
-                raise InputError(
-                    "model holds no demonstrations to update; relearn from the demonstration files",
-                    source=str(update),
-                    field="demonstrations",
-                )
-            previous = list(model.demonstrations)
-            stored = dict(model.settings)
-            settings = {k: v for k, v in stored.items() if k in _LEARNER_SETTINGS}
-            requirements = [r for r in str(stored.get("require", "")).split(";") if r]
-        elif output is None:
+        if update is None and output is None:
             raise typer.BadParameter("give -o MODEL (or --update MODEL)", param_hint="'-o'")
+        target = output or update
+        assert target is not None
+        _refuse_overwriting_inputs(target, demos)
         overrides = {
             "position_noise": position_noise,
             "orientation_noise": orientation_noise,
             "position_separation": position_separation,
             "orientation_separation": orientation_separation,
         }
-        settings.update({k: v for k, v in overrides.items() if v is not None})
-        requirements += list(require or [])
+        settings: dict[str, Any] = {k: v for k, v in overrides.items() if v is not None}
+        requirements = list(require or [])
+        from_file: list[str] = []
         if require_file is not None:
-            requirements += _read_requirements(require_file)
-            try:
-                parse_requirements_syntax(requirements)
-            except InputError as exc:
+            from_file = _read_requirements(require_file)
+            requirements += from_file
+        try:
+            parse_requirements_syntax(requirements)
+            new = load_demonstrations(demos)
+            if update is not None:
+                model = update_model(
+                    load_model(update), new, require=requirements, settings=settings
+                )
+            else:
+                model = learn_model(
+                    new,
+                    require=list(dict.fromkeys(requirements)),
+                    settings=replace(StateGenerationSettings(), **settings),
+                )
+        except InputError as exc:
+            # A requirement read from --require-file: say which file it came from.
+            if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
                 raise InputError(str(exc), source=str(require_file)) from None
-        requirements = list(dict.fromkeys(requirements))
-        new = load_demonstrations(demos)
-        learner = TaskModelLearner(require=requirements, **_typed_settings(settings))
-        learner.fit(previous + new)
-        model = learner.model_
-        target = output or update
-        assert target is not None
+            raise
         save_model(model, target)
         if json_output:
             _print_json(_model_json(model))
@@ -237,33 +249,29 @@ def learn(
             )
 
 
-_LEARNER_SETTINGS = {
-    "position_noise": float,
-    "orientation_noise": float,
-    "position_separation": float,
-    "orientation_separation": float,
-    "n_init": int,
-    "seed": int,
-}
-
-
-def _typed_settings(settings: dict[str, Any]) -> dict[str, Any]:
-    typed = {}
-    for key, value in settings.items():
-        kind = _LEARNER_SETTINGS[key]
-        try:
-            typed["random_state" if key == "seed" else key] = kind(value)
-        except (TypeError, ValueError):
-            raise InputError(f"expected a number, got {value!r}", field=f"settings.{key}") from None
-    return typed
+def _refuse_overwriting_inputs(target: Path, inputs: list[Path]) -> None:
+    """``-o`` must not name one of the demonstration files (or lie in a folder read)."""
+    resolved = target.resolve()
+    for path in inputs:
+        source = path.resolve()
+        if resolved == source:
+            raise InputError("is also an input; write the model elsewhere", source=str(target))
+        if (
+            source.is_dir()
+            and resolved.parent == source
+            and resolved.suffix in {".json", ".yaml", ".yml"}
+        ):
+            raise InputError(
+                f"lies in the demonstration folder {path}, which would read it back as a "
+                "demonstration next time; write the model elsewhere",
+                source=str(target),
+            )
 
 
 def _model_json(model: TaskModel) -> dict[str, Any]:
     from demoplan.modelfile import model_to_dict
 
-    data = model_to_dict(model)
-    data["demonstrations"] = [d.name for d in model.demonstrations]
-    return data
+    return model_to_dict(model)
 
 
 @app.command()
@@ -305,7 +313,15 @@ def experiments(
             table.add_row(*map(Text, cells), "yes" if check.ok else "NO")
         _stdout.print(table)
         _stdout.print(f"Report: {result.report}", markup=False, highlight=False)
-        if not all(c.ok for c in result.checks):
+        differing = [c for c in result.checks if not c.ok]
+        if differing:
+            names = ", ".join(f"{c.experiment.split(' (')[0]} {c.name}" for c in differing)
+            _stderr.print(
+                f"demoplan: error: {len(differing)} results differ from the paper ({names}); "
+                f"see {result.report}",
+                markup=False,
+                highlight=False,
+            )
             raise typer.Exit(1)
 
 

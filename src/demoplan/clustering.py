@@ -115,10 +115,17 @@ def kmeans_batch(
         )
         labels[moving] = new_labels
         rows = np.arange(len(moving))[:, None]
-        one_hot = np.zeros((len(moving), n, n_clusters))
-        one_hot[rows, np.arange(n)[None, :], new_labels] = 1.0
-        counts = one_hot.sum(axis=1)
-        sums = np.matmul(one_hot.transpose(0, 2, 1), xs)
+        # Per-cluster counts and sums of every moving restart in one bincount each.
+        flat = (rows * n_clusters + new_labels).ravel()
+        size = len(moving) * n_clusters
+        counts = np.bincount(flat, minlength=size).reshape(len(moving), n_clusters).astype(float)
+        sums = np.stack(
+            [
+                np.bincount(flat, weights=xs[:, :, k].ravel(), minlength=size)
+                for k in range(xs.shape[2])
+            ],
+            axis=1,
+        ).reshape(len(moving), n_clusters, xs.shape[2])
         empty = counts == 0
         if empty.any():
             # Re-seed an empty cluster at the point farthest from its centre.
@@ -313,12 +320,12 @@ def select_clustering(
     lowest maximum per-cluster spread wins. Spreads whose square roots (RMS
     deviations) differ by less than ``noise`` are ties, and ties go to fewer
     clusters. The scan stops once a score is below the noise level (no larger
-    c could then win) and at the first rejected c: more centres on the same
-    data only crowd closer. Where placements form groups this gives the full
-    scan's answer (``tests/test_clustering.py`` checks it); where they spread
-    continuously over more than the separation, the literal full scan chops
-    them into many small clusters (singletons have zero spread), and stopping
-    early deliberately keeps the coarser clustering.
+    c could then win), and after :data:`PATIENCE` rejected counts in a row:
+    more centres on the same data only crowd closer. Where placements form
+    groups this gives the full scan's answer (``tests/test_clustering.py``
+    checks it); where they spread continuously over more than the separation,
+    the literal full scan chops them into many small clusters (singletons
+    have zero spread), and stopping early deliberately keeps a coarser one.
 
     The values are put in a canonical (sorted) order before clustering, so the
     result does not depend on the order the demonstrations arrived in.
@@ -327,6 +334,10 @@ def select_clustering(
         [space], separation=separation, noise=noise, n_init=n_init, seed=seed
     )
     return clustering
+
+
+PATIENCE = 3
+"""Rejected cluster counts in a row after which the scan of eq. (2) stops."""
 
 
 class _Scan:
@@ -342,6 +353,7 @@ class _Scan:
         self.n_distinct = 1 + int(np.count_nonzero(steps))
         self.accepted: list[tuple[int, IntArray, list[tuple[float, ...]], list[float]]] = []
         self.tried: list[tuple[int, float | None]] = []
+        self.rejected_in_a_row = 0
         self.done = False
 
     def consider(self, c: int, sorted_labels: IntArray, separation: float, noise: float) -> None:
@@ -352,8 +364,10 @@ class _Scan:
         means, spreads = _cluster_stats(self.space, labels, int(present.sum()))
         if c > 1 and _closest_pair(self.space.distance, means) < separation:
             self.tried.append((c, None))
-            self.done = True
+            self.rejected_in_a_row += 1
+            self.done = self.rejected_in_a_row >= PATIENCE or c + 1 > self.n_distinct
             return
+        self.rejected_in_a_row = 0
         score = max(spreads)
         self.tried.append((c, score))
         self.accepted.append((c, labels, means, spreads))

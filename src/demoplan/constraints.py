@@ -24,10 +24,12 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from demoplan.errors import InputError
+from demoplan.graphs import find_cycle
 from demoplan.model import State, visit_label
 
 __all__ = [
     "ConstraintSet",
+    "anchor_requirements",
     "goal_states",
     "learn_constraints",
     "ordered_pairs",
@@ -37,7 +39,7 @@ __all__ = [
 ]
 
 Pair = tuple[str, str]
-_REQUIREMENT = re.compile(r"^\s*([A-Za-z0-9_.\-#]+)\s*<\s*([A-Za-z0-9_.\-#]+)\s*$")
+_REQUIREMENT = re.compile(r"^\s*([A-Za-z0-9_.\-#@]+)\s*<\s*([A-Za-z0-9_.\-#@]+)\s*$")
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,38 +115,82 @@ def parse_requirements_syntax(texts: Iterable[str]) -> list[tuple[str, str]]:
     return sides
 
 
-def parse_requirements(texts: Iterable[str], states: Sequence[State]) -> tuple[Pair, ...]:
+def parse_requirements(
+    texts: Iterable[str], states: Sequence[State], sequences: Sequence[Sequence[str]]
+) -> tuple[Pair, ...]:
     """Teacher requirements ``"A<B"`` → pairs of visit labels.
 
-    Each side is a state id (``C``), a visit label (``C#2``) or an object name,
-    which stands for every state of that object (``plate<napkin``).
+    Each side is a state id (``C``), a visit label that occurs in some
+    demonstration (``C#2``), an object name, which stands for every state of
+    that object (``plate<napkin``), or ``@d.s``, the state of step s of
+    demonstration d (both 1-based; stable when demonstrations are added).
+    Required pairs that form a cycle are refused: no plan could satisfy them.
     """
     by_object: dict[str, list[str]] = {}
     for state in states:
         by_object.setdefault(state.object, []).append(state.id)
-    ids = {state.id for state in states}
+    visits = {label for sequence in sequences for label in visit_sequence(sequence)}
     pairs: set[Pair] = set()
     texts = list(texts)
     for text, tokens in zip(texts, parse_requirements_syntax(texts), strict=True):
-        sides = [_expand(token, ids, by_object, text) for token in tokens]
+        sides = [_expand(token, visits, by_object, sequences, text) for token in tokens]
         for x in sides[0]:
             for y in sides[1]:
                 if x == y:
                     raise InputError(f"{text!r} requires {x} before itself", field="require")
                 pairs.add((x, y))
+    cycle = find_cycle(pairs, order=label_key)
+    if cycle:
+        raise InputError(
+            f"the required constraints form a cycle {' < '.join(cycle)}; no order satisfies them",
+            field="require",
+        )
     return tuple(sorted(pairs, key=_pair_key))
 
 
-def _expand(token: str, ids: set[str], by_object: dict[str, list[str]], text: str) -> list[str]:
-    if token.split("#")[0] in ids:
+_ANCHOR = re.compile(r"^@(\d+)\.(\d+)$")
+
+
+def _expand(
+    token: str,
+    visits: set[str],
+    by_object: dict[str, list[str]],
+    sequences: Sequence[Sequence[str]],
+    text: str,
+) -> list[str]:
+    if token in visits:
         return [token]
     if token in by_object:
         return by_object[token]
-    known = ", ".join(sorted(ids, key=label_key) + sorted(by_object))
+    anchor = _ANCHOR.match(token)
+    if anchor:
+        demo, step = int(anchor.group(1)), int(anchor.group(2))
+        if 1 <= demo <= len(sequences) and 1 <= step <= len(sequences[demo - 1]):
+            return [visit_sequence(sequences[demo - 1])[step - 1]]
+        raise InputError(
+            f"{text!r}: {token!r} names no step of the demonstrations", field="require"
+        )
+    known = ", ".join(sorted(visits, key=label_key) + sorted(by_object))
     raise InputError(
-        f"{text!r}: {token!r} is neither a state id nor an object (known: {known})",
+        f"{text!r}: {token!r} is neither a visited state nor an object (known: {known})",
         field="require",
     )
+
+
+def anchor_requirements(texts: Iterable[str], sequences: Sequence[Sequence[str]]) -> list[str]:
+    """Rewrite state-id sides as ``@d.s`` anchors (their first occurrence).
+
+    State ids follow the order of the demonstrations and can change when a
+    demonstration is added; the step a state was learned from does not, so
+    ``learn --update`` keeps the teacher's requirements meaning the same states.
+    """
+    where: dict[str, str] = {}
+    for d, sequence in enumerate(sequences):
+        for s, label in enumerate(visit_sequence(sequence)):
+            where.setdefault(label, f"@{d + 1}.{s + 1}")
+    return [
+        "<".join(where.get(t, t) for t in tokens) for tokens in parse_requirements_syntax(texts)
+    ]
 
 
 def label_key(label: str) -> tuple[int, str, int]:

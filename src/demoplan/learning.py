@@ -12,13 +12,18 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict
 from typing import Self
 
-from demoplan.constraints import goal_states, learn_constraints, parse_requirements
+from demoplan.constraints import (
+    anchor_requirements,
+    goal_states,
+    learn_constraints,
+    parse_requirements,
+)
 from demoplan.demonstrations import check_demonstrations
-from demoplan.errors import NotFittedError
+from demoplan.errors import InputError, NotFittedError
 from demoplan.model import Demonstration, State, TaskModel
 from demoplan.states import ReferenceScore, StateGenerationSettings, generate_states
 
-__all__ = ["TaskModelLearner", "learn"]
+__all__ = ["TaskModelLearner", "learn", "update"]
 
 logger = logging.getLogger(__name__)
 
@@ -57,12 +62,14 @@ class TaskModelLearner:
         random_state: int = 0,
         require: Sequence[str] = (),
     ):
-        self.position_noise = position_noise
-        self.orientation_noise = orientation_noise
-        self.position_separation = position_separation
-        self.orientation_separation = orientation_separation
+        self.position_noise = _positive(position_noise, "position_noise")
+        self.orientation_noise = _positive(orientation_noise, "orientation_noise")
+        self.position_separation = _positive(position_separation, "position_separation")
+        self.orientation_separation = _positive(orientation_separation, "orientation_separation")
+        if not isinstance(n_init, int) or n_init < 1:
+            raise InputError(f"expected a whole number ≥ 1, got {n_init!r}", field="n_init")
         self.n_init = n_init
-        self.random_state = random_state
+        self.random_state = int(random_state)
         self.require = tuple(require)
         self._demonstrations: list[Demonstration] = []
         self._model: TaskModel | None = None
@@ -81,8 +88,7 @@ class TaskModelLearner:
 
     def fit(self, demonstrations: Iterable[Demonstration]) -> Self:
         """Learn from ``demonstrations`` (in this order, which fixes the state letters)."""
-        self._demonstrations = list(demonstrations)
-        return self._refit()
+        return self._refit(list(demonstrations))
 
     def partial_fit(self, demonstrations: Demonstration | Iterable[Demonstration]) -> Self:
         """Add demonstrations to those already seen and update the model.
@@ -94,14 +100,13 @@ class TaskModelLearner:
         """
         if isinstance(demonstrations, Demonstration):
             demonstrations = [demonstrations]
-        self._demonstrations += list(demonstrations)
-        return self._refit()
+        return self._refit([*self._demonstrations, *demonstrations])
 
-    def _refit(self) -> Self:
-        demos = self._demonstrations
+    def _refit(self, demos: list[Demonstration]) -> Self:
+        """Learn from ``demos``; on an error the learner keeps its previous state."""
         check_demonstrations(demos)
         generation = generate_states(demos, self.settings)
-        required = parse_requirements(self.require, generation.states)
+        required = parse_requirements(self.require, generation.states, generation.sequences)
         constraint_set = learn_constraints(generation.sequences, required)
         for index, x, y in constraint_set.violations:
             logger.warning(
@@ -113,6 +118,7 @@ class TaskModelLearner:
                 x,
                 y,
             )
+        self._demonstrations = demos
         self._scores = generation.scores
         self._model = TaskModel(
             states=generation.states,
@@ -163,7 +169,65 @@ def learn(
     demonstrations: Iterable[Demonstration],
     *,
     require: Sequence[str] = (),
-    **settings: float,
+    settings: StateGenerationSettings | None = None,
 ) -> TaskModel:
-    """Learn a task model in one call: ``TaskModelLearner(**settings).fit(demos).model_``."""
-    return TaskModelLearner(require=require, **settings).fit(demonstrations).model_  # type: ignore[arg-type]
+    """Learn a task model in one call (default settings unless given)."""
+    return _learner(settings or StateGenerationSettings(), require).fit(demonstrations).model_
+
+
+def update(
+    model: TaskModel,
+    demonstrations: Iterable[Demonstration],
+    *,
+    require: Sequence[str] = (),
+    settings: dict[str, float | int] | None = None,
+) -> TaskModel:
+    """Add demonstrations to a learned model: the same model as learning from
+    all of them at once (``demoplan learn --update``).
+
+    The model's settings are kept unless overridden in ``settings``; its
+    teacher requirements are kept, their state ids rewritten as the steps
+    they were learned from (``@d.s``) so that they keep meaning the same
+    states when the new demonstrations re-letter them; ``require`` adds more.
+    """
+    if not model.demonstrations:
+        raise InputError(
+            "model holds no demonstrations to update; relearn from the demonstration files",
+            field="demonstrations",
+        )
+    stored = dict(model.settings)
+    merged = StateGenerationSettings(
+        **{
+            name: kind(
+                settings[name] if settings and name in settings else stored.get(name, default)
+            )
+            for name, (kind, default) in _SETTING_TYPES.items()
+        }
+    )
+    previous = [r for r in str(stored.get("require", "")).split(";") if r]
+    requirements = list(dict.fromkeys([*anchor_requirements(previous, model.sequences), *require]))
+    learner = _learner(merged, requirements)
+    return learner.fit([*model.demonstrations, *demonstrations]).model_
+
+
+_SETTING_TYPES: dict[str, tuple[type, float | int]] = {
+    name: (type(value), value) for name, value in asdict(StateGenerationSettings()).items()
+}
+
+
+def _learner(settings: StateGenerationSettings, require: Sequence[str]) -> TaskModelLearner:
+    return TaskModelLearner(
+        position_noise=settings.position_noise,
+        orientation_noise=settings.orientation_noise,
+        position_separation=settings.position_separation,
+        orientation_separation=settings.orientation_separation,
+        n_init=settings.n_init,
+        random_state=settings.seed,
+        require=require,
+    )
+
+
+def _positive(value: float, name: str) -> float:
+    if not isinstance(value, int | float) or not value > 0 or value == float("inf"):
+        raise InputError(f"expected a positive number, got {value!r}", field=name)
+    return float(value)

@@ -28,6 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.graphs import find_cycle
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Plan, Problem
 
@@ -361,39 +362,10 @@ def explain_unsolvable(problem: Problem) -> list[str]:
         )
         if needs_move and not c.grasps_of[obj]:
             reasons.append(f"{name} must move but allows no grasp")
-    cycle = _precedence_cycle(problem)
+    cycle = find_cycle(problem.precedences)
     if cycle:
         reasons.append(f"subgoals must come before themselves: {' < '.join(cycle)}")
     return reasons
-
-
-def _precedence_cycle(problem: Problem) -> list[str]:
-    after: dict[str, list[str]] = {}
-    for a, b in problem.precedences:
-        after.setdefault(a, []).append(b)
-    state: dict[str, int] = {}
-    path: list[str] = []
-
-    def visit(node: str) -> list[str]:
-        state[node] = 1
-        path.append(node)
-        for nxt in after.get(node, []):
-            if state.get(nxt) == 1:
-                return [*path[path.index(nxt) :], nxt]
-            if nxt not in state:
-                found = visit(nxt)
-                if found:
-                    return found
-        state[node] = 2
-        path.pop()
-        return []
-
-    for node in sorted(after):
-        if node not in state:
-            found = visit(node)
-            if found:
-                return found
-    return []
 
 
 def solve(
