@@ -511,3 +511,51 @@ def test_show_prints_the_column_units(tmp_path: Path) -> None:
     result = invoke("learn", model, "-o", tmp_path / "model.json")
     assert result.exit_code == 0
     assert "Position [m]" in result.stdout and "Orientation [deg]" in result.stdout
+
+
+def test_learn_json_in_a_real_process_prints_only_json(tmp_path: Path) -> None:
+    out = subprocess.run(
+        [*COMMAND, "learn", str(EXAMPLES / "set_table"), "-o", str(tmp_path / "m.json"), "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert out.returncode == 0
+    assert out.stderr == ""
+    model = json.loads(out.stdout)
+    assert len(model["constraints"]) == 32
+    # The JSON is the model itself: it loads back.
+    (tmp_path / "again.json").write_text(out.stdout)
+    assert invoke("show", tmp_path / "again.json").exit_code == 0
+
+
+def test_noise_of_zero_is_bad_input_and_negative_a_usage_error(tmp_path: Path) -> None:
+    demo_file = EXAMPLES / "blocks" / "demonstrations.json"
+    zero = invoke("learn", demo_file, "-o", tmp_path / "m.json", "--position-noise", "0")
+    assert_one_line_error(zero, "position_noise", "positive")
+    negative = invoke("learn", demo_file, "-o", tmp_path / "m.json", "--position-noise", "-1")
+    assert negative.exit_code == 2
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_the_model_may_not_overwrite_an_input(tmp_path: Path) -> None:
+    demo_file = write(tmp_path / "demo.json", demo())
+    original = demo_file.read_text()
+    assert_one_line_error(invoke("learn", demo_file, "-o", demo_file), "demo.json", "input")
+    assert demo_file.read_text() == original
+    assert_one_line_error(
+        invoke("learn", tmp_path, "-o", tmp_path / "model.json"), "model.json", "folder"
+    )
+
+
+def test_yaml_aliases_and_huge_coordinates_are_refused(tmp_path: Path) -> None:
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text(
+        "format: demoplan/demonstration-1\na: &a [x, x]\nb: &b [*a, *a]\n"
+        "steps: [{object: p, position: [0, 0]}]\n"
+    )
+    assert_one_line_error(invoke("learn", bomb, "-o", tmp_path / "m.json"), "bomb.yaml", "alias")
+    huge = write(tmp_path / "huge.json", demo([{"object": "p", "position": [1e300, 0]}]))
+    assert_one_line_error(
+        invoke("learn", huge, "-o", tmp_path / "m.json"), "huge.json", "steps[0].position[0]"
+    )

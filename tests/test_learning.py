@@ -9,7 +9,8 @@ from hypothesis import strategies as st
 from demoplan import TaskModelLearner, load_demonstrations
 from demoplan.constraints import ordered_pairs
 from demoplan.errors import InputError, NotFittedError
-from demoplan.model import TaskModel
+from demoplan.learning import update
+from demoplan.model import Demonstration, Pose, Step, TaskModel
 from tests.helpers import EXAMPLES, random_task_demonstrations
 
 
@@ -107,3 +108,57 @@ def test_no_constraint_is_contradicted_and_a_new_demonstration_respects_the_old(
     for sequence in after.sequences[:-1]:
         for x, y in ordered_pairs(sequence):
             assert (y, x) not in set(after.constraints)
+
+
+def test_a_failed_partial_fit_leaves_the_learner_as_it_was() -> None:
+    demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    learner = TaskModelLearner().fit(demos[:1])
+    before = learner.model_
+    moved_landmark = Demonstration(
+        "bad", (Step("wood", Pose((0.3, 0.0, 0.0))),), landmarks=(("green", Pose((0.0, 0.0, 0.0))),)
+    )
+    with pytest.raises(InputError):
+        learner.partial_fit(moved_landmark)
+    assert learner.model_ is before
+    learner.partial_fit(demos[1])  # still usable
+    assert learner.sequences_ == (("A", "B", "C"), ("D", "A", "C"))
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [
+        {"position_noise": 0.0},
+        {"orientation_noise": -1.0},
+        {"position_separation": 0},
+        {"n_init": 0},
+    ],
+)
+def test_settings_out_of_range_are_input_errors(settings: dict[str, float]) -> None:
+    with pytest.raises(InputError, match=next(iter(settings))):
+        TaskModelLearner(**settings)  # type: ignore[arg-type]
+
+
+def test_update_keeps_teacher_requirements_on_the_same_states() -> None:
+    """State ids can change when a demonstration is added; the states a teacher
+    required by id stay the ones learned from the same steps."""
+    demos = load_demonstrations([EXAMPLES / "set_table"])
+    model = TaskModelLearner(require=["C<E"]).fit(demos).model_
+    fork, glass = model.state("C"), model.state("E")
+    updated = update(model, [demos[0]])
+    ((x, y),) = updated.teacher_constraints
+    assert updated.state(x).object == fork.object and updated.state(y).object == glass.object
+    assert set(fork.members) <= set(updated.state(x).members)
+    assert set(glass.members) <= set(updated.state(y).members)
+
+
+def test_a_partly_oriented_object_is_reported(caplog: pytest.LogCaptureFixture) -> None:
+    from demoplan.rotations import quat_from_yaw
+
+    demos = [
+        Demonstration(f"d{k}", (Step("knife", Pose((0.3, 0.2, 0.0), q)),))
+        for k, q in enumerate([quat_from_yaw(0), None, quat_from_yaw(90)])
+    ]
+    with caplog.at_level("WARNING"):
+        (state,) = TaskModelLearner().fit(demos).states_
+    assert state.orientation.value is None
+    assert "knife has an orientation in some steps but not in others" in caplog.text

@@ -36,6 +36,8 @@ GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrat
 # A number is a JSON number: not a string ("1.5") nor a boolean (true), which
 # pydantic's lax mode would otherwise turn into 1.5 and 1.0.
 Number = Annotated[float, Field(strict=True)]
+MAX_COORDINATE = 1.0e4  # m (in the file's units): a table, a room, a building — not 1e300
+Coordinate = Annotated[float, Field(strict=True, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
 
 
 class _Schema(BaseModel):
@@ -48,7 +50,7 @@ class UnitsSchema(_Schema):
 
 
 class PoseSchema(_Schema):
-    position: list[Number] = Field(min_length=2, max_length=3)
+    position: list[Coordinate] = Field(min_length=2, max_length=3)
     yaw: Number | None = None
     rpy: list[Number] | None = Field(default=None, min_length=3, max_length=3)
     quat: list[Number] | None = Field(default=None, min_length=4, max_length=4)

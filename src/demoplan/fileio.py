@@ -87,8 +87,20 @@ def _parse_yaml(text: str, source: str) -> Any:
         yaml: Any = importlib.import_module("yaml")  # Any: PyYAML ships no type stubs
     except ImportError:  # pragma: no cover - yaml is a dependency
         raise InputError("reading YAML needs PyYAML (pip install pyyaml)", source=source) from None
+    class NoAliasLoader(yaml.SafeLoader):  # type: ignore[misc]
+        """Refuses anchors/aliases: a few hundred bytes of nested aliases expand
+        to billions of nodes (the YAML "billion laughs")."""
+
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            if self.check_event(yaml.AliasEvent):
+                event = self.peek_event()
+                raise yaml.composer.ComposerError(
+                    None, None, "aliases (*name) are not allowed", event.start_mark
+                )
+            return super().compose_node(parent, index)
+
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=NoAliasLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]

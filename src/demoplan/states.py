@@ -19,6 +19,7 @@ demonstrations in the order given, steps in order.
 
 from __future__ import annotations
 
+import logging
 import math
 from bisect import bisect_left
 from collections.abc import Sequence
@@ -46,6 +47,8 @@ __all__ = [
 ]
 
 Kind = Literal["position", "orientation"]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, slots=True)
@@ -259,6 +262,12 @@ def _score_references(
 ) -> list[ReferenceScore]:
     """Eq. (2) for every candidate reference that is defined at every placement."""
     if kind == "orientation" and any(p.pose.orientation is None for p in own):
+        if any(p.pose.orientation is not None for p in own):
+            logger.warning(
+                "%s has an orientation in some steps but not in others; its orientation "
+                "is not learned (give one in every step, or in none)",
+                obj,
+            )
         return []
     noise = settings.position_noise if kind == "position" else settings.orientation_noise
     separation = (
