@@ -164,3 +164,12 @@ def test_a_partly_oriented_object_is_reported(caplog: pytest.LogCaptureFixture) 
         (state,) = TaskModelLearner().fit(demos).states_
     assert state.orientation.value is None
     assert "knife has an orientation in some steps but not in others" in caplog.text
+
+
+def test_max_clusters_caps_the_scan_of_eq_2() -> None:
+    demos = random_task_demonstrations(3, 12, 4)
+    free = TaskModelLearner().fit(demos)
+    capped = TaskModelLearner(max_clusters=1).fit(demos)
+    assert max(s.clustering.n_clusters for s in capped.reference_scores_) == 1
+    assert all(c <= 1 for s in capped.reference_scores_ for c, _ in s.clustering.tried)
+    assert max(len(s.clustering.tried) for s in free.reference_scores_) > 1

@@ -186,6 +186,14 @@ def learn(
             show_default=False,
         ),
     ] = None,
+    max_clusters: Annotated[
+        int | None,
+        typer.Option(
+            min=0,
+            help="Cap on clusters per object and reference (default 0: none, as the paper).",
+            show_default=False,
+        ),
+    ] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the model as JSON on stdout.")
     ] = False,
@@ -212,6 +220,7 @@ def learn(
             "orientation_noise": orientation_noise,
             "position_separation": position_separation,
             "orientation_separation": orientation_separation,
+            "max_clusters": max_clusters,
         }
         settings: dict[str, Any] = {k: v for k, v in overrides.items() if v is not None}
         requirements = list(require or [])

@@ -395,12 +395,16 @@ def select_clusterings(
     noise: float,
     n_init: int = 8,
     seed: int = 0,
+    max_clusters: int = 0,
 ) -> list[Clustering]:
     """:func:`select_clustering` for several spaces of the same size and kind at
-    once (one object towards every candidate reference), K-means batched."""
+    once (one object towards every candidate reference), K-means batched.
+
+    ``max_clusters`` > 0 caps c (the paper scans c = 1..N, 0 keeps that).
+    """
     scans = [_Scan(space) for space in spaces]
     n = len(spaces[0]) if spaces else 0
-    for c in range(1, n + 1):
+    for c in range(1, (min(n, max_clusters) if max_clusters > 0 else n) + 1):
         active = [scan for scan in scans if not scan.done]
         if not active:
             break

@@ -87,6 +87,7 @@ def _parse_yaml(text: str, source: str) -> Any:
         yaml: Any = importlib.import_module("yaml")  # Any: PyYAML ships no type stubs
     except ImportError:  # pragma: no cover - yaml is a dependency
         raise InputError("reading YAML needs PyYAML (pip install pyyaml)", source=source) from None
+
     class NoAliasLoader(yaml.SafeLoader):  # type: ignore[misc]
         """Refuses anchors/aliases: a few hundred bytes of nested aliases expand
         to billions of nodes (the YAML "billion laughs")."""

@@ -39,6 +39,9 @@ class TaskModelLearner:
     orientation_separation : minimum angle (degrees) between two orientation clusters.
     n_init : K-means restarts per clustering.
     random_state : seed of the K-means restarts.
+    max_clusters : cap on the clusters per object and reference; 0 (default)
+        scans c = 1..N as the paper does. With placements that follow no
+        structure, eq. (2) scans far and learning slows (docs/learning.md).
     require : teacher constraints such as ``"A<B"`` or ``"plate<napkin"``; never
         removed by demonstrations (the journal version of the paper).
 
@@ -60,6 +63,7 @@ class TaskModelLearner:
         orientation_separation: float = 15.0,
         n_init: int = 8,
         random_state: int = 0,
+        max_clusters: int = 0,
         require: Sequence[str] = (),
     ):
         self.position_noise = _positive(position_noise, "position_noise")
@@ -69,6 +73,12 @@ class TaskModelLearner:
         if not isinstance(n_init, int) or n_init < 1:
             raise InputError(f"expected a whole number ≥ 1, got {n_init!r}", field="n_init")
         self.n_init = n_init
+        if not isinstance(max_clusters, int) or max_clusters < 0:
+            raise InputError(
+                f"expected a whole number ≥ 0 (0: no cap), got {max_clusters!r}",
+                field="max_clusters",
+            )
+        self.max_clusters = max_clusters
         self.random_state = int(random_state)
         self.require = tuple(require)
         self._demonstrations: list[Demonstration] = []
@@ -84,6 +94,7 @@ class TaskModelLearner:
             orientation_separation=self.orientation_separation,
             n_init=self.n_init,
             seed=self.random_state,
+            max_clusters=self.max_clusters,
         )
 
     def fit(self, demonstrations: Iterable[Demonstration]) -> Self:
@@ -223,6 +234,7 @@ def _learner(settings: StateGenerationSettings, require: Sequence[str]) -> TaskM
         orientation_separation=settings.orientation_separation,
         n_init=settings.n_init,
         random_state=settings.seed,
+        max_clusters=settings.max_clusters,
         require=require,
     )
 

@@ -43,7 +43,7 @@ _NUMBER_SETTINGS = {
     "position_separation",
     "orientation_separation",
 }
-_INTEGER_SETTINGS = {"n_init", "seed"}
+_INTEGER_SETTINGS = {"n_init", "seed", "max_clusters"}
 
 
 class _Schema(BaseModel):

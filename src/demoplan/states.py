@@ -62,6 +62,8 @@ class StateGenerationSettings:
     orientation_separation : the same for orientations (degrees, geodesic).
     n_init : K-means restarts per call.
     seed : seed of the K-means restarts.
+    max_clusters : cap on the clusters per object and reference (0: the
+        paper's N, the number of placements).
     """
 
     position_noise: float = 0.003
@@ -70,6 +72,7 @@ class StateGenerationSettings:
     orientation_separation: float = 15.0
     n_init: int = 8
     seed: int = 0
+    max_clusters: int = 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -283,7 +286,12 @@ def _score_references(
         references.append(reference)
         spaces.append(PositionSpace(values) if kind == "position" else RotationSpace(values))
     clusterings = select_clusterings(
-        spaces, separation=separation, noise=noise, n_init=settings.n_init, seed=settings.seed
+        spaces,
+        separation=separation,
+        noise=noise,
+        n_init=settings.n_init,
+        seed=settings.seed,
+        max_clusters=settings.max_clusters,
     )
     return [
         ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, space.values))
