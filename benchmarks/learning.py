@@ -550,6 +550,57 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
+@dataclass(slots=True)
+class UnstructuredRow:
+    demos: int
+    objects: int
+    max_clusters: int
+    seconds: float
+    states: int
+
+
+def run_unstructured(seed: int, *, quick: bool) -> list[UnstructuredRow]:
+    """The worst case: placements that follow no task (uniform on a 1 m table),
+    learned with the paper's full scan of c and with ``max_clusters=5``."""
+    rng = np.random.default_rng([seed, 99])
+    n_demos, n_objects = (20, 10) if quick else (TARGET_DEMOS, TARGET_OBJECTS)
+    demos = [
+        Demonstration(
+            f"random-{d + 1}",
+            tuple(
+                Step(f"obj{i}", Pose((float(rng.uniform(0, 1)), float(rng.uniform(0, 1)), 0.0)))
+                for i in rng.permutation(n_objects)
+            ),
+        )
+        for d in range(n_demos)
+    ]
+    rows = []
+    for cap in (0, 5):
+        start = time.perf_counter()
+        learner = TaskModelLearner(max_clusters=cap).fit(demos)
+        rows.append(
+            UnstructuredRow(
+                n_demos, n_objects, cap, time.perf_counter() - start, len(learner.states_)
+            )
+        )
+    return rows
+
+
+def unstructured_table(rows: list[UnstructuredRow]) -> Table:
+    table = Table(title="Worst case: placements with no structure (uniform on a 1 m table)")
+    for column in ("demos", "objects", "max_clusters", "time", "states learned"):
+        table.add_column(column, justify="right")
+    for row in rows:
+        table.add_row(
+            str(row.demos),
+            str(row.objects),
+            "none (paper)" if row.max_clusters == 0 else str(row.max_clusters),
+            format_seconds(row.seconds),
+            str(row.states),
+        )
+    return table
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     console = Console(width=None if sys.stdout.isatty() else 150)
@@ -590,6 +641,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         highlight=False,
     )
 
+    unstructured = run_unstructured(args.seed, quick=args.quick)
+    console.print(unstructured_table(unstructured))
+
     kmeans_rows = run_kmeans(
         args.seed, batches=3 if args.quick else 7, min_batch_s=0.02 if args.quick else 0.1
     )
@@ -616,6 +670,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "limit_s": TARGET_SECONDS,
                 "pass": verdict == "PASS",
             },
+            "unstructured": [asdict(row) for row in unstructured],
             "kmeans": None
             if kmeans_rows is None
             else [{**asdict(row), "ratio": row.ratio} for row in kmeans_rows],

@@ -250,6 +250,10 @@ class Space:
         """Distance between two means (for the separation threshold)."""
         raise NotImplementedError
 
+    def link(self, separation: float) -> float:
+        """The separation as a distance in the K-means embedding."""
+        raise NotImplementedError
+
 
 class PositionSpace(Space):
     """Relative positions ``(n, 3)`` in metres; spread in m²."""
@@ -265,6 +269,9 @@ class PositionSpace(Space):
 
     def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
         return math.dist(a, b)
+
+    def link(self, separation: float) -> float:
+        return separation
 
 
 class RotationSpace(Space):
@@ -286,6 +293,10 @@ class RotationSpace(Space):
 
     def distance(self, a: Sequence[float], b: Sequence[float]) -> float:
         return rotations.angle_between(a, b)
+
+    def link(self, separation: float) -> float:
+        # Chordal distance of two rotations ``separation`` degrees apart.
+        return 2.0 * math.sqrt(2.0) * math.sin(math.radians(min(separation, 180.0)) / 2.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -320,8 +331,9 @@ def select_clustering(
     lowest maximum per-cluster spread wins. Spreads whose square roots (RMS
     deviations) differ by less than ``noise`` are ties, and ties go to fewer
     clusters. The scan stops once a score is below the noise level (no larger
-    c could then win), and after :data:`PATIENCE` rejected counts in a row:
-    more centres on the same data only crowd closer. Where placements form
+    c could then win), and at a rejected c unless the values still fall into
+    more than c groups (:meth:`_Scan.groups`), after at most :data:`PATIENCE`
+    rejected counts in a row: more centres on the same data only crowd closer. Where placements form
     groups this gives the full scan's answer (``tests/test_clustering.py``
     checks it); where they spread continuously over more than the separation,
     the literal full scan chops them into many small clusters (singletons
@@ -355,6 +367,7 @@ class _Scan:
         self.tried: list[tuple[int, float | None]] = []
         self.rejected_in_a_row = 0
         self.done = False
+        self._groups: int | None = None
 
     def consider(self, c: int, sorted_labels: IntArray, separation: float, noise: float) -> None:
         labels = sorted_labels[self.inverse]
@@ -365,13 +378,38 @@ class _Scan:
         if c > 1 and _closest_pair(self.space.distance, means) < separation:
             self.tried.append((c, None))
             self.rejected_in_a_row += 1
-            self.done = self.rejected_in_a_row >= PATIENCE or c + 1 > self.n_distinct
+            self.done = (
+                self.rejected_in_a_row >= PATIENCE
+                or c + 1 > self.n_distinct
+                or c >= self.groups(separation)
+            )
             return
         self.rejected_in_a_row = 0
         score = max(spreads)
         self.tried.append((c, score))
         self.accepted.append((c, labels, means, spreads))
         self.done = math.sqrt(score) < noise or c + 1 > self.n_distinct
+
+    def groups(self, separation: float) -> int:
+        """Connected components of the values linked when closer than the separation.
+
+        After a rejected c the scan goes on only while there are more such
+        groups than c: points spread as one chain (a continuum) stop it at the
+        first rejection, distinct spots (a triangle of spots 5.5 cm apart, which
+        rejects c = 2) let it reach c = 3.
+        """
+        if self._groups is None:
+            x = self.canonical
+            sq = (x * x).sum(axis=1)
+            linked = sq[:, None] - 2.0 * x @ x.T + sq[None, :] < self.space.link(separation) ** 2
+            label = np.arange(len(x))
+            while True:  # propagate the smallest label along links until stable
+                spread = np.where(linked, label[None, :], len(x)).min(axis=1)
+                if np.array_equal(spread, label):
+                    break
+                label = spread
+            self._groups = len(np.unique(label))
+        return self._groups
 
     def result(self, noise: float) -> Clustering:
         best_root = min(math.sqrt(max(s)) for _, _, _, s in self.accepted)
