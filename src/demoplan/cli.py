@@ -14,6 +14,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import replace
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -302,6 +303,71 @@ def show(
             _print_json(_model_json(model))
         else:
             _print_model(model, decimals)
+
+
+class SearchName(StrEnum):
+    """Search strategies of ``demoplan solve`` (demoplan.planning.search.SEARCHES)."""
+
+    astar = "astar"
+    bfs = "bfs"
+
+
+@app.command()
+def solve(
+    problem_path: Annotated[
+        Path, typer.Argument(metavar="PROBLEM.xml", help="A problem in the paper's XML format.")
+    ],
+    json_output: Annotated[bool, typer.Option("--json", help="Print the plan as JSON.")] = False,
+    search: Annotated[
+        SearchName, typer.Option(help="astar (default, optimal, fast) or bfs (the paper's).")
+    ] = SearchName.astar,
+    max_nodes: Annotated[
+        int | None, typer.Option(min=1, help="Stop after expanding this many states (exit 4).")
+    ] = None,
+    timeout: Annotated[
+        float | None, typer.Option(min=0.0, help="Stop after this many seconds (exit 4).")
+    ] = None,
+) -> None:
+    """Solve a planning problem: a shortest GRASP / PUT_DOWN plan (paper §IV.C)."""
+    from demoplan.planning.problem import format_plan
+    from demoplan.planning.search import Budget
+    from demoplan.planning.search import solve as solve_problem
+    from demoplan.planning.xml import load_problem
+
+    with _reported_errors():
+        problem = load_problem(problem_path)
+        plan = solve_problem(problem, search.value, Budget(max_nodes=max_nodes, timeout=timeout))
+        if json_output:
+            _print_json(
+                {
+                    "actions": [[a.kind, a.object, a.location, a.grasp] for a in plan.actions],
+                    "length": len(plan),
+                    "search": plan.search,
+                    "expanded": plan.expanded,
+                    "generated": plan.generated,
+                    "seconds": round(plan.seconds, 6),
+                }
+            )
+        else:
+            sys.stdout.write(format_plan(plan))
+
+
+@app.command()
+def pddl(
+    problem_path: Annotated[
+        Path, typer.Argument(metavar="PROBLEM.xml", help="A problem in the paper's XML format.")
+    ],
+    output: Annotated[
+        Path, typer.Option("--output", "-o", help="Folder for domain.pddl and problem.pddl.")
+    ],
+) -> None:
+    """Export a problem as PDDL (grounded STRIPS) for Fast Downward, pyperplan, ..."""
+    from demoplan.planning.pddl import save_pddl
+    from demoplan.planning.xml import load_problem
+
+    with _reported_errors():
+        domain, problem = save_pddl(load_problem(problem_path), output)
+        _stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 
 
 @app.command()
