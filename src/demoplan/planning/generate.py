@@ -81,11 +81,17 @@ def table_problem(
     n_freespace: int = 3,
     occupied_goals: float = 0.3,
     spacing: float = 0.06,
+    density: float = 5.0,
 ) -> Problem:
-    """Move ``n_objects`` objects to their places (see the module docstring)."""
+    """Move ``n_objects`` objects to their places (see the module docstring).
+
+    Places lie on a grid of about ``density × n_objects`` cells, ``spacing``
+    apart (neighbours along a grasp's axis collide); start and goal places
+    take two in five cells at the default density.
+    """
     generator = np.random.default_rng(rng)
     objects = [f"obj{i + 1}" for i in range(n_objects)]
-    side = math.ceil(math.sqrt(2.5 * n_objects + 4))
+    side = math.ceil(math.sqrt(density * n_objects + 4))
     cells = [(i, j) for i in range(side) for j in range(side)]
     chosen = generator.permutation(len(cells))[: 2 * n_objects]
     goal_cells = [cells[k] for k in chosen[:n_objects]]

@@ -3,12 +3,20 @@
 The export is *grounded STRIPS*: one parameterless action per GRASP of an
 object at a location with a grasp, and per PUT_DOWN likewise (plus one
 variant per subgoal a PUT_DOWN can reach). Collision facts, stacking and
-exclusion become plain preconditions on ``free_*`` / ``occupied_*`` atoms, so
+exclusion become plain preconditions on ``free`` / ``occupied`` atoms, so
 the domain needs no quantifiers, conditional effects or negative
 preconditions — every STRIPS planner reads it, pyperplan included. Each
 action costs 1 (no ``:action-costs``), so an optimal PDDL plan has as many
 actions as an optimal demoplan plan; action names map back to the paper's
 ``GRASP o l g`` / ``PUT_DOWN o l g``.
+
+The predicates keep their arguments — ``(located o l)``, ``(free l)``,
+``(occupied l)``, ``(holding o g)``, ``(reached s)``, ``(pending s)`` over the
+domain's constants — rather than being flattened into one nullary atom per
+fact: Fast Downward's translator then finds the state invariants (an object
+is at one place or held, a place is free or occupied) at once, where with
+hundreds of nullary atoms its invariant synthesis runs into its candidate
+limit (about 10 s even for three objects).
 """
 
 from __future__ import annotations
@@ -22,23 +30,58 @@ from demoplan.planning.problem import Action, Problem
 __all__ = ["action_from_pddl", "problem_to_pddl", "save_pddl"]
 
 _SAFE = re.compile(r"[^a-z0-9]")  # no "_": "__" separates the parts of action names
+# Words a PDDL reader may take for syntax where a name stands (PDDL 1.2 to 3.1).
+_RESERVED = frozenset(
+    "and or not imply exists forall when either object number at over start end all "
+    "define domain problem preference always sometime within increase decrease assign "
+    "minimize maximize total-time total-cost".split()
+)
+_PREDICATES = (
+    "(handempty)",
+    "(located ?o ?l)",
+    "(free ?l)",
+    "(occupied ?l)",
+    "(holding ?o ?g)",
+    "(reached ?s)",
+    "(pending ?s)",
+)
 
 
 def _atom(*parts: str) -> str:
     return "-".join(_SAFE.sub("-", p.lower()) for p in parts)
 
 
+def _name(text: str) -> str:
+    """A PDDL name from ``text``: letters, digits and "-", starting with a letter."""
+    name = _atom(text) or "x"
+    if not name[0].isalpha():
+        name = "n" + name
+    return name
+
+
 def problem_to_pddl(problem: Problem) -> tuple[str, str]:
     """``(domain, problem)`` PDDL texts for ``problem``."""
     c = compile_problem(problem)
-    names = _unique_names(problem)
+    names, subgoal_names = _unique_names(problem)
     locations, objects, grasps = c.locations, c.objects, c.grasps
-    at = {(o, loc): f"at_{names[o]}_{names[loc]}" for o in objects for loc in locations}
-    free = {loc: f"free_{names[loc]}" for loc in locations}
-    occupied = {loc: f"occupied_{names[loc]}" for loc in locations}
-    holding = {(o, g): f"holding_{names[o]}_{names[g]}" for o in objects for g in grasps}
-    reached = {s.id: f"reached_{names['#' + s.id]}" for s in problem.subgoals}
-    pending = {s.id: f"pending_{names['#' + s.id]}" for s in problem.subgoals}
+
+    def at(o: str, loc: str) -> str:
+        return f"located {names[o]} {names[loc]}"
+
+    def free(loc: str) -> str:
+        return f"free {names[loc]}"
+
+    def occupied(loc: str) -> str:
+        return f"occupied {names[loc]}"
+
+    def holding(o: str, g: str) -> str:
+        return f"holding {names[o]} {names[g]}"
+
+    def reached(sid: str) -> str:
+        return f"reached {subgoal_names[sid]}"
+
+    def pending(sid: str) -> str:
+        return f"pending {subgoal_names[sid]}"
 
     def mask(bits: int) -> list[str]:
         return [locations[i] for i in range(len(locations)) if bits >> i & 1]
@@ -48,64 +91,56 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
         for gi in c.grasps_of[oi]:
             g = grasps[gi]
             for li, loc in enumerate(locations):
-                pre = ["handempty", at[(o, loc)]]
-                pre += [free[b] for b in mask(c.block[li][gi] | c.above[li])]
+                pre = ["handempty", at(o, loc)]
+                pre += [free(b) for b in mask(c.block[li][gi] | c.above[li])]
                 actions.append(
                     _action(
                         f"grasp__{names[o]}__{names[loc]}__{names[g]}",
                         pre,
-                        add=[holding[(o, g)], free[loc]],
-                        delete=["handempty", at[(o, loc)], occupied[loc]],
+                        add=[holding(o, g), free(loc)],
+                        delete=["handempty", at(o, loc), occupied(loc)],
                     )
                 )
-                pre = [holding[(o, g)], free[loc]]
-                pre += [free[b] for b in mask(c.block[li][gi] | c.exclusive[li])]
-                pre += [occupied[b] for b in mask(c.below[li])]
-                add = ["handempty", at[(o, loc)], occupied[loc]]
-                delete = [holding[(o, g)], free[loc]]
+                pre = [holding(o, g), free(loc)]
+                pre += [free(b) for b in mask(c.block[li][gi] | c.exclusive[li])]
+                pre += [occupied(b) for b in mask(c.below[li])]
+                add = ["handempty", at(o, loc), occupied(loc)]
+                delete = [holding(o, g), free(loc)]
                 base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
                 actions.append(_action(base, pre, add, delete))
                 for s in problem.subgoals:  # the same PUT_DOWN, reaching a subgoal
                     if s.object != o or s.location != loc:
                         continue
-                    before = [reached[a] for a, b in sorted(problem.precedences) if b == s.id]
+                    before = [reached(a) for a, b in sorted(problem.precedences) if b == s.id]
                     actions.append(
                         _action(
-                            f"{base}__reach__{names['#' + s.id]}",
-                            [*pre, pending[s.id], *before],
-                            [*add, reached[s.id]],
-                            [*delete, pending[s.id]],
+                            f"{base}__reach__{subgoal_names[s.id]}",
+                            [*pre, pending(s.id), *before],
+                            [*add, reached(s.id)],
+                            [*delete, pending(s.id)],
                         )
                     )
-    predicates = (
-        ["handempty"]
-        + list(at.values())
-        + list(free.values())
-        + list(occupied.values())
-        + list(holding.values())
-        + list(reached.values())
-        + list(pending.values())
-    )
-    domain_name = _atom("demoplan", problem.name)
+    constants = [names[n] for n in (*objects, *locations, *grasps)]
+    constants += [subgoal_names[s.id] for s in problem.subgoals]
+    domain_name = _name(f"demoplan-{problem.name}")
     domain = (
         f"(define (domain {domain_name})\n"
         "  (:requirements :strips)\n"
-        "  (:predicates\n"
-        + "".join(f"    ({p})\n" for p in predicates)
-        + "  )\n"
+        "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
+        "  (:predicates\n" + "".join(f"    {p}\n" for p in _PREDICATES) + "  )\n"
         + "".join(actions)
         + ")\n"
     )
-    start_at = dict(problem.initial)
-    taken = set(start_at.values())
+    taken = {loc for _, loc in problem.initial}
     init = ["handempty"]
-    init += [at[(o, loc)] for o, loc in problem.initial]
-    init += [occupied[loc] if loc in taken else free[loc] for loc in locations]
-    start_reached = {s.id for i, s in enumerate(problem.subgoals) if c.start_reached >> i & 1}
-    init += [reached[s] if s in start_reached else pending[s] for s in reached]
-    goal = ["handempty", *(at[(o, loc)] for o, loc in problem.goal), *reached.values()]
+    init += [at(o, loc) for o, loc in problem.initial]
+    init += [occupied(loc) if loc in taken else free(loc) for loc in locations]
+    for i, s in enumerate(problem.subgoals):
+        init.append(reached(s.id) if c.start_reached >> i & 1 else pending(s.id))
+    goal = ["handempty", *(at(o, loc) for o, loc in problem.goal)]
+    goal += [reached(s.id) for s in problem.subgoals]
     problem_text = (
-        f"(define (problem {_atom(problem.name)})\n"
+        f"(define (problem {_name(problem.name)})\n"
         f"  (:domain {domain_name})\n"
         "  (:init\n" + "".join(f"    ({fact})\n" for fact in init) + "  )\n"
         "  (:goal (and\n" + "".join(f"    ({fact})\n" for fact in goal) + "  ))\n"
@@ -125,34 +160,41 @@ def _action(name: str, pre: list[str], add: list[str], delete: list[str]) -> str
     )
 
 
-def _unique_names(problem: Problem) -> dict[str, str]:
-    """PDDL-safe, distinct names for every object, location, grasp and subgoal id."""
-    names: dict[str, str] = {}
+def _unique_names(problem: Problem) -> tuple[dict[str, str], dict[str, str]]:
+    """PDDL-safe, distinct names for every object, location and grasp, and for
+    every subgoal id (a separate namespace in demoplan, one with them in PDDL).
+
+    PDDL is case-insensitive and allows fewer characters than demoplan, so
+    ``Cup`` / ``cup`` or ``loc_1`` / ``loc-1`` get distinct names (``cup-2``);
+    a name a reader could take for a keyword gets a prefix (``and`` → ``n-and``).
+    """
     used: set[str] = set()
-    everything = [
-        *problem.objects,
-        *problem.locations,
-        *problem.grasps,
-        *("#" + s.id for s in problem.subgoals),
-    ]
-    for original in everything:
-        base = _atom(original.lstrip("#")) or "x"
-        if not base[0].isalpha():
-            base = "n" + base
+
+    def unique(original: str) -> str:
+        base = _name(original)
+        if base in _RESERVED:
+            base = "n-" + base
         name, k = base, 2
         while name in used:
             name, k = f"{base}-{k}", k + 1
         used.add(name)
-        names[original] = name
-    return names
+        return name
+
+    names = {n: unique(n) for n in (*problem.objects, *problem.locations, *problem.grasps)}
+    subgoal_names = {s.id: unique(s.id) for s in problem.subgoals}
+    return names, subgoal_names
 
 
 def action_from_pddl(problem: Problem, name: str) -> Action:
     """The demoplan action behind a PDDL action name (as a planner prints it)."""
-    reverse = {v: k for k, v in _unique_names(problem).items()}
+    reverse = {v: k for k, v in _unique_names(problem)[0].items()}
     parts = name.strip("() ").lower().split("__")
-    kind = {"grasp": "GRASP", "put_down": "PUT_DOWN"}[parts[0]]
-    return Action(kind, reverse[parts[1]], reverse[parts[2]], reverse[parts[3]])
+    kinds = {"grasp": "GRASP", "put_down": "PUT_DOWN"}
+    try:
+        kind, o, loc, g = kinds[parts[0]], *(reverse[p] for p in parts[1:4])
+    except (KeyError, ValueError):
+        raise ValueError(f"{name!r} is not an action of this problem's PDDL export") from None
+    return Action(kind, o, loc, g)
 
 
 def save_pddl(problem: Problem, folder: str | Path) -> tuple[Path, Path]:

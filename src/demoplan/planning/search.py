@@ -157,6 +157,7 @@ class _AStar:
         self.clock = _Clock(budget)
         n_locations = len(c.locations)
         self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
+        self._move_cache: dict[tuple[int, int, int], bool] = {}
         self.parent: dict[
             tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
         ] = {}
@@ -194,6 +195,9 @@ class _AStar:
                     needy.append((obj, location, goal))
             else:
                 idle |= 1 << location
+        total += max(
+            self._placement_deadlock(positions, idle), self._pair_conflicts(positions, reached)
+        )
         if not idle or not needy:
             return total
         block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
@@ -234,6 +238,99 @@ class _AStar:
                 extra += 1
         return total + extra
 
+    def _pair_conflicts(self, positions: tuple[int, ...], reached: int) -> int:
+        """Disjoint pairs of objects that cannot both reach their goals in one move each.
+
+        For objects X and Y that each need exactly one move (source → final
+        goal), X may go first only if X's move is possible with Y still at its
+        source and Y's move with X already at its goal, and likewise the other
+        way round; other objects can only get in the way more. When neither
+        order works, X or Y moves twice: +1 per pair of a greedy matching
+        (e.g. X on Y's goal and Y on X's). The second moves are those of the
+        needy objects, so this bound and the deadlock bound share moves: the
+        heuristic takes the larger of the two.
+        """
+        c = self.c
+        single = [
+            obj
+            for obj, location in enumerate(positions)
+            if c.goal[obj] >= 0
+            and c.goal[obj] != location
+            and c.grasps_of[obj]
+            and all(reached >> s & 1 for s in c.subgoals_of[obj])
+        ]
+        if len(single) < 2:
+            return 0
+        ok = self._move_ok
+        matched: set[int] = set()
+        pairs = 0
+        for i, x in enumerate(single):
+            if x in matched:
+                continue
+            sx, gx = positions[x], c.goal[x]
+            for y in single[i + 1 :]:
+                if y in matched:
+                    continue
+                sy, gy = positions[y], c.goal[y]
+                if (ok(x, sx, sy) and ok(y, sy, gx)) or (ok(y, sy, sx) and ok(x, sx, gy)):
+                    continue
+                matched |= {x, y}
+                pairs += 1
+                break
+        return pairs
+
+    def _move_ok(self, obj: int, source: int, obstacle: int) -> bool:
+        """Can ``obj`` move from ``source`` to its goal with one other object at ``obstacle``?"""
+        cache_key = (obj, source, obstacle)
+        known = self._move_cache.get(cache_key)
+        if known is None:
+            c = self.c
+            goal = c.goal[obj]
+            bit = 1 << obstacle
+            known = (
+                obstacle != goal
+                and not c.above[source] & bit
+                and not c.exclusive[goal] & bit
+                and any(not (c.block[source][g] | c.block[goal][g]) & bit for g in c.grasps_of[obj])
+            )
+            self._move_cache[cache_key] = known
+        return known
+
+    def _placement_deadlock(self, positions: tuple[int, ...], idle: int) -> int:
+        """1 if the objects away from their final places cannot all be put down
+        there with one move each, else 0.
+
+        With one move each, the object put down last finds all the others at
+        their goals, so one of its grasps must be free of them (and of idle
+        objects). Peel off objects that could go last until none can: the
+        peeling order reversed is a feasible order, and getting stuck proves
+        that some object needs a second move (an idle object moving does not
+        help: it is not in the way here). Admissible, and additive to the
+        idle-blocker count, whose extra moves are idle objects' own.
+        """
+        c = self.c
+        remaining = []
+        goals = 0
+        for obj, location in enumerate(positions):
+            goal = c.goal[obj]
+            if goal >= 0 and goal != location and c.grasps_of[obj]:
+                remaining.append(obj)
+                goals |= 1 << goal
+        block, grasps_of, goal_of = c.block, c.grasps_of, c.goal
+        while remaining:
+            kept = []
+            for obj in remaining:
+                target = goal_of[obj]
+                others = (goals & ~(1 << target)) | idle
+                if any(not block[target][g] & others for g in grasps_of[obj]):
+                    goals &= ~(1 << target)
+                else:
+                    kept.append(obj)
+            if len(kept) == len(remaining):
+                return 1
+            remaining = kept
+        return 0
+
     def key(self, positions: tuple[int, ...], reached: int) -> tuple[int, ...]:
         plain = self.c.plain
         if not plain:
@@ -241,18 +338,30 @@ class _AStar:
         return (*(-1 if plain >> p & 1 else p for p in positions), reached)
 
     def run(self) -> SearchOutcome:
+        """A* with deferred heuristic evaluation and pathmax.
+
+        A child is queued with its parent's f — a lower bound of its own, since
+        a move lowers the true distance by at most one (pathmax:
+        ``h(child) ≥ h(parent) − 1``) — and its heuristic is computed only when
+        it is popped; if its f then turns out larger it is queued again. Among
+        equal f the deepest node comes first, and among equal depth a move of a
+        needy object onto its goal (or a subgoal) before other moves, so that
+        where the heuristic is exact the search walks straight to a plan whose
+        length equals the root's lower bound — which proves it shortest.
+        """
         c = self.c
         start = (c.start, c.start_reached)
         start_key = self.key(*start)
         best_g = {start_key: 0}
+        known_h: dict[tuple[int, ...], int] = {}
         parent = self.parent
         parent[start_key] = None
         concrete = {start_key: start}
-        h0 = self.heuristic(*start)
-        heap = [(h0, h0, 0, start_key)]
+        # Entry: (f lower bound, -g, h or "unknown" rank, -counter, key, h of the parent).
+        heap: list[tuple[int, int, int, int, tuple[int, ...], int]] = [(0, 0, 0, 0, start_key, 0)]
         counter = 0
         expanded = 0
-        bound = h0
+        bound = 0
         n_locations = len(c.locations)
         grasps_of, block, above, exclusive, below = (
             c.grasps_of,
@@ -261,11 +370,19 @@ class _AStar:
             c.exclusive,
             c.below,
         )
-        plain = c.plain
+        plain, goal_of = c.plain, c.goal
         while heap:
-            f, h, _, key = heapq.heappop(heap)
+            f, negative_g, _, _, key, parent_h = heapq.heappop(heap)
             g = best_g[key]
-            if f > g + h:  # a stale entry: the state was reached more cheaply since
+            if -negative_g != g:  # stale: the state was reached more cheaply since
+                continue
+            h = known_h.get(key)
+            if h is None:
+                h = known_h[key] = self.heuristic(*concrete[key])
+            h = max(h, parent_h - 1)  # pathmax
+            if g + h > f:
+                counter += 1
+                heapq.heappush(heap, (g + h, negative_g, 0, -counter, key, parent_h))
                 continue
             positions, reached = concrete[key]
             if h == 0 and _is_goal(c, positions, reached):
@@ -287,13 +404,15 @@ class _AStar:
                 others = occupied & ~(1 << source)
                 if occupied & above[source]:
                     continue
+                goal = goal_of[obj]
+                has_subgoals = bool(c.subgoals_of[obj])
                 for grasp in grasps_of[obj]:
                     if others & block[source][grasp]:
                         continue
                     for target in range(n_locations):
                         if target == source:
                             # Put back where it was: useful only to reach a subgoal late.
-                            if c.reach(obj, target, reached) == reached:
+                            if not has_subgoals or c.reach(obj, target, reached) == reached:
                                 continue
                         elif plain >> target & 1 and (target != free_plain or plain >> source & 1):
                             continue
@@ -307,18 +426,25 @@ class _AStar:
                         if others & support != support:
                             continue
                         moved = positions[:obj] + (target,) + positions[obj + 1 :]
-                        now_reached = (
-                            c.reach(obj, target, reached) if c.subgoals_of[obj] else reached
-                        )
+                        now_reached = c.reach(obj, target, reached) if has_subgoals else reached
                         child = self.key(moved, now_reached)
                         if best_g.get(child, 1 << 60) <= g + 1:
                             continue
                         best_g[child] = g + 1
                         parent[child] = (key, (obj, source, target, grasp))
                         concrete[child] = (moved, now_reached)
-                        child_h = self.heuristic(moved, now_reached)
                         counter += 1
-                        heapq.heappush(heap, (g + 1 + child_h, child_h, counter, child))
+                        if target == goal or now_reached != reached:
+                            # Productive: evaluate now, so the best of them comes first.
+                            child_h = known_h.get(child)
+                            if child_h is None:
+                                child_h = known_h[child] = self.heuristic(moved, now_reached)
+                            child_h = max(child_h, h - 1)
+                            heapq.heappush(
+                                heap, (g + 1 + child_h, -(g + 1), child_h, -counter, child, h)
+                            )
+                        else:  # deferred: its parent's f is a lower bound (pathmax)
+                            heapq.heappush(heap, (f, -(g + 1), 1 << 30, -counter, child, h))
         return SearchOutcome(None, expanded, len(best_g), True)
 
     def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:

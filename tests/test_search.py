@@ -1,0 +1,183 @@
+"""The planner: the paper's example, and A* against breadth-first search."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.planning.generate import blocks_problem, table_problem
+from demoplan.planning.problem import Problem, Subgoal
+from demoplan.planning.search import Budget, astar_search, breadth_first_search, solve
+from demoplan.planning.xml import load_problem
+from tests.helpers import EXAMPLES
+from tests.validator import InvalidPlanError, validate
+
+PAPER_PLAN = [
+    "GRASP box loc264 grasp6",
+    "PUT_DOWN box freespace1 grasp6",
+    "GRASP food loc15 grasp2",
+    "PUT_DOWN food loc264 grasp2",
+    "GRASP fork loc10 grasp1",
+    "PUT_DOWN fork loc35 grasp1",
+    "GRASP cup loc22 grasp4",
+    "PUT_DOWN cup loc293 grasp4",
+]
+
+
+def three_objects() -> Problem:
+    """A toy task without file parsing: swap a and b through free space; c blocks a's grasp."""
+    return Problem.create(
+        objects=["a", "b", "c"],
+        locations=["l1", "l2", "l3", "free1", "free2"],
+        grasps=["g1", "g2"],
+        allowed=[("a", "g1"), ("b", "g1"), ("b", "g2"), ("c", "g2")],
+        collisions=[("l1", "l3", "g1")],
+        initial=[("a", "l1"), ("b", "l2"), ("c", "l3")],
+        goal=[("a", "l2"), ("b", "l1")],
+        freespace=["free1", "free2"],
+    )
+
+
+@pytest.mark.parametrize("search", ["astar", "bfs"])
+def test_the_papers_example_gives_an_eight_action_plan(search: str) -> None:
+    problem = load_problem(EXAMPLES / "planning" / "paper-example.xml")
+    plan = solve(problem, search)
+    assert len(plan) == 8
+    validate(problem, plan.actions)
+    if search == "bfs":  # the paper's own method finds the paper's plan
+        assert [str(a) for a in plan.actions] == PAPER_PLAN
+
+
+def test_toy_problem_needs_the_blocker_and_a_detour() -> None:
+    problem = three_objects()
+    plan = solve(problem)
+    validate(problem, plan.actions)
+    # c must leave l3 (it blocks a's only grasp), a and b swap through free space.
+    assert len(plan) == 2 * 4
+    assert len(solve(problem, "bfs")) == len(plan)
+
+
+def test_the_validator_rejects_a_plan_that_breaks_a_collision() -> None:
+    problem = three_objects()
+    with pytest.raises(InvalidPlanError, match="collides"):
+        validate(problem, solve(problem).actions[2:])
+
+
+def test_interchangeable_free_space_is_used_but_not_searched_twice() -> None:
+    problem = table_problem(7, 3, n_freespace=6)
+    few = table_problem(7, 3, n_freespace=3)
+    plan = solve(problem)
+    validate(problem, plan.actions)
+    assert len(plan) <= len(solve(few))
+
+
+def test_limits_stop_the_search_with_exit_code_4() -> None:
+    problem = table_problem(7, 1)
+    with pytest.raises(LimitReachedError, match="max-nodes 2") as caught:
+        solve(problem, budget=Budget(max_nodes=2))
+    assert caught.value.exit_code == 4
+    assert "at least" in str(caught.value)
+
+
+def test_an_object_that_must_move_without_a_grasp_is_the_reason() -> None:
+    problem = Problem.create(
+        objects=["a"],
+        locations=["l1", "l2"],
+        grasps=["g"],
+        allowed=[],
+        initial=[("a", "l1")],
+        goal=[("a", "l2")],
+    )
+    with pytest.raises(NoPlanError, match="a must move but allows no grasp") as caught:
+        solve(problem)
+    assert caught.value.exit_code == 3
+
+
+def test_an_exhausted_search_says_how_many_states_it_tried() -> None:
+    # b's only grasp at l2 is blocked by a at l1; a can never move (no grasp) -> no plan.
+    problem = Problem.create(
+        objects=["a", "b"],
+        locations=["l1", "l2", "l3"],
+        grasps=["g"],
+        allowed=[("b", "g")],
+        collisions=[("l2", "l1", "g")],
+        initial=[("a", "l1"), ("b", "l2")],
+        goal=[("b", "l3")],
+    )
+    with pytest.raises(NoPlanError, match="exhausted after"):
+        solve(problem)
+    assert breadth_first_search(problem).exhausted
+
+
+@st.composite
+def small_problems(draw: st.DrawFn) -> Problem:
+    """Random small problems with every kind of fact, for checking A* against BFS."""
+    n_objects = draw(st.integers(1, 3))
+    n_locations = draw(st.integers(n_objects + 1, n_objects + 3))
+    objects = [f"o{i}" for i in range(n_objects)]
+    locations = [f"l{i}" for i in range(n_locations)]
+    grasps = ["g1", "g2"]
+    allowed = [(o, g) for o in objects for g in grasps if draw(st.booleans()) or g == "g1"]
+    starts = draw(st.permutations(locations))[:n_objects]
+    goals = draw(st.permutations(locations))[:n_objects]
+    goal = [(o, g) for o, g in zip(objects, goals, strict=True) if draw(st.booleans())]
+    pairs = [(a, b) for a in locations for b in locations if a != b]
+    collisions = draw(
+        st.lists(st.tuples(st.sampled_from(pairs), st.sampled_from(grasps)), max_size=6)
+    )
+    supports = draw(st.lists(st.sampled_from(pairs), max_size=1))
+    exclusions = draw(st.lists(st.sampled_from(pairs), max_size=1))
+    mentioned = {x for (a, b), _ in collisions for x in (a, b)} | {
+        x for pair in supports + exclusions for x in pair
+    }
+    freespace = [loc for loc in locations if loc not in mentioned and draw(st.booleans())]
+    subgoals: list[Subgoal] = []
+    precedences: list[tuple[str, str]] = []
+    if draw(st.booleans()):
+        for k in range(draw(st.integers(1, 2))):
+            subgoals.append(
+                Subgoal(f"S{k}", draw(st.sampled_from(objects)), draw(st.sampled_from(locations)))
+            )
+        if len(subgoals) == 2 and draw(st.booleans()):
+            precedences.append(("S0", "S1"))
+    return Problem.create(
+        objects=objects,
+        locations=locations,
+        grasps=grasps,
+        allowed=allowed,
+        collisions=[(a, b, g) for (a, b), g in collisions],
+        initial=list(zip(objects, starts, strict=True)),
+        goal=goal,
+        freespace=freespace,
+        supports=supports,
+        exclusions=exclusions,
+        subgoals=subgoals,
+        precedences=precedences,
+    )
+
+
+@given(small_problems())
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_astar_plans_are_exactly_as_long_as_bfs_plans(problem: Problem) -> None:
+    reference = breadth_first_search(problem)
+    ours = astar_search(problem)
+    if reference.actions is None:
+        assert reference.exhausted
+        assert ours.actions is None and ours.exhausted
+        return
+    assert ours.actions is not None
+    assert len(ours.actions) == len(reference.actions)
+    validate(problem, ours.actions)
+    validate(problem, reference.actions)
+
+
+@pytest.mark.parametrize("n", [3, 5, 7])
+@pytest.mark.parametrize("make", [table_problem, blocks_problem])
+def test_generated_problems_match_bfs(make: object, n: int) -> None:
+    problem = make(n, n)  # type: ignore[operator]
+    plan = solve(problem)
+    validate(problem, plan.actions)
+    if n <= 5:
+        assert len(solve(problem, "bfs")) == len(plan)
