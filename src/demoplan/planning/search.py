@@ -195,9 +195,7 @@ class _AStar:
                     needy.append((obj, location, goal))
             else:
                 idle |= 1 << location
-        total += max(
-            self._placement_deadlock(positions, idle), self._pair_conflicts(positions, reached)
-        )
+        total += max(self._placement_deadlock(positions), self._pair_conflicts(positions, reached))
         if not idle or not needy:
             return total
         block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
@@ -296,17 +294,17 @@ class _AStar:
             self._move_cache[cache_key] = known
         return known
 
-    def _placement_deadlock(self, positions: tuple[int, ...], idle: int) -> int:
+    def _placement_deadlock(self, positions: tuple[int, ...]) -> int:
         """1 if the objects away from their final places cannot all be put down
         there with one move each, else 0.
 
         With one move each, the object put down last finds all the others at
-        their goals, so one of its grasps must be free of them (and of idle
-        objects). Peel off objects that could go last until none can: the
-        peeling order reversed is a feasible order, and getting stuck proves
-        that some object needs a second move (an idle object moving does not
-        help: it is not in the way here). Admissible, and additive to the
-        idle-blocker count, whose extra moves are idle objects' own.
+        their goals, so one of its grasps must be free of them. Peel off
+        objects that could go last until none can: the peeling order reversed
+        is a feasible order, and getting stuck proves that some of these
+        objects needs a second move. Idle objects are left out on purpose:
+        the moves they need are counted apart (the blocking sets), and this
+        bound must not count them again.
         """
         c = self.c
         remaining = []
@@ -321,7 +319,7 @@ class _AStar:
             kept = []
             for obj in remaining:
                 target = goal_of[obj]
-                others = (goals & ~(1 << target)) | idle
+                others = goals & ~(1 << target)  # not idle ones: their moves count apart
                 if any(not block[target][g] & others for g in grasps_of[obj]):
                     goals &= ~(1 << target)
                 else:
