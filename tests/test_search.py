@@ -95,7 +95,7 @@ def test_an_object_that_must_move_without_a_grasp_is_the_reason() -> None:
     assert caught.value.exit_code == 3
 
 
-def test_an_exhausted_search_says_how_many_states_it_tried() -> None:
+def test_objects_that_block_each_other_for_good_are_the_reason() -> None:
     # b's only grasp at l2 is blocked by a at l1; a can never move (no grasp) -> no plan.
     problem = Problem.create(
         objects=["a", "b"],
@@ -105,6 +105,21 @@ def test_an_exhausted_search_says_how_many_states_it_tried() -> None:
         collisions=[("l2", "l1", "g")],
         initial=[("a", "l1"), ("b", "l2")],
         goal=[("b", "l3")],
+    )
+    with pytest.raises(NoPlanError, match="b must move but can never be grasped"):
+        solve(problem)
+    assert breadth_first_search(problem).exhausted
+
+
+def test_an_exhausted_search_says_how_many_states_it_tried() -> None:
+    # Swap two objects with nowhere to park one of them.
+    problem = Problem.create(
+        objects=["a", "b"],
+        locations=["l1", "l2"],
+        grasps=["g"],
+        allowed=[("a", "g"), ("b", "g")],
+        initial=[("a", "l1"), ("b", "l2")],
+        goal=[("a", "l2"), ("b", "l1")],
     )
     with pytest.raises(NoPlanError, match="exhausted after"):
         solve(problem)

@@ -52,6 +52,33 @@ class Compiled:
         support = self.below[location]
         return others & support == support
 
+    def frozen(self, positions: tuple[int, ...]) -> int:
+        """Mask of the places whose objects can never be picked up again.
+
+        Start from every occupied place and drop an object whenever one of its
+        grasps is clear of the remaining ones (and nothing remaining stands on
+        it): what is left blocks itself for good — each of its objects has
+        every grasp blocked by another of them, which cannot move either.
+        """
+        where = [(obj, location) for obj, location in enumerate(positions) if location >= 0]
+        stuck = 0
+        for _, location in where:
+            stuck |= 1 << location
+        changed = True
+        while changed:
+            changed = False
+            for obj, location in where:
+                bit = 1 << location
+                if not stuck & bit:
+                    continue
+                others = stuck & ~bit
+                if not others & self.above[location] and any(
+                    not others & self.block[location][g] for g in self.grasps_of[obj]
+                ):
+                    stuck &= ~bit
+                    changed = True
+        return stuck
+
     def reach(self, obj: int, location: int, reached: int) -> int:
         """Subgoals reached by putting ``obj`` down at ``location`` (at most one)."""
         for s in self.subgoals_of[obj]:

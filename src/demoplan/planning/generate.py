@@ -85,29 +85,33 @@ def table_problem(
 ) -> Problem:
     """Move ``n_objects`` objects to their places (see the module docstring).
 
-    Places lie on a grid of about ``density × n_objects`` cells, ``spacing``
-    apart (neighbours along a grasp's axis collide); start and goal places
-    take two in five cells at the default density.
+    Goal places lie on a grid of about ``density × n_objects`` cells,
+    ``spacing`` apart (neighbours along a grasp's axis collide); the objects
+    start scattered on a side table, 10 cm apart, except those that start on
+    another object's goal place.
     """
     generator = np.random.default_rng(rng)
     objects = [f"obj{i + 1}" for i in range(n_objects)]
     side = math.ceil(math.sqrt(density * n_objects + 4))
     cells = [(i, j) for i in range(side) for j in range(side)]
-    chosen = generator.permutation(len(cells))[: 2 * n_objects]
-    goal_cells = [cells[k] for k in chosen[:n_objects]]
-    start_cells = [cells[k] for k in chosen[n_objects:]]
+    goal_cells = [cells[int(k)] for k in generator.permutation(len(cells))[:n_objects]]
+    locations: dict[str, tuple[float, float, float]] = {}
+    names: dict[tuple[int, int], str] = {}
+    for cell in goal_cells:
+        names[cell] = f"loc{len(names) + 1}"
+        locations[names[cell]] = (0.3 + cell[0] * spacing, 0.1 + cell[1] * spacing, 0.0)
+    start = []
+    columns = math.ceil(math.sqrt(n_objects))
+    for k in range(n_objects):
+        name = f"loc{len(locations) + 1}"
+        locations[name] = (0.3 + (k % columns) * 0.1, -0.4 - (k // columns) * 0.1, 0.0)
+        start.append(name)
     # Some objects start on another object's goal place.
     order = generator.permutation(n_objects)
     for k in range(round(occupied_goals * n_objects)):
         blocker, owner = int(order[k]), int(order[(k + 1) % n_objects])
         if blocker != owner:
-            start_cells[blocker] = goal_cells[owner]
-    locations: dict[str, tuple[float, float, float]] = {}
-    names: dict[tuple[int, int], str] = {}
-    for cell in [*goal_cells, *start_cells]:
-        if cell not in names:
-            names[cell] = f"loc{len(names) + 1}"
-            locations[names[cell]] = (0.3 + cell[0] * spacing, 0.1 + cell[1] * spacing, 0.0)
+            start[blocker] = names[goal_cells[owner]]
     freespace = []
     for k in range(n_freespace):  # a row apart, spaced so that no grasp there collides
         name = f"freespace{k + 1}"
@@ -120,7 +124,7 @@ def table_problem(
         grasps=list(grasp_axes),
         allowed=allowed,
         collisions=collision_facts(locations, grasp_axes),
-        initial=[(o, names[c]) for o, c in zip(objects, start_cells, strict=True)],
+        initial=list(zip(objects, start, strict=True)),
         goal=[(o, names[c]) for o, c in zip(objects, goal_cells, strict=True)],
         freespace=freespace,
         name=f"table-{n_objects}",

@@ -67,6 +67,10 @@ class SearchOutcome:
 _BfsState = tuple[tuple[int, ...], tuple[int, int] | None, int]
 
 
+DEAD_END = 1 << 40
+"""Heuristic value of a state from which no plan exists."""
+
+
 class _Clock:
     def __init__(self, budget: Budget):
         self.budget = budget
@@ -195,6 +199,8 @@ class _AStar:
                     needy.append((obj, location, goal))
             else:
                 idle |= 1 << location
+        if needy and self._dead_end(positions, needy):
+            return DEAD_END
         total += max(self._placement_deadlock(positions), self._pair_conflicts(positions, reached))
         if not idle or not needy:
             return total
@@ -235,6 +241,24 @@ class _AStar:
                 taken |= union
                 extra += 1
         return total + extra
+
+    def _dead_end(self, positions: tuple[int, ...], needy: list[tuple[int, int, int]]) -> bool:
+        """No plan from here: a needy object, or what stands on or around its
+        target, can never be picked up again (:meth:`Compiled.frozen`)."""
+        c = self.c
+        frozen = c.frozen(positions)
+        if not frozen:
+            return False
+        for obj, location, target in needy:
+            if frozen >> location & 1 and location != target:
+                return True
+            if frozen >> target & 1 and positions[obj] != target:
+                return True
+            if frozen & c.exclusive[target] or all(
+                frozen & c.block[target][g] for g in c.grasps_of[obj]
+            ):
+                return True
+        return False
 
     def _pair_conflicts(self, positions: tuple[int, ...], reached: int) -> int:
         """Disjoint pairs of objects that cannot both reach their goals in one move each.
@@ -377,6 +401,8 @@ class _AStar:
             h = known_h.get(key)
             if h is None:
                 h = known_h[key] = self.heuristic(*concrete[key])
+            if h >= DEAD_END:
+                continue
             h = max(h, parent_h - 1)  # pathmax
             if g + h > f:
                 counter += 1
@@ -437,6 +463,8 @@ class _AStar:
                             child_h = known_h.get(child)
                             if child_h is None:
                                 child_h = known_h[child] = self.heuristic(moved, now_reached)
+                            if child_h >= DEAD_END:
+                                continue
                             child_h = max(child_h, h - 1)
                             heapq.heappush(
                                 heap, (g + 1 + child_h, -(g + 1), child_h, -counter, child, h)
@@ -486,6 +514,22 @@ def explain_unsolvable(problem: Problem) -> list[str]:
         )
         if needs_move and not c.grasps_of[obj]:
             reasons.append(f"{name} must move but allows no grasp")
+    frozen = c.frozen(c.start)
+    stuck = [c.objects[o] for o, loc in enumerate(c.start) if frozen >> loc & 1]
+    must_move = [
+        c.objects[o]
+        for o, loc in enumerate(c.start)
+        if frozen >> loc & 1
+        and (
+            (c.goal[o] >= 0 and c.goal[o] != loc)
+            or any(not c.start_reached >> s & 1 for s in c.subgoals_of[o])
+        )
+    ]
+    if must_move:
+        reasons.append(
+            f"{', '.join(must_move)} must move but can never be grasped: "
+            f"{', '.join(stuck)} block every grasp of one another where they stand"
+        )
     cycle = find_cycle(problem.precedences)
     if cycle:
         reasons.append(f"subgoals must come before themselves: {' < '.join(cycle)}")
