@@ -31,11 +31,12 @@ __all__ = ["action_from_pddl", "problem_to_pddl", "save_pddl"]
 
 _SAFE = re.compile(r"[^a-z0-9]")  # no "_": "__" separates the parts of action names
 # Words a PDDL reader may take for syntax where a name stands (PDDL 1.2 to 3.1).
-_RESERVED = frozenset(
+_RESERVED_WORDS = (
     "and or not imply exists forall when either object number at over start end all "
     "define domain problem preference always sometime within increase decrease assign "
-    "minimize maximize total-time total-cost".split()
+    "minimize maximize total-time total-cost"
 )
+_RESERVED = frozenset(_RESERVED_WORDS.split())
 _PREDICATES = (
     "(handempty)",
     "(located ?o ?l)",
@@ -127,7 +128,9 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
         f"(define (domain {domain_name})\n"
         "  (:requirements :strips)\n"
         "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
-        "  (:predicates\n" + "".join(f"    {p}\n" for p in _PREDICATES) + "  )\n"
+        "  (:predicates\n"
+        + "".join(f"    {p}\n" for p in _PREDICATES)
+        + "  )\n"
         + "".join(actions)
         + ")\n"
     )

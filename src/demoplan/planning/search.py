@@ -79,7 +79,7 @@ class _Clock:
     def stop(self, expanded: int) -> str | None:
         if self.budget.max_nodes is not None and expanded >= self.budget.max_nodes:
             return f"--max-nodes {self.budget.max_nodes}"
-        if self.deadline is not None and expanded % 128 == 0 and time.monotonic() > self.deadline:
+        if self.deadline is not None and time.monotonic() > self.deadline:
             return f"--timeout {self.budget.timeout:g} s"
         return None
 
@@ -481,13 +481,6 @@ class _AStar:
             actions[:0] = self.c.move_actions(obj, source, target, grasp)
             link = self.parent[key]
         return tuple(actions)
-
-
-def _all_of(masks: list[int]) -> int:
-    result = masks[0]
-    for mask in masks[1:]:
-        result &= mask
-    return result
 
 
 SEARCHES: dict[str, Callable[[Problem, Budget], SearchOutcome]] = {

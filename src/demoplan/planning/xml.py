@@ -17,9 +17,10 @@ A file in the paper's form stays valid::
     </problem>
 
 Extensions (documented in docs/planning.md): a Location may carry
-``freespace="true"`` (names starting with ``freespace`` count as free space
-too); state args ``support UPPER LOWER``, ``exclusive LA LB``, ``reached ID``;
-goal args ``subgoal ID OBJECT LOCATION`` and ``before ID1 ID2``.
+``freespace="true"`` (without the attribute, names starting with ``freespace``
+count as free space; ``freespace="false"`` says otherwise); state args
+``support UPPER LOWER``, ``exclusive LA LB``, ``reached ID``; goal args
+``subgoal ID OBJECT LOCATION`` and ``before ID1 ID2``.
 
 Parsing refuses DTDs, entity declarations and external references
 (``defusedxml``), so an entity bomb fails at once instead of expanding.
@@ -40,6 +41,8 @@ __all__ = ["load_problem", "problem_from_xml", "problem_to_xml", "save_problem"]
 
 MAX_XML_BYTES = 32 * 1024 * 1024
 _TYPES = {"object": "Object", "location": "Location", "grasp": "Grasp"}
+_TRUE, _FALSE = {"true", "1", "yes"}, {"false", "0", "no"}
+_KEYWORDS = {"support", "exclusive", "reached", "subgoal", "before"}
 
 
 def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
@@ -55,17 +58,32 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
     except ParseError as exc:
         line, column = exc.position
         raise InputError(
-            f"malformed XML at line {line} column {column + 1}", source=source
+            f"malformed XML ({_reason(exc)}); a well-formed <problem> document expected",
+            source=source,
+            field=f"line {line} column {column + 1}",
         ) from None
     if root.tag != "problem":
-        raise InputError(f"root element <{root.tag}>; <problem> expected", source=source)
+        raise InputError(
+            f"root element <{root.tag}>; <problem> expected", source=source, field="root"
+        )
+    for index, child in enumerate(root):
+        if child.tag not in {"object", "state", "goal"}:
+            raise InputError(
+                f"unknown element <{child.tag}>; <object>, <state> or <goal> expected",
+                source=source,
+                field=f"problem/{child.tag}[{index}]",
+            )
     kinds: dict[str, str] = {}
     freespace: list[str] = []
     for index, element in enumerate(root.findall("object")):
         name, kind = element.get("name"), element.get("type", "")
         where = f"object[{index}]"
         if not name or not name.strip() or len(name.split()) != 1:
-            raise InputError("expected a name without spaces", source=source, field=f"{where}.name")
+            raise InputError(
+                f"name {name!r}; a name without spaces expected",
+                source=source,
+                field=f"{where}.name",
+            )
         if kind.lower() not in _TYPES:
             raise InputError(
                 f"type {kind!r}; Object, Location or Grasp expected",
@@ -73,20 +91,32 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
                 field=f"{where}.type",
             )
         if name in kinds:
-            raise InputError(f"{name!r} declared twice", source=source, field=where)
-        kinds[name] = _TYPES[kind.lower()]
-        marked = element.get("freespace", "").lower() in {"true", "1", "yes"}
-        if kinds[name] == "Location" and (marked or name.lower().startswith("freespace")):
-            freespace.append(name)
-    for child in root:
-        if child.tag not in {"object", "state", "goal"}:
             raise InputError(
-                f"unknown element <{child.tag}>; <object>, <state> or <goal> expected",
-                source=source,
+                f"{name!r} declared twice; each name once expected", source=source, field=where
             )
+        kinds[name] = _TYPES[kind.lower()]
+        marked = element.get("freespace")
+        if marked is None:
+            free = name.lower().startswith("freespace")
+        elif marked.strip().lower() in _TRUE | _FALSE and kinds[name] == "Location":
+            free = marked.strip().lower() in _TRUE
+        else:
+            raise InputError(
+                f'freespace={marked!r}; "true" or "false" on a Location expected',
+                source=source,
+                field=f"{where}.freespace",
+            )
+        if kinds[name] == "Location" and free:
+            freespace.append(name)
     states, goals = root.findall("state"), root.findall("goal")
-    if len(states) != 1 or len(goals) > 1:
-        raise InputError("expected one <state> and at most one <goal>", source=source)
+    if len(states) != 1:
+        raise InputError(
+            f"{len(states)} <state> elements; exactly one expected", source=source, field="state"
+        )
+    if len(goals) > 1:
+        raise InputError(
+            f"{len(goals)} <goal> elements; at most one expected", source=source, field="goal"
+        )
 
     allowed: list[tuple[str, str]] = []
     collisions: list[tuple[str, str, str]] = []
@@ -94,14 +124,32 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
     supports: list[tuple[str, str]] = []
     exclusions: list[tuple[str, str]] = []
     reached: list[str] = []
+    reached_at: dict[str, str] = {}
     hand_empty = False
+    placed: dict[str, str] = {}  # object -> where its location was given
+    holder: dict[str, tuple[str, str]] = {}  # location -> (object, where)
     for index, tokens in _args(states[0], source, "state"):
         where = f"state/arg[{index}]"
         types = [kinds.get(t) for t in tokens]
         if tokens == ["hand-empty"]:
             hand_empty = True
         elif types == ["Object", "Location"]:
-            initial.append((tokens[0], tokens[1]))
+            obj, loc = tokens
+            if obj in placed:
+                raise InputError(
+                    f"{obj!r} is already placed by {placed[obj]}; one location per object",
+                    source=source,
+                    field=where,
+                )
+            if loc in holder:
+                other, first = holder[loc]
+                raise InputError(
+                    f"{loc!r} already holds {other!r} ({first}); one object per location",
+                    source=source,
+                    field=where,
+                )
+            placed[obj], holder[loc] = where, (obj, where)
+            initial.append((obj, loc))
         elif types == ["Object", "Grasp"]:
             allowed.append((tokens[0], tokens[1]))
         elif types == ["Location", "Location", "Grasp"]:
@@ -110,25 +158,63 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
             (supports if tokens[0] == "support" else exclusions).append((tokens[1], tokens[2]))
         elif tokens[0] == "reached" and len(tokens) == 2:
             reached.append(tokens[1])
+            reached_at[tokens[1]] = where
         else:
             raise InputError(_unknown_arg(tokens, types), source=source, field=where)
     if not hand_empty:
-        raise InputError("the state must hold 'hand-empty'", source=source, field="state")
+        raise InputError(
+            "no 'hand-empty' arg; the state must hold it (the hand starts empty)",
+            source=source,
+            field="state",
+        )
+    unplaced = [n for n, k in kinds.items() if k == "Object" and n not in placed]
+    if unplaced:
+        raise InputError(
+            f"objects {unplaced} have no location; an arg 'OBJECT LOCATION' for each expected",
+            source=source,
+            field="state",
+        )
 
     goal: list[tuple[str, str]] = []
     subgoals: list[Subgoal] = []
     precedences: list[tuple[str, str]] = []
+    before_at: dict[tuple[str, str], str] = {}
+    goal_at: dict[str, str] = {}
     for index, tokens in _args(goals[0], source, "goal") if goals else []:
         where = f"goal/arg[{index}]"
         types = [kinds.get(t) for t in tokens]
         if types == ["Object", "Location"]:
+            if tokens[0] in goal_at:
+                raise InputError(
+                    f"{tokens[0]!r} already has a goal ({goal_at[tokens[0]]}); one per object",
+                    source=source,
+                    field=where,
+                )
+            goal_at[tokens[0]] = where
             goal.append((tokens[0], tokens[1]))
         elif tokens[0] == "subgoal" and types[2:] == ["Object", "Location"] and len(tokens) == 4:
             subgoals.append(Subgoal(tokens[1], tokens[2], tokens[3]))
         elif tokens[0] == "before" and len(tokens) == 3:
             precedences.append((tokens[1], tokens[2]))
+            before_at[(tokens[1], tokens[2])] = where
         else:
             raise InputError(_unknown_arg(tokens, types), source=source, field=where)
+    ids = {s.id for s in subgoals}
+    for pair, where in before_at.items():
+        for sid in pair:
+            if sid not in ids:
+                raise InputError(
+                    f"{sid!r} is not a subgoal id; one declared by 'subgoal ID OBJECT LOCATION'",
+                    source=source,
+                    field=where,
+                )
+    for sid, where in reached_at.items():
+        if sid not in ids:
+            raise InputError(
+                f"{sid!r} is not a subgoal id; one declared by 'subgoal ID OBJECT LOCATION'",
+                source=source,
+                field=where,
+            )
 
     return Problem.create(
         objects=[n for n, k in kinds.items() if k == "Object"],
@@ -154,21 +240,44 @@ def _args(parent: Element, source: str, where: str) -> list[tuple[int, list[str]
     for index, element in enumerate(parent):
         if element.tag != "arg":
             raise InputError(
-                f'<{element.tag}>; <arg name="..."/> expected', source=source, field=where
+                f'unknown element <{element.tag}>; <arg name="..."/> expected',
+                source=source,
+                field=f"{where}/{element.tag}[{index}]",
             )
         tokens = (element.get("name") or "").split()
         if not tokens:
-            raise InputError("empty arg", source=source, field=f"{where}/arg[{index}]")
+            raise InputError(
+                'empty arg; <arg name="..."/> with a fact expected',
+                source=source,
+                field=f"{where}/arg[{index}]",
+            )
         out.append((index, tokens))
     return out
 
 
+def _reason(exc: ParseError) -> str:
+    """expat's reason without its "line L, column C" tail (the field says where)."""
+    return str(exc).split(":")[0].strip() or "syntax error"
+
+
 def _unknown_arg(tokens: list[str], types: list[str | None]) -> str:
-    undeclared = [t for t, k in zip(tokens, types, strict=True) if k is None]
-    if undeclared and tokens[0] not in {"support", "exclusive", "reached", "subgoal", "before"}:
-        return f"{' '.join(tokens)!r}: {undeclared} not declared as Object, Location or Grasp"
+    text = " ".join(tokens)
+    names = list(zip(tokens, types, strict=True))
+    if tokens[0] in _KEYWORDS - {"reached", "before"}:
+        names = names[2:] if tokens[0] == "subgoal" else names[1:]
+    elif tokens[0] in {"reached", "before"}:
+        names = []
+    undeclared = [t for t, k in names if k is None]
+    if undeclared:
+        return (
+            f"{text!r}: {undeclared} not declared; an <object> of type Object, Location "
+            "or Grasp expected for each name"
+        )
     shape = " ".join(k or "?" for k in types)
-    return f"{' '.join(tokens)!r} ({shape}) is not a known fact"
+    return (
+        f"{text!r} ({shape}) is not a known fact; expected 'OBJECT LOCATION', "
+        "'OBJECT GRASP', 'LOCATION LOCATION GRASP', 'hand-empty' or an extension"
+    )
 
 
 def load_problem(path: str | Path) -> Problem:
@@ -193,8 +302,9 @@ def problem_to_xml(problem: Problem) -> str:
         SubElement(root, "object", {"name": name, "type": "Object"})
     for name in problem.locations:
         attributes = {"name": name, "type": "Location"}
-        if name in problem.freespace and not name.lower().startswith("freespace"):
-            attributes["freespace"] = "true"
+        free, by_name = name in problem.freespace, name.lower().startswith("freespace")
+        if free != by_name:  # the attribute only where the name alone would mislead
+            attributes["freespace"] = "true" if free else "false"
         SubElement(root, "object", attributes)
     for name in problem.grasps:
         SubElement(root, "object", {"name": name, "type": "Grasp"})

@@ -1,0 +1,1117 @@
+"""Benchmark: ``demoplan solve`` against Fast Downward and pyperplan, whole process.
+
+What it measures
+----------------
+Generated problems of two families — table setting
+(:func:`demoplan.planning.generate.table_problem`) and pyramid building with
+stacked starts (:func:`~demoplan.planning.generate.blocks_problem`) — with
+N = 3, 5, 7, 10, 15, 20, 30 objects (``--quick``: N = 3, 5, 7 for every planner
+plus N = 20 and 30 for demoplan alone, to check its targets). Each problem is
+written once as the paper's XML (:func:`demoplan.planning.xml.save_problem`) and
+as grounded STRIPS PDDL (:func:`demoplan.planning.pddl.save_pddl`), then solved
+by, in one run:
+
+1. **demoplan** — ``demoplan solve PROBLEM.xml --json`` (A*, the default), and
+   ``--search bfs`` (the paper's breadth-first search, the reference) for
+   N ≤ 5. Plan length, expanded states (A* expands *moves*: one GRASP with the
+   PUT_DOWN that follows) and the in-process search time come from the JSON.
+2. **Fast Downward** ``--alias seq-opt-lmcut`` (optimal: A* with LM-cut) and
+   ``--alias lama-first`` (satisficing), through the driver ``fast-downward.py``
+   (``--fd PATH``; by default the copy bundled with ``up_fast_downward`` in this
+   interpreter, else in ``/tmp/upvenv``). Each run has its own working
+   directory; the plan length is the number of actions in the ``sas_plan`` file
+   it writes there (cross-checked with ``Plan length: N step(s)``), expanded
+   states come from ``Expanded N state(s)``, and the translator's and the
+   search's own times are kept to show where the time goes.
+3. **pyperplan** ``-s astar -H lmcut`` (``hmax`` if this pyperplan has no
+   LM-cut; both are admissible, so both runs are optimal), found next to this
+   interpreter or in ``/tmp/upvenv/bin`` (``--pyperplan PATH``). The plan length
+   is the number of lines of the ``.soln`` file it writes next to the problem
+   (cross-checked with its ``Plan length:`` log line), expanded states come from
+   ``N Nodes expanded``.
+
+A planner that cannot be found is skipped with a message. Every run is a
+subprocess timed with ``time.perf_counter`` around start-to-exit (interpreter
+start-up, parsing, translation and search all count); a run over the timeout
+(``--timeout``, 60 s; 10 s with ``--quick``) is killed with its whole process
+group and reported as ``timeout``. Once a competitor times out at some N, it is
+not run at larger N of the same family (``--no-skip`` runs it anyway); demoplan
+A* always runs. A run under 1 s is repeated (3 runs in all) and the median
+reported; longer runs are timed once.
+
+Then a verdict table per family and N: demoplan's plan must never be longer than
+another planner's (a shorter plan elsewhere means demoplan is not optimal), and
+no optimal planner's plan may be longer than demoplan's (which would mean
+demoplan's plan is too short, i.e. invalid) — both are flagged as bugs — and the
+speed ratio FD-optimal / demoplan where both finished. It ends with the targets,
+PASS or FAIL: provably shortest plans for 20 objects in under 0.5 s whole
+process, for 30 objects in under 2 s, and at least 10× faster than Fast
+Downward's optimal configuration wherever that finishes.
+
+How to run
+----------
+From the repository root, with demoplan installed (``pip install -e ".[dev]"``)::
+
+    python benchmarks/planning.py                  # full run (~5 min on 2 busy cores)
+    python benchmarks/planning.py --quick          # N <= 7, 10 s timeout
+    python benchmarks/planning.py --out results.json
+    python benchmarks/planning.py --fd /path/to/fast-downward.py --timeout 30
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.util
+import json
+import os
+import platform
+import re
+import resource
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+import demoplan
+from demoplan.planning.generate import blocks_problem, table_problem
+from demoplan.planning.pddl import save_pddl
+from demoplan.planning.problem import Problem
+from demoplan.planning.xml import save_problem
+
+FULL_SIZES = (3, 5, 7, 10, 15, 20, 30)
+QUICK_SIZES = (3, 5, 7)
+QUICK_DEMOPLAN_ONLY = (20, 30)  # --quick still measures demoplan's target cells
+BFS_MAX_OBJECTS = 5
+FAMILIES: dict[str, Callable[[int, int], Problem]] = {
+    "table": table_problem,
+    "blocks": blocks_problem,
+}
+FAMILY_TITLES = {"table": "Table setting", "blocks": "Blocks (pyramids, stacked starts)"}
+DEFAULT_TIMEOUT, QUICK_TIMEOUT = 60.0, 10.0
+CHEAP_SECONDS, CHEAP_REPEATS = 1.0, 3
+TARGET_20 = (20, 0.5)  # objects, whole-process seconds
+TARGET_30 = (30, 2.0)
+TARGET_SPEEDUP = 10.0  # FD seq-opt-lmcut / demoplan
+UPVENV = Path("/tmp/upvenv")
+TIMES = "\u00d7"  # multiplication sign (spelled out for ruff's RUF001)
+
+# Planner keys, in table order.
+DEMOPLAN, BFS, FD_OPT, FD_LAMA, PYPERPLAN = "demoplan", "bfs", "fd-opt", "fd-lama", "pyperplan"
+
+
+# --------------------------------------------------------------------------- cases
+
+
+@dataclass(frozen=True, slots=True)
+class Case:
+    """One generated problem, written to disk as XML and as PDDL."""
+
+    family: str
+    n: int
+    xml: Path
+    domain: Path
+    problem: Path
+    locations: int
+    pddl_actions: int
+
+
+def make_case(family: str, n: int, seed: int, root: Path) -> Case:
+    problem = FAMILIES[family](n, seed)
+    folder = root / f"{family}-{n}"
+    folder.mkdir(parents=True, exist_ok=True)
+    xml = folder / "problem.xml"
+    save_problem(problem, xml)
+    domain, pddl_problem = save_pddl(problem, folder / "pddl")
+    actions = domain.read_text(encoding="utf-8").count("(:action ")
+    return Case(family, n, xml, domain, pddl_problem, len(problem.locations), actions)
+
+
+# --------------------------------------------------------------------------- processes
+
+
+@dataclass(frozen=True, slots=True)
+class Finished:
+    """A subprocess that exited (``returncode``) or was killed at the timeout (None)."""
+
+    returncode: int | None
+    seconds: float
+    stdout: str
+    stderr: str
+    cpu_seconds: float | None  # user + system of the reaped processes (None when killed)
+
+
+def _child_environment() -> dict[str, str]:
+    env = dict(os.environ)
+    for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env[variable] = "1"
+    return env
+
+
+def run_process(command: Sequence[str], cwd: Path, timeout: float) -> Finished:
+    """Run ``command`` in its own process group; kill the whole group at ``timeout``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    started = time.perf_counter()
+    process = subprocess.Popen(
+        list(command),
+        cwd=cwd,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        errors="replace",
+        start_new_session=True,
+        env=_child_environment(),
+    )
+    try:
+        stdout, stderr = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        _kill_group(process)
+        stdout, stderr = process.communicate()
+        return Finished(None, time.perf_counter() - started, stdout, stderr, None)
+    except BaseException:  # Ctrl-C: leave no planner running behind
+        _kill_group(process)
+        process.communicate()
+        raise
+    seconds = time.perf_counter() - started
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return Finished(process.returncode, seconds, stdout, stderr, cpu)
+
+
+def _kill_group(process: subprocess.Popen[str]) -> None:
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(process.pid, signal.SIGKILL)
+
+
+def _last_line(text: str) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1][:160] if lines else ""
+
+
+def _last_int(pattern: str, text: str) -> int | None:
+    found = re.findall(pattern, text)
+    return int(found[-1]) if found else None
+
+
+def _last_float(pattern: str, text: str) -> float | None:
+    found = re.findall(pattern, text)
+    return float(found[-1]) if found else None
+
+
+# --------------------------------------------------------------------------- planners
+
+
+@dataclass(slots=True)
+class Attempt:
+    """One run of one planner on one case."""
+
+    status: str  # "ok", "timeout", "no plan", "error"
+    seconds: float
+    length: int | None = None
+    expanded: int | None = None
+    detail: str = ""
+    extra: dict[str, float] = field(default_factory=dict)
+    cpu_seconds: float | None = None
+
+
+class Planner:
+    """A planner run as a subprocess; subclasses build the command and read the output."""
+
+    key: str = ""
+    label: str = ""
+    optimal: bool = False
+    max_objects: int | None = None  # larger cases are not run
+
+    def attempt(self, case: Case, workdir: Path, timeout: float) -> Attempt:
+        """Run once in ``workdir`` (a fresh folder) and read what came out."""
+        done = run_process(self.command(case, workdir), workdir, timeout)
+        attempt = self.read(done, workdir)
+        attempt.cpu_seconds = done.cpu_seconds
+        return attempt
+
+    def command(self, case: Case, workdir: Path) -> list[str]:
+        raise NotImplementedError
+
+    def read(self, done: Finished, workdir: Path) -> Attempt:
+        raise NotImplementedError
+
+
+class DemoplanPlanner(Planner):
+    def __init__(self, command: list[str], search: str) -> None:
+        self.base_command = command
+        self.search = search
+        self.key = DEMOPLAN if search == "astar" else BFS
+        self.label = "demoplan A*" if search == "astar" else "demoplan BFS"
+        self.optimal = True
+        self.max_objects = None if search == "astar" else BFS_MAX_OBJECTS
+
+    def command(self, case: Case, workdir: Path) -> list[str]:
+        return [*self.base_command, "solve", str(case.xml), "--json", "--search", self.search]
+
+    def read(self, done: Finished, workdir: Path) -> Attempt:
+        if done.returncode is None:
+            return Attempt("timeout", done.seconds)
+        if done.returncode == 3:
+            return Attempt("no plan", done.seconds, detail=_last_line(done.stderr))
+        if done.returncode != 0:
+            return Attempt(
+                "error", done.seconds, detail=f"exit {done.returncode}: {_last_line(done.stderr)}"
+            )
+        try:
+            data = json.loads(done.stdout)
+            length, actions = int(data["length"]), data["actions"]
+        except (ValueError, KeyError, TypeError) as exc:
+            return Attempt("error", done.seconds, detail=f"unreadable JSON ({exc})")
+        if len(actions) != length:
+            return Attempt(
+                "error",
+                done.seconds,
+                length,
+                detail=f"inconsistent plan: {len(actions)} actions listed, length {length}",
+            )
+        return Attempt(
+            "ok",
+            done.seconds,
+            length,
+            int(data["expanded"]),
+            extra={"search_s": float(data["seconds"]), "generated": float(data["generated"])},
+        )
+
+
+class FastDownwardPlanner(Planner):
+    def __init__(
+        self,
+        python: str,
+        driver: Path,
+        alias: str,
+        key: str,
+        label: str,
+        translate_options: Sequence[str] = (),
+    ) -> None:
+        self.python = python
+        self.driver = driver
+        self.alias = alias
+        self.translate_options = list(translate_options)
+        self.key = key
+        self.label = label
+        self.optimal = alias.startswith("seq-opt")
+
+    def command(self, case: Case, workdir: Path) -> list[str]:
+        return [
+            self.python,
+            str(self.driver),
+            "--alias",
+            self.alias,
+            str(case.domain),
+            str(case.problem),
+            *(["--translate-options", *self.translate_options] if self.translate_options else []),
+        ]
+
+    def read(self, done: Finished, workdir: Path) -> Attempt:
+        out = done.stdout + "\n" + done.stderr
+        extra: dict[str, float] = {}
+        translate = re.findall(r"Done! \[([\d.]+)s CPU, ([\d.]+)s wall-clock\]", out)
+        if translate:
+            extra["translate_s"] = float(translate[-1][1])
+        search = _last_float(r"\] Search time: ([\d.]+)s", out)
+        if search is not None:
+            extra["search_s"] = search
+        total = _last_float(r"\] Total time: ([\d.]+)s", out)
+        if total is not None:
+            extra["search_total_s"] = total
+        if done.returncode is None:
+            phase = "search" if "translate exit code" in out else "translating"
+            return Attempt("timeout", done.seconds, detail=f"killed while {phase}", extra=extra)
+        plan_file = workdir / "sas_plan"
+        if done.returncode != 0 or not plan_file.exists():
+            status = "no plan" if done.returncode in (11, 12) else "error"
+            return Attempt(
+                status,
+                done.seconds,
+                detail=f"exit {done.returncode}: {_last_line(done.stderr or done.stdout)}",
+                extra=extra,
+            )
+        lines = plan_file.read_text(encoding="utf-8").splitlines()
+        length = sum(1 for line in lines if line.strip() and not line.startswith(";"))
+        printed = _last_int(r"Plan length: (\d+) step", out)
+        expanded = _last_int(r"\] Expanded (\d+) state\(s\)\.", out)
+        if printed is not None and printed != length:
+            return Attempt(
+                "error",
+                done.seconds,
+                length,
+                expanded,
+                detail=f"sas_plan has {length} actions, stdout says {printed}",
+                extra=extra,
+            )
+        return Attempt("ok", done.seconds, length, expanded, extra=extra)
+
+
+class PyperplanPlanner(Planner):
+    def __init__(self, script: Path, heuristic: str) -> None:
+        self.script = script
+        self.heuristic = heuristic
+        self.key = PYPERPLAN
+        self.label = f"pyperplan A* {heuristic}"
+        self.optimal = True  # lmcut and hmax are admissible
+
+    def command(self, case: Case, workdir: Path) -> list[str]:
+        # The .soln file goes next to the problem: use copies in the run's own folder.
+        domain = shutil.copy(case.domain, workdir / "domain.pddl")
+        problem = shutil.copy(case.problem, workdir / "problem.pddl")
+        return [str(self.script), "-s", "astar", "-H", self.heuristic, str(domain), str(problem)]
+
+    def read(self, done: Finished, workdir: Path) -> Attempt:
+        out = done.stdout + "\n" + done.stderr
+        expanded = _last_int(r"(\d+) Nodes expanded", out)
+        if done.returncode is None:
+            return Attempt("timeout", done.seconds, expanded=expanded)
+        solution = workdir / "problem.pddl.soln"
+        if done.returncode != 0:
+            return Attempt(
+                "error", done.seconds, detail=f"exit {done.returncode}: {_last_line(out)}"
+            )
+        if not solution.exists():
+            return Attempt("no plan", done.seconds, expanded=expanded, detail=_last_line(out))
+        lines = solution.read_text(encoding="utf-8").splitlines()
+        length = sum(1 for line in lines if line.strip())
+        printed = _last_int(r"Plan length: (\d+)", out)
+        if printed is not None and printed != length:
+            return Attempt(
+                "error",
+                done.seconds,
+                length,
+                expanded,
+                detail=f".soln has {length} actions, the log says {printed}",
+            )
+        return Attempt("ok", done.seconds, length, expanded)
+
+
+def demoplan_command() -> list[str]:
+    script = Path(sys.executable).parent / "demoplan"
+    if script.exists():
+        return [str(script)]
+    return [sys.executable, "-m", "demoplan.cli"]
+
+
+def find_fast_downward(option: Path | None) -> tuple[str, Path] | str:
+    """``(python, driver)`` for Fast Downward, or why it is skipped."""
+    if option is not None:
+        if option.is_file():
+            return sys.executable, option
+        return f"--fd {option}: no such file"
+    spec = importlib.util.find_spec("up_fast_downward")
+    if spec is not None and spec.origin is not None:
+        driver = Path(spec.origin).parent / "downward" / "fast-downward.py"
+        if driver.is_file():
+            return sys.executable, driver
+    python = UPVENV / "bin" / "python"
+    for driver in sorted(UPVENV.glob("lib/python*/site-packages/up_fast_downward/downward/*.py")):
+        if driver.name == "fast-downward.py" and python.exists():
+            return str(python), driver
+    return (
+        "Fast Downward not found (no up_fast_downward in this interpreter or in "
+        f"{UPVENV}; pass --fd PATH/TO/fast-downward.py)"
+    )
+
+
+def find_pyperplan(option: Path | None) -> tuple[Path, str] | str:
+    """``(script, heuristic)`` for pyperplan, or why it is skipped."""
+    if option is not None:
+        candidates = [option]
+    else:
+        candidates = [Path(sys.executable).parent / "pyperplan", UPVENV / "bin" / "pyperplan"]
+    for script in candidates:
+        if script.is_file() and os.access(script, os.X_OK):
+            try:
+                done = run_process([str(script), "--help"], Path.cwd(), 30.0)
+            except OSError as exc:
+                return f"{script} does not run ({exc})"
+            heuristic = "lmcut" if "lmcut" in done.stdout else "hmax"
+            return script, heuristic
+    where = " or ".join(str(c) for c in candidates)
+    return f"pyperplan not found ({where}; pass --pyperplan PATH)"
+
+
+def _distribution_version(near: Path, name: str) -> str:
+    """The version of ``name`` installed in the virtual environment holding ``near``."""
+    for parent in near.resolve().parents:
+        for info in parent.glob(f"lib/python*/site-packages/{name}-*.dist-info"):
+            return info.name.removeprefix(f"{name}-").removesuffix(".dist-info")
+    return "?"
+
+
+# --------------------------------------------------------------------------- measuring
+
+
+@dataclass(slots=True)
+class Result:
+    """A planner on a case: the median over repeats, or why there is no time."""
+
+    planner: str
+    family: str
+    n: int
+    status: str  # "ok", "timeout", "no plan", "error", "skipped", "not run"
+    times_s: list[float] = field(default_factory=list)
+    length: int | None = None
+    expanded: int | None = None
+    detail: str = ""
+    extra: dict[str, float] = field(default_factory=dict)
+    cpu_s: list[float] = field(default_factory=list)  # user + system CPU per timed run
+
+    @property
+    def median_s(self) -> float | None:
+        return statistics.median(self.times_s) if self.times_s else None
+
+    @property
+    def median_cpu_s(self) -> float | None:
+        return statistics.median(self.cpu_s) if self.cpu_s else None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def measure(planner: Planner, case: Case, root: Path, timeout: float) -> Result:
+    """Run ``planner`` on ``case``: once, and 3 times in all when a run is under 1 s."""
+    runs: list[Attempt] = []
+    for index in range(CHEAP_REPEATS):
+        workdir = Path(tempfile.mkdtemp(prefix=f"{planner.key}-{index}-", dir=root))
+        runs.append(planner.attempt(case, workdir, timeout))
+        shutil.rmtree(workdir, ignore_errors=True)
+        if runs[0].status != "ok" or runs[0].seconds >= CHEAP_SECONDS:
+            break
+    first = runs[0]
+    timed = [r for r in runs if r.status == first.status] if first.status == "ok" else [first]
+    notes = [first.detail] if first.detail else []
+    mismatched = [r.length for r in runs if r.status == "ok" and r.length != first.length]
+    if mismatched:
+        notes.append(f"plan length changed between repeats: {first.length} then {mismatched}")
+    for index, run in enumerate(runs[1:], start=2):
+        if run.status != first.status:  # not timed; said, so that it is not lost
+            notes.append(f"run {index} of {len(runs)}: {run.status} {run.detail}".strip())
+    detail = "; ".join(notes)
+    return Result(
+        planner.key,
+        case.family,
+        case.n,
+        first.status,
+        [r.seconds for r in timed],
+        first.length,
+        first.expanded,
+        detail,
+        first.extra,
+        [r.cpu_seconds for r in timed if r.cpu_seconds is not None],
+    )
+
+
+def run_all(
+    planners: Sequence[Planner],
+    cases: dict[tuple[str, int], Case],
+    demoplan_only: set[tuple[str, int]],
+    root: Path,
+    timeout: float,
+    *,
+    skip_after_timeout: bool,
+    console: Console,
+) -> dict[tuple[str, str, int], Result]:
+    results: dict[tuple[str, str, int], Result] = {}
+    timed_out: dict[tuple[str, str], int] = {}  # (planner, family) -> smallest N that timed out
+    with console.status("") as status:
+        for (family, n), case in sorted(cases.items(), key=lambda item: (item[0][0], item[0][1])):
+            for planner in planners:
+                key = (planner.key, family, n)
+                if (family, n) in demoplan_only and planner.key != DEMOPLAN:
+                    results[key] = Result(planner.key, family, n, "not run", detail="--quick")
+                    continue
+                if planner.max_objects is not None and n > planner.max_objects:
+                    results[key] = Result(
+                        planner.key, family, n, "not run", detail=f"N > {planner.max_objects}"
+                    )
+                    continue
+                earlier = timed_out.get((planner.key, family))
+                if skip_after_timeout and planner.key != DEMOPLAN and earlier is not None:
+                    results[key] = Result(
+                        planner.key, family, n, "skipped", detail=f"timed out at N = {earlier}"
+                    )
+                    continue
+                status.update(f"{planner.label} on {family} N = {n} …")
+                result = measure(planner, case, root, timeout)
+                results[key] = result
+                if result.status == "timeout":
+                    timed_out.setdefault((planner.key, family), n)
+                line = f"  {family:6} N={n:<3} {planner.label:22} {_time_text(result):>10}"
+                if result.ok:
+                    line += f"  length {result.length}  expanded {_number(result.expanded)}"
+                if result.detail:
+                    line += f"  ({result.detail})"
+                console.print(line, highlight=False, markup=False, style="dim")
+    return results
+
+
+# --------------------------------------------------------------------------- verdicts
+
+
+@dataclass(slots=True)
+class Verdict:
+    family: str
+    n: int
+    demoplan_length: int | None
+    problems: list[str]  # plan-length bugs
+    comparisons: int  # other planners' plans compared with demoplan's
+    ratio_fd_opt: float | None  # FD optimal wall time / demoplan wall time
+    ratio_fd_opt_cpu: float | None  # the same in CPU time (user + system)
+    note: str
+
+
+def verdicts(
+    results: dict[tuple[str, str, int], Result],
+    planners: Sequence[Planner],
+    cases: Sequence[tuple[str, int]],
+) -> list[Verdict]:
+    labels = {p.key: p.label for p in planners}
+    optimal = {p.key for p in planners if p.optimal}
+    out = []
+    for family, n in cases:
+        ours = results[(DEMOPLAN, family, n)]
+        problems: list[str] = []
+        comparisons = 0
+        finished = []
+        for planner in planners:
+            if planner.key == DEMOPLAN:
+                continue
+            theirs = results[(planner.key, family, n)]
+            if not theirs.ok or theirs.length is None:
+                continue
+            finished.append(planner.key)
+            if not ours.ok or ours.length is None:
+                continue
+            comparisons += 1
+            if theirs.length < ours.length:
+                problems.append(
+                    f"BUG: {labels[planner.key]} found {theirs.length} < demoplan {ours.length}"
+                )
+            elif theirs.length > ours.length and planner.key in optimal:
+                problems.append(
+                    f"BUG: optimal {labels[planner.key]} found {theirs.length} "
+                    f"> demoplan {ours.length}"
+                )
+        fd = results.get((FD_OPT, family, n))
+        ratio = ratio_cpu = None
+        if fd is not None and fd.ok and ours.ok and fd.median_s and ours.median_s:
+            ratio = fd.median_s / ours.median_s
+            if fd.median_cpu_s and ours.median_cpu_s:
+                ratio_cpu = fd.median_cpu_s / ours.median_cpu_s
+        if ours.ok:
+            note = f"compared with {', '.join(finished)}" if finished else "no other plan"
+        else:
+            note = f"demoplan {ours.status}"
+            if finished:
+                lengths = sorted({results[(k, family, n)].length or 0 for k in finished})
+                note += f"; others found {'/'.join(map(str, lengths))}"
+        out.append(
+            Verdict(
+                family,
+                n,
+                ours.length if ours.ok else None,
+                problems,
+                comparisons,
+                ratio,
+                ratio_cpu,
+                note,
+            )
+        )
+    return out
+
+
+@dataclass(slots=True)
+class Target:
+    name: str
+    passed: bool | None  # None: not measured
+    detail: str
+
+
+def targets(
+    results: dict[tuple[str, str, int], Result],
+    planners: Sequence[Planner],
+    families: Sequence[str],
+    checks: Sequence[Verdict],
+    timeout: float,
+) -> list[Target]:
+    optimal = [p for p in planners if p.optimal and p.key != DEMOPLAN]
+    out = []
+
+    bugs = [p for v in checks for p in v.problems]
+    compared = sum(v.comparisons for v in checks)
+    out.append(
+        Target(
+            "demoplan's plan never longer than another planner's; no optimal plan longer",
+            (not bugs) if compared else None,
+            f"{compared} comparison{'s' if compared != 1 else ''}, "
+            f"{len(bugs)} disagreement{'s' if len(bugs) != 1 else ''}"
+            + (": " + "; ".join(bugs) if bugs else ""),
+        )
+    )
+
+    for n, limit in (TARGET_20, TARGET_30):
+        parts = []
+        passed = True
+        measured = [f for f in families if (DEMOPLAN, f, n) in results]
+        if not measured:
+            out.append(
+                Target(
+                    f"Shortest plans for {n} objects in under {limit:g} s whole process",
+                    None,
+                    f"N = {n} not in this run",
+                )
+            )
+            continue
+        for family in families:
+            ours = results.get((DEMOPLAN, family, n))
+            if ours is None:
+                parts.append(f"{family}: not measured")
+                continue
+            if not ours.ok or ours.median_s is None:
+                shown = f"> {timeout:g} s" if ours.status == "timeout" else ours.status
+                parts.append(f"{family}: {shown}")
+                passed = False
+                continue
+            text = f"{family}: {ours.median_s:.3f} s"
+            if ours.median_cpu_s is not None:
+                text += f" (CPU {ours.median_cpu_s:.3f} s)"
+            passed &= ours.median_s < limit
+            agree = [
+                p.label
+                for p in optimal
+                if (r := results.get((p.key, family, n))) is not None and r.ok
+            ]
+            lengths_agree = all(
+                results[(p.key, family, n)].length == ours.length
+                for p in optimal
+                if results[(p.key, family, n)].ok
+            )
+            if not lengths_agree:
+                passed = False
+                text += " (an optimal planner disagrees on the length)"
+            elif agree:
+                text += f" (length {ours.length} = {', '.join(agree)})"
+            else:
+                text += f" (length {ours.length}; no optimal planner finished to confirm it)"
+            parts.append(text)
+        out.append(
+            Target(
+                f"Shortest plans for {n} objects in under {limit:g} s whole process",
+                passed,
+                "; ".join(parts),
+            )
+        )
+
+    ratios: list[float] = []
+    failures: list[str] = []
+    count = 0
+    for key, fd in sorted(results.items()):
+        if key[0] != FD_OPT or not fd.ok or fd.median_s is None:
+            continue
+        count += 1
+        ours = results[(DEMOPLAN, key[1], key[2])]
+        if not ours.ok or ours.median_s is None:
+            failures.append(f"{key[1]} N={key[2]}: FD finished, demoplan {ours.status}")
+            continue
+        ratio = fd.median_s / ours.median_s
+        ratios.append(ratio)
+        if ratio < TARGET_SPEEDUP:
+            failures.append(f"{key[1]} N={key[2]}: {ratio:.1f}{TIMES}")
+    if not count:
+        detail = "Fast Downward's optimal configuration finished nowhere (or was not run)"
+    else:
+        detail = f"FD-optimal finished on {count} problem{'s' if count > 1 else ''}"
+        if ratios:
+            detail += (
+                f"; FD-opt / demoplan from {min(ratios):.1f}{TIMES} to {max(ratios):.1f}{TIMES}"
+                f" (median {statistics.median(ratios):.1f}{TIMES})"
+            )
+        if failures:
+            detail += "; short of 10" + TIMES + ": " + ", ".join(failures)
+    out.append(
+        Target(
+            f"At least {TARGET_SPEEDUP:g}{TIMES} faster than Fast Downward seq-opt-lmcut "
+            "wherever it finishes",
+            (not failures) if count else None,
+            detail,
+        )
+    )
+    return out
+
+
+# --------------------------------------------------------------------------- tables
+
+
+def format_seconds(seconds: float | None) -> str:
+    if seconds is None:
+        return "-"
+    if seconds < 1.0:
+        return f"{seconds * 1e3:.0f} ms"
+    return f"{seconds:.2f} s"
+
+
+def _number(value: int | None) -> str:
+    return "-" if value is None else f"{value:,}"
+
+
+def _time_text(result: Result) -> str:
+    if result.ok:
+        return format_seconds(result.median_s)
+    return {"not run": "·", "skipped": "skipped"}.get(result.status, result.status)
+
+
+def family_table(
+    family: str,
+    sizes: Sequence[int],
+    cases: dict[tuple[str, int], Case],
+    planners: Sequence[Planner],
+    results: dict[tuple[str, str, int], Result],
+    seed: int,
+) -> Table:
+    table = Table(
+        title=f"{FAMILY_TITLES[family]} (seed {seed}): whole-process wall time (median), "
+        "plan length, states expanded",
+        title_justify="left",
+    )
+    table.add_column("N", justify="right", style="bold")
+    table.add_column("PDDL\nactions", justify="right", style="dim")
+    for planner in planners:
+        table.add_column(f"{planner.label}\ntime", justify="right")
+        table.add_column("len", justify="right")
+        table.add_column("exp", justify="right", style="dim")
+    for n in sizes:
+        if (family, n) not in cases:
+            continue
+        row = [str(n), _number(cases[(family, n)].pddl_actions)]
+        for planner in planners:
+            result = results[(planner.key, family, n)]
+            time_text = _time_text(result)
+            if result.status == "timeout":
+                time_text = f"[red]{time_text}[/red]"
+            elif result.status in ("error", "no plan"):
+                time_text = f"[bold red]{time_text}[/bold red]"
+            row += [
+                time_text,
+                str(result.length) if result.ok else "-",
+                _number(result.expanded) if result.ok else "-",
+            ]
+        table.add_row(*row)
+    return table
+
+
+def fast_downward_table(
+    results: dict[tuple[str, str, int], Result], planners: Sequence[Planner]
+) -> Table | None:
+    labels = {p.key: p.label for p in planners}
+    rows = [
+        r
+        for r in results.values()
+        if r.planner in (FD_OPT, FD_LAMA) and r.status in ("ok", "timeout")
+    ]
+    if not rows:
+        return None
+    table = Table(
+        title="Fast Downward: where the wall time goes (one run; translator = its own "
+        "wall-clock, search = the search component's)",
+        title_justify="left",
+    )
+    for column in ("family", "N", "config", "whole process", "translator", "search", "share"):
+        table.add_column(column, justify="left" if column in ("family", "config") else "right")
+    for r in sorted(rows, key=lambda r: (r.family, r.n, r.planner)):
+        whole = r.median_s
+        translate = r.extra.get("translate_s")
+        search = r.extra.get("search_s")
+        share = "-"
+        if r.ok and whole and translate is not None:
+            share = f"{100 * translate / whole:.0f}% translating"
+        elif r.status == "timeout":
+            share = r.detail
+        table.add_row(
+            r.family,
+            str(r.n),
+            labels[r.planner],
+            format_seconds(whole) if r.ok else "timeout",
+            format_seconds(translate),
+            format_seconds(search),
+            share,
+        )
+    return table
+
+
+def verdict_table(checks: Sequence[Verdict]) -> Table:
+    table = Table(
+        title="Verdicts: plan lengths against demoplan's, and FD-optimal / demoplan wall time",
+        title_justify="left",
+    )
+    table.add_column("family")
+    table.add_column("N", justify="right")
+    table.add_column("demoplan len", justify="right")
+    table.add_column("plan lengths")
+    table.add_column("FD-opt / demoplan\nwall", justify="right")
+    table.add_column("FD-opt / demoplan\nCPU", justify="right", style="dim")
+    table.add_column("note", style="dim")
+    for v in checks:
+        if v.problems:
+            lengths = "[bold red]" + "; ".join(v.problems) + "[/bold red]"
+        elif v.comparisons:
+            lengths = "[green]OK[/green]"
+        else:
+            lengths = "-"
+        ratio = "-" if v.ratio_fd_opt is None else f"{v.ratio_fd_opt:.1f}{TIMES}"
+        ratio_cpu = "-" if v.ratio_fd_opt_cpu is None else f"{v.ratio_fd_opt_cpu:.1f}{TIMES}"
+        table.add_row(
+            v.family,
+            str(v.n),
+            "-" if v.demoplan_length is None else str(v.demoplan_length),
+            lengths,
+            ratio,
+            ratio_cpu,
+            v.note,
+        )
+    return table
+
+
+# --------------------------------------------------------------------------- main
+
+
+def _sizes(text: str) -> tuple[int, ...]:
+    try:
+        sizes = tuple(sorted({int(part) for part in text.split(",") if part.strip()}))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: comma-separated integers expected") from None
+    if not sizes or min(sizes) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: positive integers expected")
+    return sizes
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        description="Benchmark demoplan solve against Fast Downward and pyperplan "
+        "(whole-process wall time, plan length, expanded states).",
+    )
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"N <= 7 (demoplan also at N = 20, 30) with a {QUICK_TIMEOUT:g} s timeout",
+    )
+    parser.add_argument("--out", type=Path, help="also save the results to this JSON file")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the generated problems")
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        help=f"seconds per run (default {DEFAULT_TIMEOUT:g}; {QUICK_TIMEOUT:g} with --quick)",
+    )
+    parser.add_argument("--sizes", type=_sizes, help="comma-separated N, e.g. 3,5,10")
+    parser.add_argument(
+        "--families",
+        default=",".join(FAMILIES),
+        help=f"comma-separated problem families ({', '.join(FAMILIES)})",
+    )
+    parser.add_argument("--fd", type=Path, help="path of Fast Downward's fast-downward.py")
+    parser.add_argument(
+        "--fd-translate-options",
+        metavar="OPTIONS",
+        help="extra options for Fast Downward's translator, e.g. "
+        "--fd-translate-options='--invariant-generation-max-candidates 0' (one string, "
+        "split on spaces; use '=')",
+    )
+    parser.add_argument("--pyperplan", type=Path, help="path of the pyperplan script")
+    parser.add_argument(
+        "--no-skip",
+        action="store_true",
+        help="run a competitor at every N even after it timed out at a smaller one",
+    )
+    args = parser.parse_args(argv)
+    families = [f.strip() for f in args.families.split(",") if f.strip()]
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown or not families:
+        parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(FAMILIES)}")
+    args.families = families
+    if args.timeout is None:
+        args.timeout = QUICK_TIMEOUT if args.quick else DEFAULT_TIMEOUT
+    if args.timeout <= 0:
+        parser.error("--timeout must be positive")
+    return args
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_args(argv)
+    console = Console(width=None if sys.stdout.isatty() else 200)
+    started = time.perf_counter()
+    sizes: tuple[int, ...] = args.sizes or (QUICK_SIZES if args.quick else FULL_SIZES)
+    demoplan_only_sizes = (
+        tuple(n for n in QUICK_DEMOPLAN_ONLY if n not in sizes)
+        if args.quick and not args.sizes
+        else ()
+    )
+    all_sizes = tuple(sorted({*sizes, *demoplan_only_sizes}))
+
+    planners: list[Planner] = [
+        DemoplanPlanner(demoplan_command(), "astar"),
+        DemoplanPlanner(demoplan_command(), "bfs"),
+    ]
+    messages = []
+    fast_downward = find_fast_downward(args.fd)
+    if isinstance(fast_downward, str):
+        messages.append(f"Skipping Fast Downward: {fast_downward}")
+    else:
+        python, driver = fast_downward
+        options = args.fd_translate_options.split() if args.fd_translate_options else []
+        suffix = " (opts)" if options else ""
+        for alias, key, label in (
+            ("seq-opt-lmcut", FD_OPT, "FD opt"),
+            ("lama-first", FD_LAMA, "FD lama"),
+        ):
+            planners.append(
+                FastDownwardPlanner(python, driver, alias, key, label + suffix, options)
+            )
+        messages.append(
+            f"Fast Downward: {driver} (run with {python}; --alias seq-opt-lmcut, lama-first"
+            + (f"; --translate-options {' '.join(options)}" if options else "")
+            + ")"
+        )
+    pyperplan = find_pyperplan(args.pyperplan)
+    if isinstance(pyperplan, str):
+        messages.append(f"Skipping pyperplan: {pyperplan}")
+    else:
+        script, heuristic = pyperplan
+        planners.append(PyperplanPlanner(script, heuristic))
+        version = _distribution_version(script, "pyperplan")
+        messages.append(f"pyperplan {version}: {script} (-s astar -H {heuristic})")
+
+    console.print(
+        f"demoplan planning benchmark — {'quick' if args.quick else 'full'} run, "
+        f"N = {', '.join(map(str, sizes))}"
+        + (
+            f" (demoplan also at {', '.join(map(str, demoplan_only_sizes))})"
+            if demoplan_only_sizes
+            else ""
+        )
+        + f", families {', '.join(args.families)}, seed {args.seed}, "
+        f"timeout {args.timeout:g} s per run; Python {platform.python_version()}, "
+        f"{platform.machine()}, {os.cpu_count()} CPUs",
+        highlight=False,
+    )
+    console.print(
+        f"demoplan {demoplan.__version__} from {Path(demoplan.__file__).parent}, "
+        f"run as: {' '.join(demoplan_command())} solve PROBLEM.xml --json",
+        highlight=False,
+    )
+    for message in messages:
+        console.print(message, highlight=False, style="yellow" if "Skipping" in message else None)
+
+    with tempfile.TemporaryDirectory(prefix="demoplan-planning-bench-") as temporary:
+        root = Path(temporary)
+        cases = {
+            (family, n): make_case(family, n, args.seed, root)
+            for family in args.families
+            for n in all_sizes
+        }
+        demoplan_only = {(f, n) for f in args.families for n in demoplan_only_sizes}
+        # Warm-up, untimed: byte-compiled caches, the page cache.
+        run_process(
+            [*demoplan_command(), "solve", str(cases[(args.families[0], all_sizes[0])].xml)],
+            root,
+            args.timeout,
+        )
+        results = run_all(
+            planners,
+            cases,
+            demoplan_only,
+            root,
+            args.timeout,
+            skip_after_timeout=not args.no_skip,
+            console=console,
+        )
+
+    for family in args.families:
+        console.print(family_table(family, all_sizes, cases, planners, results, args.seed))
+    console.print(
+        "time: whole process, median of 3 runs when under 1 s; 'timeout': killed at "
+        f"{args.timeout:g} s; 'skipped': timed out at a smaller N; '·': not run. "
+        "exp: states expanded — demoplan A* expands moves (GRASP + PUT_DOWN), the others "
+        "primitive actions' states.",
+        highlight=False,
+        style="dim",
+    )
+    labels = {p.key: p.label for p in planners}
+    for r in results.values():
+        if r.detail and r.status not in ("not run", "skipped", "timeout"):
+            console.print(
+                f"Note: {labels[r.planner]} on {r.family} N = {r.n} ({r.status}): {r.detail}",
+                style="yellow",
+                highlight=False,
+                markup=False,
+            )
+    fd_table = fast_downward_table(results, planners)
+    if fd_table is not None:
+        console.print(fd_table)
+
+    ordered = [(f, n) for f in args.families for n in all_sizes]
+    checks = verdicts(results, planners, ordered)
+    console.print(verdict_table(checks))
+    goals = targets(results, planners, args.families, checks, args.timeout)
+    for goal in goals:
+        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[goal.passed]
+        console.print(
+            f"{goal.name}: {verdict} — {goal.detail}",
+            style={True: "bold green", False: "bold red", None: "bold yellow"}[goal.passed],
+            highlight=False,
+            markup=False,
+        )
+    total = time.perf_counter() - started
+    console.print(f"Total benchmark time: {total:.1f} s")
+
+    if args.out is not None:
+        document: dict[str, Any] = {
+            "benchmark": "demoplan planning",
+            "run": "quick" if args.quick else "full",
+            "seed": args.seed,
+            "timeout_s": args.timeout,
+            "sizes": list(sizes),
+            "demoplan_only_sizes": list(demoplan_only_sizes),
+            "families": args.families,
+            "python": platform.python_version(),
+            "machine": platform.machine(),
+            "cpus": os.cpu_count(),
+            "planners": [{"key": p.key, "label": p.label, "optimal": p.optimal} for p in planners],
+            "messages": messages,
+            "cases": [
+                {
+                    "family": c.family,
+                    "n": c.n,
+                    "locations": c.locations,
+                    "pddl_actions": c.pddl_actions,
+                }
+                for c in cases.values()
+            ],
+            "results": [
+                {**asdict(r), "median_s": r.median_s, "median_cpu_s": r.median_cpu_s}
+                for r in results.values()
+            ],
+            "verdicts": [asdict(v) for v in checks],
+            "targets": [asdict(t) for t in goals],
+            "total_s": total,
+        }
+        args.out.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        console.print(f"Results saved to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,154 @@
+"""`demoplan solve` and `demoplan pddl` (SPEC §3 "Plan output", §4 exit codes)."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.planning.problem import Action, Problem
+from demoplan.planning.xml import load_problem, save_problem
+from tests.helpers import EXAMPLES
+from tests.test_problem_xml import BOMB
+from tests.validator import validate
+
+PAPER = EXAMPLES / "planning" / "paper-example.xml"
+LINE = re.compile(r"(GRASP|PUT_DOWN) (\S+) (\S+) (\S+)")
+
+
+def invoke(*args: str | Path) -> Any:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def one_line_error(result: Any, code: int, *fragments: str) -> str:
+    """Exit ``code``, nothing on stdout, exactly one line on stderr with every fragment."""
+    assert result.exit_code == code, (result.exit_code, result.stdout, result.stderr)
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("demoplan: error: ")
+    for fragment in fragments:
+        assert fragment in lines[0], (fragment, lines[0])
+    return str(lines[0])
+
+
+def parse_plan(text: str) -> list[Action]:
+    actions = []
+    for line in text.splitlines():
+        match = LINE.fullmatch(line)
+        assert match, f"not an action in the paper's format: {line!r}"
+        actions.append(Action(*match.groups()))
+    return actions
+
+
+@pytest.mark.parametrize("search", [None, "astar", "bfs"])
+def test_solve_prints_the_paper_plan(search: str | None) -> None:
+    result = invoke("solve", PAPER, *(["--search", search] if search else []))
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == ""
+    actions = parse_plan(result.stdout)
+    assert len(actions) == 8
+    assert [a.kind for a in actions] == ["GRASP", "PUT_DOWN"] * 4
+    validate(load_problem(PAPER), actions)
+
+
+@pytest.mark.parametrize("search", ["astar", "bfs"])
+def test_solve_json(search: str) -> None:
+    result = invoke("solve", PAPER, "--json", "--search", search)
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)  # stdout holds the JSON and nothing else
+    assert data["length"] == 8
+    assert data["search"] == search
+    assert isinstance(data["actions"], list)
+    assert all(isinstance(a, list) and len(a) == 4 for a in data["actions"])
+    validate(load_problem(PAPER), [Action(*a) for a in data["actions"]])
+
+
+def two_objects(goal: list[tuple[str, str]], **extra: Any) -> Problem:
+    return Problem.create(
+        objects=["a", "b"],
+        locations=["l1", "l2", *extra.pop("locations", [])],
+        grasps=["g"],
+        allowed=[("a", "g"), ("b", "g")],
+        initial=[("a", "l1"), ("b", "l2")],
+        goal=goal,
+        name="two",
+        **extra,
+    )
+
+
+def test_no_plan_shared_goal_location(tmp_path: Path) -> None:
+    """A reason found without search: two objects must end at one location."""
+    path = tmp_path / "shared.xml"
+    save_problem(two_objects([("a", "l3"), ("b", "l3")], locations=["l3"]), path)
+    one_line_error(invoke("solve", path), 3, "no plan", "a and b must both end at l3")
+
+
+@pytest.mark.parametrize("search", ["astar", "bfs"])
+def test_no_plan_found_by_search(tmp_path: Path, search: str) -> None:
+    """a and b must swap places and there is no third place: nothing shows it up
+    front, the search exhausts every arrangement."""
+    problem = two_objects([("a", "l2"), ("b", "l1")])
+    path = tmp_path / "swap.xml"
+    save_problem(problem, path)
+    line = one_line_error(invoke("solve", path, "--search", search), 3, "no plan")
+    assert "exhausted" in line
+    # with a free place the same swap is solvable: the failure was the search's finding
+    roomy = tmp_path / "roomy.xml"
+    save_problem(two_objects([("a", "l2"), ("b", "l1")], locations=["freespace1"]), roomy)
+    result = invoke("solve", roomy, "--search", search)
+    assert result.exit_code == 0, result.stderr
+    assert len(parse_plan(result.stdout)) == 6
+
+
+@pytest.mark.parametrize("search", ["astar", "bfs"])
+def test_max_nodes_limit_exits_4(search: str) -> None:
+    line = one_line_error(
+        invoke("solve", PAPER, "--search", search, "--max-nodes", "1"), 4, "--max-nodes 1"
+    )
+    assert "no plan yet" in line
+
+
+def test_entity_bomb_exits_1(tmp_path: Path) -> None:
+    path = tmp_path / "bomb.xml"
+    path.write_text(BOMB)
+    one_line_error(invoke("solve", path), 1, str(path), "not allowed")
+
+
+def test_bad_field_exits_1(tmp_path: Path) -> None:
+    path = tmp_path / "bad.xml"
+    path.write_text(PAPER.read_text().replace('"cup loc22"', '"cup loc99"'))
+    one_line_error(invoke("solve", path), 1, str(path), "state/arg[2]", "'loc99'")
+
+
+def test_missing_file_exits_1(tmp_path: Path) -> None:
+    one_line_error(invoke("solve", tmp_path / "nope.xml"), 1, "nope.xml", "cannot read")
+
+
+def test_unknown_search_is_a_usage_error() -> None:
+    assert invoke("solve", PAPER, "--search", "dfs").exit_code == 2
+
+
+def test_pddl_writes_domain_and_problem(tmp_path: Path) -> None:
+    folder = tmp_path / "out" / "pddl"  # created as needed
+    result = invoke("pddl", PAPER, "-o", folder)
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout == ""
+    domain, problem = folder / "domain.pddl", folder / "problem.pddl"
+    assert domain.read_text().startswith("(define (domain demoplan-paper-example)")
+    problem_text = problem.read_text()
+    assert problem_text.startswith("(define (problem paper-example)")
+    assert "(located box loc264)" in problem_text
+    assert str(domain) in result.stderr
+
+
+def test_pddl_bad_input_exits_1(tmp_path: Path) -> None:
+    path = tmp_path / "bomb.xml"
+    path.write_text(BOMB)
+    one_line_error(invoke("pddl", path, "-o", tmp_path / "out"), 1, "not allowed")
+    assert not (tmp_path / "out").exists()
