@@ -63,6 +63,40 @@ def collision_facts(
     return facts
 
 
+def _problem(
+    name: str,
+    objects: list[str],
+    locations: dict[str, tuple[float, float, float]],
+    start: list[str],
+    goal: list[str],
+    n_freespace: int,
+    *,
+    free_y: float,
+    supports: list[tuple[str, str]] | None = None,
+) -> Problem:
+    """Add free-space spots (a row apart, spaced so that no grasp there
+    collides), two grasps per object and the collision facts."""
+    locations = dict(locations)
+    freespace = []
+    for k in range(n_freespace):
+        spot = f"freespace{k + 1}"
+        locations[spot] = (0.3 + k * 0.12, free_y, 0.0)
+        freespace.append(spot)
+    grasp_axes, allowed = _grasps(objects)
+    return Problem.create(
+        objects=objects,
+        locations=list(locations),
+        grasps=list(grasp_axes),
+        allowed=allowed,
+        collisions=collision_facts(locations, grasp_axes),
+        initial=list(zip(objects, start, strict=True)),
+        goal=list(zip(objects, goal, strict=True)),
+        freespace=freespace,
+        supports=supports or (),
+        name=name,
+    )
+
+
 def _grasps(objects: list[str]) -> tuple[dict[str, str], list[tuple[str, str]]]:
     names: dict[str, str] = {}
     allowed = []
@@ -112,22 +146,14 @@ def table_problem(
         blocker, owner = int(order[k]), int(order[(k + 1) % n_objects])
         if blocker != owner:
             start[blocker] = names[goal_cells[owner]]
-    freespace = []
-    for k in range(n_freespace):  # a row apart, spaced so that no grasp there collides
-        name = f"freespace{k + 1}"
-        locations[name] = (0.3 + k * 0.12, -0.2, 0.0)
-        freespace.append(name)
-    grasp_axes, allowed = _grasps(objects)
-    return Problem.create(
-        objects=objects,
-        locations=list(locations),
-        grasps=list(grasp_axes),
-        allowed=allowed,
-        collisions=collision_facts(locations, grasp_axes),
-        initial=list(zip(objects, start, strict=True)),
-        goal=[(o, names[c]) for o, c in zip(objects, goal_cells, strict=True)],
-        freespace=freespace,
-        name=f"table-{n_objects}",
+    return _problem(
+        f"table-{n_objects}",
+        objects,
+        locations,
+        start,
+        [names[c] for c in goal_cells],
+        n_freespace,
+        free_y=-0.2,
     )
 
 
@@ -180,21 +206,13 @@ def blocks_problem(
             locations[upper] = (locations[name][0], locations[name][1], BLOCK)
             supports.append((upper, name))
             start.append(upper)
-    freespace = []
-    for k in range(n_freespace):
-        name = f"freespace{k + 1}"
-        locations[name] = (0.3 + k * 0.12, -0.5, 0.0)
-        freespace.append(name)
-    grasp_axes, allowed = _grasps(objects)
-    return Problem.create(
-        objects=objects,
-        locations=list(locations),
-        grasps=list(grasp_axes),
-        allowed=allowed,
-        collisions=collision_facts(locations, grasp_axes),
-        initial=list(zip(objects, start, strict=True)),
-        goal=list(zip(objects, goal_order, strict=True)),
-        freespace=freespace,
+    return _problem(
+        f"blocks-{n_objects}",
+        objects,
+        locations,
+        start,
+        goal_order,
+        n_freespace,
+        free_y=-0.5,
         supports=supports,
-        name=f"blocks-{n_objects}",
     )

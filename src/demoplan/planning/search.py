@@ -213,22 +213,12 @@ class _AStar:
                 continue
             if obj not in seen:  # grasping it where it stands
                 seen.add(obj)
-                union = 0
-                for g in grasps:
-                    hit = (block[location][g] | above[location]) & idle
-                    if not hit:
-                        union = 0
-                        break
-                    union |= hit
+                union = _all_grasps_hit([block[location][g] for g in grasps], above[location], idle)
                 if union:
                     blocking_sets.append(union)
-            union = 0  # putting it down at the target
-            for g in grasps:
-                hit = (block[target][g] | exclusive[target] | 1 << target) & idle
-                if not hit:
-                    union = 0
-                    break
-                union |= hit
+            # putting it down at the target
+            extra = exclusive[target] | 1 << target
+            union = _all_grasps_hit([block[target][g] for g in grasps], extra, idle)
             if union:
                 blocking_sets.append(union)
         if not blocking_sets:
@@ -481,6 +471,17 @@ class _AStar:
             actions[:0] = self.c.move_actions(obj, source, target, grasp)
             link = self.parent[key]
         return tuple(actions)
+
+
+def _all_grasps_hit(per_grasp: list[int], always: int, idle: int) -> int:
+    """The idle places blocking a grasp, if every grasp is blocked; else 0."""
+    union = 0
+    for mask in per_grasp:
+        hit = (mask | always) & idle
+        if not hit:
+            return 0
+        union |= hit
+    return union
 
 
 SEARCHES: dict[str, Callable[[Problem, Budget], SearchOutcome]] = {
