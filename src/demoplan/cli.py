@@ -336,7 +336,12 @@ def solve(
 
     with _reported_errors():
         problem = load_problem(problem_path)
-        plan = solve_problem(problem, search.value, Budget(max_nodes=max_nodes, timeout=timeout))
+        budget = Budget(max_nodes=max_nodes, timeout=timeout)
+        if _stderr.is_terminal:  # a spinner while a long search runs; nothing when piped
+            with _stderr.status(f"Searching ({search.value}) for a shortest plan…"):
+                plan = solve_problem(problem, search.value, budget)
+        else:
+            plan = solve_problem(problem, search.value, budget)
         if json_output:
             _print_json(
                 {
