@@ -320,6 +320,11 @@ class _AStar:
         the moves they need are counted apart (the blocking sets), and this
         bound must not count them again.
         """
+        return 0 if self._peel_order(positions) is not None else 1
+
+    def _peel_order(self, positions: tuple[int, ...]) -> list[int] | None:
+        """The objects away from their final places in an order in which each
+        can be put down there, one move each (last first); None if stuck."""
         c = self.c
         remaining = []
         goals = 0
@@ -329,6 +334,7 @@ class _AStar:
                 remaining.append(obj)
                 goals |= 1 << goal
         block, grasps_of, goal_of = c.block, c.grasps_of, c.goal
+        peeled: list[int] = []
         while remaining:
             kept = []
             for obj in remaining:
@@ -336,12 +342,13 @@ class _AStar:
                 others = goals & ~(1 << target)  # not idle ones: their moves count apart
                 if any(not block[target][g] & others for g in grasps_of[obj]):
                     goals &= ~(1 << target)
+                    peeled.append(obj)
                 else:
                     kept.append(obj)
             if len(kept) == len(remaining):
-                return 1
+                return None
             remaining = kept
-        return 0
+        return peeled
 
     def key(self, positions: tuple[int, ...], reached: int) -> tuple[int, ...]:
         plain = self.c.plain
@@ -369,8 +376,11 @@ class _AStar:
         parent = self.parent
         parent[start_key] = None
         concrete = {start_key: start}
-        # Entry: (f lower bound, -g, h or "unknown" rank, -counter, key, h of the parent).
-        heap: list[tuple[int, int, int, int, tuple[int, ...], int]] = [(0, 0, 0, 0, start_key, 0)]
+        # Entry: (f lower bound, -g, h or "unknown", place-first rank, -counter, key,
+        # h of the parent).
+        heap: list[tuple[int, int, int, int, int, tuple[int, ...], int]] = [
+            (0, 0, 0, 0, 0, start_key, 0)
+        ]
         counter = 0
         expanded = 0
         bound = 0
@@ -384,7 +394,7 @@ class _AStar:
         )
         plain, goal_of = c.plain, c.goal
         while heap:
-            f, negative_g, _, _, key, parent_h = heapq.heappop(heap)
+            f, negative_g, _, _, _, key, parent_h = heapq.heappop(heap)
             g = best_g[key]
             if -negative_g != g:  # stale: the state was reached more cheaply since
                 continue
@@ -396,7 +406,7 @@ class _AStar:
             h = max(h, parent_h - 1)  # pathmax
             if g + h > f:
                 counter += 1
-                heapq.heappush(heap, (g + h, negative_g, 0, -counter, key, parent_h))
+                heapq.heappush(heap, (g + h, negative_g, 0, 0, -counter, key, parent_h))
                 continue
             positions, reached = concrete[key]
             if h == 0 and _is_goal(c, positions, reached):
@@ -406,6 +416,10 @@ class _AStar:
                 return SearchOutcome(None, expanded, len(best_g), False, limit, 2 * bound)
             expanded += 1
             bound = max(bound, f)
+            # Put objects down in an order that keeps the rest placeable: the
+            # reverse of the peeling order goes first among equals.
+            order = self._peel_order(positions) or []
+            first = {obj: len(order) - index for index, obj in enumerate(order)}
             occupied = 0
             for location in positions:
                 occupied |= 1 << location
@@ -457,10 +471,19 @@ class _AStar:
                                 continue
                             child_h = max(child_h, h - 1)
                             heapq.heappush(
-                                heap, (g + 1 + child_h, -(g + 1), child_h, -counter, child, h)
+                                heap,
+                                (
+                                    g + 1 + child_h,
+                                    -(g + 1),
+                                    child_h,
+                                    first.get(obj, 1 << 20),
+                                    -counter,
+                                    child,
+                                    h,
+                                ),
                             )
                         else:  # deferred: its parent's f is a lower bound (pathmax)
-                            heapq.heappush(heap, (f, -(g + 1), 1 << 30, -counter, child, h))
+                            heapq.heappush(heap, (f, -(g + 1), 1 << 30, 0, -counter, child, h))
         return SearchOutcome(None, expanded, len(best_g), True)
 
     def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:
