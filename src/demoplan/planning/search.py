@@ -420,6 +420,12 @@ class _AStar:
             # reverse of the peeling order goes first among equals.
             order = self._peel_order(positions) or []
             first = {obj: len(order) - index for index, obj in enumerate(order)}
+            # ... and before that, moves that free another object's goal (they
+            # unblock a chain of objects waiting for their places).
+            waited_for = 0
+            for other, at in enumerate(positions):
+                if goal_of[other] >= 0 and goal_of[other] != at:
+                    waited_for |= 1 << goal_of[other]
             occupied = 0
             for location in positions:
                 occupied |= 1 << location
@@ -476,7 +482,8 @@ class _AStar:
                                     g + 1 + child_h,
                                     -(g + 1),
                                     child_h,
-                                    first.get(obj, 1 << 20),
+                                    (0 if waited_for >> source & 1 else 1 << 20)
+                                    + first.get(obj, 1 << 19),
                                     -counter,
                                     child,
                                     h,
