@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import fields
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -28,6 +29,7 @@ from demoplan.fileio import (
 )
 from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
 from demoplan.rotations import canonical_quat, quat_from_rpy
+from demoplan.states import StateGenerationSettings
 
 __all__ = ["load_model", "model_from_dict", "model_to_dict", "save_model"]
 
@@ -36,14 +38,10 @@ __all__ = ["load_model", "model_from_dict", "model_to_dict", "save_model"]
 Number = Annotated[float, Field(strict=True)]
 Integer = Annotated[int, Field(strict=True)]
 _LABEL = re.compile(r"^[A-Z]+(?:#[1-9][0-9]*)?$")  # a state id, or a visit label "C#2"
-# Learning settings demoplan itself reads back (``learn --update``) and their types.
-_NUMBER_SETTINGS = {
-    "position_noise",
-    "orientation_noise",
-    "position_separation",
-    "orientation_separation",
-}
-_INTEGER_SETTINGS = {"n_init", "seed", "max_clusters"}
+# Learning settings demoplan itself reads back (``learn --update``) and their types,
+# from the settings dataclass itself so that a new setting cannot be forgotten here.
+_NUMBER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is float}
+_INTEGER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is int}
 
 
 class _Schema(BaseModel):

@@ -36,7 +36,8 @@ class Compiled:
     start_reached: int
     plain: int  # mask of interchangeable free-space locations (no fact mentions them)
 
-    def grasp_ok(self, occupied: int, obj: int, location: int, grasp: int) -> bool:
+    def grasp_ok(self, occupied: int, location: int, grasp: int) -> bool:
+        """GRASP at ``location`` with ``grasp`` while ``occupied`` (it included)."""
         others = occupied & ~(1 << location)
         return not (others & self.block[location][grasp]) and not (occupied & self.above[location])
 

@@ -110,7 +110,7 @@ def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchO
         if held is None:
             for obj, location in enumerate(positions):
                 for grasp in c.grasps_of[obj]:
-                    if c.grasp_ok(occupied, obj, location, grasp):
+                    if c.grasp_ok(occupied, location, grasp):
                         moved = positions[:obj] + (-1,) + positions[obj + 1 :]
                         action = Action(
                             "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
