@@ -402,7 +402,7 @@ def demoplan_command() -> list[str]:
     script = Path(sys.executable).parent / "demoplan"
     if script.exists():
         return [str(script)]
-    return [sys.executable, "-m", "demoplan.cli"]
+    return [sys.executable, "-m", "demoplan"]
 
 
 def find_fast_downward(option: Path | None) -> tuple[str, Path] | str:

@@ -24,7 +24,7 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
-from demoplan.errors import DemoplanError, InputError
+from demoplan.errors import DemoplanError, InputError, error_line
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -48,8 +48,7 @@ def _reported_errors() -> Iterator[None]:
     try:
         yield
     except DemoplanError as exc:
-        message = " ".join(str(exc).split())
-        _stderr.print(f"demoplan: error: {message}", markup=False, highlight=False)
+        _stderr.print(error_line(exc), markup=False, highlight=False)
         raise typer.Exit(exc.exit_code) from None
 
 
@@ -329,7 +328,7 @@ def solve(
     ] = None,
 ) -> None:
     """Solve a planning problem: a shortest GRASP / PUT_DOWN plan (paper §IV.C)."""
-    from demoplan.planning.problem import format_plan
+    from demoplan.planning.problem import format_plan, plan_to_json
     from demoplan.planning.search import Budget
     from demoplan.planning.search import solve as solve_problem
     from demoplan.planning.xml import load_problem
@@ -343,16 +342,7 @@ def solve(
         else:
             plan = solve_problem(problem, search.value, budget)
         if json_output:
-            _print_json(
-                {
-                    "actions": [[a.kind, a.object, a.location, a.grasp] for a in plan.actions],
-                    "length": len(plan),
-                    "search": plan.search,
-                    "expanded": plan.expanded,
-                    "generated": plan.generated,
-                    "seconds": round(plan.seconds, 6),
-                }
-            )
+            _print_json(plan_to_json(plan))
         else:
             sys.stdout.write(format_plan(plan))
 
@@ -406,7 +396,7 @@ def experiments(
 
 
 def main() -> None:
-    """Entry point of the ``demoplan`` command."""
+    """Run the typer application (the ``demoplan`` executable is :func:`demoplan.launcher.main`)."""
     app()
 
 

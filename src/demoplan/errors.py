@@ -13,6 +13,7 @@ __all__ = [
     "NoPlanError",
     "NotFittedError",
     "UsageError",
+    "error_line",
 ]
 
 
@@ -60,3 +61,8 @@ class NotFittedError(DemoplanError, AttributeError):
     """A learned attribute (ending in ``_``) was read before ``fit``."""
 
     exit_code = 2
+
+
+def error_line(exc: DemoplanError) -> str:
+    """The one line ``demoplan`` prints on stderr for ``exc`` (SPEC §4)."""
+    return "demoplan: error: " + " ".join(str(exc).split())

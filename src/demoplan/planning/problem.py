@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 from demoplan.errors import InputError
 
-__all__ = ["Action", "Plan", "Problem", "Subgoal", "format_plan"]
+__all__ = ["Action", "Plan", "Problem", "Subgoal", "format_plan", "plan_to_json"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -209,3 +209,15 @@ class Plan:
 def format_plan(plan: Plan) -> str:
     """The plan in the paper's format, one action per line."""
     return "".join(f"{action}\n" for action in plan.actions)
+
+
+def plan_to_json(plan: Plan) -> dict[str, object]:
+    """The plan as ``demoplan solve --json`` prints it."""
+    return {
+        "actions": [[a.kind, a.object, a.location, a.grasp] for a in plan.actions],
+        "length": len(plan),
+        "search": plan.search,
+        "expanded": plan.expanded,
+        "generated": plan.generated,
+        "seconds": round(plan.seconds, 6),
+    }

@@ -1,0 +1,111 @@
+"""The ``demoplan`` executable: a lean path for ``demoplan solve``, typer for the rest.
+
+Importing typer, click, pydantic and rich costs about 0.4 s per process, twenty
+times what solving a small problem takes. Programs that call ``demoplan solve``
+once per problem (a benchmark harness, an executive replanning in a loop) pay
+that on every call, so a plain, non-interactive ``solve`` invocation is parsed
+here with :mod:`argparse` and run with nothing but the planner imported.
+Anything else — another command, ``--help``, an option this parser does not
+know or a value it would reject, an interactive terminal (which gets a
+spinner) — goes to the typer application in :mod:`demoplan.cli`, so help
+texts, usage errors and their exit codes come from one place. The two paths
+print the same plan, the same JSON and the same one-line errors (tested).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["SOLVE_OPTIONS", "SolveOptions", "main", "parse_solve_options", "run_solve"]
+
+SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout")
+"""Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
+
+SEARCH_NAMES = ("astar", "bfs")
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """What ``demoplan solve`` was asked to do."""
+
+    problem: Path
+    json_output: bool = False
+    search: str = "astar"
+    max_nodes: int | None = None
+    timeout: float | None = None
+
+
+class _DeclinedError(Exception):
+    """The lean parser leaves this command line to typer."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise _DeclinedError(message)
+
+
+def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
+    """Options of ``demoplan solve ARGS``, or None when typer should handle them."""
+    if any(arg in ("-h", "--help") for arg in args):
+        return None
+    parser = _Parser(prog="demoplan solve", add_help=False, allow_abbrev=False)
+    parser.add_argument("problem", type=Path)
+    parser.add_argument("--json", dest="json_output", action="store_true")
+    parser.add_argument("--search", choices=SEARCH_NAMES, default="astar")
+    parser.add_argument("--max-nodes", type=int, default=None)
+    parser.add_argument("--timeout", type=float, default=None)
+    try:
+        parsed = parser.parse_args(list(args))
+    except _DeclinedError:
+        return None
+    max_nodes: int | None = parsed.max_nodes
+    timeout: float | None = parsed.timeout
+    if (max_nodes is not None and max_nodes < 1) or (
+        timeout is not None and not timeout >= 0.0  # also refuses NaN
+    ):
+        return None  # typer's range checks word the usage error
+    return SolveOptions(parsed.problem, parsed.json_output, parsed.search, max_nodes, timeout)
+
+
+def run_solve(options: SolveOptions) -> int:
+    """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
+    from demoplan.errors import DemoplanError, error_line
+    from demoplan.planning.problem import format_plan, plan_to_json
+    from demoplan.planning.search import Budget, solve
+    from demoplan.planning.xml import load_problem
+
+    try:
+        problem = load_problem(options.problem)
+        plan = solve(problem, options.search, Budget(options.max_nodes, options.timeout))
+    except DemoplanError as exc:
+        sys.stderr.write(error_line(exc) + "\n")
+        return exc.exit_code
+    if options.json_output:
+        import json
+
+        text = json.dumps(plan_to_json(plan), indent=2, ensure_ascii=False, allow_nan=False)
+        sys.stdout.write(text + "\n")
+    else:
+        sys.stdout.write(format_plan(plan))
+    return 0
+
+
+def main() -> None:
+    """Entry point of the ``demoplan`` command."""
+    args = sys.argv[1:]
+    if args[:1] == ["solve"] and not sys.stderr.isatty():
+        options = parse_solve_options(args[1:])
+        if options is not None:
+            sys.stdout.flush()
+            raise SystemExit(run_solve(options))
+    from demoplan.cli import app
+
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
