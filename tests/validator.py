@@ -79,6 +79,9 @@ def validate(problem: Problem, actions: list[Action] | tuple[Action, ...]) -> No
             for a, b in problem.exclusions:
                 if loc in (a, b) and occupant(b if loc == a else a) is not None:
                     raise InvalidPlanError(f"{where}: overlaps an occupied location")
+            takes = {obj for place, obj in problem.accepts if place == loc}
+            if takes and o not in takes:
+                raise InvalidPlanError(f"{where}: {loc} does not accept {o}")
             at[o] = loc
             held = None
             for s in subgoals:

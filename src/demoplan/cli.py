@@ -365,6 +365,154 @@ def pddl(
         _stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 
 
+def _scene_inputs(model_path: Path, scene_path: Path) -> tuple[Any, Any]:
+    from demoplan.modelfile import load_model
+    from demoplan.scenes.scene import load_scene
+
+    return load_model(model_path), load_scene(scene_path)
+
+
+ModelArgument = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="A task model written by 'learn'.")
+]
+SceneArgument = Annotated[
+    Path, typer.Argument(metavar="SCENE", help="The scene at run time (demoplan/scene-1).")
+]
+FreespaceOption = Annotated[
+    int | None,
+    typer.Option(
+        "--freespace",
+        min=0,
+        max=50,
+        help="Free-space spots to generate when the scene gives none (default 3).",
+    ),
+]
+
+
+def _geometry_settings(freespace: int | None) -> Any:
+    from demoplan.scenes.geometry import GeometrySettings
+
+    return GeometrySettings() if freespace is None else GeometrySettings(n_freespace=freespace)
+
+
+@app.command()
+def plan(
+    model_path: ModelArgument,
+    scene_path: SceneArgument,
+    json_output: Annotated[bool, typer.Option("--json", help="Print the plan as JSON.")] = False,
+    freespace: FreespaceOption = None,
+    max_nodes: Annotated[
+        int | None, typer.Option(min=1, help="Per candidate: stop after this many states.")
+    ] = None,
+    timeout: Annotated[
+        float | None, typer.Option(min=0.0, help="Per candidate: stop after this many seconds.")
+    ] = None,
+) -> None:
+    """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
+    from demoplan.planning.search import Budget
+    from demoplan.scenes.plan import plan_in_scene
+
+    with _reported_errors():
+        model, scene = _scene_inputs(model_path, scene_path)
+        budget = Budget(max_nodes=max_nodes, timeout=timeout)
+        settings = _geometry_settings(freespace)
+        if _stderr.is_terminal:
+            with _stderr.status("Planning every candidate goal…"):
+                result = plan_in_scene(model, scene, budget=budget, settings=settings)
+        else:
+            result = plan_in_scene(model, scene, budget=budget, settings=settings)
+        if json_output:
+            _print_json(result.to_json())
+            return
+        _print_scene_plan(result, model)
+
+
+def _print_scene_plan(result: Any, model: TaskModel) -> None:
+    table = Table(title="Candidate goals", title_justify="left")
+    for column in ("goal", "demonstrations", "actions", "moves", ""):
+        table.add_column(column)
+    for candidate in result.candidates:
+        names = ", ".join(
+            model.demonstrations[k].name for k in candidate.problem.candidate.demonstrations
+        )
+        length = candidate.length
+        chosen = candidate is result.chosen
+        table.add_row(
+            str(candidate.goal),
+            Text(names),
+            "—" if length is None else str(length),
+            "—" if length is None else str(length // 2),
+            "chosen" if chosen else Text(candidate.reason or ""),
+        )
+    _stdout.print(table)
+    sys.stdout.flush()
+    chosen = result.chosen
+    for action in chosen.plan.actions:
+        sys.stdout.write(f"{action}\n")
+    sys.stdout.flush()
+    used = dict.fromkeys(a.location for a in chosen.plan.actions)
+    locations = Table(title="Locations used", title_justify="left")
+    for column in ("location", "x", "y", "z", "yaw", "is"):
+        locations.add_column(column, justify="right" if column in "xyz yaw" else "left")
+    for name in used:
+        loc = chosen.problem.location(name)
+        what = loc.kind if not loc.objects else f"{loc.kind} of {', '.join(loc.objects)}"
+        locations.add_row(name, *(f"{v:.3f}" for v in loc.position), f"{loc.yaw:.1f}", Text(what))
+    _stdout.print(locations)
+
+
+@app.command()
+def problem(
+    model_path: ModelArgument,
+    scene_path: SceneArgument,
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output", "-o", help="The problem file (XML; with --pddl the PDDL problem)."
+        ),
+    ],
+    goal: Annotated[
+        int, typer.Option(min=0, help="The demonstration whose goal to plan for (0-based).")
+    ] = 0,
+    pddl_output: Annotated[
+        bool,
+        typer.Option(
+            "--pddl", help="Write PDDL: the problem to FILE, the domain to FILE-domain.pddl."
+        ),
+    ] = False,
+    freespace: FreespaceOption = None,
+) -> None:
+    """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
+    from demoplan.errors import UsageError
+    from demoplan.fileio import write_atomic
+    from demoplan.scenes.plan import scene_problems
+
+    with _reported_errors():
+        model, scene = _scene_inputs(model_path, scene_path)
+        if goal >= len(model.sequences):
+            raise UsageError(
+                f"--goal {goal}: the model has {len(model.sequences)} demonstrations "
+                f"(0..{len(model.sequences) - 1})"
+            )
+        problems = scene_problems(model, scene, _geometry_settings(freespace))
+        chosen = next(p for p in problems if goal in p.candidate.demonstrations)
+        if pddl_output:
+            from demoplan.planning.pddl import problem_to_pddl
+
+            domain_text, problem_text = problem_to_pddl(chosen.problem)
+            domain_path = output.with_name(f"{output.stem}-domain.pddl")
+            write_atomic(domain_path, domain_text)
+            write_atomic(output, problem_text)
+            _stderr.print(f"wrote {output} and {domain_path}", markup=False, highlight=False)
+        else:
+            from demoplan.planning.xml import save_problem
+
+            save_problem(chosen.problem, output)
+            _stderr.print(f"wrote {output}", markup=False, highlight=False)
+        for obstacle in chosen.obstacles:
+            _stderr.print(f"demoplan: warning: {obstacle}", markup=False, highlight=False)
+
+
 @app.command()
 def experiments(
     out: Annotated[Path, typer.Option(help="Folder for the report.")] = Path("demoplan-report"),

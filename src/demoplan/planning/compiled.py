@@ -26,6 +26,7 @@ class Compiled:
     below: tuple[int, ...]  # location -> mask of the locations it stands on (all needed)
     above: tuple[int, ...]  # location -> mask of locations standing on it
     exclusive: tuple[int, ...]  # location -> mask of locations that exclude it
+    accepts: tuple[int, ...]  # location -> mask of the objects it takes
     start: tuple[int, ...]  # object -> start location
     goal: tuple[int, ...]  # object -> final location, or -1
     subgoal_object: tuple[int, ...]
@@ -112,6 +113,20 @@ def compile_problem(problem: Problem) -> Compiled:
     for la, lb, g in problem.collisions:
         if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
             block[loc_index[la]][grasp_index[g]] |= 1 << loc_index[lb]
+    # A location that does not take object o: for o's grasps, every other location
+    # blocks it, so o can be put down there only in a world with no other object —
+    # where no shortest plan parks o anywhere but its own subgoals.
+    restricted: dict[int, int] = {}
+    for loc, obj in problem.accepts:
+        restricted[loc_index[loc]] = restricted.get(loc_index[loc], 0) | 1 << obj_index[obj]
+    everything_objects = (1 << len(objects)) - 1
+    accepts = [restricted.get(li, everything_objects) for li in range(len(locations))]
+    everywhere = (1 << len(locations)) - 1
+    for li, taken in restricted.items():
+        for oi in range(len(objects)):
+            if not taken >> oi & 1:
+                for gi in grasps_of[oi]:
+                    block[li][gi] |= everywhere & ~(1 << li)
     below = [0] * len(locations)
     above = [0] * len(locations)
     for upper, lower in problem.supports:
@@ -140,6 +155,7 @@ def compile_problem(problem: Problem) -> Compiled:
         mentioned |= {la, lb}
     for pair in problem.supports | problem.exclusions:
         mentioned |= set(pair)
+    mentioned |= {loc for loc, _ in problem.accepts}
     mentioned |= {loc for _, loc in problem.goal} | {s.location for s in problem.subgoals}
     plain = 0
     for name in problem.freespace - mentioned:
@@ -155,6 +171,7 @@ def compile_problem(problem: Problem) -> Compiled:
         below=tuple(below),
         above=tuple(above),
         exclusive=tuple(exclusive),
+        accepts=tuple(accepts),
         start=tuple(start),
         goal=tuple(goal),
         subgoal_object=tuple(obj_index[s.object] for s in problem.subgoals),

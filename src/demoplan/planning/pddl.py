@@ -102,6 +102,8 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
                         delete=["handempty", at(o, loc), occupied(loc)],
                     )
                 )
+                if not c.accepts[li] >> oi & 1:
+                    continue  # this location does not take o: no such PUT_DOWN
                 pre = [holding(o, g), free(loc)]
                 pre += [free(b) for b in mask(c.block[li][gi] | c.exclusive[li])]
                 pre += [occupied(b) for b in mask(c.below[li])]

@@ -10,6 +10,9 @@ goal. Beyond the paper's example it can say:
   for a block bridging two), and the object at ``lower`` cannot be grasped
   while ``upper`` is occupied (stacking);
 - ``exclusions (la, lb)``: overlapping locations that cannot both be occupied;
+- ``accepts (l, o)``: a location named in any such pair holds only the objects
+  paired with it (a spot sized for a fork does not take the food); locations
+  named in none take any object;
 - ``subgoals`` with ``precedences``: subgoal X (an object put down at a
   location) may only be reached after every Y with (Y, X); a subgoal counts as
   reached when its object is put down there after all its predecessors are
@@ -22,7 +25,8 @@ at most one object;
 - ``GRASP o la g``: hand empty, o at la, g allowed for o, no *other* object at
   any lb with a fact ``(la, lb, g)``, and no object on top of la;
 - ``PUT_DOWN o lb g``: holding o with g, lb free, no other object at any lc
-  with a fact ``(lb, lc, g)``, lb's support occupied, lb's exclusive partners free;
+  with a fact ``(lb, lc, g)``, lb's support occupied, lb's exclusive partners free,
+  lb accepts o;
 - the goal holds when every goal object is at its location, every subgoal is
   reached and the hand is empty. Plans are shortest in number of actions.
 """
@@ -60,6 +64,7 @@ class Problem:
     freespace: frozenset[str] = frozenset()
     supports: frozenset[tuple[str, str]] = frozenset()
     exclusions: frozenset[tuple[str, str]] = frozenset()
+    accepts: frozenset[tuple[str, str]] = frozenset()
     subgoals: tuple[Subgoal, ...] = ()
     precedences: frozenset[tuple[str, str]] = frozenset()
     reached: frozenset[str] = frozenset()
@@ -79,6 +84,7 @@ class Problem:
         freespace: Iterable[str] = (),
         supports: Iterable[tuple[str, str]] = (),
         exclusions: Iterable[tuple[str, str]] = (),
+        accepts: Iterable[tuple[str, str]] = (),
         subgoals: Iterable[Subgoal] = (),
         precedences: Iterable[tuple[str, str]] = (),
         reached: Iterable[str] = (),
@@ -97,6 +103,7 @@ class Problem:
             freespace=frozenset(freespace),
             supports=frozenset(supports),
             exclusions=frozenset(exclusions),
+            accepts=frozenset(accepts),
             subgoals=tuple(subgoals),
             precedences=frozenset(precedences),
             reached=frozenset(reached),
@@ -130,11 +137,26 @@ class Problem:
         for pair in self.supports | self.exclusions:
             for loc in pair:
                 need(loc, locations, "Location", "state")
+        for loc, obj in self.accepts:
+            need(loc, locations, "Location", "state")
+            need(obj, objects, "Object", "state")
+        restricted = {loc for loc, _ in self.accepts}
+
+        def refuse(obj: str, loc: str, where: str) -> None:
+            if loc in restricted and (loc, obj) not in self.accepts:
+                raise InputError(
+                    f"{loc!r} does not accept {obj!r} (its accepts facts name "
+                    f"{sorted(o for lo, o in self.accepts if lo == loc)})",
+                    source=source,
+                    field=where,
+                )
+
         seen_objects: set[str] = set()
         seen_locations: dict[str, str] = {}
         for obj, loc in self.initial:
             need(obj, objects, "Object", "state")
             need(loc, locations, "Location", "state")
+            refuse(obj, loc, "state")
             if obj in seen_objects:
                 raise InputError(f"{obj!r} is at two locations", source=source, field="state")
             if loc in seen_locations:
@@ -157,6 +179,7 @@ class Problem:
         for obj, loc in self.goal:
             need(obj, objects, "Object", "goal")
             need(loc, locations, "Location", "goal")
+            refuse(obj, loc, "goal")
             if obj in goal_objects:
                 raise InputError(f"{obj!r} has two goal locations", source=source, field="goal")
             goal_objects.add(obj)
@@ -166,6 +189,7 @@ class Problem:
         for subgoal in self.subgoals:
             need(subgoal.object, objects, "Object", "goal")
             need(subgoal.location, locations, "Location", "goal")
+            refuse(subgoal.object, subgoal.location, "goal")
         for before, after in self.precedences:
             for sid in (before, after):
                 if sid not in ids:

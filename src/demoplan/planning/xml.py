@@ -19,7 +19,7 @@ A file in the paper's form stays valid::
 Extensions (documented in docs/planning.md): a Location may carry
 ``freespace="true"`` (without the attribute, names starting with ``freespace``
 count as free space; ``freespace="false"`` says otherwise); state args
-``support UPPER LOWER``, ``exclusive LA LB``, ``reached ID``; goal args
+``support UPPER LOWER``, ``exclusive LA LB``, ``accepts LOC OBJ``, ``reached ID``; goal args
 ``subgoal ID OBJECT LOCATION`` and ``before ID1 ID2``.
 
 Parsing refuses DTDs, entity declarations and external references
@@ -42,7 +42,7 @@ __all__ = ["load_problem", "problem_from_xml", "problem_to_xml", "save_problem"]
 MAX_XML_BYTES = 32 * 1024 * 1024
 _TYPES = {"object": "Object", "location": "Location", "grasp": "Grasp"}
 _TRUE, _FALSE = {"true", "1", "yes"}, {"false", "0", "no"}
-_KEYWORDS = {"support", "exclusive", "reached", "subgoal", "before"}
+_KEYWORDS = {"support", "exclusive", "accepts", "reached", "subgoal", "before"}
 
 
 def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
@@ -123,6 +123,7 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
     initial: list[tuple[str, str]] = []
     supports: list[tuple[str, str]] = []
     exclusions: list[tuple[str, str]] = []
+    accepts: list[tuple[str, str]] = []
     reached: list[str] = []
     reached_at: dict[str, str] = {}
     hand_empty = False
@@ -156,6 +157,8 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
             collisions.append((tokens[0], tokens[1], tokens[2]))
         elif tokens[0] in {"support", "exclusive"} and types[1:] == ["Location", "Location"]:
             (supports if tokens[0] == "support" else exclusions).append((tokens[1], tokens[2]))
+        elif tokens[0] == "accepts" and types[1:] == ["Location", "Object"]:
+            accepts.append((tokens[1], tokens[2]))
         elif tokens[0] == "reached" and len(tokens) == 2:
             reached.append(tokens[1])
             reached_at[tokens[1]] = where
@@ -227,6 +230,7 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
         freespace=freespace,
         supports=supports,
         exclusions=exclusions,
+        accepts=accepts,
         subgoals=subgoals,
         precedences=precedences,
         reached=reached,
@@ -314,6 +318,7 @@ def problem_to_xml(problem: Problem) -> str:
     rows += [f"{a} {b} {g}" for a, b, g in sorted(problem.collisions)]
     rows += [f"support {a} {b}" for a, b in sorted(problem.supports)]
     rows += [f"exclusive {a} {b}" for a, b in sorted(problem.exclusions)]
+    rows += [f"accepts {loc} {o}" for loc, o in sorted(problem.accepts)]
     rows += [f"reached {s}" for s in sorted(problem.reached)]
     rows.append("hand-empty")
     for row in rows:

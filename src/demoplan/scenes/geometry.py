@@ -1,0 +1,312 @@
+"""Geometry of a scene for the planner (paper §IV.C, §V.B): footprints, grasps,
+collision facts, support and free space.
+
+Every location is a pose with the objects it was made for (the object standing
+there now, the object whose target it is; both when a target coincides with an
+occupied spot). Its footprint is the union of those objects' outlines on the
+table (boxes rotated by their yaw, cylinders and spheres as discs); it spans
+heights ``bottom..top``.
+
+- **Grasps.** A grasp is a finger axis u in the object's frame. The fingers are
+  discs of radius g_r (``Gripper.finger_radius``) at ``a ± ĝ``, ĝ = u rotated
+  with the location's yaw, ``|ĝ|`` = half the object's extent along u + g_r
+  (+ clearance): the fingers touch the object's sides.
+- **Collision facts** ``(a, b, g)``: grasp g at a hits whatever stands at b.
+  Blocks (cubes) at both: the paper's §V.B rule ``|b_p − (a_p ± ĝ_p)| < r + g_r``
+  with r the block's half side, in 3-D. Any other shapes: a finger disc reaches
+  into b's footprint and b rises above a's bottom (the fingers come from above).
+- **Support.** A location above the table (bottom > ``level_tolerance``) holds
+  an object only while every location whose top is at its bottom and whose
+  footprint overlaps it is occupied (a block bridging two needs both). A
+  location made for several objects has a top for each of them; any matches.
+- **Exclusion.** Two locations whose footprints overlap (after shrinking each by
+  ``touch_tolerance``, so touching neighbours do not) at overlapping heights,
+  and neither supports the other, cannot both be occupied.
+- **What a location takes.** The objects it was made for, and any other object
+  as tall as one of them whose outline there lies within the location's
+  footprint (grown by ``touch_tolerance``): a smaller object on a bigger
+  object's spot, never the food on a fork's spot. Free space takes anything
+  (it is sized for the largest object).
+- **Free space** (when the scene gives none): ``n_freespace`` spots on a grid
+  over the table (the scene's ``table``, else the box around every current and
+  target pose grown by ``table_margin``), each far enough from every location
+  and from each other that no grasp there or next to it collides, nearest to
+  the centre of the targets first.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry.base import BaseGeometry
+
+from demoplan.model import ObjectGeometry, Vector3
+from demoplan.scenes.scene import Gripper
+
+__all__ = [
+    "GeometrySettings",
+    "Location",
+    "accepted_objects",
+    "collision_facts",
+    "exclusions",
+    "finger_offset",
+    "footprint",
+    "free_space",
+    "is_block",
+    "supports",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class GeometrySettings:
+    """Tolerances and defaults of scene geometry (metres)."""
+
+    merge_distance: float = 0.01
+    """A target closer than this (and at the same height) to a location is that location."""
+    level_tolerance: float = 0.005
+    """Heights closer than this are one level (a top meets a bottom)."""
+    touch_tolerance: float = 0.002
+    """Footprints overlapping by less than this are neighbours, not in each other's way."""
+    support_fraction: float = 0.05
+    """An upper footprint rests on a lower one that covers at least this fraction of it."""
+    n_freespace: int = 3
+    """Free-space spots generated when the scene gives none."""
+    table_margin: float = 0.15
+    """How far around the scene's poses generated free space may lie."""
+    grid_step: float = 0.01
+    """Spacing of the candidate free-space spots."""
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """A place an object can stand: pose, the objects it was made for, and its kind
+    (``current``, ``target``, ``current+target`` or ``freespace``)."""
+
+    name: str
+    position: Vector3
+    yaw: float
+    kind: str
+    objects: tuple[str, ...]
+    shapes: tuple[ObjectGeometry, ...]
+
+    @property
+    def bottom(self) -> float:
+        return self.position[2]
+
+    @property
+    def top(self) -> float:
+        return self.position[2] + max(shape.size[2] for shape in self.shapes)
+
+
+def is_block(shape: ObjectGeometry) -> bool:
+    """A cube (to 1 mm): the shape §V.B's collision rule is stated for."""
+    sx, sy, sz = shape.size
+    return shape.shape == "box" and max(sx, sy, sz) - min(sx, sy, sz) <= 0.001
+
+
+def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> BaseGeometry:
+    """The object's outline on the table at ``position`` and ``yaw`` (degrees)."""
+    x, y = position[0], position[1]
+    if shape.shape == "box":
+        hx, hy = shape.size[0] / 2, shape.size[1] / 2
+        c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+        corners = [
+            (x + c * px - s * py, y + s * px + c * py)
+            for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+        ]
+        return shapely.Polygon(corners)
+    return shapely.Point(x, y).buffer(max(shape.size[0], shape.size[1]) / 2, quad_segs=16)
+
+
+def location_footprint(location: Location) -> BaseGeometry:
+    shapes = [footprint(s, location.position, location.yaw) for s in location.shapes]
+    return shapely.union_all(shapes)
+
+
+def half_extent(shape: ObjectGeometry, axis: float) -> float:
+    """Half the object's width along the finger axis ``axis`` (degrees, object frame)."""
+    if shape.shape != "box":
+        return max(shape.size[0], shape.size[1]) / 2
+    c, s = abs(math.cos(math.radians(axis))), abs(math.sin(math.radians(axis)))
+    return c * shape.size[0] / 2 + s * shape.size[1] / 2
+
+
+def finger_offset(shape: ObjectGeometry, axis: float, gripper: Gripper) -> float:
+    """``|ĝ|``: from the object's centre to a finger's centre along the grasp axis."""
+    return half_extent(shape, axis) + gripper.finger_radius + gripper.clearance
+
+
+def bounding_radius(shape: ObjectGeometry) -> float:
+    if shape.shape == "box":
+        return math.hypot(shape.size[0], shape.size[1]) / 2
+    return max(shape.size[0], shape.size[1]) / 2
+
+
+def fingers(location: Location, shape: ObjectGeometry, axis: float, gripper: Gripper) -> np.ndarray:
+    """The two finger centres ``a ± ĝ`` (2×3) of grasp ``axis`` for ``shape`` at ``location``."""
+    offset = finger_offset(shape, axis, gripper)
+    angle = math.radians(location.yaw + axis)
+    g = np.array([offset * math.cos(angle), offset * math.sin(angle), 0.0])
+    a = np.asarray(location.position, dtype=float)
+    return np.stack([a + g, a - g])
+
+
+def collision_facts(
+    locations: Sequence[Location],
+    grasps: Sequence[tuple[str, str, ObjectGeometry, float]],
+    gripper: Gripper,
+    settings: GeometrySettings = GeometrySettings(),
+) -> list[tuple[str, str, str]]:
+    """Facts ``(a, b, g)`` for grasps ``(name, object, shape, axis)`` (see the module
+    docstring). Vectorised over the locations b with shapely / NumPy."""
+    prints = [location_footprint(loc) for loc in locations]
+    prints_array = np.array(prints, dtype=object)
+    centres = np.array([loc.position for loc in locations], dtype=float)
+    tops = np.array([loc.top for loc in locations])
+    blocks = np.array([all(is_block(s) for s in loc.shapes) for loc in locations])
+    radii = np.array([max(s.size[0] for s in loc.shapes) / 2 for loc in locations])
+    facts: list[tuple[str, str, str]] = []
+    for grasp, _obj, shape, axis in grasps:
+        block_grasp = is_block(shape)
+        for i, a in enumerate(locations):
+            tips = fingers(a, shape, axis, gripper)
+            hit = np.zeros(len(locations), dtype=bool)
+            for tip in tips:
+                paper = np.linalg.norm(centres - tip, axis=1) < radii + gripper.finger_radius
+                point = shapely.Point(tip[0], tip[1])
+                reach = shapely.distance(prints_array, point) < gripper.finger_radius
+                above = tops > a.bottom + settings.level_tolerance
+                general = reach & above
+                hit |= np.where(blocks & block_grasp, paper, general)
+            hit[i] = False
+            facts += [(a.name, locations[int(j)].name, grasp) for j in np.flatnonzero(hit)]
+    return facts
+
+
+def supports(
+    locations: Sequence[Location], settings: GeometrySettings = GeometrySettings()
+) -> tuple[list[tuple[str, str]], list[str]]:
+    """``(upper, lower)`` pairs, and the upper locations that nothing holds up."""
+    prints = [location_footprint(loc) for loc in locations]
+    pairs: list[tuple[str, str]] = []
+    floating: list[str] = []
+    for i, upper in enumerate(locations):
+        if upper.bottom <= settings.level_tolerance:
+            continue
+        area = prints[i].area
+        lowers = [
+            lower.name
+            for j, lower in enumerate(locations)
+            if j != i
+            and any(
+                abs(lower.bottom + shape.size[2] - upper.bottom) <= settings.level_tolerance
+                for shape in lower.shapes
+            )
+            and prints[i].intersection(prints[j]).area >= settings.support_fraction * area
+        ]
+        if lowers:
+            pairs += [(upper.name, lower) for lower in lowers]
+        else:
+            floating.append(upper.name)
+    return pairs, floating
+
+
+def exclusions(
+    locations: Sequence[Location],
+    support_pairs: Sequence[tuple[str, str]],
+    settings: GeometrySettings = GeometrySettings(),
+) -> list[tuple[str, str]]:
+    """Pairs of locations that cannot both be occupied (see the module docstring)."""
+    shrunk = [location_footprint(loc).buffer(-settings.touch_tolerance) for loc in locations]
+    supported = set(support_pairs) | {(b, a) for a, b in support_pairs}
+    pairs = []
+    for i, a in enumerate(locations):
+        for j in range(i + 1, len(locations)):
+            b = locations[j]
+            if (a.name, b.name) in supported:
+                continue
+            overlap_low = max(a.bottom, b.bottom)
+            overlap_high = min(a.top, b.top)
+            if overlap_high - overlap_low <= settings.level_tolerance:
+                continue
+            if shrunk[i].intersects(shrunk[j]):
+                pairs.append((a.name, b.name))
+    return pairs
+
+
+def free_space(
+    locations: Sequence[Location],
+    shapes: Sequence[ObjectGeometry],
+    grasp_axes: Sequence[tuple[ObjectGeometry, float]],
+    gripper: Gripper,
+    table: tuple[tuple[float, float], tuple[float, float]] | None,
+    focus: Sequence[float],
+    settings: GeometrySettings = GeometrySettings(),
+) -> list[Vector3]:
+    """Up to ``settings.n_freespace`` spots on the table where any of ``shapes`` can
+    stand and be grasped without touching anything at ``locations`` or another spot.
+
+    A spot keeps clear of a location by the spot's reach (the largest object's
+    bounding radius, or a finger's far edge, whichever is further) plus the
+    location's bounding radius, and the other way round.
+    """
+    spot_radius = max(bounding_radius(s) for s in shapes)
+    spot_reach = max(
+        [spot_radius]
+        + [finger_offset(s, axis, gripper) + gripper.finger_radius for s, axis in grasp_axes]
+    )
+    if table is None:
+        xs = [loc.position[0] for loc in locations]
+        ys = [loc.position[1] for loc in locations]
+        m = settings.table_margin
+        table = ((min(xs) - m, min(ys) - m), (max(xs) + m, max(ys) + m))
+    (x0, y0), (x1, y1) = table
+    gx = np.arange(x0 + spot_radius, x1 - spot_radius + 1e-12, settings.grid_step)
+    gy = np.arange(y0 + spot_radius, y1 - spot_radius + 1e-12, settings.grid_step)
+    if len(gx) == 0 or len(gy) == 0:
+        return []
+    grid = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+    ok = np.ones(len(grid), dtype=bool)
+    for loc in locations:
+        loc_radius = max(bounding_radius(s) for s in loc.shapes)
+        loc_reach = max(
+            [loc_radius]
+            + [finger_offset(s, axis, gripper) + gripper.finger_radius for s, axis in grasp_axes]
+        )
+        clearance = max(spot_reach + loc_radius, loc_reach + spot_radius)
+        ok &= np.linalg.norm(grid - np.asarray(loc.position[:2]), axis=1) >= clearance
+    order = np.argsort(np.linalg.norm(grid - np.asarray(focus[:2]), axis=1), kind="stable")
+    chosen: list[np.ndarray] = []
+    for index in order:
+        if len(chosen) == settings.n_freespace:
+            break
+        if not ok[index]:
+            continue
+        point = grid[index]
+        if all(np.linalg.norm(point - c) >= 2 * spot_reach for c in chosen):
+            chosen.append(point)
+    return [(round(float(p[0]), 6), round(float(p[1]), 6), 0.0) for p in chosen]
+
+
+def accepted_objects(
+    location: Location,
+    shapes: dict[str, ObjectGeometry],
+    settings: GeometrySettings = GeometrySettings(),
+) -> list[str]:
+    """The objects that may be put down at ``location`` (see the module docstring)."""
+    if location.kind == "freespace":
+        return list(shapes)
+    area = location_footprint(location).buffer(settings.touch_tolerance)
+    heights = [s.size[2] for s in location.shapes]
+    taken = []
+    for name, shape in shapes.items():
+        if name in location.objects or (
+            any(abs(shape.size[2] - h) <= settings.level_tolerance for h in heights)
+            and area.contains(footprint(shape, location.position, location.yaw))
+        ):
+            taken.append(name)
+    return taken

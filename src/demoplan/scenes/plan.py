@@ -1,0 +1,130 @@
+"""Plan a learned task in a scene: every candidate goal, the shortest chosen
+(paper §IV.C, §V.B; SPEC §5 "Planning").
+
+Each demonstrated goal (deduplicated) becomes a planning problem
+(:func:`~demoplan.scenes.problems.build_problem`) solved optimally by the
+planner; the shortest plan wins, ties going to the earliest demonstration —
+Experiment 2 picks demonstration 2's 4 moves over demonstration 1's 5.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.model import TaskModel
+from demoplan.planning.problem import Plan
+from demoplan.planning.search import Budget, solve
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.problems import SceneProblem, build_problem
+from demoplan.scenes.scene import Scene, complete_geometry
+from demoplan.scenes.targets import candidate_goals
+
+__all__ = ["CandidatePlan", "ScenePlan", "plan_in_scene", "scene_problems"]
+
+
+@dataclass(frozen=True, slots=True)
+class CandidatePlan:
+    """One candidate goal: its problem and its plan, or why there is none."""
+
+    problem: SceneProblem
+    plan: Plan | None
+    reason: str | None = None
+    limit_reached: bool = False
+
+    @property
+    def goal(self) -> int:
+        return self.problem.candidate.goal
+
+    @property
+    def length(self) -> int | None:
+        return None if self.plan is None else len(self.plan)
+
+
+@dataclass(frozen=True, slots=True)
+class ScenePlan:
+    """Every candidate's outcome and the chosen one."""
+
+    candidates: tuple[CandidatePlan, ...]
+    chosen: CandidatePlan
+
+    def to_json(self) -> dict[str, Any]:
+        """``plan --json`` (SPEC §3 "Plan output")."""
+        chosen = self.chosen
+        assert chosen.plan is not None
+        return {
+            "actions": [[a.kind, a.object, a.location, a.grasp] for a in chosen.plan.actions],
+            "length": len(chosen.plan),
+            "goal": chosen.goal,
+            "candidates": [
+                {
+                    "goal": c.goal,
+                    "demonstrations": list(c.problem.candidate.demonstrations),
+                    "length": c.length,
+                    **({"reason": c.reason} if c.reason else {}),
+                    "expanded": None if c.plan is None else c.plan.expanded,
+                    "seconds": None if c.plan is None else round(c.plan.seconds, 6),
+                }
+                for c in self.candidates
+            ],
+            "subgoals": [
+                {
+                    "id": s.label,
+                    "state": s.state,
+                    "object": s.object,
+                    "location": _target(chosen.problem, s.label),
+                }
+                for s in chosen.problem.candidate.subtasks
+            ],
+            "precedences": [list(p) for p in chosen.problem.candidate.precedences],
+            "locations": chosen.problem.locations_json(),
+            "grasps": {g.name: {"object": g.object, "axis": g.axis} for g in chosen.problem.grasps},
+        }
+
+
+def _target(problem: SceneProblem, label: str) -> str:
+    return next(s.location for s in problem.problem.subgoals if s.id == label)
+
+
+def scene_problems(
+    model: TaskModel, scene: Scene, settings: GeometrySettings = GeometrySettings()
+) -> list[SceneProblem]:
+    """The planning problem of every candidate goal (deduplicated) in ``scene``."""
+    scene = complete_geometry(scene, model)
+    return [build_problem(scene, c, settings) for c in candidate_goals(model, scene)]
+
+
+def plan_in_scene(
+    model: TaskModel,
+    scene: Scene,
+    *,
+    budget: Budget = Budget(),
+    settings: GeometrySettings = GeometrySettings(),
+    search: str = "astar",
+) -> ScenePlan:
+    """Plan every candidate goal (each within ``budget``) and choose the shortest.
+
+    Raises :class:`NoPlanError` (exit 3) when no candidate has a plan, with each
+    candidate's reason, and :class:`LimitReachedError` (exit 4) when none was
+    found but some candidate's search was cut short.
+    """
+    outcomes = []
+    for problem in scene_problems(model, scene, settings):
+        if problem.obstacles:
+            outcomes.append(CandidatePlan(problem, None, "; ".join(problem.obstacles)))
+            continue
+        try:
+            outcomes.append(CandidatePlan(problem, solve(problem.problem, search, budget)))
+        except NoPlanError as exc:
+            outcomes.append(CandidatePlan(problem, None, str(exc)))
+        except LimitReachedError as exc:
+            outcomes.append(CandidatePlan(problem, None, str(exc), limit_reached=True))
+    solved = [c for c in outcomes if c.plan is not None]
+    if not solved:
+        reasons = "; ".join(f"goal {c.goal}: {c.reason}" for c in outcomes)
+        if any(c.limit_reached for c in outcomes):
+            raise LimitReachedError(f"no candidate goal planned within the budget ({reasons})")
+        raise NoPlanError(f"no candidate goal can be reached in this scene ({reasons})")
+    chosen = min(solved, key=lambda c: (c.length, c.goal))
+    return ScenePlan(tuple(outcomes), chosen)

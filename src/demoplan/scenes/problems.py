@@ -1,0 +1,275 @@
+"""A candidate goal in a scene → the planner's problem (paper §IV.C; SPEC §5).
+
+Locations are the objects' current poses (``loc1``…, in the scene's order),
+the subtasks' targets (a target at a spot made for an object of the same shape
+and size — an occupied spot, another target — is that location; one that
+overlaps a spot of another shape is a location of its own, exclusive with it)
+and free space (``freespace1``…: the scene's spots, else generated). Grasps
+are named ``grasp1``… object by object, as in the paper's example; collision
+facts, support, exclusion and what each location takes come from
+:mod:`demoplan.scenes.geometry`. Every subtask is a subgoal with its visit
+label as id, and the candidate's constraints are its precedences.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from demoplan.errors import InputError
+from demoplan.model import ObjectGeometry, Pose, Vector3
+from demoplan.planning.problem import Problem, Subgoal
+from demoplan.scenes.geometry import (
+    GeometrySettings,
+    Location,
+    accepted_objects,
+    collision_facts,
+    exclusions,
+    free_space,
+    location_footprint,
+    supports,
+)
+from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.targets import Candidate
+
+__all__ = ["Grasp", "SceneProblem", "build_problem"]
+
+
+@dataclass(frozen=True, slots=True)
+class Grasp:
+    """A grasp of ``object``: fingers closing along ``axis`` degrees in its frame."""
+
+    name: str
+    object: str
+    axis: float
+
+
+@dataclass(frozen=True, slots=True)
+class SceneProblem:
+    """A candidate's planning problem, with what its names stand for.
+
+    ``obstacles`` says why the candidate cannot be planned at all (a target
+    nothing can hold up), empty when it can.
+    """
+
+    candidate: Candidate
+    problem: Problem
+    locations: tuple[Location, ...]
+    grasps: tuple[Grasp, ...]
+    obstacles: tuple[str, ...] = field(default=())
+
+    def location(self, name: str) -> Location:
+        for location in self.locations:
+            if location.name == name:
+                return location
+        raise KeyError(name)
+
+    def locations_json(self) -> dict[str, Any]:
+        """Each location's pose and what it is, for ``plan --json``."""
+        return {
+            loc.name: {
+                "position": [round(v, 6) for v in loc.position],
+                "yaw": round(loc.yaw, 3),
+                "kind": loc.kind,
+                "objects": list(loc.objects),
+            }
+            for loc in self.locations
+        }
+
+
+def build_problem(
+    scene: Scene, candidate: Candidate, settings: GeometrySettings = GeometrySettings()
+) -> SceneProblem:
+    """The planning problem of ``candidate`` in ``scene`` (geometry completed)."""
+    shapes: dict[str, ObjectGeometry] = {}
+    for obj in scene.objects:
+        if obj.geometry is None:
+            raise InputError("size unknown", source=scene.source, field=f"objects.{obj.name}")
+        shapes[obj.name] = obj.geometry
+    locations: list[Location] = []
+    current: dict[str, str] = {}
+    for obj in scene.objects:
+        name = f"loc{len(locations) + 1}"
+        locations.append(
+            Location(
+                name,
+                obj.pose.position,
+                yaw_of(obj.pose),
+                "current",
+                (obj.name,),
+                (shapes[obj.name],),
+            )
+        )
+        current[obj.name] = name
+    _check_scene_overlaps(scene, locations, settings)
+    target_of: dict[str, str] = {}
+    for subtask in candidate.subtasks:
+        shape = shapes[subtask.object]
+        index = _coinciding(locations, subtask.pose.position, shape, settings)
+        if index is None:
+            name = f"loc{len(locations) + 1}"
+            locations.append(
+                Location(
+                    name,
+                    subtask.pose.position,
+                    yaw_of(subtask.pose),
+                    "target",
+                    (subtask.object,),
+                    (shape,),
+                )
+            )
+        else:
+            old = locations[index]
+            name = old.name
+            kind = old.kind if "target" in old.kind else f"{old.kind}+target"
+            users = old.objects if subtask.object in old.objects else (*old.objects, subtask.object)
+            locations[index] = Location(
+                name,
+                subtask.pose.position,
+                yaw_of(subtask.pose),
+                kind,
+                users,
+                tuple(shapes[o] for o in users),
+            )
+        target_of[subtask.label] = name
+    axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
+    grasps = [Grasp(f"grasp{k + 1}", obj, axis) for k, (obj, axis) in enumerate(axes)]
+    spots = scene.freespace
+    if spots is None:
+        targets = [s.pose.position for s in candidate.subtasks] or [
+            o.pose.position for o in scene.objects
+        ]
+        focus = [
+            sum(p[0] for p in targets) / len(targets),
+            sum(p[1] for p in targets) / len(targets),
+        ]
+        spots = tuple(
+            free_space(
+                locations,
+                list(shapes.values()),
+                [(shapes[g.object], g.axis) for g in grasps],
+                scene.gripper,
+                scene.table,
+                focus,
+                settings,
+            )
+        )
+    widest = max(shapes.values(), key=lambda s: s.size[0] * s.size[1])
+    for k, spot in enumerate(spots):
+        locations.append(
+            Location(f"freespace{k + 1}", _vector(spot), 0.0, "freespace", (), (widest,))
+        )
+    support_pairs, floating = supports(locations, settings)
+    obstacles = []
+    for name in floating:
+        loc = next(loc for loc in locations if loc.name == name)
+        if "current" in loc.kind:
+            raise InputError(
+                f"stands at z = {loc.bottom:.3f} m but nothing is under it; an object "
+                "with z > 0 must stand on another object",
+                source=scene.source,
+                field=f"objects.{loc.objects[0]}.position",
+            )
+        if loc.kind == "target":
+            owners = ", ".join(
+                f"{s.object}'s target {s.label}"
+                for s in candidate.subtasks
+                if target_of[s.label] == name
+            )
+            obstacles.append(f"{owners} at ({_xyz(loc.position)}) would stand on nothing")
+    facts = collision_facts(
+        locations,
+        [(g.name, g.object, shapes[g.object], g.axis) for g in grasps],
+        scene.gripper,
+        settings,
+    )
+    accepts = []
+    for loc in locations:
+        taken = accepted_objects(loc, shapes, settings)
+        if len(taken) < len(shapes):
+            accepts += [(loc.name, obj) for obj in taken]
+    final: dict[str, str] = {}
+    for subtask in candidate.subtasks:
+        final[subtask.object] = target_of[subtask.label]
+    problem = Problem.create(
+        objects=[obj.name for obj in scene.objects],
+        locations=[loc.name for loc in locations],
+        grasps=[g.name for g in grasps],
+        allowed=[(g.object, g.name) for g in grasps],
+        collisions=facts,
+        initial=list(current.items()),
+        goal=list(final.items()),
+        freespace=[loc.name for loc in locations if loc.kind == "freespace"],
+        supports=support_pairs,
+        exclusions=exclusions(locations, support_pairs, settings),
+        accepts=accepts,
+        subgoals=[Subgoal(s.label, s.object, target_of[s.label]) for s in candidate.subtasks],
+        precedences=candidate.precedences,
+        name=f"goal-{candidate.goal}",
+        source=scene.source,
+    )
+    return SceneProblem(candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles))
+
+
+def _vector(point: tuple[float, ...]) -> Vector3:
+    return (point[0], point[1], point[2] if len(point) > 2 else 0.0)
+
+
+def _xyz(position: Vector3) -> str:
+    return ", ".join(f"{v:.3f}" for v in position)
+
+
+def _coinciding(
+    locations: list[Location], position: Vector3, shape: ObjectGeometry, settings: GeometrySettings
+) -> int | None:
+    """The location a target at ``position`` coincides with, if any (the nearest).
+
+    Only a spot made for objects of the target object's shape and size is the
+    same spot (a block on another block's target); a spot of another shape
+    overlapping the target is a separate, mutually exclusive location, so that
+    each keeps its true footprint.
+    """
+    best, best_distance = None, settings.merge_distance
+    for index, loc in enumerate(locations):
+        if abs(loc.position[2] - position[2]) > settings.level_tolerance:
+            continue
+        if loc.kind == "freespace" or not all(_same_shape(s, shape) for s in loc.shapes):
+            continue
+        distance = math.dist(loc.position[:2], position[:2])
+        if distance < best_distance:
+            best, best_distance = index, distance
+    return best
+
+
+def _same_shape(a: ObjectGeometry, b: ObjectGeometry) -> bool:
+    return a.shape == b.shape and all(
+        abs(x - y) <= 0.001 for x, y in zip(a.size, b.size, strict=True)
+    )
+
+
+def _check_scene_overlaps(
+    scene: Scene, locations: list[Location], settings: GeometrySettings
+) -> None:
+    """Two objects of the scene cannot stand in each other's space."""
+    for i, la in enumerate(locations):
+        for lb in locations[i + 1 :]:
+            low, high = max(la.bottom, lb.bottom), min(la.top, lb.top)
+            if high - low <= settings.level_tolerance:
+                continue
+            pa = location_footprint(la).buffer(-settings.touch_tolerance)
+            pb = location_footprint(lb).buffer(-settings.touch_tolerance)
+            if pa.intersects(pb):
+                raise InputError(
+                    f"{lb.objects[0]} overlaps {la.objects[0]} (their footprints intersect "
+                    "at the same height); objects that do not pass through each other expected",
+                    source=scene.source,
+                    field=f"objects.{lb.objects[0]}.position",
+                )
+
+
+def pose_of(location: Location) -> Pose:
+    """A location's pose (for executors)."""
+    from demoplan.rotations import quat_from_yaw
+
+    return Pose(location.position, quat_from_yaw(location.yaw))

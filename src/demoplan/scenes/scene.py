@@ -1,0 +1,261 @@
+"""Scene files (SPEC §3 ``demoplan/scene-1``): the world at run time.
+
+```json
+{"format": "demoplan/scene-1",
+ "objects": {"red": {"position": [0.31, 0.04, 0.04], "yaw": 0, "size": [0.04, 0.04, 0.04]}},
+ "freespace": [[0.10, 0.30], [0.15, 0.30]],
+ "gripper": {"finger_radius": 0.02}}
+```
+
+Beyond the SPEC's fields a scene may give, per object, ``"shape"`` (``box``
+default, ``cylinder``, ``sphere``) and ``"grasps"`` (finger axes in degrees in
+the object's frame; default ``[0, 90]``: two orthogonal side grasps, as the
+paper's blocks have); ``"landmarks"`` (static poses used as references); and
+``"table": {"min": [x, y], "max": [x, y]}`` (where free space may be generated).
+An object's size may be left out when the task model knows it from the
+demonstrations (:func:`complete_geometry`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from demoplan.demonstrations import (
+    Coordinate,
+    Number,
+    PoseSchema,
+    UnitsSchema,
+    pose_from_dict,
+    pose_to_dict,
+)
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
+from demoplan.rotations import rpy_from_quat
+
+__all__ = [
+    "DEFAULT_GRASPS",
+    "Gripper",
+    "Scene",
+    "SceneObject",
+    "complete_geometry",
+    "load_scene",
+    "scene_from_document",
+    "scene_to_dict",
+    "yaw_of",
+]
+
+_LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+DEFAULT_GRASPS = (0.0, 90.0)
+"""Finger axes (degrees, object frame) of an object whose scene entry names none."""
+
+
+@dataclass(frozen=True, slots=True)
+class SceneObject:
+    """A movable object: pose, geometry (None until known) and grasps (finger axes, deg)."""
+
+    name: str
+    pose: Pose
+    geometry: ObjectGeometry | None
+    grasps: tuple[float, ...] = DEFAULT_GRASPS
+
+
+@dataclass(frozen=True, slots=True)
+class Gripper:
+    """A parallel-jaw gripper: each finger a disc of ``finger_radius`` (paper §V.B's g_r).
+
+    With grasp axis u, the fingers stand at ``a ± ĝ`` with ``|ĝ|`` = half the
+    object's extent along u + ``finger_radius`` + ``clearance``.
+    """
+
+    finger_radius: float = 0.02
+    clearance: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class Scene:
+    """The world at run time (SPEC §3 "Scene")."""
+
+    objects: tuple[SceneObject, ...]
+    landmarks: tuple[tuple[str, Pose], ...] = ()
+    freespace: tuple[Vector3, ...] | None = None
+    gripper: Gripper = Gripper()
+    table: tuple[tuple[float, float], tuple[float, float]] | None = None
+    source: str = "scene"
+
+    def object(self, name: str) -> SceneObject:
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(name)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(obj.name for obj in self.objects)
+
+
+def yaw_of(pose: Pose) -> float:
+    """The pose's yaw in degrees (0 when the orientation is unknown)."""
+    return 0.0 if pose.orientation is None else rpy_from_quat(pose.orientation)[2]
+
+
+class _Schema(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class _ObjectSchema(PoseSchema):
+    size: list[Number] | None = Field(default=None, min_length=3, max_length=3)
+    shape: Literal["box", "cylinder", "sphere"] = "box"
+    grasps: list[Number] | None = Field(default=None, min_length=1, max_length=16)
+
+    @field_validator("size")
+    @classmethod
+    def _positive(cls, size: list[float] | None) -> list[float] | None:
+        if size is not None and any(v <= 0 for v in size):
+            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
+        return size
+
+
+class _GripperSchema(_Schema):
+    finger_radius: Number = Field(default=0.02, gt=0, le=1.0)
+    clearance: Number = Field(default=0.0, ge=0, le=1.0)
+
+
+class _TableSchema(_Schema):
+    min: list[Coordinate] = Field(min_length=2, max_length=2)
+    max: list[Coordinate] = Field(min_length=2, max_length=2)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> _TableSchema:
+        if not (self.min[0] < self.max[0] and self.min[1] < self.max[1]):
+            raise ValueError(f"table min {self.min} must lie below and left of max {self.max}")
+        return self
+
+
+class _SceneSchema(_Schema):
+    format: str
+    name: str | None = None
+    description: str | None = None
+    units: UnitsSchema = UnitsSchema()
+    objects: dict[str, _ObjectSchema]
+    landmarks: dict[str, PoseSchema] = {}
+    freespace: list[list[Coordinate]] | None = None
+    gripper: _GripperSchema = _GripperSchema()
+    table: _TableSchema | None = None
+
+    @field_validator("objects")
+    @classmethod
+    def _some(cls, objects: dict[str, _ObjectSchema]) -> dict[str, _ObjectSchema]:
+        if not objects:
+            raise ValueError("no objects; at least one expected")
+        return objects
+
+    @field_validator("freespace")
+    @classmethod
+    def _spots(cls, spots: list[list[float]] | None) -> list[list[float]] | None:
+        for spot in spots or []:
+            if len(spot) not in (2, 3):
+                raise ValueError(f"a free-space spot is [x, y] or [x, y, z], got {spot}")
+        return spots
+
+
+def scene_from_document(data: dict[str, Any], source: str) -> Scene:
+    """Parse a ``demoplan/scene-1`` document (lengths to metres)."""
+    check_format(data, {"scene"}, source)
+    try:
+        parsed = _SceneSchema.model_validate(data)
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source) from None
+    scale = _LENGTH_SCALE[parsed.units.length]
+    to_deg = math.degrees if parsed.units.angle == "rad" else float
+    objects = []
+    for name, entry in parsed.objects.items():
+        if name in parsed.landmarks:
+            raise InputError(
+                "is both an object and a landmark; one kind expected",
+                source=source,
+                field=f"objects.{name}",
+            )
+        pose = pose_from_dict(
+            PoseSchema(**entry.model_dump(exclude={"size", "shape", "grasps"})), parsed.units
+        )
+        geometry = None
+        if entry.size is not None:
+            size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
+            geometry = ObjectGeometry(entry.shape, size)
+        grasps = DEFAULT_GRASPS if entry.grasps is None else tuple(to_deg(g) for g in entry.grasps)
+        objects.append(SceneObject(name, pose, geometry, grasps))
+    freespace = None
+    if parsed.freespace is not None:
+        freespace = tuple(
+            (s[0] * scale, s[1] * scale, (s[2] if len(s) > 2 else 0.0) * scale)
+            for s in parsed.freespace
+        )
+    table = None
+    if parsed.table is not None:
+        lo, hi = parsed.table.min, parsed.table.max
+        table = ((lo[0] * scale, lo[1] * scale), (hi[0] * scale, hi[1] * scale))
+    return Scene(
+        objects=tuple(objects),
+        landmarks=tuple((n, pose_from_dict(p, parsed.units)) for n, p in parsed.landmarks.items()),
+        freespace=freespace,
+        gripper=Gripper(parsed.gripper.finger_radius * scale, parsed.gripper.clearance * scale),
+        table=table,
+        source=source,
+    )
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read a scene file (JSON or YAML)."""
+    return scene_from_document(read_document(Path(path)), str(path))
+
+
+def complete_geometry(scene: Scene, model: TaskModel) -> Scene:
+    """Give every object without a size in the scene the geometry the
+    demonstrations recorded for it; an object known nowhere is an error."""
+    known: dict[str, ObjectGeometry] = {}
+    for demo in model.demonstrations:
+        known.update(demo.objects)
+    objects = []
+    for obj in scene.objects:
+        if obj.geometry is None:
+            if obj.name not in known:
+                raise InputError(
+                    "has no size and the task model's demonstrations do not give one; "
+                    'expected "size": [x, y, z]',
+                    source=scene.source,
+                    field=f"objects.{obj.name}",
+                )
+            obj = replace(obj, geometry=known[obj.name])
+        objects.append(obj)
+    return replace(scene, objects=tuple(objects))
+
+
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
+    """A scene in the SPEC's file form (metres, quaternions)."""
+    objects: dict[str, Any] = {}
+    for obj in scene.objects:
+        entry = pose_to_dict(obj.pose)
+        if obj.geometry is not None:
+            entry["shape"] = obj.geometry.shape
+            entry["size"] = list(obj.geometry.size)
+        if obj.grasps != DEFAULT_GRASPS:
+            entry["grasps"] = list(obj.grasps)
+        objects[obj.name] = entry
+    out: dict[str, Any] = {"format": "demoplan/scene-1", "objects": objects}
+    if scene.landmarks:
+        out["landmarks"] = {n: pose_to_dict(p) for n, p in scene.landmarks}
+    if scene.freespace is not None:
+        out["freespace"] = [list(s) for s in scene.freespace]
+    out["gripper"] = {
+        "finger_radius": scene.gripper.finger_radius,
+        "clearance": scene.gripper.clearance,
+    }
+    if scene.table is not None:
+        out["table"] = {"min": list(scene.table[0]), "max": list(scene.table[1])}
+    return out

@@ -1,0 +1,201 @@
+"""Demonstrated goals as subtasks with target poses in a new scene (SPEC §5 "Planning").
+
+Each demonstration's goal is a candidate (paper §IV.C). Every state the
+demonstration visits is a subtask — its visit label (``C``, ``C#2``) is the
+subgoal's id — and constraint (Y, X) among this demonstration's visits says X
+may only be reached after Y. A subtask's target pose is resolved through its
+references:
+
+- position: absolute → the state's value; relative to object j → j's target
+  at that point of this demonstration (its latest subtask before this one),
+  else j's final target in this goal, else j's current pose in the scene
+  (j does not move); relative to a landmark → the landmark's pose (from the
+  scene, else from the demonstrations). Offsets are in world axes (eq. 1).
+- orientation: the same chain through its own reference,
+  ``R_target = R_reference · value``; a state without a learned orientation
+  keeps the object's current orientation.
+
+Candidates with the same subtasks and constraints are one candidate, named by
+their earliest demonstration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from demoplan.constraints import visit_sequence
+from demoplan.errors import InputError
+from demoplan.model import Pose, State, TaskModel
+from demoplan.rotations import Quaternion, canonical_quat, quat_multiply
+from demoplan.scenes.scene import Scene
+
+__all__ = ["Candidate", "Subtask", "candidate_goals", "check_scene_objects", "landmark_poses"]
+
+
+@dataclass(frozen=True, slots=True)
+class Subtask:
+    """One visit of a demonstration: put ``object`` down at ``pose`` (state ``state``)."""
+
+    label: str
+    state: str
+    object: str
+    pose: Pose
+
+
+@dataclass(frozen=True, slots=True)
+class Candidate:
+    """A demonstrated goal in this scene: subtasks in demonstrated order, precedences
+    (pairs of labels) and the demonstrations (0-based) that share it."""
+
+    goal: int
+    demonstrations: tuple[int, ...]
+    subtasks: tuple[Subtask, ...]
+    precedences: tuple[tuple[str, str], ...]
+
+    def final_poses(self) -> dict[str, Pose]:
+        """Each moved object's pose at the end (its last subtask)."""
+        return {subtask.object: subtask.pose for subtask in self.subtasks}
+
+
+def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
+    """Landmarks: the scene's, else as the (first) demonstration recorded them."""
+    poses: dict[str, Pose] = {}
+    for demo in model.demonstrations:
+        for name, pose in demo.landmarks:
+            poses.setdefault(name, pose)
+    poses.update(scene.landmarks)
+    return poses
+
+
+def check_scene_objects(model: TaskModel, scene: Scene) -> None:
+    """Exit-1 errors for objects the model needs but the scene lacks, and for
+    objects the scene has but the model never saw."""
+    landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
+    needed = {state.object for state in model.states}
+    for state in model.states:
+        for reference in (state.position.reference, state.orientation.reference):
+            if reference is not None and reference not in landmarks:
+                needed.add(reference)
+    seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
+    missing = sorted(needed - set(scene.names))
+    if missing:
+        raise InputError(
+            f"the task model needs {', '.join(missing)}, which the scene lacks; "
+            f"expected objects {sorted(needed)}",
+            source=scene.source,
+            field="objects",
+        )
+    unknown = sorted(set(scene.names) - seen)
+    if unknown:
+        raise InputError(
+            f"the task model never saw {', '.join(unknown)}; expected only objects of "
+            f"the demonstrations {sorted(seen)}",
+            source=scene.source,
+            field="objects",
+        )
+
+
+class _Resolver:
+    """Target poses of one demonstration's visits, resolved in demonstrated order."""
+
+    def __init__(
+        self,
+        index: int,
+        sequence: tuple[str, ...],
+        states: dict[str, State],
+        current: dict[str, Pose],
+        landmarks: dict[str, Pose],
+    ):
+        self.index = index
+        self.states = states
+        self.current = current
+        self.landmarks = landmarks
+        self.final_state = {states[s].object: states[s] for s in sequence}
+        self.targets: dict[str, Pose] = {}  # latest target of each object so far
+        self.resolving: list[str] = []
+
+    def visit(self, state: State) -> Pose:
+        pose = self.resolve(state)
+        self.targets[state.object] = pose
+        return pose
+
+    def resolve(self, state: State) -> Pose:
+        position = np.asarray(state.position.value, dtype=float)
+        if state.position.reference is not None:
+            position = position + self.reference_pose(state.position.reference).position
+        return Pose(
+            (float(position[0]), float(position[1]), float(position[2])),
+            self.orientation(state),
+        )
+
+    def orientation(self, state: State) -> Quaternion | None:
+        value = state.orientation.value
+        if value is None:
+            return self.current[state.object].orientation
+        if state.orientation.reference is None:
+            return canonical_quat(value)
+        base = self.reference_pose(state.orientation.reference).orientation
+        if base is None:
+            return canonical_quat(value)
+        return canonical_quat(quat_multiply(np.asarray(base), np.asarray(value)).tolist())
+
+    def reference_pose(self, reference: str) -> Pose:
+        if reference in self.targets:
+            return self.targets[reference]
+        if reference in self.final_state:  # placed later in this demonstration
+            if reference in self.resolving:
+                chain = " → ".join([*self.resolving, reference])
+                raise InputError(
+                    f"states refer to each other in a cycle ({chain}); a chain ending in "
+                    "an absolute state, a landmark or an unmoved object expected",
+                    source="task model",
+                    field=f"sequences[{self.index}]",
+                )
+            self.resolving.append(reference)
+            try:
+                return self.resolve(self.final_state[reference])
+            finally:
+                self.resolving.pop()
+        if reference in self.current:
+            return self.current[reference]
+        if reference in self.landmarks:
+            return self.landmarks[reference]
+        raise InputError(  # check_scene_objects makes this unreachable for objects
+            f"reference {reference!r} is neither in the scene nor a landmark",
+            source="task model",
+            field=f"sequences[{self.index}]",
+        )
+
+
+def candidate_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
+    """Every demonstrated goal, resolved in ``scene`` (deduplicated, in demonstration order)."""
+    check_scene_objects(model, scene)
+    states = {state.id: state for state in model.states}
+    current = {obj.name: obj.pose for obj in scene.objects}
+    landmarks = landmark_poses(model, scene)
+    constraints = set(model.constraints)
+    candidates: list[Candidate] = []
+    by_key: dict[tuple[object, ...], int] = {}
+    for index, sequence in enumerate(model.sequences):
+        labels = visit_sequence(sequence)
+        resolver = _Resolver(index, tuple(sequence), states, current, landmarks)
+        subtasks = tuple(
+            Subtask(label, state_id, states[state_id].object, resolver.visit(states[state_id]))
+            for label, state_id in zip(labels, sequence, strict=True)
+        )
+        label_set = set(labels)
+        precedences = tuple(
+            sorted((x, y) for x, y in constraints if x in label_set and y in label_set)
+        )
+        key = (tuple(sorted(zip(labels, sequence, strict=True))), precedences)
+        if key in by_key:
+            first = candidates[by_key[key]]
+            candidates[by_key[key]] = Candidate(
+                first.goal, (*first.demonstrations, index), first.subtasks, first.precedences
+            )
+            continue
+        by_key[key] = len(candidates)
+        candidates.append(Candidate(index, (index,), subtasks, precedences))
+    return candidates

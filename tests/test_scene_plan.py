@@ -1,0 +1,215 @@
+"""Planning a learned task in a scene (issue: `demoplan plan` / `demoplan problem`).
+
+Experiment 2 end to end (paper §V.B) and Experiment 1 in a cluttered scene;
+every plan passes the symbolic validator and the independent geometric replay.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.demonstrations import load_demonstrations
+from demoplan.learning import learn
+from demoplan.model import TaskModel
+from demoplan.modelfile import save_model
+from demoplan.planning.problem import Action
+from demoplan.planning.xml import load_problem
+from demoplan.scenes.plan import plan_in_scene, scene_problems
+from demoplan.scenes.scene import load_scene
+from tests.helpers import EXAMPLES
+from tests.scene_checker import check_scene_plan
+from tests.validator import validate
+
+BLOCKS_SCENE = EXAMPLES / "blocks" / "scene.json"
+TABLE_SCENE = EXAMPLES / "set_table_scene" / "scene.json"
+
+
+@pytest.fixture(scope="module")
+def blocks_model() -> TaskModel:
+    return learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+
+
+@pytest.fixture(scope="module")
+def table_model() -> TaskModel:
+    return learn(load_demonstrations([EXAMPLES / "set_table"]))
+
+
+def sizes_of(model: TaskModel) -> dict[str, tuple[str, list[float]]]:
+    return {n: (g.shape, list(g.size)) for d in model.demonstrations for n, g in d.objects}
+
+
+def invoke(*args: str | Path) -> Any:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def model_files(
+    tmp_path_factory: pytest.TempPathFactory, blocks_model: TaskModel, table_model: TaskModel
+) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("models")
+    save_model(blocks_model, folder / "blocks.json")
+    save_model(table_model, folder / "table.json")
+    return {"blocks": folder / "blocks.json", "table": folder / "table.json"}
+
+
+def test_experiment_2_chooses_demonstration_2(
+    blocks_model: TaskModel, model_files: dict[str, Path]
+) -> None:
+    """Paper §V.B: demonstration 1's goal needs 5 moves, demonstration 2's 4; the
+    plan moves red away, green to its place, wood to its place, red on top."""
+    result = invoke("plan", model_files["blocks"], BLOCKS_SCENE, "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert [(c["goal"], c["length"]) for c in data["candidates"]] == [(0, 10), (1, 8)]
+    assert data["goal"] == 1 and data["length"] == 8
+    moved = [obj for kind, obj, _, _ in data["actions"] if kind == "GRASP"]
+    assert moved == ["red", "green", "wood", "red"]
+    first_put = data["locations"][data["actions"][1][2]]
+    assert first_put["kind"] == "freespace"  # red is moved out of the way first
+    problem = scene_problems(blocks_model, load_scene(BLOCKS_SCENE))[1].problem
+    validate(problem, [Action(*a) for a in data["actions"]])
+    check_scene_plan(
+        data, json.loads(BLOCKS_SCENE.read_text()), blocks_model, sizes_of(blocks_model)
+    )
+
+
+def test_only_red_is_graspable_at_the_start(blocks_model: TaskModel) -> None:
+    """Fig. 4 (centre): the scene is built so that red alone can be picked up."""
+    problem = scene_problems(blocks_model, load_scene(BLOCKS_SCENE))[1].problem
+    at = dict(problem.initial)
+    for obj in ("wood", "green"):
+        lower = at[obj]
+        assert (at["red"], lower) in problem.supports, obj  # red stands on both
+
+
+def test_experiment_1_cluttered_scene(table_model: TaskModel, model_files: dict[str, Path]) -> None:
+    result = invoke("plan", model_files["table"], TABLE_SCENE, "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["goal"] in (0, 1)  # set-table-1 and -3 share a goal
+    assert [c["demonstrations"] for c in data["candidates"]] == [[0, 2], [1]]
+    lengths = [c["length"] for c in data["candidates"]]
+    assert data["length"] == min(lengths)
+    problems = scene_problems(table_model, load_scene(TABLE_SCENE))
+    chosen = next(p for p in problems if p.candidate.goal == data["goal"])
+    validate(chosen.problem, [Action(*a) for a in data["actions"]])
+    check_scene_plan(data, json.loads(TABLE_SCENE.read_text()), table_model, sizes_of(table_model))
+    # the food stands on the plate's target: it is moved before the plate is placed
+    grasps = [obj for kind, obj, _, _ in data["actions"] if kind == "GRASP"]
+    assert grasps.index("food") < grasps.index("plate")
+    assert grasps[0] == "napkin"  # the napkin lies on the plate
+
+
+def test_plan_text_output(model_files: dict[str, Path]) -> None:
+    result = invoke("plan", model_files["blocks"], BLOCKS_SCENE)
+    assert result.exit_code == 0, result.stderr
+    lines = [line for line in result.stdout.splitlines() if line.startswith(("GRASP", "PUT_DOWN"))]
+    assert len(lines) == 8 and lines[0] == "GRASP red loc3 grasp5"
+    assert "chosen" in result.stdout and "Locations used" in result.stdout
+
+
+@pytest.mark.parametrize("goal", [0, 1])
+def test_problem_round_trips_through_solve(
+    model_files: dict[str, Path], tmp_path: Path, goal: int
+) -> None:
+    path = tmp_path / f"goal{goal}.xml"
+    result = invoke("problem", model_files["blocks"], BLOCKS_SCENE, "--goal", str(goal), "-o", path)
+    assert result.exit_code == 0, result.stderr
+    solved = invoke("solve", path, "--json")
+    assert solved.exit_code == 0, solved.stderr
+    assert json.loads(solved.stdout)["length"] == (10, 8)[goal]
+    validate(load_problem(path), [Action(*a) for a in json.loads(solved.stdout)["actions"]])
+
+
+def test_problem_as_pddl(model_files: dict[str, Path], tmp_path: Path) -> None:
+    path = tmp_path / "goal1.pddl"
+    result = invoke(
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "1", "--pddl", "-o", path
+    )
+    assert result.exit_code == 0, result.stderr
+    assert "(define (problem" in path.read_text()
+    assert "(define (domain" in (tmp_path / "goal1-domain.pddl").read_text()
+
+
+def test_problem_goal_out_of_range(model_files: dict[str, Path], tmp_path: Path) -> None:
+    result = invoke(
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "2", "-o", tmp_path / "x.xml"
+    )
+    assert result.exit_code == 2
+    assert "--goal 2" in result.stderr and not (tmp_path / "x.xml").exists()
+
+
+def scene_with(tmp_path: Path, change: Any) -> Path:
+    data = json.loads(BLOCKS_SCENE.read_text())
+    change(data)
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def one_line(result: Any, code: int, *fragments: str) -> None:
+    assert result.exit_code == code, (result.exit_code, result.stdout, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], (fragment, lines[0])
+
+
+def test_scene_missing_an_object(model_files: dict[str, Path], tmp_path: Path) -> None:
+    path = scene_with(tmp_path, lambda d: d["objects"].pop("wood"))
+    one_line(invoke("plan", model_files["blocks"], path), 1, str(path), "objects", "wood", "lacks")
+
+
+def test_scene_with_an_unknown_object(model_files: dict[str, Path], tmp_path: Path) -> None:
+    def add(d: dict[str, Any]) -> None:
+        d["objects"]["blue"] = {"position": [0.6, 0.3], "size": [0.04, 0.04, 0.04]}
+
+    path = scene_with(tmp_path, add)
+    one_line(invoke("plan", model_files["blocks"], path), 1, str(path), "never saw blue")
+
+
+@pytest.mark.parametrize(
+    ("change", "fragments"),
+    [
+        (lambda d: d["objects"]["red"].update(position=[0.32, 0.04, float("nan")]), ["NaN"]),
+        (
+            lambda d: d["objects"]["red"].update(position=[0.8, 0.04, 0.04]),
+            ["objects.red.position", "nothing is under it"],
+        ),
+        (lambda d: d["objects"]["wood"].update(position=[0.33, 0.04, 0.0]), ["overlaps"]),
+        (lambda d: d.update(format="demoplan/scene-9"), ["format"]),
+        (lambda d: d["objects"]["red"].update(size=[0.04, -0.04, 0.04]), ["objects.red.size"]),
+    ],
+)
+def test_bad_scenes_exit_1(
+    model_files: dict[str, Path], tmp_path: Path, change: Any, fragments: list[str]
+) -> None:
+    data = json.loads(BLOCKS_SCENE.read_text())
+    change(data)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(data, allow_nan=True))
+    one_line(invoke("plan", model_files["blocks"], path), 1, str(path), *fragments)
+
+
+def test_no_plan_exits_3_with_reasons(model_files: dict[str, Path], tmp_path: Path) -> None:
+    """Red pinned under a block that allows no grasp: no goal is reachable."""
+
+    def pin(d: dict[str, Any]) -> None:
+        d["objects"]["red"]["grasps"] = [0]
+        d["freespace"] = []  # nowhere to park anything
+
+    path = scene_with(tmp_path, pin)
+    result = invoke("plan", model_files["blocks"], path)
+    one_line(result, 3, "goal 0", "goal 1")
+
+
+def test_library_api(blocks_model: TaskModel) -> None:
+    result = plan_in_scene(blocks_model, load_scene(BLOCKS_SCENE))
+    assert result.chosen.goal == 1
+    assert [c.length for c in result.candidates] == [10, 8]
