@@ -11,6 +11,7 @@ import json
 import logging
 import re
 import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import replace
@@ -334,7 +335,9 @@ def solve(
     from demoplan.planning.xml import load_problem
 
     with _reported_errors():
+        started = time.perf_counter()
         problem = load_problem(problem_path)
+        read_seconds = time.perf_counter() - started
         budget = Budget(max_nodes=max_nodes, timeout=timeout)
         if _stderr.is_terminal:  # a spinner while a long search runs; nothing when piped
             with _stderr.status(f"Searching ({search.value}) for a shortest plan…"):
@@ -342,7 +345,7 @@ def solve(
         else:
             plan = solve_problem(problem, search.value, budget)
         if json_output:
-            _print_json(plan_to_json(plan))
+            _print_json(plan_to_json(plan, read_seconds))
         else:
             sys.stdout.write(format_plan(plan))
 

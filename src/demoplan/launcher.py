@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,7 +80,9 @@ def run_solve(options: SolveOptions) -> int:
     from demoplan.planning.xml import load_problem
 
     try:
+        started = time.perf_counter()
         problem = load_problem(options.problem)
+        read_seconds = time.perf_counter() - started
         plan = solve(problem, options.search, Budget(options.max_nodes, options.timeout))
     except DemoplanError as exc:
         sys.stderr.write(error_line(exc) + "\n")
@@ -87,7 +90,9 @@ def run_solve(options: SolveOptions) -> int:
     if options.json_output:
         import json
 
-        text = json.dumps(plan_to_json(plan), indent=2, ensure_ascii=False, allow_nan=False)
+        text = json.dumps(
+            plan_to_json(plan, read_seconds), indent=2, ensure_ascii=False, allow_nan=False
+        )
         sys.stdout.write(text + "\n")
     else:
         sys.stdout.write(format_plan(plan))

@@ -235,8 +235,10 @@ def format_plan(plan: Plan) -> str:
     return "".join(f"{action}\n" for action in plan.actions)
 
 
-def plan_to_json(plan: Plan) -> dict[str, object]:
-    """The plan as ``demoplan solve --json`` prints it."""
+def plan_to_json(plan: Plan, read_seconds: float | None = None) -> dict[str, object]:
+    """The plan as ``demoplan solve --json`` prints it (``seconds``: the search;
+    ``read_seconds``: reading and checking the problem file, when measured)."""
+    timing = {} if read_seconds is None else {"read_seconds": round(read_seconds, 6)}
     return {
         "actions": [[a.kind, a.object, a.location, a.grasp] for a in plan.actions],
         "length": len(plan),
@@ -244,4 +246,5 @@ def plan_to_json(plan: Plan) -> dict[str, object]:
         "expanded": plan.expanded,
         "generated": plan.generated,
         "seconds": round(plan.seconds, 6),
+        **timing,
     }
