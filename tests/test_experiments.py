@@ -24,8 +24,14 @@ def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> Non
     report = (out / "report.md").read_text()
     assert "**NO**" not in report
     assert "Constraints (32)" in report and "Constraints (5)" in report
+    planning = {p["experiment"].split()[1]: p for p in summary["planning"]}
+    assert [c["actions"] for c in planning["2"]["candidates"]] == [10, 8]  # 5 and 4 moves
+    assert planning["2"]["chosen"] == 1
+    assert ("2", "Plan moves per goal (Fig. 4 scene)") in names
+    assert planning["1"]["actions"] and "planning in a new scene" in report
     for stem in ("experiment1-set-table", "experiment2-blocks"):
         assert (out / f"{stem}-demonstrations.png").read_bytes().startswith(b"\x89PNG")
+        assert (out / f"{stem}-plan.png").read_bytes().startswith(b"\x89PNG")
         assert load_model(out / f"{stem}.model.json").states
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temp files left
 

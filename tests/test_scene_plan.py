@@ -26,8 +26,8 @@ from tests.helpers import EXAMPLES
 from tests.scene_checker import check_scene_plan
 from tests.validator import validate
 
-BLOCKS_SCENE = EXAMPLES / "blocks" / "scene.json"
-TABLE_SCENE = EXAMPLES / "set_table_scene" / "scene.json"
+BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
+TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 
 
 @pytest.fixture(scope="module")
@@ -213,3 +213,12 @@ def test_library_api(blocks_model: TaskModel) -> None:
     result = plan_in_scene(blocks_model, load_scene(BLOCKS_SCENE))
     assert result.chosen.goal == 1
     assert [c.length for c in result.candidates] == [10, 8]
+
+
+def test_plan_plot(model_files: dict[str, Path], tmp_path: Path) -> None:
+    path = tmp_path / "plan.png"
+    result = invoke("plan", model_files["blocks"], BLOCKS_SCENE, "--plot", path, "--json")
+    assert result.exit_code == 0, result.stderr
+    assert json.loads(result.stdout)["length"] == 8  # stdout still holds only the JSON
+    assert path.read_bytes().startswith(b"\x89PNG")
+    assert [p.name for p in tmp_path.iterdir()] == ["plan.png"]  # no temporary left

@@ -410,6 +410,9 @@ def plan(
     timeout: Annotated[
         float | None, typer.Option(min=0.0, help="Per candidate: stop after this many seconds.")
     ] = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the plan from above into this image (PNG, SVG).")
+    ] = None,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
     from demoplan.planning.search import Budget
@@ -424,10 +427,39 @@ def plan(
                 result = plan_in_scene(model, scene, budget=budget, settings=settings)
         else:
             result = plan_in_scene(model, scene, budget=budget, settings=settings)
+        if plot is not None:
+            _plot_scene_plan(model, scene, result, plot)
         if json_output:
             _print_json(result.to_json())
             return
         _print_scene_plan(result, model)
+
+
+def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    from demoplan.plotting import plot_scene_plan, save_figure
+    from demoplan.scenes.scene import complete_geometry
+
+    figure, ax = plt.subplots(figsize=(6.5, 5.5))
+    chosen = result.chosen
+    name = model.demonstrations[chosen.goal].name
+    title = f"Goal of demonstration {chosen.goal} ({name}): {len(chosen.plan) // 2} moves"
+    plot_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, ax, title)
+    figure.tight_layout()
+    try:
+        save_figure(figure, path)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
+    finally:
+        plt.close(figure)
 
 
 def _print_scene_plan(result: Any, model: TaskModel) -> None:

@@ -1,10 +1,12 @@
 """``demoplan experiments``: reproduce the paper's experiments and write a report.
 
-For now the learning half of both experiments (§V.A, §V.B): the learned states,
-sequences and constraints are compared with the paper's Tables II–V, and the
-report folder gets the tables side by side, top-view figures of the
-demonstrations (like Fig. 3), the models and a machine-readable summary.
-Later stages (planning, execution) add their sections here.
+Both experiments (§V.A, §V.B), learning and planning: the learned states,
+sequences and constraints are compared with the paper's Tables II–V; each
+model is then planned in a run-time scene (``examples/scenes/``) — for
+Experiment 2 the paper's Fig. 4 scene, where demonstration 1's goal takes 5
+moves and demonstration 2's 4. The report folder gets the tables side by
+side, top-view figures of the demonstrations (like Fig. 3) and of the plans,
+the models and a machine-readable summary.
 """
 
 from __future__ import annotations
@@ -14,12 +16,15 @@ import logging
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 from demoplan.demonstrations import load_demonstrations
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.learning import TaskModelLearner
 from demoplan.model import TaskModel
 from demoplan.modelfile import save_model
+from demoplan.scenes.plan import ScenePlan, plan_in_scene
+from demoplan.scenes.scene import complete_geometry, load_scene
 from demoplan.tables import constraint_text, format_orientation, format_position, sequence_rows
 
 __all__ = [
@@ -91,6 +96,15 @@ class ExperimentsResult:
     report: Path
     checks: tuple[Check, ...]
     models: tuple[TaskModel, ...]
+    plans: tuple[ScenePlan, ...] = ()
+
+
+PAPER_PLAN_MOVES_EXPERIMENT_2 = (5, 4)
+"""§V.B: "the plan for the first demonstration is five steps, while the plan for
+second demonstration is only four steps"."""
+PAPER_PLAN_EXPERIMENT_2 = ("red", "green", "wood", "red")
+"""§V.B: "Move red away, move green to position, move wood to position and
+finally move red on top of green and wood"."""
 
 
 def examples_dir() -> Path:
@@ -186,6 +200,7 @@ def run_experiments(
             PAPER_TABLE_II,
             PAPER_TABLE_III,
             PAPER_CONSTRAINTS_EXPERIMENT_1,
+            examples / "scenes" / "set-table-cluttered.json",
         ),
         (
             "Experiment 2 (blocks)",
@@ -194,12 +209,15 @@ def run_experiments(
             PAPER_TABLE_IV,
             PAPER_TABLE_V,
             CONSTRAINTS_EXPERIMENT_2,
+            examples / "scenes" / "pyramid-fig4.json",
         ),
     ]
     checks: list[Check] = []
     models = []
+    plans = []
+    planning_summary = []
     sections = ["# demoplan: the paper's experiments reproduced\n"]
-    for title, stem, source, table, sequences, n_constraints in experiments:
+    for title, stem, source, table, sequences, n_constraints, scene_path in experiments:
         notify(f"{title}: learning")
         demos = load_demonstrations([source])
         model = TaskModelLearner().fit(demos).model_
@@ -219,10 +237,123 @@ def run_experiments(
         notify(f"{title}: plotting")
         figure = _plot_demonstrations(model, out / f"{stem}-demonstrations.png", title)
         sections.append(_section(title, source, model, found, figure))
+        notify(f"{title}: planning in {scene_path.name}")
+        scene = load_scene(scene_path)
+        result = plan_in_scene(model, scene)
+        plans.append(result)
+        # The paper gives plan figures for Experiment 2 only (§V.B).
+        plan_checks = _plan_checks(title, result) if stem.startswith("experiment2") else []
+        checks += plan_checks
+        plan_figure = _plot_plan(model, scene, result, out / f"{stem}-plan.png")
+        sections.append(_plan_section(title, scene_path, model, result, plan_checks, plan_figure))
+        planning_summary.append(
+            {
+                "experiment": title,
+                "scene": scene_path.name,
+                "candidates": [
+                    {
+                        "goal": c.goal,
+                        "demonstrations": list(c.problem.candidate.demonstrations),
+                        "actions": c.length,
+                        "reason": c.reason,
+                    }
+                    for c in result.candidates
+                ],
+                "chosen": result.chosen.goal,
+                "actions": [str(a) for a in result.chosen.plan.actions]
+                if result.chosen.plan
+                else [],
+            }
+        )
     sections.append(_notes())
     write_atomic(out / "report.md", "\n".join(sections))
-    write_atomic(out / "summary.json", dump_json({"checks": [asdict(c) for c in checks]}))
-    return ExperimentsResult(out / "report.md", tuple(checks), tuple(models))
+    write_atomic(
+        out / "summary.json",
+        dump_json({"checks": [asdict(c) for c in checks], "planning": planning_summary}),
+    )
+    return ExperimentsResult(out / "report.md", tuple(checks), tuple(models), tuple(plans))
+
+
+def _moved_objects(result: ScenePlan) -> tuple[str, ...]:
+    plan = result.chosen.plan
+    return tuple(a.object for a in plan.actions if a.kind == "GRASP") if plan else ()
+
+
+def _plan_checks(experiment: str, result: ScenePlan) -> list[Check]:
+    """Experiment 2's plans against §V.B: 5 and 4 moves, demonstration 2's chosen."""
+    moves = tuple(None if c.length is None else c.length // 2 for c in result.candidates)
+    chosen = f"demonstration {result.chosen.goal + 1}: " + ", ".join(_moved_objects(result))
+    paper = "demonstration 2: " + ", ".join(PAPER_PLAN_EXPERIMENT_2)
+    return [
+        Check(
+            experiment,
+            "Plan moves per goal (Fig. 4 scene)",
+            " and ".join(map(str, PAPER_PLAN_MOVES_EXPERIMENT_2)),
+            " and ".join("—" if m is None else str(m) for m in moves),
+            moves == PAPER_PLAN_MOVES_EXPERIMENT_2,
+        ),
+        Check(experiment, "Plan chosen (objects moved)", paper, chosen, chosen == paper),
+    ]
+
+
+def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> str | None:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return None
+    from demoplan.plotting import plot_scene_plan, save_figure
+
+    chosen = result.chosen
+    assert chosen.plan is not None
+    figure, ax = plt.subplots(figsize=(6.5, 5.5))
+    title = (
+        f"Plan for the goal of demonstration {chosen.goal + 1} "
+        f"({model.demonstrations[chosen.goal].name}): {len(chosen.plan) // 2} moves"
+    )
+    plot_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, ax, title)
+    figure.tight_layout()
+    save_figure(figure, path)
+    plt.close(figure)
+    return path.name
+
+
+def _plan_section(
+    title: str,
+    scene_path: Path,
+    model: TaskModel,
+    result: ScenePlan,
+    checks: list[Check],
+    figure: str | None,
+) -> str:
+    lines = [
+        f"### {title}: planning in a new scene\n",
+        f"Scene: `scenes/{scene_path.name}`. Every demonstrated goal is planned "
+        "(shortest plans, A*); the shortest wins, ties to the earliest demonstration.\n",
+        "| Goal of | Actions | Moves | |",
+        "|---|---|---|---|",
+    ]
+    for c in result.candidates:
+        names = ", ".join(
+            f"{k + 1} ({model.demonstrations[k].name})" for k in c.problem.candidate.demonstrations
+        )
+        length = "—" if c.length is None else str(c.length)
+        moves = "—" if c.length is None else str(c.length // 2)
+        note = "chosen" if c is result.chosen else (c.reason or "")
+        lines.append(f"| demonstration {names} | {length} | {moves} | {note} |")
+    if checks:
+        lines += ["", "| Check | Paper | demoplan | Match |", "|---|---|---|---|"]
+        lines += [
+            f"| {c.name} | {c.paper} | {c.ours} | {'yes' if c.ok else '**NO**'} |" for c in checks
+        ]
+    plan = result.chosen.plan
+    assert plan is not None
+    lines += ["", "```", *(str(a) for a in plan.actions), "```", ""]
+    if figure:
+        lines.append(f"![{title}: plan]({figure})\n\n")
+    return "\n".join(lines)
 
 
 def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None:

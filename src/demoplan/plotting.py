@@ -1,4 +1,4 @@
-"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left).
+"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left) and plans.
 
 matplotlib is imported lazily (the ``plot`` extra); every function takes an
 optional ``ax`` and returns the axes it drew on.
@@ -7,6 +7,7 @@ optional ``ax`` and returns the axes it drew on.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.constraints import visit_sequence
@@ -15,7 +16,11 @@ from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["plot_constraints", "plot_demonstration"]
+    from demoplan.planning.problem import Plan
+    from demoplan.scenes.problems import SceneProblem
+    from demoplan.scenes.scene import Scene
+
+__all__ = ["plot_constraints", "plot_demonstration", "plot_scene_plan", "save_figure"]
 
 _PALETTE = {
     "red": "#d62728",
@@ -179,3 +184,74 @@ def plot_constraints(model: TaskModel, ax: Axes | None = None) -> Axes:
         fontsize=9,
     )
     return ax
+
+
+def plot_scene_plan(
+    scene: Scene,
+    problem: SceneProblem,
+    plan: Plan,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """A plan in its scene from above: where the objects stand now (faint), where
+    the plan leaves them (solid, higher objects drawn last) and each move as a
+    numbered arrow; free-space spots as dashed circles."""
+    import matplotlib.pyplot as plt
+    from matplotlib import patches
+
+    from demoplan.scenes.problems import pose_of
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 5))
+    colours = {obj.name: _colour(obj.name, k) for k, obj in enumerate(scene.objects)}
+    geometry = {obj.name: obj.geometry for obj in scene.objects}
+    final = {obj.name: obj.pose for obj in scene.objects}
+    moves = []
+    for grasp, put in zip(plan.actions[::2], plan.actions[1::2], strict=True):
+        source, target = problem.location(grasp.location), problem.location(put.location)
+        moves.append((grasp.object, source.position, target.position))
+        final[put.object] = pose_of(target)
+    for spot in problem.locations:
+        if spot.kind == "freespace":
+            radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
+            ax.add_patch(
+                patches.Circle(spot.position[:2], radius, fill=False, ls="--", ec="0.6", lw=0.8)
+            )
+            ax.annotate(spot.name, spot.position[:2], fontsize=6, color="0.5", ha="center")
+    for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
+        ax.add_patch(_footprint(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
+    for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
+        ax.add_patch(_footprint(pose, geometry[name], colours[name], 0.85))
+        ax.annotate(name, pose.position[:2], fontsize=7, ha="center", va="center")
+    for number, (name, start, end) in enumerate(moves, 1):
+        ax.annotate(
+            "",
+            xy=end[:2],
+            xytext=start[:2],
+            arrowprops={
+                "arrowstyle": "->",
+                "color": colours[name],
+                "lw": 1.2,
+                "connectionstyle": "arc3,rad=0.15",
+            },
+        )
+        middle = ((start[0] + end[0]) / 2, (start[1] + end[1]) / 2)
+        ax.annotate(str(number), middle, fontsize=7, color=colours[name], fontweight="bold")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.08)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title or f"Plan: {len(moves)} moves (faint: now; solid: after)", fontsize=9)
+    return ax
+
+
+def save_figure(figure: Any, path: Path, dpi: int = 110) -> None:
+    """Write ``figure`` to ``path`` atomically (a temporary file, then a rename)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(f".{path.name}.tmp{path.suffix}")
+    try:
+        figure.savefig(temporary, dpi=dpi)
+        temporary.replace(path)
+    finally:
+        temporary.unlink(missing_ok=True)
