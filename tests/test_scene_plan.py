@@ -222,3 +222,32 @@ def test_plan_plot(model_files: dict[str, Path], tmp_path: Path) -> None:
     assert json.loads(result.stdout)["length"] == 8  # stdout still holds only the JSON
     assert path.read_bytes().startswith(b"\x89PNG")
     assert [p.name for p in tmp_path.iterdir()] == ["plan.png"]  # no temporary left
+
+
+@pytest.mark.parametrize(
+    ("which", "goal"), [("blocks", 0), ("blocks", 1), ("table", 0), ("table", 1)]
+)
+def test_fast_downward_agrees_on_scene_problems(
+    blocks_model: TaskModel, table_model: TaskModel, which: str, goal: int
+) -> None:
+    """Scene problems use every extension (support, exclusion, accepts, subgoals with
+    precedences): Fast Downward's optimal plan for the PDDL export is as long as
+    demoplan's and passes the validator."""
+    pytest.importorskip(
+        "up_fast_downward", reason="up-fast-downward not installed (pip install -e '.[fd]')"
+    )
+    pytest.importorskip("unified_planning", reason="unified-planning not installed")
+    from demoplan.planning.pddl import action_from_pddl, problem_to_pddl
+    from demoplan.planning.search import solve
+    from tests.test_pddl import fast_downward_plan
+
+    model, scene = (blocks_model, BLOCKS_SCENE) if which == "blocks" else (table_model, TABLE_SCENE)
+    problems = scene_problems(model, load_scene(scene))
+    problem = next(p.problem for p in problems if goal in p.candidate.demonstrations)
+    if which == "table":
+        assert problem.accepts  # the case this test is for
+    status, names, _ = fast_downward_plan(*problem_to_pddl(problem), timeout=120)
+    assert status == "SOLVED_OPTIMALLY" and names is not None
+    actions = [action_from_pddl(problem, name) for name in names]
+    validate(problem, actions)
+    assert len(actions) == len(solve(problem))
