@@ -7,10 +7,12 @@ every plan passes the symbolic validator and the independent geometric replay.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from demoplan.cli import app
@@ -251,3 +253,21 @@ def test_fast_downward_agrees_on_scene_problems(
     actions = [action_from_pddl(problem, name) for name in names]
     validate(problem, actions)
     assert len(actions) == len(solve(problem))
+
+
+def test_scene_in_centimetres_and_yaml(blocks_model: TaskModel, tmp_path: Path) -> None:
+    """The same scene in cm (YAML) plans the same; grasps in the file's angle unit."""
+    data = json.loads(BLOCKS_SCENE.read_text())
+    data["units"] = {"length": "cm", "angle": "rad"}
+    for entry in data["objects"].values():
+        entry["position"] = [100 * v for v in entry["position"]]
+        entry["size"] = [100 * v for v in entry["size"]]
+        entry["yaw"] = math.radians(entry["yaw"])
+        entry["grasps"] = [0.0, math.pi / 2]
+    data["gripper"]["finger_radius"] = 2.0
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(data))
+    metres = plan_in_scene(blocks_model, load_scene(BLOCKS_SCENE))
+    centimetres = plan_in_scene(blocks_model, load_scene(path))
+    assert centimetres.chosen.plan == metres.chosen.plan
+    assert [c.length for c in centimetres.candidates] == [10, 8]

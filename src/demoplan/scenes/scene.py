@@ -51,6 +51,7 @@ __all__ = [
 ]
 
 _LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+MAX_GRIPPER = 0.5  # m: finger radius or clearance beyond this is a unit mistake
 DEFAULT_GRASPS = (0.0, 90.0)
 """Finger axes (degrees, object frame) of an object whose scene entry names none."""
 
@@ -122,8 +123,8 @@ class _ObjectSchema(PoseSchema):
 
 
 class _GripperSchema(_Schema):
-    finger_radius: Number = Field(default=0.02, gt=0, le=1.0)
-    clearance: Number = Field(default=0.0, ge=0, le=1.0)
+    finger_radius: Number = Field(default=0.02, gt=0)
+    clearance: Number = Field(default=0.0, ge=0)
 
 
 class _TableSchema(_Schema):
@@ -196,6 +197,14 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
             (s[0] * scale, s[1] * scale, (s[2] if len(s) > 2 else 0.0) * scale)
             for s in parsed.freespace
         )
+    gripper = Gripper(parsed.gripper.finger_radius * scale, parsed.gripper.clearance * scale)
+    for name in ("finger_radius", "clearance"):
+        if getattr(gripper, name) > MAX_GRIPPER:
+            raise InputError(
+                f"{getattr(gripper, name):g} m is too large; at most {MAX_GRIPPER} m expected",
+                source=source,
+                field=f"gripper.{name}",
+            )
     table = None
     if parsed.table is not None:
         lo, hi = parsed.table.min, parsed.table.max
@@ -204,7 +213,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         objects=tuple(objects),
         landmarks=tuple((n, pose_from_dict(p, parsed.units)) for n, p in parsed.landmarks.items()),
         freespace=freespace,
-        gripper=Gripper(parsed.gripper.finger_radius * scale, parsed.gripper.clearance * scale),
+        gripper=gripper,
         table=table,
         source=source,
     )
