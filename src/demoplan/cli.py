@@ -548,6 +548,91 @@ def problem(
             _stderr.print(f"demoplan: warning: {obstacle}", markup=False, highlight=False)
 
 
+class SimName(StrEnum):
+    """Worlds of ``demoplan run``."""
+
+    kinematic = "kinematic"
+    mujoco = "mujoco"
+
+
+@app.command()
+def run(
+    model_path: ModelArgument,
+    scene_path: SceneArgument,
+    sim: Annotated[
+        SimName, typer.Option(help="kinematic (exact, fast) or mujoco (physics).")
+    ] = SimName.kinematic,
+    faults: Annotated[
+        str | None,
+        typer.Option(
+            help="Faults to inject, kind=probability,...: drop, displace, misplace, grasp, block."
+        ),
+    ] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the injected faults.")] = 0,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the run report as JSON.")
+    ] = False,
+    frames: Annotated[
+        Path | None, typer.Option(help="Write top-view PNG frames and a storyboard here.")
+    ] = None,
+    max_replans: Annotated[int, typer.Option(min=0, help="Give up after this many replans.")] = 25,
+    freespace: FreespaceOption = None,
+) -> None:
+    """Execute the task in simulation: plan, act, observe, replan on failure."""
+    from demoplan.execution.faults import parse_faults
+    from demoplan.execution.runner import run_task
+
+    with _reported_errors():
+        model, scene = _scene_inputs(model_path, scene_path)
+        fault_rates = parse_faults(faults)
+        live = _stderr.is_terminal and not json_output
+        report = run_task(
+            model,
+            scene,
+            sim=sim.value,
+            faults=fault_rates,
+            seed=seed,
+            frames=frames,
+            max_replans=max_replans,
+            geometry=_geometry_settings(freespace),
+            display=_stderr if live else None,
+        )
+        if json_output:
+            _print_json(report.to_json())
+        else:
+            _print_run_report(report)
+        if not report.success:
+            _stderr.print(f"demoplan: error: {report.reason}", markup=False, highlight=False)
+            raise typer.Exit(report.exit_code)
+
+
+def _print_run_report(report: Any) -> None:
+    table = Table(title=f"Run ({report.world})", title_justify="left")
+    for column in ("step", "action", "plan", "ok"):
+        table.add_column(column)
+    for executed in report.actions:
+        table.add_row(
+            str(executed.step),
+            Text(str(executed.action)),
+            str(executed.plan),
+            "yes" if executed.ok else "NO",
+        )
+    _stdout.print(table)
+    for failure in report.failures:
+        _stdout.print(
+            f"step {failure.step}: {failure.kind}: {failure.detail}", markup=False, highlight=False
+        )
+    verdict = "success" if report.success else "FAILED"
+    errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
+    _stdout.print(
+        f"{verdict}: {report.reason}; {len(report.actions)} actions "
+        f"({report.first_plan_length} planned first), {report.replans} replans; "
+        f"final errors: {errors}",
+        markup=False,
+        highlight=False,
+    )
+
+
 @app.command()
 def experiments(
     out: Annotated[Path, typer.Option(help="Folder for the report.")] = Path("demoplan-report"),

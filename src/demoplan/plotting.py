@@ -20,7 +20,14 @@ if TYPE_CHECKING:
     from demoplan.scenes.problems import SceneProblem
     from demoplan.scenes.scene import Scene
 
-__all__ = ["plot_constraints", "plot_demonstration", "plot_scene_plan", "save_figure"]
+__all__ = [
+    "object_colour",
+    "object_patch",
+    "plot_constraints",
+    "plot_demonstration",
+    "plot_scene_plan",
+    "save_figure",
+]
 
 _PALETTE = {
     "red": "#d62728",
@@ -32,11 +39,13 @@ _PALETTE = {
 _CYCLE = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860", "#da8bc3", "#8c8c8c"]
 
 
-def _colour(name: str, index: int) -> str:
+def object_colour(name: str, index: int) -> str:
+    """A plain colour for an object named after one (``red``, ``wood``), else a cycle."""
     return _PALETTE.get(name, _CYCLE[index % len(_CYCLE)])
 
 
-def _footprint(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
+def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
+    """The object's outline from above as a matplotlib patch."""
     from matplotlib import patches
 
     x, y, _ = pose.position
@@ -75,12 +84,14 @@ def plot_demonstration(
     names = sorted({*demo.moved_objects, *(n for n, _ in demo.initial)})  # stable colours
     current = demo.initial_poses()
     for name, pose in demo.landmarks:
-        ax.add_patch(_footprint(pose, geometry.get(name), "#cccccc", 0.5))
+        ax.add_patch(object_patch(pose, geometry.get(name), "#cccccc", 0.5))
         ax.annotate(name, pose.position[:2], ha="center", va="center", fontsize=7, color="0.3")
     for name, pose in demo.initial:
-        ax.add_patch(_footprint(pose, geometry.get(name), _colour(name, names.index(name)), 0.2))
+        ax.add_patch(
+            object_patch(pose, geometry.get(name), object_colour(name, names.index(name)), 0.2)
+        )
     for number, step in enumerate(demo.steps, start=1):
-        colour = _colour(step.object, names.index(step.object))
+        colour = object_colour(step.object, names.index(step.object))
         start = current.get(step.object)
         x, y, _ = step.pose.position
         if start is not None:
@@ -90,7 +101,7 @@ def plot_demonstration(
                 start.position[:2],
                 arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
             )
-        ax.add_patch(_footprint(step.pose, geometry.get(step.object), colour, 0.85))
+        ax.add_patch(object_patch(step.pose, geometry.get(step.object), colour, 0.85))
         ax.annotate(
             f"{number} {step.object}", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7
         )
@@ -203,7 +214,7 @@ def plot_scene_plan(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = {obj.name: _colour(obj.name, k) for k, obj in enumerate(scene.objects)}
+    colours = {obj.name: object_colour(obj.name, k) for k, obj in enumerate(scene.objects)}
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     final = {obj.name: obj.pose for obj in scene.objects}
     moves = []
@@ -219,9 +230,9 @@ def plot_scene_plan(
             )
             ax.annotate(spot.name, spot.position[:2], fontsize=6, color="0.5", ha="center")
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
-        ax.add_patch(_footprint(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
+        ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
     for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
-        ax.add_patch(_footprint(pose, geometry[name], colours[name], 0.85))
+        ax.add_patch(object_patch(pose, geometry[name], colours[name], 0.85))
         ax.annotate(name, pose.position[:2], fontsize=7, ha="center", va="center")
     for number, (name, start, end) in enumerate(moves, 1):
         ax.annotate(

@@ -198,16 +198,33 @@ def supports(
         if upper.bottom <= settings.level_tolerance:
             continue
         area = prints[i].area
-        lowers = [
-            lower.name
+        candidates = [
+            (j, prints[i].intersection(prints[j]).area)
             for j, lower in enumerate(locations)
             if j != i
             and any(
                 abs(lower.bottom + shape.size[2] - upper.bottom) <= settings.level_tolerance
                 for shape in lower.shapes
             )
-            and prints[i].intersection(prints[j]).area >= settings.support_fraction * area
         ]
+        # A target rests on targets (what the goal puts under it), a current place on
+        # current places (what stands under it now): not on whatever else overlaps.
+        # Of lower places that overlap each other (only one can be occupied), a
+        # target and the one covering most of it holds it up.
+        kinds = set(upper.kind.split("+"))
+        alike = [c for c in candidates if kinds & set(locations[c[0]].kind.split("+"))]
+        candidates = alike or candidates
+        candidates.sort(key=lambda c: ("target" not in locations[c[0]].kind, -c[1], c[0]))
+        chosen: list[int] = []
+        for j, overlap in candidates:
+            if overlap < settings.support_fraction * area:
+                continue
+            shrunk = prints[j].buffer(-settings.touch_tolerance)
+            if all(
+                not shrunk.intersects(prints[k].buffer(-settings.touch_tolerance)) for k in chosen
+            ):
+                chosen.append(j)
+        lowers = [locations[j].name for j in sorted(chosen)]
         if lowers:
             pairs += [(upper.name, lower) for lower in lowers]
         else:

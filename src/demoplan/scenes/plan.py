@@ -21,7 +21,7 @@ from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.scenes.targets import candidate_goals
 
-__all__ = ["CandidatePlan", "ScenePlan", "plan_in_scene", "scene_problems"]
+__all__ = ["CandidatePlan", "ScenePlan", "plan_in_scene", "scene_problems", "solve_candidate"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,11 +88,31 @@ def _target(problem: SceneProblem, label: str) -> str:
 
 
 def scene_problems(
-    model: TaskModel, scene: Scene, settings: GeometrySettings = GeometrySettings()
+    model: TaskModel,
+    scene: Scene,
+    settings: GeometrySettings = GeometrySettings(),
+    *,
+    clutter: bool = False,
 ) -> list[SceneProblem]:
     """The planning problem of every candidate goal (deduplicated) in ``scene``."""
     scene = complete_geometry(scene, model)
-    return [build_problem(scene, c, settings) for c in candidate_goals(model, scene)]
+    return [
+        build_problem(scene, c, settings) for c in candidate_goals(model, scene, clutter=clutter)
+    ]
+
+
+def solve_candidate(
+    problem: SceneProblem, budget: Budget = Budget(), search: str = "astar"
+) -> CandidatePlan:
+    """Plan one candidate; its failure (no plan, budget reached) becomes the reason."""
+    if problem.obstacles:
+        return CandidatePlan(problem, None, "; ".join(problem.obstacles))
+    try:
+        return CandidatePlan(problem, solve(problem.problem, search, budget))
+    except NoPlanError as exc:
+        return CandidatePlan(problem, None, str(exc))
+    except LimitReachedError as exc:
+        return CandidatePlan(problem, None, str(exc), limit_reached=True)
 
 
 def plan_in_scene(
@@ -102,24 +122,19 @@ def plan_in_scene(
     budget: Budget = Budget(),
     settings: GeometrySettings = GeometrySettings(),
     search: str = "astar",
+    clutter: bool = False,
 ) -> ScenePlan:
     """Plan every candidate goal (each within ``budget``) and choose the shortest.
 
     Raises :class:`NoPlanError` (exit 3) when no candidate has a plan, with each
     candidate's reason, and :class:`LimitReachedError` (exit 4) when none was
-    found but some candidate's search was cut short.
+    found but some candidate's search was cut short. ``clutter``: objects the
+    model never saw may stand in the scene (moved out of the way if need be).
     """
-    outcomes = []
-    for problem in scene_problems(model, scene, settings):
-        if problem.obstacles:
-            outcomes.append(CandidatePlan(problem, None, "; ".join(problem.obstacles)))
-            continue
-        try:
-            outcomes.append(CandidatePlan(problem, solve(problem.problem, search, budget)))
-        except NoPlanError as exc:
-            outcomes.append(CandidatePlan(problem, None, str(exc)))
-        except LimitReachedError as exc:
-            outcomes.append(CandidatePlan(problem, None, str(exc), limit_reached=True))
+    outcomes = [
+        solve_candidate(problem, budget, search)
+        for problem in scene_problems(model, scene, settings, clutter=clutter)
+    ]
     solved = [c for c in outcomes if c.plan is not None]
     if not solved:
         reasons = "; ".join(f"goal {c.goal}: {c.reason}" for c in outcomes)

@@ -17,21 +17,25 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from shapely.geometry.base import BaseGeometry
+
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, Pose, Vector3
 from demoplan.planning.problem import Problem, Subgoal
+from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import (
     GeometrySettings,
     Location,
     accepted_objects,
     collision_facts,
     exclusions,
+    footprint,
     free_space,
     location_footprint,
     supports,
 )
 from demoplan.scenes.scene import Scene, yaw_of
-from demoplan.scenes.targets import Candidate
+from demoplan.scenes.targets import Candidate, Subtask
 
 __all__ = ["Grasp", "SceneProblem", "build_problem"]
 
@@ -79,9 +83,13 @@ class SceneProblem:
 
 
 def build_problem(
-    scene: Scene, candidate: Candidate, settings: GeometrySettings = GeometrySettings()
+    scene: Scene,
+    candidate: Candidate,
+    settings: GeometrySettings = GeometrySettings(),
+    reached: frozenset[str] = frozenset(),
 ) -> SceneProblem:
-    """The planning problem of ``candidate`` in ``scene`` (geometry completed)."""
+    """The planning problem of ``candidate`` in ``scene`` (geometry completed);
+    ``reached``: subgoal labels reached before (replanning keeps them)."""
     shapes: dict[str, ObjectGeometry] = {}
     for obj in scene.objects:
         if obj.geometry is None:
@@ -104,7 +112,7 @@ def build_problem(
         current[obj.name] = name
     _check_scene_overlaps(scene, locations, settings)
     target_of: dict[str, str] = {}
-    for subtask in candidate.subtasks:
+    for subtask in _turned_to_fit(candidate.subtasks, shapes, settings):
         shape = shapes[subtask.object]
         index = _coinciding(locations, subtask.pose.position, shape, settings)
         if index is None:
@@ -206,10 +214,53 @@ def build_problem(
         accepts=accepts,
         subgoals=[Subgoal(s.label, s.object, target_of[s.label]) for s in candidate.subtasks],
         precedences=candidate.precedences,
+        reached=reached & {s.label for s in candidate.subtasks},
         name=f"goal-{candidate.goal}",
         source=scene.source,
     )
     return SceneProblem(candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles))
+
+
+TURNS = (0.0, 90.0, -90.0, 180.0, 45.0, -45.0, 135.0, -135.0)
+"""World yaws (deg) tried, in order, for a target whose orientation is free and whose
+current yaw does not fit."""
+
+
+def _turned_to_fit(
+    subtasks: tuple[Subtask, ...], shapes: dict[str, ObjectGeometry], settings: GeometrySettings
+) -> list[Subtask]:
+    """Subtasks whose orientation was never learned keep the object's current yaw
+    unless their outline there would overlap another target's; then the first yaw
+    in :data:`TURNS` (world-aligned first) that overlaps none is taken."""
+    final = {s.object: s for s in subtasks}  # where each object ends
+
+    def outline(subtask: Subtask, yaw: float) -> BaseGeometry:
+        shape = shapes[subtask.object]
+        return footprint(shape, subtask.pose.position, yaw).buffer(-settings.touch_tolerance)
+
+    def clashes(subtask: Subtask, yaw: float) -> bool:
+        mine = outline(subtask, yaw)
+        for other in final.values():
+            if other.object == subtask.object:
+                continue
+            if abs(other.pose.position[2] - subtask.pose.position[2]) > settings.level_tolerance:
+                continue
+            if mine.intersects(outline(other, yaw_of(other.pose))):
+                return True
+        return False
+
+    turned = []
+    for subtask in subtasks:
+        if subtask.turnable and clashes(subtask, yaw_of(subtask.pose)):
+            for yaw in TURNS:
+                if not clashes(subtask, yaw):
+                    pose = Pose(subtask.pose.position, quat_from_yaw(yaw))
+                    subtask = Subtask(subtask.label, subtask.state, subtask.object, pose, True)
+                    if final[subtask.object].label == subtask.label:
+                        final[subtask.object] = subtask
+                    break
+        turned.append(subtask)
+    return turned
 
 
 def _vector(point: tuple[float, ...]) -> Vector3:
@@ -270,6 +321,4 @@ def _check_scene_overlaps(
 
 def pose_of(location: Location) -> Pose:
     """A location's pose (for executors)."""
-    from demoplan.rotations import quat_from_yaw
-
     return Pose(location.position, quat_from_yaw(location.yaw))

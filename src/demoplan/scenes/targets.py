@@ -42,6 +42,9 @@ class Subtask:
     state: str
     object: str
     pose: Pose
+    turnable: bool = False
+    """The state has no learned orientation: any yaw will do (the pose keeps the
+    object's current one unless it would not fit, see ``scenes.problems``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,9 +72,10 @@ def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
     return poses
 
 
-def check_scene_objects(model: TaskModel, scene: Scene) -> None:
-    """Exit-1 errors for objects the model needs but the scene lacks, and for
-    objects the scene has but the model never saw."""
+def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False) -> None:
+    """Exit-1 errors for objects the model needs but the scene lacks, and (unless
+    ``clutter`` allows them, as objects with no goal) for objects the scene has
+    but the model never saw."""
     landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
     needed = {state.object for state in model.states}
     for state in model.states:
@@ -88,7 +92,7 @@ def check_scene_objects(model: TaskModel, scene: Scene) -> None:
             field="objects",
         )
     unknown = sorted(set(scene.names) - seen)
-    if unknown:
+    if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
             f"the demonstrations {sorted(seen)}",
@@ -169,9 +173,10 @@ class _Resolver:
         )
 
 
-def candidate_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
-    """Every demonstrated goal, resolved in ``scene`` (deduplicated, in demonstration order)."""
-    check_scene_objects(model, scene)
+def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) -> list[Candidate]:
+    """Every demonstrated goal, resolved in ``scene`` (deduplicated, in demonstration
+    order); ``clutter``: objects the model never saw are allowed (they have no goal)."""
+    check_scene_objects(model, scene, clutter=clutter)
     states = {state.id: state for state in model.states}
     current = {obj.name: obj.pose for obj in scene.objects}
     landmarks = landmark_poses(model, scene)
@@ -182,7 +187,13 @@ def candidate_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         labels = visit_sequence(sequence)
         resolver = _Resolver(index, tuple(sequence), states, current, landmarks)
         subtasks = tuple(
-            Subtask(label, state_id, states[state_id].object, resolver.visit(states[state_id]))
+            Subtask(
+                label,
+                state_id,
+                states[state_id].object,
+                resolver.visit(states[state_id]),
+                turnable=states[state_id].orientation.value is None,
+            )
             for label, state_id in zip(labels, sequence, strict=True)
         )
         label_set = set(labels)

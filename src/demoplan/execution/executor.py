@@ -1,0 +1,409 @@
+"""Plan, act, observe, replan (the paper's execution block).
+
+The executor observes the world, plans every candidate goal and keeps the
+chosen one (:func:`demoplan.scenes.plan.plan_in_scene`), then runs the plan
+one action at a time. After each action it observes again and compares every
+object with where it should be:
+
+- after GRASP the object must be in the hand (else ``grasp``: the grasp failed);
+- after PUT_DOWN it must stand at the target within ``position_tolerance``
+  (else ``dropped`` — it fell elsewhere — or ``misplaced`` — it stands near,
+  but off, its target);
+- every other object must stand where it stood (else ``moved``: a person moved
+  it, or an object was not where the plan needed it); an object that was not
+  there before is ``new_object`` (it is planned around as clutter, moved away
+  if it is in the way).
+
+On a difference it replans the chosen goal from the observed world; subgoals
+already reached stay reached (SPEC §5: a subgoal counts once; the goal still
+needs every object at its final place). It gives up after ``max_replans``
+replans, when no plan exists, or after ``max_actions`` actions.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from demoplan.errors import DemoplanError
+from demoplan.execution.world import Observation, World
+from demoplan.model import Pose, TaskModel
+from demoplan.planning.compiled import compile_problem
+from demoplan.planning.problem import Action
+from demoplan.planning.search import Budget
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.plan import plan_in_scene, solve_candidate
+from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
+from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
+from demoplan.scenes.targets import candidate_goals
+
+__all__ = ["ExecutionSettings", "Failure", "RunEvent", "RunReport", "execute"]
+
+
+@dataclass(frozen=True, slots=True)
+class ExecutionSettings:
+    """When an observation differs from the expectation, and when to give up."""
+
+    position_tolerance: float = 0.01
+    """m: an object farther than this from where it should be has moved."""
+    max_replans: int = 25
+    max_actions: int = 400
+    budget: Budget = field(default_factory=lambda: Budget(timeout=60.0))
+    """Per (re)planning of one candidate."""
+    geometry: GeometrySettings = field(default_factory=GeometrySettings)
+
+
+@dataclass(frozen=True, slots=True)
+class Failure:
+    """A difference between what an action should have done and what was observed."""
+
+    step: int
+    kind: str
+    detail: str
+
+
+@dataclass(frozen=True, slots=True)
+class ExecutedAction:
+    step: int
+    action: Action
+    pose: Pose
+    plan: int
+    ok: bool
+
+
+@dataclass(frozen=True, slots=True)
+class RunEvent:
+    """Progress for a live display: ``kind`` is plan, action, failure, replan or done."""
+
+    kind: str
+    text: str
+    step: int = 0
+    replans: int = 0
+    remaining: int = 0
+
+
+@dataclass(slots=True)
+class RunReport:
+    """What happened (SPEC §3 "Run report")."""
+
+    success: bool
+    replans: int
+    goal: int | None
+    actions: list[ExecutedAction]
+    failures: list[Failure]
+    final: Observation
+    scene: Scene
+    reason: str = ""
+    first_plan_length: int = 0
+    pose_errors: dict[str, float] = field(default_factory=dict)
+    reached: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    world: str = ""
+    frames: list[str] = field(default_factory=list)
+    gave_up: bool = False
+    """True when a limit (replans, actions) stopped the run, not a missing plan."""
+
+    @property
+    def exit_code(self) -> int:
+        """SPEC §4: 0 success, 3 no plan from the observed world, 4 a limit reached."""
+        return 0 if self.success else 4 if self.gave_up else 3
+
+    def to_json(self) -> dict[str, Any]:
+        final_scene = _scene_of(self.final, self.scene)
+        return {
+            "success": self.success,
+            "replans": self.replans,
+            "actions": [
+                [e.action.kind, e.action.object, e.action.location, e.action.grasp]
+                for e in self.actions
+            ],
+            "failures": [
+                {"step": f.step, "kind": f.kind, "detail": f.detail} for f in self.failures
+            ],
+            "final_scene": scene_to_dict(final_scene),
+            "goal": self.goal,
+            "reason": self.reason,
+            "world": self.world,
+            "first_plan_actions": self.first_plan_length,
+            "extra_actions": max(0, len(self.actions) - self.first_plan_length),
+            "reached": self.reached,
+            "pose_errors": {k: round(v, 6) for k, v in self.pose_errors.items()},
+            "steps": [
+                {
+                    "step": e.step,
+                    "action": [e.action.kind, e.action.object, e.action.location, e.action.grasp],
+                    "position": [round(v, 6) for v in e.pose.position],
+                    "yaw": round(yaw_of(e.pose), 3),
+                    "plan": e.plan,
+                    "ok": e.ok,
+                }
+                for e in self.actions
+            ],
+            "seconds": round(self.seconds, 3),
+            "frames": self.frames,
+        }
+
+
+def _scene_of(observation: Observation, template: Scene) -> Scene:
+    """The observed world as a scene (grasps and gripper from the original scene)."""
+    known = {obj.name: obj for obj in template.objects}
+    objects = tuple(
+        SceneObject(
+            name,
+            pose,
+            observation.geometry.get(name),
+            known[name].grasps if name in known else SceneObject(name, pose, None).grasps,
+        )
+        for name, pose in observation.poses.items()
+    )
+    return Scene(
+        objects=objects,
+        landmarks=template.landmarks,
+        freespace=template.freespace,
+        gripper=template.gripper,
+        table=template.table,
+        source=template.source,
+    )
+
+
+def _distance(a: Pose, b: Pose) -> float:
+    return math.dist(a.position, b.position)
+
+
+def execute(
+    model: TaskModel,
+    scene: Scene,
+    world: World,
+    settings: ExecutionSettings = ExecutionSettings(),
+    on_event: Callable[[RunEvent], object] | None = None,
+) -> RunReport:
+    """Carry out the task in ``world`` (which starts as ``scene``); see the module docstring."""
+    emit = on_event or (lambda event: None)
+    started = time.perf_counter()
+    scene = complete_geometry(scene, model)
+    executed: list[ExecutedAction] = []
+    failures: list[Failure] = []
+    reached: set[str] = set()
+    replans = 0
+    plan_index = 0
+
+    observation = world.observe()
+    chosen = plan_in_scene(
+        model,
+        _scene_of(observation, scene),
+        budget=settings.budget,
+        settings=settings.geometry,
+        clutter=True,
+    ).chosen
+    goal = chosen.goal
+    problem: SceneProblem = chosen.problem
+    assert chosen.plan is not None
+    actions: list[Action] = list(chosen.plan.actions)
+    first_length = len(actions)
+    reached |= _reached_at_start(problem)
+    expected = dict(observation.poses)
+    emit(
+        RunEvent(
+            "plan", f"goal of demonstration {goal}: {len(actions)} actions", remaining=len(actions)
+        )
+    )
+
+    def finish(success: bool, reason: str, gave_up: bool = False) -> RunReport:
+        final = world.observe()
+        errors = {
+            obj: _distance(final.poses[obj], pose_of(problem.location(loc)))
+            for obj, loc in problem.problem.goal
+            if obj in final.poses
+        }
+        emit(RunEvent("done", reason, len(executed), replans))
+        return RunReport(
+            success,
+            replans,
+            goal,
+            executed,
+            failures,
+            final,
+            scene,
+            reason,
+            first_length,
+            errors,
+            sorted(reached),
+            time.perf_counter() - started,
+            world.name,
+            gave_up=gave_up,
+        )
+
+    def replan(step: int) -> str | None:
+        """Plan again from what is observed; None on success, else why not."""
+        nonlocal problem, actions, expected, replans, plan_index
+        replans += 1
+        plan_index += 1
+        if replans > settings.max_replans:
+            return f"gave up after {settings.max_replans} replans"
+        observation = world.observe()
+        current = complete_geometry(_scene_of(observation, scene), model)
+        try:
+            candidate = next(
+                c for c in candidate_goals(model, current, clutter=True) if goal in c.demonstrations
+            )
+            built = build_problem(current, candidate, settings.geometry, frozenset(reached))
+        except DemoplanError as exc:
+            return f"cannot plan in the observed world: {exc}"
+        outcome = solve_candidate(built, settings.budget)
+        if outcome.plan is None:
+            return f"no plan from the observed world: {outcome.reason}"
+        problem, actions = built, list(outcome.plan.actions)
+        reached.update(_reached_at_start(problem))
+        expected = dict(observation.poses)
+        emit(
+            RunEvent(
+                "replan", f"replan {replans}: {len(actions)} actions", step, replans, len(actions)
+            )
+        )
+        return None
+
+    step = 0
+    picked_from = Pose((0.0, 0.0, 0.0))  # where the object in the hand was taken from
+    while True:
+        if not actions:
+            observation = world.observe()
+            difference = _compare(expected, observation, settings, exempt=None)
+            if difference is None and _goal_holds(problem, observation, reached, settings):
+                return finish(True, f"goal of demonstration {goal} reached")
+            failures.append(
+                difference or Failure(step, "goal", "the goal does not hold at the end")
+            )
+            why = replan(step)
+            if why:
+                return finish(False, why, gave_up=why.startswith("gave up"))
+            continue
+        if len(executed) >= settings.max_actions:
+            return finish(False, f"gave up after {settings.max_actions} actions", gave_up=True)
+        action = actions.pop(0)
+        step += 1
+        location = problem.location(action.location)
+        target = pose_of(location)
+        grasp = next(g for g in problem.grasps if g.name == action.grasp)
+        emit(RunEvent("action", str(action), step, replans, len(actions)))
+        if action.kind == "GRASP":
+            picked_from = expected.get(action.object, target)
+            world.grasp(action.object, grasp.axis)
+        else:
+            world.put_down(action.object, target)
+        observation = world.observe()
+        failure = _check_action(action, target, expected, observation, settings, step)
+        executed.append(ExecutedAction(step, action, target, plan_index, failure is None))
+        if failure is None:
+            if action.kind == "GRASP":
+                expected.pop(action.object, None)
+            else:
+                expected[action.object] = observation.poses[action.object]
+                _mark_reached(problem, action, reached)
+            upcoming = [
+                pose_of(problem.location(a.location)) for a in actions if a.kind == "PUT_DOWN"
+            ]
+            world.between_actions(upcoming)
+            failure = _compare(expected, world.observe(), settings, exempt=None, step=step)
+        if failure is not None:
+            failures.append(failure)
+            emit(RunEvent("failure", f"{failure.kind}: {failure.detail}", step, replans))
+            held = world.observe().held
+            if held is not None:
+                # Plans start with an empty hand: put the object back where it was taken.
+                world.put_down(held, picked_from)
+            why = replan(step)
+            if why:
+                return finish(False, why, gave_up=why.startswith("gave up"))
+
+
+def _reached_at_start(problem: SceneProblem) -> set[str]:
+    compiled = compile_problem(problem.problem)
+    return {
+        s.id
+        for index, s in enumerate(problem.problem.subgoals)
+        if compiled.start_reached >> index & 1
+    }
+
+
+def _mark_reached(problem: SceneProblem, action: Action, reached: set[str]) -> None:
+    """The subgoal this put-down reaches (at most one; SPEC §5)."""
+    for s in problem.problem.subgoals:
+        if s.object != action.object or s.location != action.location or s.id in reached:
+            continue
+        if all(a in reached for a, b in problem.problem.precedences if b == s.id):
+            reached.add(s.id)
+            return
+
+
+def _goal_holds(
+    problem: SceneProblem, observation: Observation, reached: set[str], settings: ExecutionSettings
+) -> bool:
+    if observation.held is not None:
+        return False
+    if {s.id for s in problem.problem.subgoals} - reached:
+        return False
+    for obj, loc in problem.problem.goal:
+        pose = observation.poses.get(obj)
+        if (
+            pose is None
+            or _distance(pose, pose_of(problem.location(loc))) > settings.position_tolerance
+        ):
+            return False
+    return True
+
+
+def _check_action(
+    action: Action,
+    target: Pose,
+    expected: dict[str, Pose],
+    observation: Observation,
+    settings: ExecutionSettings,
+    step: int,
+) -> Failure | None:
+    obj = action.object
+    if action.kind == "GRASP":
+        if observation.held != obj:
+            return Failure(step, "grasp", f"{obj} is not in the hand after the grasp")
+        return _compare(expected, observation, settings, exempt=obj, step=step)
+    if observation.held is not None:
+        return Failure(step, "release", f"{observation.held} is still in the hand")
+    pose = observation.poses.get(obj)
+    if pose is None:
+        return Failure(step, "dropped", f"{obj} is nowhere to be seen")
+    error = _distance(pose, target)
+    if error > settings.position_tolerance:
+        kind = "misplaced" if error < 0.06 else "dropped"
+        where = ", ".join(f"{v:.3f}" for v in pose.position)
+        return Failure(
+            step, kind, f"{obj} stands at ({where}), {100 * error:.1f} cm from its target"
+        )
+    return _compare(expected, observation, settings, exempt=obj, step=step)
+
+
+def _compare(
+    expected: dict[str, Pose],
+    observation: Observation,
+    settings: ExecutionSettings,
+    exempt: str | None,
+    step: int = 0,
+) -> Failure | None:
+    """The first object that is not where it should be, or a new one."""
+    for obj, pose in expected.items():
+        if obj == exempt:
+            continue
+        seen = observation.poses.get(obj)
+        if seen is None:
+            if observation.held == obj:
+                continue
+            return Failure(step, "moved", f"{obj} is gone from where it stood")
+        error = _distance(seen, pose)
+        if error > settings.position_tolerance:
+            where = ", ".join(f"{v:.3f}" for v in seen.position)
+            return Failure(step, "moved", f"{obj} moved {100 * error:.1f} cm, to ({where})")
+    for obj in observation.poses:
+        if obj not in expected and obj != exempt:
+            return Failure(step, "new_object", f"{obj} appeared")
+    return None

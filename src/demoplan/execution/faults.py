@@ -1,0 +1,67 @@
+"""Faults to inject into a simulated run (SPEC §3 "Run report": ``--faults``).
+
+``--faults drop=0.2,displace=0.1`` gives each kind a probability:
+
+- ``drop`` (per PUT_DOWN): the held object falls during transport and lands on
+  the table near where it fell;
+- ``displace`` (after each action): a person moves a random standing object,
+  one with nothing on it, to a random free spot;
+- ``misplace`` (per PUT_DOWN): the object is released 2–4 cm off its target,
+  on the table;
+- ``grasp`` (per GRASP): the grasp misses; the object stays where it is;
+- ``block`` (after each action, at most twice a run): a new object (one the model
+  never saw) appears on the target of a later PUT_DOWN.
+
+Every injected fault leaves the world recoverable: objects land on the table,
+clear of the others by a gripper's reach, so each can be grasped again.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from demoplan.errors import UsageError
+
+__all__ = ["FAULT_KINDS", "Faults", "parse_faults"]
+
+FAULT_KINDS = ("drop", "displace", "misplace", "grasp", "block")
+
+
+@dataclass(frozen=True, slots=True)
+class Faults:
+    """Probability of each fault kind (0 = never)."""
+
+    drop: float = 0.0
+    displace: float = 0.0
+    misplace: float = 0.0
+    grasp: float = 0.0
+    block: float = 0.0
+
+    def any(self) -> bool:
+        return any(getattr(self, kind) > 0 for kind in FAULT_KINDS)
+
+
+def parse_faults(text: str | None) -> Faults:
+    """``"drop=0.2,displace=0.1"`` → :class:`Faults` (a usage error names what is wrong)."""
+    if not text or not text.strip():
+        return Faults()
+    values: dict[str, float] = {}
+    for item in text.split(","):
+        kind, sep, number = item.strip().partition("=")
+        kind = kind.strip()
+        if not sep or kind not in FAULT_KINDS:
+            raise UsageError(
+                f"--faults: {item.strip()!r} is not kind=probability with a kind among "
+                f"{', '.join(FAULT_KINDS)}"
+            )
+        try:
+            probability = float(number)
+        except ValueError:
+            probability = math.nan
+        if not 0.0 <= probability <= 1.0:
+            raise UsageError(f"--faults: {kind}={number.strip()}: a probability in [0, 1] expected")
+        if kind in values:
+            raise UsageError(f"--faults: {kind} given twice")
+        values[kind] = probability
+    return Faults(**values)

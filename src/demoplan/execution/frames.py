@@ -1,0 +1,116 @@
+"""Top-view frames of a run and a storyboard of them (like the paper's Fig. 4).
+
+Each frame draws the objects where the world says they stand (held object
+drawn at the gripper is left out: it is in the air), the targets of the chosen
+goal as dashed outlines, and a caption with the action just done.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from demoplan.errors import InputError
+from demoplan.execution.world import Observation
+from demoplan.model import ObjectGeometry, Pose
+
+__all__ = ["FrameWriter"]
+
+
+class FrameWriter:
+    """Writes ``frame-0000.png``… into ``folder`` and ``storyboard.png`` at the end."""
+
+    def __init__(self, folder: Path, targets: dict[str, Pose] | None = None):
+        try:
+            import matplotlib
+
+            matplotlib.use("Agg")
+        except ImportError:
+            raise InputError(
+                "matplotlib is not installed; pip install 'demoplan[plot]'", field="--frames"
+            ) from None
+        self.folder = Path(folder)
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"cannot create the folder ({exc})", source=str(folder)) from None
+        self.targets = targets or {}
+        self.frames: list[tuple[Observation, str]] = []
+        self.written: list[Path] = []
+        self._limits: tuple[float, float, float, float] | None = None
+
+    def capture(self, observation: Observation, caption: str) -> None:
+        self.frames.append((observation, caption))
+        path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
+        import matplotlib.pyplot as plt
+
+        from demoplan.plotting import save_figure
+
+        figure, ax = plt.subplots(figsize=(4.5, 4.0))
+        self._draw(ax, observation, caption)
+        figure.tight_layout()
+        save_figure(figure, path, dpi=90)
+        plt.close(figure)
+        self.written.append(path)
+
+    def storyboard(self, max_panels: int = 12) -> Path | None:
+        """Up to ``max_panels`` frames (first, last and evenly between) in one image."""
+        if not self.frames:
+            return None
+        import matplotlib.pyplot as plt
+
+        from demoplan.plotting import save_figure
+
+        n = len(self.frames)
+        picks = sorted(
+            {round(k * (n - 1) / max(1, min(n, max_panels) - 1)) for k in range(min(n, max_panels))}
+        )
+        columns = min(4, len(picks))
+        rows = math.ceil(len(picks) / columns)
+        figure, axes = plt.subplots(
+            rows, columns, figsize=(3.6 * columns, 3.3 * rows), squeeze=False
+        )
+        for ax in axes.flat:
+            ax.set_visible(False)
+        for ax, index in zip(axes.flat, picks, strict=False):
+            ax.set_visible(True)
+            self._draw(ax, *self.frames[index])
+        figure.tight_layout()
+        path = self.folder / "storyboard.png"
+        save_figure(figure, path, dpi=90)
+        plt.close(figure)
+        self.written.append(path)
+        return path
+
+    def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
+        from demoplan.plotting import object_colour, object_patch
+
+        names = sorted(set(observation.geometry))
+        for name, pose in self.targets.items():
+            shape = observation.geometry.get(name)
+            patch = object_patch(pose, shape, "none", 1.0)
+            patch.set_linestyle("--")
+            patch.set_edgecolor(object_colour(name, names.index(name) if name in names else 0))
+            ax.add_patch(patch)
+        for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
+            geometry: ObjectGeometry | None = observation.geometry.get(name)
+            ax.add_patch(object_patch(pose, geometry, object_colour(name, names.index(name)), 0.85))
+            ax.annotate(name, pose.position[:2], fontsize=6, ha="center", va="center")
+        if observation.held:
+            ax.text(
+                0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
+            )
+        if self._limits is None:
+            points = [p.position for p in observation.poses.values()] + [
+                p.position for p in self.targets.values()
+            ]
+            xs, ys = [p[0] for p in points], [p[1] for p in points]
+            margin = 0.08
+            self._limits = (min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin)
+        x0, x1, y0, y1 = self._limits
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=6)
+        ax.set_title(caption, fontsize=7)

@@ -1,0 +1,210 @@
+"""An exact, deterministic world (``--sim kinematic``), with faults injected on demand.
+
+Objects are where the last action put them, to the micrometre; a grasp lifts
+the object, a put-down releases it at the commanded pose. Faults
+(:mod:`demoplan.execution.faults`) are drawn from a seeded generator, so a run
+with the same seed is the same run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from demoplan.execution.faults import Faults
+from demoplan.execution.world import Observation
+from demoplan.model import ObjectGeometry, Pose
+from demoplan.rotations import quat_from_yaw
+from demoplan.scenes.geometry import bounding_radius, finger_offset
+from demoplan.scenes.scene import Scene, yaw_of
+
+__all__ = ["OBSTACLE", "KinematicWorld"]
+
+OBSTACLE = ObjectGeometry("box", (0.04, 0.04, 0.04))
+"""The object a ``block`` fault puts on a target."""
+MAX_BLOCKS = 2
+DISPLACEMENT = 0.05  # m: a person moves an object at least this far
+
+
+class KinematicWorld:
+    """The scene's objects as exact poses; see the module docstring."""
+
+    name = "kinematic"
+
+    def __init__(
+        self,
+        scene: Scene,
+        faults: Faults = Faults(),
+        seed: int | None = 0,
+        schedule: Mapping[int, str] | None = None,
+    ):
+        self.poses: dict[str, Pose] = {obj.name: obj.pose for obj in scene.objects}
+        self.geometry: dict[str, ObjectGeometry] = {}
+        for obj in scene.objects:
+            if obj.geometry is None:
+                raise ValueError(f"{obj.name}: geometry unknown (complete the scene first)")
+            self.geometry[obj.name] = obj.geometry
+        self.gripper = scene.gripper
+        self.faults = faults
+        self.rng = np.random.default_rng(seed)
+        self.held: str | None = None
+        self.picked_from: Pose | None = None
+        self.injected: list[tuple[str, str]] = []  # (kind, what happened), for tests and reports
+        self.blocks = 0
+        # Faults at given actions (1-based count of grasps and put-downs): a test
+        # injects exactly one kind exactly where it wants it.
+        self.schedule = dict(schedule or {})
+        self.actions = 0
+        if scene.table is not None:
+            self.region = scene.table
+        else:
+            xs = [p.position[0] for p in self.poses.values()]
+            ys = [p.position[1] for p in self.poses.values()]
+            self.region = ((min(xs) - 0.25, min(ys) - 0.25), (max(xs) + 0.25, max(ys) + 0.25))
+
+    # -- the World protocol -------------------------------------------------------------
+
+    def observe(self) -> Observation:
+        return Observation(dict(self.poses), self.held, dict(self.geometry))
+
+    def grasp(self, obj: str, axis: float) -> None:
+        self.actions += 1
+        if self.held is not None or obj not in self.poses or self._on_top_of(obj):
+            return  # nothing to grasp, or something stands on it: the hand closes on air
+        if self._chance(self.faults.grasp, "grasp"):
+            self.injected.append(("grasp", f"the grasp of {obj} missed"))
+            return
+        self.picked_from = self.poses.pop(obj)
+        self.held = obj
+
+    def put_down(self, obj: str, pose: Pose) -> None:
+        self.actions += 1
+        if self.held != obj:
+            return
+        start = self.picked_from or pose
+        if self._chance(self.faults.drop, "drop"):
+            t = float(self.rng.uniform(0.2, 0.8))
+            point = [a + t * (b - a) for a, b in zip(start.position, pose.position, strict=True)]
+            landed = self._land(obj, point[0], point[1])
+            self.injected.append(("drop", f"{obj} fell at {_xy(landed)} while carried"))
+        elif self._chance(self.faults.misplace, "misplace"):
+            angle = float(self.rng.uniform(0, 2 * math.pi))
+            distance = float(self.rng.uniform(0.02, 0.04))
+            x = pose.position[0] + distance * math.cos(angle)
+            y = pose.position[1] + distance * math.sin(angle)
+            landed = self._land(obj, x, y)
+            self.injected.append(("misplace", f"{obj} released at {_xy(landed)}, off its target"))
+        else:
+            self.poses[obj] = pose
+        self.held = None
+        self.picked_from = None
+
+    def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
+        if self.held is None and self._chance(self.faults.displace, "displace"):
+            movable = sorted(
+                o for o in self.poses if not self._on_top_of(o) and not o.startswith("obstacle")
+            )
+            if movable:
+                obj = movable[int(self.rng.integers(len(movable)))]
+                before = self.poses.pop(obj)
+                (x0, y0), (x1, y1) = self.region
+                landed = self._land(
+                    obj,
+                    float(self.rng.uniform(x0, x1)),
+                    float(self.rng.uniform(y0, y1)),
+                    yaw_of(before),
+                )
+                if math.dist(landed.position, before.position) < DISPLACEMENT:
+                    self.poses[obj] = before  # no clear spot away from it: no fault
+                else:
+                    self.injected.append(("displace", f"a person moved {obj} to {_xy(landed)}"))
+        if (
+            self.held is None
+            and upcoming
+            and self.blocks < MAX_BLOCKS
+            and self._chance(self.faults.block, "block")
+        ):
+            target = upcoming[0]
+            x, y = target.position[0], target.position[1]
+            if target.position[2] < 0.005 and self._clear(x, y, OBSTACLE, 0.002, reach=False):
+                self.blocks += 1
+                name = f"obstacle{self.blocks}"
+                self.geometry[name] = OBSTACLE
+                self.poses[name] = Pose(
+                    (target.position[0], target.position[1], 0.0), quat_from_yaw(0.0)
+                )
+                self.injected.append(("block", f"{name} appeared at {_xy(self.poses[name])}"))
+
+    # -- helpers --------------------------------------------------------------------------
+
+    def _chance(self, probability: float, kind: str = "") -> bool:
+        if kind and self.schedule.get(self.actions) == kind:
+            del self.schedule[self.actions]
+            return True
+        return probability > 0 and float(self.rng.random()) < probability
+
+    def _on_top_of(self, obj: str) -> list[str]:
+        pose, shape = self.poses[obj], self.geometry[obj]
+        top = pose.position[2] + shape.size[2]
+        reach = bounding_radius(shape)
+        return [
+            other
+            for other, p in self.poses.items()
+            if other != obj
+            and p.position[2] > pose.position[2] + shape.size[2] / 2
+            and abs(p.position[2] - top) < 0.005
+            and math.dist(p.position[:2], pose.position[:2])
+            < reach + bounding_radius(self.geometry[other])
+        ]
+
+    def _reach(self, shape: ObjectGeometry) -> float:
+        """How far from its centre grasping ``shape`` needs room (fingers included)."""
+        fingers = max(finger_offset(shape, axis, self.gripper) for axis in (0.0, 90.0))
+        return max(bounding_radius(shape), fingers + self.gripper.finger_radius)
+
+    def _clear(
+        self, x: float, y: float, shape: ObjectGeometry, margin: float, reach: bool = True
+    ) -> bool:
+        """No object within reach of (x, y): none in the way of grasping ``shape``
+        there, nor of grasping the others (``reach=False``: just not overlapping)."""
+        for other, pose in self.poses.items():
+            other_shape = self.geometry[other]
+            needed = bounding_radius(shape) + bounding_radius(other_shape)
+            if reach:
+                needed = max(
+                    self._reach(shape) + bounding_radius(other_shape),
+                    self._reach(other_shape) + bounding_radius(shape),
+                )
+            if math.dist((x, y), pose.position[:2]) < needed + margin:
+                return False
+        return True
+
+    def _land(self, obj: str, x: float, y: float, yaw: float | None = None) -> Pose:
+        """Put ``obj`` on the table at the clear spot nearest (x, y), turned by up to
+        10° from ``yaw`` (default: as it was when picked up)."""
+        shape = self.geometry[obj]
+        (x0, y0), (x1, y1) = self.region
+        best = None
+        for radius in np.arange(0.0, 0.6, 0.005):
+            count = max(1, int(2 * math.pi * radius / 0.005))
+            for k in range(count):
+                angle = 2 * math.pi * k / count
+                px, py = x + radius * math.cos(angle), y + radius * math.sin(angle)
+                if x0 <= px <= x1 and y0 <= py <= y1 and self._clear(px, py, shape, 0.002):
+                    best = (px, py)
+                    break
+            if best is not None:
+                break
+        if best is None:  # a full table: leave it where it is asked to be
+            best = (x, y)
+        if yaw is None:
+            yaw = yaw_of(self.picked_from) if self.picked_from is not None else 0.0
+        pose = Pose((best[0], best[1], 0.0), quat_from_yaw(yaw + float(self.rng.uniform(-10, 10))))
+        self.poses[obj] = pose
+        return pose
+
+
+def _xy(pose: Pose) -> str:
+    return f"({pose.position[0]:.3f}, {pose.position[1]:.3f})"

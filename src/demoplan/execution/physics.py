@@ -1,0 +1,430 @@
+"""MuJoCo physics (``--sim mujoco``): the scene's objects as rigid bodies on a
+table and a parallel-jaw gripper that really grasps, carries and releases.
+
+The gripper is a hand welded to a mocap target (so it is a dynamic body with a
+real velocity that friction can act on) with two finger pads on slide joints,
+closed by position actuators: an object is held by the fingers' squeeze and
+friction alone, so a poor grasp slips and a released stack has to stand by
+itself. The hand moves along straight lines at ``SPEED`` (the mocap body is
+stepped a little every physics step), rising to a travel height above every
+object before it moves sideways. What the executor observes is read back from
+the simulated bodies: resting point (bottom-face centre) and orientation of
+every object standing on something, and which object, if any, is lifted
+between the fingers.
+
+Faults (:mod:`demoplan.execution.faults`) are injected physically where they
+can be: ``drop`` opens the fingers low over a clear spot on the way, ``misplace``
+releases 2–4 cm off target, ``grasp`` closes the hand beside the object,
+``displace`` and ``block`` move an object (or a parked obstacle) as a person
+would, by setting its pose.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from demoplan.execution.faults import Faults
+from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
+from demoplan.execution.world import Observation
+from demoplan.model import ObjectGeometry, Pose
+from demoplan.scenes.scene import Scene, yaw_of
+
+__all__ = ["MujocoWorld", "scene_xml"]
+
+TIMESTEP = 0.002  # s
+SPEED = 0.4  # m/s of the hand
+TURN_SPEED = 180.0  # deg/s
+FINGER_HALF = (0.005, 0.012, 0.015)  # half extents of a finger pad (m)
+FINGER_TRAVEL = 0.08  # how far each finger opens from the centre (m)
+SQUEEZE = 0.006  # m: how far past the object's side the fingers are told to close
+CLEARANCE = 0.01  # m: gap between an open finger and the object's side
+OBSTACLES = 2
+PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
+DENSITY = 600.0  # kg/m³: wooden blocks
+
+
+def _quat_wxyz(yaw_deg: float) -> list[float]:
+    half = math.radians(yaw_deg) / 2
+    return [math.cos(half), 0.0, 0.0, math.sin(half)]
+
+
+def _geom(shape: ObjectGeometry) -> str:
+    sx, sy, sz = shape.size
+    if shape.shape == "box":
+        return f'type="box" size="{sx / 2} {sy / 2} {sz / 2}"'
+    if shape.shape == "sphere":
+        return f'type="sphere" size="{max(sx, sy, sz) / 2}"'
+    return f'type="cylinder" size="{max(sx, sy) / 2} {sz / 2}"'
+
+
+_COLOURS = {
+    "red": "0.84 0.15 0.16 1",
+    "green": "0.17 0.63 0.17 1",
+    "blue": "0.12 0.47 0.71 1",
+    "yellow": "0.9 0.78 0.1 1",
+    "wood": "0.71 0.53 0.35 1",
+}
+
+
+def scene_xml(scene: Scene) -> str:
+    """The MJCF model of ``scene``: table, objects (free bodies), obstacles parked
+    off the table, and the gripper."""
+    bodies = []
+    for obj in scene.objects:
+        assert obj.geometry is not None
+        x, y, z = obj.pose.position
+        half = obj.geometry.size[2] / 2
+        w, qx, qy, qz = _wxyz(obj.pose)
+        rgba = _COLOURS.get(obj.name, "0.6 0.6 0.7 1")
+        bodies.append(
+            f'<body name="{obj.name}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
+            f'<freejoint/><geom {_geom(obj.geometry)} density="{DENSITY}" rgba="{rgba}" '
+            'friction="0.8 0.01 0.0005" condim="4"/></body>'
+        )
+    for k in range(OBSTACLES):
+        s = OBSTACLE.size[0] / 2
+        bodies.append(
+            f'<body name="obstacle{k + 1}" pos="{PARK[0] + k} {PARK[1]} {s}"><freejoint/>'
+            f'<geom type="box" size="{s} {s} {s}" density="{DENSITY}" rgba="0.3 0.3 0.3 1" '
+            'friction="0.8 0.01 0.0005" condim="4"/></body>'
+        )
+    fx, fy, fz = FINGER_HALF
+    finger = (
+        f'type="box" size="{fx} {fy} {fz}" mass="0.05" friction="1.5 0.02 0.001" condim="4" '
+        'rgba="0.25 0.25 0.3 1"'
+    )
+    return f"""<mujoco model="demoplan">
+  <option timestep="{TIMESTEP}" integrator="implicitfast" cone="elliptic" impratio="10"/>
+  <visual><global offwidth="800" offheight="800"/></visual>
+  <worldbody>
+    <light pos="0.4 0.2 2" dir="0 0 -1" directional="true"/>
+    <geom name="table" type="plane" size="3 3 0.05" rgba="0.92 0.92 0.88 1"
+          friction="0.8 0.01 0.0005"/>
+    {"".join(bodies)}
+    <body name="target" mocap="true" pos="0.3 0 0.4"/>
+    <body name="hand" pos="0.3 0 0.4" gravcomp="1">
+      <freejoint/>
+      <geom type="box" size="0.012 0.03 0.01" pos="0 0 {fz + 0.03}" contype="0" conaffinity="0"
+            mass="0.5" rgba="0.4 0.4 0.45 0.5"/>
+      <body name="finger_left" gravcomp="1">
+        <joint name="left" type="slide" axis="1 0 0" range="-{FINGER_TRAVEL} 0" damping="20"/>
+        <geom {finger}/>
+      </body>
+      <body name="finger_right" gravcomp="1">
+        <joint name="right" type="slide" axis="1 0 0" range="0 {FINGER_TRAVEL}" damping="20"/>
+        <geom {finger}/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <weld body1="target" body2="hand" solref="0.004 1"/>
+  </equality>
+  <contact>
+    <exclude body1="finger_left" body2="finger_right"/>
+  </contact>
+  <actuator>
+    <position name="left" joint="left" kp="800" ctrlrange="-{FINGER_TRAVEL} 0" forcerange="-8 8"/>
+    <position name="right" joint="right" kp="800" ctrlrange="0 {FINGER_TRAVEL}" forcerange="-8 8"/>
+  </actuator>
+</mujoco>
+"""
+
+
+def _wxyz(pose: Pose) -> tuple[float, float, float, float]:
+    if pose.orientation is None:
+        return (1.0, 0.0, 0.0, 0.0)
+    x, y, z, w = pose.orientation
+    return (w, x, y, z)
+
+
+class MujocoWorld:
+    """The scene simulated by MuJoCo; see the module docstring."""
+
+    name = "mujoco"
+
+    def __init__(
+        self,
+        scene: Scene,
+        faults: Faults = Faults(),
+        seed: int | None = 0,
+        schedule: Mapping[int, str] | None = None,
+    ):
+        os.environ.setdefault("MUJOCO_GL", "egl")
+        import mujoco
+
+        self.mujoco = mujoco
+        self.scene = scene
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene))
+        self.data = mujoco.MjData(self.model)
+        self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
+        self.names = [o.name for o in scene.objects]
+        # The kinematic world decides faults and finds clear spots (same rules, same seed).
+        self.oracle = KinematicWorld(scene, faults, seed, schedule)
+        self.faults = faults
+        self.held: str | None = None
+        self.grip_offset = np.zeros(3)  # object centre relative to the hand when grasped
+        self.grip_yaw = 0.0  # object yaw relative to the hand when grasped
+        self.grip_axis = 0.0
+        self.obstacles_used = 0
+        self.simulated = 0.0
+        self.left = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "left")
+        self.right = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "right")
+        self.hand_yaw = 0.0
+        self._open()
+        self._settle(0.5)
+
+    # -- reading the simulation ----------------------------------------------------------
+
+    def _body(self, name: str) -> int:
+        return int(self.mujoco.mj_name2id(self.model, self.mujoco.mjtObj.mjOBJ_BODY, name))
+
+    def _pose(self, name: str) -> Pose:
+        body = self._body(name)
+        centre = self.data.xpos[body]
+        w, x, y, z = (float(v) for v in self.data.xquat[body])
+        shape = self.geometry[name]
+        # bottom-face centre: the centre minus the body's z axis times half the height
+        axis = np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+        bottom = centre - axis * shape.size[2] / 2
+        return Pose((float(bottom[0]), float(bottom[1]), float(bottom[2])), (x, y, z, w))
+
+    def _active(self) -> list[str]:
+        return self.names + [f"obstacle{k + 1}" for k in range(self.obstacles_used)]
+
+    def observe(self) -> Observation:
+        poses = {name: self._pose(name) for name in self._active() if name != self.held}
+        if self.held is not None and not self._lifted(self.held):
+            self.held = None
+            poses = {name: self._pose(name) for name in self._active()}
+        geometry = dict(self.geometry)
+        return Observation(poses, self.held, geometry)
+
+    def _hand(self) -> np.ndarray:
+        """Where the hand is commanded to be (the mocap target)."""
+        return np.array(self.data.mocap_pos[0])
+
+    def _hand_body(self) -> np.ndarray:
+        """Where the hand really is."""
+        return np.array(self.data.xpos[self._body("hand")])
+
+    def _lifted(self, name: str) -> bool:
+        """Between the fingers and off whatever it stood on."""
+        centre = self.data.xpos[self._body(name)]
+        hand = self._hand_body()
+        return bool(
+            np.linalg.norm(centre[:2] - hand[:2]) < 0.03
+            and centre[2] > 0.005 + self.geometry[name].size[2] / 2
+            and abs(centre[2] - hand[2]) < 0.04
+        )
+
+    # -- moving ------------------------------------------------------------------------
+
+    def _step(self, seconds: float) -> None:
+        steps = max(1, round(seconds / TIMESTEP))
+        for _ in range(steps):
+            self.mujoco.mj_step(self.model, self.data)
+        self.simulated += steps * TIMESTEP
+
+    def _settle(self, seconds: float = 0.3) -> None:
+        self._step(seconds)
+
+    def _set_hand_yaw(self, yaw: float) -> None:
+        self.hand_yaw = yaw
+        self.data.mocap_quat[0] = _quat_wxyz(yaw)
+
+    def _move(self, target: Sequence[float], yaw: float | None = None) -> None:
+        start = self._hand()
+        goal = np.asarray(target, dtype=float)
+        distance = float(np.linalg.norm(goal - start))
+        turn = 0.0 if yaw is None else ((yaw - self.hand_yaw + 180.0) % 360.0) - 180.0
+        duration = max(1.5 * distance / SPEED, abs(turn) / TURN_SPEED, TIMESTEP)
+        steps = math.ceil(duration / TIMESTEP)
+        first_yaw = self.hand_yaw
+        for k in range(1, steps + 1):
+            t = k / steps
+            t = t * t * (3.0 - 2.0 * t)  # smooth start and stop: no jerk that shakes a grasp loose
+            self.data.mocap_pos[0] = start + t * (goal - start)
+            if yaw is not None:
+                self._set_hand_yaw(first_yaw + t * turn)
+            self.mujoco.mj_step(self.model, self.data)
+        self.simulated += steps * TIMESTEP
+
+    def _fingers(self, half_width: float) -> None:
+        width = min(max(half_width, 0.0), FINGER_TRAVEL)
+        self.data.ctrl[self.left] = -width
+        self.data.ctrl[self.right] = width
+
+    def _open(self) -> None:
+        self._fingers(FINGER_TRAVEL)
+
+    def _release(self) -> None:
+        """Open the fingers a little (not wide: the neighbours are close) and let go."""
+        assert self.held is not None
+        from demoplan.scenes.geometry import half_extent
+
+        self._fingers(
+            half_extent(self.geometry[self.held], self.grip_axis) + FINGER_HALF[0] + CLEARANCE
+        )
+        self._settle(0.4)
+        self.held = None
+
+    def _travel_height(self) -> float:
+        tops = [
+            self._pose(n).position[2] + self.geometry[n].size[2]
+            for n in self._active()
+            if n != self.held
+        ]
+        carried = self.geometry[self.held].size[2] if self.held else 0.0
+        return max(tops, default=0.0) + carried + FINGER_HALF[2] + 0.05
+
+    # -- the World protocol ------------------------------------------------------------
+
+    def grasp(self, obj: str, axis: float) -> None:
+        self.oracle.actions += 1
+        if self.held is not None or obj not in self._active():
+            return
+        pose = self._pose(obj)
+        shape = self.geometry[obj]
+        yaw = yaw_of(pose) + axis
+        from demoplan.scenes.geometry import half_extent
+
+        half = half_extent(shape, axis)
+        centre = np.array(
+            [pose.position[0], pose.position[1], pose.position[2] + shape.size[2] / 2]
+        )
+        grip_z = pose.position[2] + min(shape.size[2] / 2, FINGER_HALF[2] + 0.004)
+        missed = self.oracle._chance(self.faults.grasp, "grasp")
+        if missed:
+            self.oracle.injected.append(("grasp", f"the grasp of {obj} missed"))
+            # The hand comes down 3 cm beside the object and closes on air.
+            angle = math.radians(yaw + 90.0)
+            offset = np.array([0.03 * math.cos(angle), 0.03 * math.sin(angle), 0.0])
+        else:
+            offset = np.zeros(3)
+        travel = self._travel_height()
+        # Open just wide enough: the planner's collision facts assume the fingers
+        # stand no farther out than half the object + a finger radius (§V.B).
+        self._fingers(half + FINGER_HALF[0] + CLEARANCE)
+        self._move([*self._hand()[:2], travel])
+        self._move([centre[0] + offset[0], centre[1] + offset[1], travel], yaw)
+        self._move([centre[0] + offset[0], centre[1] + offset[1], grip_z + offset[2]])
+        self._fingers(half + FINGER_HALF[0] - SQUEEZE)
+        self._settle(0.4)
+        self.held = obj
+        self._move([centre[0] + offset[0], centre[1] + offset[1], travel])
+        self._settle(0.2)
+        if not self._lifted(obj):
+            self.held = None
+            self._fingers(half + FINGER_HALF[0] + CLEARANCE)
+            self._settle(0.3)
+            return
+        body = self._body(obj)
+        self.grip_axis = axis
+        self.grip_offset = np.array(self.data.xpos[body]) - self._hand_body()
+        self.grip_yaw = yaw_of(self._pose(obj)) - self.hand_yaw
+
+    def put_down(self, obj: str, pose: Pose) -> None:
+        self.oracle.actions += 1
+        if self.held != obj:
+            return
+        shape = self.geometry[obj]
+        target_yaw = yaw_of(pose) - self.grip_yaw
+        x, y, z = pose.position
+        self._sync_oracle()
+        travel = self._travel_height()
+        hand = self._hand()
+        if self.oracle._chance(self.faults.drop, "drop"):
+            t = float(self.oracle.rng.uniform(0.2, 0.8))
+            spot = self.oracle._land(obj, hand[0] + t * (x - hand[0]), hand[1] + t * (y - hand[1]))
+            self._release_over(spot, travel, "drop", f"{obj} fell at {_xy(spot)} while carried")
+            return
+        if self.oracle._chance(self.faults.misplace, "misplace"):
+            angle = float(self.oracle.rng.uniform(0, 2 * math.pi))
+            distance = float(self.oracle.rng.uniform(0.02, 0.04))
+            spot = self.oracle._land(
+                obj, x + distance * math.cos(angle), y + distance * math.sin(angle)
+            )
+            self._release_over(
+                spot, travel, "misplace", f"{obj} released at {_xy(spot)}, off its target"
+            )
+            return
+        centre_z = z + shape.size[2] / 2 + 0.002
+        goal = np.array([x, y, centre_z]) - self._rotated_offset(target_yaw)
+        self._move([*hand[:2], travel])
+        self._move([goal[0], goal[1], travel], target_yaw)
+        self._move(goal)
+        self._release()
+        self._move([goal[0], goal[1], travel])
+        self._settle(0.3)
+
+    def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
+        if self.held is not None:
+            return
+        self._sync_oracle()
+        before = dict(self.oracle.poses)
+        self.oracle.between_actions(upcoming)
+        for name, pose in self.oracle.poses.items():
+            if name.startswith("obstacle") and name not in before:
+                self.obstacles_used = max(self.obstacles_used, int(name.removeprefix("obstacle")))
+                if self.obstacles_used > OBSTACLES:
+                    continue
+                self._teleport(name, pose)
+            elif name in before and pose != before[name]:
+                self._teleport(name, pose)
+        self._settle(0.3)
+
+    def close(self) -> None:
+        """Nothing to release (kept for the runner's interface)."""
+
+    # -- helpers -------------------------------------------------------------------------
+
+    def _rotated_offset(self, hand_yaw: float) -> np.ndarray:
+        """The grasped object's centre offset from the hand, turned with the hand."""
+        turn = math.radians(hand_yaw - self.hand_yaw)
+        c, s = math.cos(turn), math.sin(turn)
+        ox, oy, oz = self.grip_offset
+        return np.array([c * ox - s * oy, s * ox + c * oy, oz])
+
+    def _release_over(self, spot: Pose, travel: float, kind: str, detail: str) -> None:
+        """Carry the held object low over ``spot`` and let go (a drop or a misplacement)."""
+        assert self.held is not None
+        shape = self.geometry[self.held]
+        hand = self._hand()
+        yaw = yaw_of(spot) - self.grip_yaw
+        above = np.array([spot.position[0], spot.position[1], shape.size[2] / 2 + 0.012])
+        goal = above - self._rotated_offset(yaw)
+        self._move([*hand[:2], travel])
+        self._move([goal[0], goal[1], travel], yaw)
+        self._move(goal)
+        self._release()
+        self._move([goal[0], goal[1], travel])
+        self._settle(0.3)
+        self.oracle.injected.append((kind, detail))
+
+    def _sync_oracle(self) -> None:
+        self.oracle.poses = {n: self._pose(n) for n in self._active() if n != self.held}
+        for k in range(self.obstacles_used):
+            self.oracle.geometry[f"obstacle{k + 1}"] = OBSTACLE
+        self.oracle.held = self.held
+
+    def _teleport(self, name: str, pose: Pose) -> None:
+        body = self._body(name)
+        joint = self.model.body_jntadr[body]
+        address = self.model.jnt_qposadr[joint]
+        velocity = self.model.jnt_dofadr[joint]
+        half = (self.geometry.get(name) or OBSTACLE).size[2] / 2
+        x, y, z = pose.position
+        self.data.qpos[address : address + 3] = [x, y, z + half + 0.001]
+        self.data.qpos[address + 3 : address + 7] = _wxyz(pose)
+        self.data.qvel[velocity : velocity + 6] = 0.0
+        self.mujoco.mj_forward(self.model, self.data)
+        if name.startswith("obstacle"):
+            self.geometry[name] = OBSTACLE
+
+
+def _xy(pose: Pose) -> str:
+    return f"({pose.position[0]:.3f}, {pose.position[1]:.3f})"

@@ -1,0 +1,125 @@
+"""``demoplan run``: a world, the executor, a live display and frames, wired together."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from demoplan.errors import InputError
+from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
+from demoplan.execution.faults import Faults
+from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.world import World
+from demoplan.model import TaskModel
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.problems import pose_of
+from demoplan.scenes.scene import Scene, complete_geometry
+
+__all__ = ["make_world", "run_task"]
+
+
+def make_world(sim: str, scene: Scene, faults: Faults, seed: int) -> World:
+    """The simulated world ``sim`` (``kinematic`` or ``mujoco``) set up as ``scene``."""
+    if sim == "kinematic":
+        return KinematicWorld(scene, faults, seed)
+    if sim == "mujoco":
+        from demoplan.execution.physics import MujocoWorld
+
+        return MujocoWorld(scene, faults, seed)
+    raise InputError(f"unknown simulator {sim!r}; expected kinematic or mujoco", field="--sim")
+
+
+def run_task(
+    model: TaskModel,
+    scene: Scene,
+    *,
+    sim: str = "kinematic",
+    faults: Faults = Faults(),
+    seed: int = 0,
+    frames: Path | None = None,
+    max_replans: int = 25,
+    geometry: GeometrySettings | None = None,
+    display: Any = None,
+) -> RunReport:
+    """Run the task in a simulated world; ``display``: a rich console for live progress."""
+    scene = complete_geometry(scene, model)
+    world = make_world(sim, scene, faults, seed)
+    settings = ExecutionSettings(
+        max_replans=max_replans,
+        geometry=geometry or GeometrySettings(),
+        position_tolerance=0.01,
+    )
+    writer = None
+    if frames is not None:
+        from demoplan.execution.frames import FrameWriter
+
+        first = plan_in_scene(model, scene, settings=settings.geometry, clutter=True).chosen
+        targets = {
+            obj: pose_of(first.problem.location(loc)) for obj, loc in first.problem.problem.goal
+        }
+        writer = FrameWriter(frames, targets)
+        writer.capture(world.observe(), "start")
+
+    live = None
+    if display is not None:
+        from rich.live import Live
+        from rich.text import Text
+
+        live = Live(Text("planning…"), console=display, transient=True, refresh_per_second=8)
+        live.start()
+
+    def on_event(event: RunEvent) -> None:
+        if live is not None:
+            from rich.text import Text
+
+            live.update(
+                Text(
+                    f"step {event.step} · {event.text} · replans {event.replans} · "
+                    f"{event.remaining} actions to go"
+                )
+            )
+            if event.kind in ("failure", "replan"):
+                live.console.print(
+                    f"step {event.step}: {event.text}", markup=False, highlight=False
+                )
+        if writer is not None and event.kind == "action":
+            pass
+
+    class Recording:
+        """Captures a frame after each action (the world observed as the executor sees it)."""
+
+        name = world.name
+
+        def observe(self) -> Any:
+            return world.observe()
+
+        def grasp(self, obj: str, axis: float) -> None:
+            world.grasp(obj, axis)
+            self._frame(f"GRASP {obj}")
+
+        def put_down(self, obj: str, pose: Any) -> None:
+            world.put_down(obj, pose)
+            self._frame(f"PUT_DOWN {obj}")
+
+        def between_actions(self, upcoming: Any = ()) -> None:
+            world.between_actions(upcoming)
+
+        def _frame(self, caption: str) -> None:
+            if writer is not None:
+                writer.capture(world.observe(), f"{len(writer.frames)}: {caption}")
+
+    try:
+        report = execute(model, scene, Recording(), settings, on_event)
+    finally:
+        if live is not None:
+            live.stop()
+        close = getattr(world, "close", None)
+        if close is not None:
+            close()
+    if writer is not None:
+        writer.capture(report.final, "end")
+        writer.storyboard()
+        report.frames = [str(p) for p in writer.written]
+    report.world = world.name
+    return report

@@ -1,0 +1,203 @@
+"""Execution with failure detection and replanning (`demoplan run`, kinematic world)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.demonstrations import load_demonstrations
+from demoplan.errors import UsageError
+from demoplan.execution.executor import ExecutionSettings, RunReport, execute
+from demoplan.execution.faults import Faults, parse_faults
+from demoplan.execution.kinematic import KinematicWorld
+from demoplan.learning import learn
+from demoplan.model import TaskModel
+from demoplan.modelfile import save_model
+from demoplan.scenes.scene import Scene, complete_geometry, load_scene
+from tests.helpers import EXAMPLES
+
+BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
+TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
+
+
+@pytest.fixture(scope="module")
+def blocks() -> tuple[TaskModel, Scene]:
+    model = learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    return model, complete_geometry(load_scene(BLOCKS_SCENE), model)
+
+
+@pytest.fixture(scope="module")
+def table() -> tuple[TaskModel, Scene]:
+    model = learn(load_demonstrations([EXAMPLES / "set_table"]))
+    return model, complete_geometry(load_scene(TABLE_SCENE), model)
+
+
+def run(
+    task: tuple[TaskModel, Scene], faults: Faults = Faults(), seed: int = 0, **schedule: int
+) -> tuple[RunReport, KinematicWorld]:
+    model, scene = task
+    world = KinematicWorld(scene, faults, seed, {step: kind for kind, step in schedule.items()})
+    return execute(model, scene, world), world
+
+
+def assert_finished(report: RunReport, model: TaskModel) -> None:
+    """Success means: every object of the chosen goal at its target (recomputed here
+    from the model's states and the final poses), the hand empty."""
+    assert report.success, (report.reason, report.failures)
+    assert report.final.held is None
+    states = {s.id: s for s in model.states}
+    assert report.goal is not None
+    for state_id in model.goals[report.goal]:
+        state = states[state_id]
+        reference = state.position.reference
+        base = (0.0, 0.0, 0.0) if reference is None else report.final.poses[reference].position
+        expected = [b + v for b, v in zip(base, state.position.value, strict=True)]
+        assert math.dist(report.final.poses[state.object].position, expected) < 0.011, state_id
+
+
+def test_no_faults_runs_the_plan_as_planned(blocks: tuple[TaskModel, Scene]) -> None:
+    report, world = run(blocks)
+    assert_finished(report, blocks[0])
+    assert report.replans == 0 and not report.failures and not world.injected
+    assert len(report.actions) == report.first_plan_length == 8
+    assert max(report.pose_errors.values()) < 1e-9
+
+
+@pytest.mark.parametrize(
+    ("kind", "at", "detected"),
+    [
+        # green falls on its way to its target: off by more than 6 cm it "dropped",
+        # else it stands "misplaced" (both mean: not at the target after PUT_DOWN)
+        ("drop", 4, {"dropped", "misplaced"}),
+        ("misplace", 4, {"misplaced", "dropped"}),
+        ("grasp", 3, {"grasp"}),  # the grasp of green misses
+        ("displace", 6, {"moved"}),  # a person moves a placed block after action 6
+        ("block", 2, {"new_object"}),  # an obstacle appears on the next target
+    ],
+)
+def test_each_failure_is_detected_and_recovered(
+    blocks: tuple[TaskModel, Scene], kind: str, at: int, detected: set[str]
+) -> None:
+    report, world = run(blocks, **{kind: at})
+    assert [k for k, _ in world.injected] == [kind]
+    assert len(report.failures) == 1 and report.failures[0].kind in detected
+    assert report.failures[0].step == at
+    assert report.replans == 1
+    assert_finished(report, blocks[0])
+    assert len(report.actions) > report.first_plan_length  # recovery costs actions
+
+
+def test_a_new_object_on_a_target_is_moved_out_of_the_way(blocks: tuple[TaskModel, Scene]) -> None:
+    report, _ = run(blocks, block=2)
+    moved = [e.action.object for e in report.actions if e.action.kind == "GRASP"]
+    assert "obstacle1" in moved
+    assert report.success
+
+
+@pytest.mark.parametrize("task", ["blocks", "table"])
+def test_monte_carlo_recoverable_faults_always_finish(
+    task: str, request: pytest.FixtureRequest
+) -> None:
+    """drop 0.2, displace 0.1 (the issue's rates): every run reaches the goal."""
+    setup = request.getfixturevalue(task)
+    seeds = range(12 if task == "table" else 30)
+    for seed in seeds:
+        report, _ = run(setup, parse_faults("drop=0.2,displace=0.1"), seed)
+        assert_finished(report, setup[0])
+
+
+def test_same_seed_same_run(blocks: tuple[TaskModel, Scene]) -> None:
+    faults = parse_faults("drop=0.3,displace=0.2,misplace=0.1,grasp=0.1")
+    first, _ = run(blocks, faults, 7)
+    second, _ = run(blocks, faults, 7)
+    assert [e.action for e in first.actions] == [e.action for e in second.actions]
+    assert first.failures == second.failures
+
+
+def test_gives_up_after_max_replans(blocks: tuple[TaskModel, Scene]) -> None:
+    model, scene = blocks
+    world = KinematicWorld(scene, Faults(grasp=1.0), 0)
+    report = execute(model, scene, world, ExecutionSettings(max_replans=3))
+    assert not report.success and report.replans == 4
+    assert "gave up after 3 replans" in report.reason and report.exit_code == 4
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("drop=0.2,displace=0.1", Faults(drop=0.2, displace=0.1)),
+        ("", Faults()),
+        (" grasp = 1 ", Faults(grasp=1.0)),
+    ],
+)
+def test_parse_faults(text: str, expected: Faults) -> None:
+    assert parse_faults(text) == expected
+
+
+@pytest.mark.parametrize(
+    "text", ["drop", "fly=0.1", "drop=2", "drop=nan", "drop=0.1,drop=0.2", "drop=x"]
+)
+def test_bad_faults_are_usage_errors(text: str) -> None:
+    with pytest.raises(UsageError, match="--faults"):
+        parse_faults(text)
+
+
+@pytest.fixture(scope="module")
+def blocks_model_file(
+    tmp_path_factory: pytest.TempPathFactory, blocks: tuple[TaskModel, Scene]
+) -> Path:
+    path = tmp_path_factory.mktemp("run") / "blocks.json"
+    save_model(blocks[0], path)
+    return path
+
+
+def invoke(*args: Any) -> Any:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def test_run_json_report(blocks_model_file: Path, tmp_path: Path) -> None:
+    result = invoke(
+        "run",
+        blocks_model_file,
+        BLOCKS_SCENE,
+        "--faults",
+        "drop=0.3,displace=0.2",
+        "--seed",
+        "3",
+        "--json",
+        "--frames",
+        tmp_path / "frames",
+    )
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["success"] is True and data["replans"] >= 1
+    assert {"success", "replans", "actions", "failures", "final_scene"} <= set(data)
+    assert all(len(a) == 4 for a in data["actions"])
+    assert all({"step", "kind", "detail"} <= set(f) for f in data["failures"])
+    assert data["final_scene"]["format"] == "demoplan/scene-1"
+    frames = sorted((tmp_path / "frames").iterdir())
+    assert (tmp_path / "frames" / "storyboard.png") in frames
+    assert len(frames) == len(data["actions"]) + 3  # start, one per action, end, storyboard
+    assert data["frames"]
+
+
+def test_run_text_and_failure_exit_code(blocks_model_file: Path) -> None:
+    result = invoke("run", blocks_model_file, BLOCKS_SCENE)
+    assert result.exit_code == 0, result.stderr
+    assert "success" in result.stdout and "GRASP red" in result.stdout
+    failed = invoke(
+        "run", blocks_model_file, BLOCKS_SCENE, "--faults", "grasp=1", "--max-replans", "2"
+    )
+    assert failed.exit_code == 4
+    assert failed.stderr.strip().startswith("demoplan: error: gave up after 2 replans")
+
+
+def test_run_bad_faults_exit_2(blocks_model_file: Path) -> None:
+    result = invoke("run", blocks_model_file, BLOCKS_SCENE, "--faults", "fly=0.1")
+    assert result.exit_code == 2 and "--faults" in result.stderr
