@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -29,6 +30,11 @@ def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> Non
     assert planning["2"]["chosen"] == 1
     assert ("2", "Plan moves per goal (Fig. 4 scene)") in names
     assert planning["1"]["actions"] and "planning in a new scene" in report
+    if importlib.util.find_spec("mujoco") is not None:  # Fig. 4, right: the robot builds it
+        assert ("2", "Executed by the robot (MuJoCo)") in names
+        assert summary["execution"][0]["success"] is True
+        board = out / "experiment2-blocks-mujoco" / "storyboard.png"
+        assert board.read_bytes().startswith(b"\x89PNG")
     for stem in ("experiment1-set-table", "experiment2-blocks"):
         assert (out / f"{stem}-demonstrations.png").read_bytes().startswith(b"\x89PNG")
         assert (out / f"{stem}-plan.png").read_bytes().startswith(b"\x89PNG")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import pytest
@@ -19,6 +20,7 @@ from demoplan.modelfile import save_model
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES
 
+os.environ.setdefault("MUJOCO_GL", "egl")  # before MuJoCo is imported: headless rendering
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
 
 from demoplan.execution.physics import MujocoWorld

@@ -1,8 +1,9 @@
-"""Top-view frames of a run and a storyboard of them (like the paper's Fig. 4).
+"""Frames of a run and a storyboard of them (like the paper's Fig. 4).
 
-Each frame draws the objects where the world says they stand (held object
-drawn at the gripper is left out: it is in the air), the targets of the chosen
-goal as dashed outlines, and a caption with the action just done.
+A simulator that renders (MuJoCo) gives its own picture. Otherwise a frame
+draws the objects from above where the world says they stand (a held object is
+in the air and left out), the targets of the chosen goal as dashed outlines,
+and a caption with the action just done.
 """
 
 from __future__ import annotations
@@ -37,18 +38,21 @@ class FrameWriter:
             raise InputError(f"cannot create the folder ({exc})", source=str(folder)) from None
         self.targets = targets or {}
         self.frames: list[tuple[Observation, str]] = []
+        self.images: list[Any] = []
         self.written: list[Path] = []
         self._limits: tuple[float, float, float, float] | None = None
 
-    def capture(self, observation: Observation, caption: str) -> None:
+    def capture(self, observation: Observation, caption: str, image: Any = None) -> None:
+        """A frame: the simulator's own picture when it renders one, else a top view."""
         self.frames.append((observation, caption))
+        self.images.append(image)
         path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
         import matplotlib.pyplot as plt
 
         from demoplan.plotting import save_figure
 
         figure, ax = plt.subplots(figsize=(4.5, 4.0))
-        self._draw(ax, observation, caption)
+        self._panel(ax, len(self.frames) - 1)
         figure.tight_layout()
         save_figure(figure, path, dpi=90)
         plt.close(figure)
@@ -75,13 +79,23 @@ class FrameWriter:
             ax.set_visible(False)
         for ax, index in zip(axes.flat, picks, strict=False):
             ax.set_visible(True)
-            self._draw(ax, *self.frames[index])
+            self._panel(ax, index)
         figure.tight_layout()
         path = self.folder / "storyboard.png"
         save_figure(figure, path, dpi=90)
         plt.close(figure)
         self.written.append(path)
         return path
+
+    def _panel(self, ax: Any, index: int) -> None:
+        observation, caption = self.frames[index]
+        image = self.images[index]
+        if image is None:
+            self._draw(ax, observation, caption)
+            return
+        ax.imshow(image)
+        ax.set_axis_off()
+        ax.set_title(caption, fontsize=7)
 
     def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
         from demoplan.plotting import object_colour, object_patch

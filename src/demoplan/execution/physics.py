@@ -21,9 +21,11 @@ would, by setting its pose.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -34,6 +36,9 @@ from demoplan.model import ObjectGeometry, Pose
 from demoplan.scenes.scene import Scene, yaw_of
 
 __all__ = ["MujocoWorld", "scene_xml"]
+
+logger = logging.getLogger(__name__)
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering, before mujoco is imported
 
 TIMESTEP = 0.002  # s
 SPEED = 0.4  # m/s of the hand
@@ -174,6 +179,7 @@ class MujocoWorld:
         self.left = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "left")
         self.right = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "right")
         self.hand_yaw = 0.0
+        self.renderer: Any = None
         self._open()
         self._settle(0.5)
 
@@ -377,8 +383,39 @@ class MujocoWorld:
                 self._teleport(name, pose)
         self._settle(0.3)
 
+    def render(self, width: int = 480, height: int = 360) -> np.ndarray | None:
+        """An oblique view of the table (RGB, ``height × width × 3``), like the
+        paper's photographs of Fig. 4; None where no OpenGL context can be made
+        (MuJoCo imported before ``MUJOCO_GL`` was set, no EGL): frames then fall
+        back to drawings from above."""
+        if self.renderer is False:
+            return None
+        if self.renderer is None:
+            try:
+                self.renderer = self.mujoco.Renderer(self.model, height, width)
+            except Exception as exc:  # the GL back end's own errors vary
+                logger.warning("MuJoCo cannot render here (%s); frames are drawn instead", exc)
+                self.renderer = False
+                return None
+        camera = self.mujoco.MjvCamera()
+        poses = [self._pose(n).position for n in self.names]
+        camera.lookat[:] = [
+            float(np.mean([p[0] for p in poses])),
+            float(np.mean([p[1] for p in poses])),
+            0.02,
+        ]
+        camera.distance = 0.42
+        camera.elevation = -40.0
+        camera.azimuth = 120.0
+        self.renderer.update_scene(self.data, camera=camera)
+        image: np.ndarray = self.renderer.render()
+        return image
+
     def close(self) -> None:
-        """Nothing to release (kept for the runner's interface)."""
+        """Free the renderer's GL context, if one was made."""
+        if self.renderer:
+            self.renderer.close()
+        self.renderer = None
 
     # -- helpers -------------------------------------------------------------------------
 

@@ -59,7 +59,7 @@ def run_task(
             obj: pose_of(first.problem.location(loc)) for obj, loc in first.problem.problem.goal
         }
         writer = FrameWriter(frames, targets)
-        writer.capture(world.observe(), "start")
+        writer.capture(world.observe(), "start", _picture(world))
 
     live = None
     if display is not None:
@@ -107,19 +107,25 @@ def run_task(
 
         def _frame(self, caption: str) -> None:
             if writer is not None:
-                writer.capture(world.observe(), f"{len(writer.frames)}: {caption}")
+                writer.capture(world.observe(), f"{len(writer.frames)}: {caption}", _picture(world))
 
     try:
         report = execute(model, scene, Recording(), settings, on_event)
+        if writer is not None:
+            writer.capture(report.final, "end", _picture(world))
+            writer.storyboard()
+            report.frames = [str(p) for p in writer.written]
     finally:
         if live is not None:
             live.stop()
         close = getattr(world, "close", None)
         if close is not None:
             close()
-    if writer is not None:
-        writer.capture(report.final, "end")
-        writer.storyboard()
-        report.frames = [str(p) for p in writer.written]
     report.world = world.name
     return report
+
+
+def _picture(world: World) -> Any:
+    """The world's own rendering, when it makes one (MuJoCo); else None."""
+    render = getattr(world, "render", None)
+    return None if render is None else render()
