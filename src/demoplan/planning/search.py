@@ -242,6 +242,20 @@ class _AStar:
                 extra += 1
         return total + extra
 
+    def needs(self, positions: tuple[int, ...], reached: int) -> int:
+        """The sum of the objects' own needs, the first term of :meth:`heuristic`."""
+        c = self.c
+        total = 0
+        for obj, location in enumerate(positions):
+            pending = 0
+            for s in c.subgoals_of[obj]:
+                if not reached >> s & 1:
+                    pending += 1
+            goal = c.goal[obj]
+            away = goal >= 0 and goal != location
+            total += pending if pending > away else int(away)
+        return total
+
     def _dead_end(self, positions: tuple[int, ...], needy: list[tuple[int, int, int]]) -> bool:
         """No plan from here: a needy object, or what stands on or around its
         target, can never be picked up again (:meth:`Compiled.frozen`)."""
@@ -535,6 +549,11 @@ class _AStar:
                 return SearchOutcome(None, expanded, len(best_g), False, limit, 2 * bound)
             expanded += 1
             bound = max(bound, f)
+            # A move that reaches no goal and no subgoal leaves every object's
+            # need as it was or raises it (an object taken off its goal needs one
+            # more), and h is at least the sum of the needs: such a child's f is
+            # at least g + 1 + needs — one more than f when h is just the needs.
+            unproductive_f = max(f, g + 1 + self.needs(positions, reached))
             # Put objects down in an order that keeps the rest placeable: the
             # reverse of the peeling order goes first among equals.
             order = self._peel_order(positions) or []
@@ -614,8 +633,10 @@ class _AStar:
                                     h,
                                 ),
                             )
-                        else:  # deferred: its parent's f is a lower bound (pathmax)
-                            heapq.heappush(heap, (f, -(g + 1), 1 << 30, 0, -counter, child, h))
+                        else:  # deferred, with the lower bound above (and pathmax)
+                            heapq.heappush(
+                                heap, (unproductive_f, -(g + 1), 1 << 30, 0, -counter, child, h)
+                            )
         return SearchOutcome(None, expanded, len(best_g), True)
 
     def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:
