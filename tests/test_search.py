@@ -81,7 +81,7 @@ def test_interchangeable_free_space_is_used_but_not_searched_twice() -> None:
 
 
 def test_limits_stop_the_search_with_exit_code_4() -> None:
-    problem = table_problem(7, 1)
+    problem = table_problem(7, 2)  # one object must be parked: a few states are expanded
     with pytest.raises(LimitReachedError, match="max-nodes 2") as caught:
         solve(problem, budget=Budget(max_nodes=2))
     assert caught.value.exit_code == 4

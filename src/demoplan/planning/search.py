@@ -70,6 +70,15 @@ _BfsState = tuple[tuple[int, ...], tuple[int, int] | None, int]
 DEAD_END = 1 << 40
 """Heuristic value of a state from which no plan exists."""
 
+_Move = tuple[int, int, int, int]  # object, source, target, grasp
+_DIRECT_NODES = 1000
+"""States one search for a straight finish may visit (:meth:`_AStar._direct_plan`)."""
+_MAX_DIRECT_DEPTH = 500  # objects; that search recurses once per move
+
+
+class _OutOfNodesError(Exception):
+    """The search for a straight finish ran out of states."""
+
 
 class _Clock:
     def __init__(self, budget: Budget):
@@ -165,6 +174,9 @@ class _AStar:
         # Objects no plan can move (Compiled.never_placed): they are never moved,
         # and a state in which one of them still needs a move is a dead end.
         self.unmovable = c.never_placed()
+        # States (object locations, every subgoal reached) from which the objects
+        # away from their goals cannot each go straight there (see _direct_plan).
+        self._no_direct: set[tuple[int, ...]] = set()
         self.parent: dict[
             tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
         ] = {}
@@ -210,7 +222,9 @@ class _AStar:
         total += extra
         if not idle or not needy:
             if not extra and needy:
-                total += self._order_cycle(positions, reached, idle)
+                total += self._order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self._no_direct
+                )
             return total
         block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
         blocking_sets = []
@@ -231,7 +245,9 @@ class _AStar:
                 blocking_sets.append(union)
         if not blocking_sets:
             if not extra:
-                total += self._order_cycle(positions, reached, idle)
+                total += self._order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self._no_direct
+                )
             return total
         blocking_sets.sort(key=int.bit_count)
         taken = 0
@@ -241,6 +257,58 @@ class _AStar:
                 taken |= union
                 extra += 1
         return total + extra
+
+    def _direct_plan(self, positions: tuple[int, ...], nodes: int) -> list[_Move] | None:
+        """Moves taking every object away from its goal straight there, one
+        move each, in some order: the moves (a plan, if every subgoal is
+        reached), or None if there is no such order; raises
+        :class:`_OutOfNodesError` if ``nodes`` states did not settle it.
+
+        A depth-first search over the orders with the real operator tests;
+        a state shown to have no such completion is remembered in
+        ``_no_direct``. The heuristic adds 1 for a remembered state when its
+        other terms are just the needs (no blocking set, no extra move): a
+        plan of that length would move each object away from its goal exactly
+        once, straight to its goal, and no other object — such an order.
+        """
+        c = self.c
+        goal_of, grasps_of, block, above = c.goal, c.grasps_of, c.block, c.above
+        failed = self._no_direct
+        left = [
+            obj
+            for obj, location in enumerate(positions)
+            if goal_of[obj] >= 0 and goal_of[obj] != location
+        ]
+        occupied = 0
+        for location in positions:
+            occupied |= 1 << location
+        budget = [nodes]
+
+        def search(at: tuple[int, ...], occupied: int, left: list[int]) -> list[_Move] | None:
+            if not left:
+                return []
+            if at in failed:
+                return None
+            if budget[0] <= 0:
+                raise _OutOfNodesError
+            budget[0] -= 1
+            for i, obj in enumerate(left):
+                source, target = at[obj], goal_of[obj]
+                if occupied & above[source]:
+                    continue
+                others = occupied & ~(1 << source)
+                for g in grasps_of[obj]:
+                    if others & block[source][g] or not c.put_ok(others, target, g):
+                        continue
+                    moved = at[:obj] + (target,) + at[obj + 1 :]
+                    rest = search(moved, others | 1 << target, left[:i] + left[i + 1 :])
+                    if rest is not None:
+                        return [(obj, source, target, g), *rest]
+                    break  # another grasp leads to the same state
+            failed.add(at)
+            return None
+
+        return search(positions, occupied, left)
 
     def needs(self, positions: tuple[int, ...], reached: int) -> int:
         """The sum of the objects' own needs, the first term of :meth:`heuristic`."""
@@ -500,6 +568,9 @@ class _AStar:
         needy object onto its goal (or a subgoal) before other moves, so that
         where the heuristic is exact the search walks straight to a plan whose
         length equals the root's lower bound — which proves it shortest.
+        Where h is just the objects' needs, a bounded depth-first search for a
+        finish with one straight move per object (:meth:`_direct_plan`) ends
+        the search at once, or proves h one too low for that state.
         """
         c = self.c
         start = (c.start, c.start_reached)
@@ -544,6 +615,31 @@ class _AStar:
             positions, reached = concrete[key]
             if h == 0 and _is_goal(c, positions, reached):
                 return SearchOutcome(self.unwind(key), expanded, len(best_g), False)
+            if (
+                reached == c.all_subgoals
+                and h == self.needs(positions, reached)
+                and positions not in self._no_direct
+                and len(positions) < _MAX_DIRECT_DEPTH
+            ):
+                # Where h is just the needs, try to finish with one move per
+                # object: found, it is a plan of length g + h <= f, and no plan
+                # is shorter than the smallest f in the queue (A*), so it is
+                # shortest; shown impossible, h grows by one (see _direct_plan).
+                try:
+                    direct = self._direct_plan(positions, _DIRECT_NODES)
+                except _OutOfNodesError:
+                    direct = []
+                if direct:
+                    actions = list(self.unwind(key))
+                    for move in direct:
+                        actions += self.c.move_actions(*move)
+                    return SearchOutcome(tuple(actions), expanded, len(best_g), False)
+                if direct is None:
+                    h = known_h[key] = h + 1
+                    if g + h > f:
+                        counter += 1
+                        heapq.heappush(heap, (g + h, negative_g, 0, 0, -counter, key, parent_h))
+                        continue
             limit = self.clock.stop(expanded)
             if limit:
                 return SearchOutcome(None, expanded, len(best_g), False, limit, 2 * bound)
