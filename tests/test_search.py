@@ -7,9 +7,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.planning.compiled import compile_problem
 from demoplan.planning.generate import blocks_problem, table_problem
 from demoplan.planning.problem import Problem, Subgoal
-from demoplan.planning.search import Budget, astar_search, breadth_first_search, solve
+from demoplan.planning.search import (
+    Budget,
+    _AStar,
+    astar_search,
+    breadth_first_search,
+    solve,
+)
 from demoplan.planning.xml import load_problem
 from tests.helpers import EXAMPLES
 from tests.validator import InvalidPlanError, validate
@@ -74,7 +81,7 @@ def test_interchangeable_free_space_is_used_but_not_searched_twice() -> None:
 
 
 def test_limits_stop_the_search_with_exit_code_4() -> None:
-    problem = table_problem(7, 1)
+    problem = table_problem(7, 2)  # one object must be parked: a few states are expanded
     with pytest.raises(LimitReachedError, match="max-nodes 2") as caught:
         solve(problem, budget=Budget(max_nodes=2))
     assert caught.value.exit_code == 4
@@ -196,3 +203,46 @@ def test_generated_problems_match_bfs(make: object, n: int) -> None:
     validate(problem, plan.actions)
     if n <= 5:
         assert len(solve(problem, "bfs")) == len(plan)
+
+
+def test_goals_that_block_each_others_last_put_down_are_the_reason() -> None:
+    # a's only grasp at la collides with lb and b's at lb with la: whichever
+    # object is put down last cannot be.
+    problem = Problem.create(
+        objects=["a", "b"],
+        locations=["sa", "sb", "la", "lb"],
+        grasps=["g"],
+        allowed=[("a", "g"), ("b", "g")],
+        collisions=[("la", "lb", "g"), ("lb", "la", "g")],
+        initial=[("a", "sa"), ("b", "sb")],
+        goal=[("a", "la"), ("b", "lb")],
+    )
+    with pytest.raises(NoPlanError, match="the last of them put down cannot be"):
+        solve(problem)
+    assert breadth_first_search(problem).exhausted
+    assert astar_search(problem).exhausted
+
+
+def pyramid_with_a_stacked_start() -> Problem:
+    """t stands on b at the start, but t's goal (the top) needs b's goal below it."""
+    return Problem.create(
+        objects=["b", "c", "t"],
+        locations=["left", "right", "top", "s1", "s2", "s3", "free"],
+        grasps=["g"],
+        allowed=[("b", "g"), ("c", "g"), ("t", "g")],
+        supports=[("top", "left"), ("top", "right"), ("s2", "s1")],
+        initial=[("b", "s1"), ("t", "s2"), ("c", "s3")],
+        goal=[("b", "left"), ("c", "right"), ("t", "top")],
+        freespace=["free"],
+    )
+
+
+def test_a_cycle_of_precedences_counts_a_second_move() -> None:
+    # t must leave b before b can move, and b must be at its goal before t can
+    # be put on top: t is parked once, 4 moves; the heuristic sees it at the start.
+    problem = pyramid_with_a_stacked_start()
+    plan = solve(problem)
+    validate(problem, plan.actions)
+    assert len(plan) == 2 * 4 == len(solve(problem, "bfs"))
+    c = compile_problem(problem)
+    assert _AStar(c, Budget()).heuristic(c.start, c.start_reached) == 4

@@ -81,6 +81,42 @@ class Compiled:
                     changed = True
         return stuck
 
+    def never_placed(self) -> int:
+        """Mask of the goal objects that no plan can ever move.
+
+        Every object with a goal ends there, and an object's last put-down
+        puts it at its goal. Among the goal objects of a set R that move, the
+        one put down last finds every other one of R at its goal (moved ones
+        have finished; one that must not move is there already), so one of
+        its grasps at its goal must be clear of the other goals of R. Peel off
+        objects with a grasp at their goal clear of the goals still left (any
+        of them could be that last one); the objects left over, if any, have
+        every grasp at their goal blocked by the others' goals, so none of them
+        may move — from any state, since one of them away from its goal would
+        have to move and then be last or find the last one blocked. Objects
+        without a grasp never peel off (they cannot move either way).
+        """
+        remaining = [obj for obj, goal in enumerate(self.goal) if goal >= 0]
+        goals = 0
+        for obj in remaining:
+            goals |= 1 << self.goal[obj]
+        while remaining:
+            kept = []
+            for obj in remaining:
+                target = self.goal[obj]
+                others = goals & ~(1 << target)
+                if any(not self.block[target][g] & others for g in self.grasps_of[obj]):
+                    goals &= ~(1 << target)
+                else:
+                    kept.append(obj)
+            if len(kept) == len(remaining):
+                break
+            remaining = kept
+        stuck = 0
+        for obj in remaining:
+            stuck |= 1 << obj
+        return stuck
+
     def reach(self, obj: int, location: int, reached: int) -> int:
         """Subgoals reached by putting ``obj`` down at ``location`` (at most one)."""
         for s in self.subgoals_of[obj]:

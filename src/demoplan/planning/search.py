@@ -70,6 +70,15 @@ _BfsState = tuple[tuple[int, ...], tuple[int, int] | None, int]
 DEAD_END = 1 << 40
 """Heuristic value of a state from which no plan exists."""
 
+_Move = tuple[int, int, int, int]  # object, source, target, grasp
+_DIRECT_NODES = 1000
+"""States one search for a straight finish may visit (:meth:`_AStar._direct_plan`)."""
+_MAX_DIRECT_DEPTH = 500  # objects; that search recurses once per move
+
+
+class _OutOfNodesError(Exception):
+    """The search for a straight finish ran out of states."""
+
 
 class _Clock:
     def __init__(self, budget: Budget):
@@ -162,6 +171,12 @@ class _AStar:
         n_locations = len(c.locations)
         self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
         self._move_cache: dict[tuple[int, int, int], bool] = {}
+        # Objects no plan can move (Compiled.never_placed): they are never moved,
+        # and a state in which one of them still needs a move is a dead end.
+        self.unmovable = c.never_placed()
+        # States (object locations, every subgoal reached) from which the objects
+        # away from their goals cannot each go straight there (see _direct_plan).
+        self._no_direct: set[tuple[int, ...]] = set()
         self.parent: dict[
             tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
         ] = {}
@@ -194,6 +209,8 @@ class _AStar:
             away = goal >= 0 and goal != location
             need = pending if pending > away else int(away)
             if need:
+                if self.unmovable >> obj & 1:
+                    return DEAD_END
                 total += need
                 if away:
                     needy.append((obj, location, goal))
@@ -201,8 +218,13 @@ class _AStar:
                 idle |= 1 << location
         if needy and self._dead_end(positions, needy):
             return DEAD_END
-        total += max(self._placement_deadlock(positions), self._pair_conflicts(positions, reached))
+        extra = max(self._placement_deadlock(positions), self._pair_conflicts(positions, reached))
+        total += extra
         if not idle or not needy:
+            if not extra and needy:
+                total += self._order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self._no_direct
+                )
             return total
         block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
         blocking_sets = []
@@ -222,6 +244,10 @@ class _AStar:
             if union:
                 blocking_sets.append(union)
         if not blocking_sets:
+            if not extra:
+                total += self._order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self._no_direct
+                )
             return total
         blocking_sets.sort(key=int.bit_count)
         taken = 0
@@ -231,6 +257,72 @@ class _AStar:
                 taken |= union
                 extra += 1
         return total + extra
+
+    def _direct_plan(self, positions: tuple[int, ...], nodes: int) -> list[_Move] | None:
+        """Moves taking every object away from its goal straight there, one
+        move each, in some order: the moves (a plan, if every subgoal is
+        reached), or None if there is no such order; raises
+        :class:`_OutOfNodesError` if ``nodes`` states did not settle it.
+
+        A depth-first search over the orders with the real operator tests;
+        a state shown to have no such completion is remembered in
+        ``_no_direct``. The heuristic adds 1 for a remembered state when its
+        other terms are just the needs (no blocking set, no extra move): a
+        plan of that length would move each object away from its goal exactly
+        once, straight to its goal, and no other object — such an order.
+        """
+        c = self.c
+        goal_of, grasps_of, block, above = c.goal, c.grasps_of, c.block, c.above
+        failed = self._no_direct
+        left = [
+            obj
+            for obj, location in enumerate(positions)
+            if goal_of[obj] >= 0 and goal_of[obj] != location
+        ]
+        occupied = 0
+        for location in positions:
+            occupied |= 1 << location
+        budget = [nodes]
+
+        def search(at: tuple[int, ...], occupied: int, left: list[int]) -> list[_Move] | None:
+            if not left:
+                return []
+            if at in failed:
+                return None
+            if budget[0] <= 0:
+                raise _OutOfNodesError
+            budget[0] -= 1
+            for i, obj in enumerate(left):
+                source, target = at[obj], goal_of[obj]
+                if occupied & above[source]:
+                    continue
+                others = occupied & ~(1 << source)
+                for g in grasps_of[obj]:
+                    if others & block[source][g] or not c.put_ok(others, target, g):
+                        continue
+                    moved = at[:obj] + (target,) + at[obj + 1 :]
+                    rest = search(moved, others | 1 << target, left[:i] + left[i + 1 :])
+                    if rest is not None:
+                        return [(obj, source, target, g), *rest]
+                    break  # another grasp leads to the same state
+            failed.add(at)
+            return None
+
+        return search(positions, occupied, left)
+
+    def needs(self, positions: tuple[int, ...], reached: int) -> int:
+        """The sum of the objects' own needs, the first term of :meth:`heuristic`."""
+        c = self.c
+        total = 0
+        for obj, location in enumerate(positions):
+            pending = 0
+            for s in c.subgoals_of[obj]:
+                if not reached >> s & 1:
+                    pending += 1
+            goal = c.goal[obj]
+            away = goal >= 0 and goal != location
+            total += pending if pending > away else int(away)
+        return total
 
     def _dead_end(self, positions: tuple[int, ...], needy: list[tuple[int, int, int]]) -> bool:
         """No plan from here: a needy object, or what stands on or around its
@@ -290,6 +382,115 @@ class _AStar:
                 pairs += 1
                 break
         return pairs
+
+    def _order_cycle(self, positions: tuple[int, ...], reached: int, fixed: int) -> int:
+        """1 if the single-move objects cannot be ordered with one move each
+        while the idle objects stay where they are (at ``fixed``), else 0.
+
+        Only used when no idle object is in the way (no blocking set) and no
+        other extra move is counted: a plan as short as the rest of the
+        heuristic then moves every needy object exactly as often as it needs
+        and no idle object at all — the idle objects are fixed obstacles and
+        supports, and each *single* object (final goal, no pending subgoal)
+        makes exactly one move, source → goal. In such a plan, when X moves,
+        every single object Y moved before it stands at its goal and every one
+        moved after it at its source. So for each of X's grasps the places
+        that forbid the move (blocking the grasp at the source, standing on
+        the source, blocking the put-down, exclusive with or at the goal) give
+        "Y before X" (Y's source is such a place) and "Y after X" (Y's goal
+        is); a grasp forbidden by a fixed object, or by some Y both ways, is
+        unusable. What every usable grasp demands is a precedence; so are the
+        supports of X's goal, which must be occupied: by a fixed object, else
+        by the one object starting there (it moves after X) or the one ending
+        there (it moves before X) — when only one of them exists, and when
+        objects with pending subgoals (which may stand anywhere) are absent.
+        No usable grasp, an unsupportable goal or a cycle of precedences means
+        some needy object moves twice: +1, which like the deadlock bound
+        counts a needy object's second move.
+        """
+        c = self.c
+        goal_of, grasps_of = c.goal, c.grasps_of
+        single: list[int] = []
+        wildcards = False
+        for obj, location in enumerate(positions):
+            goal = goal_of[obj]
+            pending = any(not reached >> s & 1 for s in c.subgoals_of[obj])
+            if pending:
+                wildcards = True
+            elif goal >= 0 and goal != location:
+                if not grasps_of[obj]:
+                    return 0  # a dead end is another bound's business
+                single.append(obj)
+        if not single:
+            return 0
+        index_at_source: dict[int, int] = {}
+        index_at_goal: dict[int, int] = {}
+        sources = goals = 0
+        for i, obj in enumerate(single):
+            index_at_source[positions[obj]] = i
+            index_at_goal[goal_of[obj]] = i
+            sources |= 1 << positions[obj]
+            goals |= 1 << goal_of[obj]
+        block, above, exclusive, below = c.block, c.above, c.exclusive, c.below
+        everyone = (1 << len(single)) - 1
+        before = [0] * len(single)  # i -> mask of the indices that must move before i
+        for i, obj in enumerate(single):
+            source, goal = positions[obj], goal_of[obj]
+            must_before = must_after = 0
+            if not wildcards:
+                support = below[goal] & ~fixed
+                while support:
+                    low = support & -support
+                    support ^= low
+                    location = low.bit_length() - 1
+                    starter = index_at_source.get(location, -1) if location != source else -1
+                    ender = index_at_goal.get(location, -1)
+                    if starter < 0 and ender < 0:
+                        return 1  # nothing can ever hold the goal up
+                    if ender < 0:
+                        must_after |= 1 << starter
+                    elif starter < 0:
+                        must_before |= 1 << ender
+            common_before = common_after = everyone
+            usable = False
+            for g in grasps_of[obj]:
+                forbid = (
+                    block[source][g] | above[source] | block[goal][g] | exclusive[goal] | 1 << goal
+                )
+                if forbid & fixed:
+                    continue
+                b = _indices(forbid & sources & ~(1 << source), index_at_source)
+                a = _indices(forbid & goals & ~(1 << goal), index_at_goal)
+                if b & a:
+                    continue
+                usable = True
+                common_before &= b
+                common_after &= a
+            if not usable:
+                return 1
+            must_before |= common_before
+            must_after |= common_after
+            if must_before & must_after:
+                return 1
+            before[i] |= must_before & ~(1 << i)
+            after = must_after & ~(1 << i)
+            while after:
+                low = after & -after
+                after ^= low
+                before[low.bit_length() - 1] |= 1 << i
+        # Take away objects with nothing left to wait for; what stays holds a cycle.
+        remaining = everyone
+        changed = True
+        while changed and remaining:
+            changed = False
+            rest = remaining
+            while rest:
+                low = rest & -rest
+                rest ^= low
+                if not before[low.bit_length() - 1] & remaining:
+                    remaining ^= low
+                    changed = True
+        return 1 if remaining else 0
 
     def _move_ok(self, obj: int, source: int, obstacle: int) -> bool:
         """Can ``obj`` move from ``source`` to its goal with one other object at ``obstacle``?"""
@@ -367,6 +568,9 @@ class _AStar:
         needy object onto its goal (or a subgoal) before other moves, so that
         where the heuristic is exact the search walks straight to a plan whose
         length equals the root's lower bound — which proves it shortest.
+        Where h is just the objects' needs, a bounded depth-first search for a
+        finish with one straight move per object (:meth:`_direct_plan`) ends
+        the search at once, or proves h one too low for that state.
         """
         c = self.c
         start = (c.start, c.start_reached)
@@ -392,7 +596,7 @@ class _AStar:
             c.exclusive,
             c.below,
         )
-        plain, goal_of = c.plain, c.goal
+        plain, goal_of, unmovable = c.plain, c.goal, self.unmovable
         while heap:
             f, negative_g, _, _, _, key, parent_h = heapq.heappop(heap)
             g = best_g[key]
@@ -411,11 +615,41 @@ class _AStar:
             positions, reached = concrete[key]
             if h == 0 and _is_goal(c, positions, reached):
                 return SearchOutcome(self.unwind(key), expanded, len(best_g), False)
+            if (
+                reached == c.all_subgoals
+                and h == self.needs(positions, reached)
+                and positions not in self._no_direct
+                and len(positions) < _MAX_DIRECT_DEPTH
+            ):
+                # Where h is just the needs, try to finish with one move per
+                # object: found, it is a plan of length g + h <= f, and no plan
+                # is shorter than the smallest f in the queue (A*), so it is
+                # shortest; shown impossible, h grows by one (see _direct_plan).
+                try:
+                    direct = self._direct_plan(positions, _DIRECT_NODES)
+                except _OutOfNodesError:
+                    direct = []
+                if direct:
+                    actions = list(self.unwind(key))
+                    for move in direct:
+                        actions += self.c.move_actions(*move)
+                    return SearchOutcome(tuple(actions), expanded, len(best_g), False)
+                if direct is None:
+                    h = known_h[key] = h + 1
+                    if g + h > f:
+                        counter += 1
+                        heapq.heappush(heap, (g + h, negative_g, 0, 0, -counter, key, parent_h))
+                        continue
             limit = self.clock.stop(expanded)
             if limit:
                 return SearchOutcome(None, expanded, len(best_g), False, limit, 2 * bound)
             expanded += 1
             bound = max(bound, f)
+            # A move that reaches no goal and no subgoal leaves every object's
+            # need as it was or raises it (an object taken off its goal needs one
+            # more), and h is at least the sum of the needs: such a child's f is
+            # at least g + 1 + needs — one more than f when h is just the needs.
+            unproductive_f = max(f, g + 1 + self.needs(positions, reached))
             # Put objects down in an order that keeps the rest placeable: the
             # reverse of the peeling order goes first among equals.
             order = self._peel_order(positions) or []
@@ -436,7 +670,7 @@ class _AStar:
                     break
             for obj, source in enumerate(positions):
                 others = occupied & ~(1 << source)
-                if occupied & above[source]:
+                if occupied & above[source] or unmovable >> obj & 1:
                     continue
                 goal = goal_of[obj]
                 has_subgoals = bool(c.subgoals_of[obj])
@@ -461,7 +695,13 @@ class _AStar:
                             continue
                         moved = positions[:obj] + (target,) + positions[obj + 1 :]
                         now_reached = c.reach(obj, target, reached) if has_subgoals else reached
-                        child = self.key(moved, now_reached)
+                        # The key differs from the parent's in one place (and reached).
+                        child = (
+                            *key[:obj],
+                            -1 if plain >> target & 1 else target,
+                            *key[obj + 1 : -1],
+                            now_reached,
+                        )
                         if best_g.get(child, 1 << 60) <= g + 1:
                             continue
                         best_g[child] = g + 1
@@ -489,8 +729,10 @@ class _AStar:
                                     h,
                                 ),
                             )
-                        else:  # deferred: its parent's f is a lower bound (pathmax)
-                            heapq.heappush(heap, (f, -(g + 1), 1 << 30, 0, -counter, child, h))
+                        else:  # deferred, with the lower bound above (and pathmax)
+                            heapq.heappush(
+                                heap, (unproductive_f, -(g + 1), 1 << 30, 0, -counter, child, h)
+                            )
         return SearchOutcome(None, expanded, len(best_g), True)
 
     def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:
@@ -501,6 +743,16 @@ class _AStar:
             actions[:0] = self.c.move_actions(obj, source, target, grasp)
             link = self.parent[key]
         return tuple(actions)
+
+
+def _indices(mask: int, index_at: dict[int, int]) -> int:
+    """The indices (as a mask) of the objects at the locations of ``mask``."""
+    found = 0
+    while mask:
+        low = mask & -mask
+        mask ^= low
+        found |= 1 << index_at[low.bit_length() - 1]
+    return found
 
 
 def _all_grasps_hit(per_grasp: list[int], always: int, idle: int) -> int:
@@ -553,6 +805,21 @@ def explain_unsolvable(problem: Problem) -> list[str]:
         reasons.append(
             f"{', '.join(must_move)} must move but can never be grasped: "
             f"{', '.join(stuck)} block every grasp of one another where they stand"
+        )
+    unmovable = c.never_placed()
+    must_place = [
+        c.objects[o]
+        for o, loc in enumerate(c.start)
+        if unmovable >> o & 1
+        and c.grasps_of[o]
+        and (c.goal[o] != loc or any(not c.start_reached >> s & 1 for s in c.subgoals_of[o]))
+    ]
+    if must_place:
+        circle = [c.objects[o] for o in range(len(c.objects)) if unmovable >> o & 1]
+        reasons.append(
+            f"{', '.join(must_place)} must be put down at places where every grasp "
+            f"collides with another final place of {', '.join(circle)}: "
+            "the last of them put down cannot be"
         )
     cycle = find_cycle(problem.precedences)
     if cycle:
