@@ -164,6 +164,16 @@ def small_problems(draw: st.DrawFn) -> Problem:
             )
         if len(subgoals) == 2 and draw(st.booleans()):
             precedences.append(("S0", "S1"))
+    accepts: list[tuple[str, str]] = []
+    if draw(st.booleans()):  # a location that takes only some objects
+        place = draw(st.sampled_from(locations))
+        needed = {o for o, loc in zip(objects, starts, strict=True) if loc == place}
+        needed |= {o for o, loc in goal if loc == place}
+        needed |= {s.object for s in subgoals if s.location == place}
+        others = [o for o in objects if o not in needed]
+        if others:
+            needed |= set(draw(st.lists(st.sampled_from(others), max_size=1)))
+        accepts = [(place, o) for o in sorted(needed)]
     return Problem.create(
         objects=objects,
         locations=locations,
@@ -175,6 +185,7 @@ def small_problems(draw: st.DrawFn) -> Problem:
         freespace=freespace,
         supports=supports,
         exclusions=exclusions,
+        accepts=accepts,
         subgoals=subgoals,
         precedences=precedences,
     )
