@@ -19,6 +19,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
+from demoplan.planning.generate import table_problem
 from demoplan.planning.xml import save_problem
 from tests.test_problem_xml import BOMB
 from tests.test_solve_cli import PAPER, two_objects
@@ -51,6 +52,8 @@ def problems(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     save_problem(two_objects([("a", "l2"), ("b", "l1")]), paths["swap"])
     paths["shared"] = folder / "shared.xml"  # no plan: found statically
     save_problem(two_objects([("a", "l3"), ("b", "l3")], locations=["l3"]), paths["shared"])
+    paths["hard"] = folder / "hard.xml"  # needs more than two expansions
+    save_problem(table_problem(7, 2), paths["hard"])
     paths["bomb"] = folder / "bomb.xml"
     paths["bomb"].write_text(BOMB)
     return paths
@@ -63,7 +66,7 @@ def problems(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         ("paper", ["--json"], 0),
         ("paper", ["--search", "bfs", "--json"], 0),
         ("paper", ["--search=bfs"], 0),
-        ("paper", ["--max-nodes", "2"], 4),
+        ("hard", ["--max-nodes", "2"], 4),
         ("paper", ["--timeout", "0"], 4),
         ("swap", ["--search", "bfs"], 3),
         ("swap", [], 3),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import re
 import sys
 import time
@@ -25,7 +26,7 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
-from demoplan.errors import DemoplanError, InputError, error_line
+from demoplan.errors import DemoplanError, InputError, UsageError, error_line
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -548,6 +549,13 @@ def problem(
             _stderr.print(f"demoplan: warning: {obstacle}", markup=False, highlight=False)
 
 
+class PerceptionName(StrEnum):
+    """How ``demoplan run`` observes the world."""
+
+    state = "state"
+    camera = "camera"
+
+
 class SimName(StrEnum):
     """Worlds of ``demoplan run``."""
 
@@ -576,6 +584,10 @@ def run(
         Path | None, typer.Option(help="Write top-view PNG frames and a storyboard here.")
     ] = None,
     max_replans: Annotated[int, typer.Option(min=0, help="Give up after this many replans.")] = 25,
+    perception: Annotated[
+        PerceptionName,
+        typer.Option(help="state (read the simulator) or camera (perceive its top view; mujoco)."),
+    ] = PerceptionName.state,
     freespace: FreespaceOption = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
@@ -594,6 +606,7 @@ def run(
             seed=seed,
             frames=frames,
             max_replans=max_replans,
+            perception=perception.value,
             geometry=_geometry_settings(freespace),
             display=_stderr if live else None,
         )
@@ -631,6 +644,67 @@ def _print_run_report(report: Any) -> None:
         markup=False,
         highlight=False,
     )
+
+
+@app.command()
+def perceive(
+    image_path: Annotated[
+        Path, typer.Argument(metavar="IMAGE", help="A top-down orthographic colour image (PNG).")
+    ],
+    px_per_m: Annotated[float, typer.Option("--px-per-m", min=1e-6, help="Pixels per metre.")],
+    origin: Annotated[
+        tuple[float, float],
+        typer.Option(help="World x y (m) of the image's bottom-left corner."),
+    ],
+    json_output: Annotated[bool, typer.Option("--json", help="Print the scene as JSON.")] = False,
+    before: Annotated[
+        Path | None,
+        typer.Option(help="The picture before the last move: blocks it covers stand under it."),
+    ] = None,
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Also write the scene to this file.")
+    ] = None,
+    side: Annotated[
+        float | None,
+        typer.Option(
+            min=1e-4, help="The blocks' side (m), when known: sizes 15 % off it are not blocks."
+        ),
+    ] = None,
+) -> None:
+    """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
+    from demoplan.fileio import dump_json, write_atomic
+    from demoplan.perception.blocks import PerceptionSettings, detect_blocks
+    from demoplan.perception.camera import Camera, load_image
+    from demoplan.perception.stacking import BlockTracker, TrackedBlock, scene_document
+
+    with _reported_errors():
+        if not all(map(math.isfinite, (px_per_m, *origin))):
+            raise UsageError("--px-per-m and --origin must be finite numbers")
+        camera = Camera(px_per_m, origin)
+        settings = PerceptionSettings()
+        if side is not None:
+            settings = PerceptionSettings(min_side=0.85 * side, max_side=1.15 * side)
+        tracker = BlockTracker()
+        if before is not None:
+            earlier = detect_blocks(load_image(before), camera, settings)
+            tracker = BlockTracker(
+                TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
+            )
+        blocks = tracker.update(detect_blocks(load_image(image_path), camera, settings))
+        document = scene_document(blocks)
+        if output is not None:
+            write_atomic(output, dump_json(document))
+        if json_output:
+            _print_json(document)
+            return
+        table = Table(title=f"Blocks in {image_path.name}", title_justify="left")
+        for column in ("name", "x [m]", "y [m]", "z [m]", "yaw [deg]", "side [m]"):
+            table.add_column(column, justify="left" if column == "name" else "right")
+        for name, b in blocks.items():
+            table.add_row(
+                name, f"{b.x:.4f}", f"{b.y:.4f}", f"{b.z:.3f}", f"{b.yaw:.1f}", f"{b.side:.4f}"
+            )
+        _stdout.print(table)
 
 
 @app.command()

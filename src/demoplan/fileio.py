@@ -30,6 +30,7 @@ __all__ = [
     "dump_json",
     "read_document",
     "write_atomic",
+    "write_atomic_bytes",
 ]
 
 FORMAT_VERSION = 1
@@ -182,7 +183,12 @@ def dump_json(data: Any) -> str:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temp file in the same folder + rename).
+    """Write ``text`` (UTF-8) to ``path`` atomically; see :func:`write_atomic_bytes`."""
+    write_atomic_bytes(path, text.encode("utf-8"))
+
+
+def write_atomic_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temp file in the same folder + rename).
 
     A path that exists and is not a regular file (``/dev/null``, a pipe) is
     written into directly instead.
@@ -200,8 +206,8 @@ def write_atomic(path: Path, text: str) -> None:
         # A device or pipe (-o /dev/null, -o /dev/stdout): write into it; renaming
         # a file over it would replace the device itself.
         try:
-            with path.open("w", encoding="utf-8") as handle:
-                handle.write(text)
+            with path.open("wb") as handle:
+                handle.write(data)
         except OSError as exc:
             raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
         return
@@ -211,9 +217,9 @@ def write_atomic(path: Path, text: str) -> None:
     except OSError as exc:
         raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        with os.fdopen(fd, "wb") as handle:
             _set_mode(handle.fileno(), path)
-            handle.write(text)
+            handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
         Path(tmp).replace(path)

@@ -290,7 +290,7 @@ def execute(
         emit(RunEvent("action", str(action), step, replans, len(actions)))
         if action.kind == "GRASP":
             picked_from = expected.get(action.object, target)
-            world.grasp(action.object, grasp.axis)
+            world.grasp(action.object, grasp.axis, picked_from)
         else:
             world.put_down(action.object, target)
         observation = world.observe()

@@ -69,7 +69,7 @@ class KinematicWorld:
     def observe(self) -> Observation:
         return Observation(dict(self.poses), self.held, dict(self.geometry))
 
-    def grasp(self, obj: str, axis: float) -> None:
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
         self.actions += 1
         if self.held is not None or obj not in self.poses or self._on_top_of(obj):
             return  # nothing to grasp, or something stands on it: the hand closes on air

@@ -33,6 +33,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
+from demoplan.perception.camera import Camera
 from demoplan.scenes.scene import Scene, yaw_of
 
 __all__ = ["MujocoWorld", "scene_xml"]
@@ -48,6 +49,7 @@ FINGER_TRAVEL = 0.08  # how far each finger opens from the centre (m)
 SQUEEZE = 0.006  # m: how far past the object's side the fingers are told to close
 CLEARANCE = 0.01  # m: gap between an open finger and the object's side
 OBSTACLES = 2
+TOP_PX_PER_M = 1000.0  # the top camera: 1 px = 1 mm
 PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
 DENSITY = 600.0  # kg/m³: wooden blocks
 
@@ -75,9 +77,11 @@ _COLOURS = {
 }
 
 
-def scene_xml(scene: Scene) -> str:
+def scene_xml(scene: Scene, top_view: tuple[float, float, float] | None = None) -> str:
     """The MJCF model of ``scene``: table, objects (free bodies), obstacles parked
-    off the table, and the gripper."""
+    off the table, the gripper, and — with ``top_view = (x, y, height_m)`` — an
+    orthographic camera ``top`` looking straight down at (x, y) whose picture is
+    ``height_m`` metres high."""
     bodies = []
     for obj in scene.objects:
         assert obj.geometry is not None
@@ -97,6 +101,13 @@ def scene_xml(scene: Scene) -> str:
             f'<geom type="box" size="{s} {s} {s}" density="{DENSITY}" rgba="0.3 0.3 0.3 1" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
+    camera = ""
+    if top_view is not None:
+        cx, cy, view_height = top_view
+        camera = (
+            f'<camera name="top" pos="{cx} {cy} 1.5" quat="1 0 0 0" '
+            f'projection="orthographic" fovy="{view_height}"/>'
+        )
     fx, fy, fz = FINGER_HALF
     finger = (
         f'type="box" size="{fx} {fy} {fz}" mass="0.05" friction="1.5 0.02 0.001" condim="4" '
@@ -104,9 +115,14 @@ def scene_xml(scene: Scene) -> str:
     )
     return f"""<mujoco model="demoplan">
   <option timestep="{TIMESTEP}" integrator="implicitfast" cone="elliptic" impratio="10"/>
-  <visual><global offwidth="800" offheight="800"/></visual>
+  <visual>
+    <global offwidth="1200" offheight="1200"/>
+    <headlight ambient="0.35 0.35 0.35" diffuse="0.25 0.25 0.25" specular="0 0 0"/>
+  </visual>
   <worldbody>
-    <light pos="0.4 0.2 2" dir="0 0 -1" directional="true"/>
+    <light pos="0.4 0.2 2" dir="0 0 -1" directional="true" castshadow="false"
+           diffuse="0.45 0.45 0.45" specular="0 0 0"/>
+    {camera}
     <geom name="table" type="plane" size="3 3 0.05" rgba="0.92 0.92 0.88 1"
           friction="0.8 0.01 0.0005"/>
     {"".join(bodies)}
@@ -163,12 +179,17 @@ class MujocoWorld:
 
         self.mujoco = mujoco
         self.scene = scene
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene))
+        # The kinematic world decides faults and finds clear spots (same rules, same seed).
+        self.oracle = KinematicWorld(scene, faults, seed, schedule)
+        (x0, y0), (x1, y1) = self.oracle.region
+        self.top_camera = Camera(TOP_PX_PER_M, (x0, y0))
+        self.top_size = (round((x1 - x0) * TOP_PX_PER_M), round((y1 - y0) * TOP_PX_PER_M))
+        self.model = mujoco.MjModel.from_xml_string(
+            scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0))
+        )
         self.data = mujoco.MjData(self.model)
         self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
         self.names = [o.name for o in scene.objects]
-        # The kinematic world decides faults and finds clear spots (same rules, same seed).
-        self.oracle = KinematicWorld(scene, faults, seed, schedule)
         self.faults = faults
         self.held: str | None = None
         self.grip_offset = np.zeros(3)  # object centre relative to the hand when grasped
@@ -180,6 +201,7 @@ class MujocoWorld:
         self.right = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "right")
         self.hand_yaw = 0.0
         self.renderer: Any = None
+        self.top_renderer: Any = None
         self._open()
         self._settle(0.5)
 
@@ -242,7 +264,7 @@ class MujocoWorld:
         self.hand_yaw = yaw
         self.data.mocap_quat[0] = _quat_wxyz(yaw)
 
-    def _move(self, target: Sequence[float], yaw: float | None = None) -> None:
+    def _move(self, target: Sequence[float] | np.ndarray, yaw: float | None = None) -> None:
         start = self._hand()
         goal = np.asarray(target, dtype=float)
         distance = float(np.linalg.norm(goal - start))
@@ -289,11 +311,11 @@ class MujocoWorld:
 
     # -- the World protocol ------------------------------------------------------------
 
-    def grasp(self, obj: str, axis: float) -> None:
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
         self.oracle.actions += 1
         if self.held is not None or obj not in self._active():
             return
-        pose = self._pose(obj)
+        pose = where if where is not None else self._pose(obj)  # where it is believed to be
         shape = self.geometry[obj]
         yaw = yaw_of(pose) + axis
         from demoplan.scenes.geometry import half_extent
@@ -411,11 +433,36 @@ class MujocoWorld:
         image: np.ndarray = self.renderer.render()
         return image
 
+    def top_image(self) -> np.ndarray:
+        """The table from straight above through the orthographic camera ``top``
+        (1 px = 1 mm, bottom-left corner at ``self.top_camera.origin``), with the
+        hand parked beside the table first so that it hides nothing."""
+        self.park()
+        if self.top_renderer is None:
+            width, height = self.top_size
+            self.top_renderer = self.mujoco.Renderer(self.model, height, width)
+        self.top_renderer.update_scene(self.data, camera="top")
+        image: np.ndarray = self.top_renderer.render()
+        return image
+
+    def park(self) -> None:
+        """Move the hand (and what it holds) beside the table, out of the top view."""
+        (_, y0), (x1, y1) = self.oracle.region
+        travel = self._travel_height()
+        hand = self._hand()
+        home = [x1 + 0.12, (y0 + y1) / 2, travel]
+        if math.dist(hand, home) < 1e-6:
+            return
+        self._move([*hand[:2], travel])
+        self._move(home)
+        self._settle(0.1)
+
     def close(self) -> None:
-        """Free the renderer's GL context, if one was made."""
-        if self.renderer:
-            self.renderer.close()
-        self.renderer = None
+        """Free the renderers' GL contexts, if any were made."""
+        for renderer in (self.renderer, self.top_renderer):
+            if renderer:
+                renderer.close()
+        self.renderer = self.top_renderer = None
 
     # -- helpers -------------------------------------------------------------------------
 

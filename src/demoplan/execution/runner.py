@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from demoplan.errors import InputError
+from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
@@ -19,15 +19,27 @@ from demoplan.scenes.scene import Scene, complete_geometry
 __all__ = ["make_world", "run_task"]
 
 
-def make_world(sim: str, scene: Scene, faults: Faults, seed: int) -> World:
-    """The simulated world ``sim`` (``kinematic`` or ``mujoco``) set up as ``scene``."""
+def make_world(
+    sim: str, scene: Scene, faults: Faults, seed: int, perception: str = "state"
+) -> World:
+    """The simulated world ``sim`` (``kinematic`` or ``mujoco``) set up as ``scene``,
+    observed through its state or (``perception="camera"``, MuJoCo) its top camera."""
+    if perception not in ("state", "camera"):
+        raise UsageError(f"--perception {perception}: expected state or camera")
     if sim == "kinematic":
+        if perception == "camera":
+            raise UsageError("--perception camera needs --sim mujoco (a world that renders)")
         return KinematicWorld(scene, faults, seed)
     if sim == "mujoco":
         from demoplan.execution.physics import MujocoWorld
 
-        return MujocoWorld(scene, faults, seed)
-    raise InputError(f"unknown simulator {sim!r}; expected kinematic or mujoco", field="--sim")
+        world = MujocoWorld(scene, faults, seed)
+        if perception == "camera":
+            from demoplan.execution.camera_world import CameraWorld
+
+            return CameraWorld(world, scene)
+        return world
+    raise UsageError(f"--sim {sim}: expected kinematic or mujoco")
 
 
 def run_task(
@@ -39,12 +51,13 @@ def run_task(
     seed: int = 0,
     frames: Path | None = None,
     max_replans: int = 25,
+    perception: str = "state",
     geometry: GeometrySettings | None = None,
     display: Any = None,
 ) -> RunReport:
     """Run the task in a simulated world; ``display``: a rich console for live progress."""
     scene = complete_geometry(scene, model)
-    world = make_world(sim, scene, faults, seed)
+    world = make_world(sim, scene, faults, seed, perception)
     settings = ExecutionSettings(
         max_replans=max_replans,
         geometry=geometry or GeometrySettings(),
@@ -94,8 +107,8 @@ def run_task(
         def observe(self) -> Any:
             return world.observe()
 
-        def grasp(self, obj: str, axis: float) -> None:
-            world.grasp(obj, axis)
+        def grasp(self, obj: str, axis: float, where: Any = None) -> None:
+            world.grasp(obj, axis, where)
             self._frame(f"GRASP {obj}")
 
         def put_down(self, obj: str, pose: Any) -> None:

@@ -35,9 +35,10 @@ class World(Protocol):
         """What the sensors see now."""
         ...
 
-    def grasp(self, obj: str, axis: float) -> None:
-        """Close the hand on ``obj`` where it stands, fingers along ``axis`` (deg,
-        object frame), and lift it."""
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
+        """Close the hand on ``obj``, fingers along ``axis`` (deg, object frame), and
+        lift it; ``where``: the pose the executor believes it has (a world that
+        knows better may use its own)."""
         ...
 
     def put_down(self, obj: str, pose: Pose) -> None:

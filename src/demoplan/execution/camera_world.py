@@ -1,0 +1,92 @@
+"""``demoplan run --sim mujoco --perception camera``: the loop on vision.
+
+The executor sees the simulated world only through the orthographic top
+camera: after every action the hand is parked beside the table, the picture
+is taken, the blocks are found in it (:mod:`demoplan.perception.blocks`) and
+their heights are tracked from occlusion (:mod:`demoplan.perception.stacking`).
+What the hand holds comes from the gripper itself (a robot feels that). The
+grasps go where perception says the object is. The start's stacking comes
+from the scene: a camera above cannot see what is under a block it never saw
+being covered.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from demoplan.errors import UsageError
+from demoplan.execution.physics import _COLOURS, MujocoWorld
+from demoplan.execution.world import Observation
+from demoplan.model import ObjectGeometry, Pose
+from demoplan.perception.blocks import PerceptionSettings, detect_blocks
+from demoplan.perception.stacking import BlockTracker, TrackedBlock
+from demoplan.rotations import quat_from_yaw
+from demoplan.scenes.scene import Scene, yaw_of
+
+__all__ = ["CameraWorld"]
+
+
+class CameraWorld:
+    """A MuJoCo world observed through its top camera (see the module docstring)."""
+
+    name = "mujoco+camera"
+
+    def __init__(
+        self, world: MujocoWorld, scene: Scene, settings: PerceptionSettings | None = None
+    ):
+        plain = [o.name for o in scene.objects if o.name not in _COLOURS]
+        if plain:
+            raise UsageError(
+                f"--perception camera names blocks by colour; {', '.join(plain)} "
+                f"{'is' if len(plain) == 1 else 'are'} not one of {', '.join(sorted(_COLOURS))}"
+            )
+        self.world = world
+        sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]
+        # The blocks' sizes are known: a strip of a covered block is not a small block.
+        self.settings = settings or PerceptionSettings(
+            min_side=0.85 * min(sides), max_side=1.15 * max(sides)
+        )
+        self.tracker = BlockTracker(
+            TrackedBlock(
+                o.name,
+                o.pose.position[0],
+                o.pose.position[1],
+                o.pose.position[2],
+                ((yaw_of(o.pose) + 45.0) % 90.0) - 45.0,
+                o.geometry.size[0] if o.geometry else 0.04,
+            )
+            for o in scene.objects
+        )
+        self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
+        self.pictures = 0
+
+    def observe(self) -> Observation:
+        held = self.world.observe().held  # the gripper's own sense
+        image = self.world.top_image()
+        self.pictures += 1
+        detected = detect_blocks(image, self.world.top_camera, self.settings)
+        blocks = self.tracker.update(detected, held)
+        poses = {n: Pose((b.x, b.y, b.z), quat_from_yaw(b.yaw)) for n, b in blocks.items()}
+        geometry = dict(self.geometry)
+        for n, b in blocks.items():
+            geometry.setdefault(n, ObjectGeometry("box", (b.side, b.side, b.side)))
+        return Observation(poses, held, geometry)
+
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
+        self.world.grasp(obj, axis, where)
+
+    def put_down(self, obj: str, pose: Pose) -> None:
+        self.world.put_down(obj, pose)
+
+    def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
+        self.world.between_actions(upcoming)
+
+    def render(self) -> object:
+        return self.world.render()
+
+    def close(self) -> None:
+        self.world.close()
+
+    @property
+    def oracle(self) -> object:
+        return self.world.oracle

@@ -1,0 +1,9 @@
+"""Block perception from a camera above the table (paper §V.B; SPEC §3 "Camera image").
+
+- :mod:`~demoplan.perception.camera`: pixels ↔ world, reading images;
+- :mod:`~demoplan.perception.colours`: background, foreground and colour classes;
+- :mod:`~demoplan.perception.hough`: the paper's Hough transform over (x, y, θ, s);
+- :mod:`~demoplan.perception.blocks`: detection = colours + Hough + sub-pixel fit → a scene;
+- :mod:`~demoplan.perception.stacking`: a block covered after a move is under the moved one;
+- :mod:`~demoplan.perception.synthetic`: test images of blocks (anti-aliased, noisy, shaded).
+"""

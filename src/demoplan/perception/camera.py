@@ -1,0 +1,71 @@
+"""The top-down orthographic camera of SPEC §3 "Camera image".
+
+``px_per_m`` pixels per metre; ``origin`` = world (x, y) of the image's
+bottom-left corner; image x to the right = world x, image up = world y. A
+pixel's centre (row r, column c) of an H-row image lies at
+``x = X0 + (c + 0.5) / S``, ``y = Y0 + (H − r − 0.5) / S``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from demoplan.errors import InputError
+
+__all__ = ["Camera", "load_image", "save_image"]
+
+MAX_PIXELS = 50_000_000  # a larger "image" is a mistake or an attack (decompression bomb)
+
+
+@dataclass(frozen=True, slots=True)
+class Camera:
+    """Scale (px/m) and the world position of the image's bottom-left corner (m)."""
+
+    px_per_m: float
+    origin: tuple[float, float] = (0.0, 0.0)
+
+    def to_world(self, u: float, v: float) -> tuple[float, float]:
+        """(u, v) in pixels from the bottom-left corner (v up) → world (x, y)."""
+        return self.origin[0] + u / self.px_per_m, self.origin[1] + v / self.px_per_m
+
+    def to_pixels(self, x: float, y: float) -> tuple[float, float]:
+        """World (x, y) → (u, v) in pixels from the bottom-left corner (v up)."""
+        return (x - self.origin[0]) * self.px_per_m, (y - self.origin[1]) * self.px_per_m
+
+
+def load_image(path: str | Path) -> np.ndarray:
+    """An RGB image as ``uint8`` (H × W × 3); alpha is dropped, grey is made RGB."""
+    from PIL import Image, UnidentifiedImageError
+
+    Image.MAX_IMAGE_PIXELS = MAX_PIXELS
+    try:
+        with Image.open(path) as opened:  # reads the header only
+            width, height = opened.size
+            if width * height > MAX_PIXELS:
+                raise InputError(
+                    f"not a readable image ({width} × {height} pixels; at most "
+                    f"{MAX_PIXELS:,} expected)",
+                    source=str(path),
+                )
+            rgb = opened.convert("RGB")
+            return np.asarray(rgb, dtype=np.uint8).copy()
+    except FileNotFoundError:
+        raise InputError("no such file", source=str(path)) from None
+    except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as exc:
+        raise InputError(f"not a readable image ({exc})", source=str(path)) from None
+
+
+def save_image(image: np.ndarray, path: str | Path) -> None:
+    """Write an RGB ``uint8`` image as PNG, atomically."""
+    import io
+
+    from PIL import Image
+
+    from demoplan.fileio import write_atomic_bytes
+
+    buffer = io.BytesIO()
+    Image.fromarray(np.asarray(image, dtype=np.uint8)).save(buffer, format="PNG")
+    write_atomic_bytes(Path(path), buffer.getvalue())
