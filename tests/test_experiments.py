@@ -32,6 +32,7 @@ def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> Non
     assert planning["1"]["actions"] and "planning in a new scene" in report
     if importlib.util.find_spec("mujoco") is not None:  # Fig. 4, right: the robot builds it
         assert ("2", "Executed by the robot (MuJoCo)") in names
+        assert ("2", "Executed on vision (top camera)") in names
         assert summary["execution"][0]["success"] is True
         board = out / "experiment2-blocks-mujoco" / "storyboard.png"
         assert board.read_bytes().startswith(b"\x89PNG")
