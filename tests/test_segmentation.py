@@ -205,6 +205,19 @@ def test_an_object_still_moving_at_the_end_gives_no_step(caplog: pytest.LogCaptu
     assert "still moving" in caplog.text
 
 
+def test_a_track_that_begins_mid_move_still_gives_the_step_but_no_initial_pose() -> None:
+    demo = Demonstration(
+        "late", (Step("a", Pose((0.6, 0.4, 0.0))),), initial=(("a", Pose((0.1, 0.1, 0.0))),)
+    )
+    track = stream_from_demonstration(demo, rate_hz=60, noise_m=0.002, rng=0).tracks[0]
+    middle = (segment(PoseStream((track,))).moves[0].start + 0.6) <= track.times
+    late = PoseStream((ObjectTrack("a", track.times[middle], track.positions[middle]),))
+    found = segment(late)
+    assert_recovered(demo, found.steps)
+    assert found.initial == ()
+    assert found.moves[0].before is None and math.isnan(found.moves[0].distance)
+
+
 def test_a_turn_in_place_counts_when_large_and_a_wobble_does_not() -> None:
     demo = Demonstration(
         "turns",

@@ -8,7 +8,8 @@ objects at once give two moves):
    ``(t_i, t_i + w/2]`` (``w`` = :attr:`SegmentationSettings.speed_window_s`),
    divided by the difference of the two windows' mean times. Windows are in
    time, not samples, so uneven sampling and dropped samples only change how
-   many samples are averaged; with σ of sensor noise and ``k`` samples per
+   many samples are averaged (a half window holding fewer than 4 samples —
+   low rates, dropped samples — is widened to 4); with σ of sensor noise and ``k`` samples per
    half window the speed noise is about ``σ·√(2/k) / (w/2)`` per axis
    (3 mm at 30 Hz with w = 0.4 s: ≈ 8 mm/s). Everything is computed with
    cumulative sums and ``searchsorted`` — O(n log n), no Python loop per sample.
@@ -79,6 +80,7 @@ __all__ = [
 logger = logging.getLogger(__name__)
 
 MIN_FINAL_REST_SAMPLES = 3
+MIN_HALF_WINDOW_SAMPLES = 4  # a half window shorter than this is widened (sparse samples)
 INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
 MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
 
@@ -342,9 +344,11 @@ def track_speed(times: FloatArray, positions: FloatArray, window_s: float) -> Fl
     # Hold the window inside the track near its ends.
     centre = np.clip(t, half, t[-1] - half) if t[-1] > window_s else np.full(n, t[-1] / 2.0)
     ct, cp = _cumsum0(t), _cumsum0(positions)
-    lo = np.searchsorted(t, centre - half, side="left")
     mid = np.searchsorted(t, centre, side="right")
-    hi = np.searchsorted(t, centre + half, side="right")
+    # Each half window spans w/2, widened to MIN_HALF_WINDOW_SAMPLES where samples are sparse.
+    lo = np.minimum(np.searchsorted(t, centre - half, side="left"), mid - MIN_HALF_WINDOW_SAMPLES)
+    hi = np.maximum(np.searchsorted(t, centre + half, side="right"), mid + MIN_HALF_WINDOW_SAMPLES)
+    lo, hi = np.maximum(lo, 0), np.minimum(hi, n)
     left_n, left_t, left_p = _window_means(t, ct, cp, lo, mid)
     right_n, right_t, right_p = _window_means(t, ct, cp, mid, hi)
     dt = right_t - left_t
@@ -433,6 +437,10 @@ def _segment_track(track: ObjectTrack, settings: SegmentationSettings) -> _Track
     # Step 5: steps and nudges, measured from the last accepted rest pose.
     initial = rest_pose(0)
     reference = initial
+    if reference is None:
+        # Moving when the track begins: measure the first move from where the track starts.
+        b = int(np.searchsorted(times, times[0] + settings.pose_window_s, side="right"))
+        reference = _robust_pose(positions[:b], None if orientations is None else orientations[:b])
     moves: list[Move] = []
     nudges: list[Move] = []
     for k in range(starts.size):
@@ -446,7 +454,7 @@ def _segment_track(track: ObjectTrack, settings: SegmentationSettings) -> _Track
             after,
             rest_pose(k, last=True),
         )
-        if reference is None or _is_step(reference, after, settings):
+        if _is_step(reference, after, settings):
             moves.append(move)
             reference = after
         else:
