@@ -30,6 +30,8 @@ def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> Non
     assert planning["2"]["chosen"] == 1
     assert ("2", "Plan moves per goal (Fig. 4 scene)") in names
     assert planning["1"]["actions"] and "planning in a new scene" in report
+    assert ("1", "Stream segmented into the demonstration's steps") in names
+    assert (out / "experiment1-stream.csv").exists()
     if importlib.util.find_spec("mujoco") is not None:  # Fig. 4, right: the robot builds it
         assert ("2", "Executed by the robot (MuJoCo)") in names
         assert ("2", "Executed on vision (top camera)") in names

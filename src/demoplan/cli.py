@@ -132,7 +132,8 @@ def learn(
         list[Path],
         typer.Argument(
             metavar="DEMO",
-            help="Demonstration files or folders (with --update: the new ones).",
+            help="Demonstration files or folders, or pose streams (CSV, ROS 2 bags) to "
+            "segment first (with --update: the new ones).",
             show_default=False,
         ),
     ],
@@ -705,6 +706,66 @@ def perceive(
                 name, f"{b.x:.4f}", f"{b.y:.4f}", f"{b.z:.3f}", f"{b.yaw:.1f}", f"{b.side:.4f}"
             )
         _stdout.print(table)
+
+
+@app.command()
+def segment(
+    stream_path: Annotated[
+        Path,
+        typer.Argument(
+            metavar="STREAM", help="A pose stream: CSV, or a ROS 2 bag (sqlite3, mcap)."
+        ),
+    ],
+    output: Annotated[
+        Path, typer.Option("--output", "-o", help="The demonstration file to write.")
+    ],
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw speed over time with the moves shaded.")
+    ] = None,
+    name: Annotated[str | None, typer.Option(help="The demonstration's name.")] = None,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the demonstration as JSON.")
+    ] = False,
+) -> None:
+    """Segment a continuous pose stream into pick-and-place steps (a demonstration)."""
+    from demoplan.demonstrations import demonstration_to_dict
+    from demoplan.segmentation import load_stream, plot_segmentation, write_demonstration
+    from demoplan.segmentation import segment as segment_stream
+
+    with _reported_errors():
+        stream = load_stream(stream_path)
+        found = segment_stream(stream)
+        demo = found.to_demonstration(name or stream_path.stem)
+        write_demonstration(demo, output)
+        if plot is not None:
+            try:
+                plot_segmentation(found, plot)
+            except ImportError:
+                raise InputError(
+                    "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+                ) from None
+        if json_output:
+            _print_json(demonstration_to_dict(demo))
+            return
+        table = Table(title=f"Steps found in {stream_path.name}", title_justify="left")
+        for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
+            table.add_column(column, justify="left" if column == "object" else "right")
+        for index, move in enumerate(found.moves, 1):
+            x, y, z = move.pose.position
+            table.add_row(
+                str(index),
+                move.object,
+                f"{move.start:.2f}",
+                f"{move.end:.2f}",
+                f"{x:.4f}",
+                f"{y:.4f}",
+                f"{z:.4f}",
+            )
+        _stdout.print(table)
+        nudges = f", {len(found.nudges)} nudges ignored" if found.nudges else ""
+        _stderr.print(
+            f"{len(found.moves)} steps{nudges}; wrote {output}", markup=False, highlight=False
+        )
 
 
 @app.command()

@@ -24,6 +24,7 @@ __all__ = [
     "check_demonstrations",
     "demonstration_to_dict",
     "demonstrations_from_document",
+    "is_pose_stream",
     "load_demonstrations",
     "pose_from_dict",
     "pose_to_dict",
@@ -214,10 +215,29 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
     )
 
 
+STREAM_SUFFIXES = {".csv", ".db3", ".mcap"}
+
+
+def is_pose_stream(path: Path) -> bool:
+    """A pose stream (SPEC §3): a CSV file, or a ROS 2 bag (``.db3``, ``.mcap``, or a
+    folder holding ``metadata.yaml``)."""
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file()
+    return path.suffix.lower() in STREAM_SUFFIXES or path.name == "metadata.yaml"
+
+
 def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
-    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order)."""
+    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
+    a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
+    (:mod:`demoplan.segmentation`, default settings), named after the file."""
     demos: list[Demonstration] = []
     for path in map(Path, paths):
+        if is_pose_stream(path):
+            from demoplan.segmentation import load_stream, segment
+
+            name = path.stem if path.name != "metadata.yaml" else path.parent.name
+            demos.append(segment(load_stream(path)).to_demonstration(name))
+            continue
         if path.is_dir():
             # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
             files = sorted(
