@@ -1,0 +1,779 @@
+"""Benchmark: block perception from a top camera, demoplan against an OpenCV baseline.
+
+What it measures
+----------------
+Generated top-view images (:mod:`demoplan.perception.synthetic`), 500 × 400 px
+at 1 px = 1 mm (``Camera(1000.0, (0.0, 0.0))``), in three sets; every image has
+its own seed (image ``i`` of a set: ``numpy.random.default_rng(seed0 + i)``),
+which draws the scene, the sensor noise (1–5 grey levels) and the shading
+(0–0.2):
+
+a. **separated** — 1 to 5 blocks of distinct colours at random poses
+   (:func:`~demoplan.perception.synthetic.random_blocks`);
+b. **touching, two colours** — two blocks of different colours, faces touching
+   (:func:`~demoplan.perception.synthetic.touching_pair`), the paper's failure case;
+c. **touching, one colour** (stretch) — the same with one colour for both;
+   reported apart and not part of the targets.
+
+100 images per set (``--images``; ``--quick``: 20). Each image goes to
+
+1. **demoplan** — :func:`demoplan.perception.blocks.detect_blocks` (colour
+   regions, the Hough transform over (x, y, θ, s), a sub-pixel fit);
+2. **baseline** — a simple OpenCV pipeline written here: the table colour is
+   the median of the image border, the foreground the pixels farther than
+   ``BASELINE_THRESHOLD`` (RGB distance) from it, ``cv2.findContours`` on that
+   mask, and ``cv2.minAreaRect`` per contour whose area is at least
+   ``0.3 × (20 px)²`` (demoplan's own minimum) → centre, angle (mod 90° into
+   [−45°, 45°); image rows run down, so the world yaw is minus OpenCV's angle),
+   side = mean of the rectangle's width and height, colour = the mean image
+   colour inside the contour named with
+   :func:`demoplan.perception.colours.name_colour`. It merges touching blocks
+   into one contour — that is the point of the comparison.
+
+Detections are matched to the true blocks of their image by colour and nearest
+centre (greedily, closest pairs first); a true block is *detected* when a
+detection of its colour lies within 5 mm. Per set and method: detection rate
+(matched / true blocks), count accuracy (share of images with exactly the true
+number of detections), extra detections (unmatched ones), median and 95th
+percentile of the position error (mm) and of the angle error (degrees, mod 90°)
+over the matched blocks, the median absolute side error (mm), and the median and
+95th-percentile time per image (``time.perf_counter`` around the call alone;
+both methods on the same images, one warm-up call each first).
+
+It ends with the targets, PASS / FAIL / NOT MEASURED, on sets a and b: every
+block counted; median position error under 1 mm and angle error under 1°;
+under 0.5 s per 500 × 400 image (95th percentile, demoplan). Then demoplan's 5
+worst images (set, seed, what went wrong); ``--show SET:SEED`` reruns one of
+them and prints the truth and both methods' detections.
+
+Everything runs on one core (BLAS/OpenMP threads and OpenCV's pinned to 1).
+Machines are shared and noisy: compare medians and ratios between runs on one
+machine, not absolute times across machines.
+
+How to run
+----------
+From the repository root, with demoplan installed (``pip install -e ".[dev]"``,
+which brings ``opencv-python-headless``)::
+
+    python benchmarks/perception.py                  # 3 × 100 images (~1 min)
+    python benchmarks/perception.py --quick          # 3 × 20 images
+    python benchmarks/perception.py --out results.json
+    python benchmarks/perception.py --show b:17      # one image, both methods
+"""
+
+from __future__ import annotations
+
+import os
+
+# One core: must happen before NumPy (and its BLAS) is imported.
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable, Sequence  # noqa: E402
+from dataclasses import asdict, dataclass, field  # noqa: E402
+from importlib import metadata  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+from numpy.typing import NDArray  # noqa: E402
+from rich.console import Console  # noqa: E402
+from rich.table import Table  # noqa: E402
+
+import demoplan  # noqa: E402
+from demoplan.perception.blocks import detect_blocks  # noqa: E402
+from demoplan.perception.camera import Camera  # noqa: E402
+from demoplan.perception.colours import name_colour  # noqa: E402
+from demoplan.perception.synthetic import (  # noqa: E402
+    COLOURS,
+    SyntheticBlock,
+    random_blocks,
+    render_blocks,
+    touching_pair,
+)
+
+WIDTH, HEIGHT = 500, 400  # pixels
+PX_PER_M = 1000.0  # 1 px = 1 mm
+CAMERA = Camera(PX_PER_M, (0.0, 0.0))
+FULL_IMAGES, QUICK_IMAGES = 100, 20  # per set
+NOISE = (1.0, 5.0)  # grey levels, uniform
+SHADING = (0.0, 0.2)  # uniform
+MATCH_MM = 5.0  # a true block is detected when a detection of its colour is this close
+BASELINE_THRESHOLD = 60.0  # RGB distance from the table colour (foreground)
+BASELINE_MIN_AREA = 0.3 * 20.0**2  # px², demoplan's: 0.3 × (min_side in px)²
+TARGET_POSITION_MM, TARGET_ANGLE_DEG, TARGET_SECONDS = 1.0, 1.0, 0.5
+WORST_LISTED = 5
+WARM_UP_SEED = 999_999  # an image outside every set's seeds
+TIMES = "\u00d7"  # multiplication sign (spelled out for ruff's RUF001)
+
+# Set keys, in table order; the targets are judged on TARGET_SETS.
+SETS = {
+    "a": "a: separated, 1-5 blocks",
+    "b": "b: touching, two colours",
+    "c": "c: touching, one colour (stretch)",
+}
+TARGET_SETS = ("a", "b")
+# Each set draws from its own seed range, so that set b's image 0 is not set a's.
+SEED_BASE = {"a": 0, "b": 100_000, "c": 200_000}
+DEMOPLAN, BASELINE = "demoplan", "baseline"
+METHOD_LABELS = {DEMOPLAN: "demoplan detect_blocks", BASELINE: "OpenCV minAreaRect"}
+
+
+# --------------------------------------------------------------------------- images
+
+
+@dataclass(frozen=True, slots=True)
+class Scene:
+    """One generated image and its ground truth."""
+
+    set_key: str
+    seed: int
+    truth: list[SyntheticBlock]
+    image: NDArray[np.uint8]
+    noise: float
+    shading: float
+
+
+def make_scene(set_key: str, seed: int) -> Scene:
+    """The image of ``set_key`` drawn from ``numpy.random.default_rng(seed)``."""
+    rng = np.random.default_rng(seed)
+    colours = list(COLOURS)
+    if set_key == "a":
+        count = int(rng.integers(1, 6))
+        truth = random_blocks(count, CAMERA, WIDTH, HEIGHT, rng)
+    elif set_key == "b":
+        first, second = rng.choice(len(colours), size=2, replace=False)
+        truth = touching_pair(
+            CAMERA, WIDTH, HEIGHT, rng, (colours[int(first)], colours[int(second)])
+        )
+    elif set_key == "c":
+        colour = colours[int(rng.integers(len(colours)))]
+        truth = touching_pair(CAMERA, WIDTH, HEIGHT, rng, (colour, colour))
+    else:
+        raise ValueError(f"unknown image set {set_key!r}")
+    noise = float(rng.uniform(*NOISE))
+    shading = float(rng.uniform(*SHADING))
+    image = render_blocks(
+        truth, CAMERA, width=WIDTH, height=HEIGHT, noise=noise, shading=shading, rng=rng
+    )
+    return Scene(set_key, seed, truth, image, noise, shading)
+
+
+def reproduction(scene: Scene) -> str:
+    """A self-contained snippet that renders ``scene`` and runs demoplan on it."""
+    colours = list(COLOURS)
+    if scene.set_key == "a":
+        draw = "truth = random_blocks(int(rng.integers(1, 6)), camera, 500, 400, rng)"
+    elif scene.set_key == "b":
+        draw = (
+            f"i, j = rng.choice({len(colours)}, size=2, replace=False); "
+            "c = list(COLOURS); truth = touching_pair(camera, 500, 400, rng, (c[i], c[j]))"
+        )
+    else:
+        draw = (
+            f"k = int(rng.integers({len(colours)})); c = list(COLOURS)[k]; "
+            "truth = touching_pair(camera, 500, 400, rng, (c, c))"
+        )
+    return (
+        "import numpy as np; "
+        "from demoplan.perception.camera import Camera; "
+        "from demoplan.perception.synthetic import COLOURS, random_blocks, render_blocks, "
+        "touching_pair; "
+        "from demoplan.perception.blocks import detect_blocks; "
+        f"camera = Camera(1000.0, (0.0, 0.0)); rng = np.random.default_rng({scene.seed}); "
+        f"{draw}; "
+        "noise, shading = rng.uniform(1, 5), rng.uniform(0, 0.2); "
+        "image = render_blocks(truth, camera, width=500, height=400, noise=noise, "
+        "shading=shading, rng=rng); "
+        "print(truth); print(detect_blocks(image, camera))"
+    )
+
+
+# --------------------------------------------------------------------------- baseline
+
+
+@dataclass(frozen=True, slots=True)
+class Found:
+    """A detection of either method, in world units: centre (m), yaw (deg), side (m)."""
+
+    colour: str
+    x: float
+    y: float
+    yaw: float
+    side: float
+
+
+def baseline_blocks(image: NDArray[np.uint8], camera: Camera) -> list[Found]:
+    """The simple OpenCV pipeline: border-median table colour, colour-distance
+    threshold, external contours, ``cv2.minAreaRect`` per contour."""
+    rgb = image.astype(np.float32)
+    border = np.concatenate([rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]])
+    table = np.median(border, axis=0)
+    distance = np.linalg.norm(rgb - table, axis=2)
+    mask = (distance > BASELINE_THRESHOLD).astype(np.uint8)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    height = image.shape[0]
+    found = []
+    for contour in contours:
+        if cv2.contourArea(contour) < BASELINE_MIN_AREA:
+            continue
+        (col, row), (w, h), angle = cv2.minAreaRect(contour)
+        # OpenCV puts pixel centres at integer coordinates, the camera at +0.5.
+        x, y = camera.to_world(col + 0.5, height - row - 0.5)
+        # Image rows run down: an angle in the image is the negative world yaw.
+        yaw = ((-angle + 45.0) % 90.0) - 45.0
+        side = (w + h) / 2 / camera.px_per_m
+        inside = np.zeros(mask.shape, dtype=np.uint8)
+        cv2.drawContours(inside, [contour], -1, 1, thickness=cv2.FILLED)
+        colour = name_colour(image[inside.astype(bool)].mean(axis=0))
+        found.append(Found(colour, float(x), float(y), float(yaw), float(side)))
+    return found
+
+
+def demoplan_blocks(image: NDArray[np.uint8], camera: Camera) -> list[Found]:
+    return [
+        Found(b.colour, float(b.x), float(b.y), float(b.yaw), float(b.side))
+        for b in detect_blocks(image, camera)
+    ]
+
+
+METHODS: dict[str, Callable[[NDArray[np.uint8], Camera], list[Found]]] = {
+    DEMOPLAN: demoplan_blocks,
+    BASELINE: baseline_blocks,
+}
+
+
+# --------------------------------------------------------------------------- matching
+
+
+def angle_error(a: float, b: float) -> float:
+    """|a − b| in degrees, modulo 90° (a square looks the same every 90°)."""
+    return abs(((a - b + 45.0) % 90.0) - 45.0)
+
+
+@dataclass(slots=True)
+class Outcome:
+    """One method on one image: what it found and how it compares with the truth."""
+
+    set_key: str
+    seed: int
+    method: str
+    seconds: float
+    true_count: int
+    detected_count: int
+    matched: int
+    position_mm: list[float] = field(default_factory=list)
+    angle_deg: list[float] = field(default_factory=list)
+    size_mm: list[float] = field(default_factory=list)  # detected − true side
+    missed: list[str] = field(default_factory=list)  # colours of unmatched true blocks
+    extra: list[str] = field(default_factory=list)  # colours of unmatched detections
+    worst_colour: str = ""  # the matched block with the largest position error
+
+    @property
+    def exact_count(self) -> bool:
+        return self.detected_count == self.true_count
+
+    def problems(self) -> str:
+        parts = []
+        if self.missed:
+            parts.append(
+                f"missed {', '.join(self.missed)} ({self.matched}/{self.true_count} found)"
+            )
+        if self.extra:
+            parts.append(f"{len(self.extra)} extra ({', '.join(self.extra)})")
+        if self.position_mm:
+            parts.append(
+                f"max error {max(self.position_mm):.2f} mm ({self.worst_colour}), "
+                f"{max(self.angle_deg):.2f}°"
+            )
+        return "; ".join(parts) or "nothing found"
+
+    def badness(self) -> tuple[int, float, float]:
+        return (
+            len(self.missed) + len(self.extra),
+            max(self.position_mm, default=0.0),
+            max(self.angle_deg, default=0.0),
+        )
+
+
+def compare(truth: Sequence[SyntheticBlock], found: Sequence[Found], outcome: Outcome) -> Outcome:
+    """Match by colour and nearest centre, closest pairs first, within ``MATCH_MM``."""
+    pairs = sorted(
+        (math.dist((t.x, t.y), (f.x, f.y)) * 1e3, i, j)
+        for i, t in enumerate(truth)
+        for j, f in enumerate(found)
+        if t.colour == f.colour
+    )
+    used_truth: set[int] = set()
+    used_found: set[int] = set()
+    worst = -1.0
+    for distance, i, j in pairs:
+        if distance > MATCH_MM:
+            break
+        if i in used_truth or j in used_found:
+            continue
+        used_truth.add(i)
+        used_found.add(j)
+        t, f = truth[i], found[j]
+        outcome.position_mm.append(distance)
+        outcome.angle_deg.append(angle_error(f.yaw, t.yaw))
+        outcome.size_mm.append((f.side - t.side) * 1e3)
+        if distance > worst:
+            worst, outcome.worst_colour = distance, t.colour
+    outcome.matched = len(used_truth)
+    outcome.missed = [t.colour for i, t in enumerate(truth) if i not in used_truth]
+    outcome.extra = [f.colour for j, f in enumerate(found) if j not in used_found]
+    return outcome
+
+
+def run_method(method: str, scene: Scene) -> tuple[Outcome, list[Found]]:
+    call = METHODS[method]
+    start = time.perf_counter()
+    found = call(scene.image, CAMERA)
+    seconds = time.perf_counter() - start
+    outcome = Outcome(scene.set_key, scene.seed, method, seconds, len(scene.truth), len(found), 0)
+    return compare(scene.truth, found, outcome), found
+
+
+# --------------------------------------------------------------------------- summaries
+
+
+def _median(values: Sequence[float]) -> float | None:
+    return statistics.median(values) if values else None
+
+
+def _percentile(values: Sequence[float], q: float) -> float | None:
+    """Linear interpolation between closest ranks (NumPy's default)."""
+    if not values:
+        return None
+    ordered = sorted(values)
+    position = (len(ordered) - 1) * q / 100.0
+    low, high = math.floor(position), math.ceil(position)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
+
+
+def summary(outcomes: Sequence[Outcome]) -> dict[str, Any]:
+    """The metrics of one method on one set."""
+    true_blocks = sum(o.true_count for o in outcomes)
+    matched = sum(o.matched for o in outcomes)
+    positions = [e for o in outcomes for e in o.position_mm]
+    angles = [e for o in outcomes for e in o.angle_deg]
+    sizes = [e for o in outcomes for e in o.size_mm]
+    times = [o.seconds for o in outcomes]
+    return {
+        "images": len(outcomes),
+        "true_blocks": true_blocks,
+        "matched": matched,
+        "detection_rate": matched / true_blocks if true_blocks else None,
+        "exact_count_images": sum(o.exact_count for o in outcomes),
+        "count_accuracy": (
+            sum(o.exact_count for o in outcomes) / len(outcomes) if outcomes else None
+        ),
+        "extra_detections": sum(len(o.extra) for o in outcomes),
+        "median_position_mm": _median(positions),
+        "p95_position_mm": _percentile(positions, 95.0),
+        "max_position_mm": max(positions, default=None),
+        "median_angle_deg": _median(angles),
+        "p95_angle_deg": _percentile(angles, 95.0),
+        "max_angle_deg": max(angles, default=None),
+        "median_abs_size_mm": _median([abs(e) for e in sizes]),
+        "median_size_mm": _median(sizes),
+        "median_time_s": _median(times),
+        "p95_time_s": _percentile(times, 95.0),
+        "max_time_s": max(times, default=None),
+    }
+
+
+# --------------------------------------------------------------------------- tables
+
+
+def _ms(seconds: float | None) -> str:
+    return "-" if seconds is None else f"{seconds * 1e3:.0f} ms"
+
+
+def _value(value: float | None, digits: int = 2) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def _share(count: int, total: int) -> str:
+    return f"{count}/{total} ({100 * count / total:.0f}%)" if total else "-"
+
+
+def results_table(summaries: dict[tuple[str, str], dict[str, Any]], sets: Sequence[str]) -> Table:
+    table = Table(
+        title=f"Block perception on generated {WIDTH}{TIMES}{HEIGHT} images at 1 px = 1 mm: "
+        "demoplan vs an OpenCV contour / minAreaRect baseline (same images)",
+        title_justify="left",
+    )
+    table.add_column("image set", style="bold")
+    table.add_column("method")
+    table.add_column("images", justify="right")
+    table.add_column("blocks\ndetected", justify="right")
+    table.add_column("count\nexact", justify="right")
+    table.add_column("extra\ndet.", justify="right")
+    table.add_column("position mm\nmed / p95", justify="right")
+    table.add_column("angle °\nmed / p95", justify="right")
+    table.add_column("|size| mm\nmed", justify="right")
+    table.add_column("time / image\nmed / p95", justify="right")
+    for index, set_key in enumerate(sets):
+        for method in (DEMOPLAN, BASELINE):
+            s = summaries[(set_key, method)]
+            complete = s["matched"] == s["true_blocks"]
+            exact = s["exact_count_images"] == s["images"]
+            detected = _share(s["matched"], s["true_blocks"])
+            count = _share(s["exact_count_images"], s["images"])
+            table.add_row(
+                SETS[set_key] if method == DEMOPLAN else "",
+                METHOD_LABELS[method],
+                str(s["images"]),
+                f"[{'green' if complete else 'red'}]{detected}[/]",
+                f"[{'green' if exact else 'red'}]{count}[/]",
+                str(s["extra_detections"]),
+                f"{_value(s['median_position_mm'])} / {_value(s['p95_position_mm'])}",
+                f"{_value(s['median_angle_deg'])} / {_value(s['p95_angle_deg'])}",
+                _value(s["median_abs_size_mm"]),
+                f"{_ms(s['median_time_s'])} / {_ms(s['p95_time_s'])}",
+                end_section=method == BASELINE and index < len(sets) - 1,
+            )
+    return table
+
+
+def worst_table(outcomes: Sequence[Outcome]) -> Table:
+    table = Table(
+        title=f"demoplan's worst images, {WORST_LISTED} of sets a + b and {WORST_LISTED} of set c",
+        title_justify="left",
+    )
+    table.add_column("set")
+    table.add_column("seed", justify="right")
+    table.add_column("found / true", justify="right")
+    table.add_column("what went wrong")
+    table.add_column("time", justify="right")
+    groups = [
+        [o for o in outcomes if o.set_key in TARGET_SETS],
+        [o for o in outcomes if o.set_key not in TARGET_SETS],
+    ]
+    groups = [g for g in groups if g]
+    for index, group in enumerate(groups):
+        ranked = sorted(group, key=lambda o: o.badness(), reverse=True)[:WORST_LISTED]
+        for k, o in enumerate(ranked):
+            table.add_row(
+                o.set_key,
+                str(o.seed),
+                f"{o.detected_count}/{o.true_count}",
+                o.problems(),
+                _ms(o.seconds),
+                end_section=k == len(ranked) - 1 and index < len(groups) - 1,
+            )
+    return table
+
+
+# --------------------------------------------------------------------------- targets
+
+
+@dataclass(frozen=True, slots=True)
+class Target:
+    name: str
+    passed: bool | None  # None: not measured
+    detail: str
+
+
+def _measured(summaries: dict[tuple[str, str], dict[str, Any]], method: str) -> list[str]:
+    return [k for k in TARGET_SETS if (k, method) in summaries and summaries[(k, method)]["images"]]
+
+
+def counting_target(summaries: dict[tuple[str, str], dict[str, Any]]) -> Target:
+    name = "Every block counted (sets a, b)"
+    sets = _measured(summaries, DEMOPLAN)
+    if not sets:
+        return Target(name, None, "sets a and b not run")
+    parts, passed = [], True
+    for k in sets:
+        s = summaries[(k, DEMOPLAN)]
+        ok = s["matched"] == s["true_blocks"] and s["exact_count_images"] == s["images"]
+        passed = passed and ok
+        parts.append(
+            f"{k}: {s['matched']}/{s['true_blocks']} blocks detected, "
+            f"{s['exact_count_images']}/{s['images']} images counted exactly"
+        )
+    baseline = [
+        f"{k} {summaries[(k, BASELINE)]['exact_count_images']}/{summaries[(k, BASELINE)]['images']}"
+        for k in sets
+        if (k, BASELINE) in summaries
+    ]
+    detail = "demoplan " + "; ".join(parts)
+    if baseline:
+        detail += " (baseline exact counts: " + ", ".join(baseline) + ")"
+    missing = [k for k in TARGET_SETS if k not in sets]
+    if missing:
+        detail += f"; set {', '.join(missing)} not run"
+    return Target(name, passed if not missing or not passed else None, detail)
+
+
+def accuracy_target(summaries: dict[tuple[str, str], dict[str, Any]]) -> Target:
+    name = (
+        f"Median position error < {TARGET_POSITION_MM:g} mm and angle < "
+        f"{TARGET_ANGLE_DEG:g}° (sets a, b)"
+    )
+    sets = _measured(summaries, DEMOPLAN)
+    if not sets:
+        return Target(name, None, "sets a and b not run")
+    parts, passed = [], True
+    for k in sets:
+        s = summaries[(k, DEMOPLAN)]
+        position, angle = s["median_position_mm"], s["median_angle_deg"]
+        if position is None or angle is None:
+            passed = False
+            parts.append(f"{k}: nothing matched")
+            continue
+        passed = passed and bool(position < TARGET_POSITION_MM and angle < TARGET_ANGLE_DEG)
+        parts.append(
+            f"{k}: {position:.3f} mm / {angle:.3f}° (p95 {s['p95_position_mm']:.3f} mm / "
+            f"{s['p95_angle_deg']:.3f}°)"
+        )
+    missing = [k for k in TARGET_SETS if k not in sets]
+    detail = "demoplan medians " + "; ".join(parts)
+    if missing:
+        detail += f"; set {', '.join(missing)} not run"
+    return Target(name, passed if not missing or not passed else None, detail)
+
+
+def speed_target(
+    outcomes: Sequence[Outcome], summaries: dict[tuple[str, str], dict[str, Any]]
+) -> Target:
+    name = f"Under {TARGET_SECONDS:g} s per {WIDTH}{TIMES}{HEIGHT} image (p95, demoplan)"
+    times = [o.seconds for o in outcomes if o.method == DEMOPLAN and o.set_key in TARGET_SETS]
+    p95 = _percentile(times, 95.0)
+    if p95 is None:
+        return Target(name, None, "sets a and b not run")
+    detail = (
+        f"p95 {p95 * 1e3:.0f} ms, median {_ms(_median(times))}, max {_ms(max(times))} over "
+        f"{len(times)} images of sets a, b"
+    )
+    if ("c", DEMOPLAN) in summaries:
+        detail += f" (set c: p95 {_ms(summaries[('c', DEMOPLAN)]['p95_time_s'])})"
+    base = [o.seconds for o in outcomes if o.method == BASELINE and o.set_key in TARGET_SETS]
+    if base:
+        detail += f"; baseline p95 {_ms(_percentile(base, 95.0))}"
+    return Target(name, bool(p95 < TARGET_SECONDS), detail)
+
+
+# --------------------------------------------------------------------------- main
+
+
+def _version(distribution: str) -> str:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def _show(text: str) -> tuple[str, int]:
+    set_key, _, seed = text.partition(":")
+    if set_key not in SETS or not seed.strip().isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: SET:SEED expected, SET one of a, b, c")
+    return set_key, int(seed)
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        description="Benchmark block perception (demoplan detect_blocks) against a simple "
+        "OpenCV contour / minAreaRect baseline on generated top-view images.",
+    )
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"{QUICK_IMAGES} images per set instead of {FULL_IMAGES}",
+    )
+    parser.add_argument("--out", type=Path, help="also save the results to this JSON file")
+    parser.add_argument("--images", type=int, help="images per set (overrides --quick)")
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="first seed of every set (added to the set's own base: a 0, b 100000, c 200000)",
+    )
+    parser.add_argument(
+        "--sets",
+        default=",".join(SETS),
+        help="comma-separated image sets (a: separated, b: touching two colours, "
+        "c: touching one colour)",
+    )
+    parser.add_argument(
+        "--show",
+        type=_show,
+        metavar="SET:SEED",
+        help="only rerun one image (e.g. b:100017) and print the truth and both detections",
+    )
+    args = parser.parse_args(argv)
+    sets = [k.strip() for k in args.sets.split(",") if k.strip()]
+    unknown = [k for k in sets if k not in SETS]
+    if unknown or not sets:
+        parser.error(f"--sets: {unknown or 'none'}; one or more of {', '.join(SETS)}")
+    args.sets = sets
+    if args.images is None:
+        args.images = QUICK_IMAGES if args.quick else FULL_IMAGES
+    if args.images < 1:
+        parser.error("--images must be positive")
+    return args
+
+
+def show_one(console: Console, set_key: str, seed: int) -> None:
+    scene = make_scene(set_key, seed)
+    console.print(
+        f"set {SETS[set_key]}, seed {seed}: noise {scene.noise:.2f}, shading {scene.shading:.3f}",
+        highlight=False,
+    )
+    for block in scene.truth:
+        console.print(
+            f"  truth     {block.colour:7s} x {block.x * 1e3:8.2f} mm  y {block.y * 1e3:8.2f} mm  "
+            f"yaw {block.yaw:7.2f}°  side {block.side * 1e3:6.2f} mm",
+            highlight=False,
+        )
+    for method in (DEMOPLAN, BASELINE):
+        outcome, found = run_method(method, scene)
+        for f in found:
+            console.print(
+                f"  {method:9s} {f.colour:7s} x {f.x * 1e3:8.2f} mm  y {f.y * 1e3:8.2f} mm  "
+                f"yaw {f.yaw:7.2f}°  side {f.side * 1e3:6.2f} mm",
+                highlight=False,
+            )
+        console.print(f"  {method}: {outcome.problems()} ({_ms(outcome.seconds)})", highlight=False)
+    console.print(
+        "Reproduce: python -c '" + reproduction(scene) + "'",
+        highlight=False,
+        markup=False,
+        soft_wrap=True,
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_args(argv)
+    console = Console(width=None if sys.stdout.isatty() else 200)
+    cv2.setNumThreads(1)
+    if args.show is not None:
+        show_one(console, *args.show)
+        return 0
+    started = time.perf_counter()
+    console.print(
+        f"demoplan perception benchmark — {'quick' if args.quick else 'full'} run, "
+        f"{args.images} images per set ({', '.join(args.sets)}), {WIDTH}{TIMES}{HEIGHT} px at "
+        f"1 px = 1 mm, noise {NOISE[0]:g}-{NOISE[1]:g} grey levels, shading "
+        f"{SHADING[0]:g}-{SHADING[1]:g}; Python {platform.python_version()}, "
+        f"{platform.machine()}, {os.cpu_count()} CPUs, NumPy {np.__version__}, "
+        f"SciPy {_version('scipy')}, OpenCV {cv2.__version__}, "
+        "OMP/OPENBLAS/MKL/OpenCV threads = 1",
+        highlight=False,
+    )
+    console.print(
+        f"demoplan {demoplan.__version__} from {Path(demoplan.__file__).parent}; baseline: "
+        f"border-median table colour, RGB distance > {BASELINE_THRESHOLD:g}, "
+        f"cv2.findContours + cv2.minAreaRect (area ≥ {BASELINE_MIN_AREA:g} px²)",
+        highlight=False,
+    )
+    # Warm-up, untimed: imports, first-call caches.
+    warm = make_scene("a", WARM_UP_SEED)
+    for method in METHODS:
+        run_method(method, warm)
+
+    outcomes: list[Outcome] = []
+    for set_key in args.sets:
+        set_started = time.perf_counter()
+        for i in range(args.images):
+            scene = make_scene(set_key, SEED_BASE[set_key] + args.seed + i)
+            for method in METHODS:
+                outcomes.append(run_method(method, scene)[0])
+        console.print(
+            f"set {SETS[set_key]}: {args.images} images in "
+            f"{time.perf_counter() - set_started:.1f} s",
+            style="dim",
+            highlight=False,
+        )
+
+    summaries = {
+        (k, m): summary([o for o in outcomes if o.set_key == k and o.method == m])
+        for k in args.sets
+        for m in METHODS
+    }
+    console.print(results_table(summaries, args.sets))
+    console.print(
+        f"blocks detected: true blocks with a detection of their colour within {MATCH_MM:g} mm "
+        "(matched by colour and nearest centre). count exact: images with exactly the true "
+        "number of detections. extra det.: detections left unmatched. Errors over the matched "
+        "blocks; angle modulo 90°; |size|: |detected − true side|. time: the call alone "
+        "(time.perf_counter), one core. Set c is a stretch, not part of the targets.",
+        highlight=False,
+        style="dim",
+    )
+    mine = [o for o in outcomes if o.method == DEMOPLAN]
+    console.print(worst_table(mine))
+    targeted = [o for o in mine if o.set_key in TARGET_SETS] or mine
+    worst = max(targeted, key=lambda o: o.badness())
+    console.print(
+        f"Look at one: python benchmarks/perception.py --show {worst.set_key}:{worst.seed} "
+        "(the truth and both methods' detections, and a snippet that reproduces it)",
+        highlight=False,
+        style="dim",
+    )
+
+    goals = [
+        counting_target(summaries),
+        accuracy_target(summaries),
+        speed_target(outcomes, summaries),
+    ]
+    for goal in goals:
+        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[goal.passed]
+        console.print(
+            f"{goal.name}: {verdict} — {goal.detail}",
+            style={True: "bold green", False: "bold red", None: "bold yellow"}[goal.passed],
+            highlight=False,
+            markup=False,
+        )
+    total = time.perf_counter() - started
+    console.print(f"Total benchmark time: {total:.1f} s")
+
+    if args.out is not None:
+        document: dict[str, Any] = {
+            "benchmark": "demoplan perception",
+            "run": "quick" if args.quick else "full",
+            "images_per_set": args.images,
+            "seed": args.seed,
+            "seed_base": SEED_BASE,
+            "sets": {k: SETS[k] for k in args.sets},
+            "image_size": [WIDTH, HEIGHT],
+            "px_per_m": PX_PER_M,
+            "noise": list(NOISE),
+            "shading": list(SHADING),
+            "match_mm": MATCH_MM,
+            "baseline": {"threshold": BASELINE_THRESHOLD, "min_area_px": BASELINE_MIN_AREA},
+            "python": platform.python_version(),
+            "machine": platform.machine(),
+            "cpus": os.cpu_count(),
+            "numpy": np.__version__,
+            "scipy": _version("scipy"),
+            "opencv": cv2.__version__,
+            "demoplan": demoplan.__version__,
+            "summaries": [
+                {"set": k, "method": m, **summaries[(k, m)]} for k in args.sets for m in METHODS
+            ],
+            "images": [
+                {**asdict(o), "exact_count": o.exact_count, "problems": o.problems()}
+                for o in outcomes
+            ],
+            "targets": [asdict(t) for t in goals],
+            "total_s": total,
+        }
+        args.out.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        console.print(f"Results saved to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
