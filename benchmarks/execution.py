@@ -73,7 +73,6 @@ import time  # noqa: E402
 from collections import Counter  # noqa: E402
 from collections.abc import Sequence  # noqa: E402
 from dataclasses import asdict, dataclass, field  # noqa: E402
-from importlib import metadata  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -81,6 +80,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
+from common import Target, package_version, print_targets  # noqa: E402
 from demoplan.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
@@ -412,13 +412,6 @@ def reproduction(row: Row, run: Run, experiment: Experiment) -> str:
 # --------------------------------------------------------------------------- targets
 
 
-@dataclass(frozen=True, slots=True)
-class Target:
-    name: str
-    passed: bool | None  # None: not measured
-    detail: str
-
-
 def kinematic_target(rows: Sequence[Row], faults: str) -> Target:
     name = "Kinematic runs with recoverable faults reach the goal"
     if not faults:
@@ -475,13 +468,6 @@ def mujoco_target(rows: Sequence[Row], faults: str) -> Target:
 # --------------------------------------------------------------------------- main
 
 
-def _version(distribution: str) -> str:
-    try:
-        return metadata.version(distribution)
-    except metadata.PackageNotFoundError:
-        return "not installed"
-
-
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Benchmark execution with failure detection and replanning: Monte-Carlo "
@@ -525,7 +511,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     console.print(
         f"demoplan execution benchmark — {'quick' if args.quick else 'full'} run, faults "
         f"{args.faults!r}; Python {platform.python_version()}, {platform.machine()}, "
-        f"{os.cpu_count()} CPUs, MuJoCo {_version('mujoco')}, OMP/OPENBLAS/MKL threads = 1",
+        f"{os.cpu_count()} CPUs, MuJoCo {package_version('mujoco')}, OMP/OPENBLAS/MKL threads = 1",
         highlight=False,
     )
     console.print(f"demoplan {demoplan.__version__} from {Path(demoplan.__file__).parent}")
@@ -622,14 +608,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "MuJoCo not run",
             )
         )
-    for goal in goals:
-        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[goal.passed]
-        console.print(
-            f"{goal.name}: {verdict} — {goal.detail}",
-            style={True: "bold green", False: "bold red", None: "bold yellow"}[goal.passed],
-            highlight=False,
-            markup=False,
-        )
+    print_targets(console, goals)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")
 
@@ -641,7 +620,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "python": platform.python_version(),
             "machine": platform.machine(),
             "cpus": os.cpu_count(),
-            "mujoco": _version("mujoco"),
+            "mujoco": package_version("mujoco"),
             "demoplan": demoplan.__version__,
             "learn_s": learn_s,
             "experiments": [

@@ -64,7 +64,6 @@ import time  # noqa: E402
 import tracemalloc  # noqa: E402
 from collections.abc import Callable, Sequence  # noqa: E402
 from dataclasses import asdict, dataclass, field  # noqa: E402
-from importlib import metadata  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -74,6 +73,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
+from common import package_version  # noqa: E402
 from demoplan.clustering import kmeans  # noqa: E402
 from demoplan.learning import TaskModelLearner  # noqa: E402
 from demoplan.model import Demonstration, Pose, Step, Vector3  # noqa: E402
@@ -531,13 +531,6 @@ def kmeans_table(rows: list[KMeansRow]) -> Table:
 # --------------------------------------------------------------------------- main
 
 
-def _version(distribution: str) -> str:
-    try:
-        return metadata.version(distribution)
-    except metadata.PackageNotFoundError:
-        return "not installed"
-
-
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Benchmark TaskModelLearner.fit (time, memory, growth) and K-means per call.",
@@ -612,7 +605,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"demoplan learning benchmark — {'quick' if args.quick else 'full'} grid, "
         f"seed {args.seed}; "
         f"Python {platform.python_version()}, NumPy {np.__version__}, "
-        f"scikit-learn {_version('scikit-learn')}, {platform.machine()}, "
+        f"scikit-learn {package_version('scikit-learn')}, {platform.machine()}, "
         f"OMP/OPENBLAS/MKL threads = 1",
         highlight=False,
     )

@@ -78,7 +78,6 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable, Sequence  # noqa: E402
 from dataclasses import asdict, dataclass, field  # noqa: E402
-from importlib import metadata  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -89,6 +88,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
+from common import Target, package_version, print_targets  # noqa: E402
 from demoplan.perception.blocks import detect_blocks  # noqa: E402
 from demoplan.perception.camera import Camera  # noqa: E402
 from demoplan.perception.colours import name_colour  # noqa: E402
@@ -478,13 +478,6 @@ def worst_table(outcomes: Sequence[Outcome]) -> Table:
 # --------------------------------------------------------------------------- targets
 
 
-@dataclass(frozen=True, slots=True)
-class Target:
-    name: str
-    passed: bool | None  # None: not measured
-    detail: str
-
-
 def _measured(summaries: dict[tuple[str, str], dict[str, Any]], method: str) -> list[str]:
     return [k for k in TARGET_SETS if (k, method) in summaries and summaries[(k, method)]["images"]]
 
@@ -566,13 +559,6 @@ def speed_target(
 
 
 # --------------------------------------------------------------------------- main
-
-
-def _version(distribution: str) -> str:
-    try:
-        return metadata.version(distribution)
-    except metadata.PackageNotFoundError:
-        return "not installed"
 
 
 def _show(text: str) -> tuple[str, int]:
@@ -668,7 +654,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"1 px = 1 mm, noise {NOISE[0]:g}-{NOISE[1]:g} grey levels, shading "
         f"{SHADING[0]:g}-{SHADING[1]:g}; Python {platform.python_version()}, "
         f"{platform.machine()}, {os.cpu_count()} CPUs, NumPy {np.__version__}, "
-        f"SciPy {_version('scipy')}, OpenCV {cv2.__version__}, "
+        f"SciPy {package_version('scipy')}, OpenCV {cv2.__version__}, "
         "OMP/OPENBLAS/MKL/OpenCV threads = 1",
         highlight=False,
     )
@@ -728,14 +714,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         accuracy_target(summaries),
         speed_target(outcomes, summaries),
     ]
-    for goal in goals:
-        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[goal.passed]
-        console.print(
-            f"{goal.name}: {verdict} — {goal.detail}",
-            style={True: "bold green", False: "bold red", None: "bold yellow"}[goal.passed],
-            highlight=False,
-            markup=False,
-        )
+    print_targets(console, goals)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")
 
@@ -757,7 +736,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "machine": platform.machine(),
             "cpus": os.cpu_count(),
             "numpy": np.__version__,
-            "scipy": _version("scipy"),
+            "scipy": package_version("scipy"),
             "opencv": cv2.__version__,
             "demoplan": demoplan.__version__,
             "summaries": [

@@ -95,6 +95,7 @@ from rich.console import Console
 from rich.table import Table
 
 import demoplan
+from common import Target, print_targets
 from demoplan.planning.generate import blocks_problem, table_problem
 from demoplan.planning.pddl import save_pddl
 from demoplan.planning.problem import Problem
@@ -682,13 +683,6 @@ def verdicts(
     return out
 
 
-@dataclass(slots=True)
-class Target:
-    name: str
-    passed: bool | None  # None: not measured
-    detail: str
-
-
 def targets(
     results: dict[tuple[str, str, int], Result],
     planners: Sequence[Planner],
@@ -1162,14 +1156,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         style="dim",
     )
     goals = targets(results, planners, args.families, checks, args.timeout)
-    for goal in goals:
-        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[goal.passed]
-        console.print(
-            f"{goal.name}: {verdict} — {goal.detail}",
-            style={True: "bold green", False: "bold red", None: "bold yellow"}[goal.passed],
-            highlight=False,
-            markup=False,
-        )
+    print_targets(console, goals)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")
 

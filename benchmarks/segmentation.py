@@ -61,7 +61,6 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable, Sequence  # noqa: E402
 from dataclasses import asdict, dataclass  # noqa: E402
-from importlib import metadata  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -70,6 +69,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
+from common import package_version  # noqa: E402
 from demoplan.model import Demonstration, Pose, Step  # noqa: E402
 from demoplan.segmentation import (  # noqa: E402
     PoseStream,
@@ -312,13 +312,6 @@ def throughput_table(rows: list[Throughput], samples: int, objects: int) -> Tabl
 # --------------------------------------------------------------------------- main
 
 
-def _version(distribution: str) -> str:
-    try:
-        return metadata.version(distribution)
-    except metadata.PackageNotFoundError:
-        return "not installed"
-
-
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Benchmark demoplan.segmentation: step precision/recall and pose error "
@@ -340,7 +333,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     console.print(
         f"demoplan segmentation benchmark — {'quick' if args.quick else 'full'} grid, "
         f"seed {args.seed}; Python {platform.python_version()}, NumPy {np.__version__}, "
-        f"rosbags {_version('rosbags')}, {platform.machine()}, OMP/OPENBLAS/MKL threads = 1",
+        f"rosbags {package_version('rosbags')}, {platform.machine()}, OMP/OPENBLAS/MKL threads = 1",
         highlight=False,
     )
     console.print(f"demoplan imported from {Path(demoplan.__file__).parent}", highlight=False)

@@ -1,0 +1,44 @@
+"""What every benchmark script shares: target verdicts and package versions.
+
+The scripts run as ``python benchmarks/NAME.py``, so this folder is on
+``sys.path`` and they import this module as ``common``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from importlib import metadata
+
+from rich.console import Console
+
+__all__ = ["Target", "package_version", "print_targets"]
+
+
+@dataclass(frozen=True, slots=True)
+class Target:
+    """A target of an issue and how this run fared: ``passed`` None = not measured."""
+
+    name: str
+    passed: bool | None
+    detail: str
+
+
+def print_targets(console: Console, targets: Iterable[Target]) -> None:
+    """One PASS / FAIL / NOT MEASURED line per target."""
+    for target in targets:
+        verdict = {True: "PASS", False: "FAIL", None: "NOT MEASURED"}[target.passed]
+        console.print(
+            f"{target.name}: {verdict} — {target.detail}",
+            style={True: "bold green", False: "bold red", None: "bold yellow"}[target.passed],
+            highlight=False,
+            markup=False,
+        )
+
+
+def package_version(distribution: str) -> str:
+    """The installed version of ``distribution``, or ``not installed``."""
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return "not installed"
