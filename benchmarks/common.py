@@ -1,4 +1,4 @@
-"""What every benchmark script shares: target verdicts and package versions.
+"""What every benchmark script shares: target verdicts, package versions, percentiles.
 
 The scripts run as ``python benchmarks/NAME.py``, so this folder is on
 ``sys.path`` and they import this module as ``common``.
@@ -6,13 +6,15 @@ The scripts run as ``python benchmarks/NAME.py``, so this folder is on
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import math
+import statistics
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 
 from rich.console import Console
 
-__all__ = ["Target", "package_version", "print_targets"]
+__all__ = ["Target", "median", "package_version", "percentile", "print_targets"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,3 +44,19 @@ def package_version(distribution: str) -> str:
         return metadata.version(distribution)
     except metadata.PackageNotFoundError:
         return "not installed"
+
+
+def median(values: Sequence[float]) -> float | None:
+    """The median, or None for no values."""
+    return statistics.median(values) if values else None
+
+
+def percentile(values: Sequence[float], q: float) -> float | None:
+    """The q-th percentile by linear interpolation between closest ranks (NumPy's
+    default), or None for no values."""
+    if not values:
+        return None
+    ordered = sorted(values)
+    position = (len(ordered) - 1) * q / 100.0
+    low, high = math.floor(position), math.ceil(position)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)

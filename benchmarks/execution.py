@@ -65,9 +65,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import argparse  # noqa: E402
 import importlib.util  # noqa: E402
 import json  # noqa: E402
-import math  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from collections import Counter  # noqa: E402
@@ -80,7 +78,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
-from common import Target, package_version, print_targets  # noqa: E402
+from common import Target, median, package_version, percentile, print_targets  # noqa: E402
 from demoplan.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
@@ -194,38 +192,24 @@ class Row:
             "runs": n,
             "successes": len(ok),
             "success_rate": len(ok) / n if n else None,
-            "median_replans": _median([r.replans for r in runs]),
+            "median_replans": median([r.replans for r in runs]),
             "max_replans": max((r.replans for r in runs), default=None),
-            "median_extra_actions": _median([r.extra_actions for r in runs]),
+            "median_extra_actions": median([r.extra_actions for r in runs]),
             "max_extra_actions": max((r.extra_actions for r in runs), default=None),
-            "median_extra_actions_successful": _median([r.extra_actions for r in ok]),
+            "median_extra_actions_successful": median([r.extra_actions for r in ok]),
             "injected_per_run": {k: v / n for k, v in sorted(injected.items())} if n else {},
             "detected_per_run": {k: v / n for k, v in sorted(detected.items())} if n else {},
-            "median_wall_s": _median(walls),
-            "p95_wall_s": _percentile(walls, 95.0),
+            "median_wall_s": median(walls),
+            "p95_wall_s": percentile(walls, 95.0),
             "total_wall_s": sum(walls),
-            "median_pose_error_mm": _median(errors),
+            "median_pose_error_mm": median(errors),
             "max_pose_error_mm": max(errors, default=None),
             "successes_over_1mm": sum(
                 max(r.pose_errors_mm.values(), default=0.0) > 1.0 for r in ok
             ),
-            "median_sim_to_wall": _median(ratios),
+            "median_sim_to_wall": median(ratios),
             "exceptions": sum(bool(r.exception) for r in runs),
         }
-
-
-def _median(values: Sequence[float]) -> float | None:
-    return statistics.median(values) if values else None
-
-
-def _percentile(values: Sequence[float], q: float) -> float | None:
-    """Linear interpolation between closest ranks (NumPy's default)."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    position = (len(ordered) - 1) * q / 100.0
-    low, high = math.floor(position), math.ceil(position)
-    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
 
 
 def make_world(world: str, scene: Scene, faults: Faults, seed: int) -> World:

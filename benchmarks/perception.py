@@ -73,7 +73,6 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable, Sequence  # noqa: E402
@@ -88,7 +87,7 @@ from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
-from common import Target, package_version, print_targets  # noqa: E402
+from common import Target, median, package_version, percentile, print_targets  # noqa: E402
 from demoplan.perception.blocks import detect_blocks  # noqa: E402
 from demoplan.perception.camera import Camera  # noqa: E402
 from demoplan.perception.colours import name_colour  # noqa: E402
@@ -346,20 +345,6 @@ def run_method(method: str, scene: Scene) -> tuple[Outcome, list[Found]]:
 # --------------------------------------------------------------------------- summaries
 
 
-def _median(values: Sequence[float]) -> float | None:
-    return statistics.median(values) if values else None
-
-
-def _percentile(values: Sequence[float], q: float) -> float | None:
-    """Linear interpolation between closest ranks (NumPy's default)."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    position = (len(ordered) - 1) * q / 100.0
-    low, high = math.floor(position), math.ceil(position)
-    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
-
-
 def summary(outcomes: Sequence[Outcome]) -> dict[str, Any]:
     """The metrics of one method on one set."""
     true_blocks = sum(o.true_count for o in outcomes)
@@ -378,16 +363,16 @@ def summary(outcomes: Sequence[Outcome]) -> dict[str, Any]:
             sum(o.exact_count for o in outcomes) / len(outcomes) if outcomes else None
         ),
         "extra_detections": sum(len(o.extra) for o in outcomes),
-        "median_position_mm": _median(positions),
-        "p95_position_mm": _percentile(positions, 95.0),
+        "median_position_mm": median(positions),
+        "p95_position_mm": percentile(positions, 95.0),
         "max_position_mm": max(positions, default=None),
-        "median_angle_deg": _median(angles),
-        "p95_angle_deg": _percentile(angles, 95.0),
+        "median_angle_deg": median(angles),
+        "p95_angle_deg": percentile(angles, 95.0),
         "max_angle_deg": max(angles, default=None),
-        "median_abs_size_mm": _median([abs(e) for e in sizes]),
-        "median_size_mm": _median(sizes),
-        "median_time_s": _median(times),
-        "p95_time_s": _percentile(times, 95.0),
+        "median_abs_size_mm": median([abs(e) for e in sizes]),
+        "median_size_mm": median(sizes),
+        "median_time_s": median(times),
+        "p95_time_s": percentile(times, 95.0),
         "max_time_s": max(times, default=None),
     }
 
@@ -543,18 +528,18 @@ def speed_target(
 ) -> Target:
     name = f"Under {TARGET_SECONDS:g} s per {WIDTH}{TIMES}{HEIGHT} image (p95, demoplan)"
     times = [o.seconds for o in outcomes if o.method == DEMOPLAN and o.set_key in TARGET_SETS]
-    p95 = _percentile(times, 95.0)
+    p95 = percentile(times, 95.0)
     if p95 is None:
         return Target(name, None, "sets a and b not run")
     detail = (
-        f"p95 {p95 * 1e3:.0f} ms, median {_ms(_median(times))}, max {_ms(max(times))} over "
+        f"p95 {p95 * 1e3:.0f} ms, median {_ms(median(times))}, max {_ms(max(times))} over "
         f"{len(times)} images of sets a, b"
     )
     if ("c", DEMOPLAN) in summaries:
         detail += f" (set c: p95 {_ms(summaries[('c', DEMOPLAN)]['p95_time_s'])})"
     base = [o.seconds for o in outcomes if o.method == BASELINE and o.set_key in TARGET_SETS]
     if base:
-        detail += f"; baseline p95 {_ms(_percentile(base, 95.0))}"
+        detail += f"; baseline p95 {_ms(percentile(base, 95.0))}"
     return Target(name, bool(p95 < TARGET_SECONDS), detail)
 
 
