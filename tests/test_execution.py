@@ -201,3 +201,31 @@ def test_run_text_and_failure_exit_code(blocks_model_file: Path) -> None:
 def test_run_bad_faults_exit_2(blocks_model_file: Path) -> None:
     result = invoke("run", blocks_model_file, BLOCKS_SCENE, "--faults", "fly=0.1")
     assert result.exit_code == 2 and "--faults" in result.stderr
+
+
+def test_a_block_turned_on_its_target_is_put_down_again(
+    blocks: tuple[TaskModel, Scene], tmp_path: Path
+) -> None:
+    """The run only succeeds with the learned orientation: wood standing on its
+    target turned 30° is picked up and put down straight."""
+    model = blocks[0]
+    data = json.loads(BLOCKS_SCENE.read_text())
+    data["objects"] = {
+        "wood": {"position": [0.34, 0.04, 0.0], "yaw": 30, "size": [0.04] * 3},
+        "green": {"position": [0.2, 0.2, 0.0], "yaw": 0, "size": [0.04] * 3},
+        "red": {"position": [0.2, -0.1, 0.0], "yaw": 0, "size": [0.04] * 3},
+    }
+    path = tmp_path / "turned.json"
+    path.write_text(json.dumps(data))
+    turned = complete_geometry(load_scene(path), model)
+    report = execute(model, turned, KinematicWorld(turned))
+    assert report.success
+    assert "wood" in [e.action.object for e in report.actions]
+    wood = report.final.poses["wood"]
+    assert (
+        abs(
+            ((math.degrees(2 * math.atan2(wood.orientation[2], wood.orientation[3])) + 45) % 90)
+            - 45
+        )
+        < 1
+    )  # type: ignore[index]

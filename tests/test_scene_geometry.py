@@ -317,3 +317,36 @@ def test_target_on_nothing_is_an_obstacle() -> None:
     scene = block_scene(a=(0.1, 0.1))
     (candidate,) = candidate_goals(model, scene)
     assert "would stand on nothing" in build_problem(scene, candidate).obstacles[0]
+
+
+def test_free_space_on_a_huge_table_is_searched_on_a_coarser_grid() -> None:
+    """A kilometre-wide table must not allocate a grid of 10^10 spots."""
+    model = model_of([absolute("A", "a", 0.3, 0.0)], [["A"]])
+    scene = Scene(
+        objects=(SceneObject("a", Pose((0.1, 0.1, 0.0), quat_from_yaw(0.0)), BLOCK),),
+        table=((-1000.0, -1000.0), (1000.0, 1000.0)),
+    )
+    (candidate,) = candidate_goals(model, scene)
+    built = build_problem(scene, candidate)
+    assert len(built.problem.freespace) == 3
+
+
+def test_a_target_with_a_learned_orientation_is_not_a_turned_spot() -> None:
+    """wood stands on its target but turned 30°: its goal (yaw 0) is a place of its
+    own, so the plan puts it down again; a cylinder's turn does not matter."""
+    turned = State(
+        "A",
+        "a",
+        StatePosition(None, (0.3, 0.0, 0.0), 0.0),
+        StateOrientation(None, quat_from_yaw(0.0), 0.0),
+        (),
+    )
+    model = model_of([turned], [["A"]])
+    scene = Scene(objects=(SceneObject("a", Pose((0.3, 0.0, 0.0), quat_from_yaw(30.0)), BLOCK),))
+    (candidate,) = candidate_goals(model, scene)
+    built = build_problem(scene, candidate)
+    assert dict(built.problem.goal)["a"] != dict(built.problem.initial)["a"]
+    square = Scene(objects=(SceneObject("a", Pose((0.3, 0.0, 0.0), quat_from_yaw(90.0)), BLOCK),))
+    (candidate,) = candidate_goals(model, square)
+    built = build_problem(square, candidate)  # a cube turned 90° looks the same
+    assert dict(built.problem.goal)["a"] == dict(built.problem.initial)["a"]

@@ -34,7 +34,7 @@ from demoplan.model import Pose, TaskModel
 from demoplan.planning.compiled import compile_problem
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
-from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.plan import plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
@@ -49,6 +49,9 @@ class ExecutionSettings:
 
     position_tolerance: float = 0.01
     """m: an object farther than this from where it should be has moved."""
+    yaw_tolerance: float = 5.0
+    """deg: at a target whose orientation was learned, an object turned farther than
+    this (given its symmetry) is not in place."""
     max_replans: int = 25
     max_actions: int = 400
     budget: Budget = field(default_factory=lambda: Budget(timeout=60.0))
@@ -295,6 +298,13 @@ def execute(
             world.put_down(action.object, target)
         observation = world.observe()
         failure = _check_action(action, target, expected, observation, settings, step)
+        if failure is None and action.kind == "PUT_DOWN":
+            turn = _turned(
+                problem, observation, action.object, action.location, settings.yaw_tolerance
+            )
+            if turn is not None:
+                detail = f"{action.object} is turned {turn:.1f}° from its target"
+                failure = Failure(step, "misplaced", detail)
         executed.append(ExecutedAction(step, action, target, plan_index, failure is None))
         if failure is None:
             if action.kind == "GRASP":
@@ -352,7 +362,28 @@ def _goal_holds(
             or _distance(pose, pose_of(problem.location(loc))) > settings.position_tolerance
         ):
             return False
+        if _turned(problem, observation, obj, loc, settings.yaw_tolerance) is not None:
+            return False
     return True
+
+
+def _oriented(problem: SceneProblem) -> set[str]:
+    """Locations of targets whose orientation was learned (yaw matters there)."""
+    turnable = {s.label: s.turnable for s in problem.candidate.subtasks}
+    return {s.location for s in problem.problem.subgoals if not turnable.get(s.id, True)}
+
+
+def _turned(
+    problem: SceneProblem, observation: Observation, obj: str, location: str, tolerance: float
+) -> float | None:
+    """How far (deg) ``obj`` is turned from ``location``'s yaw, where that matters
+    and it is more than ``tolerance``; else None."""
+    shape = observation.geometry.get(obj)
+    pose = observation.poses.get(obj)
+    if shape is None or pose is None or location not in _oriented(problem):
+        return None
+    turn = yaw_difference(shape, yaw_of(pose), problem.location(location).yaw)
+    return turn if turn > tolerance else None
 
 
 def _check_action(

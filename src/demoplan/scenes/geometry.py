@@ -48,6 +48,7 @@ from demoplan.model import ObjectGeometry, Vector3
 from demoplan.scenes.scene import Gripper
 
 __all__ = [
+    "MAX_GRID",
     "GeometrySettings",
     "Location",
     "accepted_objects",
@@ -58,7 +59,13 @@ __all__ = [
     "free_space",
     "is_block",
     "supports",
+    "symmetry",
+    "yaw_difference",
 ]
+
+
+MAX_GRID = 250_000
+"""Most candidate free-space spots searched (the grid coarsens on a wider table)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +74,8 @@ class GeometrySettings:
 
     merge_distance: float = 0.01
     """A target closer than this (and at the same height) to a location is that location."""
+    merge_angle: float = 5.0
+    """… and, when its orientation was learned, turned less than this (deg) from it."""
     level_tolerance: float = 0.005
     """Heights closer than this are one level (a top meets a bottom)."""
     touch_tolerance: float = 0.002
@@ -100,6 +109,22 @@ class Location:
     @property
     def top(self) -> float:
         return self.position[2] + max(shape.size[2] for shape in self.shapes)
+
+
+def symmetry(shape: ObjectGeometry) -> float:
+    """The turn (deg) after which the shape looks the same from above: 90° for a
+    square box, 180° for other boxes, 0 (any turn) for cylinders and spheres."""
+    if shape.shape != "box":
+        return 0.0
+    return 90.0 if abs(shape.size[0] - shape.size[1]) <= 0.001 else 180.0
+
+
+def yaw_difference(shape: ObjectGeometry, a: float, b: float) -> float:
+    """How far apart two yaws (deg) of ``shape`` look, given its symmetry."""
+    period = symmetry(shape)
+    if period == 0.0:
+        return 0.0
+    return abs(((a - b + period / 2) % period) - period / 2)
 
 
 def is_block(shape: ObjectGeometry) -> bool:
@@ -282,8 +307,11 @@ def free_space(
         m = settings.table_margin
         table = ((min(xs) - m, min(ys) - m), (max(xs) + m, max(ys) + m))
     (x0, y0), (x1, y1) = table
-    gx = np.arange(x0 + spot_radius, x1 - spot_radius + 1e-12, settings.grid_step)
-    gy = np.arange(y0 + spot_radius, y1 - spot_radius + 1e-12, settings.grid_step)
+    # at most MAX_GRID candidate spots: a wide table gets a coarser grid
+    area = max(x1 - x0, 0.0) * max(y1 - y0, 0.0)
+    step = max(settings.grid_step, math.sqrt(area / MAX_GRID))
+    gx = np.arange(x0 + spot_radius, x1 - spot_radius + 1e-12, step)
+    gy = np.arange(y0 + spot_radius, y1 - spot_radius + 1e-12, step)
     if len(gx) == 0 or len(gy) == 0:
         return []
     grid = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)

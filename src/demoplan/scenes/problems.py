@@ -33,6 +33,7 @@ from demoplan.scenes.geometry import (
     free_space,
     location_footprint,
     supports,
+    yaw_difference,
 )
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.targets import Candidate, Subtask
@@ -114,7 +115,7 @@ def build_problem(
     target_of: dict[str, str] = {}
     for subtask in _turned_to_fit(candidate.subtasks, shapes, settings):
         shape = shapes[subtask.object]
-        index = _coinciding(locations, subtask.pose.position, shape, settings)
+        index = _coinciding(locations, subtask, shape, settings)
         if index is None:
             name = f"loc{len(locations) + 1}"
             locations.append(
@@ -272,21 +273,29 @@ def _xyz(position: Vector3) -> str:
 
 
 def _coinciding(
-    locations: list[Location], position: Vector3, shape: ObjectGeometry, settings: GeometrySettings
+    locations: list[Location], subtask: Subtask, shape: ObjectGeometry, settings: GeometrySettings
 ) -> int | None:
     """The location a target at ``position`` coincides with, if any (the nearest).
 
     Only a spot made for objects of the target object's shape and size is the
     same spot (a block on another block's target); a spot of another shape
     overlapping the target is a separate, mutually exclusive location, so that
-    each keeps its true footprint.
+    each keeps its true footprint. A target whose orientation was learned is
+    the spot only if the object there is turned the same way (to
+    ``merge_angle``, given the shape's symmetry).
     """
+    position = subtask.pose.position
     best, best_distance = None, settings.merge_distance
     for index, loc in enumerate(locations):
         if abs(loc.position[2] - position[2]) > settings.level_tolerance:
             continue
         if loc.kind == "freespace" or not all(_same_shape(s, shape) for s in loc.shapes):
             continue
+        if (
+            not subtask.turnable
+            and yaw_difference(shape, loc.yaw, yaw_of(subtask.pose)) > settings.merge_angle
+        ):
+            continue  # the object stands there but turned: it must be put down again
         distance = math.dist(loc.position[:2], position[:2])
         if distance < best_distance:
             best, best_distance = index, distance
