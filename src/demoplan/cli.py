@@ -262,12 +262,12 @@ def learn(
 
 
 def _refuse_overwriting_inputs(target: Path, inputs: list[Path]) -> None:
-    """``-o`` must not name one of the demonstration files (or lie in a folder read)."""
+    """``-o`` must not name one of the input files (or lie in a folder read)."""
     resolved = target.resolve()
     for path in inputs:
         source = path.resolve()
         if resolved == source:
-            raise InputError("is also an input; write the model elsewhere", source=str(target))
+            raise InputError("is also an input; write the output elsewhere", source=str(target))
         if (
             source.is_dir()
             and resolved.parent == source
@@ -452,7 +452,7 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
 
     figure, ax = plt.subplots(figsize=(6.5, 5.5))
     chosen = result.chosen
-    name = model.demonstrations[chosen.goal].name
+    name = _demonstration_name(model, chosen.goal)
     title = f"Goal of demonstration {chosen.goal} ({name}): {len(chosen.plan) // 2} moves"
     plot_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, ax, title)
     figure.tight_layout()
@@ -464,13 +464,20 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
         plt.close(figure)
 
 
+def _demonstration_name(model: TaskModel, index: int) -> str:
+    """A demonstration's name (a model with only the SPEC's minimum fields has none)."""
+    if index < len(model.demonstrations):
+        return model.demonstrations[index].name
+    return f"demonstration {index + 1}"
+
+
 def _print_scene_plan(result: Any, model: TaskModel) -> None:
     table = Table(title="Candidate goals", title_justify="left")
     for column in ("goal", "demonstrations", "actions", "moves", ""):
         table.add_column(column)
     for candidate in result.candidates:
         names = ", ".join(
-            model.demonstrations[k].name for k in candidate.problem.candidate.demonstrations
+            _demonstration_name(model, k) for k in candidate.problem.candidate.demonstrations
         )
         length = candidate.length
         chosen = candidate is result.chosen
@@ -525,6 +532,11 @@ def problem(
     from demoplan.scenes.plan import scene_problems
 
     with _reported_errors():
+        _refuse_overwriting_inputs(output, [model_path, scene_path])
+        if pddl_output:
+            _refuse_overwriting_inputs(
+                output.with_name(f"{output.stem}-domain.pddl"), [model_path, scene_path]
+            )
         model, scene = _scene_inputs(model_path, scene_path)
         if goal >= len(model.sequences):
             raise UsageError(
@@ -577,7 +589,7 @@ def run(
             help="Faults to inject, kind=probability,...: drop, displace, misplace, grasp, block."
         ),
     ] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the injected faults.")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="Seed of the injected faults.")] = 0,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the run report as JSON.")
     ] = False,
@@ -652,7 +664,9 @@ def perceive(
     image_path: Annotated[
         Path, typer.Argument(metavar="IMAGE", help="A top-down orthographic colour image (PNG).")
     ],
-    px_per_m: Annotated[float, typer.Option("--px-per-m", min=1e-6, help="Pixels per metre.")],
+    px_per_m: Annotated[
+        float, typer.Option("--px-per-m", min=1e-3, max=1e7, help="Pixels per metre.")
+    ],
     origin: Annotated[
         tuple[float, float],
         typer.Option(help="World x y (m) of the image's bottom-left corner."),
@@ -679,8 +693,10 @@ def perceive(
     from demoplan.perception.stacking import BlockTracker, TrackedBlock, scene_document
 
     with _reported_errors():
-        if not all(map(math.isfinite, (px_per_m, *origin))):
-            raise UsageError("--px-per-m and --origin must be finite numbers")
+        if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
+            raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+        if output is not None:
+            _refuse_overwriting_inputs(output, [image_path, *([before] if before else [])])
         camera = Camera(px_per_m, origin)
         settings = PerceptionSettings()
         if side is not None:
@@ -692,6 +708,12 @@ def perceive(
                 TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
             )
         blocks = tracker.update(detect_blocks(load_image(image_path), camera, settings))
+        if not blocks:
+            raise InputError(
+                "no blocks found; a scene needs at least one (is --px-per-m right? "
+                "--side too strict?)",
+                source=str(image_path),
+            )
         document = scene_document(blocks)
         if output is not None:
             write_atomic(output, dump_json(document))
@@ -733,6 +755,9 @@ def segment(
     from demoplan.segmentation import segment as segment_stream
 
     with _reported_errors():
+        _refuse_overwriting_inputs(output, [stream_path])
+        if plot is not None:
+            _refuse_overwriting_inputs(plot, [stream_path, output])
         stream = load_stream(stream_path)
         found = segment_stream(stream)
         demo = found.to_demonstration(name or stream_path.stem)

@@ -53,6 +53,7 @@ class KinematicWorld:
         self.picked_from: Pose | None = None
         self.injected: list[tuple[str, str]] = []  # (kind, what happened), for tests and reports
         self.blocks = 0
+        self.injected_objects: list[str] = []  # obstacles a block fault put in, in order
         # Faults at given actions (1-based count of grasps and put-downs): a test
         # injects exactly one kind exactly where it wants it.
         self.schedule = dict(schedule or {})
@@ -104,7 +105,7 @@ class KinematicWorld:
     def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
         if self.held is None and self._chance(self.faults.displace, "displace"):
             movable = sorted(
-                o for o in self.poses if not self._on_top_of(o) and not o.startswith("obstacle")
+                o for o in self.poses if not self._on_top_of(o) and o not in self.injected_objects
             )
             if movable:
                 obj = movable[int(self.rng.integers(len(movable)))]
@@ -131,7 +132,10 @@ class KinematicWorld:
             if target.position[2] < 0.005 and self._clear(x, y, OBSTACLE, 0.002, reach=False):
                 self.blocks += 1
                 name = f"obstacle{self.blocks}"
+                while name in self.geometry:  # a scene object may have that name
+                    name = f"{name}_"
                 self.geometry[name] = OBSTACLE
+                self.injected_objects.append(name)
                 self.poses[name] = Pose(
                     (target.position[0], target.position[1], 0.0), quat_from_yaw(0.0)
                 )

@@ -77,27 +77,32 @@ _COLOURS = {
 }
 
 
-def scene_xml(scene: Scene, top_view: tuple[float, float, float] | None = None) -> str:
+def scene_xml(
+    scene: Scene,
+    top_view: tuple[float, float, float] | None = None,
+    offscreen: tuple[int, int] = (1200, 1200),
+) -> str:
     """The MJCF model of ``scene``: table, objects (free bodies), obstacles parked
     off the table, the gripper, and — with ``top_view = (x, y, height_m)`` — an
     orthographic camera ``top`` looking straight down at (x, y) whose picture is
     ``height_m`` metres high."""
     bodies = []
-    for obj in scene.objects:
+    # Bodies get internal names (``_object3``): a scene's names can be anything.
+    for index, obj in enumerate(scene.objects):
         assert obj.geometry is not None
         x, y, z = obj.pose.position
         half = obj.geometry.size[2] / 2
         w, qx, qy, qz = _wxyz(obj.pose)
         rgba = _COLOURS.get(obj.name, "0.6 0.6 0.7 1")
         bodies.append(
-            f'<body name="{obj.name}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
+            f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
             f'<freejoint/><geom {_geom(obj.geometry)} density="{DENSITY}" rgba="{rgba}" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
     for k in range(OBSTACLES):
         s = OBSTACLE.size[0] / 2
         bodies.append(
-            f'<body name="obstacle{k + 1}" pos="{PARK[0] + k} {PARK[1]} {s}"><freejoint/>'
+            f'<body name="_obstacle{k + 1}" pos="{PARK[0] + k} {PARK[1]} {s}"><freejoint/>'
             f'<geom type="box" size="{s} {s} {s}" density="{DENSITY}" rgba="0.3 0.3 0.3 1" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
@@ -105,7 +110,7 @@ def scene_xml(scene: Scene, top_view: tuple[float, float, float] | None = None) 
     if top_view is not None:
         cx, cy, view_height = top_view
         camera = (
-            f'<camera name="top" pos="{cx} {cy} 1.5" quat="1 0 0 0" '
+            f'<camera name="_top" pos="{cx} {cy} 1.5" quat="1 0 0 0" '
             f'projection="orthographic" fovy="{view_height}"/>'
         )
     fx, fy, fz = FINGER_HALF
@@ -116,7 +121,7 @@ def scene_xml(scene: Scene, top_view: tuple[float, float, float] | None = None) 
     return f"""<mujoco model="demoplan">
   <option timestep="{TIMESTEP}" integrator="implicitfast" cone="elliptic" impratio="10"/>
   <visual>
-    <global offwidth="1200" offheight="1200"/>
+    <global offwidth="{offscreen[0]}" offheight="{offscreen[1]}"/>
     <headlight ambient="0.35 0.35 0.35" diffuse="0.25 0.25 0.25" specular="0 0 0"/>
   </visual>
   <worldbody>
@@ -126,30 +131,32 @@ def scene_xml(scene: Scene, top_view: tuple[float, float, float] | None = None) 
     <geom name="table" type="plane" size="3 3 0.05" rgba="0.92 0.92 0.88 1"
           friction="0.8 0.01 0.0005"/>
     {"".join(bodies)}
-    <body name="target" mocap="true" pos="0.3 0 0.4"/>
-    <body name="hand" pos="0.3 0 0.4" gravcomp="1">
+    <body name="_target" mocap="true" pos="0.3 0 0.4"/>
+    <body name="_hand" pos="0.3 0 0.4" gravcomp="1">
       <freejoint/>
       <geom type="box" size="0.012 0.03 0.01" pos="0 0 {fz + 0.03}" contype="0" conaffinity="0"
             mass="0.5" rgba="0.4 0.4 0.45 0.5"/>
-      <body name="finger_left" gravcomp="1">
-        <joint name="left" type="slide" axis="1 0 0" range="-{FINGER_TRAVEL} 0" damping="20"/>
+      <body name="_finger_left" gravcomp="1">
+        <joint name="_left" type="slide" axis="1 0 0" range="-{FINGER_TRAVEL} 0" damping="20"/>
         <geom {finger}/>
       </body>
-      <body name="finger_right" gravcomp="1">
-        <joint name="right" type="slide" axis="1 0 0" range="0 {FINGER_TRAVEL}" damping="20"/>
+      <body name="_finger_right" gravcomp="1">
+        <joint name="_right" type="slide" axis="1 0 0" range="0 {FINGER_TRAVEL}" damping="20"/>
         <geom {finger}/>
       </body>
     </body>
   </worldbody>
   <equality>
-    <weld body1="target" body2="hand" solref="0.004 1"/>
+    <weld body1="_target" body2="_hand" solref="0.004 1"/>
   </equality>
   <contact>
-    <exclude body1="finger_left" body2="finger_right"/>
+    <exclude body1="_finger_left" body2="_finger_right"/>
   </contact>
   <actuator>
-    <position name="left" joint="left" kp="800" ctrlrange="-{FINGER_TRAVEL} 0" forcerange="-8 8"/>
-    <position name="right" joint="right" kp="800" ctrlrange="0 {FINGER_TRAVEL}" forcerange="-8 8"/>
+    <position name="_left" joint="_left" kp="800" ctrlrange="-{FINGER_TRAVEL} 0"
+              forcerange="-8 8"/>
+    <position name="_right" joint="_right" kp="800" ctrlrange="0 {FINGER_TRAVEL}"
+              forcerange="-8 8"/>
   </actuator>
 </mujoco>
 """
@@ -184,12 +191,14 @@ class MujocoWorld:
         (x0, y0), (x1, y1) = self.oracle.region
         self.top_camera = Camera(TOP_PX_PER_M, (x0, y0))
         self.top_size = (round((x1 - x0) * TOP_PX_PER_M), round((y1 - y0) * TOP_PX_PER_M))
+        offscreen = (max(1200, self.top_size[0]), max(1200, self.top_size[1]))
         self.model = mujoco.MjModel.from_xml_string(
-            scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0))
+            scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0), offscreen)
         )
         self.data = mujoco.MjData(self.model)
         self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
         self.names = [o.name for o in scene.objects]
+        self.body_names = {name: f"_object{k}" for k, name in enumerate(self.names)}
         self.faults = faults
         self.held: str | None = None
         self.grip_offset = np.zeros(3)  # object centre relative to the hand when grasped
@@ -197,8 +206,8 @@ class MujocoWorld:
         self.grip_axis = 0.0
         self.obstacles_used = 0
         self.simulated = 0.0
-        self.left = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "left")
-        self.right = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "right")
+        self.left = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "_left")
+        self.right = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "_right")
         self.hand_yaw = 0.0
         self.renderer: Any = None
         self.top_renderer: Any = None
@@ -208,7 +217,9 @@ class MujocoWorld:
     # -- reading the simulation ----------------------------------------------------------
 
     def _body(self, name: str) -> int:
-        return int(self.mujoco.mj_name2id(self.model, self.mujoco.mjtObj.mjOBJ_BODY, name))
+        """The body id of an object (or of an internal body, ``_hand``…)."""
+        internal = self.body_names.get(name, name)
+        return int(self.mujoco.mj_name2id(self.model, self.mujoco.mjtObj.mjOBJ_BODY, internal))
 
     def _pose(self, name: str) -> Pose:
         body = self._body(name)
@@ -221,7 +232,7 @@ class MujocoWorld:
         return Pose((float(bottom[0]), float(bottom[1]), float(bottom[2])), (x, y, z, w))
 
     def _active(self) -> list[str]:
-        return self.names + [f"obstacle{k + 1}" for k in range(self.obstacles_used)]
+        return self.names + self.oracle.injected_objects[: self.obstacles_used]
 
     def observe(self) -> Observation:
         poses = {name: self._pose(name) for name in self._active() if name != self.held}
@@ -237,7 +248,7 @@ class MujocoWorld:
 
     def _hand_body(self) -> np.ndarray:
         """Where the hand really is."""
-        return np.array(self.data.xpos[self._body("hand")])
+        return np.array(self.data.xpos[self._body("_hand")])
 
     def _lifted(self, name: str) -> bool:
         """Between the fingers and off whatever it stood on."""
@@ -396,10 +407,11 @@ class MujocoWorld:
         before = dict(self.oracle.poses)
         self.oracle.between_actions(upcoming)
         for name, pose in self.oracle.poses.items():
-            if name.startswith("obstacle") and name not in before:
-                self.obstacles_used = max(self.obstacles_used, int(name.removeprefix("obstacle")))
-                if self.obstacles_used > OBSTACLES:
-                    continue
+            if name in self.oracle.injected_objects and name not in before:
+                if self.obstacles_used == OBSTACLES:
+                    continue  # no parked body left for it
+                self.obstacles_used += 1
+                self.body_names[name] = f"_obstacle{self.obstacles_used}"
                 self._teleport(name, pose)
             elif name in before and pose != before[name]:
                 self._teleport(name, pose)
@@ -441,7 +453,7 @@ class MujocoWorld:
         if self.top_renderer is None:
             width, height = self.top_size
             self.top_renderer = self.mujoco.Renderer(self.model, height, width)
-        self.top_renderer.update_scene(self.data, camera="top")
+        self.top_renderer.update_scene(self.data, camera="_top")
         image: np.ndarray = self.top_renderer.render()
         return image
 
@@ -491,8 +503,8 @@ class MujocoWorld:
 
     def _sync_oracle(self) -> None:
         self.oracle.poses = {n: self._pose(n) for n in self._active() if n != self.held}
-        for k in range(self.obstacles_used):
-            self.oracle.geometry[f"obstacle{k + 1}"] = OBSTACLE
+        for name in self.oracle.injected_objects[: self.obstacles_used]:
+            self.oracle.geometry[name] = OBSTACLE
         self.oracle.held = self.held
 
     def _teleport(self, name: str, pose: Pose) -> None:
@@ -506,7 +518,7 @@ class MujocoWorld:
         self.data.qpos[address + 3 : address + 7] = _wxyz(pose)
         self.data.qvel[velocity : velocity + 6] = 0.0
         self.mujoco.mj_forward(self.model, self.data)
-        if name.startswith("obstacle"):
+        if name in self.oracle.injected_objects:
             self.geometry[name] = OBSTACLE
 
 

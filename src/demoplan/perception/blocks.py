@@ -180,10 +180,12 @@ def detect_blocks(
         x, y = camera.to_world(u, v)
         yaw = ((params[2] + 45.0) % 90.0) - 45.0
         counts[region.colour] = counts.get(region.colour, 0) + 1
+        count = counts[region.colour]
+        # a plain colour names its block (red, red2, …); others are block1, block2, … (SPEC §3)
         name = (
-            region.colour
-            if counts[region.colour] == 1
-            else f"{region.colour}{counts[region.colour]}"
+            f"block{count}"
+            if region.colour == "block"
+            else (region.colour if count == 1 else f"{region.colour}{count}")
         )
         blocks.append(
             DetectedBlock(

@@ -50,6 +50,12 @@ def load_image(path: str | Path) -> np.ndarray:
                     f"{MAX_PIXELS:,} expected)",
                     source=str(path),
                 )
+            if opened.mode in {"I", "I;16", "I;16B", "I;16L", "I;16N"}:
+                # 16-bit grey: keep the top 8 bits (convert("RGB") would clip to white)
+                grey = np.asarray(opened).astype(np.int64)
+                scale = 8 if grey.max(initial=0) > 255 else 0
+                eight = np.clip(grey >> scale, 0, 255).astype(np.uint8)
+                return np.repeat(eight[..., None], 3, axis=2)
             rgb = opened.convert("RGB")
             return np.asarray(rgb, dtype=np.uint8).copy()
     except FileNotFoundError:

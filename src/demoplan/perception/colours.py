@@ -1,8 +1,10 @@
 """Background, foreground and colour classes of a top-view image.
 
-The table is the image's dominant colour (the median of its border); a pixel
+The table's colour under each pixel is a plane per channel fitted to the
+image border (so a smooth brightness gradient is table, not object); a pixel
 belongs to the foreground when it differs from the table by more than
-``max(min_contrast, 6 σ)``, σ the sensor noise measured on the border. Each
+``max(min_contrast, 6 σ)``, σ the sensor noise measured between neighbouring
+border pixels (so a smooth brightness gradient is not taken for noise). Each
 connected foreground region is split by colour: its confidently coloured
 ("core") pixels are named by the nearest plain colour in brightness-free
 chromaticity (RGB divided by its largest channel, so shading does not change
@@ -21,6 +23,10 @@ import numpy as np
 from scipy import ndimage
 
 __all__ = ["PALETTE", "ColourRegion", "colour_regions", "name_colour"]
+
+MAX_CHROMA_DISTANCE = 0.3
+"""A colour farther than this (in RGB / max RGB) from every plain colour has no name."""
+_SPECIAL = {-2: "black", -3: "grey", -4: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
     # brightness-free chromaticity: RGB / max(RGB)
@@ -50,15 +56,10 @@ class ColourRegion:
 
 
 def name_colour(rgb: np.ndarray) -> str:
-    """The plain colour name nearest to ``rgb`` (dark or grey: ``black`` / ``grey``)."""
-    names, chroma = _palette()
-    top = float(np.max(rgb))
-    if top < 60:
-        return "black"
-    normal = np.asarray(rgb, dtype=float) / top
-    if normal.min() > 0.82:
-        return "grey"
-    return names[int(np.argmin(np.linalg.norm(chroma - normal, axis=1)))]
+    """The plain colour name nearest to ``rgb`` (dark or grey: ``black`` / ``grey``;
+    ``block`` when no plain colour is near: SPEC §3 then names blocks block1, block2…)."""
+    label = int(_classify(np.asarray(rgb, dtype=float).reshape(1, 3))[0])
+    return _palette()[0][label] if label >= 0 else _SPECIAL[label]
 
 
 def _palette() -> tuple[list[str], np.ndarray]:
@@ -72,6 +73,7 @@ def _classify(pixels: np.ndarray) -> np.ndarray:
     normal = pixels / np.maximum(top, 1.0)[:, None]
     distance = np.linalg.norm(normal[:, None, :] - chroma[None, :, :], axis=2)
     labels: np.ndarray = np.argmin(distance, axis=1)
+    labels[distance.min(axis=1) > MAX_CHROMA_DISTANCE] = -4  # no plain colour
     labels[normal.min(axis=1) > 0.82] = -3
     labels[top < 60] = -2
     return labels
@@ -83,12 +85,14 @@ def colour_regions(
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour."""
     rgb = image.astype(float)
-    border = np.concatenate([rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]])
-    table = np.median(border, axis=0)
-    deviation = np.linalg.norm(border - table, axis=1)
-    sigma = 1.4826 * float(np.median(deviation)) / np.sqrt(3)
+    edges = [rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]]
+    table = np.median(np.concatenate(edges), axis=0)
+    background = _table_model(rgb)
+    # sensor noise from neighbouring border pixels (a smooth shading does not count)
+    steps = np.abs(np.concatenate([np.diff(edge, axis=0) for edge in edges]))
+    sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
     threshold = max(min_contrast, 6 * sigma)
-    distance = np.linalg.norm(rgb - table, axis=2)
+    distance = np.linalg.norm(rgb - background, axis=2)
     foreground = distance > threshold / 2
     labels, _ = ndimage.label(foreground, structure=np.ones((3, 3)))
     regions: list[ColourRegion] = []
@@ -100,6 +104,7 @@ def colour_regions(
         cols = slice(max(0, box[1].start - 3), min(labels.shape[1], box[1].stop + 3))
         member = labels[rows, cols] == index
         crop = rgb[rows, cols]
+        ground = background[rows, cols]
         far = distance[rows, cols]
         # core: clearly foreground and two pixels in from the region's rim, where
         # anti-aliased pixels mix the table's colour into the object's
@@ -111,15 +116,14 @@ def colour_regions(
         for label in np.unique(classes):
             chosen = classes == label
             if chosen.sum() >= min_area:
-                colour = names[label] if label >= 0 else ("black" if label == -2 else "grey")
-                present.append((colour, crop[core][chosen].mean(axis=0)))
+                colour = names[label] if label >= 0 else _SPECIAL[int(label)]
+                change = (crop[core][chosen] - ground[core][chosen]).mean(axis=0)
+                present.append((colour, crop[core][chosen].mean(axis=0), change))
         if not present:
             continue
-        centres = np.array([c for _, c in present])
-        pixel_colours = crop.reshape(-1, 3)
-        # nearest class centre, judged on the colour change from the table
-        offsets = pixel_colours - table
-        centre_offsets = centres - table
+        # nearest class, judged on the colour change from the table under each pixel
+        offsets = (crop - ground).reshape(-1, 3)
+        centre_offsets = np.array([change for _, _, change in present])
         scores = np.stack(
             [
                 np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
@@ -129,9 +133,8 @@ def colour_regions(
             axis=1,
         )
         nearest = np.argmin(scores, axis=1).reshape(member.shape)
-        for k, (colour, centre) in enumerate(present):
-            c = centre - table
-            projection = ((crop - table) @ c) / max(float(c @ c), 1e-9)
+        for k, (colour, centre, c) in enumerate(present):
+            projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
             alpha = (
                 np.clip(projection, 0.0, 1.0)
                 * (nearest == k)
@@ -147,6 +150,30 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _table_model(rgb: np.ndarray) -> np.ndarray:
+    """The table's colour under every pixel: a plane per channel fitted (least
+    squares) to the image border, so a smooth brightness gradient is table too."""
+    height, width, _ = rgb.shape
+    rows = np.concatenate(
+        [np.zeros(width), np.full(width, height - 1), np.arange(height), np.arange(height)]
+    )
+    cols = np.concatenate(
+        [np.arange(width), np.arange(width), np.zeros(height), np.full(height, width - 1)]
+    )
+    values = rgb[rows.astype(int), cols.astype(int)]
+    design = np.stack([np.ones_like(rows), rows / height, cols / width], axis=1)
+    coefficients, *_ = np.linalg.lstsq(design, values, rcond=None)
+    # refit without the border pixels a block touches (far from the first fit)
+    residual = np.linalg.norm(values - design @ coefficients, axis=1)
+    keep = residual <= 3 * max(float(np.median(residual)), 1.0)
+    coefficients, *_ = np.linalg.lstsq(design[keep], values[keep], rcond=None)
+    rr, cc = np.meshgrid(np.arange(height) / height, np.arange(width) / width, indexing="ij")
+    model: np.ndarray = (
+        coefficients[0] + rr[..., None] * coefficients[1] + cc[..., None] * coefficients[2]
+    )
+    return model
 
 
 def _index(colour: str) -> int | None:

@@ -87,8 +87,18 @@ class BlockTracker:
             )
 
         resolved: dict[str, TrackedBlock] = {}
-        for name in sorted(moved, key=displacement, reverse=True):
+        known = sorted((n for n in moved if n in previous), key=displacement, reverse=True)
+        new = [n for n in moved if n not in previous]
+        for name in known + new:  # new names last: they may be pieces of a covered block
             block, before = moved[name], previous.get(name)
+            if before is None and any(
+                r.z > 1e-3
+                and covered_by(r, b)
+                and b.outline().contains(shapely.Point(block.x, block.y))
+                for r in resolved.values()
+                for b in previous.values()
+            ):
+                continue  # what is left in view of a block now covered, not a new block
             if before is not None and any(
                 r.z > before.z + 1e-3 and covered_by(r, before) for r in resolved.values()
             ):

@@ -19,6 +19,7 @@ demonstrations (:func:`complete_geometry`).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -165,6 +166,27 @@ class _SceneSchema(_Schema):
         return spots
 
 
+_RESERVED = re.compile(r"^(loc|freespace|grasp)\d+$")
+
+
+def _check_name(name: str, source: str) -> None:
+    """Object names appear in plans (``GRASP red loc3 grasp5``): no spaces, and not
+    the names demoplan gives locations and grasps."""
+    if not name or any(c.isspace() for c in name):
+        raise InputError(
+            "an object name without spaces expected (it appears in plans)",
+            source=source,
+            field=f"objects.{name}",
+        )
+    if _RESERVED.match(name):
+        raise InputError(
+            "is a name demoplan gives locations and grasps (loc…, freespace…, grasp…); "
+            "another name expected",
+            source=source,
+            field=f"objects.{name}",
+        )
+
+
 def scene_from_document(data: dict[str, Any], source: str) -> Scene:
     """Parse a ``demoplan/scene-1`` document (lengths to metres)."""
     check_format(data, {"scene"}, source)
@@ -176,6 +198,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
     to_deg = math.degrees if parsed.units.angle == "rad" else float
     objects = []
     for name, entry in parsed.objects.items():
+        _check_name(name, source)
         if name in parsed.landmarks:
             raise InputError(
                 "is both an object and a landmark; one kind expected",
@@ -185,6 +208,12 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         pose = pose_from_dict(
             PoseSchema(**entry.model_dump(exclude={"size", "shape", "grasps"})), parsed.units
         )
+        if pose.position[2] < -0.005:
+            raise InputError(
+                f"z = {pose.position[2]:g} m lies under the table top; z ≥ 0 expected",
+                source=source,
+                field=f"objects.{name}.position",
+            )
         geometry = None
         if entry.size is not None:
             size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
@@ -197,6 +226,13 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
             (s[0] * scale, s[1] * scale, (s[2] if len(s) > 2 else 0.0) * scale)
             for s in parsed.freespace
         )
+        for index, spot in enumerate(freespace):
+            if abs(spot[2]) > 0.005:
+                raise InputError(
+                    f"z = {spot[2]:g} m; free-space spots lie on the table (z = 0)",
+                    source=source,
+                    field=f"freespace[{index}]",
+                )
     gripper = Gripper(parsed.gripper.finger_radius * scale, parsed.gripper.clearance * scale)
     for name in ("finger_radius", "clearance"):
         if getattr(gripper, name) > MAX_GRIPPER:

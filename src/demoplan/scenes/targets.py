@@ -77,6 +77,7 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     ``clutter`` allows them, as objects with no goal) for objects the scene has
     but the model never saw."""
     landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
+    landmarks |= {name for name, _ in scene.landmarks}
     needed = {state.object for state in model.states}
     for state in model.states:
         for reference in (state.position.reference, state.orientation.reference):

@@ -200,7 +200,7 @@ def stream_from_samples(
         if repeated.size:
             first = int(index[repeated[0] + 1])
             raise InputError(
-                f"object {name!r} has two samples at t = {t[repeated[0]]!r}; "
+                f"object {name!r} has two samples at t = {float(t[repeated[0]]):g}; "
                 "one sample per object per time expected",
                 source=source,
                 field=label(first),
