@@ -257,3 +257,17 @@ def test_a_cycle_of_precedences_counts_a_second_move() -> None:
     assert len(plan) == 2 * 4 == len(solve(problem, "bfs"))
     c = compile_problem(problem)
     assert _AStar(c, Budget()).heuristic(c.start, c.start_reached) == 4
+
+
+def test_final_places_that_overlap_are_reported() -> None:
+    problem = Problem.create(
+        objects=["a", "b"],
+        locations=["l1", "l2", "g1", "g2"],
+        grasps=["g"],
+        allowed=[("a", "g"), ("b", "g")],
+        initial=[("a", "l1"), ("b", "l2")],
+        goal=[("a", "g1"), ("b", "g2")],
+        exclusions=[("g1", "g2")],
+    )
+    with pytest.raises(NoPlanError, match="a and b cannot both stand at their final places"):
+        solve(problem)

@@ -821,6 +821,14 @@ def explain_unsolvable(problem: Problem) -> list[str]:
             f"collides with another final place of {', '.join(circle)}: "
             "the last of them put down cannot be"
         )
+    for obj, goal in enumerate(c.goal):
+        for other in range(obj + 1, len(c.goal)):
+            place = c.goal[other]
+            if goal >= 0 and place >= 0 and c.exclusive[goal] >> place & 1:
+                reasons.append(
+                    f"{c.objects[obj]} and {c.objects[other]} cannot both stand at their final "
+                    f"places: {c.locations[goal]} and {c.locations[place]} overlap"
+                )
     cycle = find_cycle(problem.precedences)
     if cycle:
         reasons.append(f"subgoals must come before themselves: {' < '.join(cycle)}")
