@@ -271,3 +271,21 @@ def test_scene_in_centimetres_and_yaml(blocks_model: TaskModel, tmp_path: Path) 
     centimetres = plan_in_scene(blocks_model, load_scene(path))
     assert centimetres.chosen.plan.actions == metres.chosen.plan.actions  # type: ignore[union-attr]
     assert [c.length for c in centimetres.candidates] == [10, 8]
+
+
+def test_clutter_is_planned_around_when_allowed(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    """An object the model never saw stands on green's target: refused by default,
+    moved out of the way with --clutter."""
+
+    def add(d: dict[str, Any]) -> None:
+        d["objects"]["blue"] = {"position": [0.404, 0.044, 0.0], "size": [0.04, 0.04, 0.04]}
+
+    path = scene_with(tmp_path, add)
+    assert invoke("plan", model_files["blocks"], path).exit_code == 1
+    result = invoke("plan", model_files["blocks"], path, "--clutter", "--json")
+    assert result.exit_code == 0, result.stderr
+    assert "blue" in [
+        obj for kind, obj, _, _ in json.loads(result.stdout)["actions"] if kind == "GRASP"
+    ]

@@ -415,6 +415,12 @@ def plan(
     plot: Annotated[
         Path | None, typer.Option(help="Also draw the plan from above into this image (PNG, SVG).")
     ] = None,
+    clutter: Annotated[
+        bool,
+        typer.Option(
+            help="Allow objects the model never saw (they get no goal; moved if in the way)."
+        ),
+    ] = False,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
     from demoplan.planning.search import Budget
@@ -426,9 +432,11 @@ def plan(
         settings = _geometry_settings(freespace)
         if _stderr.is_terminal:
             with _stderr.status("Planning every candidate goal…"):
-                result = plan_in_scene(model, scene, budget=budget, settings=settings)
+                result = plan_in_scene(
+                    model, scene, budget=budget, settings=settings, clutter=clutter
+                )
         else:
-            result = plan_in_scene(model, scene, budget=budget, settings=settings)
+            result = plan_in_scene(model, scene, budget=budget, settings=settings, clutter=clutter)
         if plot is not None:
             _plot_scene_plan(model, scene, result, plot)
         if json_output:

@@ -96,7 +96,7 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
-            f"the demonstrations {sorted(seen)}",
+            f"the demonstrations {sorted(seen)} (plan --clutter plans around others)",
             source=scene.source,
             field="objects",
         )
