@@ -12,7 +12,6 @@ import logging
 import math
 import re
 import sys
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import replace
@@ -331,25 +330,13 @@ def solve(
     ] = None,
 ) -> None:
     """Solve a planning problem: a shortest GRASP / PUT_DOWN plan (paper §IV.C)."""
-    from demoplan.planning.problem import format_plan, plan_to_json
-    from demoplan.planning.search import Budget
-    from demoplan.planning.search import solve as solve_problem
-    from demoplan.planning.xml import load_problem
+    from demoplan.launcher import SolveOptions, solve_text
 
     with _reported_errors():
-        started = time.perf_counter()
-        problem = load_problem(problem_path)
-        read_seconds = time.perf_counter() - started
-        budget = Budget(max_nodes=max_nodes, timeout=timeout)
-        if _stderr.is_terminal:  # a spinner while a long search runs; nothing when piped
-            with _stderr.status(f"Searching ({search.value}) for a shortest plan…"):
-                plan = solve_problem(problem, search.value, budget)
-        else:
-            plan = solve_problem(problem, search.value, budget)
-        if json_output:
-            _print_json(plan_to_json(plan, read_seconds))
-        else:
-            sys.stdout.write(format_plan(plan))
+        options = SolveOptions(problem_path, json_output, search.value, max_nodes, timeout)
+        # a spinner while a long search runs on a terminal; nothing when piped
+        spinner = _stderr.status if _stderr.is_terminal else None
+        sys.stdout.write(solve_text(options, spinner))
 
 
 @app.command()
@@ -446,30 +433,20 @@ def plan(
 
 
 def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
-    try:
-        import matplotlib
+    from demoplan.plotting import save_scene_plan
+    from demoplan.scenes.scene import complete_geometry
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+    chosen = result.chosen
+    name = _demonstration_name(model, chosen.goal)
+    title = f"Goal of demonstration {chosen.goal} ({name}): {len(chosen.plan) // 2} moves"
+    try:
+        save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
     except ImportError:
         raise InputError(
             "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
         ) from None
-    from demoplan.plotting import plot_scene_plan, save_figure
-    from demoplan.scenes.scene import complete_geometry
-
-    figure, ax = plt.subplots(figsize=(6.5, 5.5))
-    chosen = result.chosen
-    name = _demonstration_name(model, chosen.goal)
-    title = f"Goal of demonstration {chosen.goal} ({name}): {len(chosen.plan) // 2} moves"
-    plot_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, ax, title)
-    figure.tight_layout()
-    try:
-        save_figure(figure, path)
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
-    finally:
-        plt.close(figure)
 
 
 def _demonstration_name(model: TaskModel, index: int) -> str:

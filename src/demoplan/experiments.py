@@ -441,26 +441,18 @@ def _plan_checks(experiment: str, result: ScenePlan) -> list[Check]:
 
 
 def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> str | None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return None
-    from demoplan.plotting import plot_scene_plan, save_figure
+    from demoplan.plotting import save_scene_plan
 
     chosen = result.chosen
     assert chosen.plan is not None
-    figure, ax = plt.subplots(figsize=(6.5, 5.5))
     title = (
         f"Plan for the goal of demonstration {chosen.goal + 1} "
         f"({model.demonstrations[chosen.goal].name}): {len(chosen.plan) // 2} moves"
     )
-    plot_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, ax, title)
-    figure.tight_layout()
-    save_figure(figure, path)
-    plt.close(figure)
+    try:
+        save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
+    except ImportError:
+        return None
     return path.name
 
 
@@ -529,11 +521,12 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
         fontsize=10,
     )
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(temporary, dpi=110)
-    plt.close(fig)
-    temporary.replace(path)
+    from demoplan.plotting import save_figure
+
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
     return path.name
 
 

@@ -17,16 +17,22 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["SOLVE_OPTIONS", "SolveOptions", "main", "parse_solve_options", "run_solve"]
+__all__ = [
+    "SOLVE_OPTIONS",
+    "SolveOptions",
+    "main",
+    "parse_solve_options",
+    "run_solve",
+    "solve_text",
+]
 
 SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout")
 """Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
-
-SEARCH_NAMES = ("astar", "bfs")
 
 
 @dataclass(frozen=True)
@@ -56,7 +62,9 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     parser = _Parser(prog="demoplan solve", add_help=False, allow_abbrev=False)
     parser.add_argument("problem", type=Path)
     parser.add_argument("--json", dest="json_output", action="store_true")
-    parser.add_argument("--search", choices=SEARCH_NAMES, default="astar")
+    from demoplan.planning.search import SEARCHES  # needed next anyway, to solve
+
+    parser.add_argument("--search", choices=tuple(SEARCHES), default="astar")
     parser.add_argument("--max-nodes", type=int, default=None)
     parser.add_argument("--timeout", type=float, default=None)
     try:
@@ -72,30 +80,42 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     return SolveOptions(parsed.problem, parsed.json_output, parsed.search, max_nodes, timeout)
 
 
-def run_solve(options: SolveOptions) -> int:
-    """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
-    from demoplan.errors import DemoplanError, error_line
+def solve_text(
+    options: SolveOptions, spinner: Callable[[str], AbstractContextManager[object]] | None = None
+) -> str:
+    """Read the problem, solve it and render the plan (the paper's format, or its
+    JSON); ``spinner(text)`` wraps the search (a terminal's status line). Raises
+    :class:`~demoplan.errors.DemoplanError`. Both ``solve`` paths use this."""
     from demoplan.planning.problem import format_plan, plan_to_json
     from demoplan.planning.search import Budget, solve
     from demoplan.planning.xml import load_problem
 
-    try:
-        started = time.perf_counter()
-        problem = load_problem(options.problem)
-        read_seconds = time.perf_counter() - started
-        plan = solve(problem, options.search, Budget(options.max_nodes, options.timeout))
-    except DemoplanError as exc:
-        sys.stderr.write(error_line(exc) + "\n")
-        return exc.exit_code
+    started = time.perf_counter()
+    problem = load_problem(options.problem)
+    read_seconds = time.perf_counter() - started
+    budget = Budget(options.max_nodes, options.timeout)
+    with (
+        spinner(f"Searching ({options.search}) for a shortest plan…") if spinner else nullcontext()
+    ):
+        plan = solve(problem, options.search, budget)
     if options.json_output:
         import json
 
-        text = json.dumps(
-            plan_to_json(plan, read_seconds), indent=2, ensure_ascii=False, allow_nan=False
-        )
-        sys.stdout.write(text + "\n")
-    else:
-        sys.stdout.write(format_plan(plan))
+        data = plan_to_json(plan, read_seconds)
+        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    return format_plan(plan)
+
+
+def run_solve(options: SolveOptions) -> int:
+    """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
+    from demoplan.errors import DemoplanError, error_line
+
+    try:
+        text = solve_text(options)
+    except DemoplanError as exc:
+        sys.stderr.write(error_line(exc) + "\n")
+        return exc.exit_code
+    sys.stdout.write(text)
     return 0
 
 

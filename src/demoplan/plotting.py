@@ -27,6 +27,7 @@ __all__ = [
     "plot_demonstration",
     "plot_scene_plan",
     "save_figure",
+    "save_scene_plan",
 ]
 
 _PALETTE = {
@@ -266,3 +267,22 @@ def save_figure(figure: Any, path: Path, dpi: int = 110) -> None:
         temporary.replace(path)
     finally:
         temporary.unlink(missing_ok=True)
+
+
+def save_scene_plan(
+    scene: Scene, problem: SceneProblem, plan: Plan, path: Path, title: str
+) -> None:
+    """:func:`plot_scene_plan` into an image file, written atomically (raises
+    ImportError without matplotlib)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, ax = plt.subplots(figsize=(6.5, 5.5))
+    try:
+        plot_scene_plan(scene, problem, plan, ax, title)
+        figure.tight_layout()
+        save_figure(figure, path)
+    finally:
+        plt.close(figure)
