@@ -86,7 +86,3 @@ class CameraWorld:
 
     def close(self) -> None:
         self.world.close()
-
-    @property
-    def oracle(self) -> object:
-        return self.world.oracle

@@ -34,6 +34,7 @@ from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
+from demoplan.scenes.geometry import half_extent
 from demoplan.scenes.scene import Scene, yaw_of
 
 __all__ = ["MujocoWorld", "scene_xml"]
@@ -303,8 +304,6 @@ class MujocoWorld:
     def _release(self) -> None:
         """Open the fingers a little (not wide: the neighbours are close) and let go."""
         assert self.held is not None
-        from demoplan.scenes.geometry import half_extent
-
         self._fingers(
             half_extent(self.geometry[self.held], self.grip_axis) + FINGER_HALF[0] + CLEARANCE
         )
@@ -329,8 +328,6 @@ class MujocoWorld:
         pose = where if where is not None else self._pose(obj)  # where it is believed to be
         shape = self.geometry[obj]
         yaw = yaw_of(pose) + axis
-        from demoplan.scenes.geometry import half_extent
-
         half = half_extent(shape, axis)
         centre = np.array(
             [pose.position[0], pose.position[1], pose.position[2] + shape.size[2] / 2]

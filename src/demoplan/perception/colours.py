@@ -52,7 +52,6 @@ class ColourRegion:
     rgb: tuple[float, float, float]
     offset: tuple[int, int]
     alpha: np.ndarray
-    core_pixels: int
 
 
 def name_colour(rgb: np.ndarray) -> str:
@@ -146,7 +145,6 @@ def colour_regions(
                     (float(centre[0]), float(centre[1]), float(centre[2])),
                     (rows.start, cols.start),
                     alpha,
-                    int((classes == _index(colour)).sum()) if _index(colour) is not None else 0,
                 )
             )
     return regions, table
@@ -174,8 +172,3 @@ def _table_model(rgb: np.ndarray) -> np.ndarray:
         coefficients[0] + rr[..., None] * coefficients[1] + cc[..., None] * coefficients[2]
     )
     return model
-
-
-def _index(colour: str) -> int | None:
-    names, _ = _palette()
-    return names.index(colour) if colour in names else None

@@ -36,6 +36,7 @@ heights ``bottom..top``.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -147,7 +148,10 @@ def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> B
     return shapely.Point(x, y).buffer(max(shape.size[0], shape.size[1]) / 2, quad_segs=16)
 
 
+@functools.lru_cache(maxsize=4096)
 def location_footprint(location: Location) -> BaseGeometry:
+    """The union of the outlines of the objects a location is made for (cached:
+    collision facts, support, exclusion and what a location takes all need it)."""
     shapes = [footprint(s, location.position, location.yaw) for s in location.shapes]
     return shapely.union_all(shapes)
 
