@@ -23,27 +23,49 @@ objects at once give two moves):
    threshold alone never starts a move; a move lasts until the object is
    slower than the low threshold. Moves separated by less than
    :attr:`~SegmentationSettings.min_rest_s` of rest are one move (a pause in
-   mid-air is not a placement). The last move needs ``min_rest_s`` of rest
-   after it, or — at the very end of the stream — at least three samples.
-4. **Rest poses.** The pose of a rest is the robust mean of the samples in its
-   first :attr:`~SegmentationSettings.pose_window_s` (the pose right after
-   placing, so a later unnoticed nudge does not shift it): the per-axis
-   median, then the mean of the samples closer to it than 3 × the median
-   distance (≈ 4.6 σ for normal noise: a tracker's outliers are dropped, its
-   noise is averaged); orientations are the chordal mean of those samples'
-   quaternions.
-5. **Steps.** A move is a step when the new rest pose is at least
-   :attr:`~SegmentationSettings.min_distance` away from the object's last
-   *accepted* rest pose, or turned by at least
-   :attr:`~SegmentationSettings.min_angle_deg`. Anything smaller is a nudge:
-   it is kept in :attr:`Segmentation.nudges` and is not a step (so is a
-   tracker glitch that jumps and comes back). Steps are ordered by the time
-   their object comes to rest.
+   mid-air is not a placement); the last move needs ``min_rest_s`` of rest
+   after it, or the end of the stream (6.).
+4. **Rest poses.** The pose of a rest is read where the object first lies as
+   low as it gets in that rest after the last time it was held higher (so a
+   teleoperator's slow final lowering, or a lift-and-set-down too slow for
+   the thresholds, ends before it), over :attr:`~SegmentationSettings.pose_window_s`:
+   the per-axis median, then the mean of the samples closer to it than 3 ×
+   the median distance (≈ 4.6 σ for normal noise: a tracker's outliers are
+   dropped, its noise is averaged); orientations are the chordal mean of
+   those samples' quaternions.
+5. **Pauses in the air.** A rest is not a placement — the move goes on
+   through it — when the next move only lowers the object (it never rises
+   :attr:`~SegmentationSettings.min_lift` above the rest and ends at least
+   that much lower: an object standing on a support must be lifted before
+   it can go down), or when it is above the table (z = 0, SPEC §2) and
+   above no object or landmark whose top it could stand on (from
+   ``geometry``; an object of unknown size within 10 cm beneath may be the
+   support).
+6. **The end of the stream.** A recording that stops right after the last
+   release still gives that placement: the samples at the end within
+   :attr:`~SegmentationSettings.settle_radius` of the last ones (or 4 × the
+   noise) are the final rest when they lie on a support, or on an object of
+   unknown size with at least two samples no faster than ``start_speed``.
+   An object still carried when the stream ends gives no step (a warning).
+7. **Steps, nudges and pushes.** A move is a nudge when the new rest pose is
+   less than :attr:`~SegmentationSettings.min_distance` from the object's
+   last *accepted* rest pose and turned by less than
+   :attr:`~SegmentationSettings.min_angle_deg` (so is a tracker glitch that
+   jumps and comes back); a push when it is longer but the object was never
+   lifted ``min_lift`` above where it rested and ends at the same height
+   (slid along its support; kept in :attr:`Segmentation.pushes`, and the
+   object's new place is where later moves are measured from); otherwise a
+   step. An object moving when its track begins that only comes down, in
+   place, is settling (robosuite drops its objects onto the table at the
+   start), not a move. Steps are ordered by the time their object comes to
+   rest.
 
 Limits: the parent frame of TF transforms is taken as the world; detection
 uses translation speed only, so an object turned in place without its
 reference point moving faster than ``start_speed`` is not seen to move; an
-object carried on another (a napkin on a moved plate) counts as moved.
+object carried on another (a napkin on a moved plate) counts as moved; a
+pause in the air followed by a lift higher is a placement unless geometry
+shows nothing to stand on.
 """
 
 from __future__ import annotations
@@ -61,7 +83,7 @@ from demoplan.demonstrations import demonstration_to_dict
 from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.rotations import angle_between, mean_quat
+from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
 from demoplan.segmentation.streams import ObjectTrack, PoseStream
 
 FloatArray = NDArray[np.float64]
@@ -83,6 +105,7 @@ MIN_FINAL_REST_SAMPLES = 3
 MIN_HALF_WINDOW_SAMPLES = 4  # a half window shorter than this is widened (sparse samples)
 INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
 MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
+UNKNOWN_FOOTPRINT_M = 0.1  # an object of unknown size this close beneath may be a support
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,6 +138,22 @@ class SegmentationSettings:
     max_gap_s : float
         Gaps between samples longer than this (s), default 0.25, are checked for
         a move the tracker did not see.
+    min_lift : float
+        Height (m), default 0.01, an object must rise above where it rested for
+        its move to be a step (or change its height by this much): a move
+        along the support without it is a push, reported, not a step; a rest
+        followed by a move that only lowers the object by at least this much
+        was a pause in the air, not a placement.
+    settle_radius : float
+        At the end of the stream, the samples within this distance (m) of the
+        last ones, default 0.01, are the final rest even when they are fewer
+        than ``min_rest_s`` (a recording stopped right after a release).
+    support_tolerance : float
+        With geometry (``segment(..., geometry=...)``): a rest is on a support
+        when the object's resting point is within this height (m), default
+        0.01, of the table (z = 0) or of the top of an object or landmark
+        beneath it; a rest above a known support and on none is a pause in
+        the air.
     """
 
     speed_window_s: float = 0.4
@@ -125,6 +164,9 @@ class SegmentationSettings:
     min_angle_deg: float = 20.0
     pose_window_s: float = 1.0
     max_gap_s: float = 0.25
+    min_lift: float = 0.01
+    settle_radius: float = 0.01
+    support_tolerance: float = 0.01
 
     def __post_init__(self) -> None:
         for item in fields(self):
@@ -148,7 +190,8 @@ class Move:
     ``start`` and ``end`` are stream times (s): the object is moving from
     ``start`` and at rest again after ``end``. ``pose`` is the robust mean of
     the rest that follows; ``before`` the pose of the rest that precedes it
-    (``None`` when the object was moving when its track began).
+    (``None`` when the object was moving when its track began); ``lift`` how
+    far (m) it rose above where it rested before.
     """
 
     object: str
@@ -156,6 +199,7 @@ class Move:
     end: float
     pose: Pose
     before: Pose | None
+    lift: float = math.nan
 
     @property
     def distance(self) -> float:
@@ -179,13 +223,15 @@ class Segmentation:
     """What :func:`segment` found in a stream.
 
     ``moves`` are the steps, ordered by the time their object comes to rest
-    (``end``); ``nudges`` the moves too small to be steps; ``initial`` each
+    (``end``); ``nudges`` the moves too small to be steps; ``pushes`` the
+    moves along the support without a lift (not steps); ``initial`` each
     object's pose in its first rest (objects already moving when their track
     begins have none); ``traces`` the speed signals.
     """
 
     moves: tuple[Move, ...]
     nudges: tuple[Move, ...]
+    pushes: tuple[Move, ...]
     initial: tuple[tuple[str, Pose], ...]
     traces: tuple[SpeedTrace, ...]
     settings: SegmentationSettings
@@ -264,27 +310,42 @@ def write_demonstration(demonstration: Demonstration, path: str | Path) -> None:
 # --------------------------------------------------------------------------- detection
 
 
-def segment(stream: PoseStream, settings: SegmentationSettings | None = None) -> Segmentation:
-    """Detect every object's moves in ``stream`` (module docstring) and order them."""
+def segment(
+    stream: PoseStream,
+    settings: SegmentationSettings | None = None,
+    *,
+    geometry: Mapping[str, ObjectGeometry] | None = None,
+    landmarks: Mapping[str, Pose] | None = None,
+) -> Segmentation:
+    """Detect every object's moves in ``stream`` (module docstring) and order them.
+
+    ``geometry`` (object and landmark sizes) and ``landmarks`` (static
+    references not in the stream) let a rest be checked against the supports
+    beneath it (:attr:`SegmentationSettings.support_tolerance`); without
+    geometry only the motion tells a pause in the air from a placement.
+    """
     settings = settings or SegmentationSettings()
+    supports = _Supports(stream, geometry or {}, landmarks or {}, settings)
     moves: list[Move] = []
     nudges: list[Move] = []
+    pushes: list[Move] = []
     initial: list[tuple[str, Pose]] = []
     traces: list[SpeedTrace] = []
     for track in stream.tracks:
-        result = _segment_track(track, settings)
+        result = _segment_track(track, settings, supports)
         moves += result.moves
         nudges += result.nudges
+        pushes += result.pushes
         traces.append(SpeedTrace(track.name, track.times, result.speed))
         if result.initial is not None:
             initial.append((track.name, result.initial))
         else:
             logger.info("%s: moving when its track begins; no initial pose", track.name)
-    moves.sort(key=lambda m: (m.end, m.start, m.object))
-    nudges.sort(key=lambda m: (m.end, m.start, m.object))
+    order = lambda m: (m.end, m.start, m.object)  # noqa: E731
     return Segmentation(
-        moves=tuple(moves),
-        nudges=tuple(nudges),
+        moves=tuple(sorted(moves, key=order)),
+        nudges=tuple(sorted(nudges, key=order)),
+        pushes=tuple(sorted(pushes, key=order)),
         initial=tuple(initial),
         traces=tuple(traces),
         settings=settings,
@@ -293,10 +354,60 @@ def segment(stream: PoseStream, settings: SegmentationSettings | None = None) ->
     )
 
 
+class _Supports:
+    """What an object at rest stands on: the table (z = 0), or the top of an object
+    (at that time) or landmark beneath it, from their geometry."""
+
+    def __init__(
+        self,
+        stream: PoseStream,
+        geometry: Mapping[str, ObjectGeometry],
+        landmarks: Mapping[str, Pose],
+        settings: SegmentationSettings,
+    ):
+        self.stream = stream
+        self.geometry = geometry
+        self.landmarks = landmarks
+        self.tolerance = settings.support_tolerance
+
+    def supported(self, name: str, pose: Pose, time: float) -> bool | None:
+        """True on a support, False above known supports only, None where an
+        object of unknown size lies beneath (it may be the support)."""
+        x, y, z = pose.position
+        if abs(z) <= self.tolerance:
+            return True
+        unknown = False
+        others: list[tuple[str, Pose]] = list(self.landmarks.items())
+        for track in self.stream.tracks:
+            if track.name != name and len(track):
+                i = min(int(np.searchsorted(track.times, time)), len(track) - 1)
+                q = None if track.orientations is None else track.orientations[i]
+                x0, y0, z0 = (float(v) for v in track.positions[i])
+                quat = None if q is None else tuple(float(v) for v in q)
+                others.append((track.name, Pose((x0, y0, z0), quat)))  # type: ignore[arg-type]
+        for other, where in others:
+            size = self.geometry.get(other)
+            dx, dy = x - where.position[0], y - where.position[1]
+            if size is None:
+                unknown |= math.hypot(dx, dy) < UNKNOWN_FOOTPRINT_M and where.position[2] < z
+                continue
+            turned = where.orientation
+            yaw = 0.0 if turned is None else math.radians(rpy_from_quat(turned)[2])
+            u = math.cos(yaw) * dx + math.sin(yaw) * dy
+            v = -math.sin(yaw) * dx + math.cos(yaw) * dy
+            if abs(u) > size.size[0] / 2 or abs(v) > size.size[1] / 2:
+                continue
+            top = where.position[2] + size.size[2]
+            if abs(z - top) <= self.tolerance:
+                return True
+        return None if unknown else False
+
+
 @dataclass(frozen=True, slots=True)
 class _TrackResult:
     moves: list[Move]
     nudges: list[Move]
+    pushes: list[Move]
     initial: Pose | None
     speed: FloatArray
 
@@ -377,11 +488,13 @@ def _runs(mask: NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
 
 
-def _segment_track(track: ObjectTrack, settings: SegmentationSettings) -> _TrackResult:
+def _segment_track(
+    track: ObjectTrack, settings: SegmentationSettings, supports: _Supports | None
+) -> _TrackResult:
     n = len(track)
     times, positions = track.times, track.positions
     if n == 0:
-        return _TrackResult([], [], None, np.zeros(0))
+        return _TrackResult([], [], [], None, np.zeros(0))
     speed = track_speed(times, positions, settings.speed_window_s)
     forced = np.zeros(n, dtype=bool)
     # Step 2: moves hidden in tracking gaps.
@@ -405,59 +518,67 @@ def _segment_track(track: ObjectTrack, settings: SegmentationSettings) -> _Track
         )
         starts = starts[separate]
         ends = ends[np.concatenate((separate[1:], [True]))]
-    if ends.size and (
-        ends[-1] == n - 1
-        or (
-            times[-1] - times[ends[-1]] < settings.min_rest_s
-            and n - 1 - ends[-1] < MIN_FINAL_REST_SAMPLES
-        )
-    ):
-        logger.warning(
-            "%s: still moving at the end of the stream (t = %.3f s); its last move is not a step",
-            track.name,
-            times[-1],
-        )
-        starts, ends = starts[:-1], ends[:-1]
+    starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
 
     # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
     rest_starts = np.concatenate(([0], ends + 1))
-    rest_ends = np.concatenate((starts, [n]))
+    rest_ends = np.concatenate((starts, [last_rest_end]))
     orientations = track.orientations
 
-    def rest_pose(k: int, *, last: bool = False) -> Pose | None:
+    def rest_pose(k: int) -> Pose | None:
         a, b = int(rest_starts[k]), int(rest_ends[k])
         if b <= a:
             return None
-        if last:
-            a = int(np.searchsorted(times, times[b - 1] - settings.pose_window_s, side="left"))
-        else:
-            b = int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right"))
+        a = _settled_start(times, positions, a, b, settings)
+        b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
         return _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
 
-    # Step 5: steps and nudges, measured from the last accepted rest pose.
-    initial = rest_pose(0)
+    poses = [rest_pose(k) for k in range(starts.size + 1)]
+    # Step 5: rests in the air are not placements: the move through them continues.
+    hover = [False] * (starts.size + 1)
+    for k in range(1, starts.size + 1):
+        pose = poses[k]
+        if pose is None:  # pragma: no cover - every kept move has a rest after it
+            continue
+        if k < starts.size:  # the next move only lowers the object: it was held up
+            rise = float(positions[starts[k] : ends[k] + 1, 2].max()) - pose.position[2]
+            after = poses[k + 1]
+            drop = pose.position[2] - (after.position[2] if after else pose.position[2])
+            hover[k] = rise < settings.min_lift and drop >= settings.min_lift
+        if not hover[k] and supports is not None:
+            at = float(times[int(rest_ends[k]) - 1])
+            hover[k] = supports.supported(track.name, pose, at) is False
+    moves: list[Move] = []
+    nudges: list[Move] = []
+    pushes: list[Move] = []
+    initial = poses[0]
     reference = initial
     if reference is None:
         # Moving when the track begins: measure the first move from where the track starts.
         b = int(np.searchsorted(times, times[0] + settings.pose_window_s, side="right"))
         reference = _robust_pose(positions[:b], None if orientations is None else orientations[:b])
-    moves: list[Move] = []
-    nudges: list[Move] = []
+    previous = 0  # the rest the current move started from
+    first = 0  # the first hysteresis move of the current move
     for k in range(starts.size):
-        after = rest_pose(k + 1)
-        if after is None:  # pragma: no cover - every kept move has a rest after it
+        if hover[k + 1]:
             continue
-        move = Move(
-            track.name,
-            float(times[starts[k]]),
-            float(times[ends[k]]),
-            after,
-            rest_pose(k, last=True),
-        )
-        if _is_step(reference, after, settings):
-            moves.append(move)
-            reference = after
-        else:
+        a, b = int(starts[first]), int(ends[k])
+        after, before = poses[k + 1], poses[previous]
+        assert after is not None
+        first, previous = k + 1, k + 1
+        start_z = before.position[2] if before is not None else float(positions[a, 2])
+        lift = float(positions[a : b + 1, 2].max()) - start_z
+        move = Move(track.name, float(times[a]), float(times[b]), after, before, lift)
+        if (
+            before is None
+            and initial is None
+            and not moves
+            and lift < settings.min_lift
+            and math.dist(positions[a, :2], after.position[:2]) < settings.min_distance
+        ):
+            initial = reference = after  # settling when the track begins: not a move
+            continue
+        if not _is_step(reference, after, settings):
             nudges.append(move)
             logger.info(
                 "%s: move at t = %.3f–%.3f s is a nudge (%.1f mm), not a step",
@@ -466,7 +587,141 @@ def _segment_track(track: ObjectTrack, settings: SegmentationSettings) -> _Track
                 move.end,
                 math.dist(reference.position, after.position) * 1000,
             )
-    return _TrackResult(moves, nudges, initial, speed)
+            continue
+        unseen = bool(forced[a : b + 1].any())  # a lift may have happened in a tracking gap
+        if (
+            not unseen
+            and lift < settings.min_lift
+            and abs(after.position[2] - start_z) < settings.min_lift
+        ):
+            logger.info(
+                "%s: moved %.1f cm at t = %.3f–%.3f s without being lifted: a push, not a step",
+                track.name,
+                math.dist(reference.position, after.position) * 100,
+                move.start,
+                move.end,
+            )
+            pushes.append(move)
+            reference = after
+            continue
+        moves.append(move)
+        reference = after
+    if starts.size and hover[starts.size]:
+        logger.warning(
+            "%s: held in the air at the end of the stream (t = %.3f s); "
+            "its last move is not a step",
+            track.name,
+            times[-1],
+        )
+    return _TrackResult(moves, nudges, pushes, initial, speed)
+
+
+def _settle_at_the_end(
+    track: ObjectTrack,
+    starts: IntArray,
+    ends: IntArray,
+    settings: SegmentationSettings,
+    supports: _Supports | None,
+) -> tuple[IntArray, IntArray, int]:
+    """Cut the last move short where the object already lies still at the end of the stream.
+
+    A recording often stops a few samples after the last release (robosuite's
+    stop 0.05 s after it), too soon for the windowed speed to fall: the
+    samples at the end within :attr:`~SegmentationSettings.settle_radius` of
+    the last ones are the final rest when the object lies there on a support
+    (the table, or a known support beneath it; one sample is enough) or, on
+    an object of unknown size, when at least two of them are no faster
+    together than ``start_speed``. Otherwise the object is still moving (or held) and its
+    last move is dropped. Returns the moves and the end (exclusive) of the
+    last rest.
+    """
+    n = len(track)
+    times, positions = track.times, track.positions
+    if not ends.size:
+        return starts, ends, n
+    rest_after = n - 1 - int(ends[-1])
+    if rest_after >= MIN_FINAL_REST_SAMPLES and times[-1] - times[ends[-1]] >= min(
+        settings.min_rest_s, 0.1
+    ):
+        return starts, ends, n
+    window = int(np.searchsorted(times, times[-1] - settings.pose_window_s, side="left"))
+    first_still = max(_settled_from(positions, window, n, settings), int(starts[-1]) + 1)
+    if first_still < n:
+        pose = _robust_pose(positions[first_still:], None)
+        on = abs(pose.position[2]) <= settings.support_tolerance
+        below = None if supports is None else supports.supported(track.name, pose, times[-1])
+        still = (
+            n - first_still >= 2
+            and _speed_of(times[first_still:], positions[first_still:]) < settings.start_speed
+        )
+        if on or below is True or (still and below is None):
+            ends = ends.copy()
+            ends[-1] = first_still - 1
+            return starts, ends, n
+    logger.warning(
+        "%s: still moving at the end of the stream (t = %.3f s); its last move is not a step",
+        track.name,
+        times[-1],
+    )
+    return starts[:-1], ends[:-1], int(starts[-1])
+
+
+def _settled_from(positions: FloatArray, a: int, b: int, settings: SegmentationSettings) -> int:
+    """The first index of the samples at the end of ``a:b`` that all lie near where the
+    object is at ``b`` (the median of its last samples): within ``settle_radius``, or
+    within 4 × the sensor noise where that is larger (noise from the median
+    second difference of the samples, which smooth motion leaves at zero, so a
+    noisy tracker is not cut short)."""
+    window = positions[a:b]
+    radius = settings.settle_radius
+    if len(window) > 3:
+        # Second differences: smooth motion cancels out, white noise has σ·√6.
+        sigma = 1.4826 * np.median(np.abs(np.diff(window, n=2, axis=0)), axis=0) / math.sqrt(6.0)
+        radius = max(radius, 4.0 * float(np.linalg.norm(sigma)))
+    first = max(0, len(window) - MIN_FINAL_REST_SAMPLES)
+    for _ in range(2):  # the median of the last samples, then of the still ones
+        final = np.median(window[first:], axis=0)
+        far = np.linalg.norm(window - final, axis=1) > radius
+        first = int(np.flatnonzero(far)[-1]) + 1 if far.any() else 0
+        if first >= len(window):
+            return b
+    return a + first
+
+
+def _settled_start(
+    times: FloatArray, positions: FloatArray, a: int, b: int, settings: SegmentationSettings
+) -> int:
+    """Where the pose of the rest ``a:b`` is read (step 4): its first sample as low as
+    the rest gets (within ``min_lift / 2`` of its lowest height, heights median-filtered
+    over 0.1 s) after the last time it was ``min_lift`` higher. A placed
+    object is at rest from there on; an object held still in the air before
+    it is set down, or lifted a little and set down again (too slowly for the
+    speed thresholds), reaches it last, and a later slide at the same height
+    (an unnoticed nudge) does not shift the pose."""
+    z = positions[a:b, 2]
+    if z.size < 3:
+        return a
+    rate = (z.size - 1) / max(float(times[b - 1] - times[a]), 1e-9)
+    half = max(1, int(0.05 * rate))
+    padded = np.pad(z, half, mode="edge")
+    smooth = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
+    # Margins above the sensor noise (σ from second differences, as _settled_from).
+    sigma = 1.4826 * float(np.median(np.abs(np.diff(z, n=2)))) / math.sqrt(6.0)
+    low = smooth <= smooth.min() + max(settings.min_lift / 2.0, 4.0 * sigma)
+    raised = np.flatnonzero(smooth >= smooth.min() + max(settings.min_lift, 8.0 * sigma))
+    if raised.size:  # set down again after being held up: read it after that
+        low[: raised[-1]] = False
+    return a + int(np.argmax(low))
+
+
+def _speed_of(times: FloatArray, positions: FloatArray) -> float:
+    """Speed (m/s) of the least-squares line through the samples."""
+    t = times - times.mean()
+    span = float((t * t).sum())
+    if span <= 0:
+        return 0.0
+    slope = (t[:, None] * (positions - positions.mean(axis=0))).sum(axis=0) / span
+    return float(np.linalg.norm(slope))
 
 
 def _is_step(before: Pose, after: Pose, settings: SegmentationSettings) -> bool:

@@ -91,6 +91,9 @@ def stream_from_demonstration(
     speed_m_s: float = 0.4,
     rest_s: float = 1.0,
     start_time: float = 0.0,
+    hover_s: float = 0.0,
+    hover_m: float = 0.1,
+    end_rest_s: float = EDGE_REST_S,
 ) -> PoseStream:
     """A realistic pose stream of ``demo`` (module docstring).
 
@@ -117,6 +120,13 @@ def stream_from_demonstration(
         Lift height (m), mean horizontal carry speed (m/s), rest between moves (s).
     start_time : float
         Time of the first sample (s).
+    hover_s, hover_m : float
+        With ``hover_s > 0`` every carry stops ``hover_m`` above its target
+        and is held still there for ``hover_s`` before the final lowering (a
+        teleoperator lining an object up).
+    end_rest_s : float
+        Rest after the last move (s): ``EDGE_REST_S`` by default; a few
+        hundredths for a recording stopped right after the last release.
     """
     if not (rate_hz > 0 and 0 <= rate_jitter < 1 and 0 <= drop_fraction < 1 and 0 <= overlap < 1):
         raise ValueError("rate_hz > 0 and rate_jitter, drop_fraction, overlap in [0, 1) expected")
@@ -147,8 +157,9 @@ def stream_from_demonstration(
         rest_s,
         start_time + EDGE_REST_S,
         set(landmarks),
+        (hover_s, hover_m),
     )
-    end_time = max((e.start + e.duration for e in events), default=start_time) + EDGE_REST_S
+    end_time = max((e.start + e.duration for e in events), default=start_time) + end_rest_s
 
     tracks = []
     for name in names:
@@ -177,6 +188,7 @@ def _schedule(
     rest_s: float,
     t0: float,
     landmarks: set[str],
+    hover: tuple[float, float] = (0.0, 0.0),
 ) -> list[_Event]:
     nudge_after = set(
         rng.choice(len(steps), size=min(nudges, len(steps)), replace=False).tolist()
@@ -202,7 +214,17 @@ def _schedule(
                 start = previous_end + rest_s
             start = max(start, previous_end + MIN_END_GAP_S - duration)
         start = max(start, free_at[step.object], barrier)
-        event = _Event(step.object, start, duration, begin, step.pose, lift_m, True)
+        hover_s, hover_m = hover
+        if hover_s > 0:  # carry to above the target, hold still, then lower straight down
+            x, y, z = step.pose.position
+            above = Pose((x, y, z + hover_m), step.pose.orientation)
+            events.append(_Event(step.object, start, duration, begin, above, lift_m, True))
+            lower = BASE_DURATION_S + hover_m / speed_m_s
+            settle = start + duration + hover_s
+            event = _Event(step.object, settle, lower, above, step.pose, 0.0, True)
+            duration += hover_s + lower
+        else:
+            event = _Event(step.object, start, duration, begin, step.pose, lift_m, True)
         events.append(event)
         current[step.object] = step.pose
         free_at[step.object] = start + duration + rest_s
