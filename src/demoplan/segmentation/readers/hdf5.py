@@ -51,6 +51,7 @@ import logging
 import math
 import re
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -671,6 +672,18 @@ def _open(path: Path) -> h5py.File:
         ) from None
 
 
+@contextmanager
+def _h5_errors(source: str) -> Iterator[None]:
+    """A damaged file can fail at any read: one InputError naming it."""
+    try:
+        yield
+    except InputError:
+        raise
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
+        detail = " ".join(str(exc).split())
+        raise InputError(f"damaged HDF5 file ({detail})", source=source) from None
+
+
 def _data_group(handle: h5py.File, source: str) -> Any:
     import h5py
 
@@ -688,7 +701,7 @@ def demonstration_keys(path: str | Path) -> tuple[str, ...]:
     """The demonstrations' keys in a recording (``demo_1``, ``demo_2``, … in number order)."""
     path = Path(path)
     source = str(path)
-    with _open(path) as handle:
+    with _open(path) as handle, _h5_errors(source):
         data = _data_group(handle, source)
         keys = sorted((str(k) for k in data), key=_natural_key)
     if not keys:
@@ -736,7 +749,7 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
 
     path = Path(path)
     source = f"{path}: {key}"
-    with _open(path) as handle:
+    with _open(path) as handle, _h5_errors(source):
         data = _data_group(handle, str(path))
         group = data.get(key)
         if not isinstance(group, h5py.Group):
