@@ -13,7 +13,7 @@ import math
 import re
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import replace
 from enum import StrEnum
 from pathlib import Path
@@ -775,6 +775,174 @@ def segment(
         nudges = f", {len(found.nudges)} nudges ignored" if found.nudges else ""
         _stderr.print(
             f"{len(found.moves)} steps{nudges}; wrote {output}", markup=False, highlight=False
+        )
+
+
+def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:
+    """Write every file (atomically) or none: on any failure, or Ctrl-C, the files
+    written so far are removed (and ``folder`` too when this call created it)."""
+    from demoplan.fileio import write_atomic
+
+    if folder.exists() and not folder.is_dir():
+        raise InputError("exists and is not a folder; a folder expected", source=str(folder))
+    created = not folder.exists()
+    written: list[Path] = []
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for path, text in files:
+            write_atomic(path, text)
+            written.append(path)
+    except OSError as exc:
+        _remove(written, folder if created else None)
+        raise InputError(f"cannot write ({exc.strerror or exc})", source=str(folder)) from None
+    except BaseException:
+        _remove(written, folder if created else None)
+        raise
+
+
+def _remove(files: list[Path], folder: Path | None) -> None:
+    for path in files:
+        path.unlink(missing_ok=True)
+    if folder is not None:
+        with suppress(OSError):  # not empty: someone else wrote there meanwhile
+            folder.rmdir()
+
+
+def _move_json(move: Any) -> dict[str, Any]:
+    from demoplan.demonstrations import pose_to_dict
+
+    return {
+        "object": move.object,
+        "start": round(move.start, 4),
+        "end": round(move.end, 4),
+        **pose_to_dict(move.pose),
+    }
+
+
+@app.command("import")
+def import_(
+    recording: Annotated[
+        Path,
+        typer.Argument(
+            metavar="RECORDING", help="A robosuite (0.3, 1.x) or robomimic HDF5 recording."
+        ),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "--output", "-o", help="Folder for the demonstration files (created if missing)."
+        ),
+    ],
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print a summary as JSON on stdout.")
+    ] = False,
+    name_prefix: Annotated[
+        str | None,
+        typer.Option(
+            help="Names are PREFIX-<demo key> (default: the file's stem, or the environment "
+            "for robosuite's demo.hdf5).",
+            show_default=False,
+        ),
+    ] = None,
+) -> None:
+    """Import a robot-learning recording: one demonstration file per demonstration in it."""
+    from demoplan.demonstrations import demonstration_to_dict
+    from demoplan.fileio import dump_json
+    from demoplan.segmentation.importing import import_recording_details
+
+    with _reported_errors():
+        if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
+            raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+        with Progress(
+            TextColumn("Importing {task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            console=_stderr,
+            transient=True,
+            disable=not _stderr.is_terminal,
+        ) as bar:
+            task = bar.add_task(recording.name, total=None)
+
+            def advance(done: int, total: int, key: str) -> None:
+                bar.update(task, completed=done, total=total, description=f"{recording.name} {key}")
+
+            items = import_recording_details(
+                recording, progress=advance, name_prefix=name_prefix, skip_empty=True
+            )
+        files: list[tuple[Path, str]] = []
+        targets: dict[str, Path] = {}
+        for item in items:
+            if item.demonstration is None:
+                continue
+            target = output / f"{item.demonstration.name}.json"
+            _refuse_overwriting_inputs(target, [recording])
+            targets[item.key] = target
+            files.append((target, dump_json(demonstration_to_dict(item.demonstration))))
+        if not files:
+            problems = "; ".join(f"{i.key}: {i.problem}" for i in items)
+            raise InputError(f"no demonstration with a step ({problems})", source=str(recording))
+        _write_all(files, output)
+        for item in items:
+            if item.demonstration is None:
+                _stderr.print(
+                    f"demoplan: warning: {item.problem}; not written", markup=False, highlight=False
+                )
+        if json_output:
+            _print_json(
+                {
+                    "source": str(recording),
+                    "output": str(output),
+                    "demonstrations": [
+                        {
+                            "key": item.key,
+                            "name": None if item.demonstration is None else item.demonstration.name,
+                            "file": str(targets[item.key]) if item.key in targets else None,
+                            "samples": item.recorded.samples,
+                            "objects": list(item.recorded.stream.objects),
+                            "landmarks": [name for name, _ in item.recorded.landmarks],
+                            "steps": [_move_json(m) for m in item.segmentation.moves],
+                            "provenance": dict(item.recorded.provenance),
+                            **({"problem": item.problem} if item.problem else {}),
+                        }
+                        for item in items
+                    ],
+                }
+            )
+            return
+        for item in items:
+            title = f"{item.key}: {item.recorded.samples} samples"
+            if item.key in targets:
+                title += f" → {targets[item.key]}"
+            table = Table(title=Text(title), title_justify="left")
+            for column in (
+                "step",
+                "object",
+                "picked up [s]",
+                "at rest [s]",
+                "x [m]",
+                "y [m]",
+                "z [m]",
+            ):
+                table.add_column(Text(column), justify="left" if column == "object" else "right")
+            for index, move in enumerate(item.segmentation.moves, 1):
+                x, y, z = move.pose.position
+                table.add_row(
+                    str(index),
+                    Text(move.object),
+                    f"{move.start:.2f}",
+                    f"{move.end:.2f}",
+                    f"{x:.4f}",
+                    f"{y:.4f}",
+                    f"{z:.4f}",
+                )
+            _stdout.print(table)
+        _stderr.print(
+            f"{len(files)} of {len(items)} demonstrations imported, "
+            f"{sum(len(i.segmentation.moves) for i in items)} steps; wrote {output}",
+            markup=False,
+            highlight=False,
         )
 
 

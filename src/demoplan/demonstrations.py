@@ -13,7 +13,17 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
@@ -90,7 +100,19 @@ class DemonstrationSchema(_Schema):
     objects: dict[str, ObjectSchema] = {}
     landmarks: dict[str, PoseSchema] = {}
     initial: dict[str, PoseSchema] = {}
+    provenance: dict[str, StrictStr | StrictInt | StrictFloat] = {}
     steps: list[StepSchema]
+
+    @field_validator("provenance", mode="before")
+    @classmethod
+    def _plain_values(cls, provenance: Any) -> Any:
+        if isinstance(provenance, dict):
+            for key, value in provenance.items():
+                if isinstance(value, bool) or not isinstance(value, str | int | float):
+                    raise ValueError(
+                        f"provenance {key!r} is {value!r}; a string or a number expected"
+                    )
+        return provenance
 
     @field_validator("steps")
     @classmethod
@@ -147,6 +169,8 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
         out["landmarks"] = {n: pose_to_dict(p) for n, p in demo.landmarks}
     if demo.initial:
         out["initial"] = {n: pose_to_dict(p) for n, p in demo.initial}
+    if demo.provenance:
+        out["provenance"] = dict(demo.provenance)
     out["steps"] = [{"object": s.object, **pose_to_dict(s.pose)} for s in demo.steps]
     return out
 
@@ -212,6 +236,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         landmarks=tuple((n, pose_from_dict(p, units)) for n, p in parsed.landmarks.items()),
         initial=tuple((n, pose_from_dict(p, units)) for n, p in parsed.initial.items()),
         source=f"{source}: {prefix}" if prefix else source,
+        provenance=tuple(parsed.provenance.items()),
     )
 
 

@@ -67,6 +67,9 @@ class Demonstration:
     landmarks: tuple[tuple[str, Pose], ...] = ()
     initial: tuple[tuple[str, Pose], ...] = ()
     source: str | None = field(default=None, compare=False)
+    provenance: tuple[tuple[str, str | int | float], ...] = field(default=(), compare=False)
+    """Where the demonstration came from (``("source", file)``, ``("demonstration",
+    "demo_1")``, ``("samples", 1252)``, …); written as the file's ``provenance``."""
 
     @property
     def moved_objects(self) -> tuple[str, ...]:

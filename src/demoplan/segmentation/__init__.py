@@ -42,6 +42,11 @@ thresholds are described there):
   ``pose_window_s=1.0`` s, ``max_gap_s=0.25`` s.
 - ``write_demonstration(demo, path)`` — a ``demoplan/demonstration-1`` file, atomically.
 
+Recordings (:mod:`demoplan.segmentation.importing`, read by
+:mod:`demoplan.segmentation.readers.hdf5`): ``import_recording(path,
+settings=None, progress=None) -> list[Demonstration]`` segments each
+demonstration of a robosuite / robomimic HDF5 file.
+
 Plot (:mod:`demoplan.segmentation.plotting`, matplotlib imported lazily):
 ``plot_segmentation(segmentation, path=None, *, axes=None) -> list[Axes]``.
 
@@ -76,6 +81,7 @@ _EXPORTS = {
     "segment": "demoplan.segmentation.detect",
     "write_demonstration": "demoplan.segmentation.detect",
     "plot_segmentation": "demoplan.segmentation.plotting",
+    "import_recording": "demoplan.segmentation.importing",
     "StepComparison": "demoplan.segmentation.synthetic",
     "compare_steps": "demoplan.segmentation.synthetic",
     "stream_from_demonstration": "demoplan.segmentation.synthetic",
@@ -90,6 +96,7 @@ __all__ = [
     "SpeedTrace",
     "StepComparison",
     "compare_steps",
+    "import_recording",
     "load_bag",
     "load_csv",
     "load_stream",
@@ -110,6 +117,7 @@ if TYPE_CHECKING:
         segment,
         write_demonstration,
     )
+    from demoplan.segmentation.importing import import_recording
     from demoplan.segmentation.plotting import plot_segmentation
     from demoplan.segmentation.streams import (
         ObjectTrack,

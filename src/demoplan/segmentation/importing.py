@@ -1,0 +1,114 @@
+"""``demoplan import``: robot-learning recordings → segmented demonstrations.
+
+A recording (SPEC §3 "Recording": robosuite 0.3 / 1.x or robomimic HDF5) is
+read with :mod:`demoplan.segmentation.readers.hdf5`; each of its
+demonstrations' object tracks is segmented like any pose stream
+(:func:`~demoplan.segmentation.detect.segment`) and the result gets the
+recording's landmarks, geometry and provenance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from demoplan.errors import InputError
+from demoplan.model import Demonstration
+from demoplan.segmentation.detect import Segmentation, SegmentationSettings, segment
+from demoplan.segmentation.readers.hdf5 import (
+    RecordedDemonstration,
+    demonstration_keys,
+    read_demonstration,
+)
+
+__all__ = ["ImportedDemonstration", "import_recording", "import_recording_details"]
+
+Progress = Callable[[int, int, str], None]
+"""``progress(done, total, key)``, called after each demonstration."""
+
+GENERIC_STEMS = frozenset({"demo", "demos", "low_dim", "image", "depth", "data"})
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ImportedDemonstration:
+    """One imported demonstration with what it was made from.
+
+    ``demonstration`` is ``None`` when no step was found in it (only with
+    ``skip_empty``); ``problem`` then says why.
+    """
+
+    key: str
+    demonstration: Demonstration | None
+    recorded: RecordedDemonstration
+    segmentation: Segmentation
+    problem: str | None = None
+
+
+def recording_name(path: Path, env: str | None) -> str:
+    """Name prefix of a recording's demonstrations: the file's stem, or the
+    environment's name when the stem says nothing (robosuite's ``demo.hdf5``)."""
+    if path.stem.lower() in GENERIC_STEMS and env:
+        return env
+    return path.stem
+
+
+def import_recording_details(
+    path: str | Path,
+    settings: SegmentationSettings | None = None,
+    progress: Progress | None = None,
+    *,
+    name_prefix: str | None = None,
+    skip_empty: bool = False,
+) -> list[ImportedDemonstration]:
+    """:func:`import_recording`, keeping each demonstration's recording and segmentation.
+
+    ``name_prefix`` replaces the file stem / environment in the names. With
+    ``skip_empty``, a demonstration in which no step is found is returned
+    without a demonstration (and the reason) instead of raising.
+    """
+    path = Path(path)
+    keys = demonstration_keys(path)
+    out = []
+    for done, key in enumerate(keys, 1):
+        recorded = read_demonstration(path, key)
+        found = segment(recorded.stream, settings)
+        prefix = name_prefix if name_prefix is not None else recording_name(path, recorded.env)
+        try:
+            demo = found.to_demonstration(f"{prefix}-{key}")
+        except InputError as exc:
+            if not skip_empty:
+                raise
+            out.append(ImportedDemonstration(key, None, recorded, found, str(exc)))
+            if progress is not None:
+                progress(done, len(keys), key)
+            continue
+        demo = replace(
+            demo,
+            objects=recorded.geometry,
+            landmarks=recorded.landmarks,
+            provenance=recorded.provenance,
+        )
+        out.append(ImportedDemonstration(key, demo, recorded, found))
+        if progress is not None:
+            progress(done, len(keys), key)
+    return out
+
+
+def import_recording(
+    path: str | Path,
+    settings: SegmentationSettings | None = None,
+    progress: Progress | None = None,
+) -> list[Demonstration]:
+    """The demonstrations of a robosuite / robomimic recording, segmented.
+
+    Each is named ``<file stem or env>-<demonstration key>`` (e.g.
+    ``SawyerStack-demo_1``) and carries the recording's landmarks, the
+    geometry of its objects and landmarks, and its provenance (source file,
+    demonstration key, samples, environment, robosuite version).
+    ``progress(done, total, key)`` is called after each demonstration.
+    Raises :class:`~demoplan.errors.InputError` for an unreadable recording
+    or a demonstration in which no step is found.
+    """
+    items = import_recording_details(path, settings, progress)
+    return [item.demonstration for item in items if item.demonstration is not None]
