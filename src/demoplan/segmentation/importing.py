@@ -72,7 +72,12 @@ def import_recording_details(
     out = []
     for done, key in enumerate(keys, 1):
         recorded = read_demonstration(path, key)
-        found = segment(recorded.stream, settings)
+        found = segment(
+            recorded.stream,
+            settings,
+            geometry=dict(recorded.geometry),
+            landmarks=dict(recorded.landmarks),
+        )
         prefix = name_prefix if name_prefix is not None else recording_name(path, recorded.env)
         try:
             demo = found.to_demonstration(f"{prefix}-{key}")

@@ -1,0 +1,133 @@
+"""Segmentation on real recordings: robosuite's human teleoperated demonstrations.
+
+Six files from the ``robosuite==0.3.0`` and ``==1.0.0`` source distributions on
+PyPI (``tests/robosuite_data.py`` downloads and caches them): PickPlace,
+NutAssembly and Stack, two Sawyer demonstrations each in 0.3 and one Panda
+demonstration each in 1.0.
+
+The expected steps below were written down by hand from plots of every
+object's height over time (``docs/segmentation.md`` shows one): the order in
+which the objects are carried is the order of their lifts; where each ends
+up is the task's own goal (PickPlace: bin2, each object in its compartment;
+NutAssembly: the square nut on the square peg ``peg1``, the round one on the
+round peg ``peg2``; Stack: cubeA on cubeB). What was seen besides: in the
+first 0.3 PickPlace demonstration the Bread is pushed about 5 cm along the
+floor of bin1 (at 46 s) before it is carried; the nuts and cubes are held
+still 2–17 cm above their targets before the final lowering; every
+recording stops within 0.1 s after the last release.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from demoplan.segmentation import (
+    ObjectTrack,
+    PoseStream,
+    load_stream,
+    segment,
+    write_bag,
+    write_csv,
+)
+from demoplan.segmentation.importing import import_recording_details
+from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations
+
+# (recording, demonstration) → objects in the order they are carried.
+EXPECTED = {
+    ("SawyerPickPlace", "demo_1"): ["Can", "Cereal", "Milk", "Bread"],
+    ("SawyerPickPlace", "demo_2"): ["Bread", "Can", "Milk", "Cereal"],
+    ("PickPlace", "demo_1"): ["Bread", "Cereal", "Milk", "Can"],
+    ("SawyerNutAssembly", "demo_1"): ["SquareNut", "RoundNut"],
+    ("SawyerNutAssembly", "demo_2"): ["SquareNut", "RoundNut"],
+    ("NutAssembly", "demo_1"): ["RoundNut", "SquareNut"],
+    ("SawyerStack", "demo_1"): ["cubeA"],
+    ("SawyerStack", "demo_2"): ["cubeA"],
+    ("Stack", "demo_1"): ["cubeA"],
+}
+PEG = {"SquareNut": "peg1", "RoundNut": "peg2"}
+PUSHED = {("SawyerPickPlace", "demo_1"): ["Bread"]}
+
+
+@pytest.fixture(scope="module")
+def imported() -> dict[tuple[str, str], object]:
+    try:
+        files = robosuite_demonstrations()
+    except RobosuiteDataError as exc:
+        pytest.skip(f"robosuite's demonstrations are not available: {exc}")
+    out: dict[tuple[str, str], object] = {}
+    for name in {n for n, _ in EXPECTED}:
+        for item in import_recording_details(files[name]):
+            out[(name, item.key)] = item
+    return out
+
+
+def final_position(stream: PoseStream, name: str) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in stream.track(name).positions[-1])
+    return x, y, z
+
+
+@pytest.mark.parametrize("case", list(EXPECTED), ids=lambda c: f"{c[0]}-{c[1]}")
+def test_every_demonstration_gives_its_steps_where_the_objects_end_up(
+    imported: dict[tuple[str, str], object], case: tuple[str, str]
+) -> None:
+    item = imported[case]
+    found = item.segmentation  # type: ignore[attr-defined]
+    recorded = item.recorded  # type: ignore[attr-defined]
+    assert [m.object for m in found.moves] == EXPECTED[case]
+    for move in found.moves:
+        end = final_position(recorded.stream, move.object)
+        assert math.dist(move.pose.position, end) < 0.01, move.object
+        x, y, z = move.pose.position
+        if case[0].endswith("PickPlace"):
+            bin2 = dict(recorded.landmarks)["bin2"].position
+            assert abs(x - bin2[0]) < 0.2 and abs(y - bin2[1]) < 0.25, move.object
+            assert abs(z) < 0.01
+        elif case[0].endswith("NutAssembly"):
+            peg = dict(recorded.landmarks)[PEG[move.object]].position
+            assert math.dist((x, y), peg[:2]) < 0.03, move.object
+            assert abs(z) < 0.01
+        else:
+            cube_b = final_position(recorded.stream, "cubeB")
+            assert math.dist((x, y), cube_b[:2]) < 0.01
+            assert z == pytest.approx(cube_b[2] + 0.05, abs=0.005)
+    assert [m.object for m in found.pushes] == PUSHED.get(case, [])
+    for push in found.pushes:
+        assert 0.04 < push.distance < 0.07 and push.lift < 0.01
+
+
+def resampled(stream: PoseStream, rate_hz: float, rest_s: float) -> PoseStream:
+    """The stream at ``rate_hz`` (nearest samples), with ``rest_s`` of the last pose appended."""
+    tracks = []
+    for track in stream.tracks:
+        times = np.arange(track.times[0], track.times[-1] + 1e-9, 1.0 / rate_hz)
+        index = np.minimum(np.searchsorted(track.times, times), len(track) - 1)
+        extra = np.arange(1, round(rest_s * rate_hz) + 1) / rate_hz + times[-1]
+        index = np.concatenate((index, np.full(extra.size, len(track) - 1)))
+        times = np.concatenate((times, extra))
+        orientations = None if track.orientations is None else track.orientations[index]
+        tracks.append(ObjectTrack(track.name, times, track.positions[index], orientations))
+    return PoseStream(tuple(tracks), stream.source)
+
+
+@pytest.mark.parametrize("rest_s", [0.0, 1.0])
+@pytest.mark.parametrize("kind", ["csv", "sqlite3", "mcap"])
+def test_the_same_trajectories_as_csv_or_bags_give_the_same_steps(
+    imported: dict[tuple[str, str], object], tmp_path: Path, kind: str, rest_s: float
+) -> None:
+    for case, item in imported.items():
+        stream = resampled(item.recorded.stream, 20.0, rest_s)  # type: ignore[attr-defined]
+        path = tmp_path / f"{case[0]}-{case[1]}-{kind}"
+        if kind == "csv":
+            path = path.with_suffix(".csv")
+            write_csv(stream, path)
+        else:
+            write_bag(stream, path, kind="tf", storage=kind)
+        found = segment(load_stream(path))
+        assert [m.object for m in found.moves] == EXPECTED[case], case
+        direct = item.segmentation.moves  # type: ignore[attr-defined]
+        for move, reference in zip(found.moves, direct, strict=True):
+            assert math.dist(move.pose.position, reference.pose.position) < 0.01, case
