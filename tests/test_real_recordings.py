@@ -88,7 +88,7 @@ def test_every_demonstration_gives_its_steps_where_the_objects_end_up(
             assert abs(z) < 0.01
         elif case[0].endswith("NutAssembly"):
             peg = dict(recorded.landmarks)[PEG[move.object]].position
-            assert math.dist((x, y), peg[:2]) < 0.03, move.object
+            assert math.dist((x, y), peg[:2]) < 0.02, move.object  # the hole has 1 cm of play
             assert abs(z) < 0.01
         else:
             cube_b = final_position(recorded.stream, "cubeB")

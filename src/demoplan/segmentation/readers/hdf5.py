@@ -26,9 +26,10 @@ without the meshes they reference. What is taken from it:
   bin ``bin1`` (top at 0.82 m). It is subtracted from every z.
 * **Resting points**: an object's position is the centre of its bottom face.
   For an object made of primitive geoms (box, cylinder, sphere, capsule,
-  ellipsoid; with their ``pos`` and orientation) that is the bottom centre
-  of their bounding box in the body frame, turned with the body's
-  orientation at every sample. For an object whose collision geometry is a
+  ellipsoid; with their ``pos`` and orientation) it is the point below the
+  body origin at the bottom of their bounding box in the body frame, turned
+  with the body's orientation at every sample: the model's own centre (a
+  nut's hole, not the middle of nut and handle; for a cube the same point). For an object whose collision geometry is a
   mesh (PickPlace's milk, bread, cereal and can) the bottom is *estimated*
   from its first rest: the height of its body origin above the highest
   static surface under it. Such objects get no geometry (only their height
@@ -847,7 +848,7 @@ def _demonstration(
         rot = _matrices_from_wxyz(body_quat[k])
         if bounds is not None:
             low, high = bounds
-            offset = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
+            offset = np.array([0.0, 0.0, low[2]])  # below the body origin
             geometry.append((names[k], _geometry(geoms, low, high)))
         else:
             # Mesh object: its body origin's height above the surface it first rests on.
