@@ -29,8 +29,9 @@ without the meshes they reference. What is taken from it:
   ellipsoid; with their ``pos`` and orientation) it is the point below the
   body origin at the bottom of their bounding box in the body frame, turned
   with the body's orientation at every sample: the model's own centre (a
-  nut's hole, not the middle of nut and handle; for a cube the same point). For an object whose collision geometry is a
-  mesh (PickPlace's milk, bread, cereal and can) the bottom is *estimated*
+  nut's hole, not the middle of nut and handle; for a cube the same point).
+  For an object whose collision geometry is a mesh (PickPlace's milk,
+  bread, cereal and can) the bottom is *estimated*
   from its first rest: the height of its body origin above the highest
   static surface under it. Such objects get no geometry (only their height
   would be known).
