@@ -613,3 +613,16 @@ def test_geometry_is_passed_through_only_for_stream_objects() -> None:
         "ghost": ObjectGeometry("box", (1.0, 1.0, 1.0)),
     }
     assert found.to_demonstration(objects=geometry).objects == (("cup", geometry["cup"]),)
+
+
+def test_a_segmented_demonstration_records_the_thresholds_it_was_made_with() -> None:
+    chosen = SegmentationSettings(min_lift=0.02, settle_radius=0.005)
+    found = segment(stream_from_demonstration(SET_TABLE[0], rate_hz=30, rng=0), chosen)
+    demo = found.to_demonstration()
+    recorded = dict(demo.provenance)
+    assert recorded["segment.min_lift"] == 0.02 and recorded["segment.settle_radius"] == 0.005
+    assert recorded["pushes"] == 0
+    from demoplan.demonstrations import demonstration_to_dict
+
+    (again,) = demonstrations_from_document(demonstration_to_dict(demo), "memory")
+    assert dict(again.provenance) == recorded

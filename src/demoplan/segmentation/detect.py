@@ -255,6 +255,8 @@ class Segmentation:
         Steps in the order objects come to rest; initial poses from each
         object's first rest. ``name`` defaults to the stream file's stem.
         ``objects`` adds geometry (only for objects in the stream);
+        the provenance records the stream, the pushes and nudges left out,
+        and every threshold used (``segment.min_lift``, …);
         ``landmarks`` names stream objects that are static references: they
         become landmarks (at their first rest pose) instead of initial poses,
         and must not have moved.
@@ -292,6 +294,13 @@ class Segmentation:
                     f"landmark {landmark!r} never came to rest", source=source, field="landmarks"
                 )
         geometry = dict(objects)
+        provenance: list[tuple[str, str | int | float]] = []
+        if self.source is not None:
+            provenance.append(("source", self.source))
+        provenance += [("pushes", len(self.pushes)), ("nudges", len(self.nudges))]
+        provenance += [
+            (f"segment.{f.name}", getattr(self.settings, f.name)) for f in fields(self.settings)
+        ]
         return Demonstration(
             name=name,
             steps=self.steps,
@@ -299,6 +308,7 @@ class Segmentation:
             landmarks=tuple((n, initial[n]) for n in landmark_names),
             initial=tuple((n, p) for n, p in self.initial if n not in landmark_names),
             source=self.source,
+            provenance=tuple(provenance),
         )
 
 

@@ -92,7 +92,10 @@ def import_recording_details(
             demo,
             objects=recorded.geometry,
             landmarks=recorded.landmarks,
-            provenance=recorded.provenance,
+            provenance=(
+                *recorded.provenance,
+                *((k, v) for k, v in demo.provenance if k != "source"),
+            ),
         )
         out.append(ImportedDemonstration(key, demo, recorded, found))
         if progress is not None:
