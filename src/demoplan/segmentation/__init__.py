@@ -15,7 +15,10 @@ Public API::
     write_demonstration(demo, "set-table-1.json")
     plot_segmentation(found, "speed.png")     # speed per object, moves shaded
 
-Reading and writing streams (:mod:`demoplan.segmentation.streams`):
+Reading and writing streams (:mod:`demoplan.segmentation.readers` — one
+module per file kind: ``readers.csv``, ``readers.bag`` —,
+:mod:`demoplan.segmentation.writers`, and the types in
+:mod:`demoplan.segmentation.types`):
 
 - ``load_stream(path) -> PoseStream`` — CSV (``t,object,x,y,z`` [+ ``yaw`` |
   ``roll,pitch,yaw`` | ``qx,qy,qz,qw``]) or a ROS 2 bag (sqlite3 / mcap) with
@@ -62,13 +65,13 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _EXPORTS = {
-    "ObjectTrack": "demoplan.segmentation.streams",
-    "PoseStream": "demoplan.segmentation.streams",
-    "load_bag": "demoplan.segmentation.streams",
-    "load_csv": "demoplan.segmentation.streams",
-    "load_stream": "demoplan.segmentation.streams",
-    "write_bag": "demoplan.segmentation.streams",
-    "write_csv": "demoplan.segmentation.streams",
+    "ObjectTrack": "demoplan.segmentation.types",
+    "PoseStream": "demoplan.segmentation.types",
+    "load_bag": "demoplan.segmentation.readers",
+    "load_csv": "demoplan.segmentation.readers",
+    "load_stream": "demoplan.segmentation.readers",
+    "write_bag": "demoplan.segmentation.writers",
+    "write_csv": "demoplan.segmentation.writers",
     "Move": "demoplan.segmentation.detect",
     "Segmentation": "demoplan.segmentation.detect",
     "SegmentationSettings": "demoplan.segmentation.detect",
@@ -111,20 +114,14 @@ if TYPE_CHECKING:
         write_demonstration,
     )
     from demoplan.segmentation.plotting import plot_segmentation
-    from demoplan.segmentation.streams import (
-        ObjectTrack,
-        PoseStream,
-        load_bag,
-        load_csv,
-        load_stream,
-        write_bag,
-        write_csv,
-    )
+    from demoplan.segmentation.readers import load_bag, load_csv, load_stream
     from demoplan.segmentation.synthetic import (
         StepComparison,
         compare_steps,
         stream_from_demonstration,
     )
+    from demoplan.segmentation.types import ObjectTrack, PoseStream
+    from demoplan.segmentation.writers import write_bag, write_csv
 
 
 def __getattr__(name: str) -> Any:

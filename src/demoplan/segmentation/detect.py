@@ -62,7 +62,7 @@ from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import angle_between, mean_quat
-from demoplan.segmentation.streams import ObjectTrack, PoseStream
+from demoplan.segmentation.types import ObjectTrack, PoseStream
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
