@@ -20,14 +20,20 @@ module per file kind: ``readers.csv``, ``readers.bag`` —,
 :mod:`demoplan.segmentation.writers`, and the types in
 :mod:`demoplan.segmentation.types`):
 
-- ``load_stream(path) -> PoseStream`` — CSV (``t,object,x,y,z`` [+ ``yaw`` |
-  ``roll,pitch,yaw`` | ``qx,qy,qz,qw``]) or a ROS 2 bag (sqlite3 / mcap) with
-  ``tf2_msgs/msg/TFMessage`` (child frame = object) or
-  ``geometry_msgs/msg/PoseStamped`` topics (one per object). Errors are
-  :class:`~demoplan.errors.InputError` naming the file, line / column or
-  topic, and what was expected. ``load_csv`` / ``load_bag`` read one kind.
+- ``load_stream(path, *, frame=None, objects=None) -> PoseStream`` — CSV
+  (``t,object,x,y,z`` [+ ``yaw`` | ``roll,pitch,yaw`` | ``qx,qy,qz,qw``]) or a
+  ROS 2 bag (sqlite3 / mcap) with ``tf2_msgs/msg/TFMessage`` topics (``/tf``,
+  ``/tf_static``: a TF tree whose frames are composed to the world frame
+  ``frame``, default its root; :mod:`demoplan.segmentation.tftree`) or
+  ``geometry_msgs/msg/PoseStamped`` topics (one per object). ``objects``
+  keeps the named objects (names or fnmatch patterns); by default every
+  object, and of a TF tree its leaves (frames other than the world frame
+  without children). Errors are :class:`~demoplan.errors.InputError` naming
+  the file, line / column, topic or frame, and what was expected.
+  ``load_csv`` / ``load_bag`` read one kind.
 - ``write_csv(stream, path)``; ``write_bag(stream, path, kind="tf"|"pose",
-  storage="sqlite3"|"mcap")`` (rosbags' Writer).
+  storage="sqlite3"|"mcap", frame="world", parents=None, static=())``
+  (rosbags' Writer; ``parents`` / ``static`` write a TF tree).
 - ``PoseStream(tracks, source)`` of ``ObjectTrack(name, times (n,),
   positions (n, 3), orientations (n, 4) | None)``.
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from fnmatch import fnmatchcase
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,6 +29,8 @@ __all__ = [
     "ObjectTrack",
     "PoseStream",
     "normalise_quats",
+    "parse_object_patterns",
+    "select_objects",
     "stream_from_samples",
 ]
 
@@ -200,3 +203,38 @@ def normalise_quats(
     with np.errstate(invalid="ignore"):
         unit = quats / norms[:, None]
     return np.asarray(unit, dtype=float)
+
+
+def parse_object_patterns(text: str | None) -> list[str] | None:
+    """``"cup, plate,obj_*"`` → ``["cup", "plate", "obj_*"]``; ``None`` or blank → ``None``."""
+    if text is None:
+        return None
+    patterns = [part.strip() for part in text.split(",") if part.strip()]
+    return patterns or None
+
+
+def select_objects(
+    patterns: Sequence[str] | None,
+    available: Sequence[str],
+    default: Sequence[str],
+    *,
+    source: str | None = None,
+) -> list[str]:
+    """The objects chosen by ``patterns`` (names or :mod:`fnmatch` globs) among ``available``.
+
+    ``None`` chooses ``default``. The result keeps the order of ``available``.
+    A pattern that matches nothing is an :class:`~demoplan.errors.InputError`
+    naming every such pattern and listing what is available.
+    """
+    if patterns is None:
+        return list(default)
+    missing = [p for p in patterns if not any(fnmatchcase(name, p) for name in available)]
+    if missing:
+        listed = ", ".join(repr(p) for p in missing)
+        raise InputError(
+            f"no object {'matches' if len(missing) == 1 else 'match'} {listed}; "
+            f"available: {', '.join(available) or 'none'}",
+            source=source,
+            field="objects",
+        )
+    return [name for name in available if any(fnmatchcase(name, p) for p in patterns)]

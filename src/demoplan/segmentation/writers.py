@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import Any, Literal
 
@@ -82,6 +83,8 @@ def write_bag(
     kind: BagKind = "tf",
     storage: BagStorage = "sqlite3",
     frame: str = WORLD_FRAME,
+    parents: Mapping[str, str] | None = None,
+    static: Collection[str] = (),
 ) -> None:
     """Write ``stream`` as a ROS 2 bag folder with ``rosbags``' Writer.
 
@@ -93,7 +96,18 @@ def write_bag(
     nanoseconds; times must be ≥ 0). Objects without orientation are written
     with the identity quaternion (bags always carry one). ``path`` must not
     exist yet (rosbags refuses to overwrite a bag).
+
+    A TF tree (``kind="tf"`` only): ``parents`` maps a track's name to its
+    parent frame (default ``frame``), so that the track holds the frame's pose
+    *relative to that parent*; the tracks named in ``static`` go to a
+    ``/tf_static`` topic instead of ``/tf``. E.g. tracks ``odom`` (in ``map``),
+    ``table`` (static, in ``odom``) and ``cup`` (in ``table``) with
+    ``parents={"odom": "map", "table": "odom", "cup": "table"}, static={"table"}``.
     """
+    if kind != "tf" and (parents or static):
+        raise ValueError("parents and static frames need kind='tf'")
+    parent_of = dict(parents or {})
+    static_names = set(static)
     from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
     from rosbags.typesys import Stores, get_typestore
 
@@ -113,34 +127,39 @@ def write_bag(
     vector, quaternion = msg["geometry_msgs/msg/Vector3"], msg["geometry_msgs/msg/Quaternion"]
     point, pose_type = msg["geometry_msgs/msg/Point"], msg["geometry_msgs/msg/Pose"]
 
-    def header(stamp: int) -> Any:
+    def header(stamp: int, frame_id: str = frame) -> Any:
         return header_type(
-            stamp=time_type(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id=frame
+            stamp=time_type(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id=frame_id
         )
 
     try:
         with Writer(path, version=9, storage_plugin=plugin) as writer:
             if kind == "tf":
-                connection = writer.add_connection("/tf", TF_TYPE, typestore=store)
                 transform_type = msg["geometry_msgs/msg/TransformStamped"]
                 transform3 = msg["geometry_msgs/msg/Transform"]
-                starts = np.flatnonzero(np.r_[True, stamps[1:] != stamps[:-1]])
-                ends = np.r_[starts[1:], len(stamps)]
-                for start, end in zip(starts.tolist(), ends.tolist(), strict=True):
-                    stamp = int(stamps[start])
-                    transforms = [
-                        transform_type(
-                            header=header(stamp),
-                            child_frame_id=names[i],
-                            transform=transform3(
-                                translation=vector(*map(float, positions[i])),
-                                rotation=quaternion(*map(float, quats[i])),
-                            ),
-                        )
-                        for i in range(start, end)
-                    ]
-                    message = msg[TF_TYPE](transforms=transforms)
-                    writer.write(connection, stamp, store.serialize_cdr(message, TF_TYPE))
+                is_static = np.array([name in static_names for name in names], dtype=bool)
+                for topic, chosen in (("/tf", ~is_static), ("/tf_static", is_static)):
+                    rows = np.flatnonzero(chosen)
+                    if not rows.size and topic == "/tf_static":
+                        continue
+                    connection = writer.add_connection(topic, TF_TYPE, typestore=store)
+                    # One message per sample time: runs of equal stamps.
+                    runs = np.flatnonzero(np.r_[True, stamps[rows][1:] != stamps[rows][:-1]])
+                    for run in np.split(rows, runs[1:]):
+                        stamp = int(stamps[run[0]])
+                        transforms = [
+                            transform_type(
+                                header=header(stamp, parent_of.get(names[i], frame)),
+                                child_frame_id=names[i],
+                                transform=transform3(
+                                    translation=vector(*map(float, positions[i])),
+                                    rotation=quaternion(*map(float, quats[i])),
+                                ),
+                            )
+                            for i in run.tolist()
+                        ]
+                        message = msg[TF_TYPE](transforms=transforms)
+                        writer.write(connection, stamp, store.serialize_cdr(message, TF_TYPE))
             else:
                 connections = {
                     name: writer.add_connection(f"/{name}/pose", POSE_TYPE, typestore=store)

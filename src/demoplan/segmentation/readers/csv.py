@@ -13,6 +13,7 @@ line / column and what was expected.
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,7 @@ from demoplan.segmentation.types import (
     FloatArray,
     PoseStream,
     normalise_quats,
+    select_objects,
     stream_from_samples,
 )
 
@@ -38,8 +40,12 @@ _ORIENTATION_SETS: dict[frozenset[str], tuple[str, ...]] = {
 _EXPECTED_HEADER = "t,object,x,y,z plus optionally yaw | roll,pitch,yaw | qx,qy,qz,qw"
 
 
-def load_csv(path: str | Path) -> PoseStream:
-    """Read a CSV pose stream (module docstring); angles in degrees, lengths in metres."""
+def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseStream:
+    """Read a CSV pose stream (module docstring); angles in degrees, lengths in metres.
+
+    ``objects`` (names or :mod:`fnmatch` patterns) keeps only the matching
+    objects; a pattern matching none is an error. By default all are kept.
+    """
     path = Path(path)
     source = str(path)
     try:
@@ -129,7 +135,11 @@ def load_csv(path: str | Path) -> PoseStream:
         orientations = quats_from_rpy_array(orientation_columns(kind))
     elif kind:
         orientations = normalise_quats(orientation_columns(kind), source, where)
-    return stream_from_samples(names, times, positions, orientations, source=source, where=where)
+    stream = stream_from_samples(names, times, positions, orientations, source=source, where=where)
+    if objects is None:
+        return stream
+    chosen = set(select_objects(objects, stream.objects, stream.objects, source=source))
+    return PoseStream(tuple(t for t in stream.tracks if t.name in chosen), source)
 
 
 def _check_header(header: list[str], source: str, line: int) -> dict[str, Any]:
