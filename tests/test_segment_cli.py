@@ -14,6 +14,7 @@ from demoplan.demonstrations import load_demonstrations
 from demoplan.segmentation import write_bag, write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from tests.helpers import EXAMPLES
+from tests.test_tf_tree import SET_TABLE, robot_tree
 
 
 def invoke(*args: Any) -> Any:
@@ -86,3 +87,54 @@ def test_segment_bad_stream_exits_1(tmp_path: Path) -> None:
     result = invoke("segment", path, "-o", tmp_path / "out.json")
     assert result.exit_code == 1
     assert str(path) in result.stderr and not (tmp_path / "out.json").exists()
+
+
+# --------------------------------------------------------------------------- TF trees
+
+
+@pytest.fixture(scope="module")
+def robot_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A demonstration's objects under a static table on a moving odom (map → odom → table)."""
+    world = stream_from_demonstration(SET_TABLE[0], rate_hz=30, noise_m=0.002, start_time=10.0)
+    relative, parents, static = robot_tree(world)
+    path = tmp_path_factory.mktemp("robot") / "bag"
+    write_bag(relative, path, storage="mcap", parents=parents, static=static)
+    return path
+
+
+def test_segment_and_learn_a_robot_bag(robot_bag: Path, tmp_path: Path) -> None:
+    geometry = tmp_path / "objects.yaml"
+    geometry.write_text(
+        "units: {length: cm}\nobjects:\n"
+        + "".join(f"  {n}: {{size: [5, 5, 2]}}\n" for n in SET_TABLE[0].moved_objects)
+        + "  plate: {shape: cylinder, size: [26, 26, 2]}\n"
+    )
+    result = invoke(
+        "segment", robot_bag, "-o", tmp_path / "demo.json", "--frame", "map",
+        "--objects", "plate,knife,fork,spoon,glass,food,napkin", "--objects-file", geometry,
+    )  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    (demo,) = load_demonstrations([tmp_path / "demo.json"])
+    assert [s.object for s in demo.steps] == [s.object for s in SET_TABLE[0].steps]
+    assert dict(demo.objects)["plate"].shape == "cylinder"
+    assert dict(demo.objects)["plate"].size == pytest.approx((0.26, 0.26, 0.02))
+
+    result = invoke("learn", robot_bag, "--objects", "[!b]*", "-o", tmp_path / "m.json", "--json")
+    assert result.exit_code == 0, result.stderr
+
+
+def test_segment_errors_are_one_line(robot_bag: Path, tmp_path: Path) -> None:
+    geometry = tmp_path / "objects.json"
+    geometry.write_text('{"objects": {"mug": {"shape": "box", "size": [0.1, 0.1, 0.1]}}}')
+    partial = tmp_path / "partial.json"
+    partial.write_text('{"objects": {"plate": {"size": [0.2, 0.2, 0.02]}}}')
+    for options, message in (
+        (["--frame", "nowhere"], "unknown world frame 'nowhere'"),
+        (["--objects", "mug"], "no object matches 'mug'"),
+        (["--objects-file", geometry], "unknown object 'mug'; the stream's objects are"),
+        (["--objects-file", partial], "no geometry for 'food', 'fork'"),
+    ):
+        result = invoke("segment", robot_bag, "-o", tmp_path / "d.json", *options)
+        assert result.exit_code == 1
+        (error,) = [line for line in result.stderr.splitlines() if "error:" in line]
+        assert message in error, result.stderr

@@ -36,7 +36,7 @@ from demoplan.segmentation import (
     write_demonstration,
 )
 from demoplan.segmentation.detect import track_speed
-from demoplan.segmentation.streams import quats_from_rpy_array
+from demoplan.segmentation.readers.csv import quats_from_rpy_array
 from tests.helpers import EXAMPLES
 
 TOLERANCE = 0.005  # m: the acceptance bound on step poses

@@ -115,6 +115,17 @@ def _print_model(model: TaskModel, decimals: int) -> None:
         )
 
 
+_FRAME_OPTION = typer.Option(
+    help="ROS 2 bags: the world frame TF frames are composed to (default: the TF tree's root).",
+    show_default=False,
+)
+_OBJECTS_OPTION = typer.Option(
+    help="The objects to keep: names or glob patterns, comma-separated ('cup,plate', "
+    "'obj_*'). Default: every object; in a TF tree, every frame without children.",
+    show_default=False,
+)
+
+
 def _read_requirements(path: Path) -> list[str]:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
@@ -196,6 +207,8 @@ def learn(
             show_default=False,
         ),
     ] = None,
+    frame: Annotated[str | None, _FRAME_OPTION] = None,
+    objects: Annotated[str | None, _OBJECTS_OPTION] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the model as JSON on stdout.")
     ] = False,
@@ -209,6 +222,7 @@ def learn(
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
     from demoplan.modelfile import load_model, save_model
+    from demoplan.segmentation.types import parse_object_patterns
     from demoplan.states import StateGenerationSettings
 
     with _reported_errors():
@@ -232,7 +246,7 @@ def learn(
             requirements += from_file
         try:
             parse_requirements_syntax(requirements)
-            new = load_demonstrations(demos)
+            new = load_demonstrations(demos, frame=frame, objects=parse_object_patterns(objects))
             if update is not None:
                 model = update_model(
                     load_model(update), new, require=requirements, settings=settings
@@ -730,22 +744,49 @@ def segment(
         Path | None, typer.Option(help="Also draw speed over time with the moves shaded.")
     ] = None,
     name: Annotated[str | None, typer.Option(help="The demonstration's name.")] = None,
+    frame: Annotated[str | None, _FRAME_OPTION] = None,
+    objects: Annotated[str | None, _OBJECTS_OPTION] = None,
+    objects_file: Annotated[
+        Path | None,
+        typer.Option(
+            help="JSON/YAML file {objects: {NAME: {shape, size}}} (a demonstration's "
+            "'objects'): geometry written into the demonstration.",
+            show_default=False,
+        ),
+    ] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the demonstration as JSON.")
     ] = False,
 ) -> None:
     """Segment a continuous pose stream into pick-and-place steps (a demonstration)."""
-    from demoplan.demonstrations import demonstration_to_dict
+    from demoplan.demonstrations import demonstration_to_dict, load_object_geometry
     from demoplan.segmentation import load_stream, plot_segmentation, write_demonstration
     from demoplan.segmentation import segment as segment_stream
+    from demoplan.segmentation.types import parse_object_patterns
 
     with _reported_errors():
-        _refuse_overwriting_inputs(output, [stream_path])
+        inputs = [stream_path, *([objects_file] if objects_file is not None else [])]
+        _refuse_overwriting_inputs(output, inputs)
         if plot is not None:
-            _refuse_overwriting_inputs(plot, [stream_path, output])
-        stream = load_stream(stream_path)
+            _refuse_overwriting_inputs(plot, [*inputs, output])
+        stream = load_stream(stream_path, frame=frame, objects=parse_object_patterns(objects))
+        geometry = (
+            load_object_geometry(objects_file, known=stream.objects)
+            if objects_file is not None
+            else {}
+        )
         found = segment_stream(stream)
-        demo = found.to_demonstration(name or stream_path.stem)
+        if objects_file is not None:
+            # A demonstration's objects, when given, list every object it moves.
+            without = sorted({m.object for m in found.moves} - set(geometry))
+            if without:
+                raise InputError(
+                    f"no geometry for {', '.join(map(repr, without))}; every object "
+                    "that moves needs one (a demonstration's objects list them all)",
+                    source=str(objects_file),
+                    field="objects",
+                )
+        demo = found.to_demonstration(name or stream_path.stem, objects=geometry)
         write_demonstration(demo, output)
         if plot is not None:
             try:

@@ -9,7 +9,7 @@ orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -36,6 +36,7 @@ __all__ = [
     "demonstrations_from_document",
     "is_pose_stream",
     "load_demonstrations",
+    "load_object_geometry",
     "pose_from_dict",
     "pose_to_dict",
 ]
@@ -90,6 +91,15 @@ class ObjectSchema(_Schema):
         if any(v <= 0 for v in size):
             raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
         return size
+
+
+class ObjectsFileSchema(_Schema):
+    """A file of object geometry: a demonstration file's ``objects`` (and ``units``) alone."""
+
+    format: str | None = None
+    description: str | None = None
+    units: UnitsSchema = UnitsSchema()
+    objects: dict[str, ObjectSchema] = Field(min_length=1)
 
 
 class DemonstrationSchema(_Schema):
@@ -175,6 +185,38 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     return out
 
 
+def load_object_geometry(
+    path: Path, *, known: Collection[str] | None = None
+) -> dict[str, ObjectGeometry]:
+    """Read ``{"objects": {"cup": {"shape": "cylinder", "size": [0.08, 0.08, 0.1]}}}``
+    (JSON or YAML; the schema of a demonstration file's ``objects``, with optional
+    ``units``) as geometry per object, in metres.
+
+    ``known`` (e.g. a stream's objects): a name outside it is an
+    :class:`~demoplan.errors.InputError` naming the object and listing ``known``.
+    """
+    source = str(path)
+    try:
+        parsed = ObjectsFileSchema.model_validate(read_document(path))
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source) from None
+    scale = _LENGTH_SCALE[parsed.units.length]
+    if known is not None:
+        unknown = [name for name in parsed.objects if name not in known]
+        if unknown:
+            raise InputError(
+                f"unknown object{'s' if len(unknown) > 1 else ''} "
+                f"{', '.join(map(repr, unknown))}; the stream's objects are "
+                f"{', '.join(known) or 'none'}",
+                source=source,
+                field=f"objects.{unknown[0]}",
+            )
+    return {
+        name: ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale))
+        for name, g in parsed.objects.items()
+    }
+
+
 def demonstrations_from_document(data: dict[str, Any], source: str) -> list[Demonstration]:
     """Parse a ``demonstration-1`` or ``demonstrations-1`` document."""
     kind, _ = check_format(data, {"demonstration", "demonstrations"}, source)
@@ -251,17 +293,27 @@ def is_pose_stream(path: Path) -> bool:
     return path.suffix.lower() in STREAM_SUFFIXES or path.name == "metadata.yaml"
 
 
-def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
+def load_demonstrations(
+    paths: Iterable[str | Path],
+    *,
+    frame: str | None = None,
+    objects: Sequence[str] | None = None,
+) -> list[Demonstration]:
     """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
     a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
-    (:mod:`demoplan.segmentation`, default settings), named after the file."""
+    (:mod:`demoplan.segmentation`, default settings), named after the file.
+
+    ``frame`` and ``objects`` are passed to
+    :func:`~demoplan.segmentation.load_stream` for pose streams (the world frame
+    of a TF tree, the objects to keep); demonstration files ignore them."""
     demos: list[Demonstration] = []
     for path in map(Path, paths):
         if is_pose_stream(path):
             from demoplan.segmentation import load_stream, segment
 
             name = path.stem if path.name != "metadata.yaml" else path.parent.name
-            demos.append(segment(load_stream(path)).to_demonstration(name))
+            stream = load_stream(path, frame=frame, objects=objects)
+            demos.append(segment(stream).to_demonstration(name))
             continue
         if path.is_dir():
             # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.

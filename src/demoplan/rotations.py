@@ -32,7 +32,9 @@ __all__ = [
     "quat_from_yaw",
     "quat_inverse",
     "quat_multiply",
+    "quat_slerp",
     "relative_quats",
+    "rotate_vectors",
     "rotvecs_from_quats",
     "rpy_from_quat",
 ]
@@ -117,6 +119,45 @@ def quat_inverse(q: FloatArray) -> FloatArray:
     """Inverse (conjugate) of unit quaternions ``(..., 4)``."""
     inverse: FloatArray = np.asarray(q, dtype=float) * np.array([-1.0, -1.0, -1.0, 1.0])
     return inverse
+
+
+def rotate_vectors(quats: FloatArray, vectors: FloatArray) -> FloatArray:
+    """Rotate ``(n, 3)`` vectors by ``(n, 4)`` unit quaternions (x, y, z, w): ``R(q)·v``.
+
+    Uses ``v + w·t + u × t`` with ``t = 2·u × v`` (``u`` the vector part), which
+    leaves ``v`` unchanged bit for bit under the identity.
+    """
+    q = np.asarray(quats, dtype=float)
+    v = np.asarray(vectors, dtype=float)
+    u = q[..., :3]
+    twice = 2.0 * np.cross(u, v)
+    rotated: FloatArray = v + q[..., 3:4] * twice + np.cross(u, twice)
+    return rotated
+
+
+def quat_slerp(a: FloatArray, b: FloatArray, fraction: FloatArray) -> FloatArray:
+    """Spherical linear interpolation between ``(n, 4)`` unit quaternions, row by row.
+
+    ``fraction`` ``(n,)`` is 0 at ``a`` and 1 at ``b``; the shorter arc is taken
+    (``b`` and ``−b`` are one rotation). Nearly equal rows are interpolated
+    linearly and normalised (nlerp), where slerp's ``sin θ`` division loses
+    precision. At fraction 0 and 1 the result is ``a`` and ``±b`` exactly.
+    """
+    qa = np.asarray(a, dtype=float).reshape(-1, 4)
+    qb = np.asarray(b, dtype=float).reshape(-1, 4)
+    s = np.asarray(fraction, dtype=float).reshape(-1, 1)
+    dot = np.sum(qa * qb, axis=1, keepdims=True)
+    qb = np.where(dot < 0, -qb, qb)
+    theta = np.arccos(np.clip(np.abs(dot), 0.0, 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    safe = np.where(near, 1.0, sin_theta)
+    weight_a = np.where(near, 1.0 - s, np.sin((1.0 - s) * theta) / safe)
+    weight_b = np.where(near, s, np.sin(s * theta) / safe)
+    result = weight_a * qa + weight_b * qb
+    partial = near[:, 0] & (s[:, 0] != 0.0) & (s[:, 0] != 1.0)
+    result[partial] /= np.linalg.norm(result[partial], axis=1, keepdims=True)
+    return np.asarray(result, dtype=float)
 
 
 def rotvecs_from_quats(quats: FloatArray) -> FloatArray:

@@ -15,16 +15,25 @@ Public API::
     write_demonstration(demo, "set-table-1.json")
     plot_segmentation(found, "speed.png")     # speed per object, moves shaded
 
-Reading and writing streams (:mod:`demoplan.segmentation.streams`):
+Reading and writing streams (:mod:`demoplan.segmentation.readers` — one
+module per file kind: ``readers.csv``, ``readers.bag`` —,
+:mod:`demoplan.segmentation.writers`, and the types in
+:mod:`demoplan.segmentation.types`):
 
-- ``load_stream(path) -> PoseStream`` — CSV (``t,object,x,y,z`` [+ ``yaw`` |
-  ``roll,pitch,yaw`` | ``qx,qy,qz,qw``]) or a ROS 2 bag (sqlite3 / mcap) with
-  ``tf2_msgs/msg/TFMessage`` (child frame = object) or
-  ``geometry_msgs/msg/PoseStamped`` topics (one per object). Errors are
-  :class:`~demoplan.errors.InputError` naming the file, line / column or
-  topic, and what was expected. ``load_csv`` / ``load_bag`` read one kind.
+- ``load_stream(path, *, frame=None, objects=None) -> PoseStream`` — CSV
+  (``t,object,x,y,z`` [+ ``yaw`` | ``roll,pitch,yaw`` | ``qx,qy,qz,qw``]) or a
+  ROS 2 bag (sqlite3 / mcap) with ``tf2_msgs/msg/TFMessage`` topics (``/tf``,
+  ``/tf_static``: a TF tree whose frames are composed to the world frame
+  ``frame``, default its root; :mod:`demoplan.segmentation.tftree`) or
+  ``geometry_msgs/msg/PoseStamped`` topics (one per object). ``objects``
+  keeps the named objects (names or fnmatch patterns); by default every
+  object, and of a TF tree its leaves (frames other than the world frame
+  without children). Errors are :class:`~demoplan.errors.InputError` naming
+  the file, line / column, topic or frame, and what was expected.
+  ``load_csv`` / ``load_bag`` read one kind.
 - ``write_csv(stream, path)``; ``write_bag(stream, path, kind="tf"|"pose",
-  storage="sqlite3"|"mcap")`` (rosbags' Writer).
+  storage="sqlite3"|"mcap", frame="world", parents=None, static=())``
+  (rosbags' Writer; ``parents`` / ``static`` write a TF tree).
 - ``PoseStream(tracks, source)`` of ``ObjectTrack(name, times (n,),
   positions (n, 3), orientations (n, 4) | None)``.
 
@@ -67,13 +76,13 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _EXPORTS = {
-    "ObjectTrack": "demoplan.segmentation.streams",
-    "PoseStream": "demoplan.segmentation.streams",
-    "load_bag": "demoplan.segmentation.streams",
-    "load_csv": "demoplan.segmentation.streams",
-    "load_stream": "demoplan.segmentation.streams",
-    "write_bag": "demoplan.segmentation.streams",
-    "write_csv": "demoplan.segmentation.streams",
+    "ObjectTrack": "demoplan.segmentation.types",
+    "PoseStream": "demoplan.segmentation.types",
+    "load_bag": "demoplan.segmentation.readers",
+    "load_csv": "demoplan.segmentation.readers",
+    "load_stream": "demoplan.segmentation.readers",
+    "write_bag": "demoplan.segmentation.writers",
+    "write_csv": "demoplan.segmentation.writers",
     "Move": "demoplan.segmentation.detect",
     "Segmentation": "demoplan.segmentation.detect",
     "SegmentationSettings": "demoplan.segmentation.detect",
@@ -119,20 +128,14 @@ if TYPE_CHECKING:
     )
     from demoplan.segmentation.importing import import_recording
     from demoplan.segmentation.plotting import plot_segmentation
-    from demoplan.segmentation.streams import (
-        ObjectTrack,
-        PoseStream,
-        load_bag,
-        load_csv,
-        load_stream,
-        write_bag,
-        write_csv,
-    )
+    from demoplan.segmentation.readers import load_bag, load_csv, load_stream
     from demoplan.segmentation.synthetic import (
         StepComparison,
         compare_steps,
         stream_from_demonstration,
     )
+    from demoplan.segmentation.types import ObjectTrack, PoseStream
+    from demoplan.segmentation.writers import write_bag, write_csv
 
 
 def __getattr__(name: str) -> Any:

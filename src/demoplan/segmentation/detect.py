@@ -60,12 +60,11 @@ objects at once give two moves):
    start), not a move. Steps are ordered by the time their object comes to
    rest.
 
-Limits: the parent frame of TF transforms is taken as the world; detection
-uses translation speed only, so an object turned in place without its
-reference point moving faster than ``start_speed`` is not seen to move; an
-object carried on another (a napkin on a moved plate) counts as moved; a
-pause in the air followed by a lift higher is a placement unless geometry
-shows nothing to stand on.
+Limits: detection uses translation speed only, so an object turned in place
+without its reference point moving faster than ``start_speed`` is not seen
+to move; an object carried on another (a napkin on a moved plate) counts as
+moved; a pause in the air followed by a lift higher is a placement unless
+geometry shows nothing to stand on.
 """
 
 from __future__ import annotations
@@ -84,7 +83,7 @@ from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
-from demoplan.segmentation.streams import ObjectTrack, PoseStream
+from demoplan.segmentation.types import ObjectTrack, PoseStream
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

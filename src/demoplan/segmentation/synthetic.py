@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demoplan.model import Demonstration, Pose, Step
-from demoplan.segmentation.streams import ObjectTrack, PoseStream
+from demoplan.segmentation.types import ObjectTrack, PoseStream
 
 FloatArray = NDArray[np.float64]
 

@@ -65,7 +65,7 @@ from numpy.typing import NDArray
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.rotations import quat_from_yaw
-from demoplan.segmentation.streams import ObjectTrack, PoseStream
+from demoplan.segmentation.types import ObjectTrack, PoseStream
 
 if TYPE_CHECKING:
     import h5py

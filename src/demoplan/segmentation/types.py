@@ -1,0 +1,240 @@
+"""Pose streams: what a motion-capture system or an object tracker records.
+
+A :class:`PoseStream` holds one :class:`ObjectTrack` per object: sample times
+(seconds, strictly increasing), positions (metres, world frame, z up) and,
+when the source has them, orientations as unit quaternions ``(x, y, z, w)``.
+Tracks are sampled independently: rates may differ between objects, vary over
+time, and samples may be missing.
+
+The readers (:mod:`demoplan.segmentation.readers`) turn flat samples into a
+stream with :func:`stream_from_samples`; the writers are in
+:mod:`demoplan.segmentation.writers`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from fnmatch import fnmatchcase
+
+import numpy as np
+from numpy.typing import NDArray
+
+from demoplan.errors import InputError
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "FloatArray",
+    "ObjectTrack",
+    "PoseStream",
+    "normalise_quats",
+    "parse_object_patterns",
+    "select_objects",
+    "stream_from_samples",
+]
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ObjectTrack:
+    """The samples of one object.
+
+    Parameters
+    ----------
+    name : str
+        The object's name (CSV ``object`` column, TF child frame, topic).
+    times : ndarray, shape (n,)
+        Sample times in seconds, strictly increasing.
+    positions : ndarray, shape (n, 3)
+        Positions in metres (world frame, z up).
+    orientations : ndarray, shape (n, 4), or None
+        Unit quaternions ``(x, y, z, w)``; ``None`` when the source has none.
+    """
+
+    name: str
+    times: FloatArray
+    positions: FloatArray
+    orientations: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        n = self.times.shape[0]
+        if self.times.ndim != 1 or self.positions.shape != (n, 3):
+            raise ValueError(
+                f"track {self.name!r}: times (n,) and positions (n, 3) expected, got "
+                f"{self.times.shape} and {self.positions.shape}"
+            )
+        if self.orientations is not None and self.orientations.shape != (n, 4):
+            raise ValueError(
+                f"track {self.name!r}: orientations (n, 4) expected, got {self.orientations.shape}"
+            )
+        if n > 1 and not bool(np.all(np.diff(self.times) > 0)):
+            raise ValueError(f"track {self.name!r}: times must be strictly increasing")
+
+    def __len__(self) -> int:
+        return int(self.times.shape[0])
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample (s)."""
+        return float(self.times[-1] - self.times[0]) if len(self) else 0.0
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class PoseStream:
+    """Object poses over time: one :class:`ObjectTrack` per object, in order of appearance."""
+
+    tracks: tuple[ObjectTrack, ...]
+    source: str | None = None
+
+    @property
+    def objects(self) -> tuple[str, ...]:
+        """The objects' names, in the stream's order."""
+        return tuple(track.name for track in self.tracks)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples over all objects."""
+        return sum(len(track) for track in self.tracks)
+
+    @property
+    def start_time(self) -> float:
+        return min(float(track.times[0]) for track in self.tracks if len(track))
+
+    @property
+    def end_time(self) -> float:
+        return max(float(track.times[-1]) for track in self.tracks if len(track))
+
+    def track(self, name: str) -> ObjectTrack:
+        """The track of object ``name`` (``KeyError`` if absent)."""
+        for track in self.tracks:
+            if track.name == name:
+                return track
+        raise KeyError(name)
+
+    def __iter__(self) -> Iterator[ObjectTrack]:
+        return iter(self.tracks)
+
+
+def stream_from_samples(
+    names: Sequence[str],
+    times: FloatArray,
+    positions: FloatArray,
+    orientations: FloatArray | None = None,
+    *,
+    source: str | None = None,
+    where: Sequence[str] | None = None,
+) -> PoseStream:
+    """Group flat samples (one per row, any order) into a :class:`PoseStream`.
+
+    ``orientations`` may hold NaN rows for samples without an orientation; an
+    object must then have orientations on all of its samples or on none.
+    ``where[i]`` names sample i in error messages (e.g. ``"row 12"``). Two
+    samples of one object at the same time are refused.
+    """
+    codes, order_names = _codes(names)
+    label = (lambda i: where[i]) if where is not None else (lambda i: f"sample {i}")
+    has_q: NDArray[np.bool_] | None = None
+    if orientations is not None:
+        has_q = np.asarray(~np.isnan(orientations).any(axis=1), dtype=bool)
+    tracks = []
+    # One stable sort groups the samples by object, in time order within each.
+    order = np.lexsort((times, codes))
+    bounds = np.searchsorted(codes[order], np.arange(len(order_names) + 1))
+    for k, name in enumerate(order_names):
+        index = order[bounds[k] : bounds[k + 1]]
+        t = times[index]
+        repeated = np.flatnonzero(np.diff(t) <= 0)
+        if repeated.size:
+            first = int(index[repeated[0] + 1])
+            raise InputError(
+                f"object {name!r} has two samples at t = {float(t[repeated[0]]):g}; "
+                "one sample per object per time expected",
+                source=source,
+                field=label(first),
+            )
+        quats = None
+        if orientations is not None and has_q is not None:
+            present = has_q[index]
+            if present.any() and not present.all():
+                missing = int(index[int(np.argmin(present))])
+                raise InputError(
+                    f"object {name!r} has orientations on some samples only; "
+                    "every sample of an object needs one, or none",
+                    source=source,
+                    field=label(missing),
+                )
+            if present.all():
+                quats = orientations[index]
+        tracks.append(
+            ObjectTrack(
+                name,
+                np.ascontiguousarray(t, dtype=float),
+                np.ascontiguousarray(positions[index], dtype=float),
+                None if quats is None else np.ascontiguousarray(quats, dtype=float),
+            )
+        )
+    return PoseStream(tuple(tracks), source)
+
+
+def _codes(names: Sequence[str]) -> tuple[NDArray[np.intp], list[str]]:
+    """Integer code per sample, codes numbered in order of first appearance."""
+    table: dict[str, int] = {}
+    codes = np.fromiter((table.setdefault(name, len(table)) for name in names), np.intp, len(names))
+    return codes, list(table)
+
+
+def normalise_quats(
+    quats: FloatArray, source: str | None, where: Sequence[str] | None
+) -> FloatArray:
+    """``(n, 4)`` quaternions scaled to unit length; NaN rows (no orientation) stay NaN.
+
+    A zero quaternion is an :class:`~demoplan.errors.InputError` naming
+    ``where[i]`` (or ``sample i``).
+    """
+    norms = np.linalg.norm(quats, axis=1)
+    bad = np.flatnonzero(~(norms > 1e-9) & ~np.isnan(norms))
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(
+            "zero quaternion; a non-zero quaternion (qx, qy, qz, qw) expected",
+            source=source,
+            field=where[i] if where is not None else f"sample {i}",
+        )
+    with np.errstate(invalid="ignore"):
+        unit = quats / norms[:, None]
+    return np.asarray(unit, dtype=float)
+
+
+def parse_object_patterns(text: str | None) -> list[str] | None:
+    """``"cup, plate,obj_*"`` → ``["cup", "plate", "obj_*"]``; ``None`` or blank → ``None``."""
+    if text is None:
+        return None
+    patterns = [part.strip() for part in text.split(",") if part.strip()]
+    return patterns or None
+
+
+def select_objects(
+    patterns: Sequence[str] | None,
+    available: Sequence[str],
+    default: Sequence[str],
+    *,
+    source: str | None = None,
+) -> list[str]:
+    """The objects chosen by ``patterns`` (names or :mod:`fnmatch` globs) among ``available``.
+
+    ``None`` chooses ``default``. The result keeps the order of ``available``.
+    A pattern that matches nothing is an :class:`~demoplan.errors.InputError`
+    naming every such pattern and listing what is available.
+    """
+    if patterns is None:
+        return list(default)
+    missing = [p for p in patterns if not any(fnmatchcase(name, p) for name in available)]
+    if missing:
+        listed = ", ".join(repr(p) for p in missing)
+        raise InputError(
+            f"no object {'matches' if len(missing) == 1 else 'match'} {listed}; "
+            f"available: {', '.join(available) or 'none'}",
+            source=source,
+            field="objects",
+        )
+    return [name for name in available if any(fnmatchcase(name, p) for p in patterns)]
