@@ -1,5 +1,9 @@
 """Segmentation on real recordings: robosuite's human teleoperated demonstrations.
 
+The same trajectories are also written as 20 Hz CSV files and ROS 2 bags
+(sqlite3 and mcap; world-frame TF, and a TF tree with the objects published
+relative to a static, turned ``table`` frame) and must give the same steps.
+
 Six files from the ``robosuite==0.3.0`` and ``==1.0.0`` source distributions on
 PyPI (``tests/robosuite_data.py`` downloads and caches them): PickPlace,
 NutAssembly and Stack, two Sawyer demonstrations each in 0.3 and one Panda
@@ -25,6 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from demoplan.rotations import quat_from_yaw, quat_inverse, quat_multiply, rotate_vectors
 from demoplan.segmentation import (
     ObjectTrack,
     PoseStream,
@@ -113,8 +118,27 @@ def resampled(stream: PoseStream, rate_hz: float, rest_s: float) -> PoseStream:
     return PoseStream(tuple(tracks), stream.source)
 
 
+def under_a_turned_table(stream: PoseStream) -> PoseStream:
+    """The objects' poses relative to a static ``table`` frame 0.8 m up and turned by
+    30° in the world (a robot's TF tree), plus that frame's own track."""
+    turn = np.tile(quat_from_yaw(30.0), (1, 1))
+    origin = np.array([0.3, -0.2, 0.8])
+    tracks = []
+    for track in stream.tracks:
+        quats = np.tile(turn, (len(track), 1))
+        inverse = quat_inverse(quats)
+        local = rotate_vectors(inverse, track.positions - origin)
+        orientations = None
+        if track.orientations is not None:
+            orientations = quat_multiply(inverse, track.orientations)
+        tracks.append(ObjectTrack(track.name, track.times, local, orientations))
+    times = stream.tracks[0].times[:1]
+    tracks.append(ObjectTrack("table", times, origin[None, :], turn.copy()))
+    return PoseStream(tuple(tracks), stream.source)
+
+
 @pytest.mark.parametrize("rest_s", [0.0, 1.0])
-@pytest.mark.parametrize("kind", ["csv", "sqlite3", "mcap"])
+@pytest.mark.parametrize("kind", ["csv", "sqlite3", "mcap", "tf-tree-sqlite3", "tf-tree-mcap"])
 def test_the_same_trajectories_as_csv_or_bags_give_the_same_steps(
     imported: dict[tuple[str, str], object], tmp_path: Path, kind: str, rest_s: float
 ) -> None:
@@ -124,6 +148,10 @@ def test_the_same_trajectories_as_csv_or_bags_give_the_same_steps(
         if kind == "csv":
             path = path.with_suffix(".csv")
             write_csv(stream, path)
+        elif kind.startswith("tf-tree"):
+            parents = {t.name: "table" for t in stream.tracks} | {"table": "world"}
+            tree = under_a_turned_table(stream)
+            write_bag(tree, path, storage=kind.split("-")[-1], parents=parents, static={"table"})
         else:
             write_bag(stream, path, kind="tf", storage=kind)
         found = segment(load_stream(path))
