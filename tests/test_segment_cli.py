@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -138,3 +140,63 @@ def test_segment_errors_are_one_line(robot_bag: Path, tmp_path: Path) -> None:
         assert result.exit_code == 1
         (error,) = [line for line in result.stderr.splitlines() if "error:" in line]
         assert message in error, result.stderr
+
+
+def test_segment_reports_pushes_and_takes_thresholds(tmp_path: Path) -> None:
+    from demoplan.model import Demonstration, Pose, Step
+    from demoplan.segmentation import stream_from_demonstration, write_csv
+
+    demo = Demonstration(
+        "push", (Step("a", Pose((0.5, 0.5, 0.0))),), initial=(("a", Pose((0.1, 0.1, 0.0))),)
+    )
+    stream_path = tmp_path / "push.csv"
+    write_csv(
+        stream_from_demonstration(demo, rate_hz=60, noise_m=0.001, nudges=1, nudge_m=0.05, rng=0),
+        stream_path,
+    )
+    out = tmp_path / "push.json"
+    done = subprocess.run(
+        [sys.executable, "-m", "demoplan", "segment", str(stream_path), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "push (not a step): a slid 5.0 cm" in done.stderr
+    assert "1 step (1 push and 0 nudges left out)" in done.stderr
+    # With min_distance above the push, the push is a nudge; a bad name is exit 1.
+    bigger = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "demoplan",
+            "segment",
+            str(stream_path),
+            "-o",
+            str(out),
+            "--set",
+            "min_distance=0.08",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert "0 pushes and 1 nudge left out" in bigger.stderr
+    bad = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "demoplan",
+            "segment",
+            str(stream_path),
+            "-o",
+            str(tmp_path / "x.json"),
+            "--set",
+            "speed=1",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "--set" in bad.stderr
+    assert not (tmp_path / "x.json").exists()

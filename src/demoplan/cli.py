@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
@@ -754,11 +755,26 @@ def segment(
             show_default=False,
         ),
     ] = None,
+    thresholds: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set",
+            metavar="NAME=VALUE",
+            help="Change a threshold (repeatable; lengths m, times s, speeds m/s, "
+            "angles degrees). Defaults: " + _segmentation_defaults() + ".",
+            show_default=False,
+        ),
+    ] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the demonstration as JSON.")
     ] = False,
 ) -> None:
-    """Segment a continuous pose stream into pick-and-place steps (a demonstration)."""
+    """Segment a continuous pose stream into pick-and-place steps (a demonstration).
+
+    A step is a move that lifts an object off its support and releases it at
+    rest on a support (docs/segmentation.md); a push along the support is
+    reported, not a step; a pause in the air is not a placement.
+    """
     from demoplan.demonstrations import demonstration_to_dict, load_object_geometry
     from demoplan.segmentation import load_stream, plot_segmentation, write_demonstration
     from demoplan.segmentation import segment as segment_stream
@@ -775,7 +791,9 @@ def segment(
             if objects_file is not None
             else {}
         )
-        found = segment_stream(stream)
+        from demoplan.segmentation.detect import settings_from_text
+
+        found = segment_stream(stream, settings_from_text(thresholds or []), geometry=geometry)
         if objects_file is not None:
             # A demonstration's objects, when given, list every object it moves.
             without = sorted({m.object for m in found.moves} - set(geometry))
@@ -800,7 +818,7 @@ def segment(
             return
         table = Table(title=f"Steps found in {stream_path.name}", title_justify="left")
         for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
-            table.add_column(column, justify="left" if column == "object" else "right")
+            table.add_column(escape(column), justify="left" if column == "object" else "right")
         for index, move in enumerate(found.moves, 1):
             x, y, z = move.pose.position
             table.add_row(
@@ -813,10 +831,30 @@ def segment(
                 f"{z:.4f}",
             )
         _stdout.print(table)
-        nudges = f", {len(found.nudges)} nudges ignored" if found.nudges else ""
+        for push in found.pushes:
+            _stderr.print(
+                f"push (not a step): {push.object} slid {push.distance * 100:.1f} cm along its "
+                f"support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
+                markup=False,
+                highlight=False,
+            )
         _stderr.print(
-            f"{len(found.moves)} steps{nudges}; wrote {output}", markup=False, highlight=False
+            f"{_count(len(found.moves), 'step')} ({_count(len(found.pushes), 'push')} and "
+            f"{_count(len(found.nudges), 'nudge')} left out); wrote {output}",
+            markup=False,
+            highlight=False,
         )
+
+
+def _count(n: int, noun: str) -> str:
+    plural = noun + ("es" if noun.endswith("sh") else "s")
+    return f"{n} {noun if n == 1 else plural}"
+
+
+def _segmentation_defaults() -> str:
+    from demoplan.segmentation.detect import settings_help
+
+    return settings_help()
 
 
 def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:

@@ -94,6 +94,8 @@ __all__ = [
     "SegmentationSettings",
     "SpeedTrace",
     "segment",
+    "settings_from_text",
+    "settings_help",
     "track_speed",
     "write_demonstration",
 ]
@@ -180,6 +182,32 @@ class SegmentationSettings:
                 f"got {self.stop_speed}",
                 field="settings.stop_speed",
             )
+
+
+def settings_from_text(assignments: Iterable[str]) -> SegmentationSettings:
+    """Settings from ``NAME=VALUE`` texts (``segment --set min_lift=0.02``), the
+    rest at their defaults; an unknown name or a bad value is an :class:`InputError`."""
+    known = {f.name for f in fields(SegmentationSettings)}
+    values: dict[str, float] = {}
+    for text in assignments:
+        name, sep, value = text.partition("=")
+        name = name.strip().replace("-", "_")
+        if not sep or name not in known:
+            raise InputError(
+                f"expected NAME=VALUE with NAME one of {', '.join(sorted(known))}, got {text!r}",
+                field="--set",
+            )
+        try:
+            values[name] = float(value)
+        except ValueError:
+            raise InputError(f"{name}: expected a number, got {value!r}", field="--set") from None
+    return SegmentationSettings(**values)
+
+
+def settings_help() -> str:
+    """The thresholds and their defaults, for ``segment --help``."""
+    defaults = SegmentationSettings()
+    return ", ".join(f"{f.name}={getattr(defaults, f.name):g}" for f in fields(defaults))
 
 
 @dataclass(frozen=True, slots=True)
