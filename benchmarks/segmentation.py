@@ -18,7 +18,20 @@ What it measures
    * **pose error**: median and 95th percentile of the matched steps' position
      errors (mm).
 
-2. **Throughput** in samples per second (all objects' samples together) of
+2. **robosuite's teleoperated demonstrations**: the nine human
+   demonstrations in the six ``demo.hdf5`` files of robosuite 0.3 and 1.0
+   (PickPlace, NutAssembly, Stack; ``tests/robosuite_data.py`` fetches and
+   caches them), imported as ``demoplan import`` does, then the same
+   trajectories resampled to 20 Hz, written as CSV and read back (segmented
+   without geometry). Per demonstration: the hand-read steps
+   (``tests/robosuite_data.py: EXPECTED``, which the tests check too) and the
+   found ones, step precision / recall (``compare_steps``, each expected step
+   placed where its object rests at the end of the recording, within 2 cm),
+   the position error of the matched steps against that resting place
+   (median / max, mm), the pushes reported and the time of ``segment``
+   (median of repeats). Without the files (no network) the section is skipped.
+
+3. **Throughput** in samples per second (all objects' samples together) of
    ``segment``, and of reading and writing the stream as CSV and as ROS 2
    bags (``tf`` / ``sqlite3`` and ``pose`` / ``mcap``), on one long stream
    (20 objects × 100 steps at 120 Hz, ~0.6 M samples; ``--quick``: 8 × 20).
@@ -41,6 +54,7 @@ From the repository root, with demoplan installed (``pip install -e ".[dev]"``):
     python benchmarks/segmentation.py              # full grid (about a minute)
     python benchmarks/segmentation.py --quick      # small grid, a few seconds
     python benchmarks/segmentation.py --out results.json   # also save the numbers
+    python benchmarks/segmentation.py --no-recordings      # without robosuite's demonstrations
 """
 
 from __future__ import annotations
@@ -70,9 +84,15 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import package_version  # noqa: E402
+
+# The repository root, for tests/robosuite_data.py (the demonstrations and their hand-read steps).
+REPO = Path(__file__).resolve().parent.parent
+if str(REPO) not in sys.path:
+    sys.path.insert(1, str(REPO))
 from demoplan.model import Demonstration, Pose, Step  # noqa: E402
 from demoplan.segmentation import (  # noqa: E402
     PoseStream,
+    Segmentation,
     compare_steps,
     load_stream,
     segment,
@@ -80,6 +100,7 @@ from demoplan.segmentation import (  # noqa: E402
     write_bag,
     write_csv,
 )
+from demoplan.segmentation.importing import import_recording_details  # noqa: E402
 
 FULL_NOISE_MM = (0.5, 1.0, 2.0, 3.0, 5.0)
 FULL_RATES = (15, 30, 60, 120, 240)
@@ -234,6 +255,178 @@ def error_table(
     return table
 
 
+# --------------------------------------------------------------------------- real recordings
+
+
+@dataclass(slots=True)
+class Recording:
+    """One robosuite demonstration segmented from one source (HDF5, or 20 Hz CSV)."""
+
+    recording: str
+    key: str
+    source: str
+    samples: int
+    expected: list[str]
+    found: list[str]
+    matched: int
+    errors_mm: list[float]
+    pushes: list[str]  # "object distance at time (s from the start)"
+    nudges: int
+    seconds: float
+
+    @property
+    def precision(self) -> float:
+        return self.matched / len(self.found) if self.found else 1.0
+
+    @property
+    def recall(self) -> float:
+        return self.matched / len(self.expected) if self.expected else 1.0
+
+
+def score_recording(
+    case: tuple[str, str],
+    source: str,
+    stream: PoseStream,
+    final: PoseStream,
+    run: Callable[[], Segmentation],
+    repeats: int,
+) -> Recording:
+    """Segment with ``run`` (timed, median of ``repeats``) and score against the hand-read
+    steps, each placed where its object rests at the end of ``final``."""
+    from tests.robosuite_data import EXPECTED
+
+    seconds = timed(run, repeats)
+    result = run()
+    expected = [
+        Step(name, Pose(tuple(float(v) for v in final.track(name).positions[-1])))  # type: ignore[arg-type]
+        for name in EXPECTED[case]
+    ]
+    score = compare_steps(expected, result.steps, MATCH_TOLERANCE)
+    origin = min(float(track.times[0]) for track in stream.tracks)
+    return Recording(
+        case[0],
+        case[1],
+        source,
+        stream.n_samples,
+        EXPECTED[case],
+        [move.object for move in result.moves],
+        score.matched,
+        [error * 1000 for error in score.errors],
+        [
+            f"{move.object} {move.distance * 100:.0f} cm at {move.start - origin:.0f} s"
+            for move in result.pushes
+        ],
+        len(result.nudges),
+        seconds,
+    )
+
+
+def run_recordings(*, quick: bool) -> list[Recording] | str:
+    """Every robosuite demonstration, from its HDF5 file and as 20 Hz CSV; or why not."""
+    from tests.robosuite_data import (
+        EXPECTED,
+        RobosuiteDataError,
+        resampled,
+        robosuite_demonstrations,
+    )
+
+    try:
+        files = robosuite_demonstrations()
+    except RobosuiteDataError as exc:
+        return str(exc)
+    repeats = 3 if quick else 7
+    rows: list[Recording] = []
+    folder = Path(tempfile.mkdtemp(prefix="demoplan-seg-bench-"))
+    try:
+        for name in dict.fromkeys(n for n, _ in EXPECTED):
+            for item in import_recording_details(files[name]):
+                case = (name, item.key)
+                if case not in EXPECTED:
+                    continue
+                recorded = item.recorded
+                stream = recorded.stream
+
+                def direct(stream: PoseStream = stream, recorded: Any = recorded) -> Segmentation:
+                    return segment(
+                        stream,
+                        geometry=dict(recorded.geometry),
+                        landmarks=dict(recorded.landmarks),
+                    )
+
+                rows.append(score_recording(case, "HDF5", stream, stream, direct, repeats))
+                path = folder / f"{name}-{item.key}.csv"
+                write_csv(resampled(stream, 20.0), path)
+                loaded = load_stream(path)
+                rows.append(
+                    score_recording(
+                        case,
+                        "CSV 20 Hz",
+                        loaded,
+                        stream,
+                        lambda loaded=loaded: segment(loaded),
+                        repeats,
+                    )
+                )
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return rows
+
+
+def recordings_table(rows: Sequence[Recording], source: str) -> Table:
+    chosen = [row for row in rows if row.source == source]
+    table = Table(
+        title=f"robosuite's teleoperated demonstrations ({source}): steps found, "
+        "position error against where each object rests at the end"
+    )
+    for column in (
+        "demonstration",
+        "samples",
+        "expected steps",
+        "found steps",
+        "P",
+        "R",
+        "error med / max (mm)",
+        "pushes",
+        "segment",
+    ):
+        left = "steps" in column or column in {"demonstration", "pushes"}
+        table.add_column(column, justify="left" if left else "right")
+    for row in chosen:
+        errors = (
+            f"{statistics.median(row.errors_mm):.1f} / {max(row.errors_mm):.1f}"
+            if row.errors_mm
+            else "—"
+        )
+        table.add_row(
+            f"{row.recording} {row.key}",
+            f"{row.samples:,}",
+            " ".join(row.expected),
+            "= expected" if row.found == row.expected else " ".join(row.found) or "none",
+            f"{row.precision:.2f}",
+            f"{row.recall:.2f}",
+            errors,
+            ", ".join(row.pushes) or "—",
+            f"{row.seconds * 1000:.1f} ms",
+        )
+    table.add_section()
+    errors = [e for row in chosen for e in row.errors_mm]
+    found = sum(len(row.found) for row in chosen)
+    expected = sum(len(row.expected) for row in chosen)
+    matched = sum(row.matched for row in chosen)
+    table.add_row(
+        "all",
+        f"{sum(row.samples for row in chosen):,}",
+        f"{expected} steps",
+        f"{found} steps",
+        f"{matched / found if found else 1.0:.2f}",
+        f"{matched / expected if expected else 1.0:.2f}",
+        f"{statistics.median(errors):.1f} / {max(errors):.1f}" if errors else "—",
+        f"{sum(len(row.pushes) for row in chosen)} reported",
+        f"{sum(row.seconds for row in chosen) * 1000:.1f} ms",
+    )
+    return table
+
+
 # --------------------------------------------------------------------------- throughput
 
 
@@ -320,6 +513,11 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--quick", action="store_true", help="small grid that finishes in seconds")
     parser.add_argument("--out", type=Path, help="also save the results to this JSON file")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic data")
+    parser.add_argument(
+        "--no-recordings",
+        action="store_true",
+        help="skip robosuite's demonstrations (fetched from PyPI when not cached)",
+    )
     return parser.parse_args(argv)
 
 
@@ -347,6 +545,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     console.print(error_table(cells, noises, rates))
     total = sum(c.samples for c in cells.values()) / sum(c.seconds for c in cells.values())
     console.print(f"segment() over the grid: {total:,.0f} samples/s", highlight=False)
+    recordings: list[Recording] = []
+    if not args.no_recordings:
+        outcome = run_recordings(quick=args.quick)
+        if isinstance(outcome, str):
+            console.print(f"robosuite's demonstrations skipped: {outcome}", highlight=False)
+        else:
+            recordings = outcome
+            console.print(recordings_table(recordings, "HDF5"))
+            console.print(recordings_table(recordings, "CSV 20 Hz"))
     rows, samples, objects = run_throughput(args.seed, quick=args.quick)
     console.print(throughput_table(rows, samples, objects))
     console.print(f"Total benchmark time: {time.perf_counter() - started:.1f} s")
@@ -362,6 +569,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             "cells": [
                 {**asdict(cell), "precision": cell.precision, "recall": cell.recall}
                 for cell in cells.values()
+            ],
+            "recordings": [
+                {**asdict(row), "precision": row.precision, "recall": row.recall}
+                for row in recordings
             ],
             "throughput": [{**asdict(row), "samples_per_s": row.samples_per_s} for row in rows],
         }

@@ -16,7 +16,20 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-__all__ = ["DEMONSTRATIONS", "RobosuiteDataError", "cache_folder", "robosuite_demonstrations"]
+import numpy as np
+
+from demoplan.segmentation import ObjectTrack, PoseStream
+
+__all__ = [
+    "DEMONSTRATIONS",
+    "EXPECTED",
+    "PEG",
+    "PUSHED",
+    "RobosuiteDataError",
+    "cache_folder",
+    "resampled",
+    "robosuite_demonstrations",
+]
 
 DEMONSTRATIONS: dict[str, tuple[str, str]] = {
     # name: (robosuite version, folder under robosuite/models/assets/demonstrations)
@@ -28,6 +41,25 @@ DEMONSTRATIONS: dict[str, tuple[str, str]] = {
     "Stack": ("1.0.0", "stack/panda"),
 }
 _ASSETS = "robosuite/models/assets/demonstrations"
+
+# The steps read by hand from plots of every object's height over time (see
+# tests/test_real_recordings.py): (recording, demonstration) → the objects in the
+# order they are carried. Each object is carried once and ends where it was put.
+EXPECTED: dict[tuple[str, str], list[str]] = {
+    ("SawyerPickPlace", "demo_1"): ["Can", "Cereal", "Milk", "Bread"],
+    ("SawyerPickPlace", "demo_2"): ["Bread", "Can", "Milk", "Cereal"],
+    ("PickPlace", "demo_1"): ["Bread", "Cereal", "Milk", "Can"],
+    ("SawyerNutAssembly", "demo_1"): ["SquareNut", "RoundNut"],
+    ("SawyerNutAssembly", "demo_2"): ["SquareNut", "RoundNut"],
+    ("NutAssembly", "demo_1"): ["RoundNut", "SquareNut"],
+    ("SawyerStack", "demo_1"): ["cubeA"],
+    ("SawyerStack", "demo_2"): ["cubeA"],
+    ("Stack", "demo_1"): ["cubeA"],
+}
+# NutAssembly: the peg (landmark) each nut goes on.
+PEG: dict[str, str] = {"SquareNut": "peg1", "RoundNut": "peg2"}
+# Objects pushed along their support (not steps), in order.
+PUSHED: dict[tuple[str, str], list[str]] = {("SawyerPickPlace", "demo_1"): ["Bread"]}
 
 
 class RobosuiteDataError(RuntimeError):
@@ -98,3 +130,17 @@ def robosuite_demonstrations(cache: Path | None = None) -> dict[str, Path]:
             raise RobosuiteDataError(f"not in the archive: {', '.join(missing)}")
         out.update(paths)
     return out
+
+
+def resampled(stream: PoseStream, rate_hz: float, rest_s: float = 0.0) -> PoseStream:
+    """The stream at ``rate_hz`` (nearest samples), with ``rest_s`` of the last pose appended."""
+    tracks = []
+    for track in stream.tracks:
+        times = np.arange(track.times[0], track.times[-1] + 1e-9, 1.0 / rate_hz)
+        index = np.minimum(np.searchsorted(track.times, times), len(track) - 1)
+        extra = np.arange(1, round(rest_s * rate_hz) + 1) / rate_hz + times[-1]
+        index = np.concatenate((index, np.full(extra.size, len(track) - 1)))
+        times = np.concatenate((times, extra))
+        orientations = None if track.orientations is None else track.orientations[index]
+        tracks.append(ObjectTrack(track.name, times, track.positions[index], orientations))
+    return PoseStream(tuple(tracks), stream.source)

@@ -9,7 +9,8 @@ PyPI (``tests/robosuite_data.py`` downloads and caches them): PickPlace,
 NutAssembly and Stack, two Sawyer demonstrations each in 0.3 and one Panda
 demonstration each in 1.0.
 
-The expected steps below were written down by hand from plots of every
+The expected steps (``EXPECTED`` in ``tests/robosuite_data.py``, shared with
+``benchmarks/segmentation.py``) were written down by hand from plots of every
 object's height over time (``docs/segmentation.md`` shows one): the order in
 which the objects are carried is the order of their lifts; where each ends
 up is the task's own goal (PickPlace: bin2, each object in its compartment;
@@ -39,22 +40,14 @@ from demoplan.segmentation import (
     write_csv,
 )
 from demoplan.segmentation.importing import import_recording_details
-from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations
-
-# (recording, demonstration) → objects in the order they are carried.
-EXPECTED = {
-    ("SawyerPickPlace", "demo_1"): ["Can", "Cereal", "Milk", "Bread"],
-    ("SawyerPickPlace", "demo_2"): ["Bread", "Can", "Milk", "Cereal"],
-    ("PickPlace", "demo_1"): ["Bread", "Cereal", "Milk", "Can"],
-    ("SawyerNutAssembly", "demo_1"): ["SquareNut", "RoundNut"],
-    ("SawyerNutAssembly", "demo_2"): ["SquareNut", "RoundNut"],
-    ("NutAssembly", "demo_1"): ["RoundNut", "SquareNut"],
-    ("SawyerStack", "demo_1"): ["cubeA"],
-    ("SawyerStack", "demo_2"): ["cubeA"],
-    ("Stack", "demo_1"): ["cubeA"],
-}
-PEG = {"SquareNut": "peg1", "RoundNut": "peg2"}
-PUSHED = {("SawyerPickPlace", "demo_1"): ["Bread"]}
+from tests.robosuite_data import (
+    EXPECTED,
+    PEG,
+    PUSHED,
+    RobosuiteDataError,
+    resampled,
+    robosuite_demonstrations,
+)
 
 
 @pytest.fixture(scope="module")
@@ -102,20 +95,6 @@ def test_every_demonstration_gives_its_steps_where_the_objects_end_up(
     assert [m.object for m in found.pushes] == PUSHED.get(case, [])
     for push in found.pushes:
         assert 0.04 < push.distance < 0.07 and push.lift < 0.01
-
-
-def resampled(stream: PoseStream, rate_hz: float, rest_s: float) -> PoseStream:
-    """The stream at ``rate_hz`` (nearest samples), with ``rest_s`` of the last pose appended."""
-    tracks = []
-    for track in stream.tracks:
-        times = np.arange(track.times[0], track.times[-1] + 1e-9, 1.0 / rate_hz)
-        index = np.minimum(np.searchsorted(track.times, times), len(track) - 1)
-        extra = np.arange(1, round(rest_s * rate_hz) + 1) / rate_hz + times[-1]
-        index = np.concatenate((index, np.full(extra.size, len(track) - 1)))
-        times = np.concatenate((times, extra))
-        orientations = None if track.orientations is None else track.orientations[index]
-        tracks.append(ObjectTrack(track.name, times, track.positions[index], orientations))
-    return PoseStream(tuple(tracks), stream.source)
 
 
 def under_a_turned_table(stream: PoseStream) -> PoseStream:

@@ -57,7 +57,9 @@ settings=None, progress=None) -> list[Demonstration]`` segments each
 demonstration of a robosuite / robomimic HDF5 file.
 
 Plot (:mod:`demoplan.segmentation.plotting`, matplotlib imported lazily):
-``plot_segmentation(segmentation, path=None, *, axes=None) -> list[Axes]``.
+``plot_segmentation(segmentation, path=None, *, axes=None, title=None,
+heights=False, dpi=110) -> list[Axes]`` (speed per object; with ``heights`` a
+last row of every object's height); ``plot_heights(segmentation, ax=None) -> Axes``.
 
 Synthetic streams (:mod:`demoplan.segmentation.synthetic`):
 ``stream_from_demonstration(demo, *, rate_hz=60, noise_m=0.002, rng=None,
@@ -89,6 +91,7 @@ _EXPORTS = {
     "SpeedTrace": "demoplan.segmentation.detect",
     "segment": "demoplan.segmentation.detect",
     "write_demonstration": "demoplan.segmentation.detect",
+    "plot_heights": "demoplan.segmentation.plotting",
     "plot_segmentation": "demoplan.segmentation.plotting",
     "import_recording": "demoplan.segmentation.importing",
     "StepComparison": "demoplan.segmentation.synthetic",
@@ -109,6 +112,7 @@ __all__ = [
     "load_bag",
     "load_csv",
     "load_stream",
+    "plot_heights",
     "plot_segmentation",
     "segment",
     "stream_from_demonstration",
@@ -127,7 +131,7 @@ if TYPE_CHECKING:
         write_demonstration,
     )
     from demoplan.segmentation.importing import import_recording
-    from demoplan.segmentation.plotting import plot_segmentation
+    from demoplan.segmentation.plotting import plot_heights, plot_segmentation
     from demoplan.segmentation.readers import load_bag, load_csv, load_stream
     from demoplan.segmentation.synthetic import (
         StepComparison,

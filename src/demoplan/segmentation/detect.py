@@ -238,11 +238,13 @@ class Move:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class SpeedTrace:
-    """An object's estimated speed (m/s) at its sample times (s), for plots and checks."""
+    """An object's estimated speed (m/s) and its height z (m; ``None`` when not
+    kept) at its sample times (s), for plots and checks."""
 
     object: str
     times: FloatArray
     speed: FloatArray
+    height: FloatArray | None = None
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -373,7 +375,7 @@ def segment(
         moves += result.moves
         nudges += result.nudges
         pushes += result.pushes
-        traces.append(SpeedTrace(track.name, track.times, result.speed))
+        traces.append(SpeedTrace(track.name, track.times, result.speed, track.positions[:, 2]))
         if result.initial is not None:
             initial.append((track.name, result.initial))
         else:
