@@ -29,6 +29,7 @@ __all__ = [
     "Space",
     "kmeans",
     "kmeans_batch",
+    "outscores",
     "select_clustering",
     "select_clusterings",
     "spread_of",
@@ -233,11 +234,44 @@ def spread_of(deviations: FloatArray) -> float:
     return float((centred * centred).sum() / (n - 1))
 
 
+UNBOUNDED_DF = 1e6
+"""Degrees of freedom of a spread held at the precision floor (a known variance)."""
+
+
+def outscores(
+    worse: tuple[float, float],
+    better: tuple[float, float],
+    *,
+    noise: float,
+    significance: float,
+) -> bool:
+    """Whether a clustering scoring ``better`` = (spread, degrees of freedom) is
+    supported by the data over one scoring ``worse`` (SPEC §5: a decision only
+    beyond the placement precision).
+
+    Their RMS spreads must differ by at least ``noise``, and — unless
+    ``significance`` is 0 (the paper's plain rule) — the ratio of the spreads
+    must pass the F test at that level for their degrees of freedom: two
+    placements that happen to agree better relative to one candidate than to
+    another are no evidence, a dozen are.
+    """
+    if math.sqrt(worse[0]) - math.sqrt(better[0]) < noise:
+        return False
+    if significance <= 0:
+        return True
+    from scipy.stats import f as fisher  # deferred: SciPy's import is slow
+
+    critical = float(fisher.ppf(1.0 - significance, worse[1], better[1]))
+    return worse[0] >= critical * better[0]
+
+
 class Space:
     """Values to cluster: their K-means embedding, cluster means and spreads."""
 
     values: FloatArray
     embedded: FloatArray
+    dims: int = 1
+    """Axes along which the values vary at all (a table-top placement: x, y)."""
 
     def __len__(self) -> int:
         return int(self.embedded.shape[0])
@@ -261,6 +295,7 @@ class PositionSpace(Space):
     def __init__(self, values: FloatArray):
         self.values = np.asarray(values, dtype=float)
         self.embedded = self.values
+        self.dims = _varying_axes(self.values, 1e-6)
 
     def stats(self, members: IntArray) -> tuple[tuple[float, ...], float]:
         subset = self.values[members]
@@ -285,6 +320,7 @@ class RotationSpace(Space):
     def __init__(self, quats: FloatArray):
         self.values = np.asarray(quats, dtype=float)
         self.embedded = rotations.matrices_from_quats(self.values)
+        self.dims = _varying_axes(np.degrees(rotations.rotvecs_from_quats(self.values)), 0.01)
 
     def stats(self, members: IntArray) -> tuple[tuple[float, ...], float]:
         subset = self.values[members]
@@ -314,6 +350,9 @@ class Clustering:
     spreads: tuple[float, ...]
     score: float
     tried: tuple[tuple[int, float | None], ...]
+    df: float = UNBOUNDED_DF
+    """Degrees of freedom of ``score``: (members − 1) × varying axes of the widest
+    cluster, unbounded where the precision floor set it."""
 
 
 def select_clustering(
@@ -328,9 +367,11 @@ def select_clustering(
 
     For c = 1, 2, … the values are clustered with K-means; a clustering whose
     means lie closer than ``separation`` is rejected, and the one with the
-    lowest maximum per-cluster spread wins. Spreads whose square roots (RMS
-    deviations) differ by less than ``noise`` are ties, and ties go to fewer
-    clusters. The scan stops once a score is below the noise level (no larger
+    lowest maximum per-cluster spread wins. No cluster's spread counts below
+    ``noise²`` (a cluster of one placement has the precision's spread, not
+    none); spreads whose square roots (RMS deviations) differ by less than
+    ``noise`` are ties, and ties go to fewer clusters. The scan stops once a
+    score is at the noise level (no larger
     c could then win), and at a rejected c unless the values still fall into
     more than c groups (:meth:`_Scan.groups`), after at most :data:`PATIENCE`
     rejected counts in a row: more centres on the same data only crowd closer. Where placements form
@@ -363,7 +404,7 @@ class _Scan:
         self.canonical = space.embedded[order]
         steps = np.any(np.diff(self.canonical, axis=0) != 0, axis=1)
         self.n_distinct = 1 + int(np.count_nonzero(steps))
-        self.accepted: list[tuple[int, IntArray, list[tuple[float, ...]], list[float]]] = []
+        self.accepted: list[tuple[int, IntArray, list[tuple[float, ...]], list[float], float]] = []
         self.tried: list[tuple[int, float | None]] = []
         self.rejected_in_a_row = 0
         self.done = False
@@ -374,7 +415,10 @@ class _Scan:
         present = np.bincount(labels, minlength=c) > 0
         if not present.all():  # compact the labels if a cluster ended empty
             labels = (np.cumsum(present) - 1)[labels]
-        means, spreads = _cluster_stats(self.space, labels, int(present.sum()))
+        means, raw = _cluster_stats(self.space, labels, int(present.sum()))
+        # No cluster is tighter than the placement precision: one placement (or a
+        # few that happen to agree) does not show "no spread" (SPEC §5).
+        spreads = [max(spread, noise * noise) for spread in raw]
         if c > 1 and _closest_pair(self.space.distance, means) < separation:
             self.tried.append((c, None))
             self.rejected_in_a_row += 1
@@ -386,9 +430,12 @@ class _Scan:
             return
         self.rejected_in_a_row = 0
         score = max(spreads)
+        widest = int(np.argmax(spreads))
+        members = int(np.count_nonzero(labels == widest))
+        df = UNBOUNDED_DF if raw[widest] <= noise * noise else max(1, members - 1) * self.space.dims
         self.tried.append((c, score))
-        self.accepted.append((c, labels, means, spreads))
-        self.done = math.sqrt(score) < noise or c + 1 > self.n_distinct
+        self.accepted.append((c, labels, means, spreads, df))
+        self.done = math.sqrt(score) <= noise or c + 1 > self.n_distinct
 
     def groups(self, separation: float) -> int:
         """Connected components of the values linked when closer than the separation.
@@ -411,10 +458,12 @@ class _Scan:
             self._groups = len(np.unique(label))
         return self._groups
 
-    def result(self, noise: float) -> Clustering:
-        best_root = min(math.sqrt(max(s)) for _, _, _, s in self.accepted)
-        for c, labels, means, spreads in self.accepted:  # ascending c: ties go to fewer
-            if math.sqrt(max(spreads)) - best_root < noise:
+    def result(self, noise: float, significance: float) -> Clustering:
+        best = min(self.accepted, key=lambda a: max(a[3]))
+        for c, labels, means, spreads, df in self.accepted:  # ascending c: ties go to fewer
+            if not outscores(
+                (max(spreads), df), (max(best[3]), best[4]), noise=noise, significance=significance
+            ):
                 return Clustering(
                     n_clusters=c,
                     labels=tuple(int(v) for v in labels),
@@ -422,6 +471,7 @@ class _Scan:
                     spreads=tuple(spreads),
                     score=max(spreads),
                     tried=tuple(self.tried),
+                    df=df,
                 )
         raise AssertionError("unreachable: the minimum is always within noise of itself")
 
@@ -434,11 +484,13 @@ def select_clusterings(
     n_init: int = 8,
     seed: int = 0,
     max_clusters: int = 0,
+    significance: float = 0.0,
 ) -> list[Clustering]:
     """:func:`select_clustering` for several spaces of the same size and kind at
     once (one object towards every candidate reference), K-means batched.
 
-    ``max_clusters`` > 0 caps c (the paper scans c = 1..N, 0 keeps that).
+    ``max_clusters`` > 0 caps c (the paper scans c = 1..N, 0 keeps that);
+    ``significance`` > 0 also asks more clusters to pass :func:`outscores`' F test.
     """
     scans = [_Scan(space) for space in spaces]
     n = len(spaces[0]) if spaces else 0
@@ -454,7 +506,17 @@ def select_clusterings(
             batch_labels = kmeans_batch(data, c, n_init, 100, generator)
         for scan, labels in zip(active, batch_labels, strict=True):
             scan.consider(c, labels, separation, noise)
-    return [scan.result(noise) for scan in scans]
+    return [scan.result(noise, significance) for scan in scans]
+
+
+def _varying_axes(values: FloatArray, tolerance: float) -> int:
+    """How many coordinates vary by more than ``tolerance`` and more than 5 % of the
+    most varying one (RMS) — at least one: placements on a table vary in x and y,
+    a turned object in yaw, and the rest is noise, not freedom."""
+    if len(values) < 2:
+        return 1
+    std = values.std(axis=0)
+    return max(1, int(np.count_nonzero((std > tolerance) & (std > 0.05 * std.max()))))
 
 
 def _cluster_stats(

@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict
-from typing import Self
+from typing import Any, Self
 
 from demoplan.constraints import (
     anchor_requirements,
@@ -33,8 +33,10 @@ class TaskModelLearner:
 
     Parameters
     ----------
-    position_noise : RMS placement noise (m); spreads closer than this are ties.
-    orientation_noise : RMS orientation noise (degrees).
+    position_noise : placement precision (RMS, m): spreads closer than this are
+        ties, and no cluster counts as tighter; ``None`` (default) estimates
+        it from the demonstrations (``states.estimate_precision``).
+    orientation_noise : the same for orientations (degrees).
     position_separation : minimum distance (m) between two clusters of one object.
     orientation_separation : minimum angle (degrees) between two orientation clusters.
     n_init : K-means restarts per clustering.
@@ -57,17 +59,18 @@ class TaskModelLearner:
     def __init__(
         self,
         *,
-        position_noise: float = 0.003,
-        orientation_noise: float = 0.5,
+        position_noise: float | None = 0.003,
+        orientation_noise: float | None = 0.5,
         position_separation: float = 0.05,
         orientation_separation: float = 15.0,
         n_init: int = 8,
         random_state: int = 0,
         max_clusters: int = 0,
+        significance: float = 0.0,
         require: Sequence[str] = (),
     ):
-        self.position_noise = _positive(position_noise, "position_noise")
-        self.orientation_noise = _positive(orientation_noise, "orientation_noise")
+        self.position_noise = _optional_positive(position_noise, "position_noise")
+        self.orientation_noise = _optional_positive(orientation_noise, "orientation_noise")
         self.position_separation = _positive(position_separation, "position_separation")
         self.orientation_separation = _positive(orientation_separation, "orientation_separation")
         if not isinstance(n_init, int) or n_init < 1:
@@ -79,6 +82,12 @@ class TaskModelLearner:
                 field="max_clusters",
             )
         self.max_clusters = max_clusters
+        if not isinstance(significance, int | float) or not 0 <= significance < 1:
+            raise InputError(
+                f"expected a level in [0, 1) (0: the paper's plain rule), got {significance!r}",
+                field="significance",
+            )
+        self.significance = float(significance)
         self.random_state = int(random_state)
         self.require = tuple(require)
         self._demonstrations: list[Demonstration] = []
@@ -95,6 +104,7 @@ class TaskModelLearner:
             n_init=self.n_init,
             seed=self.random_state,
             max_clusters=self.max_clusters,
+            significance=self.significance,
         )
 
     def fit(self, demonstrations: Iterable[Demonstration]) -> Self:
@@ -140,6 +150,8 @@ class TaskModelLearner:
             teacher_constraints=required,
             violations=constraint_set.violations,
             settings=(*asdict(self.settings).items(), ("require", ";".join(self.require))),
+            precision=(generation.precision.position, generation.precision.orientation),
+            precision_estimated=generation.precision.position_estimated,
         )
         return self
 
@@ -209,8 +221,9 @@ def update(
     stored = dict(model.settings)
     merged = StateGenerationSettings(
         **{
-            name: kind(
-                settings[name] if settings and name in settings else stored.get(name, default)
+            name: _typed(
+                kind,
+                settings[name] if settings and name in settings else stored.get(name, default),
             )
             for name, (kind, default) in _SETTING_TYPES.items()
         }
@@ -221,9 +234,14 @@ def update(
     return learner.fit([*model.demonstrations, *demonstrations]).model_
 
 
-_SETTING_TYPES: dict[str, tuple[type, float | int]] = {
-    name: (type(value), value) for name, value in asdict(StateGenerationSettings()).items()
+_SETTING_TYPES: dict[str, tuple[type, float | int | None]] = {
+    name: (float if value is None else type(value), value)
+    for name, value in asdict(StateGenerationSettings()).items()
 }
+
+
+def _typed(kind: type, value: object) -> Any:
+    return None if value is None else kind(value)
 
 
 def _learner(settings: StateGenerationSettings, require: Sequence[str]) -> TaskModelLearner:
@@ -235,8 +253,13 @@ def _learner(settings: StateGenerationSettings, require: Sequence[str]) -> TaskM
         n_init=settings.n_init,
         random_state=settings.seed,
         max_clusters=settings.max_clusters,
+        significance=settings.significance,
         require=require,
     )
+
+
+def _optional_positive(value: float | None, name: str) -> float | None:
+    return None if value is None else _positive(value, name)
 
 
 def _positive(value: float, name: str) -> float:

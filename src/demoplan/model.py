@@ -48,6 +48,17 @@ class ObjectGeometry:
     shape: str
     size: Vector3
 
+    @property
+    def yaw_period(self) -> float:
+        """The turn (deg) about its own z axis after which the object looks the same:
+        90° for a square box (x and y within 1 mm), 180° for other boxes, 0 (any
+        turn) for cylinders and spheres, 360° for other shapes."""
+        if self.shape in {"cylinder", "sphere"}:
+            return 0.0
+        if self.shape == "box":
+            return 90.0 if abs(self.size[0] - self.size[1]) <= 0.001 else 180.0
+        return 360.0
+
 
 @dataclass(frozen=True, slots=True)
 class Step:
@@ -91,14 +102,17 @@ class StatePosition:
     """Where a state puts its object: ``value`` (m) relative to ``reference``.
 
     ``reference`` is ``None`` for an absolute (world-frame) position, else the
-    object or landmark whose placement is subtracted (paper eq. 1: x_i − x_j,
-    world axes). ``spread`` is the trace of the sample covariance of the
-    members' relative positions (m²).
+    object or landmark whose placement is subtracted (paper eq. 1: x_i − x_j),
+    expressed in the reference's frame (``R_j⁻¹·(x_i − x_j)``, SPEC §5) when
+    ``in_reference_frame``, else in world axes. ``spread`` is the trace of the
+    sample covariance of the members' relative positions (m²).
     """
 
     reference: str | None
     value: Vector3
     spread: float
+    in_reference_frame: bool = False
+    """``value`` is in the reference's frame (turned with it), not in world axes."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -160,7 +174,11 @@ class TaskModel:
     demonstrations: tuple[Demonstration, ...]
     teacher_constraints: tuple[tuple[str, str], ...] = ()
     violations: tuple[tuple[int, str, str], ...] = ()
-    settings: tuple[tuple[str, float | int | str], ...] = ()
+    settings: tuple[tuple[str, float | int | str | None], ...] = ()
+    precision: tuple[float, float] | None = None
+    """The placement precision decisions were measured against: RMS position (m)
+    and orientation (deg) — estimated from the demonstrations unless set."""
+    precision_estimated: bool = True
 
     def state(self, state_id: str) -> State:
         for state in self.states:

@@ -13,7 +13,7 @@ import math
 import re
 from dataclasses import fields
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
@@ -40,7 +40,9 @@ Integer = Annotated[int, Field(strict=True)]
 _LABEL = re.compile(r"^[A-Z]+(?:#[1-9][0-9]*)?$")  # a state id, or a visit label "C#2"
 # Learning settings demoplan itself reads back (``learn --update``) and their types,
 # from the settings dataclass itself so that a new setting cannot be forgotten here.
-_NUMBER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is float}
+_NUMBER_SETTINGS = {
+    f.name for f in fields(StateGenerationSettings) if type(f.default) is float or f.default is None
+}
 _INTEGER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is int}
 
 
@@ -52,6 +54,7 @@ class _PositionSchema(_Schema):
     reference: str | None
     value: list[Number] = Field(min_length=2, max_length=3)
     spread: Number = 0.0
+    frame: Literal["world", "reference"] = "world"
 
 
 class _OrientationSchema(_Schema):
@@ -88,6 +91,12 @@ class _ViolationSchema(_Schema):
     required: tuple[str, str]
 
 
+class _PrecisionSchema(_Schema):
+    position: Number = Field(gt=0)
+    orientation: Number = Field(gt=0)
+    estimated: bool = True
+
+
 class _ModelSchema(_Schema):
     format: str
     states: list[_StateSchema]
@@ -97,12 +106,15 @@ class _ModelSchema(_Schema):
     teacher_constraints: list[list[str]] = []
     violations: list[_ViolationSchema] = []
     settings: dict[str, Any] = {}
+    precision: _PrecisionSchema | None = None
     demonstrations: list[dict[str, Any]] = []
 
     @field_validator("settings")
     @classmethod
     def _typed_settings(cls, settings: dict[str, Any]) -> dict[str, Any]:
         for key, value in settings.items():
+            if value is None and key in _NUMBER_SETTINGS:
+                continue  # estimated from the demonstrations
             if isinstance(value, bool) or not isinstance(value, float | int | str):
                 raise ValueError(f"{key} must be a number or a string, got {value!r}")
             if key in _NUMBER_SETTINGS and (
@@ -125,6 +137,17 @@ def model_to_dict(model: TaskModel) -> dict[str, Any]:
         "teacher_constraints": [list(c) for c in model.teacher_constraints],
         "violations": [{"demonstration": d, "required": [x, y]} for d, x, y in model.violations],
         "settings": dict(model.settings),
+        **(
+            {}
+            if model.precision is None
+            else {
+                "precision": {
+                    "position": model.precision[0],
+                    "orientation": model.precision[1],
+                    "estimated": model.precision_estimated,
+                }
+            }
+        ),
         "demonstrations": [demonstration_to_dict(d) for d in model.demonstrations],
     }
 
@@ -138,6 +161,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
             "reference": state.position.reference,
             "value": list(state.position.value),
             "spread": state.position.spread,
+            "frame": "reference" if state.position.in_reference_frame else "world",
         },
         "orientation": {
             "reference": orientation.reference,
@@ -231,6 +255,11 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
             (v.demonstration, v.required[0], v.required[1]) for v in parsed.violations
         ),
         settings=tuple(parsed.settings.items()),
+        precision=(
+            None
+            if parsed.precision is None
+            else (parsed.precision.position, parsed.precision.orientation)
+        ),
     )
 
 
@@ -267,7 +296,11 @@ def _state_from_schema(state: _StateSchema) -> State:
         id=state.id,
         object=state.object,
         position=StatePosition(
-            state.position.reference, (x, y, rest[0] if rest else 0.0), state.position.spread
+            state.position.reference,
+            (x, y, rest[0] if rest else 0.0),
+            state.position.spread,
+            in_reference_frame=state.position.frame == "reference"
+            and state.position.reference is not None,
         ),
         orientation=StateOrientation(
             orientation.reference if quat is not None else None, quat, orientation.spread

@@ -28,15 +28,18 @@ __all__ = [
     "deviations_from_mean",
     "matrices_from_quats",
     "mean_quat",
+    "modulo_symmetry",
     "quat_from_rpy",
     "quat_from_yaw",
     "quat_inverse",
     "quat_multiply",
     "quat_slerp",
+    "reduce_yaw",
     "relative_quats",
     "rotate_vectors",
     "rotvecs_from_quats",
     "rpy_from_quat",
+    "yaws_of",
 ]
 
 
@@ -229,3 +232,52 @@ def _canonical_rows(quats: FloatArray) -> FloatArray:
     quats = quats.copy()
     quats[flip] *= -1.0
     return quats
+
+
+def _about_z(angles_rad: FloatArray) -> FloatArray:
+    half = np.asarray(angles_rad, dtype=float) / 2.0
+    zeros = np.zeros_like(half)
+    return np.stack([zeros, zeros, np.sin(half), np.cos(half)], axis=-1)
+
+
+def yaws_of(quats: FloatArray) -> FloatArray:
+    """Yaw (rad) of each ``(n, 4)`` quaternion: the heading of its x axis in the xy plane."""
+    x, y, z, w = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    return np.asarray(np.arctan2(2 * (x * y + z * w), 1 - 2 * (y * y + z * z)), dtype=float)
+
+
+def reduce_yaw(quats: FloatArray, period_deg: float) -> FloatArray:
+    """Each orientation turned about its own z axis by a multiple of ``period_deg`` so
+    that its yaw lies within half a period of 0: the frame of a symmetric object
+    (a square box: 90°) chosen the same way wherever it stands. A period of 0
+    (a cylinder) drops the turn about its axis altogether; 360 keeps the
+    orientations as they are."""
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    if period_deg >= 360.0:
+        return q
+    yaw = yaws_of(q)
+    if period_deg <= 0.0:
+        turn = -yaw
+    else:
+        period = math.radians(period_deg)
+        turn = -period * np.round(yaw / period)
+    return _canonical_rows(quat_multiply(q, _about_z(turn)))
+
+
+def modulo_symmetry(quats: FloatArray, period_deg: float) -> FloatArray:
+    """``(n, 4)`` orientations of one object, each turned about the object's own z axis
+    by a multiple of ``period_deg`` to lie as close as possible to the others
+    (their circular mean in the period's multiple of the yaw), so that a square
+    box put down at 3° and at 92° reads as one orientation. Period 0 (a
+    cylinder) removes the turn about the axis; 360 changes nothing."""
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    if period_deg >= 360.0 or len(q) == 0:
+        return q
+    if period_deg <= 0.0:
+        return reduce_yaw(q, 0.0)
+    period = math.radians(period_deg)
+    yaw = yaws_of(q)
+    folds = 2.0 * math.pi / period
+    centre = math.atan2(float(np.sin(folds * yaw).sum()), float(np.cos(folds * yaw).sum())) / folds
+    turn = -period * np.round((yaw - centre) / period)
+    return _canonical_rows(quat_multiply(q, _about_z(turn)))

@@ -34,14 +34,24 @@ from demoplan.clustering import (
     PositionSpace,
     RotationSpace,
     Space,
+    outscores,
     select_clusterings,
 )
-from demoplan.model import Demonstration, Pose, State, StateOrientation, StatePosition
+from demoplan.model import (
+    Demonstration,
+    ObjectGeometry,
+    Pose,
+    State,
+    StateOrientation,
+    StatePosition,
+)
 
 __all__ = [
+    "Precision",
     "ReferenceScore",
     "StateGeneration",
     "StateGenerationSettings",
+    "estimate_precision",
     "generate_states",
     "state_letters",
 ]
@@ -55,8 +65,10 @@ logger = logging.getLogger(__name__)
 class StateGenerationSettings:
     """Settings of state generation (documented defaults, docs/learning.md).
 
-    position_noise : RMS placement noise in metres; spreads whose RMS differs
-        by less than this are ties.
+    position_noise : the placement precision (RMS, metres): spreads whose RMS
+        differs by less than this are ties, and no cluster counts as tighter.
+        ``None`` (default): estimated from the demonstrations
+        (:func:`estimate_precision`).
     orientation_noise : the same for orientations, in degrees.
     position_separation : cluster means closer than this (m) reject a clustering.
     orientation_separation : the same for orientations (degrees, geodesic).
@@ -64,15 +76,19 @@ class StateGenerationSettings:
     seed : seed of the K-means restarts.
     max_clusters : cap on the clusters per object and reference (0: the
         paper's N, the number of placements).
+    significance : a reference or more clusters win over a fewer-state choice
+        only if their spread is also lower by the F test at this level
+        (:func:`demoplan.clustering.outscores`); 0: the paper's plain rule.
     """
 
-    position_noise: float = 0.003
-    orientation_noise: float = 0.5
+    position_noise: float | None = 0.003
+    orientation_noise: float | None = 0.5
     position_separation: float = 0.05
     orientation_separation: float = 15.0
     n_init: int = 8
     seed: int = 0
     max_clusters: int = 0
+    significance: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +118,23 @@ class StateGeneration:
     states: tuple[State, ...]
     sequences: tuple[tuple[str, ...], ...]
     scores: tuple[ReferenceScore, ...]
+    precision: Precision
+
+
+@dataclass(frozen=True, slots=True)
+class Precision:
+    """The placement precision decisions were measured against (RMS; m and degrees)
+    and whether each was estimated from the demonstrations or set by the user."""
+
+    position: float
+    orientation: float
+    position_estimated: bool = True
+    orientation_estimated: bool = True
+
+
+MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
+MIN_ORIENTATION_PRECISION = 0.05  # deg
+FALLBACK_PRECISION = (0.003, 0.5)  # m, deg: when no object was placed twice
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,6 +164,10 @@ class _World:
         self.moves: list[dict[str, tuple[list[int], list[Pose]]]] = []
         self.landmarks = [d.landmark_poses() for d in demonstrations]
         self.initial = [d.initial_poses() for d in demonstrations]
+        self.geometry: dict[str, ObjectGeometry] = {}
+        for demo in demonstrations:
+            for name, shape in demo.objects:
+                self.geometry.setdefault(name, shape)
         for demo in demonstrations:
             moves: dict[str, tuple[list[int], list[Pose]]] = {}
             for index, step in enumerate(demo.steps):
@@ -153,6 +190,12 @@ class _World:
             moved_before = bisect_left(steps, step)
             return poses[moved_before - 1] if moved_before else poses[0]
         return self.initial[demo].get(name)
+
+    def yaw_period(self, name: str | None) -> float:
+        """``name``'s symmetry about its own z axis (deg; 0: any turn); 360° (none)
+        where its geometry is unknown."""
+        shape = self.geometry.get(name) if name is not None else None
+        return 360.0 if shape is None else shape.yaw_period
 
     def available(self, demo: int, name: str, step: int) -> bool:
         """Whether ``name`` may serve as a reference at ``step`` of ``demo``."""
@@ -187,21 +230,42 @@ def generate_states(
 
     keys: dict[tuple[int, int], _StateKey] = {}
     relative: dict[tuple[str, Kind, str | None], np.ndarray] = {}
+    framed: dict[tuple[str, str | None], bool] = {}
+    candidates = {obj: [None, *(n for n in names if n != obj)] for obj in placements}
+    for obj, own in placements.items():
+        for kind in ("position", "orientation"):
+            _relative_table(obj, kind, own, candidates[obj], world, relative, framed)
+    everywhere = {
+        key
+        for key in relative
+        if key[2] is None
+        or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
+    }
+    precision = estimate_precision(
+        {key: values for key, values in relative.items() if key in everywhere}, settings
+    )
     all_scores: list[ReferenceScore] = []
     for obj, own in placements.items():
-        candidates = [None, *(n for n in names if n != obj)]
         position_scores = _score_references(
-            obj, "position", own, candidates, world, settings, relative
+            obj, "position", own, candidates[obj], settings, precision.position, relative
         )
         orientation_scores = _score_references(
-            obj, "orientation", own, candidates, world, settings, relative
+            obj, "orientation", own, candidates[obj], settings, precision.orientation, relative
         )
         all_scores += position_scores + orientation_scores
         for index, placement in enumerate(own):
-            pos = _choose(position_scores, placement, world, settings.position_noise)
+            pos = _choose(
+                position_scores, placement, world, precision.position, settings.significance
+            )
             ori_reference, ori_cluster = None, -1  # orientation unknown
             if orientation_scores:
-                ori = _choose(orientation_scores, placement, world, settings.orientation_noise)
+                ori = _choose(
+                    orientation_scores,
+                    placement,
+                    world,
+                    precision.orientation,
+                    settings.significance,
+                )
                 ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
             keys[(placement.demo, placement.step)] = _StateKey(
                 obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
@@ -231,7 +295,11 @@ def generate_states(
             State(
                 id=letter,
                 object=obj,
-                position=_position(position, key.position_reference),
+                position=_position(
+                    position,
+                    key.position_reference,
+                    framed.get((obj, key.position_reference), False),
+                ),
                 orientation=_orientation(
                     None
                     if key.orientation_cluster == -1 or orientation is None
@@ -241,7 +309,7 @@ def generate_states(
                 members=tuple(members[letter]),
             )
         )
-    return StateGeneration(tuple(states), tuple(sequences), tuple(all_scores))
+    return StateGeneration(tuple(states), tuple(sequences), tuple(all_scores), precision)
 
 
 def state_letters(index: int) -> str:
@@ -254,16 +322,16 @@ def state_letters(index: int) -> str:
     return letters
 
 
-def _score_references(
+def _relative_table(
     obj: str,
     kind: Kind,
     own: list[_Placement],
     candidates: list[str | None],
     world: _World,
-    settings: StateGenerationSettings,
     relative: dict[tuple[str, Kind, str | None], np.ndarray],
-) -> list[ReferenceScore]:
-    """Eq. (2) for every candidate reference that is defined at every placement."""
+    framed: dict[tuple[str, str | None], bool],
+) -> None:
+    """``obj``'s placements relative to every candidate defined at all of them."""
     if kind == "orientation" and any(p.pose.orientation is None for p in own):
         if any(p.pose.orientation is not None for p in own):
             logger.warning(
@@ -271,27 +339,88 @@ def _score_references(
                 "is not learned (give one in every step, or in none)",
                 obj,
             )
-        return []
-    noise = settings.position_noise if kind == "position" else settings.orientation_noise
+        return
+    for reference in candidates:
+        values, in_frame = _relative_values(kind, obj, own, reference, world)
+        if values is not None:
+            relative[(obj, kind, reference)] = values
+            if kind == "position":
+                framed[(obj, reference)] = in_frame
+
+
+def estimate_precision(
+    relative: dict[tuple[str, Kind, str | None], np.ndarray],
+    settings: StateGenerationSettings,
+) -> Precision:
+    """The placement precision of the demonstrations (SPEC §5), unless set.
+
+    For every object placed at least twice, the RMS spread of its placements
+    relative to the candidate that explains them best as one cluster (the
+    lowest trace of the sample covariance over absolute, the landmarks and
+    the objects placed before it in every demonstration — ``relative`` holds
+    just those: the best of many candidates that were never available would
+    be low by chance); the precision is the median of these over the
+    objects. An object placed where it is meant to go, relative to what it is
+    meant to go with, scatters by the teacher's precision; the median keeps
+    objects with several places (whose best single cluster is wide) from
+    inflating it. A virtual environment gives well under a millimetre,
+    people teleoperating a robot centimetres. Without any object placed
+    twice, :data:`FALLBACK_PRECISION`.
+    """
+    found: dict[Kind, float] = {}
+    for kind in ("position", "orientation"):
+        best: dict[str, float] = {}
+        for (obj, what, _), values in relative.items():
+            if what != kind or len(values) < 2:
+                continue
+            space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
+            _, spread = space.stats(np.arange(len(values)))
+            best[obj] = min(best.get(obj, math.inf), math.sqrt(spread))
+        fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
+        found[kind] = float(np.median(list(best.values()))) if best else fallback
+    position = max(found["position"], MIN_POSITION_PRECISION)
+    orientation = max(found["orientation"], MIN_ORIENTATION_PRECISION)
+    return Precision(
+        position=position if settings.position_noise is None else settings.position_noise,
+        orientation=(
+            orientation if settings.orientation_noise is None else settings.orientation_noise
+        ),
+        position_estimated=settings.position_noise is None,
+        orientation_estimated=settings.orientation_noise is None,
+    )
+
+
+def _score_references(
+    obj: str,
+    kind: Kind,
+    own: list[_Placement],
+    candidates: list[str | None],
+    settings: StateGenerationSettings,
+    precision: float,
+    relative: dict[tuple[str, Kind, str | None], np.ndarray],
+) -> list[ReferenceScore]:
+    """Eq. (2) for every candidate reference that is defined at every placement."""
     separation = (
         settings.position_separation if kind == "position" else settings.orientation_separation
     )
     references: list[str | None] = []
     spaces: list[Space] = []
     for reference in candidates:
-        values = _relative_values(kind, own, reference, world)
+        values = relative.get((obj, kind, reference))
         if values is None:
             continue
-        relative[(obj, kind, reference)] = values
         references.append(reference)
         spaces.append(PositionSpace(values) if kind == "position" else RotationSpace(values))
+    if not spaces:
+        return []
     clusterings = select_clusterings(
         spaces,
         separation=separation,
-        noise=noise,
+        noise=precision,
         n_init=settings.n_init,
         seed=settings.seed,
         max_clusters=settings.max_clusters,
+        significance=settings.significance,
     )
     return [
         ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, space.values))
@@ -300,27 +429,38 @@ def _score_references(
 
 
 def _relative_values(
-    kind: Kind, own: list[_Placement], reference: str | None, world: _World
-) -> np.ndarray | None:
+    kind: Kind, obj: str, own: list[_Placement], reference: str | None, world: _World
+) -> tuple[np.ndarray | None, bool]:
+    """``obj``'s placements relative to ``reference`` (SPEC §5): positions in the
+    reference's frame where it has an orientation at every placement (turned
+    back by its orientation, taken modulo its symmetry), else in world axes;
+    orientations ``R_ref⁻¹·R_obj``, modulo ``obj``'s own symmetry. Returns the
+    values (``None`` where the reference is not defined at every placement)
+    and whether positions are in the reference's frame."""
+    ref_poses = [None if reference is None else world.pose(p.demo, reference, p.step) for p in own]
+    if reference is not None and any(r is None for r in ref_poses):
+        return None, False
+    ref_quats: np.ndarray | None = None
+    oriented = all(r is not None and r.orientation is not None for r in ref_poses)
+    if reference is not None and oriented:
+        ref_quats = rotations.reduce_yaw(
+            np.array([r.orientation for r in ref_poses if r is not None], dtype=float),
+            world.yaw_period(reference),
+        )
     if kind == "position":
         positions = np.array([p.pose.position for p in own], dtype=float)
         if reference is None:
-            return positions
-        ref_poses = [world.pose(p.demo, reference, p.step) for p in own]
-        if any(r is None for r in ref_poses):
-            return None
-        reference_positions = np.array([r.position for r in ref_poses if r is not None])
-        return np.asarray(positions - reference_positions, dtype=float)
+            return positions, False
+        offsets = positions - np.array([r.position for r in ref_poses if r is not None])
+        if ref_quats is None:
+            return np.asarray(offsets, dtype=float), False
+        return rotations.rotate_vectors(rotations.quat_inverse(ref_quats), offsets), True
     quats = np.array([p.pose.orientation for p in own], dtype=float)
-    if reference is None:
-        return quats
-    ref_quats = []
-    for p in own:
-        pose = world.pose(p.demo, reference, p.step)
-        if pose is None or pose.orientation is None:
-            return None
-        ref_quats.append(pose.orientation)
-    return rotations.relative_quats(np.array(ref_quats, dtype=float), quats)
+    if reference is not None:
+        if ref_quats is None:
+            return None, False
+        quats = rotations.relative_quats(ref_quats, quats)
+    return rotations.modulo_symmetry(quats, world.yaw_period(obj)), False
 
 
 def _mean_distance(kind: Kind, values: np.ndarray) -> float:
@@ -330,16 +470,31 @@ def _mean_distance(kind: Kind, values: np.ndarray) -> float:
 
 
 def _choose(
-    scores: list[ReferenceScore], placement: _Placement, world: _World, noise: float
+    scores: list[ReferenceScore],
+    placement: _Placement,
+    world: _World,
+    noise: float,
+    significance: float,
 ) -> ReferenceScore:
-    """The reference of one placement: the best-scoring candidate available at its step."""
+    """The reference of one placement: among the candidates available at its step,
+    the best-scoring one and every one it does not outscore (SPEC §5) are tied;
+    ties go to fewer clusters, then absolute, then the nearest reference."""
     available = [
         s
         for s in scores
         if s.reference is None or world.available(placement.demo, s.reference, placement.step)
     ]
-    best = min(s.rms for s in available)
-    tied = [s for s in available if s.rms - best < noise]
+    best = min(available, key=lambda s: s.clustering.score)
+    tied = [
+        s
+        for s in available
+        if not outscores(
+            (s.clustering.score, s.clustering.df),
+            (best.clustering.score, best.clustering.df),
+            noise=noise,
+            significance=significance,
+        )
+    ]
     return min(
         tied,
         key=lambda s: (
@@ -351,11 +506,13 @@ def _choose(
     )
 
 
-def _position(values: np.ndarray, reference: str | None) -> StatePosition:
+def _position(values: np.ndarray, reference: str | None, in_frame: bool) -> StatePosition:
     """A state's mean relative position and its spread (members only)."""
     mean, spread = PositionSpace(values).stats(np.arange(len(values)))
     x, y, z = (float(v) for v in mean)
-    return StatePosition(reference=reference, value=(x, y, z), spread=spread)
+    return StatePosition(
+        reference=reference, value=(x, y, z), spread=spread, in_reference_frame=in_frame
+    )
 
 
 def _orientation(values: np.ndarray | None, reference: str | None) -> StateOrientation:

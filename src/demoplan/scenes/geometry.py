@@ -113,11 +113,11 @@ class Location:
 
 
 def symmetry(shape: ObjectGeometry) -> float:
-    """The turn (deg) after which the shape looks the same from above: 90° for a
-    square box, 180° for other boxes, 0 (any turn) for cylinders and spheres."""
-    if shape.shape != "box":
-        return 0.0
-    return 90.0 if abs(shape.size[0] - shape.size[1]) <= 0.001 else 180.0
+    """The turn (deg) after which the shape looks the same from above
+    (:attr:`ObjectGeometry.yaw_period`, which learning uses too): 90° for a
+    square box, 180° for other boxes, 0 (any turn) for cylinders and spheres,
+    360° for meshes."""
+    return shape.yaw_period
 
 
 def yaw_difference(shape: ObjectGeometry, a: float, b: float) -> float:

@@ -27,8 +27,14 @@ import numpy as np
 
 from demoplan.constraints import visit_sequence
 from demoplan.errors import InputError
-from demoplan.model import Pose, State, TaskModel
-from demoplan.rotations import Quaternion, canonical_quat, quat_multiply
+from demoplan.model import ObjectGeometry, Pose, State, TaskModel
+from demoplan.rotations import (
+    Quaternion,
+    canonical_quat,
+    quat_multiply,
+    reduce_yaw,
+    rotate_vectors,
+)
 from demoplan.scenes.scene import Scene
 
 __all__ = ["Candidate", "Subtask", "candidate_goals", "check_scene_objects", "landmark_poses"]
@@ -112,11 +118,13 @@ class _Resolver:
         states: dict[str, State],
         current: dict[str, Pose],
         landmarks: dict[str, Pose],
+        geometry: dict[str, ObjectGeometry] | None = None,
     ):
         self.index = index
         self.states = states
         self.current = current
         self.landmarks = landmarks
+        self.geometry = geometry or {}
         self.final_state = {states[s].object: states[s] for s in sequence}
         self.targets: dict[str, Pose] = {}  # latest target of each object so far
         self.resolving: list[str] = []
@@ -129,7 +137,16 @@ class _Resolver:
     def resolve(self, state: State) -> Pose:
         position = np.asarray(state.position.value, dtype=float)
         if state.position.reference is not None:
-            position = position + self.reference_pose(state.position.reference).position
+            reference = self.reference_pose(state.position.reference)
+            if state.position.in_reference_frame and reference.orientation is not None:
+                # Turned with the reference (SPEC §5), its frame taken modulo its symmetry
+                # exactly as learning took it.
+                frame = reduce_yaw(
+                    np.asarray([reference.orientation], dtype=float),
+                    self.yaw_period(state.position.reference),
+                )
+                position = rotate_vectors(frame, position[None, :])[0]
+            position = position + reference.position
         return Pose(
             (float(position[0]), float(position[1]), float(position[2])),
             self.orientation(state),
@@ -144,7 +161,13 @@ class _Resolver:
         base = self.reference_pose(state.orientation.reference).orientation
         if base is None:
             return canonical_quat(value)
-        return canonical_quat(quat_multiply(np.asarray(base), np.asarray(value)).tolist())
+        frame = reduce_yaw(np.asarray([base]), self.yaw_period(state.orientation.reference))[0]
+        return canonical_quat(quat_multiply(frame, np.asarray(value)).tolist())
+
+    def yaw_period(self, name: str) -> float:
+        """``name``'s symmetry about its z axis (deg), as learning used it (360: none)."""
+        shape = self.geometry.get(name)
+        return 360.0 if shape is None else shape.yaw_period
 
     def reference_pose(self, reference: str) -> Pose:
         if reference in self.targets:
@@ -181,12 +204,16 @@ def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) ->
     states = {state.id: state for state in model.states}
     current = {obj.name: obj.pose for obj in scene.objects}
     landmarks = landmark_poses(model, scene)
+    geometry: dict[str, ObjectGeometry] = {}
+    for demo in model.demonstrations:  # the shapes learning took symmetries from
+        for name, shape in demo.objects:
+            geometry.setdefault(name, shape)
     constraints = set(model.constraints)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
-        resolver = _Resolver(index, tuple(sequence), states, current, landmarks)
+        resolver = _Resolver(index, tuple(sequence), states, current, landmarks, geometry)
         subtasks = tuple(
             Subtask(
                 label,
