@@ -352,7 +352,7 @@ class Clustering:
     tried: tuple[tuple[int, float | None], ...]
     df: float = UNBOUNDED_DF
     """Degrees of freedom of ``score``: (members − 1) × varying axes of the widest
-    cluster, unbounded where the precision floor set it."""
+    cluster, unbounded for a cluster of one (its spread is the known precision)."""
 
 
 def select_clustering(
@@ -367,11 +367,10 @@ def select_clustering(
 
     For c = 1, 2, … the values are clustered with K-means; a clustering whose
     means lie closer than ``separation`` is rejected, and the one with the
-    lowest maximum per-cluster spread wins. No cluster's spread counts below
-    ``noise²`` (a cluster of one placement has the precision's spread, not
-    none); spreads whose square roots (RMS deviations) differ by less than
-    ``noise`` are ties, and ties go to fewer clusters. The scan stops once a
-    score is at the noise level (no larger
+    lowest maximum per-cluster spread wins. A cluster of one placement has
+    the precision's spread ``noise²``, not none; spreads whose square roots
+    (RMS deviations) differ by less than ``noise`` are ties, and ties go to
+    fewer clusters. The scan stops once a score is at the noise level (no larger
     c could then win), and at a rejected c unless the values still fall into
     more than c groups (:meth:`_Scan.groups`), after at most :data:`PATIENCE`
     rejected counts in a row: more centres on the same data only crowd closer. Where placements form
@@ -416,9 +415,10 @@ class _Scan:
         if not present.all():  # compact the labels if a cluster ended empty
             labels = (np.cumsum(present) - 1)[labels]
         means, raw = _cluster_stats(self.space, labels, int(present.sum()))
-        # No cluster is tighter than the placement precision: one placement (or a
-        # few that happen to agree) does not show "no spread" (SPEC §5).
-        spreads = [max(spread, noise * noise) for spread in raw]
+        # A cluster of one placement does not show "no spread" (SPEC §5): it has
+        # the placement precision's.
+        sizes = np.bincount(labels, minlength=len(raw))
+        spreads = [noise * noise if n < 2 else v for v, n in zip(raw, sizes, strict=True)]
         if c > 1 and _closest_pair(self.space.distance, means) < separation:
             self.tried.append((c, None))
             self.rejected_in_a_row += 1
@@ -432,7 +432,7 @@ class _Scan:
         score = max(spreads)
         widest = int(np.argmax(spreads))
         members = int(np.count_nonzero(labels == widest))
-        df = UNBOUNDED_DF if raw[widest] <= noise * noise else max(1, members - 1) * self.space.dims
+        df = UNBOUNDED_DF if members < 2 else (members - 1) * self.space.dims
         self.tried.append((c, score))
         self.accepted.append((c, labels, means, spreads, df))
         self.done = math.sqrt(score) <= noise or c + 1 > self.n_distinct

@@ -260,6 +260,7 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
             if parsed.precision is None
             else (parsed.precision.position, parsed.precision.orientation)
         ),
+        precision_estimated=parsed.precision is None or parsed.precision.estimated,
     )
 
 

@@ -246,6 +246,19 @@ def yaws_of(quats: FloatArray) -> FloatArray:
     return np.asarray(np.arctan2(2 * (x * y + z * w), 1 - 2 * (y * y + z * z)), dtype=float)
 
 
+def _axis_only(quats: FloatArray) -> FloatArray:
+    """For an object the same after any turn about its own z axis: the shortest turn
+    from upright to where its axis points (the axis is all that can be seen)."""
+    axis = rotate_vectors(quats, np.tile([0.0, 0.0, 1.0], (len(quats), 1)))
+    up = np.array([0.0, 0.0, 1.0])
+    cross = np.cross(np.tile(up, (len(quats), 1)), axis)
+    w = 1.0 + axis[:, 2]
+    out = np.concatenate([cross, w[:, None]], axis=1)
+    flipped = w < 1e-9  # upside down: any horizontal axis will do
+    out[flipped] = [1.0, 0.0, 0.0, 0.0]
+    return _canonical_rows(out / np.linalg.norm(out, axis=1, keepdims=True))
+
+
 def reduce_yaw(quats: FloatArray, period_deg: float) -> FloatArray:
     """Each orientation turned about its own z axis by a multiple of ``period_deg`` so
     that its yaw lies within half a period of 0: the frame of a symmetric object
@@ -255,12 +268,10 @@ def reduce_yaw(quats: FloatArray, period_deg: float) -> FloatArray:
     q = np.asarray(quats, dtype=float).reshape(-1, 4)
     if period_deg >= 360.0:
         return q
-    yaw = yaws_of(q)
     if period_deg <= 0.0:
-        turn = -yaw
-    else:
-        period = math.radians(period_deg)
-        turn = -period * np.round(yaw / period)
+        return _axis_only(q)
+    period = math.radians(period_deg)
+    turn = -period * np.round(yaws_of(q) / period)
     return _canonical_rows(quat_multiply(q, _about_z(turn)))
 
 
