@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from demoplan.constraints import (
+from demoplan.errors import InputError
+from demoplan.learning.constraints import (
     anchor_requirements,
     goal_states,
     learn_constraints,
@@ -14,7 +15,6 @@ from demoplan.constraints import (
     parse_requirements,
     visit_sequence,
 )
-from demoplan.errors import InputError
 from demoplan.model import State, StateOrientation, StatePosition
 
 

@@ -17,11 +17,11 @@ from typing import Any
 import pytest
 
 from demoplan import TaskModelLearner, load_demonstrations, load_model, save_model
-from demoplan.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, read_document, write_atomic
+from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
+from demoplan.learning.modelfile import model_from_dict, model_to_dict
 from demoplan.model import TaskModel
-from demoplan.modelfile import model_from_dict, model_to_dict
 from demoplan.rotations import angle_between
 from tests.helpers import EXAMPLES, demo, raw, write
 

@@ -7,9 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
-from demoplan.constraints import ordered_pairs
 from demoplan.errors import InputError, NotFittedError
 from demoplan.learning import update
+from demoplan.learning.constraints import ordered_pairs
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from tests.helpers import EXAMPLES, random_task_demonstrations
 

@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
+from demoplan.learning.states import StateGenerationSettings, generate_states, state_letters
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import angle_between, quat_from_yaw
-from demoplan.states import StateGenerationSettings, generate_states, state_letters
 from tests.helpers import EXAMPLES
 
 # Table II: state, object, relative position, (x, y).

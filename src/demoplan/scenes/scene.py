@@ -26,7 +26,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from demoplan.demonstrations import (
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.learning.demonstrations import (
     Coordinate,
     Number,
     PoseSchema,
@@ -34,8 +36,6 @@ from demoplan.demonstrations import (
     pose_from_dict,
     pose_to_dict,
 )
-from demoplan.errors import InputError
-from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
 from demoplan.rotations import rpy_from_quat
 

@@ -12,16 +12,16 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict
 from typing import Self
 
-from demoplan.constraints import (
+from demoplan.errors import InputError, NotFittedError
+from demoplan.learning.constraints import (
     anchor_requirements,
     goal_states,
     learn_constraints,
     parse_requirements,
 )
-from demoplan.demonstrations import check_demonstrations
-from demoplan.errors import InputError, NotFittedError
+from demoplan.learning.demonstrations import check_demonstrations
+from demoplan.learning.states import ReferenceScore, StateGenerationSettings, generate_states
 from demoplan.model import Demonstration, State, TaskModel
-from demoplan.states import ReferenceScore, StateGenerationSettings, generate_states
 
 __all__ = ["TaskModelLearner", "learn", "update"]
 

@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 
 from demoplan import rotations
-from demoplan.clustering import (
+from demoplan.learning.clustering import (
     Clustering,
     PositionSpace,
     RotationSpace,

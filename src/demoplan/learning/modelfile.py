@@ -17,8 +17,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from demoplan.constraints import label_key
-from demoplan.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.fileio import (
     check_format,
@@ -27,9 +25,11 @@ from demoplan.fileio import (
     read_document,
     write_atomic,
 )
+from demoplan.learning.constraints import label_key
+from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
+from demoplan.learning.states import StateGenerationSettings
 from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
 from demoplan.rotations import canonical_quat, quat_from_rpy
-from demoplan.states import StateGenerationSettings
 
 __all__ = ["load_model", "model_from_dict", "model_to_dict", "save_model"]
 
