@@ -888,7 +888,7 @@ def _remove(files: list[Path], folder: Path | None) -> None:
 
 
 def _move_json(move: Any) -> dict[str, Any]:
-    from demoplan.learning.demonstrations import pose_to_dict
+    from demoplan.poses import pose_to_dict
 
     return {
         "object": move.object,
