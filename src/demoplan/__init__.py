@@ -25,6 +25,7 @@ _EXPORTS = {
     "TaskModelLearner": "demoplan.learning.learner",
     "learn": "demoplan.learning.learner",
     "load_demonstrations": "demoplan.learning.demonstrations",
+    "load_inputs": "demoplan.inputs",
     "load_model": "demoplan.learning.modelfile",
     "save_model": "demoplan.learning.modelfile",
     "Problem": "demoplan.planning.problem",
@@ -48,6 +49,7 @@ __all__ = [
     "TaskModelLearner",
     "learn",
     "load_demonstrations",
+    "load_inputs",
     "load_model",
     "load_problem",
     "save_model",
@@ -56,6 +58,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
+    from demoplan.inputs import load_inputs
     from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.learner import TaskModelLearner, learn
     from demoplan.learning.modelfile import load_model, save_model

@@ -218,10 +218,10 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    from demoplan.inputs import load_inputs
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
     from demoplan.learning.constraints import parse_requirements_syntax
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.states import StateGenerationSettings
     from demoplan.segmentation.types import parse_object_patterns
@@ -247,7 +247,7 @@ def learn(
             requirements += from_file
         try:
             parse_requirements_syntax(requirements)
-            new = load_demonstrations(demos, frame=frame, objects=parse_object_patterns(objects))
+            new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
             if update is not None:
                 model = update_model(
                     load_model(update), new, require=requirements, settings=settings

@@ -25,6 +25,7 @@ _EXPORTS = {
     "check_demonstrations": "demoplan.learning.demonstrations",
     "demonstration_to_dict": "demoplan.learning.demonstrations",
     "demonstrations_from_document": "demoplan.learning.demonstrations",
+    "demonstrations_from_path": "demoplan.learning.demonstrations",
     "load_demonstrations": "demoplan.learning.demonstrations",
     "load_object_geometry": "demoplan.learning.demonstrations",
     "label_key": "demoplan.learning.constraints",
@@ -40,6 +41,7 @@ __all__ = [
     "check_demonstrations",
     "demonstration_to_dict",
     "demonstrations_from_document",
+    "demonstrations_from_path",
     "label_key",
     "learn",
     "load_demonstrations",
@@ -58,6 +60,7 @@ if TYPE_CHECKING:
         check_demonstrations,
         demonstration_to_dict,
         demonstrations_from_document,
+        demonstrations_from_path,
         load_demonstrations,
         load_object_geometry,
     )

@@ -39,7 +39,7 @@ __all__ = [
     "check_demonstrations",
     "demonstration_to_dict",
     "demonstrations_from_document",
-    "is_pose_stream",
+    "demonstrations_from_path",
     "load_demonstrations",
     "load_object_geometry",
 ]
@@ -220,57 +220,38 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
     )
 
 
-STREAM_SUFFIXES = {".csv", ".db3", ".mcap"}
+def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
+    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order)
+    and check them together (:func:`check_demonstrations`).
 
-
-def is_pose_stream(path: Path) -> bool:
-    """A pose stream (SPEC §3): a CSV file, or a ROS 2 bag (``.db3``, ``.mcap``, or a
-    folder holding ``metadata.yaml``)."""
-    if path.is_dir():
-        return (path / "metadata.yaml").is_file()
-    return path.suffix.lower() in STREAM_SUFFIXES or path.name == "metadata.yaml"
-
-
-def load_demonstrations(
-    paths: Iterable[str | Path],
-    *,
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-) -> list[Demonstration]:
-    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
-    a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
-    (:mod:`demoplan.segmentation`, default settings), named after the file.
-
-    ``frame`` and ``objects`` are passed to
-    :func:`~demoplan.segmentation.load_stream` for pose streams (the world frame
-    of a TF tree, the objects to keep); demonstration files ignore them."""
+    Pose streams (CSV, ROS 2 bags) are segmented first by
+    :func:`demoplan.inputs.load_inputs`, which reads both."""
     demos: list[Demonstration] = []
     for path in map(Path, paths):
-        if is_pose_stream(path):
-            from demoplan.segmentation import load_stream, segment
-
-            name = path.stem if path.name != "metadata.yaml" else path.parent.name
-            stream = load_stream(path, frame=frame, objects=objects)
-            demos.append(segment(stream).to_demonstration(name))
-            continue
-        if path.is_dir():
-            # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
-            files = sorted(
-                p
-                for p in path.iterdir()
-                if p.suffix.lower() in {".json", ".yaml", ".yml"}
-                and not p.name.startswith(".")
-                and p.is_file()
-            )
-            if not files:
-                raise InputError(
-                    "folder holds no .json or .yaml demonstration files", source=str(path)
-                )
-        else:
-            files = [path]
-        for file in files:
-            demos += demonstrations_from_document(read_document(file), str(file))
+        demos += demonstrations_from_path(path)
     check_demonstrations(demos)
+    return demos
+
+
+def demonstrations_from_path(path: Path) -> list[Demonstration]:
+    """The demonstrations of one file, or of every ``*.json`` / ``*.yaml`` file of a
+    folder (in name order); not yet checked against each other."""
+    if path.is_dir():
+        # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
+        files = sorted(
+            p
+            for p in path.iterdir()
+            if p.suffix.lower() in {".json", ".yaml", ".yml"}
+            and not p.name.startswith(".")
+            and p.is_file()
+        )
+        if not files:
+            raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+    else:
+        files = [path]
+    demos: list[Demonstration] = []
+    for file in files:
+        demos += demonstrations_from_document(read_document(file), str(file))
     return demos
 
 
