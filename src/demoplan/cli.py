@@ -14,7 +14,6 @@ import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
-from dataclasses import replace
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -219,11 +218,11 @@ def learn(
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
     from demoplan.inputs import load_inputs
+    from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
     from demoplan.learning.constraints import parse_requirements_syntax
     from demoplan.learning.modelfile import load_model, save_model
-    from demoplan.learning.states import StateGenerationSettings
     from demoplan.segmentation.types import parse_object_patterns
 
     with _reported_errors():
@@ -232,14 +231,14 @@ def learn(
         target = output or update
         assert target is not None
         _refuse_overwriting_inputs(target, demos)
-        overrides = {
+        options = {
             "position_noise": position_noise,
             "orientation_noise": orientation_noise,
             "position_separation": position_separation,
             "orientation_separation": orientation_separation,
             "max_clusters": max_clusters,
         }
-        settings: dict[str, Any] = {k: v for k, v in overrides.items() if v is not None}
+        overrides: dict[str, Any] = {k: v for k, v in options.items() if v is not None}
         requirements = list(require or [])
         from_file: list[str] = []
         if require_file is not None:
@@ -250,14 +249,11 @@ def learn(
             new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
             if update is not None:
                 model = update_model(
-                    load_model(update), new, require=requirements, settings=settings
+                    load_model(update), new, require=requirements, settings=overrides
                 )
             else:
-                model = learn_model(
-                    new,
-                    require=list(dict.fromkeys(requirements)),
-                    settings=replace(StateGenerationSettings(), **settings),
-                )
+                settings = LearningSettings(require=tuple(dict.fromkeys(requirements)), **overrides)
+                model = learn_model(new, settings=settings)
         except InputError as exc:
             # A requirement read from --require-file: say which file it came from.
             if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):

@@ -4,6 +4,8 @@
 - :mod:`demoplan.learning.states` and :mod:`demoplan.learning.clustering` —
   state generation (§IV.A, eq. 1–2).
 - :mod:`demoplan.learning.constraints` — task generalization (§IV.B).
+- :mod:`demoplan.learning.settings` — :class:`LearningSettings`, the one
+  settings value from ``learn``'s options to the model file.
 - :mod:`demoplan.learning.learner` — :class:`TaskModelLearner`, :func:`learn`,
   :func:`update`.
 - :mod:`demoplan.learning.modelfile` — model files (SPEC §3 ``demoplan/model-1``).
@@ -22,6 +24,7 @@ _EXPORTS = {
     "TaskModelLearner": "demoplan.learning.learner",
     "learn": "demoplan.learning.learner",
     "update": "demoplan.learning.learner",
+    "LearningSettings": "demoplan.learning.settings",
     "check_demonstrations": "demoplan.learning.demonstrations",
     "demonstration_to_dict": "demoplan.learning.demonstrations",
     "demonstrations_from_document": "demoplan.learning.demonstrations",
@@ -37,6 +40,7 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "LearningSettings",
     "TaskModelLearner",
     "check_demonstrations",
     "demonstration_to_dict",
@@ -66,6 +70,7 @@ if TYPE_CHECKING:
     )
     from demoplan.learning.learner import TaskModelLearner, learn, update
     from demoplan.learning.modelfile import load_model, model_from_dict, model_to_dict, save_model
+    from demoplan.learning.settings import LearningSettings
 
 
 def __getattr__(name: str) -> Any:
