@@ -221,7 +221,6 @@ def learn(
     from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
-    from demoplan.learning.constraints import parse_requirements_syntax
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.segmentation.types import parse_object_patterns
 
@@ -245,7 +244,6 @@ def learn(
             from_file = _read_requirements(require_file)
             requirements += from_file
         try:
-            parse_requirements_syntax(requirements)
             new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
             if update is not None:
                 model = update_model(

@@ -18,6 +18,7 @@ from demoplan.learning.constraints import (
     goal_states,
     learn_constraints,
     parse_requirements,
+    required_pairs,
 )
 from demoplan.learning.demonstrations import check_demonstrations
 from demoplan.learning.settings import LearningSettings
@@ -50,10 +51,15 @@ class TaskModelLearner:
     """
 
     def __init__(self, settings: LearningSettings | None = None, **overrides: Any) -> None:
-        self.settings = replace(settings or LearningSettings(), **overrides)
+        self._settings = replace(settings or LearningSettings(), **overrides)
+        self._requirements = parse_requirements(self._settings.require)
         self._demonstrations: list[Demonstration] = []
         self._model: TaskModel | None = None
         self._scores: tuple[ReferenceScore, ...] = ()
+
+    @property
+    def settings(self) -> LearningSettings:
+        return self._settings
 
     def fit(self, demonstrations: Iterable[Demonstration]) -> Self:
         """Learn from ``demonstrations`` (in this order, which fixes the state letters)."""
@@ -75,9 +81,7 @@ class TaskModelLearner:
         """Learn from ``demos``; on an error the learner keeps its previous state."""
         check_demonstrations(demos)
         generation = generate_states(demos, self.settings)
-        required = parse_requirements(
-            self.settings.require, generation.states, generation.sequences
-        )
+        required = required_pairs(self._requirements, generation.states, generation.sequences)
         constraint_set = learn_constraints(generation.sequences, required)
         for index, x, y in constraint_set.violations:
             logger.warning(
@@ -170,8 +174,7 @@ def update(
             "model holds no demonstrations to update; relearn from the demonstration files",
             field="demonstrations",
         )
-    kept = anchor_requirements(model.settings.require, model.sequences)
-    merged = replace(
-        model.settings, **(settings or {}), require=tuple(dict.fromkeys([*kept, *require]))
-    )
+    kept = anchor_requirements(parse_requirements(model.settings.require), model.sequences)
+    texts = tuple(dict.fromkeys([*(r.text for r in kept), *require]))
+    merged = replace(model.settings, **(settings or {}), require=texts)
     return TaskModelLearner(merged).fit([*model.demonstrations, *demonstrations]).model_
