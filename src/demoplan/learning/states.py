@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 
 from demoplan import rotations
-from demoplan.clustering import (
+from demoplan.learning.clustering import (
     Clustering,
     PositionSpace,
     RotationSpace,
@@ -37,6 +37,7 @@ from demoplan.clustering import (
     outscores,
     select_clusterings,
 )
+from demoplan.learning.settings import LearningSettings as StateGenerationSettings
 from demoplan.model import (
     Demonstration,
     ObjectGeometry,
@@ -59,36 +60,6 @@ __all__ = [
 Kind = Literal["position", "orientation"]
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True, slots=True)
-class StateGenerationSettings:
-    """Settings of state generation (documented defaults, docs/learning.md).
-
-    position_noise : the placement precision (RMS, metres): spreads whose RMS
-        differs by less than this are ties, and no cluster counts as tighter.
-        ``None`` (default): estimated from the demonstrations
-        (:func:`estimate_precision`).
-    orientation_noise : the same for orientations, in degrees.
-    position_separation : cluster means closer than this (m) reject a clustering.
-    orientation_separation : the same for orientations (degrees, geodesic).
-    n_init : K-means restarts per call.
-    seed : seed of the K-means restarts.
-    max_clusters : cap on the clusters per object and reference (0: the
-        paper's N, the number of placements).
-    significance : a reference or more clusters win over a fewer-state choice
-        only if their spread is also lower by the F test at this level
-        (:func:`demoplan.clustering.outscores`); 0: the paper's plain rule.
-    """
-
-    position_noise: float | None = 0.003
-    orientation_noise: float | None = 0.5
-    position_separation: float = 0.05
-    orientation_separation: float = 15.0
-    n_init: int = 8
-    seed: int = 0
-    max_clusters: int = 0
-    significance: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,0 +1,182 @@
+"""Learning a task model from demonstrations: state generation + task generalization.
+
+:class:`TaskModelLearner` follows scikit-learn's habits: settings in
+``__init__``, ``fit(demonstrations)`` returns ``self``, learned results end in
+``_`` and reading them before ``fit`` raises :class:`NotFittedError`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import replace
+from typing import Any, Self
+
+from demoplan.errors import InputError, NotFittedError
+from demoplan.learning.constraints import (
+    anchor_requirements,
+    goal_states,
+    learn_constraints,
+    parse_requirements,
+    required_pairs,
+)
+from demoplan.learning.demonstrations import check_demonstrations
+from demoplan.learning.settings import LearningSettings
+from demoplan.learning.states import ReferenceScore, generate_states
+from demoplan.model import Demonstration, State, TaskModel
+
+__all__ = ["TaskModelLearner", "learn", "update"]
+
+logger = logging.getLogger(__name__)
+
+
+class TaskModelLearner:
+    """Learns states, precedence constraints and goals from demonstrations.
+
+    Parameters
+    ----------
+    settings : the :class:`LearningSettings` to learn with (default: the
+        documented defaults).
+    **overrides : settings to change from ``settings``, by name
+        (``position_noise=0.005``, ``max_clusters=5``, ``require=["A<B"]``, …);
+        a value out of range is an :class:`InputError` naming the setting.
+
+    Examples
+    --------
+    >>> from demoplan import TaskModelLearner, load_demonstrations
+    >>> demos = load_demonstrations(["examples/blocks/demonstrations.json"])
+    >>> learner = TaskModelLearner().fit(demos)
+    >>> learner.sequences_
+    (('A', 'B', 'C'), ('D', 'A', 'C'))
+    """
+
+    def __init__(self, settings: LearningSettings | None = None, **overrides: Any) -> None:
+        self._settings = replace(settings or LearningSettings(), **overrides)
+        self._requirements = parse_requirements(self._settings.require)
+        self._demonstrations: list[Demonstration] = []
+        self._model: TaskModel | None = None
+        self._scores: tuple[ReferenceScore, ...] = ()
+
+    @property
+    def settings(self) -> LearningSettings:
+        return self._settings
+
+    def fit(self, demonstrations: Iterable[Demonstration]) -> Self:
+        """Learn from ``demonstrations`` (in this order, which fixes the state letters)."""
+        return self._refit(list(demonstrations))
+
+    def partial_fit(self, demonstrations: Demonstration | Iterable[Demonstration]) -> Self:
+        """Add demonstrations to those already seen and update the model.
+
+        The result equals ``fit`` on all demonstrations at once: state
+        generation is redone over every demonstration (a new one can move a
+        cluster or change a reference), and contradicted constraints stay
+        removed because they are recomputed from every sequence.
+        """
+        if isinstance(demonstrations, Demonstration):
+            demonstrations = [demonstrations]
+        return self._refit([*self._demonstrations, *demonstrations])
+
+    def _refit(self, demos: list[Demonstration]) -> Self:
+        """Learn from ``demos``; on an error the learner keeps its previous state."""
+        check_demonstrations(demos)
+        generation = generate_states(demos, self.settings)
+        required = required_pairs(self._requirements, generation.states, generation.sequences)
+        constraint_set = learn_constraints(generation.sequences, required)
+        for index, x, y in constraint_set.violations:
+            logger.warning(
+                "demonstration %d (%s) puts %s before %s, against the teacher's %s<%s",
+                index + 1,
+                demos[index].name,
+                y,
+                x,
+                x,
+                y,
+            )
+        self._demonstrations = demos
+        self._scores = generation.scores
+        self._model = TaskModel(
+            states=generation.states,
+            sequences=generation.sequences,
+            constraints=constraint_set.constraints,
+            goals=tuple(goal_states(s, generation.states) for s in generation.sequences),
+            demonstrations=tuple(demos),
+            teacher_constraints=required,
+            violations=constraint_set.violations,
+            settings=self.settings,
+            precision=(generation.precision.position, generation.precision.orientation),
+            precision_estimated=generation.precision.position_estimated,
+        )
+        return self
+
+    @property
+    def model_(self) -> TaskModel:
+        if self._model is None:
+            raise NotFittedError("TaskModelLearner is not fitted yet; call fit(demonstrations)")
+        return self._model
+
+    @property
+    def states_(self) -> tuple[State, ...]:
+        return self.model_.states
+
+    @property
+    def sequences_(self) -> tuple[tuple[str, ...], ...]:
+        return self.model_.sequences
+
+    @property
+    def constraints_(self) -> tuple[tuple[str, str], ...]:
+        return self.model_.constraints
+
+    @property
+    def goals_(self) -> tuple[tuple[str, ...], ...]:
+        return self.model_.goals
+
+    @property
+    def violations_(self) -> tuple[tuple[int, str, str], ...]:
+        return self.model_.violations
+
+    @property
+    def reference_scores_(self) -> tuple[ReferenceScore, ...]:
+        """Every candidate reference's eq. (2) score, for diagnostics."""
+        self.model_  # noqa: B018 - raises when not fitted
+        return self._scores
+
+
+def learn(
+    demonstrations: Iterable[Demonstration],
+    *,
+    require: Sequence[str] = (),
+    settings: LearningSettings | None = None,
+) -> TaskModel:
+    """Learn a task model in one call (default settings unless given; ``require``
+    adds to ``settings.require``)."""
+    settings = settings or LearningSettings()
+    if require:
+        settings = replace(settings, require=(*settings.require, *require))
+    return TaskModelLearner(settings).fit(demonstrations).model_
+
+
+def update(
+    model: TaskModel,
+    demonstrations: Iterable[Demonstration],
+    *,
+    require: Sequence[str] = (),
+    settings: Mapping[str, Any] | None = None,
+) -> TaskModel:
+    """Add demonstrations to a learned model: the same model as learning from
+    all of them at once (``demoplan learn --update``).
+
+    The model's settings are kept unless overridden in ``settings`` (by name);
+    its teacher requirements are kept, their state ids rewritten as the steps
+    they were learned from (``@d.s``) so that they keep meaning the same
+    states when the new demonstrations re-letter them; ``require`` adds more.
+    """
+    if not model.demonstrations:
+        raise InputError(
+            "model holds no demonstrations to update; relearn from the demonstration files",
+            field="demonstrations",
+        )
+    kept = anchor_requirements(parse_requirements(model.settings.require), model.sequences)
+    texts = tuple(dict.fromkeys([*(r.text for r in kept), *require]))
+    merged = replace(model.settings, **(settings or {}), require=texts)
+    return TaskModelLearner(merged).fit([*model.demonstrations, *demonstrations]).model_

@@ -1,0 +1,107 @@
+"""The learning settings: one typed value from the command line to the model file.
+
+:class:`LearningSettings` is what ``demoplan learn`` options override, what
+:class:`~demoplan.learning.TaskModelLearner` learns with, what a
+:class:`~demoplan.model.TaskModel` records (``TaskModel.settings``) and what
+the model file stores; ``learn --update`` relearns with
+``replace(model.settings, **overrides)``. Values are checked here, once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from demoplan.errors import InputError
+
+__all__ = ["PAPER_SETTINGS", "LearningSettings"]
+
+
+@dataclass(frozen=True, slots=True)
+class LearningSettings:
+    """Settings of learning (documented defaults, docs/learning.md).
+
+    position_noise : the placement precision (RMS, metres) decisions are
+        measured against (SPEC §5): spreads whose RMS differs by less than
+        this are ties, and a cluster of one placement has this spread.
+        ``None`` (default): estimated from the demonstrations
+        (:func:`demoplan.learning.states.estimate_precision`), so that one
+        default serves a virtual environment and teleoperated recordings.
+    orientation_noise : the same for orientations, in degrees.
+    position_separation : cluster means closer than this (m) reject a clustering.
+    orientation_separation : the same for orientations (degrees, geodesic).
+    n_init : K-means restarts per call.
+    seed : seed of the K-means restarts.
+    max_clusters : cap on the clusters per object and reference (0: the
+        paper's N, the number of placements). With placements that follow no
+        structure, eq. (2) scans far and learning slows (docs/learning.md).
+    significance : a reference, or more clusters, is preferred to a choice
+        with fewer states only when its spread is also lower by an F test at
+        this level (:func:`demoplan.learning.clustering.outscores`): two
+        placements that happen to agree are no evidence. 0: the paper's plain
+        comparison.
+    require : teacher constraints as given, such as ``"A<B"`` or
+        ``"plate<napkin"``; never removed by demonstrations (the journal
+        version of the paper).
+
+    A value out of range is an :class:`~demoplan.errors.InputError` naming
+    the setting. :data:`PAPER_SETTINGS` is the paper's reading: fixed
+    thresholds of 3 mm and 0.5° and the plain comparison.
+    """
+
+    position_noise: float | None = None
+    orientation_noise: float | None = None
+    position_separation: float = 0.05
+    orientation_separation: float = 15.0
+    n_init: int = 8
+    seed: int = 0
+    max_clusters: int = 0
+    significance: float = 0.05
+    require: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        for name in _POSITIVE:
+            value = getattr(self, name)
+            if value is None and name in _ESTIMATED:
+                continue
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int | float)
+                or not 0 < value < math.inf
+            ):
+                note = " (or null: estimated from the demonstrations)" if name in _ESTIMATED else ""
+                raise InputError(f"expected a positive number{note}, got {value!r}", field=name)
+            object.__setattr__(self, name, float(value))
+        level = self.significance
+        if isinstance(level, bool) or not isinstance(level, int | float) or not 0 <= level < 1:
+            raise InputError(
+                f"expected a level in [0, 1) (0: the paper's plain comparison), got {level!r}",
+                field="significance",
+            )
+        object.__setattr__(self, "significance", float(level))
+        _check_whole(self.n_init, "n_init", 1)
+        _check_whole(self.seed, "seed", 0)
+        _check_whole(self.max_clusters, "max_clusters", 0, " (0: no cap)")
+        if isinstance(self.require, str) or not all(isinstance(r, str) for r in self.require):
+            raise InputError(
+                f"expected requirement texts such as ['A<B'], got {self.require!r}", field="require"
+            )
+        object.__setattr__(self, "require", tuple(self.require))
+
+
+_ESTIMATED = frozenset({"position_noise", "orientation_noise"})
+_POSITIVE = (
+    "position_noise",
+    "orientation_noise",
+    "position_separation",
+    "orientation_separation",
+)
+
+PAPER_SETTINGS = LearningSettings(position_noise=0.003, orientation_noise=0.5, significance=0.0)
+"""The paper's reading: fixed ties at 3 mm and 0.5°, the plain comparison of
+spreads. The shipped examples were drawn for it (examples/README.md)."""
+
+
+def _check_whole(value: object, name: str, least: int, note: str = "") -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or value < least:
+        raise InputError(f"expected a whole number ≥ {least}{note}, got {value!r}", field=name)
