@@ -19,6 +19,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from demoplan import learn
+from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import Scene, SceneObject, yaw_of
@@ -51,14 +52,27 @@ def describe(model: TaskModel) -> str:
     )
 
 
+def rigid_references(family: Family, obj: str) -> list[str | None]:
+    """The intended reference of ``obj`` and the references of that one, up the
+    chain: ``obj`` is rigid with each (its noise grows by √2 a link), and SPEC §5
+    gives a tie to a reference available in every demonstration — the root of
+    a chain is, an intermediate one often is not."""
+    chain: list[str | None] = [family.references[obj]]
+    while chain[-1] is not None:
+        chain.append(family.references.get(chain[-1]))
+    return chain
+
+
 def assert_one_state_per_object(family: Family, model: TaskModel) -> dict[str, str]:
-    """One state per object, with the intended position reference; returns object → state id."""
+    """One state per object, with its intended position reference or one up that
+    reference's chain (:func:`rigid_references`); returns object → state id."""
     counts = Counter(s.object for s in model.states)
     assert counts == Counter(list(family.references)), describe(model)
     wrong = {
         s.object: (s.position.reference, family.references[s.object])
         for s in model.states
-        if s.position.reference != family.references[s.object]
+        if s.position.reference not in rigid_references(family, s.object)
+        or (family.references[s.object] is not None and s.position.reference is None)
     }
     assert not wrong, f"(learned, intended) references {wrong}; {describe(model)}"
     return {s.object: s.id for s in model.states}
@@ -93,7 +107,7 @@ def test_scenes_shifted_by_metres_keep_one_state_per_object(family: Family) -> N
     tolerance = 0.01 + 3 * family.sigma / math.sqrt(len(family.demos))
     for state in model.states:
         truth = family.offsets[state.object]
-        if truth is None:
+        if truth is None or state.position.reference != family.references[state.object]:
             continue
         error = math.dist(state.position.value[:2], truth[:2])
         assert error <= tolerance, f"{state.object}: {error * 1000:.1f} mm off"
@@ -341,9 +355,13 @@ def test_the_order_of_the_demonstrations_does_not_matter(
 def test_a_fresh_draw_of_experiment_1_learns_table_ii_and_its_32_constraints(seed: int) -> None:
     """Three demonstrations in the orders of Table III, σ = 0.5 mm, a new scene
     each draw: the states of Table II (ids, objects, references, values within
-    5 mm), the sequences of Table III and the 32 constraints of §IV.B."""
+    5 mm), the sequences of Table III and the 32 constraints of §IV.B — with
+    the paper's reading (fixed 3 mm ties, the plain comparison). Table II's
+    decisions compare spreads of 1–2 cm over three placements (the knife:
+    12 mm to the plate against 23 mm absolute); at the defaults' F test
+    three placements do not support them (test below)."""
     draw = paper_experiment_1(np.random.default_rng(seed))
-    model = learn(draw.demos)
+    model = learn(draw.demos, settings=PAPER_SETTINGS)
     got = [(s.id, s.object, s.position.reference) for s in model.states]
     assert got == [(i, o, r) for i, o, r, _ in PAPER_TABLE_II], describe(model)
     for state, (_, _, _, xy) in zip(model.states, PAPER_TABLE_II, strict=True):
@@ -354,3 +372,22 @@ def test_a_fresh_draw_of_experiment_1_learns_table_ii_and_its_32_constraints(see
     assert len(expected) == 32
     assert set(model.constraints) == expected
     assert [[d.steps[k].object for k in range(7)] for d in draw.demos] == PAPER_ORDERS
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=SEEDS)
+def test_at_defaults_a_fresh_draw_of_experiment_1_keeps_only_the_supported_states(
+    seed: int,
+) -> None:
+    """The same draws at the defaults: references whose advantage three placements
+    do not support are dropped for fewer states; what remains is still the
+    paper's: every object of Table II, the napkin on the plate (0.4 mm against
+    centimetres), no more states than Table II and the paper's sequences'
+    order between the demonstrations' first and last steps."""
+    draw = paper_experiment_1(np.random.default_rng(seed))
+    model = learn(draw.demos)
+    assert {s.object for s in model.states} == {o for _, o, _, _ in PAPER_TABLE_II}
+    assert len(model.states) <= len(PAPER_TABLE_II)
+    napkin = [s for s in model.states if s.object == "napkin"]
+    assert [s.position.reference for s in napkin] == ["plate"]
+    assert model.precision is not None and model.precision[0] < 0.02

@@ -419,7 +419,15 @@ class _Scan:
         # the placement precision's.
         sizes = np.bincount(labels, minlength=len(raw))
         spreads = [noise * noise if n < 2 else v for v, n in zip(raw, sizes, strict=True)]
-        if c > 1 and _closest_pair(self.space.distance, means) < separation:
+        if c > 1 and (
+            _closest_pair(self.space.distance, means) < separation
+            # A cluster of one placement shows no spread, not a state: a place
+            # seen once is no evidence of a second state (SPEC §5).
+            or np.bincount(labels).min() < 2
+            # Nor do clusters that scatter far beyond the placement precision:
+            # splitting a continuum is not finding states.
+            or not _within_precision(raw, np.bincount(labels), self.space.dims, noise)
+        ):
             self.tried.append((c, None))
             self.rejected_in_a_row += 1
             self.done = (
@@ -507,6 +515,25 @@ def select_clusterings(
         for scan, labels in zip(active, batch_labels, strict=True):
             scan.consider(c, labels, separation, noise)
     return [scan.result(noise, significance) for scan in scans]
+
+
+CONSISTENCY_LEVEL = 0.001
+"""A cluster scatters beyond the precision when its spread passes the F test
+against the precision at this level (0.1 %: only clear cases)."""
+
+
+def _within_precision(spreads: Sequence[float], sizes: IntArray, dims: int, noise: float) -> bool:
+    """Whether every cluster of two or more placements scatters as placements of one
+    state would, given the precision ``noise`` (RMS)."""
+    from scipy.stats import chi2  # deferred: SciPy's import is slow
+
+    for spread, size in zip(spreads, sizes, strict=True):
+        if size < 2:
+            continue
+        df = (int(size) - 1) * dims
+        if spread > noise * noise * float(chi2.ppf(1.0 - CONSISTENCY_LEVEL, df)) / df:
+            return False
+    return True
 
 
 def _varying_axes(values: FloatArray, tolerance: float) -> int:

@@ -97,11 +97,12 @@ _POSITIVE = (
     "orientation_separation",
 )
 
-PAPER_SETTINGS = LearningSettings(position_noise=0.003, orientation_noise=0.5, significance=0.0)
-"""The paper's reading: fixed ties at 3 mm and 0.5°, the plain comparison of
-spreads. The shipped examples were drawn for it (examples/README.md)."""
-
 
 def _check_whole(value: object, name: str, least: int, note: str = "") -> None:
     if isinstance(value, bool) or not isinstance(value, int) or value < least:
         raise InputError(f"expected a whole number ≥ {least}{note}, got {value!r}", field=name)
+
+
+PAPER_SETTINGS = LearningSettings(position_noise=0.003, orientation_noise=0.5, significance=0.0)
+"""The paper's reading: fixed ties at 3 mm and 0.5°, the plain comparison of
+spreads. The shipped examples were drawn for it (examples/README.md)."""

@@ -23,7 +23,7 @@ import logging
 import math
 from bisect import bisect_left
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -102,6 +102,11 @@ class Precision:
     position_estimated: bool = True
     orientation_estimated: bool = True
 
+
+LOCAL_EVIDENCE = 0.2
+"""A reference available at some of an object's placements only adds a state
+there: its F test is taken at this fraction of the significance level (0.05 →
+0.01), so that one of the many such candidates agreeing by chance does not."""
 
 MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
 MIN_ORIENTATION_PRECISION = 0.05  # deg
@@ -186,7 +191,39 @@ def generate_states(
 
     Returns the states (lettered by first appearance), each demonstration as a
     sequence of state ids, and every candidate reference's score.
+
+    A demonstration that repeats an earlier one exactly (the same steps, poses
+    and landmarks) is evidence of nothing new: the statistics are taken over
+    the distinct demonstrations, and a repeat takes its original's states (its
+    steps join their members), so adding it changes no decision.
     """
+    original: list[int] = []
+    first_of: dict[tuple[object, ...], int] = {}
+    for index, demo in enumerate(demonstrations):
+        key = (demo.steps, demo.landmarks, demo.initial)
+        original.append(first_of.setdefault(key, index))
+    distinct = sorted(set(original))
+    if len(distinct) == len(demonstrations):
+        return _generate_states(demonstrations, settings)
+    inner = _generate_states([demonstrations[d] for d in distinct], settings)
+    position = {d: k for k, d in enumerate(distinct)}
+    sequences = tuple(inner.sequences[position[original[d]]] for d in range(len(demonstrations)))
+    states = []
+    for state in inner.states:
+        members = sorted(
+            (d, step)
+            for d in range(len(demonstrations))
+            for k, step in state.members
+            if distinct[k] == original[d]
+        )
+        states.append(replace(state, members=tuple(members)))
+    return StateGeneration(tuple(states), sequences, inner.scores, inner.precision)
+
+
+def _generate_states(
+    demonstrations: Sequence[Demonstration],
+    settings: StateGenerationSettings | None = None,
+) -> StateGeneration:
     settings = settings or StateGenerationSettings()
     world = _World(demonstrations)
     placements: dict[str, list[_Placement]] = {}
@@ -215,18 +252,38 @@ def generate_states(
     precision = estimate_precision(
         {key: values for key, values in relative.items() if key in everywhere}, settings
     )
+    if precision.orientation >= settings.orientation_separation:
+        logger.info(
+            "orientations scatter by %.0f° (RMS), more than the %.0f° that tell two apart: "
+            "no orientation is learned",
+            precision.orientation,
+            settings.orientation_separation,
+        )
+    reachable: dict[str, set[str]] = {obj: set() for obj in placements}
+    for obj, _, reference in everywhere:
+        if reference is not None:
+            reachable[obj].add(reference)
     all_scores: list[ReferenceScore] = []
     for obj, own in placements.items():
         position_scores = _score_references(
             obj, "position", own, candidates[obj], settings, precision.position, relative
         )
-        orientation_scores = _score_references(
-            obj, "orientation", own, candidates[obj], settings, precision.orientation, relative
+        orientation_scores = (
+            _score_references(
+                obj, "orientation", own, candidates[obj], settings, precision.orientation, relative
+            )
+            if precision.orientation < settings.orientation_separation
+            else []  # the demonstrations do not fix orientations: none is learned
         )
         all_scores += position_scores + orientation_scores
         for index, placement in enumerate(own):
             pos = _choose(
-                position_scores, placement, world, precision.position, settings.significance
+                position_scores,
+                placement,
+                world,
+                precision.position,
+                settings.significance,
+                reachable[obj],
             )
             ori_reference, ori_cluster = None, -1  # orientation unknown
             if orientation_scores:
@@ -236,6 +293,7 @@ def generate_states(
                     world,
                     precision.orientation,
                     settings.significance,
+                    reachable[obj],
                 )
                 ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
             keys[(placement.demo, placement.step)] = _StateKey(
@@ -331,7 +389,8 @@ def estimate_precision(
     the objects placed before it in every demonstration — ``relative`` holds
     just those: the best of many candidates that were never available would
     be low by chance); the precision is the median of these over the
-    objects. An object placed where it is meant to go, relative to what it is
+    objects (the lower one of an even count: with two objects, the more
+    precise). An object placed where it is meant to go, relative to what it is
     meant to go with, scatters by the teacher's precision; the median keeps
     objects with several places (whose best single cluster is wide) from
     inflating it. A virtual environment gives well under a millimetre,
@@ -348,7 +407,8 @@ def estimate_precision(
             _, spread = space.stats(np.arange(len(values)))
             best[obj] = min(best.get(obj, math.inf), math.sqrt(spread))
         fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
-        found[kind] = float(np.median(list(best.values()))) if best else fallback
+        ranked = sorted(best.values())
+        found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else fallback
     position = max(found["position"], MIN_POSITION_PRECISION)
     orientation = max(found["orientation"], MIN_ORIENTATION_PRECISION)
     return Precision(
@@ -414,7 +474,9 @@ def _relative_values(
     ref_quats: np.ndarray | None = None
     oriented = all(r is not None and r.orientation is not None for r in ref_poses)
     if reference is not None and oriented:
-        ref_quats = rotations.reduce_yaw(
+        # The reference's frame modulo its symmetry, the same representative in
+        # every demonstration (a square tray at 44° and at 136° is one frame).
+        ref_quats = rotations.modulo_symmetry(
             np.array([r.orientation for r in ref_poses if r is not None], dtype=float),
             world.yaw_period(reference),
         )
@@ -446,34 +508,58 @@ def _choose(
     world: _World,
     noise: float,
     significance: float,
+    everywhere: set[str],
 ) -> ReferenceScore:
-    """The reference of one placement: among the candidates available at its step,
-    the best-scoring one and every one it does not outscore (SPEC §5) are tied;
-    ties go to fewer clusters, then absolute, then the nearest reference."""
-    available = [
-        s
-        for s in scores
-        if s.reference is None or world.available(placement.demo, s.reference, placement.step)
-    ]
-    best = min(available, key=lambda s: s.clustering.score)
-    tied = [
-        s
-        for s in available
-        if not outscores(
-            (s.clustering.score, s.clustering.df),
-            (best.clustering.score, best.clustering.df),
+    """The reference of one placement (SPEC §5).
+
+    First the object's own choice among the candidates available at every
+    one of its placements (absolute, landmarks, objects always placed before
+    it — a choice that adds no state): the best-scoring one and those it does
+    not outscore (:func:`~demoplan.learning.clustering.outscores`) are tied,
+    and the tie goes to fewer clusters, then to absolute, then to the nearest
+    reference (a nut to the peg it sits on, not to the other peg that moves
+    with it). A placement takes another reference — one available only at its
+    step — only where that reference outscores the object's own choice and
+    the best of those; among several, the best
+    (ties: fewer clusters, then the nearest reference). So the fork is placed
+    relative to the glass only where the glass stands already *and* explains
+    it better than the plate does everywhere (Table II, state J).
+    """
+
+    def beats(better: ReferenceScore, worse: ReferenceScore, level: float = significance) -> bool:
+        return outscores(
+            (worse.clustering.score, worse.clustering.df),
+            (better.clustering.score, better.clustering.df),
             noise=noise,
-            significance=significance,
+            significance=level,
         )
-    ]
-    return min(
-        tied,
+
+    steady = [s for s in scores if s.reference is None or s.reference in everywhere]
+    best = min(steady, key=lambda s: s.clustering.score)
+    own = min(
+        (s for s in steady if not beats(best, s)),
         key=lambda s: (
             s.clustering.n_clusters,
             s.reference is not None,
             s.distance,
             s.reference or "",
         ),
+    )
+    local = [
+        s
+        for s in scores
+        if s.reference is not None
+        and s.reference not in everywhere
+        and world.available(placement.demo, s.reference, placement.step)
+        and beats(s, own, significance * LOCAL_EVIDENCE)
+        and beats(s, best, significance * LOCAL_EVIDENCE)
+    ]
+    if not local:
+        return own
+    top = min(local, key=lambda s: s.clustering.score)
+    return min(
+        (s for s in local if not beats(top, s)),
+        key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
     )
 
 
