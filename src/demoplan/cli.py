@@ -171,7 +171,8 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
-            help="RMS placement noise in m (default 0.003).",
+            help="Placement precision (RMS) in m: spreads closer than this are ties "
+            "(default: estimated from the demonstrations).",
             show_default=False,
         ),
     ] = None,
@@ -179,10 +180,28 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
-            help="RMS orientation noise in degrees (default 0.5).",
+            help="Orientation precision (RMS) in degrees (default: estimated).",
             show_default=False,
         ),
     ] = None,
+    significance: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            max=0.999,
+            help="Level of the F test a reference or a split must pass to add states "
+            "(default 0.05; 0: the paper's plain comparison).",
+            show_default=False,
+        ),
+    ] = None,
+    paper: Annotated[
+        bool,
+        typer.Option(
+            "--paper",
+            help="The paper's reading: fixed 3 mm / 0.5° ties and the plain comparison "
+            "(what the shipped examples were drawn for); other options still apply.",
+        ),
+    ] = False,
     position_separation: Annotated[
         float | None,
         typer.Option(
@@ -222,6 +241,7 @@ def learn(
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
     from demoplan.learning.modelfile import load_model, save_model
+    from demoplan.learning.settings import paper_overrides
     from demoplan.segmentation.types import parse_object_patterns
 
     with _reported_errors():
@@ -236,8 +256,10 @@ def learn(
             "position_separation": position_separation,
             "orientation_separation": orientation_separation,
             "max_clusters": max_clusters,
+            "significance": significance,
         }
-        overrides: dict[str, Any] = {k: v for k, v in options.items() if v is not None}
+        overrides: dict[str, Any] = paper_overrides() if paper else {}
+        overrides.update({k: v for k, v in options.items() if v is not None})
         requirements = list(require or [])
         from_file: list[str] = []
         if require_file is not None:
