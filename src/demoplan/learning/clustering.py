@@ -9,6 +9,7 @@ scikit-learn's ``KMeans`` is used as a cross-check in the tests only (it costs
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -259,10 +260,23 @@ def outscores(
         return False
     if significance <= 0:
         return True
+    return worse[0] >= _f_critical(significance, worse[1], better[1]) * better[0]
+
+
+@functools.lru_cache(maxsize=4096)
+def _f_critical(significance: float, dfn: float, dfd: float) -> float:
+    """The F distribution's upper ``significance`` quantile (cached: learning asks
+    for the same few degrees of freedom thousands of times)."""
     from scipy.stats import f as fisher  # deferred: SciPy's import is slow
 
-    critical = float(fisher.ppf(1.0 - significance, worse[1], better[1]))
-    return worse[0] >= critical * better[0]
+    return float(fisher.ppf(1.0 - significance, dfn, dfd))
+
+
+@functools.lru_cache(maxsize=4096)
+def _chi2_critical(level: float, df: int) -> float:
+    from scipy.stats import chi2  # deferred: SciPy's import is slow
+
+    return float(chi2.ppf(1.0 - level, df))
 
 
 class Space:
@@ -525,13 +539,11 @@ against the precision at this level (0.1 %: only clear cases)."""
 def _within_precision(spreads: Sequence[float], sizes: IntArray, dims: int, noise: float) -> bool:
     """Whether every cluster of two or more placements scatters as placements of one
     state would, given the precision ``noise`` (RMS)."""
-    from scipy.stats import chi2  # deferred: SciPy's import is slow
-
     for spread, size in zip(spreads, sizes, strict=True):
         if size < 2:
             continue
         df = (int(size) - 1) * dims
-        if spread > noise * noise * float(chi2.ppf(1.0 - CONSISTENCY_LEVEL, df)) / df:
+        if spread > noise * noise * _chi2_critical(CONSISTENCY_LEVEL, df) / df:
             return False
     return True
 
