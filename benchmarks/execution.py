@@ -79,12 +79,12 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
-from demoplan.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
 from demoplan.execution.kinematic import KinematicWorld  # noqa: E402
 from demoplan.execution.world import World  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
+from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene  # noqa: E402
 

@@ -18,7 +18,7 @@ What it measures
    50-demonstration, 20-object cell (target: under 1 s on one core).
 
 2. **K-means per call** on tiny data (n = 5 … 200 points, d = 3, c = 2 and 4):
-   demoplan's vectorised NumPy :func:`demoplan.clustering.kmeans` against
+   demoplan's vectorised NumPy :func:`demoplan.learning.clustering.kmeans` against
    scikit-learn's ``KMeans(n_clusters=c, n_init=4, random_state=0)``, median µs
    per call and their ratio. Skipped (with a note) when scikit-learn is missing.
 
@@ -74,8 +74,8 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import package_version  # noqa: E402
-from demoplan.clustering import kmeans  # noqa: E402
 from demoplan.learning import TaskModelLearner  # noqa: E402
+from demoplan.learning.clustering import kmeans  # noqa: E402
 from demoplan.model import Demonstration, Pose, Step, Vector3  # noqa: E402
 from demoplan.rotations import quat_from_yaw  # noqa: E402
 

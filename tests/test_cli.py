@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.modelfile import load_model, model_to_dict
+from demoplan.learning.modelfile import load_model, model_to_dict
 from tests.helpers import EXAMPLES, demo, raw, write
 
 SET_TABLE = EXAMPLES / "set_table"

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demoplan.clustering import (
+from demoplan.learning.clustering import (
     PositionSpace,
     RotationSpace,
     kmeans,

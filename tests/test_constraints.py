@@ -6,15 +6,17 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from demoplan.constraints import (
+from demoplan.errors import InputError
+from demoplan.learning.constraints import (
+    Requirement,
     anchor_requirements,
     goal_states,
     learn_constraints,
     ordered_pairs,
     parse_requirements,
+    required_pairs,
     visit_sequence,
 )
-from demoplan.errors import InputError
 from demoplan.model import State, StateOrientation, StatePosition
 
 
@@ -80,23 +82,31 @@ STATES = [_state("A", "plate"), _state("B", "knife"), _state("C", "napkin"), _st
 SEQUENCES = [["A", "B", "C", "C"], ["A", "D", "C"]]
 
 
+def pairs(texts: list[str]) -> tuple[tuple[str, str], ...]:
+    return required_pairs(parse_requirements(texts), STATES, SEQUENCES)
+
+
+def test_requirements_are_parsed_once_into_their_sides() -> None:
+    (requirement,) = parse_requirements([" C#2 < A "])
+    assert requirement == Requirement(" C#2 < A ", ("C#2", "A"))
+
+
 def test_requirements_accept_state_ids_visits_and_object_names() -> None:
-    assert parse_requirements(["A<B", " C#2 < A "], STATES, SEQUENCES) == (
-        ("A", "B"),
-        ("C#2", "A"),
-    )
-    assert parse_requirements(["knife<napkin"], STATES, SEQUENCES) == (("B", "C"), ("D", "C"))
+    assert pairs(["A<B", " C#2 < A "]) == (("A", "B"), ("C#2", "A"))
+    assert pairs(["knife<napkin"]) == (("B", "C"), ("D", "C"))
     # @d.s: the state of step s of demonstration d (1-based), here D and C#2.
-    assert parse_requirements(["@2.2<@1.4"], STATES, SEQUENCES) == (("D", "C#2"),)
+    assert pairs(["@2.2<@1.4"]) == (("D", "C#2"),)
 
 
 def test_requirements_are_anchored_to_steps_for_updates() -> None:
-    assert anchor_requirements(["A<C#2", "knife<C"], SEQUENCES) == ["@1.1<@1.4", "knife<@1.3"]
+    anchored = anchor_requirements(parse_requirements(["A<C#2", "knife<C"]), SEQUENCES)
+    assert [r.text for r in anchored] == ["@1.1<@1.4", "knife<@1.3"]
+    assert anchored == parse_requirements(["@1.1<@1.4", "knife<@1.3"])
 
 
 def test_cyclic_requirements_are_refused() -> None:
     with pytest.raises(InputError, match="cycle"):
-        parse_requirements(["A<B", "B<C", "C<A"], STATES, SEQUENCES)
+        pairs(["A<B", "B<C", "C<A"])
 
 
 @pytest.mark.parametrize(
@@ -106,7 +116,7 @@ def test_cyclic_requirements_are_refused() -> None:
 def test_bad_requirements_are_refused(text: str) -> None:
     """Unknown names, visits never made (A#2), malformed labels, steps that do not exist."""
     with pytest.raises(InputError, match="require"):
-        parse_requirements([text], STATES, SEQUENCES)
+        pairs([text])
 
 
 def test_goal_is_the_state_set_a_demonstration_ends_in() -> None:

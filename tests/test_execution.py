@@ -11,14 +11,14 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.demonstrations import load_demonstrations
 from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.learning import learn
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
-from demoplan.modelfile import save_model
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES
 

@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.experiments import run_experiments
-from demoplan.modelfile import load_model
+from demoplan.learning.modelfile import load_model
 
 
 def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> None:

@@ -17,11 +17,12 @@ from typing import Any
 import pytest
 
 from demoplan import TaskModelLearner, load_demonstrations, load_model, save_model
-from demoplan.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, read_document, write_atomic
+from demoplan.learning import LearningSettings
+from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
+from demoplan.learning.modelfile import model_from_dict, model_to_dict
 from demoplan.model import TaskModel
-from demoplan.modelfile import model_from_dict, model_to_dict
 from demoplan.rotations import angle_between
 from tests.helpers import EXAMPLES, demo, raw, write
 
@@ -535,6 +536,18 @@ def test_model_round_trip(tmp_path: Path, example: str) -> None:
     assert model_to_dict(again) == model_to_dict(model)
 
 
+def test_model_files_with_requirements_joined_by_semicolons_still_load(tmp_path: Path) -> None:
+    """Before settings were one schema, ``require`` was written as one ';'-joined text."""
+    model = TaskModelLearner(require=["B<A", "plate<napkin"]).fit(load_demonstrations([SET_TABLE]))
+    data = _model_document(model.model_)
+    assert data["settings"]["require"] == ["B<A", "plate<napkin"]
+    data["settings"]["require"] = "B<A;plate<napkin"
+    again = model_from_dict(data, "old.json")
+    assert again.settings == model.settings
+    del data["settings"]
+    assert model_from_dict(data, "older.json").settings == LearningSettings()
+
+
 def test_model_round_trip_keeps_teacher_constraints_and_violations(tmp_path: Path) -> None:
     model = TaskModelLearner(require=["B<A"]).fit(load_demonstrations([SET_TABLE])).model_
     assert ("B", "A") in model.teacher_constraints
@@ -588,6 +601,8 @@ def _edit(data: dict[str, Any], edit: str) -> None:
         data["settings"]["position_noise"] = "loud"
     elif edit == "setting of a list":
         data["settings"]["colour"] = [1]
+    elif edit == "setting out of range":
+        data["settings"]["n_init"] = 0
     elif edit == "bad member":
         data["states"][0]["members"] = [[0]]
     elif edit == "bad demonstration inside":
@@ -623,8 +638,9 @@ BAD_MODELS = [
         "violation of unknown demonstration",
         r"violations\[0\]\.demonstration: demonstration 7 does not exist",
     ),
-    ("settings of the wrong type", r"settings: position_noise must be a non-negative number"),
-    ("setting of a list", r"settings: colour must be a number or a string"),
+    ("settings of the wrong type", r"settings\.position_noise: Input should be a valid number"),
+    ("setting of a list", r"settings\.colour: unknown field"),
+    ("setting out of range", r"settings\.n_init: expected a whole number ≥ 1, got 0"),
     ("bad member", r"states\[0\]\.members\[0\]"),
     ("bad demonstration inside", r"demonstrations\[0\]\.steps: empty demonstration"),
 ]

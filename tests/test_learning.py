@@ -7,9 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
-from demoplan.constraints import ordered_pairs
 from demoplan.errors import InputError, NotFittedError
 from demoplan.learning import update
+from demoplan.learning.constraints import ordered_pairs
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from tests.helpers import EXAMPLES, random_task_demonstrations
 
@@ -147,7 +147,7 @@ def test_update_keeps_teacher_requirements_on_the_same_states() -> None:
     model = TaskModelLearner(require=["C<E"]).fit(demos).model_
     assert model.sequences[0][2] == "C" and model.sequences[0][4] == "E"
     updated = update(model, [demos[0]])
-    assert dict(updated.settings)["require"] == "@1.3<@1.5"
+    assert updated.settings.require == ("@1.3<@1.5",)
     ((x, y),) = updated.teacher_constraints
     assert (x, y) == (updated.sequences[0][2], updated.sequences[0][4])
     assert updated.state(x).object == "fork" and updated.state(y).object == "glass"

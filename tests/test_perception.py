@@ -250,11 +250,11 @@ def test_experiment_2_on_vision_in_mujoco() -> None:
     against the simulator's true poses, not against what the camera saw."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
-    from demoplan.demonstrations import load_demonstrations
     from demoplan.execution.camera_world import CameraWorld
     from demoplan.execution.executor import execute
     from demoplan.execution.physics import MujocoWorld
     from demoplan.learning import learn
+    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.scenes.scene import complete_geometry, load_scene
     from tests.helpers import EXAMPLES
 

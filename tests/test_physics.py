@@ -11,12 +11,12 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.demonstrations import load_demonstrations
 from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
 from demoplan.learning import learn
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
-from demoplan.modelfile import save_model
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES
 

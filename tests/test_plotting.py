@@ -19,7 +19,7 @@ from tests.helpers import EXAMPLES
 
 def test_fig_2_transitive_reduction() -> None:
     """Fig. 2's nine constraints reduce to the five arrows the figure draws."""
-    from demoplan.constraints import learn_constraints
+    from demoplan.learning.constraints import learn_constraints
 
     edges = set(learn_constraints(["ABEFG", "AEBFG"]).constraints)
     assert _transitive_reduction(list("ABEFG"), edges) == {

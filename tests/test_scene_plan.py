@@ -16,10 +16,10 @@ import yaml
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.demonstrations import load_demonstrations
 from demoplan.learning import learn
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
-from demoplan.modelfile import save_model
 from demoplan.planning.problem import Action
 from demoplan.planning.xml import load_problem
 from demoplan.scenes.plan import plan_in_scene, scene_problems

@@ -12,7 +12,8 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.demonstrations import load_demonstrations
+from demoplan.inputs import load_inputs
+from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import write_bag, write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from tests.helpers import EXAMPLES
@@ -78,7 +79,7 @@ def test_learn_from_a_bag(tmp_path: Path) -> None:
         kind="tf",
         storage="mcap",
     )
-    (found,) = load_demonstrations([tmp_path / "bag"])
+    (found,) = load_inputs([tmp_path / "bag"])
     assert [s.object for s in found.steps] == [s.object for s in demo.steps]
     assert found.name == "bag"
 

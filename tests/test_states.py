@@ -11,9 +11,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
+from demoplan.learning import LearningSettings
+from demoplan.learning.states import generate_states, state_letters
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import angle_between, quat_from_yaw
-from demoplan.states import StateGenerationSettings, generate_states, state_letters
 from tests.helpers import EXAMPLES
 
 # Table II: state, object, relative position, (x, y).
@@ -253,7 +254,7 @@ def test_state_letters_follow_the_spec() -> None:
 
 def test_each_state_keeps_its_statistics() -> None:
     demos = load_demonstrations([EXAMPLES / "set_table"])
-    generation = generate_states(demos, StateGenerationSettings())
+    generation = generate_states(demos, LearningSettings())
     for state in generation.states:
         assert state.members
         for d, s in state.members:

@@ -21,8 +21,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from demoplan.demonstrations import load_demonstrations
 from demoplan.errors import InputError
+from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import (
     ObjectTrack,
     PoseStream,

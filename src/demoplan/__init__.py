@@ -22,11 +22,12 @@ _EXPORTS = {
     "State": "demoplan.model",
     "Step": "demoplan.model",
     "TaskModel": "demoplan.model",
-    "TaskModelLearner": "demoplan.learning",
-    "learn": "demoplan.learning",
-    "load_demonstrations": "demoplan.demonstrations",
-    "load_model": "demoplan.modelfile",
-    "save_model": "demoplan.modelfile",
+    "TaskModelLearner": "demoplan.learning.learner",
+    "learn": "demoplan.learning.learner",
+    "load_demonstrations": "demoplan.learning.demonstrations",
+    "load_inputs": "demoplan.inputs",
+    "load_model": "demoplan.learning.modelfile",
+    "save_model": "demoplan.learning.modelfile",
     "Problem": "demoplan.planning.problem",
     "Plan": "demoplan.planning.problem",
     "load_problem": "demoplan.planning.xml",
@@ -48,6 +49,7 @@ __all__ = [
     "TaskModelLearner",
     "learn",
     "load_demonstrations",
+    "load_inputs",
     "load_model",
     "load_problem",
     "save_model",
@@ -55,11 +57,12 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from demoplan.demonstrations import load_demonstrations
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
-    from demoplan.learning import TaskModelLearner, learn
+    from demoplan.inputs import load_inputs
+    from demoplan.learning.demonstrations import load_demonstrations
+    from demoplan.learning.learner import TaskModelLearner, learn
+    from demoplan.learning.modelfile import load_model, save_model
     from demoplan.model import Demonstration, Pose, State, Step, TaskModel
-    from demoplan.modelfile import load_model, save_model
     from demoplan.planning.problem import Plan, Problem
     from demoplan.planning.search import solve
     from demoplan.planning.xml import load_problem

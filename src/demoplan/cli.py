@@ -14,7 +14,6 @@ import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
-from dataclasses import replace
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -81,7 +80,7 @@ def _print_json(data: Any) -> None:
 
 
 def _print_model(model: TaskModel, decimals: int) -> None:
-    from demoplan.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
+    from demoplan.learning.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
 
     states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
     for column in STATE_HEADER:  # Text: "[m]" is not rich markup
@@ -217,13 +216,12 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
-    from demoplan.constraints import parse_requirements_syntax
-    from demoplan.demonstrations import load_demonstrations
+    from demoplan.inputs import load_inputs
+    from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
-    from demoplan.modelfile import load_model, save_model
+    from demoplan.learning.modelfile import load_model, save_model
     from demoplan.segmentation.types import parse_object_patterns
-    from demoplan.states import StateGenerationSettings
 
     with _reported_errors():
         if update is None and output is None:
@@ -231,32 +229,28 @@ def learn(
         target = output or update
         assert target is not None
         _refuse_overwriting_inputs(target, demos)
-        overrides = {
+        options = {
             "position_noise": position_noise,
             "orientation_noise": orientation_noise,
             "position_separation": position_separation,
             "orientation_separation": orientation_separation,
             "max_clusters": max_clusters,
         }
-        settings: dict[str, Any] = {k: v for k, v in overrides.items() if v is not None}
+        overrides: dict[str, Any] = {k: v for k, v in options.items() if v is not None}
         requirements = list(require or [])
         from_file: list[str] = []
         if require_file is not None:
             from_file = _read_requirements(require_file)
             requirements += from_file
         try:
-            parse_requirements_syntax(requirements)
-            new = load_demonstrations(demos, frame=frame, objects=parse_object_patterns(objects))
+            new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
             if update is not None:
                 model = update_model(
-                    load_model(update), new, require=requirements, settings=settings
+                    load_model(update), new, require=requirements, settings=overrides
                 )
             else:
-                model = learn_model(
-                    new,
-                    require=list(dict.fromkeys(requirements)),
-                    settings=replace(StateGenerationSettings(), **settings),
-                )
+                settings = LearningSettings(require=tuple(dict.fromkeys(requirements)), **overrides)
+                model = learn_model(new, settings=settings)
         except InputError as exc:
             # A requirement read from --require-file: say which file it came from.
             if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
@@ -294,7 +288,7 @@ def _refuse_overwriting_inputs(target: Path, inputs: list[Path]) -> None:
 
 
 def _model_json(model: TaskModel) -> dict[str, Any]:
-    from demoplan.modelfile import model_to_dict
+    from demoplan.learning.modelfile import model_to_dict
 
     return model_to_dict(model)
 
@@ -310,7 +304,7 @@ def show(
     decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
 ) -> None:
     """Print a model as the paper's tables: states, sequences, constraints."""
-    from demoplan.modelfile import load_model
+    from demoplan.learning.modelfile import load_model
 
     with _reported_errors():
         model = load_model(model_path)
@@ -372,7 +366,7 @@ def pddl(
 
 
 def _scene_inputs(model_path: Path, scene_path: Path) -> tuple[Any, Any]:
-    from demoplan.modelfile import load_model
+    from demoplan.learning.modelfile import load_model
     from demoplan.scenes.scene import load_scene
 
     return load_model(model_path), load_scene(scene_path)
@@ -774,7 +768,7 @@ def segment(
     rest on a support (docs/segmentation.md); a push along the support is
     reported, not a step; a pause in the air is not a placement.
     """
-    from demoplan.demonstrations import demonstration_to_dict, load_object_geometry
+    from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
     from demoplan.segmentation import load_stream, plot_segmentation, write_demonstration
     from demoplan.segmentation import segment as segment_stream
     from demoplan.segmentation.types import parse_object_patterns
@@ -885,7 +879,7 @@ def _remove(files: list[Path], folder: Path | None) -> None:
 
 
 def _move_json(move: Any) -> dict[str, Any]:
-    from demoplan.demonstrations import pose_to_dict
+    from demoplan.poses import pose_to_dict
 
     return {
         "object": move.object,
@@ -922,8 +916,8 @@ def import_(
     ] = None,
 ) -> None:
     """Import a robot-learning recording: one demonstration file per demonstration in it."""
-    from demoplan.demonstrations import demonstration_to_dict
     from demoplan.fileio import dump_json
+    from demoplan.learning.demonstrations import demonstration_to_dict
     from demoplan.segmentation.importing import import_recording_details
 
     with _reported_errors():

@@ -18,14 +18,19 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from demoplan.demonstrations import load_demonstrations
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.learning import TaskModelLearner
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.modelfile import save_model
+from demoplan.learning.tables import (
+    constraint_text,
+    format_orientation,
+    format_position,
+    sequence_rows,
+)
 from demoplan.model import TaskModel
-from demoplan.modelfile import save_model
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
 from demoplan.scenes.scene import complete_geometry, load_scene
-from demoplan.tables import constraint_text, format_orientation, format_position, sequence_rows
 
 __all__ = [
     "PAPER_TABLE_II",

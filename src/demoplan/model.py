@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from demoplan.learning.settings import LearningSettings
 from demoplan.rotations import Quaternion, rpy_from_quat
 
 Vector3 = tuple[float, float, float]
@@ -151,6 +152,7 @@ class TaskModel:
     ``goals[k]`` is the set of states demonstration k ends in.
     ``teacher_constraints`` are the pairs a teacher required; ``violations``
     lists, per demonstration, the teacher constraints it contradicts.
+    ``settings`` are those it was learned with (``require``: the teacher's texts).
     """
 
     states: tuple[State, ...]
@@ -160,7 +162,7 @@ class TaskModel:
     demonstrations: tuple[Demonstration, ...]
     teacher_constraints: tuple[tuple[str, str], ...] = ()
     violations: tuple[tuple[int, str, str], ...] = ()
-    settings: tuple[tuple[str, float | int | str], ...] = ()
+    settings: LearningSettings = field(default_factory=LearningSettings)
 
     def state(self, state_id: str) -> State:
         for state in self.states:

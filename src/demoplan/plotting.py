@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.constraints import visit_sequence
+from demoplan.learning.constraints import visit_sequence
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 
 if TYPE_CHECKING:

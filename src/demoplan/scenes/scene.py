@@ -26,7 +26,11 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from demoplan.demonstrations import (
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
+from demoplan.poses import (
+    LENGTH_SCALE,
     Coordinate,
     Number,
     PoseSchema,
@@ -34,9 +38,6 @@ from demoplan.demonstrations import (
     pose_from_dict,
     pose_to_dict,
 )
-from demoplan.errors import InputError
-from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
 from demoplan.rotations import rpy_from_quat
 
 __all__ = [
@@ -51,7 +52,6 @@ __all__ = [
     "yaw_of",
 ]
 
-_LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 MAX_GRIPPER = 0.5  # m: finger radius or clearance beyond this is a unit mistake
 DEFAULT_GRASPS = (0.0, 90.0)
 """Finger axes (degrees, object frame) of an object whose scene entry names none."""
@@ -194,7 +194,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         parsed = _SceneSchema.model_validate(data)
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
-    scale = _LENGTH_SCALE[parsed.units.length]
+    scale = LENGTH_SCALE[parsed.units.length]
     to_deg = math.degrees if parsed.units.angle == "rad" else float
     objects = []
     for name, entry in parsed.objects.items():

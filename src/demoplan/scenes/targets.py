@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.constraints import visit_sequence
 from demoplan.errors import InputError
+from demoplan.learning.constraints import visit_sequence
 from demoplan.model import Pose, State, TaskModel
 from demoplan.rotations import Quaternion, canonical_quat, quat_multiply
 from demoplan.scenes.scene import Scene

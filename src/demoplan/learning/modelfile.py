@@ -11,14 +11,21 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import fields
+from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictStr,
+    ValidationError,
+    create_model,
+    field_validator,
+)
 
-from demoplan.constraints import label_key
-from demoplan.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.fileio import (
     check_format,
@@ -27,21 +34,26 @@ from demoplan.fileio import (
     read_document,
     write_atomic,
 )
+from demoplan.learning.constraints import label_key
+from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
+from demoplan.learning.settings import LearningSettings
 from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
 from demoplan.rotations import canonical_quat, quat_from_rpy
-from demoplan.states import StateGenerationSettings
 
-__all__ = ["load_model", "model_from_dict", "model_to_dict", "save_model"]
+__all__ = [
+    "load_model",
+    "model_from_dict",
+    "model_to_dict",
+    "save_model",
+    "settings_from_dict",
+    "settings_to_dict",
+]
 
 
 # JSON numbers only: pydantic's lax mode would read "0.5" and true as numbers.
 Number = Annotated[float, Field(strict=True)]
 Integer = Annotated[int, Field(strict=True)]
 _LABEL = re.compile(r"^[A-Z]+(?:#[1-9][0-9]*)?$")  # a state id, or a visit label "C#2"
-# Learning settings demoplan itself reads back (``learn --update``) and their types,
-# from the settings dataclass itself so that a new setting cannot be forgotten here.
-_NUMBER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is float}
-_INTEGER_SETTINGS = {f.name for f in fields(StateGenerationSettings) if type(f.default) is int}
 
 
 class _Schema(BaseModel):
@@ -96,22 +108,52 @@ class _ModelSchema(_Schema):
     goals: list[list[str]]
     teacher_constraints: list[list[str]] = []
     violations: list[_ViolationSchema] = []
-    settings: dict[str, Any] = {}
+    settings: dict[str, Any] = {}  # read by settings_from_dict
     demonstrations: list[dict[str, Any]] = []
 
-    @field_validator("settings")
-    @classmethod
-    def _typed_settings(cls, settings: dict[str, Any]) -> dict[str, Any]:
-        for key, value in settings.items():
-            if isinstance(value, bool) or not isinstance(value, float | int | str):
-                raise ValueError(f"{key} must be a number or a string, got {value!r}")
-            if key in _NUMBER_SETTINGS and (
-                isinstance(value, str) or not math.isfinite(value) or value < 0
-            ):
-                raise ValueError(f"{key} must be a non-negative number, got {value!r}")
-            if key in _INTEGER_SETTINGS and not isinstance(value, int):
-                raise ValueError(f"{key} must be an integer, got {value!r}")
-        return settings
+
+def _requirement_texts(value: Any) -> Any:
+    """Model files before ``require`` was a list joined the texts with ';'."""
+    return [text for text in value.split(";") if text] if isinstance(value, str) else value
+
+
+def _settings_schema() -> type[BaseModel]:
+    """The model file's ``settings``: the fields of :class:`LearningSettings` as JSON
+    (strict numbers, no unknown names), built from the dataclass itself so that a
+    new setting cannot be forgotten here. Ranges are checked by the dataclass."""
+    kinds: dict[type, Any] = {
+        float: Number,
+        int: Integer,
+        tuple: Annotated[list[StrictStr], BeforeValidator(_requirement_texts)],
+    }
+    definitions: dict[str, Any] = {
+        f.name: (kinds[type(f.default)], list(f.default) if type(f.default) is tuple else f.default)
+        for f in fields(LearningSettings)
+    }
+    config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    return create_model("SettingsSchema", __config__=config, **definitions)
+
+
+_SettingsSchema = _settings_schema()
+
+
+def settings_to_dict(settings: LearningSettings) -> dict[str, Any]:
+    """The settings as the model file stores them."""
+    return _SettingsSchema.model_validate(asdict(settings)).model_dump()
+
+
+def settings_from_dict(data: Any, source: str) -> LearningSettings:
+    """A model file's ``settings``, or one InputError naming ``settings.<field>``."""
+    try:
+        parsed = _SettingsSchema.model_validate(data)
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source, prefix="settings") from None
+    values = parsed.model_dump()
+    try:
+        return LearningSettings(**{**values, "require": tuple(values["require"])})
+    except InputError as exc:
+        message = str(exc).removeprefix(f"{exc.field}: ")
+        raise InputError(message, source=source, field=f"settings.{exc.field}") from None
 
 
 def model_to_dict(model: TaskModel) -> dict[str, Any]:
@@ -124,7 +166,7 @@ def model_to_dict(model: TaskModel) -> dict[str, Any]:
         "goals": [list(g) for g in model.goals],
         "teacher_constraints": [list(c) for c in model.teacher_constraints],
         "violations": [{"demonstration": d, "required": [x, y]} for d, x, y in model.violations],
-        "settings": dict(model.settings),
+        "settings": settings_to_dict(model.settings),
         "demonstrations": [demonstration_to_dict(d) for d in model.demonstrations],
     }
 
@@ -156,6 +198,7 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         parsed = _ModelSchema.model_validate(data)
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
+    settings = settings_from_dict(parsed.settings, source)
     states = tuple(_state_from_schema(s) for s in parsed.states)
     ids = [s.id for s in states]
     if len(set(ids)) != len(ids):
@@ -230,7 +273,7 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         violations=tuple(
             (v.demonstration, v.required[0], v.required[1]) for v in parsed.violations
         ),
-        settings=tuple(parsed.settings.items()),
+        settings=settings,
     )
 
 

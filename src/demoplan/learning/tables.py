@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from demoplan.constraints import label_key
+from demoplan.learning.constraints import label_key
 from demoplan.model import State, TaskModel
 
 __all__ = [

@@ -29,12 +29,13 @@ from demoplan.model import State, visit_label
 
 __all__ = [
     "ConstraintSet",
+    "Requirement",
     "anchor_requirements",
     "goal_states",
     "learn_constraints",
     "ordered_pairs",
     "parse_requirements",
-    "parse_requirements_syntax",
+    "required_pairs",
     "visit_sequence",
 ]
 
@@ -104,36 +105,50 @@ def goal_states(sequence: Sequence[str], states: Sequence[State]) -> tuple[str, 
     return tuple(sorted(set(last.values()), key=label_key))
 
 
-def parse_requirements_syntax(texts: Iterable[str]) -> list[tuple[str, str]]:
+@dataclass(frozen=True, slots=True)
+class Requirement:
+    """A teacher requirement ``"X<Y"``: the text as given and its two sides.
+
+    Each side is a state id (``C``), a visit label (``C#2``), an object name,
+    which stands for every state of that object (``plate``), or ``@d.s``, the
+    state of step s of demonstration d (both 1-based).
+    """
+
+    text: str
+    tokens: tuple[str, str]
+
+
+def parse_requirements(texts: Iterable[str]) -> tuple[Requirement, ...]:
     """Split ``"X<Y"`` texts into their two sides, or raise an InputError."""
-    sides = []
+    requirements = []
     for text in texts:
         match = _REQUIREMENT.match(text)
         if not match:
             raise InputError(f"expected a requirement like 'A<B', got {text!r}", field="require")
-        sides.append((match.group(1), match.group(2)))
-    return sides
+        requirements.append(Requirement(text, (match.group(1), match.group(2))))
+    return tuple(requirements)
 
 
-def parse_requirements(
-    texts: Iterable[str], states: Sequence[State], sequences: Sequence[Sequence[str]]
+def required_pairs(
+    requirements: Iterable[Requirement],
+    states: Sequence[State],
+    sequences: Sequence[Sequence[str]],
 ) -> tuple[Pair, ...]:
-    """Teacher requirements ``"A<B"`` → pairs of visit labels.
+    """Teacher requirements → pairs of visit labels.
 
-    Each side is a state id (``C``), a visit label that occurs in some
-    demonstration (``C#2``), an object name, which stands for every state of
-    that object (``plate<napkin``), or ``@d.s``, the state of step s of
-    demonstration d (both 1-based; stable when demonstrations are added).
-    Required pairs that form a cycle are refused: no plan could satisfy them.
+    A state id or visit label must occur in some demonstration, an object
+    name stands for every state of that object (``plate<napkin``), ``@d.s``
+    must name a step (stable when demonstrations are added). Required pairs
+    that form a cycle are refused: no plan could satisfy them.
     """
     by_object: dict[str, list[str]] = {}
     for state in states:
         by_object.setdefault(state.object, []).append(state.id)
     visits = {label for sequence in sequences for label in visit_sequence(sequence)}
     pairs: set[Pair] = set()
-    texts = list(texts)
-    for text, tokens in zip(texts, parse_requirements_syntax(texts), strict=True):
-        sides = [_expand(token, visits, by_object, sequences, text) for token in tokens]
+    for requirement in requirements:
+        text = requirement.text
+        sides = [_expand(token, visits, by_object, sequences, text) for token in requirement.tokens]
         for x in sides[0]:
             for y in sides[1]:
                 if x == y:
@@ -177,7 +192,9 @@ def _expand(
     )
 
 
-def anchor_requirements(texts: Iterable[str], sequences: Sequence[Sequence[str]]) -> list[str]:
+def anchor_requirements(
+    requirements: Iterable[Requirement], sequences: Sequence[Sequence[str]]
+) -> tuple[Requirement, ...]:
     """Rewrite state-id sides as ``@d.s`` anchors (their first occurrence).
 
     State ids follow the order of the demonstrations and can change when a
@@ -188,9 +205,11 @@ def anchor_requirements(texts: Iterable[str], sequences: Sequence[Sequence[str]]
     for d, sequence in enumerate(sequences):
         for s, label in enumerate(visit_sequence(sequence)):
             where.setdefault(label, f"@{d + 1}.{s + 1}")
-    return [
-        "<".join(where.get(t, t) for t in tokens) for tokens in parse_requirements_syntax(texts)
-    ]
+    anchored = []
+    for requirement in requirements:
+        x, y = (where.get(t, t) for t in requirement.tokens)
+        anchored.append(Requirement(f"{x}<{y}", (x, y)))
+    return tuple(anchored)
 
 
 def label_key(label: str) -> tuple[int, str, int]:

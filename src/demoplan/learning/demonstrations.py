@@ -8,10 +8,9 @@ orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Collection, Iterable, Sequence
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any
 
 from pydantic import (
     BaseModel,
@@ -22,75 +21,38 @@ from pydantic import (
     StrictStr,
     ValidationError,
     field_validator,
-    model_validator,
 )
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw
+from demoplan.model import Demonstration, ObjectGeometry, Step
+from demoplan.poses import (
+    LENGTH_SCALE,
+    ObjectSchema,
+    PoseSchema,
+    UnitsSchema,
+    pose_from_dict,
+    pose_to_dict,
+)
 
 __all__ = [
     "check_demonstrations",
     "demonstration_to_dict",
     "demonstrations_from_document",
-    "is_pose_stream",
+    "demonstrations_from_path",
     "load_demonstrations",
     "load_object_geometry",
-    "pose_from_dict",
-    "pose_to_dict",
 ]
 
-_LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrations
-
-
-# A number is a JSON number: not a string ("1.5") nor a boolean (true), which
-# pydantic's lax mode would otherwise turn into 1.5 and 1.0.
-Number = Annotated[float, Field(strict=True)]
-MAX_COORDINATE = 1.0e4  # m (in the file's units): a table, a room, a building — not 1e300
-Coordinate = Annotated[float, Field(strict=True, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
 
 
 class _Schema(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
 
-class UnitsSchema(_Schema):
-    length: Literal["m", "cm", "mm"] = "m"
-    angle: Literal["deg", "rad"] = "deg"
-
-
-class PoseSchema(_Schema):
-    position: list[Coordinate] = Field(min_length=2, max_length=3)
-    yaw: Number | None = None
-    rpy: list[Number] | None = Field(default=None, min_length=3, max_length=3)
-    quat: list[Number] | None = Field(default=None, min_length=4, max_length=4)
-
-    @model_validator(mode="after")
-    def _one_orientation(self) -> PoseSchema:
-        given = [k for k in ("yaw", "rpy", "quat") if getattr(self, k) is not None]
-        if len(given) > 1:
-            raise ValueError(f"give one orientation (yaw, rpy or quat), got {' and '.join(given)}")
-        if self.quat is not None and math.hypot(*self.quat) < 1e-9:
-            raise ValueError("quat must be a non-zero quaternion [x, y, z, w]")
-        return self
-
-
 class StepSchema(PoseSchema):
     object: str = Field(min_length=1)
-
-
-class ObjectSchema(_Schema):
-    shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
-    size: list[Number] = Field(min_length=3, max_length=3)
-
-    @field_validator("size")
-    @classmethod
-    def _positive(cls, size: list[float]) -> list[float]:
-        if any(v <= 0 for v in size):
-            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
-        return size
 
 
 class ObjectsFileSchema(_Schema):
@@ -146,30 +108,6 @@ class DemonstrationsSchema(_Schema):
         return demos
 
 
-def pose_from_dict(data: PoseSchema, units: UnitsSchema) -> Pose:
-    """A validated pose → :class:`Pose` in metres and a unit quaternion."""
-    scale = _LENGTH_SCALE[units.length]
-    x, y, *rest = (v * scale for v in data.position)
-    z = rest[0] if rest else 0.0
-    to_deg = math.degrees if units.angle == "rad" else float
-    orientation = None
-    if data.yaw is not None:
-        orientation = quat_from_yaw(to_deg(data.yaw))
-    elif data.rpy is not None:
-        orientation = quat_from_rpy([to_deg(v) for v in data.rpy])
-    elif data.quat is not None:
-        orientation = canonical_quat(data.quat)
-    return Pose(position=(x, y, z), orientation=orientation)
-
-
-def pose_to_dict(pose: Pose) -> dict[str, Any]:
-    """A pose as written by demoplan: metres, and ``quat`` (exact) when oriented."""
-    out: dict[str, Any] = {"position": list(pose.position)}
-    if pose.orientation is not None:
-        out["quat"] = list(pose.orientation)
-    return out
-
-
 def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     """A demonstration in the SPEC's file form (metres, quaternions)."""
     out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
@@ -200,7 +138,7 @@ def load_object_geometry(
         parsed = ObjectsFileSchema.model_validate(read_document(path))
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
-    scale = _LENGTH_SCALE[parsed.units.length]
+    scale = LENGTH_SCALE[parsed.units.length]
     if known is not None:
         unknown = [name for name in parsed.objects if name not in known]
         if unknown:
@@ -249,7 +187,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         raise describe_validation_error(exc, source, prefix) from None
     where = f"{prefix}." if prefix else ""
     units = parsed.units
-    scale = _LENGTH_SCALE[units.length]
+    scale = LENGTH_SCALE[units.length]
     objects = tuple(
         (name, ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale)))
         for name, g in parsed.objects.items()
@@ -282,57 +220,38 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
     )
 
 
-STREAM_SUFFIXES = {".csv", ".db3", ".mcap"}
+def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
+    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order)
+    and check them together (:func:`check_demonstrations`).
 
-
-def is_pose_stream(path: Path) -> bool:
-    """A pose stream (SPEC §3): a CSV file, or a ROS 2 bag (``.db3``, ``.mcap``, or a
-    folder holding ``metadata.yaml``)."""
-    if path.is_dir():
-        return (path / "metadata.yaml").is_file()
-    return path.suffix.lower() in STREAM_SUFFIXES or path.name == "metadata.yaml"
-
-
-def load_demonstrations(
-    paths: Iterable[str | Path],
-    *,
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-) -> list[Demonstration]:
-    """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
-    a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
-    (:mod:`demoplan.segmentation`, default settings), named after the file.
-
-    ``frame`` and ``objects`` are passed to
-    :func:`~demoplan.segmentation.load_stream` for pose streams (the world frame
-    of a TF tree, the objects to keep); demonstration files ignore them."""
+    Pose streams (CSV, ROS 2 bags) are segmented first by
+    :func:`demoplan.inputs.load_inputs`, which reads both."""
     demos: list[Demonstration] = []
     for path in map(Path, paths):
-        if is_pose_stream(path):
-            from demoplan.segmentation import load_stream, segment
-
-            name = path.stem if path.name != "metadata.yaml" else path.parent.name
-            stream = load_stream(path, frame=frame, objects=objects)
-            demos.append(segment(stream).to_demonstration(name))
-            continue
-        if path.is_dir():
-            # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
-            files = sorted(
-                p
-                for p in path.iterdir()
-                if p.suffix.lower() in {".json", ".yaml", ".yml"}
-                and not p.name.startswith(".")
-                and p.is_file()
-            )
-            if not files:
-                raise InputError(
-                    "folder holds no .json or .yaml demonstration files", source=str(path)
-                )
-        else:
-            files = [path]
-        for file in files:
-            demos += demonstrations_from_document(read_document(file), str(file))
+        demos += demonstrations_from_path(path)
     check_demonstrations(demos)
+    return demos
+
+
+def demonstrations_from_path(path: Path) -> list[Demonstration]:
+    """The demonstrations of one file, or of every ``*.json`` / ``*.yaml`` file of a
+    folder (in name order); not yet checked against each other."""
+    if path.is_dir():
+        # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
+        files = sorted(
+            p
+            for p in path.iterdir()
+            if p.suffix.lower() in {".json", ".yaml", ".yml"}
+            and not p.name.startswith(".")
+            and p.is_file()
+        )
+        if not files:
+            raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+    else:
+        files = [path]
+    demos: list[Demonstration] = []
+    for file in files:
+        demos += demonstrations_from_document(read_document(file), str(file))
     return demos
 
 

@@ -29,13 +29,14 @@ from typing import Literal
 import numpy as np
 
 from demoplan import rotations
-from demoplan.clustering import (
+from demoplan.learning.clustering import (
     Clustering,
     PositionSpace,
     RotationSpace,
     Space,
     select_clusterings,
 )
+from demoplan.learning.settings import LearningSettings as StateGenerationSettings
 from demoplan.model import Demonstration, Pose, State, StateOrientation, StatePosition
 
 __all__ = [
@@ -49,30 +50,6 @@ __all__ = [
 Kind = Literal["position", "orientation"]
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True, slots=True)
-class StateGenerationSettings:
-    """Settings of state generation (documented defaults, docs/learning.md).
-
-    position_noise : RMS placement noise in metres; spreads whose RMS differs
-        by less than this are ties.
-    orientation_noise : the same for orientations, in degrees.
-    position_separation : cluster means closer than this (m) reject a clustering.
-    orientation_separation : the same for orientations (degrees, geodesic).
-    n_init : K-means restarts per call.
-    seed : seed of the K-means restarts.
-    max_clusters : cap on the clusters per object and reference (0: the
-        paper's N, the number of placements).
-    """
-
-    position_noise: float = 0.003
-    orientation_noise: float = 0.5
-    position_separation: float = 0.05
-    orientation_separation: float = 15.0
-    n_init: int = 8
-    seed: int = 0
-    max_clusters: int = 0
 
 
 @dataclass(frozen=True, slots=True)
