@@ -66,6 +66,17 @@ class RobosuiteDataError(RuntimeError):
     """The demonstrations could not be found, fetched or extracted."""
 
 
+def skip_or_fail(exc: Exception) -> None:
+    """Skip a test that needs the recordings when they cannot be had — unless
+    ``DEMOPLAN_REQUIRE_DATA=1`` (CI sets it), where that is a failure."""
+    import pytest
+
+    message = f"robosuite's demonstrations are not available: {exc}"
+    if os.environ.get("DEMOPLAN_REQUIRE_DATA") == "1":
+        pytest.fail(message)
+    pytest.skip(message)
+
+
 def cache_folder() -> Path:
     """Where the robosuite tarballs are kept."""
     root = os.environ.get("DEMOPLAN_TEST_DATA")

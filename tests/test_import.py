@@ -21,7 +21,7 @@ from demoplan.errors import InputError
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import import_recording
 from demoplan.segmentation.readers.hdf5 import model_layout, read_recording
-from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations
+from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
 
 OBJECTS = {
     "SawyerPickPlace": ["Milk", "Bread", "Cereal", "Can"],
@@ -47,7 +47,7 @@ def recordings() -> dict[str, Path]:
     try:
         return robosuite_demonstrations()
     except RobosuiteDataError as exc:
-        pytest.skip(f"robosuite's demonstrations are not available: {exc}")
+        skip_or_fail(exc)
 
 
 def invoke(*args: Any) -> Any:

@@ -47,6 +47,7 @@ from tests.robosuite_data import (
     RobosuiteDataError,
     resampled,
     robosuite_demonstrations,
+    skip_or_fail,
 )
 
 
@@ -55,7 +56,7 @@ def imported() -> dict[tuple[str, str], object]:
     try:
         files = robosuite_demonstrations()
     except RobosuiteDataError as exc:
-        pytest.skip(f"robosuite's demonstrations are not available: {exc}")
+        skip_or_fail(exc)
     out: dict[tuple[str, str], object] = {}
     for name in {n for n, _ in EXPECTED}:
         for item in import_recording_details(files[name]):

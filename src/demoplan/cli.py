@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 from rich.text import Text
 
@@ -832,31 +831,29 @@ def segment(
         if json_output:
             _print_json(demonstration_to_dict(demo))
             return
-        table = Table(title=f"Steps found in {stream_path.name}", title_justify="left")
-        for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
-            table.add_column(escape(column), justify="left" if column == "object" else "right")
-        for index, move in enumerate(found.moves, 1):
-            x, y, z = move.pose.position
-            table.add_row(
-                str(index),
-                move.object,
-                f"{move.start:.2f}",
-                f"{move.end:.2f}",
-                f"{x:.4f}",
-                f"{y:.4f}",
-                f"{z:.4f}",
-            )
-        _stdout.print(table)
-        for push in found.pushes:
-            _stderr.print(
-                f"push (not a step): {push.object} slid {push.distance * 100:.1f} cm along its "
-                f"support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
-                markup=False,
-                highlight=False,
-            )
+        _print_steps(f"Steps found in {stream_path.name}", found)
         _stderr.print(
             f"{_count(len(found.moves), 'step')} ({_count(len(found.pushes), 'push')} and "
             f"{_count(len(found.nudges), 'nudge')} left out); wrote {output}",
+            markup=False,
+            highlight=False,
+        )
+
+
+def _print_steps(title: str, found: Any) -> None:
+    """A segmentation's steps as a table on stdout, each push it left out on stderr."""
+    table = Table(title=Text(title), title_justify="left")
+    for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
+        table.add_column(Text(column), justify="left" if column == "object" else "right")
+    for index, move in enumerate(found.moves, 1):
+        x, y, z = move.pose.position
+        cells = (f"{move.start:.2f}", f"{move.end:.2f}", f"{x:.4f}", f"{y:.4f}", f"{z:.4f}")
+        table.add_row(str(index), Text(move.object), *cells)
+    _stdout.print(table)
+    for push in found.pushes:
+        _stderr.print(
+            f"push (not a step): {push.object} slid {push.distance * 100:.1f} cm along its "
+            f"support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
             markup=False,
             highlight=False,
         )
@@ -1010,29 +1007,7 @@ def import_(
             title = f"{item.key}: {item.recorded.samples} samples"
             if item.key in targets:
                 title += f" → {targets[item.key]}"
-            table = Table(title=Text(title), title_justify="left")
-            for column in (
-                "step",
-                "object",
-                "picked up [s]",
-                "at rest [s]",
-                "x [m]",
-                "y [m]",
-                "z [m]",
-            ):
-                table.add_column(Text(column), justify="left" if column == "object" else "right")
-            for index, move in enumerate(item.segmentation.moves, 1):
-                x, y, z = move.pose.position
-                table.add_row(
-                    str(index),
-                    Text(move.object),
-                    f"{move.start:.2f}",
-                    f"{move.end:.2f}",
-                    f"{x:.4f}",
-                    f"{y:.4f}",
-                    f"{z:.4f}",
-                )
-            _stdout.print(table)
+            _print_steps(title, item.segmentation)
         _stderr.print(
             f"{len(files)} of {len(items)} demonstrations imported, "
             f"{sum(len(i.segmentation.moves) for i in items)} steps; wrote {output}",

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.plotting import object_colour, save_figure
-from demoplan.segmentation.detect import Segmentation
+from demoplan.segmentation.detect import Move, Segmentation
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -100,14 +100,7 @@ def plot_segmentation(
                 ax.axvspan(move.start - origin, move.end - origin, color="0.6", alpha=0.3)
         for move in segmentation.pushes:
             if move.object == trace.object:
-                ax.axvspan(
-                    move.start - origin,
-                    move.end - origin,
-                    facecolor="none",
-                    edgecolor=colour,
-                    hatch=PUSH_HATCH,
-                    linewidth=0.0,
-                )
+                _hatch_push(ax, move, origin, colour)
         ax.axhline(
             settings.start_speed,
             color="0.3",
@@ -215,14 +208,7 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
         ax.axvspan(move.start - origin, move.end - origin, color="0.6", alpha=0.3)
     for move in segmentation.pushes:
         colour = colours.get(move.object, "0.5")
-        ax.axvspan(
-            move.start - origin,
-            move.end - origin,
-            facecolor="none",
-            edgecolor=colour,
-            hatch=PUSH_HATCH,
-            linewidth=0.0,
-        )
+        _hatch_push(ax, move, origin, colour)
         ax.annotate(
             f"push {move.distance * 100:.0f} cm",
             (move.end - origin, label_at),
@@ -251,3 +237,15 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
         handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False
     )
     return ax
+
+
+def _hatch_push(ax: Axes, move: Move, origin: float, colour: str) -> None:
+    """A push's time span, hatched in its object's colour."""
+    ax.axvspan(
+        move.start - origin,
+        move.end - origin,
+        facecolor="none",
+        edgecolor=colour,
+        hatch=PUSH_HATCH,
+        linewidth=0.0,
+    )
