@@ -120,3 +120,52 @@ def test_pick_place_one_state_per_object_in_its_compartment(
     expected = set() if panda else {("Can", "Cereal"), ("Can", "Milk")}
     assert named(model) == expected
     assert model.precision is not None and 0.01 < model.precision[0] < 0.06  # centimetres
+
+
+def test_update_with_a_repeated_demonstration_changes_nothing_and_says_so(
+    tmp_path: pytest.TempPathFactory,
+) -> None:
+    """Issue 12 item 4 on the shipped data: a demonstration that repeats one already
+    learned changes no state, reference or constraint, and ``learn --update``
+    prints that; a new one prints what it added."""
+    from pathlib import Path
+    from subprocess import run
+    from sys import executable
+
+    from tests.helpers import EXAMPLES
+
+    folder = Path(str(tmp_path))
+    model = folder / "model.json"
+    learned = run(
+        [executable, "-m", "demoplan", "learn", str(EXAMPLES / "set_table"), "-o", str(model)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert learned.returncode == 0, learned.stderr
+    again = run(
+        [
+            executable,
+            "-m",
+            "demoplan",
+            "learn",
+            "--update",
+            str(model),
+            str(EXAMPLES / "set_table" / "demonstration-2.json"),
+            "-o",
+            str(folder / "again.json"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert again.returncode == 0, again.stderr
+    assert "update: no state, reference or constraint changed" in again.stderr
+    from demoplan.learning.modelfile import load_model
+
+    before, after = load_model(model), load_model(folder / "again.json")
+    assert [(s.id, s.object, s.position.reference) for s in before.states] == [
+        (s.id, s.object, s.position.reference) for s in after.states
+    ]
+    assert before.constraints == after.constraints
+    assert after.sequences[3] == after.sequences[1]

@@ -239,6 +239,7 @@ def learn(
     from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
+    from demoplan.learning.changes import model_changes
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.settings import paper_overrides
     from demoplan.segmentation.types import parse_object_patterns
@@ -266,10 +267,11 @@ def learn(
             requirements += from_file
         try:
             new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
+            changes = None
             if update is not None:
-                model = update_model(
-                    load_model(update), new, require=requirements, settings=overrides
-                )
+                previous = load_model(update)
+                model = update_model(previous, new, require=requirements, settings=overrides)
+                changes = model_changes(previous, model)
             else:
                 settings = LearningSettings(require=tuple(dict.fromkeys(requirements)), **overrides)
                 model = learn_model(new, settings=settings)
@@ -279,6 +281,9 @@ def learn(
                 raise InputError(str(exc), source=str(require_file)) from None
             raise
         save_model(model, target)
+        if changes is not None:  # on stderr, so that --json stays pure
+            for line in changes.lines():
+                _stderr.print(f"update: {line}", markup=False, highlight=False)
         if json_output:
             _print_json(_model_json(model))
         else:

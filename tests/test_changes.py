@@ -1,0 +1,30 @@
+"""learn --update's change summary (demoplan.learning.changes)."""
+
+from __future__ import annotations
+
+from demoplan.learning import learn
+from demoplan.learning.changes import model_changes
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.settings import PAPER_SETTINGS
+from tests.helpers import EXAMPLES
+
+
+def test_a_new_demonstration_reports_the_states_and_constraints_it_adds() -> None:
+    demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    first = learn(demos[:1], settings=PAPER_SETTINGS)
+    both = learn(demos, settings=PAPER_SETTINGS)
+    changes = model_changes(first, both)
+    # Demonstration 2 starts with green on the table (Table IV's D): a new state,
+    # and the order it shows removes B<… pairs nothing; D's pairs are added.
+    assert changes.added == ("D",)
+    assert ("D", "C") in changes.constraints_added
+    assert not changes.split and not changes.merged
+    assert any(line.startswith("states added: D") for line in changes.lines())
+
+
+def test_the_same_demonstrations_change_nothing() -> None:
+    demos = load_demonstrations([EXAMPLES / "set_table"])
+    model = learn(demos)
+    changes = model_changes(model, learn([*demos, demos[0]]))
+    assert changes.unchanged
+    assert changes.lines() == ["no state, reference or constraint changed"]
