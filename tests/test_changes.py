@@ -28,3 +28,18 @@ def test_the_same_demonstrations_change_nothing() -> None:
     changes = model_changes(model, learn([*demos, demos[0]]))
     assert changes.unchanged
     assert changes.lines() == ["no state, reference or constraint changed"]
+
+
+def test_a_teacher_constraint_closing_a_cycle_is_refused_with_the_cycle() -> None:
+    from dataclasses import replace
+
+    import pytest
+
+    from demoplan.errors import InputError
+
+    demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    with pytest.raises(InputError, match=r"cycle A < C < D < A .* demonstration 2"):
+        learn(demos, settings=replace(PAPER_SETTINGS, require=("red<green",)))
+    # green<red agrees with both demonstrations' orders: no cycle.
+    model = learn(demos, settings=replace(PAPER_SETTINGS, require=("green<red",)))
+    assert model.teacher_constraints

@@ -13,12 +13,15 @@ from dataclasses import replace
 from typing import Any, Self
 
 from demoplan.errors import InputError, NotFittedError
+from demoplan.graphs import find_cycle
 from demoplan.learning.constraints import (
     anchor_requirements,
     goal_states,
+    label_key,
     learn_constraints,
     parse_requirements,
     required_pairs,
+    visit_sequence,
 )
 from demoplan.learning.demonstrations import check_demonstrations
 from demoplan.learning.settings import LearningSettings
@@ -83,6 +86,7 @@ class TaskModelLearner:
         generation = generate_states(demos, self.settings)
         required = required_pairs(self._requirements, generation.states, generation.sequences)
         constraint_set = learn_constraints(generation.sequences, required)
+        _refuse_cycles(generation.sequences, constraint_set.constraints, required, demos)
         for index, x, y in constraint_set.violations:
             logger.warning(
                 "demonstration %d (%s) puts %s before %s, against the teacher's %s<%s",
@@ -180,3 +184,33 @@ def update(
     texts = tuple(dict.fromkeys([*(r.text for r in kept), *require]))
     merged = replace(model.settings, **(settings or {}), require=texts)
     return TaskModelLearner(merged).fit([*model.demonstrations, *demonstrations]).model_
+
+
+def _refuse_cycles(
+    sequences: Sequence[Sequence[str]],
+    constraints: Sequence[tuple[str, str]],
+    required: Sequence[tuple[str, str]],
+    demos: Sequence[Demonstration],
+) -> None:
+    """A teacher constraint that closes a precedence cycle among one goal's states
+    makes that goal impossible to reach in any order: an InputError naming the
+    cycle (exit 1), not a model whose goal the planner would find unreachable.
+
+    Why an error: the teacher said X<Y, a demonstration showed Y before X
+    through other states; which of the two is meant only the teacher can say
+    (drop the requirement, or the demonstration)."""
+    if not required:
+        return
+    for index, sequence in enumerate(sequences):
+        visits = set(visit_sequence(sequence))
+        inside = [(a, b) for a, b in constraints if a in visits and b in visits]
+        cycle = find_cycle(inside, order=label_key)
+        # Each goal's own sequence orders its visits, so every learned pair
+        # against it is contradicted: a cycle there runs through a requirement.
+        if cycle:
+            raise InputError(
+                f"the teacher's constraints close a precedence cycle {' < '.join(cycle)} "
+                f"within the goal of demonstration {index + 1} ({demos[index].name}); "
+                "drop the requirement or that demonstration",
+                field="require",
+            )
