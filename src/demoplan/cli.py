@@ -80,7 +80,14 @@ def _print_json(data: Any) -> None:
 
 
 def _print_model(model: TaskModel, decimals: int) -> None:
-    from demoplan.learning.tables import STATE_HEADER, constraint_text, sequence_rows, state_rows
+    from demoplan.learning.tables import (
+        STATE_HEADER,
+        constraint_text,
+        diagnostic_lines,
+        precision_text,
+        sequence_rows,
+        state_rows,
+    )
 
     states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
     for column in STATE_HEADER:  # Text: "[m]" is not rich markup
@@ -88,6 +95,11 @@ def _print_model(model: TaskModel, decimals: int) -> None:
     for row in state_rows(model, decimals):
         states.add_row(*map(Text, row))
     _stdout.print(states)
+    precision = precision_text(model)
+    if precision is not None:
+        _stdout.print(precision, markup=False, highlight=False)
+    for line in diagnostic_lines(model):
+        _stderr.print(f"warning: {line}", markup=False, highlight=False)
     sequences = Table(title="State sequences (Tables III and V)", title_justify="left")
     for column in ("Demonstration", "Sequence", "Goal states"):
         sequences.add_column(column)

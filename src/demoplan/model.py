@@ -147,6 +147,10 @@ class State:
     position: StatePosition
     orientation: StateOrientation
     members: tuple[tuple[int, int], ...]
+    margins: tuple[tuple[str, float], ...] = field(default=(), compare=False)
+    """Per decision (``"position reference"``, ``"position clusters"``, …) how far
+    it was from going the other way, in units of the precision (SPEC §5; the
+    smallest over the members); below 1: within the precision."""
 
 
 def visit_label(state_id: str, occurrence: int) -> str:

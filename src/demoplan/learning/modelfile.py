@@ -94,6 +94,7 @@ class _StateSchema(_Schema):
     position: _PositionSchema
     orientation: _OrientationSchema = _OrientationSchema()
     members: list[tuple[Integer, Integer]] = []
+    margins: dict[str, Number] = {}
 
 
 class _ViolationSchema(_Schema):
@@ -209,6 +210,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
             "spread": orientation.spread,
         },
         "members": [list(m) for m in state.members],
+        "margins": dict(state.margins),
     }
 
 
@@ -347,6 +349,7 @@ def _state_from_schema(state: _StateSchema) -> State:
             orientation.reference if quat is not None else None, quat, orientation.spread
         ),
         members=tuple((m[0], m[1]) for m in state.members),
+        margins=tuple(sorted(state.margins.items())),
     )
 
 

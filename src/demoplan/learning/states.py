@@ -237,6 +237,7 @@ def _generate_states(
     )
 
     keys: dict[tuple[int, int], _StateKey] = {}
+    decided: dict[tuple[int, int], dict[str, float]] = {}  # step → decision → margin
     relative: dict[tuple[str, Kind, str | None], np.ndarray] = {}
     framed: dict[tuple[str, str | None], bool] = {}
     candidates = {obj: [None, *(n for n in names if n != obj)] for obj in placements}
@@ -296,6 +297,12 @@ def _generate_states(
                     reachable[obj],
                 )
                 ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
+                decided[(placement.demo, placement.step)] = _margins(
+                    "orientation", ori, orientation_scores, placement, world, precision.orientation
+                )
+            decided.setdefault((placement.demo, placement.step), {}).update(
+                _margins("position", pos, position_scores, placement, world, precision.position)
+            )
             keys[(placement.demo, placement.step)] = _StateKey(
                 obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
             )
@@ -320,9 +327,14 @@ def _generate_states(
         rows = [i for i, p in enumerate(placements[obj]) if (p.demo, p.step) in chosen]
         position = relative[(obj, "position", key.position_reference)][rows]
         orientation = relative.get((obj, "orientation", key.orientation_reference))
+        margins: dict[str, float] = {}
+        for member in members[letter]:
+            for decision, margin in decided.get(member, {}).items():
+                margins[decision] = min(margins.get(decision, math.inf), margin)
         states.append(
             State(
                 id=letter,
+                margins=tuple((d, round(m, 3)) for d, m in sorted(margins.items())),
                 object=obj,
                 position=_position(
                     position,
@@ -561,6 +573,37 @@ def _choose(
         (s for s in local if not beats(top, s)),
         key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
     )
+
+
+def _margins(
+    kind: Kind,
+    chosen: ReferenceScore,
+    scores: list[ReferenceScore],
+    placement: _Placement,
+    world: _World,
+    precision: float,
+) -> dict[str, float]:
+    """How far each decision of one placement was from going the other way, in units
+    of the precision: the runner-up reference's RMS spread minus the chosen one's
+    (negative: a lower-spread reference was set aside as a tie, for fewer
+    states), and the nearest other cluster count's minus the chosen count's."""
+    out: dict[str, float] = {}
+    others = [
+        s.rms
+        for s in scores
+        if s is not chosen
+        and (s.reference is None or world.available(placement.demo, s.reference, placement.step))
+    ]
+    if others:
+        out[f"{kind} reference"] = (min(others) - chosen.rms) / precision
+    counts = [
+        math.sqrt(score)
+        for c, score in chosen.clustering.tried
+        if score is not None and c != chosen.clustering.n_clusters
+    ]
+    if counts:
+        out[f"{kind} clusters"] = (min(counts) - chosen.rms) / precision
+    return out
 
 
 def _position(values: np.ndarray, reference: str | None, in_frame: bool) -> StatePosition:

@@ -97,3 +97,28 @@ def constraint_text(pairs: Sequence[tuple[str, str]]) -> str:
     """``A<B, A<C, …`` in label order."""
     ordered = sorted(pairs, key=lambda p: (label_key(p[0]), label_key(p[1])))
     return ", ".join(f"{x}<{y}" for x, y in ordered)
+
+
+def precision_text(model: TaskModel) -> str | None:
+    """The precision the decisions were measured against, for people."""
+    if model.precision is None:
+        return None
+    position, orientation = model.precision
+    how = "estimated from the demonstrations" if model.precision_estimated else "as set"
+    return f"Precision: {position * 1000:.1f} mm, {orientation:.1f}° ({how})"
+
+
+def diagnostic_lines(model: TaskModel) -> list[str]:
+    """Warnings a teacher should read (issue 12 item 5): decisions taken within the
+    precision (margin below 1) and states seen once."""
+    lines = []
+    for state in model.states:
+        close = [f"{d} {m:+.1f}" for d, m in state.margins if m < 1.0]
+        if close:
+            lines.append(
+                f"state {state.id} ({state.object}): decided within the precision "
+                f"({', '.join(close)} × precision)"
+            )
+        if len(state.members) == 1:
+            lines.append(f"state {state.id} ({state.object}): seen in one demonstration only")
+    return lines
