@@ -139,3 +139,25 @@ def test_the_same_trajectories_as_csv_or_bags_give_the_same_steps(
         direct = item.segmentation.moves  # type: ignore[attr-defined]
         for move, reference in zip(found.moves, direct, strict=True):
             assert math.dist(move.pose.position, reference.pose.position) < 0.01, case
+
+
+def test_imported_files_of_every_recording_are_read_back_and_learned(tmp_path: Path) -> None:
+    """What ``demoplan import`` writes, ``demoplan learn`` reads (PickPlace's mesh
+    objects have no geometry: their files carry none)."""
+    from demoplan.learning import learn
+    from demoplan.learning.demonstrations import load_demonstrations
+    from demoplan.segmentation import write_demonstration
+
+    try:
+        files = robosuite_demonstrations()
+    except RobosuiteDataError as exc:
+        skip_or_fail(exc)
+    for name in ("SawyerPickPlace", "SawyerStack", "SawyerNutAssembly"):
+        folder = tmp_path / name
+        folder.mkdir()
+        for item in import_recording_details(files[name]):
+            assert item.demonstration is not None
+            write_demonstration(item.demonstration, folder / f"{item.key}.json")
+        demos = load_demonstrations([folder])
+        assert len(demos) == 2
+        assert learn(demos).states

@@ -9,6 +9,7 @@ recording's landmarks, geometry and provenance.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -21,6 +22,8 @@ from demoplan.segmentation.readers.hdf5 import (
     demonstration_keys,
     read_demonstration,
 )
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["ImportedDemonstration", "import_recording", "import_recording_details"]
 
@@ -88,9 +91,20 @@ def import_recording_details(
             if progress is not None:
                 progress(done, len(keys), key)
             continue
+        # A demonstration file's objects, when given, name every object it moves:
+        # where the model has no primitive shape for one (PickPlace's meshes), no
+        # geometry is written (it served the segmentation's support check).
+        shapes = dict(recorded.geometry)
+        complete = all(step.object in shapes for step in demo.steps)
+        if not complete:
+            logger.info(
+                "%s: no geometry for %s; the demonstration is written without objects",
+                key,
+                ", ".join(sorted({s.object for s in demo.steps} - set(shapes))),
+            )
         demo = replace(
             demo,
-            objects=recorded.geometry,
+            objects=recorded.geometry if complete else (),
             landmarks=recorded.landmarks,
             provenance=(
                 *recorded.provenance,
