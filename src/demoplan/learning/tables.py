@@ -30,6 +30,7 @@ STATE_HEADER = (
     "Orientation [deg]",
     "Spread (RMS)",
     "Members",
+    "Margin",
 )
 
 
@@ -64,7 +65,8 @@ def _spread(state: State) -> str:
 
 
 def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
-    """One row per state, as Tables II and IV (plus spread and member count)."""
+    """One row per state, as Tables II and IV (plus spread, member count and the
+    margin of its closest decision in units of the precision)."""
     return [
         (
             s.id,
@@ -75,9 +77,17 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
             format_orientation(s),
             _spread(s),
             str(len(s.members)),
+            _margin(s),
         )
         for s in model.states
     ]
+
+
+def _margin(state: State) -> str:
+    """The state's closest decision, in units of the precision (docs/learning.md)."""
+    if not state.margins:
+        return ""
+    return f"{min(m for _, m in state.margins):+.1f}"
 
 
 def sequence_rows(model: TaskModel) -> list[tuple[str, str, str]]:
