@@ -11,6 +11,16 @@ What it measures
    * peak memory traced by ``tracemalloc`` during one further, separate fit
      (tracing slows Python down, so it is never timed).
 
+   Then **state counts over placement noise**: for a placement noise sigma of
+   0.2 mm … 3 cm, used as both the absolute scatter and the relative noise
+   (alternatives then at least max(10 cm, 6 sigma + 5 cm) apart, the anchor
+   grid widened to match: :meth:`Noise.uniform`), a few (demonstrations,
+   objects) cells, each with the learned/expected states (✓ where every
+   object learned the expected number) and the median time. The sanity line
+   summarises both tables: the expected count per object is the number of its
+   alternatives used in at least two of the demonstrations, at least 1 (a place
+   demonstrated once is no evidence of a state of its own).
+
    Then the empirical growth exponents: the least-squares slope of log(time)
    against log(demonstrations) at a fixed number of objects, and against
    log(objects) at a fixed number of demonstrations (slope 1 = linear,
@@ -30,7 +40,8 @@ The synthetic task
 ------------------
 N objects; each is placed either *absolutely* (near a fixed point on the table,
 ~2 cm RMS scatter between demonstrations) or *relative to an earlier object*
-(fixed offset, ~2 mm RMS noise). About a quarter of the objects have two
+(fixed offset, in the reference's frame when the reference is oriented, ~2 mm
+RMS noise). About a quarter of the objects have two
 alternative placements at least 10 cm apart, chosen at random per
 demonstration. About half the objects carry a yaw orientation (absolute, or
 relative to an oriented reference). Every demonstration moves every object
@@ -42,7 +53,7 @@ How to run
 From the repository root, with demoplan installed (``pip install -e ".[dev]"``)::
 
     python benchmarks/learning.py              # full grid (a few minutes)
-    python benchmarks/learning.py --quick      # small grid, under 30 s
+    python benchmarks/learning.py --quick      # small grid and noise table, under 30 s
     python benchmarks/learning.py --out results.json   # also save the numbers
 """
 
@@ -62,6 +73,7 @@ import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import tracemalloc  # noqa: E402
+from collections import Counter  # noqa: E402
 from collections.abc import Callable, Sequence  # noqa: E402
 from dataclasses import asdict, dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -96,6 +108,11 @@ ABSOLUTE_YAW_NOISE = 3.0
 RELATIVE_YAW_NOISE = 0.3
 MIN_ALTERNATIVE_GAP = 0.10
 GRID_SPACING = 0.30  # absolute anchors sit on a grid this coarse
+# The noise table: sigma (m) as both the absolute scatter and the relative noise.
+FULL_SIGMAS = (0.0002, 0.001, 0.005, 0.01, 0.02, 0.03)
+QUICK_SIGMAS = (0.0002, 0.01, 0.03)
+FULL_NOISE_CELLS = ((5, 5), (10, 10), (20, 10), (50, 20))  # (demonstrations, objects)
+QUICK_NOISE_CELLS = ((5, 5), (10, 10), (50, 20))
 # Every cell's data is a prefix of one task of TASK_OBJECTS objects and of one
 # run of TASK_DEMOS demonstrations per object count, so that along a row or a
 # column of the grid only the counts change (and --quick measures the same cells).
@@ -104,6 +121,29 @@ TASK_DEMOS = max(FULL_DEMOS)
 
 
 # --------------------------------------------------------------------------- generator
+
+
+@dataclass(frozen=True, slots=True)
+class Noise:
+    """The generator's scales (metres): the defaults are the module constants.
+
+    ``absolute_scatter`` and ``relative_noise`` are planar RMS values;
+    alternatives are at least ``min_gap`` apart; absolute anchors sit on a grid
+    ``grid_spacing`` apart.
+    """
+
+    absolute_scatter: float = ABSOLUTE_SCATTER
+    relative_noise: float = RELATIVE_NOISE
+    min_gap: float = MIN_ALTERNATIVE_GAP
+    grid_spacing: float = GRID_SPACING
+
+    @classmethod
+    def uniform(cls, sigma: float) -> Noise:
+        """``sigma`` as both the absolute scatter and the relative noise, with
+        alternatives at least max(10 cm, 6 sigma + 5 cm) apart and a grid coarse
+        enough that two anchors' alternatives stay 6 sigma apart."""
+        gap = max(MIN_ALTERNATIVE_GAP, 6.0 * sigma + 0.05)
+        return cls(sigma, sigma, gap, max(GRID_SPACING, 2.0 * (gap + 0.05) + 6.0 * sigma))
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,11 +177,34 @@ class SyntheticDemonstrations:
 
     demonstrations: tuple[Demonstration, ...]
     choices: tuple[tuple[int, ...], ...]  # choices[k][i]: alternative of object i in demo k
+    names: tuple[str, ...]  # names[i]: object i's name
 
     def expected_states(self, n_demos: int) -> int:
-        """States a perfect learner finds in the first ``n_demos``: one per alternative used."""
+        """States a perfect learner finds in the first ``n_demos``: the sum of
+        :meth:`expected_per_object`."""
+        return sum(self.expected_per_object(n_demos).values())
+
+    def expected_per_object(self, n_demos: int) -> dict[str, int]:
+        """States a perfect learner finds per object in the first ``n_demos``, under
+        the method's rule.
+
+        Per object, the number of its alternatives used in at least two of these
+        demonstrations, at least 1. A place demonstrated once is no evidence of
+        a separate state: learning rejects every clustering with a cluster of
+        one placement (``_Scan.consider`` in ``demoplan.learning.clustering``),
+        so such a placement joins a state of the object. Here an object has at
+        most two alternatives, so one used once leaves a single cluster (c = 1,
+        which is never rejected): one state, as counted. (With three or more,
+        the single placement could join a neighbouring cluster whose spread then
+        fails the precision check, collapsing the object further; the generator
+        never draws that case.)
+        """
         used = self.choices[:n_demos]
-        return sum(len({choice[i] for choice in used}) for i in range(len(used[0])))
+        expected = {}
+        for i, name in enumerate(self.names):
+            counts = Counter(choice[i] for choice in used)
+            expected[name] = max(1, sum(1 for n in counts.values() if n >= 2))
+        return expected
 
 
 def _planar(rng: np.random.Generator, low: float, high: float) -> tuple[float, float]:
@@ -152,13 +215,13 @@ def _planar(rng: np.random.Generator, low: float, high: float) -> tuple[float, f
 
 
 def _alternative(
-    rng: np.random.Generator, first: tuple[float, float], low: float, high: float
+    rng: np.random.Generator, first: tuple[float, float], low: float, high: float, gap: float
 ) -> tuple[float, float]:
-    """A second placement at least ``MIN_ALTERNATIVE_GAP`` from ``first``."""
+    """A second placement at least ``gap`` from ``first``."""
     while True:
         dx, dy = _planar(rng, low, high)
         candidate = (first[0] + dx, first[1] + dy)
-        if math.dist(candidate, first) >= MIN_ALTERNATIVE_GAP:
+        if math.dist(candidate, first) >= gap:
             return candidate
 
 
@@ -169,13 +232,16 @@ def make_task(
     relative_fraction: float = 0.5,
     alternative_fraction: float = 0.25,
     oriented_fraction: float = 0.5,
+    noise: Noise = Noise(),
 ) -> TaskSpec:
     """A random task with ``n_objects`` objects (the first one is always absolute).
 
-    Absolute objects sit on distinct nodes of a square grid ``GRID_SPACING``
+    Absolute objects sit on distinct nodes of a square grid ``noise.grid_spacing``
     apart; relative ones 6-15 cm from their reference. Alternatives are drawn
-    at least ``MIN_ALTERNATIVE_GAP`` from the first placement.
+    at least ``noise.min_gap`` from the first placement (absolute: up to 5 cm
+    further; relative: 6 cm to max(20 cm, gap + 10 cm) from the reference).
     """
+    gap = noise.min_gap
     side = math.ceil(math.sqrt(n_objects))
     cells = rng.permutation(side * side)
     specs: list[ObjectSpec] = []
@@ -184,15 +250,16 @@ def make_task(
         reference = int(rng.integers(i)) if relative else None
         if reference is None:
             row, col = divmod(int(cells[i]), side)
-            first = (col * GRID_SPACING, row * GRID_SPACING)
+            first = (col * noise.grid_spacing, row * noise.grid_spacing)
             placements = [first]
             if rng.random() < alternative_fraction:
-                placements.append(_alternative(rng, first, 0.10, 0.15))
+                # (rounded, so that the default task keeps its draws: 0.1 + 0.05 != 0.15)
+                placements.append(_alternative(rng, first, gap, round(gap + 0.05, 6), gap))
         else:
             first = _planar(rng, 0.06, 0.15)
             placements = [first]
             if rng.random() < alternative_fraction:
-                placements.append(_alternative(rng, (0.0, 0.0), 0.06, 0.20))
+                placements.append(_alternative(rng, (0.0, 0.0), 0.06, max(0.20, gap + 0.10), gap))
         yaw = float(rng.uniform(-90.0, 90.0)) if rng.random() < oriented_fraction else None
         specs.append(ObjectSpec(f"obj{i:02d}", reference, tuple(placements), yaw))
     return TaskSpec(tuple(specs))
@@ -215,11 +282,12 @@ def _step_order(task: TaskSpec, rng: np.random.Generator) -> list[int]:
 
 
 def make_demonstrations(
-    task: TaskSpec, n_demos: int, rng: np.random.Generator
+    task: TaskSpec, n_demos: int, rng: np.random.Generator, noise: Noise = Noise()
 ) -> SyntheticDemonstrations:
     """``n_demos`` noisy demonstrations of ``task``, each moving every object once."""
-    abs_sigma = ABSOLUTE_SCATTER / math.sqrt(2.0)  # per axis, so the planar RMS is the target
-    rel_sigma = RELATIVE_NOISE / math.sqrt(2.0)
+    # Per axis, so that the planar RMS is the target.
+    abs_sigma = noise.absolute_scatter / math.sqrt(2.0)
+    rel_sigma = noise.relative_noise / math.sqrt(2.0)
     demos: list[Demonstration] = []
     choices: list[tuple[int, ...]] = []
     for k in range(n_demos):
@@ -235,6 +303,12 @@ def make_demonstrations(
                 nx, ny = rng.normal(0.0, abs_sigma, size=2)
                 xy = (px + nx, py + ny)
             else:
+                if spec.reference in yaws:  # the offset is in the oriented reference's frame
+                    turn = math.radians(yaws[spec.reference])
+                    px, py = (
+                        math.cos(turn) * px - math.sin(turn) * py,
+                        math.sin(turn) * px + math.cos(turn) * py,
+                    )
                 rx, ry = positions[spec.reference]
                 nx, ny = rng.normal(0.0, rel_sigma, size=2)
                 xy = (rx + px + nx, ry + py + ny)
@@ -251,19 +325,23 @@ def make_demonstrations(
             steps.append(Step(spec.name, Pose(position, orientation)))
         demos.append(Demonstration(name=f"demo{k:03d}", steps=tuple(steps)))
         choices.append(tuple(choice))
-    return SyntheticDemonstrations(tuple(demos), tuple(choices))
+    return SyntheticDemonstrations(
+        tuple(demos), tuple(choices), tuple(spec.name for spec in task.objects)
+    )
 
 
-def synthetic_data(n_objects: int, seed: int) -> SyntheticDemonstrations:
+def synthetic_data(
+    n_objects: int, seed: int, noise: Noise = Noise(), n_demos: int = TASK_DEMOS
+) -> SyntheticDemonstrations:
     """The demonstrations every cell with ``n_objects`` objects takes a prefix of.
 
     The task is the first ``n_objects`` objects of one ``TASK_OBJECTS``-object
     task drawn from ``seed``; the demonstrations come from a generator seeded
     with ``(seed, n_objects)``.
     """
-    task = make_task(max(n_objects, TASK_OBJECTS), np.random.default_rng(seed))
+    task = make_task(max(n_objects, TASK_OBJECTS), np.random.default_rng(seed), noise=noise)
     return make_demonstrations(
-        task.prefix(n_objects), TASK_DEMOS, np.random.default_rng([seed, n_objects])
+        task.prefix(n_objects), n_demos, np.random.default_rng([seed, n_objects]), noise
     )
 
 
@@ -278,6 +356,12 @@ class CellResult:
     peak_mib: float = math.nan
     states: int = 0
     expected_states: int = 0
+    objects_off: int = 0  # objects whose learned state count is not the expected one
+
+    @property
+    def matches(self) -> bool:
+        """Every object learned as many states as expected (so the totals agree too)."""
+        return self.objects_off == 0
 
     @property
     def median_s(self) -> float:
@@ -296,9 +380,10 @@ def _repeats_after(first_seconds: float, max_repeats: int) -> int:
 
 
 def measure_cell(
-    data: SyntheticDemonstrations, n_demos: int, *, max_repeats: int = 5
+    data: SyntheticDemonstrations, n_demos: int, *, max_repeats: int = 5, trace: bool = True
 ) -> CellResult:
-    """Time and trace ``TaskModelLearner().fit`` on the first ``n_demos`` demonstrations."""
+    """Time (and, with ``trace``, trace) ``TaskModelLearner().fit`` on the first
+    ``n_demos`` demonstrations."""
     demos = list(data.demonstrations[:n_demos])
     result = CellResult(n_demos, len(demos[0].steps), expected_states=data.expected_states(n_demos))
 
@@ -306,11 +391,16 @@ def measure_cell(
     learner = TaskModelLearner().fit(demos)
     result.times_s.append(time.perf_counter() - start)
     result.states = len(learner.states_)
+    learned = Counter(state.object for state in learner.states_)
+    expected = data.expected_per_object(n_demos)
+    result.objects_off = sum(learned[name] != count for name, count in expected.items())
     for _ in range(_repeats_after(result.times_s[0], max_repeats) - 1):
         start = time.perf_counter()
         TaskModelLearner().fit(demos)
         result.times_s.append(time.perf_counter() - start)
 
+    if not trace:
+        return result
     # Peak memory in a separate, untimed run: tracing slows allocation down.
     tracemalloc.start()
     tracemalloc.reset_peak()
@@ -339,16 +429,84 @@ def run_grid(
     return results
 
 
-def sanity_line(results: dict[tuple[int, int], CellResult]) -> str:
-    """How many cells learned as many states as the generator used (not a timing result)."""
-    off = [c for c in results.values() if c.states != c.expected_states]
+def format_length(metres: float) -> str:
+    """0.0002 → ``0.2 mm``, 0.005 → ``5 mm``, 0.03 → ``3 cm``."""
+    if metres < 0.01:
+        return f"{metres * 1e3:g} mm"
+    return f"{metres * 1e2:g} cm"
+
+
+def run_noise_grid(
+    sigmas: Sequence[float],
+    cells: Sequence[tuple[int, int]],
+    seed: int,
+    console: Console,
+    *,
+    max_repeats: int = 3,
+) -> dict[tuple[float, int, int], CellResult]:
+    """The state counts (and times) over placement noise: for every sigma, the
+    task and demonstrations of :meth:`Noise.uniform` (same seeds as the grid)."""
+    results: dict[tuple[float, int, int], CellResult] = {}
+    with console.status("") as status:
+        for sigma in sigmas:
+            noise = Noise.uniform(sigma)
+            for n_objects in sorted({o for _, o in cells}):
+                most = max(d for d, o in cells if o == n_objects)
+                data = synthetic_data(n_objects, seed, noise, n_demos=most)
+                for n_demos in sorted(d for d, o in cells if o == n_objects):
+                    status.update(
+                        f"noise {format_length(sigma)}: fitting {n_demos} demonstrations "
+                        f"{TIMES} {n_objects} objects …"
+                    )
+                    results[(sigma, n_demos, n_objects)] = measure_cell(
+                        data, n_demos, max_repeats=max_repeats, trace=False
+                    )
+    return results
+
+
+def noise_table(
+    results: dict[tuple[float, int, int], CellResult],
+    sigmas: Sequence[float],
+    cells: Sequence[tuple[int, int]],
+) -> Table:
+    table = Table(
+        title="State counts over placement noise: learned/expected (✓) | median time",
+        title_justify="left",
+    )
+    table.add_column("noise σ", justify="right", style="bold")
+    for n_demos, n_objects in cells:
+        table.add_column(f"{n_demos}{TIMES}{n_objects}\nstates", justify="right")
+        table.add_column(f"{n_demos}{TIMES}{n_objects}\ntime", justify="right", style="dim")
+    for sigma in sigmas:
+        row = [format_length(sigma)]
+        for n_demos, n_objects in cells:
+            cell = results[(sigma, n_demos, n_objects)]
+            mark = " ✓" if cell.matches else "  "
+            row += [f"{cell.states}/{cell.expected_states}{mark}", format_seconds(cell.median_s)]
+        table.add_row(*row)
+    return table
+
+
+def sanity_line(
+    results: dict[tuple[int, int], CellResult],
+    noisy: dict[tuple[float, int, int], CellResult],
+) -> str:
+    """In how many cells of each table every object learned the expected number of
+    states (:meth:`SyntheticDemonstrations.expected_per_object`) — not a timing result."""
+    off = [("", c) for c in results.values() if not c.matches]
+    off += [(f"{format_length(sigma)} ", c) for (sigma, _, _), c in noisy.items() if not c.matches]
+    n_grid = sum(1 for prefix, _ in off if not prefix)
     line = (
-        f"Sanity: the learned state count matches the generator's (one state per alternative "
-        f"demonstrated) in {len(results) - len(off)}/{len(results)} cells."
+        "Sanity: every object learned the expected states (the alternatives it used in at "
+        f"least two demonstrations, at least 1) in {len(results) - n_grid}/{len(results)} "
+        f"cells of the grid and {len(noisy) - (len(off) - n_grid)}/{len(noisy)} of the "
+        "noise table."
     )
     if off:
-        line += " Learned/expected elsewhere: " + ", ".join(
-            f"{c.demos}{TIMES}{c.objects}: {c.states}/{c.expected_states}" for c in off
+        line += " Elsewhere, learned/expected states: " + ", ".join(
+            f"{prefix}{c.demos}{TIMES}{c.objects}: {c.states}/{c.expected_states} "
+            f"({c.objects_off} object{'s' if c.objects_off > 1 else ''} off)"
+            for prefix, c in off
         )
     return line
 
@@ -616,7 +774,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     results = run_grid(demo_counts, object_counts, args.seed, console, max_repeats=max_repeats)
     console.print(grid_table(results, demo_counts, object_counts))
-    console.print(sanity_line(results), highlight=False)
+    sigmas = QUICK_SIGMAS if args.quick else FULL_SIGMAS
+    noise_cells = QUICK_NOISE_CELLS if args.quick else FULL_NOISE_CELLS
+    noisy = run_noise_grid(
+        sigmas, noise_cells, args.seed, console, max_repeats=1 if args.quick else 3
+    )
+    console.print(noise_table(noisy, sigmas, noise_cells))
+    console.print(sanity_line(results, noisy), highlight=False)
 
     growth = exponents(results, demo_counts, object_counts)
     console.print(exponent_table(growth))
@@ -655,6 +819,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             "numpy": np.__version__,
             "machine": platform.machine(),
             "cells": [{**asdict(cell), "median_s": cell.median_s} for cell in results.values()],
+            "noise_cells": [
+                {"sigma_m": sigma, **asdict(cell), "median_s": cell.median_s}
+                for (sigma, _, _), cell in noisy.items()
+            ],
             "exponents": growth,
             "target": {
                 "demos": TARGET_DEMOS,
