@@ -105,8 +105,10 @@ class Precision:
 
 LOCAL_EVIDENCE = 0.2
 """A reference available at some of an object's placements only adds a state
-there: its F test is taken at this fraction of the significance level (0.05 →
-0.01), so that one of the many such candidates agreeing by chance does not."""
+there: its F test is taken at the significance level divided by the number of
+such candidates at that step (Bonferroni), and at most this fraction of it
+(0.05 → 0.01), so that one of many such candidates agreeing by chance does
+not."""
 
 MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
 MIN_ORIENTATION_PRECISION = 0.05  # deg
@@ -557,15 +559,16 @@ def _choose(
             s.reference or "",
         ),
     )
-    local = [
+    candidates = [
         s
         for s in scores
         if s.reference is not None
         and s.reference not in everywhere
         and world.available(placement.demo, s.reference, placement.step)
-        and beats(s, own, significance * LOCAL_EVIDENCE)
-        and beats(s, best, significance * LOCAL_EVIDENCE)
     ]
+    # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level.
+    level = significance * min(LOCAL_EVIDENCE, 1.0 / max(1, len(candidates)))
+    local = [s for s in candidates if beats(s, own, level) and beats(s, best, level)]
     if not local:
         return own
     top = min(local, key=lambda s: s.clustering.score)
