@@ -24,10 +24,13 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "Quaternion",
     "angle_between",
+    "axis_modulo_flip",
+    "box_symmetries",
     "canonical_quat",
     "deviations_from_mean",
     "matrices_from_quats",
     "mean_quat",
+    "modulo_group",
     "modulo_symmetry",
     "quat_from_rpy",
     "quat_from_yaw",
@@ -277,18 +280,85 @@ def reduce_yaw(quats: FloatArray, period_deg: float) -> FloatArray:
 
 def modulo_symmetry(quats: FloatArray, period_deg: float) -> FloatArray:
     """``(n, 4)`` orientations of one object, each turned about the object's own z axis
-    by a multiple of ``period_deg`` to lie as close as possible to the others
-    (their circular mean in the period's multiple of the yaw), so that a square
-    box put down at 3° and at 92° reads as one orientation. Period 0 (a
-    cylinder) removes the turn about the axis; 360 changes nothing."""
+    by a multiple of ``period_deg`` to lie as close as possible to the others, so
+    that a square box put down at 3° and at 92° reads as one orientation — also
+    when the object lies on its side (a knife on its edge): each copy is chosen
+    by its angle to a common representative (the first, then their mean, twice
+    over). Period 0 (a cylinder) keeps only the direction of the axis; 360
+    changes nothing."""
     q = np.asarray(quats, dtype=float).reshape(-1, 4)
     if period_deg >= 360.0 or len(q) == 0:
         return q
     if period_deg <= 0.0:
-        return reduce_yaw(q, 0.0)
-    period = math.radians(period_deg)
-    yaw = yaws_of(q)
-    folds = 2.0 * math.pi / period
-    centre = math.atan2(float(np.sin(folds * yaw).sum()), float(np.cos(folds * yaw).sum())) / folds
-    turn = -period * np.round((yaw - centre) / period)
-    return _canonical_rows(quat_multiply(q, _about_z(turn)))
+        return _axis_only(q)
+    turns = np.radians(period_deg) * np.arange(round(360.0 / period_deg))
+    copies = np.stack([quat_multiply(q, _about_z(np.full(len(q), t))) for t in turns], axis=1)
+    representative = q[0]
+    chosen = q
+    for _ in range(3):
+        closeness = np.abs(copies @ np.asarray(representative))  # |cos(angle / 2)|
+        chosen = copies[np.arange(len(q)), closeness.argmax(axis=1)]
+        representative = np.asarray(mean_quat(chosen))
+    return _canonical_rows(chosen)
+
+
+def _turn(axis: int, degrees: float) -> FloatArray:
+    q = np.zeros(4)
+    q[axis] = math.sin(math.radians(degrees) / 2.0)
+    q[3] = math.cos(math.radians(degrees) / 2.0)
+    return q
+
+
+def box_symmetries(size: Sequence[float], tolerance: float = 0.001) -> FloatArray:
+    """The rotations ``(k, 4)`` that map a box of extents ``size`` onto itself: the
+    four half turns about its axes; the eight of a square prism where two
+    extents agree (within ``tolerance``); the 24 of a cube."""
+    group = [np.array([0.0, 0.0, 0.0, 1.0])]
+    generators = [_turn(0, 180.0), _turn(1, 180.0), _turn(2, 180.0)]
+    x, y, z = size
+    if abs(x - y) <= tolerance:
+        generators.append(_turn(2, 90.0))
+    if abs(x - z) <= tolerance:
+        generators.append(_turn(1, 90.0))
+    if abs(y - z) <= tolerance:
+        generators.append(_turn(0, 90.0))
+    frontier = list(group)
+    while frontier:  # close the set under multiplication
+        grown = []
+        for a in frontier:
+            for g in generators:
+                q = _canonical_rows(quat_multiply(a, g)[None, :])[0]
+                if all(abs(float(q @ h)) < 1.0 - 1e-9 for h in group):
+                    group.append(q)
+                    grown.append(q)
+        frontier = grown
+    return np.asarray(group, dtype=float)
+
+
+def modulo_group(quats: FloatArray, group: FloatArray) -> FloatArray:
+    """``(n, 4)`` orientations of one object, each replaced by the copy ``q·g`` (``g``
+    in the object's symmetry ``group``) closest to a common representative (the
+    first, then the copies' mean, three times): a box lying on either side, a
+    square box turned by 90°, read as one orientation."""
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    if len(q) == 0 or len(group) <= 1:
+        return q
+    copies = np.stack([quat_multiply(q, np.tile(g, (len(q), 1))) for g in group], axis=1)
+    representative = q[0]
+    chosen = q
+    for _ in range(3):
+        closeness = np.abs(copies @ np.asarray(representative))
+        chosen = copies[np.arange(len(q)), closeness.argmax(axis=1)]
+        representative = np.asarray(mean_quat(chosen))
+    return _canonical_rows(chosen)
+
+
+def axis_modulo_flip(quats: FloatArray) -> FloatArray:
+    """For a cylinder (the same after any turn about its axis and upside down): the
+    shortest turn from upright to its axis, the axis taken pointing up."""
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    axis = rotate_vectors(q, np.tile([0.0, 0.0, 1.0], (len(q), 1)))
+    flip = axis[:, 2] < 0
+    q = q.copy()
+    q[flip] = quat_multiply(q[flip], np.tile(_turn(0, 180.0), (int(flip.sum()), 1)))
+    return _axis_only(q)

@@ -175,6 +175,20 @@ class _World:
         shape = self.geometry.get(name) if name is not None else None
         return 360.0 if shape is None else shape.yaw_period
 
+    def own_symmetry(self, name: str, quats: np.ndarray) -> np.ndarray:
+        """``name``'s orientations (absolute or relative to a reference) compared
+        modulo its shape's symmetry: a box's half turns about its axes (and quarter
+        turns where two extents agree), a cylinder's turns about its axis and
+        flip, a sphere's every turn; none for other or unknown shapes."""
+        shape = self.geometry.get(name)
+        if shape is None or shape.shape not in {"box", "cylinder", "sphere"}:
+            return quats
+        if shape.shape == "sphere":
+            return np.tile([0.0, 0.0, 0.0, 1.0], (len(quats), 1))
+        if shape.shape == "cylinder":
+            return rotations.axis_modulo_flip(quats)
+        return rotations.modulo_group(quats, rotations.box_symmetries(shape.size))
+
     def available(self, demo: int, name: str, step: int) -> bool:
         """Whether ``name`` may serve as a reference at ``step`` of ``demo``."""
         if name in self.landmarks[demo]:
@@ -507,7 +521,7 @@ def _relative_values(
         if ref_quats is None:
             return None, False
         quats = rotations.relative_quats(ref_quats, quats)
-    return rotations.modulo_symmetry(quats, world.yaw_period(obj)), False
+    return world.own_symmetry(obj, quats), False
 
 
 def _mean_distance(kind: Kind, values: np.ndarray) -> float:
