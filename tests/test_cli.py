@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 from demoplan.cli import app
 from demoplan.learning.modelfile import load_model, model_to_dict
 from tests.helpers import EXAMPLES, demo, raw, write
+from tests.learning_families import PAPER_TABLE_II, PAPER_TABLE_III
 
 SET_TABLE = EXAMPLES / "set_table"
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
@@ -40,8 +41,9 @@ def assert_one_line_error(result: Any, *fragments: str) -> str:
 
 @pytest.fixture(scope="module")
 def model_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Experiment 1 learned with the paper's reading (the examples were drawn for it)."""
     path = tmp_path_factory.mktemp("model") / "set_table.json"
-    result = invoke("learn", SET_TABLE, "-o", path)
+    result = invoke("learn", SET_TABLE, "-o", path, "--paper")
     assert result.exit_code == 0, result.stderr
     return path
 
@@ -292,7 +294,7 @@ def test_learn_writes_the_spec_model(model_file: Path) -> None:
 
 
 def test_learn_json_prints_only_json(tmp_path: Path) -> None:
-    result = invoke("learn", SET_TABLE, "-o", tmp_path / "m.json", "--json")
+    result = invoke("learn", SET_TABLE, "-o", tmp_path / "m.json", "--json", "--paper")
     assert result.exit_code == 0
     data = json.loads(result.stdout)
     assert data["format"] == "demoplan/model-1"
@@ -387,6 +389,7 @@ def test_update_equals_learning_all_at_once(tmp_path: Path, model_file: Path) ->
         SET_TABLE / "demonstration-2.json",
         "-o",
         partial,
+        "--paper",
     )
     assert first.exit_code == 0, first.stderr
     assert len(load_model(partial).sequences) == 2
@@ -421,7 +424,7 @@ def test_update_to_another_output_keeps_the_input(tmp_path: Path) -> None:
 
 def test_require_state_ids(tmp_path: Path) -> None:
     out = tmp_path / "m.json"
-    result = invoke("learn", SET_TABLE, "-o", out, "--require", "B<A")
+    result = invoke("learn", SET_TABLE, "-o", out, "--require", "B<A", "--paper")
     assert result.exit_code == 0, result.stderr
     model = load_model(out)
     assert ("B", "A") in model.teacher_constraints
@@ -479,6 +482,117 @@ def test_update_keeps_the_teacher_constraints(tmp_path: Path) -> None:
     assert load_model(partial).teacher_constraints == (("A", "G"),)
 
 
+# --- learn --paper, --significance and the precision ------------------------------------
+
+
+def _states(data: dict[str, Any]) -> list[tuple[str, str, str | None]]:
+    return [(s["id"], s["object"], s["position"]["reference"]) for s in data["states"]]
+
+
+def test_learn_paper_gives_table_ii(tmp_path: Path) -> None:
+    """The shipped Experiment 1 was drawn for the paper's reading: Table II's 10 states."""
+    result = invoke("learn", SET_TABLE, "-o", tmp_path / "m.json", "--paper", "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert _states(data) == [(i, o, r) for i, o, r, _ in PAPER_TABLE_II]
+    for state, (_, _, _, xy) in zip(data["states"], PAPER_TABLE_II, strict=True):
+        assert [round(v, 2) for v in state["position"]["value"][:2]] == list(xy)
+    assert ["".join(s) for s in data["sequences"]] == PAPER_TABLE_III
+    assert len(data["constraints"]) == 32
+    assert data["settings"]["position_noise"] == 0.003
+    assert data["settings"]["orientation_noise"] == 0.5
+    assert data["settings"]["significance"] == 0.0
+    assert data["precision"] == {"position": 0.003, "orientation": 0.5, "estimated": False}
+
+
+def test_learn_defaults_give_one_state_per_object_on_set_table(tmp_path: Path) -> None:
+    """At the defaults (precision estimated from three demonstrations, F test) the
+    set-table data support no second state of any object: every object once,
+    absolute, except the napkin, which lies on the plate in every demonstration."""
+    result = invoke("learn", SET_TABLE, "-o", tmp_path / "m.json", "--json")
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert _states(data) == [
+        ("A", "plate", None),
+        ("B", "knife", None),
+        ("C", "fork", None),
+        ("D", "spoon", None),
+        ("E", "glass", None),
+        ("F", "food", None),
+        ("G", "napkin", "plate"),
+    ]
+    napkin = data["states"][6]["position"]["value"]
+    assert [round(v, 2) for v in napkin[:2]] == [-0.01, -0.02]
+    assert data["sequences"] == [list("ABCDEFG"), list("AEDBCFG"), list("ACBFEDG")]
+    assert data["settings"]["position_noise"] is None
+    assert data["settings"]["significance"] == 0.05
+    precision = data["precision"]
+    assert set(precision) == {"position", "orientation", "estimated"}
+    assert precision["estimated"] is True
+    assert 0.003 < precision["position"] < 0.03  # hand-drawn deviations: about a centimetre
+
+
+def test_paper_is_its_three_settings(tmp_path: Path) -> None:
+    """--paper is --significance 0 --position-noise 0.003 --orientation-noise 0.5."""
+    paper = invoke("learn", SET_TABLE, "-o", tmp_path / "paper.json", "--paper", "--json")
+    spelled = invoke(
+        "learn",
+        SET_TABLE,
+        "-o",
+        tmp_path / "spelled.json",
+        "--significance",
+        "0",
+        "--position-noise",
+        "0.003",
+        "--orientation-noise",
+        "0.5",
+        "--json",
+    )
+    assert paper.exit_code == 0 and spelled.exit_code == 0, (paper.stderr, spelled.stderr)
+    assert json.loads(paper.stdout) == json.loads(spelled.stdout)
+    assert (tmp_path / "paper.json").read_bytes() == (tmp_path / "spelled.json").read_bytes()
+
+
+def test_paper_with_another_option_keeps_that_option(tmp_path: Path) -> None:
+    """Other options still apply over --paper."""
+    result = invoke(
+        "learn", SET_TABLE, "-o", tmp_path / "m.json", "--paper", "--position-noise", "0.002"
+    )
+    assert result.exit_code == 0, result.stderr
+    model = load_model(tmp_path / "m.json")
+    assert model.settings.position_noise == 0.002
+    assert model.settings.significance == 0.0
+    assert model.precision == (0.002, 0.5)
+
+
+@pytest.mark.parametrize("paper", [False, True], ids=["estimated", "paper"])
+def test_model_precision_is_written_and_read_back(tmp_path: Path, paper: bool) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, *(["--paper"] if paper else []))
+    assert result.exit_code == 0, result.stderr
+    written = json.loads(out.read_text())["precision"]
+    assert set(written) == {"position", "orientation", "estimated"}
+    assert written["estimated"] is not paper
+    model = load_model(out)
+    assert model.precision == (written["position"], written["orientation"])
+    assert model.precision_estimated is written["estimated"]
+    assert model_to_dict(model)["precision"] == written
+    shown = invoke("show", out, "--json")
+    assert shown.exit_code == 0, shown.stderr
+    assert json.loads(shown.stdout)["precision"] == written
+
+
+@pytest.mark.parametrize("level", ["1", "1.5", "-0.1"])
+def test_significance_out_of_range_is_a_usage_error(tmp_path: Path, level: str) -> None:
+    out = tmp_path / "m.json"
+    result = invoke("learn", SET_TABLE, "-o", out, "--significance", level, "--json")
+    assert result.exit_code == 2, (result.exit_code, result.stdout, result.stderr)
+    assert "--significance" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""
+    assert not out.exists()
+
+
 # --- YAML ----------------------------------------------------------------------------------
 
 
@@ -515,7 +629,15 @@ def test_show_prints_the_column_units(tmp_path: Path) -> None:
 
 def test_learn_json_in_a_real_process_prints_only_json(tmp_path: Path) -> None:
     out = subprocess.run(
-        [*COMMAND, "learn", str(EXAMPLES / "set_table"), "-o", str(tmp_path / "m.json"), "--json"],
+        [
+            *COMMAND,
+            "learn",
+            str(EXAMPLES / "set_table"),
+            "-o",
+            str(tmp_path / "m.json"),
+            "--json",
+            "--paper",
+        ],
         capture_output=True,
         text=True,
         check=False,

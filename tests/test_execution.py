@@ -15,12 +15,10 @@ from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
-from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, paper_model
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
@@ -28,13 +26,13 @@ TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 
 @pytest.fixture(scope="module")
 def blocks() -> tuple[TaskModel, Scene]:
-    model = learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    model = paper_model("blocks/demonstrations.json")
     return model, complete_geometry(load_scene(BLOCKS_SCENE), model)
 
 
 @pytest.fixture(scope="module")
 def table() -> tuple[TaskModel, Scene]:
-    model = learn(load_demonstrations([EXAMPLES / "set_table"]))
+    model = paper_model("set_table")
     return model, complete_geometry(load_scene(TABLE_SCENE), model)
 
 

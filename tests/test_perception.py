@@ -253,12 +253,10 @@ def test_experiment_2_on_vision_in_mujoco() -> None:
     from demoplan.execution.camera_world import CameraWorld
     from demoplan.execution.executor import execute
     from demoplan.execution.physics import MujocoWorld
-    from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.scenes.scene import complete_geometry, load_scene
-    from tests.helpers import EXAMPLES
+    from tests.helpers import EXAMPLES, paper_model
 
-    model = learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    model = paper_model("blocks/demonstrations.json")
     scene = complete_geometry(load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json"), model)
     world = MujocoWorld(scene)
     camera_world = CameraWorld(world, scene)

@@ -13,12 +13,10 @@ from typer.testing import CliRunner
 from demoplan.cli import app
 from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
-from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # before MuJoCo is imported: headless rendering
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
@@ -30,7 +28,7 @@ SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 
 @pytest.fixture(scope="module")
 def blocks() -> tuple[TaskModel, Scene]:
-    model = learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    model = paper_model("blocks/demonstrations.json")
     return model, complete_geometry(load_scene(SCENE), model)
 
 

@@ -9,6 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from demoplan import TaskModelLearner, load_demonstrations
+from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.plotting import (
     _transitive_reduction,
     plot_constraints,
@@ -33,7 +34,7 @@ def test_fig_2_transitive_reduction() -> None:
 
 def test_plots_draw_every_state_and_step() -> None:
     demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
-    model = TaskModelLearner().fit(demos).model_
+    model = TaskModelLearner(PAPER_SETTINGS).fit(demos).model_  # Table IV (the data's reading)
     ax = plot_constraints(model)
     texts = {t.get_text() for t in ax.texts}
     assert {"A", "B", "C", "D"} <= texts

@@ -10,15 +10,37 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 COMMAND = re.compile(r"^\$ (demoplan .*?)(?:\s+#.*)?$")
 
 
 def tour_commands() -> list[str]:
+    return [command for command, _ in tour()]
+
+
+def tour() -> list[tuple[str, list[str]]]:
+    """Every `$ demoplan …` line of the README with the output lines shown under it."""
+    shown: list[tuple[str, list[str]]] = []
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if m := COMMAND.match(line):
+            shown.append((m.group(1), []))
+        elif line.startswith("```") or line.startswith("$ "):
+            if shown and shown[-1][1] is not None:
+                shown.append(("", []))  # output after this is no command's
+        elif shown:
+            shown[-1][1].append(line)
+    return [(command, lines) for command, lines in shown if command]
+
+
+def verbatim(lines: list[str]) -> list[str]:
+    """The shown lines that must appear as they are: table rows and plan actions, not
+    lines the README shortens with an ellipsis."""
     return [
-        m.group(1)
-        for line in (ROOT / "README.md").read_text().splitlines()
-        if (m := COMMAND.match(line))
+        line
+        for line in lines
+        if "…" not in line and line.startswith(("│", "┃", "GRASP ", "PUT_DOWN ", "Constraints ("))
     ]
 
 
@@ -32,7 +54,8 @@ def test_tour_commands_run(tmp_path: Path) -> None:
     (tmp_path / "examples").symlink_to(ROOT / "examples")
     has_mujoco = importlib.util.find_spec("mujoco") is not None
     ran = 0
-    for command in tour_commands():
+    checked = 0
+    for command, shown in tour():
         if "mujoco" in command and not has_mujoco:
             continue
         done = subprocess.run(
@@ -40,10 +63,36 @@ def test_tour_commands_run(tmp_path: Path) -> None:
             cwd=tmp_path,
             capture_output=True,
             text=True,
-            env={**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")},
+            env={
+                **os.environ,
+                "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
+                "COLUMNS": "200",
+            },
             timeout=300,
             check=False,
         )
         assert done.returncode == 0, (command, done.stderr[-2000:])
         ran += 1
+        printed = {line.rstrip() for line in done.stdout.splitlines()}
+        for line in verbatim(shown):
+            assert line.rstrip() in printed, (command, line, done.stdout[-3000:])
+            checked += 1
     assert ran >= 12
+    assert checked >= 10  # the tour shows Tables III and V, and the chosen plan
+
+
+def test_python_example_prints_what_its_comments_say(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The README's Python example (learning Experiment 2 with the paper's settings)
+    runs and prints Table V's sequences and the five constraints its comments show."""
+    text = (ROOT / "README.md").read_text()
+    (block,) = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    printed = capsys.readouterr().out.splitlines()
+    promised = [m.group(1) for m in re.finditer(r"^print\(.*?\)\s+# (\(.*\))", block, re.M)]
+    assert len(promised) == 2
+    assert printed[: len(promised)] == promised
+    assert (tmp_path / "blocks.model.json").exists()

@@ -16,15 +16,13 @@ import yaml
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Action
 from demoplan.planning.xml import load_problem
 from demoplan.scenes.plan import plan_in_scene, scene_problems
 from demoplan.scenes.scene import load_scene
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, paper_model
 from tests.scene_checker import check_scene_plan
 from tests.validator import validate
 
@@ -34,12 +32,12 @@ TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 
 @pytest.fixture(scope="module")
 def blocks_model() -> TaskModel:
-    return learn(load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"]))
+    return paper_model("blocks/demonstrations.json")
 
 
 @pytest.fixture(scope="module")
 def table_model() -> TaskModel:
-    return learn(load_demonstrations([EXAMPLES / "set_table"]))
+    return paper_model("set_table")
 
 
 def sizes_of(model: TaskModel) -> dict[str, tuple[str, list[float]]]:
