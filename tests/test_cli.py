@@ -449,13 +449,25 @@ def test_require_holding_constraint_has_no_violation(tmp_path: Path) -> None:
 
 
 def test_require_object_names_contradicted(tmp_path: Path) -> None:
+    """napkin<plate against every demonstration (plate first, napkin last): with the
+    learned orders in between it closes a cycle within each goal — exit 1 naming
+    the cycle, no model written (docs/learning.md, Teacher constraints)."""
     out = tmp_path / "m.json"
-    result = invoke("learn", SET_TABLE, "-o", out, "--require", "napkin<plate")
+    result = invoke("learn", SET_TABLE, "--paper", "-o", out, "--require", "napkin<plate")
+    assert_one_line_error(result, "require", "close a precedence cycle A <")
+    assert "G < A" in result.stderr and "demonstration 1 (set-table-1)" in result.stderr
+    assert not out.exists()
+
+
+def test_require_object_names_contradicted_without_a_cycle(tmp_path: Path) -> None:
+    out = tmp_path / "m.json"
+    blocks = EXAMPLES / "blocks" / "demonstrations.json"
+    result = invoke("learn", blocks, "--paper", "-o", out, "--require", "wood<green")
     assert result.exit_code == 0, result.stderr
     model = load_model(out)
-    assert model.teacher_constraints == (("G", "A"),)
-    assert len(model.violations) == 3  # every demonstration puts the plate first
-    assert "contradicts the teacher's G<A" in result.stdout
+    assert model.teacher_constraints == (("A", "B"), ("A", "D"))
+    assert [(d, x, y) for d, x, y in model.violations] == [(1, "A", "D")]
+    assert "Demonstration 2 contradicts the teacher's A<D" in result.stdout
 
 
 @pytest.mark.parametrize(

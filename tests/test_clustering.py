@@ -166,7 +166,7 @@ def test_early_stop_agrees_with_the_full_scan_on_separated_placements(
             means.append(candidate)
     values = np.concatenate([m + rng.normal(0, scatter, (per, 3)) * [1, 1, 0] for m in means])
     space = PositionSpace(values)
-    chosen = select_clustering(space, separation=0.05, noise=0.003, seed=0)
+    chosen = select_clustering(space, separation=0.05, noise=0.003, seed=0, significance=0.05)
     c, score = _full_scan_by_the_rules(space, 0.05, 0.003)
     assert chosen.n_clusters == c
     assert math.sqrt(chosen.score) == pytest.approx(math.sqrt(score), abs=0.003)

@@ -376,6 +376,7 @@ def select_clustering(
     noise: float,
     n_init: int = 8,
     seed: int = 0,
+    significance: float = 0.0,
 ) -> Clustering:
     """Pick the cluster count c ∈ 1..N for one reference (paper eq. 2).
 
@@ -397,7 +398,12 @@ def select_clustering(
     result does not depend on the order the demonstrations arrived in.
     """
     (clustering,) = select_clusterings(
-        [space], separation=separation, noise=noise, n_init=n_init, seed=seed
+        [space],
+        separation=separation,
+        noise=noise,
+        n_init=n_init,
+        seed=seed,
+        significance=significance,
     )
     return clustering
 
@@ -423,7 +429,14 @@ class _Scan:
         self.done = False
         self._groups: int | None = None
 
-    def consider(self, c: int, sorted_labels: IntArray, separation: float, noise: float) -> None:
+    def consider(
+        self,
+        c: int,
+        sorted_labels: IntArray,
+        separation: float,
+        noise: float,
+        significance: float = 0.0,
+    ) -> None:
         labels = sorted_labels[self.inverse]
         present = np.bincount(labels, minlength=c) > 0
         if not present.all():  # compact the labels if a cluster ended empty
@@ -440,7 +453,11 @@ class _Scan:
             or np.bincount(labels).min() < 2
             # Nor do clusters that scatter far beyond the placement precision:
             # splitting a continuum is not finding states.
-            or not _within_precision(raw, np.bincount(labels), self.space.dims, noise)
+            # (The paper's plain comparison, significance 0, has no such test.)
+            or (
+                significance > 0
+                and not _within_precision(raw, np.bincount(labels), self.space.dims, noise)
+            )
         ):
             self.tried.append((c, None))
             self.rejected_in_a_row += 1
@@ -527,7 +544,7 @@ def select_clusterings(
             data = np.stack([scan.canonical for scan in active])
             batch_labels = kmeans_batch(data, c, n_init, 100, generator)
         for scan, labels in zip(active, batch_labels, strict=True):
-            scan.consider(c, labels, separation, noise)
+            scan.consider(c, labels, separation, noise, significance)
     return [scan.result(noise, significance) for scan in scans]
 
 
