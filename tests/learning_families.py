@@ -25,6 +25,7 @@ import numpy as np
 
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw
+from tests.helpers import TABLE_II
 
 __all__ = [
     "PAPER_ORDERS",
@@ -401,18 +402,7 @@ def precision_family(
 
 
 # The paper's Experiment 1 (§V.A; Tables II and III).
-PAPER_TABLE_II = [
-    ("A", "plate", None, (0.52, 0.44)),
-    ("B", "knife", "plate", (0.1, 0.0)),
-    ("C", "fork", "plate", (-0.07, 0.0)),
-    ("D", "spoon", "knife", (-0.08, 0.04)),
-    ("E", "glass", None, (0.52, 0.56)),
-    ("F", "food", None, (0.62, 0.56)),
-    ("G", "napkin", "plate", (-0.01, -0.02)),
-    ("H", "spoon", "plate", (0.02, 0.04)),
-    ("I", "knife", "spoon", (0.08, -0.04)),
-    ("J", "fork", "glass", (-0.07, -0.12)),
-]
+PAPER_TABLE_II = TABLE_II
 PAPER_ORDERS = [
     ["plate", "knife", "fork", "spoon", "glass", "food", "napkin"],
     ["plate", "glass", "spoon", "knife", "fork", "food", "napkin"],

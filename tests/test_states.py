@@ -16,21 +16,8 @@ from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.states import generate_states, state_letters
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import angle_between, quat_from_yaw
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, TABLE_II
 
-# Table II: state, object, relative position, (x, y).
-TABLE_II = [
-    ("A", "plate", None, (0.52, 0.44)),
-    ("B", "knife", "plate", (0.1, 0.0)),
-    ("C", "fork", "plate", (-0.07, 0.0)),
-    ("D", "spoon", "knife", (-0.08, 0.04)),
-    ("E", "glass", None, (0.52, 0.56)),
-    ("F", "food", None, (0.62, 0.56)),
-    ("G", "napkin", "plate", (-0.01, -0.02)),
-    ("H", "spoon", "plate", (0.02, 0.04)),
-    ("I", "knife", "spoon", (0.08, -0.04)),
-    ("J", "fork", "glass", (-0.07, -0.12)),
-]
 TABLE_III = [tuple("ABCDEFG"), tuple("AEHIJFG"), tuple("ACBFEDG")]
 
 # Table IV: state, object, relative position, relative orientation, (x, y, z), θ.

@@ -292,14 +292,8 @@ def modulo_symmetry(quats: FloatArray, period_deg: float) -> FloatArray:
     if period_deg <= 0.0:
         return _axis_only(q)
     turns = np.radians(period_deg) * np.arange(round(360.0 / period_deg))
-    copies = np.stack([quat_multiply(q, _about_z(np.full(len(q), t))) for t in turns], axis=1)
-    representative = q[0]
-    chosen = q
-    for _ in range(3):
-        closeness = np.abs(copies @ np.asarray(representative))  # |cos(angle / 2)|
-        chosen = copies[np.arange(len(q)), closeness.argmax(axis=1)]
-        representative = np.asarray(mean_quat(chosen))
-    return _canonical_rows(chosen)
+    group = np.stack([_about_z(np.array(t)) for t in turns])
+    return modulo_group(q, group)
 
 
 def _turn(axis: int, degrees: float) -> FloatArray:
@@ -338,8 +332,10 @@ def box_symmetries(size: Sequence[float], tolerance: float = 0.001) -> FloatArra
 def modulo_group(quats: FloatArray, group: FloatArray) -> FloatArray:
     """``(n, 4)`` orientations of one object, each replaced by the copy ``q·g`` (``g``
     in the object's symmetry ``group``) closest to a common representative (the
-    first, then the copies' mean, three times): a box lying on either side, a
-    square box turned by 90°, read as one orientation."""
+    first, then the copies' mean, three times) — and then, of the group's copies of
+    that arrangement, the one whose mean is nearest the identity, so that the
+    result does not depend on the order: a box lying on either side, a square
+    box turned by 90°, read as one orientation."""
     q = np.asarray(quats, dtype=float).reshape(-1, 4)
     if len(q) == 0 or len(group) <= 1:
         return q
@@ -350,7 +346,11 @@ def modulo_group(quats: FloatArray, group: FloatArray) -> FloatArray:
         closeness = np.abs(copies @ np.asarray(representative))
         chosen = copies[np.arange(len(q)), closeness.argmax(axis=1)]
         representative = np.asarray(mean_quat(chosen))
-    return _canonical_rows(chosen)
+    # The same set whatever the order the orientations came in: of the group's
+    # copies of the whole arrangement, the one whose mean is nearest the identity.
+    shifted = [quat_multiply(representative, g) for g in group]
+    best = group[int(np.argmax([abs(float(m[3])) for m in shifted]))]
+    return _canonical_rows(quat_multiply(chosen, np.tile(best, (len(q), 1))))
 
 
 def axis_modulo_flip(quats: FloatArray) -> FloatArray:
