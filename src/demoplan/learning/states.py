@@ -266,9 +266,20 @@ def _generate_states(
         if key[2] is None
         or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
     }
-    precision = estimate_precision(
-        {key: values for key, values in relative.items() if key in everywhere}, settings
-    )
+    steady = {key: values for key, values in relative.items() if key in everywhere}
+    precision = estimate_precision(steady, settings)
+    # An object placed more precisely than the median one is judged by its own
+    # precision: red stands on wood to 0.6 mm while wood and green scatter by
+    # centimetres (the shipped blocks).
+    own_precision = {
+        kind: {
+            obj: min(spread, getattr(precision, kind))
+            for obj, spread in _tightest(steady, kind).items()
+        }
+        if getattr(precision, f"{kind}_estimated")
+        else {}
+        for kind in ("position", "orientation")
+    }
     if precision.orientation >= settings.orientation_separation:
         logger.info(
             "orientations scatter by %.0f° (RMS), more than the %.0f° that tell two apart: "
@@ -282,12 +293,25 @@ def _generate_states(
             reachable[obj].add(reference)
     all_scores: list[ReferenceScore] = []
     for obj, own in placements.items():
+        position_precision = max(
+            own_precision["position"].get(obj, precision.position), MIN_POSITION_PRECISION
+        )
+        orientation_precision = max(
+            own_precision["orientation"].get(obj, precision.orientation),
+            MIN_ORIENTATION_PRECISION,
+        )
         position_scores = _score_references(
-            obj, "position", own, candidates[obj], settings, precision.position, relative
+            obj, "position", own, candidates[obj], settings, position_precision, relative
         )
         orientation_scores = (
             _score_references(
-                obj, "orientation", own, candidates[obj], settings, precision.orientation, relative
+                obj,
+                "orientation",
+                own,
+                candidates[obj],
+                settings,
+                orientation_precision,
+                relative,
             )
             if precision.orientation < settings.orientation_separation
             else []  # the demonstrations do not fix orientations: none is learned
@@ -298,7 +322,7 @@ def _generate_states(
                 position_scores,
                 placement,
                 world,
-                precision.position,
+                position_precision,
                 settings.significance,
                 reachable[obj],
             )
@@ -308,16 +332,16 @@ def _generate_states(
                     orientation_scores,
                     placement,
                     world,
-                    precision.orientation,
+                    orientation_precision,
                     settings.significance,
                     reachable[obj],
                 )
                 ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
                 decided[(placement.demo, placement.step)] = _margins(
-                    "orientation", ori, orientation_scores, placement, world, precision.orientation
+                    "orientation", ori, orientation_scores, placement, world, orientation_precision
                 )
             decided.setdefault((placement.demo, placement.step), {}).update(
-                _margins("position", pos, position_scores, placement, world, precision.position)
+                _margins("position", pos, position_scores, placement, world, position_precision)
             )
             keys[(placement.demo, placement.step)] = _StateKey(
                 obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
@@ -427,13 +451,7 @@ def estimate_precision(
     """
     found: dict[Kind, float] = {}
     for kind in ("position", "orientation"):
-        best: dict[str, float] = {}
-        for (obj, what, _), values in relative.items():
-            if what != kind or len(values) < 2:
-                continue
-            space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
-            _, spread = space.stats(np.arange(len(values)))
-            best[obj] = min(best.get(obj, math.inf), math.sqrt(spread))
+        best = _tightest(relative, kind)
         fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
         ranked = sorted(best.values())
         found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else fallback
@@ -447,6 +465,21 @@ def estimate_precision(
         position_estimated=settings.position_noise is None,
         orientation_estimated=settings.orientation_noise is None,
     )
+
+
+def _tightest(
+    relative: dict[tuple[str, Kind, str | None], np.ndarray], kind: Kind
+) -> dict[str, float]:
+    """Per object placed at least twice: its RMS spread as one cluster relative to
+    the candidate that explains it best (``relative`` holds the candidates)."""
+    best: dict[str, float] = {}
+    for (obj, what, _), values in relative.items():
+        if what != kind or len(values) < 2:
+            continue
+        space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
+        _, spread = space.stats(np.arange(len(values)))
+        best[obj] = min(best.get(obj, math.inf), math.sqrt(spread))
+    return best
 
 
 def _score_references(
