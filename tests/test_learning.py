@@ -141,10 +141,11 @@ def test_settings_out_of_range_are_input_errors(settings: dict[str, float]) -> N
 
 
 def test_update_keeps_teacher_requirements_on_the_same_states() -> None:
-    """State ids can change when a demonstration is added (here the fork's
-    placements are re-clustered); a requirement stated by id keeps naming the
-    states of the steps those ids were learned from (demonstration 1, steps 3
-    and 5)."""
+    """State ids can change when a demonstration is added, so a requirement
+    stated by id is stored as the steps it was learned from (``@d.s``) and keeps
+    naming their states (demonstration 1, steps 3 and 5). (The demonstration
+    added here repeats one, which since repeats add no evidence changes no id;
+    the anchoring is what is checked.)"""
     demos = load_demonstrations([EXAMPLES / "set_table"])
     model = TaskModelLearner(require=["C<E"]).fit(demos).model_
     assert model.sequences[0][2] == "C" and model.sequences[0][4] == "E"
