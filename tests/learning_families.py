@@ -176,7 +176,9 @@ def _names(n: int) -> list[str]:
 def shifted_scene_family(rng: np.random.Generator, n_objects: int, n_demos: int) -> Family:
     """Family 1: the first object anywhere, each later one against an earlier one
     (placements ≥ 8 cm apart), the whole scene translated by 1–5 m per
-    demonstration, σ = 1 cm per axis."""
+    demonstration (no two scenes within 1 m: two that happened to coincide
+    would make absolute as good an answer as the intended reference),
+    σ = 1 cm per axis."""
     sigma = 0.01
     while True:
         points = _spread_points(rng, n_objects, 0.5, 0.08)
@@ -187,9 +189,14 @@ def shifted_scene_family(rng: np.random.Generator, n_objects: int, n_demos: int)
             break
     names = _names(n_objects)
     demos, orders = [], []
-    for d in range(n_demos):
+    shifts: list[np.ndarray] = []
+    while len(shifts) < n_demos:  # scenes metres apart: no two within 1 m of each other
         angle = rng.uniform(0, 2 * math.pi)
         shift = rng.uniform(1.0, 5.0) * np.array([math.cos(angle), math.sin(angle)])
+        if all(np.linalg.norm(shift - other) >= 1.0 for other in shifts):
+            shifts.append(shift)
+    for d in range(n_demos):
+        shift = shifts[d]
         order = topological_order(rng, refs)
         placed: dict[int, np.ndarray] = {}
         steps = []

@@ -45,7 +45,7 @@ objects at once give two moves):
    release still gives that placement: the samples at the end within
    :attr:`~SegmentationSettings.settle_radius` of the last ones (or 4 × the
    noise) are the final rest when they lie on a support, or on an object of
-   unknown size with at least two samples no faster than ``start_speed``.
+   unknown size with at least two samples there, the last two no faster than ``start_speed``.
    An object still carried when the stream ends gives no step (a warning).
 7. **Steps, nudges and pushes.** A move is a nudge when the new rest pose is
    less than :attr:`~SegmentationSettings.min_distance` from the object's
@@ -669,10 +669,10 @@ def _settle_at_the_end(
     samples at the end within :attr:`~SegmentationSettings.settle_radius` of
     the last ones are the final rest when the object lies there on a support
     (the table, or a known support beneath it; one sample is enough) or, on
-    an object of unknown size, when at least two of them are no faster
-    together than ``start_speed``. Otherwise the object is still moving (or held) and its
-    last move is dropped. Returns the moves and the end (exclusive) of the
-    last rest.
+    an object of unknown size, when there are at least two of them and the
+    last two are no faster than ``start_speed``. Otherwise the object is still
+    moving (or held) and its last move is dropped. Returns the moves and the
+    end (exclusive) of the last rest.
     """
     n = len(track)
     times, positions = track.times, track.positions
@@ -689,9 +689,12 @@ def _settle_at_the_end(
         pose = _robust_pose(positions[first_still:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
         below = None if supports is None else supports.supported(track.name, pose, times[-1])
+        # Coming to a stop: at least two samples there, the last two slower than
+        # start_speed (a min-jerk set-down ends at rest even when the samples
+        # before it, at 20 Hz, are still on the way down).
         still = (
             n - first_still >= 2
-            and _speed_of(times[first_still:], positions[first_still:]) < settings.start_speed
+            and _speed_of(times[-2:], positions[-2:]) < settings.start_speed
         )
         if on or below is True or (still and below is None):
             ends = ends.copy()
