@@ -103,12 +103,12 @@ class Precision:
     orientation_estimated: bool = True
 
 
-LOCAL_EVIDENCE = 0.2
+LOCAL_EVIDENCE = 0.02
 """A reference available at some of an object's placements only adds a state
 there: its F test is taken at the significance level divided by the number of
 such candidates at that step (Bonferroni), and at most this fraction of it
-(0.05 → 0.01), so that one of many such candidates agreeing by chance does
-not."""
+(0.05 → 0.001), so that one of many such candidates agreeing by chance does
+not; and never from two placements."""
 
 MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
 MIN_ORIENTATION_PRECISION = 0.05  # deg
@@ -613,8 +613,11 @@ def _choose(
         and s.reference not in everywhere
         and world.available(placement.demo, s.reference, placement.step)
     ]
-    # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level.
+    # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level;
+    # and never from two placements: their spread can be as small as chance makes it.
     level = significance * min(LOCAL_EVIDENCE, 1.0 / max(1, len(candidates)))
+    if significance > 0 and len(own.clustering.labels) < 3:
+        candidates = []
     local = [s for s in candidates if beats(s, own, level) and beats(s, best, level)]
     if not local:
         return own

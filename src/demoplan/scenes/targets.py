@@ -139,13 +139,8 @@ class _Resolver:
         if state.position.reference is not None:
             reference = self.reference_pose(state.position.reference)
             if state.position.in_reference_frame and reference.orientation is not None:
-                # Turned with the reference (SPEC §5), its frame taken modulo its symmetry
-                # exactly as learning took it.
-                frame = reduce_yaw(
-                    np.asarray([reference.orientation], dtype=float),
-                    self.yaw_period(state.position.reference),
-                )
-                position = rotate_vectors(frame, position[None, :])[0]
+                frame = self.frame(state.position.reference, reference)
+                position = rotate_vectors(frame[None, :], position[None, :])[0]
             position = position + reference.position
         return Pose(
             (float(position[0]), float(position[1]), float(position[2])),
@@ -161,8 +156,22 @@ class _Resolver:
         base = self.reference_pose(state.orientation.reference).orientation
         if base is None:
             return canonical_quat(value)
-        frame = reduce_yaw(np.asarray([base]), self.yaw_period(state.orientation.reference))[0]
+        reference = state.orientation.reference
+        frame = self.frame(reference, Pose((0.0, 0.0, 0.0), base))
         return canonical_quat(quat_multiply(frame, np.asarray(value)).tolist())
+
+    def frame(self, name: str, pose: Pose) -> np.ndarray:
+        """The frame relative values of ``name`` are taken in (SPEC §5). A target this
+        demonstration resolves turns with its own reference, so its orientation is
+        already the copy learning used; an object or landmark as it stands in the
+        scene is one of its symmetric copies, reduced as learning reduced them
+        (its turn about its own axis within half a period of none)."""
+        assert pose.orientation is not None
+        quat = np.asarray(pose.orientation, dtype=float)
+        if name in self.targets or name in self.final_state:
+            return quat
+        reduced: np.ndarray = reduce_yaw(quat[None, :], self.yaw_period(name))[0]
+        return reduced
 
     def yaw_period(self, name: str) -> float:
         """``name``'s symmetry about its z axis (deg), as learning used it (360: none)."""

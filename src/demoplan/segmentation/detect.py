@@ -693,8 +693,7 @@ def _settle_at_the_end(
         # start_speed (a min-jerk set-down ends at rest even when the samples
         # before it, at 20 Hz, are still on the way down).
         still = (
-            n - first_still >= 2
-            and _speed_of(times[-2:], positions[-2:]) < settings.start_speed
+            n - first_still >= 2 and _speed_of(times[-2:], positions[-2:]) < settings.start_speed
         )
         if on or below is True or (still and below is None):
             ends = ends.copy()
