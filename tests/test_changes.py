@@ -43,3 +43,28 @@ def test_a_teacher_constraint_closing_a_cycle_is_refused_with_the_cycle() -> Non
     # green<red agrees with both demonstrations' orders: no cycle.
     model = learn(demos, settings=replace(PAPER_SETTINGS, require=("green<red",)))
     assert model.teacher_constraints
+
+
+def test_a_split_is_reported_and_requirements_stay_on_their_steps() -> None:
+    """Three demonstrations put the spoon behind the plate twice and to its right
+    once: one state (a place seen once is none of its own). Two more (right,
+    behind) split it; the update says so, and a requirement stated by id on the
+    first model keeps naming the steps it was learned from (``@d.s``)."""
+    from dataclasses import replace
+
+    from demoplan.learning import TaskModelLearner, update
+
+    demos = load_demonstrations([EXAMPLES / "two_placements" / "demonstrations.json"])
+    first = TaskModelLearner(replace(PAPER_SETTINGS, require=("B<C",))).fit(demos[:3]).model_
+    assert [(s.id, s.object) for s in first.states] == [
+        ("A", "plate"),
+        ("B", "spoon"),
+        ("C", "fork"),
+    ]
+    updated = update(first, demos[3:])
+    changes = model_changes(first, updated)
+    assert changes.split == (("B", ("B", "D")),)
+    assert "state B split into B, D" in changes.lines()
+    assert updated.settings.require == ("@1.2<@1.3",)
+    assert updated.teacher_constraints == (("B", "C"),)
+    assert updated.sequences[1] == ("A", "C", "D")  # demonstration 2's spoon: the right one
