@@ -823,7 +823,7 @@ def segment(
             if objects_file is not None
             else {}
         )
-        from demoplan.segmentation.detect import settings_from_text
+        from demoplan.segmentation.settings import settings_from_text
 
         found = segment_stream(stream, settings_from_text(thresholds or []), geometry=geometry)
         if objects_file is not None:
@@ -882,7 +882,7 @@ def _count(n: int, noun: str) -> str:
 
 
 def _segmentation_defaults() -> str:
-    from demoplan.segmentation.detect import settings_help
+    from demoplan.segmentation.settings import settings_help
 
     return settings_help()
 

@@ -87,7 +87,7 @@ _EXPORTS = {
     "write_csv": "demoplan.segmentation.writers",
     "Move": "demoplan.segmentation.detect",
     "Segmentation": "demoplan.segmentation.detect",
-    "SegmentationSettings": "demoplan.segmentation.detect",
+    "SegmentationSettings": "demoplan.segmentation.settings",
     "SpeedTrace": "demoplan.segmentation.detect",
     "segment": "demoplan.segmentation.detect",
     "write_demonstration": "demoplan.segmentation.detect",
@@ -125,7 +125,6 @@ if TYPE_CHECKING:
     from demoplan.segmentation.detect import (
         Move,
         Segmentation,
-        SegmentationSettings,
         SpeedTrace,
         segment,
         write_demonstration,
@@ -133,6 +132,7 @@ if TYPE_CHECKING:
     from demoplan.segmentation.importing import import_recording
     from demoplan.segmentation.plotting import plot_heights, plot_segmentation
     from demoplan.segmentation.readers import load_bag, load_csv, load_stream
+    from demoplan.segmentation.settings import SegmentationSettings
     from demoplan.segmentation.synthetic import (
         StepComparison,
         compare_steps,
