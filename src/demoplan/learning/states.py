@@ -3,18 +3,23 @@
 Every step of every demonstration is a *placement* of one object. For each
 object, every candidate reference — absolute, every other object, every
 landmark — is scored: the object's placements are expressed relative to the
-candidate (x_i − x_j, or R_j⁻¹·R_i for orientations) and clustered with
-K-means for c = 1..N (:func:`demoplan.clustering.select_clustering`, eq. 2).
-Each placement then takes, among the candidates *available at that step*
-(absolute, landmarks, objects already moved in that demonstration), the one
-with the lowest score — "positions can only be specified towards already
-placed objects". Ties (scores whose RMS differs by less than the measurement
-noise) go to fewer clusters, then to absolute, then to the nearest reference.
+candidate (in the reference's frame where it has an orientation, modulo its
+symmetry; orientations ``R_j⁻¹·R_i`` modulo the object's own symmetry) and
+clustered with K-means for c = 1..N
+(:func:`demoplan.learning.clustering.select_clusterings`, eq. 2). Decisions are
+measured against the placement precision, estimated from the demonstrations
+(:func:`estimate_precision`) unless set: a reference, or more clusters, wins
+over a choice with fewer states only where it outscores it
+(:func:`~demoplan.learning.clustering.outscores`). Each placement takes the
+object's own choice among the references available at all its placements, or
+one available only at its step that outscores it (:class:`_Chooser`) —
+"positions can only be specified towards already placed objects".
 
 Position and orientation choose their references independently. A state is
 (object, position reference and cluster, orientation reference and cluster);
 states are lettered A, B, … in order of first appearance over the
-demonstrations in the order given, steps in order.
+demonstrations in the order given, steps in order. docs/learning.md tells
+the whole method.
 """
 
 from __future__ import annotations
@@ -58,6 +63,7 @@ __all__ = [
 ]
 
 Kind = Literal["position", "orientation"]
+KINDS: tuple[Kind, ...] = ("position", "orientation")
 
 logger = logging.getLogger(__name__)
 
@@ -258,7 +264,7 @@ def _generate_states(
     framed: dict[tuple[str, str | None], bool] = {}
     candidates = {obj: [None, *(n for n in names if n != obj)] for obj in placements}
     for obj, own in placements.items():
-        for kind in ("position", "orientation"):
+        for kind in KINDS:
             _relative_table(obj, kind, own, candidates[obj], world, relative, framed)
     everywhere = {
         key
@@ -267,18 +273,16 @@ def _generate_states(
         or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
     }
     steady = {key: values for key, values in relative.items() if key in everywhere}
-    precision = estimate_precision(steady, settings)
+    tightest: dict[Kind, dict[str, float]] = {kind: _tightest(steady, kind) for kind in KINDS}
+    precision = _precision(tightest, settings)
     # An object placed more precisely than the median one is judged by its own
     # precision: red stands on wood to 0.6 mm while wood and green scatter by
     # centimetres (the shipped blocks).
     own_precision = {
-        kind: {
-            obj: min(spread, getattr(precision, kind))
-            for obj, spread in _tightest(steady, kind).items()
-        }
+        kind: {obj: min(spread, getattr(precision, kind)) for obj, spread in spreads.items()}
         if getattr(precision, f"{kind}_estimated")
         else {}
-        for kind in ("position", "orientation")
+        for kind, spreads in tightest.items()
     }
     if precision.orientation >= settings.orientation_separation:
         logger.info(
@@ -317,33 +321,37 @@ def _generate_states(
             else []  # the demonstrations do not fix orientations: none is learned
         )
         all_scores += position_scores + orientation_scores
+        by_position = _Chooser.of(
+            position_scores, reachable[obj], position_precision, settings.significance
+        )
+        by_orientation = (
+            _Chooser.of(
+                orientation_scores, reachable[obj], orientation_precision, settings.significance
+            )
+            if orientation_scores
+            else None
+        )
         for index, placement in enumerate(own):
-            pos = _choose(
-                position_scores,
-                placement,
-                world,
-                position_precision,
-                settings.significance,
-                reachable[obj],
+            where = (placement.demo, placement.step)
+            pos = by_position.at(placement, world)
+            decided[where] = _margins(
+                "position", pos, position_scores, placement, world, position_precision
             )
             ori_reference, ori_cluster = None, -1  # orientation unknown
-            if orientation_scores:
-                ori = _choose(
-                    orientation_scores,
-                    placement,
-                    world,
-                    orientation_precision,
-                    settings.significance,
-                    reachable[obj],
-                )
+            if by_orientation is not None:
+                ori = by_orientation.at(placement, world)
                 ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
-                decided[(placement.demo, placement.step)] = _margins(
-                    "orientation", ori, orientation_scores, placement, world, orientation_precision
+                decided[where].update(
+                    _margins(
+                        "orientation",
+                        ori,
+                        orientation_scores,
+                        placement,
+                        world,
+                        orientation_precision,
+                    )
                 )
-            decided.setdefault((placement.demo, placement.step), {}).update(
-                _margins("position", pos, position_scores, placement, world, position_precision)
-            )
-            keys[(placement.demo, placement.step)] = _StateKey(
+            keys[where] = _StateKey(
                 obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
             )
 
@@ -449,9 +457,15 @@ def estimate_precision(
     people teleoperating a robot centimetres. Without any object placed
     twice, :data:`FALLBACK_PRECISION`.
     """
+    return _precision({kind: _tightest(relative, kind) for kind in KINDS}, settings)
+
+
+def _precision(
+    tightest: dict[Kind, dict[str, float]], settings: StateGenerationSettings
+) -> Precision:
+    """:func:`estimate_precision` from each object's tightest spread, per kind."""
     found: dict[Kind, float] = {}
-    for kind in ("position", "orientation"):
-        best = _tightest(relative, kind)
+    for kind, best in tightest.items():
         fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
         ranked = sorted(best.values())
         found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else fallback
@@ -563,17 +577,11 @@ def _mean_distance(kind: Kind, values: np.ndarray) -> float:
     return float(np.degrees(2.0 * np.arccos(np.clip(np.abs(values[:, 3]), 0.0, 1.0))).mean())
 
 
-def _choose(
-    scores: list[ReferenceScore],
-    placement: _Placement,
-    world: _World,
-    noise: float,
-    significance: float,
-    everywhere: set[str],
-) -> ReferenceScore:
-    """The reference of one placement (SPEC §5).
+@dataclass(frozen=True, slots=True)
+class _Chooser:
+    """One object's reference choice for one kind (SPEC §5).
 
-    First the object's own choice among the candidates available at every
+    First the object's **own** choice among the candidates available at every
     one of its placements (absolute, landmarks, objects always placed before
     it — a choice that adds no state): the best-scoring one and those it does
     not outscore (:func:`~demoplan.learning.clustering.outscores`) are tied,
@@ -581,50 +589,77 @@ def _choose(
     reference (a nut to the peg it sits on, not to the other peg that moves
     with it). A placement takes another reference — one available only at its
     step — only where that reference outscores the object's own choice and
-    the best of those; among several, the best
-    (ties: fewer clusters, then the nearest reference). So the fork is placed
-    relative to the glass only where the glass stands already *and* explains
-    it better than the plate does everywhere (Table II, state J).
+    the best of those (:meth:`at`). So the fork is placed relative to the
+    glass only where the glass stands already *and* explains it better than
+    the plate does everywhere (Table II, state J).
     """
 
-    def beats(better: ReferenceScore, worse: ReferenceScore, level: float = significance) -> bool:
-        return outscores(
-            (worse.clustering.score, worse.clustering.df),
-            (better.clustering.score, better.clustering.df),
-            noise=noise,
-            significance=level,
+    scores: list[ReferenceScore]
+    own: ReferenceScore
+    best: ReferenceScore
+    everywhere: set[str]
+    noise: float
+    significance: float
+
+    @classmethod
+    def of(
+        cls,
+        scores: list[ReferenceScore],
+        everywhere: set[str],
+        noise: float,
+        significance: float,
+    ) -> _Chooser:
+        steady = [s for s in scores if s.reference is None or s.reference in everywhere]
+        best = min(steady, key=lambda s: s.clustering.score)
+        own = min(
+            (s for s in steady if not _beats(best, s, noise, significance)),
+            key=lambda s: (
+                s.clustering.n_clusters,
+                s.reference is not None,
+                s.distance,
+                s.reference or "",
+            ),
+        )
+        return cls(scores, own, best, everywhere, noise, significance)
+
+    def at(self, placement: _Placement, world: _World) -> ReferenceScore:
+        """The reference of one placement: the object's own choice, or a reference
+        available only at its step that outscores it (the best of those; ties:
+        fewer clusters, then the nearest reference)."""
+        candidates = [
+            s
+            for s in self.scores
+            if s.reference is not None
+            and s.reference not in self.everywhere
+            and world.available(placement.demo, s.reference, placement.step)
+        ]
+        # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level;
+        # and never from two placements: their spread can be as small as chance makes it.
+        level = self.significance * min(LOCAL_EVIDENCE, 1.0 / max(1, len(candidates)))
+        if self.significance > 0 and len(self.own.clustering.labels) < 3:
+            return self.own
+        local = [
+            s
+            for s in candidates
+            if _beats(s, self.own, self.noise, level) and _beats(s, self.best, self.noise, level)
+        ]
+        if not local:
+            return self.own
+        top = min(local, key=lambda s: s.clustering.score)
+        return min(
+            (s for s in local if not _beats(top, s, self.noise, self.significance)),
+            key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
         )
 
-    steady = [s for s in scores if s.reference is None or s.reference in everywhere]
-    best = min(steady, key=lambda s: s.clustering.score)
-    own = min(
-        (s for s in steady if not beats(best, s)),
-        key=lambda s: (
-            s.clustering.n_clusters,
-            s.reference is not None,
-            s.distance,
-            s.reference or "",
-        ),
-    )
-    candidates = [
-        s
-        for s in scores
-        if s.reference is not None
-        and s.reference not in everywhere
-        and world.available(placement.demo, s.reference, placement.step)
-    ]
-    # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level;
-    # and never from two placements: their spread can be as small as chance makes it.
-    level = significance * min(LOCAL_EVIDENCE, 1.0 / max(1, len(candidates)))
-    if significance > 0 and len(own.clustering.labels) < 3:
-        candidates = []
-    local = [s for s in candidates if beats(s, own, level) and beats(s, best, level)]
-    if not local:
-        return own
-    top = min(local, key=lambda s: s.clustering.score)
-    return min(
-        (s for s in local if not beats(top, s)),
-        key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
+
+def _beats(
+    better: ReferenceScore, worse: ReferenceScore, noise: float, significance: float
+) -> bool:
+    return outscores(
+        (worse.clustering.score, worse.clustering.df),
+        (better.clustering.score, better.clustering.df),
+        noise=noise,
+        significance=significance,
     )
 
 
