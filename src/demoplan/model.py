@@ -8,6 +8,7 @@ are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (SPEC §2).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from demoplan.learning.settings import LearningSettings
@@ -25,7 +26,9 @@ __all__ = [
     "Step",
     "TaskModel",
     "Vector3",
+    "demonstrated_shapes",
     "visit_label",
+    "yaw_period",
 ]
 
 
@@ -59,6 +62,20 @@ class ObjectGeometry:
         if self.shape == "box":
             return 90.0 if abs(self.size[0] - self.size[1]) <= 0.001 else 180.0
         return 360.0
+
+
+def yaw_period(shape: ObjectGeometry | None) -> float:
+    """:attr:`ObjectGeometry.yaw_period`, and 360° (no symmetry) for an unknown shape."""
+    return 360.0 if shape is None else shape.yaw_period
+
+
+def demonstrated_shapes(demonstrations: Iterable[Demonstration]) -> dict[str, ObjectGeometry]:
+    """Each object's (and landmark's) shape as the first demonstration giving one has it."""
+    shapes: dict[str, ObjectGeometry] = {}
+    for demo in demonstrations:
+        for name, shape in demo.objects:
+            shapes.setdefault(name, shape)
+    return shapes
 
 
 @dataclass(frozen=True, slots=True)

@@ -45,11 +45,12 @@ from demoplan.learning.clustering import (
 from demoplan.learning.settings import LearningSettings as StateGenerationSettings
 from demoplan.model import (
     Demonstration,
-    ObjectGeometry,
     Pose,
     State,
     StateOrientation,
     StatePosition,
+    demonstrated_shapes,
+    yaw_period,
 )
 
 __all__ = [
@@ -148,10 +149,7 @@ class _World:
         self.moves: list[dict[str, tuple[list[int], list[Pose]]]] = []
         self.landmarks = [d.landmark_poses() for d in demonstrations]
         self.initial = [d.initial_poses() for d in demonstrations]
-        self.geometry: dict[str, ObjectGeometry] = {}
-        for demo in demonstrations:
-            for name, shape in demo.objects:
-                self.geometry.setdefault(name, shape)
+        self.geometry = demonstrated_shapes(demonstrations)
         for demo in demonstrations:
             moves: dict[str, tuple[list[int], list[Pose]]] = {}
             for index, step in enumerate(demo.steps):
@@ -178,8 +176,7 @@ class _World:
     def yaw_period(self, name: str | None) -> float:
         """``name``'s symmetry about its own z axis (deg; 0: any turn); 360° (none)
         where its geometry is unknown."""
-        shape = self.geometry.get(name) if name is not None else None
-        return 360.0 if shape is None else shape.yaw_period
+        return yaw_period(self.geometry.get(name) if name is not None else None)
 
     def own_symmetry(self, name: str, quats: np.ndarray) -> np.ndarray:
         """``name``'s orientations (absolute or relative to a reference) compared

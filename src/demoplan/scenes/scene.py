@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
+from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
 from demoplan.poses import (
     LENGTH_SCALE,
     Coordinate,
@@ -263,9 +263,7 @@ def load_scene(path: str | Path) -> Scene:
 def complete_geometry(scene: Scene, model: TaskModel) -> Scene:
     """Give every object without a size in the scene the geometry the
     demonstrations recorded for it; an object known nowhere is an error."""
-    known: dict[str, ObjectGeometry] = {}
-    for demo in model.demonstrations:
-        known.update(demo.objects)
+    known = demonstrated_shapes(model.demonstrations)  # one geometry per object (checked)
     objects = []
     for obj in scene.objects:
         if obj.geometry is None:

@@ -27,7 +27,14 @@ import numpy as np
 
 from demoplan.errors import InputError
 from demoplan.learning.constraints import visit_sequence
-from demoplan.model import ObjectGeometry, Pose, State, TaskModel
+from demoplan.model import (
+    ObjectGeometry,
+    Pose,
+    State,
+    TaskModel,
+    demonstrated_shapes,
+    yaw_period,
+)
 from demoplan.rotations import (
     Quaternion,
     canonical_quat,
@@ -175,8 +182,7 @@ class _Resolver:
 
     def yaw_period(self, name: str) -> float:
         """``name``'s symmetry about its z axis (deg), as learning used it (360: none)."""
-        shape = self.geometry.get(name)
-        return 360.0 if shape is None else shape.yaw_period
+        return yaw_period(self.geometry.get(name))
 
     def reference_pose(self, reference: str) -> Pose:
         if reference in self.targets:
@@ -213,10 +219,7 @@ def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) ->
     states = {state.id: state for state in model.states}
     current = {obj.name: obj.pose for obj in scene.objects}
     landmarks = landmark_poses(model, scene)
-    geometry: dict[str, ObjectGeometry] = {}
-    for demo in model.demonstrations:  # the shapes learning took symmetries from
-        for name, shape in demo.objects:
-            geometry.setdefault(name, shape)
+    geometry = demonstrated_shapes(model.demonstrations)  # as learning took symmetries
     constraints = set(model.constraints)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
