@@ -73,6 +73,7 @@ import logging
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
+from operator import attrgetter
 from pathlib import Path
 
 import numpy as np
@@ -278,7 +279,7 @@ def segment(
             initial.append((track.name, result.initial))
         else:
             logger.info("%s: moving when its track begins; no initial pose", track.name)
-    order = lambda m: (m.end, m.start, m.object)  # noqa: E731
+    order = attrgetter("end", "start", "object")
     return Segmentation(
         moves=tuple(sorted(moves, key=order)),
         nudges=tuple(sorted(nudges, key=order)),
@@ -426,7 +427,7 @@ def _runs(mask: NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
 
 
 def _segment_track(
-    track: ObjectTrack, settings: SegmentationSettings, supports: _Supports | None
+    track: ObjectTrack, settings: SegmentationSettings, supports: _Supports
 ) -> _TrackResult:
     n = len(track)
     times, positions = track.times, track.positions
@@ -482,7 +483,7 @@ def _segment_track(
             after = poses[k + 1]
             drop = pose.position[2] - (after.position[2] if after else pose.position[2])
             hover[k] = rise < settings.min_lift and drop >= settings.min_lift
-        if not hover[k] and supports is not None:
+        if not hover[k]:
             at = float(times[int(rest_ends[k]) - 1])
             hover[k] = supports.supported(track.name, pose, at) is False
     moves: list[Move] = []
@@ -558,7 +559,7 @@ def _settle_at_the_end(
     starts: IntArray,
     ends: IntArray,
     settings: SegmentationSettings,
-    supports: _Supports | None,
+    supports: _Supports,
 ) -> tuple[IntArray, IntArray, int]:
     """Cut the last move short where the object already lies still at the end of the stream.
 
@@ -586,7 +587,7 @@ def _settle_at_the_end(
     if first_still < n:
         pose = _robust_pose(positions[first_still:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
-        below = None if supports is None else supports.supported(track.name, pose, times[-1])
+        below = supports.supported(track.name, pose, float(times[-1]))
         # Coming to a stop: at least two samples there, the last two slower than
         # start_speed (a min-jerk set-down ends at rest even when the samples
         # before it, at 20 Hz, are still on the way down).
