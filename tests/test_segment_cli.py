@@ -201,3 +201,24 @@ def test_segment_reports_pushes_and_takes_thresholds(tmp_path: Path) -> None:
     )
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "--set" in bad.stderr
     assert not (tmp_path / "x.json").exists()
+
+
+@pytest.mark.parametrize("command", ["segment", "import", "learn"])
+def test_a_pipe_or_device_as_input_is_one_line_not_a_hang(tmp_path: Path, command: str) -> None:
+    """A FIFO blocks on open and /dev/zero never ends: both are refused at once."""
+    import os
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for source in (fifo, Path("/dev/zero")):
+        out = tmp_path / ("out" if command == "import" else "out.json")
+        done = subprocess.run(
+            [sys.executable, "-m", "demoplan", command, str(source), "-o", str(out)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert done.returncode == 1, done.stderr
+        assert done.stderr.count("\n") == 1 and "not a regular file" in done.stderr
+        assert str(source) in done.stderr and not out.exists()

@@ -38,6 +38,21 @@ _FORMAT = re.compile(r"^demoplan/([a-z][a-z0-9-]*?)-(\d+)(?:\.(\d+))?$")
 MAX_FILE_BYTES = 64 * 1024 * 1024
 
 
+def require_regular_file(path: Path, expected: str) -> None:
+    """An InputError unless ``path`` is a regular file: a device (``/dev/zero``) or a
+    pipe would be read forever or block, a folder is not a file. ``expected``
+    says what should be there."""
+    source = str(path)
+    if not path.exists():
+        raise InputError(f"no such file; {expected} expected", source=source)
+    if path.is_dir():
+        raise InputError(f"is a folder; {expected} expected", source=source)
+    if not path.is_file():
+        raise InputError(
+            f"not a regular file (a device, pipe or socket); {expected} expected", source=source
+        )
+
+
 def read_document(path: Path) -> dict[str, Any]:
     """Parse a JSON (or YAML, by extension) file into a dict, or raise one clear InputError.
 
@@ -46,6 +61,8 @@ def read_document(path: Path) -> dict[str, Any]:
     """
     path = Path(path)
     source = str(path)
+    if path.exists() and not path.is_dir():
+        require_regular_file(path, "a JSON or YAML document")
     try:
         size = path.stat().st_size
     except OSError as exc:

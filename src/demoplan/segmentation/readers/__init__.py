@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from demoplan.errors import InputError
+from demoplan.fileio import require_regular_file
 from demoplan.segmentation.readers.bag import load_bag
 from demoplan.segmentation.readers.csv import load_csv
 from demoplan.segmentation.types import PoseStream
@@ -43,6 +44,8 @@ def load_stream(
         raise InputError(
             "no such file or folder; a CSV file or a ROS 2 bag expected", source=str(path)
         )
+    if not path.is_dir():
+        require_regular_file(path, "a CSV file or a ROS 2 bag")
     if path.is_dir() or path.suffix.lower() in {".db3", ".mcap"} or path.name == "metadata.yaml":
         return load_bag(path, frame=frame, objects=objects)
     return load_csv(path, objects=objects)

@@ -63,6 +63,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demoplan.errors import InputError
+from demoplan.fileio import require_regular_file
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.rotations import quat_from_yaw
 from demoplan.segmentation.types import ObjectTrack, PoseStream
@@ -658,12 +659,7 @@ def _open(path: Path) -> h5py.File:
     import h5py
 
     source = str(path)
-    if not path.exists():
-        raise InputError(
-            "no such file; a robosuite / robomimic HDF5 recording expected", source=source
-        )
-    if path.is_dir():
-        raise InputError("is a folder; an HDF5 recording expected", source=source)
+    require_regular_file(path, "a robosuite / robomimic HDF5 recording")
     try:
         return h5py.File(path, "r")
     except OSError as exc:
