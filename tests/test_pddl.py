@@ -13,14 +13,16 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, given, settings
 
 from demoplan.planning.generate import blocks_problem, table_problem
 from demoplan.planning.pddl import action_from_pddl, problem_to_pddl, save_pddl
 from demoplan.planning.problem import Action, Problem, Subgoal
-from demoplan.planning.search import solve
+from demoplan.planning.search import breadth_first_search, solve
+from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
 from tests.helpers import EXAMPLES
-from tests.validator import validate
+from tests.test_search import small_problems
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"
 
@@ -241,3 +243,21 @@ def test_fast_downward_optimal_lengths_match() -> None:
         validate(problem, actions)
         assert len(actions) == len(solve(problem)), problem.name
     print(f"Fast Downward: {len(problems)} problems in {seconds:.1f} s")
+
+
+@given(small_problems())
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_fast_downward_agrees_under_the_order_rule(problem: Problem) -> None:
+    """Random small problems with subgoals and precedences: Fast Downward's
+    optimal plan on the export is valid under SPEC §5's order rule and as long
+    as breadth-first search's (or both find none)."""
+    pytest.importorskip("up_fast_downward", reason="pip install -e '.[fd]'")
+    reference = breadth_first_search(problem)
+    status, names, _ = fast_downward_plan(*problem_to_pddl(problem))
+    if reference.actions is None:
+        assert names is None and status == "UNSOLVABLE"
+        return
+    assert names is not None, status
+    actions = [action_from_pddl(problem, name) for name in names]
+    validate(problem, actions)
+    assert len(actions) == len(reference.actions)

@@ -19,12 +19,12 @@ from demoplan.cli import app
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Action
+from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
 from demoplan.scenes.plan import plan_in_scene, scene_problems
 from demoplan.scenes.scene import load_scene
 from tests.helpers import EXAMPLES, paper_model
 from tests.scene_checker import check_scene_plan
-from tests.validator import validate
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"

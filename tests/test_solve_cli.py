@@ -12,10 +12,10 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.planning.problem import Action, Problem
+from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
 from tests.helpers import EXAMPLES
 from tests.test_problem_xml import BOMB
-from tests.validator import validate
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"
 LINE = re.compile(r"(GRASP|PUT_DOWN) (\S+) (\S+) (\S+)")

@@ -31,9 +31,9 @@ from typing import Any
 from demoplan.errors import DemoplanError
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
-from demoplan.planning.compiled import compile_problem
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
+from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.plan import plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
@@ -330,22 +330,14 @@ def execute(
 
 
 def _reached_at_start(problem: SceneProblem) -> set[str]:
-    compiled = compile_problem(problem.problem)
-    return {
-        s.id
-        for index, s in enumerate(problem.problem.subgoals)
-        if compiled.start_reached >> index & 1
-    }
+    """The subgoals that count as reached where the objects stand (SPEC §5)."""
+    return set(Rules(problem.problem).start().reached)
 
 
 def _mark_reached(problem: SceneProblem, action: Action, reached: set[str]) -> None:
     """The subgoal this put-down reaches (at most one; SPEC §5)."""
-    for s in problem.problem.subgoals:
-        if s.object != action.object or s.location != action.location or s.id in reached:
-            continue
-        if all(a in reached for a, b in problem.problem.precedences if b == s.id):
-            reached.add(s.id)
-            return
+    rules = Rules(problem.problem)
+    reached |= rules.reached_by_put_down(action.object, action.location, frozenset(reached))
 
 
 def _goal_holds(

@@ -117,14 +117,15 @@ class Compiled:
             stuck |= 1 << obj
         return stuck
 
-    def reach(self, obj: int, location: int, reached: int) -> int:
-        """Subgoals reached by putting ``obj`` down at ``location`` (at most one)."""
+    def put_down(self, obj: int, location: int, reached: int) -> int:
+        """The subgoals reached after putting ``obj`` down at ``location``, or -1
+        if the order rule forbids it (SPEC §5; :mod:`demoplan.planning.strips`):
+        the first unreached subgoal of ``obj`` there must have every predecessor
+        reached, and is reached by the put-down."""
         for s in self.subgoals_of[obj]:
-            if (
-                self.subgoal_location[s] == location
-                and not reached >> s & 1
-                and self.subgoal_before[s] & ~reached == 0
-            ):
+            if self.subgoal_location[s] == location and not reached >> s & 1:
+                if self.subgoal_before[s] & ~reached:
+                    return -1
                 return reached | 1 << s
         return reached
 
@@ -221,17 +222,16 @@ def compile_problem(problem: Problem) -> Compiled:
     reached = 0
     for sid in problem.reached:
         reached |= 1 << sub_index[sid]
-    # A subgoal already true at the start counts if its predecessors are reached too
-    # (at most one per object: a second visit needs a second put-down).
-    counted: set[int] = set()
-    changed = True
-    while changed:
-        changed = False
-        for index, at in enumerate(start):
-            if index in counted:
-                continue
-            updated = compiled.reach(index, at, reached)
-            if updated != reached:
-                reached, changed = updated, True
-                counted.add(index)
+    # At the start a subgoal counts where its object stands, once its own earlier
+    # subgoals are reached (other objects' predecessors are not required; see
+    # demoplan.planning.strips); at most one per object.
+    for index, at in enumerate(start):
+        own = 0
+        for sub in subgoals_of[index]:
+            own |= 1 << sub
+        for sub in subgoals_of[index]:
+            if compiled.subgoal_location[sub] == at and not reached >> sub & 1:
+                if before[sub] & own & ~reached == 0:
+                    reached |= 1 << sub
+                break
     return replace(compiled, start_reached=reached)

@@ -10,8 +10,14 @@ action costs 1 (no ``:action-costs``), so an optimal PDDL plan has as many
 actions as an optimal demoplan plan; action names map back to the paper's
 ``GRASP o l g`` / ``PUT_DOWN o l g``.
 
+The order rule of SPEC §5 is in the preconditions: the plain PUT_DOWN at a
+place of one of the object's subgoals needs every subgoal there reached; the
+variant that reaches a subgoal needs its predecessors reached. So Fast
+Downward's plans, like demoplan's, never put an object on its place before
+its predecessors.
+
 The predicates keep their arguments — ``(located o l)``, ``(free l)``,
-``(occupied l)``, ``(holding o g)``, ``(reached s)``, ``(pending s)`` over the
+``(occupied l)``, ``(holding o g)``, ``(reached s)``, ``(pending s)``, ``(away o l)`` over the
 domain's constants — rather than being flattened into one nullary atom per
 fact: Fast Downward's translator then finds the state invariants (an object
 is at one place or held, a place is free or occupied) at once, where with
@@ -45,6 +51,7 @@ _PREDICATES = (
     "(holding ?o ?g)",
     "(reached ?s)",
     "(pending ?s)",
+    "(away ?o ?l)",
 )
 
 
@@ -87,6 +94,18 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
     def mask(bits: int) -> list[str]:
         return [locations[i] for i in range(len(locations)) if bits >> i & 1]
 
+    def away(o: str, loc: str) -> str:
+        return f"away {names[o]} {names[loc]}"
+
+    # "No move ends where it started" (SPEC §5) changes no fact, so no shortest
+    # plan needs a rule for it — except where an object has two subgoals at one
+    # place: putting it back there would reach the second. For those places
+    # (away o l) says o has been put down elsewhere since it last stood at l.
+    revisits: dict[str, list[str]] = {}
+    for o in objects:
+        places = [s.location for s in problem.subgoals if s.object == o]
+        revisits[o] = sorted({p for p in places if places.count(p) > 1})
+
     actions: list[str] = []
     for oi, o in enumerate(objects):
         for gi in c.grasps_of[oi]:
@@ -108,17 +127,23 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
                 pre += [free(b) for b in mask(c.block[li][gi] | c.exclusive[li])]
                 pre += [occupied(b) for b in mask(c.below[li])]
                 add = ["handempty", at(o, loc), occupied(loc)]
+                add += [away(o, p) for p in revisits[o] if p != loc]
                 delete = [holding(o, g), free(loc)]
+                delete += [away(o, loc)] if loc in revisits[o] else []
                 base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
-                actions.append(_action(base, pre, add, delete))
-                for s in problem.subgoals:  # the same PUT_DOWN, reaching a subgoal
-                    if s.object != o or s.location != loc:
-                        continue
+                # The order rule (SPEC §5): o is put down at the place of a subgoal
+                # only to reach it — the first one there not yet reached, once its
+                # predecessors are — or once all of them there are reached.
+                here = [s for s in problem.subgoals if s.object == o and s.location == loc]
+                actions.append(_action(base, [*pre, *(reached(s.id) for s in here)], add, delete))
+                for i, s in enumerate(here):  # the same PUT_DOWN, reaching a subgoal
                     before = [reached(a) for a, b in sorted(problem.precedences) if b == s.id]
+                    earlier = [reached(e.id) for e in here[:i]]
+                    earlier += [away(o, loc)] if i else []
                     actions.append(
                         _action(
                             f"{base}__reach__{subgoal_names[s.id]}",
-                            [*pre, pending(s.id), *before],
+                            [*pre, pending(s.id), *earlier, *before],
                             [*add, reached(s.id)],
                             [*delete, pending(s.id)],
                         )
@@ -140,6 +165,8 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
     init = ["handempty"]
     init += [at(o, loc) for o, loc in problem.initial]
     init += [occupied(loc) if loc in taken else free(loc) for loc in locations]
+    start = dict(problem.initial)
+    init += [away(o, p) for o in objects for p in revisits[o] if start[o] != p]
     for i, s in enumerate(problem.subgoals):
         init.append(reached(s.id) if c.start_reached >> i & 1 else pending(s.id))
     goal = ["handempty", *(at(o, loc) for o, loc in problem.goal)]

@@ -63,8 +63,9 @@ class SearchOutcome:
     bound: int = 0  # the f-bound (in actions) reached when a limit stopped A*
 
 
-# BFS state: object locations (-1 for the held one), held (object, grasp) or None, reached.
-_BfsState = tuple[tuple[int, ...], tuple[int, int] | None, int]
+# BFS state: object locations (-1 for the held one), held (object, grasp, where it
+# was taken from) or None, reached.
+_BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
 
 
 DEAD_END = 1 << 40
@@ -124,16 +125,18 @@ def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchO
                         action = Action(
                             "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
                         )
-                        successors.append(((moved, (obj, grasp), reached), action))
+                        successors.append(((moved, (obj, grasp, location), reached), action))
         else:
-            obj, grasp = held
+            obj, grasp, source = held
             for location in range(n_locations):
-                if c.put_ok(occupied, location, grasp):
-                    placed = positions[:obj] + (location,) + positions[obj + 1 :]
-                    action = Action(
-                        "PUT_DOWN", c.objects[obj], c.locations[location], c.grasps[grasp]
-                    )
-                    successors.append(((placed, None, c.reach(obj, location, reached)), action))
+                if location == source or not c.put_ok(occupied, location, grasp):
+                    continue
+                now_reached = c.put_down(obj, location, reached)
+                if now_reached < 0:
+                    continue
+                placed = positions[:obj] + (location,) + positions[obj + 1 :]
+                action = Action("PUT_DOWN", c.objects[obj], c.locations[location], c.grasps[grasp])
+                successors.append(((placed, None, now_reached), action))
         for successor, action in successors:
             if successor not in parents:
                 parents[successor] = (state, action)
@@ -679,10 +682,8 @@ class _AStar:
                         continue
                     for target in range(n_locations):
                         if target == source:
-                            # Put back where it was: useful only to reach a subgoal late.
-                            if not has_subgoals or c.reach(obj, target, reached) == reached:
-                                continue
-                        elif plain >> target & 1 and (target != free_plain or plain >> source & 1):
+                            continue  # no move ends where it started (SPEC §5)
+                        if plain >> target & 1 and (target != free_plain or plain >> source & 1):
                             continue
                         if (
                             others >> target & 1
@@ -693,8 +694,10 @@ class _AStar:
                         support = below[target]
                         if others & support != support:
                             continue
+                        now_reached = c.put_down(obj, target, reached) if has_subgoals else reached
+                        if now_reached < 0:
+                            continue  # the order rule: parked elsewhere instead
                         moved = positions[:obj] + (target,) + positions[obj + 1 :]
-                        now_reached = c.reach(obj, target, reached) if has_subgoals else reached
                         # The key differs from the parent's in one place (and reached).
                         child = (
                             *key[:obj],
