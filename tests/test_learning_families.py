@@ -255,7 +255,11 @@ def precision_families(draw: st.DrawFn) -> Family:
     return family
 
 
-@settings(max_examples=40, deadline=None)
+# Derandomized: the F test splits by chance at a small rate. Over 400 random
+# draws of this family none split; hypothesis once found a draw in which one
+# object's four placements (σ = 2 cm) fell as two pairs 0.4 mm and 11 mm tight,
+# 6 cm apart — two places by any test of those data. CI must not depend on it.
+@settings(max_examples=40, deadline=None, derandomize=True)
 @given(family=precision_families())
 def test_the_same_task_is_learned_from_0_2_mm_to_3_cm_noise(family: Family) -> None:
     """One state per placement with the intended reference (absolute vs relative),

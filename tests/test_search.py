@@ -7,12 +7,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.planning.bounds import LowerBounds
 from demoplan.planning.compiled import compile_problem
 from demoplan.planning.generate import blocks_problem, table_problem
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.search import (
     Budget,
-    _AStar,
     astar_search,
     breadth_first_search,
     solve,
@@ -258,7 +258,7 @@ def test_a_cycle_of_precedences_counts_a_second_move() -> None:
     validate(problem, plan.actions)
     assert len(plan) == 2 * 4 == len(solve(problem, "bfs"))
     c = compile_problem(problem)
-    assert _AStar(c, Budget()).heuristic(c.start, c.start_reached) == 4
+    assert LowerBounds(c).estimate(c.start, c.start_reached) == 4
 
 
 def test_final_places_that_overlap_are_reported() -> None:

@@ -37,6 +37,12 @@ class Compiled:
     start_reached: int
     plain: int  # mask of interchangeable free-space locations (no fact mentions them)
 
+    def is_goal(self, positions: tuple[int, ...], reached: int) -> bool:
+        """Every subgoal reached and every goal object at its goal (hand empty)."""
+        if reached != self.all_subgoals:
+            return False
+        return all(goal < 0 or goal == at for goal, at in zip(self.goal, positions, strict=True))
+
     def grasp_ok(self, occupied: int, location: int, grasp: int) -> bool:
         """GRASP at ``location`` with ``grasp`` while ``occupied`` (it included)."""
         others = occupied & ~(1 << location)

@@ -10,18 +10,30 @@ collides with location b for grasp g if ``|b_p − (a_p ± ĝ_p)| < r + g_r``
   other objects, and a few free-space spots lie apart.
 - :func:`blocks_problem`: build pyramids (two blocks and one bridging them,
   which needs both) from a start where some blocks stand on others.
+- :func:`parking_problem`: the hard kind, where objects must be parked: a
+  dense grid whose neighbours collide for a grasp, objects that start on each
+  other's goal places in cycles (swaps and longer), distractors (objects
+  without a goal) standing on goal places, and objects starting on the
+  grid's free cells between goal places; two free-space spots.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from demoplan.planning.problem import Problem
 
-__all__ = ["blocks_problem", "collision_facts", "grasp_collides", "table_problem"]
+__all__ = [
+    "blocks_problem",
+    "collision_facts",
+    "grasp_collides",
+    "parking_problem",
+    "table_problem",
+]
 
 BLOCK = 0.04  # side of a block (m)
 RADIUS = BLOCK / 2  # r of §V.B
@@ -90,7 +102,7 @@ def _problem(
         allowed=allowed,
         collisions=collision_facts(locations, grasp_axes),
         initial=list(zip(objects, start, strict=True)),
-        goal=list(zip(objects, goal, strict=True)),
+        goal=list(zip(objects[: len(goal)], goal, strict=True)),  # the first ones have goals
         freespace=freespace,
         supports=supports or (),
         name=name,
@@ -215,4 +227,96 @@ def blocks_problem(
         n_freespace,
         free_y=-0.5,
         supports=supports,
+    )
+
+
+def parking_problem(
+    n_objects: int,
+    rng: np.random.Generator | int | None = None,
+    **options: Any,
+) -> Problem:
+    """:func:`parking_draw` until the draw is not unsolvable on its face
+    (:func:`~demoplan.planning.search.explain_unsolvable`: a goal place every
+    grasp of which the other goals block, a start where objects block each
+    other for good) — at most 100 draws."""
+    from demoplan.planning.search import explain_unsolvable
+
+    generator = np.random.default_rng(rng)
+    for _ in range(100):
+        problem = parking_draw(n_objects, generator, **options)
+        if not explain_unsolvable(problem):
+            return problem
+    raise ValueError(f"no solvable-looking parking problem with {n_objects} objects in 100 draws")
+
+
+def parking_draw(
+    n_objects: int,
+    rng: np.random.Generator | int | None = None,
+    *,
+    n_freespace: int = 2,
+    cycled: float = 0.5,
+    distractors: float = 0.2,
+    on_grid: float = 0.3,
+    density: float = 2.0,
+) -> Problem:
+    """A table problem where parking is forced (see the module docstring); it
+    may be unsolvable (:func:`parking_problem` draws until it is not on its face).
+
+    Goal places lie on a grid of about ``density × n_objects`` cells 6 cm
+    apart, so neighbours along a grasp's axis block that grasp. A share
+    ``cycled`` of the objects start on one another's goal places in cycles of
+    two or three (each needs a parking move or a free goal place first);
+    ``distractors × n_objects`` extra objects without a goal (``distractor1``
+    …) stand on other goal places; of the rest, a share ``on_grid`` start on
+    free grid cells (in the way of their neighbours' grasps), the others on a
+    side table.
+    """
+    generator = np.random.default_rng(rng)
+    objects = [f"obj{i + 1}" for i in range(n_objects)]
+    n_distractors = round(distractors * n_objects)
+    side = math.ceil(math.sqrt(density * n_objects + n_distractors + 2))
+    cells = [(i, j) for i in range(side) for j in range(side)]
+    shuffled = [cells[int(k)] for k in generator.permutation(len(cells))]
+    goal_cells, spare_cells = shuffled[:n_objects], shuffled[n_objects:]
+    locations: dict[str, tuple[float, float, float]] = {}
+    cell_name: dict[tuple[int, int], str] = {}
+    for cell in (*goal_cells, *spare_cells):
+        cell_name[cell] = f"loc{len(locations) + 1}"
+        locations[cell_name[cell]] = (0.3 + cell[0] * 0.06, 0.1 + cell[1] * 0.06, 0.0)
+    goal = [cell_name[c] for c in goal_cells]
+    start: list[str | None] = [None] * n_objects
+    order = [int(k) for k in generator.permutation(n_objects)]
+    n_cycled = round(cycled * n_objects)
+    k = 0
+    while n_cycled - k >= 2:  # cycles of 2 or 3: each object on the next one's goal
+        length = 3 if n_cycled - k >= 5 and generator.random() < 0.5 else 2
+        cycle = order[k : k + length]
+        for a, b in zip(cycle, cycle[1:] + cycle[:1], strict=True):
+            start[a] = goal[b]
+        k += length
+    rest = order[k:]
+    free_goal_places = [goal[o] for o in rest]
+    generator.shuffle(free_goal_places)
+    distractor_places = free_goal_places[:n_distractors]
+    grid_cells = [cell_name[c] for c in spare_cells]
+    table_row = 0
+    for obj in rest:
+        if grid_cells and generator.random() < on_grid:
+            start[obj] = grid_cells.pop()
+        else:
+            name = f"loc{len(locations) + 1}"
+            locations[name] = (0.3 + table_row * 0.1, -0.3, 0.0)
+            table_row += 1
+            start[obj] = name
+    names = objects + [f"distractor{i + 1}" for i in range(len(distractor_places))]
+    starts = [s for s in start if s is not None] + distractor_places
+    assert len(starts) == len(names)
+    return _problem(
+        f"parking-{n_objects}",
+        names,
+        locations,
+        starts,
+        goal,
+        n_freespace,
+        free_y=-0.45,
     )

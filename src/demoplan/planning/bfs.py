@@ -1,0 +1,79 @@
+"""The paper's breadth-first search over primitive GRASP / PUT_DOWN actions
+(§IV.C): the first plan found is shortest. Exponential; the reference the
+other searches are checked against on small problems."""
+
+from __future__ import annotations
+
+from collections import deque
+
+from demoplan.planning.budget import Budget, Clock, SearchOutcome
+from demoplan.planning.compiled import compile_problem
+from demoplan.planning.problem import Action, Problem
+
+__all__ = ["breadth_first_search"]
+
+# BFS state: object locations (-1 for the held one), held (object, grasp, where it
+# was taken from) or None, reached.
+_BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
+
+
+def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchOutcome:
+    """The paper's breadth-first search over primitive GRASP / PUT_DOWN actions."""
+    c = compile_problem(problem)
+    clock = Clock(budget)
+    n_locations = len(c.locations)
+    start: _BfsState = (c.start, None, c.start_reached)
+    parents: dict[_BfsState, tuple[_BfsState, Action] | None] = {start: None}
+    queue = deque([start])
+    expanded = 0
+    while queue:
+        state = queue.popleft()
+        positions, held, reached = state
+        if held is None and c.is_goal(positions, reached):
+            return SearchOutcome(_unwind(parents, state), expanded, len(parents), False)
+        limit = clock.stop(expanded)
+        if limit:
+            return SearchOutcome(None, expanded, len(parents), False, limit)
+        expanded += 1
+        occupied = 0
+        for location in positions:
+            if location >= 0:
+                occupied |= 1 << location
+        successors: list[tuple[_BfsState, Action]] = []
+        if held is None:
+            for obj, location in enumerate(positions):
+                for grasp in c.grasps_of[obj]:
+                    if c.grasp_ok(occupied, location, grasp):
+                        moved = positions[:obj] + (-1,) + positions[obj + 1 :]
+                        action = Action(
+                            "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
+                        )
+                        successors.append(((moved, (obj, grasp, location), reached), action))
+        else:
+            obj, grasp, source = held
+            for location in range(n_locations):
+                if location == source or not c.put_ok(occupied, location, grasp):
+                    continue
+                now_reached = c.put_down(obj, location, reached)
+                if now_reached < 0:
+                    continue
+                placed = positions[:obj] + (location,) + positions[obj + 1 :]
+                action = Action("PUT_DOWN", c.objects[obj], c.locations[location], c.grasps[grasp])
+                successors.append(((placed, None, now_reached), action))
+        for successor, action in successors:
+            if successor not in parents:
+                parents[successor] = (state, action)
+                queue.append(successor)
+    return SearchOutcome(None, expanded, len(parents), True)
+
+
+def _unwind(
+    parents: dict[_BfsState, tuple[_BfsState, Action] | None], state: _BfsState
+) -> tuple[Action, ...]:
+    actions: list[Action] = []
+    link = parents[state]
+    while link is not None:
+        state, action = link
+        actions.append(action)
+        link = parents[state]
+    return tuple(reversed(actions))

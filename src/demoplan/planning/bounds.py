@@ -1,0 +1,434 @@
+"""Admissible lower bounds on the moves a state still needs (A*'s heuristic).
+
+:meth:`LowerBounds.estimate` sums bounds on disjoint groups of moves; each
+part is a method of one state (object places and reached subgoals) of one
+compiled problem: the objects' own needs (:meth:`~LowerBounds.needs`), idle
+objects in the way (blocking sets), objects that cannot all go straight home
+(:meth:`~LowerBounds.placement_deadlock`, :meth:`~LowerBounds.pair_conflicts`,
+:meth:`~LowerBounds.order_cycle`) and dead ends
+(:meth:`~LowerBounds.dead_end`). :meth:`~LowerBounds.direct_plan` finds, or
+rules out, a finish with one straight move per object.
+"""
+
+from __future__ import annotations
+
+from demoplan.planning.compiled import Compiled
+
+__all__ = ["DEAD_END", "DIRECT_NODES", "MAX_DIRECT_DEPTH", "LowerBounds", "Move", "OutOfNodesError"]
+
+DEAD_END = 1 << 40
+"""Heuristic value of a state from which no plan exists."""
+
+Move = tuple[int, int, int, int]  # object, source, target, grasp
+DIRECT_NODES = 1000
+"""States one search for a straight finish may visit (:meth:`LowerBounds.direct_plan`)."""
+MAX_DIRECT_DEPTH = 500  # objects; that search recurses once per move
+
+
+class OutOfNodesError(Exception):
+    """The search for a straight finish ran out of states."""
+
+
+class LowerBounds:
+    """The bounds of one compiled problem, with what they cache between states."""
+
+    def __init__(self, c: Compiled):
+        self.c = c
+        self._move_cache: dict[tuple[int, int, int], bool] = {}
+        # Objects no plan can move (Compiled.never_placed): they are never moved,
+        # and a state in which one of them still needs a move is a dead end.
+        self.unmovable = c.never_placed()
+        # States (object locations, every subgoal reached) from which the objects
+        # away from their goals cannot each go straight there (see direct_plan).
+        self.no_direct: set[tuple[int, ...]] = set()
+
+    def estimate(self, positions: tuple[int, ...], reached: int) -> int:
+        """Admissible lower bound on the moves still needed.
+
+        Each move moves one object, so a sum of lower bounds on the moves of
+        disjoint groups of objects is a lower bound. A *needy* object needs as
+        many moves as it has unreached subgoals (each is reached by putting it
+        down), and at least one if it is not at its final location. An *idle*
+        object (needing none of its own) needs one when it is in the way: for
+        each place a needy object must be grasped from or put down at, the
+        idle objects that block a grasp there form a set U — when every grasp
+        is blocked, some object of U must move. Pairwise disjoint sets U need
+        distinct movers, so the number of such sets picked greedily (smallest
+        first, disjoint from those picked) is added.
+        """
+        c = self.c
+        total = 0
+        idle = 0
+        needy: list[tuple[int, int, int]] = []  # (object, location, target) pairs to check
+        for obj, location in enumerate(positions):
+            pending = 0
+            for s in c.subgoals_of[obj]:
+                if not reached >> s & 1:
+                    pending += 1
+                    needy.append((obj, location, c.subgoal_location[s]))
+            goal = c.goal[obj]
+            away = goal >= 0 and goal != location
+            need = pending if pending > away else int(away)
+            if need:
+                if self.unmovable >> obj & 1:
+                    return DEAD_END
+                total += need
+                if away:
+                    needy.append((obj, location, goal))
+            else:
+                idle |= 1 << location
+        if needy and self.dead_end(positions, needy):
+            return DEAD_END
+        extra = max(self.placement_deadlock(positions), self.pair_conflicts(positions, reached))
+        total += extra
+        if not idle or not needy:
+            if not extra and needy:
+                total += self.order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self.no_direct
+                )
+            return total
+        block, above, exclusive, grasps_of = c.block, c.above, c.exclusive, c.grasps_of
+        blocking_sets = []
+        seen = set()
+        for obj, location, target in needy:
+            grasps = grasps_of[obj]
+            if not grasps:
+                continue
+            if obj not in seen:  # grasping it where it stands
+                seen.add(obj)
+                union = _all_grasps_hit([block[location][g] for g in grasps], above[location], idle)
+                if union:
+                    blocking_sets.append(union)
+            # putting it down at the target
+            taken_or_overlapping = exclusive[target] | 1 << target
+            union = _all_grasps_hit([block[target][g] for g in grasps], taken_or_overlapping, idle)
+            if union:
+                blocking_sets.append(union)
+        if not blocking_sets:
+            if not extra:
+                total += self.order_cycle(positions, reached, idle) or int(
+                    reached == c.all_subgoals and positions in self.no_direct
+                )
+            return total
+        blocking_sets.sort(key=int.bit_count)
+        taken = 0
+        movers = 0
+        for union in blocking_sets:
+            if not union & taken:
+                taken |= union
+                movers += 1
+        return total + movers
+
+    def direct_plan(self, positions: tuple[int, ...], nodes: int) -> list[Move] | None:
+        """Moves taking every object away from its goal straight there, one
+        move each, in some order: the moves (a plan, if every subgoal is
+        reached), or None if there is no such order; raises
+        :class:`OutOfNodesError` if ``nodes`` states did not settle it.
+
+        A depth-first search over the orders with the real operator tests;
+        a state shown to have no such completion is remembered in
+        ``_no_direct``. The heuristic adds 1 for a remembered state when its
+        other terms are just the needs (no blocking set, no extra move): a
+        plan of that length would move each object away from its goal exactly
+        once, straight to its goal, and no other object — such an order.
+        """
+        c = self.c
+        goal_of, grasps_of, block, above = c.goal, c.grasps_of, c.block, c.above
+        failed = self.no_direct
+        left = [
+            obj
+            for obj, location in enumerate(positions)
+            if goal_of[obj] >= 0 and goal_of[obj] != location
+        ]
+        occupied = 0
+        for location in positions:
+            occupied |= 1 << location
+        budget = [nodes]
+
+        def search(at: tuple[int, ...], occupied: int, left: list[int]) -> list[Move] | None:
+            if not left:
+                return []
+            if at in failed:
+                return None
+            if budget[0] <= 0:
+                raise OutOfNodesError
+            budget[0] -= 1
+            for i, obj in enumerate(left):
+                source, target = at[obj], goal_of[obj]
+                if occupied & above[source]:
+                    continue
+                others = occupied & ~(1 << source)
+                for g in grasps_of[obj]:
+                    if others & block[source][g] or not c.put_ok(others, target, g):
+                        continue
+                    moved = at[:obj] + (target,) + at[obj + 1 :]
+                    rest = search(moved, others | 1 << target, left[:i] + left[i + 1 :])
+                    if rest is not None:
+                        return [(obj, source, target, g), *rest]
+                    break  # another grasp leads to the same state
+            failed.add(at)
+            return None
+
+        return search(positions, occupied, left)
+
+    def needs(self, positions: tuple[int, ...], reached: int) -> int:
+        """The sum of the objects' own needs, the first term of :meth:`heuristic`."""
+        c = self.c
+        total = 0
+        for obj, location in enumerate(positions):
+            pending = 0
+            for s in c.subgoals_of[obj]:
+                if not reached >> s & 1:
+                    pending += 1
+            goal = c.goal[obj]
+            away = goal >= 0 and goal != location
+            total += pending if pending > away else int(away)
+        return total
+
+    def dead_end(self, positions: tuple[int, ...], needy: list[tuple[int, int, int]]) -> bool:
+        """No plan from here: a needy object, or what stands on or around its
+        target, can never be picked up again (:meth:`Compiled.frozen`)."""
+        c = self.c
+        frozen = c.frozen(positions)
+        if not frozen:
+            return False
+        for obj, location, target in needy:
+            if frozen >> location & 1 and location != target:
+                return True
+            if frozen >> target & 1 and positions[obj] != target:
+                return True
+            if frozen & c.exclusive[target] or all(
+                frozen & c.block[target][g] for g in c.grasps_of[obj]
+            ):
+                return True
+        return False
+
+    def pair_conflicts(self, positions: tuple[int, ...], reached: int) -> int:
+        """Disjoint pairs of objects that cannot both reach their goals in one move each.
+
+        For objects X and Y that each need exactly one move (source → final
+        goal), X may go first only if X's move is possible with Y still at its
+        source and Y's move with X already at its goal, and likewise the other
+        way round; other objects can only get in the way more. When neither
+        order works, X or Y moves twice: +1 per pair of a greedy matching
+        (e.g. X on Y's goal and Y on X's). The second moves are those of the
+        needy objects, so this bound and the deadlock bound share moves: the
+        heuristic takes the larger of the two.
+        """
+        c = self.c
+        single = [
+            obj
+            for obj, location in enumerate(positions)
+            if c.goal[obj] >= 0
+            and c.goal[obj] != location
+            and c.grasps_of[obj]
+            and all(reached >> s & 1 for s in c.subgoals_of[obj])
+        ]
+        if len(single) < 2:
+            return 0
+        ok = self.move_ok
+        matched: set[int] = set()
+        pairs = 0
+        for i, x in enumerate(single):
+            if x in matched:
+                continue
+            sx, gx = positions[x], c.goal[x]
+            for y in single[i + 1 :]:
+                if y in matched:
+                    continue
+                sy, gy = positions[y], c.goal[y]
+                if (ok(x, sx, sy) and ok(y, sy, gx)) or (ok(y, sy, sx) and ok(x, sx, gy)):
+                    continue
+                matched |= {x, y}
+                pairs += 1
+                break
+        return pairs
+
+    def order_cycle(self, positions: tuple[int, ...], reached: int, fixed: int) -> int:
+        """1 if the single-move objects cannot be ordered with one move each
+        while the idle objects stay where they are (at ``fixed``), else 0.
+
+        Only used when no idle object is in the way (no blocking set) and no
+        other extra move is counted: a plan as short as the rest of the
+        heuristic then moves every needy object exactly as often as it needs
+        and no idle object at all — the idle objects are fixed obstacles and
+        supports, and each *single* object (final goal, no pending subgoal)
+        makes exactly one move, source → goal. In such a plan, when X moves,
+        every single object Y moved before it stands at its goal and every one
+        moved after it at its source. So for each of X's grasps the places
+        that forbid the move (blocking the grasp at the source, standing on
+        the source, blocking the put-down, exclusive with or at the goal) give
+        "Y before X" (Y's source is such a place) and "Y after X" (Y's goal
+        is); a grasp forbidden by a fixed object, or by some Y both ways, is
+        unusable. What every usable grasp demands is a precedence; so are the
+        supports of X's goal, which must be occupied: by a fixed object, else
+        by the one object starting there (it moves after X) or the one ending
+        there (it moves before X) — when only one of them exists, and when
+        objects with pending subgoals (which may stand anywhere) are absent.
+        No usable grasp, an unsupportable goal or a cycle of precedences means
+        some needy object moves twice: +1, which like the deadlock bound
+        counts a needy object's second move.
+        """
+        c = self.c
+        goal_of, grasps_of = c.goal, c.grasps_of
+        single: list[int] = []
+        wildcards = False
+        for obj, location in enumerate(positions):
+            goal = goal_of[obj]
+            pending = any(not reached >> s & 1 for s in c.subgoals_of[obj])
+            if pending:
+                wildcards = True
+            elif goal >= 0 and goal != location:
+                if not grasps_of[obj]:
+                    return 0  # a dead end is another bound's business
+                single.append(obj)
+        if not single:
+            return 0
+        index_at_source: dict[int, int] = {}
+        index_at_goal: dict[int, int] = {}
+        sources = goals = 0
+        for i, obj in enumerate(single):
+            index_at_source[positions[obj]] = i
+            index_at_goal[goal_of[obj]] = i
+            sources |= 1 << positions[obj]
+            goals |= 1 << goal_of[obj]
+        block, above, exclusive, below = c.block, c.above, c.exclusive, c.below
+        everyone = (1 << len(single)) - 1
+        before = [0] * len(single)  # i -> mask of the indices that must move before i
+        for i, obj in enumerate(single):
+            source, goal = positions[obj], goal_of[obj]
+            must_before = must_after = 0
+            if not wildcards:
+                support = below[goal] & ~fixed
+                while support:
+                    low = support & -support
+                    support ^= low
+                    location = low.bit_length() - 1
+                    starter = index_at_source.get(location, -1) if location != source else -1
+                    ender = index_at_goal.get(location, -1)
+                    if starter < 0 and ender < 0:
+                        return 1  # nothing can ever hold the goal up
+                    if ender < 0:
+                        must_after |= 1 << starter
+                    elif starter < 0:
+                        must_before |= 1 << ender
+            common_before = common_after = everyone
+            usable = False
+            for g in grasps_of[obj]:
+                forbid = (
+                    block[source][g] | above[source] | block[goal][g] | exclusive[goal] | 1 << goal
+                )
+                if forbid & fixed:
+                    continue
+                b = _indices(forbid & sources & ~(1 << source), index_at_source)
+                a = _indices(forbid & goals & ~(1 << goal), index_at_goal)
+                if b & a:
+                    continue
+                usable = True
+                common_before &= b
+                common_after &= a
+            if not usable:
+                return 1
+            must_before |= common_before
+            must_after |= common_after
+            if must_before & must_after:
+                return 1
+            before[i] |= must_before & ~(1 << i)
+            after = must_after & ~(1 << i)
+            while after:
+                low = after & -after
+                after ^= low
+                before[low.bit_length() - 1] |= 1 << i
+        # Take away objects with nothing left to wait for; what stays holds a cycle.
+        remaining = everyone
+        changed = True
+        while changed and remaining:
+            changed = False
+            rest = remaining
+            while rest:
+                low = rest & -rest
+                rest ^= low
+                if not before[low.bit_length() - 1] & remaining:
+                    remaining ^= low
+                    changed = True
+        return 1 if remaining else 0
+
+    def move_ok(self, obj: int, source: int, obstacle: int) -> bool:
+        """Can ``obj`` move from ``source`` to its goal with one other object at ``obstacle``?"""
+        cache_key = (obj, source, obstacle)
+        known = self._move_cache.get(cache_key)
+        if known is None:
+            c = self.c
+            goal = c.goal[obj]
+            bit = 1 << obstacle
+            known = (
+                obstacle != goal
+                and not c.above[source] & bit
+                and not c.exclusive[goal] & bit
+                and any(not (c.block[source][g] | c.block[goal][g]) & bit for g in c.grasps_of[obj])
+            )
+            self._move_cache[cache_key] = known
+        return known
+
+    def placement_deadlock(self, positions: tuple[int, ...]) -> int:
+        """1 if the objects away from their final places cannot all be put down
+        there with one move each, else 0.
+
+        With one move each, the object put down last finds all the others at
+        their goals, so one of its grasps must be free of them. Peel off
+        objects that could go last until none can: the peeling order reversed
+        is a feasible order, and getting stuck proves that some of these
+        objects needs a second move. Idle objects are left out on purpose:
+        the moves they need are counted apart (the blocking sets), and this
+        bound must not count them again.
+        """
+        return 0 if self.peel_order(positions) is not None else 1
+
+    def peel_order(self, positions: tuple[int, ...]) -> list[int] | None:
+        """The objects away from their final places in an order in which each
+        can be put down there, one move each (last first); None if stuck."""
+        c = self.c
+        remaining = []
+        goals = 0
+        for obj, location in enumerate(positions):
+            goal = c.goal[obj]
+            if goal >= 0 and goal != location and c.grasps_of[obj]:
+                remaining.append(obj)
+                goals |= 1 << goal
+        block, grasps_of, goal_of = c.block, c.grasps_of, c.goal
+        peeled: list[int] = []
+        while remaining:
+            kept = []
+            for obj in remaining:
+                target = goal_of[obj]
+                others = goals & ~(1 << target)  # not idle ones: their moves count apart
+                if any(not block[target][g] & others for g in grasps_of[obj]):
+                    goals &= ~(1 << target)
+                    peeled.append(obj)
+                else:
+                    kept.append(obj)
+            if len(kept) == len(remaining):
+                return None
+            remaining = kept
+        return peeled
+
+
+def _indices(mask: int, index_at: dict[int, int]) -> int:
+    """The indices (as a mask) of the objects at the locations of ``mask``."""
+    found = 0
+    while mask:
+        low = mask & -mask
+        mask ^= low
+        found |= 1 << index_at[low.bit_length() - 1]
+    return found
+
+
+def _all_grasps_hit(per_grasp: list[int], always: int, idle: int) -> int:
+    """The idle places blocking a grasp, if every grasp is blocked; else 0."""
+    union = 0
+    for mask in per_grasp:
+        hit = (mask | always) & idle
+        if not hit:
+            return 0
+        union |= hit
+    return union
