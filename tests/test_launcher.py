@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
-from demoplan.planning.generate import table_problem
+from demoplan.planning.generate import parking_problem
 from demoplan.planning.xml import save_problem
 from tests.test_problem_xml import BOMB
 from tests.test_solve_cli import PAPER, two_objects
@@ -52,8 +52,8 @@ def problems(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     save_problem(two_objects([("a", "l2"), ("b", "l1")]), paths["swap"])
     paths["shared"] = folder / "shared.xml"  # no plan: found statically
     save_problem(two_objects([("a", "l3"), ("b", "l3")], locations=["l3"]), paths["shared"])
-    paths["hard"] = folder / "hard.xml"  # needs more than two expansions
-    save_problem(table_problem(7, 2), paths["hard"])
+    paths["hard"] = folder / "hard.xml"  # not proved in two expansions
+    save_problem(parking_problem(10, 0), paths["hard"])
     paths["bomb"] = folder / "bomb.xml"
     paths["bomb"].write_text(BOMB)
     return paths
@@ -66,7 +66,8 @@ def problems(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         ("paper", ["--json"], 0),
         ("paper", ["--search", "bfs", "--json"], 0),
         ("paper", ["--search=bfs"], 0),
-        ("hard", ["--max-nodes", "2"], 4),
+        ("hard", ["--max-nodes", "2", "--optimal"], 4),
+        ("hard", ["--max-nodes", "2", "--search", "bfs"], 4),
         ("paper", ["--timeout", "0"], 4),
         ("swap", ["--search", "bfs"], 3),
         ("swap", [], 3),
@@ -138,7 +139,7 @@ def test_the_executable_takes_the_lean_path() -> None:
     )
     assert done.returncode == 0, done.stderr
     assert len(done.stdout.splitlines()) == 8
-    assert done.stderr.strip() == "False"
+    assert done.stderr.splitlines() == ["demoplan: 8 actions, proved shortest", "False"]
     help_text = subprocess.run(
         [sys.executable, "-m", "demoplan", "solve", "--help"],
         capture_output=True,

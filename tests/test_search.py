@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.planning.bounds import LowerBounds
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.generate import blocks_problem, table_problem
+from demoplan.planning.generate import blocks_problem, parking_problem, table_problem
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.search import (
     Budget,
@@ -68,8 +68,10 @@ def test_toy_problem_needs_the_blocker_and_a_detour() -> None:
 
 def test_the_validator_rejects_a_plan_that_breaks_a_collision() -> None:
     problem = three_objects()
+    plan = solve(problem).actions
+    without_c = [a for a in plan if a.object != "c"]  # a is grasped while c blocks it
     with pytest.raises(InvalidPlanError, match="c at l3 is in the way"):
-        validate(problem, solve(problem).actions[2:])
+        validate(problem, without_c)
 
 
 def test_interchangeable_free_space_is_used_but_not_searched_twice() -> None:
@@ -82,10 +84,24 @@ def test_interchangeable_free_space_is_used_but_not_searched_twice() -> None:
 
 def test_limits_stop_the_search_with_exit_code_4() -> None:
     problem = table_problem(7, 2)  # one object must be parked: a few states are expanded
+    outcome = astar_search(problem, Budget(max_nodes=2))
+    assert outcome.actions is None and outcome.limit == "--max-nodes 2"
     with pytest.raises(LimitReachedError, match="max-nodes 2") as caught:
-        solve(problem, budget=Budget(max_nodes=2))
+        solve(problem, "bfs", budget=Budget(max_nodes=2))
     assert caught.value.exit_code == 4
     assert "at least" in str(caught.value)
+
+
+def test_an_unproved_plan_comes_with_its_bound_or_exit_4_when_proof_is_demanded() -> None:
+    problem = parking_problem(10, 0)  # greedy finds 32 actions; A* cannot prove it in 50 nodes
+    plan = solve(problem, budget=Budget(max_nodes=50))
+    validate(problem, plan.actions)
+    assert not plan.optimal and plan.bound < len(plan)
+    assert plan.bound >= 2 * LowerBounds(compile_problem(problem)).estimate(
+        *(compile_problem(problem).start, 0)
+    )
+    with pytest.raises(LimitReachedError, match="not proved shortest"):
+        solve(problem, budget=Budget(max_nodes=50), optimal=True)
 
 
 def test_an_object_that_must_move_without_a_grasp_is_the_reason() -> None:

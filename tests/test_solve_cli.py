@@ -50,7 +50,7 @@ def parse_plan(text: str) -> list[Action]:
 def test_solve_prints_the_paper_plan(search: str | None) -> None:
     result = invoke("solve", PAPER, *(["--search", search] if search else []))
     assert result.exit_code == 0, result.stderr
-    assert result.stderr == ""
+    assert result.stderr == "demoplan: 8 actions, proved shortest\n"
     actions = parse_plan(result.stdout)
     assert len(actions) == 8
     assert [a.kind for a in actions] == ["GRASP", "PUT_DOWN"] * 4
@@ -63,7 +63,10 @@ def test_solve_json(search: str) -> None:
     assert result.exit_code == 0, result.stderr
     data = json.loads(result.stdout)  # stdout holds the JSON and nothing else
     assert data["length"] == 8
-    assert data["search"] == search
+    assert data["optimal"] is True and data["bound"] == 8
+    names = {"astar", "greedy", "greedy+astar"} if search == "astar" else {search}
+    assert data["search"] in names
+    assert result.stderr == "demoplan: 8 actions, proved shortest\n"
     assert isinstance(data["actions"], list)
     assert all(isinstance(a, list) and len(a) == 4 for a in data["actions"])
     validate(load_problem(PAPER), [Action(*a) for a in data["actions"]])
@@ -109,9 +112,11 @@ def test_no_plan_found_by_search(tmp_path: Path, search: str) -> None:
 @pytest.mark.parametrize("search", ["astar", "bfs"])
 def test_max_nodes_limit_exits_4(search: str) -> None:
     line = one_line_error(
-        invoke("solve", PAPER, "--search", search, "--max-nodes", "1"), 4, "--max-nodes 1"
+        invoke("solve", PAPER, "--search", search, "--max-nodes", "1", "--optimal"),
+        4,
+        "--max-nodes 1",
     )
-    assert "no plan yet" in line
+    assert "no plan yet" in line or "not proved shortest" in line
 
 
 def test_entity_bomb_exits_1(tmp_path: Path) -> None:

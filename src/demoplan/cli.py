@@ -24,7 +24,7 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
-from demoplan.errors import DemoplanError, InputError, UsageError, error_line
+from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -67,6 +67,9 @@ def _main(
         bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")
     ] = False,
 ) -> None:
+    from demoplan.launcher import mark_command_start
+
+    mark_command_start()
     logging.basicConfig(
         level=logging.INFO if verbose else logging.WARNING,
         format="demoplan: %(levelname)s: %(message)s",
@@ -367,23 +370,38 @@ def solve(
     ],
     json_output: Annotated[bool, typer.Option("--json", help="Print the plan as JSON.")] = False,
     search: Annotated[
-        SearchName, typer.Option(help="astar (default, optimal, fast) or bfs (the paper's).")
+        SearchName,
+        typer.Option(
+            help="astar (default: a fast plan, then A* to prove it) or bfs (the paper's)."
+        ),
     ] = SearchName.astar,
     max_nodes: Annotated[
-        int | None, typer.Option(min=1, help="Stop after expanding this many states (exit 4).")
+        int | None, typer.Option(min=1, help="A* / BFS expand at most this many states.")
     ] = None,
     timeout: Annotated[
-        float | None, typer.Option(min=0.0, help="Stop after this many seconds (exit 4).")
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Seconds for the whole command [default: 2]; the best plan found by then is "
+            "printed, with its proven lower bound if not proved shortest ('inf': no limit).",
+        ),
     ] = None,
+    optimal: Annotated[
+        bool,
+        typer.Option("--optimal", help="Only a plan proved shortest; exit 4 without one."),
+    ] = False,
 ) -> None:
-    """Solve a planning problem: a shortest GRASP / PUT_DOWN plan (paper §IV.C)."""
+    """Solve a planning problem: a GRASP / PUT_DOWN plan (paper §IV.C), shortest where
+    proved within the time budget. stderr says which, and the proven lower bound."""
     from demoplan.launcher import SolveOptions, solve_text
 
     with _reported_errors():
-        options = SolveOptions(problem_path, json_output, search.value, max_nodes, timeout)
+        options = SolveOptions(problem_path, json_output, search.value, max_nodes, timeout, optimal)
         # a spinner while a long search runs on a terminal; nothing when piped
         spinner = _stderr.status if _stderr.is_terminal else None
-        sys.stdout.write(solve_text(options, spinner))
+        text, note = solve_text(options, spinner)
+        sys.stdout.write(text)
+        sys.stderr.write(note)
 
 
 @app.command()
@@ -441,11 +459,19 @@ def plan(
     json_output: Annotated[bool, typer.Option("--json", help="Print the plan as JSON.")] = False,
     freespace: FreespaceOption = None,
     max_nodes: Annotated[
-        int | None, typer.Option(min=1, help="Per candidate: stop after this many states.")
+        int | None, typer.Option(min=1, help="Per candidate: A* expands at most this many states.")
     ] = None,
     timeout: Annotated[
-        float | None, typer.Option(min=0.0, help="Per candidate: stop after this many seconds.")
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Seconds for the whole command, shared by the candidate goals [default: 2].",
+        ),
     ] = None,
+    optimal: Annotated[
+        bool,
+        typer.Option("--optimal", help="Only a plan proved shortest; exit 4 without one."),
+    ] = False,
     plot: Annotated[
         Path | None, typer.Option(help="Also draw the plan from above into this image (PNG, SVG).")
     ] = None,
@@ -457,12 +483,13 @@ def plan(
     ] = False,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
-    from demoplan.planning.search import Budget
+    from demoplan.launcher import command_budget
+    from demoplan.planning.problem import optimality_line
     from demoplan.scenes.plan import plan_in_scene
 
     with _reported_errors():
         model, scene = _scene_inputs(model_path, scene_path)
-        budget = Budget(max_nodes=max_nodes, timeout=timeout)
+        budget = command_budget(max_nodes, timeout)
         settings = _geometry_settings(freespace)
         if _stderr.is_terminal:
             with _stderr.status("Planning every candidate goal…"):
@@ -471,12 +498,17 @@ def plan(
                 )
         else:
             result = plan_in_scene(model, scene, budget=budget, settings=settings, clutter=clutter)
+        if optimal and not result.optimal:
+            raise LimitReachedError(
+                f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"
+            )
         if plot is not None:
             _plot_scene_plan(model, scene, result, plot)
         if json_output:
             _print_json(result.to_json())
-            return
-        _print_scene_plan(result, model)
+        else:
+            _print_scene_plan(result, model)
+        _stderr.print(f"demoplan: {optimality_line(result.as_plan())}", markup=False)
 
 
 def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
@@ -634,6 +666,10 @@ def run(
         typer.Option(help="state (read the simulator) or camera (perceive its top view; mujoco)."),
     ] = PerceptionName.state,
     freespace: FreespaceOption = None,
+    timeout: Annotated[
+        float,
+        typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
+    ] = 2.0,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.execution.faults import parse_faults
@@ -654,6 +690,7 @@ def run(
             perception=perception.value,
             geometry=_geometry_settings(freespace),
             display=_stderr if live else None,
+            planning_seconds=timeout,
         )
         if json_output:
             _print_json(report.to_json())

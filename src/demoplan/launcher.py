@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 __all__ = [
     "SOLVE_OPTIONS",
@@ -31,8 +32,28 @@ __all__ = [
     "solve_text",
 ]
 
-SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout")
+SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout", "--optimal")
 """Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
+
+DEFAULT_TIMEOUT = 2.0
+"""Seconds a planning command may take by default, counted from its start (SPEC §4)."""
+
+_command_started = time.monotonic()
+"""When the current command started: the import of this module, for the
+``demoplan`` executable (so a time budget bounds the whole process, start-up
+included); each invocation of the typer app in a longer-lived process (tests,
+notebooks) restarts it (:func:`mark_command_start`)."""
+_started_by_main = False
+
+
+def mark_command_start() -> None:
+    """A command starts now — unless it is the one :func:`main` started, whose
+    clock has been running since the process began."""
+    global _command_started, _started_by_main
+    if _started_by_main:
+        _started_by_main = False
+        return
+    _command_started = time.monotonic()
 
 
 @dataclass(frozen=True)
@@ -43,7 +64,8 @@ class SolveOptions:
     json_output: bool = False
     search: str = "astar"
     max_nodes: int | None = None
-    timeout: float | None = None
+    timeout: float | None = None  # None: DEFAULT_TIMEOUT
+    optimal: bool = False
 
 
 class _DeclinedError(Exception):
@@ -67,6 +89,7 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     parser.add_argument("--search", choices=tuple(SEARCHES), default="astar")
     parser.add_argument("--max-nodes", type=int, default=None)
     parser.add_argument("--timeout", type=float, default=None)
+    parser.add_argument("--optimal", action="store_true")
     try:
         parsed = parser.parse_args(list(args))
     except _DeclinedError:
@@ -77,50 +100,66 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
         timeout is not None and not timeout >= 0.0  # also refuses NaN
     ):
         return None  # typer's range checks word the usage error
-    return SolveOptions(parsed.problem, parsed.json_output, parsed.search, max_nodes, timeout)
+    return SolveOptions(
+        parsed.problem, parsed.json_output, parsed.search, max_nodes, timeout, parsed.optimal
+    )
+
+
+def command_budget(max_nodes: int | None, timeout: float | None) -> Any:
+    """The :class:`~demoplan.planning.budget.Budget` of a planning command:
+    ``timeout`` seconds (default :data:`DEFAULT_TIMEOUT`) from the start of the
+    process, so that the whole command answers within it."""
+    from demoplan.planning.budget import Budget
+
+    seconds = DEFAULT_TIMEOUT if timeout is None else timeout
+    return Budget(max_nodes, timeout=seconds, deadline=_command_started + seconds)
 
 
 def solve_text(
     options: SolveOptions, spinner: Callable[[str], AbstractContextManager[object]] | None = None
-) -> str:
+) -> tuple[str, str]:
     """Read the problem, solve it and render the plan (the paper's format, or its
-    JSON); ``spinner(text)`` wraps the search (a terminal's status line). Raises
+    JSON) and the line for stderr saying whether it is proved shortest;
+    ``spinner(text)`` wraps the search (a terminal's status line). Raises
     :class:`~demoplan.errors.DemoplanError`. Both ``solve`` paths use this."""
-    from demoplan.planning.problem import format_plan, plan_to_json
-    from demoplan.planning.search import Budget, solve
+    from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
+    from demoplan.planning.search import solve
     from demoplan.planning.xml import load_problem
 
     started = time.perf_counter()
     problem = load_problem(options.problem)
     read_seconds = time.perf_counter() - started
-    budget = Budget(options.max_nodes, options.timeout)
-    with (
-        spinner(f"Searching ({options.search}) for a shortest plan…") if spinner else nullcontext()
-    ):
-        plan = solve(problem, options.search, budget)
+    budget = command_budget(options.max_nodes, options.timeout)
+    with spinner(f"Searching ({options.search}) for a plan…") if spinner else nullcontext():
+        plan = solve(problem, options.search, budget, optimal=options.optimal)
+    note = f"demoplan: {optimality_line(plan)}\n"
     if options.json_output:
         import json
 
         data = plan_to_json(plan, read_seconds)
-        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    return format_plan(plan)
+        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n", note
+    return format_plan(plan), note
 
 
 def run_solve(options: SolveOptions) -> int:
     """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
     from demoplan.errors import DemoplanError, error_line
 
+    mark_command_start()
     try:
-        text = solve_text(options)
+        text, note = solve_text(options)
     except DemoplanError as exc:
         sys.stderr.write(error_line(exc) + "\n")
         return exc.exit_code
     sys.stdout.write(text)
+    sys.stderr.write(note)
     return 0
 
 
 def main() -> None:
     """Entry point of the ``demoplan`` command."""
+    global _started_by_main
+    _started_by_main = True
     args = sys.argv[1:]
     if args[:1] == ["solve"] and not sys.stderr.isatty():
         options = parse_solve_options(args[1:])

@@ -54,8 +54,9 @@ class ExecutionSettings:
     this (given its symmetry) is not in place."""
     max_replans: int = 25
     max_actions: int = 400
-    budget: Budget = field(default_factory=lambda: Budget(timeout=60.0))
-    """Per (re)planning of one candidate."""
+    budget: Budget = field(default_factory=lambda: Budget(timeout=2.0))
+    """Per (re)planning, shared by the candidate goals (the anytime planner
+    returns its best plan when it runs out; SPEC §4)."""
     geometry: GeometrySettings = field(default_factory=GeometrySettings)
 
 

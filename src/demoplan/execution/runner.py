@@ -11,6 +11,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
 from demoplan.model import TaskModel
+from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.problems import pose_of
@@ -54,20 +55,25 @@ def run_task(
     perception: str = "state",
     geometry: GeometrySettings | None = None,
     display: Any = None,
+    planning_seconds: float = 2.0,
 ) -> RunReport:
-    """Run the task in a simulated world; ``display``: a rich console for live progress."""
+    """Run the task in a simulated world; ``display``: a rich console for live
+    progress; ``planning_seconds``: the time budget of each (re)planning."""
     scene = complete_geometry(scene, model)
     world = make_world(sim, scene, faults, seed, perception)
     settings = ExecutionSettings(
         max_replans=max_replans,
         geometry=geometry or GeometrySettings(),
         position_tolerance=0.01,
+        budget=Budget(timeout=planning_seconds),
     )
     writer = None
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
 
-        first = plan_in_scene(model, scene, settings=settings.geometry, clutter=True).chosen
+        first = plan_in_scene(
+            model, scene, budget=settings.budget, settings=settings.geometry, clutter=True
+        ).chosen
         targets = {
             obj: pose_of(first.problem.location(loc)) for obj, loc in first.problem.problem.goal
         }

@@ -31,7 +31,7 @@ def astar_search(
     plan already known — A* then only looks for a shorter one, and ends with
     ``actions`` None and ``bound == upper`` when it proves there is none."""
     c = compile_problem(problem)
-    return AStar(c, LowerBounds(c), budget).run(None if upper is None else upper // 2)
+    return AStar(c, LowerBounds(c), Clock(budget)).run(None if upper is None else upper // 2)
 
 
 # A queue entry is (f, -g, h where known — else _DEFERRED —, place rank, -counter,
@@ -48,10 +48,10 @@ _NO_PEEL_RANK = 1 << 19  # place rank: the object is not in the peeling order
 class AStar:
     """One A* run over the moves of a compiled problem (see :meth:`run`)."""
 
-    def __init__(self, c: Compiled, bounds: LowerBounds, budget: Budget):
+    def __init__(self, c: Compiled, bounds: LowerBounds, clock: Clock):
         self.c = c
         self.bounds = bounds
-        self.clock = Clock(budget)
+        self.clock = clock
         n_locations = len(c.locations)
         self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
         self.parent: dict[
@@ -105,9 +105,19 @@ class AStar:
         )
         plain, goal_of, unmovable = c.plain, c.goal, bounds.unmovable
 
-        def outcome(actions: tuple[Action, ...] | None, exhausted: bool = False) -> SearchOutcome:
+        def outcome(
+            actions: tuple[Action, ...] | None, exhausted: bool = False, limit: str | None = None
+        ) -> SearchOutcome:
             lower = limit_f if exhausted and upper is not None else bound
-            return SearchOutcome(actions, expanded, len(best_g), exhausted, bound=2 * lower)
+            return SearchOutcome(
+                actions,
+                expanded,
+                len(best_g),
+                exhausted,
+                limit,
+                bound=2 * lower,
+                optimal=limit is None,
+            )
 
         while heap:
             f, negative_g, _, _, _, key, parent_h = heapq.heappop(heap)
@@ -157,12 +167,9 @@ class AStar:
                             heap, (g + h, negative_g, _EVALUATED, 0, -counter, key, parent_h)
                         )
                         continue
-            limit = self.clock.stop(expanded)
+            limit = self.clock.stop(expanded, len(best_g))
             if limit:
-                result = outcome(None)
-                return SearchOutcome(
-                    None, expanded, len(best_g), False, limit, result.bound, optimal=False
-                )
+                return outcome(None, limit=limit)
             expanded += 1
             # A move that reaches no goal and no subgoal leaves every object's
             # need as it was or raises it (an object taken off its goal needs one
@@ -223,6 +230,9 @@ class AStar:
                         )
                         if best_g.get(child, 1 << 60) <= g + 1:
                             continue
+                        if not len(best_g) & 1023 and self.clock.expired():
+                            # An expansion can take long: the clock is read as it goes.
+                            return outcome(None, limit=self.clock.stop(expanded, len(best_g)))
                         best_g[child] = g + 1
                         parent[child] = (key, (obj, source, target, grasp))
                         concrete[child] = (moved, now_reached)

@@ -13,7 +13,7 @@ from demoplan.planning.problem import Action, Problem
 __all__ = ["breadth_first_search"]
 
 # BFS state: object locations (-1 for the held one), held (object, grasp, where it
-# was taken from) or None, reached.
+# was taken from — or -1, see below) or None, reached.
 _BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
 
 
@@ -22,18 +22,25 @@ def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchO
     c = compile_problem(problem)
     clock = Clock(budget)
     n_locations = len(c.locations)
+    revisits = 0  # objects with two subgoals at one place
+    for obj, subgoals in enumerate(c.subgoals_of):
+        places = [c.subgoal_location[s] for s in subgoals]
+        if len(set(places)) < len(places):
+            revisits |= 1 << obj
     start: _BfsState = (c.start, None, c.start_reached)
     parents: dict[_BfsState, tuple[_BfsState, Action] | None] = {start: None}
-    queue = deque([start])
+    queue = deque([(start, 0)])
     expanded = 0
     while queue:
-        state = queue.popleft()
+        state, depth = queue.popleft()
         positions, held, reached = state
         if held is None and c.is_goal(positions, reached):
-            return SearchOutcome(_unwind(parents, state), expanded, len(parents), False)
-        limit = clock.stop(expanded)
-        if limit:
-            return SearchOutcome(None, expanded, len(parents), False, limit)
+            return SearchOutcome(
+                _unwind(parents, state), expanded, len(parents), False, bound=depth
+            )
+        limit = clock.stop(expanded, len(parents))
+        if limit:  # every state fewer actions away was tried: no plan is shorter
+            return SearchOutcome(None, expanded, len(parents), False, limit, depth, False)
         expanded += 1
         occupied = 0
         for location in positions:
@@ -48,7 +55,11 @@ def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchO
                         action = Action(
                             "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
                         )
-                        successors.append(((moved, (obj, grasp, location), reached), action))
+                        # Where it came from matters only to an object with two subgoals at
+                        # one place: for any other, putting it back gives the state before
+                        # the GRASP, already seen, so duplicate detection drops it.
+                        source = location if revisits >> obj & 1 else -1
+                        successors.append(((moved, (obj, grasp, source), reached), action))
         else:
             obj, grasp, source = held
             for location in range(n_locations):
@@ -63,7 +74,7 @@ def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchO
         for successor, action in successors:
             if successor not in parents:
                 parents[successor] = (state, action)
-                queue.append(successor)
+                queue.append((successor, depth + 1))
     return SearchOutcome(None, expanded, len(parents), True)
 
 

@@ -371,18 +371,62 @@ class LowerBounds:
         return known
 
     def placement_deadlock(self, positions: tuple[int, ...]) -> int:
-        """1 if the objects away from their final places cannot all be put down
-        there with one move each, else 0.
+        """How many disjoint groups of the objects away from their final places
+        block one another there: each group needs a second move of one of its
+        members.
 
-        With one move each, the object put down last finds all the others at
-        their goals, so one of its grasps must be free of them. Peel off
-        objects that could go last until none can: the peeling order reversed
-        is a feasible order, and getting stuck proves that some of these
-        objects needs a second move. Idle objects are left out on purpose:
-        the moves they need are counted apart (the blocking sets), and this
-        bound must not count them again.
+        A group S *blocks itself* when every grasp of each member at its goal
+        collides with another member's goal. Then if each member moved once,
+        the member put down last would find all the others at their goals —
+        impossible; so one member of S moves twice. Disjoint such groups need
+        distinct second moves, so their number is a bound. Groups are found by
+        peeling off objects that could go last until none can (what is left
+        blocks itself), shrinking that to a smallest self-blocking group one
+        member at a time, setting it aside and peeling the rest again. Idle
+        objects are left out on purpose: the moves they need are counted
+        apart (the blocking sets), and this bound must not count them again.
         """
-        return 0 if self.peel_order(positions) is not None else 1
+        c = self.c
+        remaining = [
+            obj
+            for obj, location in enumerate(positions)
+            if c.goal[obj] >= 0 and c.goal[obj] != location and c.grasps_of[obj]
+        ]
+        groups = 0
+        while True:
+            core = self._stuck(remaining)
+            if not core:
+                return groups
+            for obj in list(core):
+                if obj in core:
+                    smaller = self._stuck([o for o in core if o != obj])
+                    if smaller:
+                        core = smaller
+            groups += 1
+            chosen = set(core)
+            remaining = [obj for obj in remaining if obj not in chosen]
+
+    def _stuck(self, objects: list[int]) -> list[int]:
+        """What is left of ``objects`` after peeling off, one at a time, those
+        with a grasp at their goal clear of the others' goals (empty: all peel)."""
+        c = self.c
+        goals = 0
+        for obj in objects:
+            goals |= 1 << c.goal[obj]
+        remaining = objects
+        while remaining:
+            kept = []
+            for obj in remaining:
+                target = c.goal[obj]
+                others = goals & ~(1 << target)
+                if any(not c.block[target][g] & others for g in c.grasps_of[obj]):
+                    goals &= ~(1 << target)
+                else:
+                    kept.append(obj)
+            if len(kept) == len(remaining):
+                return kept
+            remaining = kept
+        return []
 
     def peel_order(self, positions: tuple[int, ...]) -> list[int] | None:
         """The objects away from their final places in an order in which each

@@ -8,15 +8,23 @@ from dataclasses import dataclass
 
 from demoplan.planning.problem import Action
 
-__all__ = ["Budget", "Clock", "SearchOutcome"]
+__all__ = ["MAX_STATES", "Budget", "Clock", "SearchOutcome"]
+
+MAX_STATES = 2_000_000
+"""States a search may keep by default (about 1–2 GB at 30 objects): beyond it
+the search stops as at any other limit (exit 4), never with a MemoryError."""
 
 
 @dataclass(frozen=True, slots=True)
 class Budget:
-    """Limits of one search: expanded states and wall-clock seconds (None: no limit)."""
+    """Limits of one search (None: no limit): expanded states, seconds from the
+    start of the search, an absolute ``time.monotonic()`` deadline (a command's
+    budget counted from its own start), and states kept in memory."""
 
     max_nodes: int | None = None
     timeout: float | None = None
+    deadline: float | None = None
+    max_states: int | None = MAX_STATES
 
 
 @dataclass(frozen=True, slots=True)
@@ -32,19 +40,32 @@ class SearchOutcome:
     optimal: bool = True  # the actions are proved shortest
 
 
-# BFS state: object locations (-1 for the held one), held (object, grasp, where it
-
-
 class Clock:
     """Tells a search when its budget is spent."""
 
     def __init__(self, budget: Budget):
         self.budget = budget
-        self.deadline = None if budget.timeout is None else time.monotonic() + budget.timeout
+        deadlines = [] if budget.deadline is None else [budget.deadline]
+        if budget.timeout is not None:
+            deadlines.append(time.monotonic() + budget.timeout)
+        self.deadline = min(deadlines) if deadlines else None
 
-    def stop(self, expanded: int) -> str | None:
+    def expired(self) -> bool:
+        """The time is up."""
+        return self.deadline is not None and time.monotonic() > self.deadline
+
+    def stop(self, expanded: int, states: int = 0) -> str | None:
+        """Which limit is reached after ``expanded`` expansions with ``states``
+        kept, if any (named as the option that raises it)."""
         if self.budget.max_nodes is not None and expanded >= self.budget.max_nodes:
             return f"--max-nodes {self.budget.max_nodes}"
-        if self.deadline is not None and time.monotonic() > self.deadline:
-            return f"--timeout {self.budget.timeout:g} s"
+        if self.budget.max_states is not None and states >= self.budget.max_states:
+            return f"the memory limit of {self.budget.max_states} states"
+        if self.expired():
+            timeout = self.budget.timeout
+            return f"--timeout {timeout:g} s" if timeout is not None else "the time budget"
         return None
+
+    def remaining(self) -> float | None:
+        """Seconds left, if there is a deadline."""
+        return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())

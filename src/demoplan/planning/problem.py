@@ -38,7 +38,15 @@ from dataclasses import dataclass, field
 
 from demoplan.errors import InputError
 
-__all__ = ["Action", "Plan", "Problem", "Subgoal", "format_plan", "plan_to_json"]
+__all__ = [
+    "Action",
+    "Plan",
+    "Problem",
+    "Subgoal",
+    "format_plan",
+    "optimality_line",
+    "plan_to_json",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -225,9 +233,22 @@ class Plan:
     generated: int = 0
     seconds: float = 0.0
     search: str = ""
+    optimal: bool = True  # proved shortest
+    bound: int = 0  # proven lower bound on every plan's length (actions)
 
     def __len__(self) -> int:
         return len(self.actions)
+
+
+def optimality_line(plan: Plan) -> str:
+    """Whether ``plan`` is proved shortest, and the proven lower bound if not
+    (the line ``solve`` and ``plan`` print on stderr)."""
+    if plan.optimal:
+        return f"{len(plan)} actions, proved shortest"
+    return (
+        f"{len(plan)} actions, not proved shortest within the time budget: every plan "
+        f"needs at least {plan.bound} (--timeout to search longer, --optimal to insist)"
+    )
 
 
 def format_plan(plan: Plan) -> str:
@@ -242,6 +263,8 @@ def plan_to_json(plan: Plan, read_seconds: float | None = None) -> dict[str, obj
     return {
         "actions": [[a.kind, a.object, a.location, a.grasp] for a in plan.actions],
         "length": len(plan),
+        "optimal": plan.optimal,
+        "bound": plan.bound,
         "search": plan.search,
         "expanded": plan.expanded,
         "generated": plan.generated,

@@ -17,14 +17,17 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import NoReturn
 
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.graphs import find_cycle
-from demoplan.planning.astar import astar_search
+from demoplan.planning.astar import AStar, astar_search
 from demoplan.planning.bfs import breadth_first_search
-from demoplan.planning.budget import Budget, SearchOutcome
+from demoplan.planning.bounds import DEAD_END, LowerBounds
+from demoplan.planning.budget import Budget, Clock, SearchOutcome
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.problem import Plan, Problem
+from demoplan.planning.greedy import greedy_moves
+from demoplan.planning.problem import Action, Plan, Problem
 
 __all__ = [
     "SEARCHES",
@@ -110,22 +113,104 @@ def solve(
     problem: Problem,
     search: str = "astar",
     budget: Budget = Budget(),
+    *,
+    optimal: bool = False,
 ) -> Plan:
-    """A shortest plan, or NoPlanError (with the reason) / LimitReachedError."""
+    """A plan for ``problem`` within ``budget``: shortest where it can be proved.
+
+    ``astar`` is *anytime*: greedy best-first search
+    (:func:`~demoplan.planning.greedy.greedy_moves`) finds a plan fast, then A*
+    looks for a shorter one, dropping every state whose lower bound reaches
+    the plan's length. A* finding a plan, or running out of states, proves
+    the plan shortest; the budget ending first leaves it unproved, returned
+    with ``optimal`` False and the lower bound A* reached. With ``optimal``,
+    only a proved plan is returned (else LimitReachedError). The greedy search
+    stops at its first plan (or when it runs out of helpful moves) and may take
+    the whole budget; A* gets what is left. ``bfs`` is the
+    paper's exact search. NoPlanError (exit 3) says why there is no plan;
+    LimitReachedError (exit 4) which limit stopped a search with no plan.
+    """
     if search not in SEARCHES:
         raise ValueError(f"unknown search {search!r}; one of {sorted(SEARCHES)}")
     reasons = explain_unsolvable(problem)
     if reasons:
         raise NoPlanError("no plan: " + "; ".join(reasons))
     started = time.perf_counter()
-    outcome = SEARCHES[search](problem, budget)
+    if search == "bfs":
+        outcome = breadth_first_search(problem, budget)
+        seconds = time.perf_counter() - started
+        if outcome.actions is not None:
+            return _plan(outcome.actions, outcome, seconds, search)
+        _raise_without_plan(outcome, seconds, None)
+    c = compile_problem(problem)
+    bounds = LowerBounds(c)
+    clock = Clock(budget)
+    root = 2 * bounds.estimate(c.start, c.start_reached)
+    incumbent: tuple[Action, ...] | None = None
+    greedy_seconds = 0.0
+    if root < 2 * DEAD_END:
+        moves = greedy_moves(c, bounds, Clock(_greedy_budget(clock)))
+        greedy_seconds = time.perf_counter() - started
+        if moves is not None:
+            incumbent = tuple(action for move in moves for action in c.move_actions(*move))
+            if len(incumbent) <= root:  # as long as the lower bound: shortest
+                return Plan(incumbent, seconds=greedy_seconds, search="greedy", bound=root)
+    outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
     seconds = time.perf_counter() - started
+    name = "astar" if incumbent is None else "greedy+astar"
     if outcome.actions is not None:
-        return Plan(outcome.actions, outcome.expanded, outcome.generated, seconds, search)
+        return _plan(outcome.actions, outcome, seconds, name)
+    if incumbent is not None:
+        if outcome.exhausted:  # nothing shorter exists
+            return _plan(incumbent, outcome, seconds, name)
+        if not optimal:
+            bound = max(outcome.bound, root)
+            return _plan(incumbent, outcome, seconds, name, optimal=False, bound=bound)
+    _raise_without_plan(outcome, seconds, incumbent)
+
+
+def _plan(
+    actions: tuple[Action, ...],
+    outcome: SearchOutcome,
+    seconds: float,
+    search: str,
+    *,
+    optimal: bool = True,
+    bound: int | None = None,
+) -> Plan:
+    return Plan(
+        actions,
+        expanded=outcome.expanded,
+        generated=outcome.generated,
+        seconds=seconds,
+        search=search,
+        optimal=optimal,
+        bound=len(actions) if bound is None else bound,
+    )
+
+
+_GREEDY_SECONDS = 10.0
+"""The greedy search's time when the budget sets none (with a budget it may
+take all of it: it stops at its first plan, and A* gets what is left)."""
+
+
+def _greedy_budget(clock: Clock) -> Budget:
+    left = clock.remaining()
+    return Budget(timeout=_GREEDY_SECONDS if left is None else left, max_states=None)
+
+
+def _raise_without_plan(
+    outcome: SearchOutcome, seconds: float, incumbent: tuple[Action, ...] | None
+) -> NoReturn:
     if outcome.limit:
+        found = (
+            f"; a plan of {len(incumbent)} actions was found but not proved shortest"
+            if incumbent is not None
+            else " with no plan yet"
+        )
         raise LimitReachedError(
             f"{outcome.limit} reached after expanding {outcome.expanded} states "
-            f"({outcome.generated} generated, {seconds:.2f} s) with no plan yet"
+            f"({outcome.generated} generated, {seconds:.2f} s){found}"
             + (f"; every plan needs at least {outcome.bound} actions" if outcome.bound else "")
         )
     raise NoPlanError(

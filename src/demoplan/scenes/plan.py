@@ -2,18 +2,22 @@
 (paper §IV.C, §V.B; SPEC §5 "Planning").
 
 Each demonstrated goal (deduplicated) becomes a planning problem
-(:func:`~demoplan.scenes.problems.build_problem`) solved optimally by the
-planner; the shortest plan wins, ties going to the earliest demonstration —
-Experiment 2 picks demonstration 2's 4 moves over demonstration 1's 5.
+(:func:`~demoplan.scenes.problems.build_problem`) solved by the anytime
+planner (:func:`~demoplan.planning.search.solve`); the shortest plan wins,
+ties going to the earliest demonstration — Experiment 2 picks demonstration
+2's 4 moves over demonstration 1's 5. A time budget is shared: each
+candidate gets an equal part of what is left when its turn comes.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from typing import Any
 
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.model import TaskModel
+from demoplan.planning.budget import Clock
 from demoplan.planning.problem import Plan
 from demoplan.planning.search import Budget, solve
 from demoplan.scenes.geometry import GeometrySettings
@@ -34,6 +38,13 @@ class CandidatePlan:
     limit_reached: bool = False
 
     @property
+    def bound(self) -> float:
+        """A proven lower bound on this goal's plans (infinite: proved to have none)."""
+        if self.plan is not None:
+            return self.plan.bound
+        return 0 if self.limit_reached else math.inf
+
+    @property
     def goal(self) -> int:
         return self.problem.candidate.goal
 
@@ -49,6 +60,22 @@ class ScenePlan:
     candidates: tuple[CandidatePlan, ...]
     chosen: CandidatePlan
 
+    @property
+    def bound(self) -> int:
+        """A proven lower bound on the length of a plan for any candidate goal."""
+        return int(min(c.bound for c in self.candidates))
+
+    @property
+    def optimal(self) -> bool:
+        """The chosen plan is proved shortest over every candidate goal."""
+        assert self.chosen.plan is not None
+        return self.bound >= len(self.chosen.plan)
+
+    def as_plan(self) -> Plan:
+        """The chosen plan, with the optimality and bound of the whole choice."""
+        assert self.chosen.plan is not None
+        return replace(self.chosen.plan, optimal=self.optimal, bound=self.bound)
+
     def to_json(self) -> dict[str, Any]:
         """``plan --json`` (SPEC §3 "Plan output")."""
         chosen = self.chosen
@@ -56,12 +83,16 @@ class ScenePlan:
         return {
             "actions": [[a.kind, a.object, a.location, a.grasp] for a in chosen.plan.actions],
             "length": len(chosen.plan),
+            "optimal": self.optimal,
+            "bound": self.bound,
             "goal": chosen.goal,
             "candidates": [
                 {
                     "goal": c.goal,
                     "demonstrations": list(c.problem.candidate.demonstrations),
                     "length": c.length,
+                    "optimal": None if c.plan is None else c.plan.optimal,
+                    "bound": None if math.isinf(c.bound) else int(c.bound),
                     **({"reason": c.reason} if c.reason else {}),
                     "expanded": None if c.plan is None else c.plan.expanded,
                     "seconds": None if c.plan is None else round(c.plan.seconds, 6),
@@ -124,17 +155,23 @@ def plan_in_scene(
     search: str = "astar",
     clutter: bool = False,
 ) -> ScenePlan:
-    """Plan every candidate goal (each within ``budget``) and choose the shortest.
+    """Plan every candidate goal and choose the shortest; ``budget``'s time is
+    shared, each candidate getting an equal part of what is left.
 
     Raises :class:`NoPlanError` (exit 3) when no candidate has a plan, with each
     candidate's reason, and :class:`LimitReachedError` (exit 4) when none was
     found but some candidate's search was cut short. ``clutter``: objects the
     model never saw may stand in the scene (moved out of the way if need be).
     """
-    outcomes = [
-        solve_candidate(problem, budget, search)
-        for problem in scene_problems(model, scene, settings, clutter=clutter)
-    ]
+    problems = scene_problems(model, scene, settings, clutter=clutter)
+    clock = Clock(budget)
+    outcomes = []
+    for index, problem in enumerate(problems):
+        left = clock.remaining()
+        share = None if left is None else left / (len(problems) - index)
+        outcomes.append(
+            solve_candidate(problem, replace(budget, timeout=share, deadline=None), search)
+        )
     solved = [c for c in outcomes if c.plan is not None]
     if not solved:
         reasons = "; ".join(f"goal {c.goal}: {c.reason}" for c in outcomes)
