@@ -134,7 +134,19 @@ def test_problem_as_pddl(model_files: dict[str, Path], tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.stderr
     assert "(define (problem" in path.read_text()
-    assert "(define (domain" in (tmp_path / "goal1-domain.pddl").read_text()
+    domain = (tmp_path / "goal1-domain.pddl").read_text()
+    assert "(define (domain" in domain and "(:action put-down-reaching" in domain
+    grounded = tmp_path / "grounded.pddl"
+    result = invoke(
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--pddl", "--grounded", "-o", grounded
+    )
+    assert result.exit_code == 0, result.stderr
+    assert "__reach__" in (tmp_path / "grounded-domain.pddl").read_text()
+    # --grounded chooses the PDDL form: without --pddl it is a usage error
+    xml = tmp_path / "goal.xml"
+    result = invoke("problem", model_files["blocks"], BLOCKS_SCENE, "--grounded", "-o", xml)
+    assert result.exit_code == 2 and "--pddl" in result.stderr
+    assert not xml.exists()
 
 
 def test_problem_goal_out_of_range(model_files: dict[str, Path], tmp_path: Path) -> None:
