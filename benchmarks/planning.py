@@ -8,7 +8,8 @@ stacked starts (:func:`~demoplan.planning.generate.blocks_problem`) — with
 N = 3, 5, 7, 10, 15, 20, 30 objects (``--quick``: N = 3, 5, 7 for every planner
 plus N = 20 and 30 for demoplan alone, to check its targets). Each problem is
 written once as the paper's XML (:func:`demoplan.planning.xml.save_problem`) and
-as grounded STRIPS PDDL (:func:`demoplan.planning.pddl.save_pddl`), then solved
+as grounded STRIPS PDDL (:func:`demoplan.planning.pddl.save_pddl` with
+``grounded=True``: pyperplan cannot read the lifted export), then solved
 by, in one run:
 
 1. **demoplan** — ``demoplan solve PROBLEM.xml --json`` (A*, the default), and
@@ -144,7 +145,8 @@ def make_case(family: str, n: int, seed: int, root: Path) -> Case:
     folder.mkdir(parents=True, exist_ok=True)
     xml = folder / "problem.xml"
     save_problem(problem, xml)
-    domain, pddl_problem = save_pddl(problem, folder / "pddl")
+    # Grounded: pyperplan reads the same files, and it reads no quantifiers.
+    domain, pddl_problem = save_pddl(problem, folder / "pddl", grounded=True)
     actions = domain.read_text(encoding="utf-8").count("(:action ")
     return Case(family, n, xml, domain, pddl_problem, len(problem.locations), actions)
 

@@ -134,7 +134,19 @@ def test_problem_as_pddl(model_files: dict[str, Path], tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.stderr
     assert "(define (problem" in path.read_text()
-    assert "(define (domain" in (tmp_path / "goal1-domain.pddl").read_text()
+    domain = (tmp_path / "goal1-domain.pddl").read_text()
+    assert "(define (domain" in domain and "(:action put-down-reaching" in domain
+    grounded = tmp_path / "grounded.pddl"
+    result = invoke(
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--pddl", "--grounded", "-o", grounded
+    )
+    assert result.exit_code == 0, result.stderr
+    assert "__reach__" in (tmp_path / "grounded-domain.pddl").read_text()
+    # --grounded chooses the PDDL form: without --pddl it is a usage error
+    xml = tmp_path / "goal.xml"
+    result = invoke("problem", model_files["blocks"], BLOCKS_SCENE, "--grounded", "-o", xml)
+    assert result.exit_code == 2 and "--pddl" in result.stderr
+    assert not xml.exists()
 
 
 def test_problem_goal_out_of_range(model_files: dict[str, Path], tmp_path: Path) -> None:
@@ -224,15 +236,16 @@ def test_plan_plot(model_files: dict[str, Path], tmp_path: Path) -> None:
     assert [p.name for p in tmp_path.iterdir()] == ["plan.png"]  # no temporary left
 
 
+@pytest.mark.parametrize("grounded", [False, True], ids=["lifted", "grounded"])
 @pytest.mark.parametrize(
     ("which", "goal"), [("blocks", 0), ("blocks", 1), ("table", 0), ("table", 1)]
 )
 def test_fast_downward_agrees_on_scene_problems(
-    blocks_model: TaskModel, table_model: TaskModel, which: str, goal: int
+    blocks_model: TaskModel, table_model: TaskModel, which: str, goal: int, grounded: bool
 ) -> None:
     """Scene problems use every extension (support, exclusion, accepts, subgoals with
-    precedences): Fast Downward's optimal plan for the PDDL export is as long as
-    demoplan's and passes the validator."""
+    precedences): Fast Downward's optimal plan for the PDDL export, lifted or
+    grounded, is as long as demoplan's and passes the validator."""
     pytest.importorskip(
         "up_fast_downward", reason="up-fast-downward not installed (pip install -e '.[fd]')"
     )
@@ -246,7 +259,8 @@ def test_fast_downward_agrees_on_scene_problems(
     problem = next(p.problem for p in problems if goal in p.candidate.demonstrations)
     if which == "table":
         assert problem.accepts  # the case this test is for
-    status, names, _ = fast_downward_plan(*problem_to_pddl(problem), timeout=120)
+    texts = problem_to_pddl(problem, grounded=grounded)
+    status, names, _ = fast_downward_plan(*texts, timeout=120)
     assert status == "SOLVED_OPTIMALLY" and names is not None
     actions = [action_from_pddl(problem, name) for name in names]
     validate(problem, actions)

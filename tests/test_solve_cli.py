@@ -150,6 +150,17 @@ def test_pddl_writes_domain_and_problem(tmp_path: Path) -> None:
     assert problem_text.startswith("(define (problem paper-example)")
     assert "(located box loc264)" in problem_text
     assert str(domain) in result.stderr
+    # lifted by default: a schema per kind of action, the facts in the problem
+    assert re.findall(r"\(:action (\S+)", domain.read_text()) == ["grasp", "put-down"]
+    assert "(guard loc264 grasp6 loc293)" in problem_text
+
+
+def test_pddl_grounded(tmp_path: Path) -> None:
+    result = invoke("pddl", PAPER, "-o", tmp_path, "--grounded")
+    assert result.exit_code == 0, result.stderr
+    domain = (tmp_path / "domain.pddl").read_text()
+    assert "(:action grasp__box__loc264__grasp6" in domain
+    assert ":parameters ()" in domain and ":typing" not in domain
 
 
 def test_pddl_bad_input_exits_1(tmp_path: Path) -> None:

@@ -404,6 +404,16 @@ def solve(
         sys.stderr.write(note)
 
 
+GroundedOption = Annotated[
+    bool,
+    typer.Option(
+        "--grounded",
+        help="Write grounded STRIPS (one action per grasp and put-down) for pyperplan and "
+        "planners without quantifiers.",
+    ),
+]
+
+
 @app.command()
 def pddl(
     problem_path: Annotated[
@@ -412,13 +422,14 @@ def pddl(
     output: Annotated[
         Path, typer.Option("--output", "-o", help="Folder for domain.pddl and problem.pddl.")
     ],
+    grounded: GroundedOption = False,
 ) -> None:
-    """Export a problem as PDDL (grounded STRIPS) for Fast Downward, pyperplan, ..."""
+    """Export a problem as PDDL: a lifted domain and problem (--grounded: plain STRIPS)."""
     from demoplan.planning.pddl import save_pddl
     from demoplan.planning.xml import load_problem
 
     with _reported_errors():
-        domain, problem = save_pddl(load_problem(problem_path), output)
+        domain, problem = save_pddl(load_problem(problem_path), output, grounded=grounded)
         _stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 
 
@@ -589,6 +600,7 @@ def problem(
         ),
     ] = False,
     freespace: FreespaceOption = None,
+    grounded: GroundedOption = False,
 ) -> None:
     """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
     from demoplan.errors import UsageError
@@ -596,6 +608,8 @@ def problem(
     from demoplan.scenes.plan import scene_problems
 
     with _reported_errors():
+        if grounded and not pddl_output:
+            raise UsageError("--grounded chooses the PDDL form: it needs --pddl")
         _refuse_overwriting_inputs(output, [model_path, scene_path])
         if pddl_output:
             _refuse_overwriting_inputs(
@@ -612,7 +626,7 @@ def problem(
         if pddl_output:
             from demoplan.planning.pddl import problem_to_pddl
 
-            domain_text, problem_text = problem_to_pddl(chosen.problem)
+            domain_text, problem_text = problem_to_pddl(chosen.problem, grounded=grounded)
             domain_path = output.with_name(f"{output.stem}-domain.pddl")
             write_atomic(domain_path, domain_text)
             write_atomic(output, problem_text)

@@ -1,37 +1,57 @@
-"""PDDL export of a planning problem, for Fast Downward, pyperplan and friends.
+"""PDDL export of a planning problem, for Fast Downward, unified-planning, pyperplan.
 
-The export is *grounded STRIPS*: one parameterless action per GRASP of an
-object at a location with a grasp, and per PUT_DOWN likewise (plus one
-variant per subgoal a PUT_DOWN can reach). Collision facts, stacking and
-exclusion become plain preconditions on ``free`` / ``occupied`` atoms, so
-the domain needs no quantifiers, conditional effects or negative
-preconditions — every STRIPS planner reads it, pyperplan included. Each
-action costs 1 (no ``:action-costs``), so an optimal PDDL plan has as many
-actions as an optimal demoplan plan; action names map back to the paper's
+Two forms with one meaning, that of :mod:`demoplan.planning.strips` (SPEC §3
+and the order rule of §5). Every action costs 1 (no ``:action-costs``), so an
+optimal PDDL plan has as many actions as an optimal demoplan plan, and
+:func:`action_from_pddl` maps a planner's action back to the paper's
 ``GRASP o l g`` / ``PUT_DOWN o l g``.
 
-The order rule of SPEC §5 is in the preconditions: the plain PUT_DOWN at a
-place of one of the object's subgoals needs every subgoal there reached; the
-variant that reaches a subgoal needs its predecessors reached. So Fast
-Downward's plans, like demoplan's, never put an object on its place before
-its predecessors.
+**Lifted** (the default): a typed domain (``item``, ``location``, ``grip``,
+``subgoal``) with the schemas ``grasp ?o ?l ?g``, ``put-down ?o ?l ?g`` and,
+when there are subgoals, ``put-down-reaching ?o ?l ?g ?s``; the problem's
+facts — allowed grasps, collisions, supports, exclusions, accepts, subgoals
+and their order — are static facts in ``:init``. A rule over a *set* ("every
+location that blocks grasp g at l is free") is not a ``forall``: Fast
+Downward's translator makes a universal precondition an axiom, which its
+optimal heuristic (LM-cut) refuses, as it refuses conditional effects. So
+each set is one static fact listing it (:class:`_AllOf`), and the
+precondition an existential over that listing, which a planner grounds over
+the one listing there is. The disjunctions ("no such set, or ...") and the
+negations are on static facts only, and the one universal effect has a
+static condition: the translator evaluates them all while grounding, and
+Fast Downward searches the same operators as on the grounded export (3440
+for 20 objects either way) — from about 2 % of the text.
 
-The predicates keep their arguments — ``(located o l)``, ``(free l)``,
-``(occupied l)``, ``(holding o g)``, ``(reached s)``, ``(pending s)``, ``(away o l)`` over the
-domain's constants — rather than being flattened into one nullary atom per
-fact: Fast Downward's translator then finds the state invariants (an object
-is at one place or held, a place is free or occupied) at once, where with
-hundreds of nullary atoms its invariant synthesis runs into its candidate
-limit (about 10 s even for three objects).
+**Grounded** (``grounded=True``): plain STRIPS, one parameterless action
+per GRASP of an object at a location with a grasp, and per PUT_DOWN likewise
+(plus one variant per subgoal a PUT_DOWN can reach). Collision facts,
+stacking and exclusion become plain preconditions on ``free`` / ``occupied``
+atoms, so the domain needs no quantifiers, conditional effects or negative
+preconditions — every STRIPS planner reads it, pyperplan included. Its
+predicates keep their arguments — ``(located o l)``, ``(free l)``,
+``(occupied l)``, ``(holding o g)``, ``(reached s)``, ``(pending s)``,
+``(away o l)`` over the domain's constants — rather than being flattened into
+one nullary atom per fact: Fast Downward's translator then finds the state
+invariants (an object is at one place or held, a place is free or occupied)
+at once, where with hundreds of nullary atoms its invariant synthesis runs
+into its candidate limit (about 10 s even for three objects).
+
+In both, the order rule of SPEC §5 is in the preconditions: the plain
+PUT_DOWN at a place of one of the object's subgoals needs every subgoal there
+reached; the variant that reaches a subgoal needs its predecessors (and the
+object's earlier subgoals there) reached. So Fast Downward's plans, like
+demoplan's, never put an object on its place before its predecessors.
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 from demoplan.planning.compiled import compile_problem
 from demoplan.planning.problem import Action, Problem
+from demoplan.planning.strips import Rules
 
 __all__ = ["action_from_pddl", "problem_to_pddl", "save_pddl"]
 
@@ -43,7 +63,16 @@ _RESERVED_WORDS = (
     "minimize maximize total-time total-cost"
 )
 _RESERVED = frozenset(_RESERVED_WORDS.split())
-_PREDICATES = (
+# The lifted domain's own words: unified-planning's reader keeps types, predicates,
+# actions and objects in one namespace, so no name of the problem may be one of them.
+_LIFTED_WORDS = (
+    "item location grip subgoal grasp put-down put-down-reaching handempty located free "
+    "occupied holding allowed guarded guard loaded carries raised rests-on overlapping "
+    "overlaps restricted accepts subgoal-of pending reached ordered after subgoal-place "
+    "subgoals-at repeated revisit away"
+)
+_LIFTED_RESERVED = _RESERVED | frozenset(_LIFTED_WORDS.split())
+_GROUNDED_PREDICATES = (
     "(handempty)",
     "(located ?o ?l)",
     "(free ?l)",
@@ -67,8 +96,16 @@ def _name(text: str) -> str:
     return name
 
 
-def problem_to_pddl(problem: Problem) -> tuple[str, str]:
-    """``(domain, problem)`` PDDL texts for ``problem``."""
+def problem_to_pddl(problem: Problem, *, grounded: bool = False) -> tuple[str, str]:
+    """``(domain, problem)`` PDDL texts for ``problem``: a lifted domain with the
+    problem's facts in ``:init``, or with ``grounded`` the grounded STRIPS export."""
+    if grounded:
+        return _grounded_pddl(problem)
+    return _lifted_pddl(problem)
+
+
+def _grounded_pddl(problem: Problem) -> tuple[str, str]:
+    """One parameterless action per GRASP / PUT_DOWN (and per subgoal reached)."""
     c = compile_problem(problem)
     names, subgoal_names = _unique_names(problem)
     locations, objects, grasps = c.locations, c.objects, c.grasps
@@ -156,7 +193,7 @@ def problem_to_pddl(problem: Problem) -> tuple[str, str]:
         "  (:requirements :strips)\n"
         "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
         "  (:predicates\n"
-        + "".join(f"    {p}\n" for p in _PREDICATES)
+        + "".join(f"    {p}\n" for p in _GROUNDED_PREDICATES)
         + "  )\n"
         + "".join(actions)
         + ")\n"
@@ -192,19 +229,327 @@ def _action(name: str, pre: list[str], add: list[str], delete: list[str]) -> str
     )
 
 
-def _unique_names(problem: Problem) -> tuple[dict[str, str], dict[str, str]]:
+# --- the lifted export -------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class _AllOf:
+    """A static set per key (a place's blockers for a grasp, a subgoal's
+    predecessors, ...) whose every member must have a dynamic property ``test``.
+
+    Fast Downward turns a universally quantified precondition into an axiom,
+    which its optimal heuristic (LM-cut) refuses; so each non-empty set is one
+    static fact ``(listing key... m1 ... mk)``, padded by repeating its first
+    member to the problem's largest set, and marked by ``(flag key...)``. The
+    precondition "not ``flag``, or some listing of the set whose members all
+    have ``test``" needs only an existential, which a planner grounds over the
+    one listing there is; a plan's action keeps its own parameters only.
+    """
+
+    flag: str
+    listing: str
+    keys: tuple[str, ...]  # the key's types
+    variable: str  # prefix of the existential variables
+    sets: dict[tuple[str, ...], list[str]]
+    member: str = "location"  # the members' type
+    test: str = "free"  # the dynamic predicate every member must satisfy
+
+    @property
+    def arity(self) -> int:
+        return max((len(members) for members in self.sets.values()), default=0)
+
+    def predicates(self, *key: str) -> list[str]:
+        """The flag's and the listing's declarations (none if every set is empty)."""
+        if not self.arity:
+            return []
+        typed = " ".join(f"{v} - {t}" for v, t in zip(key, self.keys, strict=True))
+        members = " ".join(f"?m{i}" for i in range(1, self.arity + 1))
+        return [f"({self.flag} {typed})", f"({self.listing} {typed} {members} - {self.member})"]
+
+    def precondition(self, *key: str) -> list[str]:
+        """Every member of ``key``'s set has ``test`` (as a list of zero or one conditions)."""
+        if not self.arity:
+            return []
+        members = [f"?{self.variable}{i}" for i in range(1, self.arity + 1)]
+        listing = f"({self.listing} {' '.join(key)} {' '.join(members)})"
+        tests = " ".join(f"({self.test} {m})" for m in members)
+        return [
+            f"(or (not ({self.flag} {' '.join(key)})) "
+            f"(exists ({' '.join(members)} - {self.member}) (and {listing} {tests})))"
+        ]
+
+    def facts(self) -> list[str]:
+        """The ``:init`` facts: a flag and a listing per non-empty set."""
+        facts = []
+        for key, members in self.sets.items():
+            if members:
+                padded = [*members, *[members[0]] * (self.arity - len(members))]
+                facts.append(f"{self.flag} {' '.join(key)}")
+                facts.append(f"{self.listing} {' '.join((*key, *padded))}")
+        return facts
+
+
+@dataclass(frozen=True, slots=True)
+class _Lifted:
+    """What the lifted domain and problem are written from: PDDL names, the sets
+    of places and subgoals each action checks, and the ``away`` bookkeeping."""
+
+    names: dict[str, str]  # objects, locations, grasps
+    subgoal_names: dict[str, str]
+    guard: _AllOf  # (l, g): where another object blocks grasp g at l
+    carries: _AllOf  # l: the places standing on l (free to grasp at l)
+    rests_on: _AllOf  # l: the places l stands on (occupied to put down at l)
+    overlaps: _AllOf  # l: the places l excludes (free to put down at l)
+    order: _AllOf  # s: what must be reached before s is
+    settled: _AllOf  # (o, l): o's subgoals at l (all reached for a plain put-down)
+    repeated: tuple[str, ...]  # subgoals with an earlier one of their object at their place
+    revisits: tuple[tuple[str, str], ...]  # (o, l) with two subgoals of o at l
+
+
+def _lifted(problem: Problem) -> _Lifted:
+    names, subgoal_names = _unique_names(problem, _LIFTED_RESERVED)
+    rank = {name: i for i, name in enumerate((*problem.locations, *problem.grasps))}
+
+    def places(by_key: dict[tuple[str, ...], set[str]]) -> dict[tuple[str, ...], list[str]]:
+        """The sets in the problem's order, in PDDL names."""
+        return {
+            tuple(names[k] for k in key): [names[p] for p in sorted(members, key=rank.__getitem__)]
+            for key, members in sorted(by_key.items(), key=lambda item: [rank[k] for k in item[0]])
+        }
+
+    blockers: dict[tuple[str, ...], set[str]] = {}
+    for la, lb, g in problem.collisions:
+        if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
+            blockers.setdefault((la, g), set()).add(lb)
+    above: dict[tuple[str, ...], set[str]] = {}
+    below: dict[tuple[str, ...], set[str]] = {}
+    for upper, lower in problem.supports:
+        above.setdefault((lower,), set()).add(upper)
+        below.setdefault((upper,), set()).add(lower)
+    exclusive: dict[tuple[str, ...], set[str]] = {}
+    for a, b in problem.exclusions:
+        exclusive.setdefault((a,), set()).add(b)
+        exclusive.setdefault((b,), set()).add(a)
+
+    # The order rule (SPEC §5; demoplan.planning.strips): o is put down at the place of
+    # one of its subgoals only to reach the first one there not yet reached, once its
+    # predecessors are (put-down-reaching), or once all of them there are (put-down).
+    here: dict[tuple[str, str], list[str]] = {}
+    for subgoal in problem.subgoals:
+        here.setdefault((subgoal.object, subgoal.location), []).append(subgoal.id)
+    after: dict[tuple[str, ...], list[str]] = {}
+    repeated: list[str] = []
+    for ids in here.values():
+        for i, sid in enumerate(ids):
+            first = sorted(a for a, b in problem.precedences if b == sid)
+            after[(subgoal_names[sid],)] = [
+                subgoal_names[e] for e in dict.fromkeys([*first, *ids[:i]])
+            ]
+            repeated += [subgoal_names[sid]] if i else []
+    at_place: dict[tuple[str, ...], list[str]] = {
+        (names[o], names[loc]): [subgoal_names[sid] for sid in ids]
+        for (o, loc), ids in here.items()
+    }
+    place, grasp_at, subgoal_type = ("location",), ("location", "grip"), "subgoal"
+    return _Lifted(
+        names=names,
+        subgoal_names=subgoal_names,
+        guard=_AllOf("guarded", "guard", grasp_at, "b", places(blockers)),
+        carries=_AllOf("loaded", "carries", place, "u", places(above)),
+        rests_on=_AllOf("raised", "rests-on", place, "d", places(below), test="occupied"),
+        overlaps=_AllOf("overlapping", "overlaps", place, "x", places(exclusive)),
+        order=_AllOf("ordered", "after", ("subgoal",), "p", after, subgoal_type, "reached"),
+        settled=_AllOf(
+            "subgoal-place",
+            "subgoals-at",
+            ("item", "location"),
+            "q",
+            at_place,
+            subgoal_type,
+            "reached",
+        ),
+        repeated=tuple(repeated),
+        # "No move ends where it started" (SPEC §5) changes no fact, so no shortest
+        # plan needs a rule for it — except where an object has two subgoals at one
+        # place: putting it back there would reach the second. For those places
+        # (away o l) says o has been put down elsewhere since it last stood at l.
+        revisits=tuple(key for key, ids in here.items() if len(ids) > 1),
+    )
+
+
+def _lifted_pddl(problem: Problem) -> tuple[str, str]:
+    """A typed domain of up to three schemas and a problem whose ``:init`` holds the facts."""
+    lifted = _lifted(problem)
+    domain_name = _name(f"demoplan-{problem.name}")
+    return _lifted_domain(problem, lifted, domain_name), _lifted_problem(
+        problem, lifted, domain_name
+    )
+
+
+def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
+    guard, carries, rests_on, overlaps = (
+        lifted.guard,
+        lifted.carries,
+        lifted.rests_on,
+        lifted.overlaps,
+    )
+    predicates = [
+        "(handempty)",
+        "(located ?o - item ?l - location)",
+        "(free ?l - location)",
+        "(occupied ?l - location)",
+        "(holding ?o - item ?g - grip)",
+        "(allowed ?o - item ?g - grip)",
+        *guard.predicates("?l", "?g"),
+        *carries.predicates("?l"),
+        *rests_on.predicates("?l"),
+        *overlaps.predicates("?l"),
+    ]
+    if problem.accepts:
+        predicates += ["(restricted ?l - location)", "(accepts ?l - location ?o - item)"]
+    if problem.subgoals:
+        predicates += [
+            "(subgoal-of ?s - subgoal ?o - item ?l - location)",
+            "(pending ?s - subgoal)",
+            "(reached ?s - subgoal)",
+            *lifted.order.predicates("?s"),
+            *lifted.settled.predicates("?o", "?l"),
+        ]
+    if lifted.revisits:
+        predicates += [
+            "(repeated ?s - subgoal)",
+            "(revisit ?o - item ?l - location)",
+            "(away ?o - item ?l - location)",
+        ]
+
+    put_pre = ["(holding ?o ?g)", "(free ?l)", *guard.precondition("?l", "?g")]
+    put_pre += rests_on.precondition("?l") + overlaps.precondition("?l")
+    if problem.accepts:
+        put_pre.append("(or (not (restricted ?l)) (accepts ?l ?o))")
+    put_effect = [
+        "(handempty)",
+        "(located ?o ?l)",
+        "(occupied ?l)",
+        "(not (free ?l))",
+        "(not (holding ?o ?g))",
+    ]
+    if lifted.revisits:
+        put_effect += [
+            "(forall (?r - location) (when (and (revisit ?o ?r) (not (= ?r ?l))) (away ?o ?r)))",
+            "(not (away ?o ?l))",
+        ]
+    parameters = "?o - item ?l - location ?g - grip"
+    grasp_pre = ["(handempty)", "(located ?o ?l)", "(allowed ?o ?g)"]
+    grasp_pre += guard.precondition("?l", "?g") + carries.precondition("?l")
+    grasp_effect = [
+        "(not (handempty))",
+        "(not (located ?o ?l))",
+        "(not (occupied ?l))",
+        "(free ?l)",
+        "(holding ?o ?g)",
+    ]
+    schemas = [
+        _schema("grasp", parameters, grasp_pre, grasp_effect),
+        _schema(
+            "put-down", parameters, put_pre + lifted.settled.precondition("?o", "?l"), put_effect
+        ),
+    ]
+    if problem.subgoals:
+        reaching = ["(subgoal-of ?s ?o ?l)", "(pending ?s)", *lifted.order.precondition("?s")]
+        if lifted.revisits:
+            reaching.append("(or (not (repeated ?s)) (away ?o ?l))")
+        schemas.append(
+            _schema(
+                "put-down-reaching",
+                f"{parameters} ?s - subgoal",
+                put_pre + reaching,
+                [*put_effect, "(reached ?s)", "(not (pending ?s))"],
+            )
+        )
+    requirements = ":strips :typing :negative-preconditions :disjunctive-preconditions"
+    requirements += " :existential-preconditions"
+    if lifted.revisits:
+        requirements += " :equality :conditional-effects"
+    return (
+        f"(define (domain {domain_name})\n"
+        f"  (:requirements {requirements})\n"
+        "  (:types item location grip subgoal)\n"
+        "  (:predicates\n"
+        + "".join(f"    {p}\n" for p in predicates)
+        + "  )\n"
+        + "".join(schemas)
+        + ")\n"
+    )
+
+
+def _schema(name: str, parameters: str, pre: list[str], effect: list[str]) -> str:
+    return (
+        f"  (:action {name}\n"
+        f"    :parameters ({parameters})\n"
+        "    :precondition (and\n" + "".join(f"      {p}\n" for p in pre) + "    )\n"
+        "    :effect (and\n" + "".join(f"      {e}\n" for e in effect) + "    ))\n"
+    )
+
+
+def _lifted_problem(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
+    names, subgoal_names = lifted.names, lifted.subgoal_names
+    start = Rules(problem).start()
+    objects = [
+        ([names[o] for o in problem.objects], "item"),
+        ([names[loc] for loc in problem.locations], "location"),
+        ([names[g] for g in problem.grasps], "grip"),
+        ([subgoal_names[s.id] for s in problem.subgoals], "subgoal"),
+    ]
+    taken = set(start.at.values())
+    init = ["handempty"]
+    init += [f"located {names[o]} {names[loc]}" for o, loc in problem.initial]
+    init += [f"{'occupied' if loc in taken else 'free'} {names[loc]}" for loc in problem.locations]
+    init += sorted(f"allowed {names[o]} {names[g]}" for o, g in problem.allowed)
+    for sets in (lifted.guard, lifted.carries, lifted.rests_on, lifted.overlaps):
+        init += sets.facts()
+    for loc in (loc for loc in problem.locations if any(la == loc for la, _ in problem.accepts)):
+        init.append(f"restricted {names[loc]}")
+        init += sorted(f"accepts {names[loc]} {names[o]}" for la, o in problem.accepts if la == loc)
+    for s in problem.subgoals:
+        sid = subgoal_names[s.id]
+        init.append(f"subgoal-of {sid} {names[s.object]} {names[s.location]}")
+        init.append(f"{'reached' if s.id in start.reached else 'pending'} {sid}")
+    init += lifted.order.facts() + lifted.settled.facts()
+    init += [f"repeated {sid}" for sid in lifted.repeated]
+    for o, loc in lifted.revisits:
+        init.append(f"revisit {names[o]} {names[loc]}")
+        if start.at[o] != loc:
+            init.append(f"away {names[o]} {names[loc]}")
+    goal = ["handempty", *(f"located {names[o]} {names[loc]}" for o, loc in problem.goal)]
+    goal += [f"reached {subgoal_names[s.id]}" for s in problem.subgoals]
+    return (
+        f"(define (problem {_name(problem.name)})\n"
+        f"  (:domain {domain_name})\n"
+        "  (:objects\n"
+        + "".join(f"    {' '.join(group)} - {kind}\n" for group, kind in objects if group)
+        + "  )\n"
+        "  (:init\n" + "".join(f"    ({fact})\n" for fact in init) + "  )\n"
+        "  (:goal (and\n" + "".join(f"    ({fact})\n" for fact in goal) + "  ))\n"
+        ")\n"
+    )
+
+
+def _unique_names(
+    problem: Problem, reserved: frozenset[str] = _RESERVED
+) -> tuple[dict[str, str], dict[str, str]]:
     """PDDL-safe, distinct names for every object, location and grasp, and for
     every subgoal id (a separate namespace in demoplan, one with them in PDDL).
 
     PDDL is case-insensitive and allows fewer characters than demoplan, so
     ``Cup`` / ``cup`` or ``loc_1`` / ``loc-1`` get distinct names (``cup-2``);
-    a name a reader could take for a keyword gets a prefix (``and`` → ``n-and``).
+    a name a reader could take for a keyword — or, in the lifted export, for
+    one of the domain's own words — gets a prefix (``and`` → ``n-and``).
     """
     used: set[str] = set()
 
     def unique(original: str) -> str:
         base = _name(original)
-        if base in _RESERVED:
+        if base in reserved:
             base = "n-" + base
         name, k = base, 2
         while name in used:
@@ -218,22 +563,38 @@ def _unique_names(problem: Problem) -> tuple[dict[str, str], dict[str, str]]:
 
 
 def action_from_pddl(problem: Problem, name: str) -> Action:
-    """The demoplan action behind a PDDL action name (as a planner prints it)."""
-    reverse = {v: k for k, v in _unique_names(problem)[0].items()}
-    parts = name.strip("() ").lower().split("__")
-    kinds = {"grasp": "GRASP", "put_down": "PUT_DOWN"}
+    """The demoplan action behind a PDDL action as a planner prints it: lifted,
+    ``(grasp box loc264 grasp6)``, ``(put-down box freespace1 grasp6)`` or
+    ``(put-down-reaching o l g s)``; grounded, ``(grasp__box__loc264__grasp6)``."""
+    text = name.strip("() ").lower()
+    lifted = " " in text
+    names = _unique_names(problem, _LIFTED_RESERVED if lifted else _RESERVED)
+    reverse = {v: k for k, v in names[0].items()}
+    if lifted:
+        parts = text.split()
+        kinds = {"grasp": ("GRASP", 4), "put-down": ("PUT_DOWN", 4)}
+        kinds["put-down-reaching"] = ("PUT_DOWN", 5)
+        valid = parts[0] in kinds and len(parts) == kinds[parts[0]][1]
+        valid = valid and (len(parts) == 4 or parts[4] in names[1].values())
+    else:
+        parts = text.split("__")
+        kinds = {"grasp": ("GRASP", 4), "put_down": ("PUT_DOWN", 4)}
+        valid = parts[0] in kinds
     try:
-        kind, o, loc, g = kinds[parts[0]], *(reverse[p] for p in parts[1:4])
+        if not valid:
+            raise KeyError(name)
+        o, loc, g = (reverse[p] for p in parts[1:4])
     except (KeyError, ValueError):
         raise ValueError(f"{name!r} is not an action of this problem's PDDL export") from None
-    return Action(kind, o, loc, g)
+    return Action(kinds[parts[0]][0], o, loc, g)
 
 
-def save_pddl(problem: Problem, folder: str | Path) -> tuple[Path, Path]:
-    """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (atomically)."""
+def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -> tuple[Path, Path]:
+    """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (atomically):
+    lifted, or with ``grounded`` the grounded STRIPS export (see :func:`problem_to_pddl`)."""
     from demoplan.fileio import write_atomic
 
-    domain, problem_text = problem_to_pddl(problem)
+    domain, problem_text = problem_to_pddl(problem, grounded=grounded)
     folder = Path(folder)
     paths = (folder / "domain.pddl", folder / "problem.pddl")
     write_atomic(paths[0], domain)
