@@ -103,7 +103,7 @@ class AStar:
             c.exclusive,
             c.below,
         )
-        plain, goal_of, unmovable = c.plain, c.goal, bounds.unmovable
+        plain, goal_of, unmovable, accepts = c.plain, c.goal, bounds.unmovable, c.accepts
 
         def outcome(
             actions: tuple[Action, ...] | None, exhausted: bool = False, limit: str | None = None
@@ -212,6 +212,7 @@ class AStar:
                             others >> target & 1
                             or others & block[target][grasp]
                             or others & exclusive[target]
+                            or not accepts[target] >> obj & 1
                         ):
                             continue
                         support = below[target]

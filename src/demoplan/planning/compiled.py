@@ -20,9 +20,10 @@ class Compiled:
     problem: Problem
     objects: tuple[str, ...]
     locations: tuple[str, ...]
-    grasps: tuple[str, ...]
-    grasps_of: tuple[tuple[int, ...], ...]  # object -> allowed grasp indices
-    block: tuple[tuple[int, ...], ...]  # [location][grasp] -> locations that block it (mask)
+    grasps: tuple[str, ...]  # per allowed (object, grasp) pair: the grasp's name
+    grasp_object: tuple[int, ...]  # per allowed pair: its object
+    grasps_of: tuple[tuple[int, ...], ...]  # object -> its allowed pairs
+    block: tuple[tuple[int, ...], ...]  # [location][pair] -> locations that block it (mask)
     below: tuple[int, ...]  # location -> mask of the locations it stands on (all needed)
     above: tuple[int, ...]  # location -> mask of locations standing on it
     exclusive: tuple[int, ...]  # location -> mask of locations that exclude it
@@ -49,12 +50,14 @@ class Compiled:
         return not (others & self.block[location][grasp]) and not (occupied & self.above[location])
 
     def put_ok(self, others: int, location: int, grasp: int) -> bool:
-        """PUT_DOWN at ``location`` with ``grasp`` while ``others`` are occupied."""
+        """PUT_DOWN at ``location`` with ``grasp`` (an allowed pair, so it names
+        the object) while ``others`` are occupied."""
         bit = 1 << location
         if (
             others & bit
             or others & self.block[location][grasp]
             or others & self.exclusive[location]
+            or not self.accepts[location] >> self.grasp_object[grasp] & 1
         ):
             return False
         support = self.below[location]
@@ -145,31 +148,30 @@ class Compiled:
 
 def compile_problem(problem: Problem) -> Compiled:
     """Index a problem; the masks are what :mod:`demoplan.planning.search` tests."""
-    objects, locations, grasps = problem.objects, problem.locations, problem.grasps
+    objects, locations = problem.objects, problem.locations
     loc_index = {name: i for i, name in enumerate(locations)}
-    grasp_index = {name: i for i, name in enumerate(grasps)}
     obj_index = {name: i for i, name in enumerate(objects)}
+    grasp_order = {name: i for i, name in enumerate(problem.grasps)}
+    # A grasp is compiled per object that allows it: masks per (object, grasp) pair.
+    pairs = sorted(problem.allowed, key=lambda p: (obj_index[p[0]], grasp_order[p[1]]))
+    grasps = tuple(g for _, g in pairs)
+    grasp_object = tuple(obj_index[o] for o, _ in pairs)
+    pairs_named: dict[str, list[int]] = {}
+    for index, (_, g) in enumerate(pairs):
+        pairs_named.setdefault(g, []).append(index)
     grasps_of = tuple(
-        tuple(sorted(grasp_index[g] for o, g in problem.allowed if o == name)) for name in objects
+        tuple(i for i, o in enumerate(grasp_object) if o == oi) for oi in range(len(objects))
     )
-    block = [[0] * len(grasps) for _ in locations]
+    block = [[0] * len(pairs) for _ in locations]
     for la, lb, g in problem.collisions:
         if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
-            block[loc_index[la]][grasp_index[g]] |= 1 << loc_index[lb]
-    # A location that does not take object o: for o's grasps, every other location
-    # blocks it, so o can be put down there only in a world with no other object —
-    # where no shortest plan parks o anywhere but its own subgoals.
+            for pair_index in pairs_named.get(g, ()):
+                block[loc_index[la]][pair_index] |= 1 << loc_index[lb]
     restricted: dict[int, int] = {}
     for loc, obj in problem.accepts:
         restricted[loc_index[loc]] = restricted.get(loc_index[loc], 0) | 1 << obj_index[obj]
     everything_objects = (1 << len(objects)) - 1
     accepts = [restricted.get(li, everything_objects) for li in range(len(locations))]
-    everywhere = (1 << len(locations)) - 1
-    for li, taken in restricted.items():
-        for oi in range(len(objects)):
-            if not taken >> oi & 1:
-                for gi in grasps_of[oi]:
-                    block[li][gi] |= everywhere & ~(1 << li)
     below = [0] * len(locations)
     above = [0] * len(locations)
     for upper, lower in problem.supports:
@@ -209,6 +211,7 @@ def compile_problem(problem: Problem) -> Compiled:
         objects=objects,
         locations=locations,
         grasps=grasps,
+        grasp_object=grasp_object,
         grasps_of=grasps_of,
         block=tuple(tuple(row) for row in block),
         below=tuple(below),

@@ -108,7 +108,7 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
     """One parameterless action per GRASP / PUT_DOWN (and per subgoal reached)."""
     c = compile_problem(problem)
     names, subgoal_names = _unique_names(problem)
-    locations, objects, grasps = c.locations, c.objects, c.grasps
+    locations, objects, grasps = c.locations, c.objects, c.grasps  # grasps: per pair
 
     def at(o: str, loc: str) -> str:
         return f"located {names[o]} {names[loc]}"
@@ -185,7 +185,7 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
                             [*delete, pending(s.id)],
                         )
                     )
-    constants = [names[n] for n in (*objects, *locations, *grasps)]
+    constants = [names[n] for n in (*objects, *locations, *problem.grasps)]
     constants += [subgoal_names[s.id] for s in problem.subgoals]
     domain_name = _name(f"demoplan-{problem.name}")
     domain = (
