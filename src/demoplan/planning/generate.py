@@ -28,6 +28,7 @@ import numpy as np
 from demoplan.planning.problem import Problem
 
 __all__ = [
+    "PARKING_FAMILIES",
     "blocks_problem",
     "collision_facts",
     "grasp_collides",
@@ -228,6 +229,16 @@ def blocks_problem(
         free_y=-0.5,
         supports=supports,
     )
+
+
+PARKING_FAMILIES: dict[str, dict[str, float]] = {
+    "parking": {"cycled": 0.3, "distractors": 0.1, "on_grid": 0.2, "density": 3.0},
+    "parking-dense": {"cycled": 0.5, "distractors": 0.2, "on_grid": 0.3, "density": 2.0},
+}
+"""Two settings of :func:`parking_problem` for tests and benchmarks: ``parking``
+(about half of which the A* of before the anytime planner could not solve in
+20 s at 15–30 objects) and ``parking-dense`` (more cycles, distractors and
+neighbours: the hardest we generate)."""
 
 
 def parking_problem(
