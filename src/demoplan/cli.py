@@ -50,6 +50,11 @@ def _reported_errors() -> Iterator[None]:
     except DemoplanError as exc:
         _stderr.print(error_line(exc), markup=False, highlight=False)
         raise typer.Exit(exc.exit_code) from None
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
+        from demoplan.launcher import interrupted_exit_code
+
+        sys.stderr.write("demoplan: interrupted\n")
+        raise typer.Exit(interrupted_exit_code(exc)) from None
 
 
 def _version(value: bool) -> None:

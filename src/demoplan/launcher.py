@@ -156,10 +156,41 @@ def run_solve(options: SolveOptions) -> int:
     return 0
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every command stops the same way."""
+
+
+INTERRUPTED_EXIT = 130  # 128 + SIGINT, as a shell reports a job Ctrl-C stopped
+TERMINATED_EXIT = 143  # 128 + SIGTERM
+
+
+def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
+    """The exit code of a command stopped by ``exc`` (SPEC §4)."""
+    return TERMINATED_EXIT if isinstance(exc, Terminated) else INTERRUPTED_EXIT
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
+
+
 def main() -> None:
     """Entry point of the ``demoplan`` command."""
+    import signal
+
     global _started_by_main
     _started_by_main = True
+    # Ctrl-C raises KeyboardInterrupt even where the process was started with
+    # SIGINT ignored (a background job of a script); SIGTERM does the same.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        _dispatch()
+    except KeyboardInterrupt as exc:
+        sys.stderr.write("demoplan: interrupted\n")
+        raise SystemExit(interrupted_exit_code(exc)) from None
+
+
+def _dispatch() -> None:
     args = sys.argv[1:]
     if args[:1] == ["solve"] and not sys.stderr.isatty():
         options = parse_solve_options(args[1:])

@@ -1,0 +1,56 @@
+"""Ctrl-C and SIGTERM stop a long search within a second (SPEC §4: exit 130 / 143),
+on both start paths of ``demoplan solve`` and through ``plan``."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
+from demoplan.planning.xml import save_problem
+
+
+@pytest.fixture(scope="module")
+def hard_problem(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A problem no search proves in a minute (30 objects of the dense parking family)."""
+    path = tmp_path_factory.mktemp("interrupt") / "hard.xml"
+    save_problem(parking_problem(30, 1, **PARKING_FAMILIES["parking-dense"]), path)
+    return path
+
+
+def stop_after(args: list[str], sig: int, wait: float = 1.5) -> tuple[int, float, str]:
+    """Start ``demoplan ARGS``, send ``sig`` after ``wait`` s: (exit code, seconds
+    from the signal to the exit, stderr)."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "demoplan", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    )
+    time.sleep(wait)
+    assert process.poll() is None, "the search ended before the signal"
+    sent = time.monotonic()
+    process.send_signal(sig)
+    _, err = process.communicate(timeout=30)
+    return process.returncode, time.monotonic() - sent, err
+
+
+@pytest.mark.parametrize("path", ["lean", "typer"])
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_long_search_stops_within_a_second(
+    hard_problem: Path, path: str, sig: int, code: int
+) -> None:
+    args = ["solve", str(hard_problem), "--timeout", "120", "--optimal"]
+    if path == "typer":
+        args = ["--verbose", *args]  # not the lean path's command line: typer runs it
+    exit_code, seconds, err = stop_after(args, sig)
+    assert exit_code == code
+    assert seconds < 1.0
+    assert err == "demoplan: interrupted\n"
