@@ -112,7 +112,13 @@ def command_budget(max_nodes: int | None, timeout: float | None) -> Any:
     from demoplan.planning.budget import Budget
 
     seconds = DEFAULT_TIMEOUT if timeout is None else timeout
-    return Budget(max_nodes, timeout=seconds, deadline=_command_started + seconds)
+    # The search stops a little before the end, to leave time to write the answer
+    # and tear down what it built.
+    margin = min(_ANSWER_SECONDS, seconds / 8)
+    return Budget(max_nodes, timeout=seconds, deadline=_command_started + seconds - margin)
+
+
+_ANSWER_SECONDS = 0.25
 
 
 def solve_text(

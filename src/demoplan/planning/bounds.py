@@ -35,6 +35,7 @@ class LowerBounds:
     def __init__(self, c: Compiled):
         self.c = c
         self._move_cache: dict[tuple[int, int, int], bool] = {}
+        self._mask_cache: dict[tuple[int, int], int] = {}
         # Objects no plan can move (Compiled.never_placed): they are never moved,
         # and a state in which one of them still needs a move is a dead end.
         self.unmovable = c.never_placed()
@@ -226,15 +227,33 @@ class LowerBounds:
         ]
         if len(single) < 2:
             return 0
+        # Only objects whose places meet the other's move can conflict: Y's source
+        # or goal where X's move is hit (move_mask), or X's in Y's. Index who
+        # stands or ends where, and whose move each place hits.
+        order = {obj: i for i, obj in enumerate(single)}
+        near: dict[int, set[int]] = {obj: set() for obj in single}
+        standing: dict[int, list[int]] = {}
+        for obj in single:
+            standing.setdefault(positions[obj], []).append(obj)
+            standing.setdefault(c.goal[obj], []).append(obj)
+        for x in single:
+            mask = self.move_mask(x, positions[x])
+            while mask:
+                low = mask & -mask
+                mask ^= low
+                for y in standing.get(low.bit_length() - 1, ()):
+                    if y != x:
+                        near[x].add(y)
+                        near[y].add(x)
         ok = self.move_ok
         matched: set[int] = set()
         pairs = 0
-        for i, x in enumerate(single):
+        for x in single:
             if x in matched:
                 continue
             sx, gx = positions[x], c.goal[x]
-            for y in single[i + 1 :]:
-                if y in matched:
+            for y in sorted(near[x], key=order.__getitem__):
+                if order[y] < order[x] or y in matched:
                     continue
                 sy, gy = positions[y], c.goal[y]
                 if (ok(x, sx, sy) and ok(y, sy, gx)) or (ok(y, sy, sx) and ok(x, sx, gy)):
@@ -243,6 +262,24 @@ class LowerBounds:
                 pairs += 1
                 break
         return pairs
+
+    def move_mask(self, obj: int, source: int) -> int:
+        """The places where another object keeps ``obj`` from moving from
+        ``source`` straight to its goal (:meth:`move_ok` false): its goal, what
+        stands on the source or overlaps the goal, and what blocks every grasp
+        at the source or the goal."""
+        known = self._mask_cache.get((obj, source))
+        if known is None:
+            c = self.c
+            goal = c.goal[obj]
+            every_grasp = -1
+            for g in c.grasps_of[obj]:
+                every_grasp &= c.block[source][g] | c.block[goal][g]
+            if not c.grasps_of[obj]:
+                every_grasp = 0
+            known = 1 << goal | c.above[source] | c.exclusive[goal] | every_grasp
+            self._mask_cache[obj, source] = known
+        return known
 
     def order_cycle(self, positions: tuple[int, ...], reached: int, fixed: int) -> int:
         """1 if the single-move objects cannot be ordered with one move each

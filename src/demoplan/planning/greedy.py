@@ -66,6 +66,8 @@ def greedy_moves(c: Compiled, bounds: LowerBounds, clock: Clock) -> list[Move] |
                 continue
             parent[child] = (state, move)
             counter += 1
+            if not counter & 63 and clock.expired():  # an expansion can take long
+                return None
             heapq.heappush(heap, (_guidance(c, *child), g + 1, counter, child))
     return None
 

@@ -1,0 +1,75 @@
+"""Every planning call answers within its budget: huge problems, the state limit,
+BFS's node budget (never a MemoryError, never a hang)."""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from demoplan.errors import LimitReachedError
+from demoplan.planning.budget import Budget
+from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
+from demoplan.planning.problem import Problem
+from demoplan.planning.search import solve
+from demoplan.planning.xml import save_problem
+
+
+def ring_problem(n: int) -> Problem:
+    """n objects, 2n locations: each object to the next one's target row, each
+    target blocking its neighbour's grasp."""
+    objects = [f"o{i}" for i in range(n)]
+    return Problem.create(
+        objects=objects,
+        locations=[f"s{i}" for i in range(n)] + [f"t{i}" for i in range(n)],
+        grasps=[f"g{i}" for i in range(n)],
+        allowed=[(o, f"g{i}") for i, o in enumerate(objects)],
+        collisions=[(f"t{i}", f"t{i + 1}", f"g{i}") for i in range(n - 1)],
+        initial=[(o, f"s{i}") for i, o in enumerate(objects)],
+        goal=[(o, f"t{(i + 1) % n}") for i, o in enumerate(objects)],
+    )
+
+
+def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
+    """The default 2 s budget ends the command with exit 4 and one line saying
+    which limit and how far it got; memory stays far from exhaustion."""
+    path = tmp_path / "ring.xml"
+    save_problem(ring_problem(1000), path)
+    started = time.monotonic()
+    done = subprocess.run(
+        [sys.executable, "-m", "demoplan", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+        timeout=60,
+        check=False,
+    )
+    seconds = time.monotonic() - started
+    assert done.returncode in (0, 4), done.stderr
+    if done.returncode == 4:
+        lines = done.stderr.splitlines()
+        assert len(lines) == 1 and lines[0].startswith("demoplan: error: --timeout 2 s")
+        assert "every plan needs at least 2000 actions" in lines[0]
+    assert seconds < 10  # a hang guard, not a speed target (benchmarks/planning.py)
+    peak_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    assert peak_kb < 1_000_000
+
+
+def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
+    problem = parking_problem(15, 0, **PARKING_FAMILIES["parking-dense"])
+    for search in ("astar", "bfs"):
+        with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
+            solve(problem, search, Budget(max_states=5000), optimal=True)
+
+
+def test_bfs_stops_at_its_node_budget_with_its_bound() -> None:
+    problem = parking_problem(10, 0)
+    with pytest.raises(LimitReachedError, match="--max-nodes 20000") as caught:
+        solve(problem, "bfs", Budget(max_nodes=20_000))
+    assert caught.value.exit_code == 4
+    assert "every plan needs at least" in str(caught.value)
