@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
@@ -110,13 +111,17 @@ def test_no_plan_found_by_search(tmp_path: Path, search: str) -> None:
 
 
 @pytest.mark.parametrize("search", ["astar", "bfs"])
-def test_max_nodes_limit_exits_4(search: str) -> None:
+def test_max_nodes_limit_exits_4(search: str, tmp_path: Path) -> None:
+    """A problem whose fast plan (32 actions) is not proved in one expansion."""
+    path = tmp_path / "parking.xml"
+    save_problem(parking_problem(10, 0, **PARKING_FAMILIES["parking-dense"]), path)
     line = one_line_error(
-        invoke("solve", PAPER, "--search", search, "--max-nodes", "1", "--optimal"),
+        invoke("solve", path, "--search", search, "--max-nodes", "1", "--optimal"),
         4,
         "--max-nodes 1",
     )
-    assert "no plan yet" in line or "not proved shortest" in line
+    assert ("no plan yet" if search == "bfs" else "not proved shortest") in line
+    assert "every plan needs at least" in line
 
 
 def test_entity_bomb_exits_1(tmp_path: Path) -> None:

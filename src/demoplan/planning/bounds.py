@@ -205,16 +205,21 @@ class LowerBounds:
         return False
 
     def pair_conflicts(self, positions: tuple[int, ...], reached: int) -> int:
-        """Disjoint pairs of objects that cannot both reach their goals in one move each.
+        """Disjoint pairs — and longer cycles — of objects that cannot all reach
+        their goals in one move each.
 
         For objects X and Y that each need exactly one move (source → final
         goal), X may go first only if X's move is possible with Y still at its
         source and Y's move with X already at its goal, and likewise the other
         way round; other objects can only get in the way more. When neither
         order works, X or Y moves twice: +1 per pair of a greedy matching
-        (e.g. X on Y's goal and Y on X's). The second moves are those of the
-        needy objects, so this bound and the deadlock bound share moves: the
-        heuristic takes the larger of the two.
+        (e.g. X on Y's goal and Y on X's). Among the objects left, "Y must move
+        before X" where Y at its source, or X at its goal, keeps the other's
+        move from happening (X on Y's goal, Y on Z's, Z on X's); each cycle of
+        such precedences needs a second move of one of its members, and
+        disjoint cycles distinct ones: +1 per cycle found. The second moves
+        are those of the needy objects, so this bound and the deadlock bound
+        share moves: the heuristic takes the larger of the two.
         """
         c = self.c
         single = [
@@ -261,7 +266,18 @@ class LowerBounds:
                 matched |= {x, y}
                 pairs += 1
                 break
-        return pairs
+        # Longer cycles among the objects left: "Y must move before X" when Y at
+        # its source, or X at its goal, keeps the other's move from happening.
+        before: dict[int, list[int]] = {}
+        for x in single:
+            if x in matched:
+                continue
+            for y in near[x]:
+                if y not in matched and (
+                    not ok(x, positions[x], positions[y]) or not ok(y, positions[y], c.goal[x])
+                ):
+                    before.setdefault(x, []).append(y)  # y before x
+        return pairs + _disjoint_cycles(before)
 
     def move_mask(self, obj: int, source: int) -> int:
         """The places where another object keeps ``obj`` from moving from
@@ -492,6 +508,39 @@ class LowerBounds:
                 return None
             remaining = kept
         return peeled
+
+
+def _disjoint_cycles(edges: dict[int, list[int]]) -> int:
+    """How many vertex-disjoint cycles a search finds in the digraph ``edges``
+    (node -> successors), each cycle's nodes set aside once found: a lower
+    bound on the most such cycles (any disjoint set is one)."""
+    taken: set[int] = set()
+    count = 0
+    for root in sorted(edges):
+        if root in taken:
+            continue
+        # Depth-first from root along untaken nodes, looking for a way back to root.
+        path = [root]
+        on_path = {root}
+        stacks = [iter(edges.get(root, ()))]
+        visited = {root}
+        while stacks:
+            step = next(stacks[-1], None)
+            if step is None:
+                stacks.pop()
+                on_path.discard(path.pop())
+                continue
+            if step == root:
+                taken |= on_path
+                count += 1
+                break
+            if step in taken or step in visited:
+                continue
+            visited.add(step)
+            path.append(step)
+            on_path.add(step)
+            stacks.append(iter(edges.get(step, ())))
+    return count
 
 
 def _indices(mask: int, index_at: dict[int, int]) -> int:

@@ -40,17 +40,37 @@ _PARKING_PLACES = 3
 _State = tuple[tuple[int, ...], int]
 
 
-def greedy_moves(c: Compiled, bounds: LowerBounds, clock: Clock) -> list[Move] | None:
+def greedy_moves(
+    c: Compiled,
+    bounds: LowerBounds,
+    clock: Clock,
+    *,
+    weight: float | None = None,
+    upper: int | None = None,
+) -> list[Move] | None:
     """A plan as moves, shortened; None where the search runs out of time or
-    of helpful moves."""
+    of helpful moves.
+
+    ``weight`` None: greedy best-first search on the guidance. A number w:
+    weighted A* on g + w × guidance, for a shorter plan once one is known —
+    LAMA's way of improving its first plan. ``upper``: only plans of fewer
+    moves are of interest (states that need at least that many are dropped,
+    by the objects' needs, a lower bound).
+    """
     start: _State = (c.start, c.start_reached)
     if bounds.estimate(*start) >= DEAD_END:
         return None
+    scale = 0 if weight is None else 1
+    factor = 1.0 if weight is None else weight
     parent: dict[_State, tuple[_State, Move] | None] = {start: None}
-    heap = [(_guidance(c, *start), 0, 0, start)]
+    best_g = {start: 0}
+    heap = [(factor * _guidance(c, *start), 0, 0, start)]
     counter = 0
+    limit = upper if upper is not None else 1 << 60
     while heap:
         _, g, _, state = heapq.heappop(heap)
+        if best_g[state] < g:
+            continue  # reached more cheaply since
         if c.is_goal(*state):
             moves: list[Move] = []
             link = parent[state]
@@ -62,13 +82,17 @@ def greedy_moves(c: Compiled, bounds: LowerBounds, clock: Clock) -> list[Move] |
         if clock.expired():
             return None
         for move, child in _moves(c, *state):
-            if child in parent:
+            if best_g.get(child, 1 << 60) <= g + 1:
                 continue
+            if upper is not None and g + 1 + bounds.needs(*child) >= limit:
+                continue
+            best_g[child] = g + 1
             parent[child] = (state, move)
             counter += 1
             if not counter & 63 and clock.expired():  # an expansion can take long
                 return None
-            heapq.heappush(heap, (_guidance(c, *child), g + 1, counter, child))
+            priority = scale * (g + 1) + factor * _guidance(c, *child)
+            heapq.heappush(heap, (priority, g + 1, counter, child))
     return None
 
 
