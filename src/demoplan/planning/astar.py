@@ -129,6 +129,8 @@ class AStar:
             h = known_h.get(key)
             if h is None:
                 h = known_h[key] = bounds.estimate(*concrete[key])
+                if not len(known_h) & 15 and self.clock.expired():  # bounds take time
+                    return outcome(None, limit=self.clock.stop(expanded, len(best_g)))
             if h >= DEAD_END:
                 continue
             h = max(h, parent_h - 1)  # pathmax
@@ -243,6 +245,10 @@ class AStar:
                             child_h = known_h.get(child)
                             if child_h is None:
                                 child_h = known_h[child] = bounds.estimate(moved, now_reached)
+                                if not len(known_h) & 15 and self.clock.expired():
+                                    return outcome(
+                                        None, limit=self.clock.stop(expanded, len(best_g))
+                                    )
                             if child_h >= DEAD_END:
                                 continue
                             child_h = max(child_h, h - 1)
