@@ -210,7 +210,7 @@ _IMPROVE_SHARE = 0.2
 
 def _greedy_budget(clock: Clock, share: float = 1.0) -> Budget:
     left = clock.remaining()
-    return Budget(timeout=_GREEDY_SECONDS if left is None else share * left, max_states=None)
+    return Budget(timeout=share * (_GREEDY_SECONDS if left is None else left), max_states=None)
 
 
 def _raise_without_plan(
