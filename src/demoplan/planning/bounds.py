@@ -460,54 +460,22 @@ class LowerBounds:
             remaining = [obj for obj in remaining if obj not in chosen]
 
     def _stuck(self, objects: list[int]) -> list[int]:
-        """What is left of ``objects`` after peeling off, one at a time, those
-        with a grasp at their goal clear of the others' goals (empty: all peel)."""
-        c = self.c
-        goals = 0
-        for obj in objects:
-            goals |= 1 << c.goal[obj]
-        remaining = objects
-        while remaining:
-            kept = []
-            for obj in remaining:
-                target = c.goal[obj]
-                others = goals & ~(1 << target)
-                if any(not c.block[target][g] & others for g in c.grasps_of[obj]):
-                    goals &= ~(1 << target)
-                else:
-                    kept.append(obj)
-            if len(kept) == len(remaining):
-                return kept
-            remaining = kept
-        return []
+        """What is left of ``objects`` after peeling (:meth:`Compiled.peel`;
+        empty: all peel)."""
+        return self.c.peel(objects)[1]
 
     def peel_order(self, positions: tuple[int, ...]) -> list[int] | None:
         """The objects away from their final places in an order in which each
-        can be put down there, one move each (last first); None if stuck."""
+        can be put down there, one move each (last first); None if stuck.
+        Idle objects are left out: their moves count apart."""
         c = self.c
-        remaining = []
-        goals = 0
-        for obj, location in enumerate(positions):
-            goal = c.goal[obj]
-            if goal >= 0 and goal != location and c.grasps_of[obj]:
-                remaining.append(obj)
-                goals |= 1 << goal
-        block, grasps_of, goal_of = c.block, c.grasps_of, c.goal
-        peeled: list[int] = []
-        while remaining:
-            kept = []
-            for obj in remaining:
-                target = goal_of[obj]
-                others = goals & ~(1 << target)  # not idle ones: their moves count apart
-                if any(not block[target][g] & others for g in grasps_of[obj]):
-                    goals &= ~(1 << target)
-                    peeled.append(obj)
-                else:
-                    kept.append(obj)
-            if len(kept) == len(remaining):
-                return None
-            remaining = kept
-        return peeled
+        away = [
+            obj
+            for obj, location in enumerate(positions)
+            if c.goal[obj] >= 0 and c.goal[obj] != location and c.grasps_of[obj]
+        ]
+        peeled, stuck = c.peel(away)
+        return None if stuck else peeled
 
 
 def _disjoint_cycles(edges: dict[int, list[int]]) -> int:

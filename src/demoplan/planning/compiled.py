@@ -90,6 +90,32 @@ class Compiled:
                     changed = True
         return stuck
 
+    def peel(self, objects: list[int], fixed: int = 0) -> tuple[list[int], list[int]]:
+        """Peel off, one at a time, objects of ``objects`` that could be put down
+        at their goals last: with a grasp there clear of the goals of those
+        still left and of the places ``fixed`` (objects that stay). Returns
+        the objects peeled, in order (the last put down first), and those left
+        — every grasp of each blocked by the others' goals or ``fixed``."""
+        goals = fixed
+        for obj in objects:
+            goals |= 1 << self.goal[obj]
+        peeled: list[int] = []
+        remaining = objects
+        while remaining:
+            kept = []
+            for obj in remaining:
+                target = self.goal[obj]
+                others = goals & ~(1 << target)
+                if any(not self.block[target][g] & others for g in self.grasps_of[obj]):
+                    goals &= ~(1 << target)
+                    peeled.append(obj)
+                else:
+                    kept.append(obj)
+            if len(kept) == len(remaining):
+                break
+            remaining = kept
+        return peeled, remaining
+
     def never_placed(self) -> int:
         """Mask of the goal objects that no plan can ever move.
 
@@ -105,22 +131,7 @@ class Compiled:
         have to move and then be last or find the last one blocked. Objects
         without a grasp never peel off (they cannot move either way).
         """
-        remaining = [obj for obj, goal in enumerate(self.goal) if goal >= 0]
-        goals = 0
-        for obj in remaining:
-            goals |= 1 << self.goal[obj]
-        while remaining:
-            kept = []
-            for obj in remaining:
-                target = self.goal[obj]
-                others = goals & ~(1 << target)
-                if any(not self.block[target][g] & others for g in self.grasps_of[obj]):
-                    goals &= ~(1 << target)
-                else:
-                    kept.append(obj)
-            if len(kept) == len(remaining):
-                break
-            remaining = kept
+        _, remaining = self.peel([obj for obj, goal in enumerate(self.goal) if goal >= 0])
         stuck = 0
         for obj in remaining:
             stuck |= 1 << obj

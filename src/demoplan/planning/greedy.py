@@ -224,31 +224,13 @@ def _all_can_come_home(c: Compiled, positions: tuple[int, ...]) -> bool:
     object that could go last — a grasp at its goal clear of every other goal
     place still to be filled and of every object already home."""
     home = 0
-    remaining = []
+    away = []
     for obj, location in enumerate(positions):
-        goal = c.goal[obj]
-        if goal < 0:
-            continue
-        if goal == location:
+        if c.goal[obj] == location:
             home |= 1 << location
-        else:
-            remaining.append(obj)
-    goals = home
-    for obj in remaining:
-        goals |= 1 << c.goal[obj]
-    while remaining:
-        kept = []
-        for obj in remaining:
-            target = c.goal[obj]
-            others = goals & ~(1 << target)
-            if any(not c.block[target][g] & others for g in c.grasps_of[obj]):
-                goals &= ~(1 << target)
-            else:
-                kept.append(obj)
-        if len(kept) == len(remaining):
-            return False
-        remaining = kept
-    return True
+        elif c.goal[obj] >= 0:
+            away.append(obj)
+    return not c.peel(away, fixed=home)[1]
 
 
 def valid_moves(c: Compiled, moves: list[Move]) -> bool:
