@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections import deque
 
 from demoplan.planning.budget import Budget, Clock, SearchOutcome
-from demoplan.planning.compiled import compile_problem
+from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Problem
 
 __all__ = ["breadth_first_search"]
@@ -17,9 +17,12 @@ __all__ = ["breadth_first_search"]
 _BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
 
 
-def breadth_first_search(problem: Problem, budget: Budget = Budget()) -> SearchOutcome:
-    """The paper's breadth-first search over primitive GRASP / PUT_DOWN actions."""
-    c = compile_problem(problem)
+def breadth_first_search(
+    problem: Problem, budget: Budget = Budget(), compiled: Compiled | None = None
+) -> SearchOutcome:
+    """The paper's breadth-first search over primitive GRASP / PUT_DOWN actions
+    (``compiled``: the problem already compiled)."""
+    c = compiled or compile_problem(problem)
     clock = Clock(budget)
     n_locations = len(c.locations)
     revisits = 0  # objects with two subgoals at one place

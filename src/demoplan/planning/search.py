@@ -25,7 +25,7 @@ from demoplan.planning.astar import AStar, astar_search
 from demoplan.planning.bfs import breadth_first_search
 from demoplan.planning.bounds import DEAD_END, LowerBounds
 from demoplan.planning.budget import Budget, Clock, SearchOutcome
-from demoplan.planning.compiled import compile_problem
+from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.greedy import greedy_moves
 from demoplan.planning.problem import Action, Plan, Problem
 
@@ -46,9 +46,10 @@ SEARCHES: dict[str, Callable[[Problem, Budget], SearchOutcome]] = {
 }
 
 
-def explain_unsolvable(problem: Problem) -> list[str]:
-    """Reasons, where they can be shown without search, why no plan exists."""
-    c = compile_problem(problem)
+def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> list[str]:
+    """Reasons, where they can be shown without search, why no plan exists
+    (``compiled``: the problem already compiled)."""
+    c = compiled or compile_problem(problem)
     reasons = []
     finals: dict[int, int] = {}
     for obj, goal in enumerate(c.goal):
@@ -132,17 +133,17 @@ def solve(
     """
     if search not in SEARCHES:
         raise ValueError(f"unknown search {search!r}; one of {sorted(SEARCHES)}")
-    reasons = explain_unsolvable(problem)
+    c = compile_problem(problem)  # once, for every phase
+    reasons = explain_unsolvable(problem, c)
     if reasons:
         raise NoPlanError("no plan: " + "; ".join(reasons))
     started = time.perf_counter()
     if search == "bfs":
-        outcome = breadth_first_search(problem, budget)
+        outcome = breadth_first_search(problem, budget, c)
         seconds = time.perf_counter() - started
         if outcome.actions is not None:
             return _plan(outcome.actions, outcome, seconds, search)
         _raise_without_plan(outcome, seconds, None)
-    c = compile_problem(problem)
     bounds = LowerBounds(c)
     clock = Clock(budget)
     root = 2 * bounds.estimate(c.start, c.start_reached)
