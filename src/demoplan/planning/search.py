@@ -150,7 +150,7 @@ def solve(
     incumbent: tuple[Action, ...] | None = None
     greedy_seconds = 0.0
     if root < 2 * DEAD_END:
-        moves = greedy_moves(c, bounds, Clock(_greedy_budget(clock)))
+        moves = greedy_moves(c, bounds, Clock(_greedy_budget(clock)))  # never less than 0.2 s
         # Shorter plans by weighted A* on the same guidance, while they come fast.
         for weight in _WEIGHTS:
             if moves is None or 2 * len(moves) <= root:
@@ -209,9 +209,16 @@ _IMPROVE_SHARE = 0.2
 """Each pass may take this share of the time left."""
 
 
+_MIN_GREEDY_SECONDS = 0.2
+"""The first plan's search gets at least this long, even where the budget is
+spent before it starts (a slow start-up on a loaded machine): an easy problem
+must not go without a plan for want of a few milliseconds."""
+
+
 def _greedy_budget(clock: Clock, share: float = 1.0) -> Budget:
     left = clock.remaining()
-    return Budget(timeout=share * (_GREEDY_SECONDS if left is None else left), max_states=None)
+    seconds = share * (_GREEDY_SECONDS if left is None else left)
+    return Budget(timeout=max(seconds, _MIN_GREEDY_SECONDS if share == 1.0 else 0.0))
 
 
 def _raise_without_plan(

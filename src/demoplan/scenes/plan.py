@@ -12,6 +12,7 @@ candidate gets an equal part of what is left when its turn comes.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -168,10 +169,11 @@ def plan_in_scene(
     outcomes = []
     for index, problem in enumerate(problems):
         left = clock.remaining()
-        share = None if left is None else left / (len(problems) - index)
-        outcomes.append(
-            solve_candidate(problem, replace(budget, timeout=share, deadline=None), search)
-        )
+        share = budget
+        if left is not None:  # an equal part of what is left (the timeout stays as named)
+            deadline = time.monotonic() + left / (len(problems) - index)
+            share = replace(budget, deadline=deadline)
+        outcomes.append(solve_candidate(problem, share, search))
     solved = [c for c in outcomes if c.plan is not None]
     if not solved:
         reasons = "; ".join(f"goal {c.goal}: {c.reason}" for c in outcomes)
