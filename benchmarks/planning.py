@@ -31,9 +31,15 @@ by, in one run:
    (cross-checked with its ``Plan length:`` log line), expanded states come from
    ``N Nodes expanded``.
 
-A planner that cannot be found is skipped with a message. Every run is a
-subprocess timed with ``time.perf_counter`` around start-to-exit (interpreter
-start-up, parsing, translation and search all count); a run over the timeout
+Every plan is checked with :func:`demoplan.planning.strips.validate` (PDDL
+plan lines mapped back with :func:`demoplan.planning.pddl.action_from_pddl`):
+an invalid plan is reported as ``invalid`` in red — a bug of that planner or
+of the export. demoplan runs as ``python -m demoplan`` with the source folder
+of the demoplan this script imported first on ``PYTHONPATH``, so the
+subprocesses run the same code. A planner that cannot be found is skipped
+with a message. Every run is a subprocess timed with ``time.perf_counter``
+around start-to-exit (interpreter start-up, parsing, translation and search all
+count); a run over the timeout
 (``--timeout``, 60 s; 10 s with ``--quick``) is killed with its whole process
 group and reported as ``timeout``. Once a competitor times out at some N, it is
 not run at larger N of the same family (``--no-skip`` runs it anyway); demoplan
@@ -97,9 +103,11 @@ from rich.table import Table
 
 import demoplan
 from common import Target, print_targets
+from demoplan.errors import DemoplanError
 from demoplan.planning.generate import blocks_problem, table_problem
-from demoplan.planning.pddl import save_pddl
-from demoplan.planning.problem import Problem
+from demoplan.planning.pddl import action_from_pddl, save_pddl
+from demoplan.planning.problem import Action, Problem
+from demoplan.planning.strips import validate
 from demoplan.planning.xml import save_problem
 
 FULL_SIZES = (3, 5, 7, 10, 15, 20, 30)
@@ -137,6 +145,8 @@ class Case:
     problem: Path
     locations: int
     pddl_actions: int
+    generated: Problem  # what was written, to validate every plan against
+    seed: int = 0
 
 
 def make_case(family: str, n: int, seed: int, root: Path) -> Case:
@@ -148,7 +158,8 @@ def make_case(family: str, n: int, seed: int, root: Path) -> Case:
     # Grounded: pyperplan reads the same files, and it reads no quantifiers.
     domain, pddl_problem = save_pddl(problem, folder / "pddl", grounded=True)
     actions = domain.read_text(encoding="utf-8").count("(:action ")
-    return Case(family, n, xml, domain, pddl_problem, len(problem.locations), actions)
+    locations = len(problem.locations)
+    return Case(family, n, xml, domain, pddl_problem, locations, actions, problem, seed)
 
 
 # --------------------------------------------------------------------------- processes
@@ -169,6 +180,11 @@ def _child_environment() -> dict[str, str]:
     env = dict(os.environ)
     for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[variable] = "1"
+    # ``python -m demoplan`` runs the demoplan this script imported (a checkout's
+    # src/ on PYTHONPATH wins over an editable install of another one).
+    source = str(Path(demoplan.__file__).resolve().parent.parent)
+    paths = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p and p != source]
+    env["PYTHONPATH"] = os.pathsep.join([source, *paths])
     return env
 
 
@@ -238,6 +254,10 @@ class Attempt:
     extra: dict[str, float] = field(default_factory=dict)
     cpu_seconds: float | None = None
     planner_seconds: float | None = None  # the planner's own time, without start-up
+    actions: tuple[Action, ...] | None = None  # the plan, when the planner gives it as ours
+    plan_lines: list[str] = field(default_factory=list)  # the plan, as PDDL action lines
+    optimal: bool | None = None  # demoplan: proved shortest
+    bound: int | None = None  # demoplan: proven lower bound on the plan length
 
 
 class Planner:
@@ -255,6 +275,7 @@ class Planner:
         attempt.cpu_seconds = done.cpu_seconds
         if attempt.status == "ok":
             attempt.planner_seconds = self.planner_time(attempt.extra)
+            check_plan(case.generated, attempt)
         return attempt
 
     def planner_time(self, extra: dict[str, float]) -> float | None:
@@ -268,17 +289,38 @@ class Planner:
         raise NotImplementedError
 
 
+def check_plan(problem: Problem, attempt: Attempt) -> None:
+    """Validate the plan of an ``ok`` attempt against ``problem``; an invalid one
+    (a bug of that planner, or of the PDDL export) turns the attempt ``invalid``."""
+    try:
+        actions = attempt.actions
+        if actions is None:
+            actions = tuple(action_from_pddl(problem, line) for line in attempt.plan_lines)
+        validate(problem, actions)
+    except (DemoplanError, ValueError) as exc:
+        attempt.status = "invalid"
+        attempt.detail = f"INVALID PLAN ({attempt.length} actions): {exc}"
+
+
+def _plan_lines(path: Path) -> list[str]:
+    lines = path.read_text(encoding="utf-8").splitlines()
+    return [line.strip() for line in lines if line.strip() and not line.startswith(";")]
+
+
 class DemoplanPlanner(Planner):
-    def __init__(self, command: list[str], search: str) -> None:
+    """``demoplan solve --json``, with ``--search`` when ``search`` is given."""
+
+    def __init__(self, command: list[str], search: str | None) -> None:
         self.base_command = command
         self.search = search
-        self.key = DEMOPLAN if search == "astar" else BFS
-        self.label = "demoplan A*" if search == "astar" else "demoplan BFS"
-        self.optimal = True
-        self.max_objects = None if search == "astar" else BFS_MAX_OBJECTS
+        self.key = BFS if search == "bfs" else DEMOPLAN
+        self.label = {"astar": "demoplan A*", "bfs": "demoplan BFS"}.get(search or "", "demoplan")
+        self.optimal = search is not None  # by default an answer may be unproved
+        self.max_objects = BFS_MAX_OBJECTS if search == "bfs" else None
 
     def command(self, case: Case, workdir: Path) -> list[str]:
-        return [*self.base_command, "solve", str(case.xml), "--json", "--search", self.search]
+        search = [] if self.search is None else ["--search", self.search]
+        return [*self.base_command, "solve", str(case.xml), "--json", *search]
 
     def planner_time(self, extra: dict[str, float]) -> float | None:
         # Reading and checking the XML plus the search, both timed inside the process.
@@ -291,6 +333,8 @@ class DemoplanPlanner(Planner):
             return Attempt("timeout", done.seconds)
         if done.returncode == 3:
             return Attempt("no plan", done.seconds, detail=_last_line(done.stderr))
+        if done.returncode == 4:  # a limit stopped the search before any plan
+            return Attempt("limit", done.seconds, detail=_last_line(done.stderr))
         if done.returncode != 0:
             return Attempt(
                 "error", done.seconds, detail=f"exit {done.returncode}: {_last_line(done.stderr)}"
@@ -298,6 +342,7 @@ class DemoplanPlanner(Planner):
         try:
             data = json.loads(done.stdout)
             length, actions = int(data["length"]), data["actions"]
+            plan = tuple(Action(*map(str, action)) for action in actions)
         except (ValueError, KeyError, TypeError) as exc:
             return Attempt("error", done.seconds, detail=f"unreadable JSON ({exc})")
         if len(actions) != length:
@@ -310,7 +355,16 @@ class DemoplanPlanner(Planner):
         extra = {"search_s": float(data["seconds"]), "generated": float(data["generated"])}
         if "read_seconds" in data:
             extra["read_s"] = float(data["read_seconds"])
-        return Attempt("ok", done.seconds, length, int(data["expanded"]), extra=extra)
+        return Attempt(
+            "ok",
+            done.seconds,
+            length,
+            int(data["expanded"]),
+            extra=extra,
+            actions=plan,
+            optimal=bool(data.get("optimal", True)),
+            bound=int(data["bound"]) if "bound" in data else None,
+        )
 
 
 class FastDownwardPlanner(Planner):
@@ -374,8 +428,8 @@ class FastDownwardPlanner(Planner):
                 detail=f"exit {done.returncode}: {_last_line(done.stderr or done.stdout)}",
                 extra=extra,
             )
-        lines = plan_file.read_text(encoding="utf-8").splitlines()
-        length = sum(1 for line in lines if line.strip() and not line.startswith(";"))
+        lines = _plan_lines(plan_file)
+        length = len(lines)
         printed = _last_int(r"Plan length: (\d+) step", out)
         expanded = _last_int(r"\] Expanded (\d+) state\(s\)\.", out)
         if printed is not None and printed != length:
@@ -387,7 +441,7 @@ class FastDownwardPlanner(Planner):
                 detail=f"sas_plan has {length} actions, stdout says {printed}",
                 extra=extra,
             )
-        return Attempt("ok", done.seconds, length, expanded, extra=extra)
+        return Attempt("ok", done.seconds, length, expanded, extra=extra, plan_lines=lines)
 
 
 class PyperplanPlanner(Planner):
@@ -416,8 +470,8 @@ class PyperplanPlanner(Planner):
             )
         if not solution.exists():
             return Attempt("no plan", done.seconds, expanded=expanded, detail=_last_line(out))
-        lines = solution.read_text(encoding="utf-8").splitlines()
-        length = sum(1 for line in lines if line.strip())
+        lines = _plan_lines(solution)
+        length = len(lines)
         printed = _last_int(r"Plan length: (\d+)", out)
         if printed is not None and printed != length:
             return Attempt(
@@ -427,13 +481,11 @@ class PyperplanPlanner(Planner):
                 expanded,
                 detail=f".soln has {length} actions, the log says {printed}",
             )
-        return Attempt("ok", done.seconds, length, expanded)
+        return Attempt("ok", done.seconds, length, expanded, plan_lines=lines)
 
 
 def demoplan_command() -> list[str]:
-    script = Path(sys.executable).parent / "demoplan"
-    if script.exists():
-        return [str(script)]
+    # Run with the child environment, whose PYTHONPATH leads to the demoplan imported here.
     return [sys.executable, "-m", "demoplan"]
 
 
@@ -494,7 +546,7 @@ class Result:
     planner: str
     family: str
     n: int
-    status: str  # "ok", "timeout", "no plan", "error", "skipped", "not run"
+    status: str  # "ok", "timeout", "no plan", "limit", "error", "invalid", "skipped", "not run"
     times_s: list[float] = field(default_factory=list)
     length: int | None = None
     expanded: int | None = None
@@ -505,6 +557,9 @@ class Result:
     # and the raw numbers it came from, run by run.
     planner_s: list[float] = field(default_factory=list)
     run_extras: list[dict[str, float]] = field(default_factory=list)
+    seed: int = 0
+    optimal: bool | None = None  # demoplan: the plan is proved shortest
+    bound: int | None = None  # demoplan: its proven lower bound
 
     @property
     def median_s(self) -> float | None:
@@ -535,15 +590,19 @@ def measure(planner: Planner, case: Case, root: Path, timeout: float) -> Result:
         shutil.rmtree(workdir, ignore_errors=True)
         if runs[0].status != "ok" or runs[0].seconds >= CHEAP_SECONDS:
             break
-    first = runs[0]
+    # An invalid plan in any run is the result: it must not hide behind a valid repeat.
+    first = next((r for r in runs if r.status == "invalid"), runs[0])
     timed = [r for r in runs if r.status == first.status] if first.status == "ok" else [first]
     notes = [first.detail] if first.detail else []
     mismatched = [r.length for r in runs if r.status == "ok" and r.length != first.length]
     if mismatched:
         notes.append(f"plan length changed between repeats: {first.length} then {mismatched}")
-    for index, run in enumerate(runs[1:], start=2):
+    for index, run in enumerate(runs, start=1):
         if run.status != first.status:  # not timed; said, so that it is not lost
             notes.append(f"run {index} of {len(runs)}: {run.status} {run.detail}".strip())
+    unproved = [r.length for r in timed if r.optimal is False]
+    if first.optimal and unproved:
+        notes.append(f"not proved shortest in a repeat ({len(unproved)} of {len(timed)} runs)")
     detail = "; ".join(notes)
     return Result(
         planner.key,
@@ -558,6 +617,10 @@ def measure(planner: Planner, case: Case, root: Path, timeout: float) -> Result:
         [r.cpu_seconds for r in timed if r.cpu_seconds is not None],
         [r.planner_seconds for r in timed if r.planner_seconds is not None],
         [r.extra for r in timed],
+        case.seed,
+        # proved only when every timed run proved it
+        None if first.optimal is None else all(r.optimal for r in timed),
+        first.bound,
     )
 
 
@@ -631,7 +694,11 @@ def verdicts(
     out = []
     for family, n in cases:
         ours = results[(DEMOPLAN, family, n)]
-        problems: list[str] = []
+        problems = [
+            f"BUG: {labels[p.key]} plan invalid ({r.detail})"
+            for p in planners
+            if (r := results[(p.key, family, n)]).status == "invalid"
+        ]
         comparisons = 0
         finished = []
         for planner in planners:
@@ -881,7 +948,7 @@ def family_table(
             time_text = _time_text(result)
             if result.status == "timeout":
                 time_text = f"[red]{time_text}[/red]"
-            elif result.status in ("error", "no plan"):
+            elif result.status in ("error", "no plan", "limit", "invalid"):
                 time_text = f"[bold red]{time_text}[/bold red]"
             row += [
                 time_text,
@@ -1138,7 +1205,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if r.detail and r.status not in ("not run", "skipped", "timeout"):
             console.print(
                 f"Note: {labels[r.planner]} on {r.family} N = {r.n} ({r.status}): {r.detail}",
-                style="yellow",
+                style="bold red" if r.status in ("invalid", "error") else "yellow",
                 highlight=False,
                 markup=False,
             )
