@@ -462,6 +462,11 @@ class FastDownwardPlanner(Planner):
             extra["search_total_s"] = total
         if done.returncode is None:
             phase = "search" if "translate exit code" in out else "translating"
+            # The last f layer an optimal search reached is a lower bound it proved.
+            layer = _last_int(r"\] f = (\d+), \d+ evaluated", out)
+            if layer is not None:
+                extra["f_reached"] = float(layer)
+                phase += f", having reached f = {layer}"
             return Attempt("timeout", done.seconds, detail=f"killed while {phase}", extra=extra)
         plan_file = workdir / "sas_plan"
         if done.returncode != 0 or not plan_file.exists():
@@ -1336,7 +1341,11 @@ def hard_targets(
     times = [r.median_s for r in ours.values() if r.median_s is not None]
     detail = f"{total - len(late)}/{total} answered within {limit:g} s"
     if times:
-        detail += f"; whole-process median {statistics.median(times):.2f} s, max {max(times):.2f} s"
+        within = sum(1 for r in ours.values() if _answered(r, SLOW_LIMIT))
+        detail += (
+            f" ({within}/{total} within {SLOW_LIMIT:g} s); whole-process median "
+            f"{statistics.median(times):.2f} s, max {max(times):.2f} s"
+        )
     if late:
         detail += "; not: " + listed(late)
     out.append(
