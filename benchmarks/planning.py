@@ -31,9 +31,15 @@ by, in one run:
    (cross-checked with its ``Plan length:`` log line), expanded states come from
    ``N Nodes expanded``.
 
-A planner that cannot be found is skipped with a message. Every run is a
-subprocess timed with ``time.perf_counter`` around start-to-exit (interpreter
-start-up, parsing, translation and search all count); a run over the timeout
+Every plan is checked with :func:`demoplan.planning.strips.validate` (PDDL
+plan lines mapped back with :func:`demoplan.planning.pddl.action_from_pddl`):
+an invalid plan is reported as ``invalid`` in red — a bug of that planner or
+of the export. demoplan runs as ``python -m demoplan`` with the source folder
+of the demoplan this script imported first on ``PYTHONPATH``, so the
+subprocesses run the same code. A planner that cannot be found is skipped
+with a message. Every run is a subprocess timed with ``time.perf_counter``
+around start-to-exit (interpreter start-up, parsing, translation and search all
+count); a run over the timeout
 (``--timeout``, 60 s; 10 s with ``--quick``) is killed with its whole process
 group and reported as ``timeout``. Once a competitor times out at some N, it is
 not run at larger N of the same family (``--no-skip`` runs it anyway); demoplan
@@ -60,13 +66,52 @@ objects in under 2 s, and at least 10× faster than Fast Downward's optimal
 configuration wherever that finishes — judged twice, on whole-process wall time
 and on planner time.
 
+Hard families (issue 13)
+------------------------
+``parking`` and ``parking-dense``
+(:func:`demoplan.planning.generate.parking_problem` with the settings of
+:data:`~demoplan.planning.generate.PARKING_FAMILIES`): goal places on a dense
+grid whose neighbours block each other's grasps, objects starting on one
+another's goal places in swaps and 3-cycles (forced parking), distractors
+without a goal standing on goal places, objects starting on the grid between
+them. N = 10, 15, 20, 30 objects with a goal (distractors come on top), seeds
+0–7 (``--quick``: N = 10, 20, seeds 0–3; ``--seeds``, ``--sizes`` choose).
+Each problem is written as XML and as **lifted** PDDL (``save_pddl``'s
+default: Fast Downward translates it much faster than the grounded export;
+pyperplan is not run on these, it is far too slow). Per problem, each timed as
+above (whole process; runs under 1 s repeated, median of 3):
+
+1. **demoplan** with its defaults: ``python -m demoplan solve PROBLEM.xml --json``
+   — anytime, answering within 2 s counted from its own start; the JSON says
+   whether the plan is proved shortest (``optimal``) and its lower ``bound``;
+2. Fast Downward ``--alias lama-first`` and ``--alias seq-opt-lmcut``, with
+   the timeout (``--timeout``; 60 s, 20 s with ``--quick``). Either is no
+   longer run at larger N of a family once it timed out on half or more of
+   the seeds at some N (``--no-skip`` runs it anyway).
+
+A table per family, one row per N: demoplan's coverage within 2 s whole
+process; lama-first's coverage within 2 s and within its timeout; the share
+demoplan proved shortest within 2 s; median / max of demoplan's length minus
+lama's; demoplan's length against FD seq-opt-lmcut's where it finished; the
+median whole-process times and FD-opt / demoplan. Then the bugs — an invalid
+plan, a demoplan crash or "no plan" where a plan was found, a demoplan run
+over 2.5 s whole process, a plan shorter than FD-optimal's, "proved shortest"
+with another length than FD-optimal's, a lower bound above a valid plan's
+length — and issue 13's targets: (a) every problem answered within 2 s whole
+process, (b) never longer than lama-first's plan, (c) at least 90 % proved
+optimal within 2 s, (d) at least 10× faster than FD seq-opt-lmcut wherever it
+finishes, in whole-process time, and with demoplan's plan proved shortest (an
+unproved answer does not count as beating an optimal planner).
+
 How to run
 ----------
 From the repository root, with demoplan installed (``pip install -e ".[dev]"``)::
 
-    python benchmarks/planning.py                  # full run (~5 min on 2 busy cores)
-    python benchmarks/planning.py --quick          # N <= 7, 10 s timeout
-    python benchmarks/planning.py --out results.json
+    python benchmarks/planning.py                  # everything (~35 min on 2 busy cores)
+    python benchmarks/planning.py --quick          # table/blocks N <= 7; parking N = 10, 20
+    python benchmarks/planning.py --families table,blocks        # the easy families, ~5 min
+    python benchmarks/planning.py --families parking,parking-dense --sizes 10,15
+    python benchmarks/planning.py --out results.json --keep /tmp/problems
     python benchmarks/planning.py --fd /path/to/fast-downward.py --timeout 30
 """
 
@@ -97,9 +142,16 @@ from rich.table import Table
 
 import demoplan
 from common import Target, print_targets
-from demoplan.planning.generate import blocks_problem, table_problem
-from demoplan.planning.pddl import save_pddl
-from demoplan.planning.problem import Problem
+from demoplan.errors import DemoplanError
+from demoplan.planning.generate import (
+    PARKING_FAMILIES,
+    blocks_problem,
+    parking_problem,
+    table_problem,
+)
+from demoplan.planning.pddl import action_from_pddl, save_pddl
+from demoplan.planning.problem import Action, Problem
+from demoplan.planning.strips import validate
 from demoplan.planning.xml import save_problem
 
 FULL_SIZES = (3, 5, 7, 10, 15, 20, 30)
@@ -137,6 +189,8 @@ class Case:
     problem: Path
     locations: int
     pddl_actions: int
+    generated: Problem  # what was written, to validate every plan against
+    seed: int = 0
 
 
 def make_case(family: str, n: int, seed: int, root: Path) -> Case:
@@ -148,7 +202,8 @@ def make_case(family: str, n: int, seed: int, root: Path) -> Case:
     # Grounded: pyperplan reads the same files, and it reads no quantifiers.
     domain, pddl_problem = save_pddl(problem, folder / "pddl", grounded=True)
     actions = domain.read_text(encoding="utf-8").count("(:action ")
-    return Case(family, n, xml, domain, pddl_problem, len(problem.locations), actions)
+    locations = len(problem.locations)
+    return Case(family, n, xml, domain, pddl_problem, locations, actions, problem, seed)
 
 
 # --------------------------------------------------------------------------- processes
@@ -169,6 +224,11 @@ def _child_environment() -> dict[str, str]:
     env = dict(os.environ)
     for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[variable] = "1"
+    # ``python -m demoplan`` runs the demoplan this script imported (a checkout's
+    # src/ on PYTHONPATH wins over an editable install of another one).
+    source = str(Path(demoplan.__file__).resolve().parent.parent)
+    paths = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p and p != source]
+    env["PYTHONPATH"] = os.pathsep.join([source, *paths])
     return env
 
 
@@ -238,6 +298,10 @@ class Attempt:
     extra: dict[str, float] = field(default_factory=dict)
     cpu_seconds: float | None = None
     planner_seconds: float | None = None  # the planner's own time, without start-up
+    actions: tuple[Action, ...] | None = None  # the plan, when the planner gives it as ours
+    plan_lines: list[str] = field(default_factory=list)  # the plan, as PDDL action lines
+    optimal: bool | None = None  # demoplan: proved shortest
+    bound: int | None = None  # demoplan: proven lower bound on the plan length
 
 
 class Planner:
@@ -255,6 +319,7 @@ class Planner:
         attempt.cpu_seconds = done.cpu_seconds
         if attempt.status == "ok":
             attempt.planner_seconds = self.planner_time(attempt.extra)
+            check_plan(case.generated, attempt)
         return attempt
 
     def planner_time(self, extra: dict[str, float]) -> float | None:
@@ -268,17 +333,38 @@ class Planner:
         raise NotImplementedError
 
 
+def check_plan(problem: Problem, attempt: Attempt) -> None:
+    """Validate the plan of an ``ok`` attempt against ``problem``; an invalid one
+    (a bug of that planner, or of the PDDL export) turns the attempt ``invalid``."""
+    try:
+        actions = attempt.actions
+        if actions is None:
+            actions = tuple(action_from_pddl(problem, line) for line in attempt.plan_lines)
+        validate(problem, actions)
+    except (DemoplanError, ValueError) as exc:
+        attempt.status = "invalid"
+        attempt.detail = f"INVALID PLAN ({attempt.length} actions): {exc}"
+
+
+def _plan_lines(path: Path) -> list[str]:
+    lines = path.read_text(encoding="utf-8").splitlines()
+    return [line.strip() for line in lines if line.strip() and not line.startswith(";")]
+
+
 class DemoplanPlanner(Planner):
-    def __init__(self, command: list[str], search: str) -> None:
+    """``demoplan solve --json``, with ``--search`` when ``search`` is given."""
+
+    def __init__(self, command: list[str], search: str | None) -> None:
         self.base_command = command
         self.search = search
-        self.key = DEMOPLAN if search == "astar" else BFS
-        self.label = "demoplan A*" if search == "astar" else "demoplan BFS"
-        self.optimal = True
-        self.max_objects = None if search == "astar" else BFS_MAX_OBJECTS
+        self.key = BFS if search == "bfs" else DEMOPLAN
+        self.label = {"astar": "demoplan A*", "bfs": "demoplan BFS"}.get(search or "", "demoplan")
+        self.optimal = search is not None  # by default an answer may be unproved
+        self.max_objects = BFS_MAX_OBJECTS if search == "bfs" else None
 
     def command(self, case: Case, workdir: Path) -> list[str]:
-        return [*self.base_command, "solve", str(case.xml), "--json", "--search", self.search]
+        search = [] if self.search is None else ["--search", self.search]
+        return [*self.base_command, "solve", str(case.xml), "--json", *search]
 
     def planner_time(self, extra: dict[str, float]) -> float | None:
         # Reading and checking the XML plus the search, both timed inside the process.
@@ -291,6 +377,8 @@ class DemoplanPlanner(Planner):
             return Attempt("timeout", done.seconds)
         if done.returncode == 3:
             return Attempt("no plan", done.seconds, detail=_last_line(done.stderr))
+        if done.returncode == 4:  # a limit stopped the search before any plan
+            return Attempt("limit", done.seconds, detail=_last_line(done.stderr))
         if done.returncode != 0:
             return Attempt(
                 "error", done.seconds, detail=f"exit {done.returncode}: {_last_line(done.stderr)}"
@@ -298,6 +386,7 @@ class DemoplanPlanner(Planner):
         try:
             data = json.loads(done.stdout)
             length, actions = int(data["length"]), data["actions"]
+            plan = tuple(Action(*map(str, action)) for action in actions)
         except (ValueError, KeyError, TypeError) as exc:
             return Attempt("error", done.seconds, detail=f"unreadable JSON ({exc})")
         if len(actions) != length:
@@ -310,7 +399,16 @@ class DemoplanPlanner(Planner):
         extra = {"search_s": float(data["seconds"]), "generated": float(data["generated"])}
         if "read_seconds" in data:
             extra["read_s"] = float(data["read_seconds"])
-        return Attempt("ok", done.seconds, length, int(data["expanded"]), extra=extra)
+        return Attempt(
+            "ok",
+            done.seconds,
+            length,
+            int(data["expanded"]),
+            extra=extra,
+            actions=plan,
+            optimal=bool(data.get("optimal", True)),
+            bound=int(data["bound"]) if "bound" in data else None,
+        )
 
 
 class FastDownwardPlanner(Planner):
@@ -364,6 +462,11 @@ class FastDownwardPlanner(Planner):
             extra["search_total_s"] = total
         if done.returncode is None:
             phase = "search" if "translate exit code" in out else "translating"
+            # The last f layer an optimal search reached is a lower bound it proved.
+            layer = _last_int(r"\] f = (\d+), \d+ evaluated", out)
+            if layer is not None:
+                extra["f_reached"] = float(layer)
+                phase += f", having reached f = {layer}"
             return Attempt("timeout", done.seconds, detail=f"killed while {phase}", extra=extra)
         plan_file = workdir / "sas_plan"
         if done.returncode != 0 or not plan_file.exists():
@@ -374,8 +477,8 @@ class FastDownwardPlanner(Planner):
                 detail=f"exit {done.returncode}: {_last_line(done.stderr or done.stdout)}",
                 extra=extra,
             )
-        lines = plan_file.read_text(encoding="utf-8").splitlines()
-        length = sum(1 for line in lines if line.strip() and not line.startswith(";"))
+        lines = _plan_lines(plan_file)
+        length = len(lines)
         printed = _last_int(r"Plan length: (\d+) step", out)
         expanded = _last_int(r"\] Expanded (\d+) state\(s\)\.", out)
         if printed is not None and printed != length:
@@ -387,7 +490,7 @@ class FastDownwardPlanner(Planner):
                 detail=f"sas_plan has {length} actions, stdout says {printed}",
                 extra=extra,
             )
-        return Attempt("ok", done.seconds, length, expanded, extra=extra)
+        return Attempt("ok", done.seconds, length, expanded, extra=extra, plan_lines=lines)
 
 
 class PyperplanPlanner(Planner):
@@ -416,8 +519,8 @@ class PyperplanPlanner(Planner):
             )
         if not solution.exists():
             return Attempt("no plan", done.seconds, expanded=expanded, detail=_last_line(out))
-        lines = solution.read_text(encoding="utf-8").splitlines()
-        length = sum(1 for line in lines if line.strip())
+        lines = _plan_lines(solution)
+        length = len(lines)
         printed = _last_int(r"Plan length: (\d+)", out)
         if printed is not None and printed != length:
             return Attempt(
@@ -427,13 +530,11 @@ class PyperplanPlanner(Planner):
                 expanded,
                 detail=f".soln has {length} actions, the log says {printed}",
             )
-        return Attempt("ok", done.seconds, length, expanded)
+        return Attempt("ok", done.seconds, length, expanded, plan_lines=lines)
 
 
 def demoplan_command() -> list[str]:
-    script = Path(sys.executable).parent / "demoplan"
-    if script.exists():
-        return [str(script)]
+    # Run with the child environment, whose PYTHONPATH leads to the demoplan imported here.
     return [sys.executable, "-m", "demoplan"]
 
 
@@ -494,7 +595,7 @@ class Result:
     planner: str
     family: str
     n: int
-    status: str  # "ok", "timeout", "no plan", "error", "skipped", "not run"
+    status: str  # "ok", "timeout", "no plan", "limit", "error", "invalid", "skipped", "not run"
     times_s: list[float] = field(default_factory=list)
     length: int | None = None
     expanded: int | None = None
@@ -505,6 +606,9 @@ class Result:
     # and the raw numbers it came from, run by run.
     planner_s: list[float] = field(default_factory=list)
     run_extras: list[dict[str, float]] = field(default_factory=list)
+    seed: int = 0
+    optimal: bool | None = None  # demoplan: the plan is proved shortest
+    bound: int | None = None  # demoplan: its proven lower bound
 
     @property
     def median_s(self) -> float | None:
@@ -535,15 +639,19 @@ def measure(planner: Planner, case: Case, root: Path, timeout: float) -> Result:
         shutil.rmtree(workdir, ignore_errors=True)
         if runs[0].status != "ok" or runs[0].seconds >= CHEAP_SECONDS:
             break
-    first = runs[0]
+    # An invalid plan in any run is the result: it must not hide behind a valid repeat.
+    first = next((r for r in runs if r.status == "invalid"), runs[0])
     timed = [r for r in runs if r.status == first.status] if first.status == "ok" else [first]
     notes = [first.detail] if first.detail else []
     mismatched = [r.length for r in runs if r.status == "ok" and r.length != first.length]
     if mismatched:
         notes.append(f"plan length changed between repeats: {first.length} then {mismatched}")
-    for index, run in enumerate(runs[1:], start=2):
+    for index, run in enumerate(runs, start=1):
         if run.status != first.status:  # not timed; said, so that it is not lost
             notes.append(f"run {index} of {len(runs)}: {run.status} {run.detail}".strip())
+    unproved = [r.length for r in timed if r.optimal is False]
+    if first.optimal and unproved:
+        notes.append(f"not proved shortest in a repeat ({len(unproved)} of {len(timed)} runs)")
     detail = "; ".join(notes)
     return Result(
         planner.key,
@@ -558,6 +666,10 @@ def measure(planner: Planner, case: Case, root: Path, timeout: float) -> Result:
         [r.cpu_seconds for r in timed if r.cpu_seconds is not None],
         [r.planner_seconds for r in timed if r.planner_seconds is not None],
         [r.extra for r in timed],
+        case.seed,
+        # proved only when every timed run proved it
+        None if first.optimal is None else all(r.optimal for r in timed),
+        first.bound,
     )
 
 
@@ -631,7 +743,11 @@ def verdicts(
     out = []
     for family, n in cases:
         ours = results[(DEMOPLAN, family, n)]
-        problems: list[str] = []
+        problems = [
+            f"BUG: {labels[p.key]} plan invalid ({r.detail})"
+            for p in planners
+            if (r := results[(p.key, family, n)]).status == "invalid"
+        ]
         comparisons = 0
         finished = []
         for planner in planners:
@@ -881,7 +997,7 @@ def family_table(
             time_text = _time_text(result)
             if result.status == "timeout":
                 time_text = f"[red]{time_text}[/red]"
-            elif result.status in ("error", "no plan"):
+            elif result.status in ("error", "no plan", "limit", "invalid"):
                 time_text = f"[bold red]{time_text}[/bold red]"
             row += [
                 time_text,
@@ -970,6 +1086,478 @@ def verdict_table(checks: Sequence[Verdict]) -> Table:
     return table
 
 
+# --------------------------------------------------------------------------- hard families
+
+HARD_FAMILIES = tuple(PARKING_FAMILIES)  # "parking", "parking-dense"
+HARD_TITLES = {
+    "parking": "Parking (forced parking: swaps and 3-cycles, distractors on goal places, "
+    "grasp collisions between neighbours)",
+    "parking-dense": "Parking, dense (more cycles, distractors and blocking neighbours)",
+}
+HARD_FULL_SIZES = (10, 15, 20, 30)
+HARD_QUICK_SIZES = (10, 20)
+HARD_FULL_SEEDS = tuple(range(8))
+HARD_QUICK_SEEDS = tuple(range(4))
+HARD_TIMEOUT, HARD_QUICK_TIMEOUT = 60.0, 20.0
+ANSWER_LIMIT = 2.0  # s, whole process: demoplan's default budget and the targets' limit
+SLOW_LIMIT = 2.5  # s, whole process: a demoplan run slower than this is reported as a bug
+TARGET_PROVED = 0.9  # share of the problems proved shortest within ANSWER_LIMIT
+
+HardKey = tuple[str, str, int, int]  # planner, family, N, seed
+
+
+def make_hard_case(family: str, n: int, seed: int, root: Path) -> Case:
+    """A parking problem of ``family``, as XML and as *lifted* PDDL (Fast Downward
+    translates the lifted export much faster than the grounded one)."""
+    problem = parking_problem(n, seed, **PARKING_FAMILIES[family])
+    folder = root / f"{family}-{n}-seed{seed}"
+    folder.mkdir(parents=True, exist_ok=True)
+    xml = folder / "problem.xml"
+    save_problem(problem, xml)
+    domain, pddl_problem = save_pddl(problem, folder / "pddl")
+    schemas = domain.read_text(encoding="utf-8").count("(:action ")
+    locations = len(problem.locations)
+    return Case(family, n, xml, domain, pddl_problem, locations, schemas, problem, seed)
+
+
+def hard_planners(base: Sequence[Planner]) -> list[Planner]:
+    """demoplan with its defaults (anytime, 2 s from the process start), and Fast
+    Downward's lama-first and seq-opt-lmcut from ``base`` where they were found."""
+    fast_downward = [p for p in base if p.key in (FD_LAMA, FD_OPT)]
+    return [DemoplanPlanner(demoplan_command(), None), *fast_downward]
+
+
+def run_hard(
+    planners: Sequence[Planner],
+    cases: dict[tuple[str, int, int], Case],
+    root: Path,
+    timeout: float,
+    *,
+    skip_after_timeout: bool,
+    console: Console,
+) -> dict[HardKey, Result]:
+    """Every planner on every case. A competitor that timed out on half or more of
+    the seeds at some N is not run at larger N of that family (``skip_after_timeout``)."""
+    results: dict[HardKey, Result] = {}
+    seeds_at: dict[tuple[str, int], int] = {}
+    for family, n, _ in cases:
+        seeds_at[(family, n)] = seeds_at.get((family, n), 0) + 1
+    timed_out: dict[tuple[str, str, int], int] = {}  # (planner, family, N) -> timeouts
+    with console.status("") as status:
+        for (family, n, seed), case in sorted(cases.items()):
+            for planner in planners:
+                key = (planner.key, family, n, seed)
+                given_up = [
+                    m
+                    for (p, f, m), count in timed_out.items()
+                    if p == planner.key and f == family and m < n and 2 * count >= seeds_at[(f, m)]
+                ]
+                if skip_after_timeout and planner.key != DEMOPLAN and given_up:
+                    results[key] = Result(
+                        planner.key,
+                        family,
+                        n,
+                        "skipped",
+                        detail=f"timed out on half or more of the seeds at N = {min(given_up)}",
+                        seed=seed,
+                    )
+                    continue
+                status.update(f"{planner.label} on {family} N = {n} seed {seed} …")
+                result = measure(planner, case, root, timeout)
+                results[key] = result
+                if result.status == "timeout":
+                    timed_out[(planner.key, family, n)] = (
+                        timed_out.get((planner.key, family, n), 0) + 1
+                    )
+                line = (
+                    f"  {family:13} N={n:<3} seed {seed}  {planner.label:9} "
+                    f"{_time_text(result):>10}"
+                )
+                if result.ok:
+                    line += f"  length {result.length}"
+                    if result.optimal is not None:
+                        line += " proved" if result.optimal else f" (bound {result.bound})"
+                if result.detail:
+                    line += f"  ({result.detail})"
+                style = "bold red" if result.status in ("invalid", "error") else "dim"
+                console.print(line, highlight=False, markup=False, style=style)
+    return results
+
+
+@dataclass(slots=True)
+class HardRow:
+    """One family and N of the hard benchmark, over its seeds."""
+
+    family: str
+    n: int
+    problems: int
+    answered: int  # demoplan: a plan within ANSWER_LIMIT, whole process (median of runs)
+    proved: int  # ... and proved shortest
+    lama_run: int
+    lama_fast: int  # lama-first: a plan within ANSWER_LIMIT
+    lama_finished: int  # lama-first: a plan within the timeout
+    opt_run: int
+    opt_finished: int  # seq-opt-lmcut: a plan within the timeout
+    minus_lama: list[int] = field(default_factory=list)  # demoplan − lama length, both planned
+    minus_opt: list[int] = field(default_factory=list)  # demoplan − FD-optimal length
+    ratios: list[float] = field(default_factory=list)  # FD-opt / demoplan, whole process
+    demoplan_s: list[float] = field(default_factory=list)  # every exit, median of its runs
+    lama_s: list[float] = field(default_factory=list)  # finished runs
+    opt_s: list[float] = field(default_factory=list)  # finished runs
+
+
+def _ran(result: Result | None) -> bool:
+    return result is not None and result.status not in ("skipped", "not run")
+
+
+def _answered(result: Result, limit: float) -> bool:
+    return result.ok and result.median_s is not None and result.median_s <= limit
+
+
+def hard_rows(
+    results: dict[HardKey, Result],
+    cases: dict[tuple[str, int, int], Case],
+    limit: float,
+) -> list[HardRow]:
+    rows: dict[tuple[str, int], HardRow] = {}
+    for family, n, seed in sorted(cases):
+        row = rows.setdefault((family, n), HardRow(family, n, 0, 0, 0, 0, 0, 0, 0, 0))
+        row.problems += 1
+        ours = results[(DEMOPLAN, family, n, seed)]
+        lama = results.get((FD_LAMA, family, n, seed))
+        opt = results.get((FD_OPT, family, n, seed))
+        if _answered(ours, limit):
+            row.answered += 1
+            row.proved += bool(ours.optimal)
+        if ours.median_s is not None and ours.status != "timeout":
+            row.demoplan_s.append(ours.median_s)
+        if lama is not None and _ran(lama):
+            row.lama_run += 1
+            if lama.ok and lama.median_s is not None:
+                row.lama_finished += 1
+                row.lama_fast += lama.median_s <= limit
+                row.lama_s.append(lama.median_s)
+                if ours.ok and ours.length is not None and lama.length is not None:
+                    row.minus_lama.append(ours.length - lama.length)
+        if opt is not None and _ran(opt):
+            row.opt_run += 1
+            if opt.ok and opt.median_s is not None:
+                row.opt_finished += 1
+                row.opt_s.append(opt.median_s)
+                if ours.ok and ours.length is not None and opt.length is not None:
+                    row.minus_opt.append(ours.length - opt.length)
+                    if ours.median_s:
+                        row.ratios.append(opt.median_s / ours.median_s)
+    return list(rows.values())
+
+
+def hard_bugs(
+    results: dict[HardKey, Result],
+    cases: dict[tuple[str, int, int], Case],
+    planners: Sequence[Planner],
+) -> list[str]:
+    """Everything that can only be a bug: invalid plans, demoplan crashing, saying
+    there is no plan where another planner found one, answering later than
+    SLOW_LIMIT, a plan shorter than Fast Downward's optimal one, a wrong claim
+    of optimality or a lower bound above a valid plan's length."""
+    labels = {p.key: p.label for p in planners}
+    bugs = []
+    for family, n, seed in sorted(cases):
+        where = f"{family} N={n} seed {seed}"
+        mine = {p.key: results[(p.key, family, n, seed)] for p in planners}
+        for key, result in mine.items():
+            if result.status == "invalid":
+                bugs.append(f"{where}: {labels[key]} {result.detail}")
+        ours = mine[DEMOPLAN]
+        if ours.status == "error":
+            bugs.append(f"{where}: demoplan crashed ({ours.detail})")
+        others = {k: r for k, r in mine.items() if k != DEMOPLAN and r.ok and r.length is not None}
+        if ours.status == "no plan" and others:
+            found = ", ".join(f"{labels[k]} {r.length}" for k, r in others.items())
+            bugs.append(f"{where}: demoplan says no plan exists; {found} actions found")
+        slow = [t for t in ours.times_s if t > SLOW_LIMIT]
+        if slow:
+            bugs.append(
+                f"{where}: demoplan took {max(slow):.2f} s whole process "
+                f"(over {SLOW_LIMIT:g} s; default budget {ANSWER_LIMIT:g} s)"
+            )
+        if not ours.ok or ours.length is None:
+            continue
+        if ours.bound is not None and ours.bound > ours.length:
+            bugs.append(f"{where}: demoplan bound {ours.bound} > its own length {ours.length}")
+        if ours.optimal and ours.bound is not None and ours.bound != ours.length:
+            bugs.append(
+                f"{where}: demoplan says proved shortest but bound {ours.bound} "
+                f"!= length {ours.length}"
+            )
+        for key, theirs in others.items():
+            assert theirs.length is not None
+            if ours.bound is not None and ours.bound > theirs.length:
+                bugs.append(
+                    f"{where}: demoplan's lower bound {ours.bound} > {labels[key]}'s valid "
+                    f"plan of {theirs.length}"
+                )
+            if key == FD_OPT:
+                if ours.length < theirs.length:
+                    bugs.append(
+                        f"{where}: demoplan {ours.length} shorter than FD-optimal {theirs.length}"
+                    )
+                elif ours.optimal and ours.length != theirs.length:
+                    bugs.append(
+                        f"{where}: demoplan claims {ours.length} is shortest, "
+                        f"FD-optimal found {theirs.length}"
+                    )
+        lama, opt = others.get(FD_LAMA), others.get(FD_OPT)
+        if lama and opt and (lama.length or 0) < (opt.length or 0):
+            bugs.append(f"{where}: lama-first {lama.length} shorter than FD-optimal {opt.length}")
+    return bugs
+
+
+def hard_targets(
+    results: dict[HardKey, Result],
+    cases: dict[tuple[str, int, int], Case],
+    bugs: Sequence[str],
+    limit: float,
+    fd_found: bool,
+) -> list[Target]:
+    """Issue 13's targets for the hard families, and a line for the bugs."""
+    keys = sorted(cases)
+    total = len(keys)
+    out = []
+
+    def where(family: str, n: int, seed: int) -> str:
+        return f"{family} N={n} seed {seed}"
+
+    def listed(items: Sequence[str], most: int = 8) -> str:
+        shown = ", ".join(items[:most])
+        return shown + (f", and {len(items) - most} more" if len(items) > most else "")
+
+    ours = {k: results[(DEMOPLAN, *k)] for k in keys}
+    late = [
+        f"{where(*k)} ({r.median_s:.2f} s)" if r.ok and r.median_s else f"{where(*k)} ({r.status})"
+        for k, r in ours.items()
+        if not _answered(r, limit)
+    ]
+    times = [r.median_s for r in ours.values() if r.median_s is not None]
+    detail = f"{total - len(late)}/{total} answered within {limit:g} s"
+    if times:
+        within = sum(1 for r in ours.values() if _answered(r, SLOW_LIMIT))
+        detail += (
+            f" ({within}/{total} within {SLOW_LIMIT:g} s); whole-process median "
+            f"{statistics.median(times):.2f} s, max {max(times):.2f} s"
+        )
+    if late:
+        detail += "; not: " + listed(late)
+    out.append(
+        Target(
+            f"(a) every problem answered within {limit:g} s whole process",
+            not late if total else None,
+            detail,
+        )
+    )
+
+    longer, compared, missing = [], 0, []
+    for k, r in ours.items():
+        lama = results.get((FD_LAMA, *k))
+        if lama is None or not lama.ok or lama.length is None:
+            continue
+        if not r.ok or r.length is None:
+            missing.append(f"{where(*k)} (lama {lama.length}, demoplan {r.status})")
+            continue
+        compared += 1
+        if r.length > lama.length:
+            longer.append(f"{where(*k)} (+{r.length - lama.length}: {r.length} vs {lama.length})")
+    detail = f"{compared} comparisons with lama-first's plan, longer on {len(longer)}"
+    if longer:
+        detail += ": " + listed(longer)
+    if missing:
+        detail += f"; lama planned, demoplan did not: {listed(missing)}"
+    out.append(
+        Target(
+            "(b) plan never longer than lama-first's",
+            (not longer and not missing) if compared or missing else None,
+            detail,
+        )
+    )
+
+    proved = sum(1 for r in ours.values() if _answered(r, limit) and r.optimal)
+    share = proved / total if total else 0.0
+    out.append(
+        Target(
+            f"(c) at least {TARGET_PROVED:.0%} proved optimal within {limit:g} s",
+            share >= TARGET_PROVED if total else None,
+            f"{proved}/{total} = {share:.0%}",
+        )
+    )
+
+    ratios, short, finished = [], [], 0
+    for k, r in ours.items():
+        fd = results.get((FD_OPT, *k))
+        if fd is None or not fd.ok or fd.median_s is None:
+            continue
+        finished += 1
+        if not _answered(r, limit) or not r.optimal or not r.median_s:
+            short.append(f"{where(*k)} (FD-opt {fd.median_s:.1f} s; demoplan did not prove it)")
+            continue
+        ratio = fd.median_s / r.median_s
+        ratios.append(ratio)
+        if ratio < TARGET_SPEEDUP:
+            short.append(f"{where(*k)} ({ratio:.1f}{TIMES})")
+    if not fd_found:
+        detail = "Fast Downward not found"
+    elif not finished:
+        detail = "FD seq-opt-lmcut finished nowhere within its timeout (or was skipped)"
+    else:
+        detail = f"FD seq-opt-lmcut finished on {finished}/{total}"
+        if ratios:
+            detail += (
+                f"; FD-opt / demoplan (proved) from {min(ratios):.1f}{TIMES} to "
+                f"{max(ratios):.1f}{TIMES}, median {statistics.median(ratios):.1f}{TIMES}"
+            )
+        if short:
+            detail += f"; short of {TARGET_SPEEDUP:g}{TIMES} or unproved: " + listed(short)
+    out.append(
+        Target(
+            f"(d) at least {TARGET_SPEEDUP:g}{TIMES} faster than FD A*+LM-cut wherever it "
+            "finishes (whole process; demoplan's plan proved optimal)",
+            (not short) if finished else None,
+            detail,
+        )
+    )
+    out.append(
+        Target(
+            "no planner bug (invalid plan, crash, demoplan shorter than FD-optimal, wrong "
+            f"optimality claim or bound, run over {SLOW_LIMIT:g} s)",
+            not bugs if total else None,
+            f"{len(bugs)} found" + (": " + "; ".join(bugs) if bugs else ""),
+        )
+    )
+    return out
+
+
+def _share(count: int, total: int) -> str:
+    return f"{count}/{total}" if total else "-"
+
+
+def _signed(value: float) -> str:
+    return f"+{value:g}" if value > 0 else f"{value:g}"
+
+
+def _median_max(values: Sequence[int]) -> str:
+    if not values:
+        return "-"
+    text = f"{_signed(statistics.median(values))} / {_signed(max(values))}"
+    return f"[red]{text}[/red]" if max(values) > 0 else text
+
+
+def _versus_optimal(row: HardRow) -> str:
+    if not row.minus_opt:
+        return "-"
+    equal = sum(1 for d in row.minus_opt if d == 0)
+    text = f"{equal}/{len(row.minus_opt)} equal"
+    if any(d > 0 for d in row.minus_opt):
+        text += f", max +{max(row.minus_opt)}"
+    if any(d < 0 for d in row.minus_opt):
+        text = f"[bold red]BUG: shorter ({min(row.minus_opt)}); {text}[/bold red]"
+    return text
+
+
+def _median_time(values: Sequence[float], finished: int, run: int) -> str:
+    text = format_seconds(statistics.median(values)) if values else "-"
+    return text if finished == run else f"{text} ({finished}/{run})"
+
+
+def hard_table(family: str, rows: Sequence[HardRow], limit: float, timeout: float) -> Table:
+    table = Table(
+        title=f"{HARD_TITLES[family]}: demoplan (default, {limit:g} s budget) vs Fast Downward "
+        "lama-first and seq-opt-lmcut, per N over its seeds",
+        title_justify="left",
+    )
+    for name in (
+        "N",
+        "seeds",
+        f"demoplan\nplan ≤ {limit:g} s",
+        f"proved\nopt. ≤ {limit:g} s",
+        f"lama\nplan ≤ {limit:g} s",
+        f"lama\nplan ≤ {timeout:g} s",
+        "demoplan − lama\nlength med / max",
+        "demoplan vs\nFD-opt length",
+        "demoplan time\nmedian (max)",
+        "lama time\nmedian",
+        "FD-opt time\nmedian",
+        "FD-opt /\ndemoplan",
+    ):
+        table.add_column(name, justify="right")
+    for row in rows:
+        if row.family != family:
+            continue
+        demoplan_time = "-"
+        if row.demoplan_s:
+            demoplan_time = (
+                f"{format_seconds(statistics.median(row.demoplan_s))} "
+                f"({format_seconds(max(row.demoplan_s))})"
+            )
+        ratio = "-"
+        if row.ratios:
+            ratio = f"{statistics.median(row.ratios):.1f}{TIMES}"
+            if len(row.ratios) > 1:
+                ratio += f" ({min(row.ratios):.1f}–{max(row.ratios):.1f})"
+        table.add_row(
+            str(row.n),
+            str(row.problems),
+            _share(row.answered, row.problems),
+            _share(row.proved, row.problems),
+            _share(row.lama_fast, row.lama_run),
+            _share(row.lama_finished, row.lama_run),
+            _median_max(row.minus_lama),
+            _versus_optimal(row),
+            demoplan_time,
+            _median_time(row.lama_s, row.lama_finished, row.lama_run),
+            "skipped"
+            if not row.opt_run
+            else _median_time(row.opt_s, row.opt_finished, row.opt_run),
+            ratio,
+        )
+    return table
+
+
+def hard_document(
+    cases: dict[tuple[str, int, int], Case],
+    results: dict[HardKey, Result],
+    rows: Sequence[HardRow],
+    bugs: Sequence[str],
+    goals: Sequence[Target],
+    settings: dict[str, Any],
+) -> dict[str, Any]:
+    """The hard benchmark's part of the JSON file."""
+    return {
+        **settings,
+        "cases": [
+            {
+                "family": c.family,
+                "n": c.n,
+                "seed": c.seed,
+                "objects": len(c.generated.objects),
+                "goal_objects": len(c.generated.goal),
+                "locations": c.locations,
+            }
+            for c in cases.values()
+        ],
+        "results": [
+            {
+                **asdict(r),
+                "median_s": r.median_s,
+                "median_cpu_s": r.median_cpu_s,
+                "median_planner_s": r.median_planner_s,
+            }
+            for r in results.values()
+        ],
+        "rows": [asdict(row) for row in rows],
+        "bugs": list(bugs),
+        "targets": [asdict(t) for t in goals],
+    }
+
+
 # --------------------------------------------------------------------------- main
 
 
@@ -983,28 +1571,59 @@ def _sizes(text: str) -> tuple[int, ...]:
     return sizes
 
 
+def _seeds(text: str) -> tuple[int, ...]:
+    """``0-7`` or ``0,3,5`` (or both: ``0-3,8``)."""
+    seeds: set[int] = set()
+    try:
+        for part in (p.strip() for p in text.split(",")):
+            if not part:
+                continue
+            first, _, last = part.partition("-")
+            seeds.update(range(int(first), int(last or first) + 1))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: seeds like 0-7 or 0,3,5 expected") from None
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: non-negative seeds expected")
+    return tuple(sorted(seeds))
+
+
+ALL_FAMILIES = (*FAMILIES, *HARD_FAMILIES)
+
+
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Benchmark demoplan solve against Fast Downward and pyperplan "
-        "(whole-process wall time, plan length, expanded states).",
+        "(whole-process wall time, plan length, expanded states), and on the hard "
+        "parking families against Fast Downward alone (coverage within 2 s, proofs).",
     )
     parser.add_argument(
         "--quick",
         action="store_true",
-        help=f"N <= 7 (demoplan also at N = 20, 30) with a {QUICK_TIMEOUT:g} s timeout",
+        help=f"N <= 7 (demoplan also at N = 20, 30) with a {QUICK_TIMEOUT:g} s timeout; "
+        f"hard families at N = 10, 20, seeds 0-3, {HARD_QUICK_TIMEOUT:g} s timeout",
     )
     parser.add_argument("--out", type=Path, help="also save the results to this JSON file")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the generated problems")
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the table and blocks problems (default 0)"
+    )
+    parser.add_argument(
+        "--seeds",
+        type=_seeds,
+        help="seeds of the hard families, e.g. 0-7 (default 0-7; 0-3 with --quick)",
+    )
     parser.add_argument(
         "--timeout",
         type=float,
-        help=f"seconds per run (default {DEFAULT_TIMEOUT:g}; {QUICK_TIMEOUT:g} with --quick)",
+        help=f"seconds per run (default {DEFAULT_TIMEOUT:g}, {QUICK_TIMEOUT:g} with --quick; "
+        f"hard families {HARD_TIMEOUT:g}, {HARD_QUICK_TIMEOUT:g} with --quick)",
     )
-    parser.add_argument("--sizes", type=_sizes, help="comma-separated N, e.g. 3,5,10")
+    parser.add_argument(
+        "--sizes", type=_sizes, help="comma-separated N for every family chosen, e.g. 3,5,10"
+    )
     parser.add_argument(
         "--families",
-        default=",".join(FAMILIES),
-        help=f"comma-separated problem families ({', '.join(FAMILIES)})",
+        default=",".join(ALL_FAMILIES),
+        help=f"comma-separated problem families ({', '.join(ALL_FAMILIES)}; default all)",
     )
     parser.add_argument("--fd", type=Path, help="path of Fast Downward's fast-downward.py")
     parser.add_argument(
@@ -1020,35 +1639,32 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         action="store_true",
         help="run a competitor at every N even after it timed out at a smaller one",
     )
+    parser.add_argument(
+        "--keep",
+        type=Path,
+        metavar="DIR",
+        help="write the generated problems (XML, PDDL) into DIR and keep them",
+    )
     args = parser.parse_args(argv)
     families = [f.strip() for f in args.families.split(",") if f.strip()]
-    unknown = [f for f in families if f not in FAMILIES]
+    unknown = [f for f in families if f not in ALL_FAMILIES]
     if unknown or not families:
-        parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(FAMILIES)}")
-    args.families = families
-    if args.timeout is None:
-        args.timeout = QUICK_TIMEOUT if args.quick else DEFAULT_TIMEOUT
-    if args.timeout <= 0:
+        parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(ALL_FAMILIES)}")
+    args.families = [f for f in families if f in FAMILIES]
+    args.hard_families = [f for f in families if f in HARD_FAMILIES]
+    if args.timeout is not None and args.timeout <= 0:
         parser.error("--timeout must be positive")
+    args.hard_timeout = args.timeout or (HARD_QUICK_TIMEOUT if args.quick else HARD_TIMEOUT)
+    args.timeout = args.timeout or (QUICK_TIMEOUT if args.quick else DEFAULT_TIMEOUT)
+    args.hard_sizes = args.sizes or (HARD_QUICK_SIZES if args.quick else HARD_FULL_SIZES)
+    args.seeds = args.seeds or (HARD_QUICK_SEEDS if args.quick else HARD_FULL_SEEDS)
     return args
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    args = parse_args(argv)
-    console = Console(width=None if sys.stdout.isatty() else 200)
-    started = time.perf_counter()
-    sizes: tuple[int, ...] = args.sizes or (QUICK_SIZES if args.quick else FULL_SIZES)
-    demoplan_only_sizes = (
-        tuple(n for n in QUICK_DEMOPLAN_ONLY if n not in sizes)
-        if args.quick and not args.sizes
-        else ()
-    )
-    all_sizes = tuple(sorted({*sizes, *demoplan_only_sizes}))
-
-    planners: list[Planner] = [
-        DemoplanPlanner(demoplan_command(), "astar"),
-        DemoplanPlanner(demoplan_command(), "bfs"),
-    ]
+def competitors(args: argparse.Namespace) -> tuple[list[Planner], list[str]]:
+    """Fast Downward (seq-opt-lmcut, lama-first) and pyperplan where found, and
+    what was found or skipped."""
+    planners: list[Planner] = []
     messages = []
     fast_downward = find_fast_downward(args.fd)
     if isinstance(fast_downward, str):
@@ -1069,26 +1685,57 @@ def main(argv: Sequence[str] | None = None) -> int:
             + (f"; --translate-options {' '.join(options)}" if options else "")
             + ")"
         )
-    pyperplan = find_pyperplan(args.pyperplan)
-    if isinstance(pyperplan, str):
-        messages.append(f"Skipping pyperplan: {pyperplan}")
-    else:
-        script, heuristic = pyperplan
-        planners.append(PyperplanPlanner(script, heuristic))
-        version = _distribution_version(script, "pyperplan")
-        messages.append(f"pyperplan {version}: {script} (-s astar -H {heuristic})")
+    if args.families:  # pyperplan only runs on the table and blocks families
+        pyperplan = find_pyperplan(args.pyperplan)
+        if isinstance(pyperplan, str):
+            messages.append(f"Skipping pyperplan: {pyperplan}")
+        else:
+            script, heuristic = pyperplan
+            planners.append(PyperplanPlanner(script, heuristic))
+            version = _distribution_version(script, "pyperplan")
+            messages.append(f"pyperplan {version}: {script} (-s astar -H {heuristic})")
+    return planners, messages
 
-    console.print(
-        f"demoplan planning benchmark — {'quick' if args.quick else 'full'} run, "
-        f"N = {', '.join(map(str, sizes))}"
-        + (
-            f" (demoplan also at {', '.join(map(str, demoplan_only_sizes))})"
-            if demoplan_only_sizes
-            else ""
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_args(argv)
+    console = Console(width=None if sys.stdout.isatty() else 200)
+    started = time.perf_counter()
+    sizes: tuple[int, ...] = args.sizes or (QUICK_SIZES if args.quick else FULL_SIZES)
+    demoplan_only_sizes = (
+        tuple(n for n in QUICK_DEMOPLAN_ONLY if n not in sizes)
+        if args.quick and not args.sizes
+        else ()
+    )
+    all_sizes = tuple(sorted({*sizes, *demoplan_only_sizes}))
+
+    others, messages = competitors(args)
+    planners: list[Planner] = [
+        DemoplanPlanner(demoplan_command(), "astar"),
+        DemoplanPlanner(demoplan_command(), "bfs"),
+        *others,
+    ]
+    runs = []
+    if args.families:
+        runs.append(
+            f"families {', '.join(args.families)} at N = {', '.join(map(str, sizes))}"
+            + (
+                f" (demoplan also at {', '.join(map(str, demoplan_only_sizes))})"
+                if demoplan_only_sizes
+                else ""
+            )
+            + f", seed {args.seed}, timeout {args.timeout:g} s per run"
         )
-        + f", families {', '.join(args.families)}, seed {args.seed}, "
-        f"timeout {args.timeout:g} s per run; Python {platform.python_version()}, "
-        f"{platform.machine()}, {os.cpu_count()} CPUs",
+    if args.hard_families:
+        runs.append(
+            f"hard families {', '.join(args.hard_families)} at N = "
+            f"{', '.join(map(str, args.hard_sizes))}, seeds {_seed_text(args.seeds)}, "
+            f"timeout {args.hard_timeout:g} s per run"
+        )
+    console.print(
+        f"demoplan planning benchmark — {'quick' if args.quick else 'full'} run: "
+        + "; ".join(runs)
+        + f"; Python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs",
         highlight=False,
     )
     console.print(
@@ -1099,29 +1746,83 @@ def main(argv: Sequence[str] | None = None) -> int:
     for message in messages:
         console.print(message, highlight=False, style="yellow" if "Skipping" in message else None)
 
-    with tempfile.TemporaryDirectory(prefix="demoplan-planning-bench-") as temporary:
+    document: dict[str, Any] = {
+        "benchmark": "demoplan planning",
+        "run": "quick" if args.quick else "full",
+        "seed": args.seed,
+        "timeout_s": args.timeout,
+        "sizes": list(sizes) if args.families else [],
+        "demoplan_only_sizes": list(demoplan_only_sizes) if args.families else [],
+        "families": args.families,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "planners": [{"key": p.key, "label": p.label, "optimal": p.optimal} for p in planners],
+        "messages": messages,
+        "cases": [],
+        "results": [],
+        "verdicts": [],
+        "targets": [],
+    }
+    keep = contextlib.nullcontext(str(args.keep)) if args.keep is not None else None
+    with keep or tempfile.TemporaryDirectory(prefix="demoplan-planning-bench-") as temporary:
         root = Path(temporary)
-        cases = {
-            (family, n): make_case(family, n, args.seed, root)
-            for family in args.families
-            for n in all_sizes
-        }
-        demoplan_only = {(f, n) for f in args.families for n in demoplan_only_sizes}
-        # Warm-up, untimed: byte-compiled caches, the page cache.
-        run_process(
-            [*demoplan_command(), "solve", str(cases[(args.families[0], all_sizes[0])].xml)],
-            root,
-            args.timeout,
-        )
-        results = run_all(
-            planners,
-            cases,
-            demoplan_only,
-            root,
-            args.timeout,
-            skip_after_timeout=not args.no_skip,
-            console=console,
-        )
+        root.mkdir(parents=True, exist_ok=True)
+        if args.families:
+            document.update(
+                classic_benchmark(
+                    args, planners, sizes, demoplan_only_sizes, all_sizes, root, console
+                )
+            )
+        if args.hard_families:
+            document["hard"] = hard_benchmark(args, planners, root, console)
+    total = time.perf_counter() - started
+    console.print(f"Total benchmark time: {total:.1f} s")
+    document["total_s"] = total
+    if args.out is not None:
+        args.out.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        console.print(f"Results saved to {args.out}")
+    return 0
+
+
+def _seed_text(seeds: Sequence[int]) -> str:
+    if len(seeds) > 2 and list(seeds) == list(range(seeds[0], seeds[-1] + 1)):
+        return f"{seeds[0]}–{seeds[-1]}"
+    return ", ".join(map(str, seeds))
+
+
+def classic_benchmark(
+    args: argparse.Namespace,
+    planners: Sequence[Planner],
+    sizes: tuple[int, ...],
+    demoplan_only_sizes: tuple[int, ...],
+    all_sizes: tuple[int, ...],
+    root: Path,
+    console: Console,
+) -> dict[str, Any]:
+    """The table and blocks families: run, print the tables and targets, and
+    return their part of the JSON file."""
+    cases = {
+        (family, n): make_case(family, n, args.seed, root)
+        for family in args.families
+        for n in all_sizes
+    }
+    demoplan_only = {(f, n) for f in args.families for n in demoplan_only_sizes}
+    # Warm-up, untimed: byte-compiled caches, the page cache.
+    run_process(
+        [*demoplan_command(), "solve", str(cases[(args.families[0], all_sizes[0])].xml)],
+        root,
+        args.timeout,
+    )
+    results = run_all(
+        planners,
+        cases,
+        demoplan_only,
+        root,
+        args.timeout,
+        skip_after_timeout=not args.no_skip,
+        console=console,
+    )
 
     for family in args.families:
         console.print(family_table(family, all_sizes, cases, planners, results, args.seed))
@@ -1138,7 +1839,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if r.detail and r.status not in ("not run", "skipped", "timeout"):
             console.print(
                 f"Note: {labels[r.planner]} on {r.family} N = {r.n} ({r.status}): {r.detail}",
-                style="yellow",
+                style="bold red" if r.status in ("invalid", "error") else "yellow",
                 highlight=False,
                 markup=False,
             )
@@ -1159,48 +1860,88 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     goals = targets(results, planners, args.families, checks, args.timeout)
     print_targets(console, goals)
-    total = time.perf_counter() - started
-    console.print(f"Total benchmark time: {total:.1f} s")
+    return {
+        "cases": [
+            {
+                "family": c.family,
+                "n": c.n,
+                "locations": c.locations,
+                "pddl_actions": c.pddl_actions,
+            }
+            for c in cases.values()
+        ],
+        "results": [
+            {
+                **asdict(r),
+                "median_s": r.median_s,
+                "median_cpu_s": r.median_cpu_s,
+                "median_planner_s": r.median_planner_s,
+            }
+            for r in results.values()
+        ],
+        "verdicts": [asdict(v) for v in checks],
+        "targets": [asdict(t) for t in goals],
+    }
 
-    if args.out is not None:
-        document: dict[str, Any] = {
-            "benchmark": "demoplan planning",
-            "run": "quick" if args.quick else "full",
-            "seed": args.seed,
-            "timeout_s": args.timeout,
-            "sizes": list(sizes),
-            "demoplan_only_sizes": list(demoplan_only_sizes),
-            "families": args.families,
-            "python": platform.python_version(),
-            "machine": platform.machine(),
-            "cpus": os.cpu_count(),
-            "planners": [{"key": p.key, "label": p.label, "optimal": p.optimal} for p in planners],
-            "messages": messages,
-            "cases": [
-                {
-                    "family": c.family,
-                    "n": c.n,
-                    "locations": c.locations,
-                    "pddl_actions": c.pddl_actions,
-                }
-                for c in cases.values()
-            ],
-            "results": [
-                {
-                    **asdict(r),
-                    "median_s": r.median_s,
-                    "median_cpu_s": r.median_cpu_s,
-                    "median_planner_s": r.median_planner_s,
-                }
-                for r in results.values()
-            ],
-            "verdicts": [asdict(v) for v in checks],
-            "targets": [asdict(t) for t in goals],
-            "total_s": total,
-        }
-        args.out.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-        console.print(f"Results saved to {args.out}")
-    return 0
+
+def hard_benchmark(
+    args: argparse.Namespace, base: Sequence[Planner], root: Path, console: Console
+) -> dict[str, Any]:
+    """The hard (parking) families: generate, run, print the tables, bugs and
+    targets, and return their part of the JSON file."""
+    planners = hard_planners(base)
+    cases: dict[tuple[str, int, int], Case] = {}
+    with console.status("Generating the hard problems …"):
+        for family in args.hard_families:
+            for n in args.hard_sizes:
+                for seed in args.seeds:
+                    cases[(family, n, seed)] = make_hard_case(family, n, seed, root)
+    console.print(
+        f"Hard families: {len(cases)} problems written as XML and lifted PDDL; planners: "
+        + ", ".join(p.label for p in planners),
+        highlight=False,
+    )
+    first = next(iter(cases.values()))
+    run_process([*demoplan_command(), "solve", str(first.xml)], root, args.hard_timeout)  # warm-up
+    results = run_hard(
+        planners,
+        cases,
+        root,
+        args.hard_timeout,
+        skip_after_timeout=not args.no_skip,
+        console=console,
+    )
+    rows = hard_rows(results, cases, ANSWER_LIMIT)
+    for family in args.hard_families:
+        console.print(hard_table(family, rows, ANSWER_LIMIT, args.hard_timeout))
+    console.print(
+        f"plan ≤ {ANSWER_LIMIT:g} s: a plan within {ANSWER_LIMIT:g} s whole process (median of "
+        "3 runs when under 1 s, else one run); proved opt.: and demoplan proved it shortest. "
+        f"lama plan ≤ {args.hard_timeout:g} s: within the timeout. demoplan − lama: plan "
+        "lengths where both planned (negative: demoplan shorter). vs FD-opt: demoplan's "
+        "length equal to the optimal one found by FD seq-opt-lmcut, where it finished. "
+        "Times: whole process, medians over the seeds — demoplan's over every run, "
+        "Fast Downward's over the finished ones (finished/run when not all). FD-opt / "
+        "demoplan: whole-process time ratio, median (min–max), where FD-opt finished. "
+        "'skipped': timed out on half or more of the seeds at a smaller N.",
+        highlight=False,
+        style="dim",
+    )
+    bugs = hard_bugs(results, cases, planners)
+    for bug in bugs:
+        console.print(f"BUG: {bug}", style="bold red", highlight=False, markup=False)
+    goals = hard_targets(results, cases, bugs, ANSWER_LIMIT, any(p.key == FD_OPT for p in planners))
+    print_targets(console, goals)
+    settings = {
+        "families": args.hard_families,
+        "sizes": list(args.hard_sizes),
+        "seeds": list(args.seeds),
+        "timeout_s": args.hard_timeout,
+        "answer_limit_s": ANSWER_LIMIT,
+        "pddl": "lifted",
+        "planners": [{"key": p.key, "label": p.label} for p in planners],
+    }
+    return hard_document(cases, results, rows, bugs, goals, settings)
 
 
 if __name__ == "__main__":
