@@ -951,6 +951,16 @@ def speedup_target(
 # --------------------------------------------------------------------------- tables
 
 
+def result_json(result: Result) -> dict[str, Any]:
+    """One run's numbers as the saved JSON holds them, with its medians."""
+    return {
+        **asdict(result),
+        "median_s": result.median_s,
+        "median_cpu_s": result.median_cpu_s,
+        "median_planner_s": result.median_planner_s,
+    }
+
+
 def format_seconds(seconds: float | None) -> str:
     if seconds is None:
         return "-"
@@ -1543,15 +1553,7 @@ def hard_document(
             }
             for c in cases.values()
         ],
-        "results": [
-            {
-                **asdict(r),
-                "median_s": r.median_s,
-                "median_cpu_s": r.median_cpu_s,
-                "median_planner_s": r.median_planner_s,
-            }
-            for r in results.values()
-        ],
+        "results": [result_json(r) for r in results.values()],
         "rows": [asdict(row) for row in rows],
         "bugs": list(bugs),
         "targets": [asdict(t) for t in goals],
@@ -1870,15 +1872,7 @@ def classic_benchmark(
             }
             for c in cases.values()
         ],
-        "results": [
-            {
-                **asdict(r),
-                "median_s": r.median_s,
-                "median_cpu_s": r.median_cpu_s,
-                "median_planner_s": r.median_planner_s,
-            }
-            for r in results.values()
-        ],
+        "results": [result_json(r) for r in results.values()],
         "verdicts": [asdict(v) for v in checks],
         "targets": [asdict(t) for t in goals],
     }
