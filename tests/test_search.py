@@ -224,6 +224,52 @@ def test_astar_plans_are_exactly_as_long_as_bfs_plans(problem: Problem) -> None:
     validate(problem, reference.actions)
 
 
+@given(small_problems())
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_every_bound_stays_below_the_moves_left_along_a_shortest_plan(problem: Problem) -> None:
+    # Admissibility checked state by state: at every state of a shortest plan
+    # (BFS), the heuristic and the feedback-set bound are at most the moves left.
+    shortest = breadth_first_search(problem).actions
+    if shortest is None:
+        return
+    c = compile_problem(problem)
+    bounds = LowerBounds(c)
+    positions, reached = list(c.start), c.start_reached
+    moves_left = len(shortest) // 2
+    for k in range(0, len(shortest) + 1, 2):
+        state = tuple(positions)
+        assert bounds.estimate(state, reached) <= moves_left
+        assert bounds.feedback(state, reached) <= moves_left
+        if k == len(shortest):
+            break
+        put = shortest[k + 1]
+        obj, target = c.objects.index(put.object), c.locations.index(put.location)
+        positions[obj] = target
+        reached = c.put_down(obj, target, reached)
+        moves_left -= 1
+
+
+def test_the_feedback_bound_sees_a_swap_a_three_cycle_and_distractors() -> None:
+    # parking problems are drawn with cycles of two or three objects on each
+    # other's goals and distractors on goal places: each cycle needs one parking
+    # move and each distractor one move, which the bound counts at the start.
+    for seed in range(4):
+        problem = parking_problem(8, seed)
+        c = compile_problem(problem)
+        cycled = sum(
+            1
+            for obj, at in enumerate(c.start)
+            if c.goal[obj] >= 0 and at in c.goal and c.goal.index(at) != obj
+        )
+        distractors = sum(1 for goal in c.goal if goal < 0)
+        bound = LowerBounds(c).feedback(c.start, c.start_reached)
+        needs = sum(1 for obj, at in enumerate(c.start) if 0 <= c.goal[obj] != at)
+        # at least one parking move per cycle (cycles have 2 or 3 members)
+        assert bound >= needs + distractors + -(-cycled // 3)
+        plan = solve(problem, budget=Budget(timeout=5))
+        assert len(plan) >= 2 * bound
+
+
 @pytest.mark.parametrize("n", [3, 5, 7])
 @pytest.mark.parametrize("make", [table_problem, blocks_problem])
 def test_generated_problems_match_bfs(make: object, n: int) -> None:

@@ -12,6 +12,8 @@ rules out, a finish with one straight move per object.
 
 from __future__ import annotations
 
+import itertools
+
 from demoplan.planning.compiled import Compiled
 
 __all__ = ["DEAD_END", "DIRECT_NODES", "MAX_DIRECT_DEPTH", "LowerBounds", "Move", "OutOfNodesError"]
@@ -23,6 +25,8 @@ Move = tuple[int, int, int, int]  # object, source, target, grasp
 DIRECT_NODES = 1000
 """States one search for a straight finish may visit (:meth:`LowerBounds.direct_plan`)."""
 MAX_DIRECT_DEPTH = 500  # objects; that search recurses once per move
+MAX_EXACT_COMPONENT = 12
+"""Largest precedence cycle component whose minimum feedback set is found exactly."""
 
 
 class OutOfNodesError(Exception):
@@ -36,6 +40,8 @@ class LowerBounds:
         self.c = c
         self._move_cache: dict[tuple[int, int, int], bool] = {}
         self._mask_cache: dict[tuple[int, int], int] = {}
+        self._feedback_cache: dict[tuple[tuple[int, int], ...], int] = {}
+        self._hard_cache: dict[tuple[int, int], int] = {}
         # Objects no plan can move (Compiled.never_placed): they are never moved,
         # and a state in which one of them still needs a move is a dead end.
         self.unmovable = c.never_placed()
@@ -44,7 +50,16 @@ class LowerBounds:
         self.no_direct: set[tuple[int, ...]] = set()
 
     def estimate(self, positions: tuple[int, ...], reached: int) -> int:
-        """Admissible lower bound on the moves still needed.
+        """Admissible lower bound on the moves still needed: the larger of the
+        sum over disjoint groups (:meth:`summed`) and the feedback-set bound
+        (:meth:`feedback`), or :data:`DEAD_END`."""
+        summed = self.summed(positions, reached)
+        if summed >= DEAD_END:
+            return summed
+        return max(summed, self.feedback(positions, reached))
+
+    def summed(self, positions: tuple[int, ...], reached: int) -> int:
+        """Admissible lower bound on the moves still needed, summed over groups.
 
         Each move moves one object, so a sum of lower bounds on the moves of
         disjoint groups of objects is a lower bound. A *needy* object needs as
@@ -119,6 +134,117 @@ class LowerBounds:
                 taken |= union
                 movers += 1
         return total + movers
+
+    def feedback(self, positions: tuple[int, ...], reached: int) -> int:
+        """The needs plus the fewest extra moves that a plan's precedences force:
+        a minimum feedback vertex set (the rearrangement bound of Han et al.,
+        "Complexity results and fast methods for optimal tabletop rearrangement
+        with overhand grasps", IJRR 2018, with grasp collisions as precedences).
+
+        Take the objects with no pending subgoal. A *needy* one is away from
+        its goal; an *idle* one is at its goal or has none. In any plan, let F
+        be the needy objects moved more than once and the idle ones moved at
+        all; every other needy object moves once, straight from where it is to
+        its goal, and every other idle one stays. Among those, "Y before X" is
+        forced when Y where it stands, or X where it ends, keeps every grasp
+        of X's move from happening (it stands on X's goal, overlaps it, blocks
+        every grasp at X's source or goal, or stands on X: :meth:`move_mask`),
+        and "Y before X" when Y's goal holds X's goal up. An idle object that
+        keeps every grasp from picking a needy object up, or from putting it
+        down at its goal (:meth:`hard_mask`: true however often that object
+        moves), must be in F: one move if it has no goal, two (away and back)
+        if it stands at its goal. The needy objects
+        outside F obey these precedences, so they contain no cycle: F holds a
+        feedback vertex set of the precedence graph, and a plan makes at least
+        needs + (idle objects forced into F, weighted) + (a minimum feedback
+        vertex set) moves. Each strongly connected component's minimum set is
+        found exactly up to :data:`MAX_EXACT_COMPONENT` objects (and cached),
+        beyond that bounded below by disjoint cycles. Objects with pending
+        subgoals may stand anywhere meanwhile: they add no precedence.
+        """
+        c = self.c
+        occupant: dict[int, int] = {}
+        needy_goal: dict[int, int] = {}
+        needy: list[int] = []
+        occupied = goals = 0
+        for obj, location in enumerate(positions):
+            if any(not reached >> s & 1 for s in c.subgoals_of[obj]):
+                continue
+            occupant[location] = obj
+            occupied |= 1 << location
+            goal = c.goal[obj]
+            if goal >= 0 and goal != location:
+                needy.append(obj)
+                needy_goal[goal] = obj
+                goals |= 1 << goal
+        if not needy:
+            return self.needs(positions, reached)
+        after: dict[int, list[int]] = {obj: [] for obj in needy}  # Y -> the X that wait for Y
+        forced = 0
+        forced_objects = 0
+        for x in needy:
+            hit = self.move_mask(x, positions[x])
+            hard = self.hard_mask(x, positions[x])
+            standing = hit & occupied & ~(1 << positions[x])
+            while standing:
+                low = standing & -standing
+                standing ^= low
+                y = occupant[low.bit_length() - 1]
+                if y in after:
+                    after[y].append(x)
+                elif hard & low and not forced_objects >> y & 1:
+                    forced_objects |= 1 << y
+                    forced += 1 if c.goal[y] < 0 else 2
+            ending = (hit | c.below[c.goal[x]]) & goals & ~(1 << c.goal[x])
+            while ending:
+                low = ending & -ending
+                ending ^= low
+                y = needy_goal[low.bit_length() - 1]
+                if c.below[c.goal[x]] & low:
+                    after[y].append(x)  # y holds x's goal up: y first
+                else:
+                    after[x].append(y)  # y at its goal would keep x from moving: x first
+        return self.needs(positions, reached) + forced + self._feedback_set_size(after)
+
+    def hard_mask(self, obj: int, source: int) -> int:
+        """The places where another object keeps every grasp from picking
+        ``obj`` up at ``source``, or every grasp from putting it down at its
+        goal — whatever moves ``obj`` makes in between."""
+        known = self._hard_cache.get((obj, source))
+        if known is None:
+            c = self.c
+            goal = c.goal[obj]
+            pick = put = -1 if c.grasps_of[obj] else 0
+            for g in c.grasps_of[obj]:
+                pick &= c.block[source][g]
+                put &= c.block[goal][g]
+            known = pick | put | c.above[source] | c.exclusive[goal] | 1 << goal
+            self._hard_cache[obj, source] = known
+        return known
+
+    def _feedback_set_size(self, after: dict[int, list[int]]) -> int:
+        """The size of a minimum feedback vertex set of the digraph ``after``
+        (exact per strongly connected component up to
+        :data:`MAX_EXACT_COMPONENT` nodes, else a lower bound)."""
+        total = 0
+        for component in _strongly_connected(after):
+            if len(component) < 2:
+                continue
+            members = set(component)
+            edges = tuple(
+                sorted((y, x) for y in component for x in after[y] if x in members and x != y)
+            )
+            known = self._feedback_cache.get(edges)
+            if known is None:
+                if len(component) > MAX_EXACT_COMPONENT:
+                    known = _disjoint_cycles(
+                        {y: [x for x in after[y] if x in members] for y in component}
+                    )
+                else:
+                    known = _minimum_feedback_set(component, edges)
+                self._feedback_cache[edges] = known
+            total += known
+        return total
 
     def direct_plan(self, positions: tuple[int, ...], nodes: int) -> list[Move] | None:
         """Moves taking every object away from its goal straight there, one
@@ -509,6 +635,79 @@ def _disjoint_cycles(edges: dict[int, list[int]]) -> int:
             on_path.add(step)
             stacks.append(iter(edges.get(step, ())))
     return count
+
+
+def _strongly_connected(edges: dict[int, list[int]]) -> list[list[int]]:
+    """The strongly connected components of the digraph ``edges`` (node ->
+    successors, every successor a key), by Tarjan's algorithm without recursion."""
+    index: dict[int, int] = {}
+    low: dict[int, int] = {}
+    on_stack: set[int] = set()
+    stack: list[int] = []
+    components: list[list[int]] = []
+    for root in edges:
+        if root in index:
+            continue
+        work = [(root, iter(edges[root]))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, successors = work[-1]
+            step = next(successors, None)
+            if step is not None:
+                if step not in index:
+                    index[step] = low[step] = len(index)
+                    stack.append(step)
+                    on_stack.add(step)
+                    work.append((step, iter(edges[step])))
+                elif step in on_stack:
+                    low[node] = min(low[node], index[step])
+                continue
+            work.pop()
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                components.append(component)
+    return components
+
+
+def _minimum_feedback_set(nodes: list[int], edges: tuple[tuple[int, int], ...]) -> int:
+    """The fewest nodes whose removal leaves the digraph acyclic, by trying
+    sets of growing size (small components only)."""
+    for size in range(1, len(nodes)):
+        for removed in itertools.combinations(nodes, size):
+            if _acyclic(set(nodes).difference(removed), edges):
+                return size
+    return len(nodes) - 1
+
+
+def _acyclic(nodes: set[int], edges: tuple[tuple[int, int], ...]) -> bool:
+    """Whether the digraph on ``nodes`` (edges among them only) has no cycle."""
+    successors: dict[int, list[int]] = {node: [] for node in nodes}
+    waiting = dict.fromkeys(nodes, 0)
+    for a, b in edges:
+        if a in waiting and b in waiting:
+            successors[a].append(b)
+            waiting[b] += 1
+    ready = [node for node, count in waiting.items() if not count]
+    done = 0
+    while ready:
+        node = ready.pop()
+        done += 1
+        for nxt in successors[node]:
+            waiting[nxt] -= 1
+            if not waiting[nxt]:
+                ready.append(nxt)
+    return done == len(nodes)
 
 
 def _indices(mask: int, index_at: dict[int, int]) -> int:
