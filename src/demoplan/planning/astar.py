@@ -9,12 +9,15 @@ one symmetric class.
 from __future__ import annotations
 
 import heapq
+from collections.abc import Iterator
+from typing import NamedTuple
 
 from demoplan.planning.bounds import (
     DEAD_END,
     DIRECT_NODES,
     MAX_DIRECT_DEPTH,
     LowerBounds,
+    Move,
     OutOfNodesError,
 )
 from demoplan.planning.budget import Budget, Clock, SearchOutcome
@@ -22,6 +25,9 @@ from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Problem
 
 __all__ = ["AStar", "astar_search"]
+
+State = tuple[tuple[int, ...], int]  # object locations, reached subgoals (mask)
+Key = tuple[int, ...]  # a state with interchangeable locations merged (AStar.key)
 
 
 def astar_search(
@@ -34,15 +40,26 @@ def astar_search(
     return AStar(c, LowerBounds(c), Clock(budget)).run(None if upper is None else upper // 2)
 
 
-# A queue entry is (f, -g, h where known — else _DEFERRED —, place rank, -counter,
-# key, h of the parent): the least f first; among equal f the deepest; then the
-# least h, children queued with their parent's bound last; then moves from a place
-# another object waits for, then the order that keeps the rest placeable.
-_Entry = tuple[int, int, int, int, int, tuple[int, ...], int]
-_EVALUATED = 0
-_DEFERRED = 1 << 30  # an unproductive child, queued with a lower bound only
-_NOT_WAITED_FOR = 1 << 20  # place rank: the source is no other object's goal
-_NO_PEEL_RANK = 1 << 19  # place rank: the object is not in the peeling order
+class Priority(NamedTuple):
+    """A queue entry; entries compare field by field, the least popped first."""
+
+    f: int  # g + h: the least first (A*)
+    negative_g: int  # among equal f, the deepest first
+    h: int  # then the least bound; DEFERRED for a child queued with its parent's f
+    place_rank: int  # then moves that free a place another object waits for, in peel order
+    negative_order: int  # then the latest queued
+    key: Key
+    parent_h: int  # the parent's bound, for pathmax
+
+
+EVALUATED = 0  # the h of an entry whose bound is known (its f is exact)
+DEFERRED = 1 << 30  # the h of an unproductive child, queued with a lower bound only
+NOT_WAITED_FOR = 1 << 20  # place rank: the source is no other object's goal
+NOT_PEELED = 1 << 19  # place rank: the object is not in the peeling order
+
+
+class _BudgetSpentError(Exception):
+    """A limit of the budget is reached (the message names it)."""
 
 
 class AStar:
@@ -52,13 +69,18 @@ class AStar:
         self.c = c
         self.bounds = bounds
         self.clock = clock
-        n_locations = len(c.locations)
-        self.plain_locations = [loc for loc in range(n_locations) if c.plain >> loc & 1]
-        self.parent: dict[
-            tuple[int, ...], tuple[tuple[int, ...], tuple[int, int, int, int]] | None
-        ] = {}
+        self.plain_locations = [loc for loc in range(len(c.locations)) if c.plain >> loc & 1]
+        self.parent: dict[Key, tuple[Key, Move] | None] = {}
+        self.best_g: dict[Key, int] = {}
+        self.known_h: dict[Key, int] = {}
+        self.concrete: dict[Key, State] = {}
+        self.queue: list[Priority] = []
+        self.queued = 0
+        self.expanded = 0
+        self.bound = 0  # the largest f popped: no plan is shorter (in moves)
+        self.limit_f = 1 << 60
 
-    def key(self, positions: tuple[int, ...], reached: int) -> tuple[int, ...]:
+    def key(self, positions: tuple[int, ...], reached: int) -> Key:
         plain = self.c.plain
         if not plain:
             return (*positions, reached)
@@ -71,209 +93,239 @@ class AStar:
         A child is queued with its parent's f — a lower bound of its own, since
         a move lowers the true distance by at most one (pathmax:
         ``h(child) ≥ h(parent) − 1``) — and its heuristic is computed only when
-        it is popped; if its f then turns out larger it is queued again. Among
-        equal f the deepest node comes first, and among equal depth a move of a
-        needy object onto its goal (or a subgoal) before other moves, so that
-        where the heuristic is exact the search walks straight to a plan whose
-        length equals the root's lower bound — which proves it shortest.
-        Where h is just the objects' needs, a bounded depth-first search for a
-        finish with one straight move per object
-        (:meth:`~demoplan.planning.bounds.LowerBounds.direct_plan`) ends the
-        search at once, or proves h one too low for that state. Nodes whose f
-        reaches ``upper`` are dropped: when none is left, no shorter plan exists.
+        it is popped; if its f then turns out larger it is queued again. The
+        :class:`Priority` walks, where the heuristic is exact, straight to a
+        plan whose length equals the root's lower bound — which proves it
+        shortest. Where h is just the objects' needs, a bounded search for a
+        finish with one straight move per object (:meth:`finish_straight`)
+        ends the search at once, or proves h one too low for that state. Nodes
+        whose f reaches ``upper`` are dropped: when none is left, no shorter
+        plan exists.
         """
-        c, bounds = self.c, self.bounds
-        limit_f = 1 << 60 if upper is None else upper
-        start = (c.start, c.start_reached)
-        start_key = self.key(*start)
-        best_g = {start_key: 0}
-        known_h: dict[tuple[int, ...], int] = {}
-        parent = self.parent
-        parent[start_key] = None
-        concrete = {start_key: start}
-        heap: list[_Entry] = [(0, 0, _EVALUATED, 0, 0, start_key, 0)]
-        counter = 0
-        expanded = 0
-        bound = 0
-        n_locations = len(c.locations)
-        grasps_of, block, above, exclusive, below = (
-            c.grasps_of,
+        if upper is not None:
+            self.limit_f = upper
+        start_key = self.key(self.c.start, self.c.start_reached)
+        self.best_g[start_key] = 0
+        self.parent[start_key] = None
+        self.concrete[start_key] = (self.c.start, self.c.start_reached)
+        self.queue.append(Priority(0, 0, EVALUATED, 0, 0, start_key, 0))
+        try:
+            while self.queue:
+                entry = heapq.heappop(self.queue)
+                if entry.f >= self.limit_f:
+                    break  # every node left needs at least ``upper`` moves
+                h = self.settled_bound(entry)
+                if h is None:
+                    continue
+                self.bound = max(self.bound, entry.f)
+                positions, reached = self.concrete[entry.key]
+                if h == 0 and self.c.is_goal(positions, reached):
+                    return self.outcome(self.unwind(entry.key))
+                finish = self.finish_straight(entry, h)
+                if isinstance(finish, tuple):
+                    return self.outcome(finish)
+                if finish > h:  # shown one too low: queued again if f grows
+                    h = finish
+                    if -entry.negative_g + h > entry.f:
+                        self.requeue(entry, -entry.negative_g + h)
+                        continue
+                self.check_budget(always=True)
+                self.expanded += 1
+                self.expand(entry, h)
+        except _BudgetSpentError as stop:
+            return self.outcome(None, limit=str(stop))
+        return self.outcome(None, exhausted=True)
+
+    def settled_bound(self, entry: Priority) -> int | None:
+        """The popped entry's bound (with pathmax), or None when the entry is
+        stale, a dead end, or queued again with a larger f."""
+        g = self.best_g[entry.key]
+        if -entry.negative_g != g:
+            return None  # stale: the state was reached more cheaply since
+        h = self.known_h.get(entry.key)
+        if h is None:
+            h = self.evaluate(entry.key)
+        if h >= DEAD_END:
+            return None
+        h = max(h, entry.parent_h - 1)  # pathmax
+        if g + h > entry.f:
+            self.requeue(entry, g + h)
+            return None
+        return h
+
+    def evaluate(self, key: Key) -> int:
+        """The admissible bound of a state, computed once (the clock is read
+        every 16 evaluations: bounds take time)."""
+        h = self.known_h[key] = self.bounds.estimate(*self.concrete[key])
+        if not len(self.known_h) & 15:
+            self.check_budget()
+        return h
+
+    def finish_straight(self, entry: Priority, h: int) -> tuple[Action, ...] | int:
+        """Where h is just the needs, a plan that finishes with one straight
+        move per object: found, it has length g + h ≤ f and no plan is shorter
+        than the smallest f in the queue (A*), so it is shortest; shown
+        impossible, h grows by one (see ``LowerBounds.direct_plan``). Returns
+        the plan, or the node's bound."""
+        bounds = self.bounds
+        positions, reached = self.concrete[entry.key]
+        if (
+            reached != self.c.all_subgoals
+            or h != bounds.needs(positions, reached)
+            or positions in bounds.no_direct
+            or len(positions) >= MAX_DIRECT_DEPTH
+        ):
+            return h
+        try:
+            direct = bounds.direct_plan(positions, DIRECT_NODES)
+        except OutOfNodesError:
+            return h
+        if direct is None:
+            self.known_h[entry.key] = h + 1
+            return h + 1
+        actions = list(self.unwind(entry.key))
+        for move in direct:
+            actions += self.c.move_actions(*move)
+        return tuple(actions)
+
+    def expand(self, entry: Priority, h: int) -> None:
+        """Queue the children of a node: productive ones (a move onto the
+        object's goal or a subgoal) evaluated at once, the others deferred.
+
+        A move that reaches no goal and no subgoal leaves every object's need
+        as it was or raises it (an object taken off its goal needs one more),
+        and h is at least the sum of the needs: such a child's f is at least
+        g + 1 + needs — one more than f when h is just the needs.
+        """
+        positions, reached = self.concrete[entry.key]
+        g = -entry.negative_g
+        unproductive_f = max(entry.f, g + 1 + self.bounds.needs(positions, reached))
+        ranks = self.place_ranks(positions)
+        for move, now_reached in self.moves(positions, reached):
+            obj, source, target, _ = move
+            child = self.child_key(entry.key, obj, target, now_reached)
+            if self.best_g.get(child, 1 << 60) <= g + 1:
+                continue
+            if not len(self.best_g) & 1023:
+                self.check_budget()  # an expansion can take long: the clock is read as it goes
+            self.best_g[child] = g + 1
+            self.parent[child] = (entry.key, move)
+            moved = positions[:obj] + (target,) + positions[obj + 1 :]
+            self.concrete[child] = (moved, now_reached)
+            if target == self.c.goal[obj] or now_reached != reached:
+                child_h = self.known_h.get(child)
+                if child_h is None:
+                    child_h = self.evaluate(child)
+                if child_h >= DEAD_END:
+                    continue
+                child_f = g + 1 + max(child_h, h - 1)
+                if child_f < self.limit_f:
+                    rank = ranks[obj] + (0 if ranks[-1] >> source & 1 else NOT_WAITED_FOR)
+                    self.push(Priority(child_f, -(g + 1), child_f - g - 1, rank, 0, child, h))
+            elif unproductive_f < self.limit_f:
+                self.push(Priority(unproductive_f, -(g + 1), DEFERRED, 0, 0, child, h))
+
+    def place_ranks(self, positions: tuple[int, ...]) -> list[int]:
+        """Per object, the rank of its productive moves among equals: the
+        reverse of the peeling order first (it keeps the rest placeable); the
+        last item is the mask of the places another object waits for (moves
+        from there unblock a chain of objects), which rank before others."""
+        order = self.bounds.peel_order(positions) or []
+        ranks = [NOT_PEELED] * len(positions)
+        for index, obj in enumerate(order):
+            ranks[obj] = len(order) - index
+        waited_for = 0
+        for other, at in enumerate(positions):
+            goal = self.c.goal[other]
+            if goal >= 0 and goal != at:
+                waited_for |= 1 << goal
+        return [*ranks, waited_for]
+
+    def moves(self, positions: tuple[int, ...], reached: int) -> Iterator[tuple[Move, int]]:
+        """Every legal move from a state with the subgoals reached after it:
+        the GRASP and PUT_DOWN tests of :class:`Compiled` (``grasp_ok``,
+        ``put_ok``, ``put_down``) inlined, since they run for every candidate;
+        of the free interchangeable locations only one is tried, and no move
+        ends where it started (SPEC §5). The BFS-versus-A* property test guards
+        that these tests stay the rules of :mod:`demoplan.planning.strips`."""
+        c = self.c
+        block, above, exclusive, below, accepts, plain = (
             c.block,
             c.above,
             c.exclusive,
             c.below,
+            c.accepts,
+            c.plain,
         )
-        plain, goal_of, unmovable, accepts = c.plain, c.goal, bounds.unmovable, c.accepts
-
-        def outcome(
-            actions: tuple[Action, ...] | None, exhausted: bool = False, limit: str | None = None
-        ) -> SearchOutcome:
-            lower = limit_f if exhausted and upper is not None else bound
-            return SearchOutcome(
-                actions,
-                expanded,
-                len(best_g),
-                exhausted,
-                limit,
-                bound=2 * lower,
-                optimal=limit is None,
-            )
-
-        while heap:
-            f, negative_g, _, _, _, key, parent_h = heapq.heappop(heap)
-            if f >= limit_f:
-                break  # every node left needs at least ``upper`` moves
-            g = best_g[key]
-            if -negative_g != g:  # stale: the state was reached more cheaply since
+        occupied = 0
+        for location in positions:
+            occupied |= 1 << location
+        free_plain = next((p for p in self.plain_locations if not occupied >> p & 1), -1)
+        unmovable = self.bounds.unmovable
+        for obj, source in enumerate(positions):
+            if occupied & above[source] or unmovable >> obj & 1:
                 continue
-            h = known_h.get(key)
-            if h is None:
-                h = known_h[key] = bounds.estimate(*concrete[key])
-                if not len(known_h) & 15 and self.clock.expired():  # bounds take time
-                    return outcome(None, limit=self.clock.stop(expanded, len(best_g)))
-            if h >= DEAD_END:
-                continue
-            h = max(h, parent_h - 1)  # pathmax
-            if g + h > f:
-                counter += 1
-                heapq.heappush(heap, (g + h, negative_g, _EVALUATED, 0, -counter, key, parent_h))
-                continue
-            positions, reached = concrete[key]
-            bound = max(bound, f)
-            if h == 0 and c.is_goal(positions, reached):
-                return outcome(self.unwind(key))
-            if (
-                reached == c.all_subgoals
-                and h == bounds.needs(positions, reached)
-                and positions not in bounds.no_direct
-                and len(positions) < MAX_DIRECT_DEPTH
-            ):
-                # Where h is just the needs, try to finish with one move per
-                # object: found, it is a plan of length g + h <= f, and no plan
-                # is shorter than the smallest f in the queue (A*), so it is
-                # shortest; shown impossible, h grows by one (see direct_plan).
-                try:
-                    direct = bounds.direct_plan(positions, DIRECT_NODES)
-                except OutOfNodesError:
-                    direct = []
-                if direct:
-                    actions = list(self.unwind(key))
-                    for move in direct:
-                        actions += self.c.move_actions(*move)
-                    return outcome(tuple(actions))
-                if direct is None:
-                    h = known_h[key] = h + 1
-                    if g + h > f:
-                        counter += 1
-                        heapq.heappush(
-                            heap, (g + h, negative_g, _EVALUATED, 0, -counter, key, parent_h)
-                        )
-                        continue
-            limit = self.clock.stop(expanded, len(best_g))
-            if limit:
-                return outcome(None, limit=limit)
-            expanded += 1
-            # A move that reaches no goal and no subgoal leaves every object's
-            # need as it was or raises it (an object taken off its goal needs one
-            # more), and h is at least the sum of the needs: such a child's f is
-            # at least g + 1 + needs — one more than f when h is just the needs.
-            unproductive_f = max(f, g + 1 + bounds.needs(positions, reached))
-            # Put objects down in an order that keeps the rest placeable: the
-            # reverse of the peeling order goes first among equals.
-            order = bounds.peel_order(positions) or []
-            first = {obj: len(order) - index for index, obj in enumerate(order)}
-            # ... and before that, moves that free another object's goal (they
-            # unblock a chain of objects waiting for their places).
-            waited_for = 0
-            for other, at in enumerate(positions):
-                if goal_of[other] >= 0 and goal_of[other] != at:
-                    waited_for |= 1 << goal_of[other]
-            occupied = 0
-            for location in positions:
-                occupied |= 1 << location
-            free_plain = -1  # one free interchangeable location stands for all of them
-            for location in self.plain_locations:
-                if not occupied >> location & 1:
-                    free_plain = location
-                    break
-            for obj, source in enumerate(positions):
-                others = occupied & ~(1 << source)
-                if occupied & above[source] or unmovable >> obj & 1:
+            others = occupied & ~(1 << source)
+            for grasp in c.grasps_of[obj]:
+                if others & block[source][grasp]:
                     continue
-                goal = goal_of[obj]
-                has_subgoals = bool(c.subgoals_of[obj])
-                for grasp in grasps_of[obj]:
-                    if others & block[source][grasp]:
+                for target in range(len(c.locations)):
+                    if target == source:
                         continue
-                    for target in range(n_locations):
-                        if target == source:
-                            continue  # no move ends where it started (SPEC §5)
-                        if plain >> target & 1 and (target != free_plain or plain >> source & 1):
-                            continue
-                        if (
-                            others >> target & 1
-                            or others & block[target][grasp]
-                            or others & exclusive[target]
-                            or not accepts[target] >> obj & 1
-                        ):
-                            continue
-                        support = below[target]
-                        if others & support != support:
-                            continue
-                        now_reached = c.put_down(obj, target, reached) if has_subgoals else reached
-                        if now_reached < 0:
-                            continue  # the order rule: parked elsewhere instead
-                        moved = positions[:obj] + (target,) + positions[obj + 1 :]
-                        # The key differs from the parent's in one place (and reached).
-                        child = (
-                            *key[:obj],
-                            -1 if plain >> target & 1 else target,
-                            *key[obj + 1 : -1],
-                            now_reached,
-                        )
-                        if best_g.get(child, 1 << 60) <= g + 1:
-                            continue
-                        if not len(best_g) & 1023 and self.clock.expired():
-                            # An expansion can take long: the clock is read as it goes.
-                            return outcome(None, limit=self.clock.stop(expanded, len(best_g)))
-                        best_g[child] = g + 1
-                        parent[child] = (key, (obj, source, target, grasp))
-                        concrete[child] = (moved, now_reached)
-                        counter += 1
-                        if target == goal or now_reached != reached:
-                            # Productive: evaluate now, so the best of them comes first.
-                            child_h = known_h.get(child)
-                            if child_h is None:
-                                child_h = known_h[child] = bounds.estimate(moved, now_reached)
-                                if not len(known_h) & 15 and self.clock.expired():
-                                    return outcome(
-                                        None, limit=self.clock.stop(expanded, len(best_g))
-                                    )
-                            if child_h >= DEAD_END:
-                                continue
-                            child_h = max(child_h, h - 1)
-                            if g + 1 + child_h >= limit_f:
-                                continue
-                            heapq.heappush(
-                                heap,
-                                (
-                                    g + 1 + child_h,
-                                    -(g + 1),
-                                    child_h,
-                                    (0 if waited_for >> source & 1 else _NOT_WAITED_FOR)
-                                    + first.get(obj, _NO_PEEL_RANK),
-                                    -counter,
-                                    child,
-                                    h,
-                                ),
-                            )
-                        elif unproductive_f < limit_f:  # deferred, with the bound above
-                            heapq.heappush(
-                                heap, (unproductive_f, -(g + 1), _DEFERRED, 0, -counter, child, h)
-                            )
-        return outcome(None, exhausted=True)
+                    if plain >> target & 1 and (target != free_plain or plain >> source & 1):
+                        continue
+                    if (
+                        others >> target & 1
+                        or others & (block[target][grasp] | exclusive[target])
+                        or not accepts[target] >> obj & 1
+                        or others & below[target] != below[target]
+                    ):
+                        continue
+                    now_reached = reached
+                    if c.subgoals_of[obj]:
+                        now_reached = c.put_down(obj, target, reached)
+                    if now_reached >= 0:  # else the order rule: parked elsewhere instead
+                        yield (obj, source, target, grasp), now_reached
 
-    def unwind(self, key: tuple[int, ...]) -> tuple[Action, ...]:
+    def child_key(self, key: Key, obj: int, target: int, reached: int) -> Key:
+        """The key of a child: it differs from its parent's in one place (and reached)."""
+        where = -1 if self.c.plain >> target & 1 else target
+        return (*key[:obj], where, *key[obj + 1 : -1], reached)
+
+    def requeue(self, entry: Priority, f: int) -> None:
+        """Queue a popped node again with the larger f its bound gives."""
+        self.push(entry._replace(f=f, h=EVALUATED, place_rank=0))
+
+    def push(self, entry: Priority) -> None:
+        self.queued += 1
+        heapq.heappush(self.queue, entry._replace(negative_order=-self.queued))
+
+    def check_budget(self, always: bool = False) -> None:
+        """Raise :class:`_BudgetSpentError` when a limit is reached: every limit
+        when ``always``, else only the clock (read from inner loops)."""
+        if always or self.clock.expired():
+            limit = self.clock.stop(self.expanded, len(self.best_g))
+            if limit:
+                raise _BudgetSpentError(limit)
+
+    def outcome(
+        self, actions: tuple[Action, ...] | None, exhausted: bool = False, limit: str | None = None
+    ) -> SearchOutcome:
+        """The result, its bound in actions: ``upper`` itself when the search
+        below it was exhausted."""
+        upper_exhausted = exhausted and self.limit_f < 1 << 60
+        lower = self.limit_f if upper_exhausted else self.bound
+        return SearchOutcome(
+            actions,
+            self.expanded,
+            len(self.best_g),
+            exhausted,
+            limit,
+            bound=2 * lower,
+            optimal=limit is None,
+        )
+
+    def unwind(self, key: Key) -> tuple[Action, ...]:
         actions: list[Action] = []
         link = self.parent[key]
         while link is not None:
