@@ -226,19 +226,25 @@ class LowerBounds:
         """The size of a minimum feedback vertex set of the digraph ``after``
         (exact per strongly connected component up to
         :data:`MAX_EXACT_COMPONENT` nodes, else a lower bound)."""
+        waiting = {x for successors in after.values() for x in successors}
+        in_cycles = {y: after[y] for y in waiting if after[y]}  # in and out edges
+        if len(in_cycles) < 2:
+            return 0
+        for y in in_cycles:
+            in_cycles[y] = [x for x in in_cycles[y] if x in in_cycles]
         total = 0
-        for component in _strongly_connected(after):
+        for component in _strongly_connected(in_cycles):
             if len(component) < 2:
                 continue
             members = set(component)
             edges = tuple(
-                sorted((y, x) for y in component for x in after[y] if x in members and x != y)
+                sorted((y, x) for y in component for x in in_cycles[y] if x in members and x != y)
             )
             known = self._feedback_cache.get(edges)
             if known is None:
                 if len(component) > MAX_EXACT_COMPONENT:
                     known = _disjoint_cycles(
-                        {y: [x for x in after[y] if x in members] for y in component}
+                        {y: [x for x in in_cycles[y] if x in members] for y in component}
                     )
                 else:
                     known = _minimum_feedback_set(component, edges)
