@@ -136,7 +136,7 @@ def test_inconsistent_geometry_across_two_files(tmp_path: Path) -> None:
 
 def test_missing_file_and_empty_folder(tmp_path: Path) -> None:
     result = invoke("learn", tmp_path / "nope.json", "-o", tmp_path / "m.json", "--json")
-    assert_one_line_error(result, "nope.json", "cannot read file")
+    assert_one_line_error(result, "nope.json", "no such file")
     assert result.stdout == ""
     (tmp_path / "empty").mkdir()
     result = invoke("learn", tmp_path / "empty", "-o", tmp_path / "m.json", "--json")

@@ -360,7 +360,7 @@ def test_bad_demonstration_is_one_clear_input_error(
 
 
 def test_missing_file_and_empty_folder(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match=r"nope\.json: cannot read file"):
+    with pytest.raises(InputError, match=r"nope\.json: no such file; a JSON or YAML document"):
         load_demonstrations([tmp_path / "nope.json"])
     (tmp_path / "empty").mkdir()
     write(tmp_path / "empty" / "readme.txt", "hello")

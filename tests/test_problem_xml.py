@@ -289,5 +289,5 @@ def test_good_document_of_the_bad_cases_parses() -> None:
 
 
 def test_missing_file(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match=r"missing\.xml: cannot read file"):
+    with pytest.raises(InputError, match=r"missing\.xml: no such file; a problem file"):
         load_problem(tmp_path / "missing.xml")

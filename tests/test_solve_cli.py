@@ -137,7 +137,7 @@ def test_bad_field_exits_1(tmp_path: Path) -> None:
 
 
 def test_missing_file_exits_1(tmp_path: Path) -> None:
-    one_line_error(invoke("solve", tmp_path / "nope.xml"), 1, "nope.xml", "cannot read")
+    one_line_error(invoke("solve", tmp_path / "nope.xml"), 1, "nope.xml", "no such file")
 
 
 def test_unknown_search_is_a_usage_error() -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+import os
 import re
 import sys
 from collections.abc import Iterator
@@ -25,6 +26,7 @@ from rich.text import Text
 
 from demoplan import __version__
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
+from demoplan.fileio import os_error, read_input_text
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -50,6 +52,9 @@ def _reported_errors() -> Iterator[None]:
     except DemoplanError as exc:
         _stderr.print(error_line(exc), markup=False, highlight=False)
         raise typer.Exit(exc.exit_code) from None
+    except OSError as exc:  # a file system refusal no reader foresaw: still one line
+        sys.stderr.write(error_line(os_error(exc)) + "\n")
+        raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
         from demoplan.launcher import interrupted_exit_code
 
@@ -146,10 +151,7 @@ _OBJECTS_OPTION = typer.Option(
 
 
 def _read_requirements(path: Path) -> list[str]:
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read requirements ({exc})", source=str(path)) from None
+    lines = read_input_text(path, "a requirements file (one 'A<B' per line)").splitlines()
     # A comment starts at a '#' after whitespace; 'C#2' is a visit label.
     kept = (re.split(r"(?:^|\s)#", line, maxsplit=1)[0].strip() for line in lines)
     return [line for line in kept if line]
@@ -317,9 +319,10 @@ def learn(
 
 def _refuse_overwriting_inputs(target: Path, inputs: list[Path]) -> None:
     """``-o`` must not name one of the input files (or lie in a folder read)."""
-    resolved = target.resolve()
+    # os.path.realpath, not Path.resolve: it does not raise on a loop of links
+    resolved = Path(os.path.realpath(target))
     for path in inputs:
-        source = path.resolve()
+        source = Path(os.path.realpath(path))
         if resolved == source:
             raise InputError("is also an input; write the output elsewhere", source=str(target))
         if (

@@ -8,6 +8,7 @@ write leaves the old one in place.
 
 from __future__ import annotations
 
+import errno
 import importlib
 import json
 import math
@@ -27,8 +28,13 @@ __all__ = [
     "FORMAT_VERSION",
     "check_format",
     "describe_validation_error",
+    "display_path",
     "dump_json",
+    "os_error",
+    "os_reason",
     "read_document",
+    "read_input_text",
+    "require_regular_file",
     "write_atomic",
     "write_atomic_bytes",
 ]
@@ -38,19 +44,90 @@ _FORMAT = re.compile(r"^demoplan/([a-z][a-z0-9-]*?)-(\d+)(?:\.(\d+))?$")
 MAX_FILE_BYTES = 64 * 1024 * 1024
 
 
-def require_regular_file(path: Path, expected: str) -> None:
-    """An InputError unless ``path`` is a regular file: a device (``/dev/zero``) or a
-    pipe would be read forever or block, a folder is not a file. ``expected``
-    says what should be there."""
-    source = str(path)
-    if not path.exists():
-        raise InputError(f"no such file; {expected} expected", source=source)
-    if path.is_dir():
+def require_regular_file(path: Path, expected: str, max_bytes: int | None = None) -> int:
+    """The size of ``path`` if it is a regular file (after following links) of
+    at most ``max_bytes``; else one clear InputError. A device (``/dev/zero``)
+    or a pipe would be read forever or block, a folder is not a file, a loop of
+    links never ends. ``expected`` says what should be there."""
+    source = display_path(path)
+    try:
+        info = Path(path).stat()
+    except OSError as exc:
+        raise InputError(f"{os_reason(exc, path)}; {expected} expected", source=source) from None
+    except ValueError:  # a NUL byte in the name
+        raise InputError(f"not a valid file name; {expected} expected", source=source) from None
+    if stat.S_ISDIR(info.st_mode):
         raise InputError(f"is a folder; {expected} expected", source=source)
-    if not path.is_file():
+    if not stat.S_ISREG(info.st_mode):
         raise InputError(
             f"not a regular file (a device, pipe or socket); {expected} expected", source=source
         )
+    if max_bytes is not None and info.st_size > max_bytes:
+        raise InputError(
+            f"file is {info.st_size:,} bytes; at most {max_bytes:,} expected (a documented "
+            "limit: docs/limits.md)",
+            source=source,
+        )
+    return info.st_size
+
+
+def read_input_text(path: Path, expected: str, max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The UTF-8 text of an input file (a byte-order mark is skipped), after
+    :func:`require_regular_file`; one clear InputError otherwise."""
+    require_regular_file(path, expected, max_bytes)
+    source = display_path(path)
+    try:
+        # utf-8-sig: a byte-order mark (as some Windows editors write) is not an error.
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise InputError(f"cannot read file ({os_reason(exc, path)})", source=source) from None
+    except UnicodeDecodeError as exc:
+        line = exc.object[: exc.start].count(b"\n") + 1
+        raise InputError(
+            f"not UTF-8 text (byte {exc.start} on line {line}); {expected} expected", source=source
+        ) from None
+    if "\x00" in text:
+        line = text[: text.index("\x00")].count("\n") + 1
+        raise InputError(f"a NUL byte on line {line}; {expected} expected", source=source)
+    return text
+
+
+def os_reason(exc: OSError, path: Path | str | None = None) -> str:
+    """What an OSError means, in words (no errno, no repeated file name)."""
+    reasons = {
+        errno.ENOENT: "no such file",
+        errno.ELOOP: "a loop of symbolic links",
+        errno.EACCES: "permission denied",
+        errno.EPERM: "permission denied",
+        errno.ENAMETOOLONG: "file name too long",
+        errno.ENOTDIR: "a part of the path is not a folder",
+        errno.EISDIR: "is a folder",
+        errno.ENOSPC: "no space left on the device",
+        errno.EDQUOT: "disk quota exceeded",
+        errno.EROFS: "read-only file system",
+        errno.EIO: "input/output error",
+    }
+    reason = reasons.get(exc.errno or -1) or (exc.strerror or type(exc).__name__).lower()
+    if exc.errno == errno.ENOENT and path is not None and Path(path).is_symlink():
+        reason = "a symbolic link to a missing file"
+    return reason
+
+
+def os_error(exc: OSError) -> InputError:
+    """An OSError as demoplan's one-line error, naming its file (exit 1)."""
+    name = exc.filename if exc.filename is not None else None
+    source = display_path(name) if name is not None else None
+    return InputError(os_reason(exc, name), source=source)
+
+
+def display_path(path: Path | str | bytes) -> str:
+    """A file name as it can be shown on one line: bytes that are not UTF-8
+    and control characters (a newline, an escape) are written as escapes."""
+    text = os.fsdecode(path) if isinstance(path, bytes) else str(path)
+    if text.isprintable():
+        return text
+    shown = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in shown)
 
 
 def read_document(path: Path) -> dict[str, Any]:
@@ -60,20 +137,8 @@ def read_document(path: Path) -> dict[str, Any]:
     pose made of them is meaningless.
     """
     path = Path(path)
-    source = str(path)
-    if path.exists() and not path.is_dir():
-        require_regular_file(path, "a JSON or YAML document")
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise InputError(f"cannot read file ({exc.strerror or exc})", source=source) from None
-    if size > MAX_FILE_BYTES:
-        raise InputError(f"file is {size} bytes; at most {MAX_FILE_BYTES} expected", source=source)
-    try:
-        # utf-8-sig: a byte-order mark (as some Windows editors write) is not an error.
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read file as UTF-8 text ({exc})", source=source) from None
+    source = display_path(path)
+    text = read_input_text(path, "a JSON or YAML document")
     if path.suffix.lower() in {".yaml", ".yml"}:
         data = _parse_yaml(text, source)
     else:
@@ -200,8 +265,11 @@ def dump_json(data: Any) -> str:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` atomically; see :func:`write_atomic_bytes`."""
-    write_atomic_bytes(path, text.encode("utf-8"))
+    """Write ``text`` (UTF-8) to ``path`` atomically; see :func:`write_atomic_bytes`.
+    Characters UTF-8 cannot hold (a file name's undecodable bytes, kept by
+    Python as lone surrogates) are written as ``\\udcXX`` escapes, which JSON
+    reads back as the same string."""
+    write_atomic_bytes(path, text.encode("utf-8", "backslashreplace"))
 
 
 def write_atomic_bytes(path: Path, data: bytes) -> None:

@@ -150,6 +150,7 @@ def solve_text(
 def run_solve(options: SolveOptions) -> int:
     """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
     from demoplan.errors import DemoplanError, error_line
+    from demoplan.fileio import os_error
 
     mark_command_start()
     try:
@@ -157,6 +158,9 @@ def run_solve(options: SolveOptions) -> int:
     except DemoplanError as exc:
         sys.stderr.write(error_line(exc) + "\n")
         return exc.exit_code
+    except OSError as exc:
+        sys.stderr.write(error_line(os_error(exc)) + "\n")
+        return 1
     sys.stdout.write(text)
     sys.stderr.write(note)
     return 0
@@ -189,6 +193,12 @@ def main() -> None:
     # SIGINT ignored (a background job of a script); SIGTERM does the same.
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _terminate)
+    # A file name with bytes that are not UTF-8 is printed with escapes, not a
+    # UnicodeEncodeError.
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            reconfigure(errors="backslashreplace")
     try:
         _dispatch()
     except KeyboardInterrupt as exc:

@@ -14,10 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from demoplan.errors import InputError
+from demoplan.fileio import require_regular_file
 
 __all__ = ["Camera", "load_image", "save_image"]
 
 MAX_PIXELS = 50_000_000  # a larger "image" is a mistake or an attack (decompression bomb)
+MAX_IMAGE_BYTES = 256 * 1024 * 1024  # the file itself
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,6 +43,7 @@ def load_image(path: str | Path) -> np.ndarray:
     from PIL import Image, UnidentifiedImageError
 
     Image.MAX_IMAGE_PIXELS = MAX_PIXELS
+    require_regular_file(Path(path), "an image (PNG, JPEG)", MAX_IMAGE_BYTES)
     try:
         with Image.open(path) as opened:  # reads the header only
             width, height = opened.size

@@ -35,6 +35,7 @@ import defusedxml
 import defusedxml.ElementTree as SafeElementTree
 
 from demoplan.errors import InputError
+from demoplan.fileio import display_path, read_input_text
 from demoplan.planning.problem import Problem, Subgoal
 
 __all__ = ["load_problem", "problem_from_xml", "problem_to_xml", "save_problem"]
@@ -287,16 +288,8 @@ def _unknown_arg(tokens: list[str], types: list[str | None]) -> str:
 def load_problem(path: str | Path) -> Problem:
     """Read a problem file."""
     path = Path(path)
-    try:
-        size = path.stat().st_size
-        if size > MAX_XML_BYTES:
-            raise InputError(
-                f"file is {size} bytes; at most {MAX_XML_BYTES} expected", source=str(path)
-            )
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read file ({exc})", source=str(path)) from None
-    return problem_from_xml(text, str(path))
+    text = read_input_text(path, "a problem file in the paper's XML", MAX_XML_BYTES)
+    return problem_from_xml(text, display_path(path))
 
 
 def problem_to_xml(problem: Problem) -> str:

@@ -10,7 +10,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from demoplan.errors import InputError
 from demoplan.fileio import require_regular_file
 from demoplan.segmentation.readers.bag import load_bag
 from demoplan.segmentation.readers.csv import load_csv
@@ -40,10 +39,6 @@ def load_stream(
         the world frame that has no children (the tree's leaves).
     """
     path = Path(path)
-    if not path.exists():
-        raise InputError(
-            "no such file or folder; a CSV file or a ROS 2 bag expected", source=str(path)
-        )
     if not path.is_dir():
         require_regular_file(path, "a CSV file or a ROS 2 bag")
     if path.is_dir() or path.suffix.lower() in {".db3", ".mcap"} or path.name == "metadata.yaml":

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from demoplan.errors import InputError
+from demoplan.fileio import read_input_text
 from demoplan.segmentation.types import (
     FloatArray,
     PoseStream,
@@ -37,6 +38,8 @@ _ORIENTATION_SETS: dict[frozenset[str], tuple[str, ...]] = {
     frozenset({"roll", "pitch", "yaw"}): ("roll", "pitch", "yaw"),
     frozenset({"qx", "qy", "qz", "qw"}): ("qx", "qy", "qz", "qw"),
 }
+MAX_STREAM_BYTES = 1024 * 1024 * 1024
+"""The largest CSV stream read (1 GiB: about 10 hours of 10 objects at 100 Hz)."""
 _EXPECTED_HEADER = "t,object,x,y,z plus optionally yaw | roll,pitch,yaw | qx,qy,qz,qw"
 
 
@@ -48,10 +51,7 @@ def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseS
     """
     path = Path(path)
     source = str(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read file as UTF-8 text ({exc})", source=source) from None
+    text = read_input_text(path, "a CSV pose stream", MAX_STREAM_BYTES)
     lines = [
         (number, line)
         for number, line in enumerate(text.splitlines(), start=1)

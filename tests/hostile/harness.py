@@ -1,0 +1,127 @@
+"""Running a demoplan command and checking SPEC §4's promises about its answer."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
+EXIT_CODES = {0, 1, 2, 3, 4}  # SPEC §4 (130 / 143: interrupted, tested apart)
+REFUSED = {1, 2, 3, 4}
+ERROR_PREFIX = "demoplan: error: "
+NOT_SEEN = ("Traceback", "Warning:", "RuntimeWarning", "UserWarning", "DeprecationWarning")
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What a command did: exit code, its output streams and the time it took."""
+
+    args: tuple[str, ...]
+    code: int
+    stdout: str
+    stderr: str
+    seconds: float
+
+    def __str__(self) -> str:
+        shown = " ".join(self.args).encode("utf-8", "surrogateescape").decode("utf-8", "replace")
+        return (
+            f"demoplan {shown} -> exit {self.code} in {self.seconds:.1f} s\n{self.stderr[-2000:]}"
+        )
+
+
+def run(
+    args: Sequence[str | os.PathLike[str] | bytes],
+    cwd: Path,
+    *,
+    timeout: float = 60.0,
+    stdin: bytes | None = None,
+    stdout_path: str | None = None,
+) -> Answer:
+    """Run ``demoplan ARGS`` in a process of its own (special files can block a
+    reader, so nothing runs in the test's process). ``stdout_path``: a file to
+    send stdout to (``/dev/full``)."""
+    argv = [os.fsencode(a) if not isinstance(a, bytes) else a for a in args]
+    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    started = time.monotonic()
+    out_file = Path(stdout_path).open("wb") if stdout_path else None  # noqa: SIM115
+    try:
+        completed = subprocess.run(
+            [os.fsencode(DEMOPLAN), *argv],
+            cwd=cwd,
+            input=stdin,
+            stdout=out_file if out_file else subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            timeout=timeout,
+            env=env,
+            check=False,
+        )
+    finally:
+        if out_file:
+            out_file.close()
+    seconds = time.monotonic() - started
+    shown = tuple(os.fsdecode(a) for a in argv)
+    return Answer(
+        shown,
+        completed.returncode,
+        (completed.stdout or b"").decode("utf-8", "replace"),
+        completed.stderr.decode("utf-8", "replace"),
+        seconds,
+    )
+
+
+def check_refused(
+    answer: Answer, names: Iterable[str], *, codes: set[int] = REFUSED, max_seconds: float = 20.0
+) -> None:
+    """SPEC §4 for bad input: an exit code from ``codes``, exactly one stderr
+    line, starting ``demoplan: error:`` and naming one of ``names`` (the file
+    or the option), no traceback or warning text, within ``max_seconds``."""
+    assert answer.code in codes, f"exit code not in {sorted(codes)}: {answer}"
+    lines = answer.stderr.splitlines()
+    assert len(lines) == 1, f"{len(lines)} stderr lines, one expected: {answer}"
+    line = lines[0]
+    assert line.startswith(ERROR_PREFIX), f"not an error line: {answer}"
+    wanted = [n for n in names if n]
+    assert any(n in line for n in wanted), f"names none of {wanted}: {answer}"
+    for text in NOT_SEEN:
+        assert text not in answer.stderr, f"{text!r} printed: {answer}"
+    assert answer.seconds <= max_seconds, f"took {answer.seconds:.1f} s > {max_seconds} s: {answer}"
+
+
+def check_clean(answer: Answer, *, max_seconds: float = 60.0) -> None:
+    """A command that may succeed or refuse: if it refuses, as
+    :func:`check_refused` (with any name); never a traceback or warning."""
+    assert answer.code in EXIT_CODES, f"exit code not in SPEC §4: {answer}"
+    for text in NOT_SEEN:
+        assert text not in answer.stderr, f"{text!r} printed: {answer}"
+    if answer.code:
+        lines = answer.stderr.splitlines()
+        assert len(lines) == 1 and lines[0].startswith(ERROR_PREFIX), (
+            f"not one error line: {answer}"
+        )
+    assert answer.seconds <= max_seconds, f"took {answer.seconds:.1f} s: {answer}"
+
+
+def fingerprint(folder: Path) -> dict[str, str]:
+    """Every regular file under ``folder`` with a hash of its content (special
+    files and links by kind only: reading a FIFO would block)."""
+    found: dict[str, str] = {}
+    for root, dirs, files in os.walk(folder, followlinks=False):
+        for name in sorted(files + dirs):
+            path = Path(root) / name
+            key = os.fsdecode(path.relative_to(folder))
+            if path.is_symlink():
+                found[key] = "link -> " + os.fsdecode(path.readlink())
+            elif path.is_file():
+                found[key] = hashlib.sha256(path.read_bytes()).hexdigest()
+            elif path.is_dir():
+                found[key] = "folder"
+            else:
+                found[key] = "special"
+    return found

@@ -1,0 +1,203 @@
+"""Every file argument of every command, given a hostile file (issue 14).
+
+A table: each *slot* (a command and which of its arguments is the file) is
+given each *kind* of hostile file — missing, a folder, a FIFO, a device, a
+link that dangles or loops, empty, binary, invalid UTF-8, NUL bytes, too big,
+one enormous line — and must answer as SPEC §4 says (:mod:`.harness`): one
+line naming the file, an exit code of §4, within the time bound, nothing in
+the working folder changed. File names with bytes that are not UTF-8, a
+newline or rich markup must work, or be refused in one line all the same.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from tests.helpers import EXAMPLES
+from tests.hostile.harness import check_clean, check_refused, fingerprint, run
+
+MAX_SECONDS = 20.0
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A command with one file argument: ``args`` has ``FILE`` where it goes."""
+
+    name: str
+    args: tuple[str, ...]
+    suffix: str
+    valid: str  # a valid file for the slot, in the workspace
+    may_work: frozenset[str] = frozenset()  # kinds of file the command may accept
+
+
+FILE = "FILE"
+SLOTS = [
+    Slot("learn", ("learn", FILE, "-o", "out.json"), ".json", "demos.json"),
+    Slot("learn-yaml", ("learn", FILE, "-o", "out.json"), ".yaml", "demos.yaml"),
+    Slot("learn-stream", ("learn", FILE, "-o", "out.json"), ".csv", "stream.csv"),
+    Slot("learn-update", ("learn", "--update", FILE, "demos.json"), ".json", "model.json"),
+    Slot(
+        "learn-require-file",
+        ("learn", "demos.json", "-o", "out.json", "--require-file", FILE),
+        ".txt",
+        "require.txt",
+        frozenset({"empty"}),  # no requirement
+    ),
+    Slot("show", ("show", FILE), ".json", "model.json"),
+    Slot("solve", ("solve", FILE), ".xml", "problem.xml"),
+    Slot("pddl", ("pddl", FILE, "-o", "pddl-out"), ".xml", "problem.xml"),
+    Slot("problem-model", ("problem", FILE, "scene.json", "-o", "out.xml"), ".json", "model.json"),
+    Slot("problem-scene", ("problem", "model.json", FILE, "-o", "out.xml"), ".json", "scene.json"),
+    Slot("plan-model", ("plan", FILE, "scene.json"), ".json", "model.json"),
+    Slot("plan-scene", ("plan", "model.json", FILE), ".json", "scene.json"),
+    Slot("run-model", ("run", FILE, "scene.json"), ".json", "model.json"),
+    Slot("run-scene", ("run", "model.json", FILE), ".json", "scene.json"),
+    Slot(
+        "perceive",
+        ("perceive", FILE, "--px-per-m", "1000", "--origin", "0.05", "-0.21"),
+        ".png",
+        "top.png",
+    ),
+    Slot("segment", ("segment", FILE, "-o", "out.json"), ".csv", "stream.csv"),
+    Slot("segment-bag", ("segment", FILE, "-o", "out.json"), ".mcap", ""),
+    Slot("import", ("import", FILE, "-o", "imported"), ".hdf5", ""),
+]
+
+
+def _folder(path: Path) -> Path:
+    path.mkdir()
+    return path
+
+
+def _fifo(path: Path) -> Path:
+    os.mkfifo(path)
+    return path
+
+
+def _link(path: Path, target: str) -> Path:
+    path.symlink_to(target)
+    return path
+
+
+def _loop(path: Path) -> Path:
+    other = path.with_name("loop-other" + path.suffix)
+    path.symlink_to(other.name)
+    other.symlink_to(path.name)
+    return path
+
+
+def _sparse(path: Path) -> Path:
+    with path.open("wb") as f:
+        f.truncate(200 * 1024 * 1024)  # 200 MB of holes: read, it is all NUL bytes
+    return path
+
+
+def _bytes(data: bytes) -> Callable[[Path], Path]:
+    def make(path: Path) -> Path:
+        path.write_bytes(data)
+        return path
+
+    return make
+
+
+KINDS: dict[str, Callable[[Path], Path]] = {
+    "missing": lambda p: p,
+    "folder": _folder,
+    "fifo": _fifo,
+    "dev-zero": lambda p: Path("/dev/zero"),
+    "dev-urandom": lambda p: Path("/dev/urandom"),
+    "dev-null": lambda p: Path("/dev/null"),
+    "dangling-link": lambda p: _link(p, "nowhere" + p.suffix),
+    "link-loop": _loop,
+    "empty": _bytes(b""),
+    "binary": _bytes(bytes(range(256)) * 16),
+    "not-utf8": _bytes(b'{"format": "\xff\xfe\xfd"}\n'),
+    "nul-bytes": _bytes(b"\x00" * 4096),
+    "sparse-200MB": _sparse,
+    "long-line": _bytes(b"1," * (4 * 1024 * 1024) + b"\n"),
+}
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Valid inputs for every slot: a model, a scene, a problem, a stream, an image."""
+    import json
+
+    import yaml
+
+    folder = tmp_path_factory.mktemp("workspace")
+    shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
+    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
+    shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
+    shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
+    (folder / "require.txt").write_text("wood<green\n")
+    data = json.loads((folder / "demos.json").read_text())
+    (folder / "demos.yaml").write_text(yaml.safe_dump(data))
+    answer = run(["learn", "demos.json", "--paper", "-o", "model.json"], folder)
+    assert answer.code == 0, str(answer)
+    return folder
+
+
+def _case_folder(workspace: Path, tmp_path: Path) -> Path:
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder, symlinks=True)
+    return folder
+
+
+CASES = [(slot, kind) for slot in SLOTS for kind in KINDS]
+
+
+@pytest.mark.parametrize(
+    ("slot", "kind"), CASES, ids=[f"{slot.name}-{kind}" for slot, kind in CASES]
+)
+def test_a_hostile_file_is_refused_in_one_line(
+    workspace: Path, tmp_path: Path, slot: Slot, kind: str
+) -> None:
+    folder = _case_folder(workspace, tmp_path)
+    hostile = KINDS[kind](folder / f"hostile{slot.suffix}")
+    shown = str(hostile.relative_to(folder)) if hostile.is_relative_to(folder) else str(hostile)
+    before = fingerprint(folder)
+    args = [shown if a == FILE else a for a in slot.args]
+    answer = run(args, folder, timeout=MAX_SECONDS + 10)
+    if kind in slot.may_work and answer.code == 0:
+        check_clean(answer, max_seconds=MAX_SECONDS)
+        return
+    check_refused(answer, [shown], max_seconds=MAX_SECONDS)
+    assert fingerprint(folder) == before, f"files changed: {answer}"
+
+
+ODD_NAMES = {
+    "not-utf8-name": b"odd-\xff\xfe",
+    "newline-name": b"odd\nname",
+    "markup-name": b"[bold]odd[red]",
+    "control-name": b"odd\x1b[31mred",
+}
+NAMED = [
+    (slot, name)
+    for slot in SLOTS
+    if slot.valid and not slot.name.startswith("learn-")
+    for name in ODD_NAMES
+]
+
+
+@pytest.mark.parametrize(
+    ("slot", "name"), NAMED, ids=[f"{slot.name}-{name}" for slot, name in NAMED]
+)
+def test_an_odd_file_name_works_or_is_refused_in_one_line(
+    workspace: Path, tmp_path: Path, slot: Slot, name: str
+) -> None:
+    folder = _case_folder(workspace, tmp_path)
+    odd = os.fsencode(folder) + b"/" + ODD_NAMES[name] + slot.suffix.encode()
+    shutil.copy(folder / slot.valid, os.fsdecode(odd))
+    args: list[str | bytes] = [
+        ODD_NAMES[name] + slot.suffix.encode() if a == FILE else a for a in slot.args
+    ]
+    answer = run(args, folder, timeout=MAX_SECONDS + 10)  # type: ignore[arg-type]
+    check_clean(answer, max_seconds=MAX_SECONDS)
