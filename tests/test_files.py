@@ -50,13 +50,13 @@ def test_units_scale_every_length_to_metres(tmp_path: Path, unit: str, scale: fl
     data = demo(
         [{"object": "plate", "position": [50, 40, 2]}],
         units={"length": unit},
-        objects={"plate": {"shape": "cylinder", "size": [26, 26, 2]}},
+        objects={"plate": {"shape": "cylinder", "size": [8, 8, 2]}},
         landmarks={"board": {"position": [40, 10, 0], "yaw": 0}},
         initial={"plate": {"position": [20, 10]}},
     )
     d = load_one(tmp_path, data)
     assert d.steps[0].pose.position == pytest.approx((50 * scale, 40 * scale, 2 * scale))
-    assert d.geometry()["plate"].size == pytest.approx((26 * scale, 26 * scale, 2 * scale))
+    assert d.geometry()["plate"].size == pytest.approx((8 * scale, 8 * scale, 2 * scale))
     assert d.landmark_poses()["board"].position == pytest.approx((40 * scale, 10 * scale, 0))
     assert d.initial_poses()["plate"].position == pytest.approx((20 * scale, 10 * scale, 0))
 

@@ -86,6 +86,11 @@ def _main(
         stream=sys.stderr,
         force=True,
     )
+    # Warnings of the libraries (NumPy overflow, shapely, MuJoCo) never reach the
+    # terminal as raw text: bad numbers are refused with our one-line errors
+    # before they get that far, and what is left is harmless; --verbose logs them.
+    logging.captureWarnings(True)
+    logging.getLogger("py.warnings").setLevel(logging.INFO if verbose else logging.CRITICAL)
 
 
 def _print_json(data: Any) -> None:

@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 FORMAT_VERSION = 1
-_FORMAT = re.compile(r"^demoplan/([a-z][a-z0-9-]*?)-(\d+)(?:\.(\d+))?$")
+_FORMAT = re.compile(r"^demoplan/([a-z][a-z0-9-]*?)-(\d{1,9})(?:\.(\d{1,9}))?$")
 MAX_FILE_BYTES = 64 * 1024 * 1024
 
 
@@ -145,7 +145,12 @@ def read_document(path: Path) -> dict[str, Any]:
         try:
             # NaN / Infinity literals become floats here and are refused below
             # with the field they stand in; so is a number that overflows (1e999).
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_unique_keys)
+        except _DuplicateKeyError as exc:
+            raise InputError(
+                f"key {exc.key!r} appears twice in one object; each key once expected",
+                source=source,
+            ) from None
         except json.JSONDecodeError as exc:
             raise InputError(
                 f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}", source=source
@@ -153,7 +158,7 @@ def read_document(path: Path) -> dict[str, Any]:
         except RecursionError:
             raise InputError("JSON nested too deeply", source=source) from None
         except ValueError as exc:  # e.g. an integer literal beyond Python's digit limit
-            raise InputError(f"malformed JSON: {str(exc).splitlines()[0]}", source=source) from None
+            raise InputError(f"malformed JSON: {_value_problem(exc)}", source=source) from None
     if not isinstance(data, dict):
         raise InputError(
             f"expected an object (mapping) at top level, got {type(data).__name__}", source=source
@@ -162,6 +167,30 @@ def read_document(path: Path) -> dict[str, Any]:
         _check_finite(data, source, "")
     except RecursionError:
         raise InputError("document nested too deeply", source=source) from None
+    return data
+
+
+def _value_problem(exc: ValueError) -> str:
+    text = str(exc).splitlines()[0]
+    if "digits" in text and "integer" in text:
+        return "an integer of thousands of digits; a number of sensible size expected"
+    return text
+
+
+class _DuplicateKeyError(ValueError):
+    def __init__(self, key: str):
+        super().__init__(key)
+        self.key = key
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object as a dict, refusing a key given twice (JSON allows it and
+    the last one would silently win)."""
+    data: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in data:
+            raise _DuplicateKeyError(key)
+        data[key] = value
     return data
 
 
@@ -183,6 +212,25 @@ def _parse_yaml(text: str, source: str) -> Any:
                 )
             return super().compose_node(parent, index)
 
+        def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+            """A mapping; a key given twice is an error (the last would silently win)."""
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=deep)
+                try:
+                    duplicate = key in seen
+                    seen.add(key)
+                except TypeError:  # an unhashable key: the base class says so
+                    break
+                if duplicate:
+                    raise yaml.constructor.ConstructorError(
+                        None,
+                        None,
+                        f"key {key!r} appears twice in one mapping; each key once expected",
+                        key_node.start_mark,
+                    )
+            return super().construct_mapping(node, deep=deep)
+
     try:
         return yaml.load(text, Loader=NoAliasLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
@@ -194,6 +242,8 @@ def _parse_yaml(text: str, source: str) -> Any:
         ) from None
     except RecursionError:
         raise InputError("YAML nested too deeply", source=source) from None
+    except ValueError as exc:  # an integer beyond Python's digit limit
+        raise InputError(f"malformed YAML: {_value_problem(exc)}", source=source) from None
 
 
 def _check_finite(value: Any, source: str, where: str) -> None:
@@ -222,8 +272,9 @@ def check_format(data: dict[str, Any], kinds: set[str], source: str) -> tuple[st
         )
     match = _FORMAT.match(tag)
     if not match or match.group(1) not in kinds:
+        shown = repr(tag) if len(tag) <= 60 else repr(tag[:60]) + "…"
         raise InputError(
-            f"unknown format {tag!r}; expected {expected}", source=source, field="format"
+            f"unknown format {shown}; expected {expected}", source=source, field="format"
         )
     version = int(match.group(2))
     if version > FORMAT_VERSION:

@@ -14,17 +14,22 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from demoplan.errors import InputError
 from demoplan.model import Pose
 from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw
 
 __all__ = [
     "LENGTH_SCALE",
     "MAX_COORDINATE",
+    "MAX_DISTANCE_M",
+    "MAX_SIZE_M",
+    "MIN_SIZE_M",
     "Coordinate",
     "Number",
     "ObjectSchema",
     "PoseSchema",
     "UnitsSchema",
+    "check_physical",
     "pose_from_dict",
     "pose_to_dict",
 ]
@@ -74,6 +79,68 @@ class ObjectSchema(_Schema):
         if any(v <= 0 for v in size):
             raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
         return size
+
+
+MAX_DISTANCE_M = 1000.0
+"""The farthest a position may lie from the origin on any axis: 1 km."""
+MIN_SIZE_M = 1e-4
+"""The smallest extent of an object: 0.1 mm."""
+MAX_SIZE_M = 10.0
+"""The largest extent of an object: 10 m."""
+
+
+def check_physical(document: Any, length: str, source: str, prefix: str = "") -> None:
+    """Refuse numbers no tabletop holds, after the file's length unit: a
+    ``position`` (or a ``freespace`` spot) farther than :data:`MAX_DISTANCE_M`
+    on an axis, a ``size`` extent outside [:data:`MIN_SIZE_M`,
+    :data:`MAX_SIZE_M`]. One InputError naming the field (docs/limits.md)."""
+    scale = LENGTH_SCALE.get(length, 1.0)
+
+    def numbers(value: Any) -> list[float]:
+        if isinstance(value, list) and all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value
+        ):
+            return [float(v) for v in value]
+        return []
+
+    def walk(value: Any, where: str) -> None:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                field = f"{where}.{key}" if where else str(key)
+                if key == "position":
+                    _check_position(numbers(item), scale, length, source, field)
+                elif key == "size":
+                    for extent in numbers(item):
+                        if not MIN_SIZE_M <= extent * scale <= MAX_SIZE_M:
+                            raise InputError(
+                                f"extent {extent:g} {length} is outside 0.1 mm – 10 m (a "
+                                "documented limit: docs/limits.md)",
+                                source=source,
+                                field=field,
+                            )
+                elif key == "freespace" and isinstance(item, list):
+                    for index, spot in enumerate(item):
+                        _check_position(numbers(spot), scale, length, source, f"{field}[{index}]")
+                else:
+                    walk(item, field)
+        elif isinstance(value, list):
+            for index, item in enumerate(value):
+                walk(item, f"{where}[{index}]")
+
+    walk(document, prefix)
+
+
+def _check_position(
+    values: list[float], scale: float, length: str, source: str, field: str
+) -> None:
+    for value in values:
+        if abs(value * scale) > MAX_DISTANCE_M:
+            raise InputError(
+                f"{value:g} {length} lies more than 1 km from the origin; a position on a "
+                "table expected (a documented limit: docs/limits.md)",
+                source=source,
+                field=field,
+            )
 
 
 def pose_from_dict(data: PoseSchema, units: UnitsSchema) -> Pose:

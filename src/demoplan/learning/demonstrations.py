@@ -31,6 +31,7 @@ from demoplan.poses import (
     ObjectSchema,
     PoseSchema,
     UnitsSchema,
+    check_physical,
     pose_from_dict,
     pose_to_dict,
 )
@@ -187,6 +188,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         raise describe_validation_error(exc, source, prefix) from None
     where = f"{prefix}." if prefix else ""
     units = parsed.units
+    check_physical(data, units.length, source, prefix)
     scale = LENGTH_SCALE[units.length]
     objects = tuple(
         (name, ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale)))

@@ -35,6 +35,7 @@ from demoplan.poses import (
     Number,
     PoseSchema,
     UnitsSchema,
+    check_physical,
     pose_from_dict,
     pose_to_dict,
 )
@@ -194,6 +195,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         parsed = _SceneSchema.model_validate(data)
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
+    check_physical(data, parsed.units.length, source)
     scale = LENGTH_SCALE[parsed.units.length]
     to_deg = math.degrees if parsed.units.angle == "rad" else float
     objects = []

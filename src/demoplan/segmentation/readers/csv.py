@@ -59,7 +59,22 @@ def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseS
     ]
     if not lines:
         raise InputError(f"empty file; a CSV header {_EXPECTED_HEADER} expected", source=source)
-    rows = list(csv.reader(line for _, line in lines))
+    for number, line in lines:
+        if line.count('"') % 2:  # a quoted field would run on into the next line
+            raise InputError(
+                "a quote that is not closed on its line; one sample per line expected",
+                source=source,
+                field=f"line {number}",
+            )
+    reader = csv.reader(line for _, line in lines)
+    try:
+        rows = list(reader)
+    except csv.Error as exc:  # e.g. a field beyond csv's field size limit
+        raise InputError(
+            f"not CSV ({exc}); {_EXPECTED_HEADER} expected",
+            source=source,
+            field=f"line {lines[reader.line_num - 1][0]}",
+        ) from None
     header = [cell.strip().lower() for cell in rows[0]]
     columns = _check_header(header, source, lines[0][0])
     body = rows[1:]
