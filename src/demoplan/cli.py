@@ -14,7 +14,7 @@ import os
 import re
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager, suppress
+from contextlib import contextmanager, nullcontext, suppress
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -26,7 +26,7 @@ from rich.text import Text
 
 from demoplan import __version__
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
-from demoplan.fileio import os_error, read_input_text
+from demoplan.fileio import locked_for_update, os_error, read_input_text
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -292,22 +292,26 @@ def learn(
         if require_file is not None:
             from_file = _read_requirements(require_file)
             requirements += from_file
-        try:
-            new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
-            changes = None
-            if update is not None:
-                previous = load_model(update)
-                model = update_model(previous, new, require=requirements, settings=overrides)
-                changes = model_changes(previous, model)
-            else:
-                settings = LearningSettings(require=tuple(dict.fromkeys(requirements)), **overrides)
-                model = learn_model(new, settings=settings)
-        except InputError as exc:
-            # A requirement read from --require-file: say which file it came from.
-            if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
-                raise InputError(str(exc), source=str(require_file)) from None
-            raise
-        save_model(model, target)
+        # Two updates of one model at once both land: the second waits (fileio).
+        with locked_for_update(update) if update is not None else nullcontext():
+            try:
+                new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
+                changes = None
+                if update is not None:
+                    previous = load_model(update)
+                    model = update_model(previous, new, require=requirements, settings=overrides)
+                    changes = model_changes(previous, model)
+                else:
+                    settings = LearningSettings(
+                        require=tuple(dict.fromkeys(requirements)), **overrides
+                    )
+                    model = learn_model(new, settings=settings)
+            except InputError as exc:
+                # A requirement read from --require-file: say which file it came from.
+                if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
+                    raise InputError(str(exc), source=str(require_file)) from None
+                raise
+            save_model(model, target)
         if changes is not None:  # on stderr, so that --json stays pure
             for line in changes.lines():
                 _stderr.print(f"update: {line}", markup=False, highlight=False)

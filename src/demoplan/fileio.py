@@ -16,6 +16,9 @@ import os
 import re
 import stat
 import tempfile
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +33,7 @@ __all__ = [
     "describe_validation_error",
     "display_path",
     "dump_json",
+    "locked_for_update",
     "os_error",
     "os_reason",
     "read_document",
@@ -313,6 +317,44 @@ def describe_validation_error(error: ValidationError, source: str, prefix: str =
 def dump_json(data: Any) -> str:
     """JSON text as demoplan writes it: indented, UTF-8, no NaN."""
     return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+
+UPDATE_WAIT_SECONDS = 60.0
+"""How long ``learn --update`` waits for another update of the same folder."""
+
+
+@contextmanager
+def locked_for_update(path: Path, wait: float = UPDATE_WAIT_SECONDS) -> Iterator[None]:
+    """Hold an exclusive lock (``fcntl.flock``) on the folder of ``path`` for a
+    read-modify-write of it, so that two updates at once both land: the second
+    waits for the first (up to ``wait`` seconds, then one InputError). The lock
+    is on the folder, not the file, because the atomic write replaces the file
+    (a lock on the old file would not keep a third process out); no lock file
+    is left behind, and the lock goes with the process however it ends."""
+    import fcntl
+
+    folder = Path(path).parent if str(Path(path).parent) else Path()
+    try:
+        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError as exc:
+        raise InputError(f"cannot lock for update ({os_reason(exc)})", source=str(path)) from None
+    try:
+        deadline = time.monotonic() + wait
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    raise InputError(
+                        f"another demoplan has been updating its folder for {wait:g} s; "
+                        "try again when it has finished",
+                        source=str(path),
+                    ) from None
+                time.sleep(0.02)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def write_atomic(path: Path, text: str) -> None:
