@@ -53,6 +53,8 @@ def _reported_errors() -> Iterator[None]:
         _stderr.print(error_line(exc), markup=False, highlight=False)
         raise typer.Exit(exc.exit_code) from None
     except OSError as exc:  # a file system refusal no reader foresaw: still one line
+        if exc.filename is None:  # printing failed: stdout full, or its reader gone
+            raise  # demoplan.launcher.main names standard output
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)

@@ -15,6 +15,8 @@ print the same plan, the same JSON and the same one-line errors (tested).
 from __future__ import annotations
 
 import argparse
+import errno
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -193,6 +195,12 @@ def main() -> None:
     # SIGINT ignored (a background job of a script); SIGTERM does the same.
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _terminate)
+    # Started with stdout (or stderr) closed: what would be printed is dropped,
+    # as if sent to /dev/null; a command whose job is a file still does it.
+    if sys.stdout is None:
+        sys.stdout = Path(os.devnull).open("w")  # noqa: SIM115 - for the whole process
+    if sys.stderr is None:
+        sys.stderr = Path(os.devnull).open("w")  # noqa: SIM115
     # A file name with bytes that are not UTF-8 is printed with escapes, not a
     # UnicodeEncodeError.
     for stream in (sys.stdout, sys.stderr):
@@ -200,10 +208,35 @@ def main() -> None:
         if reconfigure is not None:
             reconfigure(errors="backslashreplace")
     try:
-        _dispatch()
+        try:
+            _dispatch()
+        finally:
+            sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
     except KeyboardInterrupt as exc:
         sys.stderr.write("demoplan: interrupted\n")
         raise SystemExit(interrupted_exit_code(exc)) from None
+    except OSError as exc:  # stdout full (> /dev/full) or its reader gone (| head)
+        _drop_stdout()
+        sys.stderr.write(f"demoplan: error: standard output: {_stdout_reason(exc)}\n")
+        raise SystemExit(1) from None
+
+
+def _drop_stdout() -> None:
+    """Point stdout at /dev/null, so that Python's flush at exit cannot fail again."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+    except (OSError, ValueError):
+        pass
+
+
+def _stdout_reason(exc: OSError) -> str:
+    from demoplan.fileio import os_reason
+
+    if exc.errno == errno.EPIPE:
+        return "the pipe was closed by its reader"
+    return os_reason(exc)
 
 
 def _dispatch() -> None:
