@@ -58,8 +58,10 @@ def _reported_errors() -> Iterator[None]:
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
-        from demoplan.launcher import interrupted_exit_code
+        from demoplan.launcher import interrupted_by_signal, interrupted_exit_code
 
+        if interrupted_by_signal():
+            raise  # demoplan.launcher.main reports it, once
         sys.stderr.write("demoplan: interrupted\n")
         raise typer.Exit(interrupted_exit_code(exc)) from None
 

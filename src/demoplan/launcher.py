@@ -181,8 +181,21 @@ def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
     return TERMINATED_EXIT if isinstance(exc, Terminated) else INTERRUPTED_EXIT
 
 
-def _terminate(signum: int, frame: object) -> None:
-    raise Terminated
+_signals_received: list[int] = []  # SIGINT / SIGTERM, in the order they came
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    """Ctrl-C or SIGTERM: remember it (a library may catch the exception and
+    exit in its own way — typer turns Ctrl-C into a silent exit 130) and stop."""
+    import signal
+
+    _signals_received.append(signum)
+    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+def interrupted_by_signal() -> bool:
+    """Whether ``main`` stopped the command on a signal (it reports it once)."""
+    return bool(_signals_received)
 
 
 def main() -> None:
@@ -193,8 +206,8 @@ def main() -> None:
     _started_by_main = True
     # Ctrl-C raises KeyboardInterrupt even where the process was started with
     # SIGINT ignored (a background job of a script); SIGTERM does the same.
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGINT, _on_signal)
+    signal.signal(signal.SIGTERM, _on_signal)
     # Started with stdout (or stderr) closed: what would be printed is dropped,
     # as if sent to /dev/null; a command whose job is a file still does it.
     if sys.stdout is None:
@@ -207,18 +220,37 @@ def main() -> None:
         reconfigure = getattr(stream, "reconfigure", None)
         if reconfigure is not None:
             reconfigure(errors="backslashreplace")
+    code = 1
     try:
         try:
-            _dispatch()
+            code = _dispatch()
         finally:
-            sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
-    except KeyboardInterrupt as exc:
-        sys.stderr.write("demoplan: interrupted\n")
-        raise SystemExit(interrupted_exit_code(exc)) from None
-    except OSError as exc:  # stdout full (> /dev/full) or its reader gone (| head)
+            if not _signals_received:
+                sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
+    except KeyboardInterrupt:
+        if not _signals_received:  # raised without a signal (a test, a debugger)
+            _signals_received.append(signal.SIGINT)
+    except Exception as exc:
+        if not _signals_received:
+            if not isinstance(exc, OSError):
+                raise
+            # stdout full (> /dev/full) or its reader gone (| head)
+            _drop_stdout()
+            sys.stderr.write(f"demoplan: error: standard output: {_stdout_reason(exc)}\n")
+            raise SystemExit(1) from None
+        # else the signal surfaced as another error: a C extension interrupted
+        # while it loads reports "ImportError: initialization failed"
+    # The command is over: a signal now would only turn a finished command's
+    # exit into Python's own KeyboardInterrupt report.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    if _signals_received:
+        # Every command stops the same way, wherever the signal found it.
         _drop_stdout()
-        sys.stderr.write(f"demoplan: error: standard output: {_stdout_reason(exc)}\n")
-        raise SystemExit(1) from None
+        sys.stderr.write("demoplan: interrupted\n")
+        terminated = signal.SIGTERM in _signals_received
+        raise SystemExit(TERMINATED_EXIT if terminated else INTERRUPTED_EXIT)
+    raise SystemExit(code)
 
 
 def _drop_stdout() -> None:
@@ -239,16 +271,37 @@ def _stdout_reason(exc: OSError) -> str:
     return os_reason(exc)
 
 
-def _dispatch() -> None:
+def _dispatch() -> int:
+    """Run the command; its exit code. Usage errors are one line (SPEC §4)."""
     args = sys.argv[1:]
     if args[:1] == ["solve"] and not sys.stderr.isatty():
         options = parse_solve_options(args[1:])
         if options is not None:
             sys.stdout.flush()
-            raise SystemExit(run_solve(options))
+            return run_solve(options)
     from demoplan.cli import app
 
-    app()
+    try:
+        result = app(standalone_mode=False)
+    except Exception as exc:  # click's (or typer's vendored click's) exceptions
+        if not hasattr(exc, "format_message") or not hasattr(exc, "exit_code"):
+            raise
+        if type(exc).__name__ == "NoArgsIsHelpError":  # `demoplan` alone: the help
+            exc.show()  # type: ignore[attr-defined]
+            return int(exc.exit_code)
+        return _usage_error(exc)
+    return result if isinstance(result, int) else 0
+
+
+def _usage_error(exc: Any) -> int:
+    """A click usage error (or Abort) as one line naming the command."""
+    context = getattr(exc, "ctx", None)
+    command = context.command_path if context is not None else "demoplan"
+    message = " ".join(str(exc.format_message()).split()).rstrip(".") or "aborted"
+    hint = f"; see {command} --help" if type(exc).__name__ != "Abort" else ""
+    name = command.removeprefix("demoplan").strip() or "demoplan"
+    sys.stderr.write(f"demoplan: error: {name}: {message}{hint}\n")
+    return int(exc.exit_code) if exc.exit_code else 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,142 @@
+"""Ctrl-C at a random moment of any command (issue 14): exit 130 within a
+second with ``demoplan: interrupted``, and no file new or changed — or, if the
+signal came after the command's outputs were written, those outputs complete.
+A command that finished before the signal exits 0 with complete outputs.
+
+The first tenth of a second or so of a process belongs to Python's own
+start-up (site-packages, before any of demoplan runs); a signal there gets
+Python's own KeyboardInterrupt report. So the moments are drawn from 1.2 times
+the time the executable takes to start and refuse a missing file, measured
+first (the machine may be loaded).
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.helpers import EXAMPLES
+from tests.hostile.harness import DEMOPLAN, NOT_SEEN, fingerprint
+
+COMMANDS: dict[str, tuple[list[str], list[str], float]] = {
+    # name: (arguments, outputs, seconds over which to spread the signal)
+    "learn": (["learn", "set_table", "stream.csv", "-o", "out.json"], ["out.json"], 1.5),
+    "solve": (["solve", "hard.xml", "--timeout", "30"], [], 2.0),
+    "plan": (["plan", "model.json", "scene.json", "--plot", "plan.png"], ["plan.png"], 0.8),
+    "run": (["run", "model.json", "scene.json", "--json"], [], 0.45),
+    "run-mujoco": (
+        ["run", "model.json", "scene.json", "--sim", "mujoco", "--frames", "frames"],
+        ["frames"],
+        3.0,
+    ),
+    "perceive": (
+        ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21", "-o", "s.json"],
+        ["s.json"],
+        1.1,
+    ),
+    "segment": (
+        ["segment", "stream.csv", "-o", "d.json", "--plot", "d.png"],
+        ["d.json", "d.png"],
+        1.1,
+    ),
+    "experiments": (["experiments", "--out", "report"], ["report"], 6.0),
+}
+MOMENTS = 4  # per command
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
+    from demoplan.planning.xml import save_problem
+
+    folder = tmp_path_factory.mktemp("interrupt")
+    shutil.copytree(EXAMPLES / "set_table", folder / "set_table")
+    shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
+    shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
+    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
+    save_problem(parking_problem(30, 1, **PARKING_FAMILIES["parking-dense"]), folder / "hard.xml")
+    done = subprocess.run(
+        [DEMOPLAN, "learn", "demos.json", "--paper", "-o", "model.json"],
+        cwd=folder,
+        capture_output=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
+@pytest.fixture(scope="module")
+def started(workspace: Path) -> float:
+    """Seconds the executable needs to start (and answer at once), the longest of three."""
+    times = []
+    for _ in range(3):
+        began = time.monotonic()
+        subprocess.run(
+            [DEMOPLAN, "solve", "missing.xml"], cwd=workspace, capture_output=True, check=False
+        )
+        times.append(time.monotonic() - began)
+    return max(times)
+
+
+def _complete(path: Path) -> bool:
+    """An output as a finished command leaves it: parseable JSON, a PNG with its
+    end chunk, a folder of complete files."""
+    if path.is_dir():
+        return all(_complete(p) for p in path.iterdir())
+    data = path.read_bytes()
+    if path.suffix == ".json":
+        json.loads(data)
+        return True
+    if path.suffix == ".png":
+        return data.endswith(b"IEND\xaeB`\x82")
+    return bool(data)
+
+
+CASES = [(name, k) for name in COMMANDS for k in range(MOMENTS)]
+
+
+@pytest.mark.parametrize(("name", "k"), CASES, ids=[f"{n}-{k}" for n, k in CASES])
+def test_ctrl_c_at_a_random_moment(
+    workspace: Path, started: float, tmp_path: Path, name: str, k: int
+) -> None:
+    args, outputs, spread = COMMANDS[name]
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder)
+    before = fingerprint(folder)
+    earliest = max(0.15, 1.2 * started)
+    moment = random.Random(f"{name}-{k}").uniform(earliest, max(spread, earliest + 0.3))
+    process = subprocess.Popen(
+        [DEMOPLAN, *args], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    time.sleep(moment)
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    try:
+        _, err = process.communicate(timeout=5)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        raise AssertionError(f"{name}: still running 5 s after Ctrl-C at {moment:.2f} s") from None
+    seconds = time.monotonic() - sent
+    for text in NOT_SEEN:
+        assert text not in err, err
+    if process.returncode == 0:  # finished before the signal
+        assert all(_complete(folder / o) for o in outputs)
+        return
+    assert process.returncode == 130, f"exit {process.returncode} at {moment:.2f} s: {err}"
+    assert seconds < 1.0, f"{seconds:.2f} s after Ctrl-C at {moment:.2f} s"
+    assert err.splitlines()[-1:] == ["demoplan: interrupted"], err
+    after = fingerprint(folder)
+    if after != before:  # only if the outputs had been written: then complete
+        changed = {p.split("/")[0] for p in set(after) ^ set(before)} | {
+            p.split("/")[0] for p in after if p in before and after[p] != before[p]
+        }
+        assert changed <= set(outputs), f"changed {sorted(changed)} at {moment:.2f} s"
+        assert all(_complete(folder / o) for o in changed), f"incomplete at {moment:.2f} s"
