@@ -520,6 +520,10 @@ def plan(
     from demoplan.scenes.plan import plan_in_scene
 
     with _reported_errors():
+        if plot is not None:
+            from demoplan.plotting import check_figure_path
+
+            check_figure_path(plot, "--plot")
         model, scene = _scene_inputs(model_path, scene_path)
         budget = command_budget(max_nodes, timeout)
         settings = _geometry_settings(freespace)
@@ -879,8 +883,10 @@ def segment(
     rest on a support (docs/segmentation.md); a push along the support is
     reported, not a step; a pause in the air is not a placement.
     """
+    from demoplan.fileio import StagedOutputs, dump_json
     from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
-    from demoplan.segmentation import load_stream, plot_segmentation, write_demonstration
+    from demoplan.plotting import check_figure_path
+    from demoplan.segmentation import load_stream
     from demoplan.segmentation import segment as segment_stream
     from demoplan.segmentation.types import parse_object_patterns
 
@@ -889,6 +895,7 @@ def segment(
         _refuse_overwriting_inputs(output, inputs)
         if plot is not None:
             _refuse_overwriting_inputs(plot, [*inputs, output])
+            check_figure_path(plot, "--plot")
         stream = load_stream(stream_path, frame=frame, objects=parse_object_patterns(objects))
         geometry = (
             load_object_geometry(objects_file, known=stream.objects)
@@ -909,14 +916,12 @@ def segment(
                     field="objects",
                 )
         demo = found.to_demonstration(name or stream_path.stem, objects=geometry)
-        write_demonstration(demo, output)
-        if plot is not None:
-            try:
-                plot_segmentation(found, plot)
-            except ImportError:
-                raise InputError(
-                    "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
-                ) from None
+        # The demonstration and the plot are written both or neither.
+        with StagedOutputs() as outputs:
+            text = dump_json(demonstration_to_dict(demo))
+            outputs.add(output, text.encode("utf-8", "backslashreplace"))  # see write_atomic
+            if plot is not None:
+                outputs.add(plot, _segmentation_figure(found, plot))
         if json_output:
             _print_json(demonstration_to_dict(demo))
             return
@@ -927,6 +932,30 @@ def segment(
             markup=False,
             highlight=False,
         )
+
+
+def _segmentation_figure(found: Any, plot: Path) -> bytes:
+    """The segmentation figure, encoded for ``plot``."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    from demoplan.plotting import figure_bytes
+    from demoplan.segmentation import plot_segmentation
+
+    axes = plot_segmentation(found)
+    if not axes:
+        raise InputError("nothing to draw (no object moved)", source=str(plot), field="--plot")
+    figure: Any = axes[0].figure
+    try:
+        return figure_bytes(figure, plot)
+    finally:
+        plt.close(figure)
 
 
 def _print_steps(title: str, found: Any) -> None:

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FORMAT_VERSION",
+    "StagedOutputs",
     "check_format",
     "describe_validation_error",
     "display_path",
@@ -355,6 +356,73 @@ def locked_for_update(path: Path, wait: float = UPDATE_WAIT_SECONDS) -> Iterator
         yield
     finally:
         os.close(fd)  # releases the lock
+
+
+class StagedOutputs:
+    """The output files of one command, written all or none.
+
+    :meth:`add` stages each in a temporary file beside its target; leaving the
+    ``with`` block normally renames them all into place (with SIGINT and
+    SIGTERM held back meanwhile, so that Ctrl-C cannot split the renames);
+    leaving it by an exception — a failed plot, a full disk, Ctrl-C — removes
+    the temporary files and leaves every target as it was.
+    """
+
+    def __init__(self) -> None:
+        self._staged: list[tuple[Path, Path]] = []
+
+    def __enter__(self) -> StagedOutputs:
+        return self
+
+    def add(self, path: Path, data: bytes) -> None:
+        path = Path(path)
+        if path.is_dir():
+            raise InputError("is a folder; a file name expected", source=display_path(path))
+        folder = path.parent if str(path.parent) else Path()
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        except OSError as exc:
+            reason = os_reason(exc)
+            raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
+        temporary = Path(name)
+        self._staged.append((temporary, path))
+        try:
+            with os.fdopen(fd, "wb") as handle:
+                _set_mode(handle.fileno(), path)
+                handle.write(data)
+                handle.flush()
+                os.fsync(handle.fileno())
+        except OSError as exc:
+            reason = os_reason(exc)
+            raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
+
+    def __exit__(self, kind: object, error: object, trace: object) -> None:
+        if kind is not None:
+            self._discard()
+            return
+        import signal
+
+        held = {signal.SIGINT, signal.SIGTERM}
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+        try:
+            for temporary, path in self._staged:
+                try:
+                    temporary.replace(path)
+                except OSError as exc:
+                    self._discard()
+                    raise InputError(
+                        f"cannot write ({os_reason(exc)})", source=display_path(path)
+                    ) from None
+            for folder in {path.parent for _, path in self._staged}:
+                _sync_folder(folder if str(folder) else Path())
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+    def _discard(self) -> None:
+        for temporary, _ in self._staged:
+            temporary.unlink(missing_ok=True)
+        self._staged.clear()
 
 
 def write_atomic(path: Path, text: str) -> None:

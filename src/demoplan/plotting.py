@@ -258,15 +258,47 @@ def plot_scene_plan(
     return ax
 
 
+FIGURE_FORMATS = frozenset(
+    {"png", "pdf", "svg", "svgz", "jpg", "jpeg", "tif", "tiff", "webp", "eps", "ps", "gif"}
+)
+"""Image formats a figure can be written in, by file extension."""
+
+
+def check_figure_path(path: Path, option: str) -> None:
+    """One InputError, before any work, if ``path`` cannot take a figure: a
+    folder, or an extension that names no image format."""
+    from demoplan.errors import InputError
+    from demoplan.fileio import display_path
+
+    if path.is_dir():
+        raise InputError(
+            "is a folder; an image file name expected", source=display_path(path), field=option
+        )
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in FIGURE_FORMATS:
+        raise InputError(
+            f"'.{suffix}' is not an image format; one of "
+            f"{', '.join('.' + f for f in sorted(FIGURE_FORMATS))} expected",
+            source=display_path(path),
+            field=option,
+        )
+
+
+def figure_bytes(figure: Any, path: Path, dpi: int = 110) -> bytes:
+    """``figure`` encoded in the image format of ``path``'s extension."""
+    import io
+
+    check_figure_path(path, "figure")
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=path.suffix.lower().lstrip("."), dpi=dpi)
+    return buffer.getvalue()
+
+
 def save_figure(figure: Any, path: Path, dpi: int = 110) -> None:
     """Write ``figure`` to ``path`` atomically (a temporary file, then a rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.tmp{path.suffix}")
-    try:
-        figure.savefig(temporary, dpi=dpi)
-        temporary.replace(path)
-    finally:
-        temporary.unlink(missing_ok=True)
+    from demoplan.fileio import write_atomic_bytes
+
+    write_atomic_bytes(path, figure_bytes(figure, path, dpi))
 
 
 def save_scene_plan(

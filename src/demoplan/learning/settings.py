@@ -71,6 +71,13 @@ class LearningSettings:
             ):
                 note = " (or null: estimated from the demonstrations)" if name in _ESTIMATED else ""
                 raise InputError(f"expected a positive number{note}, got {value!r}", field=name)
+            if value > _UPPER[name]:
+                raise InputError(
+                    f"{value:g} is beyond any tabletop; at most {_UPPER[name]:g} "
+                    f"{'m' if name.startswith('position') else 'degrees'} expected "
+                    "(docs/limits.md)",
+                    field=name,
+                )
             object.__setattr__(self, name, float(value))
         level = self.significance
         if isinstance(level, bool) or not isinstance(level, int | float) or not 0 <= level < 1:
@@ -90,6 +97,12 @@ class LearningSettings:
 
 
 _ESTIMATED = frozenset({"position_noise", "orientation_noise"})
+_UPPER = {  # physically meaningful bounds (docs/limits.md): 10 m, a full turn
+    "position_noise": 10.0,
+    "position_separation": 10.0,
+    "orientation_noise": 360.0,
+    "orientation_separation": 360.0,
+}
 _POSITIVE = (
     "position_noise",
     "orientation_noise",

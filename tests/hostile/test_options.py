@@ -1,0 +1,105 @@
+"""Hostile option values and outputs, hand-written (issue 14): every one is
+refused in one line naming the option (or the file), with an exit code of
+SPEC §4, quickly, and no file in the working folder changes — a command with
+several outputs writes none of them when one fails."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tests.helpers import EXAMPLES
+from tests.hostile.harness import check_refused, fingerprint, run
+
+PERCEIVE = ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21"]
+# (arguments, a name the error line must contain)
+CASES: list[tuple[list[str], str]] = (
+    [
+        (["solve", "problem.xml", "--timeout", value], "--timeout")
+        for value in ("-1", "nan", "abc", "")
+    ]
+    + [
+        (["solve", "problem.xml", "--max-nodes", value], "--max-nodes")
+        for value in ("-1", "abc", "1e3")
+    ]
+    + [
+        (["solve", "problem.xml", "--search", "dfs"], "--search"),
+        (["plan", "model.json", "scene.json", "--timeout", "-1"], "--timeout"),
+        (["plan", "model.json", "scene.json", "--timeout", "nan"], "--timeout"),
+        (["plan", "model.json", "scene.json", "--plot", "bad.xyz"], "--plot"),
+        (["plan", "model.json", "scene.json", "--plot", "folder"], "--plot"),
+        (["plan", "model.json", "scene.json", "--freespace", "-1"], "--freespace"),
+        (["plan", "model.json", "scene.json", "--freespace", "100000000"], "--freespace"),
+        (["problem", "model.json", "scene.json", "--goal", "999", "-o", "p.xml"], "--goal"),
+        (["problem", "model.json", "scene.json", "--goal", "-1", "-o", "p.xml"], "--goal"),
+        (["problem", "model.json", "scene.json", "-o", "folder"], "folder"),
+        (["run", "model.json", "scene.json", "--seed", "-1"], "--seed"),
+        (["run", "model.json", "scene.json", "--faults", "garbage"], "--faults"),
+        (["run", "model.json", "scene.json", "--faults", "drop=2"], "--faults"),
+        (["run", "model.json", "scene.json", "--faults", "drop=nan"], "--faults"),
+        (["run", "model.json", "scene.json", "--faults", "teleport=0.1"], "--faults"),
+        (["run", "model.json", "scene.json", "--sim", "unreal"], "--sim"),
+        (["run", "model.json", "scene.json", "--timeout", "-5"], "--timeout"),
+        ([*PERCEIVE[:2], "--px-per-m", "0", "--origin", "0", "0"], "--px-per-m"),
+        ([*PERCEIVE[:2], "--px-per-m", "-5", "--origin", "0", "0"], "--px-per-m"),
+        ([*PERCEIVE[:2], "--px-per-m", "nan", "--origin", "0", "0"], "--px-per-m"),
+        ([*PERCEIVE[:2], "--px-per-m", "1e308", "--origin", "0", "0"], "--px-per-m"),
+        ([*PERCEIVE[:2], "--px-per-m", "1000", "--origin", "nan", "0"], "--origin"),
+        ([*PERCEIVE[:2], "--px-per-m", "1000", "--origin", "1e308", "0"], "--origin"),
+        ([*PERCEIVE, "--side", "-1"], "--side"),
+        ([*PERCEIVE, "--side", "1e308"], "--side"),
+        ([*PERCEIVE, "--side", "nan"], "--side"),
+        ([*PERCEIVE, "-o", "folder"], "folder"),
+        (["learn", "demos.json", "-o", "out.json", "--position-noise", "-1"], "position"),
+        (["learn", "demos.json", "-o", "out.json", "--position-noise", "nan"], "position"),
+        (["learn", "demos.json", "-o", "out.json", "--position-noise", "1e308"], "position"),
+        (["learn", "demos.json", "-o", "out.json", "--max-clusters", "-1"], "max"),
+        (["learn", "demos.json", "-o", "out.json", "--significance", "2"], "significance"),
+        (["learn", "demos.json", "-o", "out.json", "--require", "A<"], "require"),
+        (["learn", "demos.json", "-o", "out.json", "--require", "A<A"], "require"),
+        (["learn", "demos.json", "-o", "out.json", "--require", "nothing<wood"], "require"),
+        (["learn", "demos.json", "-o", "folder"], "folder"),
+        (["learn", "demos.json", "-o", "demos.json"], "demos.json"),
+        (["learn", "demos.json"], "-o"),
+        (["segment", "stream.csv", "-o", "d.json", "--plot", "bad.xyz"], "--plot"),
+        (["segment", "stream.csv", "-o", "d.json", "--plot", "folder"], "--plot"),
+        (["segment", "stream.csv", "-o", "d.json", "--plot", "/proc/no/such.png"], "such.png"),
+        (["segment", "stream.csv", "-o", "/proc/no/d.json", "--plot", "d.png"], "d.json"),
+        (["segment", "stream.csv", "-o", "d.json", "--set", "bogus=1"], "bogus"),
+        (["segment", "stream.csv", "-o", "d.json", "--set", "start_speed=nan"], "start_speed"),
+        (["segment", "stream.csv", "-o", "d.json", "--set", "start_speed=-1"], "start_speed"),
+        (["segment", "stream.csv", "-o", "stream.csv"], "stream.csv"),
+        (["pddl", "problem.xml", "-o", "problem.xml"], "problem.xml"),
+        (["experiments", "--out", "demos.json"], "demos.json"),
+        (["show", "model.json", "--decimals", "-1"], "--decimals"),
+        (["nosuchcommand"], "nosuchcommand"),
+        (["learn", "--no-such-option", "demos.json"], "--no-such-option"),
+    ]
+)
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("options")
+    shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
+    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
+    shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
+    shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
+    (folder / "folder").mkdir()
+    assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
+    return folder
+
+
+@pytest.mark.parametrize(("args", "name"), CASES, ids=[" ".join(a) for a, _ in CASES])
+def test_a_hostile_option_is_refused_in_one_line(
+    workspace: Path, tmp_path: Path, args: list[str], name: str
+) -> None:
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder)
+    before = fingerprint(folder)
+    answer = run(args, folder, timeout=40)
+    check_refused(answer, [name], max_seconds=20)
+    assert fingerprint(folder) == before, f"files changed: {answer}"
