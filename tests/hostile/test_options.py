@@ -74,6 +74,8 @@ CASES: list[tuple[list[str], str]] = (
         (["pddl", "problem.xml", "-o", "problem.xml"], "problem.xml"),
         (["experiments", "--out", "demos.json"], "demos.json"),
         (["show", "model.json", "--decimals", "-1"], "--decimals"),
+        (["perceive", "strip.png", "--px-per-m", "1000", "--origin", "0", "0"], "strip.png"),
+        (["run", "model.json", "tiny-scene.json", "--sim", "mujoco"], "objects.wood.size"),
         (["nosuchcommand"], "nosuchcommand"),
         (["learn", "--no-such-option", "demos.json"], "--no-such-option"),
     ]
@@ -89,6 +91,16 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
     (folder / "folder").mkdir()
+    import json
+
+    import numpy as np
+    from PIL import Image
+
+    # a 1 × 40,000-pixel strip: under the pixel count, over the side limit
+    Image.fromarray(np.zeros((1, 40_000, 3), np.uint8)).save(folder / "strip.png")
+    scene = json.loads((folder / "scene.json").read_text())
+    scene["objects"]["wood"]["size"] = [0.0001, 0.0001, 0.0001]  # 0.1 mm: in bounds
+    (folder / "tiny-scene.json").write_text(json.dumps(scene))
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
     return folder
 

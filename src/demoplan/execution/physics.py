@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.errors import InputError
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
@@ -52,6 +53,7 @@ CLEARANCE = 0.01  # m: gap between an open finger and the object's side
 OBSTACLES = 2
 TOP_PX_PER_M = 1000.0  # the top camera: 1 px = 1 mm
 PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
+MIN_PHYSICS_EXTENT = 0.002  # m: smaller objects get no mass or inertia MuJoCo accepts
 DENSITY = 600.0  # kg/m³: wooden blocks
 
 
@@ -193,9 +195,24 @@ class MujocoWorld:
         self.top_camera = Camera(TOP_PX_PER_M, (x0, y0))
         self.top_size = (round((x1 - x0) * TOP_PX_PER_M), round((y1 - y0) * TOP_PX_PER_M))
         offscreen = (max(1200, self.top_size[0]), max(1200, self.top_size[1]))
-        self.model = mujoco.MjModel.from_xml_string(
-            scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0), offscreen)
-        )
+        for obj in scene.objects:
+            if obj.geometry is not None and min(obj.geometry.size) < MIN_PHYSICS_EXTENT:
+                raise InputError(
+                    f"extent {min(obj.geometry.size) * 1000:g} mm is below the "
+                    f"{MIN_PHYSICS_EXTENT * 1000:g} mm the physics world simulates; "
+                    "--sim kinematic takes it",
+                    source="--sim mujoco",
+                    field=f"objects.{obj.name}.size",
+                )
+        try:
+            self.model = mujoco.MjModel.from_xml_string(
+                scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0), offscreen)
+            )
+        except ValueError as exc:  # MuJoCo's compiler refused the scene
+            raise InputError(
+                f"MuJoCo cannot build the scene ({str(exc).splitlines()[0]})",
+                source="--sim mujoco",
+            ) from None
         self.data = mujoco.MjData(self.model)
         self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
         self.names = [o.name for o in scene.objects]

@@ -20,6 +20,7 @@ __all__ = ["Camera", "load_image", "save_image"]
 
 MAX_PIXELS = 50_000_000  # a larger "image" is a mistake or an attack (decompression bomb)
 MAX_IMAGE_BYTES = 256 * 1024 * 1024  # the file itself
+MAX_SIDE = 20_000  # pixels on a side: a 1 × 40,000,000 strip is no camera image
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,10 +48,10 @@ def load_image(path: str | Path) -> np.ndarray:
     try:
         with Image.open(path) as opened:  # reads the header only
             width, height = opened.size
-            if width * height > MAX_PIXELS:
+            if width * height > MAX_PIXELS or max(width, height) > MAX_SIDE:
                 raise InputError(
                     f"not a readable image ({width} × {height} pixels; at most "
-                    f"{MAX_PIXELS:,} expected)",
+                    f"{MAX_PIXELS:,} pixels and {MAX_SIDE:,} on a side expected)",
                     source=str(path),
                 )
             if opened.mode in {"I", "I;16", "I;16B", "I;16L", "I;16N"}:
@@ -61,6 +62,8 @@ def load_image(path: str | Path) -> np.ndarray:
                 return np.repeat(eight[..., None], 3, axis=2)
             rgb = opened.convert("RGB")
             return np.asarray(rgb, dtype=np.uint8).copy()
+    except InputError:
+        raise
     except FileNotFoundError:
         raise InputError("no such file", source=str(path)) from None
     except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as exc:

@@ -1,0 +1,59 @@
+"""The hostile suite's report: cases per command and time, printed after the run."""
+
+from __future__ import annotations
+
+import re
+from collections import defaultdict
+from typing import Any
+
+_reports: list[tuple[str, str, float, str]] = []  # (file, command, seconds, outcome)
+
+# test_generated's tests run many hypothesis examples each: their command, as
+# in the test's name, and how many examples (its max_examples, derandomized).
+_GENERATED = {
+    "test_learn_on_a_mutated_demonstration_file": ("learn", 70),
+    "test_plan_in_a_mutated_scene": ("plan", 60),
+    "test_problem_for_a_mutated_scene": ("problem", 30),
+    "test_show_and_plan_with_a_mutated_model": ("show/plan", 60),
+    "test_solve_a_mutated_problem": ("solve", 60),
+    "test_segment_a_mutated_stream": ("segment", 40),
+}
+
+
+def pytest_runtest_logreport(report: Any) -> None:
+    if "tests/hostile/" not in report.nodeid or report.when != "call":
+        return
+    path, _, name = report.nodeid.partition("::")
+    function, _, param = name.partition("[")
+    param = param.removesuffix("]")
+    command = re.split(r"[-\s]", param, maxsplit=1)[0] if param else function
+    if function == "test_twenty_pairs_of_simultaneous_updates_lose_no_demonstration":
+        command = "learn --update"
+    _reports.append((path.rsplit("/", 1)[-1], command, report.duration, report.outcome))
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    if not _reports:
+        return
+    cases: dict[str, int] = defaultdict(int)
+    seconds: dict[str, float] = defaultdict(float)
+    failed = 0
+    generated = handwritten = 0
+    for _, command, duration, outcome in _reports:
+        if command in _GENERATED:
+            command, count = _GENERATED[command]
+            generated += count
+        else:
+            count = 1
+            handwritten += 1
+        cases[command] += count
+        seconds[command] += duration
+        failed += outcome == "failed"
+    write = terminalreporter.write_line
+    write("")
+    write(
+        f"hostile suite: {handwritten} hand-written cases and {generated} generated "
+        f"examples, {failed} failed; per command (cases, seconds summed over workers):"
+    )
+    for command in sorted(cases, key=lambda c: -cases[c]):
+        write(f"  {command:<16} {cases[command]:>5} cases  {seconds[command]:7.1f} s")
