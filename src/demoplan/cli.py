@@ -66,6 +66,18 @@ def _reported_errors() -> Iterator[None]:
         raise typer.Exit(interrupted_exit_code(exc)) from None
 
 
+@contextmanager
+def _model_named(path: Path) -> Iterator[None]:
+    """A fault in the model found only while planning (a cycle of references)
+    names the model file, not "task model"."""
+    try:
+        yield
+    except InputError as exc:
+        if exc.source != "task model":
+            raise
+        raise InputError(exc.message, source=str(path), field=exc.field) from None
+
+
 def _version(value: bool) -> None:
     if value:
         _stdout.print(f"demoplan {__version__}", markup=False)
@@ -519,7 +531,7 @@ def plan(
     from demoplan.planning.problem import optimality_line
     from demoplan.scenes.plan import plan_in_scene
 
-    with _reported_errors():
+    with _reported_errors(), _model_named(model_path):
         if plot is not None:
             from demoplan.plotting import check_figure_path
 
@@ -632,7 +644,7 @@ def problem(
     from demoplan.fileio import write_atomic
     from demoplan.scenes.plan import scene_problems
 
-    with _reported_errors():
+    with _reported_errors(), _model_named(model_path):
         if grounded and not pddl_output:
             raise UsageError("--grounded chooses the PDDL form: it needs --pddl")
         _refuse_overwriting_inputs(output, [model_path, scene_path])
@@ -714,7 +726,7 @@ def run(
     from demoplan.execution.faults import parse_faults
     from demoplan.execution.runner import run_task
 
-    with _reported_errors():
+    with _reported_errors(), _model_named(model_path):
         model, scene = _scene_inputs(model_path, scene_path)
         fault_rates = parse_faults(faults)
         live = _stderr.is_terminal and not json_output

@@ -76,7 +76,11 @@ CASES: list[tuple[list[str], str]] = (
         (["show", "model.json", "--decimals", "-1"], "--decimals"),
         (["perceive", "strip.png", "--px-per-m", "1000", "--origin", "0", "0"], "strip.png"),
         (["run", "model.json", "tiny-scene.json", "--sim", "mujoco"], "objects.wood.size"),
-        (["nosuchcommand"], "nosuchcommand"),
+        # a model whose states refer to each other in a cycle: found while planning
+    (["plan", "cycle-model.json", "scene.json"], "cycle-model.json"),
+    (["run", "cycle-model.json", "scene.json"], "cycle-model.json"),
+    (["problem", "cycle-model.json", "scene.json", "-o", "p.xml"], "cycle-model.json"),
+    (["nosuchcommand"], "nosuchcommand"),
         (["learn", "--no-such-option", "demos.json"], "--no-such-option"),
     ]
 )
@@ -102,6 +106,10 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     scene["objects"]["wood"]["size"] = [0.0001, 0.0001, 0.0001]  # 0.1 mm: in bounds
     (folder / "tiny-scene.json").write_text(json.dumps(scene))
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
+    model = json.loads((folder / "model.json").read_text())
+    wood = next(s for s in model["states"] if s["object"] == "wood")
+    wood["position"]["reference"] = "red"  # and red's is wood
+    (folder / "cycle-model.json").write_text(json.dumps(model))
     return folder
 
 
