@@ -77,10 +77,10 @@ CASES: list[tuple[list[str], str]] = (
         (["perceive", "strip.png", "--px-per-m", "1000", "--origin", "0", "0"], "strip.png"),
         (["run", "model.json", "tiny-scene.json", "--sim", "mujoco"], "objects.wood.size"),
         # a model whose states refer to each other in a cycle: found while planning
-    (["plan", "cycle-model.json", "scene.json"], "cycle-model.json"),
-    (["run", "cycle-model.json", "scene.json"], "cycle-model.json"),
-    (["problem", "cycle-model.json", "scene.json", "-o", "p.xml"], "cycle-model.json"),
-    (["nosuchcommand"], "nosuchcommand"),
+        (["plan", "cycle-model.json", "scene.json"], "cycle-model.json"),
+        (["run", "cycle-model.json", "scene.json"], "cycle-model.json"),
+        (["problem", "cycle-model.json", "scene.json", "-o", "p.xml"], "cycle-model.json"),
+        (["nosuchcommand"], "nosuchcommand"),
         (["learn", "--no-such-option", "demos.json"], "--no-such-option"),
     ]
 )
