@@ -43,6 +43,9 @@ app = typer.Typer(
 _stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
 _stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
+LEARNING_TIMEOUT = 300.0
+"""Seconds ``learn`` may take by default (docs/limits.md)."""
+
 
 @contextmanager
 def _reported_errors() -> Iterator[None]:
@@ -236,6 +239,13 @@ def learn(
             show_default=False,
         ),
     ] = None,
+    timeout: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            help="Seconds learning may take before it stops with exit 4 (inf: no limit).",
+        ),
+    ] = LEARNING_TIMEOUT,
     paper: Annotated[
         bool,
         typer.Option(
@@ -282,6 +292,7 @@ def learn(
     from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
+    from demoplan.learning.budget import time_budget
     from demoplan.learning.changes import model_changes
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.settings import paper_overrides
@@ -309,7 +320,10 @@ def learn(
             from_file = _read_requirements(require_file)
             requirements += from_file
         # Two updates of one model at once both land: the second waits (fileio).
-        with locked_for_update(update) if update is not None else nullcontext():
+        with (
+            locked_for_update(update) if update is not None else nullcontext(),
+            time_budget(timeout),
+        ):
             try:
                 new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
                 changes = None

@@ -63,6 +63,8 @@ CASES: list[tuple[list[str], str]] = (
         (["learn", "demos.json", "-o", "folder"], "folder"),
         (["learn", "demos.json", "-o", "demos.json"], "demos.json"),
         (["learn", "demos.json"], "-o"),
+    (["learn", "demos.json", "-o", "out.json", "--timeout", "0.0001"], "--timeout"),
+    (["learn", "demos.json", "-o", "out.json", "--timeout", "-1"], "--timeout"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "bad.xyz"], "--plot"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "folder"], "--plot"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "/proc/no/such.png"], "such.png"),

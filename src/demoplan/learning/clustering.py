@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demoplan import rotations
+from demoplan.learning.budget import check_time
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -537,6 +538,7 @@ def select_clusterings(
         active = [scan for scan in scans if not scan.done]
         if not active:
             break
+        check_time()  # the learning budget (demoplan.learning.budget), if one is set
         if c == 1:
             batch_labels = np.zeros((len(active), n), dtype=np.intp)
         else:
