@@ -45,6 +45,8 @@ _stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
 LEARNING_TIMEOUT = 300.0
 """Seconds ``learn`` may take by default (docs/limits.md)."""
+PERCEPTION_TIMEOUT = 60.0
+"""Seconds ``perceive`` may take by default (docs/limits.md)."""
 
 
 @contextmanager
@@ -288,11 +290,11 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    from demoplan.deadline import time_budget
     from demoplan.inputs import load_inputs
     from demoplan.learning import LearningSettings
     from demoplan.learning import learn as learn_model
     from demoplan.learning import update as update_model
-    from demoplan.learning.budget import time_budget
     from demoplan.learning.changes import model_changes
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.settings import paper_overrides
@@ -322,7 +324,11 @@ def learn(
         # Two updates of one model at once both land: the second waits (fileio).
         with (
             locked_for_update(update) if update is not None else nullcontext(),
-            time_budget(timeout),
+            time_budget(
+                timeout,
+                f"learning stopped at its time budget (--timeout {timeout:g} s); give it more "
+                "time, or for many scattered placements cap the clusters (--max-clusters 5)",
+            ),
         ):
             try:
                 new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
@@ -819,8 +825,15 @@ def perceive(
             min=1e-4, help="The blocks' side (m), when known: sizes 15 % off it are not blocks."
         ),
     ] = None,
+    timeout: Annotated[
+        float,
+        typer.Option(
+            min=0.0, help="Seconds perception may take before it stops with exit 4 (inf: none)."
+        ),
+    ] = PERCEPTION_TIMEOUT,
 ) -> None:
     """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
+    from demoplan.deadline import time_budget
     from demoplan.fileio import dump_json, write_atomic
     from demoplan.perception.blocks import PerceptionSettings, detect_blocks
     from demoplan.perception.camera import Camera, load_image
@@ -836,12 +849,18 @@ def perceive(
         if side is not None:
             settings = PerceptionSettings(min_side=0.85 * side, max_side=1.15 * side)
         tracker = BlockTracker()
-        if before is not None:
-            earlier = detect_blocks(load_image(before), camera, settings)
-            tracker = BlockTracker(
-                TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
-            )
-        blocks = tracker.update(detect_blocks(load_image(image_path), camera, settings))
+        budget = time_budget(
+            timeout,
+            f"perception stopped at its time budget (--timeout {timeout:g} s): many small "
+            "regions; give it more time, or say the blocks' size (--side)",
+        )
+        with budget:
+            if before is not None:
+                earlier = detect_blocks(load_image(before), camera, settings)
+                tracker = BlockTracker(
+                    TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
+                )
+            blocks = tracker.update(detect_blocks(load_image(image_path), camera, settings))
         if not blocks:
             raise InputError(
                 "no blocks found; a scene needs at least one (is --px-per-m right? "

@@ -52,6 +52,7 @@ CASES: list[tuple[list[str], str]] = (
         ([*PERCEIVE, "--side", "1e308"], "--side"),
         ([*PERCEIVE, "--side", "nan"], "--side"),
         ([*PERCEIVE, "-o", "folder"], "folder"),
+        ([*PERCEIVE, "--timeout", "0.0001"], "--timeout"),
         (["learn", "demos.json", "-o", "out.json", "--position-noise", "-1"], "position"),
         (["learn", "demos.json", "-o", "out.json", "--position-noise", "nan"], "position"),
         (["learn", "demos.json", "-o", "out.json", "--position-noise", "1e308"], "position"),

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
+from demoplan.deadline import check_time
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import ColourRegion, colour_regions
 from demoplan.perception.hough import Hypothesis, hough_squares
@@ -143,6 +144,7 @@ def detect_blocks(
     regions, _ = colour_regions(image, min_area=min_area)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for region in regions:
+        check_time()  # a budget set by the caller (demoplan.deadline), if any
         alpha = region.alpha.copy()
         for _ in range(8):
             if (alpha > 0.5).sum() < min_area:
