@@ -47,6 +47,8 @@ LEARNING_TIMEOUT = 300.0
 """Seconds ``learn`` may take by default (docs/limits.md)."""
 PERCEPTION_TIMEOUT = 60.0
 """Seconds ``perceive`` may take by default (docs/limits.md)."""
+REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
+"""Names ``experiments`` writes: a folder of only these is an earlier report."""
 
 
 @contextmanager
@@ -1185,10 +1187,17 @@ def experiments(
 ) -> None:
     """Reproduce the paper's experiments and write a report (tables, figures, models)."""
     from demoplan.experiments import run_experiments
+    from demoplan.fileio import staged_folder
 
     with _reported_errors():
-        with _stdout.status("Running the paper's experiments…") as status:
-            result = run_experiments(out, progress=lambda text: status.update(text))
+        # The whole report or none of it: built beside --out, then put in its place
+        # (an earlier report is replaced; a folder of anything else is refused).
+        with (
+            _stdout.status("Running the paper's experiments…") as status,
+            staged_folder(out, lambda name: bool(REPORT_FILES.match(name))) as building,
+        ):
+            result = run_experiments(building, progress=lambda text: status.update(text))
+        report = out / result.report.name
         table = Table(title="Paper vs. demoplan", title_justify="left")
         for column in ("Experiment", "Check", "Paper", "demoplan", "Match"):
             table.add_column(column)
@@ -1196,13 +1205,13 @@ def experiments(
             cells = (check.experiment, check.name, check.paper, check.ours)
             table.add_row(*map(Text, cells), "yes" if check.ok else "NO")
         _stdout.print(table)
-        _stdout.print(f"Report: {result.report}", markup=False, highlight=False)
+        _stdout.print(f"Report: {report}", markup=False, highlight=False)
         differing = [c for c in result.checks if not c.ok]
         if differing:
             names = ", ".join(f"{c.experiment.split(' (')[0]} {c.name}" for c in differing)
             _stderr.print(
                 f"demoplan: error: {len(differing)} results differ from the paper ({names}); "
-                f"see {result.report}",
+                f"see {report}",
                 markup=False,
                 highlight=False,
             )

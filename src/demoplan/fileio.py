@@ -17,7 +17,7 @@ import re
 import stat
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,6 +40,7 @@ __all__ = [
     "read_document",
     "read_input_text",
     "require_regular_file",
+    "staged_folder",
     "write_atomic",
     "write_atomic_bytes",
 ]
@@ -423,6 +424,58 @@ class StagedOutputs:
         for temporary, _ in self._staged:
             temporary.unlink(missing_ok=True)
         self._staged.clear()
+
+
+@contextmanager
+def staged_folder(target: Path, ours: Callable[[str], bool]) -> Iterator[Path]:
+    """A folder of outputs written all or none: the block fills a temporary
+    folder beside ``target``; leaving it normally puts that folder in
+    ``target``'s place (an old ``target`` is moved aside first and removed
+    after, with SIGINT and SIGTERM held back over the two renames); leaving
+    it by an exception removes the temporary folder and leaves ``target`` as
+    it was. An existing ``target`` is replaced only if it is empty or every
+    name in it is ``ours`` (an earlier run's output): a folder of other files
+    is refused, never removed."""
+    import shutil
+    import signal
+
+    target = Path(target)
+    if target.exists() and not target.is_dir():
+        raise InputError("exists and is not a folder; a folder expected", source=str(target))
+    if target.is_dir():
+        others = sorted(entry.name for entry in target.iterdir() if not ours(entry.name))
+        if others:
+            raise InputError(
+                f"holds other files ({', '.join(others[:3])}{', …' if len(others) > 3 else ''}); "
+                "an empty folder, an earlier report or a new name expected",
+                source=str(target),
+            )
+    parent = target.parent if str(target.parent) else Path()
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        building = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
+    except OSError as exc:
+        raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
+    try:
+        yield building
+    except BaseException:
+        shutil.rmtree(building, ignore_errors=True)
+        raise
+    old = parent / f".{target.name}.old-{building.name}"
+    held = {signal.SIGINT, signal.SIGTERM}
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        if target.exists():
+            target.replace(old)
+        building.replace(target)
+    except OSError as exc:
+        if old.exists() and not target.exists():
+            old.replace(target)
+        shutil.rmtree(building, ignore_errors=True)
+        raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def write_atomic(path: Path, text: str) -> None:

@@ -76,6 +76,7 @@ CASES: list[tuple[list[str], str]] = (
         (["segment", "stream.csv", "-o", "stream.csv"], "stream.csv"),
         (["pddl", "problem.xml", "-o", "problem.xml"], "problem.xml"),
         (["experiments", "--out", "demos.json"], "demos.json"),
+        (["experiments", "--out", "others"], "others"),  # a folder of someone's files
         (["show", "model.json", "--decimals", "-1"], "--decimals"),
         (["perceive", "strip.png", "--px-per-m", "1000", "--origin", "0", "0"], "strip.png"),
         (["run", "model.json", "tiny-scene.json", "--sim", "mujoco"], "objects.wood.size"),
@@ -98,6 +99,8 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
     (folder / "folder").mkdir()
+    (folder / "others").mkdir()
+    (folder / "others" / "thesis.tex").write_text("\\documentclass{article}\n")
     import json
 
     import numpy as np
