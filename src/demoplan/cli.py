@@ -49,6 +49,8 @@ PERCEPTION_TIMEOUT = 60.0
 """Seconds ``perceive`` may take by default (docs/limits.md)."""
 REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
 """Names ``experiments`` writes: a folder of only these is an earlier report."""
+FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
+"""Names ``run --frames`` writes: a folder of only these holds an earlier run's frames."""
 
 
 @contextmanager
@@ -747,24 +749,34 @@ def run(
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.execution.faults import parse_faults
     from demoplan.execution.runner import run_task
+    from demoplan.fileio import staged_folder
 
     with _reported_errors(), _model_named(model_path):
         model, scene = _scene_inputs(model_path, scene_path)
         fault_rates = parse_faults(faults)
         live = _stderr.is_terminal and not json_output
-        report = run_task(
-            model,
-            scene,
-            sim=sim.value,
-            faults=fault_rates,
-            seed=seed,
-            frames=frames,
-            max_replans=max_replans,
-            perception=perception.value,
-            geometry=_geometry_settings(freespace),
-            display=_stderr if live else None,
-            planning_seconds=timeout,
+        # The frames folder whole or not at all: built beside --frames, swapped in at the end.
+        staging = (
+            staged_folder(frames, lambda name: bool(FRAME_FILES.match(name)))
+            if frames is not None
+            else nullcontext(None)
         )
+        with staging as building:
+            report = run_task(
+                model,
+                scene,
+                sim=sim.value,
+                faults=fault_rates,
+                seed=seed,
+                frames=building,
+                max_replans=max_replans,
+                perception=perception.value,
+                geometry=_geometry_settings(freespace),
+                display=_stderr if live else None,
+                planning_seconds=timeout,
+            )
+        if frames is not None and building is not None:
+            report.frames[:] = [str(frames / Path(f).name) for f in report.frames]
         if json_output:
             _print_json(report.to_json())
         else:

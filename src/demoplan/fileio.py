@@ -447,7 +447,7 @@ def staged_folder(target: Path, ours: Callable[[str], bool]) -> Iterator[Path]:
         if others:
             raise InputError(
                 f"holds other files ({', '.join(others[:3])}{', …' if len(others) > 3 else ''}); "
-                "an empty folder, an earlier report or a new name expected",
+                "an empty folder, an earlier run's output or a new name expected",
                 source=str(target),
             )
     parent = target.parent if str(target.parent) else Path()

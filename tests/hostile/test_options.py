@@ -42,6 +42,7 @@ CASES: list[tuple[list[str], str]] = (
         (["run", "model.json", "scene.json", "--faults", "teleport=0.1"], "--faults"),
         (["run", "model.json", "scene.json", "--sim", "unreal"], "--sim"),
         (["run", "model.json", "scene.json", "--timeout", "-5"], "--timeout"),
+        (["run", "model.json", "scene.json", "--frames", "others"], "others"),
         ([*PERCEIVE[:2], "--px-per-m", "0", "--origin", "0", "0"], "--px-per-m"),
         ([*PERCEIVE[:2], "--px-per-m", "-5", "--origin", "0", "0"], "--px-per-m"),
         ([*PERCEIVE[:2], "--px-per-m", "nan", "--origin", "0", "0"], "--px-per-m"),
