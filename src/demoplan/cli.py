@@ -14,7 +14,7 @@ import os
 import re
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager, nullcontext, suppress
+from contextlib import AbstractContextManager, contextmanager, nullcontext, suppress
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -73,6 +73,11 @@ def _reported_errors() -> Iterator[None]:
             raise  # demoplan.launcher.main reports it, once
         sys.stderr.write("demoplan: interrupted\n")
         raise typer.Exit(interrupted_exit_code(exc)) from None
+
+
+def _working(text: str) -> AbstractContextManager[Any]:
+    """A spinner with ``text`` on stderr while long work runs, on a terminal only."""
+    return _stderr.status(text) if _stderr.is_terminal else nullcontext()
 
 
 @contextmanager
@@ -333,6 +338,7 @@ def learn(
                 f"learning stopped at its time budget (--timeout {timeout:g} s); give it more "
                 "time, or for many scattered placements cap the clusters (--max-clusters 5)",
             ),
+            _working("Learning states and constraints…"),
         ):
             try:
                 new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
@@ -868,7 +874,7 @@ def perceive(
             f"perception stopped at its time budget (--timeout {timeout:g} s): many small "
             "regions; give it more time, or say the blocks' size (--side)",
         )
-        with budget:
+        with budget, _working("Finding blocks…"):
             if before is not None:
                 earlier = detect_blocks(load_image(before), camera, settings)
                 tracker = BlockTracker(
