@@ -477,7 +477,8 @@ def test_failed_write_keeps_the_old_file(tmp_path: Path, monkeypatch: pytest.Mon
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(os, "fsync", broken_fsync)
-    with pytest.raises(InputError, match=r"model\.json: cannot write \(No space left on device\)"):
+    no_space = r"model\.json: cannot write \(no space left on the device\)"
+    with pytest.raises(InputError, match=no_space):
         write_atomic(target, "new content")
     assert target.read_text() == "old content"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json"]

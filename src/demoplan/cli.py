@@ -26,7 +26,7 @@ from rich.text import Text
 
 from demoplan import __version__
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
-from demoplan.fileio import locked_for_update, os_error, read_input_text
+from demoplan.fileio import locked_for_update, os_error, os_reason, read_input_text
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -1069,7 +1069,7 @@ def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:
             written.append(path)
     except OSError as exc:
         _remove(written, folder if created else None)
-        raise InputError(f"cannot write ({exc.strerror or exc})", source=str(folder)) from None
+        raise InputError(f"cannot write ({os_reason(exc)})", source=str(folder)) from None
     except BaseException:
         _remove(written, folder if created else None)
         raise

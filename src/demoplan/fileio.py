@@ -458,6 +458,13 @@ def staged_folder(target: Path, ours: Callable[[str], bool]) -> Iterator[Path]:
         raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     try:
         yield building
+    except InputError as exc:  # name the file as the user will know it, not the temporary one
+        shutil.rmtree(building, ignore_errors=True)
+        inside = exc.source is not None and exc.source.startswith(str(building))
+        if not inside:
+            raise
+        shown = str(target) + exc.source[len(str(building)) :]  # type: ignore[index]
+        raise InputError(exc.message, source=shown, field=exc.field) from None
     except BaseException:
         shutil.rmtree(building, ignore_errors=True)
         raise
@@ -508,13 +515,13 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
             with path.open("wb") as handle:
                 handle.write(data)
         except OSError as exc:
-            raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
+            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
         return
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as exc:
-        raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
+        raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
     try:
         with os.fdopen(fd, "wb") as handle:
             _set_mode(handle.fileno(), path)
@@ -525,7 +532,7 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
     except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
         if isinstance(exc, OSError):
-            raise InputError(f"cannot write ({exc.strerror or exc})", source=str(path)) from None
+            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
         raise
     _sync_folder(folder)
 
