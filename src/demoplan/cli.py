@@ -14,7 +14,7 @@ import os
 import re
 import sys
 from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager, nullcontext, suppress
+from contextlib import contextmanager, nullcontext, suppress
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -75,9 +75,32 @@ def _reported_errors() -> Iterator[None]:
         raise typer.Exit(interrupted_exit_code(exc)) from None
 
 
-def _working(text: str) -> AbstractContextManager[Any]:
-    """A spinner with ``text`` on stderr while long work runs, on a terminal only."""
-    return _stderr.status(text) if _stderr.is_terminal else nullcontext()
+@contextmanager
+def _working(text: str) -> Iterator[None]:
+    """A progress bar on stderr while long work runs (learning: objects done;
+    perception: colour regions done), on a terminal only; it goes when done."""
+    if not _stderr.is_terminal:
+        yield
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from demoplan.deadline import reporting_progress
+
+    with Progress(
+        TextColumn(text),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[what]}"),
+        console=_stderr,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(text, total=None, what="")
+
+        def update(what: str, done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total, what=what)
+
+        with reporting_progress(update):
+            yield
 
 
 @contextmanager

@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
 from demoplan.errors import LimitReachedError
 
-__all__ = ["check_time", "time_budget"]
+__all__ = ["check_time", "report_progress", "reporting_progress", "time_budget"]
 
 _deadline: ContextVar[tuple[float, str] | None] = ContextVar("deadline", default=None)
 
@@ -44,3 +44,25 @@ def check_time() -> None:
     budget = _deadline.get()
     if budget is not None and time.monotonic() > budget[0]:
         raise LimitReachedError(budget[1])
+
+
+Progress = Callable[[str, int, int], None]  # (what, done, total)
+_progress: ContextVar[Progress | None] = ContextVar("progress", default=None)
+
+
+@contextmanager
+def reporting_progress(callback: Progress | None) -> Iterator[None]:
+    """Long work inside the block reports ``callback(what, done, total)`` as it
+    goes (a progress bar in the command line; None: nothing)."""
+    token = _progress.set(callback)
+    try:
+        yield
+    finally:
+        _progress.reset(token)
+
+
+def report_progress(what: str, done: int, total: int) -> None:
+    """Tell the current progress callback, if any, how far the work is."""
+    callback = _progress.get()
+    if callback is not None:
+        callback(what, done, total)

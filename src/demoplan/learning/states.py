@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 
 from demoplan import rotations
+from demoplan.deadline import report_progress
 from demoplan.learning.clustering import (
     Clustering,
     PositionSpace,
@@ -293,7 +294,8 @@ def _generate_states(
         if reference is not None:
             reachable[obj].add(reference)
     all_scores: list[ReferenceScore] = []
-    for obj, own in placements.items():
+    for done, (obj, own) in enumerate(placements.items()):
+        report_progress("objects", done, len(placements))
         position_precision = max(
             own_precision["position"].get(obj, precision.position), MIN_POSITION_PRECISION
         )
