@@ -515,6 +515,8 @@ def pddl(
     from demoplan.planning.xml import load_problem
 
     with _reported_errors():
+        for name in ("domain.pddl", "problem.pddl"):  # the files save_pddl writes
+            _refuse_overwriting_inputs(output / name, [problem_path])
         domain, problem = save_pddl(load_problem(problem_path), output, grounded=grounded)
         _stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 

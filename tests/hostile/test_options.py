@@ -76,6 +76,7 @@ CASES: list[tuple[list[str], str]] = (
         (["segment", "stream.csv", "-o", "d.json", "--set", "start_speed=-1"], "start_speed"),
         (["segment", "stream.csv", "-o", "stream.csv"], "stream.csv"),
         (["pddl", "problem.xml", "-o", "problem.xml"], "problem.xml"),
+        (["pddl", "problem.pddl", "-o", "."], "problem.pddl"),  # the input named like an output
         (["experiments", "--out", "demos.json"], "demos.json"),
         (["experiments", "--out", "others"], "others"),  # a folder of someone's files
         (["show", "model.json", "--decimals", "-1"], "--decimals"),
@@ -100,6 +101,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
     (folder / "folder").mkdir()
+    shutil.copy(folder / "problem.xml", folder / "problem.pddl")
     (folder / "others").mkdir()
     (folder / "others" / "thesis.tex").write_text("\\documentclass{article}\n")
     import json
