@@ -377,26 +377,7 @@ class StagedOutputs:
 
     def add(self, path: Path, data: bytes) -> None:
         path = Path(path)
-        if path.is_dir():
-            raise InputError("is a folder; a file name expected", source=display_path(path))
-        folder = path.parent if str(path.parent) else Path()
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        except OSError as exc:
-            reason = os_reason(exc)
-            raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
-        temporary = Path(name)
-        self._staged.append((temporary, path))
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                _set_mode(handle.fileno(), path)
-                handle.write(data)
-                handle.flush()
-                os.fsync(handle.fileno())
-        except OSError as exc:
-            reason = os_reason(exc)
-            raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
+        self._staged.append((_write_temporary(path, data), path))
 
     def __exit__(self, kind: object, error: object, trace: object) -> None:
         if kind is not None:
@@ -505,10 +486,7 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
     :class:`InputError` naming ``path``.
     """
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path()
-    if path.is_dir():
-        raise InputError("is a folder; a file name expected", source=str(path))
-    if path.exists() and not path.is_file():
+    if path.exists() and not path.is_file() and not path.is_dir():
         # A device or pipe (-o /dev/null, -o /dev/stdout): write into it; renaming
         # a file over it would replace the device itself.
         try:
@@ -517,24 +495,44 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
         except OSError as exc:
             raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
         return
+    temporary = _write_temporary(path, data)
+    try:
+        temporary.replace(path)
+    except BaseException as exc:
+        temporary.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
+        raise
+    _sync_folder(path.parent if str(path.parent) else Path())
+
+
+def _write_temporary(path: Path, data: bytes) -> Path:
+    """``data`` in a new temporary file beside ``path`` with ``path``'s
+    permissions, flushed to disk: the first half of an atomic write (the
+    caller renames it into place). On failure nothing is left and one
+    InputError names ``path``."""
+    if path.is_dir():
+        raise InputError("is a folder; a file name expected", source=display_path(path))
+    folder = path.parent if str(path.parent) else Path()
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as exc:
-        raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
+        raise InputError(f"cannot write ({os_reason(exc)})", source=display_path(path)) from None
+    temporary = Path(name)
     try:
         with os.fdopen(fd, "wb") as handle:
             _set_mode(handle.fileno(), path)
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        Path(tmp).replace(path)
     except BaseException as exc:
-        Path(tmp).unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
         if isinstance(exc, OSError):
-            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
+            reason = os_reason(exc)
+            raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
         raise
-    _sync_folder(folder)
+    return temporary
 
 
 def _set_mode(fd: int, path: Path) -> None:
