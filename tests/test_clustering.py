@@ -243,3 +243,49 @@ def test_result_does_not_depend_on_the_order_of_values() -> None:
     partition_a = {frozenset(np.flatnonzero(np.array(a.labels) == k)) for k in set(a.labels)}
     partition_b = {frozenset(order[np.flatnonzero(np.array(b.labels) == k)]) for k in set(b.labels)}
     assert partition_a == partition_b
+
+
+def _ring(centre: tuple[float, float], radius: float, count: int) -> np.ndarray:
+    angles = np.linspace(0.0, 2.0 * math.pi, count, endpoint=False)
+    return np.stack(
+        [centre[0] + radius * np.cos(angles), centre[1] + radius * np.sin(angles), 0 * angles], 1
+    )
+
+
+def test_a_place_seen_twice_is_a_state_where_one_cluster_does_not_fit_the_precision() -> None:
+    """Eight placements scattered by 2 cm around one spot, two 3.6 cm apart
+    around another 11 cm away: as one cluster they scatter by ~51 mm. Against a precision of
+    19 mm estimated from 20 degrees of freedom that is no state's scatter, and
+    the two clusters each fit it: two states — though the wider cluster holds
+    two placements, too few for the F test against it (critical ratio ≈ 19).
+    Against a precision estimated from 2 degrees of freedom, one state."""
+    values = np.concatenate([_ring((0.0, 0.0), 0.02, 8), _ring((0.11, 0.0), 0.018, 2)])
+    space = PositionSpace(values)
+    chosen = select_clustering(space, separation=0.05, noise=0.019, noise_df=20, significance=0.05)
+    assert chosen.n_clusters == 2
+    assert dict(chosen.tried)[1] is not None and math.sqrt(dict(chosen.tried)[1]) > 0.045
+    doubtful = select_clustering(space, separation=0.05, noise=0.019, noise_df=2, significance=0.05)
+    assert doubtful.n_clusters == 1
+
+
+def test_a_cluster_a_little_wider_than_an_estimated_precision_is_not_a_continuum() -> None:
+    """Two spots 12 cm apart, 100 placements each scattered by exactly 22.6 mm
+    RMS, against a precision of 19.1 mm estimated with 398 degrees of freedom:
+    the variance ratio, 1.40, lies below the F test's 0.1 % point (1.45) and
+    above the χ² test's (1.34) — the consistency check keeps both clusters
+    only when it takes the precision as the estimate it is."""
+    rng = np.random.default_rng(3)
+    clusters = []
+    for spot in ([0.0, 0.0, 0.0], [0.12, 0.0, 0.0]):
+        scatter = rng.normal(0, 1, (100, 3)) * [1, 1, 0]
+        scatter -= scatter.mean(axis=0)
+        scatter *= 0.0226 / math.sqrt(spread_of(scatter))
+        clusters.append(np.array(spot) + scatter)
+    space = PositionSpace(np.concatenate(clusters))
+    estimated = select_clustering(
+        space, separation=0.05, noise=0.0191, noise_df=398, significance=0.05
+    )
+    assert estimated.n_clusters == 2
+    exact = select_clustering(space, separation=0.05, noise=0.0191, significance=0.05)
+    assert exact.n_clusters == 1
+    assert CONSISTENCY_LEVEL == 0.001

@@ -246,22 +246,42 @@ def outscores(
     *,
     noise: float,
     significance: float,
+    noise_df: float = UNBOUNDED_DF,
 ) -> bool:
     """Whether a clustering scoring ``better`` = (spread, degrees of freedom) is
     supported by the data over one scoring ``worse`` (SPEC §5: a decision only
     beyond the placement precision).
 
     Their RMS spreads must differ by at least ``noise``, and — unless
-    ``significance`` is 0 (the paper's plain rule) — the ratio of the spreads
-    must pass the F test at that level for their degrees of freedom: two
-    placements that happen to agree better relative to one candidate than to
-    another are no evidence, a dozen are.
+    ``significance`` is 0 (the paper's plain rule) — ``worse`` must be
+    rejected at that level by an F test: against ``better`` (two placements
+    that happen to agree better relative to one candidate than to another are
+    no evidence, a dozen are), or against the precision itself, an estimate
+    with ``noise_df`` degrees of freedom (unbounded: set by the user), where
+    ``better`` passes as placements of one state at that precision. The second
+    test serves where ``better`` rests on few placements — the widest of two
+    clusters holds two — while ``worse`` scatters far beyond what the
+    demonstrations' precision allows; that ``better`` must fit keeps a
+    candidate that merely scatters a little less (an outlier explained by
+    chance) from winning.
     """
     if math.sqrt(worse[0]) - math.sqrt(better[0]) < noise:
         return False
     if significance <= 0:
         return True
-    return worse[0] >= _f_critical(significance, worse[1], better[1]) * better[0]
+    if worse[0] >= _f_critical(significance, worse[1], better[1]) * better[0]:
+        return True
+    variance = noise * noise
+    return (
+        worse[0] >= _f_critical(significance, worse[1], noise_df) * variance
+        and better[0] < _f_critical(FIT_LEVEL, better[1], noise_df) * variance
+    )
+
+
+FIT_LEVEL = 0.05
+""":func:`outscores`' test against the precision asks the better choice to pass
+as one state's placements at this level — the default significance, fixed:
+a level lowered for many candidates (Bonferroni) would make passing easier."""
 
 
 @functools.lru_cache(maxsize=4096)
@@ -271,13 +291,6 @@ def _f_critical(significance: float, dfn: float, dfd: float) -> float:
     from scipy.stats import f as fisher  # deferred: SciPy's import is slow
 
     return float(fisher.ppf(1.0 - significance, dfn, dfd))
-
-
-@functools.lru_cache(maxsize=4096)
-def _chi2_critical(level: float, df: int) -> float:
-    from scipy.stats import chi2  # deferred: SciPy's import is slow
-
-    return float(chi2.ppf(1.0 - level, df))
 
 
 class Space:
@@ -378,6 +391,7 @@ def select_clustering(
     n_init: int = 8,
     seed: int = 0,
     significance: float = 0.0,
+    noise_df: float = UNBOUNDED_DF,
 ) -> Clustering:
     """Pick the cluster count c ∈ 1..N for one reference (paper eq. 2).
 
@@ -405,6 +419,7 @@ def select_clustering(
         n_init=n_init,
         seed=seed,
         significance=significance,
+        noise_df=noise_df,
     )
     return clustering
 
@@ -437,6 +452,7 @@ class _Scan:
         separation: float,
         noise: float,
         significance: float = 0.0,
+        noise_df: float = UNBOUNDED_DF,
     ) -> None:
         labels = sorted_labels[self.inverse]
         present = np.bincount(labels, minlength=c) > 0
@@ -457,7 +473,9 @@ class _Scan:
             # (The paper's plain comparison, significance 0, has no such test.)
             or (
                 significance > 0
-                and not _within_precision(raw, np.bincount(labels), self.space.dims, noise)
+                and not _within_precision(
+                    raw, np.bincount(labels), self.space.dims, noise, noise_df
+                )
             )
         ):
             self.tried.append((c, None))
@@ -498,11 +516,15 @@ class _Scan:
             self._groups = len(np.unique(label))
         return self._groups
 
-    def result(self, noise: float, significance: float) -> Clustering:
+    def result(self, noise: float, significance: float, noise_df: float) -> Clustering:
         best = min(self.accepted, key=lambda a: max(a[3]))
         for c, labels, means, spreads, df in self.accepted:  # ascending c: ties go to fewer
             if not outscores(
-                (max(spreads), df), (max(best[3]), best[4]), noise=noise, significance=significance
+                (max(spreads), df),
+                (max(best[3]), best[4]),
+                noise=noise,
+                significance=significance,
+                noise_df=noise_df,
             ):
                 return Clustering(
                     n_clusters=c,
@@ -525,12 +547,15 @@ def select_clusterings(
     seed: int = 0,
     max_clusters: int = 0,
     significance: float = 0.0,
+    noise_df: float = UNBOUNDED_DF,
 ) -> list[Clustering]:
     """:func:`select_clustering` for several spaces of the same size and kind at
     once (one object towards every candidate reference), K-means batched.
 
     ``max_clusters`` > 0 caps c (the paper scans c = 1..N, 0 keeps that);
-    ``significance`` > 0 also asks more clusters to pass :func:`outscores`' F test.
+    ``significance`` > 0 also asks more clusters to pass :func:`outscores`' F test;
+    ``noise_df`` is how many degrees of freedom the precision ``noise`` was
+    estimated with (unbounded: known).
     """
     scans = [_Scan(space) for space in spaces]
     n = len(spaces[0]) if spaces else 0
@@ -546,8 +571,8 @@ def select_clusterings(
             data = np.stack([scan.canonical for scan in active])
             batch_labels = kmeans_batch(data, c, n_init, 100, generator)
         for scan, labels in zip(active, batch_labels, strict=True):
-            scan.consider(c, labels, separation, noise, significance)
-    return [scan.result(noise, significance) for scan in scans]
+            scan.consider(c, labels, separation, noise, significance, noise_df)
+    return [scan.result(noise, significance, noise_df) for scan in scans]
 
 
 CONSISTENCY_LEVEL = 0.001
@@ -555,14 +580,19 @@ CONSISTENCY_LEVEL = 0.001
 against the precision at this level (0.1 %: only clear cases)."""
 
 
-def _within_precision(spreads: Sequence[float], sizes: IntArray, dims: int, noise: float) -> bool:
+def _within_precision(
+    spreads: Sequence[float], sizes: IntArray, dims: int, noise: float, noise_df: float
+) -> bool:
     """Whether every cluster of two or more placements scatters as placements of one
-    state would, given the precision ``noise`` (RMS)."""
+    state would, given the precision ``noise`` (RMS), itself estimated with
+    ``noise_df`` degrees of freedom: an F test, not a χ² one that would take an
+    estimate for the truth (200 placements scattering 18 % wider than the
+    median object's estimate are not a continuum)."""
     for spread, size in zip(spreads, sizes, strict=True):
         if size < 2:
             continue
         df = (int(size) - 1) * dims
-        if spread > noise * noise * _chi2_critical(CONSISTENCY_LEVEL, df) / df:
+        if spread > noise * noise * _f_critical(CONSISTENCY_LEVEL, df, noise_df):
             return False
     return True
 

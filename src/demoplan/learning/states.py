@@ -29,13 +29,14 @@ import math
 from bisect import bisect_left
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
 from demoplan import rotations
 from demoplan.deadline import report_progress
 from demoplan.learning.clustering import (
+    UNBOUNDED_DF,
     Clustering,
     PositionSpace,
     RotationSpace,
@@ -109,6 +110,16 @@ class Precision:
     orientation: float
     position_estimated: bool = True
     orientation_estimated: bool = True
+    position_df: float = UNBOUNDED_DF
+    """Degrees of freedom of the estimate (unbounded where the user set it)."""
+    orientation_df: float = UNBOUNDED_DF
+
+
+class _Spread(NamedTuple):
+    """An RMS spread (m or degrees) and the degrees of freedom it was measured with."""
+
+    rms: float
+    df: float
 
 
 LOCAL_EVIDENCE = 0.02
@@ -271,17 +282,19 @@ def _generate_states(
         or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
     }
     steady = {key: values for key, values in relative.items() if key in everywhere}
-    tightest: dict[Kind, dict[str, float]] = {kind: _tightest(steady, kind) for kind in KINDS}
+    tightest = {kind: _tightest(steady, kind) for kind in KINDS}
     precision = _precision(tightest, settings)
     # An object placed more precisely than the median one is judged by its own
     # precision: red stands on wood to 0.6 mm while wood and green scatter by
     # centimetres (the shipped blocks).
-    own_precision = {
-        kind: {obj: min(spread, getattr(precision, kind)) for obj, spread in spreads.items()}
-        if getattr(precision, f"{kind}_estimated")
-        else {}
-        for kind, spreads in tightest.items()
-    }
+    own_precision: dict[Kind, dict[str, _Spread]] = {}
+    for kind, spreads in tightest.items():
+        common = _Spread(getattr(precision, kind), getattr(precision, f"{kind}_df"))
+        own_precision[kind] = (
+            {obj: min(spread, common) for obj, spread in spreads.items()}
+            if getattr(precision, f"{kind}_estimated")
+            else {}
+        )
     if precision.orientation >= settings.orientation_separation:
         logger.info(
             "orientations scatter by %.0f° (RMS), more than the %.0f° that tell two apart: "
@@ -296,11 +309,14 @@ def _generate_states(
     all_scores: list[ReferenceScore] = []
     for done, (obj, own) in enumerate(placements.items()):
         report_progress("objects", done, len(placements))
-        position_precision = max(
-            own_precision["position"].get(obj, precision.position), MIN_POSITION_PRECISION
+        position_precision = _floored(
+            own_precision["position"].get(obj, _Spread(precision.position, precision.position_df)),
+            MIN_POSITION_PRECISION,
         )
-        orientation_precision = max(
-            own_precision["orientation"].get(obj, precision.orientation),
+        orientation_precision = _floored(
+            own_precision["orientation"].get(
+                obj, _Spread(precision.orientation, precision.orientation_df)
+            ),
             MIN_ORIENTATION_PRECISION,
         )
         position_scores = _score_references(
@@ -334,7 +350,7 @@ def _generate_states(
             where = (placement.demo, placement.step)
             pos = by_position.at(placement, world)
             decided[where] = _margins(
-                "position", pos, position_scores, placement, world, position_precision
+                "position", pos, position_scores, placement, world, position_precision.rms
             )
             ori_reference, ori_cluster = None, -1  # orientation unknown
             if by_orientation is not None:
@@ -347,7 +363,7 @@ def _generate_states(
                         orientation_scores,
                         placement,
                         world,
-                        orientation_precision,
+                        orientation_precision.rms,
                     )
                 )
             keys[where] = _StateKey(
@@ -460,38 +476,50 @@ def estimate_precision(
 
 
 def _precision(
-    tightest: dict[Kind, dict[str, float]], settings: StateGenerationSettings
+    tightest: dict[Kind, dict[str, _Spread]], settings: StateGenerationSettings
 ) -> Precision:
-    """:func:`estimate_precision` from each object's tightest spread, per kind."""
-    found: dict[Kind, float] = {}
+    """:func:`estimate_precision` from each object's tightest spread, per kind; with
+    the degrees of freedom of the median one (an estimate from that object's
+    placements, not the truth)."""
+    found: dict[Kind, _Spread] = {}
     for kind, best in tightest.items():
         fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
         ranked = sorted(best.values())
-        found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else fallback
-    position = max(found["position"], MIN_POSITION_PRECISION)
-    orientation = max(found["orientation"], MIN_ORIENTATION_PRECISION)
+        found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else _Spread(fallback, UNBOUNDED_DF)
+    position = _floored(found["position"], MIN_POSITION_PRECISION)
+    orientation = _floored(found["orientation"], MIN_ORIENTATION_PRECISION)
+    set_position, set_orientation = settings.position_noise, settings.orientation_noise
     return Precision(
-        position=position if settings.position_noise is None else settings.position_noise,
-        orientation=(
-            orientation if settings.orientation_noise is None else settings.orientation_noise
-        ),
-        position_estimated=settings.position_noise is None,
-        orientation_estimated=settings.orientation_noise is None,
+        position=position.rms if set_position is None else set_position,
+        orientation=orientation.rms if set_orientation is None else set_orientation,
+        position_estimated=set_position is None,
+        orientation_estimated=set_orientation is None,
+        position_df=position.df if set_position is None else UNBOUNDED_DF,
+        orientation_df=orientation.df if set_orientation is None else UNBOUNDED_DF,
     )
+
+
+def _floored(spread: _Spread, least: float) -> _Spread:
+    """``spread`` raised to at least ``least`` — noise-free data still have a scale
+    for ties — and then known exactly (no degrees of freedom to doubt it by)."""
+    return spread if spread.rms >= least else _Spread(least, UNBOUNDED_DF)
 
 
 def _tightest(
     relative: dict[tuple[str, Kind, str | None], np.ndarray], kind: Kind
-) -> dict[str, float]:
+) -> dict[str, _Spread]:
     """Per object placed at least twice: its RMS spread as one cluster relative to
-    the candidate that explains it best (``relative`` holds the candidates)."""
-    best: dict[str, float] = {}
+    the candidate that explains it best (``relative`` holds the candidates), and
+    its degrees of freedom, (placements − 1) × the axes they vary along."""
+    best: dict[str, _Spread] = {}
     for (obj, what, _), values in relative.items():
         if what != kind or len(values) < 2:
             continue
         space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
         _, spread = space.stats(np.arange(len(values)))
-        best[obj] = min(best.get(obj, math.inf), math.sqrt(spread))
+        found = _Spread(math.sqrt(spread), (len(values) - 1) * space.dims)
+        if obj not in best or found < best[obj]:
+            best[obj] = found
     return best
 
 
@@ -501,7 +529,7 @@ def _score_references(
     own: list[_Placement],
     candidates: list[str | None],
     settings: StateGenerationSettings,
-    precision: float,
+    precision: _Spread,
     relative: dict[tuple[str, Kind, str | None], np.ndarray],
 ) -> list[ReferenceScore]:
     """Eq. (2) for every candidate reference that is defined at every placement."""
@@ -521,7 +549,8 @@ def _score_references(
     clusterings = select_clusterings(
         spaces,
         separation=separation,
-        noise=precision,
+        noise=precision.rms,
+        noise_df=precision.df,
         n_init=settings.n_init,
         seed=settings.seed,
         max_clusters=settings.max_clusters,
@@ -597,7 +626,7 @@ class _Chooser:
     own: ReferenceScore
     best: ReferenceScore
     everywhere: set[str]
-    noise: float
+    noise: _Spread
     significance: float
 
     @classmethod
@@ -605,7 +634,7 @@ class _Chooser:
         cls,
         scores: list[ReferenceScore],
         everywhere: set[str],
-        noise: float,
+        noise: _Spread,
         significance: float,
     ) -> _Chooser:
         steady = [s for s in scores if s.reference is None or s.reference in everywhere]
@@ -652,13 +681,14 @@ class _Chooser:
 
 
 def _beats(
-    better: ReferenceScore, worse: ReferenceScore, noise: float, significance: float
+    better: ReferenceScore, worse: ReferenceScore, noise: _Spread, significance: float
 ) -> bool:
     return outscores(
         (worse.clustering.score, worse.clustering.df),
         (better.clustering.score, better.clustering.df),
-        noise=noise,
+        noise=noise.rms,
         significance=significance,
+        noise_df=noise.df,
     )
 
 
