@@ -39,6 +39,7 @@ __all__ = [
     "precision_family",
     "rotate",
     "shifted_scene_family",
+    "slots_family",
     "symmetric_family",
     "topological_order",
     "tray_family",
@@ -406,6 +407,74 @@ def precision_family(
         else:
             offsets[names[i]] = (*points[i].tolist(), 0.0) if i in fixed else None
     return Family("precision", demos, references, offsets, orders, sigma)
+
+
+def slots_family(
+    rng: np.random.Generator,
+    sigma: float,
+    n_slotted: int,
+    n_fixed: int,
+    n_relative: int,
+    n_demos: int,
+) -> Family:
+    """Family 5: a kit with alternative slots and mixed precision. ``n_slotted``
+    objects each go into one of two slots (each slot used in at least three
+    demonstrations) and ``n_fixed`` onto one spot, all put down by hand to
+    ``sigma``; ``n_relative`` objects are placed against a fixed one ten times
+    more precisely (a jig). Spots lie ≥ max(12 cm, 6σ + 6 cm) apart.
+    ``extra["slots"]``: each slotted object's two spots."""
+    n_absolute = n_slotted + n_fixed
+    separation = max(0.12, 6 * sigma + 0.06)
+    while True:
+        points = _spread_points(rng, n_absolute + n_slotted, separation * 4, separation)
+        if points is not None:
+            break
+    names = _names(n_absolute + n_relative)
+    slotted = names[:n_slotted]
+    slots = {name: (points[k], points[n_absolute + k]) for k, name in enumerate(slotted)}
+    fixed = {names[n_slotted + k]: points[n_slotted + k] for k in range(n_fixed)}
+    jigged = {
+        names[n_absolute + k]: (
+            names[n_slotted + int(rng.integers(n_fixed))],
+            np.array(_planar_offset(rng)),
+        )
+        for k in range(n_relative)
+    }
+    choices = {
+        name: rng.permutation([d % 2 for d in range(n_demos)]) for name in slotted
+    }  # n_demos ≥ 6: each slot at least three times
+    demos, orders = [], []
+    for d in range(n_demos):
+        order = [*rng.permutation(slotted + list(fixed)).tolist()]
+        for name in jigged:  # after its reference, anywhere
+            order.insert(order.index(jigged[name][0]) + 1, name)
+        placed: dict[str, np.ndarray] = {}
+        steps = []
+        for name in order:
+            if name in slots:
+                placed[name] = slots[name][int(choices[name][d])] + rng.normal(0, sigma, 2)
+            elif name in fixed:
+                placed[name] = fixed[name] + rng.normal(0, sigma, 2)
+            else:
+                reference, offset = jigged[name]
+                placed[name] = placed[reference] + offset + rng.normal(0, sigma / 10, 2)
+            xy = placed[name]
+            steps.append(Step(name, Pose((float(xy[0]), float(xy[1]), 0.0))))
+        demos.append(Demonstration(f"slots-{d + 1}", tuple(steps)))
+        orders.append(order)
+    references: dict[str, str | None] = {name: None for name in [*slotted, *fixed]}
+    references |= {name: reference for name, (reference, _) in jigged.items()}
+    offsets: dict[str, tuple[float, float, float] | None] = {name: None for name in slotted}
+    offsets |= {name: (*xy.tolist(), 0.0) for name, xy in fixed.items()}
+    offsets |= {name: (*offset.tolist(), 0.0) for name, (_, offset) in jigged.items()}
+    return Family("slots", demos, references, offsets, orders, sigma, extra={"slots": slots})
+
+
+def _planar_offset(rng: np.random.Generator) -> tuple[float, float]:
+    """A jig's offset from its reference: 6–10 cm in any direction."""
+    angle = rng.uniform(0, 2 * math.pi)
+    length = rng.uniform(0.06, 0.10)
+    return (length * math.cos(angle), length * math.sin(angle))
 
 
 # The paper's Experiment 1 (§V.A; Tables II and III).

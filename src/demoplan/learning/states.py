@@ -41,6 +41,7 @@ from demoplan.learning.clustering import (
     PositionSpace,
     RotationSpace,
     Space,
+    kmeans_batch,
     outscores,
     select_clusterings,
 )
@@ -129,6 +130,13 @@ such candidates at that step (Bonferroni), and at most this fraction of it
 (0.05 → 0.001), so that one of many such candidates agreeing by chance does
 not; and never from two placements."""
 
+OWN_PRECISION_DF = 6
+"""Degrees of freedom from which an object's own tightest spread may be its
+precision (four placements on a table): fewer agree as closely as chance
+makes them (:func:`_own_precisions`)."""
+SIMILAR_PRECISION = 2.0
+"""An object's own precision counts where another object's lies within this
+factor of it (:func:`_own_precisions`)."""
 MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
 MIN_ORIENTATION_PRECISION = 0.05  # deg
 FALLBACK_PRECISION = (0.003, 0.5)  # m, deg: when no object was placed twice
@@ -282,19 +290,14 @@ def _generate_states(
         or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
     }
     steady = {key: values for key, values in relative.items() if key in everywhere}
-    tightest = {kind: _tightest(steady, kind) for kind in KINDS}
+    tightest = {kind: _tightest(steady, kind, settings) for kind in KINDS}
     precision = _precision(tightest, settings)
-    # An object placed more precisely than the median one is judged by its own
-    # precision: red stands on wood to 0.6 mm while wood and green scatter by
-    # centimetres (the shipped blocks).
-    own_precision: dict[Kind, dict[str, _Spread]] = {}
-    for kind, spreads in tightest.items():
-        common = _Spread(getattr(precision, kind), getattr(precision, f"{kind}_df"))
-        own_precision[kind] = (
-            {obj: min(spread, common) for obj, spread in spreads.items()}
-            if getattr(precision, f"{kind}_estimated")
-            else {}
-        )
+    own_precision = {
+        kind: _own_precisions(spreads, getattr(precision, kind), getattr(precision, f"{kind}_df"))
+        if getattr(precision, f"{kind}_estimated")
+        else {}
+        for kind, spreads in tightest.items()
+    }
     if precision.orientation >= settings.orientation_separation:
         logger.info(
             "orientations scatter by %.0f° (RMS), more than the %.0f° that tell two apart: "
@@ -472,7 +475,7 @@ def estimate_precision(
     people teleoperating a robot centimetres. Without any object placed
     twice, :data:`FALLBACK_PRECISION`.
     """
-    return _precision({kind: _tightest(relative, kind) for kind in KINDS}, settings)
+    return _precision({kind: _tightest(relative, kind, settings) for kind in KINDS}, settings)
 
 
 def _precision(
@@ -499,6 +502,34 @@ def _precision(
     )
 
 
+def _own_precisions(
+    tightest: dict[str, _Spread], median: float, median_df: float
+) -> dict[str, _Spread]:
+    """The precision each object's decisions are judged by.
+
+    The median object's (:func:`estimate_precision`), or the object's own
+    tightest spread where that is lower — red stands on wood to 0.6 mm while
+    wood and green scatter by centimetres (the shipped blocks) — or where the
+    object's own is measured (:data:`OWN_PRECISION_DF`) and another object is
+    placed about as precisely (:data:`SIMILAR_PRECISION`): a task may mix
+    objects put down to 2 mm relative to others with objects put on spots to
+    2 cm, and one median precision would judge half of them wrongly. An
+    object alone at its precision is judged by the median: a can put
+    anywhere on the table that happened to land in two regions 80 cm apart
+    is not two places of 8 cm while everything else is placed to 2 mm.
+    """
+    common = _Spread(median, median_df)
+    own: dict[str, _Spread] = {}
+    for obj, spread in tightest.items():
+        confirmed = spread.df >= OWN_PRECISION_DF and any(
+            spread.rms / SIMILAR_PRECISION <= other.rms <= spread.rms * SIMILAR_PRECISION
+            for name, other in tightest.items()
+            if name != obj
+        )
+        own[obj] = spread if confirmed else min(spread, common)
+    return own
+
+
 def _floored(spread: _Spread, least: float) -> _Spread:
     """``spread`` raised to at least ``least`` — noise-free data still have a scale
     for ties — and then known exactly (no degrees of freedom to doubt it by)."""
@@ -506,20 +537,71 @@ def _floored(spread: _Spread, least: float) -> _Spread:
 
 
 def _tightest(
-    relative: dict[tuple[str, Kind, str | None], np.ndarray], kind: Kind
+    relative: dict[tuple[str, Kind, str | None], np.ndarray],
+    kind: Kind,
+    settings: StateGenerationSettings,
 ) -> dict[str, _Spread]:
-    """Per object placed at least twice: its RMS spread as one cluster relative to
-    the candidate that explains it best (``relative`` holds the candidates), and
-    its degrees of freedom, (placements − 1) × the axes they vary along."""
-    best: dict[str, _Spread] = {}
+    """Per object placed at least twice: its RMS spread relative to the candidate
+    that explains it best (``relative`` holds the candidates), and its degrees
+    of freedom, (placements − 1) × the axes they vary along. For positions a
+    few well-separated places count too (:func:`_grouped_spreads`): an object
+    put in one of two slots 15 cm apart scatters by its teacher's precision
+    within each slot, not by 75 mm — which, as the median of three objects,
+    was once the precision and merged the slots."""
+    by_object: dict[str, list[np.ndarray]] = {}
     for (obj, what, _), values in relative.items():
-        if what != kind or len(values) < 2:
-            continue
-        space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
-        _, spread = space.stats(np.arange(len(values)))
-        found = _Spread(math.sqrt(spread), (len(values) - 1) * space.dims)
-        if obj not in best or found < best[obj]:
-            best[obj] = found
+        if what == kind and len(values) >= 2:
+            by_object.setdefault(obj, []).append(values)
+    best: dict[str, _Spread] = {}
+    for obj, candidates in by_object.items():
+        for values in candidates:
+            space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
+            _, spread = space.stats(np.arange(len(values)))
+            found = _Spread(math.sqrt(spread), (len(values) - 1) * space.dims)
+            if obj not in best or found < best[obj]:
+                best[obj] = found
+        if kind == "position":
+            grouped = _grouped_spreads(np.stack(candidates), settings)
+            if grouped is not None and grouped < best[obj]:
+                best[obj] = grouped
+    return best
+
+
+GROUP_GAP = 4.0
+"""Groups of placements count as separate places in the precision estimate only
+where every two centres lie at least this many pooled RMS spreads apart (and at
+least ``position_separation``): two slots 11 cm apart, each scattered by 2 cm,
+do; a continuum cut by K-means does not (neighbouring pieces of a uniform
+stretch lie about 3.5 RMS apart)."""
+GROUP_MAX_PLACES = 3
+"""At most this many places per object in the precision estimate."""
+
+
+def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) -> _Spread | None:
+    """The lowest pooled within-group RMS spread of one object's positions ``(B, n,
+    3)`` (relative to B candidates) split into 2..:data:`GROUP_MAX_PLACES`
+    groups of at least two placements whose centres lie :data:`GROUP_GAP`
+    spreads apart; ``None`` where no split qualifies. Degrees of freedom:
+    (placements − groups) × varying axes. One batched K-means per group count."""
+    _, n, _ = candidates.shape
+    best: _Spread | None = None
+    generator = np.random.default_rng(settings.seed)
+    for c in range(2, min(GROUP_MAX_PLACES, n // 2) + 1):
+        labels = kmeans_batch(candidates, c, settings.n_init, 100, generator)
+        for values, label in zip(candidates, labels, strict=True):
+            sizes = np.bincount(label, minlength=c)
+            if sizes.min() < 2:
+                continue
+            centres = np.stack([values[label == k].mean(axis=0) for k in range(c)])
+            residual = values - centres[label]
+            pooled = float((residual * residual).sum()) / (n - c)
+            gaps = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
+            closest = float(gaps[np.triu_indices(c, 1)].min())
+            if closest < max(settings.position_separation, GROUP_GAP * math.sqrt(pooled)):
+                continue
+            found = _Spread(math.sqrt(pooled), (n - c) * PositionSpace(values).dims)
+            if best is None or found < best:
+                best = found
     return best
 
 
