@@ -114,6 +114,46 @@ def constraints_from_sequences(sequences: list[list[str]]) -> set[tuple[str, str
     return {(x, y) for x, y in seen if (y, x) not in seen}
 
 
+def table_places(
+    rows: list[tuple[str, str, str | None, tuple[float, ...]]], sequences: list[tuple[str, ...]]
+) -> dict[str, tuple[str, tuple[float, ...]]]:
+    """Each of a table's states as (object, absolute place): its relative value
+    added to its reference's place — the state the reference object takes in
+    the same demonstration (Table III / V), itself resolved the same way."""
+    row = {state: (obj, reference, value) for state, obj, reference, value in rows}
+    places: dict[str, tuple[str, tuple[float, ...]]] = {}
+
+    def place(state: str, sequence: tuple[str, ...]) -> tuple[float, ...]:
+        _, reference, value = row[state]
+        if reference is None:
+            return value
+        (base,) = (s for s in sequence if row[s][0] == reference)
+        return tuple(a + b for a, b in zip(place(base, sequence), value, strict=True))
+
+    for sequence in sequences:
+        for state in sequence:
+            places.setdefault(state, (row[state][0], place(state, sequence)))
+    return places
+
+
+def distinct_places(
+    places: dict[str, tuple[str, tuple[float, ...]]], within: float = 0.011
+) -> dict[str, str]:
+    """State → the first state with the same object at the same place (the tables
+    round to 1 cm, and a sum of two rounded values is within 1 cm)."""
+    first: dict[str, str] = {}
+    for state, (obj, xy) in places.items():
+        first[state] = next(
+            (
+                seen
+                for seen in first.values()
+                if places[seen][0] == obj and math.dist(places[seen][1], xy) <= within
+            ),
+            state,
+        )
+    return first
+
+
 def unambiguous(family: Family) -> bool:
     """Whether the drawn placements support the intended references: at no step
     does a candidate available there (absolute, objects placed earlier in that

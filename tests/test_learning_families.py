@@ -32,12 +32,14 @@ from tests.learning_families import (
     SYMMETRIC_SHAPES,
     Family,
     constraints_from_sequences,
+    distinct_places,
     paper_experiment_1,
     precision_family,
     rotate,
     shifted_scene_family,
     slots_family,
     symmetric_family,
+    table_places,
     tray_family,
     unambiguous,
 )
@@ -434,18 +436,32 @@ def test_a_fresh_draw_of_experiment_1_learns_table_ii_and_its_32_constraints(see
 
 @settings(max_examples=20, deadline=None)
 @given(seed=SEEDS)
-def test_at_defaults_a_fresh_draw_of_experiment_1_keeps_only_the_supported_states(
+def test_at_defaults_a_fresh_draw_of_experiment_1_learns_the_seven_places_of_table_ii(
     seed: int,
 ) -> None:
-    """The same draws at the defaults: references whose advantage three placements
-    do not support are dropped for fewer states; what remains is still the
-    paper's: every object of Table II, the napkin on the plate (0.4 mm against
-    centimetres), no more states than Table II and the paper's sequences'
-    order between the demonstrations' first and last steps."""
+    """The same draws at the defaults: Table II's ten states name seven places (I
+    is B's spot beside the plate, H is D's, J is C's — the tables' own numbers,
+    tests/test_states.py); the defaults learn one state per place, within 1 cm
+    of it (the fork's designed deviations do not average out: up to 7.4 mm
+    over 60 seeds), in Table III's order, with §IV.B's constraints over the
+    places; the napkin on the plate (0.4 mm against centimetres)."""
     draw = paper_experiment_1(np.random.default_rng(seed))
     model = learn(draw.demos)
-    assert {s.object for s in model.states} == {o for _, o, _, _ in PAPER_TABLE_II}
-    assert len(model.states) <= len(PAPER_TABLE_II)
+    sequences = [tuple(s) for s in PAPER_TABLE_III]
+    paper = table_places(PAPER_TABLE_II, sequences)
+    merged = distinct_places(paper)
+    as_paper: dict[str, str] = {}
+    for state in model.states:
+        place = np.mean([draw.demos[d].steps[k].pose.position[:2] for d, k in state.members], 0)
+        (as_paper[state.id],) = (
+            p
+            for p in set(merged.values())
+            if paper[p][0] == state.object and math.dist(paper[p][1], place) <= 0.01
+        )
+    assert sorted(as_paper.values()) == sorted(set(merged.values())), describe(model)
+    place_sequences = [[merged[s] for s in sequence] for sequence in sequences]
+    assert [[as_paper[s] for s in seq] for seq in model.sequences] == place_sequences
+    constraints = {(as_paper[a], as_paper[b]) for a, b in model.constraints}
+    assert constraints == constraints_from_sequences(place_sequences)
     napkin = [s for s in model.states if s.object == "napkin"]
     assert [s.position.reference for s in napkin] == ["plate"]
-    assert model.precision is not None and model.precision[0] < 0.02
