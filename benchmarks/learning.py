@@ -215,12 +215,18 @@ def _planar(rng: np.random.Generator, low: float, high: float) -> tuple[float, f
 
 
 def _alternative(
-    rng: np.random.Generator, first: tuple[float, float], low: float, high: float, gap: float
+    rng: np.random.Generator,
+    centre: tuple[float, float],
+    first: tuple[float, float],
+    low: float,
+    high: float,
+    gap: float,
 ) -> tuple[float, float]:
-    """A second placement at least ``gap`` from ``first``."""
+    """A second placement ``low``–``high`` from ``centre`` and at least ``gap``
+    from ``first``."""
     while True:
         dx, dy = _planar(rng, low, high)
-        candidate = (first[0] + dx, first[1] + dy)
+        candidate = (centre[0] + dx, centre[1] + dy)
         if math.dist(candidate, first) >= gap:
             return candidate
 
@@ -254,12 +260,16 @@ def make_task(
             placements = [first]
             if rng.random() < alternative_fraction:
                 # (rounded, so that the default task keeps its draws: 0.1 + 0.05 != 0.15)
-                placements.append(_alternative(rng, first, gap, round(gap + 0.05, 6), gap))
+                placements.append(_alternative(rng, first, first, gap, round(gap + 0.05, 6), gap))
         else:
             first = _planar(rng, 0.06, 0.15)
             placements = [first]
             if rng.random() < alternative_fraction:
-                placements.append(_alternative(rng, (0.0, 0.0), 0.06, max(0.20, gap + 0.10), gap))
+                # Around the reference, and away from the first placement: the two
+                # must be told apart (an alternative 2 cm from the first is one place).
+                placements.append(
+                    _alternative(rng, (0.0, 0.0), first, 0.06, max(0.20, gap + 0.10), gap)
+                )
         yaw = float(rng.uniform(-90.0, 90.0)) if rng.random() < oriented_fraction else None
         specs.append(ObjectSpec(f"obj{i:02d}", reference, tuple(placements), yaw))
     return TaskSpec(tuple(specs))
