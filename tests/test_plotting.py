@@ -10,35 +10,27 @@ import matplotlib.pyplot as plt
 
 from demoplan import TaskModelLearner, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
-from demoplan.plotting import (
-    _transitive_reduction,
-    plot_constraints,
-    plot_demonstration,
-)
+from demoplan.plotting import plot_constraints, plot_demonstration
 from tests.helpers import EXAMPLES
 
 
 def test_fig_2_transitive_reduction() -> None:
     """Fig. 2's nine constraints reduce to the five arrows the figure draws."""
-    from demoplan.learning.constraints import learn_constraints
+    from demoplan.learning.constraints import goal_order, learn_constraints
 
-    edges = set(learn_constraints(["ABEFG", "AEBFG"]).constraints)
-    assert _transitive_reduction(list("ABEFG"), edges) == {
-        ("A", "B"),
-        ("A", "E"),
-        ("B", "F"),
-        ("E", "F"),
-        ("F", "G"),
-    }
+    constraints = learn_constraints(["ABEFG", "AEBFG"]).constraints
+    order = goal_order("ABEFG", constraints)
+    assert order.drawn == {("A", "B"), ("A", "E"), ("B", "F"), ("E", "F"), ("F", "G")}
+    assert order.implied == frozenset()
 
 
 def test_plots_draw_every_state_and_step() -> None:
     demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
     model = TaskModelLearner(PAPER_SETTINGS).fit(demos).model_  # Table IV (the data's reading)
-    ax = plot_constraints(model)
+    ax = plot_constraints(model, 0)
     texts = {t.get_text() for t in ax.texts}
-    assert {"A", "B", "C", "D"} <= texts
-    assert "5 constraints" in ax.get_title()
+    assert {"A", "B", "C"} <= texts and "D" not in texts  # demonstration 1: A-B-C
+    assert ax.get_title() == "3 constraints here: 2 drawn, the rest are paths"
     ax = plot_demonstration(demos[0])
     assert len(ax.patches) == len(demos[0].initial) + len(demos[0].steps)
     assert {"1 wood", "2 green", "3 red"} <= {t.get_text() for t in ax.texts}

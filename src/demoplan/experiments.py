@@ -522,10 +522,10 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
             fig.add_subplot(grid[0, k]),
             title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}",
         )
-    plot_constraints(model, fig.add_subplot(grid[1, :]))
+        plot_constraints(model, k, fig.add_subplot(grid[1, k]))
     fig.suptitle(
-        f"{title}: the demonstrations from above (numbers: order of the moves), "
-        "and the constraints learned",
+        f"{title}: the demonstrations from above (numbers: order of the moves),\nand below "
+        f"each the constraints among its states ({len(model.constraints)} learned in all)",
         fontsize=10,
     )
     fig.tight_layout()

@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.learning.constraints import visit_sequence
+from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 
 if TYPE_CHECKING:
@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from demoplan.scenes.scene import Scene
 
 __all__ = [
+    "constraint_caption",
     "object_colour",
     "object_patch",
     "plot_constraints",
@@ -117,43 +118,33 @@ def plot_demonstration(
     return ax
 
 
-def _transitive_reduction(nodes: list[str], edges: set[tuple[str, str]]) -> set[tuple[str, str]]:
-    """Edges not implied by a longer path (the constraints' Hasse diagram)."""
-    successors = {n: {y for x, y in edges if x == n} for n in nodes}
+def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axes:
+    """The constraints among demonstration ``goal``'s states (0-based) as a
+    layered graph (like the paper's Fig. 2): their transitive reduction
+    (:func:`~demoplan.learning.constraints.goal_order`), so that every drawn
+    path is an order every plan for that goal keeps, and every constraint is
+    a path. The title counts them and names any order the paths imply that
+    is not itself a constraint.
 
-    def reachable(start: str, skip: tuple[str, str]) -> set[str]:
-        seen: set[str] = set()
-        stack = [y for y in successors[start] if (start, y) != skip]
-        while stack:
-            node = stack.pop()
-            if node not in seen:
-                seen.add(node)
-                stack.extend(successors.get(node, ()))
-        return seen
-
-    return {(x, y) for x, y in edges if y not in reachable(x, (x, y))}
-
-
-def plot_constraints(model: TaskModel, ax: Axes | None = None) -> Axes:
-    """The precedence constraints as a layered graph (like the paper's Fig. 2).
-
-    Only the transitive reduction is drawn; redundant constraints (A<G given
-    A<B and B<G) are kept in the model but implied by the arrows shown.
+    One graph per goal: the constraints of the whole model are not
+    transitively closed where states occur in some demonstrations only (E<J
+    and J<F, but F before E in a demonstration without J), and one graph of
+    them would draw orders no demonstration supports.
     """
     import matplotlib.pyplot as plt
 
+    from demoplan.learning.constraints import goal_order
+
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 3))
-    labels = list(
-        dict.fromkeys(label for sequence in model.sequences for label in visit_sequence(sequence))
-    )
-    edges = {(x, y) for x, y in model.constraints if x in labels and y in labels}
-    depth = {label: 0 for label in labels}
-    for _ in labels:  # longest-path layering; constraints are acyclic
-        for x, y in edges:
-            depth[y] = max(depth[y], depth[x] + 1)
+    order = goal_order(model.sequences[goal], model.constraints)
+    depth = {label: 0 for label in order.labels}
+    for label in order.labels:  # longest-path layering, in the sequence's order
+        for x, y in order.drawn:
+            if x == label:
+                depth[y] = max(depth[y], depth[x] + 1)
     layers: dict[int, list[str]] = {}
-    for label in labels:
+    for label in order.labels:
         layers.setdefault(depth[label], []).append(label)
     position = {
         label: (layer, index - (len(members) - 1) / 2)
@@ -161,8 +152,7 @@ def plot_constraints(model: TaskModel, ax: Axes | None = None) -> Axes:
         for index, label in enumerate(members)
     }
     objects = {s.id: s.object for s in model.states}
-    shown = _transitive_reduction(labels, edges)
-    for x, y in sorted(shown):
+    for x, y in sorted(order.drawn):
         ax.annotate(
             "",
             position[y],
@@ -191,11 +181,20 @@ def plot_constraints(model: TaskModel, ax: Axes | None = None) -> Axes:
     spread = max((len(m) for m in layers.values()), default=1)
     ax.set_ylim(-spread / 2 - 0.3, spread / 2 + 0.1)
     ax.axis("off")
-    ax.set_title(
-        f"{len(model.constraints)} constraints ({len(shown)} drawn; the rest follow transitively)",
-        fontsize=9,
-    )
+    ax.set_title(constraint_caption(order), fontsize=8)
     return ax
+
+
+def constraint_caption(order: GoalOrder) -> str:
+    """What a constraint graph shows, exactly (:func:`plot_constraints`)."""
+    n = len(order.constraints)
+    text = (
+        f"{n} constraint{'' if n == 1 else 's'} here: {len(order.drawn)} drawn, the rest are paths"
+    )
+    if order.implied:
+        pairs = ", ".join(f"{x}<{y}" for x, y in sorted(order.implied))
+        text += f";\nthe paths also order {pairs}, as every plan for this goal does"
+    return text
 
 
 def plot_scene_plan(

@@ -29,8 +29,10 @@ from demoplan.model import State, visit_label
 
 __all__ = [
     "ConstraintSet",
+    "GoalOrder",
     "Requirement",
     "anchor_requirements",
+    "goal_order",
     "goal_states",
     "learn_constraints",
     "ordered_pairs",
@@ -116,6 +118,51 @@ class Requirement:
 
     text: str
     tokens: tuple[str, str]
+
+
+@dataclass(frozen=True, slots=True)
+class GoalOrder:
+    """The constraints among one demonstration's visits, as a figure draws them.
+
+    ``labels`` : the demonstration's visit labels, in its order.
+    ``constraints`` : the model's constraints between two of them.
+    ``drawn`` : their transitive reduction — no drawn edge follows from a path
+    of others — so every constraint is a path of drawn edges.
+    ``implied`` : orders the drawn paths imply that are not constraints
+    themselves: a plan for this goal keeps them all the same (E before J
+    before F puts E before F, though another demonstration placed F first, in
+    a goal without J). Empty where the constraints among the labels are
+    transitively closed.
+    """
+
+    labels: tuple[str, ...]
+    constraints: frozenset[Pair]
+    drawn: frozenset[Pair]
+    implied: frozenset[Pair]
+
+
+def goal_order(sequence: Sequence[str], constraints: Iterable[Pair]) -> GoalOrder:
+    """:class:`GoalOrder` of the demonstration with state ``sequence``.
+
+    The constraints are acyclic among one demonstration's visits (it visits
+    them in one order), so the reduction is unique.
+    """
+    labels = visit_sequence(sequence)
+    position = {label: k for k, label in enumerate(labels)}
+    among = frozenset((x, y) for x, y in constraints if x in position and y in position)
+    after: dict[str, set[str]] = {label: set() for label in labels}
+    for x, y in among:
+        after[x].add(y)
+    reach: dict[str, set[str]] = {}
+    for label in reversed(labels):  # every constraint points forward in the sequence
+        reach[label] = set(after[label])
+        for y in after[label]:
+            reach[label] |= reach[y]
+    drawn = frozenset(
+        (x, y) for x, y in among if not any(y in reach[z] for z in after[x] if z != y)
+    )
+    closure = {(x, y) for x in labels for y in reach[x]}
+    return GoalOrder(labels, among, drawn, frozenset(closure - among))
 
 
 def parse_requirements(texts: Iterable[str]) -> tuple[Requirement, ...]:
