@@ -114,7 +114,7 @@ def test_plan_text_output(model_files: dict[str, Path]) -> None:
     assert "chosen" in result.stdout and "Locations used" in result.stdout
 
 
-@pytest.mark.parametrize("goal", [0, 1])
+@pytest.mark.parametrize("goal", [1, 2])
 def test_problem_round_trips_through_solve(
     model_files: dict[str, Path], tmp_path: Path, goal: int
 ) -> None:
@@ -123,14 +123,14 @@ def test_problem_round_trips_through_solve(
     assert result.exit_code == 0, result.stderr
     solved = invoke("solve", path, "--json")
     assert solved.exit_code == 0, solved.stderr
-    assert json.loads(solved.stdout)["length"] == (10, 8)[goal]
+    assert json.loads(solved.stdout)["length"] == {1: 10, 2: 8}[goal]  # demonstrations 1 and 2
     validate(load_problem(path), [Action(*a) for a in json.loads(solved.stdout)["actions"]])
 
 
 def test_problem_as_pddl(model_files: dict[str, Path], tmp_path: Path) -> None:
     path = tmp_path / "goal1.pddl"
     result = invoke(
-        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "1", "--pddl", "-o", path
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "2", "--pddl", "-o", path
     )
     assert result.exit_code == 0, result.stderr
     assert "(define (problem" in path.read_text()
@@ -151,10 +151,15 @@ def test_problem_as_pddl(model_files: dict[str, Path], tmp_path: Path) -> None:
 
 def test_problem_goal_out_of_range(model_files: dict[str, Path], tmp_path: Path) -> None:
     result = invoke(
-        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "2", "-o", tmp_path / "x.xml"
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "3", "-o", tmp_path / "x.xml"
     )
     assert result.exit_code == 2
-    assert "--goal 2" in result.stderr and not (tmp_path / "x.xml").exists()
+    assert "--goal 3: the model has 2 demonstrations (1..2)" in result.stderr
+    assert not (tmp_path / "x.xml").exists()
+    zero = invoke(
+        "problem", model_files["blocks"], BLOCKS_SCENE, "--goal", "0", "-o", tmp_path / "x.xml"
+    )
+    assert zero.exit_code == 2 and "--goal" in zero.stderr  # numbered from 1
 
 
 def scene_with(tmp_path: Path, change: Any) -> Path:

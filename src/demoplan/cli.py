@@ -27,6 +27,7 @@ from rich.text import Text
 from demoplan import __version__
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
 from demoplan.fileio import locked_for_update, os_error, os_reason, read_input_text
+from demoplan.wording import plural
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -389,7 +390,8 @@ def learn(
         else:
             _print_model(model, decimals)
             _stdout.print(
-                f"Learned from {len(model.demonstrations)} demonstrations; wrote {target}",
+                f"Learned from {plural(len(model.demonstrations), 'demonstration')}; "
+                f"wrote {target}",
                 markup=False,
                 highlight=False,
             )
@@ -619,8 +621,7 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
     from demoplan.scenes.scene import complete_geometry
 
     chosen = result.chosen
-    name = _demonstration_name(model, chosen.goal)
-    title = f"Goal of demonstration {chosen.goal} ({name}): {len(chosen.plan) // 2} moves"
+    title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
     try:
         save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
     except ImportError:
@@ -631,25 +632,17 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
         raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
 
 
-def _demonstration_name(model: TaskModel, index: int) -> str:
-    """A demonstration's name (a model with only the SPEC's minimum fields has none)."""
-    if index < len(model.demonstrations):
-        return model.demonstrations[index].name
-    return f"demonstration {index + 1}"
-
-
 def _print_scene_plan(result: Any, model: TaskModel) -> None:
     table = Table(title="Candidate goals", title_justify="left")
-    for column in ("goal", "demonstrations", "actions", "moves", ""):
+    for column in ("goal of demonstration", "actions", "moves", ""):
         table.add_column(column)
     for candidate in result.candidates:
         names = ", ".join(
-            _demonstration_name(model, k) for k in candidate.problem.candidate.demonstrations
+            model.demonstration_number(k) for k in candidate.problem.candidate.demonstrations
         )
         length = candidate.length
         chosen = candidate is result.chosen
         table.add_row(
-            str(candidate.goal),
             Text(names),
             "—" if length is None else str(length),
             "—" if length is None else str(length // 2),
@@ -683,8 +676,13 @@ def problem(
         ),
     ],
     goal: Annotated[
-        int, typer.Option(min=0, help="The demonstration whose goal to plan for (0-based).")
-    ] = 0,
+        int,
+        typer.Option(
+            min=1,
+            help="The demonstration whose goal to plan for, numbered from 1 as 'learn' and "
+            "'plan' print them.",
+        ),
+    ] = 1,
     pddl_output: Annotated[
         bool,
         typer.Option(
@@ -708,13 +706,13 @@ def problem(
                 output.with_name(f"{output.stem}-domain.pddl"), [model_path, scene_path]
             )
         model, scene = _scene_inputs(model_path, scene_path)
-        if goal >= len(model.sequences):
+        if goal > len(model.sequences):
             raise UsageError(
-                f"--goal {goal}: the model has {len(model.sequences)} demonstrations "
-                f"(0..{len(model.sequences) - 1})"
+                f"--goal {goal}: the model has {plural(len(model.sequences), 'demonstration')} "
+                f"(1..{len(model.sequences)})"
             )
         problems = scene_problems(model, scene, _geometry_settings(freespace))
-        chosen = next(p for p in problems if goal in p.candidate.demonstrations)
+        chosen = next(p for p in problems if goal - 1 in p.candidate.demonstrations)
         if pddl_output:
             from demoplan.planning.pddl import problem_to_pddl
 
@@ -836,8 +834,8 @@ def _print_run_report(report: Any) -> None:
     verdict = "success" if report.success else "FAILED"
     errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
     _stdout.print(
-        f"{verdict}: {report.reason}; {len(report.actions)} actions "
-        f"({report.first_plan_length} planned first), {report.replans} replans; "
+        f"{verdict}: {report.reason}; {plural(len(report.actions), 'action')} "
+        f"({report.first_plan_length} planned first), {plural(report.replans, 'replan')}; "
         f"final errors: {errors}",
         markup=False,
         highlight=False,
@@ -1217,8 +1215,8 @@ def import_(
                 title += f" → {targets[item.key]}"
             _print_steps(title, item.segmentation)
         _stderr.print(
-            f"{len(files)} of {len(items)} demonstrations imported, "
-            f"{sum(len(i.segmentation.moves) for i in items)} steps; wrote {output}",
+            f"{len(files)} of {plural(len(items), 'demonstration')} imported, "
+            f"{plural(sum(len(i.segmentation.moves) for i in items), 'step')}; wrote {output}",
             markup=False,
             highlight=False,
         )

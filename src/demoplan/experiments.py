@@ -32,6 +32,7 @@ from demoplan.learning.tables import (
 from demoplan.model import TaskModel
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
 from demoplan.scenes.scene import complete_geometry, load_scene
+from demoplan.wording import plural
 
 __all__ = [
     "PAPER_TABLE_II",
@@ -331,7 +332,7 @@ def _execute_in_mujoco(
     )
     lines += [
         "The chosen plan run by a simulated parallel-jaw gripper (physics, friction grasps); "
-        f"{len(report.actions)} actions, {report.replans} replans, "
+        f"{plural(len(report.actions), 'action')}, {plural(report.replans, 'replan')}, "
         f"final errors: "
         + ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
         + ".\n",
@@ -348,8 +349,8 @@ def _execute_in_mujoco(
     world_note = (
         f"On vision (`--perception camera`: an orthographic top camera after every action, "
         f"blocks found by the Hough transform, heights from occlusion): "
-        f"{'built' if seen.success else 'NOT built'}, {len(seen.actions)} actions, "
-        f"{seen.replans} replans.\n"
+        f"{'built' if seen.success else 'NOT built'}, {plural(len(seen.actions), 'action')}, "
+        f"{plural(seen.replans, 'replan')}.\n"
     )
     vision = Check(
         title,

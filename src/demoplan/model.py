@@ -208,3 +208,14 @@ class TaskModel:
             if state.id == state_id:
                 return state
         raise KeyError(state_id)
+
+    def demonstration_label(self, index: int) -> str:
+        """Demonstration ``index`` (0-based, as in files and ``--json``) as a person
+        reads it: numbered from 1, with its name — ``demonstration 2 (pyramid-2)``."""
+        return f"demonstration {self.demonstration_number(index)}"
+
+    def demonstration_number(self, index: int) -> str:
+        """``2 (pyramid-2)`` for index 1: the number a person reads, and the name."""
+        if index < len(self.demonstrations) and self.demonstrations[index].name:
+            return f"{index + 1} ({self.demonstrations[index].name})"
+        return str(index + 1)

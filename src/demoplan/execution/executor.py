@@ -39,6 +39,7 @@ from demoplan.scenes.plan import plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
 from demoplan.scenes.targets import candidate_goals
+from demoplan.wording import plural
 
 __all__ = ["ExecutionSettings", "Failure", "RunEvent", "RunReport", "execute"]
 
@@ -211,7 +212,9 @@ def execute(
     expected = dict(observation.poses)
     emit(
         RunEvent(
-            "plan", f"goal of demonstration {goal}: {len(actions)} actions", remaining=len(actions)
+            "plan",
+            f"goal of {model.demonstration_label(goal)}: {plural(len(actions), 'action')}",
+            remaining=len(actions),
         )
     )
 
@@ -246,7 +249,7 @@ def execute(
         replans += 1
         plan_index += 1
         if replans > settings.max_replans:
-            return f"gave up after {settings.max_replans} replans"
+            return f"gave up after {plural(settings.max_replans, 'replan')}"
         observation = world.observe()
         current = complete_geometry(_scene_of(observation, scene), model)
         try:
@@ -264,7 +267,11 @@ def execute(
         expected = dict(observation.poses)
         emit(
             RunEvent(
-                "replan", f"replan {replans}: {len(actions)} actions", step, replans, len(actions)
+                "replan",
+                f"replan {replans}: {plural(len(actions), 'action')}",
+                step,
+                replans,
+                len(actions),
             )
         )
         return None
@@ -276,7 +283,7 @@ def execute(
             observation = world.observe()
             difference = _compare(expected, observation, settings, exempt=None)
             if difference is None and _goal_holds(problem, observation, reached, settings):
-                return finish(True, f"goal of demonstration {goal} reached")
+                return finish(True, f"goal of {model.demonstration_label(goal)} reached")
             failures.append(
                 difference or Failure(step, "goal", "the goal does not hold at the end")
             )
@@ -285,7 +292,9 @@ def execute(
                 return finish(False, why, gave_up=why.startswith("gave up"))
             continue
         if len(executed) >= settings.max_actions:
-            return finish(False, f"gave up after {settings.max_actions} actions", gave_up=True)
+            return finish(
+                False, f"gave up after {plural(settings.max_actions, 'action')}", gave_up=True
+            )
         action = actions.pop(0)
         step += 1
         location = problem.location(action.location)

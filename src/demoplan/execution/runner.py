@@ -16,6 +16,7 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.problems import pose_of
 from demoplan.scenes.scene import Scene, complete_geometry
+from demoplan.wording import plural
 
 __all__ = ["make_world", "run_task"]
 
@@ -95,7 +96,7 @@ def run_task(
             live.update(
                 Text(
                     f"step {event.step} · {event.text} · replans {event.replans} · "
-                    f"{event.remaining} actions to go"
+                    f"{plural(event.remaining, 'action')} to go"
                 )
             )
             if event.kind in ("failure", "replan"):
