@@ -693,3 +693,17 @@ def test_yaml_aliases_and_huge_coordinates_are_refused(tmp_path: Path) -> None:
     assert_one_line_error(
         invoke("learn", huge, "-o", tmp_path / "m.json"), "huge.json", "steps[0].position[0]"
     )
+
+
+def test_learn_json_without_output_prints_the_model_and_writes_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`learn --json` alone is a dry run: the model on stdout, no file; without
+    --json a model file (-o or --update) is still required (usage error 2)."""
+    monkeypatch.chdir(tmp_path)
+    result = invoke("learn", SET_TABLE, "--paper", "--json")
+    assert result.exit_code == 0, result.stderr
+    assert len(json.loads(result.stdout)["states"]) == 10
+    assert list(tmp_path.iterdir()) == []
+    missing = invoke("learn", SET_TABLE)
+    assert missing.exit_code == 2 and "-o" in missing.stderr

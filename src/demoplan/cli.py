@@ -228,7 +228,13 @@ def learn(
         ),
     ],
     output: Annotated[
-        Path | None, typer.Option("--output", "-o", help="Model file to write.", show_default=False)
+        Path | None,
+        typer.Option(
+            "--output",
+            "-o",
+            help="Model file to write (with --json, optional).",
+            show_default=False,
+        ),
     ] = None,
     update: Annotated[
         Path | None,
@@ -334,11 +340,14 @@ def learn(
     from demoplan.segmentation.types import parse_object_patterns
 
     with _reported_errors():
-        if update is None and output is None:
-            raise typer.BadParameter("give -o MODEL (or --update MODEL)", param_hint="'-o'")
-        target = output or update
-        assert target is not None
-        _refuse_overwriting_inputs(target, demos)
+        if update is None and output is None and not json_output:
+            raise typer.BadParameter(
+                "give -o MODEL (or --update MODEL, or --json to print the model only)",
+                param_hint="'-o'",
+            )
+        target = output or update  # None: --json alone prints the model, writes nothing
+        if target is not None:
+            _refuse_overwriting_inputs(target, demos)
         options = {
             "position_noise": position_noise,
             "orientation_noise": orientation_noise,
@@ -381,7 +390,8 @@ def learn(
                 if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
                     raise InputError(str(exc), source=str(require_file)) from None
                 raise
-            save_model(model, target)
+            if target is not None:
+                save_model(model, target)
         if changes is not None:  # on stderr, so that --json stays pure
             for line in changes.lines():
                 _stderr.print(f"update: {line}", markup=False, highlight=False)
