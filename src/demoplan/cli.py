@@ -13,7 +13,7 @@ import math
 import os
 import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Collection, Iterable, Iterator, Sequence
 from contextlib import contextmanager, nullcontext, suppress
 from enum import StrEnum
 from pathlib import Path
@@ -151,33 +151,77 @@ def _print_json(data: Any) -> None:
     sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n")
 
 
+def fitted_table(
+    title: str,
+    header: Sequence[str],
+    rows: Iterable[Sequence[str]],
+    names: Collection[str] = (),
+) -> Table:
+    """A table that reads in an 80-column terminal: columns empty in every row are
+    left out, the columns in ``names`` (object and state names) wrap between
+    words but never cut a name (up to 24 characters), and the others fold
+    where the width runs out. Cells are plain text ("[m]" is not rich markup)."""
+    body = [list(row) for row in rows]
+    keep = [k for k in range(len(header)) if any(row[k].strip() for row in body)]
+    table = Table(title=title, title_justify="left")
+    for k in keep:
+        if header[k] in names:  # wrapped between words at most, never cut within one
+            words = [word for row in body for word in row[k].split()] + header[k].split()
+            widest = max(len(word) for word in words)
+            table.add_column(Text(header[k]), min_width=min(widest, 24), overflow="fold")
+        else:
+            table.add_column(Text(header[k]), overflow="fold")
+    for row in body:
+        table.add_row(*(Text(row[k]) for k in keep))
+    return table
+
+
+def states_table(model: TaskModel, decimals: int, width: int) -> Table:
+    """The states as the paper's Tables II and IV; where that is wider than
+    ``width``, compact: the two reference columns in one ("Pcb / Motor":
+    position / orientation, one name where they agree) and the position and
+    orientation in one, so that the names still read in full."""
+    from demoplan.learning.tables import STATE_HEADER, state_rows
+
+    title = "States (as the paper's Tables II and IV)"
+    names = ("State", "Object", "Relative Position", "Relative Orientation", "Relative to")
+    rows = state_rows(model, decimals)
+    table = fitted_table(title, STATE_HEADER, rows, names)
+    if Console(width=10_000).measure(table).maximum <= width:  # its natural width
+        return table
+    compact = []
+    for state, obj, by_position, by_orientation, position, yaw, spread, members, margin in rows:
+        if by_orientation and by_orientation != by_position:
+            reference = f"{by_position or '—'} / {by_orientation}"
+        else:
+            reference = by_position
+        value = f"{position} {yaw}°" if yaw else position
+        compact.append((state, obj, reference, value, spread, members, margin))
+    header = ("State", "Object", "Relative to", "Value [m, deg]", "Spread", "Members", "Margin")
+    return fitted_table(title, header, compact, names)
+
+
 def _print_model(model: TaskModel, decimals: int) -> None:
     from demoplan.learning.tables import (
-        STATE_HEADER,
         constraint_text,
         diagnostic_lines,
         precision_text,
         sequence_rows,
-        state_rows,
     )
 
-    states = Table(title="States (as the paper's Tables II and IV)", title_justify="left")
-    for column in STATE_HEADER:  # Text: "[m]" is not rich markup
-        states.add_column(Text(column), no_wrap=column != "Relative Orientation")
-    for row in state_rows(model, decimals):
-        states.add_row(*map(Text, row))
-    _stdout.print(states)
+    _stdout.print(states_table(model, decimals, _stdout.width))
     precision = precision_text(model)
     if precision is not None:
         _stdout.print(precision, markup=False, highlight=False)
     for line in diagnostic_lines(model):
         _stderr.print(f"warning: {line}", markup=False, highlight=False)
-    sequences = Table(title="State sequences (Tables III and V)", title_justify="left")
-    for column in ("Demonstration", "Sequence", "Goal states"):
-        sequences.add_column(column)
-    for row in sequence_rows(model):
-        sequences.add_row(*map(Text, row))
-    _stdout.print(sequences)
+    _stdout.print(
+        fitted_table(
+            "State sequences (Tables III and V)",
+            ("Demonstration", "Sequence", "Goal states"),
+            sequence_rows(model),
+        )
+    )
     _stdout.print(
         f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
         markup=False,
