@@ -29,6 +29,7 @@ __all__ = [
     "PositionSpace",
     "RotationSpace",
     "Space",
+    "f_critical",
     "kmeans",
     "kmeans_batch",
     "outscores",
@@ -247,6 +248,7 @@ def outscores(
     noise: float,
     significance: float,
     noise_df: float = UNBOUNDED_DF,
+    against_precision: bool = True,
 ) -> bool:
     """Whether a clustering scoring ``better`` = (spread, degrees of freedom) is
     supported by the data over one scoring ``worse`` (SPEC §5: a decision only
@@ -256,36 +258,30 @@ def outscores(
     ``significance`` is 0 (the paper's plain rule) — ``worse`` must be
     rejected at that level by an F test: against ``better`` (two placements
     that happen to agree better relative to one candidate than to another are
-    no evidence, a dozen are), or against the precision itself, an estimate
-    with ``noise_df`` degrees of freedom (unbounded: set by the user), where
-    ``better`` passes as placements of one state at that precision. The second
-    test serves where ``better`` rests on few placements — the widest of two
-    clusters holds two — while ``worse`` scatters far beyond what the
-    demonstrations' precision allows; that ``better`` must fit keeps a
-    candidate that merely scatters a little less (an outlier explained by
-    chance) from winning.
+    no evidence, a dozen are), or — with ``against_precision`` — against the
+    precision itself, an estimate with ``noise_df`` degrees of freedom
+    (unbounded: set by the user), where ``better`` passes the consistency
+    check at that precision (``CONSISTENCY_LEVEL``, as a clustering must). The
+    second test serves where ``better`` rests on few placements — the widest
+    of two clusters holds two — while ``worse`` scatters far beyond what the
+    demonstrations' precision allows.
     """
     if math.sqrt(worse[0]) - math.sqrt(better[0]) < noise:
         return False
     if significance <= 0:
         return True
-    if worse[0] >= _f_critical(significance, worse[1], better[1]) * better[0]:
+    if worse[0] >= f_critical(significance, worse[1], better[1]) * better[0]:
         return True
     variance = noise * noise
     return (
-        worse[0] >= _f_critical(significance, worse[1], noise_df) * variance
-        and better[0] < _f_critical(FIT_LEVEL, better[1], noise_df) * variance
+        against_precision
+        and worse[0] >= f_critical(significance, worse[1], noise_df) * variance
+        and better[0] <= f_critical(CONSISTENCY_LEVEL, better[1], noise_df) * variance
     )
 
 
-FIT_LEVEL = 0.05
-""":func:`outscores`' test against the precision asks the better choice to pass
-as one state's placements at this level — the default significance, fixed:
-a level lowered for many candidates (Bonferroni) would make passing easier."""
-
-
 @functools.lru_cache(maxsize=4096)
-def _f_critical(significance: float, dfn: float, dfd: float) -> float:
+def f_critical(significance: float, dfn: float, dfd: float) -> float:
     """The F distribution's upper ``significance`` quantile (cached: learning asks
     for the same few degrees of freedom thousands of times)."""
     from scipy.stats import f as fisher  # deferred: SciPy's import is slow
@@ -592,7 +588,7 @@ def _within_precision(
         if size < 2:
             continue
         df = (int(size) - 1) * dims
-        if spread > noise * noise * _f_critical(CONSISTENCY_LEVEL, df, noise_df):
+        if spread > noise * noise * f_critical(CONSISTENCY_LEVEL, df, noise_df):
             return False
     return True
 

@@ -36,14 +36,17 @@ import numpy as np
 from demoplan import rotations
 from demoplan.deadline import report_progress
 from demoplan.learning.clustering import (
+    CONSISTENCY_LEVEL,
     UNBOUNDED_DF,
     Clustering,
     PositionSpace,
     RotationSpace,
     Space,
+    f_critical,
     kmeans_batch,
     outscores,
     select_clusterings,
+    spread_of,
 )
 from demoplan.learning.settings import LearningSettings as StateGenerationSettings
 from demoplan.model import (
@@ -581,7 +584,8 @@ def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) 
     """The lowest pooled within-group RMS spread of one object's positions ``(B, n,
     3)`` (relative to B candidates) split into 2..:data:`GROUP_MAX_PLACES`
     groups of at least two placements whose centres lie :data:`GROUP_GAP`
-    spreads apart; ``None`` where no split qualifies. Degrees of freedom:
+    spreads apart and that one cluster explains far worse (an F test at
+    ``CONSISTENCY_LEVEL``); ``None`` where no split qualifies. Degrees of freedom:
     (placements − groups) × varying axes. One batched K-means per group count."""
     _, n, _ = candidates.shape
     best: _Spread | None = None
@@ -599,7 +603,14 @@ def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) 
             closest = float(gaps[np.triu_indices(c, 1)].min())
             if closest < max(settings.position_separation, GROUP_GAP * math.sqrt(pooled)):
                 continue
-            found = _Spread(math.sqrt(pooled), (n - c) * PositionSpace(values).dims)
+            # ... and only where the groups explain the placements far better than
+            # one cluster does (an F test at 0.1 %): four or six placements of one
+            # spot fall into two tight-looking groups often enough by chance.
+            dims = PositionSpace(values).dims
+            df_one, df_groups = (n - 1) * dims, (n - c) * dims
+            if spread_of(values) < f_critical(CONSISTENCY_LEVEL, df_one, df_groups) * pooled:
+                continue
+            found = _Spread(math.sqrt(pooled), df_groups)
             if best is None or found < best:
                 best = found
     return best
@@ -751,7 +762,8 @@ class _Chooser:
         local = [
             s
             for s in candidates
-            if _beats(s, self.own, self.noise, level) and _beats(s, self.best, self.noise, level)
+            if _beats(s, self.own, self.noise, level, local=True)
+            and _beats(s, self.best, self.noise, level, local=True)
         ]
         if not local:
             return self.own
@@ -763,14 +775,25 @@ class _Chooser:
 
 
 def _beats(
-    better: ReferenceScore, worse: ReferenceScore, noise: _Spread, significance: float
+    better: ReferenceScore,
+    worse: ReferenceScore,
+    noise: _Spread,
+    significance: float,
+    *,
+    local: bool = False,
 ) -> bool:
+    """:func:`~demoplan.learning.clustering.outscores` for two references; a
+    ``local`` one (available at some placements only, adding states there)
+    must win by the F test against the other reference alone — it never wins
+    because the other one scatters beyond the precision: one of many such
+    candidates explains an outlier better by chance."""
     return outscores(
         (worse.clustering.score, worse.clustering.df),
         (better.clustering.score, better.clustering.df),
         noise=noise.rms,
         significance=significance,
         noise_df=noise.df,
+        against_precision=not local,
     )
 
 
