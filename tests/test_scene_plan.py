@@ -223,7 +223,9 @@ def test_no_plan_exits_3_with_reasons(model_files: dict[str, Path], tmp_path: Pa
 
     path = scene_with(tmp_path, pin)
     result = invoke("plan", model_files["blocks"], path)
-    one_line(result, 3, "goal 0", "goal 1")
+    one_line(
+        result, 3, "goal of demonstration 1 (pyramid-1)", "goal of demonstration 2 (pyramid-2)"
+    )
 
 
 def test_library_api(blocks_model: TaskModel) -> None:
@@ -306,3 +308,26 @@ def test_clutter_is_planned_around_when_allowed(
     assert "blue" in [
         obj for kind, obj, _, _ in json.loads(result.stdout)["actions"] if kind == "GRASP"
     ]
+
+
+def test_plan_plot_without_a_plan_draws_the_targets_and_exits_3(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    """Experiment 2's scene with no free space: green stands on wood's target and
+    nothing can be parked, so neither goal has a plan (exit 3). --plot still
+    writes the scene with the targets and the reason — when a picture is
+    needed most."""
+    scene = json.loads(BLOCKS_SCENE.read_text())
+    scene["freespace"] = []
+    scene_path = tmp_path / "no-room.json"
+    scene_path.write_text(json.dumps(scene))
+    picture = tmp_path / "why.png"
+    result = invoke("plan", model_files["blocks"], scene_path, "--plot", picture)
+    assert result.exit_code == 3, result.stderr
+    assert "no candidate goal can be reached" in result.stderr
+    assert "goal of demonstration 1 (pyramid-1)" in result.stderr
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    import matplotlib.image
+
+    pixels = matplotlib.image.imread(picture)
+    assert pixels.shape[0] > 300 and pixels.std() > 0.05  # a drawing, not a blank page

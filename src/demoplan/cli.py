@@ -25,7 +25,14 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
-from demoplan.errors import DemoplanError, InputError, LimitReachedError, UsageError, error_line
+from demoplan.errors import (
+    DemoplanError,
+    InputError,
+    LimitReachedError,
+    NoPlanError,
+    UsageError,
+    error_line,
+)
 from demoplan.fileio import locked_for_update, os_error, os_reason, read_input_text
 from demoplan.wording import plural
 
@@ -650,13 +657,19 @@ def plan(
         model, scene = _scene_inputs(model_path, scene_path)
         budget = command_budget(max_nodes, timeout)
         settings = _geometry_settings(freespace)
-        if _stderr.is_terminal:
-            with _stderr.status("Planning every candidate goal…"):
+        try:
+            with (
+                _stderr.status("Planning every candidate goal…")
+                if _stderr.is_terminal
+                else (nullcontext())
+            ):
                 result = plan_in_scene(
                     model, scene, budget=budget, settings=settings, clutter=clutter
                 )
-        else:
-            result = plan_in_scene(model, scene, budget=budget, settings=settings, clutter=clutter)
+        except (NoPlanError, LimitReachedError) as exc:
+            if plot is not None:  # a picture of the targets is what is needed now
+                _plot_no_plan(model, scene, settings, clutter, str(exc), plot)
+            raise
         if optimal and not result.optimal:
             raise LimitReachedError(
                 f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"
@@ -684,6 +697,28 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
         ) from None
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
+
+
+def _plot_no_plan(
+    model: TaskModel, scene: Any, settings: Any, clutter: bool, reason: str, path: Path
+) -> None:
+    """The scene, the first candidate goal's targets and why there is no plan."""
+    from demoplan.plotting import save_scene_targets
+    from demoplan.scenes.plan import scene_problems
+    from demoplan.scenes.scene import complete_geometry
+
+    first = scene_problems(model, scene, settings, clutter=clutter)[0]
+    goal = first.candidate.demonstrations[0]
+    title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
+    try:
+        save_scene_targets(complete_geometry(scene, model), first, reason, path, title)
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
+    _stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 
 def _print_scene_plan(result: Any, model: TaskModel) -> None:

@@ -27,8 +27,10 @@ __all__ = [
     "plot_constraints",
     "plot_demonstration",
     "plot_scene_plan",
+    "plot_scene_targets",
     "save_figure",
     "save_scene_plan",
+    "save_scene_targets",
 ]
 
 _PALETTE = {
@@ -255,6 +257,77 @@ def plot_scene_plan(
     ax.set_ylabel("y [m]")
     ax.set_title(title or f"Plan: {len(moves)} moves (faint: now; solid: after)", fontsize=9)
     return ax
+
+
+def plot_scene_targets(
+    scene: Scene, problem: SceneProblem, reason: str, ax: Axes | None = None, title: str = ""
+) -> Axes:
+    """A scene that has no plan, from above: the objects where they stand
+    (solid), the targets of one candidate goal as dashed outlines named after
+    their objects, the free-space spots, and why there is no plan (wrapped
+    under the title)."""
+    import textwrap
+
+    import matplotlib.pyplot as plt
+    from matplotlib import patches
+
+    from demoplan.scenes.problems import pose_of
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 5))
+    colours = {obj.name: object_colour(obj.name, k) for k, obj in enumerate(scene.objects)}
+    geometry = {obj.name: obj.geometry for obj in scene.objects}
+    for spot in problem.locations:
+        if spot.kind == "freespace":
+            radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
+            ax.add_patch(
+                patches.Circle(spot.position[:2], radius, fill=False, ls="--", ec="0.6", lw=0.8)
+            )
+        elif "target" in spot.kind:
+            for name in spot.objects:
+                outline = object_patch(pose_of(spot), geometry.get(name), colours[name], 1.0)
+                outline.set_fill(False)
+                outline.set_edgecolor(colours[name])
+                outline.set_linestyle("--")
+                outline.set_linewidth(1.2)
+                ax.add_patch(outline)
+                ax.annotate(
+                    f"{name}'s target",
+                    spot.position[:2],
+                    fontsize=6,
+                    color=colours[name],
+                    ha="center",
+                    va="top",
+                )
+    for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
+        ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.85))
+        ax.annotate(obj.name, obj.pose.position[:2], fontsize=7, ha="center", va="center")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.12)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    heading = title or "No plan"
+    ax.set_title(heading + "\n" + textwrap.fill(reason, 90), fontsize=8)
+    return ax
+
+
+def save_scene_targets(
+    scene: Scene, problem: SceneProblem, reason: str, path: Path, title: str
+) -> None:
+    """:func:`plot_scene_targets` into an image file, written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, ax = plt.subplots(figsize=(6.5, 5.8))
+    try:
+        plot_scene_targets(scene, problem, reason, ax, title)
+        figure.tight_layout()
+        save_figure(figure, path)
+    finally:
+        plt.close(figure)
 
 
 FIGURE_FORMATS = frozenset(

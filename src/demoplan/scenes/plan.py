@@ -176,7 +176,9 @@ def plan_in_scene(
         outcomes.append(solve_candidate(problem, share, search))
     solved = [c for c in outcomes if c.plan is not None]
     if not solved:
-        reasons = "; ".join(f"goal {c.goal}: {c.reason}" for c in outcomes)
+        reasons = "; ".join(
+            f"goal of {model.demonstration_label(c.goal)}: {c.reason}" for c in outcomes
+        )
         if any(c.limit_reached for c in outcomes):
             raise LimitReachedError(f"no candidate goal planned within the budget ({reasons})")
         raise NoPlanError(f"no candidate goal can be reached in this scene ({reasons})")
