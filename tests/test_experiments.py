@@ -24,6 +24,10 @@ def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> Non
     assert ("1", "State J") in names and ("2", "State D") in names
     report = (out / "report.md").read_text()
     assert "**NO**" not in report
+    # Provenance first: how the data were made, before any table a reader could
+    # take for independent evidence.
+    assert report.index("## Where the data come from") < report.index("| Check |")
+    assert "drawn at random until learning" in report
     assert "Constraints (32)" in report and "Constraints (5)" in report
     planning = {p["experiment"].split()[1]: p for p in summary["planning"]}
     assert [c["actions"] for c in planning["2"]["candidates"]] == [10, 8]  # 5 and 4 moves
