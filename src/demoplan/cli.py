@@ -689,8 +689,15 @@ def _plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> N
 
     chosen = result.chosen
     title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
-    try:
+    with _plot_errors(path):
         save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
+
+
+@contextmanager
+def _plot_errors(path: Path) -> Iterator[None]:
+    """--plot's failures as one-line input errors."""
+    try:
+        yield
     except ImportError:
         raise InputError(
             "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
@@ -710,14 +717,8 @@ def _plot_no_plan(
     first = scene_problems(model, scene, settings, clutter=clutter)[0]
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
-    try:
+    with _plot_errors(path):
         save_scene_targets(complete_geometry(scene, model), first, reason, path, title)
-    except ImportError:
-        raise InputError(
-            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
-        ) from None
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
     _stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 

@@ -7,6 +7,7 @@ optional ``ax`` and returns the axes it drew on.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -316,6 +317,12 @@ def save_scene_targets(
     scene: Scene, problem: SceneProblem, reason: str, path: Path, title: str
 ) -> None:
     """:func:`plot_scene_targets` into an image file, written atomically."""
+    _save_one_axes(lambda ax: plot_scene_targets(scene, problem, reason, ax, title), path)
+
+
+def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
+    """A one-axes figure drawn by ``draw``, saved atomically (raises ImportError
+    without matplotlib)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -323,7 +330,7 @@ def save_scene_targets(
 
     figure, ax = plt.subplots(figsize=(6.5, 5.8))
     try:
-        plot_scene_targets(scene, problem, reason, ax, title)
+        draw(ax)
         figure.tight_layout()
         save_figure(figure, path)
     finally:
@@ -378,15 +385,4 @@ def save_scene_plan(
 ) -> None:
     """:func:`plot_scene_plan` into an image file, written atomically (raises
     ImportError without matplotlib)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, ax = plt.subplots(figsize=(6.5, 5.5))
-    try:
-        plot_scene_plan(scene, problem, plan, ax, title)
-        figure.tight_layout()
-        save_figure(figure, path)
-    finally:
-        plt.close(figure)
+    _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title), path)
