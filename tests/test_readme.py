@@ -86,8 +86,7 @@ def test_python_example_prints_what_its_comments_say(
 ) -> None:
     """The README's Python example (learning Experiment 2 with the paper's settings)
     runs and prints Table V's sequences and the five constraints its comments show."""
-    text = (ROOT / "README.md").read_text()
-    (block,) = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    (block,) = [b for b in python_blocks() if "TaskModelLearner" in b]
     (tmp_path / "examples").symlink_to(ROOT / "examples")
     monkeypatch.chdir(tmp_path)
     exec(compile(block, "README.md", "exec"), {})
@@ -96,3 +95,22 @@ def test_python_example_prints_what_its_comments_say(
     assert len(promised) == 2
     assert printed[: len(promised)] == promised
     assert (tmp_path / "blocks.model.json").exists()
+
+
+def python_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+
+
+def test_the_one_import_loop_prints_what_its_comments_say(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The README's `import demoplan` example: learn, plan and run Experiment 2 —
+    every commented print shows the start of what it prints."""
+    (block,) = [b for b in python_blocks() if b.startswith("import demoplan")]
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0] == "[10, 8]"
+    assert printed[1] == "GRASP red loc3 grasp5" and len(printed) == 1 + 8 + 1
+    assert printed[-1] == "True goal of demonstration 2 (pyramid-2) reached"

@@ -23,7 +23,18 @@ _EXPORTS = {
     "Step": "demoplan.model",
     "TaskModel": "demoplan.model",
     "TaskModelLearner": "demoplan.learning.learner",
-    "learn": "demoplan.learning.learner",
+    "learn": "demoplan.api",
+    "plan": "demoplan.api",
+    "run": "demoplan.api",
+    "LearningSettings": "demoplan.learning.settings",
+    "PAPER_SETTINGS": "demoplan.learning.settings",
+    "Scene": "demoplan.scenes.scene",
+    "load_scene": "demoplan.scenes.scene",
+    "ScenePlan": "demoplan.scenes.plan",
+    "World": "demoplan.execution.world",
+    "Observation": "demoplan.execution.world",
+    "Faults": "demoplan.execution.faults",
+    "RunReport": "demoplan.execution.executor",
     "load_demonstrations": "demoplan.learning.demonstrations",
     "load_inputs": "demoplan.inputs",
     "load_model": "demoplan.learning.modelfile",
@@ -35,37 +46,55 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "PAPER_SETTINGS",
     "Demonstration",
     "DemoplanError",
+    "Faults",
     "InputError",
+    "LearningSettings",
     "LimitReachedError",
     "NoPlanError",
+    "Observation",
     "Plan",
     "Pose",
     "Problem",
+    "RunReport",
+    "Scene",
+    "ScenePlan",
     "State",
     "Step",
     "TaskModel",
     "TaskModelLearner",
+    "World",
     "learn",
     "load_demonstrations",
     "load_inputs",
     "load_model",
     "load_problem",
+    "load_scene",
+    "plan",
+    "run",
     "save_model",
     "solve",
 ]
 
 if TYPE_CHECKING:
+    from demoplan.api import learn, plan, run
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
+    from demoplan.execution.executor import RunReport
+    from demoplan.execution.faults import Faults
+    from demoplan.execution.world import Observation, World
     from demoplan.inputs import load_inputs
     from demoplan.learning.demonstrations import load_demonstrations
-    from demoplan.learning.learner import TaskModelLearner, learn
+    from demoplan.learning.learner import TaskModelLearner
     from demoplan.learning.modelfile import load_model, save_model
+    from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings
     from demoplan.model import Demonstration, Pose, State, Step, TaskModel
     from demoplan.planning.problem import Plan, Problem
     from demoplan.planning.search import solve
     from demoplan.planning.xml import load_problem
+    from demoplan.scenes.plan import ScenePlan
+    from demoplan.scenes.scene import Scene, load_scene
 
 
 def __getattr__(name: str) -> Any:
