@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from demoplan.colours import object_colour
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 
@@ -33,20 +34,6 @@ __all__ = [
     "save_scene_plan",
     "save_scene_targets",
 ]
-
-_PALETTE = {
-    "red": "#d62728",
-    "green": "#2ca02c",
-    "blue": "#1f77b4",
-    "yellow": "#e6c619",
-    "wood": "#b5875a",
-}
-_CYCLE = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860", "#da8bc3", "#8c8c8c"]
-
-
-def object_colour(name: str, index: int) -> str:
-    """A plain colour for an object named after one (``red``, ``wood``), else a cycle."""
-    return _PALETTE.get(name, _CYCLE[index % len(_CYCLE)])
 
 
 def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
@@ -86,17 +73,14 @@ def plot_demonstration(
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
     geometry = demo.geometry()
-    names = sorted({*demo.moved_objects, *(n for n, _ in demo.initial)})  # stable colours
     current = demo.initial_poses()
     for name, pose in demo.landmarks:
         ax.add_patch(object_patch(pose, geometry.get(name), "#cccccc", 0.5))
         ax.annotate(name, pose.position[:2], ha="center", va="center", fontsize=7, color="0.3")
     for name, pose in demo.initial:
-        ax.add_patch(
-            object_patch(pose, geometry.get(name), object_colour(name, names.index(name)), 0.2)
-        )
+        ax.add_patch(object_patch(pose, geometry.get(name), object_colour(name), 0.2))
     for number, step in enumerate(demo.steps, start=1):
-        colour = object_colour(step.object, names.index(step.object))
+        colour = object_colour(step.object)
         start = current.get(step.object)
         x, y, _ = step.pose.position
         if start is not None:
@@ -217,7 +201,7 @@ def plot_scene_plan(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = {obj.name: object_colour(obj.name, k) for k, obj in enumerate(scene.objects)}
+    colours = {obj.name: object_colour(obj.name) for obj in scene.objects}
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     final = {obj.name: obj.pose for obj in scene.objects}
     moves = []
@@ -276,7 +260,7 @@ def plot_scene_targets(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = {obj.name: object_colour(obj.name, k) for k, obj in enumerate(scene.objects)}
+    colours = {obj.name: object_colour(obj.name) for obj in scene.objects}
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     for spot in problem.locations:
         if spot.kind == "freespace":

@@ -15,13 +15,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from demoplan.errors import UsageError
-from demoplan.execution.physics import _COLOURS, MujocoWorld
+from demoplan.execution.physics import MujocoWorld
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import Scene, yaw_of
+
+PERCEIVED_COLOURS = ("red", "green", "blue", "yellow", "wood")
+"""The block colours the top camera tells apart (rendered as demoplan.colours names them)."""
 
 __all__ = ["CameraWorld"]
 
@@ -34,11 +37,12 @@ class CameraWorld:
     def __init__(
         self, world: MujocoWorld, scene: Scene, settings: PerceptionSettings | None = None
     ):
-        plain = [o.name for o in scene.objects if o.name not in _COLOURS]
+        plain = [o.name for o in scene.objects if o.name not in PERCEIVED_COLOURS]
         if plain:
             raise UsageError(
                 f"--perception camera names blocks by colour; {', '.join(plain)} "
-                f"{'is' if len(plain) == 1 else 'are'} not one of {', '.join(sorted(_COLOURS))}"
+                f"{'is' if len(plain) == 1 else 'are'} not one of "
+                f"{', '.join(sorted(PERCEIVED_COLOURS))}"
             )
         self.world = world
         sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]

@@ -98,18 +98,18 @@ class FrameWriter:
         ax.set_title(caption, fontsize=7)
 
     def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
-        from demoplan.plotting import object_colour, object_patch
+        from demoplan.colours import object_colour
+        from demoplan.plotting import object_patch
 
-        names = sorted(set(observation.geometry))
         for name, pose in self.targets.items():
             shape = observation.geometry.get(name)
             patch = object_patch(pose, shape, "none", 1.0)
             patch.set_linestyle("--")
-            patch.set_edgecolor(object_colour(name, names.index(name) if name in names else 0))
+            patch.set_edgecolor(object_colour(name))
             ax.add_patch(patch)
         for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
             geometry: ObjectGeometry | None = observation.geometry.get(name)
-            ax.add_patch(object_patch(pose, geometry, object_colour(name, names.index(name)), 0.85))
+            ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
             ax.annotate(name, pose.position[:2], fontsize=6, ha="center", va="center")
         if observation.held:
             ax.text(

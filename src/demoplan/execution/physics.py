@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.colours import object_rgba
 from demoplan.errors import InputError
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
@@ -71,15 +72,6 @@ def _geom(shape: ObjectGeometry) -> str:
     return f'type="cylinder" size="{max(sx, sy) / 2} {sz / 2}"'
 
 
-_COLOURS = {
-    "red": "0.84 0.15 0.16 1",
-    "green": "0.17 0.63 0.17 1",
-    "blue": "0.12 0.47 0.71 1",
-    "yellow": "0.9 0.78 0.1 1",
-    "wood": "0.71 0.53 0.35 1",
-}
-
-
 def scene_xml(
     scene: Scene,
     top_view: tuple[float, float, float] | None = None,
@@ -96,7 +88,7 @@ def scene_xml(
         x, y, z = obj.pose.position
         half = obj.geometry.size[2] / 2
         w, qx, qy, qz = _wxyz(obj.pose)
-        rgba = _COLOURS.get(obj.name, "0.6 0.6 0.7 1")
+        rgba = object_rgba(obj.name)
         bodies.append(
             f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
             f'<freejoint/><geom {_geom(obj.geometry)} density="{DENSITY}" rgba="{rgba}" '

@@ -9,7 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.plotting import object_colour, save_figure
+from demoplan.colours import object_colour
+from demoplan.plotting import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
 
 if TYPE_CHECKING:
@@ -82,8 +83,8 @@ def plot_segmentation(
     number = {id(move): k + 1 for k, move in enumerate(segmentation.moves)}
     top = max((float(trace.speed.max()) for trace in traces if trace.speed.size), default=0.0)
     top = max(top * 1.1, settings.start_speed * 1.5)
-    for index, (ax, trace) in enumerate(zip(speed_axes, traces, strict=False)):
-        colour = object_colour(trace.object, index)
+    for ax, trace in zip(speed_axes, traces, strict=False):
+        colour = object_colour(trace.object)
         ax.plot(trace.times - origin, trace.speed, color=colour, linewidth=1.0)
         for move in segmentation.moves:
             if move.object == trace.object:
@@ -155,10 +156,7 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
 
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
     origin = _origin(segmentation)
-    colours = {
-        trace.object: object_colour(trace.object, index)
-        for index, trace in enumerate(segmentation.traces)
-    }
+    colours = {trace.object: object_colour(trace.object) for trace in segmentation.traces}
     bottom = min(
         (
             float(t.height.min())
