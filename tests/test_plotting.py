@@ -35,3 +35,23 @@ def test_plots_draw_every_state_and_step() -> None:
     assert len(ax.patches) == len(demos[0].initial) + len(demos[0].steps)
     assert {"1 wood", "2 green", "3 red"} <= {t.get_text() for t in ax.texts}
     plt.close("all")
+
+
+def test_side_by_side_demonstrations_share_their_axis_ranges() -> None:
+    """The experiments' demonstration panels: one range for all, covering each."""
+    from demoplan.plotting import share_limits
+
+    demos = load_demonstrations([EXAMPLES / "set_table"])
+    figure, axes = plt.subplots(1, len(demos))
+    own = []
+    for ax, demo in zip(axes, demos, strict=True):
+        plot_demonstration(demo, ax)
+        own.append((ax.get_xlim(), ax.get_ylim()))
+    assert len({limits for limits in own}) > 1  # they differed before
+    share_limits(list(axes))
+    shared = {(ax.get_xlim(), ax.get_ylim()) for ax in axes}
+    assert len(shared) == 1
+    ((x_low, x_high), (y_low, y_high)) = shared.pop()
+    for (xl, xh), (yl, yh) in own:
+        assert x_low <= xl and xh <= x_high and y_low <= yl and yh <= y_high
+    plt.close(figure)

@@ -512,18 +512,22 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
             "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
         )
         return None
-    from demoplan.plotting import plot_constraints, plot_demonstration
+    from demoplan.plotting import plot_constraints, plot_demonstration, share_limits
 
     demos = model.demonstrations
     fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
     grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
+    panels = []
     for k, demo in enumerate(demos):
-        plot_demonstration(
-            demo,
-            fig.add_subplot(grid[0, k]),
-            title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}",
+        panels.append(
+            plot_demonstration(
+                demo,
+                fig.add_subplot(grid[0, k]),
+                title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}",
+            )
         )
         plot_constraints(model, k, fig.add_subplot(grid[1, k]))
+    share_limits(panels)
     fig.suptitle(
         f"{title}: the demonstrations from above (numbers: order of the moves),\nand below "
         f"each the constraints among its states ({len(model.constraints)} learned in all)",

@@ -33,6 +33,7 @@ __all__ = [
     "save_figure",
     "save_scene_plan",
     "save_scene_targets",
+    "share_limits",
 ]
 
 
@@ -170,6 +171,20 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
     ax.axis("off")
     ax.set_title(constraint_caption(order), fontsize=8)
     return ax
+
+
+def share_limits(axes: list[Axes]) -> None:
+    """One x and one y range for side-by-side top views (the union of theirs), so
+    that the same spot is in the same place in every panel."""
+    if not axes:
+        return
+    x_low = min(ax.get_xlim()[0] for ax in axes)
+    x_high = max(ax.get_xlim()[1] for ax in axes)
+    y_low = min(ax.get_ylim()[0] for ax in axes)
+    y_high = max(ax.get_ylim()[1] for ax in axes)
+    for ax in axes:
+        ax.set_xlim(x_low, x_high)
+        ax.set_ylim(y_low, y_high)
 
 
 def constraint_caption(order: GoalOrder) -> str:
