@@ -55,3 +55,32 @@ def test_side_by_side_demonstrations_share_their_axis_ranges() -> None:
     for (xl, xh), (yl, yh) in own:
         assert x_low <= xl and xh <= x_high and y_low <= yl and yh <= y_high
     plt.close(figure)
+
+
+def test_top_views_carry_a_legend_of_their_marks() -> None:
+    """Faint and solid shapes, arrows and dashed circles are explained in the figure."""
+    from demoplan import load_scene, plan
+    from demoplan.plotting import plot_scene_plan
+    from demoplan.scenes.scene import complete_geometry
+
+    demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])
+    ax = plot_demonstration(demos[0])
+    legend = ax.get_legend()
+    assert legend is not None
+    assert [t.get_text() for t in legend.get_texts()] == [
+        "where the objects stood",
+        "where step n put them",
+        "the move of step n",
+    ]
+    model = TaskModelLearner(PAPER_SETTINGS).fit(demos).model_
+    scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
+    result = plan(model, scene)
+    ax = plot_scene_plan(complete_geometry(scene, model), result.chosen.problem, result.chosen.plan)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts == [
+        "where the objects stand now",
+        "where the plan leaves them",
+        "move n of the plan",
+        "free-space spot",
+    ]
+    plt.close("all")

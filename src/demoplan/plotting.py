@@ -103,6 +103,14 @@ def plot_demonstration(
     ax.set_ylabel("y [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.set_title(title or demo.name, fontsize=9)
+    _legend(
+        ax,
+        [
+            ("faint", "where the objects stood"),
+            ("solid", "where step n put them"),
+            ("arrow", "the move of step n"),
+        ],
+    )
     return ax
 
 
@@ -255,8 +263,36 @@ def plot_scene_plan(
     ax.margins(0.08)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(title or f"Plan: {len(moves)} moves (faint: now; solid: after)", fontsize=9)
+    ax.set_title(title or f"Plan: {len(moves)} moves", fontsize=9)
+    _legend(
+        ax,
+        [
+            ("faint", "where the objects stand now"),
+            ("solid", "where the plan leaves them"),
+            ("arrow", "move n of the plan"),
+            ("dashed", "free-space spot"),
+        ],
+    )
     return ax
+
+
+def _legend(ax: Axes, entries: list[tuple[str, str]]) -> None:
+    """A legend of what the marks mean (not of the objects: their names are
+    written on them): ``faint``/``solid`` shapes, ``arrow``s, ``dashed`` circles."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Patch
+
+    handles: list[Any] = []
+    for mark, text in entries:
+        if mark == "faint":
+            handles.append(Patch(fc="0.5", alpha=0.25, ec="0.5", label=text))
+        elif mark == "solid":
+            handles.append(Patch(fc="0.5", alpha=0.85, ec="black", label=text))
+        elif mark == "arrow":
+            handles.append(Line2D([], [], color="0.3", marker=">", lw=1.2, label=text))
+        else:
+            handles.append(Circle((0, 0), 1, fill=False, ls="--", ec="0.6", label=text))
+    ax.legend(handles=handles, loc="best", fontsize=6, framealpha=0.8)
 
 
 def plot_scene_targets(
