@@ -29,6 +29,8 @@ __all__ = [
     "PositionSpace",
     "RotationSpace",
     "Space",
+    "closest_pair",
+    "cluster_stats",
     "f_critical",
     "kmeans",
     "kmeans_batch",
@@ -454,13 +456,13 @@ class _Scan:
         present = np.bincount(labels, minlength=c) > 0
         if not present.all():  # compact the labels if a cluster ended empty
             labels = (np.cumsum(present) - 1)[labels]
-        means, raw = _cluster_stats(self.space, labels, int(present.sum()))
+        means, raw = cluster_stats(self.space, labels, int(present.sum()))
         # A cluster of one placement does not show "no spread" (SPEC §5): it has
         # the placement precision's.
         sizes = np.bincount(labels, minlength=len(raw))
         spreads = [noise * noise if n < 2 else v for v, n in zip(raw, sizes, strict=True)]
         if c > 1 and (
-            _closest_pair(self.space.distance, means) < separation
+            closest_pair(self.space.distance, means) < separation
             # A cluster of one placement shows no spread, not a state: a place
             # seen once is no evidence of a second state (SPEC §5).
             or np.bincount(labels).min() < 2
@@ -603,7 +605,7 @@ def _varying_axes(values: FloatArray, tolerance: float) -> int:
     return max(1, int(np.count_nonzero((std > tolerance) & (std > 0.05 * std.max()))))
 
 
-def _cluster_stats(
+def cluster_stats(
     space: Space, labels: IntArray, n_clusters: int
 ) -> tuple[list[tuple[float, ...]], list[float]]:
     means: list[tuple[float, ...]] = []
@@ -615,7 +617,7 @@ def _cluster_stats(
     return means, spreads
 
 
-def _closest_pair(
+def closest_pair(
     distance: Callable[[Sequence[float], Sequence[float]], float],
     means: Sequence[Sequence[float]],
 ) -> float:

@@ -42,6 +42,8 @@ from demoplan.learning.clustering import (
     PositionSpace,
     RotationSpace,
     Space,
+    closest_pair,
+    cluster_stats,
     f_critical,
     kmeans_batch,
     outscores,
@@ -596,18 +598,16 @@ def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) 
             sizes = np.bincount(label, minlength=c)
             if sizes.min() < 2:
                 continue
-            centres = np.stack([values[label == k].mean(axis=0) for k in range(c)])
-            residual = values - centres[label]
-            pooled = float((residual * residual).sum()) / (n - c)
-            gaps = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
-            closest = float(gaps[np.triu_indices(c, 1)].min())
-            if closest < max(settings.position_separation, GROUP_GAP * math.sqrt(pooled)):
+            space = PositionSpace(values)
+            centres, spreads = cluster_stats(space, label, c)
+            pooled = sum((k - 1) * v for k, v in zip(sizes, spreads, strict=True)) / (n - c)
+            gap = max(settings.position_separation, GROUP_GAP * math.sqrt(pooled))
+            if closest_pair(space.distance, centres) < gap:
                 continue
             # ... and only where the groups explain the placements far better than
             # one cluster does (an F test at 0.1 %): four or six placements of one
             # spot fall into two tight-looking groups often enough by chance.
-            dims = PositionSpace(values).dims
-            df_one, df_groups = (n - 1) * dims, (n - c) * dims
+            df_one, df_groups = (n - 1) * space.dims, (n - c) * space.dims
             if spread_of(values) < f_critical(CONSISTENCY_LEVEL, df_one, df_groups) * pooled:
                 continue
             found = _Spread(math.sqrt(pooled), df_groups)
