@@ -481,9 +481,7 @@ def _plan_section(
         "|---|---|---|---|",
     ]
     for c in result.candidates:
-        names = ", ".join(
-            f"{k + 1} ({model.demonstrations[k].name})" for k in c.problem.candidate.demonstrations
-        )
+        names = ", ".join(model.demonstration_number(k) for k in c.problem.candidate.demonstrations)
         length = "—" if c.length is None else str(c.length)
         moves = "—" if c.length is None else str(c.length // 2)
         note = "chosen" if c is result.chosen else (c.reason or "")
