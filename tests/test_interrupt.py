@@ -54,3 +54,30 @@ def test_a_long_search_stops_within_a_second(
     assert exit_code == code
     assert seconds < 1.0
     assert err == "demoplan: interrupted\n"
+
+
+def test_a_signal_that_lands_where_python_cannot_raise_is_delivered_again() -> None:
+    """Ctrl-C arriving inside a ``__del__`` (CI once caught it inside an import
+    lock's weakref callback): no 'Exception ignored … Traceback' on stderr, and
+    the program still stops at the next line of ordinary code."""
+    script = (
+        "import signal, sys, time\n"
+        "from demoplan import launcher\n"
+        "signal.signal(signal.SIGINT, launcher._on_signal)\n"
+        "sys.unraisablehook = launcher._redeliver_lost_signal\n"
+        "class Boom:\n"
+        "    def __del__(self):\n"
+        "        signal.raise_signal(signal.SIGINT)\n"
+        "        sum(range(1000))\n"
+        "try:\n"
+        "    Boom()\n"
+        "    time.sleep(2)\n"
+        "    print('ran on')\n"
+        "except KeyboardInterrupt:\n"
+        "    print('stopped')\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.stdout.strip() == "stopped", done.stdout + done.stderr
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr

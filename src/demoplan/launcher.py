@@ -193,6 +193,23 @@ def _on_signal(signum: int, frame: object) -> None:
     raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
 
 
+def _redeliver_lost_signal(unraisable: Any) -> None:
+    """``sys.unraisablehook``: a signal whose exception arrived where Python cannot
+    raise it (a weakref callback inside an import lock, a ``__del__``) is
+    neither reported with a traceback nor lost — a timer delivers it again a
+    few milliseconds later, after the hook has returned, so that the command
+    stops at the next line of ordinary code. Other unraisable exceptions go to
+    Python's own report."""
+    import signal
+
+    if isinstance(unraisable.exc_value, KeyboardInterrupt) and _signals_received:
+        signum = _signals_received[-1]
+        signal.signal(signal.SIGALRM, lambda _number, frame: _on_signal(signum, frame))
+        signal.setitimer(signal.ITIMER_REAL, 0.005)
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def interrupted_by_signal() -> bool:
     """Whether ``main`` stopped the command on a signal (it reports it once)."""
     return bool(_signals_received)
@@ -208,6 +225,7 @@ def main() -> None:
     # SIGINT ignored (a background job of a script); SIGTERM does the same.
     signal.signal(signal.SIGINT, _on_signal)
     signal.signal(signal.SIGTERM, _on_signal)
+    sys.unraisablehook = _redeliver_lost_signal
     # Started with stdout (or stderr) closed: what would be printed is dropped,
     # as if sent to /dev/null; a command whose job is a file still does it.
     if sys.stdout is None:
