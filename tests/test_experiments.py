@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
+import re
+import shutil
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
@@ -13,10 +17,18 @@ from demoplan.experiments import run_experiments
 from demoplan.learning.modelfile import load_model
 
 
-def test_experiments_command_reproduces_the_papers_tables(tmp_path: Path) -> None:
-    out = tmp_path / "report"
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder ``demoplan experiments`` wrote (run once for this module)."""
+    out = tmp_path_factory.mktemp("experiments") / "report"
     result = CliRunner().invoke(app, ["experiments", "--out", str(out)])
     assert result.exit_code == 0, result.output
+    assert f"Report page: {out / 'report.html'}" in result.output
+    return out
+
+
+def test_experiments_command_reproduces_the_papers_tables(report: Path) -> None:
+    out = report
     summary = json.loads((out / "summary.json").read_text())
     checks = summary["checks"]
     assert checks and all(c["ok"] for c in checks)
@@ -61,3 +73,71 @@ def test_a_mismatch_with_the_paper_is_reported(tmp_path: Path, monkeypatch: obje
         ("Sequence 1", "A-B-C-D-E-G-F", "A-B-C-D-E-F-G")
     ]
     assert CliRunner().invoke(app, ["experiments", "--out", str(tmp_path)]).exit_code == 1
+
+
+# The HTML page: Debian's chromium driven by Playwright (skipped where either is
+# missing, unless DEMOPLAN_REQUIRE_BROWSER=1 as in CI, whose .ci/run installs both).
+ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+
+def _chromium() -> str:
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        found = None
+    if found is None:
+        if os.environ.get("DEMOPLAN_REQUIRE_BROWSER") == "1":
+            pytest.fail(
+                "Playwright and Debian's chromium are required (DEMOPLAN_REQUIRE_BROWSER=1)"
+            )
+        pytest.skip("no Playwright or no chromium on this machine")
+    return found
+
+
+def test_the_report_page_is_one_file_with_every_image_inside(report: Path) -> None:
+    page = (report / "report.html").read_text(encoding="utf-8")
+    markdown = (report / "report.md").read_text(encoding="utf-8")
+    images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", markdown)
+    assert len(images) >= 5
+    assert page.count('src="data:image/png;base64,') == len(images)
+    assert "<table>" in page and "Where the data come from" in page
+
+
+def test_the_report_page_opens_in_headless_chromium(report: Path) -> None:
+    executable = _chromium()
+    from playwright.sync_api import sync_playwright
+
+    errors: list[str] = []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+        try:
+            tab = browser.new_page(viewport={"width": 1200, "height": 900})
+            tab.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            tab.on("pageerror", lambda e: errors.append(str(e)))
+            tab.goto((report / "report.html").as_uri())
+            tab.wait_for_load_state("load")
+            broken = tab.evaluate(
+                "Array.from(document.images)"
+                ".filter(i => !i.complete || i.naturalWidth === 0).map(i => i.alt)"
+            )
+            count = tab.evaluate("document.images.length")
+            heading = tab.inner_text("h1")
+            ARTIFACTS.mkdir(exist_ok=True)
+            tab.screenshot(path=str(ARTIFACTS / "report-page.png"), full_page=False)
+        finally:
+            browser.close()
+    assert count >= 5
+    assert broken == []
+    assert errors == []
+    assert "the paper's experiments reproduced" in heading

@@ -1315,8 +1315,13 @@ def import_(
 @app.command()
 def experiments(
     out: Annotated[Path, typer.Option(help="Folder for the report.")] = Path("demoplan-report"),
+    open_report: Annotated[
+        bool,
+        typer.Option("--open", help="Open report.html in the web browser when done."),
+    ] = False,
 ) -> None:
-    """Reproduce the paper's experiments and write a report (tables, figures, models)."""
+    """Reproduce the paper's experiments and write a report: report.md and a
+    self-contained report.html (tables, figures, models)."""
     from demoplan.experiments import run_experiments
     from demoplan.fileio import staged_folder
 
@@ -1337,6 +1342,15 @@ def experiments(
             table.add_row(*map(Text, cells), "yes" if check.ok else "NO")
         _stdout.print(table)
         _stdout.print(f"Report: {report}", markup=False, highlight=False)
+        if result.html is not None:
+            page = out / result.html.name
+            _stdout.print(f"Report page: {page}", markup=False, highlight=False)
+            if open_report and not _open_in_browser(page):
+                _stderr.print(
+                    f"demoplan: note: no web browser to open {page} (open it by hand)",
+                    markup=False,
+                    highlight=False,
+                )
         differing = [c for c in result.checks if not c.ok]
         if differing:
             names = ", ".join(f"{c.experiment.split(' (')[0]} {c.name}" for c in differing)
@@ -1347,6 +1361,16 @@ def experiments(
                 highlight=False,
             )
             raise typer.Exit(1)
+
+
+def _open_in_browser(page: Path) -> bool:
+    """Open a file in the user's web browser; False where there is none."""
+    import webbrowser
+
+    try:
+        return webbrowser.open(page.resolve().as_uri())
+    except webbrowser.Error:
+        return False
 
 
 def main() -> None:

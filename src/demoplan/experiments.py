@@ -30,6 +30,7 @@ from demoplan.learning.tables import (
     sequence_rows,
 )
 from demoplan.model import TaskModel
+from demoplan.report_html import markdown_to_html
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
 from demoplan.scenes.scene import complete_geometry, load_scene
 from demoplan.wording import plural
@@ -104,6 +105,7 @@ class ExperimentsResult:
     checks: tuple[Check, ...]
     models: tuple[TaskModel, ...]
     plans: tuple[ScenePlan, ...] = ()
+    html: Path | None = None  # the same report as one self-contained page
 
 
 PAPER_PLAN_MOVES_EXPERIMENT_2 = (5, 4)
@@ -288,7 +290,10 @@ def run_experiments(
     sections.append(text)
     checks += stream_checks
     sections.append(_notes())
-    write_atomic(out / "report.md", "\n".join(sections))
+    markdown = "\n".join(sections)
+    write_atomic(out / "report.md", markdown)
+    page = markdown_to_html(markdown, out, "demoplan: the paper's experiments reproduced")
+    write_atomic(out / "report.html", page)
     write_atomic(
         out / "summary.json",
         dump_json(
@@ -299,7 +304,9 @@ def run_experiments(
             }
         ),
     )
-    return ExperimentsResult(out / "report.md", tuple(checks), tuple(models), tuple(plans))
+    return ExperimentsResult(
+        out / "report.md", tuple(checks), tuple(models), tuple(plans), out / "report.html"
+    )
 
 
 def _execute_in_mujoco(

@@ -1,0 +1,68 @@
+"""A self-contained HTML page of a markdown report (``report.html`` beside
+``report.md``): the markdown rendered with markdown-it (CommonMark and tables,
+already installed with rich), every local image embedded as a data URI, so the
+page opens anywhere as one file.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import mimetypes
+from pathlib import Path
+
+from markdown_it import MarkdownIt
+from markdown_it.token import Token
+
+__all__ = ["markdown_to_html"]
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; max-width: 70rem; margin: 2rem auto;
+       padding: 0 1rem; line-height: 1.45; color: #222; }
+table { border-collapse: collapse; margin: 1rem 0; font-size: 0.92rem; }
+th, td { border: 1px solid #ccc; padding: 0.25rem 0.6rem; text-align: left; }
+th { background: #f3f3f3; }
+img { max-width: 100%; height: auto; border: 1px solid #eee; }
+code, pre { background: #f6f6f6; font-size: 0.9rem; }
+pre { padding: 0.6rem; overflow-x: auto; }
+"""
+
+
+def markdown_to_html(markdown: str, folder: Path, title: str) -> str:
+    """The HTML page of ``markdown``, whose relative image paths are read from
+    ``folder`` and embedded. An image that is missing stays a link (and shows
+    as broken, which the report test catches)."""
+    parser = MarkdownIt("commonmark").enable("table")
+    tokens = parser.parse(markdown)
+    for token in _walk(tokens):
+        if token.type == "image":
+            source = str(token.attrGet("src") or "")
+            embedded = _data_uri(folder, source)
+            if embedded is not None:
+                token.attrSet("src", embedded)
+    body = parser.renderer.render(tokens, parser.options, {})
+    return (
+        '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
+        f"<title>{html.escape(title)}</title>\n<style>{_STYLE}</style>\n</head>\n"
+        f"<body>\n{body}</body>\n</html>\n"
+    )
+
+
+def _walk(tokens: list[Token]) -> list[Token]:
+    found: list[Token] = []
+    for token in tokens:
+        found.append(token)
+        if token.children:
+            found += _walk(token.children)
+    return found
+
+
+def _data_uri(folder: Path, source: str) -> str | None:
+    """``source`` as a data URI when it names a file inside ``folder``."""
+    if ":" in source or source.startswith("/"):
+        return None  # a URL or an absolute path: left as written
+    path = (folder / source).resolve()
+    if not path.is_file() or not path.is_relative_to(folder.resolve()):
+        return None
+    kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
+    return f"data:{kind};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
