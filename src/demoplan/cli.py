@@ -33,7 +33,13 @@ from demoplan.errors import (
     UsageError,
     error_line,
 )
-from demoplan.fileio import locked_for_update, os_error, os_reason, read_input_text
+from demoplan.fileio import (
+    display_path,
+    locked_for_update,
+    os_error,
+    os_reason,
+    read_input_text,
+)
 from demoplan.wording import plural
 
 if TYPE_CHECKING:
@@ -486,23 +492,120 @@ def _model_json(model: TaskModel) -> dict[str, Any]:
 
 @app.command()
 def show(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="A model file written by 'learn'.")
+    path: Annotated[
+        Path,
+        typer.Argument(
+            metavar="MODEL|SCENE",
+            help="A model file written by 'learn', or a scene file to look at before planning.",
+        ),
     ],
     json_output: Annotated[
-        bool, typer.Option("--json", help="Print the model as JSON on stdout.")
+        bool, typer.Option("--json", help="Print the model or the scene preview as JSON.")
     ] = False,
     decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
+    model_path: Annotated[
+        Path | None,
+        typer.Option("--model", help="A scene: take sizes the scene omits from this model."),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(help="A scene: draw it from above into this image (PNG, SVG)."),
+    ] = None,
 ) -> None:
-    """Print a model as the paper's tables: states, sequences, constraints."""
-    from demoplan.learning.modelfile import load_model
+    """Print a model as the paper's tables (states, sequences, constraints), or
+    preview a scene: where each object stands, which grasps its neighbours
+    block, the landmarks and the free space planning would park objects on."""
+    from demoplan.fileio import check_format, read_document
+    from demoplan.learning.modelfile import model_from_dict
 
     with _reported_errors():
-        model = load_model(model_path)
-        if json_output:
-            _print_json(_model_json(model))
-        else:
-            _print_model(model, decimals)
+        document = read_document(path)
+        kind, _ = check_format(document, {"model", "scene"}, display_path(path))
+        if kind == "model":
+            if plot is not None or model_path is not None:
+                option = "--plot" if plot is not None else "--model"
+                raise InputError(f"{option} is for a scene; {path} is a model", field=option)
+            model = model_from_dict(document, str(path))
+            if json_output:
+                _print_json(_model_json(model))
+            else:
+                _print_model(model, decimals)
+            return
+        _show_scene(path, document, json_output, decimals, model_path, plot)
+
+
+def _show_scene(
+    path: Path,
+    document: dict[str, Any],
+    json_output: bool,
+    decimals: int,
+    model_path: Path | None,
+    plot: Path | None,
+) -> None:
+    from demoplan.learning.modelfile import load_model
+    from demoplan.scenes.preview import preview_scene
+    from demoplan.scenes.scene import complete_geometry, scene_from_document
+
+    if plot is not None:
+        from demoplan.plotting import check_figure_path
+
+        check_figure_path(plot, "--plot")
+    scene = scene_from_document(document, str(path))
+    if model_path is not None:
+        scene = complete_geometry(scene, load_model(model_path))
+    preview = preview_scene(scene)
+    if plot is not None:
+        from demoplan.plotting import save_scene_targets
+
+        with _plot_errors(plot):
+            title = f"{display_path(path)}: the scene before planning"
+            save_scene_targets(scene, preview.problem, "", plot, title)
+        _stderr.print(f"wrote {plot}", markup=False, highlight=False)
+    if json_output:
+        _print_json(preview.to_json())
+    else:
+        _print_scene_preview(preview, decimals)
+
+
+def _print_scene_preview(preview: Any, decimals: int) -> None:
+    table = Table(title=f"Scene {preview.source}", title_justify="left")
+    for column in ("Object", "Position [m]", "Yaw", "Size [m]", "On", "Grasps (axis: in the way)"):
+        table.add_column(column, overflow="fold")
+    for obj in preview.objects:
+        grasps = "; ".join(
+            f"{g.axis:g}°: " + (", ".join(g.blocked_by) if g.blocked_by else "free")
+            for g in obj.grasps
+        )
+        size = " × ".join(f"{v:g}" for v in obj.geometry.size)
+        table.add_row(
+            Text(obj.name),
+            _xyz_text(obj.position, decimals),
+            f"{obj.yaw:.0f}°",
+            f"{obj.geometry.shape} {size}",
+            Text(", ".join(obj.on) or "table"),
+            Text(grasps),
+        )
+    _stdout.print(table)
+    for name, position in preview.landmarks:
+        _stdout.print(f"Landmark {name} at {_xyz_text(position, decimals)}", markup=False)
+    where = "generated (the scene gives none)" if preview.freespace_generated else "given"
+    spots = ", ".join(_xyz_text(spot, decimals) for spot in preview.freespace) or "none"
+    _stdout.print(
+        f"Free space, {where}: {plural(len(preview.freespace), 'spot')}: {spots}",
+        markup=False,
+        highlight=False,
+    )
+    stuck = [o.name for o in preview.objects if not o.graspable]
+    if stuck:
+        _stdout.print(
+            f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)",
+            markup=False,
+            highlight=False,
+        )
+
+
+def _xyz_text(position: Any, decimals: int) -> str:
+    return "(" + ", ".join(f"{v:.{decimals}f}" for v in position) + ")"
 
 
 class SearchName(StrEnum):

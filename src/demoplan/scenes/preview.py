@@ -1,0 +1,137 @@
+"""A scene looked at before planning (``demoplan show SCENE``): where each
+object stands, which of its grasps the neighbours block (the collision rule
+of paper §IV.C / §V.B that planning uses), the landmarks, and the free-space
+spots planning would park objects on.
+
+It builds the same planning problem as :func:`~demoplan.scenes.problems.build_problem`
+with no goal, so what it shows is what the planner will see at the start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from demoplan.model import ObjectGeometry, Vector3
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.problems import SceneProblem, build_problem
+from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.targets import Candidate
+
+__all__ = ["GraspPreview", "ObjectPreview", "ScenePreview", "preview_scene"]
+
+
+@dataclass(frozen=True, slots=True)
+class GraspPreview:
+    """One grasp of an object where it stands: fingers closing along ``axis``
+    (deg, in the object's frame), and the objects in the way (empty: free)."""
+
+    name: str
+    axis: float
+    blocked_by: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectPreview:
+    name: str
+    geometry: ObjectGeometry
+    position: Vector3
+    yaw: float
+    location: str
+    grasps: tuple[GraspPreview, ...]
+    on: tuple[str, ...]  # the objects it stands on (empty: on the table)
+
+    @property
+    def graspable(self) -> bool:
+        """Some grasp is free and nothing stands on it."""
+        return any(not g.blocked_by for g in self.grasps)
+
+
+@dataclass(frozen=True, slots=True)
+class ScenePreview:
+    """What :func:`preview_scene` found; ``problem``: the goal-less planning
+    problem (for figures)."""
+
+    source: str
+    objects: tuple[ObjectPreview, ...]
+    landmarks: tuple[tuple[str, Vector3], ...]
+    freespace: tuple[Vector3, ...]
+    freespace_generated: bool
+    table: tuple[tuple[float, float], tuple[float, float]] | None
+    problem: SceneProblem
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "source": self.source,
+            "objects": {
+                o.name: {
+                    "location": o.location,
+                    "position": [round(v, 6) for v in o.position],
+                    "yaw": round(o.yaw, 3),
+                    "shape": o.geometry.shape,
+                    "size": list(o.geometry.size),
+                    "on": list(o.on),
+                    "grasps": [
+                        {"name": g.name, "axis": g.axis, "blocked_by": list(g.blocked_by)}
+                        for g in o.grasps
+                    ],
+                }
+                for o in self.objects
+            },
+            "landmarks": {name: list(position) for name, position in self.landmarks},
+            "freespace": [list(spot) for spot in self.freespace],
+            "freespace_generated": self.freespace_generated,
+            "table": None if self.table is None else [list(corner) for corner in self.table],
+        }
+
+
+def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings()) -> ScenePreview:
+    """Look at ``scene`` as the planner will (every object's size known: see
+    :func:`~demoplan.scenes.scene.complete_geometry`)."""
+    nothing = Candidate(goal=0, demonstrations=(), subtasks=(), precedences=())
+    built = build_problem(scene, nothing, settings)
+    problem = built.problem
+    at = dict(problem.initial)
+    standing = {location: obj for obj, location in problem.initial}
+    below: dict[str, list[str]] = {}
+    for upper, lower in problem.supports:
+        below.setdefault(upper, []).append(lower)
+    blocked: dict[tuple[str, str], list[str]] = {}
+    for a, b, grasp in sorted(problem.collisions):
+        if b in standing and standing.get(a) is not None:
+            blocked.setdefault((a, grasp), []).append(standing[b])
+    objects = []
+    for obj in scene.objects:
+        assert obj.geometry is not None  # build_problem refused it otherwise
+        here = at[obj.name]
+        resting_on = tuple(sorted(standing[b] for b in below.get(here, ()) if b in standing))
+        on_top = [standing[u] for u, lows in below.items() if here in lows and u in standing]
+        grasps = tuple(
+            GraspPreview(
+                g.name,
+                g.axis,
+                tuple(sorted(set(blocked.get((here, g.name), []) + on_top))),
+            )
+            for g in built.grasps
+            if g.object == obj.name
+        )
+        objects.append(
+            ObjectPreview(
+                obj.name,
+                obj.geometry,
+                obj.pose.position,
+                yaw_of(obj.pose),
+                here,
+                grasps,
+                resting_on,
+            )
+        )
+    spots = tuple(loc.position for loc in built.locations if loc.kind == "freespace")
+    return ScenePreview(
+        scene.source,
+        tuple(objects),
+        tuple((name, pose.position) for name, pose in scene.landmarks),
+        spots,
+        scene.freespace is None,
+        scene.table,
+        built,
+    )
