@@ -10,8 +10,9 @@ from typing import Any
 import pytest
 from typer.testing import CliRunner
 
+import demoplan
 from demoplan.cli import app
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
@@ -227,3 +228,26 @@ def test_a_block_turned_on_its_target_is_put_down_again(
         )
         < 1
     )  # type: ignore[index]
+
+
+def test_unknown_objects_are_handled_alike_by_plan_and_run(tmp_path: Path) -> None:
+    """An object the model never saw: refused by plan and run alike, with the
+    same one-line error; both plan around it with --clutter (issue 15)."""
+    model = tmp_path / "blocks.json"
+    assert invoke("learn", EXAMPLES / "blocks", "--paper", "-o", model).exit_code == 0
+    scene = json.loads((EXAMPLES / "scenes" / "pyramid-fig4.json").read_text())
+    scene["objects"]["mug"] = {"position": [0.5, 0.3, 0], "yaw": 0, "size": [0.05, 0.05, 0.08]}
+    path = tmp_path / "mug.json"
+    path.write_text(json.dumps(scene))
+    errors = []
+    for command in ("plan", "run"):
+        refused = invoke(command, model, path)
+        assert refused.exit_code == 1
+        assert refused.stderr.count("\n") == 1 and "never saw mug" in refused.stderr
+        errors.append(refused.stderr)
+        accepted = invoke(command, model, path, "--clutter", "--json")
+        assert accepted.exit_code == 0, accepted.stderr
+    assert errors[0] == errors[1]
+    with pytest.raises(InputError, match="never saw mug"):
+        demoplan.run(model, path)
+    assert demoplan.run(model, path, clutter=True).success

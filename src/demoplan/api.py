@@ -32,6 +32,7 @@ from demoplan.model import Demonstration, TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
 from demoplan.scenes.scene import Scene, load_scene
+from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["learn", "plan", "run"]
 
@@ -80,13 +81,16 @@ def run(
     seed: int = 0,
     max_replans: int = 25,
     planning_seconds: float = 2.0,
+    clutter: bool = False,
 ) -> RunReport:
     """Carry the task out: plan, act, observe, replan where the world differs.
 
     Without ``world``, in a simulated one (``sim``: ``kinematic`` or ``mujoco``,
     with injected ``faults``); with ``world``, in that one — it must start as
-    ``scene`` describes."""
+    ``scene`` describes. ``clutter``: as in :func:`plan`, objects the model
+    never saw are allowed (no goal; moved only when in the way)."""
     task, start = _model(model), _scene(scene)
+    check_scene_objects(task, start, clutter=clutter)
     if world is None:
         return run_task(
             task,
@@ -96,6 +100,7 @@ def run(
             seed=seed,
             max_replans=max_replans,
             planning_seconds=planning_seconds,
+            clutter=clutter,
         )
     settings = ExecutionSettings(max_replans=max_replans, budget=Budget(timeout=planning_seconds))
     return execute(task, start, world, settings)

@@ -700,6 +700,10 @@ ModelArgument = Annotated[
 SceneArgument = Annotated[
     Path, typer.Argument(metavar="SCENE", help="The scene at run time (demoplan/scene-1).")
 ]
+ClutterOption = Annotated[
+    bool,
+    typer.Option(help="Allow objects the model never saw (they get no goal; moved if in the way)."),
+]
 FreespaceOption = Annotated[
     int | None,
     typer.Option(
@@ -740,12 +744,7 @@ def plan(
     plot: Annotated[
         Path | None, typer.Option(help="Also draw the plan from above into this image (PNG, SVG).")
     ] = None,
-    clutter: Annotated[
-        bool,
-        typer.Option(
-            help="Allow objects the model never saw (they get no goal; moved if in the way)."
-        ),
-    ] = False,
+    clutter: ClutterOption = False,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
     from demoplan.launcher import command_budget
@@ -967,6 +966,7 @@ def run(
         float,
         typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
     ] = 2.0,
+    clutter: ClutterOption = False,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.execution.faults import parse_faults
@@ -996,6 +996,7 @@ def run(
                 geometry=_geometry_settings(freespace),
                 display=_stderr if live else None,
                 planning_seconds=timeout,
+                clutter=clutter,
             )
         if frames is not None and building is not None:
             report.frames[:] = [str(frames / Path(f).name) for f in report.frames]

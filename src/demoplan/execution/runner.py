@@ -16,6 +16,7 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.problems import pose_of
 from demoplan.scenes.scene import Scene, complete_geometry
+from demoplan.scenes.targets import check_scene_objects
 from demoplan.wording import plural
 
 __all__ = ["make_world", "run_task"]
@@ -57,9 +58,13 @@ def run_task(
     geometry: GeometrySettings | None = None,
     display: Any = None,
     planning_seconds: float = 2.0,
+    clutter: bool = False,
 ) -> RunReport:
     """Run the task in a simulated world; ``display``: a rich console for live
-    progress; ``planning_seconds``: the time budget of each (re)planning."""
+    progress; ``planning_seconds``: the time budget of each (re)planning;
+    ``clutter``: objects the model never saw are allowed (as in ``plan``: they
+    get no goal and are moved only when in the way), else an input error."""
+    check_scene_objects(model, scene, clutter=clutter)
     scene = complete_geometry(scene, model)
     world = make_world(sim, scene, faults, seed, perception)
     settings = ExecutionSettings(

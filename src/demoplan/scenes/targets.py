@@ -109,7 +109,7 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
-            f"the demonstrations {sorted(seen)} (plan --clutter plans around others)",
+            f"the demonstrations {sorted(seen)} (--clutter plans around them)",
             source=scene.source,
             field="objects",
         )
