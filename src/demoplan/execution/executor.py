@@ -35,6 +35,7 @@ from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
+from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
@@ -205,6 +206,12 @@ def execute(
     ).chosen
     goal = chosen.goal
     problem: SceneProblem = chosen.problem
+    # Replans name the places and grasps of the first plan as it did.
+    names = StableNames.of(
+        ((loc.name, loc.position) for loc in problem.locations),
+        ((g.name, g.object, g.axis) for g in problem.grasps),
+        settings.geometry.merge_distance,
+    )
     assert chosen.plan is not None
     actions: list[Action] = list(chosen.plan.actions)
     first_length = len(actions)
@@ -256,7 +263,7 @@ def execute(
             candidate = next(
                 c for c in candidate_goals(model, current, clutter=True) if goal in c.demonstrations
             )
-            built = build_problem(current, candidate, settings.geometry, frozenset(reached))
+            built = build_problem(current, candidate, settings.geometry, frozenset(reached), names)
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
         outcome = solve_candidate(built, settings.budget)

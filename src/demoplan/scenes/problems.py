@@ -35,6 +35,7 @@ from demoplan.scenes.geometry import (
     supports,
     yaw_difference,
 )
+from demoplan.scenes.naming import StableNames
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.targets import Candidate, Subtask
 
@@ -88,9 +89,15 @@ def build_problem(
     candidate: Candidate,
     settings: GeometrySettings = GeometrySettings(),
     reached: frozenset[str] = frozenset(),
+    names: StableNames | None = None,
 ) -> SceneProblem:
     """The planning problem of ``candidate`` in ``scene`` (geometry completed);
-    ``reached``: subgoal labels reached before (replanning keeps them)."""
+    ``reached``: subgoal labels reached before (replanning keeps them);
+    ``names``: the location and grasp names of earlier problems of the same
+    run, kept for the same places (a new set numbers them from 1 in order:
+    current places, then targets, then free space)."""
+    if names is None:
+        names = StableNames(settings.merge_distance)
     shapes: dict[str, ObjectGeometry] = {}
     for obj in scene.objects:
         if obj.geometry is None:
@@ -99,7 +106,8 @@ def build_problem(
     locations: list[Location] = []
     current: dict[str, str] = {}
     for obj in scene.objects:
-        name = f"loc{len(locations) + 1}"
+        used = {loc.name for loc in locations}
+        name = names.place("loc", obj.pose.position, used, any_prefix=True)
         locations.append(
             Location(
                 name,
@@ -117,7 +125,7 @@ def build_problem(
         shape = shapes[subtask.object]
         index = _coinciding(locations, subtask, shape, settings)
         if index is None:
-            name = f"loc{len(locations) + 1}"
+            name = names.place("loc", subtask.pose.position, {loc.name for loc in locations})
             locations.append(
                 Location(
                     name,
@@ -143,7 +151,7 @@ def build_problem(
             )
         target_of[subtask.label] = name
     axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
-    grasps = [Grasp(f"grasp{k + 1}", obj, axis) for k, (obj, axis) in enumerate(axes)]
+    grasps = [Grasp(names.grasp(obj, axis), obj, axis) for obj, axis in axes]
     spots = scene.freespace
     if spots is None:
         targets = [s.pose.position for s in candidate.subtasks] or [
@@ -165,10 +173,9 @@ def build_problem(
             )
         )
     widest = max(shapes.values(), key=lambda s: s.size[0] * s.size[1])
-    for k, spot in enumerate(spots):
-        locations.append(
-            Location(f"freespace{k + 1}", _vector(spot), 0.0, "freespace", (), (widest,))
-        )
+    for spot in spots:
+        name = names.place("freespace", _vector(spot), {loc.name for loc in locations})
+        locations.append(Location(name, _vector(spot), 0.0, "freespace", (), (widest,)))
     support_pairs, floating = supports(locations, settings)
     obstacles = []
     for name in floating:
