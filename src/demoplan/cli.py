@@ -1023,7 +1023,10 @@ def _print_run_report(report: Any) -> None:
     _stdout.print(table)
     for failure in report.failures:
         _stdout.print(
-            f"step {failure.step}: {failure.kind}: {failure.detail}", markup=False, highlight=False
+            f"step {failure.step}: {failure.kind}: {failure.detail}",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,  # one line per message, however long: it is read by scripts too
         )
     verdict = "success" if report.success else "FAILED"
     errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
@@ -1033,6 +1036,7 @@ def _print_run_report(report: Any) -> None:
         f"final errors: {errors}",
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
 
 
