@@ -62,9 +62,9 @@ def test_a_signal_that_lands_where_python_cannot_raise_is_delivered_again() -> N
     the program still stops at the next line of ordinary code."""
     script = (
         "import signal, sys, time\n"
-        "from demoplan import launcher\n"
-        "signal.signal(signal.SIGINT, launcher._on_signal)\n"
-        "sys.unraisablehook = launcher._redeliver_lost_signal\n"
+        "from demoplan import interrupts\n"
+        "signal.signal(signal.SIGINT, interrupts.on_signal)\n"
+        "sys.unraisablehook = interrupts.redeliver_lost_signal\n"
         "class Boom:\n"
         "    def __del__(self):\n"
         "        signal.raise_signal(signal.SIGINT)\n"

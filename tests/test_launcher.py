@@ -159,3 +159,17 @@ def test_the_executable_takes_the_lean_path() -> None:
         )["length"]
         == 8
     )
+
+
+def test_the_cli_does_not_import_the_launcher_back() -> None:
+    """launcher → cli only (at dispatch): the typer application reaches the
+    command clock and the signal state through demoplan.commands and
+    demoplan.interrupts, never through the launcher."""
+    code = (
+        "import sys, demoplan.cli\n"
+        "print('demoplan.launcher' in sys.modules)\n"
+        "import demoplan.launcher\n"
+        "print(sorted(m for m in sys.modules if m.startswith('demoplan.launcher')))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.splitlines() == ["False", "['demoplan.launcher']"]

@@ -81,7 +81,7 @@ def _reported_errors() -> Iterator[None]:
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
-        from demoplan.launcher import interrupted_by_signal, interrupted_exit_code
+        from demoplan.interrupts import interrupted_by_signal, interrupted_exit_code
 
         if interrupted_by_signal():
             raise  # demoplan.launcher.main reports it, once
@@ -144,7 +144,7 @@ def _main(
         bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")
     ] = False,
 ) -> None:
-    from demoplan.launcher import mark_command_start
+    from demoplan.commands import mark_command_start
 
     mark_command_start()
     logging.basicConfig(
@@ -645,7 +645,7 @@ def solve(
 ) -> None:
     """Solve a planning problem: a GRASP / PUT_DOWN plan (paper §IV.C), shortest where
     proved within the time budget. stderr says which, and the proven lower bound."""
-    from demoplan.launcher import SolveOptions, solve_text
+    from demoplan.commands import SolveOptions, solve_text
 
     with _reported_errors():
         options = SolveOptions(problem_path, json_output, search.value, max_nodes, timeout, optimal)
@@ -747,7 +747,7 @@ def plan(
     clutter: ClutterOption = False,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
-    from demoplan.launcher import command_budget
+    from demoplan.commands import command_budget
     from demoplan.planning.problem import optimality_line
     from demoplan.scenes.plan import plan_in_scene
 

@@ -18,12 +18,19 @@ import argparse
 import errno
 import os
 import sys
-import time
-from collections.abc import Callable, Sequence
-from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+# First: the command clock starts when this module is imported, at process start.
+from demoplan.commands import SolveOptions, mark_command_start, mark_process_start, solve_text
+from demoplan.interrupts import (
+    INTERRUPTED_EXIT,
+    TERMINATED_EXIT,
+    on_signal,
+    redeliver_lost_signal,
+    signals_received,
+)
 
 __all__ = [
     "SOLVE_OPTIONS",
@@ -31,43 +38,10 @@ __all__ = [
     "main",
     "parse_solve_options",
     "run_solve",
-    "solve_text",
 ]
 
 SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout", "--optimal")
 """Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
-
-DEFAULT_TIMEOUT = 2.0
-"""Seconds a planning command may take by default, counted from its start (SPEC §4)."""
-
-_command_started = time.monotonic()
-"""When the current command started: the import of this module, for the
-``demoplan`` executable (so a time budget bounds the whole process, start-up
-included); each invocation of the typer app in a longer-lived process (tests,
-notebooks) restarts it (:func:`mark_command_start`)."""
-_started_by_main = False
-
-
-def mark_command_start() -> None:
-    """A command starts now — unless it is the one :func:`main` started, whose
-    clock has been running since the process began."""
-    global _command_started, _started_by_main
-    if _started_by_main:
-        _started_by_main = False
-        return
-    _command_started = time.monotonic()
-
-
-@dataclass(frozen=True)
-class SolveOptions:
-    """What ``demoplan solve`` was asked to do."""
-
-    problem: Path
-    json_output: bool = False
-    search: str = "astar"
-    max_nodes: int | None = None
-    timeout: float | None = None  # None: DEFAULT_TIMEOUT
-    optimal: bool = False
 
 
 class _DeclinedError(Exception):
@@ -107,48 +81,6 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     )
 
 
-def command_budget(max_nodes: int | None, timeout: float | None) -> Any:
-    """The :class:`~demoplan.planning.budget.Budget` of a planning command:
-    ``timeout`` seconds (default :data:`DEFAULT_TIMEOUT`) from the start of the
-    process, so that the whole command answers within it."""
-    from demoplan.planning.budget import Budget
-
-    seconds = DEFAULT_TIMEOUT if timeout is None else timeout
-    # The search stops a little before the end, to leave time to write the answer
-    # and tear down what it built.
-    margin = min(_ANSWER_SECONDS, seconds / 8)
-    return Budget(max_nodes, timeout=seconds, deadline=_command_started + seconds - margin)
-
-
-_ANSWER_SECONDS = 0.25
-
-
-def solve_text(
-    options: SolveOptions, spinner: Callable[[str], AbstractContextManager[object]] | None = None
-) -> tuple[str, str]:
-    """Read the problem, solve it and render the plan (the paper's format, or its
-    JSON) and the line for stderr saying whether it is proved shortest;
-    ``spinner(text)`` wraps the search (a terminal's status line). Raises
-    :class:`~demoplan.errors.DemoplanError`. Both ``solve`` paths use this."""
-    from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
-    from demoplan.planning.search import solve
-    from demoplan.planning.xml import load_problem
-
-    started = time.perf_counter()
-    problem = load_problem(options.problem)
-    read_seconds = time.perf_counter() - started
-    budget = command_budget(options.max_nodes, options.timeout)
-    with spinner(f"Searching ({options.search}) for a plan…") if spinner else nullcontext():
-        plan = solve(problem, options.search, budget, optimal=options.optimal)
-    note = f"demoplan: {optimality_line(plan)}\n"
-    if options.json_output:
-        import json
-
-        data = plan_to_json(plan, read_seconds)
-        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n", note
-    return format_plan(plan), note
-
-
 def run_solve(options: SolveOptions) -> int:
     """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
     from demoplan.errors import DemoplanError, error_line
@@ -168,64 +100,16 @@ def run_solve(options: SolveOptions) -> int:
     return 0
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C so that every command stops the same way."""
-
-
-INTERRUPTED_EXIT = 130  # 128 + SIGINT, as a shell reports a job Ctrl-C stopped
-TERMINATED_EXIT = 143  # 128 + SIGTERM
-
-
-def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
-    """The exit code of a command stopped by ``exc`` (SPEC §4)."""
-    return TERMINATED_EXIT if isinstance(exc, Terminated) else INTERRUPTED_EXIT
-
-
-_signals_received: list[int] = []  # SIGINT / SIGTERM, in the order they came
-
-
-def _on_signal(signum: int, frame: object) -> None:
-    """Ctrl-C or SIGTERM: remember it (a library may catch the exception and
-    exit in its own way — typer turns Ctrl-C into a silent exit 130) and stop."""
-    import signal
-
-    _signals_received.append(signum)
-    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
-
-
-def _redeliver_lost_signal(unraisable: Any) -> None:
-    """``sys.unraisablehook``: a signal whose exception arrived where Python cannot
-    raise it (a weakref callback inside an import lock, a ``__del__``) is
-    neither reported with a traceback nor lost — a timer delivers it again a
-    few milliseconds later, after the hook has returned, so that the command
-    stops at the next line of ordinary code. Other unraisable exceptions go to
-    Python's own report."""
-    import signal
-
-    if isinstance(unraisable.exc_value, KeyboardInterrupt) and _signals_received:
-        signum = _signals_received[-1]
-        signal.signal(signal.SIGALRM, lambda _number, frame: _on_signal(signum, frame))
-        signal.setitimer(signal.ITIMER_REAL, 0.005)
-        return
-    sys.__unraisablehook__(unraisable)
-
-
-def interrupted_by_signal() -> bool:
-    """Whether ``main`` stopped the command on a signal (it reports it once)."""
-    return bool(_signals_received)
-
-
 def main() -> None:
     """Entry point of the ``demoplan`` command."""
     import signal
 
-    global _started_by_main
-    _started_by_main = True
+    mark_process_start()
     # Ctrl-C raises KeyboardInterrupt even where the process was started with
     # SIGINT ignored (a background job of a script); SIGTERM does the same.
-    signal.signal(signal.SIGINT, _on_signal)
-    signal.signal(signal.SIGTERM, _on_signal)
-    sys.unraisablehook = _redeliver_lost_signal
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    sys.unraisablehook = redeliver_lost_signal
     # Started with stdout (or stderr) closed: what would be printed is dropped,
     # as if sent to /dev/null; a command whose job is a file still does it.
     if sys.stdout is None:
@@ -243,13 +127,13 @@ def main() -> None:
         try:
             code = _dispatch()
         finally:
-            if not _signals_received:
+            if not signals_received:
                 sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
     except KeyboardInterrupt:
-        if not _signals_received:  # raised without a signal (a test, a debugger)
-            _signals_received.append(signal.SIGINT)
+        if not signals_received:  # raised without a signal (a test, a debugger)
+            signals_received.append(signal.SIGINT)
     except Exception as exc:
-        if not _signals_received:
+        if not signals_received:
             if not isinstance(exc, OSError):
                 raise
             # stdout full (> /dev/full) or its reader gone (| head)
@@ -262,11 +146,11 @@ def main() -> None:
     # exit into Python's own KeyboardInterrupt report.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    if _signals_received:
+    if signals_received:
         # Every command stops the same way, wherever the signal found it.
         _drop_stdout()
         sys.stderr.write("demoplan: interrupted\n")
-        terminated = signal.SIGTERM in _signals_received
+        terminated = signal.SIGTERM in signals_received
         raise SystemExit(TERMINATED_EXIT if terminated else INTERRUPTED_EXIT)
     raise SystemExit(code)
 
