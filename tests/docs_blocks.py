@@ -108,7 +108,7 @@ def _pattern(line: str) -> re.Pattern[str]:
 
 def mismatch(expected: tuple[str, ...], output: str) -> str | None:
     """Why ``output`` is not what the block shows (None when it is)."""
-    shown = [line for line in expected if line.strip()]
+    shown = [line for line in expected if line.strip() and not _BORDER.match(line)]
     if not shown:
         return None
     real = [_normal(line) for line in output.splitlines() if not _BORDER.match(line)]

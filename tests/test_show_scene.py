@@ -64,7 +64,8 @@ def test_the_table_names_the_blocked_grasps_and_the_generated_free_space() -> No
     code, out, err = invoke("show", PYRAMID)
     assert code == 0, err
     assert "wood" in out and "0°: green, red; 90°: red" in out
-    assert "Free space, generated (the scene gives none): 3 spots" in out
+    assert "Free space, generated near the objects (the scene lists none; " in out
+    assert ": 3 spots: " in out
     assert "Cannot be grasped where they stand: wood, green" in out
 
 

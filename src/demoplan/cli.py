@@ -514,7 +514,7 @@ def show(
 ) -> None:
     """Print a model as the paper's tables (states, sequences, constraints), or
     preview a scene: where each object stands, which grasps its neighbours
-    block, the landmarks and the free space planning would park objects on."""
+    block, the landmarks and free space (the scene's, else spots near the objects)."""
     from demoplan.fileio import check_format, read_document
     from demoplan.learning.modelfile import model_from_dict
 
@@ -587,21 +587,25 @@ def _print_scene_preview(preview: Any, decimals: int) -> None:
         )
     _stdout.print(table)
     for name, position in preview.landmarks:
-        _stdout.print(f"Landmark {name} at {_xyz_text(position, decimals)}", markup=False)
-    where = "generated (the scene gives none)" if preview.freespace_generated else "given"
-    spots = ", ".join(_xyz_text(spot, decimals) for spot in preview.freespace) or "none"
-    _stdout.print(
-        f"Free space, {where}: {plural(len(preview.freespace), 'spot')}: {spots}",
-        markup=False,
-        highlight=False,
+        _line(f"Landmark {name} at {_xyz_text(position, decimals)}")
+    where = (
+        "generated near the objects (the scene lists none; plan generates its own "
+        "near each goal's targets)"
+        if preview.freespace_generated
+        else "as the scene lists it"
     )
+    spots = ", ".join(_xyz_text(spot, decimals) for spot in preview.freespace) or "none"
+    _line(f"Free space, {where}: {plural(len(preview.freespace), 'spot')}: {spots}")
     stuck = [o.name for o in preview.objects if not o.graspable]
     if stuck:
-        _stdout.print(
-            f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)",
-            markup=False,
-            highlight=False,
+        _line(
+            f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)"
         )
+
+
+def _line(text: str) -> None:
+    """A message on stdout: plain text, one line however long (scripts read it)."""
+    _stdout.print(text, markup=False, highlight=False, soft_wrap=True)
 
 
 def _xyz_text(position: Any, decimals: int) -> str:

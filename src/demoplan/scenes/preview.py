@@ -1,7 +1,8 @@
 """A scene looked at before planning (``demoplan show SCENE``): where each
 object stands, which of its grasps the neighbours block (the collision rule
-of paper §IV.C / §V.B that planning uses), the landmarks, and the free-space
-spots planning would park objects on.
+of paper §IV.C / §V.B that planning uses), the landmarks, and free space:
+the scene's spots, or where it lists none, spots generated near the objects
+(planning generates its own near the targets of the goal it plans).
 
 It builds the same planning problem as :func:`~demoplan.scenes.problems.build_problem`
 with no goal, so what it shows is what the planner will see at the start.
