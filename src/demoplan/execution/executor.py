@@ -253,10 +253,10 @@ def execute(
     def replan(step: int) -> str | None:
         """Plan again from what is observed; None on success, else why not."""
         nonlocal problem, actions, expected, replans, plan_index
+        if replans >= settings.max_replans:  # the report counts the replans made
+            return f"gave up after {plural(settings.max_replans, 'replan')}"
         replans += 1
         plan_index += 1
-        if replans > settings.max_replans:
-            return f"gave up after {plural(settings.max_replans, 'replan')}"
         observation = world.observe()
         current = complete_geometry(_scene_of(observation, scene), model)
         try:
