@@ -4,13 +4,19 @@ rendered grey in MuJoCo)."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from typing import Any
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
-from demoplan.colours import NAMED, object_colour, object_rgba
+from demoplan.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.plotting import plot_demonstration
 from tests.helpers import EXAMPLES
@@ -40,3 +46,45 @@ def test_named_colours_and_mujoco_rgba_agree() -> None:
     assert to_hex((red, green, blue)) == object_colour("glass") and alpha == 1.0
     assert object_colour("glass") == object_colour("glass")
     assert object_rgba("fork") != "0.6 0.6 0.7 1"  # no longer every plain name grey
+
+
+names_strategy = st.lists(
+    st.text(alphabet="abcdefghijklmnopqrstuvwxyz_0123456789", min_size=1, max_size=12),
+    min_size=1,
+    max_size=len(CYCLE),
+    unique=True,
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(names_strategy, st.randoms(use_true_random=False))
+def test_a_tasks_colours_are_distinct_and_do_not_depend_on_order(
+    names: list[str], shuffle: Any
+) -> None:
+    """However the objects of a task come (learn's figure, plan's, run's
+    frames), they get the same colours, distinct where the cycle allows."""
+    first = assign_colours(names)
+    again = list(names)
+    shuffle.shuffle(again)
+    for name in again:  # drawn one by one, in another order, before anything else
+        object_colour(name)
+    assert assign_colours(again) == first
+    plain = [n for n in names if n not in NAMED]
+    assert len({first[n] for n in plain}) == len(plain)
+    assert all(object_colour(n) == first[n] for n in names)
+
+
+def test_colours_are_the_same_in_another_process() -> None:
+    """A command drawing the plan and another drawing the frames agree: the
+    colour comes from the names, not from what a process drew first."""
+    task = ["motor", "pcb", "screws", "cable", "manual"]
+    code = (
+        "from demoplan.colours import object_colour\n"
+        "print(object_colour('zebra'))\n"
+        "from demoplan.colours import assign_colours\n"
+        f"print(sorted(assign_colours({list(reversed(task))!r}).items()))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    lines = done.stdout.splitlines()
+    assert lines[0] == object_colour("zebra")
+    assert lines[1] == str(sorted(assign_colours(task).items()))

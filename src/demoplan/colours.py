@@ -1,15 +1,22 @@
-"""One colour per object, the same in every figure and render of a run.
+"""One colour per object, the same in every figure and render — and in every
+command, so that ``learn``'s figure, ``plan --plot`` and ``run --frames`` of
+one task agree.
 
-An object named after a colour (``red``, ``wood``) gets that colour; any other
-gets the next colour of a cycle the first time it is drawn, and keeps it for
-the rest of the process — so the demonstrations, the plan, the storyboard and
-the MuJoCo scene of one ``demoplan experiments`` agree (the glass is one
-colour everywhere). NumPy- and matplotlib-free: the physics world uses it too.
+An object named after a colour (``red``, ``wood``) gets that colour. Any
+other gets a colour of :data:`CYCLE` chosen from its name alone (a stable
+hash), so it does not depend on which object happened to be drawn first;
+where two objects of one task would share a colour, :func:`assign_colours`,
+given the task's objects, moves the later name (in sorted order) to the next
+free colour — the same way in every command that sees the same objects.
+NumPy- and matplotlib-free: the physics world uses it too.
 """
 
 from __future__ import annotations
 
-__all__ = ["object_colour", "object_rgba"]
+import zlib
+from collections.abc import Iterable
+
+__all__ = ["CYCLE", "NAMED", "assign_colours", "object_colour", "object_rgba"]
 
 NAMED = {
     "red": "#d62728",
@@ -37,21 +44,54 @@ CYCLE = (
     "#64b5cd",
     "#ccb974",
     "#8c8c8c",
+    "#2f4b7c",
+    "#a05195",
+    "#f95d6a",
+    "#00a3a3",
+    "#7a5195",
+    "#ffa600",
+    "#5b8c2a",
+    "#b2456e",
+    "#3d85c6",
+    "#9c6644",
 )
 _assigned: dict[str, str] = {}
 
 
 def object_colour(name: str) -> str:
-    """``name``'s colour as ``#rrggbb``: its own where it names one, else the
-    first cycle colour no other object of this run has (cycling once all are
-    taken)."""
+    """``name``'s colour as ``#rrggbb``: its own where it names one, else the one
+    :func:`assign_colours` gave it, else its preferred cycle colour."""
     if name in NAMED:
         return NAMED[name]
-    if name not in _assigned:
-        taken = set(_assigned.values())
-        free = [c for c in CYCLE if c not in taken]
-        _assigned[name] = free[0] if free else CYCLE[len(_assigned) % len(CYCLE)]
-    return _assigned[name]
+    return _assigned.get(name) or _preferred(name)
+
+
+def assign_colours(names: Iterable[str]) -> dict[str, str]:
+    """Colours for the objects of one task, distinct where the cycle allows:
+    in sorted order, each name takes its preferred colour, or the next one in
+    the cycle that no other of ``names`` has. Remembered for
+    :func:`object_colour` for the rest of the process."""
+    unique = sorted(set(names))
+    taken = {NAMED[n] for n in unique if n in NAMED}
+    colours: dict[str, str] = {}
+    for name in unique:
+        if name in NAMED:
+            colours[name] = NAMED[name]
+            continue
+        start = CYCLE.index(_preferred(name))
+        for step in range(len(CYCLE)):
+            colour = CYCLE[(start + step) % len(CYCLE)]
+            if colour not in taken:
+                break
+        else:
+            colour = CYCLE[start]  # more objects than colours
+        taken.add(colour)
+        colours[name] = _assigned[name] = colour
+    return colours
+
+
+def _preferred(name: str) -> str:
+    return CYCLE[zlib.crc32(name.encode("utf-8", "surrogatepass")) % len(CYCLE)]
 
 
 def object_rgba(name: str) -> str:

@@ -98,9 +98,10 @@ class FrameWriter:
         ax.set_title(caption, fontsize=7)
 
     def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
-        from demoplan.colours import object_colour
+        from demoplan.colours import assign_colours, object_colour
         from demoplan.plotting import object_patch
 
+        assign_colours([*self.targets, *observation.poses])  # as every figure of the task
         for name, pose in self.targets.items():
             shape = observation.geometry.get(name)
             patch = object_patch(pose, shape, "none", 1.0)

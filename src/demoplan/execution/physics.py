@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from demoplan.colours import object_rgba
+from demoplan.colours import assign_colours, object_rgba
 from demoplan.errors import InputError
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
@@ -82,6 +82,7 @@ def scene_xml(
     orthographic camera ``top`` looking straight down at (x, y) whose picture is
     ``height_m`` metres high."""
     bodies = []
+    assign_colours(obj.name for obj in scene.objects)  # the figures' colours
     # Bodies get internal names (``_object3``): a scene's names can be anything.
     for index, obj in enumerate(scene.objects):
         assert obj.geometry is not None

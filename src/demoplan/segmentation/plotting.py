@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.colours import object_colour
+from demoplan.colours import assign_colours, object_colour
 from demoplan.plotting import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
 
@@ -80,6 +80,7 @@ def plot_segmentation(
             raise ValueError(f"{wanted} axes expected ({what}), got {len(axes_list)}")
     speed_axes = axes_list[: len(traces)] if traces else axes_list[:1]
     origin = _origin(segmentation)
+    assign_colours(trace.object for trace in segmentation.traces)
     number = {id(move): k + 1 for k, move in enumerate(segmentation.moves)}
     top = max((float(trace.speed.max()) for trace in traces if trace.speed.size), default=0.0)
     top = max(top * 1.1, settings.start_speed * 1.5)
@@ -156,7 +157,7 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
 
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
     origin = _origin(segmentation)
-    colours = {trace.object: object_colour(trace.object) for trace in segmentation.traces}
+    colours = assign_colours(trace.object for trace in segmentation.traces)
     bottom = min(
         (
             float(t.height.min())
