@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import logging
 import math
-import os
 import re
 import sys
 from collections.abc import Collection, Iterable, Iterator, Sequence
@@ -25,6 +24,7 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan import __version__
+from demoplan.deadline import LEARNING_TIMEOUT, PERCEPTION_TIMEOUT
 from demoplan.errors import (
     DemoplanError,
     InputError,
@@ -35,10 +35,9 @@ from demoplan.errors import (
 )
 from demoplan.fileio import (
     display_path,
-    locked_for_update,
     os_error,
     os_reason,
-    read_input_text,
+    refuse_overwriting_inputs,
 )
 from demoplan.wording import plural
 
@@ -57,10 +56,6 @@ app = typer.Typer(
 _stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
 _stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
-LEARNING_TIMEOUT = 300.0
-"""Seconds ``learn`` may take by default (docs/limits.md)."""
-PERCEPTION_TIMEOUT = 60.0
-"""Seconds ``perceive`` may take by default (docs/limits.md)."""
 REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
 """Names ``experiments`` writes: a folder of only these is an earlier report."""
 FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
@@ -266,13 +261,6 @@ _OBJECTS_OPTION = typer.Option(
 )
 
 
-def _read_requirements(path: Path) -> list[str]:
-    lines = read_input_text(path, "a requirements file (one 'A<B' per line)").splitlines()
-    # A comment starts at a '#' after whitespace; 'C#2' is a visit label.
-    kept = (re.split(r"(?:^|\s)#", line, maxsplit=1)[0].strip() for line in lines)
-    return [line for line in kept if line]
-
-
 @app.command()
 def learn(
     demos: Annotated[
@@ -386,14 +374,7 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
-    from demoplan.deadline import time_budget
-    from demoplan.inputs import load_inputs
-    from demoplan.learning import LearningSettings
-    from demoplan.learning import learn as learn_model
-    from demoplan.learning import update as update_model
-    from demoplan.learning.changes import model_changes
-    from demoplan.learning.modelfile import load_model, save_model
-    from demoplan.learning.settings import paper_overrides
+    from demoplan.learning.files import learn_files
     from demoplan.segmentation.types import parse_object_patterns
 
     with _reported_errors():
@@ -402,9 +383,6 @@ def learn(
                 "give -o MODEL (or --update MODEL, or --json to print the model only)",
                 param_hint="'-o'",
             )
-        target = output or update  # None: --json alone prints the model, writes nothing
-        if target is not None:
-            _refuse_overwriting_inputs(target, demos)
         options = {
             "position_noise": position_noise,
             "orientation_noise": orientation_noise,
@@ -413,74 +391,31 @@ def learn(
             "max_clusters": max_clusters,
             "significance": significance,
         }
-        overrides: dict[str, Any] = paper_overrides() if paper else {}
-        overrides.update({k: v for k, v in options.items() if v is not None})
-        requirements = list(require or [])
-        from_file: list[str] = []
-        if require_file is not None:
-            from_file = _read_requirements(require_file)
-            requirements += from_file
-        # Two updates of one model at once both land: the second waits (fileio).
-        with (
-            locked_for_update(update) if update is not None else nullcontext(),
-            time_budget(
-                timeout,
-                f"learning stopped at its time budget (--timeout {timeout:g} s); give it more "
-                "time, or for many scattered placements cap the clusters (--max-clusters 5)",
-            ),
-            _working("Learning states and constraints…"),
-        ):
-            try:
-                new = load_inputs(demos, frame=frame, objects=parse_object_patterns(objects))
-                changes = None
-                if update is not None:
-                    previous = load_model(update)
-                    model = update_model(previous, new, require=requirements, settings=overrides)
-                    changes = model_changes(previous, model)
-                else:
-                    settings = LearningSettings(
-                        require=tuple(dict.fromkeys(requirements)), **overrides
-                    )
-                    model = learn_model(new, settings=settings)
-            except InputError as exc:
-                # A requirement read from --require-file: say which file it came from.
-                if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
-                    raise InputError(str(exc), source=str(require_file)) from None
-                raise
-            if target is not None:
-                save_model(model, target)
-        if changes is not None:  # on stderr, so that --json stays pure
-            for line in changes.lines():
+        result = learn_files(
+            demos,
+            output=output,
+            update_path=update,
+            require=require or (),
+            require_file=require_file,
+            paper=paper,
+            overrides={k: v for k, v in options.items() if v is not None},
+            frame=frame,
+            objects=parse_object_patterns(objects),
+            timeout=timeout,
+            working=lambda: _working("Learning states and constraints…"),
+        )
+        if result.changes is not None:  # on stderr, so that --json stays pure
+            for line in result.changes.lines():
                 _stderr.print(f"update: {line}", markup=False, highlight=False)
         if json_output:
-            _print_json(_model_json(model))
+            _print_json(_model_json(result.model))
         else:
-            _print_model(model, decimals)
+            _print_model(result.model, decimals)
             _stdout.print(
-                f"Learned from {plural(len(model.demonstrations), 'demonstration')}; "
-                f"wrote {target}",
+                f"Learned from {plural(len(result.model.demonstrations), 'demonstration')}; "
+                f"wrote {result.written}",
                 markup=False,
                 highlight=False,
-            )
-
-
-def _refuse_overwriting_inputs(target: Path, inputs: list[Path]) -> None:
-    """``-o`` must not name one of the input files (or lie in a folder read)."""
-    # os.path.realpath, not Path.resolve: it does not raise on a loop of links
-    resolved = Path(os.path.realpath(target))
-    for path in inputs:
-        source = Path(os.path.realpath(path))
-        if resolved == source:
-            raise InputError("is also an input; write the output elsewhere", source=str(target))
-        if (
-            source.is_dir()
-            and resolved.parent == source
-            and resolved.suffix in {".json", ".yaml", ".yml"}
-        ):
-            raise InputError(
-                f"lies in the demonstration folder {path}, which would read it back as a "
-                "demonstration next time; write the model elsewhere",
-                source=str(target),
             )
 
 
@@ -686,7 +621,7 @@ def pddl(
 
     with _reported_errors():
         for name in ("domain.pddl", "problem.pddl"):  # the files save_pddl writes
-            _refuse_overwriting_inputs(output / name, [problem_path])
+            refuse_overwriting_inputs(output / name, [problem_path])
         domain, problem = save_pddl(load_problem(problem_path), output, grounded=grounded)
         _stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 
@@ -896,9 +831,9 @@ def problem(
     with _reported_errors(), _model_named(model_path):
         if grounded and not pddl_output:
             raise UsageError("--grounded chooses the PDDL form: it needs --pddl")
-        _refuse_overwriting_inputs(output, [model_path, scene_path])
+        refuse_overwriting_inputs(output, [model_path, scene_path])
         if pddl_output:
-            _refuse_overwriting_inputs(
+            refuse_overwriting_inputs(
                 output.with_name(f"{output.stem}-domain.pddl"), [model_path, scene_path]
             )
         model, scene = _scene_inputs(model_path, scene_path)
@@ -1088,7 +1023,7 @@ def perceive(
         if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
             raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
         if output is not None:
-            _refuse_overwriting_inputs(output, [image_path, *([before] if before else [])])
+            refuse_overwriting_inputs(output, [image_path, *([before] if before else [])])
         camera = Camera(px_per_m, origin)
         settings = PerceptionSettings()
         if side is not None:
@@ -1182,9 +1117,9 @@ def segment(
 
     with _reported_errors():
         inputs = [stream_path, *([objects_file] if objects_file is not None else [])]
-        _refuse_overwriting_inputs(output, inputs)
+        refuse_overwriting_inputs(output, inputs)
         if plot is not None:
-            _refuse_overwriting_inputs(plot, [*inputs, output])
+            refuse_overwriting_inputs(plot, [*inputs, output])
             check_figure_path(plot, "--plot")
         stream = load_stream(stream_path, frame=frame, objects=parse_object_patterns(objects))
         geometry = (
@@ -1377,7 +1312,7 @@ def import_(
             if item.demonstration is None:
                 continue
             target = output / f"{item.demonstration.name}.json"
-            _refuse_overwriting_inputs(target, [recording])
+            refuse_overwriting_inputs(target, [recording])
             targets[item.key] = target
             files.append((target, dump_json(demonstration_to_dict(item.demonstration))))
         if not files:

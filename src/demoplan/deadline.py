@@ -20,9 +20,21 @@ from contextvars import ContextVar
 
 from demoplan.errors import LimitReachedError
 
-__all__ = ["check_time", "report_progress", "reporting_progress", "time_budget"]
+__all__ = [
+    "LEARNING_TIMEOUT",
+    "PERCEPTION_TIMEOUT",
+    "check_time",
+    "report_progress",
+    "reporting_progress",
+    "time_budget",
+]
 
 _deadline: ContextVar[tuple[float, str] | None] = ContextVar("deadline", default=None)
+
+LEARNING_TIMEOUT = 300.0
+"""Seconds ``learn`` may take by default before it stops with exit 4 (docs/limits.md)."""
+PERCEPTION_TIMEOUT = 60.0
+"""Seconds ``perceive`` may take by default (docs/limits.md)."""
 
 
 @contextmanager

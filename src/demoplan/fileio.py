@@ -17,7 +17,7 @@ import re
 import stat
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -39,6 +39,7 @@ __all__ = [
     "os_reason",
     "read_document",
     "read_input_text",
+    "refuse_overwriting_inputs",
     "require_regular_file",
     "staged_folder",
     "write_atomic",
@@ -571,3 +572,23 @@ def _sync_folder(folder: Path) -> None:
         pass
     finally:
         os.close(fd)
+
+
+def refuse_overwriting_inputs(target: Path, inputs: Sequence[Path]) -> None:
+    """``-o`` must not name one of the input files (or lie in a folder read)."""
+    # os.path.realpath, not Path.resolve: it does not raise on a loop of links
+    resolved = Path(os.path.realpath(target))
+    for path in inputs:
+        source = Path(os.path.realpath(path))
+        if resolved == source:
+            raise InputError("is also an input; write the output elsewhere", source=str(target))
+        if (
+            source.is_dir()
+            and resolved.parent == source
+            and resolved.suffix in {".json", ".yaml", ".yml"}
+        ):
+            raise InputError(
+                f"lies in the demonstration folder {path}, which would read it back as a "
+                "demonstration next time; write the model elsewhere",
+                source=str(target),
+            )

@@ -1,0 +1,102 @@
+"""Learning from files, as ``demoplan learn`` does it: read the demonstrations
+(and pose streams, segmented on the way), the teacher's constraints, learn or
+update a model within a time budget, and write it — one function the command
+line only renders (:func:`learn_files`).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from demoplan.deadline import LEARNING_TIMEOUT, time_budget
+from demoplan.errors import InputError
+from demoplan.fileio import locked_for_update, read_input_text, refuse_overwriting_inputs
+from demoplan.learning.changes import ModelChanges, model_changes
+from demoplan.learning.learner import learn, update
+from demoplan.learning.modelfile import load_model, save_model
+from demoplan.learning.settings import LearningSettings, paper_overrides
+from demoplan.model import TaskModel
+
+__all__ = ["LearnedFiles", "learn_files", "read_requirements"]
+
+
+@dataclass(frozen=True, slots=True)
+class LearnedFiles:
+    """What :func:`learn_files` did: the model, what an update changed, and
+    the file written (None: nothing was written)."""
+
+    model: TaskModel
+    changes: ModelChanges | None
+    written: Path | None
+
+
+def read_requirements(path: Path) -> list[str]:
+    """Teacher constraints from a file, one ``A<B`` per line; ``#`` starts a
+    comment where it follows whitespace (``C#2`` is a visit label)."""
+    lines = read_input_text(path, "a requirements file (one 'A<B' per line)").splitlines()
+    kept = (re.split(r"(?:^|\s)#", line, maxsplit=1)[0].strip() for line in lines)
+    return [line for line in kept if line]
+
+
+def learn_files(
+    inputs: Sequence[Path],
+    *,
+    output: Path | None = None,
+    update_path: Path | None = None,
+    require: Sequence[str] = (),
+    require_file: Path | None = None,
+    paper: bool = False,
+    overrides: Mapping[str, Any] | None = None,
+    frame: str | None = None,
+    objects: Sequence[str] | None = None,
+    timeout: float = LEARNING_TIMEOUT,
+    working: Callable[[], AbstractContextManager[object]] | None = None,
+) -> LearnedFiles:
+    """Learn a model from ``inputs`` (demonstration files or folders, pose
+    streams), or with ``update_path`` extend that model with them (written
+    back unless ``output``); ``paper``: the paper's fixed thresholds, then
+    ``overrides`` (settings by name); ``working``: a progress display around
+    the work. Nothing is written when neither ``output`` nor ``update_path``
+    is given. Two updates of one model at once both land (the second waits)."""
+    from demoplan.inputs import load_inputs
+
+    target = output or update_path
+    if target is not None:
+        refuse_overwriting_inputs(target, inputs)
+    settings: dict[str, Any] = paper_overrides() if paper else {}
+    settings.update(overrides or {})
+    requirements = list(require)
+    from_file = read_requirements(require_file) if require_file is not None else []
+    requirements += from_file
+    with (
+        locked_for_update(update_path) if update_path is not None else nullcontext(),
+        time_budget(
+            timeout,
+            f"learning stopped at its time budget (--timeout {timeout:g} s); give it more "
+            "time, or for many scattered placements cap the clusters (--max-clusters 5)",
+        ),
+        working() if working is not None else nullcontext(),
+    ):
+        try:
+            new = load_inputs(inputs, frame=frame, objects=objects)
+            changes = None
+            if update_path is not None:
+                previous = load_model(update_path)
+                model = update(previous, new, require=requirements, settings=settings)
+                changes = model_changes(previous, model)
+            else:
+                chosen = LearningSettings(require=tuple(dict.fromkeys(requirements)), **settings)
+                model = learn(new, settings=chosen)
+        except InputError as exc:
+            # A requirement read from --require-file: say which file it came from.
+            if exc.field == "require" and any(repr(t) in str(exc) for t in from_file):
+                raise InputError(str(exc), source=str(require_file)) from None
+            raise
+        if target is not None:
+            save_model(model, target)
+    return LearnedFiles(model, changes, target)

@@ -1,0 +1,50 @@
+"""demoplan.learning.files.learn_files: learning from files as `learn` does
+it, callable without the command line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from demoplan.errors import InputError
+from demoplan.learning.files import learn_files, read_requirements
+from demoplan.learning.modelfile import load_model
+from tests.helpers import EXAMPLES
+
+BLOCKS = EXAMPLES / "blocks" / "demonstrations.json"
+
+
+def test_without_an_output_nothing_is_written(tmp_path: Path) -> None:
+    result = learn_files([BLOCKS], paper=True)
+    assert result.written is None and result.changes is None
+    assert [s.id for s in result.model.states] == ["A", "B", "C", "D"]  # Table IV
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_update_writes_back_and_says_what_changed(tmp_path: Path) -> None:
+    model = tmp_path / "m.json"
+    first = learn_files([BLOCKS], output=model, paper=True)
+    assert first.written == model and load_model(model).states == first.model.states
+    assert ("D", "A") in first.model.constraints  # pyramid-2 puts green (D) first
+    again = learn_files([BLOCKS], update_path=model, require=["wood<green"])
+    assert again.written == model and again.changes is not None
+    assert "constraints added: A<D" in again.changes.lines()
+    constraints = load_model(model).constraints  # the teacher's wood<green holds for D too
+    assert ("A", "D") in constraints and ("D", "A") not in constraints
+
+
+def test_a_bad_requirement_from_a_file_names_the_file(tmp_path: Path) -> None:
+    rules = tmp_path / "rules.txt"
+    rules.write_text("# teacher\nwood<nothing  # an unknown object\n")
+    assert read_requirements(rules) == ["wood<nothing"]
+    with pytest.raises(InputError) as caught:
+        learn_files([BLOCKS], require_file=rules, paper=True)
+    assert caught.value.source == str(rules)
+
+
+def test_the_output_may_not_be_an_input(tmp_path: Path) -> None:
+    copy = tmp_path / "d.json"
+    copy.write_bytes(BLOCKS.read_bytes())
+    with pytest.raises(InputError, match="is also an input"):
+        learn_files([copy], output=copy)
