@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import re
 import sys
 from collections.abc import Collection, Iterable, Iterator, Sequence
@@ -825,36 +824,23 @@ def problem(
 ) -> None:
     """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
     from demoplan.errors import UsageError
-    from demoplan.fileio import write_atomic
-    from demoplan.scenes.plan import scene_problems
+    from demoplan.planning.pddl import pddl_domain_path, save_pddl_problem
+    from demoplan.planning.xml import save_problem
+    from demoplan.scenes.plan import goal_problem
 
     with _reported_errors(), _model_named(model_path):
         if grounded and not pddl_output:
             raise UsageError("--grounded chooses the PDDL form: it needs --pddl")
-        refuse_overwriting_inputs(output, [model_path, scene_path])
+        inputs = [model_path, scene_path]
+        refuse_overwriting_inputs(output, inputs)
         if pddl_output:
-            refuse_overwriting_inputs(
-                output.with_name(f"{output.stem}-domain.pddl"), [model_path, scene_path]
-            )
+            refuse_overwriting_inputs(pddl_domain_path(output), inputs)
         model, scene = _scene_inputs(model_path, scene_path)
-        if goal > len(model.sequences):
-            raise UsageError(
-                f"--goal {goal}: the model has {plural(len(model.sequences), 'demonstration')} "
-                f"(1..{len(model.sequences)})"
-            )
-        problems = scene_problems(model, scene, _geometry_settings(freespace))
-        chosen = next(p for p in problems if goal - 1 in p.candidate.demonstrations)
+        chosen = goal_problem(model, scene, goal, _geometry_settings(freespace))
         if pddl_output:
-            from demoplan.planning.pddl import problem_to_pddl
-
-            domain_text, problem_text = problem_to_pddl(chosen.problem, grounded=grounded)
-            domain_path = output.with_name(f"{output.stem}-domain.pddl")
-            write_atomic(domain_path, domain_text)
-            write_atomic(output, problem_text)
+            domain_path = save_pddl_problem(chosen.problem, output, grounded=grounded)
             _stderr.print(f"wrote {output} and {domain_path}", markup=False, highlight=False)
         else:
-            from demoplan.planning.xml import save_problem
-
             save_problem(chosen.problem, output)
             _stderr.print(f"wrote {output}", markup=False, highlight=False)
         for obstacle in chosen.obstacles:
@@ -1013,39 +999,16 @@ def perceive(
     ] = PERCEPTION_TIMEOUT,
 ) -> None:
     """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
-    from demoplan.deadline import time_budget
     from demoplan.fileio import dump_json, write_atomic
-    from demoplan.perception.blocks import PerceptionSettings, detect_blocks
-    from demoplan.perception.camera import Camera, load_image
-    from demoplan.perception.stacking import BlockTracker, TrackedBlock, scene_document
+    from demoplan.perception.images import perceive_files
+    from demoplan.perception.stacking import scene_document
 
     with _reported_errors():
-        if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
-            raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
         if output is not None:
             refuse_overwriting_inputs(output, [image_path, *([before] if before else [])])
-        camera = Camera(px_per_m, origin)
-        settings = PerceptionSettings()
-        if side is not None:
-            settings = PerceptionSettings(min_side=0.85 * side, max_side=1.15 * side)
-        tracker = BlockTracker()
-        budget = time_budget(
-            timeout,
-            f"perception stopped at its time budget (--timeout {timeout:g} s): many small "
-            "regions; give it more time, or say the blocks' size (--side)",
-        )
-        with budget, _working("Finding blocks…"):
-            if before is not None:
-                earlier = detect_blocks(load_image(before), camera, settings)
-                tracker = BlockTracker(
-                    TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
-                )
-            blocks = tracker.update(detect_blocks(load_image(image_path), camera, settings))
-        if not blocks:
-            raise InputError(
-                "no blocks found; a scene needs at least one (is --px-per-m right? "
-                "--side too strict?)",
-                source=str(image_path),
+        with _working("Finding blocks…"):
+            blocks = perceive_files(
+                image_path, px_per_m, origin, before=before, side=side, timeout=timeout
             )
         document = scene_document(blocks)
         if output is not None:

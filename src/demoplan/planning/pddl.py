@@ -53,7 +53,13 @@ from demoplan.planning.compiled import compile_problem
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import Rules
 
-__all__ = ["action_from_pddl", "problem_to_pddl", "save_pddl"]
+__all__ = [
+    "action_from_pddl",
+    "pddl_domain_path",
+    "problem_to_pddl",
+    "save_pddl",
+    "save_pddl_problem",
+]
 
 _SAFE = re.compile(r"[^a-z0-9]")  # no "_": "__" separates the parts of action names
 # Words a PDDL reader may take for syntax where a name stands (PDDL 1.2 to 3.1).
@@ -600,3 +606,22 @@ def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -
     write_atomic(paths[0], domain)
     write_atomic(paths[1], problem_text)
     return paths
+
+
+def save_pddl_problem(problem: Problem, path: str | Path, *, grounded: bool = False) -> Path:
+    """Write the PDDL problem to ``path`` and its domain beside it, to
+    ``<stem>-domain.pddl`` (both atomically); returns the domain's path."""
+    from demoplan.fileio import write_atomic
+
+    path = Path(path)
+    domain, problem_text = problem_to_pddl(problem, grounded=grounded)
+    domain_path = pddl_domain_path(path)
+    write_atomic(domain_path, domain)
+    write_atomic(path, problem_text)
+    return domain_path
+
+
+def pddl_domain_path(problem_path: str | Path) -> Path:
+    """Where :func:`save_pddl_problem` puts the domain of ``problem_path``."""
+    path = Path(problem_path)
+    return path.with_name(f"{path.stem}-domain.pddl")

@@ -16,7 +16,7 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
-from demoplan.errors import LimitReachedError, NoPlanError
+from demoplan.errors import LimitReachedError, NoPlanError, UsageError
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Clock
 from demoplan.planning.problem import Plan
@@ -25,8 +25,16 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.scenes.targets import candidate_goals
+from demoplan.wording import plural
 
-__all__ = ["CandidatePlan", "ScenePlan", "plan_in_scene", "scene_problems", "solve_candidate"]
+__all__ = [
+    "CandidatePlan",
+    "ScenePlan",
+    "goal_problem",
+    "plan_in_scene",
+    "scene_problems",
+    "solve_candidate",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,6 +139,24 @@ def scene_problems(
     return [
         build_problem(scene, c, settings) for c in candidate_goals(model, scene, clutter=clutter)
     ]
+
+
+def goal_problem(
+    model: TaskModel,
+    scene: Scene,
+    number: int,
+    settings: GeometrySettings = GeometrySettings(),
+) -> SceneProblem:
+    """The planning problem of the goal of demonstration ``number`` (numbered
+    from 1, as people read them) in ``scene``; a usage error for a number the
+    model does not have."""
+    if not 1 <= number <= len(model.sequences):
+        raise UsageError(
+            f"--goal {number}: the model has {plural(len(model.sequences), 'demonstration')} "
+            f"(1..{len(model.sequences)})"
+        )
+    problems = scene_problems(model, scene, settings)
+    return next(p for p in problems if number - 1 in p.candidate.demonstrations)
 
 
 def solve_candidate(
