@@ -1,0 +1,23 @@
+"""The ``demoplan`` command line (SPEC §4).
+
+Commands only parse options, call the library and render what it returns with
+rich. ``--json`` output goes to stdout and nothing else does; a domain error
+becomes one line on stderr and the exit code of SPEC §4.
+"""
+
+from __future__ import annotations
+
+from demoplan.cli import execution, learning, planning, recordings, report  # noqa: F401 - commands
+from demoplan.cli.common import FRAME_FILES, REPORT_FILES, app
+from demoplan.cli.render import fitted_table, states_table
+
+__all__ = ["FRAME_FILES", "REPORT_FILES", "app", "fitted_table", "main", "states_table"]
+
+
+def main() -> None:
+    """Run the typer application (the ``demoplan`` executable is :func:`demoplan.launcher.main`)."""
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,5 @@
+"""``python -m demoplan.cli``: the typer application."""
+
+from demoplan.cli import main
+
+main()

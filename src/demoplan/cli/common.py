@@ -1,0 +1,269 @@
+"""What every command shares: the typer application, the two consoles,
+errors to exit codes, progress, and the options several commands take."""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from typer.core import TyperGroup
+
+from demoplan import __version__
+from demoplan.errors import (
+    DemoplanError,
+    InputError,
+    error_line,
+)
+from demoplan.fileio import (
+    os_error,
+)
+
+COMMANDS = (
+    "learn",
+    "show",
+    "solve",
+    "pddl",
+    "plan",
+    "problem",
+    "run",
+    "perceive",
+    "segment",
+    "import",
+    "experiments",
+)
+"""The commands in the order ``--help`` lists them: the pipeline's order,
+whatever order their modules are imported in."""
+
+
+class _PipelineOrder(TyperGroup):
+    def list_commands(self, ctx: Any) -> list[str]:
+        names = super().list_commands(ctx)
+        return sorted(names, key=lambda n: COMMANDS.index(n) if n in COMMANDS else len(COMMANDS))
+
+
+app = typer.Typer(
+    name="demoplan",
+    cls=_PipelineOrder,
+    help="Learn pick-and-place task models from human demonstrations and plan them in new scenes.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
+stderr = Console(stderr=True, soft_wrap=True, emoji=False)
+
+REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
+"""Names ``experiments`` writes: a folder of only these is an earlier report."""
+FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
+"""Names ``run --frames`` writes: a folder of only these holds an earlier run's frames."""
+
+
+@contextmanager
+def reported_errors() -> Iterator[None]:
+    """Turn a demoplan error into one line on stderr and its exit code."""
+    try:
+        yield
+    except DemoplanError as exc:
+        stderr.print(error_line(exc), markup=False, highlight=False)
+        raise typer.Exit(exc.exit_code) from None
+    except OSError as exc:  # a file system refusal no reader foresaw: still one line
+        if exc.filename is None:  # printing failed: stdout full, or its reader gone
+            raise  # demoplan.launcher.main names standard output
+        sys.stderr.write(error_line(os_error(exc)) + "\n")
+        raise typer.Exit(1) from None
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
+        from demoplan.interrupts import interrupted_by_signal, interrupted_exit_code
+
+        if interrupted_by_signal():
+            raise  # demoplan.launcher.main reports it, once
+        sys.stderr.write("demoplan: interrupted\n")
+        raise typer.Exit(interrupted_exit_code(exc)) from None
+
+
+@contextmanager
+def working(text: str) -> Iterator[None]:
+    """A progress bar on stderr while long work runs (learning: objects done;
+    perception: colour regions done), on a terminal only; it goes when done."""
+    if not stderr.is_terminal:
+        yield
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from demoplan.deadline import reporting_progress
+
+    with Progress(
+        TextColumn(text),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[what]}"),
+        console=stderr,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(text, total=None, what="")
+
+        def update(what: str, done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total, what=what)
+
+        with reporting_progress(update):
+            yield
+
+
+@contextmanager
+def model_named(path: Path) -> Iterator[None]:
+    """A fault in the model found only while planning (a cycle of references)
+    names the model file, not "task model"."""
+    try:
+        yield
+    except InputError as exc:
+        if exc.source != "task model":
+            raise
+        raise InputError(exc.message, source=str(path), field=exc.field) from None
+
+
+def _version(value: bool) -> None:
+    if value:
+        stdout.print(f"demoplan {__version__}", markup=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version.")
+    ] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")
+    ] = False,
+) -> None:
+    from demoplan.commands import mark_command_start
+
+    mark_command_start()
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.WARNING,
+        format="demoplan: %(levelname)s: %(message)s",
+        stream=sys.stderr,
+        force=True,
+    )
+    # Warnings of the libraries (NumPy overflow, shapely, MuJoCo) never reach the
+    # terminal as raw text: bad numbers are refused with our one-line errors
+    # before they get that far, and what is left is harmless; --verbose logs them.
+    logging.captureWarnings(True)
+    logging.getLogger("py.warnings").setLevel(logging.INFO if verbose else logging.CRITICAL)
+
+
+def print_json(data: Any) -> None:
+    sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n")
+
+
+FRAME_OPTION = typer.Option(
+    help="ROS 2 bags: the world frame TF frames are composed to (default: the TF tree's root).",
+    show_default=False,
+)
+OBJECTS_OPTION = typer.Option(
+    help="The objects to keep: names or glob patterns, comma-separated ('cup,plate', "
+    "'obj_*'). Default: every object; in a TF tree, every frame without children.",
+    show_default=False,
+)
+
+
+def say(text: str) -> None:
+    """A message on stdout: plain text, one line however long (scripts read it)."""
+    stdout.print(text, markup=False, highlight=False, soft_wrap=True)
+
+
+def xyz_text(position: Any, decimals: int) -> str:
+    return "(" + ", ".join(f"{v:.{decimals}f}" for v in position) + ")"
+
+
+class SearchName(StrEnum):
+    """Search strategies of ``demoplan solve`` (demoplan.planning.search.SEARCHES)."""
+
+    astar = "astar"
+    bfs = "bfs"
+
+
+GroundedOption = Annotated[
+    bool,
+    typer.Option(
+        "--grounded",
+        help="Write grounded STRIPS (one action per grasp and put-down) for pyperplan and "
+        "planners without quantifiers.",
+    ),
+]
+
+
+def scene_inputs(model_path: Path, scene_path: Path) -> tuple[Any, Any]:
+    from demoplan.learning.modelfile import load_model
+    from demoplan.scenes.scene import load_scene
+
+    return load_model(model_path), load_scene(scene_path)
+
+
+ModelArgument = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="A task model written by 'learn'.")
+]
+SceneArgument = Annotated[
+    Path, typer.Argument(metavar="SCENE", help="The scene at run time (demoplan/scene-1).")
+]
+ClutterOption = Annotated[
+    bool,
+    typer.Option(help="Allow objects the model never saw (they get no goal; moved if in the way)."),
+]
+FreespaceOption = Annotated[
+    int | None,
+    typer.Option(
+        "--freespace",
+        min=0,
+        max=50,
+        help="Free-space spots to generate when the scene gives none (default 3).",
+    ),
+]
+
+
+def geometry_settings(freespace: int | None) -> Any:
+    from demoplan.scenes.geometry import GeometrySettings
+
+    return GeometrySettings() if freespace is None else GeometrySettings(n_freespace=freespace)
+
+
+@contextmanager
+def plot_errors(path: Path) -> Iterator[None]:
+    """--plot's failures as one-line input errors."""
+    try:
+        yield
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
+
+
+class PerceptionName(StrEnum):
+    """How ``demoplan run`` observes the world."""
+
+    state = "state"
+    camera = "camera"
+
+
+class SimName(StrEnum):
+    """Worlds of ``demoplan run``."""
+
+    kinematic = "kinematic"
+    mujoco = "mujoco"
+
+
+def count_of(n: int, noun: str) -> str:
+    plural = noun + ("es" if noun.endswith("sh") else "s")
+    return f"{n} {noun if n == 1 else plural}"

@@ -1,0 +1,268 @@
+"""``learn`` and ``show``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from demoplan.cli.common import (
+    FRAME_OPTION,
+    OBJECTS_OPTION,
+    app,
+    plot_errors,
+    print_json,
+    reported_errors,
+    stderr,
+    stdout,
+    working,
+)
+from demoplan.cli.render import (
+    model_json,
+    print_model,
+    print_scene_preview,
+)
+from demoplan.deadline import LEARNING_TIMEOUT
+from demoplan.errors import (
+    InputError,
+)
+from demoplan.fileio import (
+    display_path,
+)
+from demoplan.wording import plural
+
+
+@app.command()
+def learn(
+    demos: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="DEMO",
+            help="Demonstration files or folders, or pose streams (CSV, ROS 2 bags) to "
+            "segment first (with --update: the new ones).",
+            show_default=False,
+        ),
+    ],
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "--output",
+            "-o",
+            help="Model file to write (with --json, optional).",
+            show_default=False,
+        ),
+    ] = None,
+    update: Annotated[
+        Path | None,
+        typer.Option(
+            help="Existing model to extend with DEMOS (written back unless -o).", show_default=False
+        ),
+    ] = None,
+    require: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="Teacher constraint 'A<B' (state ids or object names); repeatable.",
+            show_default=False,
+        ),
+    ] = None,
+    require_file: Annotated[
+        Path | None,
+        typer.Option(help="File of teacher constraints, one 'A<B' per line.", show_default=False),
+    ] = None,
+    position_noise: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Placement precision (RMS) in m: spreads closer than this are ties "
+            "(default: estimated from the demonstrations).",
+            show_default=False,
+        ),
+    ] = None,
+    orientation_noise: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Orientation precision (RMS) in degrees (default: estimated).",
+            show_default=False,
+        ),
+    ] = None,
+    significance: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            max=0.999,
+            help="Level of the F test a reference or a split must pass to add states "
+            "(default 0.05; 0: the paper's plain comparison).",
+            show_default=False,
+        ),
+    ] = None,
+    timeout: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            help="Seconds learning may take before it stops with exit 4 (inf: no limit).",
+        ),
+    ] = LEARNING_TIMEOUT,
+    paper: Annotated[
+        bool,
+        typer.Option(
+            "--paper",
+            help="The paper's reading: fixed 3 mm / 0.5° ties and the plain comparison "
+            "(what the shipped examples were drawn for); other options still apply.",
+        ),
+    ] = False,
+    position_separation: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Minimum distance between clusters in m (default 0.05).",
+            show_default=False,
+        ),
+    ] = None,
+    orientation_separation: Annotated[
+        float | None,
+        typer.Option(
+            min=0.0,
+            help="Minimum angle between clusters in degrees (default 15).",
+            show_default=False,
+        ),
+    ] = None,
+    max_clusters: Annotated[
+        int | None,
+        typer.Option(
+            min=0,
+            help="Cap on clusters per object and reference (default 0: none, as the paper).",
+            show_default=False,
+        ),
+    ] = None,
+    frame: Annotated[str | None, FRAME_OPTION] = None,
+    objects: Annotated[str | None, OBJECTS_OPTION] = None,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the model as JSON on stdout.")
+    ] = False,
+    decimals: Annotated[
+        int, typer.Option(min=0, max=6, help="Decimals of positions in the tables.")
+    ] = 2,
+) -> None:
+    """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    from demoplan.learning.files import learn_files
+    from demoplan.segmentation.types import parse_object_patterns
+
+    with reported_errors():
+        if update is None and output is None and not json_output:
+            raise typer.BadParameter(
+                "give -o MODEL (or --update MODEL, or --json to print the model only)",
+                param_hint="'-o'",
+            )
+        options = {
+            "position_noise": position_noise,
+            "orientation_noise": orientation_noise,
+            "position_separation": position_separation,
+            "orientation_separation": orientation_separation,
+            "max_clusters": max_clusters,
+            "significance": significance,
+        }
+        result = learn_files(
+            demos,
+            output=output,
+            update_path=update,
+            require=require or (),
+            require_file=require_file,
+            paper=paper,
+            overrides={k: v for k, v in options.items() if v is not None},
+            frame=frame,
+            objects=parse_object_patterns(objects),
+            timeout=timeout,
+            working=lambda: working("Learning states and constraints…"),
+        )
+        if result.changes is not None:  # on stderr, so that --json stays pure
+            for line in result.changes.lines():
+                stderr.print(f"update: {line}", markup=False, highlight=False)
+        if json_output:
+            print_json(model_json(result.model))
+        else:
+            print_model(result.model, decimals)
+            stdout.print(
+                f"Learned from {plural(len(result.model.demonstrations), 'demonstration')}; "
+                f"wrote {result.written}",
+                markup=False,
+                highlight=False,
+            )
+
+
+@app.command()
+def show(
+    path: Annotated[
+        Path,
+        typer.Argument(
+            metavar="MODEL|SCENE",
+            help="A model file written by 'learn', or a scene file to look at before planning.",
+        ),
+    ],
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the model or the scene preview as JSON.")
+    ] = False,
+    decimals: Annotated[int, typer.Option(min=0, max=6, help="Decimals of positions.")] = 2,
+    model_path: Annotated[
+        Path | None,
+        typer.Option("--model", help="A scene: take sizes the scene omits from this model."),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(help="A scene: draw it from above into this image (PNG, SVG)."),
+    ] = None,
+) -> None:
+    """Print a model as the paper's tables (states, sequences, constraints), or
+    preview a scene: where each object stands, which grasps its neighbours
+    block, the landmarks and free space (the scene's, else spots near the objects)."""
+    from demoplan.fileio import check_format, read_document
+    from demoplan.learning.modelfile import model_from_dict
+
+    with reported_errors():
+        document = read_document(path)
+        kind, _ = check_format(document, {"model", "scene"}, display_path(path))
+        if kind == "model":
+            if plot is not None or model_path is not None:
+                option = "--plot" if plot is not None else "--model"
+                raise InputError(f"{option} is for a scene; {path} is a model", field=option)
+            model = model_from_dict(document, str(path))
+            if json_output:
+                print_json(model_json(model))
+            else:
+                print_model(model, decimals)
+            return
+        show_scene(path, document, json_output, decimals, model_path, plot)
+
+
+def show_scene(
+    path: Path,
+    document: dict[str, Any],
+    json_output: bool,
+    decimals: int,
+    model_path: Path | None,
+    plot: Path | None,
+) -> None:
+    from demoplan.learning.modelfile import load_model
+    from demoplan.scenes.preview import preview_scene
+    from demoplan.scenes.scene import complete_geometry, scene_from_document
+
+    if plot is not None:
+        from demoplan.plotting import check_figure_path
+
+        check_figure_path(plot, "--plot")
+    scene = scene_from_document(document, str(path))
+    if model_path is not None:
+        scene = complete_geometry(scene, load_model(model_path))
+    preview = preview_scene(scene)
+    if plot is not None:
+        from demoplan.plotting import save_scene_targets
+
+        with plot_errors(plot):
+            title = f"{display_path(path)}: the scene before planning"
+            save_scene_targets(scene, preview.problem, "", plot, title)
+        stderr.print(f"wrote {plot}", markup=False, highlight=False)
+    if json_output:
+        print_json(preview.to_json())
+    else:
+        print_scene_preview(preview, decimals)

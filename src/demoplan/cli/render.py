@@ -1,0 +1,292 @@
+"""Rendering for people: the tables and figures the commands print or write,
+from what the library returns."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Collection, Iterable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from demoplan.cli.common import (
+    plot_errors,
+    say,
+    stderr,
+    stdout,
+    xyz_text,
+)
+from demoplan.errors import (
+    InputError,
+)
+from demoplan.wording import plural
+
+if TYPE_CHECKING:
+    from demoplan.model import TaskModel
+
+
+def fitted_table(
+    title: str,
+    header: Sequence[str],
+    rows: Iterable[Sequence[str]],
+    names: Collection[str] = (),
+) -> Table:
+    """A table that reads in an 80-column terminal: columns empty in every row are
+    left out, the columns in ``names`` (object and state names) wrap between
+    words but never cut a name (up to 24 characters), and the others fold
+    where the width runs out. Cells are plain text ("[m]" is not rich markup)."""
+    body = [list(row) for row in rows]
+    keep = [k for k in range(len(header)) if any(row[k].strip() for row in body)]
+    table = Table(title=title, title_justify="left")
+    for k in keep:
+        if header[k] in names:  # wrapped between words at most, never cut within one
+            words = [word for row in body for word in row[k].split()] + header[k].split()
+            widest = max(len(word) for word in words)
+            table.add_column(Text(header[k]), min_width=min(widest, 24), overflow="fold")
+        else:
+            table.add_column(Text(header[k]), overflow="fold")
+    for row in body:
+        table.add_row(*(Text(row[k]) for k in keep))
+    return table
+
+
+def states_table(model: TaskModel, decimals: int, width: int) -> Table:
+    """The states as the paper's Tables II and IV; where that is wider than
+    ``width``, compact: the two reference columns in one ("Pcb / Motor":
+    position / orientation, one name where they agree) and the position and
+    orientation in one, so that the names still read in full."""
+    from demoplan.learning.tables import STATE_HEADER, state_rows
+
+    title = "States (as the paper's Tables II and IV)"
+    names = ("State", "Object", "Relative Position", "Relative Orientation", "Relative to")
+    rows = state_rows(model, decimals)
+    table = fitted_table(title, STATE_HEADER, rows, names)
+    if Console(width=10_000).measure(table).maximum <= width:  # its natural width
+        return table
+    compact = []
+    for state, obj, by_position, by_orientation, position, yaw, spread, members, margin in rows:
+        if by_orientation and by_orientation != by_position:
+            reference = f"{by_position or '—'} / {by_orientation}"
+        else:
+            reference = by_position
+        value = f"{position} {yaw}°" if yaw else position
+        compact.append((state, obj, reference, value, spread, members, margin))
+    header = ("State", "Object", "Relative to", "Value [m, deg]", "Spread", "Members", "Margin")
+    return fitted_table(title, header, compact, names)
+
+
+def print_model(model: TaskModel, decimals: int) -> None:
+    from demoplan.learning.tables import (
+        constraint_text,
+        diagnostic_lines,
+        precision_text,
+        sequence_rows,
+    )
+
+    stdout.print(states_table(model, decimals, stdout.width))
+    precision = precision_text(model)
+    if precision is not None:
+        stdout.print(precision, markup=False, highlight=False)
+    for line in diagnostic_lines(model):
+        stderr.print(f"warning: {line}", markup=False, highlight=False)
+    stdout.print(
+        fitted_table(
+            "State sequences (Tables III and V)",
+            ("Demonstration", "Sequence", "Goal states"),
+            sequence_rows(model),
+        )
+    )
+    stdout.print(
+        f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )
+    if model.teacher_constraints:
+        stdout.print(
+            f"Teacher constraints: {constraint_text(model.teacher_constraints)}",
+            markup=False,
+            highlight=False,
+        )
+    for index, x, y in model.violations:
+        stdout.print(
+            f"Demonstration {index + 1} contradicts the teacher's {x}<{y}",
+            markup=False,
+            highlight=False,
+        )
+
+
+def model_json(model: TaskModel) -> dict[str, Any]:
+    from demoplan.learning.modelfile import model_to_dict
+
+    return model_to_dict(model)
+
+
+def print_scene_preview(preview: Any, decimals: int) -> None:
+    table = Table(title=f"Scene {preview.source}", title_justify="left")
+    for column in ("Object", "Position [m]", "Yaw", "Size [m]", "On", "Grasps (axis: in the way)"):
+        table.add_column(column, overflow="fold")
+    for obj in preview.objects:
+        grasps = "; ".join(
+            f"{g.axis:g}°: " + (", ".join(g.blocked_by) if g.blocked_by else "free")
+            for g in obj.grasps
+        )
+        size = " × ".join(f"{v:g}" for v in obj.geometry.size)
+        table.add_row(
+            Text(obj.name),
+            xyz_text(obj.position, decimals),
+            f"{obj.yaw:.0f}°",
+            f"{obj.geometry.shape} {size}",
+            Text(", ".join(obj.on) or "table"),
+            Text(grasps),
+        )
+    stdout.print(table)
+    for name, position in preview.landmarks:
+        say(f"Landmark {name} at {xyz_text(position, decimals)}")
+    where = (
+        "generated near the objects (the scene lists none; plan generates its own "
+        "near each goal's targets)"
+        if preview.freespace_generated
+        else "as the scene lists it"
+    )
+    spots = ", ".join(xyz_text(spot, decimals) for spot in preview.freespace) or "none"
+    say(f"Free space, {where}: {plural(len(preview.freespace), 'spot')}: {spots}")
+    stuck = [o.name for o in preview.objects if not o.graspable]
+    if stuck:
+        say(f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)")
+
+
+def plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
+    from demoplan.plotting import save_scene_plan
+    from demoplan.scenes.scene import complete_geometry
+
+    chosen = result.chosen
+    title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
+    with plot_errors(path):
+        save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
+
+
+def plot_no_plan(
+    model: TaskModel, scene: Any, settings: Any, clutter: bool, reason: str, path: Path
+) -> None:
+    """The scene, the first candidate goal's targets and why there is no plan."""
+    from demoplan.plotting import save_scene_targets
+    from demoplan.scenes.plan import scene_problems
+    from demoplan.scenes.scene import complete_geometry
+
+    first = scene_problems(model, scene, settings, clutter=clutter)[0]
+    goal = first.candidate.demonstrations[0]
+    title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
+    with plot_errors(path):
+        save_scene_targets(complete_geometry(scene, model), first, reason, path, title)
+    stderr.print(f"wrote {path}", markup=False, highlight=False)
+
+
+def print_scene_plan(result: Any, model: TaskModel) -> None:
+    table = Table(title="Candidate goals", title_justify="left")
+    for column in ("goal of demonstration", "actions", "moves", ""):
+        table.add_column(column)
+    for candidate in result.candidates:
+        names = ", ".join(
+            model.demonstration_number(k) for k in candidate.problem.candidate.demonstrations
+        )
+        length = candidate.length
+        chosen = candidate is result.chosen
+        table.add_row(
+            Text(names),
+            "—" if length is None else str(length),
+            "—" if length is None else str(length // 2),
+            "chosen" if chosen else Text(candidate.reason or ""),
+        )
+    stdout.print(table)
+    sys.stdout.flush()
+    chosen = result.chosen
+    for action in chosen.plan.actions:
+        sys.stdout.write(f"{action}\n")
+    sys.stdout.flush()
+    used = dict.fromkeys(a.location for a in chosen.plan.actions)
+    locations = Table(title="Locations used", title_justify="left")
+    for column in ("location", "x", "y", "z", "yaw", "is"):
+        locations.add_column(column, justify="right" if column in "xyz yaw" else "left")
+    for name in used:
+        loc = chosen.problem.location(name)
+        what = loc.kind if not loc.objects else f"{loc.kind} of {', '.join(loc.objects)}"
+        locations.add_row(name, *(f"{v:.3f}" for v in loc.position), f"{loc.yaw:.1f}", Text(what))
+    stdout.print(locations)
+
+
+def print_run_report(report: Any) -> None:
+    table = Table(title=f"Run ({report.world})", title_justify="left")
+    for column in ("step", "action", "plan", "ok"):
+        table.add_column(column)
+    for executed in report.actions:
+        table.add_row(
+            str(executed.step),
+            Text(str(executed.action)),
+            str(executed.plan),
+            "yes" if executed.ok else "NO",
+        )
+    stdout.print(table)
+    for failure in report.failures:
+        stdout.print(
+            f"step {failure.step}: {failure.kind}: {failure.detail}",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,  # one line per message, however long: it is read by scripts too
+        )
+    verdict = "success" if report.success else "FAILED"
+    errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
+    stdout.print(
+        f"{verdict}: {report.reason}; {plural(len(report.actions), 'action')} "
+        f"({report.first_plan_length} planned first), {plural(report.replans, 'replan')}; "
+        f"final errors: {errors}",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )
+
+
+def segmentation_figure(found: Any, plot: Path) -> bytes:
+    """The segmentation figure, encoded for ``plot``."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    from demoplan.plotting import figure_bytes
+    from demoplan.segmentation import plot_segmentation
+
+    axes = plot_segmentation(found)
+    if not axes:
+        raise InputError("nothing to draw (no object moved)", source=str(plot), field="--plot")
+    figure: Any = axes[0].figure
+    try:
+        return figure_bytes(figure, plot)
+    finally:
+        plt.close(figure)
+
+
+def print_steps(title: str, found: Any) -> None:
+    """A segmentation's steps as a table on stdout, each push it left out on stderr."""
+    table = Table(title=Text(title), title_justify="left")
+    for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
+        table.add_column(Text(column), justify="left" if column == "object" else "right")
+    for index, move in enumerate(found.moves, 1):
+        x, y, z = move.pose.position
+        cells = (f"{move.start:.2f}", f"{move.end:.2f}", f"{x:.4f}", f"{y:.4f}", f"{z:.4f}")
+        table.add_row(str(index), Text(move.object), *cells)
+    stdout.print(table)
+    for push in found.pushes:
+        stderr.print(
+            f"push (not a step): {push.object} slid {push.distance * 100:.1f} cm along its "
+            f"support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
+            markup=False,
+            highlight=False,
+        )
