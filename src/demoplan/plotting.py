@@ -1,40 +1,70 @@
-"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left) and plans.
+"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left) and plans,
+and a side view of plans that stack.
 
 matplotlib is imported lazily (the ``plot`` extra); every function takes an
 optional ``ax`` and returns the axes it drew on.
+
+Labels of objects and moves are made with :func:`add_label`; when a figure is
+written (:func:`save_figure`, :func:`figure_bytes`) :func:`place_labels` moves
+them, at the written resolution, so that no two texts of an axes overlap and
+none runs off its axes (:func:`place_boxes` is the placement itself).
 """
 
 from __future__ import annotations
 
+import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.colours import object_colour
+from demoplan.colours import assign_colours, object_colour
+from demoplan.labels import (
+    BoxPlacement,
+    Leader,
+    add_label,
+    figure_renderer,
+    place_boxes,
+    place_labels,
+)
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.backend_bases import RendererBase
+    from matplotlib.figure import Figure
 
     from demoplan.planning.problem import Plan
     from demoplan.scenes.problems import SceneProblem
     from demoplan.scenes.scene import Scene
 
 __all__ = [
+    "BoxPlacement",
+    "Leader",
+    "add_label",
     "constraint_caption",
+    "figure_renderer",
     "object_colour",
     "object_patch",
+    "observing_saved_figures",
+    "place_boxes",
+    "place_labels",
+    "plan_stacks",
     "plot_constraints",
     "plot_demonstration",
     "plot_scene_plan",
+    "plot_scene_side",
     "plot_scene_targets",
     "save_figure",
     "save_scene_plan",
     "save_scene_targets",
     "share_limits",
+    "side_patch",
 ]
+
+logger = logging.getLogger(__name__)
 
 
 def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
@@ -75,9 +105,10 @@ def plot_demonstration(
         _, ax = plt.subplots(figsize=(5, 5))
     geometry = demo.geometry()
     current = demo.initial_poses()
+    assign_colours([*(name for name, _ in demo.initial), *(step.object for step in demo.steps)])
     for name, pose in demo.landmarks:
         ax.add_patch(object_patch(pose, geometry.get(name), "#cccccc", 0.5))
-        ax.annotate(name, pose.position[:2], ha="center", va="center", fontsize=7, color="0.3")
+        add_label(ax, name, _xy(pose.position), fontsize=7, color="0.3")
     for name, pose in demo.initial:
         ax.add_patch(object_patch(pose, geometry.get(name), object_colour(name), 0.2))
     for number, step in enumerate(demo.steps, start=1):
@@ -92,8 +123,8 @@ def plot_demonstration(
                 arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
             )
         ax.add_patch(object_patch(step.pose, geometry.get(step.object), colour, 0.85))
-        ax.annotate(
-            f"{number} {step.object}", (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7
+        add_label(
+            ax, f"{number} {step.object}", (x, y), offset=(4, 4), ha="left", va="bottom", fontsize=7
         )
         current[step.object] = step.pose
     ax.set_aspect("equal")
@@ -170,8 +201,15 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
             fontsize=9,
             bbox={"boxstyle": "circle", "fc": "white", "ec": "0.2"},
         )
-        ax.annotate(
-            objects[label.split("#")[0]], (px, py - 0.32), ha="center", fontsize=6, color="0.4"
+        ax.annotate(  # under the circle, whatever the axes' scale
+            objects[label.split("#")[0]],
+            (px, py),
+            xytext=(0, -11),
+            textcoords="offset points",
+            ha="center",
+            va="top",
+            fontsize=6,
+            color="0.4",
         )
     ax.set_xlim(-0.6, max(depth.values(), default=0) + 0.6)
     spread = max((len(m) for m in layers.values()), default=1)
@@ -224,7 +262,7 @@ def plot_scene_plan(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = {obj.name: object_colour(obj.name) for obj in scene.objects}
+    colours = assign_colours(obj.name for obj in scene.objects)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     final = {obj.name: obj.pose for obj in scene.objects}
     moves = []
@@ -232,32 +270,40 @@ def plot_scene_plan(
         source, target = problem.location(grasp.location), problem.location(put.location)
         moves.append((grasp.object, source.position, target.position))
         final[put.object] = pose_of(target)
-    for spot in problem.locations:
-        if spot.kind == "freespace":
-            radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
-            ax.add_patch(
-                patches.Circle(spot.position[:2], radius, fill=False, ls="--", ec="0.6", lw=0.8)
-            )
-            ax.annotate(spot.name, spot.position[:2], fontsize=6, color="0.5", ha="center")
+    spots = [spot for spot in problem.locations if spot.kind == "freespace"]
+    for spot in spots:
+        radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
+        ax.add_patch(
+            patches.Circle(spot.position[:2], radius, fill=False, ls="--", ec="0.6", lw=0.8)
+        )
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
     for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
         ax.add_patch(object_patch(pose, geometry[name], colours[name], 0.85))
-        ax.annotate(name, pose.position[:2], fontsize=7, ha="center", va="center")
+        add_label(ax, name, _xy(pose.position), fontsize=7)
+    rad = 0.15
     for number, (name, start, end) in enumerate(moves, 1):
         ax.annotate(
             "",
-            xy=end[:2],
-            xytext=start[:2],
+            xy=_xy(end),
+            xytext=_xy(start),
             arrowprops={
                 "arrowstyle": "->",
                 "color": colours[name],
                 "lw": 1.2,
-                "connectionstyle": "arc3,rad=0.15",
+                "connectionstyle": f"arc3,rad={rad}",
             },
         )
-        middle = ((start[0] + end[0]) / 2, (start[1] + end[1]) / 2)
-        ax.annotate(str(number), middle, fontsize=7, color=colours[name], fontweight="bold")
+        add_label(
+            ax,
+            str(number),
+            _arc_middle(_xy(start), _xy(end), rad),
+            fontsize=7,
+            color=colours[name],
+            fontweight="bold",
+        )
+    for spot in spots:
+        add_label(ax, spot.name, _xy(spot.position), fontsize=6, color="0.5")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.08)
@@ -278,7 +324,8 @@ def plot_scene_plan(
 
 def _legend(ax: Axes, entries: list[tuple[str, str]]) -> None:
     """A legend of what the marks mean (not of the objects: their names are
-    written on them): ``faint``/``solid`` shapes, ``arrow``s, ``dashed`` circles."""
+    written on them): ``faint``/``solid`` shapes, ``arrow``s, dashed ``outline``s,
+    ``dashed`` circles."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle, Patch
 
@@ -290,6 +337,8 @@ def _legend(ax: Axes, entries: list[tuple[str, str]]) -> None:
             handles.append(Patch(fc="0.5", alpha=0.85, ec="black", label=text))
         elif mark == "arrow":
             handles.append(Line2D([], [], color="0.3", marker=">", lw=1.2, label=text))
+        elif mark == "outline":
+            handles.append(Patch(fill=False, ls="--", ec="0.3", label=text))
         else:
             handles.append(Circle((0, 0), 1, fill=False, ls="--", ec="0.6", label=text))
     ax.legend(handles=handles, loc="best", fontsize=6, framealpha=0.8)
@@ -311,8 +360,9 @@ def plot_scene_targets(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = {obj.name: object_colour(obj.name) for obj in scene.objects}
+    colours = assign_colours(obj.name for obj in scene.objects)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
+    targets = []
     for spot in problem.locations:
         if spot.kind == "freespace":
             radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
@@ -327,17 +377,12 @@ def plot_scene_targets(
                 outline.set_linestyle("--")
                 outline.set_linewidth(1.2)
                 ax.add_patch(outline)
-                ax.annotate(
-                    f"{name}'s target",
-                    spot.position[:2],
-                    fontsize=6,
-                    color=colours[name],
-                    ha="center",
-                    va="top",
-                )
+                targets.append((name, _xy(spot.position)))
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.85))
-        ax.annotate(obj.name, obj.pose.position[:2], fontsize=7, ha="center", va="center")
+        add_label(ax, obj.name, _xy(obj.pose.position), fontsize=7)
+    for name, xy in targets:  # placed after the objects' names, which stay on their objects
+        add_label(ax, f"{name}'s target", xy, fontsize=6, color=colours[name], va="top")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.12)
@@ -399,12 +444,30 @@ def check_figure_path(path: Path, option: str) -> None:
 
 
 def figure_bytes(figure: Any, path: Path, dpi: int = 110) -> bytes:
-    """``figure`` encoded in the image format of ``path``'s extension."""
+    """``figure`` encoded in the image format of ``path``'s extension, its
+    labels placed (:func:`place_labels`) at that ``dpi`` first."""
     import io
 
     check_figure_path(path, "figure")
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format=path.suffix.lower().lstrip("."), dpi=dpi)
+    original = figure.dpi
+    figure.set_dpi(dpi)
+    try:
+        crowded = place_labels(figure)
+        if crowded:
+            logger.warning(
+                "%s: no free place for the label(s) %s; they overlap others",
+                path.name,
+                ", ".join(repr(t.get_text()) for t in crowded),
+            )
+        if _SAVE_OBSERVERS:
+            figure.draw_without_rendering()
+            renderer = figure_renderer(figure)
+            for observer in list(_SAVE_OBSERVERS):
+                observer(figure, renderer, path)
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format=path.suffix.lower().lstrip("."), dpi=dpi)
+    finally:
+        figure.set_dpi(original)
     return buffer.getvalue()
 
 
@@ -419,5 +482,202 @@ def save_scene_plan(
     scene: Scene, problem: SceneProblem, plan: Plan, path: Path, title: str
 ) -> None:
     """:func:`plot_scene_plan` into an image file, written atomically (raises
-    ImportError without matplotlib)."""
-    _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title), path)
+    ImportError without matplotlib); where the plan stacks (:func:`plan_stacks`)
+    its side view (:func:`plot_scene_side`) beside it."""
+    if not plan_stacks(scene, problem, plan):
+        _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title), path)
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure = plt.figure(figsize=(12.5, 5.8))
+    grid = figure.add_gridspec(1, 2, width_ratios=[1.0, 1.0])
+    try:
+        plot_scene_plan(scene, problem, plan, figure.add_subplot(grid[0, 0]), title)
+        plot_scene_side(scene, problem, plan, figure.add_subplot(grid[0, 1]))
+        figure.tight_layout()
+        save_figure(figure, path)
+    finally:
+        plt.close(figure)
+
+
+LEVEL_TOLERANCE = 0.001
+"""Heights (m) closer than this are one level: the plan's objects stack where any
+stands or is put down higher than this above the lowest."""
+
+
+def plan_stacks(scene: Scene, problem: SceneProblem, plan: Plan) -> bool:
+    """Whether an object of the scene stands, or is put down by the plan, on
+    another level than the rest (its bottom's z differs): a top view hides that."""
+    heights = [obj.pose.position[2] for obj in scene.objects]
+    heights += [problem.location(a.location).position[2] for a in plan.actions]
+    return bool(heights) and max(heights) - min(heights) > LEVEL_TOLERANCE
+
+
+def side_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
+    """The object's outline seen from the side (looking along y: x across, z up;
+    ``pose``'s z is its bottom) as a matplotlib patch: a box's x extent as it
+    is turned, a cylinder's diameter, a sphere's circle."""
+    from matplotlib import patches
+
+    x, _, z = pose.position
+    size = geometry.size if geometry else (0.03, 0.03, 0.03)
+    if geometry is not None and geometry.shape in {"cylinder", "sphere"}:
+        across = size[0]
+    else:
+        yaw = 0.0
+        if pose.orientation is not None:
+            qx, qy, qz, qw = pose.orientation
+            yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+        across = abs(size[0] * math.cos(yaw)) + abs(size[1] * math.sin(yaw))
+    if geometry is not None and geometry.shape == "sphere":
+        return patches.Ellipse(
+            (x, z + size[2] / 2), across, size[2], fc=colour, ec="k", alpha=alpha, lw=0.8
+        )
+    return patches.Rectangle(
+        (x - across / 2, z), across, size[2], fc=colour, ec="k", alpha=alpha, lw=0.8
+    )
+
+
+def plot_scene_side(
+    scene: Scene,
+    problem: SceneProblem,
+    plan: Plan,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """A plan in its scene from the side (x across, height z up, the table at
+    z = 0): where the objects stand now (faint), where the plan leaves them
+    (solid), where a move puts an object down on its way (dashed outline), and
+    each move as a numbered arrow: up from the top of the object where it is
+    picked up, across above everything (move n at the n-th level), down to
+    where its top is once put down, so that unstacking and stacking show."""
+    import matplotlib.pyplot as plt
+
+    from demoplan.scenes.problems import pose_of
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3))
+    colours = assign_colours(obj.name for obj in scene.objects)
+    geometry = {obj.name: obj.geometry for obj in scene.objects}
+    final = {obj.name: obj.pose for obj in scene.objects}
+    moves: list[tuple[str, Pose, Pose]] = []
+    for grasp, put in zip(plan.actions[::2], plan.actions[1::2], strict=True):
+        source = pose_of(problem.location(grasp.location))
+        target = pose_of(problem.location(put.location))
+        moves.append((put.object, source, target))
+        final[put.object] = target
+    last = {name: k for k, (name, _, _) in enumerate(moves)}
+    ax.axhline(0.0, color="0.4", lw=0.8)
+    for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
+        ax.add_patch(side_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
+    between = False
+    for k, (name, _, target) in enumerate(moves):
+        if last[name] != k:  # put down on its way, moved again later
+            outline = side_patch(target, geometry[name], colours[name], 1.0)
+            outline.set_fill(False)
+            outline.set_edgecolor(colours[name])
+            outline.set_linestyle("--")
+            outline.set_zorder(1.5)  # over the solid shapes it may stand behind
+            ax.add_patch(outline)
+            between = True
+    for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
+        ax.add_patch(side_patch(pose, geometry[name], colours[name], 0.85))
+        add_label(ax, name, _side_middle(pose, geometry[name]), fontsize=7)
+    tops = [obj.pose.position[2] + _height(obj.geometry) for obj in scene.objects]
+    tops += [target.position[2] + _height(geometry[name]) for name, _, target in moves]
+    highest = max(tops, default=0.05)
+    spacing = 0.1 * highest
+    carry = highest
+    for number, (name, source, target) in enumerate(moves, 1):
+        # Lifted from the top of where it stood, carried above everything (each
+        # move a level higher than the one before), set down with its top where
+        # the arrow ends.
+        (x0, z0), (x1, z1) = _side_top(source, geometry[name]), _side_top(target, geometry[name])
+        carry = highest + (number + 0.5) * spacing
+        ax.plot([x0, x0, x1], [z0, carry, carry], color=colours[name], lw=1.2)
+        ax.annotate(
+            "",
+            xy=(x1, z1),
+            xytext=(x1, carry),
+            arrowprops={"arrowstyle": "->", "color": colours[name], "lw": 1.2, "shrinkA": 0},
+        )
+        add_label(
+            ax,
+            str(number),
+            ((x0 + x1) / 2, carry),
+            offset=(0.0, 1.5),
+            va="bottom",
+            fontsize=7,
+            color=colours[name],
+            fontweight="bold",
+        )
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(x=0.08)
+    ax.set_ylim(-0.5 * spacing, carry + 2.5 * spacing)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("height z [m]")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_title(title or "From the side: the height of each move", fontsize=9)
+    entries = [
+        ("faint", "where the objects stand now"),
+        ("solid", "where the plan leaves them"),
+        ("arrow", "move n of the plan"),
+    ]
+    if between:
+        entries.append(("outline", "put down on its way"))
+    _legend(ax, entries)
+    return ax
+
+
+def _xy(position: Sequence[float]) -> tuple[float, float]:
+    return (float(position[0]), float(position[1]))
+
+
+def _height(geometry: ObjectGeometry | None) -> float:
+    return geometry.size[2] if geometry else 0.03
+
+
+def _side_middle(pose: Pose, geometry: ObjectGeometry | None) -> tuple[float, float]:
+    """The middle of an object seen from the side: (x, z halfway up)."""
+    return (float(pose.position[0]), float(pose.position[2]) + _height(geometry) / 2)
+
+
+def _side_top(pose: Pose, geometry: ObjectGeometry | None) -> tuple[float, float]:
+    """The top of an object seen from the side: (x, z of its top)."""
+    return (float(pose.position[0]), float(pose.position[2]) + _height(geometry))
+
+
+def _arc_middle(
+    start: tuple[float, float], end: tuple[float, float], rad: float
+) -> tuple[float, float]:
+    """The middle of matplotlib's ``arc3,rad=rad`` curve from ``start`` to ``end``
+    (the quadratic Bézier's point at t = 1/2), on axes of equal aspect."""
+    dx, dy = end[0] - start[0], end[1] - start[1]
+    return (
+        (start[0] + end[0]) / 2 + rad * dy / 2,
+        (start[1] + end[1]) / 2 - rad * dx / 2,
+    )
+
+
+# Labels: made with add_label, placed by place_labels when a figure is written.
+
+_SAVE_OBSERVERS: list[Callable[[Figure, RendererBase, Path], object]] = []
+
+
+@contextmanager
+def observing_saved_figures(
+    observer: Callable[[Figure, RendererBase, Path], object],
+) -> Iterator[None]:
+    """Within the block, call ``observer(figure, renderer, path)`` for every
+    figure written by :func:`save_figure` or :func:`figure_bytes`, just before
+    it is encoded: its labels placed, at the dpi it is written at, ``renderer``
+    the one they were measured with."""
+    _SAVE_OBSERVERS.append(observer)
+    try:
+        yield
+    finally:
+        _SAVE_OBSERVERS.remove(observer)
