@@ -99,6 +99,7 @@ class FrameWriter:
 
     def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
         from demoplan.colours import assign_colours, object_colour
+        from demoplan.labels import add_label
         from demoplan.plotting import object_patch
 
         assign_colours([*self.targets, *observation.poses])  # as every figure of the task
@@ -111,7 +112,7 @@ class FrameWriter:
         for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
             geometry: ObjectGeometry | None = observation.geometry.get(name)
             ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
-            ax.annotate(name, pose.position[:2], fontsize=6, ha="center", va="center")
+            add_label(ax, name, (pose.position[0], pose.position[1]), fontsize=6)
         if observation.held:
             ax.text(
                 0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
