@@ -8,24 +8,14 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.experiments.paper import PAPER_TABLE_II
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
-# Table II: state, object, relative position, (x, y).
-TABLE_II = [
-    ("A", "plate", None, (0.52, 0.44)),
-    ("B", "knife", "plate", (0.1, 0.0)),
-    ("C", "fork", "plate", (-0.07, 0.0)),
-    ("D", "spoon", "knife", (-0.08, 0.04)),
-    ("E", "glass", None, (0.52, 0.56)),
-    ("F", "food", None, (0.62, 0.56)),
-    ("G", "napkin", "plate", (-0.01, -0.02)),
-    ("H", "spoon", "plate", (0.02, 0.04)),
-    ("I", "knife", "spoon", (0.08, -0.04)),
-    ("J", "fork", "glass", (-0.07, -0.12)),
-]
+# Table II: state, object, relative position, (x, y) — the library's transcription.
+TABLE_II = [(r.id, r.object, r.position_reference, r.position) for r in PAPER_TABLE_II]
 
 
 def paper_model(example: str) -> TaskModel:

@@ -23,6 +23,10 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.experiments.paper import PAPER_ORDERS, PaperDraw, paper_experiment_1, spread_points
+from demoplan.experiments.paper import PAPER_TABLE_III as LIBRARY_TABLE_III
+from demoplan.experiments.paper import distinct_places as distinct_places
+from demoplan.experiments.paper import table_places as table_places
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw
 from tests.helpers import TABLE_II
@@ -114,46 +118,6 @@ def constraints_from_sequences(sequences: list[list[str]]) -> set[tuple[str, str
     return {(x, y) for x, y in seen if (y, x) not in seen}
 
 
-def table_places(
-    rows: list[tuple[str, str, str | None, tuple[float, ...]]], sequences: list[tuple[str, ...]]
-) -> dict[str, tuple[str, tuple[float, ...]]]:
-    """Each of a table's states as (object, absolute place): its relative value
-    added to its reference's place — the state the reference object takes in
-    the same demonstration (Table III / V), itself resolved the same way."""
-    row = {state: (obj, reference, value) for state, obj, reference, value in rows}
-    places: dict[str, tuple[str, tuple[float, ...]]] = {}
-
-    def place(state: str, sequence: tuple[str, ...]) -> tuple[float, ...]:
-        _, reference, value = row[state]
-        if reference is None:
-            return value
-        (base,) = (s for s in sequence if row[s][0] == reference)
-        return tuple(a + b for a, b in zip(place(base, sequence), value, strict=True))
-
-    for sequence in sequences:
-        for state in sequence:
-            places.setdefault(state, (row[state][0], place(state, sequence)))
-    return places
-
-
-def distinct_places(
-    places: dict[str, tuple[str, tuple[float, ...]]], within: float = 0.011
-) -> dict[str, str]:
-    """State → the first state with the same object at the same place (the tables
-    round to 1 cm, and a sum of two rounded values is within 1 cm)."""
-    first: dict[str, str] = {}
-    for state, (obj, xy) in places.items():
-        first[state] = next(
-            (
-                seen
-                for seen in first.values()
-                if places[seen][0] == obj and math.dist(places[seen][1], xy) <= within
-            ),
-            state,
-        )
-    return first
-
-
 def unambiguous(family: Family) -> bool:
     """Whether the drawn placements support the intended references: at no step
     does a candidate available there (absolute, objects placed earlier in that
@@ -176,19 +140,6 @@ def unambiguous(family: Family) -> bool:
                 if spread(obj, ref) < own - family.sigma / 2:
                     return False
     return True
-
-
-def _spread_points(
-    rng: np.random.Generator, n: int, side: float, separation: float
-) -> np.ndarray | None:
-    points: list[np.ndarray] = []
-    for _ in range(2000):
-        p = rng.uniform(0.0, side, 2)
-        if all(np.linalg.norm(p - q) >= separation for q in points):
-            points.append(p)
-            if len(points) == n:
-                return np.array(points)
-    return None
 
 
 def _nearest_references(
@@ -222,7 +173,7 @@ def shifted_scene_family(rng: np.random.Generator, n_objects: int, n_demos: int)
     σ = 1 cm per axis."""
     sigma = 0.01
     while True:
-        points = _spread_points(rng, n_objects, 0.5, 0.08)
+        points = spread_points(rng, n_objects, 0.5, 0.08)
         if points is None:
             continue
         refs = _nearest_references(points, list(range(n_objects)), 0.02)
@@ -346,7 +297,7 @@ def symmetric_family(
     sigma = 0.002
     points = None
     while points is None:
-        points = _spread_points(rng, len(kinds), 0.6, 0.15)
+        points = spread_points(rng, len(kinds), 0.6, 0.15)
     names = [f"{kind}{i}" for i, kind in enumerate(kinds)]
     bases = rng.uniform(-180, 180, len(kinds))
     refs: list[int | None] = [None] + [0 if relative else None] * (len(kinds) - 1)
@@ -405,7 +356,7 @@ def precision_family(
     side = separation * 3.0
     while True:
         fixed = [i for i in range(1, n_objects) if rng.random() < 0.35]
-        points = _spread_points(rng, n_objects, side, separation)
+        points = spread_points(rng, n_objects, side, separation)
         if points is None:
             continue
         movable = [i for i in range(n_objects) if i not in fixed]
@@ -466,7 +417,7 @@ def slots_family(
     n_absolute = n_slotted + n_fixed
     separation = max(0.12, 6 * sigma + 0.06)
     while True:
-        points = _spread_points(rng, n_absolute + n_slotted, separation * 4, separation)
+        points = spread_points(rng, n_absolute + n_slotted, separation * 4, separation)
         if points is not None:
             break
     names = _names(n_absolute + n_relative)
@@ -517,112 +468,6 @@ def _planar_offset(rng: np.random.Generator) -> tuple[float, float]:
     return (length * math.cos(angle), length * math.sin(angle))
 
 
-# The paper's Experiment 1 (§V.A; Tables II and III).
+# The paper's Experiment 1 (§V.A; Tables II and III): the library's draws.
 PAPER_TABLE_II = TABLE_II
-PAPER_ORDERS = [
-    ["plate", "knife", "fork", "spoon", "glass", "food", "napkin"],
-    ["plate", "glass", "spoon", "knife", "fork", "food", "napkin"],
-    ["plate", "fork", "knife", "food", "glass", "spoon", "napkin"],
-]
-PAPER_TABLE_III = ["ABCDEFG", "AEHIJFG", "ACBFEDG"]
-
-# How the teacher's placements deviate from the nominal layout in each of the
-# three demonstrations (m): the plate, the glass, the knife-and-spoon pair
-# against the plate, and the fork. Chosen (by a search over such patterns) so
-# that Table II is the unambiguous answer: in every step, the reference of
-# Table II has a lower spread than every other candidate available at that
-# step by ≥ 4 mm RMS (absolute states: lowest or tied with absolute), the
-# table's values are met exactly, and no object's absolute placements lie
-# more than 4.5 cm apart (so that none is two clusters).
-_PLATE = ((0.001, -0.009), (0.015, 0.018))
-_GLASS = ((0.012, -0.004), (-0.003, 0.009))
-_CUTLERY = (0.005, -0.012)
-_FORK = (0.013, -0.001)
-
-
-@dataclass(frozen=True)
-class PaperDraw:
-    demos: list[Demonstration]
-    scale: float
-
-
-def paper_experiment_1(rng: np.random.Generator, sigma: float = 0.0005) -> PaperDraw:
-    """Three demonstrations with the structure of the paper's Experiment 1: the
-    plate, glass and food absolute; the knife and spoon a pair placed against
-    the plate (each against the other once one is down); the fork against the
-    plate in x and the glass in y (so that it is nearest to the glass where the
-    glass is down, J, else to the plate, C); the napkin on the plate; orders of
-    Table III. A new scene per draw: initial poses, the deviations scaled by
-    0.95–1.05, and σ noise on every placement."""
-    scale = float(rng.uniform(0.95, 1.05))
-    p1, p2 = (np.array(v) * scale for v in _PLATE)
-    g1, g2 = (np.array(v) * scale for v in _GLASS)
-    j = np.array(_CUTLERY) * scale
-    f1 = np.array(_FORK) * scale
-    plate_dev = [p1, p2, -p1 - p2]
-    glass_dev = [g1, g2, -g1 - g2]
-    cutlery = [j, np.zeros(2), -j]
-    fork_dev = [f1, g2, plate_dev[2] - f1 + p1]
-    geometry = (
-        ("plate", ObjectGeometry("cylinder", (0.07, 0.07, 0.015))),
-        ("knife", ObjectGeometry("box", (0.012, 0.09, 0.005))),
-        ("fork", ObjectGeometry("box", (0.012, 0.07, 0.005))),
-        ("spoon", ObjectGeometry("box", (0.05, 0.012, 0.008))),
-        ("glass", ObjectGeometry("cylinder", (0.05, 0.05, 0.1))),
-        ("food", ObjectGeometry("cylinder", (0.08, 0.08, 0.04))),
-        ("napkin", ObjectGeometry("box", (0.05, 0.05, 0.003))),
-    )
-    demos = []
-    for d, order in enumerate(PAPER_ORDERS):
-        placed: dict[str, np.ndarray] = {}
-
-        def noise() -> np.ndarray:
-            return rng.normal(0, sigma, 2)
-
-        for name in order:
-            if name == "plate":
-                xy = np.array([0.52, 0.44]) + plate_dev[d]
-            elif name == "glass":
-                xy = np.array([0.52, 0.56]) + glass_dev[d]
-            elif name == "food":
-                xy = np.array([0.62, 0.56])
-            elif name == "napkin":
-                xy = placed["plate"] + (-0.01, -0.02)
-            elif name == "knife" and "spoon" in placed:
-                xy = placed["spoon"] + (0.08, -0.04)
-            elif name == "knife":
-                xy = placed["plate"] + (0.1, 0.0) + cutlery[d]
-            elif name == "spoon" and "knife" in placed:
-                xy = placed["knife"] + (-0.08, 0.04)
-            elif name == "spoon":
-                xy = placed["plate"] + (0.02, 0.04) + cutlery[d]
-            else:  # fork: x with the plate, y with the glass (nominal placements)
-                xy = np.array([0.45, 0.44]) + fork_dev[d]
-            placed[name] = xy + noise()
-        initial = _spread_points(rng, len(order), 0.35, 0.09)
-        assert initial is not None
-        steps = tuple(
-            Step(
-                name,
-                Pose(
-                    (
-                        float(placed[name][0]),
-                        float(placed[name][1]),
-                        0.015 if name == "napkin" else 0.0,
-                    )
-                ),
-            )
-            for name in order
-        )
-        demos.append(
-            Demonstration(
-                f"set-table-{d + 1}",
-                steps,
-                objects=geometry,
-                initial=tuple(
-                    (name, Pose((float(initial[k][0]) + 0.05, float(initial[k][1]) + 0.15, 0.0)))
-                    for k, name in enumerate(sorted(placed))
-                ),
-            )
-        )
-    return PaperDraw(demos, scale)
+PAPER_TABLE_III = [sequence.replace("-", "") for sequence in LIBRARY_TABLE_III]

@@ -20,6 +20,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from demoplan import learn
+from demoplan.experiments.paper import PAPER_TABLE_II as LIBRARY_TABLE_II
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
@@ -437,7 +438,7 @@ def test_a_fresh_draw_of_experiment_1_learns_table_ii_and_its_32_constraints(see
     expected = constraints_from_sequences([list(s) for s in PAPER_TABLE_III])
     assert len(expected) == 32
     assert set(model.constraints) == expected
-    assert [[d.steps[k].object for k in range(7)] for d in draw.demos] == PAPER_ORDERS
+    assert [tuple(d.steps[k].object for k in range(7)) for d in draw.demos] == list(PAPER_ORDERS)
 
 
 @settings(max_examples=20, deadline=None)
@@ -454,7 +455,7 @@ def test_at_defaults_a_fresh_draw_of_experiment_1_learns_the_seven_places_of_tab
     draw = paper_experiment_1(np.random.default_rng(seed))
     model = learn(draw.demos)
     sequences = [tuple(s) for s in PAPER_TABLE_III]
-    paper = table_places(PAPER_TABLE_II, sequences)
+    paper = table_places(LIBRARY_TABLE_II, sequences)
     merged = distinct_places(paper)
     as_paper: dict[str, str] = {}
     for state in model.states:

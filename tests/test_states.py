@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan import TaskModelLearner, load_demonstrations
+from demoplan.experiments.paper import PAPER_TABLE_II, PAPER_TABLE_IV, PaperState
 from demoplan.learning import LearningSettings
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.states import generate_states, state_letters
@@ -342,23 +343,22 @@ def learned_places(learner: TaskModelLearner, demos: list[Demonstration]) -> dic
 def test_table_ii_names_seven_places_and_table_iv_three() -> None:
     """The paper's own tables: I is B's place, H is D's, J is C's (Table II);
     D is B's (Table IV) — e.g. I = H + (0.08, −0.04) = A + (0.10, 0.00) = B."""
-    two = distinct_places(table_places(TABLE_II, TABLE_III))
+    two = distinct_places(table_places(PAPER_TABLE_II, TABLE_III))
     assert {s: p for s, p in two.items() if s != p} == {"H": "D", "I": "B", "J": "C"}
-    rows_iv = [(s, o, r, xyz) for s, o, r, _, xyz, _ in TABLE_IV]
-    four = distinct_places(table_places(rows_iv, TABLE_V))
+    four = distinct_places(table_places(PAPER_TABLE_IV, TABLE_V))
     assert {s: p for s, p in four.items() if s != p} == {"D": "B"}
 
 
 @pytest.mark.parametrize(
     ("folder", "rows", "sequences"),
     [
-        ("set_table", TABLE_II, TABLE_III),
-        ("blocks", [(s, o, r, xyz) for s, o, r, _, xyz, _ in TABLE_IV], TABLE_V),
+        ("set_table", PAPER_TABLE_II, TABLE_III),
+        ("blocks", PAPER_TABLE_IV, TABLE_V),
     ],
 )
 def test_at_the_defaults_the_shipped_examples_learn_the_tables_places(
     folder: str,
-    rows: list[tuple[str, str, str | None, tuple[float, ...]]],
+    rows: tuple[PaperState, ...],
     sequences: list[tuple[str, ...]],
 ) -> None:
     """One learned state per distinct place of Table II (7) / IV (3), at that place
