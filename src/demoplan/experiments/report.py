@@ -185,9 +185,16 @@ def _segmentation_section(run: SegmentationRun) -> str:
     lines = [
         f"### {run.title}: from a pose stream to steps\n",
         f"Demonstration 1 played back as a tracker would record it: `{run.stream_file}`, "
-        f"{run.samples} samples at 60 Hz, 2 mm noise, 3 % dropped samples, one 1 cm nudge "
-        f"(below the 2 cm step threshold). `demoplan segment` finds "
-        f"{plural(run.moves, 'move')}.\n",
+        f"{run.samples} samples at 60 Hz, 2 mm noise, 3 % dropped samples, and one object "
+        f"pushed 1 cm by hand (below the 2 cm a step must move). `demoplan segment` finds "
+        f"{plural(run.moves, 'move')}; "
+        + (
+            f"it saw the push and left it out as {plural(run.nudges, 'nudge')}."
+            if run.nudges
+            else "the push stayed below the start speed, so it did not register as a movement "
+            "at all (the figure's title counts 0 nudges)."
+        )
+        + "\n",
         *_checks_table(run.checks),
     ]
     if run.figure:

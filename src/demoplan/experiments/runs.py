@@ -111,6 +111,7 @@ class SegmentationRun:
     stream_file: str
     samples: int
     moves: int
+    nudges: int  # small moves segmentation saw and left out (not steps)
     checks: tuple[Check, ...]
     figure: str | None
     seconds: float
@@ -255,6 +256,7 @@ def segment_experiment(out: Path) -> SegmentationRun:
         stream_file,
         stream.n_samples,
         len(found.moves),
+        len(found.nudges),
         (check,),
         figure,
         time.perf_counter() - started,
