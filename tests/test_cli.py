@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -707,3 +708,27 @@ def test_learn_json_without_output_prints_the_model_and_writes_nothing(
     assert list(tmp_path.iterdir()) == []
     missing = invoke("learn", SET_TABLE)
     assert missing.exit_code == 2 and "-o" in missing.stderr
+
+
+def test_warnings_follow_a_success_and_give_way_to_an_error(tmp_path: Path) -> None:
+    """A stream whose object is still moving at its end: segmentation warns.
+    With a step found the warning is printed after the result; with none the
+    command fails with its one line and the warning is dropped."""
+
+    def lifted(progress: float) -> str:  # x along a move of 30 cm, lifted 5 cm midway
+        return f"{0.3 * progress:.4f},0,{0.05 * math.sin(math.pi * progress):.4f}"
+
+    rows = ["t,object,x,y,z"]
+    rows += [f"{t / 20:.2f},cup,{lifted(min(1.0, max(0.0, (t - 10) / 20)))}" for t in range(80)]
+    rows += [f"{4 + t / 20:.2f},cup,{0.3 + 0.05 * t / 20:.4f},0,0.03" for t in range(1, 20)]
+    moving = tmp_path / "moving.csv"
+    moving.write_text("\n".join(rows) + "\n")
+    result = CliRunner().invoke(app, ["segment", str(moving), "-o", str(tmp_path / "d.json")])
+    assert result.exit_code == 0, result.stderr
+    lines = result.stderr.splitlines()
+    assert lines[-1].startswith("demoplan: WARNING: cup: still moving at the end")
+    still = tmp_path / "still.csv"
+    still.write_text("\n".join([rows[0], *rows[60:]]) + "\n")  # at rest, then the unfinished move
+    result = CliRunner().invoke(app, ["segment", str(still), "-o", str(tmp_path / "e.json")])
+    assert result.exit_code == 1
+    assert result.stderr.count("\n") == 1 and result.stderr.startswith("demoplan: error: ")

@@ -71,13 +71,17 @@ FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
 
 @contextmanager
 def reported_errors() -> Iterator[None]:
-    """Turn a demoplan error into one line on stderr and its exit code."""
+    """Turn a demoplan error into one line on stderr and its exit code. The
+    warnings a command logged are printed when it succeeds and dropped when it
+    fails: a failure is its one line (an error supersedes what led to it)."""
     try:
         yield
     except DemoplanError as exc:
+        _HELD.discard()
         stderr.print(error_line(exc), markup=False, highlight=False)
         raise typer.Exit(exc.exit_code) from None
     except OSError as exc:  # a file system refusal no reader foresaw: still one line
+        _HELD.discard()
         if exc.filename is None:  # printing failed: stdout full, or its reader gone
             raise  # demoplan.launcher.main names standard output
         sys.stderr.write(error_line(os_error(exc)) + "\n")
@@ -85,10 +89,39 @@ def reported_errors() -> Iterator[None]:
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
         from demoplan.interrupts import interrupted_by_signal, interrupted_exit_code
 
+        _HELD.discard()
         if interrupted_by_signal():
             raise  # demoplan.launcher.main reports it, once
         sys.stderr.write("demoplan: interrupted\n")
         raise typer.Exit(interrupted_exit_code(exc)) from None
+    else:
+        _HELD.print_held()
+
+
+class _HeldWarnings(logging.Handler):
+    """Warnings logged while a command runs, held until it ends (without
+    ``--verbose``; with it every record is printed as it comes)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+    def print_held(self) -> None:
+        """Print the held warnings on stderr, in the order they came."""
+        for record in self.records:
+            sys.stderr.write(self.format(record) + "\n")
+        self.records.clear()
+
+    def discard(self) -> None:
+        """Forget the held warnings (``release``/``acquire`` are the handler's lock)."""
+        self.records.clear()
+
+
+_HELD = _HeldWarnings()
+_LOG_FORMAT = "demoplan: %(levelname)s: %(message)s"
 
 
 @contextmanager
@@ -149,12 +182,12 @@ def _main(
     from demoplan.commands import mark_command_start
 
     mark_command_start()
-    logging.basicConfig(
-        level=logging.INFO if verbose else logging.WARNING,
-        format="demoplan: %(levelname)s: %(message)s",
-        stream=sys.stderr,
-        force=True,
-    )
+    _HELD.discard()
+    if verbose:
+        logging.basicConfig(level=logging.INFO, format=_LOG_FORMAT, stream=sys.stderr, force=True)
+    else:  # warnings are printed when the command ends (reported_errors)
+        _HELD.setFormatter(logging.Formatter(_LOG_FORMAT))
+        logging.basicConfig(level=logging.WARNING, handlers=[_HELD], force=True)
     # Warnings of the libraries (NumPy overflow, shapely, MuJoCo) never reach the
     # terminal as raw text: bad numbers are refused with our one-line errors
     # before they get that far, and what is left is harmless; --verbose logs them.
