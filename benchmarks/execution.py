@@ -264,8 +264,7 @@ def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: in
 def _injected(instance: Any) -> dict[str, int]:
     if instance is None:
         return {}
-    record = instance.oracle.injected if hasattr(instance, "oracle") else instance.injected
-    return dict(Counter(kind for kind, _ in record))
+    return dict(Counter(fault.kind for fault in instance.injected))
 
 
 def run_row(

@@ -624,6 +624,7 @@ RUN_JSON = Output(
         "replans": ("integer", "times the task was planned again"),
         "actions": ("array of actions", "the actions executed, `[KIND, OBJECT, LOCATION, GRASP]`"),
         "failures": ("array", "every difference between expectation and observation (below)"),
+        "injected": ("array", "every fault the simulation injected, as it happened (below)"),
         "final_scene": ("scene", "the world at the end, as a scene document"),
         "goal": ("integer or null", "the demonstration whose goal was pursued, from 0"),
         "reason": ("string", "how the run ended"),
@@ -641,6 +642,15 @@ FAILURE_JSON = Output(
     {
         "step": ("integer", "the action after which it was seen, from 1 (0: before any)"),
         "kind": ("string", "what went wrong (below)"),
+        "detail": ("string", "in words"),
+    }
+)
+INJECTED_JSON = Output(
+    {
+        "kind": ("string", "the `--faults` kind"),
+        "action": ("integer", "the world's action it came with, from 1 (grasps and put-downs)"),
+        "object": ("string", "the object it happened to (a `block`: the new obstacle)"),
+        "position": ("array of 3 numbers or null", "where the object ended up (null: it stayed)"),
         "detail": ("string", "in words"),
     }
 )
@@ -1273,6 +1283,15 @@ def run_section(computed: Computed) -> str:
             table(
                 ("field", "type", "meaning"),
                 FAILURE_JSON.rows(first(report["failures"], "failure"), "run --json failures"),
+            ),
+            "Each entry of `injected` (what the simulation did; the failures are what "
+            "the executor saw — a fault that changes nothing the executor checks, such as "
+            "a drop that lands on the target, is injected but not a failure):",
+            table(
+                ("field", "type", "meaning"),
+                INJECTED_JSON.rows(
+                    first(report["injected"], "injected fault"), "run --json injected"
+                ),
             ),
             "The kinds of failure:",
             table(("kind", "seen when"), [(code(k), v) for k, v in FAILURE_KINDS.items()]),

@@ -84,7 +84,7 @@ def test_each_failure_is_detected_and_recovered(
     blocks: tuple[TaskModel, Scene], kind: str, at: int, detected: set[str]
 ) -> None:
     report, world = run(blocks, **{kind: at})
-    assert [k for k, _ in world.injected] == [kind]
+    assert [f.kind for f in world.injected] == [kind]
     assert len(report.failures) == 1 and report.failures[0].kind in detected
     assert report.failures[0].step == at
     assert report.replans == 1
@@ -251,3 +251,33 @@ def test_unknown_objects_are_handled_alike_by_plan_and_run(tmp_path: Path) -> No
     with pytest.raises(InputError, match="never saw mug"):
         demoplan.run(model, path)
     assert demoplan.run(model, path, clutter=True).success
+
+
+@pytest.mark.parametrize("task", ["blocks", "table"])
+def test_faults_are_reported_as_they_happened_and_detected_as_their_kind(
+    task: str, blocks: tuple[TaskModel, Scene], table: tuple[TaskModel, Scene]
+) -> None:
+    """Over seeded runs with one fault kind at a time, the report lists every
+    injected fault (kind, action, object) and the executor detects each as the
+    kind that names it: a misplacement as misplaced (it lands 1.5–5 cm off, within
+    the 6 cm of that kind), a missed grasp as grasp, a person's move as moved,
+    a new obstacle as new_object."""
+    model, scene = blocks if task == "blocks" else table
+    expected = {"misplace": {"misplaced"}, "grasp": {"grasp"}, "displace": {"moved"}}
+    expected["block"] = {"new_object"}
+    for kind, detected_as in expected.items():
+        injected = detected = 0
+        for seed in range(8):
+            world = KinematicWorld(scene, Faults(**{kind: 0.3}), seed)
+            report = execute(model, scene, world, ExecutionSettings())
+            assert report.success, (kind, seed, report.reason)
+            assert report.injected == tuple(world.injected)
+            assert {f.kind for f in report.injected} <= {kind}
+            assert {f.kind for f in report.failures} <= detected_as, (kind, seed)
+            faults = report.to_json()["injected"]
+            assert [f["action"] for f in faults] == sorted(f["action"] for f in faults)
+            injected += len(report.injected)
+            detected += len(report.failures)
+        assert injected > 0, kind  # the kind was exercised in these scenes
+        if kind in ("misplace", "grasp", "block"):  # one action each: seen at once
+            assert detected == injected, (kind, injected, detected)

@@ -230,13 +230,10 @@ def print_run_report(report: Any) -> None:
             "yes" if executed.ok else "NO",
         )
     stdout.print(table)
+    for fault in report.injected:  # what the simulation did, beside what the executor saw
+        say(f"injected at action {fault.action}: {fault.kind}: {fault.detail}")
     for failure in report.failures:
-        stdout.print(
-            f"step {failure.step}: {failure.kind}: {failure.detail}",
-            markup=False,
-            highlight=False,
-            soft_wrap=True,  # one line per message, however long: it is read by scripts too
-        )
+        say(f"step {failure.step}: {failure.kind}: {failure.detail}")
     verdict = "success" if report.success else "FAILED"
     errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
     stdout.print(

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from demoplan.errors import UsageError
+from demoplan.execution.faults import InjectedFault
 from demoplan.execution.physics import MujocoWorld
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
@@ -84,6 +85,11 @@ class CameraWorld:
 
     def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
         self.world.between_actions(upcoming)
+
+    @property
+    def injected(self) -> list[InjectedFault]:
+        """The faults the simulated world injected (the camera does not see them)."""
+        return self.world.injected
 
     def render(self) -> object:
         return self.world.render()

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from demoplan.errors import DemoplanError
+from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
 from demoplan.planning.problem import Action
@@ -111,6 +112,8 @@ class RunReport:
     frames: list[str] = field(default_factory=list)
     gave_up: bool = False
     """True when a limit (replans, actions) stopped the run, not a missing plan."""
+    injected: tuple[InjectedFault, ...] = ()
+    """The faults a simulated world injected, as they happened (a real world has none)."""
 
     @property
     def exit_code(self) -> int:
@@ -129,6 +132,7 @@ class RunReport:
             "failures": [
                 {"step": f.step, "kind": f.kind, "detail": f.detail} for f in self.failures
             ],
+            "injected": [fault.to_json() for fault in self.injected],
             "final_scene": scene_to_dict(final_scene),
             "goal": self.goal,
             "reason": self.reason,
@@ -248,6 +252,7 @@ def execute(
             time.perf_counter() - started,
             world.name,
             gave_up=gave_up,
+            injected=tuple(getattr(world, "injected", ())),
         )
 
     def replan(step: int) -> str | None:

@@ -6,8 +6,9 @@
   the table near where it fell;
 - ``displace`` (after each action): a person moves a random standing object,
   one with nothing on it, to a random free spot;
-- ``misplace`` (per PUT_DOWN): the object is released 2–4 cm off its target,
-  on the table;
+- ``misplace`` (per PUT_DOWN): the object is released 1.5–5 cm off its target,
+  on the table — within the executor's 6 cm for *misplaced*; where no clear
+  spot is that near, nothing is injected;
 - ``grasp`` (per GRASP): the grasp misses; the object stays where it is;
 - ``block`` (after each action, at most twice a run): a new object (one the model
   never saw) appears on the target of a later PUT_DOWN.
@@ -20,10 +21,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from demoplan.errors import UsageError
 
-__all__ = ["FAULT_KINDS", "Faults", "parse_faults"]
+__all__ = ["FAULT_KINDS", "Faults", "InjectedFault", "parse_faults"]
 
 FAULT_KINDS = ("drop", "displace", "misplace", "grasp", "block")
 
@@ -40,6 +42,29 @@ class Faults:
 
     def any(self) -> bool:
         return any(getattr(self, kind) > 0 for kind in FAULT_KINDS)
+
+
+@dataclass(frozen=True, slots=True)
+class InjectedFault:
+    """A fault a simulated world injected, as it happened: its kind, the world's
+    action it came with (1-based count of grasps and put-downs; a ``displace``
+    or ``block`` comes after that action), the object, where the object ended
+    up (None: it did not move, a missed grasp), and a sentence."""
+
+    kind: str
+    action: int
+    object: str
+    position: tuple[float, float, float] | None
+    detail: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "kind": self.kind,
+            "action": self.action,
+            "object": self.object,
+            "position": None if self.position is None else [round(v, 6) for v in self.position],
+            "detail": self.detail,
+        }
 
 
 def parse_faults(text: str | None) -> Faults:

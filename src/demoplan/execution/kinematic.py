@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from demoplan.execution.faults import Faults
+from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.rotations import quat_from_yaw
@@ -24,6 +24,8 @@ __all__ = ["OBSTACLE", "KinematicWorld"]
 
 OBSTACLE = ObjectGeometry("box", (0.04, 0.04, 0.04))
 """The object a ``block`` fault puts on a target."""
+MISPLACE_NEAR, MISPLACE_FAR = 0.015, 0.05
+"""How far (m) from its target a ``misplace`` fault releases an object."""
 MAX_BLOCKS = 2
 DISPLACEMENT = 0.05  # m: a person moves an object at least this far
 
@@ -51,7 +53,7 @@ class KinematicWorld:
         self.rng = np.random.default_rng(seed)
         self.held: str | None = None
         self.picked_from: Pose | None = None
-        self.injected: list[tuple[str, str]] = []  # (kind, what happened), for tests and reports
+        self.injected: list[InjectedFault] = []  # as they happened, for reports and tests
         self.blocks = 0
         self.injected_objects: list[str] = []  # obstacles a block fault put in, in order
         # Faults at given actions (1-based count of grasps and put-downs): a test
@@ -75,7 +77,7 @@ class KinematicWorld:
         if self.held is not None or obj not in self.poses or self._on_top_of(obj):
             return  # nothing to grasp, or something stands on it: the hand closes on air
         if self._chance(self.faults.grasp, "grasp"):
-            self.injected.append(("grasp", f"the grasp of {obj} missed"))
+            self.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
             return
         self.picked_from = self.poses.pop(obj)
         self.held = obj
@@ -89,14 +91,14 @@ class KinematicWorld:
             t = float(self.rng.uniform(0.2, 0.8))
             point = [a + t * (b - a) for a, b in zip(start.position, pose.position, strict=True)]
             landed = self._land(obj, point[0], point[1])
-            self.injected.append(("drop", f"{obj} fell at {_xy(landed)} while carried"))
-        elif self._chance(self.faults.misplace, "misplace"):
-            angle = float(self.rng.uniform(0, 2 * math.pi))
-            distance = float(self.rng.uniform(0.02, 0.04))
-            x = pose.position[0] + distance * math.cos(angle)
-            y = pose.position[1] + distance * math.sin(angle)
-            landed = self._land(obj, x, y)
-            self.injected.append(("misplace", f"{obj} released at {_xy(landed)}, off its target"))
+            self.record_fault("drop", obj, landed, f"{obj} fell at {_xy(landed)} while carried")
+        elif self._chance(self.faults.misplace, "misplace") and (
+            spot := self.misplaced_spot(obj, pose)
+        ):
+            self.poses[obj] = spot
+            self.record_fault(
+                "misplace", obj, spot, f"{obj} released at {_xy(spot)}, off its target"
+            )
         else:
             self.poses[obj] = pose
         self.held = None
@@ -120,16 +122,25 @@ class KinematicWorld:
                 if math.dist(landed.position, before.position) < DISPLACEMENT:
                     self.poses[obj] = before  # no clear spot away from it: no fault
                 else:
-                    self.injected.append(("displace", f"a person moved {obj} to {_xy(landed)}"))
+                    self.record_fault(
+                        "displace", obj, landed, f"a person moved {obj} to {_xy(landed)}"
+                    )
         if (
             self.held is None
             and upcoming
             and self.blocks < MAX_BLOCKS
             and self._chance(self.faults.block, "block")
         ):
-            target = upcoming[0]
-            x, y = target.position[0], target.position[1]
-            if target.position[2] < 0.005 and self._clear(x, y, OBSTACLE, 0.002, reach=False):
+            # The next target an obstacle can stand on: on the table and free (a
+            # target on a stack waits for what will hold it up).
+            free = [
+                t
+                for t in upcoming
+                if t.position[2] < 0.005
+                and self._clear(t.position[0], t.position[1], OBSTACLE, 0.002, reach=False)
+            ]
+            if free:
+                target = free[0]
                 self.blocks += 1
                 name = f"obstacle{self.blocks}"
                 while name in self.geometry:  # a scene object may have that name
@@ -139,7 +150,35 @@ class KinematicWorld:
                 self.poses[name] = Pose(
                     (target.position[0], target.position[1], 0.0), quat_from_yaw(0.0)
                 )
-                self.injected.append(("block", f"{name} appeared at {_xy(self.poses[name])}"))
+                placed = self.poses[name]
+                self.record_fault("block", name, placed, f"{name} appeared at {_xy(placed)}")
+
+    # -- faults ---------------------------------------------------------------------------
+
+    def record_fault(self, kind: str, obj: str, where: Pose | None, detail: str) -> None:
+        """Note an injected fault at the current action."""
+        position = None
+        if where is not None:
+            x, y, z = where.position
+            position = (float(x), float(y), float(z))
+        self.injected.append(InjectedFault(kind, self.actions, obj, position, detail))
+
+    def misplaced_spot(self, obj: str, target: Pose) -> Pose | None:
+        """A clear spot on the table 1.5–5 cm from ``target`` (a misplacement the
+        executor sees as *misplaced*), or None when there is none; the search
+        starts at a random direction."""
+        shape = self.geometry[obj]
+        start = float(self.rng.uniform(0, 2 * math.pi))
+        x, y = target.position[0], target.position[1]
+        (x0, y0), (x1, y1) = self.region
+        for distance in np.arange(MISPLACE_NEAR, MISPLACE_FAR + 1e-9, 0.005):
+            for k in range(24):
+                angle = start + 2 * math.pi * k / 24
+                px, py = x + distance * math.cos(angle), y + distance * math.sin(angle)
+                if x0 <= px <= x1 and y0 <= py <= y1 and self._clear(px, py, shape, 0.002):
+                    turn = float(self.rng.uniform(-10, 10))
+                    return Pose((px, py, 0.0), quat_from_yaw(yaw_of(target) + turn))
+        return None
 
     # -- helpers --------------------------------------------------------------------------
 

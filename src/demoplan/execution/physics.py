@@ -31,7 +31,7 @@ import numpy as np
 
 from demoplan.colours import assign_colours, object_rgba
 from demoplan.errors import InputError
-from demoplan.execution.faults import Faults
+from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
@@ -345,7 +345,7 @@ class MujocoWorld:
         grip_z = pose.position[2] + min(shape.size[2] / 2, FINGER_HALF[2] + 0.004)
         missed = self.oracle._chance(self.faults.grasp, "grasp")
         if missed:
-            self.oracle.injected.append(("grasp", f"the grasp of {obj} missed"))
+            self.oracle.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
             # The hand comes down 3 cm beside the object and closes on air.
             angle = math.radians(yaw + 90.0)
             offset = np.array([0.03 * math.cos(angle), 0.03 * math.sin(angle), 0.0])
@@ -389,15 +389,12 @@ class MujocoWorld:
             self._release_over(spot, travel, "drop", f"{obj} fell at {_xy(spot)} while carried")
             return
         if self.oracle._chance(self.faults.misplace, "misplace"):
-            angle = float(self.oracle.rng.uniform(0, 2 * math.pi))
-            distance = float(self.oracle.rng.uniform(0.02, 0.04))
-            spot = self.oracle._land(
-                obj, x + distance * math.cos(angle), y + distance * math.sin(angle)
-            )
-            self._release_over(
-                spot, travel, "misplace", f"{obj} released at {_xy(spot)}, off its target"
-            )
-            return
+            off = self.oracle.misplaced_spot(obj, pose)
+            if off is not None:
+                self._release_over(
+                    off, travel, "misplace", f"{obj} released at {_xy(off)}, off its target"
+                )
+                return
         centre_z = z + shape.size[2] / 2 + 0.002
         goal = np.array([x, y, centre_z]) - self._rotated_offset(target_yaw)
         self._move([*hand[:2], travel])
@@ -495,7 +492,8 @@ class MujocoWorld:
     def _release_over(self, spot: Pose, travel: float, kind: str, detail: str) -> None:
         """Carry the held object low over ``spot`` and let go (a drop or a misplacement)."""
         assert self.held is not None
-        shape = self.geometry[self.held]
+        obj = self.held
+        shape = self.geometry[obj]
         hand = self._hand()
         yaw = yaw_of(spot) - self.grip_yaw
         above = np.array([spot.position[0], spot.position[1], shape.size[2] / 2 + 0.012])
@@ -506,7 +504,12 @@ class MujocoWorld:
         self._release()
         self._move([goal[0], goal[1], travel])
         self._settle(0.3)
-        self.oracle.injected.append((kind, detail))
+        self.oracle.record_fault(kind, obj, spot, detail)
+
+    @property
+    def injected(self) -> list[InjectedFault]:
+        """The faults injected so far, as they happened."""
+        return self.oracle.injected
 
     def _sync_oracle(self) -> None:
         self.oracle.poses = {n: self._pose(n) for n in self._active() if n != self.held}

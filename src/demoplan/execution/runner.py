@@ -130,6 +130,10 @@ def run_task(
         def between_actions(self, upcoming: Any = ()) -> None:
             world.between_actions(upcoming)
 
+        @property
+        def injected(self) -> Any:  # the simulated world's faults, for the report
+            return getattr(world, "injected", ())
+
         def _frame(self, caption: str) -> None:
             if writer is not None:
                 writer.capture(world.observe(), f"{len(writer.frames)}: {caption}", _picture(world))
