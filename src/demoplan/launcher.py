@@ -150,8 +150,12 @@ def main() -> None:
         # Every command stops the same way, wherever the signal found it.
         _drop_stdout()
         sys.stderr.write("demoplan: interrupted\n")
+        sys.stderr.flush()
         terminated = signal.SIGTERM in signals_received
-        raise SystemExit(TERMINATED_EXIT if terminated else INTERRUPTED_EXIT)
+        # At once: the command has unwound (outputs removed, locks released), and
+        # the interpreter's own teardown (MuJoCo's GL contexts, matplotlib) can
+        # take longer than the second a stopped command has.
+        os._exit(TERMINATED_EXIT if terminated else INTERRUPTED_EXIT)
     raise SystemExit(code)
 
 
