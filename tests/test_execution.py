@@ -281,3 +281,47 @@ def test_faults_are_reported_as_they_happened_and_detected_as_their_kind(
         assert injected > 0, kind  # the kind was exercised in these scenes
         if kind in ("misplace", "grasp", "block"):  # one action each: seen at once
             assert detected == injected, (kind, injected, detected)
+
+
+def test_a_storyboard_keeps_every_failure_frame(
+    blocks: tuple[TaskModel, Scene], tmp_path: Path
+) -> None:
+    """A run with a missed grasp at action 5 and a drop at action 9: the
+    frames after both show the failure in their captions, and the storyboard
+    keeps them however few panels it has."""
+    from demoplan.execution.frames import FrameWriter
+
+    model, scene = blocks
+    writer = FrameWriter(tmp_path)
+    world = KinematicWorld(scene, schedule={5: "grasp", 9: "drop"})
+
+    class Filmed:
+        name = "filmed"
+
+        def observe(self) -> Any:
+            return world.observe()
+
+        def grasp(self, obj: str, axis: float, where: Any = None) -> None:
+            world.grasp(obj, axis, where)
+            writer.capture(world.observe(), f"GRASP {obj}")
+
+        def put_down(self, obj: str, pose: Any) -> None:
+            world.put_down(obj, pose)
+            writer.capture(world.observe(), f"PUT_DOWN {obj}")
+
+        def between_actions(self, upcoming: Any = ()) -> None:
+            world.between_actions(upcoming)
+
+    def heard(event: Any) -> None:
+        if event.kind == "failure":
+            writer.mark_failure(event.text)
+
+    report = execute(model, scene, Filmed(), ExecutionSettings(), heard)
+    assert report.success and [f.kind for f in report.failures] == ["grasp", "dropped"]
+    failed = sorted(writer.failed)
+    assert len(failed) == 2 and all("FAILED" in writer.frames[k][1] for k in failed)
+    for panels in (4, 6, 12):
+        picks = writer.storyboard_frames(panels)
+        assert set(failed) <= set(picks) and len(picks) <= panels
+        assert picks[0] == 0 and picks[-1] == len(writer.frames) - 1
+    assert writer.storyboard() is not None

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
-from contextlib import nullcontext
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager, nullcontext
+from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from demoplan.cli.common import (
     FRAME_FILES,
@@ -34,6 +37,32 @@ from demoplan.deadline import PERCEPTION_TIMEOUT
 from demoplan.fileio import (
     refuse_overwriting_inputs,
 )
+from demoplan.wording import plural
+
+
+@contextmanager
+def live_progress(show: bool) -> Iterator[Callable[[Any], None] | None]:
+    """A live line on stderr for a run's events (a terminal only): the action,
+    the replans and the actions to go; failures and replans stay on screen."""
+    if not show:
+        yield None
+        return
+    from rich.live import Live
+
+    live = Live(Text("planning…"), console=stderr, transient=True, refresh_per_second=8)
+
+    def on_event(event: Any) -> None:
+        live.update(
+            Text(
+                f"step {event.step} · {event.text} · replans {event.replans} · "
+                f"{plural(event.remaining, 'action')} to go"
+            )
+        )
+        if event.kind in ("failure", "replan"):
+            live.console.print(f"step {event.step}: {event.text}", markup=False, highlight=False)
+
+    with live:
+        yield on_event
 
 
 @app.command()
@@ -83,7 +112,7 @@ def run(
             if frames is not None
             else nullcontext(None)
         )
-        with staging as building:
+        with staging as building, live_progress(live) as on_event:
             report = run_task(
                 model,
                 scene,
@@ -94,12 +123,13 @@ def run(
                 max_replans=max_replans,
                 perception=perception.value,
                 geometry=geometry_settings(freespace),
-                display=stderr if live else None,
+                on_event=on_event,
                 planning_seconds=timeout,
                 clutter=clutter,
             )
-        if frames is not None and building is not None:
-            report.frames[:] = [str(frames / Path(f).name) for f in report.frames]
+        if frames is not None and building is not None:  # named where they now are
+            moved = tuple(str(frames / Path(f).name) for f in report.frames)
+            report = replace(report, frames=moved)
         if json_output:
             print_json(report.to_json())
         else:

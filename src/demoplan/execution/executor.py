@@ -26,6 +26,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
 
 from demoplan.errors import DemoplanError
@@ -43,7 +44,14 @@ from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_t
 from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
 
-__all__ = ["ExecutionSettings", "Failure", "RunEvent", "RunReport", "execute"]
+__all__ = [
+    "ExecutionSettings",
+    "Failure",
+    "FailureKind",
+    "RunEvent",
+    "RunReport",
+    "execute",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,12 +71,28 @@ class ExecutionSettings:
     geometry: GeometrySettings = field(default_factory=GeometrySettings)
 
 
+MISPLACED_WITHIN = 0.06
+"""m: an object off its target by less than this was misplaced; farther, dropped."""
+
+
+class FailureKind(StrEnum):
+    """What the executor saw differ from what an action should have done."""
+
+    GRASP = "grasp"  # after GRASP the object is not in the hand
+    RELEASE = "release"  # after PUT_DOWN something is still in the hand
+    DROPPED = "dropped"  # the object is nowhere, or more than 6 cm from its target
+    MISPLACED = "misplaced"  # within 6 cm of its target but not within 1 cm / 5°
+    MOVED = "moved"  # another object is not where it stood
+    NEW_OBJECT = "new_object"  # an object that was not there appeared
+    GOAL = "goal"  # no action left, but the goal does not hold
+
+
 @dataclass(frozen=True, slots=True)
 class Failure:
     """A difference between what an action should have done and what was observed."""
 
     step: int
-    kind: str
+    kind: FailureKind
     detail: str
 
 
@@ -83,33 +107,35 @@ class ExecutedAction:
 
 @dataclass(frozen=True, slots=True)
 class RunEvent:
-    """Progress for a live display: ``kind`` is plan, action, failure, replan or done."""
+    """Progress for a live display: ``kind`` is plan, action, failure, replan or
+    done; a plan or replan carries its ``targets`` (goal object, target pose)."""
 
     kind: str
     text: str
     step: int = 0
     replans: int = 0
     remaining: int = 0
+    targets: tuple[tuple[str, Pose], ...] = ()
 
 
-@dataclass(slots=True)
+@dataclass(frozen=True, slots=True, kw_only=True)
 class RunReport:
-    """What happened (SPEC §3 "Run report")."""
+    """What happened (SPEC §3 "Run report"); built with keywords, never changed."""
 
     success: bool
     replans: int
     goal: int | None
-    actions: list[ExecutedAction]
-    failures: list[Failure]
+    actions: tuple[ExecutedAction, ...]
+    failures: tuple[Failure, ...]
     final: Observation
     scene: Scene
     reason: str = ""
     first_plan_length: int = 0
     pose_errors: dict[str, float] = field(default_factory=dict)
-    reached: list[str] = field(default_factory=list)
+    reached: tuple[str, ...] = ()
     seconds: float = 0.0
     world: str = ""
-    frames: list[str] = field(default_factory=list)
+    frames: tuple[str, ...] = ()
     gave_up: bool = False
     """True when a limit (replans, actions) stopped the run, not a missing plan."""
     injected: tuple[InjectedFault, ...] = ()
@@ -139,7 +165,7 @@ class RunReport:
             "world": self.world,
             "first_plan_actions": self.first_plan_length,
             "extra_actions": max(0, len(self.actions) - self.first_plan_length),
-            "reached": self.reached,
+            "reached": list(self.reached),
             "pose_errors": {k: round(v, 6) for k, v in self.pose_errors.items()},
             "steps": [
                 {
@@ -153,7 +179,7 @@ class RunReport:
                 for e in self.actions
             ],
             "seconds": round(self.seconds, 3),
-            "frames": self.frames,
+            "frames": list(self.frames),
         }
 
 
@@ -226,6 +252,7 @@ def execute(
             "plan",
             f"goal of {model.demonstration_label(goal)}: {plural(len(actions), 'action')}",
             remaining=len(actions),
+            targets=_targets(problem),
         )
     )
 
@@ -238,19 +265,19 @@ def execute(
         }
         emit(RunEvent("done", reason, len(executed), replans))
         return RunReport(
-            success,
-            replans,
-            goal,
-            executed,
-            failures,
-            final,
-            scene,
-            reason,
-            first_length,
-            errors,
-            sorted(reached),
-            time.perf_counter() - started,
-            world.name,
+            success=success,
+            replans=replans,
+            goal=goal,
+            actions=tuple(executed),
+            failures=tuple(failures),
+            final=final,
+            scene=scene,
+            reason=reason,
+            first_plan_length=first_length,
+            pose_errors=errors,
+            reached=tuple(sorted(reached)),
+            seconds=time.perf_counter() - started,
+            world=world.name,
             gave_up=gave_up,
             injected=tuple(getattr(world, "injected", ())),
         )
@@ -284,6 +311,7 @@ def execute(
                 step,
                 replans,
                 len(actions),
+                _targets(problem),
             )
         )
         return None
@@ -297,7 +325,7 @@ def execute(
             if difference is None and _goal_holds(problem, observation, reached, settings):
                 return finish(True, f"goal of {model.demonstration_label(goal)} reached")
             failures.append(
-                difference or Failure(step, "goal", "the goal does not hold at the end")
+                difference or Failure(step, FailureKind.GOAL, "the goal does not hold at the end")
             )
             why = replan(step)
             if why:
@@ -326,7 +354,7 @@ def execute(
             )
             if turn is not None:
                 detail = f"{action.object} is turned {turn:.1f}° from its target"
-                failure = Failure(step, "misplaced", detail)
+                failure = Failure(step, FailureKind.MISPLACED, detail)
         executed.append(ExecutedAction(step, action, target, plan_index, failure is None))
         if failure is None:
             if action.kind == "GRASP":
@@ -349,6 +377,11 @@ def execute(
             why = replan(step)
             if why:
                 return finish(False, why, gave_up=why.startswith("gave up"))
+
+
+def _targets(problem: SceneProblem) -> tuple[tuple[str, Pose], ...]:
+    """Each goal object's target pose in ``problem``."""
+    return tuple((obj, pose_of(problem.location(loc))) for obj, loc in problem.problem.goal)
 
 
 def _reached_at_start(problem: SceneProblem) -> set[str]:
@@ -411,16 +444,16 @@ def _check_action(
     obj = action.object
     if action.kind == "GRASP":
         if observation.held != obj:
-            return Failure(step, "grasp", f"{obj} is not in the hand after the grasp")
+            return Failure(step, FailureKind.GRASP, f"{obj} is not in the hand after the grasp")
         return _compare(expected, observation, settings, exempt=obj, step=step)
     if observation.held is not None:
-        return Failure(step, "release", f"{observation.held} is still in the hand")
+        return Failure(step, FailureKind.RELEASE, f"{observation.held} is still in the hand")
     pose = observation.poses.get(obj)
     if pose is None:
-        return Failure(step, "dropped", f"{obj} is nowhere to be seen")
+        return Failure(step, FailureKind.DROPPED, f"{obj} is nowhere to be seen")
     error = _distance(pose, target)
     if error > settings.position_tolerance:
-        kind = "misplaced" if error < 0.06 else "dropped"
+        kind = FailureKind.MISPLACED if error < MISPLACED_WITHIN else FailureKind.DROPPED
         where = ", ".join(f"{v:.3f}" for v in pose.position)
         return Failure(
             step, kind, f"{obj} stands at ({where}), {100 * error:.1f} cm from its target"
@@ -443,12 +476,14 @@ def _compare(
         if seen is None:
             if observation.held == obj:
                 continue
-            return Failure(step, "moved", f"{obj} is gone from where it stood")
+            return Failure(step, FailureKind.MOVED, f"{obj} is gone from where it stood")
         error = _distance(seen, pose)
         if error > settings.position_tolerance:
             where = ", ".join(f"{v:.3f}" for v in seen.position)
-            return Failure(step, "moved", f"{obj} moved {100 * error:.1f} cm, to ({where})")
+            return Failure(
+                step, FailureKind.MOVED, f"{obj} moved {100 * error:.1f} cm, to ({where})"
+            )
     for obj in observation.poses:
         if obj not in expected and obj != exempt:
-            return Failure(step, "new_object", f"{obj} appeared")
+            return Failure(step, FailureKind.NEW_OBJECT, f"{obj} appeared")
     return None

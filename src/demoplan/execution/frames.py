@@ -18,6 +18,9 @@ from demoplan.model import ObjectGeometry, Pose
 
 __all__ = ["FrameWriter"]
 
+FAILED_COLOUR = "#b00020"
+"""The caption colour of a frame that shows a failure."""
+
 
 class FrameWriter:
     """Writes ``frame-0000.png``… into ``folder`` and ``storyboard.png`` at the end."""
@@ -38,6 +41,7 @@ class FrameWriter:
             raise InputError(f"cannot create the folder ({exc})", source=str(folder)) from None
         self.targets = targets or {}
         self.frames: list[tuple[Observation, str]] = []
+        self.failed: set[int] = set()  # frames after which a failure was seen
         self.images: list[Any] = []
         self.written: list[Path] = []
         self._limits: tuple[float, float, float, float] | None = None
@@ -58,18 +62,36 @@ class FrameWriter:
         plt.close(figure)
         self.written.append(path)
 
+    def mark_failure(self, text: str) -> None:
+        """The last frame shows a failure (``text``: what was seen): it is kept in
+        the storyboard and its caption says so."""
+        if self.frames:
+            index = len(self.frames) - 1
+            observation, caption = self.frames[index]
+            self.frames[index] = (observation, f"{caption}\nFAILED: {text}")
+            self.failed.add(index)
+
+    def storyboard_frames(self, max_panels: int = 12) -> list[int]:
+        """The frames a storyboard shows: the first, the last and every one that
+        shows a failure, then frames evenly between, up to ``max_panels``."""
+        n = len(self.frames)
+        if n == 0:
+            return []
+        chosen = {0, n - 1, *sorted(self.failed)[: max(0, max_panels - 2)]}
+        spare = max_panels - len(chosen)
+        if spare > 0:
+            chosen |= {round(k * (n - 1) / (spare + 1)) for k in range(1, spare + 1)}
+        return sorted(chosen)[:max_panels]
+
     def storyboard(self, max_panels: int = 12) -> Path | None:
-        """Up to ``max_panels`` frames (first, last and evenly between) in one image."""
+        """:meth:`storyboard_frames` in one image (``storyboard.png``)."""
         if not self.frames:
             return None
         import matplotlib.pyplot as plt
 
         from demoplan.plotting import save_figure
 
-        n = len(self.frames)
-        picks = sorted(
-            {round(k * (n - 1) / max(1, min(n, max_panels) - 1)) for k in range(min(n, max_panels))}
-        )
+        picks = self.storyboard_frames(max_panels)
         columns = min(4, len(picks))
         rows = math.ceil(len(picks) / columns)
         figure, axes = plt.subplots(
@@ -91,13 +113,13 @@ class FrameWriter:
         observation, caption = self.frames[index]
         image = self.images[index]
         if image is None:
-            self._draw(ax, observation, caption)
+            self._draw(ax, observation, caption, index in self.failed)
             return
         ax.imshow(image)
         ax.set_axis_off()
-        ax.set_title(caption, fontsize=7)
+        ax.set_title(caption, fontsize=7, color=FAILED_COLOUR if index in self.failed else "black")
 
-    def _draw(self, ax: Any, observation: Observation, caption: str) -> None:
+    def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
         from demoplan.colours import assign_colours, object_colour
         from demoplan.labels import add_label
         from demoplan.plotting import object_patch
@@ -129,4 +151,4 @@ class FrameWriter:
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
-        ax.set_title(caption, fontsize=7)
+        ax.set_title(caption, fontsize=7, color=FAILED_COLOUR if failed else "black")

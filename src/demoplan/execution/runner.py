@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -13,11 +15,8 @@ from demoplan.execution.world import World
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.plan import plan_in_scene
-from demoplan.scenes.problems import pose_of
 from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.scenes.targets import check_scene_objects
-from demoplan.wording import plural
 
 __all__ = ["make_world", "run_task"]
 
@@ -56,14 +55,16 @@ def run_task(
     max_replans: int = 25,
     perception: str = "state",
     geometry: GeometrySettings | None = None,
-    display: Any = None,
+    on_event: Callable[[RunEvent], object] | None = None,
     planning_seconds: float = 2.0,
     clutter: bool = False,
 ) -> RunReport:
-    """Run the task in a simulated world; ``display``: a rich console for live
-    progress; ``planning_seconds``: the time budget of each (re)planning;
-    ``clutter``: objects the model never saw are allowed (as in ``plan``: they
-    get no goal and are moved only when in the way), else an input error."""
+    """Run the task in a simulated world; ``on_event`` hears the run's progress
+    (plans, actions, failures, replans: a live display is the caller's);
+    ``frames``: a folder for a frame per action and a storyboard;
+    ``planning_seconds``: the time budget of each (re)planning; ``clutter``:
+    objects the model never saw are allowed (as in ``plan``: they get no goal
+    and are moved only when in the way), else an input error."""
     check_scene_objects(model, scene, clutter=clutter)
     scene = complete_geometry(scene, model)
     world = make_world(sim, scene, faults, seed, perception)
@@ -77,39 +78,17 @@ def run_task(
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
 
-        first = plan_in_scene(
-            model, scene, budget=settings.budget, settings=settings.geometry, clutter=True
-        ).chosen
-        targets = {
-            obj: pose_of(first.problem.location(loc)) for obj, loc in first.problem.problem.goal
-        }
-        writer = FrameWriter(frames, targets)
-        writer.capture(world.observe(), "start", _picture(world))
+        writer = FrameWriter(frames)
 
-    live = None
-    if display is not None:
-        from rich.live import Live
-        from rich.text import Text
-
-        live = Live(Text("planning…"), console=display, transient=True, refresh_per_second=8)
-        live.start()
-
-    def on_event(event: RunEvent) -> None:
-        if live is not None:
-            from rich.text import Text
-
-            live.update(
-                Text(
-                    f"step {event.step} · {event.text} · replans {event.replans} · "
-                    f"{plural(event.remaining, 'action')} to go"
-                )
-            )
-            if event.kind in ("failure", "replan"):
-                live.console.print(
-                    f"step {event.step}: {event.text}", markup=False, highlight=False
-                )
-        if writer is not None and event.kind == "action":
-            pass
+    def heard(event: RunEvent) -> None:
+        if writer is not None:
+            if event.kind == "plan" and not writer.frames:  # the start, with its targets
+                writer.targets = dict(event.targets)
+                writer.capture(world.observe(), "start", _picture(world))
+            elif event.kind == "failure":
+                writer.mark_failure(event.text)
+        if on_event is not None:
+            on_event(event)
 
     class Recording:
         """Captures a frame after each action (the world observed as the executor sees it)."""
@@ -139,19 +118,17 @@ def run_task(
                 writer.capture(world.observe(), f"{len(writer.frames)}: {caption}", _picture(world))
 
     try:
-        report = execute(model, scene, Recording(), settings, on_event)
+        report = execute(model, scene, Recording(), settings, heard)
+        written: tuple[str, ...] = ()
         if writer is not None:
             writer.capture(report.final, "end", _picture(world))
             writer.storyboard()
-            report.frames = [str(p) for p in writer.written]
+            written = tuple(str(p) for p in writer.written)
     finally:
-        if live is not None:
-            live.stop()
         close = getattr(world, "close", None)
         if close is not None:
             close()
-    report.world = world.name
-    return report
+    return replace(report, frames=written, world=world.name)
 
 
 def _picture(world: World) -> Any:
