@@ -79,6 +79,7 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
+from demoplan.errors import InputError  # noqa: E402
 from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
 from demoplan.execution.kinematic import KinematicWorld  # noqa: E402
@@ -227,6 +228,20 @@ def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: in
     try:
         instance = make_world(world, scene, faults, seed)
         report = execute(model, scene, instance, settings)
+    except InputError as exc:  # refused before the first motion (an object the gripper cannot take)
+        return Run(
+            seed,
+            False,
+            0,
+            0,
+            0,
+            time.perf_counter() - started,
+            getattr(instance, "simulated", None),
+            _injected(instance),
+            {},
+            {},
+            f"refused before the run: {exc}",
+        )
     except Exception as exc:  # a crash is a finding: keep it, go on with the next seed
         wall = time.perf_counter() - started
         return Run(

@@ -102,3 +102,45 @@ def test_run_mujoco_cli(blocks: tuple[TaskModel, Scene], tmp_path: Path) -> None
     data = json.loads(result.stdout)
     assert data["success"] and data["world"] == "mujoco"
     assert (tmp_path / "f" / "storyboard.png").exists()
+
+
+@pytest.mark.parametrize("height_mm", [10, 12, 14, 16])
+def test_the_graspable_check_agrees_with_the_physics(height_mm: int) -> None:
+    """The pre-run check says what the simulated hand does: a box it calls too
+    thin is not lifted off a clear table; one it accepts is lifted and placed."""
+    from demoplan.model import Pose
+    from demoplan.scenes.scene import scene_from_document
+
+    document = {
+        "format": "demoplan/scene-1",
+        "objects": {
+            "box": {"position": [0.3, 0.1, 0], "yaw": 0, "size": [0.05, 0.08, height_mm / 1000]},
+            "other": {"position": [0.6, 0.4, 0], "yaw": 0, "size": [0.04, 0.04, 0.04]},
+        },
+    }
+    world = MujocoWorld(scene_from_document(document, "generated"))
+    try:
+        refused = world.why_not_graspable("box")
+        world.grasp("box", 0.0)
+        lifted = world.observe().held == "box"
+        world.put_down("box", Pose((0.4, 0.2, 0.0)))
+        end = world.observe().poses["box"]
+        placed = math.dist(end.position[:2], (0.4, 0.2)) < 0.01
+    finally:
+        world.close()
+    assert (refused is None) == lifted == placed, (refused, lifted, placed)
+
+
+def test_a_task_the_gripper_cannot_take_stops_before_any_motion(tmp_path: Path) -> None:
+    """The kit's 1 cm pcb and 5 mm manual: one line naming both, exit 1, no
+    grasp tried (before: 26 failed grasps and exit 4)."""
+    model = tmp_path / "kit.json"
+    runner = CliRunner()
+    demos = EXAMPLES / "kitting" / "demonstrations.json"
+    learned = runner.invoke(app, ["learn", str(demos), "-o", str(model)])
+    assert learned.exit_code == 0, learned.stderr
+    scene = EXAMPLES / "kitting" / "scene-manual-on-motor.json"
+    result = runner.invoke(app, ["run", str(model), str(scene), "--sim", "mujoco", "--json"])
+    assert result.exit_code == 1
+    assert result.stderr.count("\n") == 1 and result.stdout == ""
+    assert "pcb is 10 mm tall" in result.stderr and "manual is 5 mm tall" in result.stderr

@@ -86,6 +86,9 @@ class CameraWorld:
     def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:
         self.world.between_actions(upcoming)
 
+    def why_not_graspable(self, obj: str) -> str | None:
+        return self.world.why_not_graspable(obj)
+
     @property
     def injected(self) -> list[InjectedFault]:
         """The faults the simulated world injected (the camera does not see them)."""

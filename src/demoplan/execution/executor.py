@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-from demoplan.errors import DemoplanError
+from demoplan.errors import DemoplanError, InputError
 from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
@@ -244,6 +244,7 @@ def execute(
     )
     assert chosen.plan is not None
     actions: list[Action] = list(chosen.plan.actions)
+    _check_graspable(world, actions, scene)
     first_length = len(actions)
     reached |= _reached_at_start(problem)
     expected = dict(observation.poses)
@@ -377,6 +378,23 @@ def execute(
             why = replan(step)
             if why:
                 return finish(False, why, gave_up=why.startswith("gave up"))
+
+
+def _check_graspable(world: World, actions: list[Action], scene: Scene) -> None:
+    """Before the first motion: an input error naming every object the plan
+    must grasp that the world's gripper cannot take (a world that can tell:
+    ``why_not_graspable(obj)``), rather than one failed grasp after another."""
+    check = getattr(world, "why_not_graspable", None)
+    if check is None:
+        return
+    moved = dict.fromkeys(a.object for a in actions if a.kind == "GRASP")
+    reasons = [f"{obj} {why}" for obj in moved if (why := check(obj))]
+    if reasons:
+        raise InputError(
+            "cannot be carried out by this gripper: " + "; ".join(reasons),
+            source=scene.source,
+            field="objects",
+        )
 
 
 def _targets(problem: SceneProblem) -> tuple[tuple[str, Pose], ...]:

@@ -56,6 +56,13 @@ TOP_PX_PER_M = 1000.0  # the top camera: 1 px = 1 mm
 PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
 MIN_PHYSICS_EXTENT = 0.002  # m: smaller objects get no mass or inertia MuJoCo accepts
 DENSITY = 600.0  # kg/m³: wooden blocks
+MIN_GRASP_HEIGHT = 0.013
+"""m: the lowest object the finger pads lift (measured on a clear table: 12 mm
+slips out, 13 mm and up are lifted and placed; the pads are 3 cm tall and
+close at mid-height, so under that they touch the table first)."""
+MAX_GRASP_WIDTH = 2 * (FINGER_TRAVEL - FINGER_HALF[0] - CLEARANCE)
+"""m: the widest extent across the fingers that leaves them room to come down
+beside the object (the fingers open 8 cm from the centre)."""
 
 
 def _quat_wxyz(yaw_deg: float) -> list[float]:
@@ -505,6 +512,23 @@ class MujocoWorld:
         self._move([goal[0], goal[1], travel])
         self._settle(0.3)
         self.oracle.record_fault(kind, obj, spot, detail)
+
+    def why_not_graspable(self, obj: str) -> str | None:
+        """Why this gripper cannot take ``obj`` (too thin or too wide for every
+        grasp it allows), or None."""
+        shape = self.geometry[obj]
+        if shape.size[2] < MIN_GRASP_HEIGHT:
+            return (
+                f"is {1000 * shape.size[2]:.0f} mm tall; the simulated gripper's pads lift "
+                f"objects from {1000 * MIN_GRASP_HEIGHT:.0f} mm"
+            )
+        axes = next((o.grasps for o in self.scene.objects if o.name == obj), (0.0, 90.0))
+        if all(2 * half_extent(shape, axis) > MAX_GRASP_WIDTH for axis in axes):
+            return (
+                f"is {100 * min(2 * half_extent(shape, a) for a in axes):.0f} cm across every "
+                f"grasp it allows; the simulated gripper opens to {100 * MAX_GRASP_WIDTH:.0f} cm"
+            )
+        return None
 
     @property
     def injected(self) -> list[InjectedFault]:

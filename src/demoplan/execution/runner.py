@@ -109,6 +109,10 @@ def run_task(
         def between_actions(self, upcoming: Any = ()) -> None:
             world.between_actions(upcoming)
 
+        def why_not_graspable(self, obj: str) -> str | None:
+            check = getattr(world, "why_not_graspable", None)
+            return None if check is None else check(obj)
+
         @property
         def injected(self) -> Any:  # the simulated world's faults, for the report
             return getattr(world, "injected", ())
