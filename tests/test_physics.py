@@ -32,6 +32,13 @@ def blocks() -> tuple[TaskModel, Scene]:
     return model, complete_geometry(load_scene(SCENE), model)
 
 
+@pytest.fixture(scope="module")
+def model_file(blocks: tuple[TaskModel, Scene], tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("model") / "blocks.json"
+    save_model(blocks[0], path)
+    return path
+
+
 def test_the_scene_is_simulated_as_given(blocks: tuple[TaskModel, Scene]) -> None:
     """After settling, every block rests where the scene says (red on green and wood)."""
     _, scene = blocks
@@ -144,3 +151,37 @@ def test_a_task_the_gripper_cannot_take_stops_before_any_motion(tmp_path: Path) 
     assert result.exit_code == 1
     assert result.stderr.count("\n") == 1 and result.stdout == ""
     assert "pcb is 10 mm tall" in result.stderr and "manual is 5 mm tall" in result.stderr
+
+
+def test_run_records_a_video_from_a_fixed_camera(model_file: Path, tmp_path: Path) -> None:
+    """--video: an MP4 (imageio-ffmpeg's own ffmpeg) of the whole run at 20
+    frames per simulated second, from one camera that does not move: the first
+    and last frames differ only where the blocks moved (the pyramid is built)."""
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    import numpy as np
+
+    video = tmp_path / "run.mp4"
+    result = CliRunner().invoke(
+        app, ["run", str(model_file), str(SCENE), "--sim", "mujoco", "--video", str(video)]
+    )
+    assert result.exit_code == 0, result.stderr
+    frames = imageio_ffmpeg.read_frames(str(video))
+    meta = next(frames)
+    width, height = meta["size"]
+    images = [np.frombuffer(f, np.uint8).reshape(height, width, 3) for f in frames]
+    assert meta["fps"] == 20 and len(images) >= 100  # seconds of simulated motion
+    first, last = images[0].astype(int), images[-1].astype(int)
+    changed = np.abs(first - last).sum(axis=2) > 60
+    assert 0.001 < changed.mean() < 0.2  # the blocks moved; the view did not
+    assert [p.name for p in tmp_path.iterdir()] == ["run.mp4"]  # no partial file left
+
+
+def test_video_needs_physics_and_an_mp4(model_file: Path, tmp_path: Path) -> None:
+    runner = CliRunner()
+    kinematic = runner.invoke(app, ["run", str(model_file), str(SCENE), "--video", "a.mp4"])
+    assert kinematic.exit_code == 2 and "--sim mujoco" in kinematic.stderr
+    avi = runner.invoke(
+        app, ["run", str(model_file), str(SCENE), "--sim", "mujoco", "--video", "a.avi"]
+    )
+    assert avi.exit_code == 2 and ".mp4" in avi.stderr
+    assert not (tmp_path / "a.mp4").exists()

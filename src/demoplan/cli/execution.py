@@ -34,6 +34,7 @@ from demoplan.cli.render import (
     print_run_report,
 )
 from demoplan.deadline import PERCEPTION_TIMEOUT
+from demoplan.errors import UsageError
 from demoplan.fileio import (
     refuse_overwriting_inputs,
 )
@@ -96,6 +97,10 @@ def run(
         typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
     ] = 2.0,
     clutter: ClutterOption = False,
+    video: Annotated[
+        Path | None,
+        typer.Option(help="Also record the run as an MP4 from a fixed camera (--sim mujoco)."),
+    ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.execution.faults import parse_faults
@@ -103,6 +108,10 @@ def run(
     from demoplan.fileio import staged_folder
 
     with reported_errors(), model_named(model_path):
+        if video is not None:
+            if video.suffix.lower() != ".mp4":
+                raise UsageError(f"--video {video}: an .mp4 file expected")
+            refuse_overwriting_inputs(video, [model_path, scene_path])
         model, scene = scene_inputs(model_path, scene_path)
         fault_rates = parse_faults(faults)
         live = stderr.is_terminal and not json_output
@@ -126,6 +135,7 @@ def run(
                 on_event=on_event,
                 planning_seconds=timeout,
                 clutter=clutter,
+                video=video,
             )
         if frames is not None and building is not None:  # named where they now are
             moved = tuple(str(frames / Path(f).name) for f in report.frames)

@@ -25,6 +25,7 @@ import logging
 import math
 import os
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,6 +57,8 @@ TOP_PX_PER_M = 1000.0  # the top camera: 1 px = 1 mm
 PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
 MIN_PHYSICS_EXTENT = 0.002  # m: smaller objects get no mass or inertia MuJoCo accepts
 DENSITY = 600.0  # kg/m³: wooden blocks
+VIDEO_FPS = 20.0  # video frames per simulated second
+VIDEO_SIZE = (480, 360)  # video width, height (px)
 MIN_GRASP_HEIGHT = 0.013
 """m: the lowest object the finger pads lift (measured on a clear table: 12 mm
 slips out, 13 mm and up are lifted and placed; the pads are 3 cm tall and
@@ -229,6 +232,17 @@ class MujocoWorld:
         self.hand_yaw = 0.0
         self.renderer: Any = None
         self.top_renderer: Any = None
+        # A fixed camera over the workspace — the objects with room around them for
+        # free space and targets — so that a video does not follow the objects.
+        xs = [o.pose.position[0] for o in scene.objects]
+        ys = [o.pose.position[1] for o in scene.objects]
+        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 0.3
+        distance = 0.6 * span / math.tan(math.radians(22.5))  # MuJoCo's 45° field of view
+        centre = [(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.02]
+        self.overview = (centre, distance)
+        self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
+        self.video_every = 0.0  # simulated seconds between video frames
+        self.video_due = 0.0
         self._open()
         self._settle(0.5)
 
@@ -284,7 +298,16 @@ class MujocoWorld:
         steps = max(1, round(seconds / TIMESTEP))
         for _ in range(steps):
             self.mujoco.mj_step(self.model, self.data)
-        self.simulated += steps * TIMESTEP
+            self._tick()
+
+    def _tick(self) -> None:
+        """One physics step done: the clock, and a video frame when one is due."""
+        self.simulated += TIMESTEP
+        if self.video is not None and self.simulated >= self.video_due:
+            self.video_due += self.video_every
+            image = self.render(*VIDEO_SIZE)
+            if image is not None:
+                self.video.send(np.ascontiguousarray(image))
 
     def _settle(self, seconds: float = 0.3) -> None:
         self._step(seconds)
@@ -308,7 +331,7 @@ class MujocoWorld:
             if yaw is not None:
                 self._set_hand_yaw(first_yaw + t * turn)
             self.mujoco.mj_step(self.model, self.data)
-        self.simulated += steps * TIMESTEP
+            self._tick()
 
     def _fingers(self, half_width: float) -> None:
         width = min(max(half_width, 0.0), FINGER_TRAVEL)
@@ -429,8 +452,9 @@ class MujocoWorld:
         self._settle(0.3)
 
     def render(self, width: int = 480, height: int = 360) -> np.ndarray | None:
-        """An oblique view of the table (RGB, ``height × width × 3``), like the
-        paper's photographs of Fig. 4; None where no OpenGL context can be made
+        """An oblique view of the whole workspace (RGB, ``height × width × 3``)
+        from a fixed camera (:attr:`overview`), like the paper's photographs of
+        Fig. 4; None where no OpenGL context can be made
         (MuJoCo imported before ``MUJOCO_GL`` was set, no EGL): frames then fall
         back to drawings from above."""
         if self.renderer is False:
@@ -443,13 +467,7 @@ class MujocoWorld:
                 self.renderer = False
                 return None
         camera = self.mujoco.MjvCamera()
-        poses = [self._pose(n).position for n in self.names]
-        camera.lookat[:] = [
-            float(np.mean([p[0] for p in poses])),
-            float(np.mean([p[1] for p in poses])),
-            0.02,
-        ]
-        camera.distance = 0.42
+        camera.lookat[:], camera.distance = self.overview
         camera.elevation = -40.0
         camera.azimuth = 120.0
         self.renderer.update_scene(self.data, camera=camera)
@@ -480,8 +498,24 @@ class MujocoWorld:
         self._move(home)
         self._settle(0.1)
 
+    def record_video(self, path: Path, fps: float = VIDEO_FPS) -> None:
+        """From now on, write what the overview camera sees to ``path`` (MP4,
+        ``fps`` frames per simulated second) until :meth:`close`."""
+        import imageio_ffmpeg  # type: ignore[import-untyped]
+
+        width, height = VIDEO_SIZE
+        self.video = imageio_ffmpeg.write_frames(
+            str(path), (width, height), fps=fps, macro_block_size=8, ffmpeg_log_level="error"
+        )
+        self.video.send(None)  # start ffmpeg
+        self.video_every = 1.0 / fps
+        self.video_due = self.simulated
+
     def close(self) -> None:
-        """Free the renderers' GL contexts, if any were made."""
+        """Finish a video being recorded, and free the renderers' GL contexts."""
+        if self.video is not None:
+            video, self.video = self.video, None
+            video.close()
         for renderer in (self.renderer, self.top_renderer):
             if renderer:
                 renderer.close()

@@ -58,16 +58,26 @@ def run_task(
     on_event: Callable[[RunEvent], object] | None = None,
     planning_seconds: float = 2.0,
     clutter: bool = False,
+    video: Path | None = None,
 ) -> RunReport:
     """Run the task in a simulated world; ``on_event`` hears the run's progress
     (plans, actions, failures, replans: a live display is the caller's);
     ``frames``: a folder for a frame per action and a storyboard;
+    ``video``: an MP4 of the run from the fixed overview camera (``sim``
+    ``mujoco``; written whole or not at all);
     ``planning_seconds``: the time budget of each (re)planning; ``clutter``:
     objects the model never saw are allowed (as in ``plan``: they get no goal
     and are moved only when in the way), else an input error."""
     check_scene_objects(model, scene, clutter=clutter)
     scene = complete_geometry(scene, model)
+    if video is not None and sim != "mujoco":
+        raise UsageError("--video records the physics simulation: it needs --sim mujoco")
     world = make_world(sim, scene, faults, seed, perception)
+    recording = None
+    if video is not None:
+        recording = video.with_name(f".{video.name}.part.mp4")
+        simulator: Any = getattr(world, "world", world)  # a camera world films through its own
+        simulator.record_video(recording)
     settings = ExecutionSettings(
         max_replans=max_replans,
         geometry=geometry or GeometrySettings(),
@@ -121,6 +131,7 @@ def run_task(
             if writer is not None:
                 writer.capture(world.observe(), f"{len(writer.frames)}: {caption}", _picture(world))
 
+    finished = False
     try:
         report = execute(model, scene, Recording(), settings, heard)
         written: tuple[str, ...] = ()
@@ -128,10 +139,16 @@ def run_task(
             writer.capture(report.final, "end", _picture(world))
             writer.storyboard()
             written = tuple(str(p) for p in writer.written)
+        finished = True
     finally:
         close = getattr(world, "close", None)
         if close is not None:
-            close()
+            close()  # also finishes the video
+        if recording is not None and video is not None:
+            if finished:
+                recording.replace(video)
+            else:
+                recording.unlink(missing_ok=True)
     return replace(report, frames=written, world=world.name)
 
 
