@@ -75,6 +75,12 @@ def test_the_report_measures_table_ii_on_fresh_draws(report: Path) -> None:
     assert text.index("### Fresh draws") < text.index("## Experiment 1")
     assert "![Table II over fresh draws" in text and (report / "experiment1-precision.png").exists()
     assert "## Timings" in text
+    if importlib.util.find_spec("imageio_ffmpeg") and importlib.util.find_spec("mujoco"):
+        # Fig. 4, right, as a video: the MuJoCo run, embedded in the page too.
+        assert (report / "experiment2-blocks-mujoco.mp4").read_bytes()[4:8] == b"ftyp"
+        assert '<video controls width="480" src="experiment2-blocks-mujoco.mp4">' in text
+        page = (report / "report.html").read_text()
+        assert page.count('src="data:video/mp4;base64,') == 1
 
 
 def test_a_mismatch_with_the_paper_is_reported(tmp_path: Path, monkeypatch: object) -> None:

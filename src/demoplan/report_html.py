@@ -1,7 +1,7 @@
 """A self-contained HTML page of a markdown report (``report.html`` beside
 ``report.md``): the markdown rendered with markdown-it (CommonMark and tables,
-already installed with rich), every local image embedded as a data URI, so the
-page opens anywhere as one file.
+already installed with rich), every local image and video embedded as a data
+URI, so the page opens anywhere as one file.
 """
 
 from __future__ import annotations
@@ -9,12 +9,15 @@ from __future__ import annotations
 import base64
 import html
 import mimetypes
+import re
 from pathlib import Path
 
 from markdown_it import MarkdownIt
 from markdown_it.token import Token
 
 __all__ = ["markdown_to_html"]
+
+_VIDEO_SOURCE = re.compile(r'src="([^":]+\.mp4)"')
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 70rem; margin: 2rem auto;
@@ -40,6 +43,10 @@ def markdown_to_html(markdown: str, folder: Path, title: str) -> str:
             embedded = _data_uri(folder, source)
             if embedded is not None:
                 token.attrSet("src", embedded)
+        elif token.type in ("html_block", "html_inline"):  # a <video src="…">
+            token.content = _VIDEO_SOURCE.sub(
+                lambda m: f'src="{_data_uri(folder, m.group(1)) or m.group(1)}"', token.content
+            )
     body = parser.renderer.render(tokens, parser.options, {})
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
@@ -65,4 +72,6 @@ def _data_uri(folder: Path, source: str) -> str | None:
     if not path.is_file() or not path.is_relative_to(folder.resolve()):
         return None
     kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
+    if path.suffix.lower() == ".mp4":
+        kind = "video/mp4"
     return f"data:{kind};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"

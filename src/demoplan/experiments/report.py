@@ -171,6 +171,11 @@ def _execution_section(run: ExecutionRun) -> str:
     ]
     if run.storyboard:
         lines.append(f"![{run.title}: storyboard]({run.storyboard})\n\n")
+    if run.video:
+        lines.append(
+            f'<video controls width="480" src="{run.video}"></video>\n\n'
+            f"The whole run from a fixed camera: [{run.video}]({run.video}).\n"
+        )
     lines += [
         "On vision (`--perception camera`: an orthographic top camera after every action, "
         "blocks found by the Hough transform, heights from occlusion): "

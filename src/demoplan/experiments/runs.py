@@ -96,6 +96,7 @@ class ExecutionRun:
     replans: int = 0
     pose_errors: tuple[tuple[str, float], ...] = ()
     storyboard: str | None = None
+    video: str | None = None  # an MP4 of the run, when imageio-ffmpeg is installed
     vision_success: bool = False
     vision_actions: int = 0
     vision_replans: int = 0
@@ -178,7 +179,9 @@ def execute_experiment(title: str, model: TaskModel, scene: Scene, frames: Path)
     from demoplan.execution.runner import run_task
 
     started = time.perf_counter()
-    report = run_task(model, scene, sim="mujoco", frames=frames)
+    filmed = importlib.util.find_spec("imageio_ffmpeg") is not None
+    video = frames.parent / f"{frames.name}.mp4" if filmed else None
+    report = run_task(model, scene, sim="mujoco", frames=frames, video=video)
     top = report.final.poses.get("red")
     on_top = top is not None and abs(top.position[2] - 0.04) < 0.005
     worst = max(report.pose_errors.values(), default=float("inf"))
@@ -207,6 +210,7 @@ def execute_experiment(title: str, model: TaskModel, scene: Scene, frames: Path)
         report.replans,
         tuple(report.pose_errors.items()),
         f"{frames.name}/storyboard.png" if storyboard.exists() else None,
+        video.name if video is not None and video.exists() else None,
         seen.success,
         len(seen.actions),
         seen.replans,
