@@ -27,6 +27,7 @@ from demoplan.planning.bounds import DEAD_END, LowerBounds
 from demoplan.planning.budget import Budget, Clock, SearchOutcome
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.greedy import greedy_moves
+from demoplan.planning.parts import needs_moves, object_groups, parts_plan, plan_by_parts
 from demoplan.planning.problem import Action, Plan, Problem
 
 __all__ = [
@@ -149,6 +150,15 @@ def solve(
     root = 2 * bounds.estimate(c.start, c.start_reached)
     incumbent: tuple[Action, ...] | None = None
     greedy_seconds = 0.0
+    groups = object_groups(problem, c)
+    if root < 2 * DEAD_END and sum(needs_moves(c, g) for g in groups) > 1:
+        # Groups of objects that never meet: their shortest plans add up (parts.py).
+        parts = plan_by_parts(problem, groups, _greedy_budget(clock, _PARTS_SHARE))
+        by_parts = parts_plan(parts, time.perf_counter() - started)
+        if by_parts is not None and by_parts.optimal:
+            return by_parts
+        root = max(root, parts.bound)
+        incumbent = parts.actions
     if root < 2 * DEAD_END:
         moves = greedy_moves(c, bounds, Clock(_greedy_budget(clock)))  # never less than 0.2 s
         # Shorter plans by weighted A* on the same guidance, while they come fast.
@@ -161,7 +171,9 @@ def solve(
                 moves = better
         greedy_seconds = time.perf_counter() - started
         if moves is not None:
-            incumbent = tuple(action for move in moves for action in c.move_actions(*move))
+            greedy = tuple(action for move in moves for action in c.move_actions(*move))
+            if incumbent is None or len(greedy) < len(incumbent):
+                incumbent = greedy
             if len(incumbent) <= root:  # as long as the lower bound: shortest
                 return Plan(incumbent, seconds=greedy_seconds, search="greedy", bound=root)
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
@@ -207,6 +219,11 @@ _WEIGHTS = (3.0, 2.0, 1.5)
 """Weights of the weighted-A* passes that shorten the first plan."""
 _IMPROVE_SHARE = 0.2
 """Each pass may take this share of the time left."""
+
+
+_PARTS_SHARE = 0.4
+"""The share of the time left that solving group by group may take (when the
+objects fall into several groups that need moves)."""
 
 
 _MIN_GREEDY_SECONDS = 0.2
