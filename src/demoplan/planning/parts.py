@@ -121,6 +121,8 @@ def plan_by_parts(problem: Problem, groups: Sequence[Sequence[str]], budget: Bud
     actions: list[Action] = []
     planned = True
     for k, group in enumerate(groups):
+        if clock.expired():  # out of time: no plan and no bound from the parts
+            return PartsResult(None, 0)
         left = clock.remaining()
         share = None if left is None else left / (2 * (len(groups) - k))
         alone = _alone(problem, group)
