@@ -185,3 +185,28 @@ def test_video_needs_physics_and_an_mp4(model_file: Path, tmp_path: Path) -> Non
     )
     assert avi.exit_code == 2 and ".mp4" in avi.stderr
     assert not (tmp_path / "a.mp4").exists()
+
+
+def test_renders_mark_the_targets(blocks: tuple[TaskModel, Scene]) -> None:
+    """show_targets: a translucent box of the object's size and colour where it
+    should go — drawn only (the simulation does not change), so the start of
+    a storyboard differs from its end."""
+    import numpy as np
+
+    from demoplan.model import Pose
+
+    _, scene = blocks
+    world = MujocoWorld(scene)
+    try:
+        before = world.render()
+        if before is None:
+            pytest.skip("MuJoCo cannot render here")
+        state = world.observe().poses
+        world.show_targets({"red": Pose((0.45, 0.12, 0.0))})
+        after = world.render()
+        assert after is not None
+        changed = np.abs(after.astype(int) - before.astype(int)).sum(axis=2) > 30
+        assert 0.001 < changed.mean() < 0.05  # a small box appears, nothing else moves
+        assert world.observe().poses == state
+    finally:
+        world.close()

@@ -240,6 +240,7 @@ class MujocoWorld:
         distance = 0.6 * span / math.tan(math.radians(22.5))  # MuJoCo's 45° field of view
         centre = [(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.02]
         self.overview = (centre, distance)
+        self.targets: dict[str, Pose] = {}  # drawn in renders (show_targets)
         self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
         self.video_every = 0.0  # simulated seconds between video frames
         self.video_due = 0.0
@@ -471,8 +472,43 @@ class MujocoWorld:
         camera.elevation = -40.0
         camera.azimuth = 120.0
         self.renderer.update_scene(self.data, camera=camera)
+        self._draw_targets(self.renderer.scene)
         image: np.ndarray = self.renderer.render()
         return image
+
+    def show_targets(self, targets: Mapping[str, Pose]) -> None:
+        """Draw these target poses (goal object → pose) in every render from now
+        on, as translucent boxes of the objects' sizes in their colours: a frame
+        then shows where each object should go (nothing collides with them)."""
+        self.targets = dict(targets)
+
+    def _draw_targets(self, scene: Any) -> None:
+        mujoco = self.mujoco
+        for name, pose in self.targets.items():
+            shape = self.geometry.get(name)
+            if shape is None or scene.ngeom >= scene.maxgeom:
+                continue
+            red, green, blue, _ = (float(v) for v in object_rgba(name).split())
+            x, y, z = pose.position
+            half = np.array(shape.size, dtype=float) / 2
+            matrix = np.zeros(9)
+            w, qx, qy, qz = _wxyz(pose)
+            mujoco.mju_quat2Mat(matrix, np.array([w, qx, qy, qz], dtype=float))
+            kind = (
+                mujoco.mjtGeom.mjGEOM_CYLINDER
+                if shape.shape == "cylinder"
+                else mujoco.mjtGeom.mjGEOM_BOX
+            )
+            size = np.array([half[0], half[2], 0.0]) if shape.shape == "cylinder" else half
+            mujoco.mjv_initGeom(
+                scene.geoms[scene.ngeom],
+                kind,
+                size,
+                np.array([x, y, z + half[2]], dtype=float),
+                matrix,
+                np.array([red, green, blue, 0.3], dtype=np.float32),
+            )
+            scene.ngeom += 1
 
     def top_image(self) -> np.ndarray:
         """The table from straight above through the orthographic camera ``top``

@@ -91,6 +91,9 @@ def run_task(
         writer = FrameWriter(frames)
 
     def heard(event: RunEvent) -> None:
+        show = getattr(getattr(world, "world", world), "show_targets", None)
+        if show is not None and event.kind in ("plan", "replan"):
+            show(dict(event.targets))  # the renders mark where the objects should go
         if writer is not None:
             if event.kind == "plan" and not writer.frames:  # the start, with its targets
                 writer.targets = dict(event.targets)
