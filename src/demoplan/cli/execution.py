@@ -109,9 +109,12 @@ def run(
 
     with reported_errors(), model_named(model_path):
         if video is not None:
+            from demoplan.execution.runner import check_video_path
+
             if video.suffix.lower() != ".mp4":
                 raise UsageError(f"--video {video}: an .mp4 file expected")
             refuse_overwriting_inputs(video, [model_path, scene_path])
+            check_video_path(video)
         model, scene = scene_inputs(model_path, scene_path)
         fault_rates = parse_faults(faults)
         live = stderr.is_terminal and not json_output

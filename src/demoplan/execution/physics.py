@@ -541,7 +541,7 @@ class MujocoWorld:
 
         width, height = VIDEO_SIZE
         self.video = imageio_ffmpeg.write_frames(
-            str(path), (width, height), fps=fps, macro_block_size=8, ffmpeg_log_level="error"
+            str(path), (width, height), fps=fps, macro_block_size=8, ffmpeg_log_level="quiet"
         )
         self.video.send(None)  # start ffmpeg
         self.video_every = 1.0 / fps

@@ -7,11 +7,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
+from demoplan.fileio import os_reason
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
@@ -77,7 +78,16 @@ def run_task(
     if video is not None:
         recording = video.with_name(f".{video.name}.part.mp4")
         simulator: Any = getattr(world, "world", world)  # a camera world films through its own
-        simulator.record_video(recording)
+        try:
+            simulator.record_video(recording)
+        except (OSError, RuntimeError) as exc:  # ffmpeg could not start or open the file
+            recording.unlink(missing_ok=True)
+            world_close = getattr(world, "close", None)
+            if world_close is not None:
+                world_close()
+            raise InputError(
+                f"cannot write the video ({_first_line(exc)})", source=str(video)
+            ) from None
     settings = ExecutionSettings(
         max_replans=max_replans,
         geometry=geometry or GeometrySettings(),
@@ -145,14 +155,45 @@ def run_task(
         finished = True
     finally:
         close = getattr(world, "close", None)
-        if close is not None:
-            close()  # also finishes the video
+        try:
+            if close is not None:
+                close()  # also finishes the video
+        except (OSError, RuntimeError) as exc:  # ffmpeg failed on the way (a full disk)
+            if recording is not None:
+                recording.unlink(missing_ok=True)
+            if finished:
+                raise InputError(
+                    f"cannot write the video ({_first_line(exc)})", source=str(video)
+                ) from None
         if recording is not None and video is not None:
             if finished:
                 recording.replace(video)
             else:
                 recording.unlink(missing_ok=True)
     return replace(report, frames=written, world=world.name)
+
+
+def check_video_path(video: Path) -> None:
+    """Before any work: ``video`` can be written — an .mp4 path that is not a
+    folder or a device, in a folder that exists or can be made and takes a file."""
+    if video.suffix.lower() != ".mp4":
+        raise UsageError(f"--video {video}: an .mp4 file expected")
+    if video.exists() and not video.is_file():
+        raise InputError(
+            "is a folder or a device, not a file; an .mp4 file path expected",
+            source=str(video),
+        )
+    probe = video.with_name(f".{video.name}.part.mp4")
+    try:
+        video.parent.mkdir(parents=True, exist_ok=True)
+        probe.open("wb").close()
+    except OSError as exc:
+        raise InputError(f"cannot write the video ({os_reason(exc)})", source=str(video)) from None
+    probe.unlink(missing_ok=True)
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
 
 
 def _picture(world: World) -> Any:
