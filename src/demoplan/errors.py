@@ -65,5 +65,8 @@ class NotFittedError(DemoplanError, AttributeError):
 
 
 def error_line(exc: DemoplanError) -> str:
-    """The one line ``demoplan`` prints on stderr for ``exc`` (SPEC §4)."""
-    return "demoplan: error: " + " ".join(str(exc).split())
+    """The one line ``demoplan`` prints on stderr for ``exc`` (SPEC §4): runs
+    of whitespace as one space, control characters (an escape sequence in a
+    name read from a file) written as escapes, never sent to the terminal."""
+    text = " ".join(str(exc).split())
+    return "demoplan: error: " + "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)

@@ -173,9 +173,9 @@ _RESERVED = re.compile(r"^(loc|freespace|grasp)\d+$")
 def _check_name(name: str, source: str) -> None:
     """Object names appear in plans (``GRASP red loc3 grasp5``): no spaces, and not
     the names demoplan gives locations and grasps."""
-    if not name or any(c.isspace() for c in name):
+    if not name or any(c.isspace() or not c.isprintable() for c in name):
         raise InputError(
-            "an object name without spaces expected (it appears in plans)",
+            "an object name without spaces or control characters expected (it appears in plans)",
             source=source,
             field=f"objects.{name}",
         )
