@@ -101,7 +101,12 @@ def build_problem(
     shapes: dict[str, ObjectGeometry] = {}
     for obj in scene.objects:
         if obj.geometry is None:
-            raise InputError("size unknown", source=scene.source, field=f"objects.{obj.name}")
+            raise InputError(
+                'size unknown; expected "size": [x, y, z] (or a task model that gives it: '
+                "show --model, plan, run)",
+                source=scene.source,
+                field=f"objects.{obj.name}",
+            )
         shapes[obj.name] = obj.geometry
     locations: list[Location] = []
     current: dict[str, str] = {}
