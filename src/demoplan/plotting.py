@@ -57,6 +57,7 @@ __all__ = [
     "plot_scene_plan",
     "plot_scene_side",
     "plot_scene_targets",
+    "save_demonstrations",
     "save_figure",
     "save_scene_plan",
     "save_scene_targets",
@@ -217,6 +218,36 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
     ax.axis("off")
     ax.set_title(constraint_caption(order), fontsize=8)
     return ax
+
+
+def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
+    """Every demonstration of ``model`` from above (like the paper's Fig. 3),
+    each with the constraints among its states below it, on shared axes, in
+    one image written atomically; ``heading`` names the task in the title."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    demos = model.demonstrations
+    fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
+    grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
+    panels = []
+    for k, demo in enumerate(demos):
+        title = f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}"
+        panels.append(plot_demonstration(demo, fig.add_subplot(grid[0, k]), title=title))
+        plot_constraints(model, k, fig.add_subplot(grid[1, k]))
+    share_limits(panels)
+    fig.suptitle(
+        f"{heading}: the demonstrations from above (numbers: order of the moves),\nand below "
+        f"each the constraints among its states ({len(model.constraints)} learned in all)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
 def share_limits(axes: list[Axes]) -> None:

@@ -42,35 +42,10 @@ def demoplan(*args: str) -> None:
 
 
 def demonstrations_figure(model_path: Path, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from demoplan import load_model
-    from demoplan.plotting import plot_constraints, plot_demonstration, save_figure, share_limits
+    from demoplan.plotting import save_demonstrations
 
-    model = load_model(model_path)
-    demos = model.demonstrations
-    fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
-    grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
-    panels = []
-    for k, demo in enumerate(demos):
-        title = f"Demonstration {k + 1} ({demo.name}): {'-'.join(model.sequences[k])}"
-        panels.append(plot_demonstration(demo, fig.add_subplot(grid[0, k]), title=title))
-        plot_constraints(model, k, fig.add_subplot(grid[1, k]))
-    share_limits(panels)
-    fig.suptitle(
-        "examples/kitting: the three demonstrations from above (numbers: order of the moves;"
-        " the tray is a landmark),\nand below each the constraints among its states"
-        f" ({len(model.constraints)} learned in all)",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    try:
-        save_figure(fig, out)
-    finally:
-        plt.close(fig)
+    save_demonstrations(load_model(model_path), out, "examples/kitting (the tray is a landmark)")
     print("wrote", out.relative_to(ROOT))
 
 

@@ -398,40 +398,12 @@ def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> s
 
 
 def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    if importlib.util.find_spec("matplotlib") is None:
         logger.warning(
             "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
         )
         return None
-    from demoplan.plotting import plot_constraints, plot_demonstration, save_figure, share_limits
+    from demoplan.plotting import save_demonstrations
 
-    demos = model.demonstrations
-    fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
-    grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
-    panels = []
-    for k, demo in enumerate(demos):
-        panels.append(
-            plot_demonstration(
-                demo,
-                fig.add_subplot(grid[0, k]),
-                title=f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}",
-            )
-        )
-        plot_constraints(model, k, fig.add_subplot(grid[1, k]))
-    share_limits(panels)
-    fig.suptitle(
-        f"{title}: the demonstrations from above (numbers: order of the moves),\nand below "
-        f"each the constraints among its states ({len(model.constraints)} learned in all)",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    try:
-        save_figure(fig, path)
-    finally:
-        plt.close(fig)
+    save_demonstrations(model, path, title)
     return path.name
