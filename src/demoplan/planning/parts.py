@@ -173,17 +173,10 @@ def parts_plan(result: PartsResult, seconds: float) -> Plan | None:
 def _alone(problem: Problem, group: Sequence[str]) -> Problem:
     """The problem with only ``group``'s objects (a relaxation of it)."""
     keep = set(group)
-    subgoals = tuple(s for s in problem.subgoals if s.object in keep)
-    ids = {s.id for s in subgoals}
     return dataclasses.replace(
-        problem,
+        _only_goals_of(problem, keep),
         objects=tuple(o for o in problem.objects if o in keep),
-        allowed=frozenset(a for a in problem.allowed if a[0] in keep),
         initial=tuple(x for x in problem.initial if x[0] in keep),
-        goal=tuple(x for x in problem.goal if x[0] in keep),
-        subgoals=subgoals,
-        precedences=frozenset(p for p in problem.precedences if p[0] in ids and p[1] in ids),
-        reached=frozenset(r for r in problem.reached if r in ids),
         # A place that took only objects now gone takes any: a relaxation too.
         accepts=frozenset(a for a in problem.accepts if a[1] in keep),
     )
@@ -199,19 +192,26 @@ def _in_turn(
     """``group``'s turn in the whole problem: every object where it stands now,
     only ``group``'s may move, only its goals count, and the places the
     ``later`` groups must reach take none of ``group``'s objects."""
-    keep = set(group)
-    subgoals = tuple(s for s in problem.subgoals if s.object in keep)
-    ids = {s.id for s in subgoals}
     accepts = set(problem.accepts)
     for obj in later:
         accepts |= {(location, obj) for location in owners.get(obj, ())}
     return dataclasses.replace(
+        _only_goals_of(problem, set(group)),
+        initial=tuple((o, state[o]) for o in problem.objects),
+        accepts=frozenset(accepts),
+    )
+
+
+def _only_goals_of(problem: Problem, keep: set[str]) -> Problem:
+    """``problem`` where only the objects in ``keep`` may be grasped and only
+    their goals, subgoals and the precedences among those count."""
+    subgoals = tuple(s for s in problem.subgoals if s.object in keep)
+    ids = {s.id for s in subgoals}
+    return dataclasses.replace(
         problem,
         allowed=frozenset(a for a in problem.allowed if a[0] in keep),
-        initial=tuple((o, state[o]) for o in problem.objects),
         goal=tuple(x for x in problem.goal if x[0] in keep),
         subgoals=subgoals,
         precedences=frozenset(p for p in problem.precedences if p[0] in ids and p[1] in ids),
         reached=frozenset(r for r in problem.reached if r in ids),
-        accepts=frozenset(accepts),
     )
