@@ -34,7 +34,6 @@ from demoplan.cli.render import (
     print_run_report,
 )
 from demoplan.deadline import PERCEPTION_TIMEOUT
-from demoplan.errors import UsageError
 from demoplan.fileio import (
     refuse_overwriting_inputs,
 )
@@ -111,10 +110,8 @@ def run(
         if video is not None:
             from demoplan.execution.runner import check_video_path
 
-            if video.suffix.lower() != ".mp4":
-                raise UsageError(f"--video {video}: an .mp4 file expected")
-            refuse_overwriting_inputs(video, [model_path, scene_path])
             check_video_path(video)
+            refuse_overwriting_inputs(video, [model_path, scene_path])
         model, scene = scene_inputs(model_path, scene_path)
         fault_rates = parse_faults(faults)
         live = stderr.is_terminal and not json_output
