@@ -80,6 +80,7 @@ from demoplan.scenes.scene import (
     MAX_GRIPPER,
     _GripperSchema,
     _ObjectSchema,
+    _RobotSchema,
     _SceneSchema,
     _TableSchema,
     load_scene,
@@ -313,6 +314,8 @@ SCENE = FieldTable(
         "gripper": "the parallel-jaw gripper",
         "table": "where free space may be generated (default: the poses' bounding box "
         "grown by 0.15 m)",
+        "robot": "where the arm of `run --sim arm` stands (default: placed where it "
+        "reaches every object and target)",
     },
 )
 SCENE_OBJECT = FieldTable(
@@ -338,6 +341,14 @@ TABLE = FieldTable(
     "Table",
     _TableSchema,
     {"min": "`[x, y]` of one corner", "max": "`[x, y]` of the opposite corner, above and right"},
+)
+ROBOT = FieldTable(
+    "Robot",
+    _RobotSchema,
+    {
+        "base": "`[x, y]` of the arm's base on the table (`run --sim arm`)",
+        "yaw": "the base's turn about the vertical, in degrees (default 0: facing +x)",
+    },
 )
 MODEL = FieldTable(
     "Model fields",
@@ -443,6 +454,7 @@ FIELD_TABLES = (
     SCENE_OBJECT,
     GRIPPER,
     TABLE,
+    ROBOT,
     MODEL,
     STATE,
     STATE_POSITION,
@@ -625,6 +637,16 @@ RUN_JSON = Output(
         "actions": ("array of actions", "the actions executed, `[KIND, OBJECT, LOCATION, GRASP]`"),
         "failures": ("array", "every difference between expectation and observation (below)"),
         "injected": ("array", "every fault the simulation injected, as it happened (below)"),
+        "collisions": (
+            "array",
+            "`--sim arm`: every contact of the arm with anything but its load, as a "
+            "sentence with the simulated time (empty: none)",
+        ),
+        "motions_refused": (
+            "array",
+            "`--sim arm`: motions not made because a check found them impossible "
+            "(no inverse kinematics, a collision), each with its reason",
+        ),
         "final_scene": ("scene", "the world at the end, as a scene document"),
         "goal": ("integer or null", "the demonstration whose goal was pursued, from 0"),
         "reason": ("string", "how the run ended"),
@@ -1127,6 +1149,7 @@ def scene_section() -> str:
             field_table(SCENE_OBJECT),
             field_table(GRIPPER),
             field_table(TABLE),
+            field_table(ROBOT),
         ]
     )
 

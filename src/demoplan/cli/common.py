@@ -295,6 +295,7 @@ class SimName(StrEnum):
 
     kinematic = "kinematic"
     mujoco = "mujoco"
+    arm = "arm"
 
 
 def count_of(n: int, noun: str) -> str:

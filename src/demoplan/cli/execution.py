@@ -70,7 +70,11 @@ def run(
     model_path: ModelArgument,
     scene_path: SceneArgument,
     sim: Annotated[
-        SimName, typer.Option(help="kinematic (exact, fast) or mujoco (physics).")
+        SimName,
+        typer.Option(
+            help="kinematic (exact, fast), mujoco (physics, a floating gripper) or arm "
+            "(physics, a 6-DOF Kinova Jaco with a suction cup)."
+        ),
     ] = SimName.kinematic,
     faults: Annotated[
         str | None,
@@ -88,7 +92,9 @@ def run(
     max_replans: Annotated[int, typer.Option(min=0, help="Give up after this many replans.")] = 25,
     perception: Annotated[
         PerceptionName,
-        typer.Option(help="state (read the simulator) or camera (perceive its top view; mujoco)."),
+        typer.Option(
+            help="state (read the simulator) or camera (perceive its top view; mujoco, arm)."
+        ),
     ] = PerceptionName.state,
     freespace: FreespaceOption = None,
     timeout: Annotated[
@@ -98,7 +104,9 @@ def run(
     clutter: ClutterOption = False,
     video: Annotated[
         Path | None,
-        typer.Option(help="Also record the run as an MP4 from a fixed camera (--sim mujoco)."),
+        typer.Option(
+            help="Also record the run as an MP4 from a fixed camera (--sim mujoco or arm)."
+        ),
     ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""

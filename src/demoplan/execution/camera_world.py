@@ -89,6 +89,10 @@ class CameraWorld:
     def why_not_graspable(self, obj: str) -> str | None:
         return self.world.why_not_graspable(obj)
 
+    def why_not_reachable(self, obj: str, pose: Pose) -> str | None:
+        check = getattr(self.world, "why_not_reachable", None)
+        return None if check is None else check(obj, pose)
+
     @property
     def injected(self) -> list[InjectedFault]:
         """The faults the simulated world injected (the camera does not see them)."""

@@ -38,7 +38,7 @@ from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.naming import StableNames
-from demoplan.scenes.plan import plan_in_scene, solve_candidate
+from demoplan.scenes.plan import CandidatePlan, plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
 from demoplan.scenes.targets import candidate_goals
@@ -140,6 +140,10 @@ class RunReport:
     """True when a limit (replans, actions) stopped the run, not a missing plan."""
     injected: tuple[InjectedFault, ...] = ()
     """The faults a simulated world injected, as they happened (a real world has none)."""
+    collisions: tuple[str, ...] = ()
+    """Contacts of the robot with anything but its load, as they happened (``--sim arm``)."""
+    motions_refused: tuple[str, ...] = ()
+    """Motions the robot did not make because a check found them impossible (``--sim arm``)."""
 
     @property
     def exit_code(self) -> int:
@@ -159,6 +163,8 @@ class RunReport:
                 {"step": f.step, "kind": f.kind, "detail": f.detail} for f in self.failures
             ],
             "injected": [fault.to_json() for fault in self.injected],
+            "collisions": list(self.collisions),
+            "motions_refused": list(self.motions_refused),
             "final_scene": scene_to_dict(final_scene),
             "goal": self.goal,
             "reason": self.reason,
@@ -202,11 +208,31 @@ def _scene_of(observation: Observation, template: Scene) -> Scene:
         gripper=template.gripper,
         table=template.table,
         source=template.source,
+        robot=template.robot,
     )
 
 
 def _distance(a: Pose, b: Pose) -> float:
     return math.dist(a.position, b.position)
+
+
+def first_plan(model: TaskModel, scene: Scene, settings: ExecutionSettings) -> CandidatePlan:
+    """The plan a run starts with: every candidate goal planned in ``scene``
+    (objects the model never saw allowed), the shortest chosen."""
+    return plan_in_scene(
+        model, scene, budget=settings.budget, settings=settings.geometry, clutter=True
+    ).chosen
+
+
+def first_targets(chosen: CandidatePlan) -> tuple[tuple[str, Pose], ...]:
+    """Where the put-downs of ``chosen`` put their objects (in plan order)."""
+    problem = chosen.problem
+    assert chosen.plan is not None
+    return tuple(
+        (a.object, pose_of(problem.location(a.location)))
+        for a in chosen.plan.actions
+        if a.kind == "PUT_DOWN"
+    )
 
 
 def execute(
@@ -215,8 +241,11 @@ def execute(
     world: World,
     settings: ExecutionSettings = ExecutionSettings(),
     on_event: Callable[[RunEvent], object] | None = None,
+    first: CandidatePlan | None = None,
 ) -> RunReport:
-    """Carry out the task in ``world`` (which starts as ``scene``); see the module docstring."""
+    """Carry out the task in ``world`` (which starts as ``scene``); see the module
+    docstring. ``first``: the plan for the world as it starts, when the caller
+    has made it already (it is not made again)."""
     emit = on_event or (lambda event: None)
     started = time.perf_counter()
     scene = complete_geometry(scene, model)
@@ -227,13 +256,7 @@ def execute(
     plan_index = 0
 
     observation = world.observe()
-    chosen = plan_in_scene(
-        model,
-        _scene_of(observation, scene),
-        budget=settings.budget,
-        settings=settings.geometry,
-        clutter=True,
-    ).chosen
+    chosen = first or first_plan(model, _scene_of(observation, scene), settings)
     goal = chosen.goal
     problem: SceneProblem = chosen.problem
     # Replans name the places and grasps of the first plan as it did.
@@ -244,7 +267,7 @@ def execute(
     )
     assert chosen.plan is not None
     actions: list[Action] = list(chosen.plan.actions)
-    _check_graspable(world, actions, scene)
+    _check_feasible(world, actions, problem, scene.source)
     first_length = len(actions)
     reached |= _reached_at_start(problem)
     expected = dict(observation.poses)
@@ -302,6 +325,10 @@ def execute(
         outcome = solve_candidate(built, settings.budget)
         if outcome.plan is None:
             return f"no plan from the observed world: {outcome.reason}"
+        try:
+            _check_feasible(world, list(outcome.plan.actions), built, scene.source)
+        except InputError as exc:  # an object moved beyond the robot's reach
+            return exc.message
         problem, actions = built, list(outcome.plan.actions)
         reached.update(_reached_at_start(problem))
         expected = dict(observation.poses)
@@ -380,19 +407,35 @@ def execute(
                 return finish(False, why, gave_up=why.startswith("gave up"))
 
 
-def _check_graspable(world: World, actions: list[Action], scene: Scene) -> None:
+def _check_feasible(
+    world: World, actions: list[Action], problem: SceneProblem, source: str
+) -> None:
     """Before the first motion: an input error naming every object the plan
-    must grasp that the world's gripper cannot take (a world that can tell:
-    ``why_not_graspable(obj)``), rather than one failed grasp after another."""
-    check = getattr(world, "why_not_graspable", None)
-    if check is None:
-        return
-    moved = dict.fromkeys(a.object for a in actions if a.kind == "GRASP")
-    reasons = [f"{obj} {why}" for obj in moved if (why := check(obj))]
+    must grasp that the world's gripper cannot take (``why_not_graspable(obj)``)
+    and every grasp or put-down the robot cannot reach
+    (``why_not_reachable(obj, pose)``), in a world that can tell — rather than
+    one failed grasp after another."""
+    graspable = getattr(world, "why_not_graspable", None)
+    reachable = getattr(world, "why_not_reachable", None)
+    reasons: list[str] = []
+    if graspable is not None:
+        moved = dict.fromkeys(a.object for a in actions if a.kind == "GRASP")
+        reasons += [f"{obj} {why}" for obj in moved if (why := graspable(obj))]
+    if reachable is not None and not reasons:
+        seen = set()
+        for action in actions:
+            if (action.object, action.location) in seen:
+                continue
+            seen.add((action.object, action.location))
+            pose = pose_of(problem.location(action.location))
+            why = reachable(action.object, pose)
+            if why:
+                where = "standing" if action.kind == "GRASP" else "put down"
+                reasons.append(f"{action.object} {where} {why}")
     if reasons:
         raise InputError(
-            "cannot be carried out by this gripper: " + "; ".join(reasons),
-            source=scene.source,
+            "cannot be carried out by this robot: " + "; ".join(reasons),
+            source=source,
             field="objects",
         )
 

@@ -9,7 +9,7 @@ with the same seed is the same run.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -56,6 +56,9 @@ class KinematicWorld:
         self.injected: list[InjectedFault] = []  # as they happened, for reports and tests
         self.blocks = 0
         self.injected_objects: list[str] = []  # obstacles a block fault put in, in order
+        # Where a fault may put things: a world with a robot that reaches only
+        # part of the table says which (x, y) it reaches; None: anywhere.
+        self.reachable: Callable[[float, float], bool] | None = None
         # Faults at given actions (1-based count of grasps and put-downs): a test
         # injects exactly one kind exactly where it wants it.
         self.schedule = dict(schedule or {})
@@ -211,7 +214,10 @@ class KinematicWorld:
         self, x: float, y: float, shape: ObjectGeometry, margin: float, reach: bool = True
     ) -> bool:
         """No object within reach of (x, y): none in the way of grasping ``shape``
-        there, nor of grasping the others (``reach=False``: just not overlapping)."""
+        there, nor of grasping the others (``reach=False``: just not overlapping);
+        and the robot reaches the spot (:attr:`reachable`)."""
+        if self.reachable is not None and not self.reachable(x, y):
+            return False
         for other, pose in self.poses.items():
             other_shape = self.geometry[other]
             needed = bounding_radius(shape) + bounding_radius(other_shape)

@@ -86,9 +86,11 @@ def scene_xml(
     scene: Scene,
     top_view: tuple[float, float, float] | None = None,
     offscreen: tuple[int, int] = (1200, 1200),
+    hand: bool = True,
 ) -> str:
     """The MJCF model of ``scene``: table, objects (free bodies), obstacles parked
-    off the table, the gripper, and — with ``top_view = (x, y, height_m)`` — an
+    off the table, the floating gripper (``hand=False``: none, for a world that
+    adds its own robot), and — with ``top_view = (x, y, height_m)`` — an
     orthographic camera ``top`` looking straight down at (x, y) whose picture is
     ``height_m`` metres high."""
     bodies = []
@@ -119,12 +121,7 @@ def scene_xml(
             f'<camera name="_top" pos="{cx} {cy} 1.5" quat="1 0 0 0" '
             f'projection="orthographic" fovy="{view_height}"/>'
         )
-    fx, fy, fz = FINGER_HALF
-    finger = (
-        f'type="box" size="{fx} {fy} {fz}" mass="0.05" friction="1.5 0.02 0.001" condim="4" '
-        'rgba="0.25 0.25 0.3 1"'
-    )
-    return f"""<mujoco model="demoplan">
+    header = f"""<mujoco model="demoplan">
   <option timestep="{TIMESTEP}" integrator="implicitfast" cone="elliptic" impratio="10"/>
   <visual>
     <global offwidth="{offscreen[0]}" offheight="{offscreen[1]}"/>
@@ -137,7 +134,21 @@ def scene_xml(
     <geom name="table" type="plane" size="3 3 0.05" rgba="0.92 0.92 0.88 1"
           friction="0.8 0.01 0.0005"/>
     {"".join(bodies)}
-    <body name="_target" mocap="true" pos="0.3 0 0.4"/>
+"""
+    if not hand:
+        return header + "  </worldbody>\n</mujoco>\n"
+    return header + _floating_hand()
+
+
+def _floating_hand() -> str:
+    """The floating parallel-jaw hand (a mocap weld) and its finger actuators,
+    closing the MJCF document :func:`scene_xml` began."""
+    fx, fy, fz = FINGER_HALF
+    finger = (
+        f'type="box" size="{fx} {fy} {fz}" mass="0.05" friction="1.5 0.02 0.001" condim="4" '
+        'rgba="0.25 0.25 0.3 1"'
+    )
+    return f"""    <body name="_target" mocap="true" pos="0.3 0 0.4"/>
     <body name="_hand" pos="0.3 0 0.4" gravcomp="1">
       <freejoint/>
       <geom type="box" size="0.012 0.03 0.01" pos="0 0 {fz + 0.03}" contype="0" conaffinity="0"
@@ -204,19 +215,18 @@ class MujocoWorld:
                     f"extent {min(obj.geometry.size) * 1000:g} mm is below the "
                     f"{MIN_PHYSICS_EXTENT * 1000:g} mm the physics world simulates; "
                     "--sim kinematic takes it",
-                    source="--sim mujoco",
+                    source=f"--sim {self.name}",
                     field=f"objects.{obj.name}.size",
                 )
         try:
-            self.model = mujoco.MjModel.from_xml_string(
-                scene_xml(scene, ((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0), offscreen)
-            )
+            self.model = self._compile(((x0 + x1) / 2, (y0 + y1) / 2, y1 - y0), offscreen)
         except ValueError as exc:  # MuJoCo's compiler refused the scene
             raise InputError(
                 f"MuJoCo cannot build the scene ({str(exc).splitlines()[0]})",
-                source="--sim mujoco",
+                source=f"--sim {self.name}",
             ) from None
         self.data = mujoco.MjData(self.model)
+        self._start_robot()
         self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
         self.names = [o.name for o in scene.objects]
         self.body_names = {name: f"_object{k}" for k, name in enumerate(self.names)}
@@ -241,11 +251,20 @@ class MujocoWorld:
         centre = [(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.02]
         self.overview = (centre, distance)
         self.targets: dict[str, Pose] = {}  # drawn in renders (show_targets)
+        self.hidden_from_top: tuple[int, ...] = ()  # geom groups the top camera masks out
         self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
         self.video_every = 0.0  # simulated seconds between video frames
         self.video_due = 0.0
         self._open()
         self._settle(0.5)
+
+    def _compile(self, top_view: tuple[float, float, float], offscreen: tuple[int, int]) -> Any:
+        """The MuJoCo model of the scene with this world's robot (here the floating hand)."""
+        return self.mujoco.MjModel.from_xml_string(scene_xml(self.scene, top_view, offscreen))
+
+    def _start_robot(self) -> None:
+        """Put the robot in its starting pose before the scene settles (the hand
+        starts where the model puts it)."""
 
     # -- reading the simulation ----------------------------------------------------------
 
@@ -518,7 +537,10 @@ class MujocoWorld:
         if self.top_renderer is None:
             width, height = self.top_size
             self.top_renderer = self.mujoco.Renderer(self.model, height, width)
-        self.top_renderer.update_scene(self.data, camera="_top")
+        hidden = self.mujoco.MjvOption()
+        for group in self.hidden_from_top:
+            hidden.geomgroup[group] = 0
+        self.top_renderer.update_scene(self.data, camera="_top", scene_option=hidden)
         image: np.ndarray = self.top_renderer.render()
         return image
 

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from demoplan.errors import InputError, UsageError
-from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
+from demoplan.execution.executor import (
+    ExecutionSettings,
+    RunEvent,
+    RunReport,
+    execute,
+    first_plan,
+    first_targets,
+)
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
@@ -23,26 +30,39 @@ __all__ = ["make_world", "run_task"]
 
 
 def make_world(
-    sim: str, scene: Scene, faults: Faults, seed: int, perception: str = "state"
+    sim: str,
+    scene: Scene,
+    faults: Faults,
+    seed: int,
+    perception: str = "state",
+    workspace: Sequence[tuple[float, float]] = (),
 ) -> World:
-    """The simulated world ``sim`` (``kinematic`` or ``mujoco``) set up as ``scene``,
-    observed through its state or (``perception="camera"``, MuJoCo) its top camera."""
+    """The simulated world ``sim`` (``kinematic``, ``mujoco`` or ``arm``) set up as
+    ``scene``, observed through its state or (``perception="camera"``, MuJoCo)
+    its top camera; ``workspace``: the (x, y) points the arm must reach besides
+    the objects (the plan's targets), where it places its base."""
     if perception not in ("state", "camera"):
         raise UsageError(f"--perception {perception}: expected state or camera")
     if sim == "kinematic":
         if perception == "camera":
             raise UsageError("--perception camera needs --sim mujoco (a world that renders)")
         return KinematicWorld(scene, faults, seed)
-    if sim == "mujoco":
+    if sim in ("mujoco", "arm"):
         from demoplan.execution.physics import MujocoWorld
 
-        world = MujocoWorld(scene, faults, seed)
+        world: MujocoWorld
+        if sim == "arm":
+            from demoplan.execution.arm import ArmWorld
+
+            world = ArmWorld(scene, faults, seed, workspace=workspace)
+        else:
+            world = MujocoWorld(scene, faults, seed)
         if perception == "camera":
             from demoplan.execution.camera_world import CameraWorld
 
             return CameraWorld(world, scene)
         return world
-    raise UsageError(f"--sim {sim}: expected kinematic or mujoco")
+    raise UsageError(f"--sim {sim}: expected kinematic, mujoco or arm")
 
 
 def run_task(
@@ -71,9 +91,20 @@ def run_task(
     and are moved only when in the way), else an input error."""
     check_scene_objects(model, scene, clutter=clutter)
     scene = complete_geometry(scene, model)
-    if video is not None and sim != "mujoco":
-        raise UsageError("--video records the physics simulation: it needs --sim mujoco")
-    world = make_world(sim, scene, faults, seed, perception)
+    if video is not None and sim not in ("mujoco", "arm"):
+        raise UsageError("--video records the physics simulation: it needs --sim mujoco or arm")
+    settings = ExecutionSettings(
+        max_replans=max_replans,
+        geometry=geometry or GeometrySettings(),
+        position_tolerance=0.01,
+        budget=Budget(timeout=planning_seconds),
+    )
+    first = None
+    workspace: list[tuple[float, float]] = []
+    if sim == "arm":  # the arm stands where it reaches the plan's targets too
+        first = first_plan(model, scene, settings)
+        workspace = [pose.position[:2] for _, pose in first_targets(first)]
+    world = make_world(sim, scene, faults, seed, perception, workspace)
     recording = None
     if video is not None:
         recording = video.with_name(f".{video.name}.part.mp4")
@@ -88,12 +119,6 @@ def run_task(
             raise InputError(
                 f"cannot write the video ({_first_line(exc)})", source=str(video)
             ) from None
-    settings = ExecutionSettings(
-        max_replans=max_replans,
-        geometry=geometry or GeometrySettings(),
-        position_tolerance=0.01,
-        budget=Budget(timeout=planning_seconds),
-    )
     writer = None
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
@@ -136,6 +161,10 @@ def run_task(
             check = getattr(world, "why_not_graspable", None)
             return None if check is None else check(obj)
 
+        def why_not_reachable(self, obj: str, pose: Any) -> str | None:
+            check = getattr(world, "why_not_reachable", None)
+            return None if check is None else check(obj, pose)
+
         @property
         def injected(self) -> Any:  # the simulated world's faults, for the report
             return getattr(world, "injected", ())
@@ -146,7 +175,7 @@ def run_task(
 
     finished = False
     try:
-        report = execute(model, scene, Recording(), settings, heard)
+        report = execute(model, scene, Recording(), settings, heard, first)
         written: tuple[str, ...] = ()
         if writer is not None:
             writer.capture(report.final, "end", _picture(world))
@@ -170,7 +199,14 @@ def run_task(
                 recording.replace(video)
             else:
                 recording.unlink(missing_ok=True)
-    return replace(report, frames=written, world=world.name)
+    simulated: Any = getattr(world, "world", world)
+    return replace(
+        report,
+        frames=written,
+        world=world.name,
+        collisions=tuple(getattr(simulated, "collisions", ())),
+        motions_refused=tuple(getattr(simulated, "motion_failures", ())),
+    )
 
 
 def check_video_path(video: Path) -> None:

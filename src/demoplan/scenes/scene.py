@@ -90,6 +90,8 @@ class Scene:
     gripper: Gripper = Gripper()
     table: tuple[tuple[float, float], tuple[float, float]] | None = None
     source: str = "scene"
+    robot: tuple[float, float, float] | None = None
+    """Where the arm of ``--sim arm`` stands: (x, y, yaw°); None: placed to reach the task."""
 
     def object(self, name: str) -> SceneObject:
         for obj in self.objects:
@@ -140,6 +142,11 @@ class _TableSchema(_Schema):
         return self
 
 
+class _RobotSchema(_Schema):
+    base: list[Coordinate] = Field(min_length=2, max_length=2)
+    yaw: Number = Field(default=0.0, ge=-360, le=360)
+
+
 class _SceneSchema(_Schema):
     format: str
     name: str | None = None
@@ -150,6 +157,7 @@ class _SceneSchema(_Schema):
     freespace: list[list[Coordinate]] | None = None
     gripper: _GripperSchema = _GripperSchema()
     table: _TableSchema | None = None
+    robot: _RobotSchema | None = None
 
     @field_validator("objects")
     @classmethod
@@ -247,6 +255,9 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
     if parsed.table is not None:
         lo, hi = parsed.table.min, parsed.table.max
         table = ((lo[0] * scale, lo[1] * scale), (hi[0] * scale, hi[1] * scale))
+    robot = None
+    if parsed.robot is not None:
+        robot = (parsed.robot.base[0] * scale, parsed.robot.base[1] * scale, parsed.robot.yaw)
     return Scene(
         objects=tuple(objects),
         landmarks=tuple((n, pose_from_dict(p, parsed.units)) for n, p in parsed.landmarks.items()),
@@ -254,6 +265,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         gripper=gripper,
         table=table,
         source=source,
+        robot=robot,
     )
 
 
@@ -303,4 +315,6 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     }
     if scene.table is not None:
         out["table"] = {"min": list(scene.table[0]), "max": list(scene.table[1])}
+    if scene.robot is not None:
+        out["robot"] = {"base": list(scene.robot[:2]), "yaw": scene.robot[2]}
     return out

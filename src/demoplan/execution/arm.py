@@ -1,0 +1,601 @@
+"""A 6-DOF arm in MuJoCo (``--sim arm``): dm_control's Kinova Jaco with a
+suction cup, inverse kinematics by mink, joint-space motions checked against
+collisions before they run.
+
+**The arm.** The Jaco model (``dm_control/third_party/kinova/jaco_arm.xml``,
+shipped in dm_control's wheel: six hinge joints, two of them limited, real link
+masses and joint friction) stands on the table at :attr:`ArmWorld.base`. Each
+joint is driven by a position servo, as a robot controller drives it; the
+links are gravity-compensated, as the Jaco's own controller does.
+
+**The tool.** A suction cup on an 8 cm stem in place of the Jaco's three-finger
+hand: the paper's cutlery is 5–8 mm thin, the napkin 3 mm, the kit's pcb 1 cm,
+and no parallel jaw in simulation lifts them off a table (the floating hand's
+pads need 13 mm). The cup holds by force, not by a weld: MuJoCo's *adhesion*
+actuator pulls the cup's contacts together with up to :data:`SUCTION_FORCE`
+newtons, so a held object is carried by that force and the pad's friction, and
+an object too heavy for it or with no face to seal on is refused before the run
+(:meth:`ArmWorld.why_not_graspable`).
+
+**Motions.** Every move of the cup is a straight line (up to the travel height,
+across, straight down), cut into waypoints 1 cm apart; each waypoint is solved
+by inverse kinematics (mink, warm-started from the one before, joint limits
+respected), so the arm's motion is a joint-space path. Before a path runs,
+every waypoint is checked in a copy of the simulation: the arm may touch
+nothing but the object it holds or is about to take, the held object nothing
+but where it is put down. A path that would collide is raised and tried again
+higher; one that still collides is not run. While it runs, the servos track
+the path and every contact the arm makes is recorded (:attr:`ArmWorld.collisions`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from demoplan.execution.arm_model import (
+    ARM_GROUP,
+    HOME,
+    MAX_PAYLOAD,
+    PAD_HALF,
+    REACH,
+    SAFETY,
+    SUCTION_FORCE,
+    ArmKinematics,
+    arm_base,
+    attach_arm,
+    check_base,
+    mass_of,
+)
+from demoplan.execution.faults import Faults
+from demoplan.execution.physics import MujocoWorld, scene_xml
+from demoplan.model import Pose
+from demoplan.scenes.scene import Scene, yaw_of
+
+__all__ = ["ArmWorld", "MotionError"]
+
+WAYPOINT = 0.01  # m between inverse-kinematics waypoints
+SPEED = 0.25  # m/s of the cup along a straight line
+TURN_SPEED = 120.0  # deg/s of the cup about the vertical
+APPROACH = 0.03  # m above the contact height where the straight approach starts
+PENETRATION = 0.002  # m: a contact deeper than this is a collision
+PARK_SECONDS = 4.0  # s for the half turn behind the base (slow: a load must not slip)
+RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
+
+
+class MotionError(RuntimeError):
+    """A motion the arm cannot make (no inverse kinematics, or a collision)."""
+
+
+class ArmWorld(MujocoWorld):
+    """The scene in MuJoCo with the Jaco arm and its suction cup; see the module docstring."""
+
+    name = "arm"
+
+    def __init__(
+        self,
+        scene: Scene,
+        faults: Faults = Faults(),
+        seed: int | None = 0,
+        schedule: Mapping[int, str] | None = None,
+        workspace: Sequence[tuple[float, float]] = (),
+    ):
+        self.base = arm_base(scene, workspace)
+        check_base(scene, self.base)
+        self.motion_failures: list[str] = []  # motions not made, and why
+        self.collisions: list[str] = []  # arm contacts with anything but its load, as they happened
+        self.grip = np.eye(4)  # the held object's frame in the cup's frame
+        self.grip_yaw = 0.0
+        self.allowed: str | None = None  # the object the cup may touch now
+        self.parked = False  # turned round behind the base (park)
+        super().__init__(scene, faults, seed, schedule)
+        self.hidden_from_top = (ARM_GROUP,)
+        self.oracle.reachable = self._comfortably_reached
+        xs = [o.pose.position[0] for o in scene.objects] + [self.base[0]]
+        ys = [o.pose.position[1] for o in scene.objects] + [self.base[1]]
+        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 0.3
+        distance = 0.6 * span / math.tan(math.radians(22.5))
+        self.overview = ([(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.1], distance)
+
+    def _comfortably_reached(self, x: float, y: float) -> bool:
+        """(x, y) lies 5 cm inside the cup's reach (where faults may put things)."""
+        distance = math.hypot(x - self.base[0], y - self.base[1])
+        return REACH[0] + 0.05 <= distance <= REACH[1] - 0.05
+
+    def _start_robot(self) -> None:
+        """The arm at its home pose, servos holding it there, suction off."""
+        mujoco = self.mujoco
+        self.kinematics = ArmKinematics(mujoco, self.base)
+        self.joints = [
+            int(
+                self.model.jnt_qposadr[
+                    mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, f"arm/joint_{k}")
+                ]
+            )
+            for k in range(1, 7)
+        ]
+        self.servos = [
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"_joint{k}")
+            for k in range(1, 7)
+        ]
+        self.suction = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "_suction")
+        self.tcp = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "arm/tcp")
+        self.pad = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "arm/pad")
+        arm_root = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "arm/b_base")
+        self.arm_bodies = {b for b in range(self.model.nbody) if self._under(b, arm_root)}
+        self.scratch = mujoco.MjData(self.model)
+        home = np.array(HOME)
+        self.data.qpos[self.joints] = home
+        self.data.ctrl[self.servos] = home
+        mujoco.mj_forward(self.model, self.data)
+        self.q = home
+        self.cup_yaw = self._cup_yaw()
+
+    # -- building --------------------------------------------------------------------------
+
+    def _compile(self, top_view: tuple[float, float, float], offscreen: tuple[int, int]) -> Any:
+        mujoco = self.mujoco
+        world = mujoco.MjSpec.from_string(scene_xml(self.scene, top_view, offscreen, hand=False))
+        attach_arm(mujoco, world, self.base)
+        for k in range(1, 7):
+            servo = world.add_actuator(
+                name=f"_joint{k}", target=f"arm/joint_{k}", trntype=mujoco.mjtTrn.mjTRN_JOINT
+            )
+            # stiff enough that joint friction (frictionloss 2 and 1 N·m) leaves
+            # under 1.5 mrad of error: under 1 mm at the cup
+            servo.set_to_position(kp=2000.0 if k <= 3 else 800.0, dampratio=1.0)
+            servo.forcerange = [-60.0, 60.0] if k <= 3 else [-25.0, 25.0]
+            servo.forcelimited = True
+        suction = world.add_actuator(
+            name="_suction", target="arm/cup", trntype=mujoco.mjtTrn.mjTRN_BODY
+        )
+        suction.set_to_adhesion(gain=SUCTION_FORCE)
+        suction.ctrlrange = [0.0, 1.0]
+        return world.compile()
+
+    def _under(self, body: int, root: int) -> bool:
+        while body > 0:
+            if body == root:
+                return True
+            body = int(self.model.body_parentid[body])
+        return False
+
+    # -- reading ---------------------------------------------------------------------------
+
+    def _cup(self, data: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        data = self.data if data is None else data
+        return np.array(data.site_xpos[self.tcp]), np.array(data.site_xmat[self.tcp]).reshape(3, 3)
+
+    def _cup_yaw(self) -> float:
+        _, rotation = self._cup()
+        return math.degrees(math.atan2(rotation[1, 0], rotation[0, 0]))
+
+    def _hand(self) -> np.ndarray:
+        return self._cup()[0]
+
+    def _hand_body(self) -> np.ndarray:
+        return self._cup()[0]
+
+    def _touching(self, obj: str, data: Any = None) -> bool:
+        data = self.data if data is None else data
+        body = self._body(obj)
+        for contact in data.contact[: data.ncon]:
+            pair = (int(contact.geom1), int(contact.geom2))
+            if self.pad in pair:
+                other = pair[1] if pair[0] == self.pad else pair[0]
+                if int(self.model.geom_bodyid[other]) == body and contact.dist < 0.002:
+                    return True
+        return False
+
+    def _lifted(self, name: str) -> bool:
+        """Sealed on the cup and off whatever it stood on."""
+        centre = self.data.xpos[self._body(name)]
+        return bool(self._touching(name) and centre[2] > 0.004 + self.geometry[name].size[2] / 2)
+
+    def _object_frame(self, name: str, data: Any = None) -> np.ndarray:
+        data = self.data if data is None else data
+        body = self._body(name)
+        frame = np.eye(4)
+        frame[:3, :3] = np.array(data.xmat[body]).reshape(3, 3)
+        frame[:3, 3] = data.xpos[body]
+        return frame
+
+    def _cup_frame(self, data: Any = None) -> np.ndarray:
+        position, rotation = self._cup(data)
+        frame = np.eye(4)
+        frame[:3, :3] = rotation
+        frame[:3, 3] = position
+        return frame
+
+    # -- motions ---------------------------------------------------------------------------
+
+    def _path(self, goal: np.ndarray, yaw: float) -> list[np.ndarray]:
+        """Joint waypoints moving the cup in a straight line from where it is to
+        ``goal`` while it turns to ``yaw``; MotionError where one has no solution."""
+        start, _ = self._cup()
+        turn = ((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0
+        steps = max(
+            1, math.ceil(float(np.linalg.norm(goal - start)) / WAYPOINT), math.ceil(abs(turn) / 5)
+        )
+        path, q = [], self.q
+        for k in range(1, steps + 1):
+            t = k / steps
+            point = start + t * (goal - start)
+            solved = self.kinematics.solve(point, self.cup_yaw + t * turn, q)
+            if solved is None:
+                solved = self.kinematics.solve_anywhere(point, self.cup_yaw + t * turn, q)
+            if solved is None:
+                raise MotionError(f"the cup cannot reach {_xyz(point)}")
+            if np.max(np.abs(_wrapped(solved - q))) > 0.6:
+                raise MotionError(f"the arm would swing through a new posture near {_xyz(point)}")
+            q = q + _wrapped(solved - q)
+            path.append(q)
+        return path
+
+    def _collision(self, path: list[np.ndarray], landing: bool) -> str | None:
+        """The first collision along ``path`` in a copy of the simulation, or None;
+        ``landing``: the held object may touch what it is put on at the end."""
+        mujoco = self.mujoco
+        scratch = self.scratch
+        scratch.qpos[:] = self.data.qpos
+        scratch.qvel[:] = 0.0
+        held = self._body(self.held) if self.held is not None else -1
+        if self.held is not None:
+            joint = int(self.model.body_jntadr[held])
+            address = int(self.model.jnt_qposadr[joint])
+        for index, q in enumerate(path):
+            scratch.qpos[self.joints] = q
+            if self.held is not None:
+                mujoco.mj_kinematics(self.model, scratch)
+                frame = self._cup_frame(scratch) @ self.grip
+                quat = np.zeros(4)
+                mujoco.mju_mat2Quat(quat, frame[:3, :3].flatten())
+                scratch.qpos[address : address + 3] = frame[:3, 3]
+                scratch.qpos[address + 3 : address + 7] = quat
+            mujoco.mj_forward(self.model, scratch)
+            last = index >= len(path) - 3
+            for contact in scratch.contact[: scratch.ncon]:
+                if contact.dist > -PENETRATION:
+                    continue
+                first = int(self.model.geom_bodyid[contact.geom1])
+                second = int(self.model.geom_bodyid[contact.geom2])
+                found = self._offending(first, second, held, landing and last)
+                if found is not None:
+                    return found
+        return None
+
+    def _offending(self, first: int, second: int, held: int, landing: bool) -> str | None:
+        """A sentence when a contact between bodies ``first`` and ``second`` is a
+        collision (the arm touching anything but its load, the load anything
+        but its landing place)."""
+        allowed = self._body(self.allowed) if self.allowed is not None else -2
+        for mine, other in ((first, second), (second, first)):
+            if mine in self.arm_bodies and other not in self.arm_bodies:
+                if other in (held, allowed):
+                    return None
+                return f"the arm would hit {self._body_label(other)}"
+            if mine == held and other not in self.arm_bodies and not landing:
+                return f"{self.held} would hit {self._body_label(other)}"
+        return None
+
+    def _body_label(self, body: int) -> str:
+        if body == 0:
+            return "the table"
+        internal = self.mujoco.mj_id2name(self.model, self.mujoco.mjtObj.mjOBJ_BODY, body)
+        for name, inner in self.body_names.items():
+            if inner == internal:
+                return name
+        return str(internal)
+
+    def _run(self, path: list[np.ndarray], seconds: float) -> None:
+        """Track ``path`` with the joint servos over ``seconds`` (smooth start and stop)."""
+        steps = max(1, math.ceil(seconds / 0.002))
+        points = [self.q, *path]
+        for k in range(1, steps + 1):
+            t = k / steps
+            t = t * t * (3.0 - 2.0 * t)
+            position = t * (len(points) - 1)
+            index = min(int(position), len(points) - 2)
+            frac = position - index
+            self.data.ctrl[self.servos] = points[index] + frac * (points[index + 1] - points[index])
+            self.mujoco.mj_step(self.model, self.data)
+            self._watch()
+            self._tick()
+        self.q = path[-1]
+        for _ in range(150):  # let the servos settle on the last waypoint
+            if np.max(np.abs(self.data.qpos[self.joints] - self.q)) < 2e-3:
+                break
+            self.mujoco.mj_step(self.model, self.data)
+            self._watch()
+            self._tick()
+
+    def _watch(self) -> None:
+        """Record the arm's contacts with anything but its load (a test reads them)."""
+        held = self._body(self.held) if self.held is not None else -1
+        for contact in self.data.contact[: self.data.ncon]:
+            if contact.dist > -PENETRATION:
+                continue
+            first = int(self.model.geom_bodyid[contact.geom1])
+            second = int(self.model.geom_bodyid[contact.geom2])
+            for mine, other in ((first, second), (second, first)):
+                if mine in self.arm_bodies and other not in self.arm_bodies:
+                    allowed = self._body(self.allowed) if self.allowed is not None else -2
+                    if other not in (held, allowed):
+                        label = (
+                            f"the arm touched {self._body_label(other)} at {self.simulated:.2f} s"
+                        )
+                        if not self.collisions or self.collisions[-1] != label:
+                            self.collisions.append(label)
+
+    def _go(
+        self, goal: np.ndarray | list[float], yaw: float | None = None, landing: bool = False
+    ) -> None:
+        """Move the cup in a straight line to ``goal`` (turning to ``yaw``),
+        after checking the path against collisions."""
+        if self.parked:
+            self._unpark()
+        goal = np.asarray(goal, dtype=float)
+        yaw = self.cup_yaw if yaw is None else yaw
+        start, _ = self._cup()
+        path = self._path(goal, yaw)
+        problem = self._collision(path, landing)
+        if problem is not None:
+            raise MotionError(problem)
+        turn = abs(((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0)
+        distance = float(np.linalg.norm(goal - start))
+        self._run(path, max(1.5 * distance / SPEED, turn / TURN_SPEED, 0.1))
+        self.cup_yaw = yaw
+
+    def _travel(self, goal_xy: tuple[float, float], yaw: float, low: float) -> None:
+        """Up, across at the travel height, and down to ``low`` above ``goal_xy``:
+        straight moves above what stands along the way, raised when a check
+        finds a collision."""
+        if self.parked:
+            self._unpark()
+        here, _ = self._cup()
+        problem = ""
+        for raise_by in RAISES:
+            height = max(
+                self._travel_height((float(here[0]), float(here[1])), goal_xy) + raise_by, low
+            )
+            try:
+                self._go([here[0], here[1], max(height, here[2])])
+                self._go([goal_xy[0], goal_xy[1], height], yaw)
+                return
+            except MotionError as exc:
+                problem = str(exc)
+        raise MotionError(problem)
+
+    def _travel_height(
+        self, start: tuple[float, float] | None = None, goal: tuple[float, float] | None = None
+    ) -> float:
+        """A height for the cup to cross from ``start`` to ``goal`` (x, y): 3 cm
+        over the load above the tallest object near that line (every object
+        without one)."""
+        carried = 0.0
+        sweep = 0.05
+        if self.held is not None:
+            shape = self.geometry[self.held]
+            carried = shape.size[2]
+            sweep += math.hypot(shape.size[0], shape.size[1]) / 2
+        tops = []
+        for name in self._active():
+            if name == self.held:
+                continue
+            pose = self._pose(name)
+            shape = self.geometry[name]
+            if start is not None and goal is not None:
+                near = sweep + math.hypot(shape.size[0], shape.size[1]) / 2
+                if _distance_to_segment(pose.position[:2], start, goal) > near:
+                    continue
+            tops.append(pose.position[2] + shape.size[2])
+        return max(tops, default=0.0) + carried + 0.03
+
+    # -- the World protocol ------------------------------------------------------------
+
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
+        self.oracle.actions += 1
+        if self.held is not None or obj not in self._active():
+            return
+        pose = where if where is not None else self._pose(obj)
+        top = pose.position[2] + self.geometry[obj].size[2]
+        x, y = pose.position[0], pose.position[1]
+        missed = self.oracle._chance(self.faults.grasp, "grasp")
+        if missed:  # the cup comes down 3 cm beside the object and seals on air
+            self.oracle.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
+            angle = math.radians(yaw_of(pose) + axis + 90.0)
+            x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
+        try:
+            self.allowed = obj
+            self._travel((x, y), self.cup_yaw, top + APPROACH)
+            self._go([x, y, top + APPROACH])
+            if not missed:
+                self._go([x, y, top + 0.002], landing=True)
+                self._press(obj, x, y, top)
+            self.data.ctrl[self.suction] = 1.0
+            self._settle(0.3)
+            if self._touching(obj):
+                self.held = obj
+                self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
+                self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
+            self._go([x, y, top + APPROACH])
+            self._settle(0.2)
+        except MotionError as exc:
+            self._give_up(str(exc))
+        finally:
+            self.allowed = None
+        if self.held is not None and not self._lifted(self.held):
+            self.held = None
+            self.data.ctrl[self.suction] = 0.0
+            self._settle(0.2)
+
+    def put_down(self, obj: str, pose: Pose) -> None:
+        self.oracle.actions += 1
+        if self.held != obj:
+            return
+        self._sync_oracle()
+        here = self._hand()
+        if self.oracle._chance(self.faults.drop, "drop"):
+            x, y = pose.position[0], pose.position[1]
+            t = float(self.oracle.rng.uniform(0.2, 0.8))
+            spot = self.oracle._land(obj, here[0] + t * (x - here[0]), here[1] + t * (y - here[1]))
+            self._release_at(spot, 0.012, "drop", f"{obj} fell at {_xy(spot)} while carried")
+            return
+        if self.oracle._chance(self.faults.misplace, "misplace"):
+            off = self.oracle.misplaced_spot(obj, pose)
+            if off is not None:
+                detail = f"{obj} released at {_xy(off)}, off its target"
+                self._release_at(off, 0.002, "misplace", detail)
+                return
+        self._release_at(pose, 0.002, None, "")
+
+    def _press(self, obj: str, x: float, y: float, top: float) -> None:
+        """Lower the cup 1 mm at a time until its pad touches ``obj`` (as a
+        compliant suction gripper senses contact), at most 6 mm below where the
+        top was expected."""
+        for depth in np.arange(0.001, -0.0065, -0.001):
+            if self._touching(obj):
+                return
+            self._go([x, y, top + depth], landing=True)
+
+    def _release_at(self, pose: Pose, gap: float, fault: str | None, detail: str) -> None:
+        """Carry the held object over ``pose``, lower it to ``gap`` above it and let go."""
+        assert self.held is not None
+        obj = self.held
+        shape = self.geometry[obj]
+        target = np.eye(4)
+        target[:3, :3] = _yaw_matrix(yaw_of(pose))
+        target[:3, 3] = [
+            pose.position[0],
+            pose.position[1],
+            pose.position[2] + shape.size[2] / 2 + gap,
+        ]
+        cup = target @ np.linalg.inv(self.grip)
+        yaw = math.degrees(math.atan2(cup[1, 0], cup[0, 0]))
+        yaw = self.cup_yaw + ((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0
+        above = cup[:3, 3] + [0.0, 0.0, APPROACH]
+        try:
+            self._travel((float(above[0]), float(above[1])), yaw, float(above[2]))
+            self._go(above, yaw)
+            self._go(cup[:3, 3], yaw, landing=True)
+        except MotionError as exc:
+            self._give_up(str(exc))
+            return
+        self.data.ctrl[self.suction] = 0.0
+        self._settle(0.3)
+        self.held = None
+        try:
+            self.allowed = obj  # the cup leaves it: touching it on the way up is no collision
+            self._go(above)
+        except MotionError as exc:
+            self._give_up(str(exc))
+        finally:
+            self.allowed = None
+        self._settle(0.2)
+        if fault is not None:
+            self.oracle.record_fault(fault, obj, pose, detail)
+
+    def _give_up(self, reason: str) -> None:
+        """A motion that cannot be made is not made: the action fails, and the
+        executor, observing, replans."""
+        self.motion_failures.append(reason)
+
+    def park(self) -> None:
+        """Turn the arm (and what it holds) round behind its base, out of the top
+        camera's view: straight up first, then the home pose turned by half a
+        turn of the first joint, every step checked against collisions."""
+        here, _ = self._cup()
+        parked = np.array(HOME) + [math.pi, 0, 0, 0, 0, 0]
+        if np.max(np.abs(_wrapped(self.q - parked))) < 1e-3:
+            return
+        try:
+            self._go([here[0], here[1], max(here[2], self._travel_height() + 0.1)])
+            target = self.q + _wrapped(parked - self.q)
+            path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
+            problem = self._collision(path, False)
+            if problem is not None:
+                raise MotionError(problem)
+            self._run(path, PARK_SECONDS)
+            self.parked = True
+        except MotionError as exc:
+            self._give_up(f"parking: {exc}")
+        self.cup_yaw = self._cup_yaw()
+
+    def _unpark(self) -> None:
+        """Back from behind the base to the home pose, in joint space (checked)."""
+        self.parked = False
+        target = self.q + _wrapped(np.array(HOME) - self.q)
+        path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
+        problem = self._collision(path, False)
+        if problem is not None:
+            raise MotionError(problem)
+        self._run(path, PARK_SECONDS)
+        self.cup_yaw = self._cup_yaw()
+
+    # -- checks before the run -----------------------------------------------------------
+
+    def why_not_graspable(self, obj: str) -> str | None:
+        """Why the suction cup cannot take ``obj`` (no flat top it seals on, or
+        too heavy for its pull), or None."""
+        shape = self.geometry[obj]
+        if shape.shape == "sphere":
+            return "is a sphere: it has no flat top for the suction cup to seal on"
+        width = min(shape.size[0], shape.size[1])
+        if width < 2 * PAD_HALF:
+            return (
+                f"has a top {1000 * width:.0f} mm across; the suction pad needs "
+                f"{2000 * PAD_HALF:.0f} mm"
+            )
+        mass = mass_of(shape)
+        if mass > MAX_PAYLOAD:
+            return (
+                f"weighs {mass:.2f} kg; the suction cup ({SUCTION_FORCE:g} N) carries up to "
+                f"{MAX_PAYLOAD:.2f} kg with a safety factor of {SAFETY:g}"
+            )
+        return None
+
+    def why_not_reachable(self, obj: str, pose: Pose) -> str | None:
+        """Why the cup cannot come down on ``obj`` standing at ``pose`` (out of the
+        arm's reach), or None."""
+        shape = self.geometry[obj]
+        top = pose.position[2] + shape.size[2]
+        point = np.array([pose.position[0], pose.position[1], top])
+        for height in (0.0, APPROACH):
+            if self.kinematics.solve_anywhere(point + [0, 0, height], 0.0, np.array(HOME)) is None:
+                bx, by, _ = self.base
+                distance = math.hypot(point[0] - bx, point[1] - by)
+                low, high = REACH
+                return (
+                    f"at {_xy(pose)} is out of the arm's reach ({distance:.2f} m from its "
+                    f"base at ({bx:.3f}, {by:.3f}); the cup reaches {low:.2f}–{high:.2f} m)"
+                )
+        return None
+
+
+def _distance_to_segment(
+    point: tuple[float, ...], start: tuple[float, float], goal: tuple[float, float]
+) -> float:
+    p, a, b = np.asarray(point[:2]), np.asarray(start), np.asarray(goal)
+    span = b - a
+    t = 0.0 if not span.any() else float(np.clip(np.dot(p - a, span) / np.dot(span, span), 0, 1))
+    return float(np.linalg.norm(p - (a + t * span)))
+
+
+def _wrapped(delta: np.ndarray) -> np.ndarray:
+    return (np.asarray(delta) + math.pi) % (2 * math.pi) - math.pi
+
+
+def _yaw_matrix(yaw: float) -> np.ndarray:
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _xyz(point: np.ndarray) -> str:
+    return f"({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f})"
+
+
+def _xy(pose: Pose) -> str:
+    return f"({pose.position[0]:.3f}, {pose.position[1]:.3f})"

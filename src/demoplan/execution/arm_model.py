@@ -1,0 +1,226 @@
+"""The arm of ``--sim arm`` as a model: dm_control's Kinova Jaco with a suction
+cup in MuJoCo, its inverse kinematics (mink), where it stands, and what it can
+take (see :mod:`demoplan.execution.arm` for the world that moves it)."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from demoplan.errors import InputError, UsageError
+from demoplan.model import ObjectGeometry
+from demoplan.scenes.scene import Scene
+
+__all__ = [
+    "ArmKinematics",
+    "arm_base",
+    "attach_arm",
+    "check_base",
+    "jaco_folder",
+    "mass_of",
+]
+
+SUCTION_FORCE = 5.0
+"""N: the adhesion actuator's pull at full suction (a 10 mm cup at 60 kPa of vacuum
+holds 0.785 cm² × 6 N/cm² = 4.7 N)."""
+SAFETY = 2.0  # the cup must hold this many times an object's weight
+MAX_PAYLOAD = SUCTION_FORCE / (SAFETY * 9.81)  # kg
+PAD_HALF = 0.005  # m: half the side of the square suction pad
+STEM = 0.08  # m: from the wrist flange to the pad's face
+ARM_GROUP = 3
+"""MuJoCo geom group of the arm's links: the top camera masks them out, as a
+robot's perception filters out the robot's own links by its kinematics."""
+BASE_RADIUS = 0.06  # m: the Jaco base's footprint
+BASE_STANDOFF = 0.42  # m: default base distance from the objects' centre
+REACH = (0.22, 0.6)
+"""m: horizontal distances from the base where the cup, pointing down, reaches
+anywhere from the table to 30 cm up (measured by inverse kinematics on a grid)."""
+HOME = (-0.237, 2.743, 5.164, 2.922, 0.839, -2.027)
+"""rad: the cup 35 cm in front of the base, 30 cm up, pointing down (elbow up)."""
+_ARM_XML = "jaco_arm.xml"
+
+
+def jaco_folder() -> Path:
+    """Where dm_control keeps the Kinova Jaco's model (found without importing
+    dm_control, whose Python bindings this world does not use)."""
+    spec = importlib.util.find_spec("dm_control")
+    if spec is None or not spec.submodule_search_locations:
+        raise UsageError(
+            "--sim arm needs dm_control's Kinova Jaco model and mink: pip install 'demoplan[sim]'"
+        )
+    folder = Path(next(iter(spec.submodule_search_locations))) / "third_party" / "kinova"
+    if not (folder / _ARM_XML).is_file():
+        raise UsageError(f"--sim arm: {folder / _ARM_XML} is missing from dm_control")
+    return folder
+
+
+def _arm_spec(mujoco: Any) -> Any:
+    """The Jaco arm with the suction tool on its wrist flange, links gravity-compensated."""
+    arm = mujoco.MjSpec.from_file(str(jaco_folder() / _ARM_XML))
+    flange = arm.site("wristsite")
+    tool = arm.body("b_6").add_body(name="tool", pos=flange.pos, quat=flange.quat)
+    tool.add_geom(
+        name="stem",
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        size=[0.008, (STEM - 0.008) / 2, 0],
+        pos=[0, 0, (STEM - 0.008) / 2],
+        rgba=[0.55, 0.55, 0.6, 1],
+        mass=0.1,
+    )
+    cup = tool.add_body(name="cup", pos=[0, 0, STEM - 0.008])
+    cup.add_geom(
+        name="pad",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[PAD_HALF, PAD_HALF, 0.004],
+        pos=[0, 0, 0.004],
+        rgba=[0.15, 0.25, 0.7, 1],
+        mass=0.01,
+        margin=0.001,
+        friction=[1.5, 0.02, 0.001],
+        condim=4,
+        solref=[0.004, 1.0],
+        solimp=[0.99, 0.999, 0.0005, 0.5, 2.0],
+    )
+    cup.add_site(name="tcp", pos=[0, 0, 0.008])
+    for body in arm.bodies:
+        body.gravcomp = 1
+    for geom in arm.geoms:
+        geom.group = ARM_GROUP
+    return arm
+
+
+def attach_arm(mujoco: Any, world: Any, base: tuple[float, float, float]) -> None:
+    """The arm (prefix ``arm/``) at ``base`` = (x, y, yaw°) in ``world``."""
+    x, y, yaw = base
+    half = math.radians(yaw) / 2
+    frame = world.worldbody.add_frame(pos=[x, y, 0], quat=[math.cos(half), 0, 0, math.sin(half)])
+    world.attach(_arm_spec(mujoco), prefix="arm/", frame=frame)
+
+
+def _tool_rotation(yaw: float) -> np.ndarray:
+    """The cup's frame pointing straight down, its x axis at ``yaw`` degrees."""
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
+
+
+class ArmKinematics:
+    """Inverse kinematics of the cup (mink on a model of the arm alone)."""
+
+    def __init__(self, mujoco: Any, base: tuple[float, float, float]):
+        import mink
+
+        self.mink = mink
+        world = mujoco.MjSpec()
+        attach_arm(mujoco, world, base)
+        self.model = world.compile()
+        self.configuration = mink.Configuration(self.model)
+        self.task = mink.FrameTask("arm/tcp", "site", position_cost=1.0, orientation_cost=0.5)
+        self.limits = [mink.ConfigurationLimit(self.model)]
+        low = self.model.jnt_range[:, 0].copy()
+        high = self.model.jnt_range[:, 1].copy()
+        free = ~self.model.jnt_limited.astype(bool)
+        low[free], high[free] = -math.pi, math.pi
+        self.low, self.high = low, high
+
+    def solve(
+        self, position: np.ndarray, yaw: float, seed: np.ndarray, steps: int = 200
+    ) -> np.ndarray | None:
+        """Joint angles putting the cup at ``position`` pointing down at ``yaw``,
+        starting from ``seed``; None when the solver does not get within 0.5 mm
+        and 0.3° (out of reach, or a seed that leads nowhere)."""
+        mink = self.mink
+        self.configuration.update(np.array(seed, dtype=float))
+        target = mink.SE3.from_rotation_and_translation(
+            mink.SO3.from_matrix(_tool_rotation(yaw)), np.asarray(position, dtype=float)
+        )
+        self.task.set_target(target)
+        for _ in range(steps):
+            velocity = mink.solve_ik(
+                self.configuration, [self.task], 0.05, "daqp", damping=1e-3, limits=self.limits
+            )
+            self.configuration.integrate_inplace(velocity, 0.05)
+            error = self.task.compute_error(self.configuration)
+            if np.linalg.norm(error[:3]) < 5e-4 and np.linalg.norm(error[3:]) < 5e-3:
+                return np.array(self.configuration.q, dtype=float)
+        return None
+
+    def solve_anywhere(
+        self, position: np.ndarray, yaw: float, seed: np.ndarray
+    ) -> np.ndarray | None:
+        """:meth:`solve` from ``seed``, then from a few fixed restarts."""
+        found = self.solve(position, yaw, seed)
+        rng = np.random.default_rng(0)
+        for _ in range(6):
+            if found is not None:
+                return found
+            found = self.solve(position, yaw, rng.uniform(self.low, self.high))
+        return found
+
+
+def arm_base(scene: Scene, workspace: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
+    """Where the arm stands, (x, y, yaw°): the scene's ``robot`` when it says,
+    else the spot around the points to reach (the objects and ``workspace``)
+    that leaves every point best inside the cup's reach (:data:`REACH`, at
+    most 30 cm up) and no object on the base; ties go to the spot in front
+    (−x), facing +x. The yaw faces the points' centre."""
+    if scene.robot is not None:
+        return scene.robot
+    points = np.array(
+        [o.pose.position[:2] for o in scene.objects] + [tuple(p[:2]) for p in workspace],
+        dtype=float,
+    )
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2
+    best: tuple[float, tuple[float, float, float]] | None = None
+    for standoff in (0.42, 0.35, 0.5, 0.3):
+        for turn in range(0, 360, 15):
+            angle = math.radians(180 + turn)
+            base = centre + standoff * np.array([math.cos(angle), math.sin(angle)])
+            distances = np.linalg.norm(points - base, axis=1)
+            margin = float(min((distances - REACH[0]).min(), (REACH[1] - distances).min()))
+            clear = all(
+                math.dist(o.pose.position[:2], base) >= BASE_RADIUS + footprint(o.geometry)
+                for o in scene.objects
+                if o.geometry is not None
+            )
+            if clear and (best is None or margin > best[0] + 0.01):
+                facing = math.degrees(math.atan2(*(centre - base)[::-1]))
+                best = (margin, (float(base[0]), float(base[1]), facing))
+    if best is None:
+        x, y = centre
+        return (float(x) - BASE_STANDOFF, float(y), 0.0)
+    return best[1]
+
+
+def check_base(scene: Scene, base: tuple[float, float, float]) -> None:
+    """An input error for an object standing where the arm's base stands."""
+    for obj in scene.objects:
+        assert obj.geometry is not None
+        reach = footprint(obj.geometry)
+        distance = math.hypot(obj.pose.position[0] - base[0], obj.pose.position[1] - base[1])
+        if distance < BASE_RADIUS + reach:
+            raise InputError(
+                f"stands inside the arm's base at ({base[0]:.3f}, {base[1]:.3f}) "
+                f"({distance:.3f} m from its centre; at least "
+                f"{BASE_RADIUS + reach:.3f} m expected)",
+                source=scene.source,
+                field=f"objects.{obj.name}.position",
+            )
+
+
+def footprint(shape: ObjectGeometry | None) -> float:
+    """The radius of the circle round an object's footprint."""
+    return 0.0 if shape is None else math.hypot(shape.size[0], shape.size[1]) / 2
+
+
+def mass_of(shape: ObjectGeometry) -> float:
+    from demoplan.execution.physics import DENSITY
+
+    sx, sy, sz = shape.size
+    if shape.shape == "box":
+        return DENSITY * sx * sy * sz
+    return DENSITY * math.pi * (max(sx, sy) / 2) ** 2 * sz

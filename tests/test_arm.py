@@ -1,0 +1,223 @@
+"""The 6-DOF arm (`demoplan run --sim arm`): dm_control's Kinova Jaco with a
+suction cup in MuJoCo, motions by inverse kinematics, checked against collisions.
+
+The acceptance runs read MuJoCo's contacts: every contact of an arm link (the
+cup included) with anything but the object it holds or is taking is recorded
+by the world while it simulates, and must not happen."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.execution.executor import RunReport, execute
+from demoplan.learning import learn
+from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.learning.modelfile import save_model
+from demoplan.model import TaskModel
+from demoplan.scenes.scene import complete_geometry, load_scene, yaw_of
+from tests.helpers import EXAMPLES, paper_model
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
+pytest.importorskip("mink", reason="mink is not installed (pip install -e '.[sim]')")
+
+from demoplan.execution.arm import ArmWorld, MotionError
+from demoplan.execution.runner import run_task
+
+BLOCKS = EXAMPLES / "scenes" / "pyramid-fig4.json"
+SET_TABLE = EXAMPLES / "scenes" / "set-table-cluttered.json"
+KIT = EXAMPLES / "kitting" / "scene-manual-on-motor.json"
+
+
+@pytest.fixture(scope="module")
+def blocks() -> TaskModel:
+    return paper_model("blocks/demonstrations.json")
+
+
+@pytest.fixture(scope="module")
+def set_table() -> TaskModel:
+    return paper_model("set_table")
+
+
+@pytest.fixture(scope="module")
+def kit() -> TaskModel:
+    return learn(load_demonstrations([EXAMPLES / "kitting" / "demonstrations.json"]))
+
+
+def _assert_done_on_target(report: RunReport) -> None:
+    """Success; every object within 1 cm and 5° of the target of its last
+    put-down; the arm touched nothing but its load; no motion refused."""
+    assert report.success, (report.reason, report.failures, report.motions_refused)
+    assert report.collisions == ()
+    assert report.motions_refused == ()
+    last: dict[str, Any] = {}
+    for step in report.actions:
+        if step.ok and step.action.kind == "PUT_DOWN":
+            last[step.action.object] = step.pose
+    assert last
+    for name, target in last.items():
+        final = report.final.poses[name]
+        assert math.dist(final.position, target.position) < 0.01, name
+        turn = (yaw_of(final) - yaw_of(target) + 180.0) % 360.0 - 180.0
+        assert abs(turn) < 5.0, (name, turn)
+
+
+def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
+    """§V.B executed by the arm: demonstration 2's goal, 4 moves, the pyramid stands."""
+    report = run_task(blocks, load_scene(BLOCKS), sim="arm")
+    _assert_done_on_target(report)
+    assert report.goal == 1 and report.first_plan_length == 8
+    assert report.final.poses["red"].position[2] == pytest.approx(0.04, abs=0.003)
+
+
+def test_experiment_1_on_the_arm(set_table: TaskModel) -> None:
+    """The paper's set-table task: 5–8 mm cutlery, a 3 mm napkin on the plate —
+    what the floating hand's pads cannot lift, the suction cup takes."""
+    report = run_task(set_table, load_scene(SET_TABLE), sim="arm")
+    _assert_done_on_target(report)
+    assert report.final.poses["napkin"].position[2] > 0.01  # on the plate
+
+
+def test_kitting_on_the_arm(kit: TaskModel) -> None:
+    """The kit: a 1 cm pcb, the manual parked off the motor and put on the pcb last."""
+    report = run_task(kit, load_scene(KIT), sim="arm")
+    _assert_done_on_target(report)
+    manual, pcb = report.final.poses["manual"], report.final.poses["pcb"]
+    assert manual.position[2] == pytest.approx(0.01, abs=0.002)
+    assert math.dist(manual.position[:2], pcb.position[:2]) < 0.01
+
+
+def test_experiment_2_on_vision_with_the_arm(blocks: TaskModel) -> None:
+    """The arm acting on what the top camera sees (Hough-transform blocks)."""
+    report = run_task(blocks, load_scene(BLOCKS), sim="arm", perception="camera")
+    assert report.success, (report.reason, report.failures)
+    assert report.collisions == ()
+
+
+@pytest.mark.parametrize("kind", ["drop", "misplace", "grasp", "displace"])
+def test_faults_on_the_arm_are_detected_and_recovered(blocks: TaskModel, kind: str) -> None:
+    """One fault at a given action: reported as injected, detected as a failure,
+    replanned, and the run still ends with the pyramid, the arm touching nothing."""
+    scene = complete_geometry(load_scene(BLOCKS), blocks)
+    at = {"drop": 4, "displace": 4, "misplace": 4, "grasp": 3}[kind]
+    world = ArmWorld(scene, schedule={at: kind})
+    report = execute(blocks, scene, world)
+    assert [f.kind for f in world.injected] == [kind]
+    assert report.success and max(report.pose_errors.values()) < 0.01
+    assert report.failures and report.replans == len(report.failures)
+    assert world.collisions == [] and world.motion_failures == []
+
+
+# -- the checks that make the above mean something ---------------------------------------
+
+
+def test_the_collision_check_refuses_a_motion_through_a_block(blocks: TaskModel) -> None:
+    """Moving the cup straight down into the pyramid is refused before it runs
+    (the arm does not move), naming the block it would hit first (red, on top)."""
+    scene = complete_geometry(load_scene(BLOCKS), blocks)
+    world = ArmWorld(scene)
+    before = np.array(world.data.qpos[world.joints])
+    green = world._pose("green").position
+    with pytest.raises(MotionError, match="would hit red"):
+        world._go([green[0], green[1], 0.02])
+    assert np.allclose(world.data.qpos[world.joints], before, atol=1e-3)
+
+
+def test_the_contact_watch_sees_a_collision(blocks: TaskModel) -> None:
+    """Driving the arm through a block without the check is recorded as a contact
+    (so an empty record in the runs above is a real observation)."""
+    scene = complete_geometry(load_scene(BLOCKS), blocks)
+    world = ArmWorld(scene)
+    green = world._pose("green").position
+    path = world._path(np.array([green[0], green[1], 0.02]), world.cup_yaw)
+    world._run(path, 2.0)
+    assert any("touched red" in c for c in world.collisions)
+
+
+def test_the_suction_holds_by_force_not_a_weld(blocks: TaskModel) -> None:
+    """With the suction off the cup lifts nothing; on, the block rises with it."""
+    scene = complete_geometry(load_scene(BLOCKS), blocks)
+    world = ArmWorld(scene)
+    world.grasp("red", 0.0)
+    assert world.observe().held == "red"
+    assert world.data.ctrl[world.suction] == 1.0
+    assert world.model.neq == 0  # no weld, no equality constraint of any kind
+    world.data.ctrl[world.suction] = 0.0
+    world._settle(0.5)
+    assert world.observe().held is None
+
+
+# -- refused before anything moves ---------------------------------------------------------
+
+
+def _scene_file(tmp_path: Path, objects: dict[str, Any], robot: Any = None) -> Path:
+    data: dict[str, Any] = {"format": "demoplan/scene-1", "objects": objects}
+    if robot is not None:
+        data["robot"] = robot
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def _blocks_objects() -> dict[str, Any]:
+    return json.loads(BLOCKS.read_text())["objects"]
+
+
+@pytest.fixture(scope="module")
+def blocks_file(blocks: TaskModel, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("arm") / "blocks.json"
+    save_model(blocks, path)
+    return path
+
+
+def _run_cli(model: Path, scene: Path) -> Any:
+    return CliRunner().invoke(app, ["run", str(model), str(scene), "--sim", "arm"])
+
+
+def test_an_unreachable_scene_is_refused_in_one_line(blocks_file: Path, tmp_path: Path) -> None:
+    """The arm stands where the scene says, 1.5 m away: exit 1 before any motion."""
+    scene = _scene_file(tmp_path, _blocks_objects(), robot={"base": [-1.2, 0.0]})
+    result = _run_cli(blocks_file, scene)
+    assert result.exit_code == 1, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and "out of the arm's reach" in lines[0] and "red" in lines[0]
+
+
+def test_an_object_in_the_arms_base_is_refused(blocks_file: Path, tmp_path: Path) -> None:
+    scene = _scene_file(tmp_path, _blocks_objects(), robot={"base": [0.3, 0.04]})
+    result = _run_cli(blocks_file, scene)
+    assert result.exit_code == 1, result.output
+    assert "objects.wood.position" in result.output and "inside the arm's base" in result.output
+
+
+def test_a_too_heavy_object_is_refused(kit: TaskModel, tmp_path: Path) -> None:
+    """The kit's cable as a 4 × 4 × 50 cm wooden column (0.48 kg), beyond what the
+    cup's 5 N carry with a safety factor of 2: one line naming it and its
+    weight, exit 1, before any motion."""
+    scene = json.loads(KIT.read_text())
+    scene["objects"]["cable"]["size"] = [0.04, 0.04, 0.5]
+    path = tmp_path / "column.json"
+    path.write_text(json.dumps(scene))
+    model = tmp_path / "kit.json"
+    save_model(kit, model)
+    result = _run_cli(model, path)
+    assert result.exit_code == 1, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and "cable weighs 0.48 kg; the suction cup" in lines[0], lines
+
+
+def test_an_object_without_a_flat_top_is_refused(blocks: TaskModel) -> None:
+    scene = complete_geometry(load_scene(BLOCKS), blocks)
+    world = ArmWorld(scene)
+    world.geometry["red"] = type(world.geometry["red"])("sphere", (0.04, 0.04, 0.04))
+    assert "no flat top" in (world.why_not_graspable("red") or "")
+    assert world.why_not_graspable("green") is None
