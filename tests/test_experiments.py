@@ -48,12 +48,16 @@ def test_experiments_command_reproduces_the_papers_tables(report: Path) -> None:
     assert planning["1"]["actions"] and "planning in a new scene" in report
     assert ("1", "Stream segmented into the demonstration's steps") in names
     assert (out / "experiment1-stream.csv").exists()
-    if importlib.util.find_spec("mujoco") is not None:  # Fig. 4, right: the robot builds it
-        assert ("2", "Executed by the robot (MuJoCo)") in names
+    if all(importlib.util.find_spec(m) for m in ("mujoco", "mink", "dm_control")):
+        # Fig. 4, right: the arm carries out both experiments, touching nothing else
+        assert ("1", "Executed by the arm (MuJoCo)") in names
+        assert ("2", "Executed by the arm (MuJoCo)") in names
         assert ("2", "Executed on vision (top camera)") in names
-        assert summary["execution"][0]["success"] is True
-        board = out / "experiment2-blocks-mujoco" / "storyboard.png"
-        assert board.read_bytes().startswith(b"\x89PNG")
+        for run in summary["execution"]:
+            assert run["success"] is True and run["collisions"] == [], run
+        for stem in ("experiment1-set-table", "experiment2-blocks"):
+            board = out / f"{stem}-arm" / "storyboard.png"
+            assert board.read_bytes().startswith(b"\x89PNG")
     for stem in ("experiment1-set-table", "experiment2-blocks"):
         assert (out / f"{stem}-demonstrations.png").read_bytes().startswith(b"\x89PNG")
         assert (out / f"{stem}-plan.png").read_bytes().startswith(b"\x89PNG")
@@ -75,12 +79,13 @@ def test_the_report_measures_table_ii_on_fresh_draws(report: Path) -> None:
     assert text.index("### Fresh draws") < text.index("## Experiment 1")
     assert "![Table II over fresh draws" in text and (report / "experiment1-precision.png").exists()
     assert "## Timings" in text
-    if importlib.util.find_spec("imageio_ffmpeg") and importlib.util.find_spec("mujoco"):
-        # Fig. 4, right, as a video: the MuJoCo run, embedded in the page too.
-        assert (report / "experiment2-blocks-mujoco.mp4").read_bytes()[4:8] == b"ftyp"
-        assert '<video controls width="480" src="experiment2-blocks-mujoco.mp4">' in text
+    if all(importlib.util.find_spec(m) for m in ("imageio_ffmpeg", "mujoco", "mink")):
+        # Fig. 4, right, as videos: both arm runs, embedded in the page too.
+        for stem in ("experiment1-set-table", "experiment2-blocks"):
+            assert (report / f"{stem}-arm.mp4").read_bytes()[4:8] == b"ftyp"
+            assert f'<video controls width="480" src="{stem}-arm.mp4">' in text
         page = (report / "report.html").read_text()
-        assert page.count('src="data:video/mp4;base64,') == 1
+        assert page.count('src="data:video/mp4;base64,') == 2
 
 
 def test_a_mismatch_with_the_paper_is_reported(tmp_path: Path, monkeypatch: object) -> None:

@@ -105,7 +105,8 @@ def run(
     video: Annotated[
         Path | None,
         typer.Option(
-            help="Also record the run as an MP4 from a fixed camera (--sim mujoco or arm)."
+            help="Also record the run as an MP4 from a fixed camera (--sim mujoco; --sim arm "
+            "at twice the speed)."
         ),
     ] = None,
 ) -> None:

@@ -61,8 +61,10 @@ WAYPOINT = 0.01  # m between inverse-kinematics waypoints
 SPEED = 0.25  # m/s of the cup along a straight line
 TURN_SPEED = 120.0  # deg/s of the cup about the vertical
 APPROACH = 0.03  # m above the contact height where the straight approach starts
-PENETRATION = 0.002  # m: a contact deeper than this is a collision
-PARK_SECONDS = 4.0  # s for the half turn behind the base (slow: a load must not slip)
+PENETRATION = 0.002
+"""m: in the check before a motion, a contact deeper than this is a collision
+(the waypoints are 1 cm apart; grazing is left to the watch while it runs)."""
+PARK_SECONDS = 2.5  # s for the half turn behind the base (a load creeps on the pad if faster)
 RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
 
 
@@ -74,6 +76,7 @@ class ArmWorld(MujocoWorld):
     """The scene in MuJoCo with the Jaco arm and its suction cup; see the module docstring."""
 
     name = "arm"
+    video_speed = 2.0  # the arm moves carefully: its videos play at twice the speed
 
     def __init__(
         self,
@@ -94,11 +97,16 @@ class ArmWorld(MujocoWorld):
         super().__init__(scene, faults, seed, schedule)
         self.hidden_from_top = (ARM_GROUP,)
         self.oracle.reachable = self._comfortably_reached
-        xs = [o.pose.position[0] for o in scene.objects] + [self.base[0]]
-        ys = [o.pose.position[1] for o in scene.objects] + [self.base[1]]
-        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 0.3
-        distance = 0.6 * span / math.tan(math.radians(22.5))
-        self.overview = ([(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.1], distance)
+        # The overview looks across the arm, from its side: the arm in profile,
+        # the objects beyond its base in view.
+        points = [o.pose.position[:2] for o in scene.objects] + [p[:2] for p in workspace]
+        xs = [p[0] for p in points] + [self.base[0]]
+        ys = [p[1] for p in points] + [self.base[1]]
+        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 0.25
+        distance = 0.75 * span / math.tan(math.radians(22.5))
+        centre = [(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.1]
+        self.overview = (centre, distance)
+        self.overview_azimuth = self.base[2] + 90.0
 
     def _comfortably_reached(self, x: float, y: float) -> bool:
         """(x, y) lies 5 cm inside the cup's reach (where faults may put things)."""
@@ -258,7 +266,7 @@ class ArmWorld(MujocoWorld):
             mujoco.mj_forward(self.model, scratch)
             last = index >= len(path) - 3
             for contact in scratch.contact[: scratch.ncon]:
-                if contact.dist > -PENETRATION:
+                if contact.dist > contact.includemargin - PENETRATION:
                     continue
                 first = int(self.model.geom_bodyid[contact.geom1])
                 second = int(self.model.geom_bodyid[contact.geom2])
@@ -316,7 +324,7 @@ class ArmWorld(MujocoWorld):
         """Record the arm's contacts with anything but its load (a test reads them)."""
         held = self._body(self.held) if self.held is not None else -1
         for contact in self.data.contact[: self.data.ncon]:
-            if contact.dist > -PENETRATION:
+            if contact.dist >= contact.includemargin:  # not an active contact: not touching
                 continue
             first = int(self.model.geom_bodyid[contact.geom1])
             second = int(self.model.geom_bodyid[contact.geom2])
@@ -505,30 +513,29 @@ class ArmWorld(MujocoWorld):
 
     def park(self) -> None:
         """Turn the arm (and what it holds) round behind its base, out of the top
-        camera's view: straight up first, then the home pose turned by half a
-        turn of the first joint, every step checked against collisions."""
-        here, _ = self._cup()
-        parked = np.array(HOME) + [math.pi, 0, 0, 0, 0, 0]
-        if np.max(np.abs(_wrapped(self.q - parked))) < 1e-3:
+        camera's view: straight up, then half a turn of the first joint alone
+        (its axis is vertical, so the cup stays pointing down and a load does
+        not tilt), every step checked against collisions; the next motion
+        turns it back first (:meth:`_unpark`)."""
+        if self.parked:
             return
+        here, _ = self._cup()
         try:
             self._go([here[0], here[1], max(here[2], self._travel_height() + 0.1)])
-            target = self.q + _wrapped(parked - self.q)
-            path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
-            problem = self._collision(path, False)
-            if problem is not None:
-                raise MotionError(problem)
-            self._run(path, PARK_SECONDS)
+            self._turn_base(math.pi)
             self.parked = True
         except MotionError as exc:
             self._give_up(f"parking: {exc}")
-        self.cup_yaw = self._cup_yaw()
 
     def _unpark(self) -> None:
-        """Back from behind the base to the home pose, in joint space (checked)."""
+        """Back from behind the base: the half turn of :meth:`park` undone."""
         self.parked = False
-        target = self.q + _wrapped(np.array(HOME) - self.q)
-        path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
+        self._turn_base(-math.pi)
+
+    def _turn_base(self, angle: float) -> None:
+        """Turn the first joint alone by ``angle`` (rad), checked, then run."""
+        steps = 36
+        path = [self.q + np.array([angle * k / steps, 0, 0, 0, 0, 0]) for k in range(1, steps + 1)]
         problem = self._collision(path, False)
         if problem is not None:
             raise MotionError(problem)

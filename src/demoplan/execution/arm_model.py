@@ -32,7 +32,7 @@ SAFETY = 2.0  # the cup must hold this many times an object's weight
 MAX_PAYLOAD = SUCTION_FORCE / (SAFETY * 9.81)  # kg
 PAD_HALF = 0.005  # m: half the side of the square suction pad
 STEM = 0.08  # m: from the wrist flange to the pad's face
-ARM_GROUP = 3
+ARM_GROUP = 2
 """MuJoCo geom group of the arm's links: the top camera masks them out, as a
 robot's perception filters out the robot's own links by its kinematics."""
 BASE_RADIUS = 0.06  # m: the Jaco base's footprint
@@ -81,8 +81,11 @@ def _arm_spec(mujoco: Any) -> Any:
         rgba=[0.15, 0.25, 0.7, 1],
         mass=0.01,
         margin=0.001,
-        friction=[1.5, 0.02, 0.001],
-        condim=4,
+        # a flat pad resists turning and tilting up to about its radius times
+        # the normal force: torsional and rolling friction of 5 mm (condim 6)
+        friction=[1.5, 0.005, 0.005],
+        condim=6,
+        priority=1,  # the pad's stiff contact parameters, not a mix with the object's
         solref=[0.004, 1.0],
         solimp=[0.99, 0.999, 0.0005, 0.5, 2.0],
     )

@@ -190,6 +190,7 @@ class MujocoWorld:
     """The scene simulated by MuJoCo; see the module docstring."""
 
     name = "mujoco"
+    video_speed = 1.0  # a video plays this many times faster than simulated time
 
     def __init__(
         self,
@@ -250,6 +251,7 @@ class MujocoWorld:
         distance = 0.6 * span / math.tan(math.radians(22.5))  # MuJoCo's 45° field of view
         centre = [(min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, 0.02]
         self.overview = (centre, distance)
+        self.overview_azimuth = 120.0  # deg: the direction the overview camera looks in
         self.targets: dict[str, Pose] = {}  # drawn in renders (show_targets)
         self.hidden_from_top: tuple[int, ...] = ()  # geom groups the top camera masks out
         self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
@@ -489,7 +491,7 @@ class MujocoWorld:
         camera = self.mujoco.MjvCamera()
         camera.lookat[:], camera.distance = self.overview
         camera.elevation = -40.0
-        camera.azimuth = 120.0
+        camera.azimuth = self.overview_azimuth
         self.renderer.update_scene(self.data, camera=camera)
         self._draw_targets(self.renderer.scene)
         image: np.ndarray = self.renderer.render()
@@ -557,8 +559,9 @@ class MujocoWorld:
         self._settle(0.1)
 
     def record_video(self, path: Path, fps: float = VIDEO_FPS) -> None:
-        """From now on, write what the overview camera sees to ``path`` (MP4,
-        ``fps`` frames per simulated second) until :meth:`close`."""
+        """From now on, write what the overview camera sees to ``path`` (MP4 at
+        ``fps`` frames per second, :attr:`video_speed` times faster than
+        simulated time) until :meth:`close`."""
         import imageio_ffmpeg  # type: ignore[import-untyped]
 
         width, height = VIDEO_SIZE
@@ -566,7 +569,7 @@ class MujocoWorld:
             str(path), (width, height), fps=fps, macro_block_size=8, ffmpeg_log_level="quiet"
         )
         self.video.send(None)  # start ffmpeg
-        self.video_every = 1.0 / fps
+        self.video_every = self.video_speed / fps
         self.video_due = self.simulated
 
     def close(self) -> None:

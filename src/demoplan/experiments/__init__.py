@@ -104,11 +104,12 @@ def run_experiments(
         second = stem.startswith("experiment2")
         planning = plan_experiment(title, learning.model, scene, out, stem, against_paper=second)
         planned.append(planning)
-        if second:
-            notify(f"{title}: executing in MuJoCo")
-            executed.append(
-                execute_experiment(title, learning.model, planning.scene, out / f"{stem}-mujoco")
+        notify(f"{title}: executing on the arm in MuJoCo")
+        executed.append(
+            execute_experiment(
+                title, learning.model, planning.scene, out / f"{stem}-arm", vision=second
             )
+        )
     notify("Experiment 1 (set table): segmenting a recorded stream")
     segmented = segment_experiment(out)
     notify("Experiment 1 (set table): fresh draws against placement precision")

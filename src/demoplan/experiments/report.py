@@ -159,13 +159,16 @@ def _plan_section(learning: LearningRun, run: PlanningRun) -> str:
 
 
 def _execution_section(run: ExecutionRun) -> str:
-    lines = [f"### {run.title}: execution in MuJoCo\n"]
+    lines = [f"### {run.title}: executed by the arm in MuJoCo\n"]
     if run.skipped:
         return "\n".join([*lines, f"Skipped: {run.skipped}.\n"])
     errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in run.pose_errors)
     lines += [
-        "The chosen plan run by a simulated parallel-jaw gripper (physics, friction grasps); "
-        f"{plural(run.actions, 'action')}, {plural(run.replans, 'replan')}, "
+        "The chosen plan run by a 6-DOF arm (dm_control's Kinova Jaco with a suction cup; "
+        "`demoplan run --sim arm`): inverse kinematics for every waypoint, each motion "
+        "checked against collisions before it runs, objects held by the cup's suction "
+        f"force. {plural(run.actions, 'action')}, {plural(run.replans, 'replan')}, "
+        f"{plural(len(run.collisions), 'contact')} of the arm with anything but its load; "
         f"final errors: {errors}.\n",
         *_checks_table(run.checks[:1]),
     ]
@@ -174,15 +177,17 @@ def _execution_section(run: ExecutionRun) -> str:
     if run.video:
         lines.append(
             f'<video controls width="480" src="{run.video}"></video>\n\n'
-            f"The whole run from a fixed camera: [{run.video}]({run.video}).\n"
+            f"The whole run from a fixed camera, at twice the speed: [{run.video}]({run.video}).\n"
         )
-    lines += [
-        "On vision (`--perception camera`: an orthographic top camera after every action, "
-        "blocks found by the Hough transform, heights from occlusion): "
-        f"{'built' if run.vision_success else 'NOT built'}, "
-        f"{plural(run.vision_actions, 'action')}, {plural(run.vision_replans, 'replan')}.\n",
-        *_checks_table(run.checks[1:]),
-    ]
+    if run.vision:
+        lines += [
+            "On vision (`--perception camera`: an orthographic top camera after every action, "
+            "blocks found by the Hough transform, heights from occlusion, the arm's own "
+            "links masked out): "
+            f"{'reached' if run.vision_success else 'NOT reached'}, "
+            f"{plural(run.vision_actions, 'action')}, {plural(run.vision_replans, 'replan')}.\n",
+            *_checks_table(run.checks[1:]),
+        ]
     return "\n".join(lines)
 
 
@@ -216,7 +221,11 @@ def _timings(
 ) -> str:
     rows = [(f"{r.title}: learning, comparing, figure", r.seconds) for r in learned]
     rows += [(f"{r.title}: planning every goal, figure", r.seconds) for r in planned]
-    rows += [(f"{r.title}: MuJoCo, then on vision", r.seconds) for r in executed if not r.skipped]
+    rows += [
+        (f"{r.title}: the arm in MuJoCo{', then on vision' if r.vision else ''}", r.seconds)
+        for r in executed
+        if not r.skipped
+    ]
     rows.append((f"{segmented.title}: stream, segmentation, figure", segmented.seconds))
     total = len(precision.sigmas_mm) * precision.draws
     rows.append((f"Fresh draws: {total} draws, each learned twice", precision.seconds))
@@ -277,7 +286,10 @@ def _summary(
                 "replans": r.replans,
                 "actions": r.actions,
                 "pose_errors_m": dict(r.pose_errors),
-                "on_vision": {"success": r.vision_success, "replans": r.vision_replans},
+                "collisions": list(r.collisions),
+                "on_vision": {"success": r.vision_success, "replans": r.vision_replans}
+                if r.vision
+                else None,
             }
             for r in executed
         ],
