@@ -17,11 +17,17 @@ Each experiment is run in these worlds (seeds 0 … N-1, one world per seed):
    200 runs (``--quick``: 20);
 2. the kinematic world without faults, the reference: 20 runs (5);
 3. **MuJoCo** without faults: 5 runs (2);
-4. MuJoCo with the same faults: 20 runs (5).
+4. MuJoCo with the same faults: 20 runs (5);
+5. the **arm** (``--sim arm``: the Kinova Jaco with its suction cup) without
+   faults, and with one fault kind per row (``drop``, ``displace``,
+   ``misplace``, ``grasp``, ``block``, each at 0.3): Experiment 1 3 and 4 runs
+   per row, Experiment 2 5 and 10 (``--quick``: 1 and 1, 2 and 3). The one-kind
+   rows make a confusion table: per injected kind, what the executor detected.
 
 MuJoCo is required for Experiment 2 only; Experiment 1 is tried in MuJoCo too,
 with a few runs (2 without faults, 3 with; ``--quick``: 1 and 1), and whatever
-happens is reported. ``--no-mujoco`` leaves MuJoCo out.
+happens is reported. ``--no-mujoco`` leaves MuJoCo (and the arm) out,
+``--no-arm`` the arm.
 
 Per row the table gives: runs, success rate, median and max replans, median and
 max extra actions (actions executed − length of the first plan), faults
@@ -31,15 +37,19 @@ by kind), median and 95th-percentile wall time per run (building the world plus
 the successful runs (mm; the executor's own success test is 1 cm) with the
 number of successful runs that ended with a goal object more than 1 mm off (a
 dropped object can land within the tolerance of its target and is then
-accepted as placed), and for MuJoCo the median simulated-seconds /
-wall-seconds ratio. Failed runs are listed
+accepted as placed), for MuJoCo the median simulated-seconds /
+wall-seconds ratio, and for the arm its contacts with anything but its load
+and the motions its checks refused. Failed runs are listed
 with their seed, reason and first detected failure (the first 10 per row),
 followed by a command that reproduces one. The run ends with the targets:
 
 * kinematic runs with recoverable faults reach the goal — every one of them
   (the fault injector only makes recoverable faults);
 * MuJoCo Experiment 2 with faults: every goal block within 1 cm in every
-  successful run.
+  successful run;
+* the arm: every run without faults reaches the goal with every object within
+  1 cm, and in no run (faults or not) does the arm touch anything but its load
+  (MuJoCo's contacts, recorded every physics step).
 
 Everything runs on one core (BLAS/OpenMP threads pinned to 1). Machines are
 shared and noisy: compare medians and ratios between runs on one machine.
@@ -80,7 +90,12 @@ from rich.table import Table  # noqa: E402
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
 from demoplan.errors import InputError  # noqa: E402
-from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
+from demoplan.execution.executor import (  # noqa: E402
+    ExecutionSettings,
+    execute,
+    first_plan,
+    first_targets,
+)
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
 from demoplan.execution.kinematic import KinematicWorld  # noqa: E402
 from demoplan.execution.world import World  # noqa: E402
@@ -92,7 +107,10 @@ from demoplan.scenes.scene import Scene, complete_geometry, load_scene  # noqa: 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 DEFAULT_FAULTS = "drop=0.2,displace=0.1"
-KINEMATIC, MUJOCO = "kinematic", "mujoco"
+KINEMATIC, MUJOCO, ARM = "kinematic", "mujoco", "arm"
+ARM_FAULTS = ("drop=0.3", "displace=0.3", "misplace=0.3", "grasp=0.3", "block=0.3")
+"""The arm's rows: one fault kind each, so that what was detected per kind reads
+as a confusion table (injected kind → detected failure kinds)."""
 TOLERANCE_MM = 10.0  # the MuJoCo target: every goal block within 1 cm
 LISTED_FAILURES = 10
 
@@ -102,6 +120,9 @@ QUICK_RUNS = (20, 5, 5, 2)
 # Experiment 1 in MuJoCo (not required; a few runs to see what happens): without, with.
 FULL_EXP1_MUJOCO = (2, 3)
 QUICK_EXP1_MUJOCO = (1, 1)
+# The arm, per experiment: runs without faults, runs per fault kind (Exp. 1, Exp. 2).
+FULL_ARM = {"exp1": (3, 4), "exp2": (5, 10)}
+QUICK_ARM = {"exp1": (1, 1), "exp2": (2, 3)}
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,6 +170,8 @@ class Run:
     first_failure: str = ""
     gave_up: bool = False
     exception: str = ""  # the run raised: a defect, not a failed run
+    collisions: int = 0  # the arm's contacts with anything but its load
+    refused_motions: int = 0  # arm motions a check refused
 
     @property
     def extra_actions(self) -> int:
@@ -210,12 +233,20 @@ class Row:
             ),
             "median_sim_to_wall": median(ratios),
             "exceptions": sum(bool(r.exception) for r in runs),
+            "collisions": sum(r.collisions for r in runs),
+            "refused_motions": sum(r.refused_motions for r in runs),
         }
 
 
-def make_world(world: str, scene: Scene, faults: Faults, seed: int) -> World:
+def make_world(
+    world: str, scene: Scene, faults: Faults, seed: int, workspace: Sequence[Any] = ()
+) -> World:
     if world == KINEMATIC:
         return KinematicWorld(scene, faults, seed)
+    if world == ARM:
+        from demoplan.execution.arm import ArmWorld
+
+        return ArmWorld(scene, faults, seed, workspace=workspace)
     from demoplan.execution.physics import MujocoWorld
 
     return MujocoWorld(scene, faults, seed)
@@ -226,8 +257,13 @@ def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: in
     started = time.perf_counter()
     instance: Any = None
     try:
-        instance = make_world(world, scene, faults, seed)
-        report = execute(model, scene, instance, settings)
+        first = None
+        workspace: list[Any] = []
+        if world == ARM:  # the arm stands where it reaches the first plan's targets
+            first = first_plan(model, scene, settings)
+            workspace = [pose.position[:2] for _, pose in first_targets(first)]
+        instance = make_world(world, scene, faults, seed, workspace)
+        report = execute(model, scene, instance, settings, first=first)
     except InputError as exc:  # refused before the first motion (an object the gripper cannot take)
         return Run(
             seed,
@@ -273,6 +309,8 @@ def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: in
         report.reason,
         f"{report.failures[0].kind}: {report.failures[0].detail}" if report.failures else "",
         report.gave_up,
+        collisions=len(getattr(instance, "collisions", ())),
+        refused_motions=len(getattr(instance, "motion_failures", ())),
     )
 
 
@@ -346,6 +384,7 @@ def results_table(rows: Sequence[Row], titles: dict[str, str]) -> Table:
     table.add_column("pose error mm\nmed / max (ok)", justify="right")
     table.add_column("ok runs\n> 1 mm", justify="right")
     table.add_column("sim / wall", justify="right")
+    table.add_column("arm contacts\n/ refused", justify="right")
     for row in rows:
         s = row.summary()
         n, ok = s["runs"], s["successes"]
@@ -365,6 +404,39 @@ def results_table(rows: Sequence[Row], titles: dict[str, str]) -> Table:
             f"{_number(s['median_pose_error_mm'], 2)} / {_number(s['max_pose_error_mm'], 2)}",
             str(s["successes_over_1mm"]) if ok else "-",
             "-" if ratio is None else f"{ratio:.1f}",
+            f"{s['collisions']} / {s['refused_motions']}" if row.world == ARM else "-",
+        )
+    return table
+
+
+def confusion_table(rows: Sequence[Row], titles: dict[str, str]) -> Table | None:
+    """The arm's one-kind fault rows: per injected kind, how many were injected
+    and what the executor detected (failure kinds, totals over the row's runs)."""
+    arm = [r for r in rows if r.world == ARM and r.faults]
+    if not arm:
+        return None
+    kinds = sorted({k for row in arm for run in row.runs for k in run.detected})
+    table = Table(
+        title="The arm: faults injected → failures detected (totals over each row's runs)",
+        title_justify="left",
+    )
+    for column in ("experiment", "injected", "runs", "count", *kinds, "success"):
+        left = column in ("experiment", "injected")
+        table.add_column(column, justify="left" if left else "right")
+    for row in arm:
+        injected: Counter[str] = Counter()
+        detected: Counter[str] = Counter()
+        for run in row.runs:
+            injected.update(run.injected)
+            detected.update(run.detected)
+        kind = row.faults.split("=")[0]
+        table.add_row(
+            titles[row.experiment],
+            kind,
+            str(len(row.runs)),
+            str(injected.get(kind, 0)),
+            *(str(detected.get(k, 0)) for k in kinds),
+            f"{row.successes}/{len(row.runs)}",
         )
     return table
 
@@ -463,6 +535,28 @@ def mujoco_target(rows: Sequence[Row], faults: str) -> Target:
     return Target(name, worst <= TOLERANCE_MM, detail)
 
 
+def arm_target(rows: Sequence[Row]) -> Target:
+    name = (
+        "The arm: every run without faults reaches the goal, every object within 1 cm, "
+        "no contact of the arm with anything but its load in any run"
+    )
+    arm = [r for r in rows if r.world == ARM]
+    if not arm:
+        return Target(name, None, "arm not run")
+    clean = [run for r in arm if not r.faults for run in r.runs]
+    reached = sum(run.success for run in clean)
+    worst = max((e for run in clean for e in run.pose_errors_mm.values()), default=None)
+    contacts = sum(run.collisions for r in arm for run in r.runs)
+    total = sum(len(r.runs) for r in arm)
+    detail = (
+        f"without faults {reached}/{len(clean)}, max error "
+        + ("-" if worst is None else f"{worst:.1f} mm")
+        + f"; contacts in {total} runs: {contacts}"
+    )
+    met = reached == len(clean) and worst is not None and worst <= TOLERANCE_MM and not contacts
+    return Target(name, met, detail)
+
+
 # --------------------------------------------------------------------------- main
 
 
@@ -484,6 +578,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help=f"faults of the faulty rows (default {DEFAULT_FAULTS})",
     )
     parser.add_argument("--no-mujoco", action="store_true", help="kinematic rows only")
+    parser.add_argument("--no-arm", action="store_true", help="leave out the arm's rows")
     parser.add_argument(
         "--no-mujoco-exp1",
         action="store_true",
@@ -527,6 +622,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         plan += [(exp2, MUJOCO, "", m_clean), (exp2, MUJOCO, args.faults, m_faulty)]
         if not args.no_mujoco_exp1:
             plan += [(exp1, MUJOCO, "", e1_clean), (exp1, MUJOCO, args.faults, e1_faulty)]
+    have_arm = use_mujoco and all(importlib.util.find_spec(m) for m in ("mink", "dm_control"))
+    if use_mujoco and not have_arm:
+        console.print("mink or dm_control is not installed: arm rows skipped.", style="yellow")
+    if have_arm and not args.no_arm:
+        for experiment in EXPERIMENTS:
+            clean, per_kind = (QUICK_ARM if args.quick else FULL_ARM)[experiment.key]
+            plan.append((experiment, ARM, "", clean))
+            plan += [(experiment, ARM, kind, per_kind) for kind in ARM_FAULTS]
 
     models: dict[str, TaskModel] = {}
     scenes: dict[str, Scene] = {}
@@ -572,6 +675,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         highlight=False,
         style="dim",
     )
+    confusion = confusion_table(rows, titles)
+    if confusion is not None:
+        console.print(confusion)
     failed = failures_table(rows, titles)
     if failed is not None:
         console.print(failed)
@@ -606,6 +712,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "MuJoCo not run",
             )
         )
+    if have_arm and not args.no_arm:
+        goals.append(arm_target(rows))
     print_targets(console, goals)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
@@ -22,8 +24,8 @@ from demoplan.execution.executor import RunReport, execute
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
-from demoplan.model import TaskModel
-from demoplan.scenes.scene import complete_geometry, load_scene, yaw_of
+from demoplan.model import Pose, TaskModel
+from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of
 from tests.helpers import EXAMPLES, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -221,3 +223,71 @@ def test_an_object_without_a_flat_top_is_refused(blocks: TaskModel) -> None:
     world.geometry["red"] = type(world.geometry["red"])("sphere", (0.04, 0.04, 0.04))
     assert "no flat top" in (world.why_not_graspable("red") or "")
     assert world.why_not_graspable("green") is None
+
+
+# -- collision facts from the arm (--collisions simulation) ---------------------------------
+
+
+def test_plan_with_collisions_from_the_arm(blocks_file: Path) -> None:
+    """Experiment 2 planned with the arm's collision facts: the same 4-move plan;
+    the cup cannot come down on wood or green while red lies across them, but
+    the finger rule's side-by-side facts (wood and green too close for the
+    fingers) are not the suction cup's."""
+    result = CliRunner().invoke(
+        app, ["plan", str(blocks_file), str(BLOCKS), "--collisions", "simulation", "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    plan = json.loads(result.stdout)
+    assert plan["length"] == 8
+    check = plan["collisions"]
+    simulated = {tuple(f) for f in check["only_simulation"]}
+    ruled = {tuple(f) for f in check["only_rule"]}
+    assert check["source"] == "simulation" and check["simulation"] > 0
+    assert any(a == "loc1" and b == "loc3" for a, b, _ in simulated)  # wood under red
+    assert any(a == "loc1" and b == "loc2" for a, b, _ in ruled)  # wood beside green
+    text = CliRunner().invoke(
+        app, ["plan", str(blocks_file), str(BLOCKS), "--collisions", "simulation"]
+    )
+    assert "collision facts from the arm in simulation" in text.output
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    gap=st.floats(0.0, 0.15),
+    height=st.floats(0.01, 0.2),
+    angle=st.floats(0.0, 360.0),
+)
+def test_a_neighbour_is_in_the_arms_way_only_when_it_reaches_the_cups_column(
+    gap: float, height: float, angle: float
+) -> None:
+    """A 4 cm block at a, a neighbour of any height ``gap`` metres beside it, in
+    any direction: every approach is reachable, and a neighbour more than 3 cm
+    clear is never in the way of the cup coming down on a's top (the pad is
+    1 cm across, the stem 1.6 cm), however tall — where the finger rule
+    blocks grasps up to a finger's width beside. (A neighbour lying over a's
+    top is in the way: Experiment 2's red over wood, above.)"""
+    from demoplan.model import ObjectGeometry
+    from demoplan.scenes.geometry import Location
+    from demoplan.scenes.scene import SceneObject
+    from demoplan.scenes.simulated_collisions import simulated_collision_facts
+
+    block = ObjectGeometry("box", (0.04, 0.04, 0.04))
+    other = ObjectGeometry("box", (0.04, 0.04, height))
+    distance = 0.04 + gap
+    bx = 0.4 + distance * math.cos(math.radians(angle))
+    by = distance * math.sin(math.radians(angle))
+    a = Location("a", (0.4, 0.0, 0.0), 0.0, "current", ("block",), (block,))
+    b = Location("b", (bx, by, 0.0), 0.0, "current", ("other",), (other,))
+    scene = Scene(
+        objects=(
+            SceneObject("block", Pose((0.4, 0.0, 0.0)), block),
+            SceneObject("other", Pose((bx, by, 0.0)), other),
+        ),
+        robot=(0.0, 0.0, 0.0),
+    )
+    facts, unreachable = simulated_collision_facts(
+        scene, [a, b], [("g", "block", block, 0.0)], {"block": block, "other": other}
+    )
+    assert unreachable == []
+    if gap > 0.03:
+        assert ("a", "b", "g") not in facts

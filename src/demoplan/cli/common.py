@@ -264,10 +264,32 @@ FreespaceOption = Annotated[
 ]
 
 
-def geometry_settings(freespace: int | None) -> Any:
+class CollisionSource(StrEnum):
+    """Where the planner's collision facts come from."""
+
+    rule = "rule"
+    simulation = "simulation"
+
+
+CollisionsOption = Annotated[
+    CollisionSource,
+    typer.Option(
+        "--collisions",
+        help="Collision facts from the geometric finger rule (§V.B) or from the arm of "
+        "--sim arm posed in MuJoCo (§IV.C's path planner); simulation also reports where "
+        "the two disagree.",
+    ),
+]
+
+
+def geometry_settings(
+    freespace: int | None, collisions: CollisionSource = CollisionSource.rule
+) -> Any:
     from demoplan.scenes.geometry import GeometrySettings
 
-    return GeometrySettings() if freespace is None else GeometrySettings(n_freespace=freespace)
+    if freespace is None:
+        return GeometrySettings(collisions=collisions.value)
+    return GeometrySettings(n_freespace=freespace, collisions=collisions.value)
 
 
 @contextmanager

@@ -15,6 +15,8 @@ from rich.text import Text
 from demoplan.cli.common import (
     FRAME_FILES,
     ClutterOption,
+    CollisionsOption,
+    CollisionSource,
     FreespaceOption,
     ModelArgument,
     PerceptionName,
@@ -102,6 +104,7 @@ def run(
         typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
     ] = 2.0,
     clutter: ClutterOption = False,
+    collisions: CollisionsOption = CollisionSource.rule,
     video: Annotated[
         Path | None,
         typer.Option(
@@ -140,7 +143,7 @@ def run(
                 frames=building,
                 max_replans=max_replans,
                 perception=perception.value,
-                geometry=geometry_settings(freespace),
+                geometry=geometry_settings(freespace, collisions),
                 on_event=on_event,
                 planning_seconds=timeout,
                 clutter=clutter,

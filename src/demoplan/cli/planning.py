@@ -11,6 +11,8 @@ import typer
 
 from demoplan.cli.common import (
     ClutterOption,
+    CollisionsOption,
+    CollisionSource,
     FreespaceOption,
     GroundedOption,
     ModelArgument,
@@ -125,6 +127,7 @@ def plan(
         Path | None, typer.Option(help="Also draw the plan from above into this image (PNG, SVG).")
     ] = None,
     clutter: ClutterOption = False,
+    collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
     from demoplan.commands import command_budget
@@ -138,7 +141,7 @@ def plan(
             check_figure_path(plot, "--plot")
         model, scene = scene_inputs(model_path, scene_path)
         budget = command_budget(max_nodes, timeout)
-        settings = geometry_settings(freespace)
+        settings = geometry_settings(freespace, collisions)
         try:
             with (
                 stderr.status("Planning every candidate goal…")
@@ -162,6 +165,9 @@ def plan(
             print_json(result.to_json())
         else:
             print_scene_plan(result, model)
+        check = result.chosen.problem.collision_check
+        if check is not None and not json_output:
+            stderr.print(f"demoplan: {check.summary()}", markup=False, highlight=False)
         stderr.print(f"demoplan: {optimality_line(result.as_plan())}", markup=False)
 
 
@@ -191,6 +197,7 @@ def problem(
     ] = False,
     freespace: FreespaceOption = None,
     grounded: GroundedOption = False,
+    collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
     from demoplan.planning.pddl import pddl_domain_path, save_pddl_problem
@@ -205,7 +212,11 @@ def problem(
         if pddl_output:
             refuse_overwriting_inputs(pddl_domain_path(output), inputs)
         model, scene = scene_inputs(model_path, scene_path)
-        chosen = goal_problem(model, scene, goal, geometry_settings(freespace))
+        chosen = goal_problem(model, scene, goal, geometry_settings(freespace, collisions))
+        if chosen.collision_check is not None:
+            stderr.print(
+                f"demoplan: {chosen.collision_check.summary()}", markup=False, highlight=False
+            )
         if pddl_output:
             domain_path = save_pddl_problem(chosen.problem, output, grounded=grounded)
             stderr.print(f"wrote {output} and {domain_path}", markup=False, highlight=False)

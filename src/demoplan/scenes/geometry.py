@@ -89,6 +89,10 @@ class GeometrySettings:
     """How far around the scene's poses generated free space may lie."""
     grid_step: float = 0.01
     """Spacing of the candidate free-space spots."""
+    collisions: str = "rule"
+    """Where collision facts come from: ``rule`` (the finger discs, §V.B) or
+    ``simulation`` (the arm of ``--sim arm`` posed in MuJoCo, §IV.C's path
+    planner: :mod:`demoplan.scenes.simulated_collisions`)."""
 
 
 @dataclass(frozen=True, slots=True)

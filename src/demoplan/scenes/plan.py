@@ -108,6 +108,11 @@ class ScenePlan:
                 }
                 for c in self.candidates
             ],
+            **(
+                {"collisions": chosen.problem.collision_check.to_json()}
+                if chosen.problem.collision_check is not None
+                else {}
+            ),
             "subgoals": [
                 {
                     "id": s.label,

@@ -37,6 +37,11 @@ from demoplan.scenes.geometry import (
 )
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.simulated_collisions import (
+    CollisionComparison,
+    checked_pairs,
+    simulated_collision_facts,
+)
 from demoplan.scenes.targets import Candidate, Subtask
 
 __all__ = ["Grasp", "SceneProblem", "build_problem"]
@@ -64,6 +69,8 @@ class SceneProblem:
     locations: tuple[Location, ...]
     grasps: tuple[Grasp, ...]
     obstacles: tuple[str, ...] = field(default=())
+    collision_check: CollisionComparison | None = None
+    """With ``--collisions simulation``: the arm's facts beside the rule's."""
 
     def location(self, name: str) -> Location:
         for location in self.locations:
@@ -199,12 +206,17 @@ def build_problem(
                 if target_of[s.label] == name
             )
             obstacles.append(f"{owners} at ({_xyz(loc.position)}) would stand on nothing")
-    facts = collision_facts(
-        locations,
-        [(g.name, g.object, shapes[g.object], g.axis) for g in grasps],
-        scene.gripper,
-        settings,
-    )
+    grasp_shapes = [(g.name, g.object, shapes[g.object], g.axis) for g in grasps]
+    facts = collision_facts(locations, grasp_shapes, scene.gripper, settings)
+    comparison = None
+    if settings.collisions == "simulation":
+        simulated, unreachable = simulated_collision_facts(
+            scene, locations, grasp_shapes, shapes, settings
+        )
+        pairs = checked_pairs(locations, grasp_shapes, shapes, settings)
+        ruled = tuple(f for f in facts if (f[0], f[2]) in pairs)
+        comparison = CollisionComparison(ruled, tuple(simulated), tuple(unreachable))
+        facts = simulated
     accepts = []
     for loc in locations:
         taken = accepted_objects(loc, shapes, settings)
@@ -231,7 +243,9 @@ def build_problem(
         name=f"goal-{candidate.goal}",
         source=scene.source,
     )
-    return SceneProblem(candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles))
+    return SceneProblem(
+        candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles), comparison
+    )
 
 
 TURNS = (0.0, 90.0, -90.0, 180.0, 45.0, -45.0, 135.0, -135.0)
