@@ -46,8 +46,11 @@ from demoplan.execution.arm_model import (
     SUCTION_FORCE,
     ArmKinematics,
     arm_base,
+    arm_bodies,
+    arm_joints,
     attach_arm,
     check_base,
+    jaco_folder,
     mass_of,
 )
 from demoplan.execution.faults import Faults
@@ -86,6 +89,7 @@ class ArmWorld(MujocoWorld):
         schedule: Mapping[int, str] | None = None,
         workspace: Sequence[tuple[float, float]] = (),
     ):
+        jaco_folder()  # a one-line usage error where the arm's packages are missing
         self.base = arm_base(scene, workspace)
         check_base(scene, self.base)
         self.motion_failures: list[str] = []  # motions not made, and why
@@ -117,14 +121,7 @@ class ArmWorld(MujocoWorld):
         """The arm at its home pose, servos holding it there, suction off."""
         mujoco = self.mujoco
         self.kinematics = ArmKinematics(mujoco, self.base)
-        self.joints = [
-            int(
-                self.model.jnt_qposadr[
-                    mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, f"arm/joint_{k}")
-                ]
-            )
-            for k in range(1, 7)
-        ]
+        self.joints = arm_joints(mujoco, self.model)
         self.servos = [
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"_joint{k}")
             for k in range(1, 7)
@@ -132,8 +129,7 @@ class ArmWorld(MujocoWorld):
         self.suction = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "_suction")
         self.tcp = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "arm/tcp")
         self.pad = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "arm/pad")
-        arm_root = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "arm/b_base")
-        self.arm_bodies = {b for b in range(self.model.nbody) if self._under(b, arm_root)}
+        self.arm_bodies = arm_bodies(mujoco, self.model)
         self.scratch = mujoco.MjData(self.model)
         home = np.array(HOME)
         self.data.qpos[self.joints] = home
@@ -163,13 +159,6 @@ class ArmWorld(MujocoWorld):
         suction.set_to_adhesion(gain=SUCTION_FORCE)
         suction.ctrlrange = [0.0, 1.0]
         return world.compile()
-
-    def _under(self, body: int, root: int) -> bool:
-        while body > 0:
-            if body == root:
-                return True
-            body = int(self.model.body_parentid[body])
-        return False
 
     # -- reading ---------------------------------------------------------------------------
 

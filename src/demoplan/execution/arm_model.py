@@ -19,6 +19,8 @@ from demoplan.scenes.scene import Scene
 __all__ = [
     "ArmKinematics",
     "arm_base",
+    "arm_bodies",
+    "arm_joints",
     "attach_arm",
     "check_base",
     "jaco_folder",
@@ -49,7 +51,11 @@ def jaco_folder() -> Path:
     """Where dm_control keeps the Kinova Jaco's model (found without importing
     dm_control, whose Python bindings this world does not use)."""
     spec = importlib.util.find_spec("dm_control")
-    if spec is None or not spec.submodule_search_locations:
+    if (
+        spec is None
+        or not spec.submodule_search_locations
+        or importlib.util.find_spec("mink") is None
+    ):
         raise UsageError(
             "--sim arm needs dm_control's Kinova Jaco model and mink: pip install 'demoplan[sim]'"
         )
@@ -103,6 +109,29 @@ def attach_arm(mujoco: Any, world: Any, base: tuple[float, float, float]) -> Non
     half = math.radians(yaw) / 2
     frame = world.worldbody.add_frame(pos=[x, y, 0], quat=[math.cos(half), 0, 0, math.sin(half)])
     world.attach(_arm_spec(mujoco), prefix="arm/", frame=frame)
+
+
+def arm_joints(mujoco: Any, model: Any) -> list[int]:
+    """The qpos addresses of the arm's six joints in ``model`` (attached by
+    :func:`attach_arm`)."""
+    joint = mujoco.mjtObj.mjOBJ_JOINT
+    return [
+        int(model.jnt_qposadr[mujoco.mj_name2id(model, joint, f"arm/joint_{k}")])
+        for k in range(1, 7)
+    ]
+
+
+def arm_bodies(mujoco: Any, model: Any) -> set[int]:
+    """The ids of the arm's bodies in ``model``: its base and everything on it."""
+    root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "arm/b_base")
+    bodies = set()
+    for body in range(model.nbody):
+        parent = body
+        while parent > 0 and parent != root:
+            parent = int(model.body_parentid[parent])
+        if parent == root:
+            bodies.add(body)
+    return bodies
 
 
 def _tool_rotation(yaw: float) -> np.ndarray:

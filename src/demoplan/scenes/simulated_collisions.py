@@ -128,7 +128,14 @@ def simulated_collision_facts(
             "pip install 'demoplan[sim]'"
         ) from None
 
-    from demoplan.execution.arm_model import HOME, ArmKinematics, arm_base, attach_arm
+    from demoplan.execution.arm_model import (
+        HOME,
+        ArmKinematics,
+        arm_base,
+        arm_bodies,
+        arm_joints,
+        attach_arm,
+    )
 
     base = arm_base(scene, [loc.position[:2] for loc in locations])
     world = mujoco.MjSpec()
@@ -146,13 +153,8 @@ def simulated_collision_facts(
     model = world.compile()
     data = mujoco.MjData(model)
     kinematics = ArmKinematics(mujoco, base)
-    joint = mujoco.mjtObj.mjOBJ_JOINT
-    joints = [
-        int(model.jnt_qposadr[mujoco.mj_name2id(model, joint, f"arm/joint_{k}")])
-        for k in range(1, 7)
-    ]
-    root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "arm/b_base")
-    arm = {b for b in range(model.nbody) if _under(model, b, root)}
+    joints = arm_joints(mujoco, model)
+    arm = arm_bodies(mujoco, model)
     location_of = {
         mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"_location{i}"): i
         for i in range(len(locations))
@@ -217,11 +219,3 @@ def _add_outline(mujoco: Any, body: Any, shape: ObjectGeometry) -> None:
     else:
         kind, size = mujoco.mjtGeom.mjGEOM_CYLINDER, [max(sx, sy) / 2, sz / 2, 0]
     body.add_geom(type=kind, size=size, pos=[0, 0, sz / 2])
-
-
-def _under(model: Any, body: int, root: int) -> bool:
-    while body > 0:
-        if body == root:
-            return True
-        body = int(model.body_parentid[body])
-    return False
