@@ -149,6 +149,31 @@ def test_exclusions_overlap_but_not_touching() -> None:
     assert excl == {frozenset("ao"), frozenset("ot")}  # a–t touch; s stands on a (support)
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    thin=st.floats(0.001, 0.02),
+    tall=st.floats(0.001, 0.2),
+    offset=st.floats(0.0, 0.015),
+    yaw=st.floats(-90.0, 90.0),
+)
+def test_overlapping_places_on_one_level_exclude_each_other_however_thin(
+    thin: float, tall: float, offset: float, yaw: float
+) -> None:
+    """A thin part's place (a 1–20 mm knife) and another object's place
+    overlapping it on the table cannot both be occupied, whatever the heights
+    (found on the arm: a 5 mm knife's target under a 4 cm obstacle was taken
+    as free, since the height overlap did not exceed the 5 mm level
+    tolerance); the same knife on top of the other object is stacked, not
+    excluded."""
+    knife = ObjectGeometry("box", (0.012, 0.09, thin))
+    other = ObjectGeometry("box", (0.04, 0.04, tall))
+    target = Location("knife", (0.6 + offset, 0.44, 0.0), yaw, "target", ("knife",), (knife,))
+    obstacle = Location("obstacle", (0.6, 0.44, 0.0), 0.0, "current", ("obstacle",), (other,))
+    assert exclusions([target, obstacle], []) == [("knife", "obstacle")]
+    on_top = Location("up", (0.6, 0.44, tall), yaw, "target", ("knife",), (knife,))
+    assert exclusions([on_top, obstacle], [("up", "obstacle")]) == []
+
+
 def test_what_a_location_takes() -> None:
     shapes = {"fork": FORK, "food": FOOD, "plate": PLATE, "b1": BLOCK, "b2": BLOCK}
     fork_spot = Location("l1", (0.45, 0.44, 0.0), 0.0, "target", ("fork",), (FORK,))

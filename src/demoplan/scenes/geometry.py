@@ -279,13 +279,22 @@ def exclusions(
             b = locations[j]
             if (a.name, b.name) in supported:
                 continue
-            overlap_low = max(a.bottom, b.bottom)
-            overlap_high = min(a.top, b.top)
-            if overlap_high - overlap_low <= settings.level_tolerance:
+            # One above the other (a top meets a bottom, to the tolerance): no
+            # clash. Thin objects side by side at one level do clash, however
+            # thin (a 5 mm knife on an obstacle's spot).
+            tolerance = settings.level_tolerance
+            if _above(a, b, tolerance) or _above(b, a, tolerance):
                 continue
             if shrunk[i].intersects(shrunk[j]):
                 pairs.append((a.name, b.name))
     return pairs
+
+
+def _above(upper: Location, lower: Location, tolerance: float) -> bool:
+    """``upper`` stands on a level above ``lower``: its bottom at or over
+    ``lower``'s top, and higher than ``lower``'s bottom (two thin objects on
+    one level are side by side, not stacked)."""
+    return upper.bottom >= lower.top - tolerance and upper.bottom > lower.bottom + tolerance
 
 
 def free_space(
