@@ -67,6 +67,8 @@ APPROACH = 0.03  # m above the contact height where the straight approach starts
 PENETRATION = 0.002
 """m: in the check before a motion, a contact deeper than this is a collision
 (the waypoints are 1 cm apart; grazing is left to the watch while it runs)."""
+MAX_JUMP = 0.6  # rad a joint may turn between two waypoints 1 cm apart
+WRIST_NUDGE = 0.3  # rad the wrist is bent to leave its singularity
 PARK_SECONDS = 2.5  # s for the half turn behind the base (a load creeps on the pad if faster)
 RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
 
@@ -221,16 +223,27 @@ class ArmWorld(MujocoWorld):
         for k in range(1, steps + 1):
             t = k / steps
             point = start + t * (goal - start)
-            solved = self.kinematics.solve(point, self.cup_yaw + t * turn, q)
-            if solved is None:
-                solved = self.kinematics.solve_anywhere(point, self.cup_yaw + t * turn, q)
-            if solved is None:
-                raise MotionError(f"the cup cannot reach {_xyz(point)}")
-            if np.max(np.abs(_wrapped(solved - q))) > 0.6:
-                raise MotionError(f"the arm would swing through a new posture near {_xyz(point)}")
+            solved = self._step_to(point, self.cup_yaw + t * turn, q)
             q = q + _wrapped(solved - q)
             path.append(q)
         return path
+
+    def _step_to(self, point: np.ndarray, yaw: float, q: np.ndarray) -> np.ndarray:
+        """The joint angles one waypoint on from ``q``: solved from ``q``, else
+        from ``q`` with the wrist bent a little either way (a straight wrist,
+        fifth joint at 0, is a singularity the solver cannot leave), else from
+        anywhere — refused (MotionError) if that means a new posture."""
+        nudge = np.array([0.0, 0.0, 0.0, 0.0, WRIST_NUDGE, 0.0])
+        for seed in (q, q + nudge, q - nudge):
+            solved = self.kinematics.solve(point, yaw, seed)
+            if solved is not None and np.max(np.abs(_wrapped(solved - q))) <= MAX_JUMP:
+                return solved
+        solved = self.kinematics.solve_anywhere(point, yaw, q)
+        if solved is None:
+            raise MotionError(f"the cup cannot reach {_xyz(point)}")
+        if np.max(np.abs(_wrapped(solved - q))) > MAX_JUMP:
+            raise MotionError(f"the arm would swing through a new posture near {_xyz(point)}")
+        return solved
 
     def _collision(self, path: list[np.ndarray], landing: bool) -> str | None:
         """The first collision along ``path`` in a copy of the simulation, or None;
@@ -407,11 +420,7 @@ class ArmWorld(MujocoWorld):
             x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
         try:
             self.allowed = obj
-            self._travel((x, y), self.cup_yaw, top + APPROACH)
-            self._go([x, y, top + APPROACH])
-            if not missed:
-                self._go([x, y, top + 0.002], landing=True)
-                self._press(obj, x, y, top)
+            self._come_down(obj, x, y, top, missed)
             self.data.ctrl[self.suction] = 1.0
             self._settle(0.3)
             if self._touching(obj):
@@ -448,6 +457,51 @@ class ArmWorld(MujocoWorld):
                 self._release_at(off, 0.002, "misplace", detail)
                 return
         self._release_at(pose, 0.002, None, "")
+
+    def _come_down(self, obj: str, x: float, y: float, top: float, missed: bool) -> None:
+        """Over (x, y) and down onto ``obj``'s top (``missed``: stop 3 cm above).
+        The cup is round to the object, so its turn is free: where a straight
+        descent would take the wrist through a singularity (its fifth joint
+        straight) the cup tries again turned by 90°, −90° and 180°."""
+        problem = ""
+        for turn in (0.0, 90.0, -90.0, 180.0, None):
+            yaw = self.cup_yaw + (turn or 0.0)
+            try:
+                self._travel((x, y), yaw, top + APPROACH)
+                if turn is None:  # last: a new posture, made up there
+                    self._repose(np.array([x, y, top + 0.002]), yaw)
+                self._go([x, y, top + APPROACH], yaw)
+                if not missed:
+                    self._go([x, y, top + 0.002], landing=True)
+                    self._press(obj, x, y, top)
+                return
+            except MotionError as exc:
+                problem = str(exc)
+        raise MotionError(problem)
+
+    def _repose(self, low: np.ndarray, yaw: float) -> None:
+        """Where the posture the arm has cannot go straight down to ``low`` (a
+        singularity on the way): solve ``low`` afresh, walk the straight line
+        up from it to where the cup is, and change posture up here by a
+        joint-space move (checked) to the start of that line."""
+        here, _ = self._cup()
+        seed = np.array(HOME)
+        seed[0] += math.atan2(low[1] - self.base[1], low[0] - self.base[0]) - math.radians(
+            self.base[2]
+        )
+        q = self.kinematics.solve_anywhere(low, yaw, seed)
+        if q is None:
+            raise MotionError(f"the cup cannot reach {_xyz(low)}")
+        steps = max(1, math.ceil(float(np.linalg.norm(here - low)) / WAYPOINT))
+        for k in range(1, steps + 1):
+            q = q + _wrapped(self._step_to(low + k / steps * (here - low), yaw, q) - q)
+        target = self.q + _wrapped(q - self.q)
+        path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
+        problem = self._collision(path, False)
+        if problem is not None:
+            raise MotionError(problem)
+        self._run(path, 2.0)
+        self.cup_yaw = self._cup_yaw()
 
     def _press(self, obj: str, x: float, y: float, top: float) -> None:
         """Lower the cup 1 mm at a time until its pad touches ``obj`` (as a
