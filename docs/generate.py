@@ -599,7 +599,15 @@ PLAN_JSON = Output(
             "object",
             "every grasp by name: `object`, and `axis` in degrees in the object's frame",
         ),
-    }
+        "collisions": (
+            "object",
+            "with `--collisions simulation` only: `simulation` and `rule` (how many "
+            "collision facts each gives), `only_rule` and `only_simulation` (the facts "
+            "`[a, b, grasp]` where they disagree), `unreachable` (`[location, grasp]` the "
+            "arm could not check)",
+        ),
+    },
+    optional=frozenset({"collisions"}),
 )
 CANDIDATE_JSON = Output(
     {
