@@ -53,6 +53,15 @@ from demoplan.execution.arm_model import (
     jaco_folder,
     mass_of,
 )
+from demoplan.execution.arm_motion import (
+    WAYPOINT,
+    ArmMotion,
+    Load,
+    MotionError,
+    cup_frame,
+    wrapped,
+    xyz,
+)
 from demoplan.execution.faults import Faults
 from demoplan.execution.physics import MujocoWorld, scene_xml
 from demoplan.model import Pose
@@ -60,21 +69,11 @@ from demoplan.scenes.scene import Scene, yaw_of
 
 __all__ = ["ArmWorld", "MotionError"]
 
-WAYPOINT = 0.01  # m between inverse-kinematics waypoints
 SPEED = 0.25  # m/s of the cup along a straight line
 TURN_SPEED = 120.0  # deg/s of the cup about the vertical
 APPROACH = 0.03  # m above the contact height where the straight approach starts
-PENETRATION = 0.002
-"""m: in the check before a motion, a contact deeper than this is a collision
-(the waypoints are 1 cm apart; grazing is left to the watch while it runs)."""
-MAX_JUMP = 0.6  # rad a joint may turn between two waypoints 1 cm apart
-WRIST_NUDGE = 0.3  # rad the wrist is bent to leave its singularity
 PARK_SECONDS = 2.5  # s for the half turn behind the base (a load creeps on the pad if faster)
 RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
-
-
-class MotionError(RuntimeError):
-    """A motion the arm cannot make (no inverse kinematics, or a collision)."""
 
 
 class ArmWorld(MujocoWorld):
@@ -132,7 +131,9 @@ class ArmWorld(MujocoWorld):
         self.tcp = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "arm/tcp")
         self.pad = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "arm/pad")
         self.arm_bodies = arm_bodies(mujoco, self.model)
-        self.scratch = mujoco.MjData(self.model)
+        self.motion = ArmMotion(
+            mujoco, self.model, self.kinematics, self.joints, self.arm_bodies, self.tcp
+        )
         home = np.array(HOME)
         self.data.qpos[self.joints] = home
         self.data.ctrl[self.servos] = home
@@ -203,11 +204,7 @@ class ArmWorld(MujocoWorld):
         return frame
 
     def _cup_frame(self, data: Any = None) -> np.ndarray:
-        position, rotation = self._cup(data)
-        frame = np.eye(4)
-        frame[:3, :3] = rotation
-        frame[:3, 3] = position
-        return frame
+        return cup_frame(self.data if data is None else data, self.tcp)
 
     # -- motions ---------------------------------------------------------------------------
 
@@ -215,81 +212,21 @@ class ArmWorld(MujocoWorld):
         """Joint waypoints moving the cup in a straight line from where it is to
         ``goal`` while it turns to ``yaw``; MotionError where one has no solution."""
         start, _ = self._cup()
-        turn = ((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0
-        steps = max(
-            1, math.ceil(float(np.linalg.norm(goal - start)) / WAYPOINT), math.ceil(abs(turn) / 5)
-        )
-        path, q = [], self.q
-        for k in range(1, steps + 1):
-            t = k / steps
-            point = start + t * (goal - start)
-            solved = self._step_to(point, self.cup_yaw + t * turn, q)
-            q = q + _wrapped(solved - q)
-            path.append(q)
-        return path
+        return self.motion.straight_line(start, self.cup_yaw, self.q, goal, yaw)
 
     def _step_to(self, point: np.ndarray, yaw: float, q: np.ndarray) -> np.ndarray:
-        """The joint angles one waypoint on from ``q``: solved from ``q``, else
-        from ``q`` with the wrist bent a little either way (a straight wrist,
-        fifth joint at 0, is a singularity the solver cannot leave), else from
-        anywhere — refused (MotionError) if that means a new posture."""
-        nudge = np.array([0.0, 0.0, 0.0, 0.0, WRIST_NUDGE, 0.0])
-        for seed in (q, q + nudge, q - nudge):
-            solved = self.kinematics.solve(point, yaw, seed)
-            if solved is not None and np.max(np.abs(_wrapped(solved - q))) <= MAX_JUMP:
-                return solved
-        solved = self.kinematics.solve_anywhere(point, yaw, q)
-        if solved is None:
-            raise MotionError(f"the cup cannot reach {_xyz(point)}")
-        if np.max(np.abs(_wrapped(solved - q))) > MAX_JUMP:
-            raise MotionError(f"the arm would swing through a new posture near {_xyz(point)}")
-        return solved
+        return self.motion.step_to(point, yaw, q)
 
     def _collision(self, path: list[np.ndarray], landing: bool) -> str | None:
-        """The first collision along ``path`` in a copy of the simulation, or None;
-        ``landing``: the held object may touch what it is put on at the end."""
-        mujoco = self.mujoco
-        scratch = self.scratch
-        scratch.qpos[:] = self.data.qpos
-        scratch.qvel[:] = 0.0
-        held = self._body(self.held) if self.held is not None else -1
-        if self.held is not None:
-            joint = int(self.model.body_jntadr[held])
-            address = int(self.model.jnt_qposadr[joint])
-        for index, q in enumerate(path):
-            scratch.qpos[self.joints] = q
-            if self.held is not None:
-                mujoco.mj_kinematics(self.model, scratch)
-                frame = self._cup_frame(scratch) @ self.grip
-                quat = np.zeros(4)
-                mujoco.mju_mat2Quat(quat, frame[:3, :3].flatten())
-                scratch.qpos[address : address + 3] = frame[:3, 3]
-                scratch.qpos[address + 3 : address + 7] = quat
-            mujoco.mj_forward(self.model, scratch)
-            last = index >= len(path) - 3
-            for contact in scratch.contact[: scratch.ncon]:
-                if contact.dist > contact.includemargin - PENETRATION:
-                    continue
-                first = int(self.model.geom_bodyid[contact.geom1])
-                second = int(self.model.geom_bodyid[contact.geom2])
-                found = self._offending(first, second, held, landing and last)
-                if found is not None:
-                    return found
-        return None
-
-    def _offending(self, first: int, second: int, held: int, landing: bool) -> str | None:
-        """A sentence when a contact between bodies ``first`` and ``second`` is a
-        collision (the arm touching anything but its load, the load anything
-        but its landing place)."""
-        allowed = self._body(self.allowed) if self.allowed is not None else -2
-        for mine, other in ((first, second), (second, first)):
-            if mine in self.arm_bodies and other not in self.arm_bodies:
-                if other in (held, allowed):
-                    return None
-                return f"the arm would hit {self._body_label(other)}"
-            if mine == held and other not in self.arm_bodies and not landing:
-                return f"{self.held} would hit {self._body_label(other)}"
-        return None
+        """The first collision along ``path`` (:meth:`ArmMotion.first_collision`)."""
+        return self.motion.first_collision(
+            self.data.qpos,
+            path,
+            Load(self.held, self._body(self.held), self.grip) if self.held is not None else None,
+            self._body(self.allowed) if self.allowed is not None else None,
+            landing,
+            self._body_label,
+        )
 
     def _body_label(self, body: int) -> str:
         if body == 0:
@@ -491,11 +428,11 @@ class ArmWorld(MujocoWorld):
         )
         q = self.kinematics.solve_anywhere(low, yaw, seed)
         if q is None:
-            raise MotionError(f"the cup cannot reach {_xyz(low)}")
+            raise MotionError(f"the cup cannot reach {xyz(low)}")
         steps = max(1, math.ceil(float(np.linalg.norm(here - low)) / WAYPOINT))
         for k in range(1, steps + 1):
-            q = q + _wrapped(self._step_to(low + k / steps * (here - low), yaw, q) - q)
-        target = self.q + _wrapped(q - self.q)
+            q = q + wrapped(self._step_to(low + k / steps * (here - low), yaw, q) - q)
+        target = self.q + wrapped(q - self.q)
         path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
         problem = self._collision(path, False)
         if problem is not None:
@@ -634,17 +571,9 @@ def _distance_to_segment(
     return float(np.linalg.norm(p - (a + t * span)))
 
 
-def _wrapped(delta: np.ndarray) -> np.ndarray:
-    return (np.asarray(delta) + math.pi) % (2 * math.pi) - math.pi
-
-
 def _yaw_matrix(yaw: float) -> np.ndarray:
     c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _xyz(point: np.ndarray) -> str:
-    return f"({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f})"
 
 
 def _xy(pose: Pose) -> str:
