@@ -90,15 +90,9 @@ from rich.table import Table  # noqa: E402
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
 from demoplan.errors import InputError  # noqa: E402
-from demoplan.execution.executor import (  # noqa: E402
-    ExecutionSettings,
-    execute,
-    first_plan,
-    first_targets,
-)
+from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
 from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
-from demoplan.execution.kinematic import KinematicWorld  # noqa: E402
-from demoplan.execution.world import World  # noqa: E402
+from demoplan.execution.runner import start_world  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
 from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
@@ -238,31 +232,12 @@ class Row:
         }
 
 
-def make_world(
-    world: str, scene: Scene, faults: Faults, seed: int, workspace: Sequence[Any] = ()
-) -> World:
-    if world == KINEMATIC:
-        return KinematicWorld(scene, faults, seed)
-    if world == ARM:
-        from demoplan.execution.arm import ArmWorld
-
-        return ArmWorld(scene, faults, seed, workspace=workspace)
-    from demoplan.execution.physics import MujocoWorld
-
-    return MujocoWorld(scene, faults, seed)
-
-
 def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: int) -> Run:
     settings = ExecutionSettings()
     started = time.perf_counter()
     instance: Any = None
     try:
-        first = None
-        workspace: list[Any] = []
-        if world == ARM:  # the arm stands where it reaches the first plan's targets
-            first = first_plan(model, scene, settings)
-            workspace = [pose.position[:2] for _, pose in first_targets(first)]
-        instance = make_world(world, scene, faults, seed, workspace)
+        instance, first = start_world(model, scene, world, faults, seed, settings)
         report = execute(model, scene, instance, settings, first=first)
     except InputError as exc:  # refused before the first motion (an object the gripper cannot take)
         return Run(

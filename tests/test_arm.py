@@ -273,7 +273,7 @@ def test_a_neighbour_is_in_the_arms_way_only_when_it_reaches_the_cups_column(
     from demoplan.model import ObjectGeometry
     from demoplan.scenes.geometry import Location
     from demoplan.scenes.scene import SceneObject
-    from demoplan.scenes.simulated_collisions import simulated_collision_facts
+    from demoplan.scenes.simulated_collisions import checked_pairs, simulated_collision_facts
 
     block = ObjectGeometry("box", (0.04, 0.04, 0.04))
     other = ObjectGeometry("box", (0.04, 0.04, height))
@@ -289,9 +289,10 @@ def test_a_neighbour_is_in_the_arms_way_only_when_it_reaches_the_cups_column(
         ),
         robot=(0.0, 0.0, 0.0),
     )
-    facts, unreachable = simulated_collision_facts(
-        scene, [a, b], [("g", "block", block, 0.0)], {"block": block, "other": other}
-    )
+    grasps = [("g", "block", block, 0.0)]
+    pairs = checked_pairs([a, b], grasps, {"block": block, "other": other})
+    assert ("a", "g") in pairs
+    facts, unreachable = simulated_collision_facts(scene, [a, b], grasps, pairs)
     assert unreachable == []
     if height <= 0.04 or (gap > 0.03 and height < 0.04 + 0.08):
         assert ("a", "b", "g") not in facts

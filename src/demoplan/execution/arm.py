@@ -432,13 +432,7 @@ class ArmWorld(MujocoWorld):
         steps = max(1, math.ceil(float(np.linalg.norm(here - low)) / WAYPOINT))
         for k in range(1, steps + 1):
             q = q + wrapped(self._step_to(low + k / steps * (here - low), yaw, q) - q)
-        target = self.q + wrapped(q - self.q)
-        path = [self.q + (target - self.q) * k / 30 for k in range(1, 31)]
-        problem = self._collision(path, False)
-        if problem is not None:
-            raise MotionError(problem)
-        self._run(path, 2.0)
-        self.cup_yaw = self._cup_yaw()
+        self._joint_move(self.q + wrapped(q - self.q), 30, 2.0)
 
     def _press(self, obj: str, x: float, y: float, top: float) -> None:
         """Lower the cup 1 mm at a time until its pad touches ``obj`` (as a
@@ -513,13 +507,17 @@ class ArmWorld(MujocoWorld):
         self._turn_base(-math.pi)
 
     def _turn_base(self, angle: float) -> None:
-        """Turn the first joint alone by ``angle`` (rad), checked, then run."""
-        steps = 36
-        path = [self.q + np.array([angle * k / steps, 0, 0, 0, 0, 0]) for k in range(1, steps + 1)]
+        """Turn the first joint alone by ``angle`` (rad)."""
+        self._joint_move(self.q + np.array([angle, 0, 0, 0, 0, 0]), 36, PARK_SECONDS)
+
+    def _joint_move(self, target: np.ndarray, steps: int, seconds: float) -> None:
+        """From the arm's joint angles straight to ``target`` in joint space, in
+        ``steps`` waypoints checked against collisions, then run over ``seconds``."""
+        path = [self.q + (target - self.q) * k / steps for k in range(1, steps + 1)]
         problem = self._collision(path, False)
         if problem is not None:
             raise MotionError(problem)
-        self._run(path, PARK_SECONDS)
+        self._run(path, seconds)
         self.cup_yaw = self._cup_yaw()
 
     # -- checks before the run -----------------------------------------------------------

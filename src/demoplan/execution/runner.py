@@ -23,10 +23,11 @@ from demoplan.fileio import os_reason
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.plan import CandidatePlan
 from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.scenes.targets import check_scene_objects
 
-__all__ = ["make_world", "run_task"]
+__all__ = ["make_world", "run_task", "start_world"]
 
 
 def make_world(
@@ -65,6 +66,25 @@ def make_world(
     raise UsageError(f"--sim {sim}: expected kinematic, mujoco or arm")
 
 
+def start_world(
+    model: TaskModel,
+    scene: Scene,
+    sim: str,
+    faults: Faults,
+    seed: int,
+    settings: ExecutionSettings,
+    perception: str = "state",
+) -> tuple[World, CandidatePlan | None]:
+    """The world of a run (:func:`make_world`), and for the arm the first plan
+    too: the arm stands where it reaches that plan's targets, and the executor
+    starts from it (``execute(first=…)``) instead of planning it again."""
+    if sim != "arm":
+        return make_world(sim, scene, faults, seed, perception), None
+    first = first_plan(model, scene, settings)
+    workspace = [pose.position[:2] for _, pose in first_targets(first)]
+    return make_world(sim, scene, faults, seed, perception, workspace), first
+
+
 def run_task(
     model: TaskModel,
     scene: Scene,
@@ -99,12 +119,7 @@ def run_task(
         position_tolerance=0.01,
         budget=Budget(timeout=planning_seconds),
     )
-    first = None
-    workspace: list[tuple[float, float]] = []
-    if sim == "arm":  # the arm stands where it reaches the plan's targets too
-        first = first_plan(model, scene, settings)
-        workspace = [pose.position[:2] for _, pose in first_targets(first)]
-    world = make_world(sim, scene, faults, seed, perception, workspace)
+    world, first = start_world(model, scene, sim, faults, seed, settings, perception)
     recording = None
     if video is not None:
         recording = video.with_name(f".{video.name}.part.mp4")

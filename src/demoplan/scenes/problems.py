@@ -210,10 +210,8 @@ def build_problem(
     facts = collision_facts(locations, grasp_shapes, scene.gripper, settings)
     comparison = None
     if settings.collisions == "simulation":
-        simulated, unreachable = simulated_collision_facts(
-            scene, locations, grasp_shapes, shapes, settings
-        )
         pairs = checked_pairs(locations, grasp_shapes, shapes, settings)
+        simulated, unreachable = simulated_collision_facts(scene, locations, grasp_shapes, pairs)
         ruled = tuple(f for f in facts if (f[0], f[2]) in pairs)
         comparison = CollisionComparison(ruled, tuple(simulated), tuple(unreachable))
         facts = simulated

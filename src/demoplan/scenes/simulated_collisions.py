@@ -112,13 +112,12 @@ def simulated_collision_facts(
     scene: Scene,
     locations: Sequence[Location],
     grasps: Sequence[tuple[str, str, ObjectGeometry, float]],
-    shapes: dict[str, ObjectGeometry],
-    settings: GeometrySettings = GeometrySettings(),
+    pairs: set[tuple[str, str]],
 ) -> tuple[list[Fact], list[tuple[str, str]]]:
     """Facts ``(a, b, g)`` for grasps ``(name, object, shape, axis)``, decided by
     posing the arm along each grasp's approach (module docstring), at every
-    pair of :func:`checked_pairs`; and the (location, grasp) pairs the arm
-    cannot reach."""
+    (location, grasp) pair of ``pairs`` (:func:`checked_pairs`); and the pairs
+    the arm cannot reach."""
     try:
         import mink  # noqa: F401  (the arm's inverse kinematics, imported by ArmKinematics)
         import mujoco
@@ -159,7 +158,6 @@ def simulated_collision_facts(
         mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"_location{i}"): i
         for i in range(len(locations))
     }
-    pairs = checked_pairs(locations, grasps, shapes, settings)
     facts: list[Fact] = []
     unreachable: list[tuple[str, str]] = []
     home = np.array(HOME)
