@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
-from demoplan.planning.generate import parking_problem
+from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.xml import save_problem
 from tests.test_problem_xml import BOMB
 from tests.test_solve_cli import PAPER, two_objects
@@ -53,7 +53,7 @@ def problems(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     paths["shared"] = folder / "shared.xml"  # no plan: found statically
     save_problem(two_objects([("a", "l3"), ("b", "l3")], locations=["l3"]), paths["shared"])
     paths["hard"] = folder / "hard.xml"  # not proved in two expansions
-    save_problem(parking_problem(10, 0), paths["hard"])
+    save_problem(parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"]), paths["hard"])
     paths["bomb"] = folder / "bomb.xml"
     paths["bomb"].write_text(BOMB)
     return paths

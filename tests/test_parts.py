@@ -77,7 +77,7 @@ def test_two_problems_that_never_meet_are_solved_as_parts(first: Problem, second
     groups = object_groups(whole, compile_problem(whole))
     assert sorted(o for g in groups for o in g) == sorted(whole.objects)
     assert len(groups) >= 2 and all(len({o[-1] for o in g}) == 1 for g in groups)
-    parts = plan_by_parts(whole, groups, Budget(timeout=5.0))
+    parts = plan_by_parts(whole, groups, Budget(timeout=5.0), compile_problem(whole))
     if reference.actions is None:  # no plan at all: the parts find none either
         assert parts.actions is None
         return

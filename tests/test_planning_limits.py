@@ -61,10 +61,10 @@ def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
 
 
 def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
-    problem = parking_problem(30, 1, **PARKING_FAMILIES["parking-dense"])
+    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
     for search in ("astar", "bfs"):
         with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
-            solve(problem, search, Budget(max_states=5000), optimal=True)
+            solve(problem, search, Budget(max_states=5000, timeout=5), optimal=True)
 
 
 def test_bfs_stops_at_its_node_budget_with_its_bound() -> None:

@@ -9,7 +9,12 @@ from hypothesis import strategies as st
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.planning.bounds import LowerBounds
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.generate import blocks_problem, parking_problem, table_problem
+from demoplan.planning.generate import (
+    PARKING_FAMILIES,
+    blocks_problem,
+    parking_problem,
+    table_problem,
+)
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.search import (
     Budget,
@@ -93,15 +98,16 @@ def test_limits_stop_the_search_with_exit_code_4() -> None:
 
 
 def test_an_unproved_plan_comes_with_its_bound_or_exit_4_when_proof_is_demanded() -> None:
-    problem = parking_problem(10, 0)  # greedy finds 32 actions; A* cannot prove it in 50 nodes
-    plan = solve(problem, budget=Budget(max_nodes=50))
+    # a crowded grid: a plan of 70 actions, a bound of 64, no proof in 50 nodes
+    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
+    plan = solve(problem, budget=Budget(max_nodes=50, timeout=2))
     validate(problem, plan.actions)
     assert not plan.optimal and plan.bound < len(plan)
     assert plan.bound >= 2 * LowerBounds(compile_problem(problem)).estimate(
         *(compile_problem(problem).start, 0)
     )
     with pytest.raises(LimitReachedError, match="not proved shortest"):
-        solve(problem, budget=Budget(max_nodes=50), optimal=True)
+        solve(problem, budget=Budget(max_nodes=50, timeout=2), optimal=True)
 
 
 def test_an_object_that_must_move_without_a_grasp_is_the_reason() -> None:

@@ -62,7 +62,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
     shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
-    save_problem(parking_problem(30, 1, **PARKING_FAMILIES["parking-dense"]), folder / "hard.xml")
+    save_problem(parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"]), folder / "hard.xml")
     done = subprocess.run(
         [DEMOPLAN, "learn", "demos.json", "--paper", "-o", "model.json"],
         cwd=folder,

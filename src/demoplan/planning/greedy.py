@@ -4,7 +4,7 @@ The anytime planner (:func:`demoplan.planning.search.solve`) starts with this
 plan and lets A* prove it shortest, or find a shorter one, within the budget.
 
 **Greedy best-first search** expands the state with the smallest *guidance*
-(:func:`_guidance`, an estimate that may overshoot — it is not a bound),
+(:func:`guidance`, an estimate that may overshoot — it is not a bound),
 fewest moves first among equals, until it reaches the goal. Guidance counts
 each needy object's own moves, plus for each the objects that must make way
 (on its target, or blocking its cheapest grasp at its source and target),
@@ -32,12 +32,12 @@ from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
 from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 
-__all__ = ["greedy_moves", "shorten", "valid_moves"]
+__all__ = ["greedy_moves", "guidance", "helpful_moves", "shorten", "valid_moves"]
 
 _PARKING_PLACES = 3
 """Free places tried per object for a helpful parking move."""
 
-_State = tuple[tuple[int, ...], int]
+State = tuple[tuple[int, ...], int]  # object locations, reached subgoals (mask)
 
 
 def greedy_moves(
@@ -57,14 +57,14 @@ def greedy_moves(
     moves are of interest (states that need at least that many are dropped,
     by the objects' needs, a lower bound).
     """
-    start: _State = (c.start, c.start_reached)
+    start: State = (c.start, c.start_reached)
     if bounds.estimate(*start) >= DEAD_END:
         return None
     scale = 0 if weight is None else 1
     factor = 1.0 if weight is None else weight
-    parent: dict[_State, tuple[_State, Move] | None] = {start: None}
+    parent: dict[State, tuple[State, Move] | None] = {start: None}
     best_g = {start: 0}
-    heap = [(factor * _guidance(c, *start), 0, 0, start)]
+    heap = [(factor * guidance(c, *start), 0, 0, start)]
     counter = 0
     limit = upper if upper is not None else 1 << 60
     while heap:
@@ -81,7 +81,7 @@ def greedy_moves(
             return shorten(c, moves[::-1])
         if clock.expired():
             return None
-        for move, child in _moves(c, *state):
+        for move, child in helpful_moves(c, *state):
             if best_g.get(child, 1 << 60) <= g + 1:
                 continue
             if upper is not None and g + 1 + bounds.needs(*child) >= limit:
@@ -91,12 +91,12 @@ def greedy_moves(
             counter += 1
             if not counter & 63 and clock.expired():  # an expansion can take long
                 return None
-            priority = scale * (g + 1) + factor * _guidance(c, *child)
+            priority = scale * (g + 1) + factor * guidance(c, *child)
             heapq.heappush(heap, (priority, g + 1, counter, child))
     return None
 
 
-def _guidance(c: Compiled, positions: tuple[int, ...], reached: int) -> int:
+def guidance(c: Compiled, positions: tuple[int, ...], reached: int) -> int:
     """An estimate of the moves left, for guidance only (not a bound): each
     needy object's own moves, plus for each the objects that must make way —
     on its target, or blocking its cheapest grasp at its source and target —
@@ -151,7 +151,9 @@ def _targets(c: Compiled, positions: tuple[int, ...], reached: int) -> dict[int,
     return wanted
 
 
-def _moves(c: Compiled, positions: tuple[int, ...], reached: int) -> list[tuple[Move, _State]]:
+def helpful_moves(
+    c: Compiled, positions: tuple[int, ...], reached: int
+) -> list[tuple[Move, State]]:
     """The helpful moves from a state (see the module docstring)."""
     occupied = 0
     for location in positions:
@@ -184,8 +186,8 @@ def _moves(c: Compiled, positions: tuple[int, ...], reached: int) -> list[tuple[
             plain_seen = True
         free.append(((hot >> place & 1) * 4 + (place in wanted_places) * 8, place))
     free.sort()
-    productive: list[tuple[Move, _State]] = []
-    parking: list[tuple[Move, _State]] = []
+    productive: list[tuple[Move, State]] = []
+    parking: list[tuple[Move, State]] = []
     for obj in sorted(movers):
         source = positions[obj]
         if occupied & c.above[source]:

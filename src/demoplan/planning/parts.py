@@ -94,21 +94,33 @@ def object_groups(problem: Problem, c: Compiled) -> list[list[str]]:
 
 def needs_moves(c: Compiled, group: Sequence[str]) -> bool:
     """Whether some object of ``group`` is off its goal or has a subgoal to reach."""
+    return _movers(c, group) > 0
+
+
+def _movers(c: Compiled, group: Sequence[str]) -> int:
+    """How many objects of ``group`` are off their goals or have a subgoal to reach."""
+    count = 0
     for name in group:
         obj = c.objects.index(name)
-        if c.goal[obj] >= 0 and c.goal[obj] != c.start[obj]:
-            return True
-        if any(not c.start_reached >> s & 1 for s in c.subgoals_of[obj]):
-            return True
-    return False
+        if (c.goal[obj] >= 0 and c.goal[obj] != c.start[obj]) or any(
+            not c.start_reached >> s & 1 for s in c.subgoals_of[obj]
+        ):
+            count += 1
+    return count
 
 
-def plan_by_parts(problem: Problem, groups: Sequence[Sequence[str]], budget: Budget) -> PartsResult:
+def plan_by_parts(
+    problem: Problem, groups: Sequence[Sequence[str]], budget: Budget, c: Compiled
+) -> PartsResult:
     """A plan group by group and the bound of the groups alone (module
-    docstring), within ``budget``; each group's two searches share it."""
-    from demoplan.planning.search import solve
+    docstring), within ``budget``: each group's two searches share the time
+    left in proportion to the objects it must move (a group with none gets
+    no time of its own: its plan is empty), so the groups solved quickly
+    leave their time to the others."""
+    from demoplan.planning.search import solve_part
     from demoplan.planning.strips import InvalidPlanError, validate
 
+    weights = [_movers(c, group) for group in groups]
     clock = Clock(budget)
     bound = 0
     bound_proved = True
@@ -124,10 +136,10 @@ def plan_by_parts(problem: Problem, groups: Sequence[Sequence[str]], budget: Bud
         if clock.expired():  # out of time: no plan and no bound from the parts
             return PartsResult(None, 0)
         left = clock.remaining()
-        share = None if left is None else left / (2 * (len(groups) - k))
+        share = None if left is None else left * weights[k] / (2 * max(1, sum(weights[k:])))
         alone = _alone(problem, group)
         try:
-            relaxed = solve(alone, budget=Budget(timeout=share))
+            relaxed = solve_part(alone, Budget(timeout=share))
         except Exception:  # no plan for a part, or out of time: no bound from it
             bound_proved = False
         else:
@@ -136,9 +148,7 @@ def plan_by_parts(problem: Problem, groups: Sequence[Sequence[str]], budget: Bud
             continue
         later = [o for g in groups[k + 1 :] for o in g]
         try:
-            part = solve(
-                _in_turn(problem, group, state, later, owners), budget=Budget(timeout=share)
-            )
+            part = solve_part(_in_turn(problem, group, state, later, owners), Budget(timeout=share))
         except Exception:  # the part has no plan with the others standing still
             planned = False
             continue

@@ -23,11 +23,12 @@ from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.graphs import find_cycle
 from demoplan.planning.astar import AStar, astar_search
 from demoplan.planning.bfs import breadth_first_search
-from demoplan.planning.bounds import DEAD_END, LowerBounds
-from demoplan.planning.budget import Budget, Clock, SearchOutcome
+from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
+from demoplan.planning.budget import MAX_STATES, Budget, Clock, SearchOutcome
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.greedy import greedy_moves
 from demoplan.planning.parts import needs_moves, object_groups, parts_plan, plan_by_parts
+from demoplan.planning.plateau import plateau_moves
 from demoplan.planning.problem import Action, Plan, Problem
 
 __all__ = [
@@ -120,18 +121,43 @@ def solve(
 ) -> Plan:
     """A plan for ``problem`` within ``budget``: shortest where it can be proved.
 
-    ``astar`` is *anytime*: greedy best-first search
-    (:func:`~demoplan.planning.greedy.greedy_moves`) finds a plan fast, then A*
-    looks for a shorter one, dropping every state whose lower bound reaches
-    the plan's length. A* finding a plan, or running out of states, proves
-    the plan shortest; the budget ending first leaves it unproved, returned
-    with ``optimal`` False and the lower bound A* reached. With ``optimal``,
-    only a proved plan is returned (else LimitReachedError). The greedy search
-    stops at its first plan (or when it runs out of helpful moves) and may take
-    the whole budget; A* gets what is left. ``bfs`` is the
-    paper's exact search. NoPlanError (exit 3) says why there is no plan;
-    LimitReachedError (exit 4) which limit stopped a search with no plan.
+    ``astar`` is *anytime*, in phases that share the budget:
+
+    1. greedy best-first search (:func:`~demoplan.planning.greedy.greedy_moves`)
+       finds a first plan fast (it may take the whole budget, and never less
+       than 0.2 s);
+    2. a depth-first dive (:func:`~demoplan.planning.plateau.plateau_moves`)
+       looks for a plan as long as the start's lower bound — shortest;
+    3. where the objects fall into groups that never meet, the groups are
+       solved one by one (:mod:`~demoplan.planning.parts`): a plan, and a
+       lower bound that adds up;
+    4. weighted A* passes on the greedy guidance shorten the plan;
+    5. A* looks for a shorter plan, dropping every state whose lower bound
+       reaches the plan's length.
+
+    A plan as long as a proven lower bound, or A* finding a plan or running
+    out of states, proves the plan shortest; the budget ending first leaves
+    it unproved, returned with ``optimal`` False and the lower bound reached.
+    With ``optimal``, only a proved plan is returned (else LimitReachedError).
+    ``bfs`` is the paper's exact search. NoPlanError (exit 3) says why there
+    is no plan; LimitReachedError (exit 4) which limit stopped a search with
+    no plan.
     """
+    return _solve(problem, search, budget, optimal, _MIN_GREEDY_SECONDS)
+
+
+def solve_part(problem: Problem, budget: Budget) -> Plan:
+    """:func:`solve` for a part of a bigger problem (:mod:`~demoplan.planning.parts`):
+    the budget is kept to the letter — the first plan's search gets no more
+    time than is left, since a part without a plan only means the parts give
+    no plan."""
+    return _solve(problem, "astar", budget, False, 0.0)
+
+
+def _solve(
+    problem: Problem, search: str, budget: Budget, optimal: bool, first_plan_seconds: float
+) -> Plan:
+    """:func:`solve`, where the first plan's search gets at least ``first_plan_seconds``."""
     if search not in SEARCHES:
         raise ValueError(f"unknown search {search!r}; one of {sorted(SEARCHES)}")
     c = compile_problem(problem)  # once, for every phase
@@ -148,36 +174,48 @@ def solve(
     bounds = LowerBounds(c)
     clock = Clock(budget)
     root = 2 * bounds.estimate(c.start, c.start_reached)
-    incumbent: tuple[Action, ...] | None = None
-    greedy_seconds = 0.0
+    if root >= 2 * DEAD_END:  # A* proves it: no state to expand
+        outcome = AStar(c, bounds, clock).run()
+        _raise_without_plan(outcome, time.perf_counter() - started, None)
+
+    def elapsed() -> float:
+        return time.perf_counter() - started
+
+    def actions_of(moves: list[Move]) -> tuple[Action, ...]:
+        return tuple(action for move in moves for action in c.move_actions(*move))
+
+    first = Budget(timeout=max(_share(clock, 1.0), first_plan_seconds))
+    moves = greedy_moves(c, bounds, Clock(first))
+    incumbent = None if moves is None else actions_of(moves)
+    if incumbent is not None and len(incumbent) <= root:  # as long as the bound: shortest
+        return Plan(incumbent, seconds=elapsed(), search="greedy", bound=root)
+    # A plan as long as the root bound is shortest: dive for one (plateau.py).
+    dive = Clock(Budget(timeout=_share(clock, _PLATEAU_SHARE)))
+    found = plateau_moves(c, bounds, dive, root // 2, budget.max_states or MAX_STATES)
+    if found is not None:
+        return Plan(actions_of(found), seconds=elapsed(), search="plateau", bound=root)
     groups = object_groups(problem, c)
-    if root < 2 * DEAD_END and sum(needs_moves(c, g) for g in groups) > 1:
+    if sum(needs_moves(c, g) for g in groups) > 1:
         # Groups of objects that never meet: their shortest plans add up (parts.py).
-        parts = plan_by_parts(problem, groups, _greedy_budget(clock, _PARTS_SHARE))
-        by_parts = parts_plan(parts, time.perf_counter() - started)
+        parts = plan_by_parts(problem, groups, Budget(timeout=_share(clock, _PARTS_SHARE)), c)
+        by_parts = parts_plan(parts, elapsed())
         if by_parts is not None and by_parts.optimal:
             return by_parts
         root = max(root, parts.bound)
-        incumbent = parts.actions
-    if root < 2 * DEAD_END:
-        moves = greedy_moves(c, bounds, Clock(_greedy_budget(clock)))  # never less than 0.2 s
-        # Shorter plans by weighted A* on the same guidance, while they come fast.
-        for weight in _WEIGHTS:
-            if moves is None or 2 * len(moves) <= root:
-                break
-            improve = Clock(_greedy_budget(clock, _IMPROVE_SHARE))
-            better = greedy_moves(c, bounds, improve, weight=weight, upper=len(moves))
-            if better is not None and len(better) < len(moves):
-                moves = better
-        greedy_seconds = time.perf_counter() - started
-        if moves is not None:
-            greedy = tuple(action for move in moves for action in c.move_actions(*move))
-            if incumbent is None or len(greedy) < len(incumbent):
-                incumbent = greedy
-            if len(incumbent) <= root:  # as long as the lower bound: shortest
-                return Plan(incumbent, seconds=greedy_seconds, search="greedy", bound=root)
+        if parts.actions is not None and (incumbent is None or len(parts.actions) < len(incumbent)):
+            incumbent = parts.actions
+    # Shorter plans by weighted A* on the same guidance, while they come fast.
+    for weight in _WEIGHTS:
+        if incumbent is None or len(incumbent) <= root:
+            break
+        improve = Clock(Budget(timeout=_share(clock, _IMPROVE_SHARE)))
+        better = greedy_moves(c, bounds, improve, weight=weight, upper=len(incumbent) // 2)
+        if better is not None and 2 * len(better) < len(incumbent):
+            incumbent = actions_of(better)
+    if incumbent is not None and len(incumbent) <= root:
+        return Plan(incumbent, seconds=elapsed(), search="greedy", bound=root)
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
-    seconds = time.perf_counter() - started
+    seconds = elapsed()
     name = "astar" if incumbent is None else "greedy+astar"
     if outcome.actions is not None:
         return _plan(outcome.actions, outcome, seconds, name)
@@ -210,9 +248,18 @@ def _plan(
     )
 
 
-_GREEDY_SECONDS = 10.0
-"""The greedy search's time when the budget sets none (with a budget it may
-take all of it: it stops at its first plan, and A* gets what is left)."""
+_UNBOUNDED_SECONDS = 10.0
+"""The time the phases share when the budget sets none."""
+
+
+_PLATEAU_SHARE = 0.3
+"""The share of the time left that the dive for a plan as long as the root
+bound may take."""
+
+
+_PARTS_SHARE = 0.4
+"""The share of the time left that solving group by group may take (when the
+objects fall into several groups that need moves)."""
 
 
 _WEIGHTS = (3.0, 2.0, 1.5)
@@ -221,21 +268,16 @@ _IMPROVE_SHARE = 0.2
 """Each pass may take this share of the time left."""
 
 
-_PARTS_SHARE = 0.4
-"""The share of the time left that solving group by group may take (when the
-objects fall into several groups that need moves)."""
-
-
 _MIN_GREEDY_SECONDS = 0.2
 """The first plan's search gets at least this long, even where the budget is
 spent before it starts (a slow start-up on a loaded machine): an easy problem
 must not go without a plan for want of a few milliseconds."""
 
 
-def _greedy_budget(clock: Clock, share: float = 1.0) -> Budget:
+def _share(clock: Clock, share: float) -> float:
+    """Seconds for a phase: ``share`` of the time left."""
     left = clock.remaining()
-    seconds = share * (_GREEDY_SECONDS if left is None else left)
-    return Budget(timeout=max(seconds, _MIN_GREEDY_SECONDS if share == 1.0 else 0.0))
+    return share * (_UNBOUNDED_SECONDS if left is None else left)
 
 
 def _raise_without_plan(
