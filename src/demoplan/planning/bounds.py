@@ -16,7 +16,16 @@ import itertools
 
 from demoplan.planning.compiled import Compiled
 
-__all__ = ["DEAD_END", "DIRECT_NODES", "MAX_DIRECT_DEPTH", "LowerBounds", "Move", "OutOfNodesError"]
+__all__ = [
+    "DEAD_END",
+    "DIRECT_NODES",
+    "MAX_DIRECT_DEPTH",
+    "MAX_EXACT_COMPONENT",
+    "LowerBounds",
+    "Move",
+    "OutOfNodesError",
+    "strongly_connected",
+]
 
 DEAD_END = 1 << 40
 """Heuristic value of a state from which no plan exists."""
@@ -162,6 +171,21 @@ class LowerBounds:
         beyond that bounded below by disjoint cycles. Objects with pending
         subgoals may stand anywhere meanwhile: they add no precedence.
         """
+        graph = self.precedence_graph(positions, reached)
+        if graph is None:
+            return self.needs(positions, reached)
+        _, after, forced_objects = graph
+        forced = sum(
+            1 if self.c.goal[y] < 0 else 2 for y in range(len(positions)) if forced_objects >> y & 1
+        )
+        return self.needs(positions, reached) + forced + self._feedback_set_size(after)
+
+    def precedence_graph(
+        self, positions: tuple[int, ...], reached: int
+    ) -> tuple[list[int], dict[int, list[int]], int] | None:
+        """The parts of :meth:`feedback`: the needy objects, the precedences
+        among them (Y -> the X that must wait for Y) and the mask of the idle
+        objects forced to move; None when no object is needy."""
         c = self.c
         occupant: dict[int, int] = {}
         needy_goal: dict[int, int] = {}
@@ -178,9 +202,8 @@ class LowerBounds:
                 needy_goal[goal] = obj
                 goals |= 1 << goal
         if not needy:
-            return self.needs(positions, reached)
+            return None
         after: dict[int, list[int]] = {obj: [] for obj in needy}  # Y -> the X that wait for Y
-        forced = 0
         forced_objects = 0
         for x in needy:
             hit = self.move_mask(x, positions[x])
@@ -192,9 +215,8 @@ class LowerBounds:
                 y = occupant[low.bit_length() - 1]
                 if y in after:
                     after[y].append(x)
-                elif hard & low and not forced_objects >> y & 1:
+                elif hard & low:
                     forced_objects |= 1 << y
-                    forced += 1 if c.goal[y] < 0 else 2
             ending = (hit | c.below[c.goal[x]]) & goals & ~(1 << c.goal[x])
             while ending:
                 low = ending & -ending
@@ -204,7 +226,7 @@ class LowerBounds:
                     after[y].append(x)  # y holds x's goal up: y first
                 else:
                     after[x].append(y)  # y at its goal would keep x from moving: x first
-        return self.needs(positions, reached) + forced + self._feedback_set_size(after)
+        return needy, after, forced_objects
 
     def hard_mask(self, obj: int, source: int) -> int:
         """The places where another object keeps every grasp from picking
@@ -233,7 +255,7 @@ class LowerBounds:
         for y in in_cycles:
             in_cycles[y] = [x for x in in_cycles[y] if x in in_cycles]
         total = 0
-        for component in _strongly_connected(in_cycles):
+        for component in strongly_connected(in_cycles):
             if len(component) < 2:
                 continue
             members = set(component)
@@ -643,7 +665,7 @@ def _disjoint_cycles(edges: dict[int, list[int]]) -> int:
     return count
 
 
-def _strongly_connected(edges: dict[int, list[int]]) -> list[list[int]]:
+def strongly_connected(edges: dict[int, list[int]]) -> list[list[int]]:
     """The strongly connected components of the digraph ``edges`` (node ->
     successors, every successor a key), by Tarjan's algorithm without recursion."""
     index: dict[int, int] = {}

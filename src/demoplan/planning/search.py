@@ -30,6 +30,7 @@ from demoplan.planning.greedy import greedy_moves
 from demoplan.planning.parts import needs_moves, object_groups, parts_plan, plan_by_parts
 from demoplan.planning.plateau import plateau_moves
 from demoplan.planning.problem import Action, Plan, Problem
+from demoplan.planning.tight import tight_plan
 
 __all__ = [
     "SEARCHES",
@@ -123,6 +124,9 @@ def solve(
 
     ``astar`` is *anytime*, in phases that share the budget:
 
+    0. where the start's bound has a rigid shape, a plan exactly that long is
+       built from an order of the moves, or shown not to exist — the bound
+       then grows by a move (:func:`~demoplan.planning.tight.tight_plan`);
     1. greedy best-first search (:func:`~demoplan.planning.greedy.greedy_moves`)
        finds a first plan fast (it may take the whole budget, and never less
        than 0.2 s);
@@ -184,6 +188,14 @@ def _solve(
     def actions_of(moves: list[Move]) -> tuple[Action, ...]:
         return tuple(action for move in moves for action in c.move_actions(*move))
 
+    # A plan as long as the feedback bound from an order of the moves, or
+    # the proof that there is none (tight.py).
+    ordering = Clock(Budget(timeout=_share(clock, _TIGHT_SHARE)))
+    tight = tight_plan(bounds, c.start, c.start_reached, ordering)
+    if tight.moves is not None:
+        return Plan(actions_of(tight.moves), seconds=elapsed(), search="tight", bound=root)
+    if tight.refuted:
+        root += 2
     first = Budget(timeout=max(_share(clock, 1.0), first_plan_seconds))
     moves = greedy_moves(c, bounds, Clock(first))
     incumbent = None if moves is None else actions_of(moves)
@@ -250,6 +262,11 @@ def _plan(
 
 _UNBOUNDED_SECONDS = 10.0
 """The time the phases share when the budget sets none."""
+
+
+_TIGHT_SHARE = 0.25
+"""The share of the time left that ordering the moves of a plan as long as the
+feedback bound may take."""
 
 
 _PLATEAU_SHARE = 0.3
