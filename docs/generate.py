@@ -577,7 +577,11 @@ SOLVE_JSON = Output(
         "length": ("integer", "number of actions"),
         "optimal": ("boolean", "proved shortest"),
         "bound": ("integer", "proven lower bound on the length of any plan"),
-        "search": ("string", "the search that found it (`greedy`, `astar`, `bfs`)"),
+        "search": (
+            "string",
+            "the phase that found it (`tight`, `greedy`, `plateau`, `parts`, "
+            "`greedy+astar`, `astar`, `bfs`; docs/planning.md)",
+        ),
         "expanded": ("integer", "states expanded"),
         "generated": ("integer", "states generated"),
         "seconds": ("number", "time spent searching"),
