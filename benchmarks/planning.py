@@ -68,7 +68,7 @@ and on planner time.
 
 Hard families (issue 13)
 ------------------------
-``parking`` and ``parking-dense``
+``parking``, ``parking-dense`` and ``parking-crowded``
 (:func:`demoplan.planning.generate.parking_problem` with the settings of
 :data:`~demoplan.planning.generate.PARKING_FAMILIES`): goal places on a dense
 grid whose neighbours block each other's grasps, objects starting on one
@@ -101,7 +101,10 @@ length — and issue 13's targets: (a) every problem answered within 2 s whole
 process, (b) never longer than lama-first's plan, (c) at least 90 % proved
 optimal within 2 s, (d) at least 10× faster than FD seq-opt-lmcut wherever it
 finishes, in whole-process time, and with demoplan's plan proved shortest (an
-unproved answer does not count as beating an optimal planner).
+unproved answer does not count as beating an optimal planner). The targets
+are judged on ``parking`` and ``parking-dense``, the families of the issue;
+``parking-crowded``, the hardest we generate, gets a line of the same figures
+beside them, to show where the planner stops.
 
 How to run
 ----------
@@ -1098,11 +1101,17 @@ def verdict_table(checks: Sequence[Verdict]) -> Table:
 
 # --------------------------------------------------------------------------- hard families
 
-HARD_FAMILIES = tuple(PARKING_FAMILIES)  # "parking", "parking-dense"
+HARD_FAMILIES = tuple(PARKING_FAMILIES)  # "parking", "parking-dense", "parking-crowded"
+TARGET_FAMILIES = ("parking", "parking-dense")
+"""The families issue 13's targets are judged on (designed, and failed by the
+planner of the time, before the planner that meets them was written);
+``parking-crowded`` runs beside them to show where the planner stops."""
 HARD_TITLES = {
     "parking": "Parking (forced parking: swaps and 3-cycles, distractors on goal places, "
     "grasp collisions between neighbours)",
     "parking-dense": "Parking, dense (more cycles, distractors and blocking neighbours)",
+    "parking-crowded": "Parking, crowded (most objects in cycles or on the grid, a grid "
+    "barely larger than the objects; beyond the targets)",
 }
 HARD_FULL_SIZES = (10, 15, 20, 30)
 HARD_QUICK_SIZES = (10, 20)
@@ -1924,8 +1933,17 @@ def hard_benchmark(
     bugs = hard_bugs(results, cases, planners)
     for bug in bugs:
         console.print(f"BUG: {bug}", style="bold red", highlight=False, markup=False)
-    goals = hard_targets(results, cases, bugs, ANSWER_LIMIT, any(p.key == FD_OPT for p in planners))
+    judged = {k: case for k, case in cases.items() if k[0] in TARGET_FAMILIES}
+    fd_opt = any(p.key == FD_OPT for p in planners)
+    goals = hard_targets(results, judged, bugs, ANSWER_LIMIT, fd_opt)
     print_targets(console, goals)
+    beyond = [
+        beyond_the_targets(family, results, cases, ANSWER_LIMIT)
+        for family in args.hard_families
+        if family not in TARGET_FAMILIES
+    ]
+    for line in beyond:
+        console.print(line, highlight=False, markup=False, style="bold")
     settings = {
         "families": args.hard_families,
         "sizes": list(args.hard_sizes),
@@ -1935,7 +1953,33 @@ def hard_benchmark(
         "pddl": "lifted",
         "planners": [{"key": p.key, "label": p.label} for p in planners],
     }
-    return hard_document(cases, results, rows, bugs, goals, settings)
+    document = hard_document(cases, results, rows, bugs, goals, settings)
+    document["beyond_the_targets"] = beyond
+    return document
+
+
+def beyond_the_targets(
+    family: str,
+    results: dict[HardKey, Result],
+    cases: dict[tuple[str, int, int], Case],
+    limit: float,
+) -> str:
+    """The targets' figures for a family they are not judged on."""
+    keys = [k for k in sorted(cases) if k[0] == family]
+    ours = [results[(DEMOPLAN, *k)] for k in keys]
+    answered = sum(1 for r in ours if _answered(r, limit))
+    proved = sum(1 for r in ours if _answered(r, limit) and r.optimal)
+    longer = compared = 0
+    for k, r in zip(keys, ours, strict=True):
+        lama = results.get((FD_LAMA, *k))
+        if lama is not None and lama.ok and lama.length is not None and r.length is not None:
+            compared += 1
+            longer += r.length > lama.length
+    return (
+        f"Beyond the targets, {family}: {answered}/{len(keys)} answered with a plan within "
+        f"{limit:g} s, {proved}/{len(keys)} proved shortest, longer than lama-first's plan "
+        f"on {longer} of {compared} comparisons"
+    )
 
 
 if __name__ == "__main__":
