@@ -74,8 +74,10 @@ Hard families (issue 13)
 grid whose neighbours block each other's grasps, objects starting on one
 another's goal places in swaps and 3-cycles (forced parking), distractors
 without a goal standing on goal places, objects starting on the grid between
-them. N = 10, 15, 20, 30 objects with a goal (distractors come on top), seeds
-0–7 (``--quick``: N = 10, 20, seeds 0–3; ``--seeds``, ``--sizes`` choose).
+them. N = 5, 10, 15, 20, 30 objects with a goal (distractors come on top),
+seeds 0–7 (``--quick``: N = 10, 20, seeds 0–3; ``--seeds``, ``--sizes``
+choose); target (c) counts N ≥ 10, N = 5 is there for target (d), where
+Fast Downward's optimal configuration still finishes.
 Each problem is written as XML and as **lifted** PDDL (``save_pddl``'s
 default: Fast Downward translates it much faster than the grounded export;
 pyperplan is not run on these, it is far too slow). Per problem, each timed as
@@ -1113,7 +1115,11 @@ HARD_TITLES = {
     "parking-crowded": "Parking, crowded (most objects in cycles or on the grid, a grid "
     "barely larger than the objects; beyond the targets)",
 }
-HARD_FULL_SIZES = (10, 15, 20, 30)
+HARD_FULL_SIZES = (5, 10, 15, 20, 30)
+PROOF_SIZES = 10
+"""Target (c) counts the problems of at least this many objects (the issue's
+10–30); N = 5 is run for target (d): Fast Downward's seq-opt-lmcut finishes
+there (1–2 s) and nowhere from about 8 objects on within a minute."""
 HARD_QUICK_SIZES = (10, 20)
 HARD_FULL_SEEDS = tuple(range(8))
 HARD_QUICK_SEEDS = tuple(range(4))
@@ -1399,50 +1405,20 @@ def hard_targets(
         )
     )
 
-    proved = sum(1 for r in ours.values() if _answered(r, limit) and r.optimal)
-    share = proved / total if total else 0.0
+    counted = {k: r for k, r in ours.items() if k[1] >= PROOF_SIZES}
+    proved = sum(1 for r in counted.values() if _answered(r, limit) and r.optimal)
+    share = proved / len(counted) if counted else 0.0
     out.append(
         Target(
-            f"(c) at least {TARGET_PROVED:.0%} proved optimal within {limit:g} s",
-            share >= TARGET_PROVED if total else None,
-            f"{proved}/{total} = {share:.0%}",
+            f"(c) at least {TARGET_PROVED:.0%} proved optimal within {limit:g} s "
+            f"(N ≥ {PROOF_SIZES})",
+            share >= TARGET_PROVED if counted else None,
+            f"{proved}/{len(counted)} = {share:.0%}",
         )
     )
 
-    ratios, short, finished = [], [], 0
-    for k, r in ours.items():
-        fd = results.get((FD_OPT, *k))
-        if fd is None or not fd.ok or fd.median_s is None:
-            continue
-        finished += 1
-        if not _answered(r, limit) or not r.optimal or not r.median_s:
-            short.append(f"{where(*k)} (FD-opt {fd.median_s:.1f} s; demoplan did not prove it)")
-            continue
-        ratio = fd.median_s / r.median_s
-        ratios.append(ratio)
-        if ratio < TARGET_SPEEDUP:
-            short.append(f"{where(*k)} ({ratio:.1f}{TIMES})")
-    if not fd_found:
-        detail = "Fast Downward not found"
-    elif not finished:
-        detail = "FD seq-opt-lmcut finished nowhere within its timeout (or was skipped)"
-    else:
-        detail = f"FD seq-opt-lmcut finished on {finished}/{total}"
-        if ratios:
-            detail += (
-                f"; FD-opt / demoplan (proved) from {min(ratios):.1f}{TIMES} to "
-                f"{max(ratios):.1f}{TIMES}, median {statistics.median(ratios):.1f}{TIMES}"
-            )
-        if short:
-            detail += f"; short of {TARGET_SPEEDUP:g}{TIMES} or unproved: " + listed(short)
-    out.append(
-        Target(
-            f"(d) at least {TARGET_SPEEDUP:g}{TIMES} faster than FD A*+LM-cut wherever it "
-            "finishes (whole process; demoplan's plan proved optimal)",
-            (not short) if finished else None,
-            detail,
-        )
-    )
+    for measure_name in ("whole process", "planner time"):
+        out.append(_speedup_target(results, ours, limit, fd_found, measure_name))
     out.append(
         Target(
             "no planner bug (invalid plan, crash, demoplan shorter than FD-optimal, wrong "
@@ -1452,6 +1428,58 @@ def hard_targets(
         )
     )
     return out
+
+
+def _speedup_target(
+    results: dict[HardKey, Result],
+    ours: dict[tuple[str, int, int], Result],
+    limit: float,
+    fd_found: bool,
+    measure_name: str,
+) -> Target:
+    """Target (d) on whole-process time or on planner time (the time each
+    planner reports for the problem, without interpreter start-up)."""
+
+    def seconds(result: Result) -> float | None:
+        return result.median_s if measure_name == "whole process" else result.median_planner_s
+
+    ratios, short, finished = [], [], 0
+    for (family, n, seed), r in ours.items():
+        fd = results.get((FD_OPT, family, n, seed))
+        if fd is None or not fd.ok or not seconds(fd):
+            continue
+        finished += 1
+        where = f"{family} N={n} seed {seed}"
+        mine, theirs = seconds(r), seconds(fd)
+        if not _answered(r, limit) or not r.optimal or not mine or not theirs:
+            short.append(f"{where} (demoplan did not prove it)")
+            continue
+        ratio = theirs / mine
+        ratios.append(ratio)
+        if ratio < TARGET_SPEEDUP:
+            short.append(f"{where} ({ratio:.1f}{TIMES})")
+    if not fd_found:
+        detail = "Fast Downward not found"
+    elif not finished:
+        detail = "FD seq-opt-lmcut finished nowhere within its timeout (or was skipped)"
+    else:
+        detail = f"FD seq-opt-lmcut finished on {finished}/{len(ours)}"
+        if ratios:
+            detail += (
+                f"; FD-opt / demoplan (proved) from {min(ratios):.1f}{TIMES} to "
+                f"{max(ratios):.1f}{TIMES}, median {statistics.median(ratios):.1f}{TIMES}"
+            )
+        if short:
+            shown = ", ".join(short[:8]) + (
+                f", and {len(short) - 8} more" if len(short) > 8 else ""
+            )
+            detail += f"; short of {TARGET_SPEEDUP:g}{TIMES} or unproved: " + shown
+    return Target(
+        f"(d) at least {TARGET_SPEEDUP:g}{TIMES} faster than FD A*+LM-cut wherever it "
+        f"finishes ({measure_name}; demoplan's plan proved optimal)",
+        (not short) if finished else None,
+        detail,
+    )
 
 
 def _share(count: int, total: int) -> str:
