@@ -90,12 +90,12 @@ def tight_plan(
         return unknown
     limits = _Limits(MAX_NODES, clock)
     orderable = False
-    in_the_way = _in_the_way(c)
+    in_the_way: list[int] = []  # computed when first needed: a pass over every fact
     for count, parked in enumerate(choices):
         if count >= MAX_CHOICES or clock.expired():
             return unknown
         parked_set = set(itertools.chain(*parked))
-        events = _Events(bounds, positions, needy, parked_set, forced_objects, in_the_way)
+        events = _Events(bounds, positions, needy, parked_set, forced_objects)
         if events.impossible:
             continue
         try:
@@ -105,7 +105,8 @@ def tight_plan(
         if closure is None:
             continue
         orderable = True
-        moves = events.realize(positions, closure)
+        in_the_way = in_the_way or _in_the_way(c)
+        moves = events.realize(positions, closure, in_the_way)
         if moves is not None:
             return TightResult(moves=moves)
     return unknown if orderable else TightResult(refuted=True)
@@ -170,7 +171,6 @@ class _Events:
         needy: list[int],
         parked: set[int],
         forced_objects: int,
-        in_the_way: list[int],
     ):
         c = bounds.c
         self.c = c
@@ -197,7 +197,6 @@ class _Events:
                 self.leave[obj] = len(moves)
                 moves.append((obj, source, -1))
         self.moves = moves
-        self.in_the_way = in_the_way
         self.first_occupant = {positions[obj]: obj for obj in range(len(positions))}
         self.final_occupant = {c.goal[obj]: obj for obj in moving if c.goal[obj] >= 0}
         self.fixed = {positions[obj] for obj in range(len(positions)) if obj not in moving}
@@ -223,7 +222,9 @@ class _Events:
                 self.impossible = True
             self.options.append(options)
 
-    def realize(self, positions: tuple[int, ...], closure: list[int]) -> list[Move] | None:
+    def realize(
+        self, positions: tuple[int, ...], closure: list[int], in_the_way: list[int]
+    ) -> list[Move] | None:
         """The events in an order of ``closure`` as real moves — an object
         sent away goes to the free place that gets in the way of the fewest
         grasps and is no goal still to be filled — checked by the operators'
@@ -244,7 +245,7 @@ class _Events:
             grasps = [g for g in c.grasps_of[obj] if c.grasp_ok(occupied, source, g)]
             if target < 0:
                 spots = [
-                    (to_fill >> place & 1, self.in_the_way[place], place)
+                    (to_fill >> place & 1, in_the_way[place], place)
                     for place in range(len(c.locations))
                     if place != source and any(c.put_ok(others, place, g) for g in grasps)
                 ]
