@@ -13,6 +13,7 @@ rules out, a finish with one straight move per object.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterable
 
 from demoplan.planning.compiled import Compiled
 
@@ -24,6 +25,7 @@ __all__ = [
     "LowerBounds",
     "Move",
     "OutOfNodesError",
+    "acyclic",
     "strongly_connected",
 ]
 
@@ -713,12 +715,12 @@ def _minimum_feedback_set(nodes: list[int], edges: tuple[tuple[int, int], ...]) 
     sets of growing size (small components only)."""
     for size in range(1, len(nodes)):
         for removed in itertools.combinations(nodes, size):
-            if _acyclic(set(nodes).difference(removed), edges):
+            if acyclic(set(nodes).difference(removed), edges):
                 return size
     return len(nodes) - 1
 
 
-def _acyclic(nodes: set[int], edges: tuple[tuple[int, int], ...]) -> bool:
+def acyclic(nodes: set[int], edges: Iterable[tuple[int, int]]) -> bool:
     """Whether the digraph on ``nodes`` (edges among them only) has no cycle."""
     successors: dict[int, list[int]] = {node: [] for node in nodes}
     waiting = dict.fromkeys(nodes, 0)

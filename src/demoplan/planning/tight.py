@@ -39,7 +39,13 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from demoplan.planning.bounds import MAX_EXACT_COMPONENT, LowerBounds, Move, strongly_connected
+from demoplan.planning.bounds import (
+    MAX_EXACT_COMPONENT,
+    LowerBounds,
+    Move,
+    acyclic,
+    strongly_connected,
+)
 from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 
@@ -132,32 +138,12 @@ def _minimum_feedback_sets(
             sets = [
                 removed
                 for removed in itertools.combinations(sorted(component), size)
-                if _acyclic(members.difference(removed), inside)
+                if acyclic(members.difference(removed), inside)
             ]
             if sets:
                 per_component.append(sets)
                 break
     return itertools.product(*per_component)
-
-
-def _acyclic(nodes: set[int], edges: list[tuple[int, int]]) -> bool:
-    """Whether the edges among ``nodes`` leave them without a cycle."""
-    waiting = dict.fromkeys(nodes, 0)
-    successors: dict[int, list[int]] = {node: [] for node in nodes}
-    for a, b in edges:
-        if a in waiting and b in waiting:
-            successors[a].append(b)
-            waiting[b] += 1
-    ready = [node for node, count in waiting.items() if not count]
-    done = 0
-    while ready:
-        node = ready.pop()
-        done += 1
-        for nxt in successors[node]:
-            waiting[nxt] -= 1
-            if not waiting[nxt]:
-                ready.append(nxt)
-    return done == len(nodes)
 
 
 class _Events:
