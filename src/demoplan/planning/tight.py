@@ -12,15 +12,15 @@ straight home, the forced idle objects move once (no goal) or away and back
 
 For each choice of F, the moves are *events* to be put in order. Each event
 has a grasp to choose, and a grasp needs places empty at that moment: the
-places that block it at the source (and stand on the source) and at the
-target (and the target and what overlaps it). A place is empty between the
+places that block it at the source and at the target, the target itself and
+what overlaps it. A place is empty between the
 moment its first occupant leaves and the moment its final occupant arrives
 (an object that never moves keeps it full: that grasp is out). So each
 grasp demands precedences between events, and a tight plan needs one grasp
 per event with no cycle among all the precedences. Where a parked object
-stands in between is not known: it is taken to be in nobody's way, and the
-supports a target needs are not asked for — both only drop demands, so a
-refutation stays sound. The search for grasps propagates (an event with one
+stands in between is not known: it is taken to be in nobody's way, which
+only drops demands, so a refutation stays sound. Problems that stack (a
+place standing on another) are left out. The search for grasps propagates (an event with one
 grasp left takes it; one with none refutes the choice) and branches on the
 event with the fewest grasps left.
 
@@ -233,12 +233,13 @@ class _Events:
                 spots = [
                     (to_fill >> place & 1, in_the_way[place], place)
                     for place in range(len(c.locations))
-                    if place != source and any(c.put_ok(others, place, g) for g in grasps)
+                    if place not in (source, c.goal[obj])  # its goal comes with its own move
+                    and any(c.put_ok(others, place, g) for g in grasps)
                 ]
                 if not spots:
                     return None
                 target = min(spots)[2]
-            usable = [g for g in grasps if c.put_ok(others, target, g)]
+            usable = [g for g in grasps if target != source and c.put_ok(others, target, g)]
             if not usable:
                 return None
             plan.append((obj, source, target, usable[0]))
