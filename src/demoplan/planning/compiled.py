@@ -44,6 +44,13 @@ class Compiled:
             return False
         return all(goal < 0 or goal == at for goal, at in zip(self.goal, positions, strict=True))
 
+    def must_move(self, obj: int) -> bool:
+        """Whether ``obj`` must move from the start: it stands off its goal or
+        has a subgoal to reach."""
+        if 0 <= self.goal[obj] != self.start[obj]:
+            return True
+        return any(not self.start_reached >> s & 1 for s in self.subgoals_of[obj])
+
     def grasp_ok(self, occupied: int, location: int, grasp: int) -> bool:
         """GRASP at ``location`` with ``grasp`` while ``occupied`` (it included)."""
         others = occupied & ~(1 << location)

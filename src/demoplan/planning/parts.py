@@ -99,14 +99,7 @@ def needs_moves(c: Compiled, group: Sequence[str]) -> bool:
 
 def _movers(c: Compiled, group: Sequence[str]) -> int:
     """How many objects of ``group`` are off their goals or have a subgoal to reach."""
-    count = 0
-    for name in group:
-        obj = c.objects.index(name)
-        if (c.goal[obj] >= 0 and c.goal[obj] != c.start[obj]) or any(
-            not c.start_reached >> s & 1 for s in c.subgoals_of[obj]
-        ):
-            count += 1
-    return count
+    return sum(c.must_move(c.objects.index(name)) for name in group)
 
 
 def plan_by_parts(

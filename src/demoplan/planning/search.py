@@ -63,21 +63,12 @@ def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> li
             reasons.append(f"{first} and {second} must both end at {c.locations[goal]}")
         finals[goal] = obj
     for obj, name in enumerate(c.objects):
-        needs_move = (c.goal[obj] >= 0 and c.goal[obj] != c.start[obj]) or any(
-            not c.start_reached >> s & 1 for s in c.subgoals_of[obj]
-        )
-        if needs_move and not c.grasps_of[obj]:
+        if c.must_move(obj) and not c.grasps_of[obj]:
             reasons.append(f"{name} must move but allows no grasp")
     frozen = c.frozen(c.start)
     stuck = [c.objects[o] for o, loc in enumerate(c.start) if frozen >> loc & 1]
     must_move = [
-        c.objects[o]
-        for o, loc in enumerate(c.start)
-        if frozen >> loc & 1
-        and (
-            (c.goal[o] >= 0 and c.goal[o] != loc)
-            or any(not c.start_reached >> s & 1 for s in c.subgoals_of[o])
-        )
+        c.objects[o] for o, loc in enumerate(c.start) if frozen >> loc & 1 and c.must_move(o)
     ]
     if must_move:
         reasons.append(
@@ -87,10 +78,8 @@ def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> li
     unmovable = c.never_placed()
     must_place = [
         c.objects[o]
-        for o, loc in enumerate(c.start)
-        if unmovable >> o & 1
-        and c.grasps_of[o]
-        and (c.goal[o] != loc or any(not c.start_reached >> s & 1 for s in c.subgoals_of[o]))
+        for o in range(len(c.objects))
+        if unmovable >> o & 1 and c.grasps_of[o] and c.must_move(o)
     ]
     if must_place:
         circle = [c.objects[o] for o in range(len(c.objects)) if unmovable >> o & 1]
