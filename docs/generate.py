@@ -580,7 +580,7 @@ SOLVE_JSON = Output(
         "search": (
             "string",
             "the phase that found it (`tight`, `greedy`, `plateau`, `parts`, "
-            "`greedy+astar`, `astar`, `bfs`; docs/planning.md)",
+            "`greedy+astar`, `parts+astar`, `astar`, `bfs`; docs/planning.md)",
         ),
         "expanded": ("integer", "states expanded"),
         "generated": ("integer", "states generated"),

@@ -1,5 +1,6 @@
-"""A plan as short as the lower bound, by a depth-first dive: the first phase
-of the anytime planner (:func:`demoplan.planning.search.solve`).
+"""A plan as short as the lower bound, by a depth-first dive: the phase of the
+anytime planner (:func:`demoplan.planning.search.solve`) after the first
+greedy plan.
 
 When the admissible bound of the start (:mod:`demoplan.planning.bounds`) is
 exact, every state of a shortest plan has f = g + h equal to it: the plan lies

@@ -188,8 +188,9 @@ def _solve(
     first = Budget(timeout=max(_share(clock, 1.0), first_plan_seconds))
     moves = greedy_moves(c, bounds, Clock(first))
     incumbent = None if moves is None else actions_of(moves)
+    found_by = "greedy"  # the phase that found the incumbent
     if incumbent is not None and len(incumbent) <= root:  # as long as the bound: shortest
-        return Plan(incumbent, seconds=elapsed(), search="greedy", bound=root)
+        return Plan(incumbent, seconds=elapsed(), search=found_by, bound=root)
     # A plan as long as the root bound is shortest: dive for one (plateau.py).
     dive = Clock(Budget(timeout=_share(clock, _PLATEAU_SHARE)))
     found = plateau_moves(c, bounds, dive, root // 2, budget.max_states or MAX_STATES)
@@ -204,7 +205,7 @@ def _solve(
             return by_parts
         root = max(root, parts.bound)
         if parts.actions is not None and (incumbent is None or len(parts.actions) < len(incumbent)):
-            incumbent = parts.actions
+            incumbent, found_by = parts.actions, "parts"
     # Shorter plans by weighted A* on the same guidance, while they come fast.
     for weight in _WEIGHTS:
         if incumbent is None or len(incumbent) <= root:
@@ -212,12 +213,12 @@ def _solve(
         improve = Clock(Budget(timeout=_share(clock, _IMPROVE_SHARE)))
         better = greedy_moves(c, bounds, improve, weight=weight, upper=len(incumbent) // 2)
         if better is not None and 2 * len(better) < len(incumbent):
-            incumbent = actions_of(better)
+            incumbent, found_by = actions_of(better), "greedy"
     if incumbent is not None and len(incumbent) <= root:
-        return Plan(incumbent, seconds=elapsed(), search="greedy", bound=root)
+        return Plan(incumbent, seconds=elapsed(), search=found_by, bound=root)
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
     seconds = elapsed()
-    name = "astar" if incumbent is None else "greedy+astar"
+    name = "astar" if incumbent is None else f"{found_by}+astar"
     if outcome.actions is not None:
         return _plan(outcome.actions, outcome, seconds, name)
     if incumbent is not None:
