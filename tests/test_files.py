@@ -722,3 +722,43 @@ def test_write_atomic_writes_into_a_pipe_instead_of_replacing_it(tmp_path: Path)
     reader.join(timeout=5)
     assert received == ["hello\n"]
     assert stat.S_ISFIFO(fifo.stat().st_mode)
+
+
+def test_write_atomic_through_a_link_replaces_the_file_and_keeps_the_link(tmp_path: Path) -> None:
+    from demoplan.fileio import write_atomic
+
+    (tmp_path / "real.json").write_text("old\n")
+    link = tmp_path / "link.json"
+    link.symlink_to("real.json")
+    write_atomic(link, "new\n")
+    assert link.is_symlink() and str(link.readlink()) == "real.json"
+    assert (tmp_path / "real.json").read_text() == "new\n"
+
+
+@pytest.mark.parametrize("kind", ["socket", "block-device"])
+def test_write_atomic_refuses_a_socket_or_a_block_device(tmp_path: Path, kind: str) -> None:
+    """Neither can take a file: refused in one error, and the node is left as it was."""
+    import socket
+    import tempfile
+
+    from demoplan.fileio import write_atomic
+
+    node = tmp_path / "node"
+    if kind == "socket":
+        with tempfile.TemporaryDirectory() as short:  # a socket's path is limited to ~107 bytes
+            server = socket.socket(socket.AF_UNIX)
+            server.bind(str(Path(short) / "s"))
+            (Path(short) / "s").rename(node)
+            server.close()
+        is_kind = stat.S_ISSOCK
+    else:
+        try:
+            os.mknod(node, stat.S_IFBLK | 0o600, os.makedev(7, 0))  # a loop device, never opened
+        except PermissionError:
+            pytest.skip("making a device node is not permitted here")
+        is_kind = stat.S_ISBLK
+    with pytest.raises(InputError, match="not a regular file") as caught:
+        write_atomic(node, "data\n")
+    assert str(node) in str(caught.value)
+    assert is_kind(node.lstat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["node"]  # no temporary left

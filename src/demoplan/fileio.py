@@ -31,12 +31,14 @@ __all__ = [
     "FORMAT_VERSION",
     "StagedOutputs",
     "check_format",
+    "check_output_folder",
     "describe_validation_error",
     "display_path",
     "dump_json",
     "locked_for_update",
     "os_error",
     "os_reason",
+    "output_target",
     "read_document",
     "read_input_text",
     "refuse_overwriting_inputs",
@@ -360,30 +362,104 @@ def locked_for_update(path: Path, wait: float = UPDATE_WAIT_SECONDS) -> Iterator
         os.close(fd)  # releases the lock
 
 
+def _kind_of(mode: int) -> str:
+    """A special file's kind, in words."""
+    kinds = (
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a pipe (FIFO)"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISDIR, "a folder"),
+    )
+    return next((words for test, words in kinds if test(mode)), "not a regular file")
+
+
+def output_target(path: Path, *, stream_ok: bool = True) -> tuple[Path, bool]:
+    """Where an output file named ``path`` is written, by the one rule every
+    writer follows (docs/limits.md, "Outputs"): ``(target, stream)``.
+
+    - missing, or a regular file: written atomically, a temporary file renamed
+      over ``target`` — a link to a regular file is followed, so the link stays
+      and the file it names is replaced;
+    - a character device or a pipe (``/dev/null``, ``/dev/stdout``, a FIFO)
+      when ``stream_ok``: ``stream`` is True and the bytes are written into it
+      directly, never renamed over, removed or truncated;
+    - anything else (a folder, a block device, a socket, a device where a
+      seekable file is needed): one InputError, "not a regular file".
+    """
+    path = Path(path)
+    shown = display_path(path)
+    try:
+        info = path.stat()  # follows links
+    except FileNotFoundError:
+        return path, False  # a new file (or a dangling link, replaced by the file)
+    except OSError as exc:
+        raise InputError(f"cannot write ({os_reason(exc, path)})", source=shown) from None
+    except ValueError:  # a NUL byte in the name
+        raise InputError("not a valid file name", source=shown) from None
+    if stat.S_ISREG(info.st_mode):
+        return (Path(os.path.realpath(path)) if path.is_symlink() else path), False
+    if stat.S_ISDIR(info.st_mode):
+        raise InputError("is a folder; a file name expected", source=shown)
+    if stream_ok and (stat.S_ISCHR(info.st_mode) or stat.S_ISFIFO(info.st_mode)):
+        return path, True
+    needed = (
+        "a regular file, a character device or a pipe expected"
+        if stream_ok
+        else "a regular file expected (this output is written as a whole file)"
+    )
+    raise InputError(f"is {_kind_of(info.st_mode)}, not a regular file; {needed}", source=shown)
+
+
+def _write_stream(path: Path, data: bytes) -> None:
+    """``data`` written straight into a character device or a pipe: opened
+    without creating or truncating anything (a pipe waits for its reader;
+    Ctrl-C stops the wait)."""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | getattr(os, "O_CLOEXEC", 0))
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+    except OSError as exc:
+        raise InputError(f"cannot write ({os_reason(exc)})", source=display_path(path)) from None
+
+
 class StagedOutputs:
     """The output files of one command, written all or none.
 
-    :meth:`add` stages each in a temporary file beside its target; leaving the
-    ``with`` block normally renames them all into place (with SIGINT and
-    SIGTERM held back meanwhile, so that Ctrl-C cannot split the renames);
-    leaving it by an exception — a failed plot, a full disk, Ctrl-C — removes
-    the temporary files and leaves every target as it was.
+    Each target follows :func:`output_target`. :meth:`add` stages a file in
+    a temporary file beside its target; leaving the ``with`` block normally
+    first writes the character devices and pipes among the targets (which
+    cannot be staged), then renames the staged files into place with SIGINT
+    and SIGTERM held back, so that Ctrl-C cannot split the renames. Leaving it
+    by an exception — a failed plot, a full disk, Ctrl-C — or a failed write
+    into a device removes the temporary files and leaves every regular target
+    as it was. A special file is never renamed over, removed or truncated.
     """
 
     def __init__(self) -> None:
         self._staged: list[tuple[Path, Path]] = []
+        self._streams: list[tuple[Path, bytes]] = []
 
     def __enter__(self) -> StagedOutputs:
         return self
 
-    def add(self, path: Path, data: bytes) -> None:
-        path = Path(path)
-        self._staged.append((_write_temporary(path, data), path))
+    def add(self, path: Path, data: bytes, *, stream_ok: bool = True) -> None:
+        target, stream = output_target(Path(path), stream_ok=stream_ok)
+        if stream:
+            self._streams.append((target, data))
+        else:
+            self._staged.append((_write_temporary(target, data), target))
 
     def __exit__(self, kind: object, error: object, trace: object) -> None:
         if kind is not None:
             self._discard()
             return
+        try:
+            for path, data in self._streams:
+                _write_stream(path, data)
+        except BaseException:
+            self._discard()
+            raise
         import signal
 
         held = {signal.SIGINT, signal.SIGTERM}
@@ -406,6 +482,25 @@ class StagedOutputs:
         for temporary, _ in self._staged:
             temporary.unlink(missing_ok=True)
         self._staged.clear()
+        self._streams.clear()
+
+
+def check_output_folder(path: Path) -> None:
+    """One InputError if ``path`` exists and is not a folder: a folder output
+    never replaces a file, a device, a pipe or a socket (docs/limits.md)."""
+    try:
+        info = Path(path).stat()
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise InputError(
+            f"cannot write ({os_reason(exc, path)})", source=display_path(path)
+        ) from None
+    if not stat.S_ISDIR(info.st_mode):
+        kind = "a file" if stat.S_ISREG(info.st_mode) else _kind_of(info.st_mode)
+        raise InputError(
+            f"exists and is {kind}, not a folder; a folder expected", source=display_path(path)
+        )
 
 
 @contextmanager
@@ -422,8 +517,7 @@ def staged_folder(target: Path, ours: Callable[[str], bool]) -> Iterator[Path]:
     import signal
 
     target = Path(target)
-    if target.exists() and not target.is_dir():
-        raise InputError("exists and is not a folder; a folder expected", source=str(target))
+    check_output_folder(target)
     if target.is_dir():
         others = sorted(entry.name for entry in target.iterdir() if not ours(entry.name))
         if others:
@@ -476,35 +570,17 @@ def write_atomic(path: Path, text: str) -> None:
 
 
 def write_atomic_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temp file in the same folder + rename).
-
-    A path that exists and is not a regular file (``/dev/null``, a pipe) is
-    written into directly instead.
+    """Write ``data`` to ``path`` atomically (temp file in the same folder + rename),
+    by the rule of :func:`output_target`: a character device or a pipe
+    (``/dev/null``, ``/dev/stdout``) is written into directly, never replaced.
 
     The new file gets the old file's permissions, or the usual ones for a new
     file (0666 less the umask) — not the 0600 of a bare temporary file. Any
     failure leaves ``path`` as it was, removes the temporary file and raises
     :class:`InputError` naming ``path``.
     """
-    path = Path(path)
-    if path.exists() and not path.is_file() and not path.is_dir():
-        # A device or pipe (-o /dev/null, -o /dev/stdout): write into it; renaming
-        # a file over it would replace the device itself.
-        try:
-            with path.open("wb") as handle:
-                handle.write(data)
-        except OSError as exc:
-            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
-        return
-    temporary = _write_temporary(path, data)
-    try:
-        temporary.replace(path)
-    except BaseException as exc:
-        temporary.unlink(missing_ok=True)
-        if isinstance(exc, OSError):
-            raise InputError(f"cannot write ({os_reason(exc)})", source=str(path)) from None
-        raise
-    _sync_folder(path.parent if str(path.parent) else Path())
+    with StagedOutputs() as outputs:
+        outputs.add(path, data)
 
 
 def _write_temporary(path: Path, data: bytes) -> Path:

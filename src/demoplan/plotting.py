@@ -458,12 +458,13 @@ def check_figure_path(path: Path, option: str) -> None:
     """One InputError, before any work, if ``path`` cannot take a figure: a
     folder, or an extension that names no image format."""
     from demoplan.errors import InputError
-    from demoplan.fileio import display_path
+    from demoplan.fileio import display_path, output_target
 
     if path.is_dir():
         raise InputError(
             "is a folder; an image file name expected", source=display_path(path), field=option
         )
+    output_target(path)  # a socket or a block device: refused before any work
     suffix = path.suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
         raise InputError(

@@ -27,7 +27,6 @@ from demoplan.errors import (
     UsageError,
 )
 from demoplan.fileio import (
-    os_reason,
     refuse_overwriting_inputs,
 )
 from demoplan.wording import plural
@@ -136,33 +135,22 @@ def _segmentation_defaults() -> str:
 
 
 def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:
-    """Write every file (atomically) or none: on any failure, or Ctrl-C, the files
-    written so far are removed (and ``folder`` too when this call created it)."""
-    from demoplan.fileio import write_atomic
+    """Write every file or none (:class:`~demoplan.fileio.StagedOutputs`): on
+    any failure, or Ctrl-C, the files are as they were (and ``folder`` is
+    removed when this call created it)."""
+    from demoplan.fileio import StagedOutputs, check_output_folder
 
-    if folder.exists() and not folder.is_dir():
-        raise InputError("exists and is not a folder; a folder expected", source=str(folder))
+    check_output_folder(folder)
     created = not folder.exists()
-    written: list[Path] = []
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        for path, text in files:
-            write_atomic(path, text)
-            written.append(path)
-    except OSError as exc:
-        _remove(written, folder if created else None)
-        raise InputError(f"cannot write ({os_reason(exc)})", source=str(folder)) from None
+        with StagedOutputs() as outputs:
+            for path, text in files:
+                outputs.add(path, text.encode("utf-8", "backslashreplace"))  # as write_atomic
     except BaseException:
-        _remove(written, folder if created else None)
+        if created:
+            with suppress(OSError):  # not empty: someone else wrote there meanwhile
+                folder.rmdir()
         raise
-
-
-def _remove(files: list[Path], folder: Path | None) -> None:
-    for path in files:
-        path.unlink(missing_ok=True)
-    if folder is not None:
-        with suppress(OSError):  # not empty: someone else wrote there meanwhile
-            folder.rmdir()
 
 
 def _move_json(move: Any) -> dict[str, Any]:

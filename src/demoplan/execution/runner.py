@@ -19,7 +19,7 @@ from demoplan.execution.executor import (
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
-from demoplan.fileio import os_reason
+from demoplan.fileio import os_reason, output_target
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
@@ -122,6 +122,7 @@ def run_task(
     world, first = start_world(model, scene, sim, faults, seed, settings, perception)
     recording = None
     if video is not None:
+        video = output_target(video, stream_ok=False)[0]  # a link's file, not the link
         recording = video.with_name(f".{video.name}.part.mp4")
         simulator: Any = getattr(world, "world", world)  # a camera world films through its own
         try:
@@ -229,11 +230,8 @@ def check_video_path(video: Path) -> None:
     folder or a device, in a folder that exists or can be made and takes a file."""
     if video.suffix.lower() != ".mp4":
         raise UsageError(f"--video {video}: an .mp4 file expected")
-    if video.exists() and not video.is_file():
-        raise InputError(
-            "is a folder or a device, not a file; an .mp4 file path expected",
-            source=str(video),
-        )
+    # An MP4 is finished by seeking back to its index: never a device or a pipe.
+    output_target(video, stream_ok=False)
     probe = video.with_name(f".{video.name}.part.mp4")
     try:
         video.parent.mkdir(parents=True, exist_ok=True)

@@ -596,29 +596,35 @@ def action_from_pddl(problem: Problem, name: str) -> Action:
 
 
 def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -> tuple[Path, Path]:
-    """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (atomically):
+    """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (both or neither):
     lifted, or with ``grounded`` the grounded STRIPS export (see :func:`problem_to_pddl`)."""
-    from demoplan.fileio import write_atomic
+    from demoplan.fileio import check_output_folder
 
     domain, problem_text = problem_to_pddl(problem, grounded=grounded)
     folder = Path(folder)
+    check_output_folder(folder)
     paths = (folder / "domain.pddl", folder / "problem.pddl")
-    write_atomic(paths[0], domain)
-    write_atomic(paths[1], problem_text)
+    _write_both(paths, (domain, problem_text))
     return paths
 
 
 def save_pddl_problem(problem: Problem, path: str | Path, *, grounded: bool = False) -> Path:
     """Write the PDDL problem to ``path`` and its domain beside it, to
-    ``<stem>-domain.pddl`` (both atomically); returns the domain's path."""
-    from demoplan.fileio import write_atomic
-
+    ``<stem>-domain.pddl`` (both or neither); returns the domain's path."""
     path = Path(path)
     domain, problem_text = problem_to_pddl(problem, grounded=grounded)
     domain_path = pddl_domain_path(path)
-    write_atomic(domain_path, domain)
-    write_atomic(path, problem_text)
+    _write_both((domain_path, path), (domain, problem_text))
     return domain_path
+
+
+def _write_both(paths: tuple[Path, Path], texts: tuple[str, str]) -> None:
+    """The domain and the problem, written both or neither (atomically)."""
+    from demoplan.fileio import StagedOutputs
+
+    with StagedOutputs() as outputs:
+        for path, text in zip(paths, texts, strict=True):
+            outputs.add(path, text.encode("utf-8", "backslashreplace"))
 
 
 def pddl_domain_path(problem_path: str | Path) -> Path:
