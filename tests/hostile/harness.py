@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 import subprocess
 import sys
 import time
@@ -125,3 +126,21 @@ def fingerprint(folder: Path) -> dict[str, str]:
             else:
                 found[key] = "special"
     return found
+
+
+MEMORY_DEVICES = {"null": 3, "zero": 5, "full": 7, "urandom": 9}
+"""The kernel's memory devices by minor number (major 1), as under /dev."""
+
+
+def private_device(path: Path, name: str) -> Path:
+    """A character device node at ``path`` that is the kernel's ``/dev/<name>``
+    (null, zero, full, urandom): the tests point demoplan at their own nodes,
+    never the machine's, so that no defect can replace a device every program
+    shares. Skips the test where making a node is not permitted."""
+    import pytest
+
+    try:
+        os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, MEMORY_DEVICES[name]))
+    except PermissionError:
+        pytest.skip("making a device node is not permitted here")
+    return path

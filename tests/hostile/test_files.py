@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from tests.helpers import EXAMPLES
-from tests.hostile.harness import check_clean, check_refused, fingerprint, run
+from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
 
 MAX_SECONDS = 20.0
 
@@ -110,9 +110,10 @@ KINDS: dict[str, Callable[[Path], Path]] = {
     "missing": lambda p: p,
     "folder": _folder,
     "fifo": _fifo,
-    "dev-zero": lambda p: Path("/dev/zero"),
-    "dev-urandom": lambda p: Path("/dev/urandom"),
-    "dev-null": lambda p: Path("/dev/null"),
+    # the kernel's devices, as private nodes: never the machine's own /dev
+    "dev-zero": lambda p: private_device(p, "zero"),
+    "dev-urandom": lambda p: private_device(p, "urandom"),
+    "dev-null": lambda p: private_device(p, "null"),
     "dangling-link": lambda p: _link(p, "nowhere" + p.suffix),
     "link-loop": _loop,
     "empty": _bytes(b""),

@@ -1,6 +1,6 @@
-"""Standard output full (``> /dev/full``) or closed (``>&-``): one line naming
-standard output and exit 1, or — closed — the output dropped and the job done;
-never a traceback (issue 14)."""
+"""Standard output full (``> /dev/full``, through a private node of that
+device) or closed (``>&-``): one line naming standard output and exit 1, or —
+closed — the output dropped and the job done; never a traceback (issue 14)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from tests.helpers import EXAMPLES
-from tests.hostile.harness import DEMOPLAN, NOT_SEEN, check_refused, run
+from tests.hostile.harness import DEMOPLAN, NOT_SEEN, check_refused, private_device, run
 
 COMMANDS = {
     "show": ["show", "model.json"],
@@ -34,8 +34,9 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))
-def test_a_full_standard_output_is_one_line(folder: Path, name: str) -> None:
-    answer = run(COMMANDS[name], folder, stdout_path="/dev/full")
+def test_a_full_standard_output_is_one_line(folder: Path, tmp_path: Path, name: str) -> None:
+    full = private_device(tmp_path / "full", "full")
+    answer = run(COMMANDS[name], folder, stdout_path=str(full))
     check_refused(answer, ["standard output"], codes={1})
 
 
