@@ -8,7 +8,7 @@ once per demonstration, so the intended model has one state per object,
 except in :func:`paper_experiment_1`, which regenerates the paper's Table II.
 
 Layouts are chosen so that the intended answer is the unambiguous one under
-SPEC §5: a relative object's reference is also its nearest object (by a
+docs/learning.md: a relative object's reference is also its nearest object (by a
 margin), so that the tie rule ("else the nearest reference") agrees with
 the lowest spread; references move between demonstrations far more than the
 placement noise, so that relative vs absolute is decidable.
@@ -108,7 +108,8 @@ def topological_order(
 
 
 def constraints_from_sequences(sequences: list[list[str]]) -> set[tuple[str, str]]:
-    """SPEC §5 / paper §IV.B: (X, Y) seen with X before Y somewhere, minus pairs seen both ways."""
+    """Paper §IV.B (docs/learning.md): (X, Y) seen with X before Y somewhere, minus
+    pairs seen both ways."""
     seen: set[tuple[str, str]] = set()
     for sequence in sequences:
         for i, x in enumerate(sequence):

@@ -1,4 +1,4 @@
-"""The command line (SPEC §4): learn / show, exit codes, one-line errors, outputs."""
+"""The command line (docs/cli.md): learn / show, exit codes, one-line errors, outputs."""
 
 from __future__ import annotations
 

@@ -108,7 +108,7 @@ def _full_scan(space: PositionSpace, separation: float, noise: float) -> tuple[i
 def _full_scan_by_the_rules(
     space: PositionSpace, separation: float, noise: float
 ) -> tuple[int, float]:
-    """Eq. (2) with SPEC §5's acceptance rules, every c in 1..N, no early stop.
+    """Eq. (2) with docs/learning.md's acceptance rules, every c in 1..N, no early stop.
 
     As the scan of :func:`select_clustering` judges each c (``_Scan.consider``):
     a cluster of one placement has the precision's spread (``noise²``) and no
@@ -156,7 +156,7 @@ def test_early_stop_agrees_with_the_full_scan_on_separated_placements(
 ) -> None:
     """Where placements form groups (here ≥ 1.2× the separation apart), the scan
     that stops after a few rejected cluster counts gives the full scan's answer
-    under the same rules (SPEC §5: clusters of one are no state, clusters are
+    under the same rules (docs/learning.md: clusters of one are no state, clusters are
     consistent with the precision)."""
     rng = np.random.default_rng(seed)
     means = [rng.uniform(-0.5, 0.5, 3) * [1, 1, 0]]

@@ -1,4 +1,4 @@
-"""File formats (SPEC §2-3): demonstration files, model files, atomic writes.
+"""File formats (docs/formats.md): demonstration files, model files, atomic writes.
 
 Library-level tests; the command line's handling of the same inputs is in
 ``test_cli.py``.
@@ -665,7 +665,7 @@ def test_bad_model_file_is_one_clear_input_error(
 
 
 def test_minimal_spec_model_loads() -> None:
-    """The SPEC's example model (no statistics, no demonstrations) is readable."""
+    """The example model of docs/formats.md (no statistics, no demonstrations) is readable."""
     data = {
         "format": "demoplan/model-1",
         "states": [

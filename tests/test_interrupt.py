@@ -1,4 +1,4 @@
-"""Ctrl-C and SIGTERM stop a long search within a second (SPEC §4: exit 130 / 143),
+"""Ctrl-C and SIGTERM stop a long search within a second (docs/cli.md: exit 130 / 143),
 on both start paths of ``demoplan solve`` and through ``plan``."""
 
 from __future__ import annotations

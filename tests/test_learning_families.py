@@ -1,7 +1,7 @@
 """What learning must produce at default settings over generated families of
 demonstrations (hypothesis; generators in ``tests/learning_families.py``).
 
-The families are the acceptance list of state generation (SPEC §5): scenes
+The families are the acceptance list of state generation (docs/learning.md): scenes
 shifted by metres with 1 cm noise, a fixture turned by ±30° carrying its
 items, symmetric objects released at any yaw, placement precision from
 0.2 mm to 3 cm, stability under a repeated or reordered demonstration, and a
@@ -59,7 +59,7 @@ def describe(model: TaskModel) -> str:
 
 def rigid_references(family: Family, obj: str) -> list[str | None]:
     """The intended reference of ``obj`` and the references of that one, up the
-    chain: ``obj`` is rigid with each (its noise grows by √2 a link), and SPEC §5
+    chain: ``obj`` is rigid with each (its noise grows by √2 a link), and docs/learning.md
     gives a tie to a reference available in every demonstration — the root of
     a chain is, an intermediate one often is not."""
     chain: list[str | None] = [family.references[obj]]
@@ -156,7 +156,7 @@ def offsets_in_tray_frame(family: Family) -> dict[str, np.ndarray]:
 @given(family=tray_families())
 def test_items_on_a_turned_tray_are_learned_in_the_trays_frame(family: Family) -> None:
     """Each item is one state against the tray whose value is the item's offset
-    in the tray's frame (SPEC §5) as demonstrated (the mean over the
+    in the tray's frame (docs/learning.md) as demonstrated (the mean over the
     demonstrations, so that the noise does not count), within 3 mm."""
     model = learn(family.demos)
     items = [s for s in model.states if s.object != "tray"]
@@ -314,7 +314,7 @@ def test_objects_with_two_slots_learn_two_states_beside_precise_ones(family: Fam
         states = [s for s in model.states if s.object == obj]
         if obj not in slots:
             # A jig may be learned against another jig on the same object: the
-            # two are rigid (SPEC §5's tie goes to the nearer reference).
+            # two are rigid (docs/learning.md's tie goes to the nearer reference).
             rigid = {reference} | {
                 other
                 for other, theirs in family.references.items()

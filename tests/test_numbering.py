@@ -1,6 +1,6 @@
 """One numbering: a demonstration is "demonstration N (name)", N from 1, wherever a
 person reads it — learn's table, plan's table and figure title, run's messages
-— while JSON keeps SPEC §3's 0-based goal."""
+— while JSON keeps docs/formats.md's 0-based goal."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The taught order honoured physically (SPEC §5 "Planning"): no object put down
+"""The taught order honoured physically (docs/planning.md "Planning"): no object put down
 on its place before its predecessors are reached, no move that ends where it
 started — in the search, the validator (strips), the PDDL export and the
 executor's notion of "reached"."""
@@ -37,7 +37,7 @@ def order_broken(problem: SceneProblem, actions: tuple[Action, ...]) -> list[str
     subgoals = {s.id: s for s in problem.problem.subgoals}
     before = {sid: {a for a, b in problem.problem.precedences if b == sid} for sid in subgoals}
     at = dict(problem.problem.initial)
-    # A state counts where its object stands at the start (SPEC §5, strips docstring).
+    # A state counts where its object stands at the start (docs/planning.md, strips docstring).
     done = {sid for sid, s in subgoals.items() if at[s.object] == s.location}
     broken = []
     taken_from = ""

@@ -423,7 +423,7 @@ def test_fast_downward_optimal_lengths_match(grounded: bool) -> None:
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_fast_downward_agrees_under_the_order_rule(grounded: bool, problem: Problem) -> None:
     """Random small problems with subgoals and precedences: Fast Downward's
-    optimal plan on the export is valid under SPEC §5's order rule and as long
+    optimal plan on the export is valid under docs/planning.md's order rule and as long
     as breadth-first search's (or both find none)."""
     need_fast_downward()
     reference = breadth_first_search(problem)

@@ -95,7 +95,7 @@ def test_touching_blocks_of_one_colour_stretch_case() -> None:
 
 
 def test_world_coordinates_follow_the_camera() -> None:
-    """Scale and origin (SPEC §3): image x = world x, image up = world y."""
+    """Scale and origin (docs/formats.md): image x = world x, image up = world y."""
     camera = Camera(500.0, (-0.3, 0.2))
     truth = [
         SyntheticBlock("blue", -0.1, 0.45, 20.0, 0.05),

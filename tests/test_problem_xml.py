@@ -1,4 +1,4 @@
-"""The paper's XML problem format (SPEC §3 "Planning problem"): parsing, the
+"""The paper's XML problem format (docs/formats.md "Planning problem"): parsing, the
 round trip through problem_to_xml, and refusal of bad or hostile files."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Scene geometry (paper §V.B) and target resolution (SPEC §5 "Planning")."""
+"""Scene geometry (paper §V.B) and target resolution (docs/scenes.md "Planning")."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""`demoplan solve` and `demoplan pddl` (SPEC §3 "Plan output", §4 exit codes)."""
+"""`demoplan solve` and `demoplan pddl` (docs/formats.md "Plan output", docs/cli.md exit codes)."""
 
 from __future__ import annotations
 

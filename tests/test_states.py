@@ -94,7 +94,7 @@ def test_experiment_2_reproduces_table_iv(blocks: TaskModelLearner) -> None:
 
 def test_experiment_2_reproduces_table_v(blocks: TaskModelLearner) -> None:
     assert list(blocks.sequences_) == TABLE_V
-    # Five by the rule of §IV.B (the paper's text says four; SPEC §5).
+    # Five by the rule of §IV.B (the paper's text says four; docs/learning.md).
     assert blocks.constraints_ == (("A", "B"), ("A", "C"), ("B", "C"), ("D", "A"), ("D", "C"))
     assert blocks.goals_ == (("A", "B", "C"), ("A", "C", "D"))
 
@@ -119,7 +119,7 @@ def test_kmeans_separates_two_genuinely_different_spoon_placements() -> None:
 
 def test_cucumber_table_i_references_and_repeated_knife_states() -> None:
     """Table I's structure: the knife moves down and up once per slice (states C
-    and D, repeated visits), relative to what holds the cucumber. Since SPEC §5's
+    and D, repeated visits), relative to what holds the cucumber. Since docs/learning.md's
     update, offsets are in the reference's frame and orientations are compared
     modulo symmetry: the example's cucumber is a cylinder (any turn about its
     axis looks the same, so its orientation is the same everywhere: a tie, to
@@ -148,7 +148,7 @@ def test_cucumber_table_i_references_and_repeated_knife_states() -> None:
 def test_orientation_reference_is_chosen_independently_of_position() -> None:
     """The box's position follows the tray, its orientation follows the sign.
 
-    Relative positions are in the reference's frame (SPEC §5): the box sits
+    Relative positions are in the reference's frame (docs/learning.md): the box sits
     10 cm along the turned tray's x axis, not at a fixed offset in world axes.
     """
     rng = np.random.default_rng(3)
@@ -169,7 +169,7 @@ def test_orientation_reference_is_chosen_independently_of_position() -> None:
     # Two of the three objects are turned at random here, so the estimated
     # orientation precision (a median over the objects) would be their scatter
     # (about 25°, beyond the 15° separation: no orientation learned); the
-    # teacher states it instead, as a user may (SPEC §5).
+    # teacher states it instead, as a user may (docs/learning.md).
     learner = TaskModelLearner(orientation_noise=0.5).fit(demos)
     box = [s for s in learner.states_ if s.object == "box"]
     assert len(box) == 1
@@ -232,7 +232,7 @@ def test_orientations_near_gimbal_lock_are_compared_as_rotations() -> None:
 
 
 def test_an_object_moved_twice_uses_its_current_placement_as_reference() -> None:
-    """SPEC §5: for an object moved more than once, the placement current at the step."""
+    """docs/learning.md: for an object moved more than once, the placement current at the step."""
     demos = []
     for d in range(3):
         base = 0.1 * d
@@ -328,7 +328,7 @@ def test_yaws_a_few_degrees_apart_are_one_state_wherever_they_wrap(
 # At the defaults: the places the paper's tables name. Tables II and IV give one
 # place several states where the reference that won a near tie differs (the
 # knife relative to the plate, B, or to the spoon, I — the same spot beside the
-# plate); decisions the data support (SPEC §5) merge them, so the defaults
+# plate); decisions the data support (docs/learning.md) merge them, so the defaults
 # must learn exactly the tables' distinct places, in the tables' orders.
 
 

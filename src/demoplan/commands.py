@@ -23,7 +23,7 @@ __all__ = [
 ]
 
 DEFAULT_TIMEOUT = 2.0
-"""Seconds a planning command may take by default, counted from its start (SPEC §4)."""
+"""Seconds a planning command may take by default, counted from its start (docs/cli.md)."""
 
 _command_started = time.monotonic()
 """When the current command started: the import of this module, for the

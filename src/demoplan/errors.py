@@ -1,4 +1,4 @@
-"""The exceptions demoplan raises; each carries the exit code of SPEC §4.
+"""The exceptions demoplan raises; each carries the exit code of docs/cli.md.
 
 The library never prints or exits: the command line turns one of these into a
 single line on stderr and the exit code below.
@@ -65,7 +65,7 @@ class NotFittedError(DemoplanError, AttributeError):
 
 
 def error_line(exc: DemoplanError) -> str:
-    """The one line ``demoplan`` prints on stderr for ``exc`` (SPEC §4): runs
+    """The one line ``demoplan`` prints on stderr for ``exc`` (docs/cli.md): runs
     of whitespace as one space, control characters (an escape sequence in a
     name read from a file) written as escapes, never sent to the terminal."""
     text = " ".join(str(exc).split())

@@ -1,6 +1,6 @@
 """Reading and writing demoplan's JSON/YAML files: format tags, units, atomic writes.
 
-Every file carries ``"format": "demoplan/<kind>-<version>"`` (SPEC §2). Files
+Every file carries ``"format": "demoplan/<kind>-<version>"`` (docs/formats.md). Files
 are written atomically — to a temporary file in the target's folder, flushed
 and renamed over the target — so a reader never sees half a file and a failed
 write leaves the old one in place.

@@ -21,7 +21,7 @@ STREAM_SUFFIXES = {".csv", ".db3", ".mcap"}
 
 
 def is_pose_stream(path: Path) -> bool:
-    """A pose stream (SPEC §3): a CSV file, or a ROS 2 bag (``.db3``, ``.mcap``, or a
+    """A pose stream (docs/formats.md): a CSV file, or a ROS 2 bag (``.db3``, ``.mcap``, or a
     folder holding ``metadata.yaml``)."""
     if path.is_dir():
         return (path / "metadata.yaml").is_file()

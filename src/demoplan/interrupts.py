@@ -1,4 +1,4 @@
-"""Ctrl-C and SIGTERM, the same way in every command (SPEC §4: exit 130 /
+"""Ctrl-C and SIGTERM, the same way in every command (docs/cli.md: exit 130 /
 143): the handlers :func:`demoplan.launcher.main` installs, and what the CLI
 asks when a command was stopped. Kept apart from the launcher so that the
 typer application can use it without importing the launcher back.
@@ -30,7 +30,7 @@ TERMINATED_EXIT = 143  # 128 + SIGTERM
 
 
 def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
-    """The exit code of a command stopped by ``exc`` (SPEC §4)."""
+    """The exit code of a command stopped by ``exc`` (docs/cli.md)."""
     return TERMINATED_EXIT if isinstance(exc, Terminated) else INTERRUPTED_EXIT
 
 

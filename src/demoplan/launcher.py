@@ -82,7 +82,7 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
 
 
 def run_solve(options: SolveOptions) -> int:
-    """Solve, print the plan (or its JSON) on stdout; return the exit code (SPEC §4)."""
+    """Solve, print the plan (or its JSON) on stdout; return the exit code (docs/cli.md)."""
     from demoplan.errors import DemoplanError, error_line
     from demoplan.fileio import os_error
 
@@ -178,7 +178,7 @@ def _stdout_reason(exc: OSError) -> str:
 
 
 def _dispatch() -> int:
-    """Run the command; its exit code. Usage errors are one line (SPEC §4)."""
+    """Run the command; its exit code. Usage errors are one line (docs/cli.md)."""
     args = sys.argv[1:]
     if args[:1] == ["solve"] and not sys.stderr.isatty():
         options = parse_solve_options(args[1:])

@@ -3,7 +3,7 @@
 Frozen, slotted dataclasses with tuples inside, so that values hash and
 compare. Positions are metres ``(x, y, z)`` in the world frame (z up, table
 top at z = 0, the point is the centre of the object's bottom face); orientations
-are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (SPEC §2).
+are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (docs/formats.md).
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ class Step:
 
 @dataclass(frozen=True, slots=True)
 class Demonstration:
-    """A segmented demonstration (SPEC §3 ``demoplan/demonstration-1``)."""
+    """A segmented demonstration (docs/formats.md ``demoplan/demonstration-1``)."""
 
     name: str
     steps: tuple[Step, ...]
@@ -121,7 +121,7 @@ class StatePosition:
 
     ``reference`` is ``None`` for an absolute (world-frame) position, else the
     object or landmark whose placement is subtracted (paper eq. 1: x_i − x_j),
-    expressed in the reference's frame (``R_j⁻¹·(x_i − x_j)``, SPEC §5) when
+    expressed in the reference's frame (``R_j⁻¹·(x_i − x_j)``, docs/learning.md) when
     ``in_reference_frame``, else in world axes. ``spread`` is the trace of the
     sample covariance of the members' relative positions (m²).
     """
@@ -166,7 +166,7 @@ class State:
     members: tuple[tuple[int, int], ...]
     margins: tuple[tuple[str, float], ...] = field(default=(), compare=False)
     """Per decision (``"position reference"``, ``"position clusters"``, …) how far
-    it was from going the other way, in units of the precision (SPEC §5; the
+    it was from going the other way, in units of the precision (docs/learning.md; the
     smallest over the members); below 1: within the precision."""
 
 
@@ -181,7 +181,7 @@ def visit_label(state_id: str, occurrence: int) -> str:
 
 @dataclass(frozen=True, slots=True)
 class TaskModel:
-    """A learned task model (SPEC §3 ``demoplan/model-1``).
+    """A learned task model (docs/formats.md ``demoplan/model-1``).
 
     ``constraints`` are pairs of visit labels ``(X, Y)`` meaning "X before Y";
     ``goals[k]`` is the set of states demonstration k ends in.

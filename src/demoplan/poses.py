@@ -1,4 +1,4 @@
-"""Poses, units and object geometry as demoplan's files spell them (SPEC §2).
+"""Poses, units and object geometry as demoplan's files spell them (docs/formats.md).
 
 The pydantic schemas that demonstration files (:mod:`demoplan.learning.demonstrations`)
 and scene files (:mod:`demoplan.scenes.scene`) share: a pose is a ``position``

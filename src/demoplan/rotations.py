@@ -2,7 +2,7 @@
 
 Names follow ``<target>_from_<source>``. Quaternions are ``(x, y, z, w)`` with
 ``w >= 0`` (canonical sign); Euler angles are extrinsic x-y-z (roll, pitch,
-yaw) in degrees, as SPEC §2 defines ``rpy``.
+yaw) in degrees, as docs/formats.md defines ``rpy``.
 
 Orientations are compared as rotations, never as raw Euler differences: the
 deviation of a rotation from a mean is the rotation vector of

@@ -1,4 +1,4 @@
-"""Running a demoplan command and checking SPEC §4's promises about its answer."""
+"""Running a demoplan command and checking docs/cli.md's promises about its answer."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
-EXIT_CODES = {0, 1, 2, 3, 4}  # SPEC §4 (130 / 143: interrupted, tested apart)
+EXIT_CODES = {0, 1, 2, 3, 4}  # docs/cli.md (130 / 143: interrupted, tested apart)
 REFUSED = {1, 2, 3, 4}
 ERROR_PREFIX = "demoplan: error: "
 NOT_SEEN = ("Traceback", "Warning:", "RuntimeWarning", "UserWarning", "DeprecationWarning")
@@ -80,7 +80,7 @@ def run(
 def check_refused(
     answer: Answer, names: Iterable[str], *, codes: set[int] = REFUSED, max_seconds: float = 20.0
 ) -> None:
-    """SPEC §4 for bad input: an exit code from ``codes``, exactly one stderr
+    """docs/cli.md for bad input: an exit code from ``codes``, exactly one stderr
     line, starting ``demoplan: error:`` and naming one of ``names`` (the file
     or the option), no traceback or warning text, within ``max_seconds``."""
     assert answer.code in codes, f"exit code not in {sorted(codes)}: {answer}"
@@ -98,7 +98,7 @@ def check_refused(
 def check_clean(answer: Answer, *, max_seconds: float = 60.0) -> None:
     """A command that may succeed or refuse: if it refuses, as
     :func:`check_refused` (with any name); never a traceback or warning."""
-    assert answer.code in EXIT_CODES, f"exit code not in SPEC §4: {answer}"
+    assert answer.code in EXIT_CODES, f"exit code not in docs/cli.md: {answer}"
     for text in NOT_SEEN:
         assert text not in answer.stderr, f"{text!r} printed: {answer}"
     if answer.code:

@@ -3,7 +3,7 @@
 A table: each *slot* (a command and which of its arguments is the file) is
 given each *kind* of hostile file — missing, a folder, a FIFO, a device, a
 link that dangles or loops, empty, binary, invalid UTF-8, NUL bytes, too big,
-one enormous line — and must answer as SPEC §4 says (:mod:`.harness`): one
+one enormous line — and must answer as docs/cli.md says (:mod:`.harness`): one
 line naming the file, an exit code of §4, within the time bound, nothing in
 the working folder changed. File names with bytes that are not UTF-8, a
 newline or rich markup must work, or be refused in one line all the same.

@@ -7,7 +7,7 @@ string, a name with a newline or rich markup, null, a list or object where a
 number belongs), drops or adds a key, duplicates one, or cuts the file short —
 and runs the command that reads it, in this process (fast). Whatever comes
 in, the command must succeed or answer with one line naming the file and an
-exit code of SPEC §4 — never a traceback or a warning — and leave the files
+exit code of docs/cli.md — never a traceback or a warning — and leave the files
 it was given as they were.
 """
 

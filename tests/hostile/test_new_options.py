@@ -3,7 +3,7 @@ test_options.py: ``show SCENE`` (``--model``, ``--plot``), ``run --video``
 (and Ctrl-C while it records), ``run --clutter`` with hostile extra objects,
 ``experiments --out`` and ``--open``.
 
-Every case: an exit code of SPEC §4; when it is not 0, exactly one stderr
+Every case: an exit code of docs/cli.md; when it is not 0, exactly one stderr
 line ``demoplan: error: …`` naming the file or the option, no traceback or
 warning text, and no file in the working folder new or changed (the outputs
 are written all or none). The defects this pass found (ffmpeg's own lines
@@ -137,7 +137,7 @@ def check_answer(
     codes: set[int],
     outputs: tuple[str, ...] = (),
 ) -> None:
-    """SPEC §4 for one case: an exit code from ``codes``; refused in one line
+    """docs/cli.md for one case: an exit code from ``codes``; refused in one line
     naming one of ``names`` (not a temporary file beside it) with nothing
     changed, or done with only ``outputs`` changed."""
     assert answer.code in codes, f"exit code not in {sorted(codes)}: {answer}"

@@ -1,6 +1,6 @@
 """Hostile option values and outputs, hand-written (issue 14): every one is
 refused in one line naming the option (or the file), with an exit code of
-SPEC §4, quickly, and no file in the working folder changes — a command with
+docs/cli.md, quickly, and no file in the working folder changes — a command with
 several outputs writes none of them when one fails."""
 
 from __future__ import annotations

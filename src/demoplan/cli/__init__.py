@@ -1,8 +1,8 @@
-"""The ``demoplan`` command line (SPEC §4).
+"""The ``demoplan`` command line (docs/cli.md).
 
 Commands only parse options, call the library and render what it returns with
 rich. ``--json`` output goes to stdout and nothing else does; a domain error
-becomes one line on stderr and the exit code of SPEC §4.
+becomes one line on stderr and the exit code of docs/cli.md.
 """
 
 from __future__ import annotations

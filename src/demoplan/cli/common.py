@@ -86,7 +86,7 @@ def reported_errors() -> Iterator[None]:
             raise  # demoplan.launcher.main names standard output
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
-    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (SPEC §4)
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (docs/cli.md)
         from demoplan.interrupts import interrupted_by_signal, interrupted_exit_code
 
         _HELD.discard()

@@ -15,7 +15,7 @@ object with where it should be:
   if it is in the way).
 
 On a difference it replans the chosen goal from the observed world; subgoals
-already reached stay reached (SPEC §5: a subgoal counts once; the goal still
+already reached stay reached (docs/execution.md: a subgoal counts once; the goal still
 needs every object at its final place). It gives up after ``max_replans``
 replans, when no plan exists, or after ``max_actions`` actions.
 """
@@ -67,7 +67,7 @@ class ExecutionSettings:
     max_actions: int = 400
     budget: Budget = field(default_factory=lambda: Budget(timeout=2.0))
     """Per (re)planning, shared by the candidate goals (the anytime planner
-    returns its best plan when it runs out; SPEC §4)."""
+    returns its best plan when it runs out; docs/cli.md)."""
     geometry: GeometrySettings = field(default_factory=GeometrySettings)
 
 
@@ -120,7 +120,7 @@ class RunEvent:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RunReport:
-    """What happened (SPEC §3 "Run report"); built with keywords, never changed."""
+    """What happened (docs/formats.md "Run report"); built with keywords, never changed."""
 
     success: bool
     replans: int
@@ -147,7 +147,7 @@ class RunReport:
 
     @property
     def exit_code(self) -> int:
-        """SPEC §4: 0 success, 3 no plan from the observed world, 4 a limit reached."""
+        """docs/cli.md: 0 success, 3 no plan from the observed world, 4 a limit reached."""
         return 0 if self.success else 4 if self.gave_up else 3
 
     def to_json(self) -> dict[str, Any]:
@@ -446,12 +446,12 @@ def _targets(problem: SceneProblem) -> tuple[tuple[str, Pose], ...]:
 
 
 def _reached_at_start(problem: SceneProblem) -> set[str]:
-    """The subgoals that count as reached where the objects stand (SPEC §5)."""
+    """The subgoals that count as reached where the objects stand (docs/execution.md)."""
     return set(Rules(problem.problem).start().reached)
 
 
 def _mark_reached(problem: SceneProblem, action: Action, reached: set[str]) -> None:
-    """The subgoal this put-down reaches (at most one; SPEC §5)."""
+    """The subgoal this put-down reaches (at most one; docs/execution.md)."""
     rules = Rules(problem.problem)
     reached |= rules.reached_by_put_down(action.object, action.location, frozenset(reached))
 

@@ -1,4 +1,4 @@
-"""Faults to inject into a simulated run (SPEC §3 "Run report": ``--faults``).
+"""Faults to inject into a simulated run (docs/formats.md "Run report": ``--faults``).
 
 ``--faults drop=0.2,displace=0.1`` gives each kind a probability:
 

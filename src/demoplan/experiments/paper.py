@@ -69,7 +69,7 @@ PAPER_TABLE_IV = (
     PaperState("D", "green", None, (0.40, 0.04, 0.00), None, 0),
 )
 PAPER_TABLE_V = ("A-B-C", "D-A-C")
-# The paper's text says "four constraints"; the rule of §IV.B gives five (SPEC §5).
+# The paper's text says "four constraints"; the rule of §IV.B gives five (docs/learning.md).
 CONSTRAINTS_EXPERIMENT_2 = 5
 
 

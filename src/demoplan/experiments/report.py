@@ -241,7 +241,8 @@ def _notes() -> str:
         "- Positions are rounded to the paper's two decimals (m), θ to whole degrees.\n"
         "- Experiment 2: the paper's text says four constraints were generated; the rule of "
         "§IV.B (every ordered pair seen, minus pairs seen both ways) gives five for Table V's "
-        "sequences A-B-C and D-A-C: A<B, A<C, B<C, D<A, D<C. SPEC §5 takes the rule.\n"
+        "sequences A-B-C and D-A-C: A<B, A<C, B<C, D<A, D<C. demoplan takes the rule "
+        "(docs/learning.md).\n"
     )
 
 

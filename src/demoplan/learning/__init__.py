@@ -1,6 +1,6 @@
 """The learning stage: demonstrations in, a task model out (paper §IV.A–B).
 
-- :mod:`demoplan.learning.demonstrations` — demonstration files (SPEC §3).
+- :mod:`demoplan.learning.demonstrations` — demonstration files (docs/formats.md).
 - :mod:`demoplan.learning.states` and :mod:`demoplan.learning.clustering` —
   state generation (§IV.A, eq. 1–2).
 - :mod:`demoplan.learning.constraints` — task generalization (§IV.B).
@@ -8,7 +8,7 @@
   settings value from ``learn``'s options to the model file.
 - :mod:`demoplan.learning.learner` — :class:`TaskModelLearner`, :func:`learn`,
   :func:`update`.
-- :mod:`demoplan.learning.modelfile` — model files (SPEC §3 ``demoplan/model-1``).
+- :mod:`demoplan.learning.modelfile` — model files (docs/formats.md ``demoplan/model-1``).
 - :mod:`demoplan.learning.tables` — the paper's tables as text rows.
 
 Names are imported on first use, so the value types (:mod:`demoplan.model`)

@@ -229,7 +229,7 @@ def _kmeans_plus_plus(
 def spread_of(deviations: FloatArray) -> float:
     """Trace of the sample covariance (n − 1 in the denominator); 0 for one sample.
 
-    The SPEC's reading of the paper's |cov|: the determinant degenerates when
+    Our reading of the paper's |cov|: the determinant degenerates when
     there are no more demonstrations than dimensions, the trace does not.
     """
     n = deviations.shape[0]
@@ -253,7 +253,7 @@ def outscores(
     against_precision: bool = True,
 ) -> bool:
     """Whether a clustering scoring ``better`` = (spread, degrees of freedom) is
-    supported by the data over one scoring ``worse`` (SPEC §5: a decision only
+    supported by the data over one scoring ``worse`` (docs/learning.md: a decision only
     beyond the placement precision).
 
     Their RMS spreads must differ by at least ``noise``, and — unless
@@ -457,14 +457,14 @@ class _Scan:
         if not present.all():  # compact the labels if a cluster ended empty
             labels = (np.cumsum(present) - 1)[labels]
         means, raw = cluster_stats(self.space, labels, int(present.sum()))
-        # A cluster of one placement does not show "no spread" (SPEC §5): it has
+        # A cluster of one placement does not show "no spread" (docs/learning.md): it has
         # the placement precision's.
         sizes = np.bincount(labels, minlength=len(raw))
         spreads = [noise * noise if n < 2 else v for v, n in zip(raw, sizes, strict=True)]
         if c > 1 and (
             closest_pair(self.space.distance, means) < separation
             # A cluster of one placement shows no spread, not a state: a place
-            # seen once is no evidence of a second state (SPEC §5).
+            # seen once is no evidence of a second state (docs/learning.md).
             or np.bincount(labels).min() < 2
             # Nor do clusters that scatter far beyond the placement precision:
             # splitting a continuum is not finding states.

@@ -1,4 +1,4 @@
-"""Task generalization (paper §IV.B, Fig. 2; SPEC §5).
+"""Task generalization (paper §IV.B, Fig. 2; docs/learning.md).
 
 Every ordered pair (X, Y) with X before Y in some demonstration is a
 constraint "X before Y"; a pair also seen in the other order, in any

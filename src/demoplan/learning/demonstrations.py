@@ -1,4 +1,4 @@
-"""Demonstration files (SPEC §3 ``demoplan/demonstration-1`` / ``demonstrations-1``).
+"""Demonstration files (docs/formats.md ``demoplan/demonstration-1`` / ``demonstrations-1``).
 
 Files are validated with pydantic schemas; any problem becomes one
 :class:`~demoplan.errors.InputError` naming the file, the field and what was
@@ -110,7 +110,7 @@ class DemonstrationsSchema(_Schema):
 
 
 def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
-    """A demonstration in the SPEC's file form (metres, quaternions)."""
+    """A demonstration in the file form of docs/formats.md (metres, quaternions)."""
     out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
     if demo.objects:
         out["objects"] = {n: {"shape": g.shape, "size": list(g.size)} for n, g in demo.objects}

@@ -1,6 +1,6 @@
-"""Task model files (SPEC §3 ``demoplan/model-1``), written by ``demoplan learn``.
+"""Task model files (docs/formats.md ``demoplan/model-1``), written by ``demoplan learn``.
 
-Besides the fields the SPEC requires (``states``, ``sequences``,
+Besides the required fields (``states``, ``sequences``,
 ``constraints``, ``goals``), a model records each state's statistics (spread,
 members), the teacher's constraints and any demonstration that contradicts
 them, the learning settings, and the demonstrations themselves, so that
@@ -167,7 +167,7 @@ def settings_from_dict(data: Any, source: str) -> LearningSettings:
 
 
 def model_to_dict(model: TaskModel) -> dict[str, Any]:
-    """The model as the SPEC's JSON document (metres, degrees)."""
+    """The model as the JSON document of docs/formats.md (metres, degrees)."""
     return {
         "format": "demoplan/model-1",
         "states": [_state_to_dict(s) for s in model.states],

@@ -22,7 +22,7 @@ class LearningSettings:
     """Settings of learning (documented defaults, docs/learning.md).
 
     position_noise : the placement precision (RMS, metres) decisions are
-        measured against (SPEC §5): spreads whose RMS differs by less than
+        measured against (docs/learning.md): spreads whose RMS differs by less than
         this are ties, and a cluster of one placement has this spread.
         ``None`` (default): estimated from the demonstrations
         (:func:`demoplan.learning.states.estimate_precision`), so that one

@@ -1,4 +1,4 @@
-"""State generation (paper §IV.A, eq. 1–2; SPEC §5).
+"""State generation (paper §IV.A, eq. 1–2; docs/learning.md).
 
 Every step of every demonstration is a *placement* of one object. For each
 object, every candidate reference — absolute, every other object, every
@@ -184,7 +184,7 @@ class _World:
             self.moves.append(moves)
 
     def pose(self, demo: int, name: str, step: int) -> Pose | None:
-        """``name``'s placement when ``step`` happens (SPEC §5).
+        """``name``'s placement when ``step`` happens (docs/learning.md).
 
         The placement current at the step; for an object placed only after the
         step, its first placement; for one never moved, its initial pose.
@@ -425,7 +425,7 @@ def _generate_states(
 
 
 def state_letters(index: int) -> str:
-    """0 → ``A``, 25 → ``Z``, 26 → ``AA``, 27 → ``AB``, … (SPEC §3)."""
+    """0 → ``A``, 25 → ``Z``, 26 → ``AA``, 27 → ``AB``, … (docs/formats.md)."""
     letters = ""
     index += 1
     while index:
@@ -464,7 +464,7 @@ def estimate_precision(
     relative: dict[tuple[str, Kind, str | None], np.ndarray],
     settings: StateGenerationSettings,
 ) -> Precision:
-    """The placement precision of the demonstrations (SPEC §5), unless set.
+    """The placement precision of the demonstrations (docs/learning.md), unless set.
 
     For every object placed at least twice, the RMS spread of its placements
     relative to the candidate that explains them best as one cluster (the
@@ -658,7 +658,7 @@ def _score_references(
 def _relative_values(
     kind: Kind, obj: str, own: list[_Placement], reference: str | None, world: _World
 ) -> tuple[np.ndarray | None, bool]:
-    """``obj``'s placements relative to ``reference`` (SPEC §5): positions in the
+    """``obj``'s placements relative to ``reference`` (docs/learning.md): positions in the
     reference's frame where it has an orientation at every placement (turned
     back by its orientation, taken modulo its symmetry), else in world axes;
     orientations ``R_ref⁻¹·R_obj``, modulo ``obj``'s own symmetry. Returns the
@@ -700,7 +700,7 @@ def _mean_distance(kind: Kind, values: np.ndarray) -> float:
 
 @dataclass(frozen=True, slots=True)
 class _Chooser:
-    """One object's reference choice for one kind (SPEC §5).
+    """One object's reference choice for one kind (docs/learning.md).
 
     First the object's **own** choice among the candidates available at every
     one of its placements (absolute, landmarks, objects always placed before

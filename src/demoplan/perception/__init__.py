@@ -1,4 +1,4 @@
-"""Block perception from a camera above the table (paper §V.B; SPEC §3 "Camera image").
+"""Block perception from a camera above the table (paper §V.B; docs/formats.md "Camera image").
 
 - :mod:`~demoplan.perception.camera`: pixels ↔ world, reading images;
 - :mod:`~demoplan.perception.colours`: background, foreground and colour classes;

@@ -184,7 +184,8 @@ def detect_blocks(
         yaw = ((params[2] + 45.0) % 90.0) - 45.0
         counts[region.colour] = counts.get(region.colour, 0) + 1
         count = counts[region.colour]
-        # a plain colour names its block (red, red2, …); others are block1, block2, … (SPEC §3)
+        # a plain colour names its block (red, red2, …); others are block1, block2, …
+        # (docs/formats.md)
         name = (
             f"block{count}"
             if region.colour == "block"

@@ -1,4 +1,4 @@
-"""The top-down orthographic camera of SPEC §3 "Camera image".
+"""The top-down orthographic camera of docs/formats.md "Camera image".
 
 ``px_per_m`` pixels per metre; ``origin`` = world (x, y) of the image's
 bottom-left corner; image x to the right = world x, image up = world y. A

@@ -56,7 +56,7 @@ class ColourRegion:
 
 def name_colour(rgb: np.ndarray) -> str:
     """The plain colour name nearest to ``rgb`` (dark or grey: ``black`` / ``grey``;
-    ``block`` when no plain colour is near: SPEC §3 then names blocks block1, block2…)."""
+    ``block`` when no plain colour is near: docs/formats.md then names blocks block1, block2…)."""
     label = int(_classify(np.asarray(rgb, dtype=float).reshape(1, 3))[0])
     return _palette()[0][label] if label >= 0 else _SPECIAL[label]
 

@@ -246,7 +246,7 @@ class AStar:
         the GRASP and PUT_DOWN tests of :class:`Compiled` (``grasp_ok``,
         ``put_ok``, ``put_down``) inlined, since they run for every candidate;
         of the free interchangeable locations only one is tried, and no move
-        ends where it started (SPEC §5). The BFS-versus-A* property test guards
+        ends where it started (docs/planning.md). The BFS-versus-A* property test guards
         that these tests stay the rules of :mod:`demoplan.planning.strips`."""
         c = self.c
         block, above, exclusive, below, accepts, plain = (

@@ -146,7 +146,7 @@ class Compiled:
 
     def put_down(self, obj: int, location: int, reached: int) -> int:
         """The subgoals reached after putting ``obj`` down at ``location``, or -1
-        if the order rule forbids it (SPEC §5; :mod:`demoplan.planning.strips`):
+        if the order rule forbids it (docs/planning.md; :mod:`demoplan.planning.strips`):
         the first unreached subgoal of ``obj`` there must have every predecessor
         reached, and is reached by the put-down."""
         for s in self.subgoals_of[obj]:

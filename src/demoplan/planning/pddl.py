@@ -1,6 +1,6 @@
 """PDDL export of a planning problem, for Fast Downward, unified-planning, pyperplan.
 
-Two forms with one meaning, that of :mod:`demoplan.planning.strips` (SPEC §3
+Two forms with one meaning, that of :mod:`demoplan.planning.strips` (docs/formats.md
 and the order rule of §5). Every action costs 1 (no ``:action-costs``), so an
 optimal PDDL plan has as many actions as an optimal demoplan plan, and
 :func:`action_from_pddl` maps a planner's action back to the paper's
@@ -36,7 +36,7 @@ invariants (an object is at one place or held, a place is free or occupied)
 at once, where with hundreds of nullary atoms its invariant synthesis runs
 into its candidate limit (about 10 s even for three objects).
 
-In both, the order rule of SPEC §5 is in the preconditions: the plain
+In both, the order rule of docs/planning.md is in the preconditions: the plain
 PUT_DOWN at a place of one of the object's subgoals needs every subgoal there
 reached; the variant that reaches a subgoal needs its predecessors (and the
 object's earlier subgoals there) reached. So Fast Downward's plans, like
@@ -140,7 +140,7 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
     def away(o: str, loc: str) -> str:
         return f"away {names[o]} {names[loc]}"
 
-    # "No move ends where it started" (SPEC §5) changes no fact, so no shortest
+    # "No move ends where it started" (docs/planning.md) changes no fact, so no shortest
     # plan needs a rule for it — except where an object has two subgoals at one
     # place: putting it back there would reach the second. For those places
     # (away o l) says o has been put down elsewhere since it last stood at l.
@@ -174,7 +174,7 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
                 delete = [holding(o, g), free(loc)]
                 delete += [away(o, loc)] if loc in revisits[o] else []
                 base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
-                # The order rule (SPEC §5): o is put down at the place of a subgoal
+                # The order rule (docs/planning.md): o is put down at the place of a subgoal
                 # only to reach it — the first one there not yet reached, once its
                 # predecessors are — or once all of them there are reached.
                 here = [s for s in problem.subgoals if s.object == o and s.location == loc]
@@ -337,7 +337,7 @@ def _lifted(problem: Problem) -> _Lifted:
         exclusive.setdefault((a,), set()).add(b)
         exclusive.setdefault((b,), set()).add(a)
 
-    # The order rule (SPEC §5; demoplan.planning.strips): o is put down at the place of
+    # The order rule (docs/planning.md; demoplan.planning.strips): o is put down at the place of
     # one of its subgoals only to reach the first one there not yet reached, once its
     # predecessors are (put-down-reaching), or once all of them there are (put-down).
     here: dict[tuple[str, str], list[str]] = {}
@@ -375,7 +375,7 @@ def _lifted(problem: Problem) -> _Lifted:
             "reached",
         ),
         repeated=tuple(repeated),
-        # "No move ends where it started" (SPEC §5) changes no fact, so no shortest
+        # "No move ends where it started" (docs/planning.md) changes no fact, so no shortest
         # plan needs a rule for it — except where an object has two subgoals at one
         # place: putting it back there would reach the second. For those places
         # (away o l) says o has been put down elsewhere since it last stood at l.

@@ -1,4 +1,4 @@
-"""The symbolic planning problem (paper §IV.C; SPEC §3 "Planning problem").
+"""The symbolic planning problem (paper §IV.C; docs/formats.md "Planning problem").
 
 A problem names objects, locations (some marked as free space), grasps, which
 grasps each object allows, collision facts ``(la, lb, g)`` — grasp g at la is
@@ -19,7 +19,7 @@ goal. Beyond the paper's example it can say:
   reached, or at the start when it already holds and its predecessors do too.
   ``reached`` lists subgoals reached before planning (replanning keeps them).
 
-Semantics of the operators (SPEC §3): one object per location, the hand holds
+Semantics of the operators (docs/formats.md): one object per location, the hand holds
 at most one object;
 
 - ``GRASP o la g``: hand empty, o at la, g allowed for o, no *other* object at

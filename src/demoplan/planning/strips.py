@@ -1,5 +1,5 @@
-"""GRASP / PUT_DOWN on names: the operators of SPEC §3 and the order rule of
-SPEC §5, written as plainly as a STRIPS interpreter (pyperplan's
+"""GRASP / PUT_DOWN on names: the operators of docs/formats.md and the order rule of
+docs/planning.md, written as plainly as a STRIPS interpreter (pyperplan's
 ``applicable`` / ``apply``).
 
 The searches run on a compiled, bitmask form of the same rules

@@ -1,4 +1,4 @@
-"""The paper's XML problem format (§IV.C; SPEC §3), read safely with defusedxml.
+"""The paper's XML problem format (§IV.C; docs/formats.md), read safely with defusedxml.
 
 A file in the paper's form stays valid::
 

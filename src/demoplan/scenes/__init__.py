@@ -1,4 +1,4 @@
-"""Planning a learned task in a new scene (paper §IV.C, §V.B; SPEC §3 "Scene", §5).
+"""Planning a learned task in a new scene (paper §IV.C, §V.B; docs/scenes.md).
 
 - :mod:`~demoplan.scenes.scene`: the scene file (``demoplan/scene-1``);
 - :mod:`~demoplan.scenes.targets`: each demonstrated goal as subtasks with target poses;

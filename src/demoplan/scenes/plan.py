@@ -1,5 +1,5 @@
 """Plan a learned task in a scene: every candidate goal, the shortest chosen
-(paper §IV.C, §V.B; SPEC §5 "Planning").
+(paper §IV.C, §V.B; docs/scenes.md "Planning").
 
 Each demonstrated goal (deduplicated) becomes a planning problem
 (:func:`~demoplan.scenes.problems.build_problem`) solved by the anytime
@@ -86,7 +86,7 @@ class ScenePlan:
         return replace(self.chosen.plan, optimal=self.optimal, bound=self.bound)
 
     def to_json(self) -> dict[str, Any]:
-        """``plan --json`` (SPEC §3 "Plan output")."""
+        """``plan --json`` (docs/formats.md "Plan output")."""
         chosen = self.chosen
         assert chosen.plan is not None
         return {

@@ -1,4 +1,4 @@
-"""A candidate goal in a scene → the planner's problem (paper §IV.C; SPEC §5).
+"""A candidate goal in a scene → the planner's problem (paper §IV.C; docs/scenes.md).
 
 Locations are the objects' current poses (``loc1``…, in the scene's order),
 the subtasks' targets (a target at a spot made for an object of the same shape

@@ -1,4 +1,4 @@
-"""Scene files (SPEC §3 ``demoplan/scene-1``): the world at run time.
+"""Scene files (docs/formats.md ``demoplan/scene-1``): the world at run time.
 
 ```json
 {"format": "demoplan/scene-1",
@@ -7,7 +7,7 @@
  "gripper": {"finger_radius": 0.02}}
 ```
 
-Beyond the SPEC's fields a scene may give, per object, ``"shape"`` (``box``
+Beyond the basic fields a scene may give, per object, ``"shape"`` (``box``
 default, ``cylinder``, ``sphere``) and ``"grasps"`` (finger axes in degrees in
 the object's frame; default ``[0, 90]``: two orthogonal side grasps, as the
 paper's blocks have); ``"landmarks"`` (static poses used as references); and
@@ -82,7 +82,7 @@ class Gripper:
 
 @dataclass(frozen=True, slots=True)
 class Scene:
-    """The world at run time (SPEC §3 "Scene")."""
+    """The world at run time (docs/formats.md "Scene")."""
 
     objects: tuple[SceneObject, ...]
     landmarks: tuple[tuple[str, Pose], ...] = ()
@@ -294,7 +294,7 @@ def complete_geometry(scene: Scene, model: TaskModel) -> Scene:
 
 
 def scene_to_dict(scene: Scene) -> dict[str, Any]:
-    """A scene in the SPEC's file form (metres, quaternions)."""
+    """A scene in the file form of docs/formats.md (metres, quaternions)."""
     objects: dict[str, Any] = {}
     for obj in scene.objects:
         entry = pose_to_dict(obj.pose)

@@ -1,4 +1,4 @@
-"""Demonstrated goals as subtasks with target poses in a new scene (SPEC §5 "Planning").
+"""Demonstrated goals as subtasks with target poses in a new scene (docs/scenes.md "Planning").
 
 Each demonstration's goal is a candidate (paper §IV.C). Every state the
 demonstration visits is a subtask — its visit label (``C``, ``C#2``) is the
@@ -168,7 +168,7 @@ class _Resolver:
         return canonical_quat(quat_multiply(frame, np.asarray(value)).tolist())
 
     def frame(self, name: str, pose: Pose) -> np.ndarray:
-        """The frame relative values of ``name`` are taken in (SPEC §5). A target this
+        """The frame relative values of ``name`` are taken in (docs/scenes.md). A target this
         demonstration resolves turns with its own reference, so its orientation is
         already the copy learning used; an object or landmark as it stands in the
         scene is one of its symmetric copies, reduced as learning reduced them

@@ -37,7 +37,7 @@ objects at once give two moves):
    through it — when the next move only lowers the object (it never rises
    :attr:`~SegmentationSettings.min_lift` above the rest and ends at least
    that much lower: an object standing on a support must be lifted before
-   it can go down), or when it is above the table (z = 0, SPEC §2) and
+   it can go down), or when it is above the table (z = 0, docs/formats.md) and
    above no object or landmark whose top it could stand on (from
    ``geometry``; an object of unknown size within 10 cm beneath may be the
    support).
@@ -178,7 +178,7 @@ class Segmentation:
         objects: Mapping[str, ObjectGeometry] | Iterable[tuple[str, ObjectGeometry]] = (),
         landmarks: Iterable[str] = (),
     ) -> Demonstration:
-        """The segmented demonstration (SPEC §3 ``demoplan/demonstration-1``).
+        """The segmented demonstration (docs/formats.md ``demoplan/demonstration-1``).
 
         Steps in the order objects come to rest; initial poses from each
         object's first rest. ``name`` defaults to the stream file's stem.

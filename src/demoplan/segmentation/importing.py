@@ -1,6 +1,6 @@
 """``demoplan import``: robot-learning recordings → segmented demonstrations.
 
-A recording (SPEC §3 "Recording": robosuite 0.3 / 1.x or robomimic HDF5) is
+A recording (docs/formats.md "Recording": robosuite 0.3 / 1.x or robomimic HDF5) is
 read with :mod:`demoplan.segmentation.readers.hdf5`; each of its
 demonstrations' object tracks is segmented like any pose stream
 (:func:`~demoplan.segmentation.detect.segment`) and the result gets the

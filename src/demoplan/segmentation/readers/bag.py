@@ -1,4 +1,4 @@
-"""ROS 2 bag pose streams (SPEC §3 "Pose stream"), read with ``rosbags``.
+"""ROS 2 bag pose streams (docs/formats.md "Pose stream"), read with ``rosbags``.
 
 A bag (sqlite3 or mcap; a bag folder or its storage file) is read with
 ``rosbags.highlevel.AnyReader``:

@@ -1,4 +1,4 @@
-"""CSV pose streams (SPEC §3 "Pose stream").
+"""CSV pose streams (docs/formats.md "Pose stream").
 
 Header ``t,object,x,y,z`` plus optionally ``yaw``, or ``roll,pitch,yaw``
 (degrees, extrinsic x-y-z), or ``qx,qy,qz,qw``; one row per object per

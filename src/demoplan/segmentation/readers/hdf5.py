@@ -1,4 +1,4 @@
-"""Robosuite / robomimic HDF5 recordings → object pose streams (SPEC §3 "Recording").
+"""Robosuite / robomimic HDF5 recordings → object pose streams (docs/formats.md "Recording").
 
 A recording holds, per demonstration ``data/<key>``, the simulator's states
 over time (``states``: one row per sample, ``[time, qpos…, qvel…, act…]``) and
@@ -18,7 +18,7 @@ without the meshes they reference. What is taken from it:
   than ``1 + nq + nv (+ na)`` is refused.
 * **Objects**: bodies with a free joint, named by the body's name without
   robosuite's instance suffix (``Milk0`` → ``Milk``) when that stays unique.
-* **World frame** (SPEC §2): z up, the table top is z = 0. The table-top
+* **World frame** (docs/formats.md): z up, the table top is z = 0. The table-top
   height is the ``table_top`` site if the model has one, else the top of the
   collision boxes of a body named ``table``, else the highest static box top
   under each object's first rest (the lowest of these over the objects):
@@ -99,7 +99,7 @@ SUPPORT_SLACK = 0.005  # m: a surface counts as "under" a point up to this far a
 
 @dataclass(frozen=True, slots=True, eq=False)
 class RecordedDemonstration:
-    """One demonstration of a recording, in demoplan's world frame (SPEC §2).
+    """One demonstration of a recording, in demoplan's world frame (docs/formats.md).
 
     Attributes
     ----------
