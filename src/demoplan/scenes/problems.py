@@ -44,7 +44,7 @@ from demoplan.scenes.simulated_collisions import (
 )
 from demoplan.scenes.targets import Candidate, Subtask
 
-__all__ = ["Grasp", "SceneProblem", "build_problem"]
+__all__ = ["Grasp", "SceneProblem", "build_problem", "landmark_tops"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -188,7 +188,7 @@ def build_problem(
     for spot in spots:
         name = names.place("freespace", _vector(spot), {loc.name for loc in locations})
         locations.append(Location(name, _vector(spot), 0.0, "freespace", (), (widest,)))
-    support_pairs, floating = supports(locations, settings)
+    support_pairs, floating = supports(locations, settings, landmark_tops(scene))
     obstacles = []
     for name in floating:
         loc = next(loc for loc in locations if loc.name == name)
@@ -286,6 +286,20 @@ def _turned_to_fit(
                     break
         turned.append(subtask)
     return turned
+
+
+def landmark_tops(scene: Scene) -> list[tuple[BaseGeometry, float]]:
+    """The footprint and top height of every landmark with a known size: what
+    objects may stand on besides the table and each other."""
+    shapes = dict(scene.landmark_geometry)
+    return [
+        (
+            footprint(shapes[name], pose.position, yaw_of(pose)),
+            pose.position[2] + shapes[name].size[2],
+        )
+        for name, pose in scene.landmarks
+        if name in shapes
+    ]
 
 
 def _vector(point: tuple[float, ...]) -> Vector3:
