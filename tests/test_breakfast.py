@@ -189,3 +189,38 @@ def test_items_stand_on_the_tray_top(breakfast_model: TaskModel, tmp_path: Path)
     sizeless = scene_from_document(document, "scene.json")
     # The demonstrations give the tray's size: the scene need not.
     assert plan_in_scene(breakfast_model, sizeless).chosen.plan is not None
+
+
+def test_every_figure_draws_the_tray(breakfast_model: TaskModel) -> None:
+    """The tray (a landmark with a size) is drawn, hatched, at its pose and
+    size, from above and from the side: plan --plot, show --plot's view."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.colors import to_rgba
+
+    from demoplan.plotting import LANDMARK_COLOUR, plot_scene_plan, plot_scene_side
+    from demoplan.scenes.landmarks import complete_scene
+
+    scene = complete_scene(
+        scene_from_document(scene_document((0.5, 0.1, 30.0)), "scene.json"), breakfast_model
+    )
+    chosen = plan_in_scene(breakfast_model, scene).chosen
+    assert chosen.plan is not None
+    for draw, extent in ((plot_scene_plan, (0.40, 0.30)), (plot_scene_side, None)):
+        ax = draw(scene, chosen.problem, chosen.plan)
+        trays = [
+            p
+            for p in ax.patches
+            if p.get_hatch() == "//" and p.get_facecolor()[:3] == to_rgba(LANDMARK_COLOUR)[:3]
+        ]
+        assert len(trays) == 1, draw.__name__
+        if extent is not None:  # from above: the tray's outline, turned by its yaw
+            box = trays[0].get_window_extent()
+            corners = ax.transData.inverted().transform([[box.x0, box.y0], [box.x1, box.y1]])
+            width, height = np.abs(corners[1] - corners[0])
+            c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+            assert width == pytest.approx(extent[0] * c + extent[1] * s, abs=0.01)
+            assert height == pytest.approx(extent[0] * s + extent[1] * c, abs=0.01)
+        assert "tray" in [t.get_text() for t in ax.texts]

@@ -140,7 +140,7 @@ def run_task(
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
 
-        writer = FrameWriter(frames)
+        writer = FrameWriter(frames, scene=scene)
 
     def heard(event: RunEvent) -> None:
         show = getattr(getattr(world, "world", world), "show_targets", None)
