@@ -408,6 +408,8 @@ STATE_POSITION = FieldTable(
         "spread": "trace of the sample covariance of the members' values (m²)",
         "frame": "`reference`: the offset is in the reference's frame (turns with it); "
         "`world`: in world axes",
+        "anywhere": "`true`: placed anywhere on its support (an absolute state scattered far "
+        "beyond the precision, docs/learning.md); `value` is the mean, for information",
     },
 )
 STATE_ORIENTATION = FieldTable(

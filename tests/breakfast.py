@@ -144,3 +144,29 @@ def scene_document(tray: tuple[float, float, float] | None, **landmark: Any) -> 
         "objects": {n: {"position": [x, y, 0.0]} for n, (x, y) in RESTING.items()},
         "landmarks": landmarks,
     }
+
+
+def carried_tray_documents(family: Family, seed: int) -> list[dict[str, Any]]:
+    """The family with the tray an object the person puts down first, at a
+    different place and yaw each time (a kit tray), then fills."""
+    documents = demonstration_documents(family, seed)
+    for document, tray in zip(documents, family.trays, strict=True):
+        entry = document["landmarks"].pop("tray")
+        document["objects"]["tray"] = {"shape": entry["shape"], "size": entry["size"]}
+        document["initial"]["tray"] = {"position": [0.9, 0.45, 0.0]}
+        document["steps"].insert(
+            0, {"object": "tray", "position": [tray[0], tray[1], 0.0], "yaw": tray[2]}
+        )
+    return documents
+
+
+def carried_tray_scene(tray: tuple[float, float, float]) -> dict[str, Any]:
+    """A scene where the kit tray already stands, at ``tray`` (x, y, yaw°)."""
+    document = scene_document(None)
+    document["objects"]["tray"] = {
+        "position": [tray[0], tray[1], 0.0],
+        "yaw": tray[2],
+        "shape": "box",
+        "size": list(TRAY),
+    }
+    return document

@@ -131,6 +131,11 @@ class StatePosition:
     spread: float
     in_reference_frame: bool = False
     """``value`` is in the reference's frame (turned with it), not in world axes."""
+    anywhere: bool = False
+    """Placed anywhere on its support: absolute placements that scatter far
+    beyond the precision with no reference explaining them (``value`` is
+    their mean, for information). At run time the object stays where it
+    stands when it can (:mod:`demoplan.scenes.targets`)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -296,6 +296,38 @@ def modulo_symmetry(quats: FloatArray, period_deg: float) -> FloatArray:
     return modulo_group(q, group)
 
 
+def frames_agreeing(quats: FloatArray, offsets: FloatArray, period_deg: float) -> FloatArray:
+    """``(n, 4)`` frames of one symmetric reference, each turned about its own
+    z axis by a multiple of ``period_deg`` so that ``offsets`` (``(n, 3)``,
+    world axes) expressed in them agree best: a kit tray, the same after half
+    a turn, put down at 10° and at 170° is one frame for what lies on it only
+    if the copy is chosen by where the contents lie — the copies nearest each
+    other (:func:`modulo_symmetry`) would turn the contents of one by half a
+    turn. Each copy of the first frame seeds a choice (every other frame's
+    copy nearest it, then nearest the mean, thrice); the tightest wins. A
+    period of 0 or 360, or a single frame: :func:`modulo_symmetry`."""
+    q = np.asarray(quats, dtype=float).reshape(-1, 4)
+    if period_deg <= 0.0 or period_deg >= 360.0 or len(q) < 2:
+        return modulo_symmetry(q, period_deg)
+    d = np.asarray(offsets, dtype=float).reshape(-1, 3)
+    turns = np.radians(period_deg) * np.arange(round(360.0 / period_deg))
+    copies = np.stack([quat_multiply(q, _about_z(np.full(len(q), t))) for t in turns])
+    local = np.stack([rotate_vectors(quat_inverse(c), d) for c in copies])  # (copies, n, 3)
+    rows = np.arange(len(q))
+    best: tuple[float, np.ndarray] | None = None
+    for seed in range(len(turns)):
+        anchor = local[seed, 0]
+        choice = np.argmin(np.linalg.norm(local - anchor, axis=2), axis=0)
+        for _ in range(3):
+            mean = local[choice, rows].mean(axis=0)
+            choice = np.argmin(np.linalg.norm(local - mean, axis=2), axis=0)
+        spread = float(((local[choice, rows] - local[choice, rows].mean(axis=0)) ** 2).sum())
+        if best is None or spread < best[0] - 1e-12:
+            best = (spread, choice)
+    assert best is not None
+    return _canonical_rows(copies[best[1], rows])
+
+
 def _turn(axis: int, degrees: float) -> FloatArray:
     q = np.zeros(4)
     q[axis] = math.sin(math.radians(degrees) / 2.0)

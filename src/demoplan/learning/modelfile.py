@@ -65,6 +65,7 @@ class _PositionSchema(_Schema):
     value: list[Number] = Field(min_length=2, max_length=3)
     spread: Number = 0.0
     frame: Literal["world", "reference"] = "world"
+    anywhere: bool = False
 
 
 class _OrientationSchema(_Schema):
@@ -202,6 +203,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
             "value": list(state.position.value),
             "spread": state.position.spread,
             "frame": "reference" if state.position.in_reference_frame else "world",
+            **({"anywhere": True} if state.position.anywhere else {}),
         },
         "orientation": {
             "reference": orientation.reference,
@@ -344,6 +346,7 @@ def _state_from_schema(state: _StateSchema) -> State:
             state.position.spread,
             in_reference_frame=state.position.frame == "reference"
             and state.position.reference is not None,
+            anywhere=state.position.anywhere and state.position.reference is None,
         ),
         orientation=StateOrientation(
             orientation.reference if quat is not None else None, quat, orientation.spread

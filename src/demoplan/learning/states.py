@@ -425,7 +425,41 @@ def _generate_states(
                 members=tuple(members[letter]),
             )
         )
+    states = [_anywhere(state, precision, settings) for state in states]
     return StateGeneration(tuple(states), tuple(sequences), tuple(all_scores), precision)
+
+
+ANYWHERE_PRECISIONS = 5.0
+"""An absolute state whose placements scatter (RMS) by at least this many
+times the precision — and by at least ``position_separation``, the distance
+that tells two places apart — is placed *anywhere* (:func:`_anywhere`)."""
+
+
+def _anywhere(state: State, precision: Precision, settings: StateGenerationSettings) -> State:
+    """``state``, placed anywhere on its support where its absolute placements
+    scatter far beyond the precision and no reference explains them (one was
+    chosen otherwise): a tray put down at a different place in every
+    demonstration is not meant to go to the mean of them. Its orientation,
+    if absolute and as scattered (RMS at least ``orientation_separation``,
+    as the whole model's orientations are dropped beyond it), is dropped too.
+    The same reading as the paper's eq. (2) stopping at one cluster: the
+    placements are not one place, and no more states are supported."""
+    position = state.position
+    rms = math.sqrt(position.spread)
+    if (
+        position.reference is not None
+        or len(state.members) < 2
+        or rms < max(settings.position_separation, ANYWHERE_PRECISIONS * precision.position)
+    ):
+        return state
+    orientation = state.orientation
+    if (
+        orientation.reference is None
+        and orientation.value is not None
+        and math.sqrt(orientation.spread) >= settings.orientation_separation
+    ):
+        orientation = StateOrientation(reference=None, value=None, spread=orientation.spread)
+    return replace(state, position=replace(position, anywhere=True), orientation=orientation)
 
 
 def state_letters(index: int) -> str:
@@ -674,10 +708,15 @@ def _relative_values(
     ref_quats: np.ndarray | None = None
     oriented = all(r is not None and r.orientation is not None for r in ref_poses)
     if reference is not None and oriented:
-        # The reference's frame modulo its symmetry, the same representative in
-        # every demonstration (a square tray at 44° and at 136° is one frame).
-        ref_quats = rotations.modulo_symmetry(
+        # The reference's frame modulo its symmetry: in every demonstration the
+        # copy in which the object's placements agree (a kit tray at 10° and at
+        # 170° is one frame for what lies on it), for positions and
+        # orientations alike.
+        positions = np.array([p.pose.position for p in own], dtype=float)
+        centres = np.array([r.position for r in ref_poses if r is not None], dtype=float)
+        ref_quats = rotations.frames_agreeing(
             np.array([r.orientation for r in ref_poses if r is not None], dtype=float),
+            positions - centres,
             world.yaw_period(reference),
         )
     if kind == "position":

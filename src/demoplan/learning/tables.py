@@ -71,7 +71,7 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
         (
             s.id,
             s.object,  # as the demonstrations name it: --require takes the same
-            s.position.reference or "",
+            "anywhere" if s.position.anywhere else s.position.reference or "",
             s.orientation.reference or "",
             format_position(s, decimals),
             format_orientation(s),

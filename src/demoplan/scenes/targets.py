@@ -43,8 +43,9 @@ from demoplan.rotations import (
     reduce_yaw,
     rotate_vectors,
 )
+from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
-from demoplan.scenes.scene import Scene
+from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -136,6 +137,8 @@ class _Resolver:
         self.final_state = {states[s].object: states[s] for s in sequence}
         self.targets: dict[str, Pose] = {}  # latest target of each object so far
         self.resolving: list[str] = []
+        self.staying: frozenset[str] = frozenset()
+        """Objects whose states are placed anywhere and that stay where they stand."""
 
     def visit(self, state: State) -> Pose:
         pose = self.resolve(state)
@@ -143,6 +146,8 @@ class _Resolver:
         return pose
 
     def resolve(self, state: State) -> Pose:
+        if state.object in self.staying:  # placed anywhere, and it can stay
+            return Pose(self.current[state.object].position, self.orientation(state))
         position = np.asarray(state.position.value, dtype=float)
         if state.position.reference is not None:
             reference = self.reference_pose(state.position.reference)
@@ -232,6 +237,8 @@ def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) ->
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
         resolver = _Resolver(index, tuple(sequence), states, current, landmarks, geometry)
+        resolver.staying = _staying(model, scene, sequence, resolver)
+        resolver.targets.clear()
         subtasks = tuple(
             Subtask(
                 label,
@@ -256,3 +263,75 @@ def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) ->
         by_key[key] = len(candidates)
         candidates.append(Candidate(index, (index,), subtasks, precedences))
     return candidates
+
+
+def _staying(
+    model: TaskModel, scene: Scene, sequence: tuple[str, ...], resolver: _Resolver
+) -> frozenset[str]:
+    """The objects of ``sequence`` placed anywhere (``StatePosition.anywhere``)
+    that can stay where they stand: on the table (not on another object), in
+    the sequence once, and clear of every target that does not move with
+    them (their own contents follow them). The others go where the
+    demonstrations put them on average."""
+    states = {state.id: state for state in model.states}
+    visits = [states[s] for s in sequence]
+    anywhere = {
+        s.object
+        for s in visits
+        if s.position.anywhere and sum(v.object == s.object for v in visits) == 1
+    }
+    candidates = {
+        name
+        for name in anywhere
+        if name in resolver.current and resolver.current[name].position[2] <= STANDING_ON_TABLE
+    }
+    if not candidates:
+        return frozenset()
+    follows = _followers(model)
+    resolver.staying = frozenset(candidates)
+    targets = [(s.object, resolver.visit(s)) for s in visits]
+    resolver.targets.clear()
+    staying = set()
+    for name in candidates:
+        shape = scene.object(name).geometry
+        if shape is None:
+            continue
+        here = resolver.current[name]
+        outline = footprint(shape, here.position, yaw_of(here)).buffer(-TOUCH)
+        clear = True
+        for other, pose in targets:
+            other_shape = scene.object(other).geometry if other in scene.names else None
+            if other == name or name in follows.get(other, set()) or other_shape is None:
+                continue
+            if outline.intersects(
+                footprint(other_shape, pose.position, yaw_of(pose)).buffer(-TOUCH)
+            ):
+                clear = False
+                break
+        if clear:
+            staying.add(name)
+    return frozenset(staying)
+
+
+STANDING_ON_TABLE = 0.005
+"""m: an object this low stands on the table (an anywhere object on another stays not)."""
+TOUCH = 0.001
+"""m: footprints that only touch are clear of each other."""
+
+
+def _followers(model: TaskModel) -> dict[str, set[str]]:
+    """Per object, what it is placed relative to, directly or through others."""
+    direct: dict[str, set[str]] = {}
+    for state in model.states:
+        if state.position.reference is not None:
+            direct.setdefault(state.object, set()).add(state.position.reference)
+    closed = {name: set(refs) for name, refs in direct.items()}
+    changed = True
+    while changed:
+        changed = False
+        for refs in closed.values():
+            more = set().union(*(direct.get(r, set()) for r in refs)) - refs
+            if more:
+                refs |= more
+                changed = True
+    return closed
