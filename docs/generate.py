@@ -38,6 +38,7 @@ from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
+from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
     GEOMETRY_TOLERANCE,
@@ -975,6 +976,33 @@ def conventions() -> str:
             "mistakes. Files larger than these are refused before they are read "
             "(docs/limits.md has every limit):",
             limits,
+            "**Does the file fit its units?** A file in millimetres without `units` is read "
+            "in metres, a 30 cm table as 300 m. A demonstration or scene is therefore "
+            "looked at as a whole, after its unit, and refused in one line naming `units` "
+            f"when its positions spread more than {MAX_SPREAD_M:g} m along an axis (a "
+            f"tabletop is smaller), an object it moves (not a landmark) is larger than "
+            f"{MAX_CARRIED_M:g} m, or its positions spread more than "
+            f"{MAX_SPREAD_PER_OBJECT:g} times the largest object it moves (sizes and "
+            "positions in different units). The line says which unit would fit: "
+            "`demoplan: error: mm.json: units: lengths read in metres (the default: it "
+            'gives no "units"), its positions spread 524 m along x (…); a tabletop spans '
+            "less than 10 m: in mm, the positions spread 0.524 m: give the unit, "
+            '"units": {"length": "mm"}`. A millimetre file read as metres is caught '
+            "whenever two of its positions lie 1.5 cm or more apart; a centimetre file "
+            "whenever its positions spread more than 10 cm along an axis or an object it "
+            "moves is larger than 2 cm (a file of smaller things, closer together, is not "
+            "seen). A scene's `table` is a region, not a position, and does not count.",
+            "**Angles that look like radians.** Where angles are read in degrees (the "
+            "default), a file whose `yaw`, `rpy` and `grasps` values all lie within ±2π, "
+            "not all whole numbers, and at least two of them π/4 or more (two objects "
+            "turned 45° or more, were they radians), gets one warning naming the file and "
+            "the field of the largest: "
+            "`demoplan: WARNING: scene.json: objects.knife.yaw: every angle of the file "
+            "lies within ±2π (this one 1.5708) and they are read in degrees; if they are "
+            'radians, give "units": {"angle": "rad"}`. A warning, not an error: every '
+            "object within 6° of the axes is possible. Placements within a degree of the "
+            "axes (at most one angle of 0.79 or more), and whole numbers (2° is a likelier "
+            "reading than 2 rad), are not warned about.",
             "**Numbering demonstrations.** JSON counts demonstrations from 0, in the order "
             "they were given to `learn`: a model's `members` and `violations`, the `goal` "
             "and `candidates` of `plan --json`, the `goal` of `run --json`. Everything "
