@@ -6,7 +6,10 @@ Families of tabletop tasks drawn in metres and written in m, cm or mm: with the
 right ``units`` every one is read; with the unit left out (read as metres) a
 millimetre file is always refused and a centimetre one whenever the documented
 rule sees it, in one line naming ``units``. Angles written in radians where
-degrees are read are warned about; ordinary degree files are not.
+degrees are read are warned about; ordinary degree files are not. Towers built
+bottom-up are accepted without a word; a block released before the block under
+it is there is warned about, naming the demonstration, the step and the step
+where its support arrives.
 """
 
 from __future__ import annotations
@@ -28,8 +31,10 @@ from demoplan.learning.demonstrations import (
     demonstrations_from_document,
     demonstrations_from_path,
 )
+from demoplan.learning.releases import unsupported_releases
+from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M
-from demoplan.rotations import rpy_from_quat
+from demoplan.rotations import quat_from_yaw, rpy_from_quat
 from demoplan.scenes.scene import scene_from_document
 from tests.helpers import EXAMPLES
 
@@ -352,6 +357,144 @@ def test_small_degree_turns_are_not_warned_about(
     with caplog.at_level(logging.WARNING, logger=WARNINGS):
         scene_from_document(_scene_with_yaws(yaws), "scene.json")
     assert _warnings(caplog) == []
+
+
+# --------------------------------------------------------------------------- releases
+
+
+def _block(z: float, xy: tuple[float, float] = (0.5, 0.3), yaw: float = 0.0) -> Pose:
+    return Pose((xy[0], xy[1], z), quat_from_yaw(yaw))
+
+
+@st.composite
+def towers(draw: st.DrawFn) -> tuple[Demonstration, list[float]]:
+    """A tower of 2–5 blocks built bottom-up, each a little off the centre of the
+    one under it (well within it) and turned; the blocks start far apart."""
+    n = draw(st.integers(2, 5))
+    side = st.floats(0.03, 0.08, allow_nan=False)
+    sizes = [
+        (draw(side), draw(side), draw(st.floats(0.015, 0.06, allow_nan=False))) for _ in range(n)
+    ]
+    offset = st.floats(-0.004, 0.004, allow_nan=False)
+    steps, bottoms, z = [], [], 0.0
+    for i in range(n):
+        bottoms.append(z)
+        xy = (0.5 + draw(offset), 0.3 + draw(offset))
+        steps.append(Step(f"b{i}", _block(z, xy, draw(st.floats(-20, 20)))))
+        z += sizes[i][2]
+    demo = Demonstration(
+        name="tower",
+        steps=tuple(steps),
+        objects=tuple((f"b{i}", ObjectGeometry("box", sizes[i])) for i in range(n)),
+        initial=tuple((f"b{i}", _block(0.0, (0.1 * i - 0.5, -0.4))) for i in range(n)),
+    )
+    return demo, bottoms
+
+
+@FAMILY
+@given(tower=towers())
+def test_a_tower_built_bottom_up_has_no_unsupported_release(
+    tower: tuple[Demonstration, list[float]],
+) -> None:
+    demo, _ = tower
+    assert unsupported_releases(demo) == []
+
+
+@FAMILY
+@given(tower=towers(), data=st.data())
+def test_a_block_released_before_its_support_is_named_with_the_step_it_arrives(
+    tower: tuple[Demonstration, list[float]], data: st.DataObject
+) -> None:
+    """Block i put first, before block i − 1 under it: a warning for step 1,
+    block i at its height above the table, block i − 1 arriving at step i."""
+    demo, bottoms = tower
+    i = data.draw(st.integers(1, len(demo.steps) - 1))
+    steps = (demo.steps[i], *demo.steps[:i], *demo.steps[i + 1 :])
+    (release,) = unsupported_releases(
+        Demonstration("d2", steps, demo.objects, initial=demo.initial)
+    )
+    assert (release.demonstration, release.step, release.object) == ("d2", 1, f"b{i}")
+    assert release.height == pytest.approx(bottoms[i])
+    assert release.above is None and release.arrives == (f"b{i - 1}", i + 1)
+    assert release.describe().startswith(f"demonstration 'd2' step 1: b{i} released ")
+
+
+@FAMILY
+@given(height=st.floats(0.0, 0.5, allow_nan=False), carried=st.booleans())
+def test_a_release_in_the_air_is_named_and_one_on_the_table_is_not(
+    height: float, carried: bool
+) -> None:
+    """One cube, nothing else: released more than 1 cm above the table it is
+    named; a point it is carried through (followed by its own next step) never."""
+    geometry = (("cube", ObjectGeometry("box", (0.04, 0.04, 0.04))),)
+    steps = [Step("cube", _block(height))]
+    if carried:
+        steps.append(Step("cube", _block(0.0, (0.6, 0.3))))
+    found = unsupported_releases(Demonstration("d", tuple(steps), geometry))
+    assert [r.step for r in found] == ([1] if height > 0.01 and not carried else [])
+
+
+def test_a_tilted_knife_on_its_edge_rests_on_the_table() -> None:
+    """A knife pitched 90° (the cucumber example) rests on its edge: its resting
+    point stands half its width above the table, its lowest corner on it."""
+    geometry = (("knife", ObjectGeometry("box", (0.02, 0.25, 0.04))),)
+    pitched = Pose((0.4, 0.1, 0.0103), (0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)))
+    assert unsupported_releases(Demonstration("d", (Step("knife", pitched),), geometry)) == []
+    raised = Pose((0.4, 0.1, 0.05), pitched.orientation)
+    (release,) = unsupported_releases(Demonstration("d", (Step("knife", raised),), geometry))
+    assert release.height == pytest.approx(0.04)
+
+
+def test_a_block_on_two_bridging_blocks_is_held_up() -> None:
+    """The blocks example's top block rests on two blocks with a gap between:
+    its centre is over the gap, its footprint on both."""
+    cube = ObjectGeometry("box", (0.04, 0.04, 0.04))
+    demo = Demonstration(
+        "bridge",
+        (
+            Step("wood", _block(0.0, (0.335, 0.04))),
+            Step("green", _block(0.0, (0.391, 0.036))),
+            Step("red", _block(0.04, (0.3655, 0.0402))),
+        ),
+        (("wood", cube), ("green", cube), ("red", cube)),
+    )
+    assert unsupported_releases(demo) == []
+
+
+def test_the_user_report_bowl_released_before_the_plate(tmp_path: Path) -> None:
+    """The issue's demonstration: `learn` succeeds and says, in one warning line,
+    which step of which demonstration releases the bowl on nothing."""
+    objects = {
+        "plate": {"shape": "cylinder", "size": [0.24, 0.24, 0.02]},
+        "bowl": {"shape": "cylinder", "size": [0.14, 0.14, 0.06]},
+        "cup": {"shape": "cylinder", "size": [0.08, 0.08, 0.1]},
+    }
+    initial = {n: {"position": [0.1, 0.2 + 0.3 * i]} for i, n in enumerate(objects)}
+    good = [
+        {"object": "plate", "position": [0.5, 0.3, 0]},
+        {"object": "cup", "position": [0.7, 0.45, 0]},
+        {"object": "bowl", "position": [0.5, 0.3, 0.02]},
+    ]
+    wrong = [
+        {"object": "cup", "position": [0.71, 0.45, 0]},
+        {"object": "cup", "position": [0.7, 0.45, 0]},
+        {"object": "cup", "position": [0.7, 0.46, 0]},
+        {"object": "bowl", "position": [0.5, 0.31, 0.02]},
+        {"object": "plate", "position": [0.5, 0.3, 0]},
+    ]
+    demos = [
+        {"name": "d1", "objects": objects, "initial": initial, "steps": good},
+        {"name": "d2", "initial": initial, "steps": wrong},
+    ]
+    path = tmp_path / "dinner.json"
+    path.write_text(json.dumps({"format": "demoplan/demonstrations-1", "demonstrations": demos}))
+    result = CliRunner().invoke(app, ["learn", str(path), "-o", str(tmp_path / "model.json")])
+    assert result.exit_code == 0, result.stderr
+    warnings = [line for line in result.stderr.splitlines() if "released" in line]
+    assert warnings == [
+        f"demoplan: WARNING: {path}: demonstrations[1]: demonstration 'd2' step 4: bowl "
+        "released 2 cm above the table with nothing under it (the plate arrives at step 5)"
+    ]
 
 
 def _tower_document() -> dict[str, Any]:

@@ -25,6 +25,7 @@ from pydantic import (
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.learning.releases import warn_unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Step
 from demoplan.plausibility import check_units
 from demoplan.poses import (
@@ -256,6 +257,7 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
     demos: list[Demonstration] = []
     for file in files:
         demos += demonstrations_from_document(read_document(file), str(file))
+    warn_unsupported_releases(demos)
     return demos
 
 
