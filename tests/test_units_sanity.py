@@ -434,6 +434,25 @@ def test_a_release_in_the_air_is_named_and_one_on_the_table_is_not(
     assert [r.step for r in found] == ([1] if height > 0.01 and not carried else [])
 
 
+@FAMILY
+@given(gap=st.floats(0.0, 0.2, allow_nan=False), base=st.floats(0.01, 0.1, allow_nan=False))
+def test_a_release_above_a_block_names_the_gap_to_its_top(gap: float, base: float) -> None:
+    """A cube released over a block: resting on it up to 1 cm above its top;
+    higher, named with its height above the block's top."""
+    geometry = (
+        ("block", ObjectGeometry("box", (0.1, 0.1, base))),
+        ("cube", ObjectGeometry("box", (0.04, 0.04, 0.04))),
+    )
+    steps = (Step("block", _block(0.0)), Step("cube", _block(base + gap, (0.51, 0.3))))
+    found = unsupported_releases(Demonstration("d", steps, geometry))
+    if gap <= 0.01 - 1e-9:
+        assert found == []
+    elif gap > 0.01 + 1e-9:
+        (release,) = found
+        assert release.above == "block" and release.height == pytest.approx(gap)
+        assert "above the top of the block, resting on nothing" in release.describe()
+
+
 def test_a_tilted_knife_on_its_edge_rests_on_the_table() -> None:
     """A knife pitched 90° (the cucumber example) rests on its edge: its resting
     point stands half its width above the table, its lowest corner on it."""

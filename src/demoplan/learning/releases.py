@@ -108,12 +108,12 @@ def unsupported_releases(
             others = {**landmarks, **{n: p for n, p in standing.items() if n != step.object}}
             holds = [_holds(known, n, p, step.object, step.pose, height) for n, p in others.items()]
             if not any(h is not False for h in holds):
-                below = [
+                tops = [
                     (p.position[2] + known[n].size[2], n)
                     for n, p in others.items()
                     if _under(known, n, p, step.object, step.pose, height)
                 ]
-                top, name = max(below, default=(0.0, None))
+                top, name = max(((t, n) for t, n in tops if t < height), default=(0.0, None))
                 arrives = None
                 for later in range(index + 1, len(steps)):
                     other = steps[later]
