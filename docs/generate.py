@@ -38,6 +38,7 @@ from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
+from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
     GEOMETRY_TOLERANCE,
@@ -993,6 +994,33 @@ def conventions() -> str:
             "mistakes. Files larger than these are refused before they are read "
             "(docs/limits.md has every limit):",
             limits,
+            "**Does the file fit its units?** A file in millimetres without `units` is read "
+            "in metres, a 30 cm table as 300 m. A demonstration or scene is therefore "
+            "looked at as a whole, after its unit, and refused in one line naming `units` "
+            f"when its positions spread more than {MAX_SPREAD_M:g} m along an axis (a "
+            f"tabletop is smaller), an object it moves (not a landmark) is larger than "
+            f"{MAX_CARRIED_M:g} m, or its positions spread more than "
+            f"{MAX_SPREAD_PER_OBJECT:g} times the largest object it moves (sizes and "
+            "positions in different units). The line says which unit would fit: "
+            "`demoplan: error: mm.json: units: lengths read in metres (the default: it "
+            'gives no "units"), its positions spread 524 m along x (…); a tabletop spans '
+            "less than 10 m: in mm, the positions spread 0.524 m: give the unit, "
+            '"units": {"length": "mm"}`. A millimetre file read as metres is caught '
+            "whenever two of its positions lie 1.5 cm or more apart; a centimetre file "
+            "whenever its positions spread more than 10 cm along an axis or an object it "
+            "moves is larger than 2 cm (a file of smaller things, closer together, is not "
+            "seen). A scene's `table` is a region, not a position, and does not count.",
+            "**Angles that look like radians.** Where angles are read in degrees (the "
+            "default), a file whose `yaw`, `rpy` and `grasps` values all lie within ±2π, "
+            "not all whole numbers, and at least two of them π/4 or more (two objects "
+            "turned 45° or more, were they radians), gets one warning naming the file and "
+            "the field of the largest: "
+            "`demoplan: WARNING: scene.json: objects.knife.yaw: every angle of the file "
+            "lies within ±2π (this one 1.5708) and they are read in degrees; if they are "
+            'radians, give "units": {"angle": "rad"}`. A warning, not an error: every '
+            "object within 6° of the axes is possible. Placements within a degree of the "
+            "axes (at most one angle of 0.79 or more), and whole numbers (2° is a likelier "
+            "reading than 2 rad), are not warned about.",
             "**Numbering demonstrations.** JSON counts demonstrations from 0, in the order "
             "they were given to `learn`: a model's `members` and `violations`, the `goal` "
             "and `candidates` of `plan --json`, the `goal` of `run --json`. Everything "
@@ -1020,6 +1048,19 @@ def demonstration_section() -> str:
             "demonstration never moves from it. An object has "
             "one geometry in all the demonstrations learned together (to "
             f"{GEOMETRY_TOLERANCE * 1000:g} mm).",
+            "A step released where nothing holds the object up gets one warning when the "
+            "file is read: more than 1 cm above the table (its lowest corner, for a "
+            "tilted object) and not resting on, or inside, an object standing there at "
+            "that moment or a landmark — `demoplan: WARNING: dinner.json: "
+            "demonstrations[1]: demonstration 'd2' step 4: bowl released 2 cm above the "
+            "table with nothing under it (the plate arrives at step 5)`. Learning would "
+            "take the pose as given and, since a position is learned relative to objects "
+            "already placed, lose the bowl's relation to the plate. Support is judged as "
+            "in scenes (footprints; an upper one rests on a lower one covering 5% of it), "
+            "with the sizes of `objects`; an object or landmark of unknown size less than "
+            "10 cm away beneath may be the support. Steps numbered from 1. A step "
+            "followed by a step of the same object is a point it was carried through "
+            "(the cucumber example's knife going down and up), not a release.",
             "`provenance` says where a demonstration came from. `segment` writes the "
             "stream (`source`), the pushes and nudges it left out (`pushes`, `nudges`) and "
             "every threshold it used (`segment.min_lift`, …); `import` also writes the "

@@ -47,18 +47,21 @@ def set_table_model() -> TaskModel:
 
 @pytest.mark.parametrize(("unit", "scale"), [("m", 1.0), ("cm", 0.01), ("mm", 0.001)])
 def test_units_scale_every_length_to_metres(tmp_path: Path, unit: str, scale: float) -> None:
+    def written(*metres: float) -> list[float]:  # a tabletop in metres, in the file's unit
+        return [round(v / scale, 9) for v in metres]
+
     data = demo(
-        [{"object": "plate", "position": [50, 40, 2]}],
+        [{"object": "plate", "position": written(0.5, 0.4, 0.02)}],
         units={"length": unit},
-        objects={"plate": {"shape": "cylinder", "size": [8, 8, 2]}},
-        landmarks={"board": {"position": [40, 10, 0], "yaw": 0}},
-        initial={"plate": {"position": [20, 10]}},
+        objects={"plate": {"shape": "cylinder", "size": written(0.08, 0.08, 0.02)}},
+        landmarks={"board": {"position": written(0.45, 0.4, 0), "yaw": 0}},
+        initial={"plate": {"position": written(0.2, 0.1)}},
     )
     d = load_one(tmp_path, data)
-    assert d.steps[0].pose.position == pytest.approx((50 * scale, 40 * scale, 2 * scale))
-    assert d.geometry()["plate"].size == pytest.approx((8 * scale, 8 * scale, 2 * scale))
-    assert d.landmark_poses()["board"].position == pytest.approx((40 * scale, 10 * scale, 0))
-    assert d.initial_poses()["plate"].position == pytest.approx((20 * scale, 10 * scale, 0))
+    assert d.steps[0].pose.position == pytest.approx((0.5, 0.4, 0.02))
+    assert d.geometry()["plate"].size == pytest.approx((0.08, 0.08, 0.02))
+    assert d.landmark_poses()["board"].position == pytest.approx((0.45, 0.4, 0))
+    assert d.initial_poses()["plate"].position == pytest.approx((0.2, 0.1, 0))
 
 
 def test_unknown_length_unit_is_refused(tmp_path: Path) -> None:

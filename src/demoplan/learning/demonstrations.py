@@ -25,7 +25,9 @@ from pydantic import (
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.learning.releases import warn_unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Step
+from demoplan.plausibility import check_units
 from demoplan.poses import (
     LENGTH_SCALE,
     LandmarkSchema,
@@ -189,6 +191,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         raise describe_validation_error(exc, source, prefix) from None
     where = f"{prefix}." if prefix else ""
     units = parsed.units
+    check_units(data, units, source, prefix)
     check_physical(data, units.length, source, prefix)
     scale = LENGTH_SCALE[units.length]
     objects = tuple(
@@ -267,6 +270,7 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
     demos: list[Demonstration] = []
     for file in files:
         demos += demonstrations_from_document(read_document(file), str(file))
+    warn_unsupported_releases(demos)
     return demos
 
 

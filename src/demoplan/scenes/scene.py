@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
+from demoplan.plausibility import check_units
 from demoplan.poses import (
     LENGTH_SCALE,
     Coordinate,
@@ -211,6 +212,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         parsed = _SceneSchema.model_validate(data)
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
+    check_units(data, parsed.units, source)
     check_physical(data, parsed.units.length, source)
     scale = LENGTH_SCALE[parsed.units.length]
     to_deg = math.degrees if parsed.units.angle == "rad" else float
