@@ -9,7 +9,11 @@ import typer
 
 from demoplan.cli.common import (
     FRAME_OPTION,
+    LANDMARKS_OPTION,
+    OBJECTS_FILE_HELP,
     OBJECTS_OPTION,
+    UNITS_OPTION,
+    Units,
     app,
     plot_errors,
     print_json,
@@ -138,6 +142,16 @@ def learn(
     ] = None,
     frame: Annotated[str | None, FRAME_OPTION] = None,
     objects: Annotated[str | None, OBJECTS_OPTION] = None,
+    landmarks: Annotated[str | None, LANDMARKS_OPTION] = None,
+    objects_file: Annotated[
+        Path | None,
+        typer.Option(
+            help=OBJECTS_FILE_HELP + ": the geometry of the pose streams' objects (a "
+            "cylinder's yaw is not learned); demonstration files carry their own.",
+            show_default=False,
+        ),
+    ] = None,
+    units: Annotated[Units | None, UNITS_OPTION] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the model as JSON on stdout.")
     ] = False,
@@ -173,6 +187,9 @@ def learn(
             overrides={k: v for k, v in options.items() if v is not None},
             frame=frame,
             objects=parse_object_patterns(objects),
+            units=None if units is None else units.value,
+            landmarks=parse_object_patterns(landmarks),
+            objects_file=objects_file,
             timeout=timeout,
             working=lambda: working("Learning states and constraints…"),
         )
