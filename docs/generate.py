@@ -360,6 +360,9 @@ MODEL = FieldTable(
         "second visit of a state in one demonstration labelled `C#2`",
         "constraints": "pairs `[X, Y]`: X comes before Y (seen before it in some "
         "demonstration, after it in none)",
+        "support": "optional, per constraint: the number of demonstrations that show it (X "
+        "visited before Y; docs/learning.md). Written by `learn`; recomputed from "
+        "`sequences` when read",
         "goals": "per demonstration, the visits it ends in",
         "teacher_constraints": "pairs `[X, Y]` required by the teacher (`learn --require`), "
         "kept whatever the demonstrations show",
@@ -440,6 +443,8 @@ SETTINGS = FieldTable(
         "significance": "level of the F test that adding states must pass; 0: the paper's "
         "plain comparison (`--significance`)",
         "require": "the teacher constraints as given (`A<B`, `plate<napkin`)",
+        "min_support": "a learned constraint is kept when at least this many demonstrations "
+        "show it; 1: the paper's rule (`--min-support`)",
     },
 )
 FIELD_TABLES = (

@@ -140,6 +140,17 @@ def learn(
             show_default=False,
         ),
     ] = None,
+    min_support: Annotated[
+        int | None,
+        typer.Option(
+            min=1,
+            help="Keep only learned constraints shown by at least K demonstrations (default "
+            "1: the paper's rule, every pair no demonstration contradicts); teacher "
+            "constraints are kept.",
+            metavar="K",
+            show_default=False,
+        ),
+    ] = None,
     frame: Annotated[str | None, FRAME_OPTION] = None,
     objects: Annotated[str | None, OBJECTS_OPTION] = None,
     landmarks: Annotated[str | None, LANDMARKS_OPTION] = None,
@@ -176,6 +187,7 @@ def learn(
             "orientation_separation": orientation_separation,
             "max_clusters": max_clusters,
             "significance": significance,
+            "min_support": min_support,
         }
         result = learn_files(
             demos,
