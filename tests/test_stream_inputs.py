@@ -290,3 +290,29 @@ def test_import_takes_an_objects_file(tmp_path: Path) -> None:
     result = invoke("import", recording, "-o", tmp_path / "again", "--objects-file", geometry)
     assert result.exit_code == 1 and "objects.mug: unknown object 'mug'" in result.stderr
     assert not (tmp_path / "again").exists()
+
+
+def test_an_objects_file_must_agree_with_the_demonstration_files(tmp_path: Path) -> None:
+    """Streams and demonstration files learned together: one geometry per object."""
+    write_csv(stream_from_demonstration(SET_TABLE[0], rng=7), tmp_path / "s.csv")
+    shapes = {n: {"shape": g.shape, "size": list(g.size)} for n, g in SET_TABLE[0].objects}
+    shapes["plate"] = {"shape": "box", "size": [0.26, 0.26, 0.02]}
+    geometry = tmp_path / "objects.json"
+    geometry.write_text(json.dumps({"objects": shapes}))
+    demo_file = EXAMPLES / "set_table" / "demonstration-2.json"
+    result = invoke("learn", tmp_path / "s.csv", demo_file, "--json", "--objects-file", geometry)
+    assert result.exit_code == 1
+    assert "objects.plate: cylinder" in result.stderr and "differs from box" in result.stderr
+
+
+def test_a_bag_is_in_metres(tmp_path: Path) -> None:
+    from demoplan.segmentation import write_bag
+
+    write_bag(stream_from_demonstration(SET_TABLE[0], rng=8), tmp_path / "bag")
+    result = invoke("segment", tmp_path / "bag", "-o", tmp_path / "o.json", "--units", "mm")
+    assert result.exit_code == 1
+    assert "units: a ROS 2 bag is in metres (REP 103)" in result.stderr
+    assert (
+        invoke("segment", tmp_path / "bag", "-o", tmp_path / "o.json", "--units", "m").exit_code
+        == 0
+    )
