@@ -87,7 +87,7 @@ from demoplan.scenes.scene import (
     _TableSchema,
     load_scene,
 )
-from demoplan.segmentation.readers.csv import MAX_STREAM_BYTES
+from demoplan.segmentation.readers.csv import MAX_STREAM_BYTES, PLAUSIBLE_METRES
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -376,6 +376,9 @@ MODEL = FieldTable(
         "second visit of a state in one demonstration labelled `C#2`",
         "constraints": "pairs `[X, Y]`: X comes before Y (seen before it in some "
         "demonstration, after it in none)",
+        "support": "optional, per constraint: the number of demonstrations that show it (X "
+        "visited before Y; docs/learning.md). Written by `learn`; recomputed from "
+        "`sequences` when read",
         "goals": "per demonstration, the visits it ends in",
         "teacher_constraints": "pairs `[X, Y]` required by the teacher (`learn --require`), "
         "kept whatever the demonstrations show",
@@ -458,6 +461,8 @@ SETTINGS = FieldTable(
         "significance": "level of the F test that adding states must pass; 0: the paper's "
         "plain comparison (`--significance`)",
         "require": "the teacher constraints as given (`A<B`, `plate<napkin`)",
+        "min_support": "a learned constraint is kept when at least this many demonstrations "
+        "show it; 1: the paper's rule (`--min-support`)",
     },
 )
 FIELD_TABLES = (
@@ -1114,6 +1119,25 @@ def stream_section() -> str:
             "`examples/streams/set-table-1.csv` (Experiment 1's first demonstration as a "
             "tracker records it, 30 Hz):",
             fenced("csv", first_lines("examples/streams/set-table-1.csv", 8)),
+            "**Units.** Positions are metres unless the stream says otherwise: a comment "
+            "line `# units: mm` (or `cm`, `m`) above the header, or `--units mm` on "
+            "`segment` and `learn`. Positions are converted to metres on reading. When "
+            "both are given they must agree (a file that says mm read with `--units cm` "
+            "is refused: one of the two is wrong, and a guess would be silent). A stream "
+            f"without either whose positions reach beyond {PLAUSIBLE_METRES:g} m — a "
+            "millimetre stream's hundreds and thousands — is refused in one line naming "
+            "`units`, rather than segmented into no step of at least 2 cm; declare `# "
+            "units: m` (or `--units m`) for a stream that truly spans more than a room.",
+            fenced(
+                "csv",
+                "# units: mm\nt,object,x,y,z,yaw\n0.0,plate,148.9,201.2,0.7,0\n"
+                "0.0,knife,97.3,350.9,-0.7,90",
+            ),
+            "A tracked frame that is a landmark (a tray the objects are put into, a box) "
+            "is named with `--landmarks tray` (names or glob patterns, comma-separated, on "
+            "`segment` and `learn`): it is no object; its first rest pose is written as "
+            "the demonstration's landmark, and it must not be moved (a step of it is "
+            "refused).",
             "### ROS 2 bag",
             "A bag in sqlite3 or mcap storage — its folder, its `.db3` or `.mcap` file, or "
             "its `metadata.yaml` — read with the `rosbags` library (no ROS installation "
@@ -1181,10 +1205,16 @@ def objects_section() -> str:
     return blocks(
         [
             f"## {TITLES['objects']}",
-            "The geometry of a stream's objects, for `segment --objects-file`: a "
+            "The geometry of a stream's objects, for `segment --objects-file`, `learn "
+            "--objects-file` (the pose streams it segments) and `import --objects-file`: a "
             "demonstration's `objects` (and `units`) alone. Every name must be an object "
-            "of the stream, and every object that moves must have a geometry; it is "
-            "written into the demonstration. JSON or YAML. The geometry of "
+            "(or a tracked landmark) of the streams — for `import`, an object or landmark "
+            "of the recording — and every object that moves must have a geometry; it is "
+            "written into the demonstration, so that learning knows a plate is round (a "
+            "cylinder's yaw is taken modulo any turn, docs/learning.md). `import` adds it "
+            "to the recording's own geometry, replacing it where both name an object. "
+            "`learn` refuses it without a pose stream among its inputs: demonstration "
+            "files carry their own `objects`. JSON or YAML. The geometry of "
             "`examples/set_table/demonstration-1.json`:",
             fenced("json", compact_json(geometry)),
             field_table(OBJECTS_FILE),
@@ -1442,7 +1472,13 @@ def other_section() -> str:
 
 COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "learn": (
-        ("demonstration", "stream", "requirements --require-file", "model --update"),
+        (
+            "demonstration",
+            "stream",
+            "objects --objects-file",
+            "requirements --require-file",
+            "model --update",
+        ),
         ("model",),
     ),
     "show": (("model", "scene"), ("other --plot",)),
@@ -1453,7 +1489,7 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "run": (("model", "scene"), ("run --json", "other --frames")),
     "perceive": (("other",), ("scene",)),
     "segment": (("stream", "objects --objects-file"), ("demonstration", "other --plot")),
-    "import": (("recording",), ("demonstration",)),
+    "import": (("recording", "objects --objects-file"), ("demonstration",)),
     "experiments": ((), ("other",)),
 }
 """Per command, what it reads and what it writes: the formats.md sections (keys of

@@ -145,10 +145,13 @@ def test_the_run_example_ends_in_a_scene() -> None:
 
 
 def test_csv_and_xml_examples_load(tmp_path: Path) -> None:
-    (stream,) = fenced("formats.md", "csv")
+    stream, in_millimetres = fenced("formats.md", "csv")
     path = tmp_path / "stream.csv"
     path.write_text(stream, encoding="utf-8")
     assert len(load_csv(path).tracks) == 7
+    path.write_text(in_millimetres, encoding="utf-8")
+    plate = load_csv(path).track("plate")
+    assert plate.positions[0].tolist() == pytest.approx([0.1489, 0.2012, 0.0007])
     (problem,) = fenced("formats.md", "xml")
     assert len(problem_from_xml(problem).objects) == 4
 

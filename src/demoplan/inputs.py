@@ -9,11 +9,12 @@ former imports neither).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
+from demoplan.errors import InputError
 from demoplan.learning.demonstrations import check_demonstrations, demonstrations_from_path
-from demoplan.model import Demonstration
+from demoplan.model import Demonstration, ObjectGeometry
 
 __all__ = ["STREAM_SUFFIXES", "is_pose_stream", "load_inputs"]
 
@@ -33,23 +34,54 @@ def load_inputs(
     *,
     frame: str | None = None,
     objects: Sequence[str] | None = None,
+    units: str | None = None,
+    landmarks: Sequence[str] | None = None,
+    geometry: Mapping[str, ObjectGeometry] | None = None,
+    geometry_source: str | None = None,
 ) -> list[Demonstration]:
     """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
     a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
-    (:mod:`demoplan.segmentation`, default settings), named after the file.
+    (:func:`~demoplan.segmentation.streams.demonstration_from_stream`, default
+    settings), named after the file.
 
-    ``frame`` and ``objects`` are passed to
-    :func:`~demoplan.segmentation.load_stream` for pose streams (the world frame
-    of a TF tree, the objects to keep); demonstration files ignore them."""
+    ``frame``, ``objects``, ``units`` and ``landmarks`` are for pose streams
+    (the world frame of a TF tree, the objects to keep, a CSV's unit of length,
+    the tracked frames that are landmarks), as ``segment`` takes them;
+    ``geometry`` (an objects file, read from ``geometry_source``) is written
+    into each stream's demonstration — every name must be an object of some
+    stream. Demonstration files ignore all of them: they carry their own
+    objects and landmarks (an object's geometry must agree across all
+    demonstrations, :func:`~demoplan.learning.demonstrations.check_demonstrations`)."""
     demos: list[Demonstration] = []
+    tracked: dict[str, None] = {}
+    streams = 0
     for path in map(Path, paths):
         if is_pose_stream(path):
-            from demoplan.segmentation import load_stream, segment
+            from demoplan.segmentation.streams import demonstration_from_stream
 
-            name = path.stem if path.name != "metadata.yaml" else path.parent.name
-            stream = load_stream(path, frame=frame, objects=objects)
-            demos.append(segment(stream).to_demonstration(name))
+            segmented = demonstration_from_stream(
+                path,
+                frame=frame,
+                objects=objects,
+                units=units,
+                landmarks=landmarks,
+                geometry=geometry,
+                geometry_source=geometry_source,
+            )
+            tracked.update(dict.fromkeys(segmented.stream.objects))
+            demos.append(segmented.demonstration)
+            streams += 1
         else:
             demos += demonstrations_from_path(path)
+    if geometry is not None:
+        if not streams:
+            raise InputError(
+                "an objects file gives the geometry of pose streams' objects, and no "
+                "pose stream is given (demonstration files carry their own 'objects')",
+                source=geometry_source,
+            )
+        from demoplan.segmentation.streams import check_geometry_names
+
+        check_geometry_names(geometry, list(tracked), geometry_source)
     check_demonstrations(demos)
     return demos

@@ -209,6 +209,29 @@ OBJECTS_OPTION = typer.Option(
     "'obj_*'). Default: every object; in a TF tree, every frame without children.",
     show_default=False,
 )
+LANDMARKS_OPTION = typer.Option(
+    help="Pose streams: tracked frames that are landmarks (a tray, a box), not objects: "
+    "names or glob patterns, comma-separated; each one's rest pose is the "
+    "demonstration's landmark.",
+    show_default=False,
+)
+OBJECTS_FILE_HELP = "JSON/YAML file {objects: {NAME: {shape, size}}} (a demonstration's 'objects')"
+
+
+class Units(StrEnum):
+    """Units of length of a CSV pose stream's positions (``--units``)."""
+
+    m = "m"
+    cm = "cm"
+    mm = "mm"
+
+
+UNITS_OPTION = typer.Option(
+    help="CSV streams: the unit of x,y,z (converted to metres); a '# units: mm' line "
+    "above the header says it too, and the two must agree. Default: the file's, else "
+    "metres, and a stream whose positions no room holds in metres is refused.",
+    show_default=False,
+)
 
 
 def say(text: str) -> None:

@@ -9,7 +9,11 @@ import typer
 
 from demoplan.cli.common import (
     FRAME_OPTION,
+    LANDMARKS_OPTION,
+    OBJECTS_FILE_HELP,
     OBJECTS_OPTION,
+    UNITS_OPTION,
+    Units,
     app,
     plot_errors,
     print_json,
@@ -136,8 +140,29 @@ def learn(
             show_default=False,
         ),
     ] = None,
+    min_support: Annotated[
+        int | None,
+        typer.Option(
+            min=1,
+            help="Keep only learned constraints shown by at least K demonstrations (default "
+            "1: the paper's rule, every pair no demonstration contradicts); teacher "
+            "constraints are kept.",
+            metavar="K",
+            show_default=False,
+        ),
+    ] = None,
     frame: Annotated[str | None, FRAME_OPTION] = None,
     objects: Annotated[str | None, OBJECTS_OPTION] = None,
+    landmarks: Annotated[str | None, LANDMARKS_OPTION] = None,
+    objects_file: Annotated[
+        Path | None,
+        typer.Option(
+            help=OBJECTS_FILE_HELP + ": the geometry of the pose streams' objects (a "
+            "cylinder's yaw is not learned); demonstration files carry their own.",
+            show_default=False,
+        ),
+    ] = None,
+    units: Annotated[Units | None, UNITS_OPTION] = None,
     json_output: Annotated[
         bool, typer.Option("--json", help="Print the model as JSON on stdout.")
     ] = False,
@@ -162,6 +187,7 @@ def learn(
             "orientation_separation": orientation_separation,
             "max_clusters": max_clusters,
             "significance": significance,
+            "min_support": min_support,
         }
         result = learn_files(
             demos,
@@ -173,6 +199,9 @@ def learn(
             overrides={k: v for k, v in options.items() if v is not None},
             frame=frame,
             objects=parse_object_patterns(objects),
+            units=None if units is None else units.value,
+            landmarks=parse_object_patterns(landmarks),
+            objects_file=objects_file,
             timeout=timeout,
             working=lambda: working("Learning states and constraints…"),
         )

@@ -11,7 +11,11 @@ import typer
 
 from demoplan.cli.common import (
     FRAME_OPTION,
+    LANDMARKS_OPTION,
+    OBJECTS_FILE_HELP,
     OBJECTS_OPTION,
+    UNITS_OPTION,
+    Units,
     app,
     count_of,
     print_json,
@@ -49,14 +53,15 @@ def segment(
     name: Annotated[str | None, typer.Option(help="The demonstration's name.")] = None,
     frame: Annotated[str | None, FRAME_OPTION] = None,
     objects: Annotated[str | None, OBJECTS_OPTION] = None,
+    landmarks: Annotated[str | None, LANDMARKS_OPTION] = None,
     objects_file: Annotated[
         Path | None,
         typer.Option(
-            help="JSON/YAML file {objects: {NAME: {shape, size}}} (a demonstration's "
-            "'objects'): geometry written into the demonstration.",
+            help=OBJECTS_FILE_HELP + ": geometry written into the demonstration.",
             show_default=False,
         ),
     ] = None,
+    units: Annotated[Units | None, UNITS_OPTION] = None,
     thresholds: Annotated[
         list[str] | None,
         typer.Option(
@@ -80,8 +85,8 @@ def segment(
     from demoplan.fileio import StagedOutputs, dump_json
     from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
     from demoplan.plotting import check_figure_path
-    from demoplan.segmentation import load_stream
-    from demoplan.segmentation import segment as segment_stream
+    from demoplan.segmentation.settings import settings_from_text
+    from demoplan.segmentation.streams import demonstration_from_stream
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
@@ -90,26 +95,19 @@ def segment(
         if plot is not None:
             refuse_overwriting_inputs(plot, [*inputs, output])
             check_figure_path(plot, "--plot")
-        stream = load_stream(stream_path, frame=frame, objects=parse_object_patterns(objects))
-        geometry = (
-            load_object_geometry(objects_file, known=stream.objects)
-            if objects_file is not None
-            else {}
+        segmented = demonstration_from_stream(
+            stream_path,
+            name=name or stream_path.stem,
+            settings=settings_from_text(thresholds or []),
+            frame=frame,
+            objects=parse_object_patterns(objects),
+            units=None if units is None else units.value,
+            landmarks=parse_object_patterns(landmarks),
+            geometry=None if objects_file is None else load_object_geometry(objects_file),
+            geometry_source=None if objects_file is None else str(objects_file),
+            geometry_of_this_stream=True,
         )
-        from demoplan.segmentation.settings import settings_from_text
-
-        found = segment_stream(stream, settings_from_text(thresholds or []), geometry=geometry)
-        if objects_file is not None:
-            # A demonstration's objects, when given, list every object it moves.
-            without = sorted({m.object for m in found.moves} - set(geometry))
-            if without:
-                raise InputError(
-                    f"no geometry for {', '.join(map(repr, without))}; every object "
-                    "that moves needs one (a demonstration's objects list them all)",
-                    source=str(objects_file),
-                    field="objects",
-                )
-        demo = found.to_demonstration(name or stream_path.stem, objects=geometry)
+        found, demo = segmented.segmentation, segmented.demonstration
         # The demonstration and the plot are written both or neither.
         with StagedOutputs() as outputs:
             text = dump_json(demonstration_to_dict(demo))
@@ -189,13 +187,22 @@ def import_(
             show_default=False,
         ),
     ] = None,
+    objects_file: Annotated[
+        Path | None,
+        typer.Option(
+            help=OBJECTS_FILE_HELP + ": gives or replaces the geometry of the recording's "
+            "objects and landmarks (a mesh has no primitive shape).",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Import a robot-learning recording: one demonstration file per demonstration in it."""
     from demoplan.fileio import dump_json
-    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
     from demoplan.segmentation.importing import import_recording_details
 
     with reported_errors():
+        geometry = None if objects_file is None else load_object_geometry(objects_file)
         if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
             raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
@@ -214,7 +221,12 @@ def import_(
                 bar.update(task, completed=done, total=total, description=f"{recording.name} {key}")
 
             items = import_recording_details(
-                recording, progress=advance, name_prefix=name_prefix, skip_empty=True
+                recording,
+                progress=advance,
+                name_prefix=name_prefix,
+                skip_empty=True,
+                geometry=geometry,
+                geometry_source=None if objects_file is None else str(objects_file),
             )
         files: list[tuple[Path, str]] = []
         targets: dict[str, Path] = {}
@@ -222,7 +234,9 @@ def import_(
             if item.demonstration is None:
                 continue
             target = output / f"{item.demonstration.name}.json"
-            refuse_overwriting_inputs(target, [recording])
+            refuse_overwriting_inputs(
+                target, [recording, *([objects_file] if objects_file is not None else [])]
+            )
             targets[item.key] = target
             files.append((target, dump_json(demonstration_to_dict(item.demonstration))))
         if not files:

@@ -84,6 +84,8 @@ def print_model(model: TaskModel, decimals: int) -> None:
         diagnostic_lines,
         precision_text,
         sequence_rows,
+        support_lines,
+        supported_constraint_text,
     )
 
     stdout.print(states_table(model, decimals, stdout.width))
@@ -100,11 +102,13 @@ def print_model(model: TaskModel, decimals: int) -> None:
         )
     )
     stdout.print(
-        f"Constraints ({len(model.constraints)}): {constraint_text(model.constraints)}",
+        f"Constraints ({len(model.constraints)}): {supported_constraint_text(model)}",
         markup=False,
         highlight=False,
         soft_wrap=True,
     )
+    for line in support_lines(model):
+        stdout.print(line, markup=False, highlight=False, soft_wrap=True)
     if model.teacher_constraints:
         stdout.print(
             f"Teacher constraints: {constraint_text(model.teacher_constraints)}",

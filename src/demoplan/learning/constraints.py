@@ -15,11 +15,23 @@ constraints relate visits, so a demonstration never contradicts itself
 Teacher-given constraints (the journal version of the paper) are never
 removed; a learned constraint that reverses one is dropped, and a
 demonstration that contradicts one is reported.
+
+The *support* of a constraint (X, Y) is the number of demonstrations that
+show it: those in which visit X comes before visit Y
+(:func:`constraint_support`). The paper's rule keeps every uncontradicted
+pair, so a learned constraint has a support of at least 1 — and, since a
+demonstration visiting both shows them in some order, its support is the
+number of demonstrations that visit both. A constraint shown once rests on
+one demonstration's order, which may be chance; ``min_support`` (``learn
+--min-support K``) keeps only learned constraints shown by at least K
+demonstrations (default 1: the paper's rule). Teacher constraints are kept
+whatever their support (which may be 0).
 """
 
 from __future__ import annotations
 
 import re
+from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -32,6 +44,7 @@ __all__ = [
     "GoalOrder",
     "Requirement",
     "anchor_requirements",
+    "constraint_support",
     "goal_order",
     "goal_states",
     "learn_constraints",
@@ -53,11 +66,16 @@ class ConstraintSet:
     ``contradicted`` : pairs seen in both orders (each once, as (X, Y) with X < Y).
     ``violations`` : ``(demonstration index, X, Y)`` where a required X < Y was
     demonstrated the other way round.
+    ``support`` : per constraint, the demonstrations that show it (module docstring).
+    ``below_support`` : uncontradicted pairs left out because fewer than
+    ``min_support`` demonstrations show them, sorted.
     """
 
     constraints: tuple[Pair, ...]
     contradicted: tuple[Pair, ...]
     violations: tuple[tuple[int, str, str], ...]
+    support: tuple[int, ...] = ()
+    below_support: tuple[Pair, ...] = ()
 
 
 def visit_sequence(sequence: Sequence[str]) -> tuple[str, ...]:
@@ -76,25 +94,49 @@ def ordered_pairs(sequence: Sequence[str]) -> set[Pair]:
     return {(visits[a], visits[b]) for a in range(len(visits)) for b in range(a + 1, len(visits))}
 
 
-def learn_constraints(
-    sequences: Iterable[Sequence[str]], required: Iterable[Pair] = ()
-) -> ConstraintSet:
-    """Constraints from state sequences (paper §IV.B) plus teacher requirements."""
-    sequences = [tuple(s) for s in sequences]
-    seen: set[Pair] = set()
+def constraint_support(
+    sequences: Iterable[Sequence[str]], pairs: Iterable[Pair]
+) -> tuple[int, ...]:
+    """Per pair (X, Y) of visit labels, the number of sequences that show it:
+    in which X is visited before Y (the module docstring's support)."""
+    shown = _shown(sequences)
+    return tuple(shown[pair] for pair in pairs)
+
+
+def _shown(sequences: Iterable[Sequence[str]]) -> Counter[Pair]:
+    """How many sequences show each ordered pair."""
+    shown: Counter[Pair] = Counter()
     for sequence in sequences:
-        seen |= ordered_pairs(sequence)
+        shown.update(ordered_pairs(sequence))
+    return shown
+
+
+def learn_constraints(
+    sequences: Iterable[Sequence[str]], required: Iterable[Pair] = (), min_support: int = 1
+) -> ConstraintSet:
+    """Constraints from state sequences (paper §IV.B) plus teacher requirements.
+
+    ``min_support``: a learned constraint must be shown by at least this many
+    sequences (1: the paper's rule, every uncontradicted pair); teacher
+    requirements are kept whatever their support."""
+    sequences = [tuple(s) for s in sequences]
+    shown = _shown(sequences)
+    seen = set(shown)
     contradicted = {pair for pair in seen if (pair[1], pair[0]) in seen}
     required_set = set(required)
-    learned = seen - contradicted - {(y, x) for x, y in required_set}
+    uncontradicted = seen - contradicted - {(y, x) for x, y in required_set}
+    learned = {pair for pair in uncontradicted if shown[pair] >= min_support}
     violations = []
     for index, sequence in enumerate(sequences):
         demonstrated = ordered_pairs(sequence)
         violations += [(index, x, y) for x, y in sorted(required_set) if (y, x) in demonstrated]
+    constraints = tuple(sorted(learned | required_set, key=_pair_key))
     return ConstraintSet(
-        constraints=tuple(sorted(learned | required_set, key=_pair_key)),
+        constraints=constraints,
         contradicted=tuple(sorted({_unordered(p) for p in contradicted}, key=_pair_key)),
         violations=tuple(violations),
+        support=tuple(shown[pair] for pair in constraints),
+        below_support=tuple(sorted(uncontradicted - learned - required_set, key=_pair_key)),
     )
 
 

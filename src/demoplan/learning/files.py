@@ -54,6 +54,9 @@ def learn_files(
     overrides: Mapping[str, Any] | None = None,
     frame: str | None = None,
     objects: Sequence[str] | None = None,
+    units: str | None = None,
+    landmarks: Sequence[str] | None = None,
+    objects_file: Path | None = None,
     timeout: float = LEARNING_TIMEOUT,
     working: Callable[[], AbstractContextManager[object]] | None = None,
 ) -> LearnedFiles:
@@ -62,12 +65,18 @@ def learn_files(
     back unless ``output``); ``paper``: the paper's fixed thresholds, then
     ``overrides`` (settings by name); ``working``: a progress display around
     the work. Nothing is written when neither ``output`` nor ``update_path``
-    is given. Two updates of one model at once both land (the second waits)."""
+    is given. Two updates of one model at once both land (the second waits).
+    ``frame``, ``objects``, ``units``, ``landmarks`` and ``objects_file`` (the
+    geometry of the streams' objects) are for pose streams
+    (:func:`demoplan.inputs.load_inputs`)."""
     from demoplan.inputs import load_inputs
+    from demoplan.learning.demonstrations import load_object_geometry
 
     target = output or update_path
     if target is not None:
-        refuse_overwriting_inputs(target, inputs)
+        refuse_overwriting_inputs(
+            target, [*inputs, *([objects_file] if objects_file is not None else [])]
+        )
     settings: dict[str, Any] = paper_overrides() if paper else {}
     settings.update(overrides or {})
     requirements = list(require)
@@ -83,7 +92,15 @@ def learn_files(
         working() if working is not None else nullcontext(),
     ):
         try:
-            new = load_inputs(inputs, frame=frame, objects=objects)
+            new = load_inputs(
+                inputs,
+                frame=frame,
+                objects=objects,
+                units=units,
+                landmarks=landmarks,
+                geometry=None if objects_file is None else load_object_geometry(objects_file),
+                geometry_source=None if objects_file is None else str(objects_file),
+            )
             changes = None
             if update_path is not None:
                 previous = load_model(update_path)

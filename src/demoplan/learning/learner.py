@@ -50,7 +50,11 @@ class TaskModelLearner:
     >>> demos = load_demonstrations(["examples/blocks/demonstrations.json"])
     >>> learner = TaskModelLearner().fit(demos)
     >>> learner.sequences_
-    (('A', 'B', 'C'), ('D', 'A', 'C'))
+    (('A', 'B', 'C'), ('B', 'A', 'C'))
+    >>> dict(zip(learner.constraints_, learner.support_))
+    {('A', 'C'): 2, ('B', 'C'): 2}
+    >>> TaskModelLearner(min_support=3).fit(demos).constraints_
+    ()
     """
 
     def __init__(self, settings: LearningSettings | None = None, **overrides: Any) -> None:
@@ -59,6 +63,8 @@ class TaskModelLearner:
         self._demonstrations: list[Demonstration] = []
         self._model: TaskModel | None = None
         self._scores: tuple[ReferenceScore, ...] = ()
+        self._support: tuple[int, ...] = ()
+        self._below_support: tuple[tuple[str, str], ...] = ()
 
     @property
     def settings(self) -> LearningSettings:
@@ -85,7 +91,9 @@ class TaskModelLearner:
         check_demonstrations(demos)
         generation = generate_states(demos, self.settings)
         required = required_pairs(self._requirements, generation.states, generation.sequences)
-        constraint_set = learn_constraints(generation.sequences, required)
+        constraint_set = learn_constraints(
+            generation.sequences, required, self.settings.min_support
+        )
         _refuse_cycles(generation.sequences, constraint_set.constraints, required, demos)
         for index, x, y in constraint_set.violations:
             logger.warning(
@@ -99,6 +107,8 @@ class TaskModelLearner:
             )
         self._demonstrations = demos
         self._scores = generation.scores
+        self._support = constraint_set.support
+        self._below_support = constraint_set.below_support
         self._model = TaskModel(
             states=generation.states,
             sequences=generation.sequences,
@@ -130,6 +140,20 @@ class TaskModelLearner:
     @property
     def constraints_(self) -> tuple[tuple[str, str], ...]:
         return self.model_.constraints
+
+    @property
+    def support_(self) -> tuple[int, ...]:
+        """Per constraint (in the order of :attr:`constraints_`), the number of
+        demonstrations that show it (docs/learning.md, "Support")."""
+        self.model_  # noqa: B018 - raises when not fitted
+        return self._support
+
+    @property
+    def below_support_(self) -> tuple[tuple[str, str], ...]:
+        """Uncontradicted pairs left out because fewer than ``min_support``
+        demonstrations show them (empty with the paper's rule, ``min_support=1``)."""
+        self.model_  # noqa: B018 - raises when not fitted
+        return self._below_support
 
     @property
     def goals_(self) -> tuple[tuple[str, ...], ...]:

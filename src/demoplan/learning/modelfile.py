@@ -2,9 +2,11 @@
 
 Besides the required fields (``states``, ``sequences``,
 ``constraints``, ``goals``), a model records each state's statistics (spread,
-members), the teacher's constraints and any demonstration that contradicts
-them, the learning settings, and the demonstrations themselves, so that
-``demoplan learn --update`` can add one more and relearn.
+members), each constraint's support (the demonstrations that show it,
+recomputed from ``sequences`` when read), the teacher's constraints and any
+demonstration that contradicts them, the learning settings, and the
+demonstrations themselves, so that ``demoplan learn --update`` can add one
+more and relearn.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from demoplan.fileio import (
     read_document,
     write_atomic,
 )
-from demoplan.learning.constraints import label_key
+from demoplan.learning.constraints import constraint_support, label_key
 from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.learning.settings import LearningSettings
 from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
@@ -114,6 +116,7 @@ class _ModelSchema(_Schema):
     states: list[_StateSchema]
     sequences: list[list[str]]
     constraints: list[list[str]]
+    support: list[Integer] = []  # written for people and tools; recomputed on reading
     goals: list[list[str]]
     teacher_constraints: list[list[str]] = []
     violations: list[_ViolationSchema] = []
@@ -174,6 +177,7 @@ def model_to_dict(model: TaskModel) -> dict[str, Any]:
         "states": [_state_to_dict(s) for s in model.states],
         "sequences": [list(s) for s in model.sequences],
         "constraints": [list(c) for c in model.constraints],
+        "support": list(constraint_support(model.sequences, model.constraints)),
         "goals": [list(g) for g in model.goals],
         "teacher_constraints": [list(c) for c in model.teacher_constraints],
         "violations": [{"demonstration": d, "required": [x, y]} for d, x, y in model.violations],

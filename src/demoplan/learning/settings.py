@@ -43,6 +43,11 @@ class LearningSettings:
     require : teacher constraints as given, such as ``"A<B"`` or
         ``"plate<napkin"``; never removed by demonstrations (the journal
         version of the paper).
+    min_support : a learned constraint is kept only when at least this many
+        demonstrations show it (its support,
+        :func:`demoplan.learning.constraints.constraint_support`); 1 (default):
+        the paper's rule (§IV.B), every pair no demonstration contradicts.
+        Teacher constraints are kept whatever their support.
 
     A value out of range is an :class:`~demoplan.errors.InputError` naming
     the setting. :data:`PAPER_SETTINGS` is the paper's reading: fixed
@@ -58,6 +63,7 @@ class LearningSettings:
     max_clusters: int = 0
     significance: float = 0.05
     require: tuple[str, ...] = ()
+    min_support: int = 1
 
     def __post_init__(self) -> None:
         for name in _POSITIVE:
@@ -89,6 +95,7 @@ class LearningSettings:
         _check_whole(self.n_init, "n_init", 1)
         _check_whole(self.seed, "seed", 0)
         _check_whole(self.max_clusters, "max_clusters", 0, " (0: no cap)")
+        _check_whole(self.min_support, "min_support", 1, " (1: the paper's rule)")
         if isinstance(self.require, str) or not all(isinstance(r, str) for r in self.require):
             raise InputError(
                 f"expected requirement texts such as ['A<B'], got {self.require!r}", field="require"

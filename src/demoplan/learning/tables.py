@@ -7,10 +7,12 @@ rich and the experiment report as Markdown, so both show the same numbers.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Sequence
 
-from demoplan.learning.constraints import label_key
+from demoplan.learning.constraints import constraint_support, label_key, learn_constraints
 from demoplan.model import State, TaskModel
+from demoplan.wording import plural
 
 __all__ = [
     "STATE_HEADER",
@@ -19,6 +21,8 @@ __all__ = [
     "format_position",
     "sequence_rows",
     "state_rows",
+    "support_lines",
+    "supported_constraint_text",
 ]
 
 STATE_HEADER = (
@@ -107,6 +111,38 @@ def constraint_text(pairs: Sequence[tuple[str, str]]) -> str:
     """``A<B, A<C, …`` in label order."""
     ordered = sorted(pairs, key=lambda p: (label_key(p[0]), label_key(p[1])))
     return ", ".join(f"{x}<{y}" for x, y in ordered)
+
+
+def supported_constraint_text(model: TaskModel) -> str:
+    """``A<B (3), A<C (1), …``: each constraint with its support, the number of
+    demonstrations that show it (docs/learning.md), in label order."""
+    support = dict(
+        zip(model.constraints, constraint_support(model.sequences, model.constraints), strict=True)
+    )
+    ordered = sorted(model.constraints, key=lambda p: (label_key(p[0]), label_key(p[1])))
+    return ", ".join(f"{x}<{y} ({support[(x, y)]})" for x, y in ordered)
+
+
+def support_lines(model: TaskModel) -> list[str]:
+    """How much the constraints rest on: how many are shown by 1, 2, …
+    demonstrations, and how many ``min_support`` left out."""
+    counts = Counter(constraint_support(model.sequences, model.constraints))
+    lines = []
+    if counts:
+        parts = [f"{k}: {plural(counts[k], 'constraint')}" for k in sorted(counts)]
+        lines.append(
+            f"Support (demonstrations showing a constraint, of {len(model.sequences)}): "
+            + ", ".join(parts)
+        )
+    least = model.settings.min_support
+    if least > 1:
+        every = learn_constraints(model.sequences, model.teacher_constraints).constraints
+        dropped = len(set(every) - set(model.constraints))
+        lines.append(
+            f"Left out by --min-support {least}: {plural(dropped, 'constraint')} shown by "
+            f"fewer than {plural(least, 'demonstration')}"
+        )
+    return lines
 
 
 def precision_text(model: TaskModel) -> str | None:

@@ -10,12 +10,12 @@ recording's landmarks, geometry and provenance.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from demoplan.errors import InputError
-from demoplan.model import Demonstration
+from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, SegmentationSettings, segment
 from demoplan.segmentation.readers.hdf5 import (
     RecordedDemonstration,
@@ -63,22 +63,35 @@ def import_recording_details(
     *,
     name_prefix: str | None = None,
     skip_empty: bool = False,
+    geometry: Mapping[str, ObjectGeometry] | None = None,
+    geometry_source: str | None = None,
 ) -> list[ImportedDemonstration]:
     """:func:`import_recording`, keeping each demonstration's recording and segmentation.
 
     ``name_prefix`` replaces the file stem / environment in the names. With
     ``skip_empty``, a demonstration in which no step is found is returned
     without a demonstration (and the reason) instead of raising.
+    ``geometry`` (an objects file, ``import --objects-file``, read from
+    ``geometry_source``) gives or replaces the geometry of the recording's
+    objects and landmarks (a mesh has no primitive shape); every name must be
+    an object or landmark of some demonstration of the recording.
     """
     path = Path(path)
     keys = demonstration_keys(path)
     out = []
+    named: dict[str, None] = {}
     for done, key in enumerate(keys, 1):
         recorded = read_demonstration(path, key)
+        own = [*recorded.stream.objects, *(n for n, _ in recorded.landmarks)]
+        named.update(dict.fromkeys(own))
+        shapes = {
+            **dict(recorded.geometry),
+            **{n: g for n, g in (geometry or {}).items() if n in own},
+        }
         found = segment(
             recorded.stream,
             settings,
-            geometry=dict(recorded.geometry),
+            geometry=shapes,
             landmarks=dict(recorded.landmarks),
         )
         prefix = name_prefix if name_prefix is not None else recording_name(path, recorded.env)
@@ -94,7 +107,6 @@ def import_recording_details(
         # A demonstration file's objects, when given, name every object it moves:
         # where the model has no primitive shape for one (PickPlace's meshes), no
         # geometry is written (it served the segmentation's support check).
-        shapes = dict(recorded.geometry)
         complete = all(step.object in shapes for step in demo.steps)
         if not complete:
             logger.info(
@@ -104,7 +116,7 @@ def import_recording_details(
             )
         demo = replace(
             demo,
-            objects=recorded.geometry if complete else (),
+            objects=tuple(shapes.items()) if complete else (),
             landmarks=recorded.landmarks,
             provenance=(
                 *recorded.provenance,
@@ -114,6 +126,10 @@ def import_recording_details(
         out.append(ImportedDemonstration(key, demo, recorded, found))
         if progress is not None:
             progress(done, len(keys), key)
+    if geometry is not None:
+        from demoplan.segmentation.streams import check_geometry_names
+
+        check_geometry_names(geometry, list(named), geometry_source)
     return out
 
 

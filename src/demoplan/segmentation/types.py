@@ -219,12 +219,14 @@ def select_objects(
     default: Sequence[str],
     *,
     source: str | None = None,
+    field: str = "objects",
 ) -> list[str]:
     """The objects chosen by ``patterns`` (names or :mod:`fnmatch` globs) among ``available``.
 
     ``None`` chooses ``default``. The result keeps the order of ``available``.
     A pattern that matches nothing is an :class:`~demoplan.errors.InputError`
-    naming every such pattern and listing what is available.
+    naming every such pattern and listing what is available (``field``: the
+    option the patterns came from).
     """
     if patterns is None:
         return list(default)
@@ -235,6 +237,6 @@ def select_objects(
             f"no object {'matches' if len(missing) == 1 else 'match'} {listed}; "
             f"available: {', '.join(available) or 'none'}",
             source=source,
-            field="objects",
+            field=field,
         )
     return [name for name in available if any(fnmatchcase(name, p) for p in patterns)]

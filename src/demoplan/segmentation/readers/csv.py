@@ -3,8 +3,16 @@
 Header ``t,object,x,y,z`` plus optionally ``yaw``, or ``roll,pitch,yaw``
 (degrees, extrinsic x-y-z), or ``qx,qy,qz,qw``; one row per object per
 sample, rows in any order, columns in any order. Blank lines and lines
-starting with ``#`` are skipped. Orientation cells may be left empty for an
+starting with ``#`` are skipped, except a ``# units: mm`` comment above the
+header (``m``, ``cm`` or ``mm``), which gives the unit of ``x,y,z``: positions
+are converted to metres on reading. Orientation cells may be left empty for an
 object without orientation (all of its rows, all the cells).
+
+Without a declared unit (the comment, or ``units=``), positions are taken as
+metres, and a stream no tabletop holds in metres — a coordinate beyond
+:data:`PLAUSIBLE_METRES` (a millimetre stream's hundreds and thousands) — is
+refused, naming ``units``: read as metres, a millimetre stream would show no
+step of at least 2 cm.
 
 Every problem is one :class:`~demoplan.errors.InputError` naming the file, the
 line / column and what was expected.
@@ -13,6 +21,7 @@ line / column and what was expected.
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -21,6 +30,7 @@ import numpy as np
 
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
+from demoplan.poses import LENGTH_SCALE
 from demoplan.segmentation.types import (
     FloatArray,
     PoseStream,
@@ -29,7 +39,7 @@ from demoplan.segmentation.types import (
     stream_from_samples,
 )
 
-__all__ = ["load_csv", "quats_from_rpy_array"]
+__all__ = ["PLAUSIBLE_METRES", "load_csv", "quats_from_rpy_array", "stream_units"]
 
 _BASE_COLUMNS = ("t", "object", "x", "y", "z")
 _ORIENTATION_SETS: dict[frozenset[str], tuple[str, ...]] = {
@@ -41,17 +51,29 @@ _ORIENTATION_SETS: dict[frozenset[str], tuple[str, ...]] = {
 MAX_STREAM_BYTES = 1024 * 1024 * 1024
 """The largest CSV stream read (1 GiB: about 10 hours of 10 objects at 100 Hz)."""
 _EXPECTED_HEADER = "t,object,x,y,z plus optionally yaw | roll,pitch,yaw | qx,qy,qz,qw"
+PLAUSIBLE_METRES = 10.0
+"""The largest coordinate (m) of a stream without declared units: a room, not a
+millimetre stream's hundreds (docs/formats.md "Pose stream")."""
+_UNITS_COMMENT = re.compile(r"^\s*#\s*units\s*:\s*(\S*)\s*$", re.IGNORECASE)
 
 
-def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseStream:
-    """Read a CSV pose stream (module docstring); angles in degrees, lengths in metres.
+def load_csv(
+    path: str | Path, *, objects: Sequence[str] | None = None, units: str | None = None
+) -> PoseStream:
+    """Read a CSV pose stream (module docstring); angles in degrees, positions
+    converted to metres.
 
     ``objects`` (names or :mod:`fnmatch` patterns) keeps only the matching
     objects; a pattern matching none is an error. By default all are kept.
+    ``units`` (``"m"``, ``"cm"``, ``"mm"``; ``--units``) is the unit of
+    ``x,y,z``; a ``# units:`` comment in the file must agree with it
+    (:func:`stream_units`). Without either, positions are metres, and beyond
+    :data:`PLAUSIBLE_METRES` they are refused as undeclared units.
     """
     path = Path(path)
     source = str(path)
     text = read_input_text(path, "a CSV pose stream", MAX_STREAM_BYTES)
+    declared = stream_units(text, units, source)
     lines = [
         (number, line)
         for number, line in enumerate(text.splitlines(), start=1)
@@ -140,6 +162,10 @@ def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseS
 
     times = column("t")
     positions = np.stack([column("x"), column("y"), column("z")], axis=1)
+    if declared is None:
+        _check_metres(positions, names, source)
+    else:
+        positions = positions * LENGTH_SCALE[declared]
     kind = columns["__orientation__"]
     orientations: FloatArray | None = None
     if kind == ("yaw",):
@@ -155,6 +181,66 @@ def load_csv(path: str | Path, *, objects: Sequence[str] | None = None) -> PoseS
         return stream
     chosen = set(select_objects(objects, stream.objects, stream.objects, source=source))
     return PoseStream(tuple(t for t in stream.tracks if t.name in chosen), source)
+
+
+def stream_units(text: str, given: str | None, source: str) -> str | None:
+    """The unit of a CSV stream's positions: ``given`` (``--units``) or the
+    ``# units: mm`` comment above the header; both must agree. ``None``: neither
+    (metres, checked for plausibility)."""
+    if given is not None and given not in LENGTH_SCALE:
+        raise InputError(
+            f"{given!r} is not a unit of length; m, cm or mm expected", source=source, field="units"
+        )
+    in_file: str | None = None
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        if not line.lstrip().startswith("#"):
+            break  # the header: a units comment below it is a plain comment
+        match = _UNITS_COMMENT.match(line)
+        if match is None:
+            continue
+        value = match.group(1).lower()
+        if value not in LENGTH_SCALE:
+            raise InputError(
+                f"'# units: {match.group(1)}' names no unit of length; m, cm or mm expected",
+                source=source,
+                field=f"line {number}",
+            )
+        if in_file is not None and value != in_file:
+            raise InputError(
+                f"a second units comment says {value}, the first {in_file}; one unit expected",
+                source=source,
+                field=f"line {number}",
+            )
+        in_file = value
+    if given is not None and in_file is not None and given != in_file:
+        raise InputError(
+            f"the file says '# units: {in_file}', --units says {given}; they must agree",
+            source=source,
+            field="units",
+        )
+    return given or in_file
+
+
+def _check_metres(positions: FloatArray, names: Sequence[str], source: str) -> None:
+    """Positions without declared units are metres: refuse a stream no room
+    holds in metres (a coordinate beyond :data:`PLAUSIBLE_METRES`), which a
+    millimetre or centimetre stream is."""
+    peak = np.abs(positions).max(axis=1)
+    far = int(np.argmax(peak))
+    if peak[far] <= PLAUSIBLE_METRES:
+        return
+    codes = {name: k for k, name in enumerate(dict.fromkeys(names))}
+    index = np.fromiter((codes[n] for n in names), np.intp, len(names))
+    span = max(float(np.ptp(positions[index == k], axis=0).max()) for k in range(len(codes)))
+    raise InputError(
+        f"positions reach {float(peak[far]):g} ({names[far]!r}) and objects move up to "
+        f"{span:g}: not metres on a table; declare the unit with a '# units: mm' (or cm) "
+        "line above the header or --units mm|cm (--units m if they are metres)",
+        source=source,
+        field="units",
+    )
 
 
 def _check_header(header: list[str], source: str, line: int) -> dict[str, Any]:

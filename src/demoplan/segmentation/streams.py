@@ -1,0 +1,125 @@
+"""A pose stream file → a demonstration, as ``segment``, ``learn`` and ``import`` read one.
+
+One function (:func:`demonstration_from_stream`) reads the stream
+(:func:`~demoplan.segmentation.readers.load_stream`: its objects, frame and
+length unit), segments it (:func:`~demoplan.segmentation.detect.segment`)
+with the objects' geometry, and writes the demonstration: the tracked frames
+named as landmarks are references, not objects — their rest pose is the
+demonstration's landmark — and the geometry of an objects file
+(``--objects-file``, :func:`~demoplan.learning.demonstrations.load_object_geometry`)
+is written into it, so that learning knows which objects are round
+(a cylinder's yaw is not learned, docs/learning.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from demoplan.errors import InputError
+from demoplan.model import Demonstration, ObjectGeometry
+from demoplan.segmentation.detect import Segmentation, segment
+from demoplan.segmentation.readers import load_stream
+from demoplan.segmentation.settings import SegmentationSettings
+from demoplan.segmentation.types import PoseStream, select_objects
+
+__all__ = [
+    "SegmentedStream",
+    "check_geometry_names",
+    "demonstration_from_stream",
+    "stream_name",
+]
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SegmentedStream:
+    """What :func:`demonstration_from_stream` read and found: the stream, its
+    segmentation and the demonstration written from it."""
+
+    stream: PoseStream
+    segmentation: Segmentation
+    demonstration: Demonstration
+
+
+def stream_name(path: Path) -> str:
+    """A stream's demonstration name: the file's stem, or a bag folder's name
+    for its ``metadata.yaml``."""
+    return path.parent.name if path.name == "metadata.yaml" else path.stem
+
+
+def demonstration_from_stream(
+    path: str | Path,
+    *,
+    name: str | None = None,
+    settings: SegmentationSettings | None = None,
+    frame: str | None = None,
+    objects: Sequence[str] | None = None,
+    units: str | None = None,
+    landmarks: Sequence[str] | None = None,
+    geometry: Mapping[str, ObjectGeometry] | None = None,
+    geometry_source: str | None = None,
+    geometry_of_this_stream: bool = False,
+) -> SegmentedStream:
+    """Read, segment and write the demonstration of one pose stream.
+
+    Parameters
+    ----------
+    path : the stream (CSV, ROS 2 bag).
+    name : the demonstration's name (default: :func:`stream_name`).
+    settings : the segmentation's thresholds (default: the documented ones).
+    frame, objects, units : passed to :func:`~demoplan.segmentation.readers.load_stream`;
+        the landmarks are kept along with ``objects``.
+    landmarks : names or :mod:`fnmatch` globs of tracked frames that are
+        landmarks (a tray, a box): not objects; each one's first rest pose is
+        the demonstration's landmark. A pattern matching no tracked frame, or
+        a landmark that moved (a step), is an :class:`InputError`.
+    geometry : object (and landmark) geometry, from an objects file: it checks
+        placements against their supports and is written into the
+        demonstration for the stream's objects; every object that moves must
+        then have one (a demonstration's ``objects`` list them all), else an
+        :class:`InputError` naming ``geometry_source``. Names outside this
+        stream are ignored, unless ``geometry_of_this_stream`` (one stream,
+        ``segment``): then each must be one of its objects
+        (:func:`check_geometry_names`); several streams are checked together.
+    """
+    path = Path(path)
+    patterns = list(landmarks or ())
+    keep = None if objects is None else [*objects, *patterns]
+    stream = load_stream(path, frame=frame, objects=keep, units=units)
+    chosen = (
+        select_objects(patterns, stream.objects, (), source=str(path), field="landmarks")
+        if patterns
+        else []
+    )
+    if geometry is not None and geometry_of_this_stream:
+        check_geometry_names(geometry, stream.objects, geometry_source)
+    shapes = {n: g for n, g in (geometry or {}).items() if n in stream.objects}
+    found = segment(stream, settings, geometry=shapes)
+    if geometry is not None:
+        without = sorted({m.object for m in found.moves} - set(shapes) - set(chosen))
+        if without:
+            raise InputError(
+                f"no geometry for {', '.join(map(repr, without))} (moved in {path}); every "
+                "object that moves needs one (a demonstration's objects list them all)",
+                source=geometry_source,
+                field="objects",
+            )
+    demo = found.to_demonstration(name or stream_name(path), objects=shapes, landmarks=chosen)
+    return SegmentedStream(stream, found, demo)
+
+
+def check_geometry_names(
+    geometry: Mapping[str, ObjectGeometry], known: Sequence[str], source: str | None
+) -> None:
+    """Every object of an objects file must be one of the streams' objects
+    (``known``): an :class:`InputError` naming the first other and listing them."""
+    unknown = [name for name in geometry if name not in known]
+    if unknown:
+        raise InputError(
+            f"unknown object{'s' if len(unknown) > 1 else ''} "
+            f"{', '.join(map(repr, unknown))}; the stream's objects are "
+            f"{', '.join(known) or 'none'}",
+            source=source,
+            field=f"objects.{unknown[0]}",
+        )
