@@ -38,7 +38,6 @@ from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
-from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
     GEOMETRY_TOLERANCE,
@@ -66,6 +65,7 @@ from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
+from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.plotting import FIGURE_FORMATS
 from demoplan.poses import (
     MAX_COORDINATE,
