@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from demoplan.errors import InputError
 from demoplan.graphs import find_cycle
 from demoplan.model import State, visit_label
+from demoplan.wording import did_you_mean
 
 __all__ = [
     "ConstraintSet",
@@ -276,7 +277,8 @@ def _expand(
         )
     known = ", ".join(sorted(visits, key=label_key) + sorted(by_object))
     raise InputError(
-        f"{text!r}: {token!r} is neither a visited state nor an object (known: {known})",
+        f"{text!r}: {token!r} is neither a visited state nor an object (known: {known})"
+        + did_you_mean(token, by_object),
         field="require",
     )
 
