@@ -101,9 +101,13 @@ def test_a_model_is_still_shown_as_the_papers_tables(tmp_path: Path) -> None:
     code, out, err = invoke("show", model)
     assert code == 0, err
     assert "State" in out
+    # Its plot: the demonstrations, each step marked with its state (Fig. 3).
     code, out, err = invoke("show", model, "--plot", tmp_path / "x.png")
+    assert code == 0, err
+    assert (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, out, err = invoke("show", model, "--model", model)
     assert code == 1
-    assert err.count("\n") == 1 and "--plot is for a scene" in err
+    assert err.count("\n") == 1 and "--model is for a scene" in err
 
 
 def test_a_file_of_neither_kind_is_one_line_naming_both(tmp_path: Path) -> None:

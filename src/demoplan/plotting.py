@@ -134,10 +134,15 @@ def _landmark_corner(pose: Pose, geometry: ObjectGeometry) -> tuple[float, float
 
 
 def plot_demonstration(
-    demo: Demonstration, ax: Axes | None = None, *, title: str | None = None
+    demo: Demonstration,
+    ax: Axes | None = None,
+    *,
+    title: str | None = None,
+    states: Sequence[str] = (),
 ) -> Axes:
     """Draw one demonstration from above: initial poses faint, each step's placement
-    solid and numbered in the order it happened, an arrow for every move."""
+    solid and numbered in the order it happened (with its learned state, when
+    ``states`` gives one per step: ``2 B knife``), an arrow for every move."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -165,8 +170,15 @@ def plot_demonstration(
                 arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
             )
         ax.add_patch(object_patch(step.pose, geometry.get(step.object), colour, 0.85))
+        state = f"{states[number - 1]} " if number <= len(states) else ""
         add_label(
-            ax, f"{number} {step.object}", (x, y), offset=(4, 4), ha="left", va="bottom", fontsize=7
+            ax,
+            f"{number} {state}{step.object}",
+            (x, y),
+            offset=(4, 4),
+            ha="left",
+            va="bottom",
+            fontsize=7,
         )
         current[step.object] = step.pose
     ax.set_aspect("equal")
@@ -276,7 +288,11 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
     panels = []
     for k, demo in enumerate(demos):
         title = f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}"
-        panels.append(plot_demonstration(demo, fig.add_subplot(grid[0, k]), title=title))
+        panels.append(
+            plot_demonstration(
+                demo, fig.add_subplot(grid[0, k]), title=title, states=model.sequences[k]
+            )
+        )
         plot_constraints(model, k, fig.add_subplot(grid[1, k]))
     share_limits(panels)
     fig.suptitle(

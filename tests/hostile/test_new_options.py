@@ -216,8 +216,15 @@ SHOW: list[object] = [
         (),
         id="show-model-lacks-a-sized-object",
     ),
+    pytest.param(  # a model's plot: its demonstrations and states
+        ["show", "model.json", "--plot", "p.png"], [], {0}, ("p.png",), id="show-plot-of-a-model"
+    ),
     pytest.param(
-        ["show", "model.json", "--plot", "p.png"], ["--plot"], {1, 2}, (), id="show-plot-of-a-model"
+        ["show", "model.json", "--model", "model.json"],
+        ["--model"],
+        {1, 2},
+        (),
+        id="show-model-of-a-model",
     ),
     pytest.param(
         ["show", "scene.json", "--plot", "bad.xyz"], ["--plot"], {1, 2}, (), id="show-plot-bad-ext"

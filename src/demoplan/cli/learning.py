@@ -239,7 +239,10 @@ def show(
     ] = None,
     plot: Annotated[
         Path | None,
-        typer.Option(help="A scene: draw it from above into this image (PNG, SVG)."),
+        typer.Option(
+            help="A scene: draw it from above into this image (PNG, SVG); a model: its "
+            "demonstrations, each step marked with its learned state, and their constraints."
+        ),
     ] = None,
 ) -> None:
     """Print a model as the paper's tables (states, sequences, constraints), or
@@ -252,10 +255,19 @@ def show(
         document = read_document(path)
         kind, _ = check_format(document, {"model", "scene"}, display_path(path))
         if kind == "model":
-            if plot is not None or model_path is not None:
-                option = "--plot" if plot is not None else "--model"
-                raise InputError(f"{option} is for a scene; {path} is a model", field=option)
+            if model_path is not None:
+                raise InputError(f"--model is for a scene; {path} is a model", field="--model")
+            if plot is not None:
+                from demoplan.plotting import check_figure_path
+
+                check_figure_path(plot, "--plot")
             model = model_from_dict(document, str(path))
+            if plot is not None:
+                from demoplan.plotting import save_demonstrations
+
+                with plot_errors(plot):
+                    save_demonstrations(model, plot, display_path(path))
+                stderr.print(f"wrote {plot}", markup=False, highlight=False)
             if json_output:
                 print_json(model_json(model))
             else:
