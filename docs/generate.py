@@ -1081,8 +1081,8 @@ def demonstration_section() -> str:
             "(in demonstrations and scenes alike: [scenes.md](scenes.md#landmarks)):",
             fenced(
                 "json",
-                '"landmarks": {"tray": {"position": [0.45, 0.10, 0], "yaw": 30, '
-                '"shape": "box", "size": [0.40, 0.30, 0.02]}}',
+                '{"landmarks": {"tray": {"position": [0.45, 0.10, 0], "yaw": 30, '
+                '"shape": "box", "size": [0.40, 0.30, 0.02]}}}',
             ),
             field_table(LANDMARK),
             "### A file of several demonstrations (`demoplan/demonstrations-1`)",
