@@ -25,7 +25,7 @@ from demoplan.execution.faults import parse_faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
-from demoplan.learning.modelfile import save_model
+from demoplan.learning.modelfile import load_model, save_model
 from demoplan.model import (
     Demonstration,
     ObjectGeometry,
@@ -38,6 +38,7 @@ from demoplan.model import (
 )
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from tests.helpers import EXAMPLES
@@ -327,3 +328,28 @@ def test_a_family_of_swaps_plans_with_clear_parking_spots(task: tuple[TaskModel,
     # each object has some spot that takes it (the table inferred has room)
     for obj in scene.objects:
         assert any(obj.name in objects for objects in every.values()), obj.name
+
+
+def test_show_finds_room_beside_a_tray_and_says_where_there_is_none(
+    kit_file: Path, tmp_path: Path
+) -> None:
+    """The user's report: show said "Free space: 0 spots" beside a 30 × 20 cm
+    tray. Now it lists spots on the inferred table, one of them tray-sized; a
+    scene whose "freespace" lists none says what is missing."""
+    path = kit_with_tray(tmp_path)
+    result = invoke("show", path, "--model", kit_file)
+    assert result.exit_code == 0, result.stderr
+    assert ": 3 spots: " in result.stdout
+    assert "Table, inferred around the objects and landmarks" in result.stdout
+    preview = preview_scene(complete_geometry(load_scene(path), load_model(kit_file)))
+    tray_radius = math.hypot(0.3, 0.2) / 2
+    spots = [loc for loc in preview.problem.locations if loc.kind == "freespace"]
+    assert any(loc.shapes[0].size[0] / 2 >= tray_radius for loc in spots)
+    assert preview.no_room == ()
+    data = json.loads(path.read_text())
+    data["freespace"] = []
+    path.write_text(json.dumps(data))
+    result = invoke("show", path, "--model", kit_file)
+    assert result.exit_code == 0, result.stderr
+    assert "No free space for motor" in result.stdout
+    assert 'the scene\'s "freespace" lists no spot' in " ".join(result.stdout.split())

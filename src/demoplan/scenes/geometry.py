@@ -318,18 +318,42 @@ def spot_shape(radius: float, height: float) -> ObjectGeometry:
     return ObjectGeometry("cylinder", (2 * radius, 2 * radius, height))
 
 
-def _grasp_zone(
-    location: Location, grasp_axes: Sequence[tuple[str, float]], gripper: Gripper
-) -> BaseGeometry:
-    """What stands at ``location`` and where its fingers go when it is grasped:
-    its footprint and the finger discs of every grasp of the objects it was made for."""
-    parts = [location_footprint(location)]
+def _distance_to_outline(
+    grid: np.ndarray, shape: ObjectGeometry, position: Sequence[float], yaw: float
+) -> np.ndarray:
+    """From each point of ``grid`` (n×2) to :func:`footprint` (0 inside), in NumPy:
+    a box in its own frame, a disc by its radius."""
+    offset = grid - np.asarray(position[:2], dtype=float)
+    if shape.shape != "box":
+        radius = max(shape.size[0], shape.size[1]) / 2
+        return np.asarray(np.maximum(np.linalg.norm(offset, axis=1) - radius, 0.0))
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    local = np.abs(offset @ np.array([[c, -s], [s, c]]))
+    outside = np.maximum(local - np.array([shape.size[0] / 2, shape.size[1] / 2]), 0.0)
+    return np.asarray(np.linalg.norm(outside, axis=1))
+
+
+def _distances(
+    grid: np.ndarray,
+    location: Location,
+    grasp_axes: Sequence[tuple[str, float]],
+    gripper: Gripper,
+) -> tuple[np.ndarray, np.ndarray]:
+    """From each point of ``grid`` to what stands at ``location`` (its footprint),
+    and to its grasp zone: the footprint and the finger discs of every grasp of
+    the objects it was made for."""
+    to_print = np.min(
+        [_distance_to_outline(grid, s, location.position, location.yaw) for s in location.shapes],
+        axis=0,
+    )
+    to_zone = to_print
     for shape, obj in zip(location.shapes, location.objects, strict=False):
         for owner, axis in grasp_axes:
             if owner == obj:
                 for tip in fingers(location, shape, axis, gripper):
-                    parts.append(shapely.Point(tip[0], tip[1]).buffer(gripper.finger_radius))
-    return shapely.union_all(parts)
+                    disc = np.linalg.norm(grid - tip[:2], axis=1) - gripper.finger_radius
+                    to_zone = np.minimum(to_zone, np.maximum(disc, 0.0))
+    return to_print, to_zone
 
 
 def spot_reach(radius: float, gripper: Gripper) -> float:
@@ -361,11 +385,11 @@ def free_space(
     A spot keeps clear of everything: whatever fits in its disc, and the
     fingers grasping it (:func:`spot_reach`), touch no location's footprint
     nor ``keep_out`` (landmarks' outlines); no location's object or fingers
-    (:func:`_grasp_zone`) reach into its disc; two spots keep clear of each
+    (:func:`_distances`) reach into its disc; two spots keep clear of each
     other the same way.
     """
     (x0, y0), (x1, y1) = table
-    radii = sorted({round(bounding_radius(s), 6) for s in shapes}, reverse=True)
+    radii = sorted({bounding_radius(s) for s in shapes}, reverse=True)
     # at most MAX_GRID candidate spots: a wide table gets a coarser grid
     area = max(x1 - x0, 0.0) * max(y1 - y0, 0.0)
     step = max(settings.grid_step, math.sqrt(area / MAX_GRID))
@@ -374,19 +398,18 @@ def free_space(
     if len(gx) == 0 or len(gy) == 0 or not radii:
         return []
     grid = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
-    points = shapely.points(grid)
     # the room each candidate has: to the nearest footprint (what a spot's own
     # fingers must miss) and to the nearest grasp zone (what its object must miss)
     to_print = np.full(len(grid), np.inf)
     to_zone = np.full(len(grid), np.inf)
     for location in locations:
-        to_print = np.minimum(to_print, shapely.distance(points, location_footprint(location)))
-        to_zone = np.minimum(
-            to_zone, shapely.distance(points, _grasp_zone(location, grasp_axes, gripper))
-        )
+        print_distance, zone_distance = _distances(grid, location, grasp_axes, gripper)
+        to_print = np.minimum(to_print, print_distance)
+        to_zone = np.minimum(to_zone, zone_distance)
+    points = shapely.points(grid) if keep_out else None
     for outline in keep_out:
-        to_print = np.minimum(to_print, shapely.distance(points, outline))
-        to_zone = np.minimum(to_zone, shapely.distance(points, outline))
+        apart = shapely.distance(points, outline)
+        to_print, to_zone = np.minimum(to_print, apart), np.minimum(to_zone, apart)
     to_edge = np.minimum.reduce(
         [grid[:, 0] - x0, x1 - grid[:, 0], grid[:, 1] - y0, y1 - grid[:, 1]]
     )
@@ -416,7 +439,7 @@ def free_space(
     # plate-sized spot), or where it has no room for the next smaller that fits
     wanted = sorted((bounding_radius(s) for s in shapes), reverse=True)
     for k in range(settings.n_freespace):
-        size = round(wanted[k % len(wanted)], 6)
+        size = wanted[k % len(wanted)]
         if not any(place(radius) for radius in radii if radius <= size):
             break
     for radius in radii:

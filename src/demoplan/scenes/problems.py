@@ -239,7 +239,7 @@ def build_problem(
             surroundings.landmark_outlines(),
         )
     for spot in spots:
-        fits = [s.size[2] for s in shapes.values() if bounding_radius(s) <= spot.radius + 1e-9]
+        fits = [s.size[2] for s in shapes.values() if bounding_radius(s) <= spot.radius + 1e-6]
         name = names.place("freespace", spot.position, {loc.name for loc in locations})
         shape = spot_shape(spot.radius, max(fits, default=0.0) or 0.001)
         locations.append(Location(name, spot.position, 0.0, "freespace", (), (shape,)))
