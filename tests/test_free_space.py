@@ -138,6 +138,11 @@ def test_a_table_with_no_room_names_free_space_and_what_to_add(
     assert len(result.stderr.strip().splitlines()) == 1
     for fragment in ("no free space for manual", "scene's table", '"table"', '"freespace"'):
         assert fragment in result.stderr, result.stderr
+    # with no time to search, the budget is reached first: the reason still
+    # names free space before the search's own words
+    result = invoke("plan", kit_file, path, "--timeout", "0")
+    assert result.exit_code in (3, 4), result.stderr
+    assert "(kit-1): no free space for manual" in result.stderr, result.stderr
     data["freespace"] = []
     path.write_text(json.dumps(data))
     result = invoke("plan", kit_file, path)
