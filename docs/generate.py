@@ -71,6 +71,7 @@ from demoplan.poses import (
     MAX_DISTANCE_M,
     MAX_SIZE_M,
     MIN_SIZE_M,
+    LandmarkSchema,
     ObjectSchema,
     PoseSchema,
     UnitsSchema,
@@ -279,6 +280,19 @@ GEOMETRY = FieldTable(
         "size": "extents `[x, y, z]` in the object's frame; a cylinder's x and y are its diameter",
     },
 )
+LANDMARK = FieldTable(
+    "Landmark",
+    LandmarkSchema,
+    {
+        **POSE_FIELDS,
+        "position": "`[x, y]` or `[x, y, z]`: where it stands (bottom-face centre); its yaw "
+        "is its frame as given — a landmark's shape does not make its frame symmetric",
+        "shape": "its shape, with `size`",
+        "size": "extents `[x, y, z]`; z is its height: objects stand on its top, and every "
+        "figure draws it (may stand under `objects` instead, as `import` writes it)",
+    },
+    noun="landmark",
+)
 COLLECTION = FieldTable(
     "Collection fields",
     DemonstrationsSchema,
@@ -308,7 +322,8 @@ SCENE = FieldTable(
         "description": "free text",
         "units": "units of this scene",
         "objects": "the movable objects and where they stand (at least one)",
-        "landmarks": "static references (default: the demonstrations' landmark poses)",
+        "landmarks": "static references; one that moved between the demonstrations must be "
+        "given ([scenes.md](scenes.md#landmarks)); one that stood still defaults to that pose",
         "freespace": "spots `[x, y]` or `[x, y, z]` (z = 0) where objects may be parked; "
         "default: generated on the table",
         "gripper": "the parallel-jaw gripper",
@@ -448,6 +463,7 @@ FIELD_TABLES = (
     DEMONSTRATION,
     STEP,
     GEOMETRY,
+    LANDMARK,
     COLLECTION,
     OBJECTS_FILE,
     SCENE,
@@ -1013,6 +1029,14 @@ def demonstration_section() -> str:
             field_table(DEMONSTRATION),
             field_table(STEP),
             field_table(GEOMETRY),
+            "A landmark is a pose, and optionally the thing's `shape` and `size` "
+            "(in demonstrations and scenes alike: [scenes.md](scenes.md#landmarks)):",
+            fenced(
+                "json",
+                '"landmarks": {"tray": {"position": [0.45, 0.10, 0], "yaw": 30, '
+                '"shape": "box", "size": [0.40, 0.30, 0.02]}}',
+            ),
+            field_table(LANDMARK),
             "### A file of several demonstrations (`demoplan/demonstrations-1`)",
             "A file may hold several demonstrations in `demonstrations`, each a document as "
             "above. One without a `name` is called after the file and its place in it, "

@@ -318,8 +318,8 @@ def test_show_prints_tables(model_file: Path) -> None:
     assert "Constraints (32)" in result.stdout
     assert "States" in result.stdout
     assert "A-E-H-I-J-F-G" in result.stdout
-    for obj in ("Plate", "Knife", "Fork", "Spoon", "Glass", "Food", "Napkin"):
-        assert obj in result.stdout
+    for obj in ("plate", "knife", "fork", "spoon", "glass", "food", "napkin"):
+        assert f"│ {obj} " in result.stdout  # as the demonstrations name it
 
 
 BAD_MODELS = [

@@ -1,7 +1,7 @@
 """The repository stands alone: a user clones it without the project's
-working papers, so no file points outside it — no path into ``../shared``
-and no "SPEC" section — and the paper is cited by title, authors, venue
-and year (README)."""
+working papers, so no file points outside it — no path to the folder of
+those papers beside the checkout and no section of the contract they hold —
+and the paper is cited by title, authors, venue and year (README)."""
 
 from __future__ import annotations
 

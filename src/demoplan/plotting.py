@@ -95,6 +95,44 @@ def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha
     )
 
 
+LANDMARK_COLOUR = "#d9c9a8"
+"""Landmarks (a tray, a fixture) are drawn in one sandy colour, hatched, under everything."""
+
+
+def draw_landmarks(ax: Axes, scene: Scene, *, side: bool = False) -> None:
+    """The scene's landmarks that have a size, from above (or from the side),
+    under the objects, each named."""
+    shapes = dict(scene.landmark_geometry)
+    for name, pose in scene.landmarks:
+        if name not in shapes:
+            continue
+        draw = side_patch if side else object_patch
+        patch = draw(pose, shapes[name], LANDMARK_COLOUR, 0.6)
+        patch.set_hatch("//")
+        patch.set_zorder(0.5)
+        ax.add_patch(patch)
+        if side:
+            add_label(ax, name, _side_middle(pose, shapes[name]), fontsize=7, color="0.3")
+        else:
+            corner = _landmark_corner(pose, shapes[name])
+            add_label(ax, name, corner, fontsize=7, color="0.3", ha="left", va="bottom")
+
+
+def _landmark_corner(pose: Pose, geometry: ObjectGeometry) -> tuple[float, float]:
+    """A point just inside the landmark's first corner: its name there stays
+    clear of what stands on its middle."""
+    x, y, _ = pose.position
+    yaw = 0.0
+    if pose.orientation is not None:
+        qx, qy, qz, qw = pose.orientation
+        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+    dx, dy = -0.4 * geometry.size[0], -0.4 * geometry.size[1]
+    return (
+        x + dx * math.cos(yaw) - dy * math.sin(yaw),
+        y + dx * math.sin(yaw) + dy * math.cos(yaw),
+    )
+
+
 def plot_demonstration(
     demo: Demonstration, ax: Axes | None = None, *, title: str | None = None
 ) -> Axes:
@@ -108,7 +146,10 @@ def plot_demonstration(
     current = demo.initial_poses()
     assign_colours([*(name for name, _ in demo.initial), *(step.object for step in demo.steps)])
     for name, pose in demo.landmarks:
-        ax.add_patch(object_patch(pose, geometry.get(name), "#cccccc", 0.5))
+        patch = object_patch(pose, geometry.get(name), LANDMARK_COLOUR, 0.6)
+        patch.set_hatch("//")
+        patch.set_zorder(0.5)
+        ax.add_patch(patch)
         add_label(ax, name, _xy(pose.position), fontsize=7, color="0.3")
     for name, pose in demo.initial:
         ax.add_patch(object_patch(pose, geometry.get(name), object_colour(name), 0.2))
@@ -301,6 +342,7 @@ def plot_scene_plan(
         source, target = problem.location(grasp.location), problem.location(put.location)
         moves.append((grasp.object, source.position, target.position))
         final[put.object] = pose_of(target)
+    draw_landmarks(ax, scene)
     spots = [spot for spot in problem.locations if spot.kind == "freespace"]
     for spot in spots:
         radius = max(max(s.size[0], s.size[1]) for s in spot.shapes) / 2
@@ -393,6 +435,7 @@ def plot_scene_targets(
         _, ax = plt.subplots(figsize=(6, 5))
     colours = assign_colours(obj.name for obj in scene.objects)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
+    draw_landmarks(ax, scene)
     targets = []
     for spot in problem.locations:
         if spot.kind == "freespace":
@@ -603,6 +646,7 @@ def plot_scene_side(
         final[put.object] = target
     last = {name: k for k, (name, _, _) in enumerate(moves)}
     ax.axhline(0.0, color="0.4", lw=0.8)
+    draw_landmarks(ax, scene, side=True)
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
         ax.add_patch(side_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
     between = False

@@ -15,7 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from demoplan.errors import InputError
-from demoplan.model import Pose
+from demoplan.model import ObjectGeometry, Pose
 from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw
 
 __all__ = [
@@ -25,6 +25,7 @@ __all__ = [
     "MAX_SIZE_M",
     "MIN_SIZE_M",
     "Coordinate",
+    "LandmarkSchema",
     "Number",
     "ObjectSchema",
     "PoseSchema",
@@ -79,6 +80,32 @@ class ObjectSchema(_Schema):
         if any(v <= 0 for v in size):
             raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
         return size
+
+
+class LandmarkSchema(PoseSchema):
+    """A landmark: a pose, and optionally the thing's ``shape`` and ``size``
+    (its extents [x, y, z]; z is its height) — a tray things stand on, drawn
+    in every figure."""
+
+    shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
+    size: list[Number] | None = Field(default=None, min_length=3, max_length=3)
+
+    @field_validator("size")
+    @classmethod
+    def _positive(cls, size: list[float] | None) -> list[float] | None:
+        if size is not None and any(v <= 0 for v in size):
+            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
+        return size
+
+    def pose(self, units: UnitsSchema) -> Pose:
+        return pose_from_dict(PoseSchema(**self.model_dump(exclude={"shape", "size"})), units)
+
+    def geometry(self, units: UnitsSchema) -> ObjectGeometry | None:
+        if self.size is None:
+            return None
+        scale = LENGTH_SCALE[units.length]
+        x, y, z = (v * scale for v in self.size)
+        return ObjectGeometry(self.shape, (x, y, z))
 
 
 MAX_DISTANCE_M = 1000.0

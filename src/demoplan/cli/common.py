@@ -110,9 +110,10 @@ class _HeldWarnings(logging.Handler):
         self.records.append(record)
 
     def print_held(self) -> None:
-        """Print the held warnings on stderr, in the order they came."""
-        for record in self.records:
-            sys.stderr.write(self.format(record) + "\n")
+        """Print the held warnings on stderr, in the order they came, each once
+        (a scene checked for every candidate goal would repeat its warning)."""
+        for line in dict.fromkeys(self.format(record) for record in self.records):
+            sys.stderr.write(line + "\n")
         self.records.clear()
 
     def discard(self) -> None:

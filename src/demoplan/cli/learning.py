@@ -244,8 +244,9 @@ def show_scene(
     plot: Path | None,
 ) -> None:
     from demoplan.learning.modelfile import load_model
+    from demoplan.scenes.landmarks import complete_scene
     from demoplan.scenes.preview import preview_scene
-    from demoplan.scenes.scene import complete_geometry, scene_from_document
+    from demoplan.scenes.scene import scene_from_document
 
     if plot is not None:
         from demoplan.plotting import check_figure_path
@@ -253,7 +254,7 @@ def show_scene(
         check_figure_path(plot, "--plot")
     scene = scene_from_document(document, str(path))
     if model_path is not None:
-        scene = complete_geometry(scene, load_model(model_path))
+        scene = complete_scene(scene, load_model(model_path))
     preview = preview_scene(scene)
     if plot is not None:
         from demoplan.plotting import save_scene_targets

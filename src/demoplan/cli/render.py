@@ -170,12 +170,12 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
 
 def plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
     from demoplan.plotting import save_scene_plan
-    from demoplan.scenes.scene import complete_geometry
+    from demoplan.scenes.landmarks import complete_scene
 
     chosen = result.chosen
     title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
     with plot_errors(path):
-        save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
+        save_scene_plan(complete_scene(scene, model), chosen.problem, chosen.plan, path, title)
 
 
 def plot_no_plan(
@@ -183,14 +183,14 @@ def plot_no_plan(
 ) -> None:
     """The scene, the first candidate goal's targets and why there is no plan."""
     from demoplan.plotting import save_scene_targets
+    from demoplan.scenes.landmarks import complete_scene
     from demoplan.scenes.plan import scene_problems
-    from demoplan.scenes.scene import complete_geometry
 
     first = scene_problems(model, scene, settings, clutter=clutter)[0]
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
     with plot_errors(path):
-        save_scene_targets(complete_geometry(scene, model), first, reason, path, title)
+        save_scene_targets(complete_scene(scene, model), first, reason, path, title)
     stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Any
 
@@ -37,10 +37,11 @@ from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
+from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import CandidatePlan, plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
-from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, scene_to_dict, yaw_of
+from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
 from demoplan.scenes.table import surroundings_of
 from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
@@ -202,15 +203,7 @@ def _scene_of(observation: Observation, template: Scene) -> Scene:
         )
         for name, pose in observation.poses.items()
     )
-    return Scene(
-        objects=objects,
-        landmarks=template.landmarks,
-        freespace=template.freespace,
-        gripper=template.gripper,
-        table=template.table,
-        source=template.source,
-        robot=template.robot,
-    )
+    return replace(template, objects=objects)
 
 
 def _distance(a: Pose, b: Pose) -> float:
@@ -249,7 +242,7 @@ def execute(
     has made it already (it is not made again)."""
     emit = on_event or (lambda event: None)
     started = time.perf_counter()
-    scene = complete_geometry(scene, model)
+    scene = complete_scene(scene, model)
     executed: list[ExecutedAction] = []
     failures: list[Failure] = []
     reached: set[str] = set()
@@ -315,7 +308,7 @@ def execute(
         replans += 1
         plan_index += 1
         observation = world.observe()
-        current = complete_geometry(_scene_of(observation, scene), model)
+        current = complete_scene(_scene_of(observation, scene), model)
         try:
             candidate = next(
                 c for c in candidate_goals(model, current, clutter=True) if goal in c.demonstrations

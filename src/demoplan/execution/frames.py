@@ -15,6 +15,7 @@ from typing import Any
 from demoplan.errors import InputError
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
+from demoplan.scenes.scene import Scene
 
 __all__ = ["FrameWriter"]
 
@@ -25,7 +26,9 @@ FAILED_COLOUR = "#b00020"
 class FrameWriter:
     """Writes ``frame-0000.png``… into ``folder`` and ``storyboard.png`` at the end."""
 
-    def __init__(self, folder: Path, targets: dict[str, Pose] | None = None):
+    def __init__(
+        self, folder: Path, targets: dict[str, Pose] | None = None, scene: Scene | None = None
+    ):
         try:
             import matplotlib
 
@@ -40,6 +43,7 @@ class FrameWriter:
         except OSError as exc:
             raise InputError(f"cannot create the folder ({exc})", source=str(folder)) from None
         self.targets = targets or {}
+        self.scene = scene  # its landmarks are drawn under every frame
         self.frames: list[tuple[Observation, str]] = []
         self.failed: set[int] = set()  # frames after which a failure was seen
         self.images: list[Any] = []
@@ -122,9 +126,11 @@ class FrameWriter:
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
         from demoplan.colours import assign_colours, object_colour
         from demoplan.labels import add_label
-        from demoplan.plotting import object_patch
+        from demoplan.plotting import draw_landmarks, object_patch
 
         assign_colours([*self.targets, *observation.poses])  # as every figure of the task
+        if self.scene is not None:
+            draw_landmarks(ax, self.scene)
         for name, pose in self.targets.items():
             shape = observation.geometry.get(name)
             patch = object_patch(pose, shape, "none", 1.0)
@@ -143,6 +149,12 @@ class FrameWriter:
             points = [p.position for p in observation.poses.values()] + [
                 p.position for p in self.targets.values()
             ]
+            if self.scene is not None:  # a landmark whole: its corners' circle
+                shapes = dict(self.scene.landmark_geometry)
+                for name, pose in self.scene.landmarks:
+                    reach = math.hypot(*shapes[name].size[:2]) / 2 if name in shapes else 0.0
+                    x, y, z = pose.position
+                    points += [(x - reach, y - reach, z), (x + reach, y + reach, z)]
             xs, ys = [p[0] for p in points], [p[1] for p in points]
             margin = 0.08
             self._limits = (min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin)

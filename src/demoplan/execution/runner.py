@@ -23,8 +23,9 @@ from demoplan.fileio import os_reason, output_target
 from demoplan.model import TaskModel
 from demoplan.planning.budget import Budget
 from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.plan import CandidatePlan
-from demoplan.scenes.scene import Scene, complete_geometry
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["make_world", "run_task", "start_world"]
@@ -110,7 +111,7 @@ def run_task(
     objects the model never saw are allowed (as in ``plan``: they get no goal
     and are moved only when in the way), else an input error."""
     check_scene_objects(model, scene, clutter=clutter)
-    scene = complete_geometry(scene, model)
+    scene = complete_scene(scene, model)
     if video is not None and sim not in ("mujoco", "arm"):
         raise UsageError("--video records the physics simulation: it needs --sim mujoco or arm")
     settings = ExecutionSettings(
@@ -139,7 +140,7 @@ def run_task(
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
 
-        writer = FrameWriter(frames)
+        writer = FrameWriter(frames, scene=scene)
 
     def heard(event: RunEvent) -> None:
         show = getattr(getattr(world, "world", world), "show_targets", None)

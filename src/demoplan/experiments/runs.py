@@ -32,8 +32,9 @@ from demoplan.learning import TaskModelLearner
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings
 from demoplan.model import TaskModel
+from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
-from demoplan.scenes.scene import Scene, complete_geometry, load_scene
+from demoplan.scenes.scene import Scene, load_scene
 from demoplan.wording import plural
 
 __all__ = [
@@ -406,7 +407,7 @@ def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> s
         f"{len(chosen.plan) // 2} moves"
     )
     try:
-        save_scene_plan(complete_geometry(scene, model), chosen.problem, chosen.plan, path, title)
+        save_scene_plan(complete_scene(scene, model), chosen.problem, chosen.plan, path, title)
     except ImportError:
         return None
     return path.name

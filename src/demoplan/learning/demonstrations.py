@@ -28,6 +28,7 @@ from demoplan.fileio import check_format, describe_validation_error, read_docume
 from demoplan.model import Demonstration, ObjectGeometry, Step
 from demoplan.poses import (
     LENGTH_SCALE,
+    LandmarkSchema,
     ObjectSchema,
     PoseSchema,
     UnitsSchema,
@@ -71,7 +72,7 @@ class DemonstrationSchema(_Schema):
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
     objects: dict[str, ObjectSchema] = {}
-    landmarks: dict[str, PoseSchema] = {}
+    landmarks: dict[str, LandmarkSchema] = {}
     initial: dict[str, PoseSchema] = {}
     provenance: dict[str, StrictStr | StrictInt | StrictFloat] = {}
     steps: list[StepSchema]
@@ -194,6 +195,18 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         (name, ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale)))
         for name, g in parsed.objects.items()
     )
+    # A landmark's size may stand in its entry (as in a scene) or under objects.
+    for name, entry in parsed.landmarks.items():
+        geometry = entry.geometry(units)
+        if geometry is None:
+            continue
+        if name in parsed.objects:
+            raise InputError(
+                "a landmark's size is given both here and under objects; once expected",
+                source=source,
+                field=f"{where}landmarks.{name}.size",
+            )
+        objects += ((name, geometry),)
     for index, step in enumerate(parsed.steps):
         if parsed.objects and step.object not in parsed.objects:
             raise InputError(
@@ -215,7 +228,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         name=parsed.name or default_name,
         steps=steps,
         objects=objects,
-        landmarks=tuple((n, pose_from_dict(p, units)) for n, p in parsed.landmarks.items()),
+        landmarks=tuple((n, entry.pose(units)) for n, entry in parsed.landmarks.items()),
         initial=tuple((n, pose_from_dict(p, units)) for n, p in parsed.initial.items()),
         source=f"{source}: {prefix}" if prefix else source,
         provenance=tuple(parsed.provenance.items()),

@@ -200,8 +200,12 @@ class _World:
 
     def yaw_period(self, name: str | None) -> float:
         """``name``'s symmetry about its own z axis (deg; 0: any turn); 360° (none)
-        where its geometry is unknown."""
-        return yaw_period(self.geometry.get(name) if name is not None else None)
+        where its geometry is unknown, and for a landmark: its yaw is given, not
+        tracked, so its frame is the one given (a tray has a front, whatever
+        its shape's symmetry)."""
+        if name is None or any(name in landmarks for landmarks in self.landmarks):
+            return 360.0
+        return yaw_period(self.geometry.get(name))
 
     def own_symmetry(self, name: str, quats: np.ndarray) -> np.ndarray:
         """``name``'s orientations (absolute or relative to a reference) compared

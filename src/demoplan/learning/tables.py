@@ -70,9 +70,9 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
     return [
         (
             s.id,
-            s.object.capitalize(),
-            (s.position.reference or "").capitalize(),
-            (s.orientation.reference or "").capitalize(),
+            s.object,  # as the demonstrations name it: --require takes the same
+            s.position.reference or "",
+            s.orientation.reference or "",
             format_position(s, decimals),
             format_orientation(s),
             _spread(s),

@@ -227,9 +227,15 @@ def collision_facts(
 
 
 def supports(
-    locations: Sequence[Location], settings: GeometrySettings = GeometrySettings()
+    locations: Sequence[Location],
+    settings: GeometrySettings = GeometrySettings(),
+    surfaces: Sequence[tuple[BaseGeometry, float]] = (),
 ) -> tuple[list[tuple[str, str]], list[str]]:
-    """``(upper, lower)`` pairs, and the upper locations that nothing holds up."""
+    """``(upper, lower)`` pairs, and the upper locations that nothing holds up.
+
+    ``surfaces`` are fixed tops (a landmark's footprint and the height of its
+    top: a tray): a location at that height over at least
+    ``support_fraction`` of its footprint stands on it, as on the table."""
     prints = [location_footprint(loc) for loc in locations]
     pairs: list[tuple[str, str]] = []
     floating: list[str] = []
@@ -237,6 +243,12 @@ def supports(
         if upper.bottom <= settings.level_tolerance:
             continue
         area = prints[i].area
+        if any(
+            abs(top - upper.bottom) <= settings.level_tolerance
+            and prints[i].intersection(surface).area >= settings.support_fraction * area
+            for surface, top in surfaces
+        ):
+            continue
         candidates = [
             (j, prints[i].intersection(prints[j]).area)
             for j, lower in enumerate(locations)

@@ -22,8 +22,9 @@ from demoplan.planning.budget import Clock
 from demoplan.planning.problem import Plan
 from demoplan.planning.search import Budget, solve
 from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.problems import SceneProblem, build_problem
-from demoplan.scenes.scene import Scene, complete_geometry
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import surroundings_of
 from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
@@ -141,7 +142,7 @@ def scene_problems(
     clutter: bool = False,
 ) -> list[SceneProblem]:
     """The planning problem of every candidate goal (deduplicated) in ``scene``."""
-    scene = complete_geometry(scene, model)
+    scene = complete_scene(scene, model)
     around = surroundings_of(model, scene)
     return [
         build_problem(scene, c, settings, surroundings=around)

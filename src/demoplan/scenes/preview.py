@@ -18,7 +18,7 @@ from demoplan.model import ObjectGeometry, Vector3
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, yaw_of
-from demoplan.scenes.table import Surroundings
+from demoplan.scenes.table import Surroundings, landmarks_of
 from demoplan.scenes.targets import Candidate
 
 __all__ = ["GraspPreview", "ObjectPreview", "ScenePreview", "preview_scene"]
@@ -100,7 +100,7 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
     """Look at ``scene`` as the planner will (every object's size known: see
     :func:`~demoplan.scenes.scene.complete_geometry`)."""
     nothing = Candidate(goal=0, demonstrations=(), subtasks=(), precedences=())
-    around = Surroundings(landmarks=tuple((name, pose, None) for name, pose in scene.landmarks))
+    around = Surroundings(landmarks=landmarks_of(scene))
     built = build_problem(scene, nothing, settings, surroundings=around)
     problem = built.problem
     at = dict(problem.initial)

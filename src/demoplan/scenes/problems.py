@@ -48,7 +48,7 @@ from demoplan.scenes.simulated_collisions import (
 from demoplan.scenes.table import Surroundings, Table, infer_table
 from demoplan.scenes.targets import Candidate, Subtask
 
-__all__ = ["FreeSpaceRoom", "Grasp", "SceneProblem", "build_problem"]
+__all__ = ["FreeSpaceRoom", "Grasp", "SceneProblem", "build_problem", "landmark_tops"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -250,7 +250,7 @@ def build_problem(
         if not any(name in accepted_objects(loc, {name: shape}, settings) for loc in parked)
     )
     room = FreeSpaceRoom(table, scene.table is None and not given, given, no_room)
-    support_pairs, floating = supports(locations, settings)
+    support_pairs, floating = supports(locations, settings, landmark_tops(scene))
     obstacles = []
     for name in floating:
         loc = next(loc for loc in locations if loc.name == name)
@@ -348,6 +348,20 @@ def _turned_to_fit(
                     break
         turned.append(subtask)
     return turned
+
+
+def landmark_tops(scene: Scene) -> list[tuple[BaseGeometry, float]]:
+    """The footprint and top height of every landmark with a known size: what
+    objects may stand on besides the table and each other."""
+    shapes = dict(scene.landmark_geometry)
+    return [
+        (
+            footprint(shapes[name], pose.position, yaw_of(pose)),
+            pose.position[2] + shapes[name].size[2],
+        )
+        for name, pose in scene.landmarks
+        if name in shapes
+    ]
 
 
 def _vector(point: tuple[float, ...]) -> Vector3:

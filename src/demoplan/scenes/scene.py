@@ -32,6 +32,7 @@ from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrate
 from demoplan.poses import (
     LENGTH_SCALE,
     Coordinate,
+    LandmarkSchema,
     Number,
     PoseSchema,
     UnitsSchema,
@@ -92,6 +93,9 @@ class Scene:
     source: str = "scene"
     robot: tuple[float, float, float] | None = None
     """Where the arm of ``--sim arm`` stands: (x, y, yaw°); None: placed to reach the task."""
+    landmark_geometry: tuple[tuple[str, ObjectGeometry], ...] = ()
+    """The shape and size of landmarks that have one (a tray): things stand on
+    their top, and figures draw them."""
 
     def object(self, name: str) -> SceneObject:
         for obj in self.objects:
@@ -102,6 +106,10 @@ class Scene:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(obj.name for obj in self.objects)
+
+    @property
+    def landmark_names(self) -> tuple[str, ...]:
+        return tuple(name for name, _ in self.landmarks)
 
 
 def yaw_of(pose: Pose) -> float:
@@ -153,7 +161,7 @@ class _SceneSchema(_Schema):
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
     objects: dict[str, _ObjectSchema]
-    landmarks: dict[str, PoseSchema] = {}
+    landmarks: dict[str, LandmarkSchema] = {}
     freespace: list[list[Coordinate]] | None = None
     gripper: _GripperSchema = _GripperSchema()
     table: _TableSchema | None = None
@@ -260,7 +268,12 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         robot = (parsed.robot.base[0] * scale, parsed.robot.base[1] * scale, parsed.robot.yaw)
     return Scene(
         objects=tuple(objects),
-        landmarks=tuple((n, pose_from_dict(p, parsed.units)) for n, p in parsed.landmarks.items()),
+        landmarks=tuple((n, entry.pose(parsed.units)) for n, entry in parsed.landmarks.items()),
+        landmark_geometry=tuple(
+            (n, geometry)
+            for n, entry in parsed.landmarks.items()
+            if (geometry := entry.geometry(parsed.units)) is not None
+        ),
         freespace=freespace,
         gripper=gripper,
         table=table,
@@ -306,7 +319,14 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         objects[obj.name] = entry
     out: dict[str, Any] = {"format": "demoplan/scene-1", "objects": objects}
     if scene.landmarks:
-        out["landmarks"] = {n: pose_to_dict(p) for n, p in scene.landmarks}
+        shapes = dict(scene.landmark_geometry)
+        out["landmarks"] = {}
+        for name, pose in scene.landmarks:
+            entry = pose_to_dict(pose)
+            if name in shapes:
+                entry["shape"] = shapes[name].shape
+                entry["size"] = list(shapes[name].size)
+            out["landmarks"][name] = entry
     if scene.freespace is not None:
         out["freespace"] = [list(s) for s in scene.freespace]
     out["gripper"] = {

@@ -32,9 +32,15 @@ from demoplan.scenes.geometry import (
     spot_reach,
 )
 from demoplan.scenes.scene import Gripper, Scene, yaw_of
-from demoplan.scenes.targets import landmark_poses
 
-__all__ = ["Surroundings", "Table", "infer_table", "surroundings_of"]
+__all__ = [
+    "Surroundings",
+    "Table",
+    "demonstrated_workspace",
+    "infer_table",
+    "landmarks_of",
+    "surroundings_of",
+]
 
 Table = tuple[tuple[float, float], tuple[float, float]]
 """``((x_min, y_min), (x_max, y_max))`` in metres."""
@@ -58,18 +64,27 @@ class Surroundings:
 
 
 def surroundings_of(model: TaskModel, scene: Scene) -> Surroundings:
-    """The landmarks (the scene's, else the demonstrations') and the
-    demonstrations' workspace of ``model`` for ``scene``."""
+    """The landmarks of ``scene`` (completed: :func:`~demoplan.scenes.landmarks.complete_scene`)
+    with their shapes, and the demonstrations' workspace of ``model``."""
+    return Surroundings(landmarks_of(scene), demonstrated_workspace(model))
+
+
+def landmarks_of(scene: Scene) -> tuple[tuple[str, Pose, ObjectGeometry | None], ...]:
+    """Each landmark of ``scene`` with its shape where the scene knows it."""
+    shapes = dict(scene.landmark_geometry)
+    return tuple((name, pose, shapes.get(name)) for name, pose in scene.landmarks)
+
+
+def demonstrated_workspace(model: TaskModel) -> tuple[tuple[Pose, ObjectGeometry | None], ...]:
+    """Every initial pose, release pose and landmark the demonstrations recorded,
+    with the object's (or landmark's) shape where known."""
     shapes = demonstrated_shapes(model.demonstrations)
-    landmarks = tuple(
-        (name, pose, shapes.get(name)) for name, pose in landmark_poses(model, scene).items()
-    )
     workspace: list[tuple[Pose, ObjectGeometry | None]] = []
     for demo in model.demonstrations:
         workspace += [(pose, shapes.get(name)) for name, pose in demo.initial]
         workspace += [(step.pose, shapes.get(step.object)) for step in demo.steps]
         workspace += [(pose, shapes.get(name)) for name, pose in demo.landmarks]
-    return Surroundings(landmarks, tuple(workspace))
+    return tuple(workspace)
 
 
 def infer_table(

@@ -9,8 +9,9 @@ references:
 - position: absolute → the state's value; relative to object j → j's target
   at that point of this demonstration (its latest subtask before this one),
   else j's final target in this goal, else j's current pose in the scene
-  (j does not move); relative to a landmark → the landmark's pose (from the
-  scene, else from the demonstrations). Offsets are in world axes (eq. 1).
+  (j does not move); relative to a landmark → the landmark's pose from the
+  scene (from the demonstrations only where it stood still in all of them:
+  :func:`landmark_poses`). Offsets are in world axes (eq. 1).
 - orientation: the same chain through its own reference,
   ``R_target = R_reference · value``; a state without a learned orientation
   keeps the object's current orientation.
@@ -42,9 +43,16 @@ from demoplan.rotations import (
     reduce_yaw,
     rotate_vectors,
 )
+from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.scene import Scene
+from demoplan.wording import did_you_mean
 
-__all__ = ["Candidate", "Subtask", "candidate_goals", "check_scene_objects", "landmark_poses"]
+__all__ = [
+    "Candidate",
+    "Subtask",
+    "candidate_goals",
+    "check_scene_objects",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,22 +83,13 @@ class Candidate:
         return {subtask.object: subtask.pose for subtask in self.subtasks}
 
 
-def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
-    """Landmarks: the scene's, else as the (first) demonstration recorded them."""
-    poses: dict[str, Pose] = {}
-    for demo in model.demonstrations:
-        for name, pose in demo.landmarks:
-            poses.setdefault(name, pose)
-    poses.update(scene.landmarks)
-    return poses
-
-
 def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False) -> None:
     """Exit-1 errors for objects the model needs but the scene lacks, and (unless
     ``clutter`` allows them, as objects with no goal) for objects the scene has
-    but the model never saw."""
+    but the model never saw; each names a near name ("did you mean") where there
+    is one."""
     landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
-    landmarks |= {name for name, _ in scene.landmarks}
+    landmarks |= set(scene.landmark_names)
     needed = {state.object for state in model.states}
     for state in model.states:
         for reference in (state.position.reference, state.orientation.reference):
@@ -98,18 +97,20 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
                 needed.add(reference)
     seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
     missing = sorted(needed - set(scene.names))
+    unknown = sorted(set(scene.names) - seen)
     if missing:
+        hint = did_you_mean(missing[0], [*unknown, *scene.landmark_names])
         raise InputError(
             f"the task model needs {', '.join(missing)}, which the scene lacks; "
-            f"expected objects {sorted(needed)}",
+            f"expected objects {sorted(needed)}{hint}",
             source=scene.source,
             field="objects",
         )
-    unknown = sorted(set(scene.names) - seen)
     if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
-            f"the demonstrations {sorted(seen)} (--clutter plans around them)",
+            f"the demonstrations {sorted(seen)} (--clutter plans around them)"
+            + did_you_mean(unknown[0], seen | landmarks),
             source=scene.source,
             field="objects",
         )
@@ -219,7 +220,12 @@ def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) ->
     states = {state.id: state for state in model.states}
     current = {obj.name: obj.pose for obj in scene.objects}
     landmarks = landmark_poses(model, scene)
-    geometry = demonstrated_shapes(model.demonstrations)  # as learning took symmetries
+    # Symmetries as learning took them: an object's shape's; a landmark's frame as given.
+    geometry = {
+        name: shape
+        for name, shape in demonstrated_shapes(model.demonstrations).items()
+        if name not in landmarks
+    }
     constraints = set(model.constraints)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
