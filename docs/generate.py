@@ -328,8 +328,8 @@ SCENE = FieldTable(
         "freespace": "spots `[x, y]` or `[x, y, z]` (z = 0) where objects may be parked; "
         "default: generated on the table",
         "gripper": "the parallel-jaw gripper",
-        "table": "where free space may be generated (default: the poses' bounding box "
-        "grown by 0.15 m)",
+        "table": "where free space may be generated (default: inferred around the objects, "
+        "targets, landmarks and the demonstrations' workspace; docs/scenes.md)",
         "robot": "where the arm of `run --sim arm` stands (default: placed where it "
         "reaches every object and target)",
     },

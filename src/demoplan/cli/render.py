@@ -158,6 +158,15 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
     )
     spots = ", ".join(xyz_text(spot, decimals) for spot in preview.freespace) or "none"
     say(f"Free space, {where}: {plural(len(preview.freespace), 'spot')}: {spots}")
+    if preview.freespace_generated and preview.table is not None:
+        (x0, y0), (x1, y1) = preview.table
+        kind = (
+            "inferred around the objects and landmarks" if preview.table_inferred else "the scene's"
+        )
+        corners = xyz_text((x0, y0), decimals) + "–" + xyz_text((x1, y1), decimals)
+        say(f"Table, {kind}: {corners}")
+    if preview.shortage:
+        say(preview.shortage[0].upper() + preview.shortage[1:])
     stuck = [o.name for o in preview.objects if not o.graspable]
     if stuck:
         say(f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)")

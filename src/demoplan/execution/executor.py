@@ -42,6 +42,7 @@ from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import CandidatePlan, plan_in_scene, solve_candidate
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
+from demoplan.scenes.table import surroundings_of
 from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
 
@@ -312,7 +313,14 @@ def execute(
             candidate = next(
                 c for c in candidate_goals(model, current, clutter=True) if goal in c.demonstrations
             )
-            built = build_problem(current, candidate, settings.geometry, frozenset(reached), names)
+            built = build_problem(
+                current,
+                candidate,
+                settings.geometry,
+                frozenset(reached),
+                names,
+                surroundings_of(model, current),
+            )
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
         outcome = solve_candidate(built, settings.budget)

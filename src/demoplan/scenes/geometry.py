@@ -25,13 +25,16 @@ heights ``bottom..top``.
 - **What a location takes.** The objects it was made for, and any other object
   as tall as one of them whose outline there lies within the location's
   footprint (grown by ``touch_tolerance``): a smaller object on a bigger
-  object's spot, never the food on a fork's spot. Free space takes anything
-  (it is sized for the largest object).
+  object's spot, never the food on a fork's spot. A free-space spot is a disc
+  (:func:`spot_shape`) and takes every object whose outline fits in it turned
+  any way (the scene's own spots are sized for the largest object).
 - **Free space** (when the scene gives none): ``n_freespace`` spots on a grid
-  over the table (the scene's ``table``, else the box around every current and
-  target pose grown by ``table_margin``), each far enough from every location
-  and from each other that no grasp there or next to it collides, nearest to
-  the centre of the targets first.
+  over the table (the scene's ``table``, else the one
+  :mod:`demoplan.scenes.table` infers), each sized for an object (the k-th
+  spot for the k-th largest, a smaller one where that has no room) and far
+  enough from every location, landmark outline and other spot that no grasp
+  there or next to it collides, nearest to the centre of the targets first;
+  then a spot for any object none takes yet (:func:`free_space`).
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ from demoplan.scenes.scene import Gripper
 
 __all__ = [
     "MAX_GRID",
+    "FreeSpot",
     "GeometrySettings",
     "Location",
     "accepted_objects",
@@ -59,6 +63,8 @@ __all__ = [
     "footprint",
     "free_space",
     "is_block",
+    "spot_reach",
+    "spot_shape",
     "supports",
     "symmetry",
     "yaw_difference",
@@ -309,61 +315,149 @@ def _above(upper: Location, lower: Location, tolerance: float) -> bool:
     return upper.bottom >= lower.top - tolerance and upper.bottom > lower.bottom + tolerance
 
 
+@dataclass(frozen=True, slots=True)
+class FreeSpot:
+    """A generated parking spot: its centre on the table and the radius of the
+    disc an object must fit in (any turn) to be parked there."""
+
+    position: Vector3
+    radius: float
+
+
+def spot_shape(radius: float, height: float) -> ObjectGeometry:
+    """The outline a free-space location stands for: a disc of ``radius`` (any
+    object that fits in it, turned any way), as tall as the tallest such object."""
+    return ObjectGeometry("cylinder", (2 * radius, 2 * radius, height))
+
+
+def _distance_to_outline(
+    grid: np.ndarray, shape: ObjectGeometry, position: Sequence[float], yaw: float
+) -> np.ndarray:
+    """From each point of ``grid`` (n×2) to :func:`footprint` (0 inside), in NumPy:
+    a box in its own frame, a disc by its radius."""
+    offset = grid - np.asarray(position[:2], dtype=float)
+    if shape.shape != "box":
+        radius = max(shape.size[0], shape.size[1]) / 2
+        return np.asarray(np.maximum(np.linalg.norm(offset, axis=1) - radius, 0.0))
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    local = np.abs(offset @ np.array([[c, -s], [s, c]]))
+    outside = np.maximum(local - np.array([shape.size[0] / 2, shape.size[1] / 2]), 0.0)
+    return np.asarray(np.linalg.norm(outside, axis=1))
+
+
+def _distances(
+    grid: np.ndarray,
+    location: Location,
+    grasp_axes: Sequence[tuple[str, float]],
+    gripper: Gripper,
+) -> tuple[np.ndarray, np.ndarray]:
+    """From each point of ``grid`` to what stands at ``location`` (its footprint),
+    and to its grasp zone: the footprint and the finger discs of every grasp of
+    the objects it was made for."""
+    to_print = np.min(
+        [_distance_to_outline(grid, s, location.position, location.yaw) for s in location.shapes],
+        axis=0,
+    )
+    to_zone = to_print
+    for shape, obj in zip(location.shapes, location.objects, strict=False):
+        for owner, axis in grasp_axes:
+            if owner == obj:
+                for tip in fingers(location, shape, axis, gripper):
+                    disc = np.linalg.norm(grid - tip[:2], axis=1) - gripper.finger_radius
+                    to_zone = np.minimum(to_zone, np.maximum(disc, 0.0))
+    return to_print, to_zone
+
+
+def spot_reach(radius: float, gripper: Gripper) -> float:
+    """How far from a spot's centre grasping anything that fits in its disc may
+    reach: the far edge of a finger beside the widest such object."""
+    return radius + 2 * gripper.finger_radius + gripper.clearance
+
+
 def free_space(
     locations: Sequence[Location],
     shapes: Sequence[ObjectGeometry],
-    grasp_axes: Sequence[tuple[ObjectGeometry, float]],
+    grasp_axes: Sequence[tuple[str, float]],
     gripper: Gripper,
-    table: tuple[tuple[float, float], tuple[float, float]] | None,
+    table: tuple[tuple[float, float], tuple[float, float]],
     focus: Sequence[float],
     settings: GeometrySettings = GeometrySettings(),
-) -> list[Vector3]:
-    """Up to ``settings.n_freespace`` spots on the table where any of ``shapes`` can
-    stand and be grasped without touching anything at ``locations`` or another spot.
+    keep_out: Sequence[BaseGeometry] = (),
+) -> list[FreeSpot]:
+    """Up to ``settings.n_freespace`` parking spots on ``table``, each sized for
+    one of ``shapes`` (the disc around it, :func:`bounding_radius`), nearest to
+    ``focus`` first; ``grasp_axes``: (object, axis) of every grasp.
 
-    A spot keeps clear of a location by the spot's reach (the largest object's
-    bounding radius, or a finger's far edge, whichever is further) plus the
-    location's bounding radius, and the other way round.
+    Spot k is sized for the k-th largest object (cycling), or, where the table
+    has no room for that, for the next smaller object that fits: a tray gets a
+    spot of its own where the table has room for one, two plates get two, and
+    a small object still gets one where no tray fits. Then any object that no
+    spot takes yet gets a spot of its size where one fits (none: no room).
+
+    A spot keeps clear of everything: whatever fits in its disc, and the
+    fingers grasping it (:func:`spot_reach`), touch no location's footprint
+    nor ``keep_out`` (landmarks' outlines); no location's object or fingers
+    (:func:`_distances`) reach into its disc; two spots keep clear of each
+    other the same way.
     """
-    spot_radius = max(bounding_radius(s) for s in shapes)
-    spot_reach = max(
-        [spot_radius]
-        + [finger_offset(s, axis, gripper) + gripper.finger_radius for s, axis in grasp_axes]
-    )
-    if table is None:
-        xs = [loc.position[0] for loc in locations]
-        ys = [loc.position[1] for loc in locations]
-        m = settings.table_margin
-        table = ((min(xs) - m, min(ys) - m), (max(xs) + m, max(ys) + m))
     (x0, y0), (x1, y1) = table
+    radii = sorted({bounding_radius(s) for s in shapes}, reverse=True)
     # at most MAX_GRID candidate spots: a wide table gets a coarser grid
     area = max(x1 - x0, 0.0) * max(y1 - y0, 0.0)
     step = max(settings.grid_step, math.sqrt(area / MAX_GRID))
-    gx = np.arange(x0 + spot_radius, x1 - spot_radius + 1e-12, step)
-    gy = np.arange(y0 + spot_radius, y1 - spot_radius + 1e-12, step)
-    if len(gx) == 0 or len(gy) == 0:
+    gx = np.arange(x0, x1 + 1e-12, step)
+    gy = np.arange(y0, y1 + 1e-12, step)
+    if len(gx) == 0 or len(gy) == 0 or not radii:
         return []
     grid = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
-    ok = np.ones(len(grid), dtype=bool)
-    for loc in locations:
-        loc_radius = max(bounding_radius(s) for s in loc.shapes)
-        loc_reach = max(
-            [loc_radius]
-            + [finger_offset(s, axis, gripper) + gripper.finger_radius for s, axis in grasp_axes]
-        )
-        clearance = max(spot_reach + loc_radius, loc_reach + spot_radius)
-        ok &= np.linalg.norm(grid - np.asarray(loc.position[:2]), axis=1) >= clearance
+    # the room each candidate has: to the nearest footprint (what a spot's own
+    # fingers must miss) and to the nearest grasp zone (what its object must miss)
+    to_print = np.full(len(grid), np.inf)
+    to_zone = np.full(len(grid), np.inf)
+    for location in locations:
+        print_distance, zone_distance = _distances(grid, location, grasp_axes, gripper)
+        to_print = np.minimum(to_print, print_distance)
+        to_zone = np.minimum(to_zone, zone_distance)
+    points = shapely.points(grid) if keep_out else None
+    for outline in keep_out:
+        apart = shapely.distance(points, outline)
+        to_print, to_zone = np.minimum(to_print, apart), np.minimum(to_zone, apart)
+    to_edge = np.minimum.reduce(
+        [grid[:, 0] - x0, x1 - grid[:, 0], grid[:, 1] - y0, y1 - grid[:, 1]]
+    )
     order = np.argsort(np.linalg.norm(grid - np.asarray(focus[:2]), axis=1), kind="stable")
-    chosen: list[np.ndarray] = []
-    for index in order:
-        if len(chosen) == settings.n_freespace:
+    margin = settings.touch_tolerance
+    chosen: list[FreeSpot] = []
+
+    def place(radius: float) -> bool:
+        ok = (
+            (to_edge >= radius)
+            & (to_print >= spot_reach(radius, gripper) + margin)
+            & (to_zone >= radius + margin)
+        )
+        for spot in chosen:
+            apart = max(
+                spot_reach(radius, gripper) + spot.radius, spot_reach(spot.radius, gripper) + radius
+            )
+            ok &= np.linalg.norm(grid - np.asarray(spot.position[:2]), axis=1) >= apart + margin
+        free = order[ok[order]]
+        if len(free) == 0:
+            return False
+        x, y = grid[int(free[0])]
+        chosen.append(FreeSpot((round(float(x), 6), round(float(y), 6), 0.0), radius))
+        return True
+
+    # spot k is sized for the k-th largest object (a second plate gets a second
+    # plate-sized spot), or where it has no room for the next smaller that fits
+    wanted = sorted((bounding_radius(s) for s in shapes), reverse=True)
+    for k in range(settings.n_freespace):
+        size = wanted[k % len(wanted)]
+        if not any(place(radius) for radius in radii if radius <= size):
             break
-        if not ok[index]:
-            continue
-        point = grid[index]
-        if all(np.linalg.norm(point - c) >= 2 * spot_reach for c in chosen):
-            chosen.append(point)
-    return [(round(float(p[0]), 6), round(float(p[1]), 6), 0.0) for p in chosen]
+    for radius in radii:
+        if not any(spot.radius >= radius for spot in chosen):
+            place(radius)
+    return chosen
 
 
 def accepted_objects(
@@ -373,7 +467,8 @@ def accepted_objects(
 ) -> list[str]:
     """The objects that may be put down at ``location`` (see the module docstring)."""
     if location.kind == "freespace":
-        return list(shapes)
+        room = max(bounding_radius(s) for s in location.shapes) + settings.touch_tolerance
+        return [name for name, shape in shapes.items() if bounding_radius(shape) <= room]
     area = location_footprint(location).buffer(settings.touch_tolerance)
     heights = [s.size[2] for s in location.shapes]
     taken = []

@@ -25,6 +25,7 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene
+from demoplan.scenes.table import surroundings_of
 from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
 
@@ -142,8 +143,10 @@ def scene_problems(
 ) -> list[SceneProblem]:
     """The planning problem of every candidate goal (deduplicated) in ``scene``."""
     scene = complete_scene(scene, model)
+    around = surroundings_of(model, scene)
     return [
-        build_problem(scene, c, settings) for c in candidate_goals(model, scene, clutter=clutter)
+        build_problem(scene, c, settings, surroundings=around)
+        for c in candidate_goals(model, scene, clutter=clutter)
     ]
 
 
@@ -171,12 +174,15 @@ def solve_candidate(
     """Plan one candidate; its failure (no plan, budget reached) becomes the reason."""
     if problem.obstacles:
         return CandidatePlan(problem, None, "; ".join(problem.obstacles))
+    shortage = None if problem.room is None else problem.room.shortage()
     try:
         return CandidatePlan(problem, solve(problem.problem, search, budget))
     except NoPlanError as exc:
-        return CandidatePlan(problem, None, str(exc))
+        reason = str(exc) if shortage is None else f"{shortage} ({exc})"
+        return CandidatePlan(problem, None, reason)
     except LimitReachedError as exc:
-        return CandidatePlan(problem, None, str(exc), limit_reached=True)
+        reason = str(exc) if shortage is None else f"{shortage} ({exc})"
+        return CandidatePlan(problem, None, reason, limit_reached=True)
 
 
 def plan_in_scene(

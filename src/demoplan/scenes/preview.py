@@ -2,7 +2,9 @@
 object stands, which of its grasps the neighbours block (the collision rule
 of paper §IV.C / §V.B that planning uses), the landmarks, and free space:
 the scene's spots, or where it lists none, spots generated near the objects
-(planning generates its own near the targets of the goal it plans).
+(planning generates its own near the targets of the goal it plans), on the
+scene's table or, where it gives none, the one inferred around the objects and
+landmarks (:mod:`demoplan.scenes.table`); objects with no room to park are named.
 
 It builds the same planning problem as :func:`~demoplan.scenes.problems.build_problem`
 with no goal, so what it shows is what the planner will see at the start.
@@ -16,6 +18,7 @@ from demoplan.model import ObjectGeometry, Vector3
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.table import Surroundings, landmarks_of
 from demoplan.scenes.targets import Candidate
 
 __all__ = ["GraspPreview", "ObjectPreview", "ScenePreview", "preview_scene"]
@@ -58,7 +61,13 @@ class ScenePreview:
     freespace: tuple[Vector3, ...]
     freespace_generated: bool
     table: tuple[tuple[float, float], tuple[float, float]] | None
+    """The table free space was generated on (the scene's, else inferred)."""
     problem: SceneProblem
+    table_inferred: bool = False
+    no_room: tuple[str, ...] = ()
+    """Objects no free-space spot takes: nowhere to park them."""
+    shortage: str | None = None
+    """Why, and what to add to the scene (None: every object has a spot)."""
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -82,6 +91,8 @@ class ScenePreview:
             "freespace": [list(spot) for spot in self.freespace],
             "freespace_generated": self.freespace_generated,
             "table": None if self.table is None else [list(corner) for corner in self.table],
+            "table_inferred": self.table_inferred,
+            "no_room": list(self.no_room),
         }
 
 
@@ -89,7 +100,8 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
     """Look at ``scene`` as the planner will (every object's size known: see
     :func:`~demoplan.scenes.scene.complete_geometry`)."""
     nothing = Candidate(goal=0, demonstrations=(), subtasks=(), precedences=())
-    built = build_problem(scene, nothing, settings)
+    around = Surroundings(landmarks=landmarks_of(scene))
+    built = build_problem(scene, nothing, settings, surroundings=around)
     problem = built.problem
     at = dict(problem.initial)
     standing = {location: obj for obj, location in problem.initial}
@@ -127,12 +139,16 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
             )
         )
     spots = tuple(loc.position for loc in built.locations if loc.kind == "freespace")
+    room = built.room
     return ScenePreview(
         scene.source,
         tuple(objects),
         tuple((name, pose.position) for name, pose in scene.landmarks),
         spots,
         scene.freespace is None,
-        scene.table,
+        scene.table if room is None else room.table,
         built,
+        room is not None and room.inferred,
+        () if room is None else tuple(name for name, _ in room.no_room),
+        None if room is None else room.shortage(),
     )

@@ -24,14 +24,17 @@ from demoplan.model import ObjectGeometry, Pose, Vector3
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import (
+    FreeSpot,
     GeometrySettings,
     Location,
     accepted_objects,
+    bounding_radius,
     collision_facts,
     exclusions,
     footprint,
     free_space,
     location_footprint,
+    spot_shape,
     supports,
     yaw_difference,
 )
@@ -42,9 +45,10 @@ from demoplan.scenes.simulated_collisions import (
     checked_pairs,
     simulated_collision_facts,
 )
+from demoplan.scenes.table import Surroundings, Table, infer_table
 from demoplan.scenes.targets import Candidate, Subtask
 
-__all__ = ["Grasp", "SceneProblem", "build_problem", "landmark_tops"]
+__all__ = ["FreeSpaceRoom", "Grasp", "SceneProblem", "build_problem", "landmark_tops"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,6 +75,8 @@ class SceneProblem:
     obstacles: tuple[str, ...] = field(default=())
     collision_check: CollisionComparison | None = None
     """With ``--collisions simulation``: the arm's facts beside the rule's."""
+    room: FreeSpaceRoom | None = None
+    """Where free space was sought and which objects it has no room for."""
 
     def location(self, name: str) -> Location:
         for location in self.locations:
@@ -91,18 +97,59 @@ class SceneProblem:
         }
 
 
+@dataclass(frozen=True, slots=True)
+class FreeSpaceRoom:
+    """Where a problem's free space came from: the table it was generated on
+    (None: the scene lists its spots), whether that table was inferred, and the
+    objects no free-space spot takes (nowhere to park them)."""
+
+    table: Table | None
+    inferred: bool
+    given: bool
+    no_room: tuple[tuple[str, ObjectGeometry], ...]
+
+    def shortage(self) -> str | None:
+        """Why an object cannot be parked and what to add to the scene; None
+        when every object has a spot."""
+        if not self.no_room:
+            return None
+        named = ", ".join(f"{name} ({_size(shape)})" for name, shape in self.no_room)
+        if self.given:
+            return (
+                f'no free space for {named}: the scene\'s "freespace" lists no spot; '
+                "add spots there, or leave the field out to have them generated on the table"
+            )
+        assert self.table is not None
+        (x0, y0), (x1, y1) = self.table
+        extent = f"({x0:.3f}, {y0:.3f})–({x1:.3f}, {y1:.3f})"
+        which = "the inferred table" if self.inferred else "the scene's table"
+        return (
+            f"no free space for {named}: {which} {extent} has no room to park it clear "
+            'of the other objects and their grasps; add a larger "table" extent or '
+            '"freespace" spots to the scene'
+        )
+
+
+def _size(shape: ObjectGeometry) -> str:
+    return " × ".join(f"{v:g}" for v in shape.size[:2]) + " m"
+
+
 def build_problem(
     scene: Scene,
     candidate: Candidate,
     settings: GeometrySettings = GeometrySettings(),
     reached: frozenset[str] = frozenset(),
     names: StableNames | None = None,
+    surroundings: Surroundings = Surroundings(),
 ) -> SceneProblem:
     """The planning problem of ``candidate`` in ``scene`` (geometry completed);
     ``reached``: subgoal labels reached before (replanning keeps them);
     ``names``: the location and grasp names of earlier problems of the same
     run, kept for the same places (a new set numbers them from 1 in order:
-    current places, then targets, then free space)."""
+    current places, then targets, then free space); ``surroundings``: the
+    landmarks and the demonstrations' workspace, which the table free space is
+    generated on is inferred from where the scene gives none
+    (:mod:`demoplan.scenes.table`)."""
     if names is None:
         names = StableNames(settings.merge_distance)
     shapes: dict[str, ObjectGeometry] = {}
@@ -164,8 +211,12 @@ def build_problem(
         target_of[subtask.label] = name
     axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
     grasps = [Grasp(names.grasp(obj, axis), obj, axis) for obj, axis in axes]
-    spots = scene.freespace
-    if spots is None:
+    given = scene.freespace is not None
+    table = scene.table
+    if scene.freespace is not None:
+        widest = max(bounding_radius(s) for s in shapes.values())
+        spots = [FreeSpot(_vector(spot), widest) for spot in scene.freespace]
+    else:
         targets = [s.pose.position for s in candidate.subtasks] or [
             o.pose.position for o in scene.objects
         ]
@@ -173,21 +224,32 @@ def build_problem(
             sum(p[0] for p in targets) / len(targets),
             sum(p[1] for p in targets) / len(targets),
         ]
-        spots = tuple(
-            free_space(
-                locations,
-                list(shapes.values()),
-                [(shapes[g.object], g.axis) for g in grasps],
-                scene.gripper,
-                scene.table,
-                focus,
-                settings,
+        if table is None:
+            table = infer_table(
+                locations, list(shapes.values()), scene.gripper, surroundings, settings
             )
+        spots = free_space(
+            locations,
+            list(shapes.values()),
+            [(g.object, g.axis) for g in grasps],
+            scene.gripper,
+            table,
+            focus,
+            settings,
+            surroundings.landmark_outlines(),
         )
-    widest = max(shapes.values(), key=lambda s: s.size[0] * s.size[1])
     for spot in spots:
-        name = names.place("freespace", _vector(spot), {loc.name for loc in locations})
-        locations.append(Location(name, _vector(spot), 0.0, "freespace", (), (widest,)))
+        fits = [s.size[2] for s in shapes.values() if bounding_radius(s) <= spot.radius + 1e-6]
+        name = names.place("freespace", spot.position, {loc.name for loc in locations})
+        shape = spot_shape(spot.radius, max(fits, default=0.0) or 0.001)
+        locations.append(Location(name, spot.position, 0.0, "freespace", (), (shape,)))
+    parked = [loc for loc in locations if loc.kind == "freespace"]
+    no_room = tuple(
+        (name, shape)
+        for name, shape in shapes.items()
+        if not any(name in accepted_objects(loc, {name: shape}, settings) for loc in parked)
+    )
+    room = FreeSpaceRoom(table, scene.table is None and not given, given, no_room)
     support_pairs, floating = supports(locations, settings, landmark_tops(scene))
     obstacles = []
     for name in floating:
@@ -242,7 +304,7 @@ def build_problem(
         source=scene.source,
     )
     return SceneProblem(
-        candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles), comparison
+        candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles), comparison, room
     )
 
 
