@@ -44,8 +44,10 @@ from demoplan.wording import plural
 
 @contextmanager
 def live_progress(show: bool) -> Iterator[Callable[[Any], None] | None]:
-    """A live line on stderr for a run's events (a terminal only): the action,
-    the replans and the actions to go; failures and replans stay on screen."""
+    """Live progress on stderr for a run's events (a terminal only): a line per
+    action done, failure and replan, which stays on screen, and under them a
+    status line — the step, the replans, the actions to go — that goes when
+    the run ends (an arm's action takes seconds: the line shows it is alive)."""
     if not show:
         yield None
         return
@@ -60,7 +62,7 @@ def live_progress(show: bool) -> Iterator[Callable[[Any], None] | None]:
                 f"{plural(event.remaining, 'action')} to go"
             )
         )
-        if event.kind in ("failure", "replan"):
+        if event.kind in ("action", "failure", "replan"):
             live.console.print(f"step {event.step}: {event.text}", markup=False, highlight=False)
 
     with live:
