@@ -14,8 +14,9 @@ and no parallel jaw in simulation lifts them off a table (the floating hand's
 pads need 13 mm). The cup holds by force, not by a weld: MuJoCo's *adhesion*
 actuator pulls the cup's contacts together with up to :data:`SUCTION_FORCE`
 newtons, so a held object is carried by that force and the pad's friction, and
-an object too heavy for it or with no face to seal on is refused before the run
-(:meth:`ArmWorld.why_not_graspable`).
+an object with no face to seal on, or that the cup does not carry in a trial
+carry in this same simulation (its size, shape and mass), is refused before
+the run (:func:`why_not_carried`).
 
 **Motions.** Every move of the cup is a straight line (up to the travel height,
 across, straight down), cut into waypoints 1 cm apart; each waypoint is solved
