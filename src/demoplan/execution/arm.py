@@ -571,9 +571,12 @@ def why_not_carried(shape: ObjectGeometry) -> str | None:
             f"has a top {1000 * width:.0f} mm across; the suction pad needs "
             f"{2000 * PAD_HALF:.0f} mm"
         )
-    lifted, placed = carries(replace(shape, mass=TRIAL_MARGIN * shape.kg), TRIAL_PICK, TRIAL_PLACE)
+    heavier = replace(shape, mass=TRIAL_MARGIN * shape.kg)
+    lifted, placed, refused = _carry(heavier, TRIAL_PICK, TRIAL_PLACE)
     if lifted and placed:
         return None
+    if refused:  # not the load: the arm could not make the motions
+        return f"cannot be carried by the arm in a trial carry: {refused[0]}"
     what = "does not lift" if not lifted else "lifts but loses on the way"
     return (
         f"weighs {shape.kg:.3g} kg; the suction cup ({SUCTION_FORCE:g} N) {what} "
@@ -585,12 +588,18 @@ def carries(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool]
     """Whether the arm's suction cup, alone on a table with an object of
     ``shape`` standing at ``pick`` (the base at the origin facing +x), lifts it
     and puts it down at ``place`` within 1 cm: (lifted, placed)."""
+    lifted, placed, _ = _carry(shape, pick, place)
+    return lifted, placed
+
+
+def _carry(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool, list[str]]:
+    """:func:`carries`, and the motions the arm refused on the way."""
     name = "load"
     world = ArmWorld(Scene(objects=(SceneObject(name, pick, shape),), robot=(0.0, 0.0, 0.0)))
     try:
         world.grasp(name, 0.0, pick)
         if world.observe().held != name:
-            return False, False
+            return False, False, world.motion_failures
         world.put_down(name, place)
         final = world.observe()
         pose = final.poses.get(name)
@@ -599,7 +608,7 @@ def carries(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool]
             and pose is not None
             and math.dist(pose.position, place.position) < 0.01
         )
-        return True, placed
+        return True, placed, world.motion_failures
     finally:
         world.close()
 
