@@ -61,6 +61,8 @@ from demoplan.learning.modelfile import (
     model_to_dict,
 )
 from demoplan.learning.settings import PAPER_SETTINGS
+from demoplan.masses import MAX_DENSITY, MIN_DENSITY
+from demoplan.model import WOOD_DENSITY
 from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
@@ -273,12 +275,20 @@ STEP = FieldTable(
     StepSchema,
     {**POSE_FIELDS, "object": "the object moved: the pose is where it was released"},
 )
+MASS_FIELDS = {
+    "mass": "kg; or `density`, not both; default: solid wood "
+    f"({WOOD_DENSITY:g} kg/m³). The mean density over the shape's volume must lie "
+    f"between {MIN_DENSITY:g} (air) and {MAX_DENSITY:g} kg/m³ (osmium)",
+    "density": "kg/m³; the mass is the density times the shape's volume (a box, a "
+    "cylinder, a sphere of the largest extent)",
+}
 GEOMETRY = FieldTable(
     "Object geometry",
     ObjectSchema,
     {
         "shape": "`mesh`: a shape known only by its extents (no symmetry is assumed)",
         "size": "extents `[x, y, z]` in the object's frame; a cylinder's x and y are its diameter",
+        **MASS_FIELDS,
     },
 )
 LANDMARK = FieldTable(
@@ -343,6 +353,7 @@ SCENE_OBJECT = FieldTable(
         "shape": "the object's shape",
         "grasps": "finger axes in the object's frame, in degrees; default `[0, 90]`: "
         "two side grasps at right angles",
+        **MASS_FIELDS,
     },
 )
 GRIPPER = FieldTable(

@@ -8,6 +8,7 @@ are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (docs/formats.md)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -16,7 +17,12 @@ from demoplan.rotations import Quaternion, rpy_from_quat
 
 Vector3 = tuple[float, float, float]
 
+WOOD_DENSITY = 600.0
+"""kg/m³: an object's density where its file gives neither ``mass`` nor
+``density`` (solid wood, as the paper's blocks)."""
+
 __all__ = [
+    "WOOD_DENSITY",
     "Demonstration",
     "ObjectGeometry",
     "Pose",
@@ -47,10 +53,28 @@ class Pose:
 
 @dataclass(frozen=True, slots=True)
 class ObjectGeometry:
-    """Shape and size (metres, x/y/z extents; a cylinder's x and y are its diameter)."""
+    """Shape and size (metres, x/y/z extents; a cylinder's x and y are its diameter)
+    and mass (kg; None: solid wood, :data:`WOOD_DENSITY`)."""
 
     shape: str
     size: Vector3
+    mass: float | None = None
+
+    @property
+    def volume(self) -> float:
+        """m³ of the solid the physics simulates: a box, a sphere of the largest
+        extent, and a cylinder (of the larger of x and y) for every other shape."""
+        sx, sy, sz = self.size
+        if self.shape == "box":
+            return sx * sy * sz
+        if self.shape == "sphere":
+            return 4.0 / 3.0 * math.pi * (max(sx, sy, sz) / 2) ** 3
+        return math.pi * (max(sx, sy) / 2) ** 2 * sz
+
+    @property
+    def kg(self) -> float:
+        """The object's mass: :attr:`mass` where given, else solid wood of :attr:`volume`."""
+        return self.mass if self.mass is not None else WOOD_DENSITY * self.volume
 
     @property
     def yaw_period(self) -> float:

@@ -14,8 +14,9 @@ and no parallel jaw in simulation lifts them off a table (the floating hand's
 pads need 13 mm). The cup holds by force, not by a weld: MuJoCo's *adhesion*
 actuator pulls the cup's contacts together with up to :data:`SUCTION_FORCE`
 newtons, so a held object is carried by that force and the pad's friction, and
-an object too heavy for it or with no face to seal on is refused before the run
-(:meth:`ArmWorld.why_not_graspable`).
+an object with no face to seal on, or that the cup does not carry in a trial
+carry in this same simulation (its size, shape and mass), is refused before
+the run (:func:`why_not_carried`).
 
 **Motions.** Every move of the cup is a straight line (up to the travel height,
 across, straight down), cut into waypoints 1 cm apart; each waypoint is solved
@@ -30,8 +31,10 @@ the path and every contact the arm makes is recorded (:attr:`ArmWorld.collisions
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -39,10 +42,8 @@ import numpy as np
 from demoplan.execution.arm_model import (
     ARM_GROUP,
     HOME,
-    MAX_PAYLOAD,
     PAD_HALF,
     REACH,
-    SAFETY,
     SUCTION_FORCE,
     ArmKinematics,
     arm_base,
@@ -51,7 +52,6 @@ from demoplan.execution.arm_model import (
     attach_arm,
     check_base,
     jaco_folder,
-    mass_of,
 )
 from demoplan.execution.arm_motion import (
     WAYPOINT,
@@ -64,16 +64,24 @@ from demoplan.execution.arm_motion import (
 )
 from demoplan.execution.faults import Faults
 from demoplan.execution.physics import MujocoWorld, scene_xml
-from demoplan.model import Pose
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.model import ObjectGeometry, Pose
+from demoplan.scenes.scene import Scene, SceneObject, yaw_of
 
-__all__ = ["ArmWorld", "MotionError"]
+__all__ = ["ArmWorld", "MotionError", "carries", "why_not_carried"]
 
 SPEED = 0.25  # m/s of the cup along a straight line
 TURN_SPEED = 120.0  # deg/s of the cup about the vertical
 APPROACH = 0.03  # m above the contact height where the straight approach starts
 PARK_SECONDS = 2.5  # s for the half turn behind the base (a load creeps on the pad if faster)
 RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
+TRIAL_PICK = Pose((0.42, -0.14, 0.0))
+TRIAL_PLACE = Pose((0.42, 0.14, 0.0), (0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)))
+"""Where the trial carry (:func:`why_not_carried`) takes an object from and puts it,
+the arm's base at the origin facing +x: 28 cm across its front, turned by 90°."""
+TRIAL_MARGIN = 1.25
+"""The trial carries the object this many times as heavy: near the cup's limit
+whether a load stays on depends on where the arm moves it (its posture, how
+far, how fast), and an object the check accepts must be carried anywhere."""
 
 
 class ArmWorld(MujocoWorld):
@@ -523,24 +531,9 @@ class ArmWorld(MujocoWorld):
     # -- checks before the run -----------------------------------------------------------
 
     def why_not_graspable(self, obj: str) -> str | None:
-        """Why the suction cup cannot take ``obj`` (no flat top it seals on, or
-        too heavy for its pull), or None."""
-        shape = self.geometry[obj]
-        if shape.shape == "sphere":
-            return "is a sphere: it has no flat top for the suction cup to seal on"
-        width = min(shape.size[0], shape.size[1])
-        if width < 2 * PAD_HALF:
-            return (
-                f"has a top {1000 * width:.0f} mm across; the suction pad needs "
-                f"{2000 * PAD_HALF:.0f} mm"
-            )
-        mass = mass_of(shape)
-        if mass > MAX_PAYLOAD:
-            return (
-                f"weighs {mass:.2f} kg; the suction cup ({SUCTION_FORCE:g} N) carries up to "
-                f"{MAX_PAYLOAD:.2f} kg with a safety factor of {SAFETY:g}"
-            )
-        return None
+        """Why the suction cup cannot take ``obj`` and carry it (no flat top it
+        seals on, or lost in a trial carry in this same simulation), or None."""
+        return why_not_carried(self.geometry[obj])
 
     def why_not_reachable(self, obj: str, pose: Pose) -> str | None:
         """Why the cup cannot come down on ``obj`` standing at ``pose`` (out of the
@@ -558,6 +551,66 @@ class ArmWorld(MujocoWorld):
                     f"base at ({bx:.3f}, {by:.3f}); the cup reaches {low:.2f}–{high:.2f} m)"
                 )
         return None
+
+
+@functools.cache
+def why_not_carried(shape: ObjectGeometry) -> str | None:
+    """Why the suction cup cannot take an object of ``shape`` (its size and
+    mass) and carry it, or None: a sphere has no flat top, a top narrower than
+    the pad none to seal on, and every other object is tried in this same
+    simulation — the arm, the cup, the servos and the motions of a run — taken
+    at :data:`TRIAL_PICK`, carried across the arm's front and turned by 90°
+    to :data:`TRIAL_PLACE`, :data:`TRIAL_MARGIN` times as heavy. It is carried
+    when it ends there within 1 cm.
+    The check is the physics itself, not a model of it (docs/execution.md)."""
+    if shape.shape == "sphere":
+        return "is a sphere: it has no flat top for the suction cup to seal on"
+    width = min(shape.size[0], shape.size[1])
+    if width < 2 * PAD_HALF:
+        return (
+            f"has a top {1000 * width:.0f} mm across; the suction pad needs "
+            f"{2000 * PAD_HALF:.0f} mm"
+        )
+    heavier = replace(shape, mass=TRIAL_MARGIN * shape.kg)
+    lifted, placed, refused = _carry(heavier, TRIAL_PICK, TRIAL_PLACE)
+    if lifted and placed:
+        return None
+    if refused:  # not the load: the arm could not make the motions
+        return f"cannot be carried by the arm in a trial carry: {refused[0]}"
+    what = "does not lift" if not lifted else "lifts but loses on the way"
+    return (
+        f"weighs {shape.kg:.3g} kg; the suction cup ({SUCTION_FORCE:g} N) {what} "
+        f"{TRIAL_MARGIN:g} times that in a trial carry in the simulation"
+    )
+
+
+def carries(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool]:
+    """Whether the arm's suction cup, alone on a table with an object of
+    ``shape`` standing at ``pick`` (the base at the origin facing +x), lifts it
+    and puts it down at ``place`` within 1 cm: (lifted, placed)."""
+    lifted, placed, _ = _carry(shape, pick, place)
+    return lifted, placed
+
+
+def _carry(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool, list[str]]:
+    """:func:`carries`, and the motions the arm refused on the way."""
+    name = "load"
+    world = ArmWorld(Scene(objects=(SceneObject(name, pick, shape),), robot=(0.0, 0.0, 0.0)))
+    try:
+        world.grasp(name, 0.0, pick)
+        if world.observe().held != name:
+            return False, False, world.motion_failures
+        world.put_down(name, place)
+        final = world.observe()
+        pose = final.poses.get(name)
+        placed = (
+            final.held is None
+            and pose is not None
+            and math.dist(pose.position, place.position) < 0.01
+        )
+        return True, placed, world.motion_failures
+    finally:
+        world.close()
 
 
 def _distance_to_segment(

@@ -24,14 +24,11 @@ __all__ = [
     "attach_arm",
     "check_base",
     "jaco_folder",
-    "mass_of",
 ]
 
 SUCTION_FORCE = 5.0
 """N: the adhesion actuator's pull at full suction (a 10 mm cup at 60 kPa of vacuum
 holds 0.785 cm² × 6 N/cm² = 4.7 N)."""
-SAFETY = 2.0  # the cup must hold this many times an object's weight
-MAX_PAYLOAD = SUCTION_FORCE / (SAFETY * 9.81)  # kg
 PAD_HALF = 0.005  # m: half the side of the square suction pad
 STEM = 0.08  # m: from the wrist flange to the pad's face
 ARM_GROUP = 2
@@ -247,12 +244,3 @@ def check_base(scene: Scene, base: tuple[float, float, float]) -> None:
 def footprint(shape: ObjectGeometry | None) -> float:
     """The radius of the circle round an object's footprint."""
     return 0.0 if shape is None else math.hypot(shape.size[0], shape.size[1]) / 2
-
-
-def mass_of(shape: ObjectGeometry) -> float:
-    from demoplan.execution.physics import DENSITY
-
-    sx, sy, sz = shape.size
-    if shape.shape == "box":
-        return DENSITY * sx * sy * sz
-    return DENSITY * math.pi * (max(sx, sy) / 2) ** 2 * sz

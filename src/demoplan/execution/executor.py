@@ -73,6 +73,11 @@ class ExecutionSettings:
     geometry: GeometrySettings = field(default_factory=GeometrySettings)
 
 
+MAX_SAME_GRASP = 3
+"""A grasp that failed is tried again identically (the same object, finger axis
+and place) at most twice: after its third failure the replan takes another
+grasp of the object, and the run stops, naming the object, when none is left."""
+
 MISPLACED_WITHIN = 0.06
 """m: an object off its target by less than this was misplaced; farther, dropped."""
 
@@ -248,6 +253,7 @@ def execute(
     reached: set[str] = set()
     replans = 0
     plan_index = 0
+    failed_grasps: dict[GraspKey, int] = {}  # how often each grasp failed at each place
 
     observation = world.observe()
     chosen = first or first_plan(model, _scene_of(observation, scene), settings)
@@ -323,6 +329,9 @@ def execute(
             )
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
+        built, why = _without_failed_grasps(built, failed_grasps, observation, settings, world)
+        if why:
+            return why
         outcome = solve_candidate(built, settings.budget)
         if outcome.plan is None:
             return f"no plan from the observed world: {outcome.reason}"
@@ -399,6 +408,9 @@ def execute(
         if failure is not None:
             failures.append(failure)
             emit(RunEvent("failure", f"{failure.kind}: {failure.detail}", step, replans))
+            if action.kind == "GRASP" and failure.kind == FailureKind.GRASP:
+                key = _grasp_key(action.object, grasp.axis, picked_from, settings)
+                failed_grasps[key] = failed_grasps.get(key, 0) + 1
             held = world.observe().held
             if held is not None:
                 # Plans start with an empty hand: put the object back where it was taken.
@@ -439,6 +451,57 @@ def _check_feasible(
             source=source,
             field="objects",
         )
+
+
+GraspKey = tuple[str, float, int, int]
+"""A grasp as tried: the object, its finger axis (deg, mod 180) and the place it
+stood (x, y in cells of the position tolerance)."""
+
+
+def _grasp_key(obj: str, axis: float, where: Pose, settings: ExecutionSettings) -> GraspKey:
+    cell = settings.position_tolerance
+    return (
+        obj,
+        round(axis % 180.0, 1),
+        round(where.position[0] / cell),
+        round(where.position[1] / cell),
+    )
+
+
+def _without_failed_grasps(
+    built: SceneProblem,
+    failed: dict[GraspKey, int],
+    observation: Observation,
+    settings: ExecutionSettings,
+    world: World,
+) -> tuple[SceneProblem, str]:
+    """``built`` without the grasps that failed :data:`MAX_SAME_GRASP` times on
+    an object standing where it stood then (another grasp is planned instead);
+    with the reason to stop when such an object has no grasp left."""
+    banned: dict[tuple[str, float], GraspKey] = {}
+    for key, count in failed.items():
+        obj = key[0]
+        pose = observation.poses.get(obj)
+        here = pose is not None and _grasp_key(obj, key[1], pose, settings) == key
+        if count >= MAX_SAME_GRASP and here:
+            banned[(obj, key[1])] = key
+    if not banned:
+        return built, ""
+    axis = {g.name: round(g.axis % 180.0, 1) for g in built.grasps}
+    allowed = frozenset(
+        (obj, grasp) for obj, grasp in built.problem.allowed if (obj, axis[grasp]) not in banned
+    )
+    for obj, _ in banned:
+        if not any(o == obj for o, _ in allowed):
+            pose = observation.poses[obj]
+            refused = list(getattr(world, "motion_failures", ()))
+            cause = f"; the last motion refused: {refused[-1]}" if refused else ""
+            return built, (
+                f"gave up on {obj}: every grasp of it failed {MAX_SAME_GRASP} times at "
+                f"({pose.position[0]:.3f}, {pose.position[1]:.3f}), the object not in the "
+                f"hand after it{cause}"
+            )
+    return replace(built, problem=replace(built.problem, allowed=allowed)), ""
 
 
 def _targets(problem: SceneProblem) -> tuple[tuple[str, Pose], ...]:

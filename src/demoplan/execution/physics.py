@@ -35,7 +35,7 @@ from demoplan.errors import InputError
 from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
 from demoplan.scenes.geometry import half_extent
 from demoplan.scenes.scene import Scene, yaw_of
@@ -56,7 +56,7 @@ OBSTACLES = 2
 TOP_PX_PER_M = 1000.0  # the top camera: 1 px = 1 mm
 PARK = (5.0, 5.0)  # where unused obstacles wait (off the table)
 MIN_PHYSICS_EXTENT = 0.002  # m: smaller objects get no mass or inertia MuJoCo accepts
-DENSITY = 600.0  # kg/m³: wooden blocks
+DENSITY = WOOD_DENSITY  # kg/m³ of the parked obstacles (an object has its own mass)
 VIDEO_FPS = 20.0  # video frames per simulated second
 VIDEO_SIZE = (480, 360)  # video width, height (px)
 MIN_GRASP_HEIGHT = 0.013
@@ -104,7 +104,7 @@ def scene_xml(
         rgba = object_rgba(obj.name)
         bodies.append(
             f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
-            f'<freejoint/><geom {_geom(obj.geometry)} density="{DENSITY}" rgba="{rgba}" '
+            f'<freejoint/><geom {_geom(obj.geometry)} mass="{obj.geometry.kg}" rgba="{rgba}" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
     for k in range(OBSTACLES):

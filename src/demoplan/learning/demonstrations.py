@@ -8,6 +8,7 @@ orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Collection, Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ from pydantic import (
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.learning.releases import warn_unsupported_releases
+from demoplan.masses import with_mass
 from demoplan.model import Demonstration, ObjectGeometry, Step
 from demoplan.plausibility import check_units
 from demoplan.poses import (
@@ -116,7 +118,11 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     """A demonstration in the file form of docs/formats.md (metres, quaternions)."""
     out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
     if demo.objects:
-        out["objects"] = {n: {"shape": g.shape, "size": list(g.size)} for n, g in demo.objects}
+        out["objects"] = {
+            n: {"shape": g.shape, "size": list(g.size)}
+            | ({} if g.mass is None else {"mass": g.mass})
+            for n, g in demo.objects
+        }
     if demo.landmarks:
         out["landmarks"] = {n: pose_to_dict(p) for n, p in demo.landmarks}
     if demo.initial:
@@ -153,10 +159,21 @@ def load_object_geometry(
                 source=source,
                 field=f"objects.{unknown[0]}",
             )
-    return {
-        name: ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale))
-        for name, g in parsed.objects.items()
-    }
+    return {name: _geometry(name, g, scale, source, "") for name, g in parsed.objects.items()}
+
+
+def _geometry(
+    name: str, entry: ObjectSchema, scale: float, source: str, where: str
+) -> ObjectGeometry:
+    """An ``objects`` entry in metres, with its mass (:func:`demoplan.masses.with_mass`)."""
+    size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
+    return with_mass(
+        ObjectGeometry(entry.shape, size),
+        entry.mass,
+        entry.density,
+        source,
+        f"{where}objects.{name}",
+    )
 
 
 def demonstrations_from_document(data: dict[str, Any], source: str) -> list[Demonstration]:
@@ -195,8 +212,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
     check_physical(data, units.length, source, prefix)
     scale = LENGTH_SCALE[units.length]
     objects = tuple(
-        (name, ObjectGeometry(g.shape, (g.size[0] * scale, g.size[1] * scale, g.size[2] * scale)))
-        for name, g in parsed.objects.items()
+        (name, _geometry(name, g, scale, source, where)) for name, g in parsed.objects.items()
     )
     # A landmark's size may stand in its entry (as in a scene) or under objects.
     for name, entry in parsed.landmarks.items():
@@ -292,6 +308,13 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
                     raise InputError(
                         f"{shape.shape} {_metres(shape.size)} differs from {known.shape} "
                         f"{_metres(known.size)} in {where}; one geometry per object expected",
+                        source=source,
+                        field=f"objects.{name}",
+                    )
+                if not math.isclose(known.kg, shape.kg, rel_tol=0.01):
+                    raise InputError(
+                        f"weighs {shape.kg:.3g} kg here and {known.kg:.3g} kg in {where}; "
+                        "one mass per object expected",
                         source=source,
                         field=f"objects.{name}",
                     )

@@ -28,6 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.masses import with_mass
 from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
 from demoplan.plausibility import check_units
 from demoplan.poses import (
@@ -126,6 +127,8 @@ class _ObjectSchema(PoseSchema):
     size: list[Number] | None = Field(default=None, min_length=3, max_length=3)
     shape: Literal["box", "cylinder", "sphere"] = "box"
     grasps: list[Number] | None = Field(default=None, min_length=1, max_length=16)
+    mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.masses)
+    density: Number | None = Field(default=None, gt=0)  # kg/m³
 
     @field_validator("size")
     @classmethod
@@ -226,7 +229,8 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
                 field=f"objects.{name}",
             )
         pose = pose_from_dict(
-            PoseSchema(**entry.model_dump(exclude={"size", "shape", "grasps"})), parsed.units
+            PoseSchema(**entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density"})),
+            parsed.units,
         )
         if pose.position[2] < -0.005:
             raise InputError(
@@ -237,7 +241,19 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         geometry = None
         if entry.size is not None:
             size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
-            geometry = ObjectGeometry(entry.shape, size)
+            geometry = with_mass(
+                ObjectGeometry(entry.shape, size),
+                entry.mass,
+                entry.density,
+                source,
+                f"objects.{name}",
+            )
+        elif entry.mass is not None or entry.density is not None:
+            raise InputError(
+                'has no "size" to go with it; a mass or density is given with the size',
+                source=source,
+                field=f"objects.{name}.{'mass' if entry.mass is not None else 'density'}",
+            )
         grasps = DEFAULT_GRASPS if entry.grasps is None else tuple(to_deg(g) for g in entry.grasps)
         objects.append(SceneObject(name, pose, geometry, grasps))
     freespace = None
@@ -316,6 +332,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         if obj.geometry is not None:
             entry["shape"] = obj.geometry.shape
             entry["size"] = list(obj.geometry.size)
+            if obj.geometry.mass is not None:
+                entry["mass"] = obj.geometry.mass
         if obj.grasps != DEFAULT_GRASPS:
             entry["grasps"] = list(obj.grasps)
         objects[obj.name] = entry
