@@ -96,6 +96,7 @@ from demoplan.execution.runner import start_world  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
 from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
+from demoplan.scenes.prepared import prepare  # noqa: E402
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -237,8 +238,9 @@ def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: in
     started = time.perf_counter()
     instance: Any = None
     try:
-        instance, first = start_world(model, scene, world, faults, seed, settings)
-        report = execute(model, scene, instance, settings, first=first)
+        prepared = prepare(model, scene, clutter=True)
+        instance, first = start_world(model, prepared, world, faults, seed, settings)
+        report = execute(model, prepared, instance, settings, first=first)
     except InputError as exc:  # refused before the first motion (an object the gripper cannot take)
         return Run(
             seed,

@@ -29,10 +29,10 @@ from demoplan.learning.learner import learn as learn_demonstrations
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.settings import LearningSettings
 from demoplan.model import Demonstration, TaskModel
-from demoplan.planning.budget import Budget
+from demoplan.planning.budget import PLANNING_SECONDS, Budget
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, load_scene
-from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["learn", "plan", "run"]
 
@@ -60,7 +60,7 @@ def plan(
     model: TaskModel | str | Path,
     scene: Scene | str | Path,
     *,
-    timeout: float = 2.0,
+    timeout: float = PLANNING_SECONDS,
     clutter: bool = False,
 ) -> ScenePlan:
     """Every demonstrated goal planned in ``scene``, the shortest chosen (§IV.C),
@@ -80,7 +80,7 @@ def run(
     faults: Faults = Faults(),
     seed: int = 0,
     max_replans: int = 25,
-    planning_seconds: float = 2.0,
+    planning_seconds: float = PLANNING_SECONDS,
     clutter: bool = False,
 ) -> RunReport:
     """Carry the task out: plan, act, observe, replan where the world differs.
@@ -89,12 +89,12 @@ def run(
     with injected ``faults``); with ``world``, in that one — it must start as
     ``scene`` describes. ``clutter``: as in :func:`plan`, objects the model
     never saw are allowed (no goal; moved only when in the way)."""
-    task, start = _model(model), _scene(scene)
-    check_scene_objects(task, start, clutter=clutter)
+    task = _model(model)
+    start = prepare(task, _scene(scene), clutter=clutter)  # checked and completed once
     if world is None:
         return run_task(
             task,
-            start,
+            start.scene,
             sim=sim,
             faults=faults,
             seed=seed,

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.planning.budget import PLANNING_SECONDS
+
 __all__ = [
     "DEFAULT_TIMEOUT",
     "SolveOptions",
@@ -22,7 +24,7 @@ __all__ = [
     "solve_text",
 ]
 
-DEFAULT_TIMEOUT = 2.0
+DEFAULT_TIMEOUT = PLANNING_SECONDS
 """Seconds a planning command may take by default, counted from its start (docs/cli.md)."""
 
 _command_started = time.monotonic()

@@ -39,6 +39,7 @@ from demoplan.deadline import PERCEPTION_TIMEOUT
 from demoplan.fileio import (
     refuse_overwriting_inputs,
 )
+from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.wording import plural
 
 
@@ -104,7 +105,7 @@ def run(
     timeout: Annotated[
         float,
         typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
-    ] = 2.0,
+    ] = PLANNING_SECONDS,
     clutter: ClutterOption = False,
     collisions: CollisionsOption = CollisionSource.rule,
     video: Annotated[

@@ -133,13 +133,15 @@ def plan(
     from demoplan.commands import command_budget
     from demoplan.planning.problem import optimality_line
     from demoplan.scenes.plan import plan_in_scene
+    from demoplan.scenes.prepared import prepare
 
     with reported_errors(), model_named(model_path):
         if plot is not None:
             from demoplan.plotting import check_figure_path
 
             check_figure_path(plot, "--plot")
-        model, scene = scene_inputs(model_path, scene_path)
+        model, raw_scene = scene_inputs(model_path, scene_path)
+        scene = prepare(model, raw_scene, clutter=clutter)
         budget = command_budget(max_nodes, timeout)
         settings = geometry_settings(freespace, collisions)
         try:
@@ -153,14 +155,14 @@ def plan(
                 )
         except (NoPlanError, LimitReachedError) as exc:
             if plot is not None:  # a picture of the targets is what is needed now
-                plot_no_plan(model, scene, settings, clutter, str(exc), plot)
+                plot_no_plan(model, scene, settings, str(exc), plot)
             raise
         if optimal and not result.optimal:
             raise LimitReachedError(
                 f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"
             )
         if plot is not None:
-            plot_scene_plan(model, scene, result, plot)
+            plot_scene_plan(model, result, plot)
         if json_output:
             print_json(result.to_json())
         else:

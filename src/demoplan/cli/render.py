@@ -172,29 +172,26 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
         say(f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)")
 
 
-def plot_scene_plan(model: TaskModel, scene: Any, result: Any, path: Path) -> None:
+def plot_scene_plan(model: TaskModel, result: Any, path: Path) -> None:
+    """The chosen plan in the scene it was made in (prepared: sizes, landmarks)."""
     from demoplan.plotting import save_scene_plan
-    from demoplan.scenes.landmarks import complete_scene
 
     chosen = result.chosen
     title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
     with plot_errors(path):
-        save_scene_plan(complete_scene(scene, model), chosen.problem, chosen.plan, path, title)
+        save_scene_plan(result.scene, chosen.problem, chosen.plan, path, title)
 
 
-def plot_no_plan(
-    model: TaskModel, scene: Any, settings: Any, clutter: bool, reason: str, path: Path
-) -> None:
-    """The scene, the first candidate goal's targets and why there is no plan."""
+def plot_no_plan(model: TaskModel, prepared: Any, settings: Any, reason: str, path: Path) -> None:
+    """The prepared scene, the first candidate goal's targets and why there is no plan."""
     from demoplan.plotting import save_scene_targets
-    from demoplan.scenes.landmarks import complete_scene
     from demoplan.scenes.plan import scene_problems
 
-    first = scene_problems(model, scene, settings, clutter=clutter)[0]
+    first = scene_problems(model, prepared, settings)[0]
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
     with plot_errors(path):
-        save_scene_targets(complete_scene(scene, model), first, reason, path, title)
+        save_scene_targets(prepared.scene, first, reason, path, title)
     stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 

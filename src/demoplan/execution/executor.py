@@ -33,17 +33,18 @@ from demoplan.errors import DemoplanError, InputError
 from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
+from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
-from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import CandidatePlan, plan_in_scene, solve_candidate
+from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
 from demoplan.scenes.table import surroundings_of
-from demoplan.scenes.targets import candidate_goals
+from demoplan.scenes.targets import resolve_goals
 from demoplan.wording import plural
 
 __all__ = [
@@ -67,7 +68,7 @@ class ExecutionSettings:
     this (given its symmetry) is not in place."""
     max_replans: int = 25
     max_actions: int = 400
-    budget: Budget = field(default_factory=lambda: Budget(timeout=2.0))
+    budget: Budget = field(default_factory=lambda: Budget(timeout=PLANNING_SECONDS))
     """Per (re)planning, shared by the candidate goals (the anytime planner
     returns its best plan when it runs out; docs/cli.md)."""
     geometry: GeometrySettings = field(default_factory=GeometrySettings)
@@ -196,14 +197,24 @@ class RunReport:
         }
 
 
+def world_moved(observation: Observation, scene: Scene) -> bool:
+    """Whether the observed world differs from ``scene`` (an object elsewhere,
+    or not seen): then the first plan is made from the observation."""
+    poses = observation.poses
+    return set(poses) != set(scene.names) or any(
+        _distance(poses[obj.name], obj.pose) > 1e-9 for obj in scene.objects
+    )
+
+
 def _scene_of(observation: Observation, template: Scene) -> Scene:
-    """The observed world as a scene (grasps and gripper from the original scene)."""
+    """The observed world as a scene (grasps, gripper and landmarks from the
+    prepared scene; an object's geometry from it where the world gives none)."""
     known = {obj.name: obj for obj in template.objects}
     objects = tuple(
         SceneObject(
             name,
             pose,
-            observation.geometry.get(name),
+            observation.geometry.get(name) or (known[name].geometry if name in known else None),
             known[name].grasps if name in known else SceneObject(name, pose, None).grasps,
         )
         for name, pose in observation.poses.items()
@@ -215,7 +226,9 @@ def _distance(a: Pose, b: Pose) -> float:
     return math.dist(a.position, b.position)
 
 
-def first_plan(model: TaskModel, scene: Scene, settings: ExecutionSettings) -> CandidatePlan:
+def first_plan(
+    model: TaskModel, scene: Scene | PreparedScene, settings: ExecutionSettings
+) -> CandidatePlan:
     """The plan a run starts with: every candidate goal planned in ``scene``
     (objects the model never saw allowed), the shortest chosen."""
     return plan_in_scene(
@@ -236,7 +249,7 @@ def first_targets(chosen: CandidatePlan) -> tuple[tuple[str, Pose], ...]:
 
 def execute(
     model: TaskModel,
-    scene: Scene,
+    scene: Scene | PreparedScene,
     world: World,
     settings: ExecutionSettings = ExecutionSettings(),
     on_event: Callable[[RunEvent], object] | None = None,
@@ -247,7 +260,8 @@ def execute(
     has made it already (it is not made again)."""
     emit = on_event or (lambda event: None)
     started = time.perf_counter()
-    scene = complete_scene(scene, model)
+    prepared = prepare(model, scene, clutter=True)
+    scene = prepared.scene
     executed: list[ExecutedAction] = []
     failures: list[Failure] = []
     reached: set[str] = set()
@@ -256,7 +270,11 @@ def execute(
     failed_grasps: dict[GraspKey, int] = {}  # how often each grasp failed at each place
 
     observation = world.observe()
-    chosen = first or first_plan(model, _scene_of(observation, scene), settings)
+    chosen = first or first_plan(
+        model,
+        _scene_of(observation, scene) if world_moved(observation, scene) else prepared,
+        settings,
+    )
     goal = chosen.goal
     problem: SceneProblem = chosen.problem
     # Replans name the places and grasps of the first plan as it did.
@@ -314,11 +332,9 @@ def execute(
         replans += 1
         plan_index += 1
         observation = world.observe()
-        current = complete_scene(_scene_of(observation, scene), model)
+        current = _scene_of(observation, scene)  # complete: the prepared scene's geometry
         try:
-            candidate = next(
-                c for c in candidate_goals(model, current, clutter=True) if goal in c.demonstrations
-            )
+            candidate = next(c for c in resolve_goals(model, current) if goal in c.demonstrations)
             built = build_problem(
                 current,
                 candidate,

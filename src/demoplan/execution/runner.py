@@ -21,12 +21,11 @@ from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
 from demoplan.fileio import os_reason, output_target
 from demoplan.model import TaskModel
-from demoplan.planning.budget import Budget
+from demoplan.planning.budget import PLANNING_SECONDS, Budget
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.plan import CandidatePlan
+from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.scene import Scene
-from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["make_world", "run_task", "start_world"]
 
@@ -69,7 +68,7 @@ def make_world(
 
 def start_world(
     model: TaskModel,
-    scene: Scene,
+    prepared: PreparedScene,
     sim: str,
     faults: Faults,
     seed: int,
@@ -79,9 +78,10 @@ def start_world(
     """The world of a run (:func:`make_world`), and for the arm the first plan
     too: the arm stands where it reaches that plan's targets, and the executor
     starts from it (``execute(first=…)``) instead of planning it again."""
+    scene = prepared.scene
     if sim != "arm":
         return make_world(sim, scene, faults, seed, perception), None
-    first = first_plan(model, scene, settings)
+    first = first_plan(model, prepared, settings)
     workspace = [pose.position[:2] for _, pose in first_targets(first)]
     return make_world(sim, scene, faults, seed, perception, workspace), first
 
@@ -98,7 +98,7 @@ def run_task(
     perception: str = "state",
     geometry: GeometrySettings | None = None,
     on_event: Callable[[RunEvent], object] | None = None,
-    planning_seconds: float = 2.0,
+    planning_seconds: float = PLANNING_SECONDS,
     clutter: bool = False,
     video: Path | None = None,
 ) -> RunReport:
@@ -110,8 +110,8 @@ def run_task(
     ``planning_seconds``: the time budget of each (re)planning; ``clutter``:
     objects the model never saw are allowed (as in ``plan``: they get no goal
     and are moved only when in the way), else an input error."""
-    check_scene_objects(model, scene, clutter=clutter)
-    scene = complete_scene(scene, model)
+    prepared = prepare(model, scene, clutter=clutter)  # once per run
+    scene = prepared.scene
     if video is not None and sim not in ("mujoco", "arm"):
         raise UsageError("--video records the physics simulation: it needs --sim mujoco or arm")
     settings = ExecutionSettings(
@@ -120,7 +120,7 @@ def run_task(
         position_tolerance=0.01,
         budget=Budget(timeout=planning_seconds),
     )
-    world, first = start_world(model, scene, sim, faults, seed, settings, perception)
+    world, first = start_world(model, prepared, sim, faults, seed, settings, perception)
     recording = None
     if video is not None:
         video = output_target(video, stream_ok=False)[0]  # a link's file, not the link
@@ -192,7 +192,7 @@ def run_task(
 
     finished = False
     try:
-        report = execute(model, scene, Recording(), settings, heard, first)
+        report = execute(model, prepared, Recording(), settings, heard, first)
         written: tuple[str, ...] = ()
         if writer is not None:
             writer.capture(report.final, "end", _picture(world))

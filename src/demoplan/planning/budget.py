@@ -8,7 +8,13 @@ from dataclasses import dataclass
 
 from demoplan.planning.problem import Action
 
-__all__ = ["MAX_STATES", "Budget", "Clock", "SearchOutcome"]
+__all__ = ["MAX_STATES", "PLANNING_SECONDS", "Budget", "Clock", "SearchOutcome"]
+
+PLANNING_SECONDS = 2.0
+"""The time budget of a planning command and of each (re)planning of a run,
+by default (docs/limits.md): the one place it is written — the CLI, the
+library (:mod:`demoplan.api`) and :class:`~demoplan.execution.executor.ExecutionSettings`
+take it from here."""
 
 MAX_STATES = 2_000_000
 """States a search may keep by default (about 1–2 GB at 30 objects): beyond it

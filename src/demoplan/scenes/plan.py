@@ -22,11 +22,10 @@ from demoplan.planning.budget import Clock
 from demoplan.planning.problem import Plan
 from demoplan.planning.search import Budget, solve
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.landmarks import complete_scene
+from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import surroundings_of
-from demoplan.scenes.targets import candidate_goals
 from demoplan.wording import plural
 
 __all__ = [
@@ -70,6 +69,8 @@ class ScenePlan:
 
     candidates: tuple[CandidatePlan, ...]
     chosen: CandidatePlan
+    scene: Scene | None = None
+    """The scene planned in, prepared (complete: sizes, landmarks): what figures draw."""
 
     @property
     def bound(self) -> int:
@@ -136,23 +137,23 @@ def _target(problem: SceneProblem, label: str) -> str:
 
 def scene_problems(
     model: TaskModel,
-    scene: Scene,
+    scene: Scene | PreparedScene,
     settings: GeometrySettings = GeometrySettings(),
     *,
     clutter: bool = False,
 ) -> list[SceneProblem]:
-    """The planning problem of every candidate goal (deduplicated) in ``scene``."""
-    scene = complete_scene(scene, model)
-    around = surroundings_of(model, scene)
+    """The planning problem of every candidate goal (deduplicated) in ``scene``
+    (prepared here unless it is already: :func:`~demoplan.scenes.prepared.prepare`)."""
+    prepared = prepare(model, scene, clutter=clutter)
+    around = surroundings_of(model, prepared.scene)
     return [
-        build_problem(scene, c, settings, surroundings=around)
-        for c in candidate_goals(model, scene, clutter=clutter)
+        build_problem(prepared.scene, c, settings, surroundings=around) for c in prepared.candidates
     ]
 
 
 def goal_problem(
     model: TaskModel,
-    scene: Scene,
+    scene: Scene | PreparedScene,
     number: int,
     settings: GeometrySettings = GeometrySettings(),
 ) -> SceneProblem:
@@ -187,7 +188,7 @@ def solve_candidate(
 
 def plan_in_scene(
     model: TaskModel,
-    scene: Scene,
+    scene: Scene | PreparedScene,
     *,
     budget: Budget = Budget(),
     settings: GeometrySettings = GeometrySettings(),
@@ -202,7 +203,8 @@ def plan_in_scene(
     found but some candidate's search was cut short. ``clutter``: objects the
     model never saw may stand in the scene (moved out of the way if need be).
     """
-    problems = scene_problems(model, scene, settings, clutter=clutter)
+    prepared = prepare(model, scene, clutter=clutter)
+    problems = scene_problems(model, prepared, settings)
     clock = Clock(budget)
     outcomes = []
     for index, problem in enumerate(problems):
@@ -221,4 +223,4 @@ def plan_in_scene(
             raise LimitReachedError(f"no candidate goal planned within the budget ({reasons})")
         raise NoPlanError(f"no candidate goal can be reached in this scene ({reasons})")
     chosen = min(solved, key=lambda c: (c.length, c.goal))
-    return ScenePlan(tuple(outcomes), chosen)
+    return ScenePlan(tuple(outcomes), chosen, prepared.scene)

@@ -53,6 +53,7 @@ __all__ = [
     "Subtask",
     "candidate_goals",
     "check_scene_objects",
+    "resolve_goals",
 ]
 
 
@@ -220,8 +221,16 @@ class _Resolver:
 
 def candidate_goals(model: TaskModel, scene: Scene, *, clutter: bool = False) -> list[Candidate]:
     """Every demonstrated goal, resolved in ``scene`` (deduplicated, in demonstration
-    order); ``clutter``: objects the model never saw are allowed (they have no goal)."""
+    order), after :func:`check_scene_objects`; ``clutter``: objects the model
+    never saw are allowed (they have no goal)."""
     check_scene_objects(model, scene, clutter=clutter)
+    return resolve_goals(model, scene)
+
+
+def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
+    """Every demonstrated goal, resolved in ``scene`` (deduplicated, in
+    demonstration order); the scene checked already (a prepared scene, or the
+    observed world of a replan)."""
     states = {state.id: state for state in model.states}
     current = {obj.name: obj.pose for obj in scene.objects}
     landmarks = landmark_poses(model, scene)

@@ -1,0 +1,67 @@
+"""The scene is prepared once per run: checked, completed and its goals
+resolved in one place (scenes.prepared), not again by the planner, the
+executor and every replan."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+import demoplan.scenes.prepared as prepared_module
+from demoplan.execution.faults import Faults
+from demoplan.execution.runner import run_task
+from demoplan.planning.budget import PLANNING_SECONDS
+from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.prepared import PreparedScene, prepare
+from demoplan.scenes.scene import load_scene
+from tests.helpers import EXAMPLES, paper_model
+
+
+@pytest.fixture
+def completions(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Every completion of a scene, by its source."""
+    seen: list[str] = []
+    original = prepared_module.complete_scene
+
+    def counted(scene: Any, model: Any) -> Any:
+        seen.append(scene.source)
+        return original(scene, model)
+
+    monkeypatch.setattr(prepared_module, "complete_scene", counted)
+    return seen
+
+
+def test_a_run_with_replans_prepares_its_scene_once(completions: list[str]) -> None:
+    model = paper_model("blocks")
+    scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
+    report = run_task(model, scene, faults=Faults(drop=0.5, block=0.3), seed=2)
+    assert report.replans > 0, "the seed injects no fault: pick another"
+    assert report.success, report.reason
+    assert len(completions) == 1, completions
+
+
+def test_planning_a_prepared_scene_does_not_prepare_it_again(completions: list[str]) -> None:
+    model = paper_model("blocks")
+    prepared = prepare(model, load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json"))
+    assert isinstance(prepared, PreparedScene) and prepare(model, prepared) is prepared
+    result = plan_in_scene(model, prepared)
+    assert result.chosen.plan is not None
+    assert result.scene is prepared.scene  # what the figures draw
+    assert len(completions) == 1
+
+
+def test_one_planning_budget_default() -> None:
+    """The CLI, the library and the executor take the default from one place."""
+    import inspect
+
+    import demoplan.api as api
+    from demoplan.cli.execution import run as run_command
+    from demoplan.commands import DEFAULT_TIMEOUT
+    from demoplan.execution.executor import ExecutionSettings
+
+    assert ExecutionSettings().budget.timeout == PLANNING_SECONDS == DEFAULT_TIMEOUT
+    assert inspect.signature(api.plan).parameters["timeout"].default == PLANNING_SECONDS
+    assert inspect.signature(api.run).parameters["planning_seconds"].default == PLANNING_SECONDS
+    assert inspect.signature(run_task).parameters["planning_seconds"].default == PLANNING_SECONDS
+    assert inspect.signature(run_command).parameters["timeout"].default == PLANNING_SECONDS
