@@ -68,6 +68,10 @@ MAX_GRASP_WIDTH = 2 * (FINGER_TRAVEL - FINGER_HALF[0] - CLEARANCE)
 beside the object (the fingers open 8 cm from the centre)."""
 
 
+LANDMARK_RGBA = "0.85 0.79 0.66 1"
+"""A landmark's colour in renders: the figures' sandy landmark colour."""
+
+
 def _quat_wxyz(yaw_deg: float) -> list[float]:
     half = math.radians(yaw_deg) / 2
     return [math.cos(half), 0.0, 0.0, math.sin(half)]
@@ -88,7 +92,8 @@ def scene_xml(
     offscreen: tuple[int, int] = (1200, 1200),
     hand: bool = True,
 ) -> str:
-    """The MJCF model of ``scene``: table, objects (free bodies), obstacles parked
+    """The MJCF model of ``scene``: table, its landmarks that have a size (static
+    bodies objects stand on), objects (free bodies), obstacles parked
     off the table, the floating gripper (``hand=False``: none, for a world that
     adds its own robot), and — with ``top_view = (x, y, height_m)`` — an
     orthographic camera ``top`` looking straight down at (x, y) whose picture is
@@ -106,6 +111,18 @@ def scene_xml(
             f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
             f'<freejoint/><geom {_geom(obj.geometry)} mass="{obj.geometry.kg}" rgba="{rgba}" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
+        )
+    shapes = dict(scene.landmark_geometry)
+    for index, (name, pose) in enumerate(scene.landmarks):
+        if name not in shapes:
+            continue  # a landmark with no size is only a reference, nothing to stand on
+        x, y, z = pose.position
+        w, qx, qy, qz = _wxyz(pose)
+        # Static (no joint): a tray things stand on, drawn in every render.
+        bodies.append(
+            f'<body name="_landmark{index}" pos="{x} {y} {z + shapes[name].size[2] / 2}" '
+            f'quat="{w} {qx} {qy} {qz}"><geom {_geom(shapes[name])} '
+            f'rgba="{LANDMARK_RGBA}" friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
     for k in range(OBSTACLES):
         s = OBSTACLE.size[0] / 2
