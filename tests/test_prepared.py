@@ -65,3 +65,16 @@ def test_one_planning_budget_default() -> None:
     assert inspect.signature(api.run).parameters["planning_seconds"].default == PLANNING_SECONDS
     assert inspect.signature(run_task).parameters["planning_seconds"].default == PLANNING_SECONDS
     assert inspect.signature(run_command).parameters["timeout"].default == PLANNING_SECONDS
+
+
+def test_a_run_logs_its_phases_for_verbose(caplog: pytest.LogCaptureFixture) -> None:
+    """--verbose shows the run as it goes: each plan, action and its end."""
+    model = paper_model("blocks")
+    scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
+    with caplog.at_level("INFO", logger="demoplan.execution.executor"):
+        report = run_task(model, scene)
+    said = [r.getMessage() for r in caplog.records]
+    assert said[0].startswith("run: plan at step 0")
+    actions = [m for m in said if m.startswith("run: action")]
+    assert len(actions) == len(report.actions)
+    assert said[-1].startswith("run: done")

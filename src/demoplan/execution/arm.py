@@ -32,6 +32,7 @@ the path and every contact the arm makes is recorded (:attr:`ArmWorld.collisions
 from __future__ import annotations
 
 import functools
+import logging
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
@@ -66,6 +67,8 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.physics import MujocoWorld, scene_xml
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.scenes.scene import Scene, SceneObject, yaw_of
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["ArmWorld", "MotionError", "carries", "why_not_carried"]
 
@@ -365,6 +368,7 @@ class ArmWorld(MujocoWorld):
             x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
         try:
             self.allowed = obj
+            logger.info("arm: over %s at (%.3f, %.3f) and down onto its top", obj, x, y)
             self._come_down(obj, x, y, top, missed)
             self.data.ctrl[self.suction] = 1.0
             self._settle(0.3)
@@ -372,6 +376,9 @@ class ArmWorld(MujocoWorld):
                 self.held = obj
                 self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
                 self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
+            logger.info(
+                "arm: suction on, lifting %s (%s)", obj, "sealed" if self.held else "no seal"
+            )
             self._go([x, y, top + APPROACH])
             self._settle(0.2)
         except MotionError as exc:
@@ -401,6 +408,7 @@ class ArmWorld(MujocoWorld):
                 detail = f"{obj} released at {_xy(off)}, off its target"
                 self._release_at(off, 0.002, "misplace", detail)
                 return
+        logger.info("arm: carrying %s to (%.3f, %.3f) and setting it down", obj, *pose.position[:2])
         self._release_at(pose, 0.002, None, "")
 
     def _come_down(self, obj: str, x: float, y: float, top: float, missed: bool) -> None:

@@ -22,6 +22,7 @@ replans, when no plan exists, or after ``max_actions`` actions.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable
@@ -46,6 +47,8 @@ from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
 from demoplan.scenes.table import surroundings_of
 from demoplan.scenes.targets import resolve_goals
 from demoplan.wording import plural
+
+logger = logging.getLogger(__name__)
 
 __all__ = [
     "ExecutionSettings",
@@ -258,7 +261,13 @@ def execute(
     """Carry out the task in ``world`` (which starts as ``scene``); see the module
     docstring. ``first``: the plan for the world as it starts, when the caller
     has made it already (it is not made again)."""
-    emit = on_event or (lambda event: None)
+    heard = on_event or (lambda event: None)
+
+    def emit(event: RunEvent) -> None:
+        """Tell the caller; and with --verbose, log the run's phases as they come."""
+        logger.info("run: %s at step %d: %s", event.kind, event.step, event.text)
+        heard(event)
+
     started = time.perf_counter()
     prepared = prepare(model, scene, clutter=True)
     scene = prepared.scene
