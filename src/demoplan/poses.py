@@ -33,6 +33,7 @@ __all__ = [
     "check_physical",
     "pose_from_dict",
     "pose_to_dict",
+    "positive_extents",
 ]
 
 LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
@@ -70,6 +71,13 @@ class PoseSchema(_Schema):
         return self
 
 
+def positive_extents(size: list[float]) -> list[float]:
+    """``size`` if its three extents are positive; else the ValueError a schema reports."""
+    if any(v <= 0 for v in size):
+        raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
+    return size
+
+
 class ObjectSchema(_Schema):
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Number] = Field(min_length=3, max_length=3)
@@ -79,9 +87,7 @@ class ObjectSchema(_Schema):
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float]) -> list[float]:
-        if any(v <= 0 for v in size):
-            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
-        return size
+        return positive_extents(size)
 
 
 class LandmarkSchema(PoseSchema):
@@ -95,9 +101,7 @@ class LandmarkSchema(PoseSchema):
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float] | None) -> list[float] | None:
-        if size is not None and any(v <= 0 for v in size):
-            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
-        return size
+        return None if size is None else positive_extents(size)
 
     def pose(self, units: UnitsSchema) -> Pose:
         return pose_from_dict(PoseSchema(**self.model_dump(exclude={"shape", "size"})), units)

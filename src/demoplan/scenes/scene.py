@@ -41,6 +41,7 @@ from demoplan.poses import (
     check_physical,
     pose_from_dict,
     pose_to_dict,
+    positive_extents,
 )
 from demoplan.rotations import rpy_from_quat
 
@@ -133,9 +134,7 @@ class _ObjectSchema(PoseSchema):
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float] | None) -> list[float] | None:
-        if size is not None and any(v <= 0 for v in size):
-            raise ValueError(f"size must be three positive extents [x, y, z], got {size}")
-        return size
+        return None if size is None else positive_extents(size)
 
 
 class _GripperSchema(_Schema):
