@@ -131,3 +131,14 @@ def mismatch(expected: tuple[str, ...], output: str) -> str | None:
     if at < len(real) and not skipping:
         return f"the output goes on after the lines shown: {real[at]!r} (end the block with …)"
     return None
+
+
+_PLANNING = re.compile(r"\bdemoplan (plan|solve|run)\b")
+
+
+def without_time_limit(command: str) -> str | None:
+    """``command`` with ``--timeout inf`` for each planning command in it, if it
+    plans on the default wall-clock budget (None otherwise)."""
+    if "--timeout" in command or not _PLANNING.search(command):
+        return None
+    return _PLANNING.sub(r"demoplan \1 --timeout inf", command)

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import signal
+import subprocess
+import time
 from pathlib import Path
 from typing import Any
 
@@ -98,3 +101,22 @@ def raw(step: str) -> str:
 def write(path: Path, data: Any) -> Path:
     path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
     return path
+
+
+def wait_for_signal_handlers(process: subprocess.Popen[str], limit: float = 120.0) -> None:
+    """Wait until ``process`` (a demoplan command) has set its own handler for
+    SIGTERM — the first thing the launcher does — so that a signal sent now is
+    demoplan's to answer, not Python's start-up's, however slowly a loaded
+    machine starts the process. Reads the caught-signal mask of /proc (Linux);
+    where there is none, returns at once."""
+    status = Path(f"/proc/{process.pid}/status")
+    began = time.monotonic()
+    while process.poll() is None and time.monotonic() - began < limit:
+        try:
+            text = status.read_text()
+        except OSError:
+            return
+        caught = [line.split()[1] for line in text.splitlines() if line.startswith("SigCgt:")]
+        if not caught or int(caught[0], 16) >> (signal.SIGTERM - 1) & 1:
+            return
+        time.sleep(0.005)

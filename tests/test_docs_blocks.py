@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.docs_blocks import blocks, mismatch
+from tests.docs_blocks import blocks, mismatch, without_time_limit
 
 OUTPUT = """Candidate goals
 ┏━━━━━━━━━━━━━━━┳━━━━━━━━━┓
@@ -66,3 +66,20 @@ def test_console_and_shell_blocks_are_read_with_their_commands(tmp_path: Path) -
     assert [c.text for c in console] == ["demoplan solve p.xml", "demoplan show m.json"]
     assert console[0].expected == ("GRASP a b c", "…") and console[0].line == 4
     assert [c.text for c in found[1].commands] == ["demoplan import x.hdf5 -o d/"]
+
+
+def test_only_planning_commands_on_the_default_budget_get_a_run_without_time_limit() -> None:
+    """tests/test_docs_shell.py's second run of a command whose output the
+    default wall-clock budget decides: ``--timeout inf`` for each planning
+    command, nothing for a command that gives its own budget or plans nothing."""
+    assert (
+        without_time_limit("demoplan solve p.xml --search bfs --json | python -m json.tool")
+        == "demoplan solve --timeout inf p.xml --search bfs --json | python -m json.tool"
+    )
+    assert (
+        without_time_limit("demoplan run kit.json scene.json --seed 0   # faults")
+        == "demoplan run --timeout inf kit.json scene.json --seed 0   # faults"
+    )
+    assert without_time_limit("demoplan plan kit.json scene.json --timeout 5") is None
+    assert without_time_limit("demoplan learn demos.json -o kit.json") is None
+    assert without_time_limit("demoplan planner") is None

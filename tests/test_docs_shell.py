@@ -4,6 +4,14 @@ every Python block runs. Each document's blocks run in order, in a fresh
 folder where ``examples/``, ``benchmarks/`` and ``docs/`` are the
 repository's, so a block may use what an earlier one wrote.
 
+What a planning command prints on its default time budget (2 s from the
+process start, docs/planning.md) depends on the machine's speed: on a loaded
+machine start-up alone can spend it, and the plan comes back unproved (or
+longer). Such a command (``plan``, ``solve``, ``run`` without ``--timeout``)
+that does not print what its block shows is run once more with
+``--timeout inf``, which must then print exactly that — so the output shown
+is still checked, only not the machine's speed (that is benchmarks/planning.py's).
+
 The README's set-up commands (its first block, a plain ``` block) are what
 CI runs; they are not run again here.
 """
@@ -17,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.docs_blocks import ROOT, Block, blocks, documents, mismatch
+from tests.docs_blocks import ROOT, Block, blocks, documents, mismatch, without_time_limit
 
 TIMEOUT = 180  # seconds per command
 SHARED = ("examples", "benchmarks", "docs", "tests")
@@ -64,18 +72,24 @@ def _run_block(block: Block, folder: Path, env: dict[str, str], last: list[int])
         if command.text.strip() == "echo $?":
             output, code = f"{last[0]}\n", 0
         else:
-            done = _run(command.text, folder, env)
-            output, code = done.stdout, done.returncode
             following = (
                 block.commands[index + 1].text.strip() if index + 1 < len(block.commands) else ""
             )
+            ran = command.text
+            done = _run(ran, folder, env)
+            unlimited = without_time_limit(command.text)
+            if unlimited is not None and (
+                (done.returncode != 0 and following != "echo $?")
+                or mismatch(command.expected, done.stdout) is not None
+            ):  # the default budget ran out first (a loaded machine): the same, unhurried
+                ran = unlimited
+                done = _run(ran, folder, env)
+            output, code = done.stdout, done.returncode
             if code != 0 and following != "echo $?":
-                pytest.fail(f"{where}: `{command.text}` exited {code}:\n{output[-2000:]}")
+                pytest.fail(f"{where}: `{ran}` exited {code}:\n{output[-2000:]}")
         last[0] = code
         why = mismatch(command.expected, output)
-        assert why is None, (
-            f"{where}: `{command.text}`: {why}\n--- real output ---\n{output[-3000:]}"
-        )
+        assert why is None, f"{where}: `{ran}`: {why}\n--- real output ---\n{output[-3000:]}"
 
 
 def _provide(document: Path, folder: Path) -> None:

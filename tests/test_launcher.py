@@ -127,7 +127,8 @@ def test_the_lean_parser_knows_every_option_of_the_command() -> None:
 def test_the_executable_takes_the_lean_path() -> None:
     """``python -m demoplan solve`` with stderr piped: the plan, and typer never imported."""
     probe = (
-        "import runpy, sys; sys.argv = ['demoplan', 'solve', sys.argv[1]]\n"
+        # --timeout inf: the proof must not race start-up on a loaded machine
+        "import runpy, sys; sys.argv = ['demoplan', 'solve', sys.argv[1], '--timeout', 'inf']\n"
         "try:\n    runpy.run_module('demoplan', run_name='__main__')\n"
         "finally:\n    print('typer' in sys.modules, file=sys.stderr)\n"
     )
@@ -151,7 +152,16 @@ def test_the_executable_takes_the_lean_path() -> None:
     assert (
         json.loads(
             subprocess.run(
-                [sys.executable, "-m", "demoplan", "solve", str(PAPER), "--json"],
+                [
+                    sys.executable,
+                    "-m",
+                    "demoplan",
+                    "solve",
+                    str(PAPER),
+                    "--json",
+                    "--timeout",
+                    "inf",
+                ],
                 capture_output=True,
                 text=True,
                 check=True,

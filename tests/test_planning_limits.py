@@ -17,7 +17,8 @@ from demoplan.planning.budget import Budget
 from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
-from demoplan.planning.xml import save_problem
+from demoplan.planning.xml import load_problem, save_problem
+from tests.test_solve_cli import PAPER
 
 
 def ring_problem(n: int) -> Problem:
@@ -46,7 +47,7 @@ def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
         capture_output=True,
         text=True,
         env={**os.environ, "PYTHONWARNINGS": "ignore"},
-        timeout=60,
+        timeout=300,
         check=False,
     )
     seconds = time.monotonic() - started
@@ -55,7 +56,10 @@ def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
         lines = done.stderr.splitlines()
         assert len(lines) == 1 and lines[0].startswith("demoplan: error: --timeout 2 s")
         assert "every plan needs at least 2000 actions" in lines[0]
-    assert seconds < 10  # a hang guard, not a speed target (benchmarks/planning.py)
+    # A hang guard, not a speed target (benchmarks/planning.py): 1.5 s here
+    # unloaded, but reading and compiling the problem (about 0.8 s of it) come
+    # before the search and its budget, and a loaded machine stretches them.
+    assert seconds < 120
     peak_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     assert peak_kb < 1_000_000
 
@@ -64,7 +68,7 @@ def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
     problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
     for search in ("astar", "bfs"):
         with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
-            solve(problem, search, Budget(max_states=5000, timeout=5), optimal=True)
+            solve(problem, search, Budget(max_states=5000), optimal=True)  # no clock to race
 
 
 def test_bfs_stops_at_its_node_budget_with_its_bound() -> None:
@@ -77,7 +81,9 @@ def test_bfs_stops_at_its_node_budget_with_its_bound() -> None:
 
 def test_a_budget_spent_before_planning_still_gets_the_fast_plan() -> None:
     """A slow start (imports on a loaded machine) can use up a command's 2 s
-    before the search starts: the fast plan still comes, not proved shortest."""
-    problem = parking_problem(10, 0)
+    before the search starts: the fast plan still comes, not proved shortest
+    (the paper's problem: its first plan, 14 actions against a bound of 8, takes
+    milliseconds, well inside the 0.2 s the first plan always gets)."""
+    problem = load_problem(PAPER)
     plan = solve(problem, budget=Budget(timeout=2.0, deadline=time.monotonic() - 1.0))
     assert not plan.optimal and len(plan) >= plan.bound > 0

@@ -140,7 +140,8 @@ def test_entities_are_refused_at_once(tmp_path: Path, text: str) -> None:
     started = time.perf_counter()
     with pytest.raises(InputError) as caught:
         load_problem(path)
-    assert time.perf_counter() - started < 1.0
+    # A hang guard, not a speed target: expanding the bomb is 79 GB of text.
+    assert time.perf_counter() - started < 30.0
     message = str(caught.value)
     assert str(path) in message
     assert "not allowed" in message

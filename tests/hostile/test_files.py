@@ -4,7 +4,7 @@ A table: each *slot* (a command and which of its arguments is the file) is
 given each *kind* of hostile file — missing, a folder, a FIFO, a device, a
 link that dangles or loops, empty, binary, invalid UTF-8, NUL bytes, too big,
 one enormous line — and must answer as docs/cli.md says (:mod:`.harness`): one
-line naming the file, an exit code of §4, within the time bound, nothing in
+line naming the file, an exit code of §4, short of the hang bound, nothing in
 the working folder changed. File names with bytes that are not UTF-8, a
 newline or rich markup must work, or be refused in one line all the same.
 """
@@ -21,8 +21,6 @@ import pytest
 
 from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
-
-MAX_SECONDS = 20.0
 
 
 @dataclass(frozen=True)
@@ -166,11 +164,11 @@ def test_a_hostile_file_is_refused_in_one_line(
     shown = str(hostile.relative_to(folder)) if hostile.is_relative_to(folder) else str(hostile)
     before = fingerprint(folder)
     args = [shown if a == FILE else a for a in slot.args]
-    answer = run(args, folder, timeout=MAX_SECONDS + 10)
+    answer = run(args, folder)
     if kind in slot.may_work and answer.code == 0:
-        check_clean(answer, max_seconds=MAX_SECONDS)
+        check_clean(answer)
         return
-    check_refused(answer, [shown], max_seconds=MAX_SECONDS)
+    check_refused(answer, [shown])
     assert fingerprint(folder) == before, f"files changed: {answer}"
 
 
@@ -200,5 +198,5 @@ def test_an_odd_file_name_works_or_is_refused_in_one_line(
     args: list[str | bytes] = [
         ODD_NAMES[name] + slot.suffix.encode() if a == FILE else a for a in slot.args
     ]
-    answer = run(args, folder, timeout=MAX_SECONDS + 10)  # type: ignore[arg-type]
-    check_clean(answer, max_seconds=MAX_SECONDS)
+    answer = run(args, folder)  # type: ignore[arg-type]
+    check_clean(answer)

@@ -54,8 +54,8 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_a_disk_that_fills_up_leaves_nothing(
     workspace: Path, small_disk: Path, args: list[str], output: str
 ) -> None:
-    answer = run([a.replace("SMALL", str(small_disk)) for a in args], workspace, timeout=120)
-    check_refused(answer, [str(small_disk / output)], codes={1}, max_seconds=60)
+    answer = run([a.replace("SMALL", str(small_disk)) for a in args], workspace)
+    check_refused(answer, [str(small_disk / output)], codes={1})
     assert "no space left" in answer.stderr
     assert ".tmp" not in answer.stderr  # the output as the user named it
     assert list(small_disk.iterdir()) == []

@@ -31,6 +31,7 @@ from tests.helpers import EXAMPLES
 from tests.hostile.harness import (
     DEMOPLAN,
     ERROR_PREFIX,
+    HANG_SECONDS,
     NOT_SEEN,
     Answer,
     check_clean,
@@ -45,7 +46,6 @@ needs_video = pytest.mark.skipif(not HAVE_VIDEO, reason="MuJoCo or imageio-ffmpe
 MUJOCO = ["--sim", "mujoco"]
 RUN = ["run", "model.json", "scene.json"]
 ESCAPE = "\x1b[31mESC"  # a terminal escape sequence as an object name
-MAX_SECONDS = 20.0
 
 
 def _scene(**extra: dict[str, Any]) -> dict[str, Any]:
@@ -142,10 +142,10 @@ def check_answer(
     changed, or done with only ``outputs`` changed."""
     assert answer.code in codes, f"exit code not in {sorted(codes)}: {answer}"
     if answer.code == 0:
-        check_clean(answer, max_seconds=MAX_SECONDS)
+        check_clean(answer)
         assert _changed(before, after) <= set(outputs), f"files changed: {answer}"
     else:
-        check_refused(answer, names, codes=codes - {0}, max_seconds=MAX_SECONDS)
+        check_refused(answer, names, codes=codes - {0})
         for temporary in (".part.", ".tmp"):  # the output as the user named it
             assert temporary not in answer.stderr, f"names a temporary file: {answer}"
         assert after == before, f"files changed: {_changed(before, after)}: {answer}"
@@ -413,9 +413,10 @@ def test_run_a_video_works(workspace: Path, tmp_path: Path) -> None:
 def test_ctrl_c_while_recording_a_video(
     workspace: Path, tmp_path: Path, group: bool, delay: float
 ) -> None:
-    """Ctrl-C once ffmpeg has started writing: exit 130 within a second, the one
-    line ``demoplan: interrupted``, no video, partial or temporary. ``group``:
-    as a terminal sends it, to ffmpeg as well (its own process group)."""
+    """Ctrl-C once ffmpeg has started writing: exit 130 (at once; only a hang
+    is timed, HANG_SECONDS), the one line ``demoplan: interrupted``, no video,
+    partial or temporary. ``group``: as a terminal sends it, to ffmpeg as well
+    (its own process group)."""
     folder = _case(workspace, tmp_path)
     before = fingerprint(folder)
     process = subprocess.Popen(
@@ -427,7 +428,7 @@ def test_ctrl_c_while_recording_a_video(
         start_new_session=group,
     )
     began = time.monotonic()
-    while time.monotonic() - began < 15 and process.poll() is None:
+    while time.monotonic() - began < HANG_SECONDS and process.poll() is None:
         if any("run.mp4" in p.name for p in folder.iterdir()):  # ffmpeg is writing
             break
         time.sleep(0.01)
@@ -438,13 +439,13 @@ def test_ctrl_c_while_recording_a_video(
     else:
         process.send_signal(signal.SIGINT)
     try:
-        _, err = process.communicate(timeout=10)
+        _, err = process.communicate(timeout=2 * HANG_SECONDS)
     except subprocess.TimeoutExpired:
         if group:
             os.killpg(process.pid, signal.SIGKILL)
         else:
             process.kill()
-        raise AssertionError("still running 10 s after Ctrl-C") from None
+        raise AssertionError(f"still running {2 * HANG_SECONDS:g} s after Ctrl-C") from None
     seconds = time.monotonic() - sent
     for text in NOT_SEEN:
         assert text not in err, err
@@ -454,7 +455,7 @@ def test_ctrl_c_while_recording_a_video(
         return
     assert process.returncode == 130, f"exit {process.returncode}: {err}"
     assert err.splitlines() == ["demoplan: interrupted"], err
-    assert seconds < 1.0, f"{seconds:.2f} s after Ctrl-C"
+    assert seconds < HANG_SECONDS, f"{seconds:.2f} s after Ctrl-C"
     assert fingerprint(folder) == before, f"left: {_changed(before, fingerprint(folder))}"
 
 
