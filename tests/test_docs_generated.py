@@ -108,6 +108,10 @@ def load(document: dict[str, Any], tmp_path: Path) -> object:
         for action in document["actions"]:
             assert action[0] in ("GRASP", "PUT_DOWN") and len(action) == 4
         return document["actions"]
+    if set(document) == {"landmarks"}:  # a landmark entry, as in any file
+        from demoplan.poses import LandmarkSchema
+
+        return {n: LandmarkSchema.model_validate(e) for n, e in document["landmarks"].items()}
     path = tmp_path / "objects.json"  # segment --objects-file
     path.write_text(json.dumps(document), encoding="utf-8")
     return load_object_geometry(path)
