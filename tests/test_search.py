@@ -343,3 +343,17 @@ def test_final_places_that_overlap_are_reported() -> None:
     )
     with pytest.raises(NoPlanError, match="a and b cannot both stand at their final places"):
         solve(problem)
+
+
+def test_an_infinite_budget_gives_each_phase_a_finite_share() -> None:
+    """--timeout inf is no deadline: the early phases get a share of the
+    unbounded default, as with no timeout — not inf * share, which let a
+    phase run forever before the exact search."""
+    import math
+
+    from demoplan.planning.budget import Budget, Clock
+    from demoplan.planning.search import _UNBOUNDED_SECONDS, _share
+
+    for budget in (Budget(), Budget(timeout=math.inf)):
+        seconds = _share(Clock(budget), 0.25)
+        assert math.isfinite(seconds) and seconds == 0.25 * _UNBOUNDED_SECONDS

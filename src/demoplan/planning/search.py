@@ -15,6 +15,7 @@ that need no search.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from typing import NoReturn
@@ -282,9 +283,11 @@ must not go without a plan for want of a few milliseconds."""
 
 
 def _share(clock: Clock, share: float) -> float:
-    """Seconds for a phase: ``share`` of the time left."""
+    """Seconds for a phase: ``share`` of the time left; with no deadline (none,
+    or ``--timeout inf``) a share of :data:`_UNBOUNDED_SECONDS`, so that an
+    early phase cannot take forever before the exact search."""
     left = clock.remaining()
-    return share * (_UNBOUNDED_SECONDS if left is None else left)
+    return share * (_UNBOUNDED_SECONDS if left is None or math.isinf(left) else left)
 
 
 def _raise_without_plan(
