@@ -9,7 +9,7 @@ orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,9 +40,11 @@ from demoplan.poses import (
     pose_from_dict,
     pose_to_dict,
 )
+from demoplan.wording import did_you_mean
 
 __all__ = [
     "check_demonstrations",
+    "check_geometry_names",
     "demonstration_to_dict",
     "demonstrations_from_document",
     "demonstrations_from_path",
@@ -149,17 +151,26 @@ def load_object_geometry(
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
     scale = LENGTH_SCALE[parsed.units.length]
+    geometry = {name: _geometry(name, g, scale, source, "") for name, g in parsed.objects.items()}
     if known is not None:
-        unknown = [name for name in parsed.objects if name not in known]
-        if unknown:
-            raise InputError(
-                f"unknown object{'s' if len(unknown) > 1 else ''} "
-                f"{', '.join(map(repr, unknown))}; the stream's objects are "
-                f"{', '.join(known) or 'none'}",
-                source=source,
-                field=f"objects.{unknown[0]}",
-            )
-    return {name: _geometry(name, g, scale, source, "") for name, g in parsed.objects.items()}
+        check_geometry_names(geometry, list(known), source)
+    return geometry
+
+
+def check_geometry_names(
+    geometry: Mapping[str, ObjectGeometry], known: Sequence[str], source: str | None
+) -> None:
+    """Every object of an objects file must be one of the streams' objects
+    (``known``): an :class:`InputError` naming the first other and listing them."""
+    unknown = [name for name in geometry if name not in known]
+    if unknown:
+        raise InputError(
+            f"unknown object{'s' if len(unknown) > 1 else ''} "
+            f"{', '.join(map(repr, unknown))}; the stream's objects are "
+            f"{', '.join(known) or 'none'}" + did_you_mean(unknown[0], known),
+            source=source,
+            field=f"objects.{unknown[0]}",
+        )
 
 
 def _geometry(

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from demoplan.errors import InputError
+from demoplan.learning.demonstrations import check_geometry_names
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, segment
 from demoplan.segmentation.readers import load_stream
@@ -107,19 +108,3 @@ def demonstration_from_stream(
             )
     demo = found.to_demonstration(name or stream_name(path), objects=shapes, landmarks=chosen)
     return SegmentedStream(stream, found, demo)
-
-
-def check_geometry_names(
-    geometry: Mapping[str, ObjectGeometry], known: Sequence[str], source: str | None
-) -> None:
-    """Every object of an objects file must be one of the streams' objects
-    (``known``): an :class:`InputError` naming the first other and listing them."""
-    unknown = [name for name in geometry if name not in known]
-    if unknown:
-        raise InputError(
-            f"unknown object{'s' if len(unknown) > 1 else ''} "
-            f"{', '.join(map(repr, unknown))}; the stream's objects are "
-            f"{', '.join(known) or 'none'}",
-            source=source,
-            field=f"objects.{unknown[0]}",
-        )
