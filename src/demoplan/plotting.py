@@ -30,6 +30,7 @@ from demoplan.labels import (
 )
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
+from demoplan.rotations import rpy_from_quat
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -122,10 +123,7 @@ def _landmark_corner(pose: Pose, geometry: ObjectGeometry) -> tuple[float, float
     """A point just inside the landmark's first corner: its name there stays
     clear of what stands on its middle."""
     x, y, _ = pose.position
-    yaw = 0.0
-    if pose.orientation is not None:
-        qx, qy, qz, qw = pose.orientation
-        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+    yaw = 0.0 if pose.orientation is None else math.radians(rpy_from_quat(pose.orientation)[2])
     dx, dy = -0.4 * geometry.size[0], -0.4 * geometry.size[1]
     return (
         x + dx * math.cos(yaw) - dy * math.sin(yaw),
