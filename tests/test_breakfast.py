@@ -317,3 +317,74 @@ def test_the_breakfast_recovers_from_drops_and_blocks_on_20_seeds(
         assert report.success, f"seed {seed}: {report.reason}"
         injected += len(report.injected)
     assert injected >= 10, injected  # the faults were there to recover from
+
+
+def _kettle_documents(trays: tuple[tuple[float, float, float], ...]) -> list[dict[str, object]]:
+    """The kit tray put down at ``trays``, filled, and then a kettle put at the
+    same place (0.5, 0) every time — where the trays' mean is."""
+    from dataclasses import replace
+
+    from tests.breakfast import carried_tray_documents
+
+    family = replace(draw_family(7, len(trays), 0.004), trays=trays)
+    documents = carried_tray_documents(family, 7)
+    for index, document in enumerate(documents):
+        document["objects"]["kettle"] = {"shape": "box", "size": [0.12, 0.12, 0.15]}
+        document["initial"]["kettle"] = {"position": [0.95, -0.3, 0.0]}
+        document["steps"].append(
+            {"object": "kettle", "position": [0.5 + 0.001 * index, 0.0, 0.0], "yaw": 0.0}
+        )
+    return documents
+
+
+@pytest.mark.parametrize("tray_at", [(0.5, 0.05, 0.0), (0.52, -0.02, 30.0)])
+def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
+    tray_at: tuple[float, float, float],
+) -> None:
+    """The tray stands where the kettle goes, and the demonstrations' mean of
+    the tray is there too: it cannot stay and its mean is not free, so it goes
+    to the nearest place clear of the kettle's target, is filled there, and
+    the kettle is put at its place."""
+    from shapely import box as shapely_box
+
+    from demoplan.scenes.geometry import footprint
+    from demoplan.scenes.scene import yaw_of
+    from tests.breakfast import TRAY, carried_tray_scene, laid_out
+
+    trays = ((0.2, 0.0, 90.0), (0.8, 0.0, 90.0), (0.5, 0.36, 0.0), (0.5, -0.36, 0.0))
+    documents = _kettle_documents(trays)
+    demos = [
+        d for i, doc in enumerate(documents) for d in demonstrations_from_document(doc, f"d{i}")
+    ]
+    model = learn(demos)
+    tray_state = next(s for s in model.states if s.object == "tray")
+    assert tray_state.position.anywhere
+    assert np.allclose(tray_state.position.value[:2], (0.5, 0.0), atol=1e-6)
+    document = carried_tray_scene(tray_at)
+    document["objects"]["kettle"] = {"position": [0.95, -0.3, 0.0], "shape": "box"}
+    document["objects"]["kettle"]["size"] = [0.12, 0.12, 0.15]
+    scene = scene_from_document(document, "scene.json")
+    report = run_task(model, scene)
+    assert report.success, report
+    final = report.final.poses
+    tray = final["tray"]
+    assert tray.position != (tray_at[0], tray_at[1], 0.0), "the tray stayed on the kettle's place"
+    kettle_box = shapely_box(0.44, -0.06, 0.56, 0.06)
+    tray_shape = scene.object("tray").geometry
+    assert tray_shape is not None
+    outline = footprint(tray_shape, tray.position, yaw_of(tray))
+    assert outline.intersection(kettle_box).area < 1e-6, "the tray stands on the kettle's place"
+    # nearest clear place: the tray's half-length in y (it keeps its yaw) beyond the kettle
+    distance = math.dist(tray.position[:2], (0.5, 0.0))
+    assert distance <= 0.06 + math.hypot(TRAY[0], TRAY[1]) / 2 + 0.02, distance
+    assert np.allclose(final["kettle"].position[:2], (0.5, 0.0), atol=0.004)
+    errors = []
+    for frame in (_yaw(tray), _yaw(tray) + 180.0):
+        places = laid_out((tray.position[0], tray.position[1], frame))
+        errors.append(
+            max(
+                float(np.linalg.norm(np.subtract(final[name].position, places[name][:3])))
+                for name in LAYOUT
+            )
+        )
+    assert min(errors) <= 0.004, f"{min(errors) * 1000:.1f} mm off"

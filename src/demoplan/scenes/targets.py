@@ -11,7 +11,9 @@ references:
   else j's final target in this goal, else j's current pose in the scene
   (j does not move); relative to a landmark → the landmark's pose from the
   scene (from the demonstrations only where it stood still in all of them:
-  :func:`landmark_poses`). Offsets are in world axes (eq. 1).
+  :func:`landmark_poses`); placed anywhere → where the object stands, or a
+  clear place nearest the demonstrations' mean (:func:`_anywhere_places`).
+  Offsets are in world axes (eq. 1).
 - orientation: the same chain through its own reference,
   ``R_target = R_reference · value``; a state without a learned orientation
   keeps the object's current orientation.
@@ -22,9 +24,12 @@ their earliest demonstration.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from shapely.geometry.base import BaseGeometry
 
 from demoplan.errors import InputError
 from demoplan.learning.constraints import visit_sequence
@@ -46,6 +51,7 @@ from demoplan.rotations import (
 from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.table import landmarks_of
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -138,8 +144,9 @@ class _Resolver:
         self.final_state = {states[s].object: states[s] for s in sequence}
         self.targets: dict[str, Pose] = {}  # latest target of each object so far
         self.resolving: list[str] = []
-        self.staying: frozenset[str] = frozenset()
-        """Objects whose states are placed anywhere and that stay where they stand."""
+        self.placed: dict[str, tuple[float, float, float]] = {}
+        """Where the objects whose states are placed anywhere go: where they
+        stand, or a clear place on the table (:func:`_anywhere_places`)."""
 
     def visit(self, state: State) -> Pose:
         pose = self.resolve(state)
@@ -147,8 +154,8 @@ class _Resolver:
         return pose
 
     def resolve(self, state: State) -> Pose:
-        if state.object in self.staying:  # placed anywhere, and it can stay
-            return Pose(self.current[state.object].position, self.orientation(state))
+        if state.object in self.placed:  # placed anywhere: where it stands, or a clear place
+            return Pose(self.placed[state.object], self.orientation(state))
         position = np.asarray(state.position.value, dtype=float)
         if state.position.reference is not None:
             reference = self.reference_pose(state.position.reference)
@@ -246,7 +253,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
         resolver = _Resolver(index, tuple(sequence), states, current, landmarks, geometry)
-        resolver.staying = _staying(model, scene, sequence, resolver)
+        resolver.placed = _anywhere_places(model, scene, sequence, resolver)
         resolver.targets.clear()
         subtasks = tuple(
             Subtask(
@@ -274,54 +281,124 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
     return candidates
 
 
-def _staying(
+def _anywhere_places(
     model: TaskModel, scene: Scene, sequence: tuple[str, ...], resolver: _Resolver
-) -> frozenset[str]:
-    """The objects of ``sequence`` placed anywhere (``StatePosition.anywhere``)
-    that can stay where they stand: on the table (not on another object), in
-    the sequence once, and clear of every target that does not move with
-    them (their own contents follow them). The others go where the
-    demonstrations put them on average."""
+) -> dict[str, tuple[float, float, float]]:
+    """Where each object of ``sequence`` placed anywhere (``StatePosition.anywhere``,
+    in the sequence once) goes. It stays where it stands when it stands on the
+    table (not on another object) and clear of every target that does not move
+    with it (its own contents follow it). Otherwise it goes to free space: the
+    place nearest the demonstrations' mean where its outline, at the yaw it
+    will have, is clear of those targets and of what stays in the scene
+    (:func:`_nearest_clear_place`) — the mean itself when that is clear."""
     states = {state.id: state for state in model.states}
     visits = [states[s] for s in sequence]
-    anywhere = {
-        s.object
+    anywhere = [
+        s
         for s in visits
-        if s.position.anywhere and sum(v.object == s.object for v in visits) == 1
-    }
-    candidates = {
-        name
-        for name in anywhere
-        if name in resolver.current and resolver.current[name].position[2] <= STANDING_ON_TABLE
-    }
-    if not candidates:
-        return frozenset()
+        if s.position.anywhere
+        and sum(v.object == s.object for v in visits) == 1
+        and s.object in resolver.current
+    ]
+    if not anywhere:
+        return {}
     follows = _followers(model)
-    resolver.staying = frozenset(candidates)
+    # every target with each anywhere object where it stands: the others' targets
+    # do not depend on where it goes, and its followers' are not counted against it
+    resolver.placed = {s.object: resolver.current[s.object].position for s in anywhere}
     targets = [(s.object, resolver.visit(s)) for s in visits]
     resolver.targets.clear()
-    staying = set()
-    for name in candidates:
+    moved = {s.object for s in visits}
+    landmark_outlines = [
+        footprint(shape, pose.position, yaw_of(pose))
+        for _, pose, shape in landmarks_of(scene)
+        if shape is not None
+    ]
+    places: dict[str, tuple[float, float, float]] = {}
+    for state in anywhere:
+        name = state.object
         shape = scene.object(name).geometry
-        if shape is None:
-            continue
         here = resolver.current[name]
-        outline = footprint(shape, here.position, yaw_of(here)).buffer(-TOUCH)
-        clear = True
-        for other, pose in targets:
-            other_shape = scene.object(other).geometry if other in scene.names else None
-            if other == name or name in follows.get(other, set()) or other_shape is None:
+        if shape is None:
+            places[name] = here.position
+            continue
+        blocked = [
+            footprint(other_shape, pose.position, yaw_of(pose))
+            for other, pose in targets
+            if other != name
+            and name not in follows.get(other, set())
+            and (other_shape := _shape(scene, other)) is not None
+        ]
+        yaw = yaw_of(Pose(here.position, resolver.orientation(state)))
+        if here.position[2] <= STANDING_ON_TABLE and _clear(shape, here.position, yaw, blocked):
+            places[name] = here.position
+            continue
+        mean = tuple(float(v) for v in state.position.value)
+        if mean[2] > STANDING_ON_TABLE:  # put down on something: its mean
+            places[name] = (mean[0], mean[1], mean[2])
+            continue
+        staying = [
+            footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose))
+            for obj in scene.objects
+            if obj.name not in moved and obj.geometry is not None
+        ]
+        places[name] = _nearest_clear_place(
+            shape, (mean[0], mean[1]), yaw, [*blocked, *staying, *landmark_outlines], scene.table
+        )
+    return places
+
+
+def _shape(scene: Scene, name: str) -> ObjectGeometry | None:
+    return scene.object(name).geometry if name in scene.names else None
+
+
+def _clear(
+    shape: ObjectGeometry, position: Sequence[float], yaw: float, blocked: list[BaseGeometry]
+) -> bool:
+    """Whether ``shape``'s outline at ``position`` and ``yaw`` only touches ``blocked``."""
+    outline = footprint(shape, position, yaw).buffer(-TOUCH)
+    return not any(outline.intersects(other.buffer(-TOUCH)) for other in blocked)
+
+
+def _nearest_clear_place(
+    shape: ObjectGeometry,
+    start: tuple[float, float],
+    yaw: float,
+    blocked: list[BaseGeometry],
+    table: tuple[tuple[float, float], tuple[float, float]] | None,
+) -> tuple[float, float, float]:
+    """The place on the table nearest ``start`` (on rings :data:`PLACE_STEP`
+    apart, out to :data:`PLACE_REACH`) where ``shape`` at ``yaw`` is clear of
+    ``blocked`` and inside ``table`` when the scene gives one; ``start`` itself
+    when none is (the planner then says what is in the way)."""
+    for ring in range(round(PLACE_REACH / PLACE_STEP) + 1):
+        radius = ring * PLACE_STEP
+        count = max(1, round(2 * math.pi * radius / PLACE_STEP))
+        for k in range(count):
+            angle = 2 * math.pi * k / count
+            point = (start[0] + radius * math.cos(angle), start[1] + radius * math.sin(angle), 0.0)
+            if table is not None and not _inside(shape, point, yaw, table):
                 continue
-            if outline.intersects(
-                footprint(other_shape, pose.position, yaw_of(pose)).buffer(-TOUCH)
-            ):
-                clear = False
-                break
-        if clear:
-            staying.add(name)
-    return frozenset(staying)
+            if _clear(shape, point, yaw, blocked):
+                return (round(point[0], 6), round(point[1], 6), 0.0)
+    return (start[0], start[1], 0.0)
 
 
+def _inside(
+    shape: ObjectGeometry,
+    point: tuple[float, float, float],
+    yaw: float,
+    table: tuple[tuple[float, float], tuple[float, float]],
+) -> bool:
+    (x0, y0), (x1, y1) = table
+    bx0, by0, bx1, by1 = footprint(shape, point, yaw).bounds
+    return bool(bx0 >= x0 and by0 >= y0 and bx1 <= x1 and by1 <= y1)
+
+
+PLACE_STEP = 0.01
+"""m: the rings on which a clear place for an anywhere object is looked for."""
+PLACE_REACH = 1.0
+"""m: how far from the demonstrations' mean a clear place is looked for."""
 STANDING_ON_TABLE = 0.005
 """m: an object this low stands on the table (an anywhere object on another stays not)."""
 TOUCH = 0.001
