@@ -37,7 +37,7 @@ from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
-from demoplan.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
+from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
     GEOMETRY_TOLERANCE,

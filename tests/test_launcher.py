@@ -1,4 +1,4 @@
-"""The lean ``demoplan solve`` path (demoplan.launcher) against the typer command.
+"""The lean ``demoplan solve`` path (demoplan.cli.launcher) against the typer command.
 
 Both must print the same plan, JSON and one-line errors with the same exit
 codes; whatever the lean parser does not accept must be left to typer.
@@ -18,7 +18,7 @@ import typer.main
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
+from demoplan.cli.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
 from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.xml import save_problem
 from tests.test_problem_xml import BOMB
@@ -174,12 +174,12 @@ def test_the_executable_takes_the_lean_path() -> None:
 def test_the_cli_does_not_import_the_launcher_back() -> None:
     """launcher → cli only (at dispatch): the typer application reaches the
     command clock and the signal state through demoplan.commands and
-    demoplan.interrupts, never through the launcher."""
+    demoplan.cli.interrupts, never through the launcher."""
     code = (
         "import sys, demoplan.cli\n"
-        "print('demoplan.launcher' in sys.modules)\n"
-        "import demoplan.launcher\n"
-        "print(sorted(m for m in sys.modules if m.startswith('demoplan.launcher')))\n"
+        "print('demoplan.cli.launcher' in sys.modules)\n"
+        "import demoplan.cli.launcher\n"
+        "print(sorted(m for m in sys.modules if m.startswith('demoplan.cli.launcher')))\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert done.stdout.splitlines() == ["False", "['demoplan.launcher']"]
+    assert done.stdout.splitlines() == ["False", "['demoplan.cli.launcher']"]

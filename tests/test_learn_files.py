@@ -1,4 +1,4 @@
-"""demoplan.learning.files.learn_files: learning from files as `learn` does
+"""demoplan.commands.learning.learn_files: learning from files as `learn` does
 it, callable without the command line."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from demoplan.commands.learning import learn_files, read_requirements
 from demoplan.errors import InputError
-from demoplan.learning.files import learn_files, read_requirements
 from demoplan.learning.modelfile import load_model
 from tests.helpers import EXAMPLES
 

@@ -56,8 +56,8 @@ def test_one_planning_budget_default() -> None:
     import inspect
 
     import demoplan.api as api
+    from demoplan.cli.clock import DEFAULT_TIMEOUT
     from demoplan.cli.execution import run as run_command
-    from demoplan.commands import DEFAULT_TIMEOUT
     from demoplan.execution.executor import ExecutionSettings
 
     assert ExecutionSettings().budget.timeout == PLANNING_SECONDS == DEFAULT_TIMEOUT

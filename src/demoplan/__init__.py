@@ -36,7 +36,7 @@ _EXPORTS = {
     "Faults": "demoplan.execution.faults",
     "RunReport": "demoplan.execution.executor",
     "load_demonstrations": "demoplan.learning.demonstrations",
-    "load_inputs": "demoplan.inputs",
+    "load_inputs": "demoplan.commands.inputs",
     "load_model": "demoplan.learning.modelfile",
     "save_model": "demoplan.learning.modelfile",
     "Problem": "demoplan.planning.problem",
@@ -80,11 +80,11 @@ __all__ = [
 
 if TYPE_CHECKING:
     from demoplan.api import learn, plan, run
+    from demoplan.commands.inputs import load_inputs
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
     from demoplan.execution.executor import RunReport
     from demoplan.execution.faults import Faults
     from demoplan.execution.world import Observation, World
-    from demoplan.inputs import load_inputs
     from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.learner import TaskModelLearner
     from demoplan.learning.modelfile import load_model, save_model

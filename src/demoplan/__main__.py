@@ -1,5 +1,5 @@
 """``python -m demoplan``: the same as the ``demoplan`` command."""
 
-from demoplan.launcher import main
+from demoplan.cli.launcher import main
 
 main()

@@ -20,11 +20,11 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from demoplan.commands.inputs import load_inputs
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import run_task
 from demoplan.execution.world import World
-from demoplan.inputs import load_inputs
 from demoplan.learning.learner import learn as learn_demonstrations
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.settings import LearningSettings

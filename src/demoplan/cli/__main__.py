@@ -1,5 +1,5 @@
 """``python -m demoplan.cli``: the typer application."""
 
-from demoplan.cli import main
+from demoplan.cli.application import main
 
 main()

@@ -83,15 +83,15 @@ def reported_errors() -> Iterator[None]:
     except OSError as exc:  # a file system refusal no reader foresaw: still one line
         _HELD.discard()
         if exc.filename is None:  # printing failed: stdout full, or its reader gone
-            raise  # demoplan.launcher.main names standard output
+            raise  # demoplan.cli.launcher.main names standard output
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (docs/cli.md)
-        from demoplan.interrupts import interrupted_by_signal, interrupted_exit_code
+        from demoplan.cli.interrupts import interrupted_by_signal, interrupted_exit_code
 
         _HELD.discard()
         if interrupted_by_signal():
-            raise  # demoplan.launcher.main reports it, once
+            raise  # demoplan.cli.launcher.main reports it, once
         sys.stderr.write("demoplan: interrupted\n")
         raise typer.Exit(interrupted_exit_code(exc)) from None
     else:
@@ -180,7 +180,7 @@ def _main(
         bool, typer.Option("--verbose", "-v", help="Log progress to stderr.")
     ] = False,
 ) -> None:
-    from demoplan.commands import mark_command_start
+    from demoplan.cli.clock import mark_command_start
 
     mark_command_start()
     _HELD.discard()

@@ -171,7 +171,7 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
-    from demoplan.learning.files import learn_files
+    from demoplan.commands.learning import learn_files
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():

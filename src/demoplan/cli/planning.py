@@ -9,6 +9,7 @@ from typing import Annotated
 
 import typer
 
+from demoplan.cli.clock import command_budget
 from demoplan.cli.common import (
     ClutterOption,
     CollisionsOption,
@@ -20,25 +21,18 @@ from demoplan.cli.common import (
     SearchName,
     app,
     geometry_settings,
-    model_named,
     print_json,
     reported_errors,
-    scene_inputs,
     stderr,
 )
-from demoplan.cli.render import (
-    plot_no_plan,
-    plot_scene_plan,
-    print_scene_plan,
-)
-from demoplan.errors import (
-    LimitReachedError,
-    NoPlanError,
-    UsageError,
-)
-from demoplan.fileio import (
-    refuse_overwriting_inputs,
-)
+from demoplan.cli.launcher import SolveOptions, solve_text
+from demoplan.cli.render import plot_no_plan, plot_scene_plan, print_scene_plan
+from demoplan.commands.planning import plan as plan_task
+from demoplan.commands.planning import write_problem
+from demoplan.commands.solving import export_pddl
+from demoplan.planning.problem import optimality_line
+from demoplan.plotting import check_figure_path
+from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
 
 
 @app.command()
@@ -71,8 +65,6 @@ def solve(
 ) -> None:
     """Solve a planning problem: a GRASP / PUT_DOWN plan (paper §IV.C), shortest where
     proved within the time budget. stderr says which, and the proven lower bound."""
-    from demoplan.commands import SolveOptions, solve_text
-
     with reported_errors():
         options = SolveOptions(problem_path, json_output, search.value, max_nodes, timeout, optimal)
         # a spinner while a long search runs on a terminal; nothing when piped
@@ -93,13 +85,8 @@ def pddl(
     grounded: GroundedOption = False,
 ) -> None:
     """Export a problem as PDDL: a lifted domain and problem (--grounded: plain STRIPS)."""
-    from demoplan.planning.pddl import save_pddl
-    from demoplan.planning.xml import load_problem
-
     with reported_errors():
-        for name in ("domain.pddl", "problem.pddl"):  # the files save_pddl writes
-            refuse_overwriting_inputs(output / name, [problem_path])
-        domain, problem = save_pddl(load_problem(problem_path), output, grounded=grounded)
+        domain, problem = export_pddl(problem_path, output, grounded=grounded)
         stderr.print(f"wrote {domain} and {problem}", markup=False, highlight=False)
 
 
@@ -130,43 +117,33 @@ def plan(
     collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
-    from demoplan.commands import command_budget
-    from demoplan.planning.problem import optimality_line
-    from demoplan.scenes.plan import plan_in_scene
-    from demoplan.scenes.prepared import prepare
-
-    with reported_errors(), model_named(model_path):
+    with reported_errors():
         if plot is not None:
-            from demoplan.plotting import check_figure_path
-
             check_figure_path(plot, "--plot")
-        model, raw_scene = scene_inputs(model_path, scene_path)
-        scene = prepare(model, raw_scene, clutter=clutter)
-        budget = command_budget(max_nodes, timeout)
-        settings = geometry_settings(freespace, collisions)
         try:
             with (
                 stderr.status("Planning every candidate goal…")
                 if stderr.is_terminal
                 else (nullcontext())
             ):
-                result = plan_in_scene(
-                    model, scene, budget=budget, settings=settings, clutter=clutter
+                result = plan_task(
+                    model_path,
+                    scene_path,
+                    budget=command_budget(max_nodes, timeout),
+                    settings=geometry_settings(freespace, collisions),
+                    clutter=clutter,
+                    optimal=optimal,
                 )
-        except (NoPlanError, LimitReachedError) as exc:
+        except (SceneNoPlanError, SceneLimitReachedError) as exc:
             if plot is not None:  # a picture of the targets is what is needed now
-                plot_no_plan(model, scene, settings, str(exc), plot)
+                plot_no_plan(exc, plot)
             raise
-        if optimal and not result.optimal:
-            raise LimitReachedError(
-                f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"
-            )
         if plot is not None:
-            plot_scene_plan(model, result, plot)
+            plot_scene_plan(result, plot)
         if json_output:
             print_json(result.to_json())
         else:
-            print_scene_plan(result, model)
+            print_scene_plan(result)
         check = result.chosen.problem.collision_check
         if check is not None and not json_output:
             stderr.print(f"demoplan: {check.summary()}", markup=False, highlight=False)
@@ -202,28 +179,20 @@ def problem(
     collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
-    from demoplan.planning.pddl import pddl_domain_path, save_pddl_problem
-    from demoplan.planning.xml import save_problem
-    from demoplan.scenes.plan import goal_problem
-
-    with reported_errors(), model_named(model_path):
-        if grounded and not pddl_output:
-            raise UsageError("--grounded chooses the PDDL form: it needs --pddl")
-        inputs = [model_path, scene_path]
-        refuse_overwriting_inputs(output, inputs)
-        if pddl_output:
-            refuse_overwriting_inputs(pddl_domain_path(output), inputs)
-        model, scene = scene_inputs(model_path, scene_path)
-        chosen = goal_problem(model, scene, goal, geometry_settings(freespace, collisions))
-        if chosen.collision_check is not None:
-            stderr.print(
-                f"demoplan: {chosen.collision_check.summary()}", markup=False, highlight=False
-            )
-        if pddl_output:
-            domain_path = save_pddl_problem(chosen.problem, output, grounded=grounded)
-            stderr.print(f"wrote {output} and {domain_path}", markup=False, highlight=False)
-        else:
-            save_problem(chosen.problem, output)
-            stderr.print(f"wrote {output}", markup=False, highlight=False)
-        for obstacle in chosen.obstacles:
+    with reported_errors():
+        written = write_problem(
+            model_path,
+            scene_path,
+            output,
+            goal=goal,
+            settings=geometry_settings(freespace, collisions),
+            pddl=pddl_output,
+            grounded=grounded,
+        )
+        check = written.problem.collision_check
+        if check is not None:
+            stderr.print(f"demoplan: {check.summary()}", markup=False, highlight=False)
+        files = " and ".join(str(f) for f in written.files)
+        stderr.print(f"wrote {files}", markup=False, highlight=False)
+        for obstacle in written.problem.obstacles:
             stderr.print(f"demoplan: warning: {obstacle}", markup=False, highlight=False)

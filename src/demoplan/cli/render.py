@@ -26,6 +26,7 @@ from demoplan.wording import plural
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
+    from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError, ScenePlan
 
 
 def fitted_table(
@@ -172,30 +173,34 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
         say(f"Cannot be grasped where they stand: {', '.join(stuck)} (something else moves first)")
 
 
-def plot_scene_plan(model: TaskModel, result: Any, path: Path) -> None:
+def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     """The chosen plan in the scene it was made in (prepared: sizes, landmarks)."""
     from demoplan.plotting import save_scene_plan
 
     chosen = result.chosen
-    title = f"Goal of {model.demonstration_label(chosen.goal)}: {len(chosen.plan) // 2} moves"
+    assert result.model is not None and result.scene is not None and chosen.plan is not None
+    label = result.model.demonstration_label(chosen.goal)
+    title = f"Goal of {label}: {len(chosen.plan) // 2} moves"
     with plot_errors(path):
         save_scene_plan(result.scene, chosen.problem, chosen.plan, path, title)
 
 
-def plot_no_plan(model: TaskModel, prepared: Any, settings: Any, reason: str, path: Path) -> None:
-    """The prepared scene, the first candidate goal's targets and why there is no plan."""
+def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
+    """The prepared scene, the first candidate goal's targets and why there is no
+    plan (the problems the planner was given, carried by ``failure``)."""
     from demoplan.plotting import save_scene_targets
-    from demoplan.scenes.plan import scene_problems
 
-    first = scene_problems(model, prepared, settings)[0]
+    first = failure.outcomes[0].problem
     goal = first.candidate.demonstrations[0]
-    title = f"No plan; the targets of the goal of {model.demonstration_label(goal)}"
+    title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
     with plot_errors(path):
-        save_scene_targets(prepared.scene, first, reason, path, title)
+        save_scene_targets(failure.scene, first, str(failure), path, title)
     stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 
-def print_scene_plan(result: Any, model: TaskModel) -> None:
+def print_scene_plan(result: ScenePlan) -> None:
+    model = result.model
+    assert model is not None and result.chosen.plan is not None
     table = Table(title="Candidate goals", title_justify="left")
     for column in ("goal of demonstration", "actions", "moves", ""):
         table.add_column(column)
@@ -204,16 +209,16 @@ def print_scene_plan(result: Any, model: TaskModel) -> None:
             model.demonstration_number(k) for k in candidate.problem.candidate.demonstrations
         )
         length = candidate.length
-        chosen = candidate is result.chosen
         table.add_row(
             Text(names),
             "—" if length is None else str(length),
             "—" if length is None else str(length // 2),
-            "chosen" if chosen else Text(candidate.reason or ""),
+            "chosen" if candidate is result.chosen else Text(candidate.reason or ""),
         )
     stdout.print(table)
     sys.stdout.flush()
     chosen = result.chosen
+    assert chosen.plan is not None
     for action in chosen.plan.actions:
         sys.stdout.write(f"{action}\n")
     sys.stdout.flush()

@@ -270,7 +270,7 @@ def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
     and check them together (:func:`check_demonstrations`).
 
     Pose streams (CSV, ROS 2 bags) are segmented first by
-    :func:`demoplan.inputs.load_inputs`, which reads both."""
+    :func:`demoplan.commands.inputs.load_inputs`, which reads both."""
     demos: list[Demonstration] = []
     for path in map(Path, paths):
         demos += demonstrations_from_path(path)

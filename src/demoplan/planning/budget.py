@@ -8,7 +8,14 @@ from dataclasses import dataclass
 
 from demoplan.planning.problem import Action
 
-__all__ = ["MAX_STATES", "PLANNING_SECONDS", "Budget", "Clock", "SearchOutcome"]
+__all__ = [
+    "MAX_STATES",
+    "PLANNING_SECONDS",
+    "Budget",
+    "Clock",
+    "SearchOutcome",
+    "default_budget",
+]
 
 PLANNING_SECONDS = 2.0
 """The time budget of a planning command and of each (re)planning of a run,
@@ -75,3 +82,8 @@ class Clock:
     def remaining(self) -> float | None:
         """Seconds left, if there is a deadline."""
         return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
+
+
+def default_budget() -> Budget:
+    """A planning command's budget when it is given none: :data:`PLANNING_SECONDS`."""
+    return Budget(timeout=PLANNING_SECONDS)

@@ -30,12 +30,41 @@ from demoplan.wording import plural
 
 __all__ = [
     "CandidatePlan",
+    "SceneLimitReachedError",
+    "SceneNoPlanError",
     "ScenePlan",
     "goal_problem",
     "plan_in_scene",
     "scene_problems",
     "solve_candidate",
 ]
+
+
+class SceneNoPlanError(NoPlanError):
+    """No candidate goal has a plan in the scene (exit 3): each candidate's
+    outcome (its problem, why it has no plan) and the prepared scene travel
+    with the error, so that a figure of the failure needs no second build."""
+
+    def __init__(
+        self, message: str, outcomes: tuple[CandidatePlan, ...], scene: Scene, model: TaskModel
+    ):
+        super().__init__(message)
+        self.outcomes = outcomes
+        self.scene = scene
+        self.model = model
+
+
+class SceneLimitReachedError(LimitReachedError):
+    """No candidate goal was planned within the budget (exit 4); as
+    :class:`SceneNoPlanError`, with the outcomes and the scene."""
+
+    def __init__(
+        self, message: str, outcomes: tuple[CandidatePlan, ...], scene: Scene, model: TaskModel
+    ):
+        super().__init__(message)
+        self.outcomes = outcomes
+        self.scene = scene
+        self.model = model
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,6 +100,8 @@ class ScenePlan:
     chosen: CandidatePlan
     scene: Scene | None = None
     """The scene planned in, prepared (complete: sizes, landmarks): what figures draw."""
+    model: TaskModel | None = None
+    """The task model planned (its demonstrations name the candidates)."""
 
     @property
     def bound(self) -> int:
@@ -220,7 +251,17 @@ def plan_in_scene(
             f"goal of {model.demonstration_label(c.goal)}: {c.reason}" for c in outcomes
         )
         if any(c.limit_reached for c in outcomes):
-            raise LimitReachedError(f"no candidate goal planned within the budget ({reasons})")
-        raise NoPlanError(f"no candidate goal can be reached in this scene ({reasons})")
+            raise SceneLimitReachedError(
+                f"no candidate goal planned within the budget ({reasons})",
+                tuple(outcomes),
+                prepared.scene,
+                model,
+            )
+        raise SceneNoPlanError(
+            f"no candidate goal can be reached in this scene ({reasons})",
+            tuple(outcomes),
+            prepared.scene,
+            model,
+        )
     chosen = min(solved, key=lambda c: (c.length, c.goal))
-    return ScenePlan(tuple(outcomes), chosen, prepared.scene)
+    return ScenePlan(tuple(outcomes), chosen, prepared.scene, model)

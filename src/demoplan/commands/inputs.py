@@ -1,4 +1,6 @@
-"""What ``demoplan learn`` reads: demonstration files and folders, and pose streams.
+"""What the commands read: demonstration files and folders, and pose streams
+(:func:`load_inputs`); a task model and a scene, given as values or as the
+files that hold them (:func:`task_and_scene`).
 
 This module sits above the two stages it dispatches to:
 :mod:`demoplan.learning.demonstrations` reads demonstration files only, and
@@ -9,14 +11,23 @@ former imports neither).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from demoplan.errors import InputError
 from demoplan.learning.demonstrations import check_demonstrations, demonstrations_from_path
-from demoplan.model import Demonstration, ObjectGeometry
+from demoplan.learning.modelfile import load_model
+from demoplan.model import Demonstration, ObjectGeometry, TaskModel
+from demoplan.scenes.scene import Scene, load_scene
 
-__all__ = ["STREAM_SUFFIXES", "is_pose_stream", "load_inputs"]
+__all__ = [
+    "STREAM_SUFFIXES",
+    "is_pose_stream",
+    "load_inputs",
+    "model_named",
+    "task_and_scene",
+]
 
 STREAM_SUFFIXES = {".csv", ".db3", ".mcap"}
 
@@ -85,3 +96,23 @@ def load_inputs(
         check_geometry_names(geometry, list(tracked), geometry_source)
     check_demonstrations(demos)
     return demos
+
+
+def task_and_scene(
+    model: TaskModel | str | Path, scene: Scene | str | Path
+) -> tuple[TaskModel, Scene]:
+    """The task model and the scene: given, or read from their files."""
+    task = model if isinstance(model, TaskModel) else load_model(model)
+    return task, scene if isinstance(scene, Scene) else load_scene(scene)
+
+
+@contextmanager
+def model_named(model: TaskModel | str | Path) -> Iterator[None]:
+    """A fault in the model found only while planning (a cycle of references)
+    names the model file, not "task model", where the model came from one."""
+    try:
+        yield
+    except InputError as exc:
+        if exc.source != "task model" or isinstance(model, TaskModel):
+            raise
+        raise InputError(exc.message, source=str(model), field=exc.field) from None

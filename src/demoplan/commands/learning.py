@@ -68,8 +68,8 @@ def learn_files(
     is given. Two updates of one model at once both land (the second waits).
     ``frame``, ``objects``, ``units``, ``landmarks`` and ``objects_file`` (the
     geometry of the streams' objects) are for pose streams
-    (:func:`demoplan.inputs.load_inputs`)."""
-    from demoplan.inputs import load_inputs
+    (:func:`demoplan.commands.inputs.load_inputs`)."""
+    from demoplan.commands.inputs import load_inputs
     from demoplan.learning.demonstrations import load_object_geometry
 
     target = output or update_path

@@ -1,5 +1,5 @@
 """Ctrl-C and SIGTERM, the same way in every command (docs/cli.md: exit 130 /
-143): the handlers :func:`demoplan.launcher.main` installs, and what the CLI
+143): the handlers :func:`demoplan.cli.launcher.main` installs, and what the CLI
 asks when a command was stopped. Kept apart from the launcher so that the
 typer application can use it without importing the launcher back.
 """

@@ -1,0 +1,19 @@
+"""The typer application: every command module registered on one app."""
+
+from __future__ import annotations
+
+from demoplan.cli import execution, learning, planning, recordings, report  # noqa: F401 - commands
+from demoplan.cli.common import FRAME_FILES, REPORT_FILES, app
+from demoplan.cli.render import fitted_table, states_table
+
+__all__ = ["FRAME_FILES", "REPORT_FILES", "app", "fitted_table", "main", "states_table"]
+
+
+def main() -> None:
+    """Run the typer application (the ``demoplan`` executable is
+    :func:`demoplan.cli.launcher.main`)."""
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

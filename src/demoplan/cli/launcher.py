@@ -1,0 +1,254 @@
+"""The ``demoplan`` executable: a lean path for ``demoplan solve``, typer for the rest.
+
+Importing typer, click, pydantic and rich costs about 0.4 s per process, twenty
+times what solving a small problem takes. Programs that call ``demoplan solve``
+once per problem (a benchmark harness, an executive replanning in a loop) pay
+that on every call, so a plain, non-interactive ``solve`` invocation is parsed
+here with :mod:`argparse` and run with nothing but the planner imported.
+Anything else — another command, ``--help``, an option this parser does not
+know or a value it would reject, an interactive terminal (which gets a
+spinner) — goes to the typer application in :mod:`demoplan.cli`, so help
+texts, usage errors and their exit codes come from one place. The two paths
+print the same plan, the same JSON and the same one-line errors (tested).
+"""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import os
+import sys
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+# First: the command clock starts when this module is imported, at process start.
+from demoplan.cli.clock import command_budget, mark_command_start, mark_process_start
+from demoplan.cli.interrupts import (
+    INTERRUPTED_EXIT,
+    TERMINATED_EXIT,
+    on_signal,
+    redeliver_lost_signal,
+    signals_received,
+)
+
+__all__ = [
+    "SOLVE_OPTIONS",
+    "SolveOptions",
+    "main",
+    "parse_solve_options",
+    "run_solve",
+    "solve_text",
+]
+
+SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout", "--optimal")
+"""Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """What ``demoplan solve`` was asked to do."""
+
+    problem: Path
+    json_output: bool = False
+    search: str = "astar"
+    max_nodes: int | None = None
+    timeout: float | None = None  # None: the default budget
+    optimal: bool = False
+
+
+def solve_text(
+    options: SolveOptions, spinner: Callable[[str], AbstractContextManager[object]] | None = None
+) -> tuple[str, str]:
+    """``demoplan solve``'s output: the plan of
+    :func:`~demoplan.commands.solving.solve_problem` in the paper's format (or
+    its JSON), and the line for stderr saying whether it is proved shortest;
+    ``spinner(text)`` wraps the search (a terminal's status line). Both
+    ``solve`` paths (this launcher's and typer's) render with this."""
+    from demoplan.commands.solving import solve_problem
+    from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
+
+    budget = command_budget(options.max_nodes, options.timeout)
+    with spinner(f"Searching ({options.search}) for a plan…") if spinner else nullcontext():
+        solved = solve_problem(
+            options.problem, search=options.search, budget=budget, optimal=options.optimal
+        )
+    note = f"demoplan: {optimality_line(solved.plan)}\n"
+    if options.json_output:
+        import json
+
+        data = plan_to_json(solved.plan, solved.read_seconds)
+        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n", note
+    return format_plan(solved.plan), note
+
+
+class _DeclinedError(Exception):
+    """The lean parser leaves this command line to typer."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise _DeclinedError(message)
+
+
+def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
+    """Options of ``demoplan solve ARGS``, or None when typer should handle them."""
+    if any(arg in ("-h", "--help") for arg in args):
+        return None
+    parser = _Parser(prog="demoplan solve", add_help=False, allow_abbrev=False)
+    parser.add_argument("problem", type=Path)
+    parser.add_argument("--json", dest="json_output", action="store_true")
+    from demoplan.planning.search import SEARCHES  # needed next anyway, to solve
+
+    parser.add_argument("--search", choices=tuple(SEARCHES), default="astar")
+    parser.add_argument("--max-nodes", type=int, default=None)
+    parser.add_argument("--timeout", type=float, default=None)
+    parser.add_argument("--optimal", action="store_true")
+    try:
+        parsed = parser.parse_args(list(args))
+    except _DeclinedError:
+        return None
+    max_nodes: int | None = parsed.max_nodes
+    timeout: float | None = parsed.timeout
+    if (max_nodes is not None and max_nodes < 1) or (
+        timeout is not None and not timeout >= 0.0  # also refuses NaN
+    ):
+        return None  # typer's range checks word the usage error
+    return SolveOptions(
+        parsed.problem, parsed.json_output, parsed.search, max_nodes, timeout, parsed.optimal
+    )
+
+
+def run_solve(options: SolveOptions) -> int:
+    """Solve, print the plan (or its JSON) on stdout; return the exit code (docs/cli.md)."""
+    from demoplan.errors import DemoplanError, error_line
+    from demoplan.fileio import os_error
+
+    mark_command_start()
+    try:
+        text, note = solve_text(options)
+    except DemoplanError as exc:
+        sys.stderr.write(error_line(exc) + "\n")
+        return exc.exit_code
+    except OSError as exc:
+        sys.stderr.write(error_line(os_error(exc)) + "\n")
+        return 1
+    sys.stdout.write(text)
+    sys.stderr.write(note)
+    return 0
+
+
+def main() -> None:
+    """Entry point of the ``demoplan`` command."""
+    import signal
+
+    mark_process_start()
+    # Ctrl-C raises KeyboardInterrupt even where the process was started with
+    # SIGINT ignored (a background job of a script); SIGTERM does the same.
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    sys.unraisablehook = redeliver_lost_signal
+    # Started with stdout (or stderr) closed: what would be printed is dropped,
+    # as if sent to /dev/null; a command whose job is a file still does it.
+    if sys.stdout is None:
+        sys.stdout = Path(os.devnull).open("w")  # noqa: SIM115 - for the whole process
+    if sys.stderr is None:
+        sys.stderr = Path(os.devnull).open("w")  # noqa: SIM115
+    # A file name with bytes that are not UTF-8 is printed with escapes, not a
+    # UnicodeEncodeError.
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            reconfigure(errors="backslashreplace")
+    code = 1
+    try:
+        try:
+            code = _dispatch()
+        finally:
+            if not signals_received:
+                sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
+    except KeyboardInterrupt:
+        if not signals_received:  # raised without a signal (a test, a debugger)
+            signals_received.append(signal.SIGINT)
+    except Exception as exc:
+        if not signals_received:
+            if not isinstance(exc, OSError):
+                raise
+            # stdout full (> /dev/full) or its reader gone (| head)
+            _drop_stdout()
+            sys.stderr.write(f"demoplan: error: standard output: {_stdout_reason(exc)}\n")
+            raise SystemExit(1) from None
+        # else the signal surfaced as another error: a C extension interrupted
+        # while it loads reports "ImportError: initialization failed"
+    # The command is over: a signal now would only turn a finished command's
+    # exit into Python's own KeyboardInterrupt report.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    if signals_received:
+        # Every command stops the same way, wherever the signal found it.
+        _drop_stdout()
+        sys.stderr.write("demoplan: interrupted\n")
+        sys.stderr.flush()
+        terminated = signal.SIGTERM in signals_received
+        # At once: the command has unwound (outputs removed, locks released), and
+        # the interpreter's own teardown (MuJoCo's GL contexts, matplotlib) can
+        # take longer than the second a stopped command has.
+        os._exit(TERMINATED_EXIT if terminated else INTERRUPTED_EXIT)
+    raise SystemExit(code)
+
+
+def _drop_stdout() -> None:
+    """Point stdout at /dev/null, so that Python's flush at exit cannot fail again."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+    except (OSError, ValueError):
+        pass
+
+
+def _stdout_reason(exc: OSError) -> str:
+    from demoplan.fileio import os_reason
+
+    if exc.errno == errno.EPIPE:
+        return "the pipe was closed by its reader"
+    return os_reason(exc)
+
+
+def _dispatch() -> int:
+    """Run the command; its exit code. Usage errors are one line (docs/cli.md)."""
+    args = sys.argv[1:]
+    if args[:1] == ["solve"] and not sys.stderr.isatty():
+        options = parse_solve_options(args[1:])
+        if options is not None:
+            sys.stdout.flush()
+            return run_solve(options)
+    from demoplan.cli.application import app
+
+    try:
+        result = app(standalone_mode=False)
+    except Exception as exc:  # click's (or typer's vendored click's) exceptions
+        if not hasattr(exc, "format_message") or not hasattr(exc, "exit_code"):
+            raise
+        if type(exc).__name__ == "NoArgsIsHelpError":  # `demoplan` alone: the help
+            exc.show()  # type: ignore[attr-defined]
+            return int(exc.exit_code)
+        return _usage_error(exc)
+    return result if isinstance(result, int) else 0
+
+
+def _usage_error(exc: Any) -> int:
+    """A click usage error (or Abort) as one line naming the command."""
+    context = getattr(exc, "ctx", None)
+    command = context.command_path if context is not None else "demoplan"
+    message = " ".join(str(exc.format_message()).split()).rstrip(".") or "aborted"
+    hint = f"; see {command} --help" if type(exc).__name__ != "Abort" else ""
+    name = command.removeprefix("demoplan").strip() or "demoplan"
+    sys.stderr.write(f"demoplan: error: {name}: {message}{hint}\n")
+    return int(exc.exit_code) if exc.exit_code else 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
