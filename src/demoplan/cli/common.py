@@ -65,7 +65,7 @@ stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
 REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
 """Names ``experiments`` writes: a folder of only these is an earlier report."""
-FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
+
 """Names ``run --frames`` writes: a folder of only these holds an earlier run's frames."""
 
 

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager, nullcontext
-from dataclasses import replace
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -13,7 +12,6 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan.cli.common import (
-    FRAME_FILES,
     ClutterOption,
     CollisionsOption,
     CollisionSource,
@@ -24,21 +22,17 @@ from demoplan.cli.common import (
     SimName,
     app,
     geometry_settings,
-    model_named,
     print_json,
     reported_errors,
-    scene_inputs,
     stderr,
     stdout,
     working,
 )
-from demoplan.cli.render import (
-    print_run_report,
-)
+from demoplan.cli.render import print_run_report
+from demoplan.commands.execution import perceive as perceive_image
+from demoplan.commands.execution import run as run_task
 from demoplan.deadline import PERCEPTION_TIMEOUT
-from demoplan.fileio import (
-    refuse_overwriting_inputs,
-)
+from demoplan.execution.faults import parse_faults
 from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.wording import plural
 
@@ -117,33 +111,16 @@ def run(
     ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
-    from demoplan.execution.faults import parse_faults
-    from demoplan.execution.runner import run_task
-    from demoplan.fileio import staged_folder
-
-    with reported_errors(), model_named(model_path):
-        if video is not None:
-            from demoplan.execution.runner import check_video_path
-
-            check_video_path(video)
-            refuse_overwriting_inputs(video, [model_path, scene_path])
-        model, scene = scene_inputs(model_path, scene_path)
-        fault_rates = parse_faults(faults)
+    with reported_errors():
         live = stderr.is_terminal and not json_output
-        # The frames folder whole or not at all: built beside --frames, swapped in at the end.
-        staging = (
-            staged_folder(frames, lambda name: bool(FRAME_FILES.match(name)))
-            if frames is not None
-            else nullcontext(None)
-        )
-        with staging as building, live_progress(live) as on_event:
+        with live_progress(live) as on_event:
             report = run_task(
-                model,
-                scene,
+                model_path,
+                scene_path,
                 sim=sim.value,
-                faults=fault_rates,
+                faults=parse_faults(faults),
                 seed=seed,
-                frames=building,
+                frames=frames,
                 max_replans=max_replans,
                 perception=perception.value,
                 geometry=geometry_settings(freespace, collisions),
@@ -152,9 +129,6 @@ def run(
                 clutter=clutter,
                 video=video,
             )
-        if frames is not None and building is not None:  # named where they now are
-            moved = tuple(str(frames / Path(f).name) for f in report.frames)
-            report = replace(report, frames=moved)
         if json_output:
             print_json(report.to_json())
         else:
@@ -198,27 +172,24 @@ def perceive(
     ] = PERCEPTION_TIMEOUT,
 ) -> None:
     """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
-    from demoplan.fileio import dump_json, write_atomic
-    from demoplan.perception.images import perceive_files
-    from demoplan.perception.stacking import scene_document
-
     with reported_errors():
-        if output is not None:
-            refuse_overwriting_inputs(output, [image_path, *([before] if before else [])])
         with working("Finding blocks…"):
-            blocks = perceive_files(
-                image_path, px_per_m, origin, before=before, side=side, timeout=timeout
+            found = perceive_image(
+                image_path,
+                px_per_m,
+                origin,
+                before=before,
+                side=side,
+                timeout=timeout,
+                output=output,
             )
-        document = scene_document(blocks)
-        if output is not None:
-            write_atomic(output, dump_json(document))
         if json_output:
-            print_json(document)
+            print_json(found.document)
             return
         table = Table(title=f"Blocks in {image_path.name}", title_justify="left")
         for column in ("name", "x [m]", "y [m]", "z [m]", "yaw [deg]", "side [m]"):
             table.add_column(column, justify="left" if column == "name" else "right")
-        for name, b in blocks.items():
+        for name, b in found.blocks.items():
             table.add_row(
                 name, f"{b.x:.4f}", f"{b.y:.4f}", f"{b.z:.3f}", f"{b.yaw:.1f}", f"{b.side:.4f}"
             )

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import re
-from contextlib import suppress
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -22,17 +20,13 @@ from demoplan.cli.common import (
     reported_errors,
     stderr,
 )
-from demoplan.cli.render import (
-    print_steps,
-    segmentation_figure,
-)
-from demoplan.errors import (
-    InputError,
-    UsageError,
-)
-from demoplan.fileio import (
-    refuse_overwriting_inputs,
-)
+from demoplan.cli.render import print_steps
+from demoplan.commands.recordings import import_recording
+from demoplan.commands.recordings import segment as segment_stream
+from demoplan.learning.demonstrations import demonstration_to_dict
+from demoplan.poses import pose_to_dict
+from demoplan.segmentation.settings import settings_help
+from demoplan.segmentation.types import parse_object_patterns
 from demoplan.wording import plural
 
 
@@ -82,38 +76,20 @@ def segment(
     rest on a support (docs/segmentation.md); a push along the support is
     reported, not a step; a pause in the air is not a placement.
     """
-    from demoplan.fileio import StagedOutputs, dump_json
-    from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
-    from demoplan.plotting import check_figure_path
-    from demoplan.segmentation.settings import settings_from_text
-    from demoplan.segmentation.streams import demonstration_from_stream
-    from demoplan.segmentation.types import parse_object_patterns
-
     with reported_errors():
-        inputs = [stream_path, *([objects_file] if objects_file is not None else [])]
-        refuse_overwriting_inputs(output, inputs)
-        if plot is not None:
-            refuse_overwriting_inputs(plot, [*inputs, output])
-            check_figure_path(plot, "--plot")
-        segmented = demonstration_from_stream(
+        done = segment_stream(
             stream_path,
-            name=name or stream_path.stem,
-            settings=settings_from_text(thresholds or []),
+            output,
+            name=name,
+            plot=plot,
+            thresholds=thresholds or (),
             frame=frame,
             objects=parse_object_patterns(objects),
-            units=None if units is None else units.value,
             landmarks=parse_object_patterns(landmarks),
-            geometry=None if objects_file is None else load_object_geometry(objects_file),
-            geometry_source=None if objects_file is None else str(objects_file),
-            geometry_of_this_stream=True,
+            units=None if units is None else units.value,
+            objects_file=objects_file,
         )
-        found, demo = segmented.segmentation, segmented.demonstration
-        # The demonstration and the plot are written both or neither.
-        with StagedOutputs() as outputs:
-            text = dump_json(demonstration_to_dict(demo))
-            outputs.add(output, text.encode("utf-8", "backslashreplace"))  # see write_atomic
-            if plot is not None:
-                outputs.add(plot, segmentation_figure(found, plot))
+        found, demo = done.segmentation, done.demonstration
         if json_output:
             print_json(demonstration_to_dict(demo))
             return
@@ -127,33 +103,10 @@ def segment(
 
 
 def _segmentation_defaults() -> str:
-    from demoplan.segmentation.settings import settings_help
-
     return settings_help()
 
 
-def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:
-    """Write every file or none (:class:`~demoplan.fileio.StagedOutputs`): on
-    any failure, or Ctrl-C, the files are as they were (and ``folder`` is
-    removed when this call created it)."""
-    from demoplan.fileio import StagedOutputs, check_output_folder
-
-    check_output_folder(folder)
-    created = not folder.exists()
-    try:
-        with StagedOutputs() as outputs:
-            for path, text in files:
-                outputs.add(path, text.encode("utf-8", "backslashreplace"))  # as write_atomic
-    except BaseException:
-        if created:
-            with suppress(OSError):  # not empty: someone else wrote there meanwhile
-                folder.rmdir()
-        raise
-
-
 def _move_json(move: Any) -> dict[str, Any]:
-    from demoplan.poses import pose_to_dict
-
     return {
         "object": move.object,
         "start": round(move.start, 4),
@@ -197,16 +150,9 @@ def import_(
     ] = None,
 ) -> None:
     """Import a robot-learning recording: one demonstration file per demonstration in it."""
-    from demoplan.fileio import dump_json
-    from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
-    from demoplan.segmentation.importing import import_recording_details
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     with reported_errors():
-        geometry = None if objects_file is None else load_object_geometry(objects_file)
-        if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
-            raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-
         with Progress(
             TextColumn("Importing {task.description}"),
             BarColumn(),
@@ -220,29 +166,14 @@ def import_(
             def advance(done: int, total: int, key: str) -> None:
                 bar.update(task, completed=done, total=total, description=f"{recording.name} {key}")
 
-            items = import_recording_details(
+            imported = import_recording(
                 recording,
-                progress=advance,
+                output,
                 name_prefix=name_prefix,
-                skip_empty=True,
-                geometry=geometry,
-                geometry_source=None if objects_file is None else str(objects_file),
+                objects_file=objects_file,
+                progress=advance,
             )
-        files: list[tuple[Path, str]] = []
-        targets: dict[str, Path] = {}
-        for item in items:
-            if item.demonstration is None:
-                continue
-            target = output / f"{item.demonstration.name}.json"
-            refuse_overwriting_inputs(
-                target, [recording, *([objects_file] if objects_file is not None else [])]
-            )
-            targets[item.key] = target
-            files.append((target, dump_json(demonstration_to_dict(item.demonstration))))
-        if not files:
-            problems = "; ".join(f"{i.key}: {i.problem}" for i in items)
-            raise InputError(f"no demonstration with a step ({problems})", source=str(recording))
-        _write_all(files, output)
+        items, targets = imported.items, imported.files
         for item in items:
             if item.demonstration is None:
                 stderr.print(
@@ -276,7 +207,7 @@ def import_(
                 title += f" → {targets[item.key]}"
             print_steps(title, item.segmentation)
         stderr.print(
-            f"{len(files)} of {plural(len(items), 'demonstration')} imported, "
+            f"{len(targets)} of {plural(len(items), 'demonstration')} imported, "
             f"{plural(sum(len(i.segmentation.moves) for i in items), 'step')}; wrote {output}",
             markup=False,
             highlight=False,

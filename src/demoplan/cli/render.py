@@ -19,9 +19,6 @@ from demoplan.cli.common import (
     stdout,
     xyz_text,
 )
-from demoplan.errors import (
-    InputError,
-)
 from demoplan.wording import plural
 
 if TYPE_CHECKING:
@@ -259,30 +256,6 @@ def print_run_report(report: Any) -> None:
         highlight=False,
         soft_wrap=True,
     )
-
-
-def segmentation_figure(found: Any, plot: Path) -> bytes:
-    """The segmentation figure, encoded for ``plot``."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise InputError(
-            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
-        ) from None
-    from demoplan.plotting import figure_bytes
-    from demoplan.segmentation import plot_segmentation
-
-    axes = plot_segmentation(found)
-    if not axes:
-        raise InputError("nothing to draw (no object moved)", source=str(plot), field="--plot")
-    figure: Any = axes[0].figure
-    try:
-        return figure_bytes(figure, plot)
-    finally:
-        plt.close(figure)
 
 
 def print_steps(title: str, found: Any) -> None:

@@ -7,12 +7,13 @@ line only renders (:func:`learn_files`).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.commands.inputs import load_inputs
 from demoplan.deadline import LEARNING_TIMEOUT, time_budget
 from demoplan.errors import InputError
 from demoplan.fileio import locked_for_update, read_input_text, refuse_overwriting_inputs
@@ -20,9 +21,9 @@ from demoplan.learning.changes import ModelChanges, model_changes
 from demoplan.learning.learner import learn, update
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
-from demoplan.model import TaskModel
+from demoplan.model import Demonstration, TaskModel
 
-__all__ = ["LearnedFiles", "learn_files", "read_requirements"]
+__all__ = ["LearnedFiles", "learn_files", "learn_model", "read_requirements"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -33,6 +34,25 @@ class LearnedFiles:
     model: TaskModel
     changes: ModelChanges | None
     written: Path | None
+
+
+def learn_model(
+    sources: Iterable[Demonstration | str | Path],
+    *,
+    require: Sequence[str] = (),
+    settings: LearningSettings | None = None,
+) -> TaskModel:
+    """A task model from demonstrations (paper §IV.A–B): objects, or files and
+    folders (demonstration files, pose streams — CSV, ROS 2 bags — segmented on
+    the way), in the order given. Default settings unless ``settings``;
+    ``require``: teacher constraints such as ``"red<green"``."""
+    demonstrations: list[Demonstration] = []
+    for source in sources:
+        if isinstance(source, Demonstration):
+            demonstrations.append(source)
+        else:
+            demonstrations += load_inputs([source])
+    return learn(demonstrations, require=require, settings=settings)
 
 
 def read_requirements(path: Path) -> list[str]:
@@ -69,7 +89,6 @@ def learn_files(
     ``frame``, ``objects``, ``units``, ``landmarks`` and ``objects_file`` (the
     geometry of the streams' objects) are for pose streams
     (:func:`demoplan.commands.inputs.load_inputs`)."""
-    from demoplan.commands.inputs import load_inputs
     from demoplan.learning.demonstrations import load_object_geometry
 
     target = output or update_path

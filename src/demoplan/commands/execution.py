@@ -1,0 +1,126 @@
+"""``run`` and ``perceive``: a learned task carried out in simulation (paper
+§IV.C, execution with replanning), and blocks found in a camera image
+(§V.B)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from demoplan.commands.inputs import model_named, task_and_scene
+from demoplan.deadline import PERCEPTION_TIMEOUT
+from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
+from demoplan.execution.faults import Faults
+from demoplan.execution.runner import check_video_path, run_task
+from demoplan.execution.world import World
+from demoplan.fileio import dump_json, refuse_overwriting_inputs, staged_folder, write_atomic
+from demoplan.model import TaskModel
+from demoplan.perception.images import perceive_files
+from demoplan.perception.stacking import TrackedBlock, scene_document
+from demoplan.planning.budget import PLANNING_SECONDS, Budget
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.prepared import prepare
+from demoplan.scenes.scene import Scene
+
+__all__ = ["FRAME_FILES", "Perceived", "perceive", "run"]
+
+FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
+"""The files a ``--frames`` folder holds (an earlier run's are replaced)."""
+
+
+def run(
+    model: TaskModel | str | Path,
+    scene: Scene | str | Path,
+    *,
+    world: World | None = None,
+    sim: str = "kinematic",
+    faults: Faults = Faults(),
+    seed: int = 0,
+    max_replans: int = 25,
+    perception: str = "state",
+    geometry: GeometrySettings | None = None,
+    planning_seconds: float = PLANNING_SECONDS,
+    clutter: bool = False,
+    frames: Path | None = None,
+    video: Path | None = None,
+    on_event: Callable[[RunEvent], object] | None = None,
+) -> RunReport:
+    """Carry the task out: plan, act, observe, replan where the world differs.
+
+    Without ``world``, in a simulated one (``sim``: ``kinematic``, ``mujoco``
+    or ``arm``, with injected ``faults`` drawn from ``seed``); with ``world``,
+    in that one — it must start as ``scene`` describes (that is where a real
+    robot plugs in). ``frames``: a folder for a frame per action and a
+    storyboard, written whole or not at all; ``video``: an MP4 of the run;
+    ``planning_seconds``: each (re)planning's budget; ``clutter``: objects the
+    model never saw are allowed (no goal; moved only when in the way);
+    ``on_event`` hears the run's progress."""
+    if video is not None:
+        check_video_path(video)
+        refuse_overwriting_inputs(
+            video, [Path(p) for p in (model, scene) if isinstance(p, str | Path)]
+        )
+    task, start = task_and_scene(model, scene)
+    with model_named(model):
+        prepared = prepare(task, start, clutter=clutter)  # checked and completed once
+        if world is not None:
+            settings = ExecutionSettings(
+                max_replans=max_replans,
+                geometry=geometry or GeometrySettings(),
+                budget=Budget(timeout=planning_seconds),
+            )
+            return execute(task, prepared, world, settings, on_event=on_event)
+        options: dict[str, Any] = {
+            "sim": sim,
+            "faults": faults,
+            "seed": seed,
+            "max_replans": max_replans,
+            "perception": perception,
+            "geometry": geometry,
+            "on_event": on_event,
+            "planning_seconds": planning_seconds,
+            "clutter": clutter,
+            "video": video,
+        }
+        if frames is None:
+            return run_task(task, prepared.scene, **options)
+        # The frames folder whole or not at all: built beside it, swapped in at the end.
+        with staged_folder(frames, lambda name: bool(FRAME_FILES.match(name))) as building:
+            report = run_task(task, prepared.scene, frames=building, **options)
+        moved = tuple(str(frames / Path(f).name) for f in report.frames)  # where they now are
+        return replace(report, frames=moved)
+
+
+@dataclass(frozen=True, slots=True)
+class Perceived:
+    """The blocks found in an image, by name, and the scene document they make
+    (``demoplan/scene-1``, as ``perceive -o`` writes it)."""
+
+    blocks: dict[str, TrackedBlock]
+    document: dict[str, Any]
+
+
+def perceive(
+    image: Path,
+    px_per_m: float,
+    origin: tuple[float, float],
+    *,
+    before: Path | None = None,
+    side: float | None = None,
+    timeout: float = PERCEPTION_TIMEOUT,
+    output: Path | None = None,
+) -> Perceived:
+    """The blocks in a top-down orthographic ``image`` (paper §V.B: a Hough
+    transform over x, y, θ, s); with ``before`` (the picture before the last
+    move) a block the moved one covers stands under it; ``output``: also
+    write the scene there."""
+    if output is not None:
+        refuse_overwriting_inputs(output, [image, *([before] if before else [])])
+    blocks = perceive_files(image, px_per_m, origin, before=before, side=side, timeout=timeout)
+    document = scene_document(blocks)
+    if output is not None:
+        write_atomic(output, dump_json(document))
+    return Perceived(blocks, document)
