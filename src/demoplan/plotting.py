@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.colours import assign_colours, object_colour
+from demoplan.errors import InputError
 from demoplan.labels import (
     BoxPlacement,
     Leader,
@@ -45,7 +46,9 @@ __all__ = [
     "BoxPlacement",
     "Leader",
     "add_label",
+    "check_figure_path",
     "constraint_caption",
+    "figure_errors",
     "figure_renderer",
     "object_colour",
     "object_patch",
@@ -511,10 +514,23 @@ FIGURE_FORMATS = frozenset(
 """Image formats a figure can be written in, by file extension."""
 
 
+@contextmanager
+def figure_errors(path: Path) -> Iterator[None]:
+    """A figure's failures as one-line input errors: matplotlib missing, or the
+    file that cannot be written."""
+    try:
+        yield
+    except ImportError:
+        raise InputError(
+            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
+
+
 def check_figure_path(path: Path, option: str) -> None:
     """One InputError, before any work, if ``path`` cannot take a figure: a
     folder, or an extension that names no image format."""
-    from demoplan.errors import InputError
     from demoplan.fileio import display_path, output_target
 
     if path.is_dir():

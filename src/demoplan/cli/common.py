@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import logging
-import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,7 +19,6 @@ from typer.core import TyperGroup
 from demoplan import __version__
 from demoplan.errors import (
     DemoplanError,
-    InputError,
     error_line,
 )
 from demoplan.fileio import (
@@ -63,7 +61,6 @@ app = typer.Typer(
 stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
 stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
-REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
 """Names ``experiments`` writes: a folder of only these is an earlier report."""
 
 """Names ``run --frames`` writes: a folder of only these holds an earlier run's frames."""
@@ -151,18 +148,6 @@ def working(text: str) -> Iterator[None]:
 
         with reporting_progress(update):
             yield
-
-
-@contextmanager
-def model_named(path: Path) -> Iterator[None]:
-    """A fault in the model found only while planning (a cycle of references)
-    names the model file, not "task model"."""
-    try:
-        yield
-    except InputError as exc:
-        if exc.source != "task model":
-            raise
-        raise InputError(exc.message, source=str(path), field=exc.field) from None
 
 
 def _version(value: bool) -> None:
@@ -260,13 +245,6 @@ GroundedOption = Annotated[
 ]
 
 
-def scene_inputs(model_path: Path, scene_path: Path) -> tuple[Any, Any]:
-    from demoplan.learning.modelfile import load_model
-    from demoplan.scenes.scene import load_scene
-
-    return load_model(model_path), load_scene(scene_path)
-
-
 ModelArgument = Annotated[
     Path, typer.Argument(metavar="MODEL", help="A task model written by 'learn'.")
 ]
@@ -314,19 +292,6 @@ def geometry_settings(
     if freespace is None:
         return GeometrySettings(collisions=collisions.value)
     return GeometrySettings(n_freespace=freespace, collisions=collisions.value)
-
-
-@contextmanager
-def plot_errors(path: Path) -> Iterator[None]:
-    """--plot's failures as one-line input errors."""
-    try:
-        yield
-    except ImportError:
-        raise InputError(
-            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
-        ) from None
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
 
 
 class PerceptionName(StrEnum):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -15,7 +15,6 @@ from demoplan.cli.common import (
     UNITS_OPTION,
     Units,
     app,
-    plot_errors,
     print_json,
     reported_errors,
     stderr,
@@ -27,13 +26,9 @@ from demoplan.cli.render import (
     print_model,
     print_scene_preview,
 )
+from demoplan.commands.learning import ShownModel, learn_files
+from demoplan.commands.learning import show as show_file
 from demoplan.deadline import LEARNING_TIMEOUT
-from demoplan.errors import (
-    InputError,
-)
-from demoplan.fileio import (
-    display_path,
-)
 from demoplan.wording import plural
 
 
@@ -171,7 +166,6 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
-    from demoplan.commands.learning import learn_files
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
@@ -248,63 +242,16 @@ def show(
     """Print a model as the paper's tables (states, sequences, constraints), or
     preview a scene: where each object stands, which grasps its neighbours
     block, the landmarks and free space (the scene's, else spots near the objects)."""
-    from demoplan.fileio import check_format, read_document
-    from demoplan.learning.modelfile import model_from_dict
-
     with reported_errors():
-        document = read_document(path)
-        kind, _ = check_format(document, {"model", "scene"}, display_path(path))
-        if kind == "model":
-            if model_path is not None:
-                raise InputError(f"--model is for a scene; {path} is a model", field="--model")
-            if plot is not None:
-                from demoplan.plotting import check_figure_path
-
-                check_figure_path(plot, "--plot")
-            model = model_from_dict(document, str(path))
-            if plot is not None:
-                from demoplan.plotting import save_demonstrations
-
-                with plot_errors(plot):
-                    save_demonstrations(model, plot, display_path(path))
-                stderr.print(f"wrote {plot}", markup=False, highlight=False)
+        shown = show_file(path, model=model_path, plot=plot)
+        if shown.figure is not None:
+            stderr.print(f"wrote {shown.figure}", markup=False, highlight=False)
+        if isinstance(shown, ShownModel):
             if json_output:
-                print_json(model_json(model))
+                print_json(model_json(shown.model))
             else:
-                print_model(model, decimals)
-            return
-        show_scene(path, document, json_output, decimals, model_path, plot)
-
-
-def show_scene(
-    path: Path,
-    document: dict[str, Any],
-    json_output: bool,
-    decimals: int,
-    model_path: Path | None,
-    plot: Path | None,
-) -> None:
-    from demoplan.learning.modelfile import load_model
-    from demoplan.scenes.landmarks import complete_scene
-    from demoplan.scenes.preview import preview_scene
-    from demoplan.scenes.scene import scene_from_document
-
-    if plot is not None:
-        from demoplan.plotting import check_figure_path
-
-        check_figure_path(plot, "--plot")
-    scene = scene_from_document(document, str(path))
-    if model_path is not None:
-        scene = complete_scene(scene, load_model(model_path))
-    preview = preview_scene(scene)
-    if plot is not None:
-        from demoplan.plotting import save_scene_targets
-
-        with plot_errors(plot):
-            title = f"{display_path(path)}: the scene before planning"
-            save_scene_targets(scene, preview.problem, "", plot, title)
-        stderr.print(f"wrote {plot}", markup=False, highlight=False)
-    if json_output:
-        print_json(preview.to_json())
-    else:
-        print_scene_preview(preview, decimals)
+                print_model(shown.model, decimals)
+        elif json_output:
+            print_json(shown.preview.to_json())
+        else:
+            print_scene_preview(shown.preview, decimals)

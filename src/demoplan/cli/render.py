@@ -13,7 +13,6 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan.cli.common import (
-    plot_errors,
     say,
     stderr,
     stdout,
@@ -172,25 +171,25 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
 
 def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     """The chosen plan in the scene it was made in (prepared: sizes, landmarks)."""
-    from demoplan.plotting import save_scene_plan
+    from demoplan.plotting import figure_errors, save_scene_plan
 
     chosen = result.chosen
     assert result.model is not None and result.scene is not None and chosen.plan is not None
     label = result.model.demonstration_label(chosen.goal)
     title = f"Goal of {label}: {len(chosen.plan) // 2} moves"
-    with plot_errors(path):
+    with figure_errors(path):
         save_scene_plan(result.scene, chosen.problem, chosen.plan, path, title)
 
 
 def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
     """The prepared scene, the first candidate goal's targets and why there is no
     plan (the problems the planner was given, carried by ``failure``)."""
-    from demoplan.plotting import save_scene_targets
+    from demoplan.plotting import figure_errors, save_scene_targets
 
     first = failure.outcomes[0].problem
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
-    with plot_errors(path):
+    with figure_errors(path):
         save_scene_targets(failure.scene, first, str(failure), path, title)
     stderr.print(f"wrote {path}", markup=False, highlight=False)
 

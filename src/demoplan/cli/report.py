@@ -10,12 +10,12 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan.cli.common import (
-    REPORT_FILES,
     app,
     reported_errors,
     stderr,
     stdout,
 )
+from demoplan.commands.experiments import experiments as run_all
 
 
 @app.command()
@@ -28,18 +28,10 @@ def experiments(
 ) -> None:
     """Reproduce the paper's experiments and write a report: report.md and a
     self-contained report.html (tables, figures, models)."""
-    from demoplan.experiments import run_experiments
-    from demoplan.fileio import staged_folder
-
     with reported_errors():
-        # The whole report or none of it: built beside --out, then put in its place
-        # (an earlier report is replaced; a folder of anything else is refused).
-        with (
-            stdout.status("Running the paper's experiments…") as status,
-            staged_folder(out, lambda name: bool(REPORT_FILES.match(name))) as building,
-        ):
-            result = run_experiments(building, progress=lambda text: status.update(text))
-        report = out / result.report.name
+        with stdout.status("Running the paper's experiments…") as status:
+            result = run_all(out, progress=lambda text: status.update(text))
+        report = result.report
         table = Table(title="Paper vs. demoplan", title_justify="left")
         for column in ("Experiment", "Check", "Paper", "demoplan", "Match"):
             table.add_column(column)
@@ -49,7 +41,7 @@ def experiments(
         stdout.print(table)
         stdout.print(f"Report: {report}", markup=False, highlight=False)
         if result.html is not None:
-            page = out / result.html.name
+            page = result.html
             stdout.print(f"Report page: {page}", markup=False, highlight=False)
             if open_report and not _open_in_browser(page):
                 stderr.print(

@@ -22,8 +22,17 @@ from demoplan.learning.learner import learn, update
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
 from demoplan.model import Demonstration, TaskModel
+from demoplan.scenes.preview import ScenePreview
 
-__all__ = ["LearnedFiles", "learn_files", "learn_model", "read_requirements"]
+__all__ = [
+    "LearnedFiles",
+    "ShownModel",
+    "ShownScene",
+    "learn_files",
+    "learn_model",
+    "read_requirements",
+    "show",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,3 +145,61 @@ def learn_files(
         if target is not None:
             save_model(model, target)
     return LearnedFiles(model, changes, target)
+
+
+@dataclass(frozen=True, slots=True)
+class ShownModel:
+    """``show MODEL``: the model read (and the figure written, if asked)."""
+
+    model: TaskModel
+    figure: Path | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class ShownScene:
+    """``show SCENE``: the scene as the planner will see it (and the figure written)."""
+
+    preview: ScenePreview
+    figure: Path | None = None
+
+
+def show(
+    path: Path, *, model: Path | None = None, plot: Path | None = None
+) -> ShownModel | ShownScene:
+    """A model file (its tables; ``plot``: its demonstrations, each step marked
+    with its learned state), or a scene file as the planner will see it —
+    where each object stands, which grasps its neighbours block, the landmarks
+    and free space (``model``: sizes the scene omits; ``plot``: from above)."""
+    from demoplan.fileio import check_format, display_path, read_document
+    from demoplan.learning.modelfile import model_from_dict
+    from demoplan.plotting import (
+        check_figure_path,
+        figure_errors,
+        save_demonstrations,
+        save_scene_targets,
+    )
+    from demoplan.scenes.landmarks import complete_scene
+    from demoplan.scenes.preview import preview_scene
+    from demoplan.scenes.scene import scene_from_document
+
+    document = read_document(path)
+    kind, _ = check_format(document, {"model", "scene"}, display_path(path))
+    if kind == "model" and model is not None:
+        raise InputError(f"--model is for a scene; {path} is a model", field="--model")
+    if plot is not None:
+        check_figure_path(plot, "--plot")
+    if kind == "model":
+        task = model_from_dict(document, str(path))
+        if plot is not None:
+            with figure_errors(plot):
+                save_demonstrations(task, plot, display_path(path))
+        return ShownModel(task, plot)
+    scene = scene_from_document(document, str(path))
+    if model is not None:
+        scene = complete_scene(scene, load_model(model))
+    preview = preview_scene(scene)
+    if plot is not None:
+        with figure_errors(plot):
+            title = f"{display_path(path)}: the scene before planning"
+            save_scene_targets(scene, preview.problem, "", plot, title)
+    return ShownScene(preview, plot)
