@@ -9,8 +9,11 @@ are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (docs/formats.md)
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+
+import shapely
+from shapely.geometry.base import BaseGeometry
 
 from demoplan.learning.settings import LearningSettings
 from demoplan.rotations import Quaternion, rpy_from_quat
@@ -22,6 +25,8 @@ WOOD_DENSITY = 600.0
 ``density`` (solid wood, as the paper's blocks)."""
 
 __all__ = [
+    "LEVEL_TOLERANCE",
+    "SUPPORT_FRACTION",
     "WOOD_DENSITY",
     "Demonstration",
     "ObjectGeometry",
@@ -33,6 +38,7 @@ __all__ = [
     "TaskModel",
     "Vector3",
     "demonstrated_shapes",
+    "footprint",
     "visit_label",
     "yaw_period",
 ]
@@ -248,3 +254,25 @@ class TaskModel:
         if index < len(self.demonstrations) and self.demonstrations[index].name:
             return f"{index + 1} ({self.demonstrations[index].name})"
         return str(index + 1)
+
+
+LEVEL_TOLERANCE = 0.005
+"""m: heights closer than this are one level (a top meets a bottom; an object
+whose bottom is this close to the table stands on it)."""
+SUPPORT_FRACTION = 0.05
+"""An object stands on another when their outlines overlap by at least this
+share of the upper one's (the support rule of docs/scenes.md)."""
+
+
+def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> BaseGeometry:
+    """The object's outline on the table at ``position`` and ``yaw`` (degrees)."""
+    x, y = position[0], position[1]
+    if shape.shape == "box":
+        hx, hy = shape.size[0] / 2, shape.size[1] / 2
+        c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+        corners = [
+            (x + c * px - s * py, y + s * px + c * py)
+            for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+        ]
+        return shapely.Polygon(corners)
+    return shapely.Point(x, y).buffer(max(shape.size[0], shape.size[1]) / 2, quad_segs=16)

@@ -29,8 +29,17 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
-from demoplan.model import Demonstration, ObjectGeometry, Pose, demonstrated_shapes
+from demoplan.model import (
+    LEVEL_TOLERANCE,
+    SUPPORT_FRACTION,
+    Demonstration,
+    ObjectGeometry,
+    Pose,
+    demonstrated_shapes,
+    footprint,
+)
 from demoplan.rotations import matrices_from_quats, rpy_from_quat
 from demoplan.segmentation.settings import SegmentationSettings
 
@@ -143,11 +152,9 @@ def _holds(
         return None if near and at.position[2] < z else False
     if not _under(known, lower, at, upper, pose, z):
         return False
-    from demoplan.scenes.geometry import GeometrySettings
-
     bottom = at.position[2]
     top = bottom + known[lower].size[2]
-    return bottom + GeometrySettings().level_tolerance < z <= top + RELEASE_TOLERANCE_M
+    return bottom + LEVEL_TOLERANCE < z <= top + RELEASE_TOLERANCE_M
 
 
 def _under(
@@ -155,17 +162,13 @@ def _under(
 ) -> bool:
     """``lower`` (of known size) at ``at`` stands beneath ``upper`` at ``pose``, its
     bottom below ``z``: their footprints overlap as a support's must."""
-    import shapely
-
-    from demoplan.scenes.geometry import GeometrySettings, footprint
-
     if lower not in known or _tilted(at) or at.position[2] >= z:
         return False
     below = footprint(known[lower], at.position, _yaw(at))
     if upper in known and not _tilted(pose):
         above = footprint(known[upper], pose.position, _yaw(pose))
         overlap = below.intersection(above).area
-        return bool(overlap >= GeometrySettings().support_fraction * above.area)
+        return bool(overlap >= SUPPORT_FRACTION * above.area)
     return bool(below.covers(shapely.Point(pose.position[0], pose.position[1])))
 
 

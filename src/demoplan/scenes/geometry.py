@@ -48,7 +48,13 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from demoplan.model import ObjectGeometry, Vector3
+from demoplan.model import (
+    LEVEL_TOLERANCE,
+    SUPPORT_FRACTION,
+    ObjectGeometry,
+    Vector3,
+    footprint,
+)
 from demoplan.scenes.scene import Gripper
 
 __all__ = [
@@ -83,11 +89,11 @@ class GeometrySettings:
     """A target closer than this (and at the same height) to a location is that location."""
     merge_angle: float = 5.0
     """… and, when its orientation was learned, turned less than this (deg) from it."""
-    level_tolerance: float = 0.005
+    level_tolerance: float = LEVEL_TOLERANCE
     """Heights closer than this are one level (a top meets a bottom)."""
     touch_tolerance: float = 0.002
     """Footprints overlapping by less than this are neighbours, not in each other's way."""
-    support_fraction: float = 0.05
+    support_fraction: float = SUPPORT_FRACTION
     """An upper footprint rests on a lower one that covers at least this fraction of it."""
     n_freespace: int = 3
     """Free-space spots generated when the scene gives none."""
@@ -142,20 +148,6 @@ def is_block(shape: ObjectGeometry) -> bool:
     """A cube (to 1 mm): the shape §V.B's collision rule is stated for."""
     sx, sy, sz = shape.size
     return shape.shape == "box" and max(sx, sy, sz) - min(sx, sy, sz) <= 0.001
-
-
-def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> BaseGeometry:
-    """The object's outline on the table at ``position`` and ``yaw`` (degrees)."""
-    x, y = position[0], position[1]
-    if shape.shape == "box":
-        hx, hy = shape.size[0] / 2, shape.size[1] / 2
-        c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-        corners = [
-            (x + c * px - s * py, y + s * px + c * py)
-            for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
-        ]
-        return shapely.Polygon(corners)
-    return shapely.Point(x, y).buffer(max(shape.size[0], shape.size[1]) / 2, quad_segs=16)
 
 
 @functools.lru_cache(maxsize=4096)
