@@ -32,12 +32,24 @@ import typer.main
 from pydantic import BaseModel
 
 from demoplan.cli import app
+from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
+from demoplan.documents.masses import MAX_DENSITY, MIN_DENSITY
+from demoplan.documents.poses import (
+    MAX_COORDINATE,
+    MAX_DISTANCE_M,
+    MAX_SIZE_M,
+    MIN_SIZE_M,
+    LandmarkSchema,
+    ObjectSchema,
+    PoseSchema,
+    UnitsSchema,
+)
+from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.errors import InputError, LimitReachedError, NoPlanError, UsageError
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
-from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
     GEOMETRY_TOLERANCE,
@@ -61,24 +73,12 @@ from demoplan.learning.modelfile import (
     model_to_dict,
 )
 from demoplan.learning.settings import PAPER_SETTINGS
-from demoplan.masses import MAX_DENSITY, MIN_DENSITY
 from demoplan.model import WOOD_DENSITY
 from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
-from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
-from demoplan.plotting import FIGURE_FORMATS
-from demoplan.poses import (
-    MAX_COORDINATE,
-    MAX_DISTANCE_M,
-    MAX_SIZE_M,
-    MIN_SIZE_M,
-    LandmarkSchema,
-    ObjectSchema,
-    PoseSchema,
-    UnitsSchema,
-)
+from demoplan.plotting.figures import FIGURE_FORMATS
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.scene import (
     MAX_GRIPPER,

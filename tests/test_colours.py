@@ -16,16 +16,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
-from demoplan.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
 from demoplan.learning.demonstrations import load_demonstrations
-from demoplan.plotting import plot_demonstration
+from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
+from demoplan.plotting.figures import plot_demonstration
 from tests.helpers import EXAMPLES
 
 
 def test_an_object_has_one_colour_in_every_demonstration_figure() -> None:
     """The three set-table demonstrations move the objects in different orders;
     the placed objects' fills in each figure are exactly their colours from
-    demoplan.colours (one source for every figure), distinct within a figure."""
+    demoplan.plotting.colours (one source for every figure), distinct within a figure."""
     demos = load_demonstrations([EXAMPLES / "set_table"])
     for demo in demos:
         ax = plot_demonstration(demo)
@@ -79,9 +79,9 @@ def test_colours_are_the_same_in_another_process() -> None:
     colour comes from the names, not from what a process drew first."""
     task = ["motor", "pcb", "screws", "cable", "manual"]
     code = (
-        "from demoplan.colours import object_colour\n"
+        "from demoplan.plotting.colours import object_colour\n"
         "print(object_colour('zebra'))\n"
-        "from demoplan.colours import assign_colours\n"
+        "from demoplan.plotting.colours import assign_colours\n"
         f"print(sorted(assign_colours({list(reversed(task))!r}).items()))\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -109,7 +109,7 @@ def load(document: dict[str, Any], tmp_path: Path) -> object:
             assert action[0] in ("GRASP", "PUT_DOWN") and len(action) == 4
         return document["actions"]
     if set(document) == {"landmarks"}:  # a landmark entry, as in any file
-        from demoplan.poses import LandmarkSchema
+        from demoplan.documents.poses import LandmarkSchema
 
         return {n: LandmarkSchema.model_validate(e) for n, e in document["landmarks"].items()}
     path = tmp_path / "objects.json"  # segment --objects-file

@@ -26,9 +26,9 @@ matplotlib.use("Agg")
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
 
-from demoplan.colours import object_colour
 from demoplan.experiments import run_experiments
-from demoplan.plotting import Leader, observing_saved_figures, place_boxes
+from demoplan.plotting.colours import object_colour
+from demoplan.plotting.figures import Leader, observing_saved_figures, place_boxes
 
 REPORT_FIGURES = (
     "experiment1-set-table-demonstrations.png",

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 
 from demoplan import TaskModelLearner, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
-from demoplan.plotting import plot_constraints, plot_demonstration
+from demoplan.plotting.figures import plot_constraints, plot_demonstration
 from tests.helpers import EXAMPLES
 
 
@@ -39,7 +39,7 @@ def test_plots_draw_every_state_and_step() -> None:
 
 def test_side_by_side_demonstrations_share_their_axis_ranges() -> None:
     """The experiments' demonstration panels: one range for all, covering each."""
-    from demoplan.plotting import share_limits
+    from demoplan.plotting.figures import share_limits
 
     demos = load_demonstrations([EXAMPLES / "set_table"])
     figure, axes = plt.subplots(1, len(demos))
@@ -60,7 +60,7 @@ def test_side_by_side_demonstrations_share_their_axis_ranges() -> None:
 def test_top_views_carry_a_legend_of_their_marks() -> None:
     """Faint and solid shapes, arrows and dashed circles are explained in the figure."""
     from demoplan import load_scene, plan
-    from demoplan.plotting import plot_scene_plan
+    from demoplan.plotting.figures import plot_scene_plan
     from demoplan.scenes.scene import complete_geometry
 
     demos = load_demonstrations([EXAMPLES / "blocks" / "demonstrations.json"])

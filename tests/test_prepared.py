@@ -9,9 +9,9 @@ from typing import Any
 import pytest
 
 import demoplan.scenes.prepared as prepared_module
+from demoplan.budget import PLANNING_SECONDS
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import run_task
-from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.scene import load_scene

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.colors import to_rgba
 
-from demoplan.segmentation import ObjectTrack, PoseStream, plot_heights, plot_segmentation, segment
+from demoplan.plotting.segmentation import plot_heights, plot_segmentation
+from demoplan.segmentation import ObjectTrack, PoseStream, segment
 
 
 def carried_and_pushed() -> PoseStream:

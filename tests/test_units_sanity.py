@@ -26,6 +26,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M
 from demoplan.errors import InputError
 from demoplan.learning.demonstrations import (
     demonstrations_from_document,
@@ -33,7 +34,6 @@ from demoplan.learning.demonstrations import (
 )
 from demoplan.learning.releases import unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.plausibility import MAX_CARRIED_M, MAX_SPREAD_M
 from demoplan.rotations import quat_from_yaw, rpy_from_quat
 from demoplan.scenes.scene import scene_from_document
 from tests.helpers import EXAMPLES

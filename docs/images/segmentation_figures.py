@@ -23,7 +23,7 @@ sys.path.insert(1, str(HERE.parent.parent))  # the repository root, for tests.ro
 
 from tests.robosuite_data import robosuite_demonstrations  # noqa: E402
 
-from demoplan.segmentation import plot_segmentation  # noqa: E402
+from demoplan.plotting.segmentation import plot_segmentation  # noqa: E402
 from demoplan.segmentation.importing import import_recording_details  # noqa: E402
 
 FIGURES = (

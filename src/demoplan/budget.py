@@ -1,13 +1,16 @@
-"""A time budget for long computations other than search: learning (read
-between cluster counts) and perception (read between colour regions).
+"""Budgets: how long (and how far) a computation may run — one mechanism for
+the planner's searches, learning and perception (docs/limits.md).
 
-Their cost grows with the data (placements × references × cluster counts;
-regions × Hough candidates), and hostile data makes it minutes.
-:func:`time_budget` sets a deadline for the code run inside it;
-:func:`check_time` raises :class:`~demoplan.errors.LimitReachedError` (exit 4)
-once it has passed, naming the option that raises it. Without a budget
-nothing is checked. (The planner's searches have their own,
-:mod:`demoplan.planning.budget`.)
+A :class:`Budget` names the limits (expanded states, seconds, an absolute
+deadline, states kept); a :class:`Clock` tells the work when its budget is
+spent. A search is handed its budget and reads its clock between expansions
+(:mod:`demoplan.planning`). Learning (read between cluster counts) and
+perception (read between colour regions) run inside :func:`time_budget`,
+which puts a clock in a context variable; :func:`check_time` raises
+:class:`~demoplan.errors.LimitReachedError` (exit 4) once it is spent,
+naming the option that raises it. Their cost grows with the data
+(placements × references × cluster counts; regions × Hough candidates), and
+hostile data makes it minutes. Without a budget nothing is checked.
 """
 
 from __future__ import annotations
@@ -17,24 +20,89 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from dataclasses import dataclass
 
 from demoplan.errors import LimitReachedError
 
 __all__ = [
     "LEARNING_TIMEOUT",
+    "MAX_STATES",
     "PERCEPTION_TIMEOUT",
+    "PLANNING_SECONDS",
+    "Budget",
+    "Clock",
     "check_time",
+    "default_budget",
     "report_progress",
     "reporting_progress",
     "time_budget",
 ]
 
-_deadline: ContextVar[tuple[float, str] | None] = ContextVar("deadline", default=None)
+PLANNING_SECONDS = 2.0
+"""The time budget of a planning command and of each (re)planning of a run,
+by default (docs/limits.md): the one place it is written — the CLI, the
+command layer and :class:`~demoplan.execution.executor.ExecutionSettings`
+take it from here."""
+
+MAX_STATES = 2_000_000
+"""States a search may keep by default (about 1–2 GB at 30 objects): beyond it
+the search stops as at any other limit (exit 4), never with a MemoryError."""
 
 LEARNING_TIMEOUT = 300.0
 """Seconds ``learn`` may take by default before it stops with exit 4 (docs/limits.md)."""
 PERCEPTION_TIMEOUT = 60.0
 """Seconds ``perceive`` may take by default (docs/limits.md)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Budget:
+    """Limits of one computation (None: no limit): expanded states, seconds from
+    its start, an absolute ``time.monotonic()`` deadline (a command's budget
+    counted from its own start), and states kept in memory."""
+
+    max_nodes: int | None = None
+    timeout: float | None = None
+    deadline: float | None = None
+    max_states: int | None = MAX_STATES
+
+
+def default_budget() -> Budget:
+    """A planning command's budget when it is given none: :data:`PLANNING_SECONDS`."""
+    return Budget(timeout=PLANNING_SECONDS)
+
+
+class Clock:
+    """Tells a computation when its budget is spent."""
+
+    def __init__(self, budget: Budget):
+        self.budget = budget
+        deadlines = [] if budget.deadline is None else [budget.deadline]
+        if budget.timeout is not None:
+            deadlines.append(time.monotonic() + budget.timeout)
+        self.deadline = min(deadlines) if deadlines else None
+
+    def expired(self) -> bool:
+        """The time is up."""
+        return self.deadline is not None and time.monotonic() > self.deadline
+
+    def stop(self, expanded: int, states: int = 0) -> str | None:
+        """Which limit is reached after ``expanded`` expansions with ``states``
+        kept, if any (named as the option that raises it)."""
+        if self.budget.max_nodes is not None and expanded >= self.budget.max_nodes:
+            return f"--max-nodes {self.budget.max_nodes}"
+        if self.budget.max_states is not None and states >= self.budget.max_states:
+            return f"the memory limit of {self.budget.max_states} states"
+        if self.expired():
+            timeout = self.budget.timeout
+            return f"--timeout {timeout:g} s" if timeout is not None else "the time budget"
+        return None
+
+    def remaining(self) -> float | None:
+        """Seconds left, if there is a deadline."""
+        return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
+
+
+_current: ContextVar[tuple[Clock, str] | None] = ContextVar("budget", default=None)
 
 
 @contextmanager
@@ -44,18 +112,18 @@ def time_budget(seconds: float | None, message: str) -> Iterator[None]:
     if seconds is None or math.isinf(seconds):
         yield
         return
-    token = _deadline.set((time.monotonic() + seconds, message))
+    token = _current.set((Clock(Budget(timeout=seconds)), message))
     try:
         yield
     finally:
-        _deadline.reset(token)
+        _current.reset(token)
 
 
 def check_time() -> None:
     """Raise LimitReachedError if the current budget is spent."""
-    budget = _deadline.get()
-    if budget is not None and time.monotonic() > budget[0]:
-        raise LimitReachedError(budget[1])
+    current = _current.get()
+    if current is not None and current[0].expired():
+        raise LimitReachedError(current[1])
 
 
 Progress = Callable[[str, int, int], None]  # (what, done, total)

@@ -6,7 +6,7 @@ frames in a temporary folder — and writes into this folder:
 
 - ``demonstrations.png``: the three demonstrations from above and, under each,
   the constraints among its states (``demoplan learn`` has no ``--plot``; this
-  one is drawn with ``demoplan.plotting``, as ``demoplan experiments`` draws its
+  one is drawn with ``demoplan.plotting.figures``, as ``demoplan experiments`` draws its
   own);
 - ``scene.png``: ``demoplan show SCENE --model kit.json --plot``;
 - ``plan.png``: ``demoplan plan kit.json SCENE --plot``;
@@ -43,7 +43,7 @@ def demoplan(*args: str) -> None:
 
 def demonstrations_figure(model_path: Path, out: Path) -> None:
     from demoplan import load_model
-    from demoplan.plotting import save_demonstrations
+    from demoplan.plotting.figures import save_demonstrations
 
     save_demonstrations(load_model(model_path), out, "examples/kitting (the tray is a landmark)")
     print("wrote", out.relative_to(ROOT))

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 
-from demoplan.planning.budget import PLANNING_SECONDS, Budget
+from demoplan.budget import PLANNING_SECONDS, Budget
 
 __all__ = [
     "DEFAULT_TIMEOUT",

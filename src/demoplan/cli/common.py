@@ -131,7 +131,7 @@ def working(text: str) -> Iterator[None]:
         return
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
-    from demoplan.deadline import reporting_progress
+    from demoplan.budget import reporting_progress
 
     with Progress(
         TextColumn(text),

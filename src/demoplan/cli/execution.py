@@ -11,6 +11,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
+from demoplan.budget import PERCEPTION_TIMEOUT, PLANNING_SECONDS
 from demoplan.cli.common import (
     ClutterOption,
     CollisionsOption,
@@ -31,9 +32,7 @@ from demoplan.cli.common import (
 from demoplan.cli.render import print_run_report
 from demoplan.commands.execution import perceive as perceive_image
 from demoplan.commands.execution import run as run_task
-from demoplan.deadline import PERCEPTION_TIMEOUT
 from demoplan.execution.faults import parse_faults
-from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.wording import plural
 
 

@@ -18,14 +18,12 @@ import argparse
 import errno
 import os
 import sys
-from collections.abc import Callable, Sequence
-from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 # First: the command clock starts when this module is imported, at process start.
-from demoplan.cli.clock import command_budget, mark_command_start, mark_process_start
+from demoplan.cli.clock import mark_command_start, mark_process_start
 from demoplan.cli.interrupts import (
     INTERRUPTED_EXIT,
     TERMINATED_EXIT,
@@ -33,6 +31,7 @@ from demoplan.cli.interrupts import (
     redeliver_lost_signal,
     signals_received,
 )
+from demoplan.cli.solving import SolveOptions, solve_text
 
 __all__ = [
     "SOLVE_OPTIONS",
@@ -45,43 +44,6 @@ __all__ = [
 
 SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout", "--optimal")
 """Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
-
-
-@dataclass(frozen=True)
-class SolveOptions:
-    """What ``demoplan solve`` was asked to do."""
-
-    problem: Path
-    json_output: bool = False
-    search: str = "astar"
-    max_nodes: int | None = None
-    timeout: float | None = None  # None: the default budget
-    optimal: bool = False
-
-
-def solve_text(
-    options: SolveOptions, spinner: Callable[[str], AbstractContextManager[object]] | None = None
-) -> tuple[str, str]:
-    """``demoplan solve``'s output: the plan of
-    :func:`~demoplan.commands.solving.solve_problem` in the paper's format (or
-    its JSON), and the line for stderr saying whether it is proved shortest;
-    ``spinner(text)`` wraps the search (a terminal's status line). Both
-    ``solve`` paths (this launcher's and typer's) render with this."""
-    from demoplan.commands.solving import solve_problem
-    from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
-
-    budget = command_budget(options.max_nodes, options.timeout)
-    with spinner(f"Searching ({options.search}) for a plan…") if spinner else nullcontext():
-        solved = solve_problem(
-            options.problem, search=options.search, budget=budget, optimal=options.optimal
-        )
-    note = f"demoplan: {optimality_line(solved.plan)}\n"
-    if options.json_output:
-        import json
-
-        data = plan_to_json(solved.plan, solved.read_seconds)
-        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n", note
-    return format_plan(solved.plan), note
 
 
 class _DeclinedError(Exception):

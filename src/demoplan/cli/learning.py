@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from demoplan.budget import LEARNING_TIMEOUT
 from demoplan.cli.common import (
     FRAME_OPTION,
     LANDMARKS_OPTION,
@@ -28,7 +29,6 @@ from demoplan.cli.render import (
 )
 from demoplan.commands.learning import ShownModel, learn_files
 from demoplan.commands.learning import show as show_file
-from demoplan.deadline import LEARNING_TIMEOUT
 from demoplan.wording import plural
 
 

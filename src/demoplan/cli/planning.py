@@ -25,13 +25,13 @@ from demoplan.cli.common import (
     reported_errors,
     stderr,
 )
-from demoplan.cli.launcher import SolveOptions, solve_text
 from demoplan.cli.render import plot_no_plan, plot_scene_plan, print_scene_plan
+from demoplan.cli.solving import SolveOptions, solve_text
 from demoplan.commands.planning import plan as plan_task
 from demoplan.commands.planning import write_problem
 from demoplan.commands.solving import export_pddl
 from demoplan.planning.problem import optimality_line
-from demoplan.plotting import check_figure_path
+from demoplan.plotting.figures import check_figure_path
 from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
 
 

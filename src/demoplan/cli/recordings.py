@@ -23,8 +23,8 @@ from demoplan.cli.common import (
 from demoplan.cli.render import print_steps
 from demoplan.commands.recordings import import_recording
 from demoplan.commands.recordings import segment as segment_stream
+from demoplan.documents.poses import pose_to_dict
 from demoplan.learning.demonstrations import demonstration_to_dict
-from demoplan.poses import pose_to_dict
 from demoplan.segmentation.settings import settings_help
 from demoplan.segmentation.types import parse_object_patterns
 from demoplan.wording import plural

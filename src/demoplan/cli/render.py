@@ -171,7 +171,7 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
 
 def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     """The chosen plan in the scene it was made in (prepared: sizes, landmarks)."""
-    from demoplan.plotting import figure_errors, save_scene_plan
+    from demoplan.plotting.figures import figure_errors, save_scene_plan
 
     chosen = result.chosen
     assert result.model is not None and result.scene is not None and chosen.plan is not None
@@ -184,7 +184,7 @@ def plot_scene_plan(result: ScenePlan, path: Path) -> None:
 def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
     """The prepared scene, the first candidate goal's targets and why there is no
     plan (the problems the planner was given, carried by ``failure``)."""
-    from demoplan.plotting import figure_errors, save_scene_targets
+    from demoplan.plotting.figures import figure_errors, save_scene_targets
 
     first = failure.outcomes[0].problem
     goal = first.candidate.demonstrations[0]

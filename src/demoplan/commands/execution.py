@@ -10,8 +10,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from demoplan.budget import PERCEPTION_TIMEOUT, PLANNING_SECONDS, Budget
 from demoplan.commands.inputs import model_named, task_and_scene
-from demoplan.deadline import PERCEPTION_TIMEOUT
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import check_video_path, run_task
@@ -20,7 +20,6 @@ from demoplan.fileio import dump_json, refuse_overwriting_inputs, staged_folder,
 from demoplan.model import TaskModel
 from demoplan.perception.images import perceive_files
 from demoplan.perception.stacking import TrackedBlock, scene_document
-from demoplan.planning.budget import PLANNING_SECONDS, Budget
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene

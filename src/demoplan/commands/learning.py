@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.budget import LEARNING_TIMEOUT, time_budget
 from demoplan.commands.inputs import load_inputs
-from demoplan.deadline import LEARNING_TIMEOUT, time_budget
 from demoplan.errors import InputError
 from demoplan.fileio import locked_for_update, read_input_text, refuse_overwriting_inputs
 from demoplan.learning.changes import ModelChanges, model_changes
@@ -172,7 +172,7 @@ def show(
     and free space (``model``: sizes the scene omits; ``plot``: from above)."""
     from demoplan.fileio import check_format, display_path, read_document
     from demoplan.learning.modelfile import model_from_dict
-    from demoplan.plotting import (
+    from demoplan.plotting.figures import (
         check_figure_path,
         figure_errors,
         save_demonstrations,

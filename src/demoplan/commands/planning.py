@@ -5,11 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from demoplan.budget import Budget, default_budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.errors import LimitReachedError, UsageError
 from demoplan.fileio import refuse_overwriting_inputs
 from demoplan.model import TaskModel
-from demoplan.planning.budget import Budget, default_budget
 from demoplan.planning.pddl import pddl_domain_path, save_pddl_problem
 from demoplan.planning.problem import optimality_line
 from demoplan.planning.xml import save_problem
@@ -32,7 +32,7 @@ def plan(
     optimal: bool = False,
 ) -> ScenePlan:
     """Every demonstrated goal planned in ``scene``, the shortest chosen (§IV.C),
-    within ``budget`` in all (default :func:`~demoplan.planning.budget.default_budget`);
+    within ``budget`` in all (default :func:`~demoplan.budget.default_budget`);
     ``clutter``: objects the model never saw may stand in the scene;
     ``optimal``: only a plan proved shortest (else LimitReachedError).
 

@@ -49,7 +49,7 @@ def segment(
     demonstration to ``output`` — and with ``plot`` the segmentation figure,
     both or neither (docs/segmentation.md). ``thresholds``: ``NAME=VALUE``
     settings; ``objects_file``: the geometry of the stream's objects."""
-    from demoplan.plotting import check_figure_path
+    from demoplan.plotting.figures import check_figure_path
 
     inputs = [stream, *([objects_file] if objects_file is not None else [])]
     refuse_overwriting_inputs(output, inputs)
@@ -88,8 +88,8 @@ def _segmentation_figure(found: Segmentation, plot: Path) -> bytes:
         raise InputError(
             "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
         ) from None
-    from demoplan.plotting import figure_bytes
-    from demoplan.segmentation import plot_segmentation
+    from demoplan.plotting.figures import figure_bytes
+    from demoplan.plotting.segmentation import plot_segmentation
 
     axes = plot_segmentation(found)
     if not axes:

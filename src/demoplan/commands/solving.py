@@ -8,7 +8,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from demoplan.planning.budget import Budget
+from demoplan.budget import Budget
 from demoplan.planning.problem import Plan
 
 __all__ = ["Solved", "export_pddl", "solve_problem"]
@@ -27,9 +27,9 @@ def solve_problem(
     path: Path, *, search: str = "astar", budget: Budget | None = None, optimal: bool = False
 ) -> Solved:
     """Read the problem at ``path`` and solve it (paper §IV.C) within ``budget``
-    (default :func:`~demoplan.planning.budget.default_budget`); ``optimal``:
+    (default :func:`~demoplan.budget.default_budget`); ``optimal``:
     only a plan proved shortest. Raises :class:`~demoplan.errors.DemoplanError`."""
-    from demoplan.planning.budget import default_budget
+    from demoplan.budget import default_budget
     from demoplan.planning.search import solve
     from demoplan.planning.xml import load_problem
 

@@ -81,7 +81,7 @@ def positive_extents(size: list[float]) -> list[float]:
 class ObjectSchema(_Schema):
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Number] = Field(min_length=3, max_length=3)
-    mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.masses)
+    mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
 
     @field_validator("size")

@@ -26,8 +26,8 @@ import math
 from collections.abc import Iterator, Mapping
 from typing import Any
 
+from demoplan.documents.poses import LENGTH_SCALE, UnitsSchema
 from demoplan.errors import InputError
-from demoplan.poses import LENGTH_SCALE, UnitsSchema
 
 __all__ = [
     "MAX_CARRIED_M",

@@ -25,7 +25,7 @@ from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import Scene, yaw_of
 
 PERCEIVED_COLOURS = ("red", "green", "blue", "yellow", "wood")
-"""The block colours the top camera tells apart (rendered as demoplan.colours names them)."""
+"""The block colours the top camera tells apart (as in demoplan.plotting.colours)."""
 
 __all__ = ["CameraWorld"]
 

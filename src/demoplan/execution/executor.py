@@ -30,11 +30,11 @@ from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Any
 
+from demoplan.budget import PLANNING_SECONDS
 from demoplan.errors import DemoplanError, InputError
 from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
-from demoplan.planning.budget import PLANNING_SECONDS
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules

@@ -57,7 +57,7 @@ class FrameWriter:
         path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
         import matplotlib.pyplot as plt
 
-        from demoplan.plotting import save_figure
+        from demoplan.plotting.figures import save_figure
 
         figure, ax = plt.subplots(figsize=(4.5, 4.0))
         self._panel(ax, len(self.frames) - 1)
@@ -93,7 +93,7 @@ class FrameWriter:
             return None
         import matplotlib.pyplot as plt
 
-        from demoplan.plotting import save_figure
+        from demoplan.plotting.figures import save_figure
 
         picks = self.storyboard_frames(max_panels)
         columns = min(4, len(picks))
@@ -124,9 +124,9 @@ class FrameWriter:
         ax.set_title(caption, fontsize=7, color=FAILED_COLOUR if index in self.failed else "black")
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
-        from demoplan.colours import assign_colours, object_colour
-        from demoplan.labels import add_label
-        from demoplan.plotting import draw_landmarks, object_patch
+        from demoplan.plotting.colours import assign_colours, object_colour
+        from demoplan.plotting.figures import draw_landmarks, object_patch
+        from demoplan.plotting.labels import add_label
 
         assign_colours([*self.targets, *observation.poses])  # as every figure of the task
         if self.scene is not None:

@@ -30,13 +30,13 @@ from typing import Any
 
 import numpy as np
 
-from demoplan.colours import assign_colours, object_rgba
 from demoplan.errors import InputError
 from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
+from demoplan.plotting.colours import assign_colours, object_rgba
 from demoplan.scenes.geometry import half_extent
 from demoplan.scenes.scene import Scene, yaw_of
 

@@ -7,6 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from demoplan.budget import PLANNING_SECONDS, Budget
 from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import (
     ExecutionSettings,
@@ -21,7 +22,6 @@ from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.world import World
 from demoplan.fileio import os_reason, output_target
 from demoplan.model import TaskModel
-from demoplan.planning.budget import PLANNING_SECONDS, Budget
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import CandidatePlan
 from demoplan.scenes.prepared import PreparedScene, prepare

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from demoplan.experiments.compare import Check
+from demoplan.experiments.report_html import markdown_to_html
 from demoplan.experiments.runs import (
     ExecutionRun,
     LearningRun,
@@ -21,7 +22,6 @@ from demoplan.experiments.runs import (
 )
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.learning.tables import constraint_text, sequence_rows
-from demoplan.report_html import markdown_to_html
 from demoplan.wording import plural
 
 __all__ = ["TITLE", "write_report"]

@@ -265,7 +265,7 @@ def segment_experiment(out: Path) -> SegmentationRun:
     )
     figure = None
     try:
-        from demoplan.segmentation import plot_segmentation
+        from demoplan.plotting.segmentation import plot_segmentation
 
         plot_segmentation(found, out / "experiment1-segmentation.png")
         figure = "experiment1-segmentation.png"
@@ -362,7 +362,7 @@ def _plot_precision(
         import matplotlib.pyplot as plt
     except ImportError:
         return None
-    from demoplan.plotting import save_figure
+    from demoplan.plotting.figures import save_figure
 
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     ax.plot(
@@ -398,7 +398,7 @@ def _plot_precision(
 
 
 def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> str | None:
-    from demoplan.plotting import save_scene_plan
+    from demoplan.plotting.figures import save_scene_plan
 
     chosen = result.chosen
     assert chosen.plan is not None
@@ -419,7 +419,7 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
             "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
         )
         return None
-    from demoplan.plotting import save_demonstrations
+    from demoplan.plotting.figures import save_demonstrations
 
     save_demonstrations(model, path, title)
     return path.name

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demoplan import rotations
-from demoplan.deadline import check_time
+from demoplan.budget import check_time
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -561,7 +561,7 @@ def select_clusterings(
         active = [scan for scan in scans if not scan.done]
         if not active:
             break
-        check_time()  # the learning budget (demoplan.deadline), if one is set
+        check_time()  # the learning budget (demoplan.budget), if one is set
         if c == 1:
             batch_labels = np.zeros((len(active), n), dtype=np.intp)
         else:

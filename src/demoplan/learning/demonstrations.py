@@ -24,13 +24,8 @@ from pydantic import (
     field_validator,
 )
 
-from demoplan.errors import InputError
-from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.learning.releases import warn_unsupported_releases
-from demoplan.masses import with_mass
-from demoplan.model import Demonstration, ObjectGeometry, Step
-from demoplan.plausibility import check_units
-from demoplan.poses import (
+from demoplan.documents.masses import with_mass
+from demoplan.documents.poses import (
     LENGTH_SCALE,
     LandmarkSchema,
     ObjectSchema,
@@ -40,6 +35,11 @@ from demoplan.poses import (
     pose_from_dict,
     pose_to_dict,
 )
+from demoplan.documents.units import check_units
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.learning.releases import warn_unsupported_releases
+from demoplan.model import Demonstration, ObjectGeometry, Step
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -176,7 +176,7 @@ def check_geometry_names(
 def _geometry(
     name: str, entry: ObjectSchema, scale: float, source: str, where: str
 ) -> ObjectGeometry:
-    """An ``objects`` entry in metres, with its mass (:func:`demoplan.masses.with_mass`)."""
+    """An ``objects`` entry in metres, its mass by :func:`~demoplan.documents.masses.with_mass`."""
     size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
     return with_mass(
         ObjectGeometry(entry.shape, size),

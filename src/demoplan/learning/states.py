@@ -34,7 +34,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from demoplan import rotations
-from demoplan.deadline import report_progress
+from demoplan.budget import report_progress
 from demoplan.learning.clustering import (
     CONSISTENCY_LEVEL,
     UNBOUNDED_DF,

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from demoplan.deadline import check_time, report_progress
+from demoplan.budget import check_time, report_progress
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import ColourRegion, colour_regions
 from demoplan.perception.hough import Hypothesis, hough_squares
@@ -144,7 +144,7 @@ def detect_blocks(
     regions, _ = colour_regions(image, min_area=min_area)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
-        check_time()  # a budget set by the caller (demoplan.deadline), if any
+        check_time()  # a budget set by the caller (demoplan.budget), if any
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
         for _ in range(8):

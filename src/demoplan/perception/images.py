@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from demoplan.deadline import PERCEPTION_TIMEOUT, time_budget
+from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
 from demoplan.errors import InputError, UsageError
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, load_image

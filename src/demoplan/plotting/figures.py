@@ -19,9 +19,11 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.colours import assign_colours, object_colour
 from demoplan.errors import InputError
-from demoplan.labels import (
+from demoplan.learning.constraints import GoalOrder
+from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
+from demoplan.plotting.colours import assign_colours, object_colour
+from demoplan.plotting.labels import (
     BoxPlacement,
     Leader,
     add_label,
@@ -29,8 +31,6 @@ from demoplan.labels import (
     place_boxes,
     place_labels,
 )
-from demoplan.learning.constraints import GoalOrder
-from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 from demoplan.rotations import rpy_from_quat
 
 if TYPE_CHECKING:

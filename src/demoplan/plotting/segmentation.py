@@ -9,8 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.colours import assign_colours, object_colour
-from demoplan.plotting import save_figure
+from demoplan.plotting.colours import assign_colours, object_colour
+from demoplan.plotting.figures import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
 
 if TYPE_CHECKING:

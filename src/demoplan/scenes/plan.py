@@ -16,9 +16,9 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
+from demoplan.budget import Clock
 from demoplan.errors import LimitReachedError, NoPlanError, UsageError
 from demoplan.model import TaskModel
-from demoplan.planning.budget import Clock
 from demoplan.planning.problem import Plan
 from demoplan.planning.search import Budget, solve
 from demoplan.scenes.geometry import GeometrySettings

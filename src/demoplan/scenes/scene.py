@@ -26,12 +26,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from demoplan.errors import InputError
-from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.masses import with_mass
-from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
-from demoplan.plausibility import check_units
-from demoplan.poses import (
+from demoplan.documents.masses import with_mass
+from demoplan.documents.poses import (
     LENGTH_SCALE,
     Coordinate,
     LandmarkSchema,
@@ -43,6 +39,10 @@ from demoplan.poses import (
     pose_to_dict,
     positive_extents,
 )
+from demoplan.documents.units import check_units
+from demoplan.errors import InputError
+from demoplan.fileio import check_format, describe_validation_error, read_document
+from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
 from demoplan.rotations import rpy_from_quat
 
 __all__ = [
@@ -128,7 +128,7 @@ class _ObjectSchema(PoseSchema):
     size: list[Number] | None = Field(default=None, min_length=3, max_length=3)
     shape: Literal["box", "cylinder", "sphere"] = "box"
     grasps: list[Number] | None = Field(default=None, min_length=1, max_length=16)
-    mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.masses)
+    mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
 
     @field_validator("size")

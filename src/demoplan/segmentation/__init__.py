@@ -13,6 +13,9 @@ Public API::
     found = segment(stream)                    # SegmentationSettings() by default
     demo = found.to_demonstration("set-table-1")
     write_demonstration(demo, "set-table-1.json")
+
+    from demoplan.plotting.segmentation import plot_segmentation
+
     plot_segmentation(found, "speed.png")     # speed per object, moves shaded
 
 Reading and writing streams (:mod:`demoplan.segmentation.readers` — one
@@ -56,7 +59,8 @@ Recordings (:mod:`demoplan.segmentation.importing`, read by
 settings=None, progress=None) -> list[Demonstration]`` segments each
 demonstration of a robosuite / robomimic HDF5 file.
 
-Plot (:mod:`demoplan.segmentation.plotting`, matplotlib imported lazily):
+Plot (:mod:`demoplan.plotting.segmentation`, a floor above this package;
+matplotlib imported lazily):
 ``plot_segmentation(segmentation, path=None, *, axes=None, title=None,
 heights=False, dpi=110) -> list[Axes]`` (speed per object; with ``heights`` a
 last row of every object's height); ``plot_heights(segmentation, ax=None) -> Axes``.
@@ -91,8 +95,6 @@ _EXPORTS = {
     "SpeedTrace": "demoplan.segmentation.detect",
     "segment": "demoplan.segmentation.detect",
     "write_demonstration": "demoplan.segmentation.detect",
-    "plot_heights": "demoplan.segmentation.plotting",
-    "plot_segmentation": "demoplan.segmentation.plotting",
     "import_recording": "demoplan.segmentation.importing",
     "StepComparison": "demoplan.segmentation.synthetic",
     "compare_steps": "demoplan.segmentation.synthetic",
@@ -112,8 +114,6 @@ __all__ = [
     "load_bag",
     "load_csv",
     "load_stream",
-    "plot_heights",
-    "plot_segmentation",
     "segment",
     "stream_from_demonstration",
     "write_bag",
@@ -130,7 +130,6 @@ if TYPE_CHECKING:
         write_demonstration,
     )
     from demoplan.segmentation.importing import import_recording
-    from demoplan.segmentation.plotting import plot_heights, plot_segmentation
     from demoplan.segmentation.readers import load_bag, load_csv, load_stream
     from demoplan.segmentation.settings import SegmentationSettings
     from demoplan.segmentation.synthetic import (

@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.documents.poses import LENGTH_SCALE
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
-from demoplan.poses import LENGTH_SCALE
 from demoplan.segmentation.types import (
     FloatArray,
     PoseStream,

@@ -1,0 +1,5 @@
+"""What demoplan's files say, checked as they are read: the pose and geometry
+schemas that demonstrations, scenes and streams share
+(:mod:`~demoplan.documents.poses`), whether their numbers are plausible for
+the declared units (:mod:`~demoplan.documents.units`), and an object's mass
+(:mod:`~demoplan.documents.masses`)."""
