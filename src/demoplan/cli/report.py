@@ -15,7 +15,7 @@ from demoplan.cli.common import (
     stderr,
     stdout,
 )
-from demoplan.commands.experiments import experiments as run_all
+from demoplan.commands.experiments import reproduce_experiments
 
 
 @app.command()
@@ -30,7 +30,7 @@ def experiments(
     self-contained report.html (tables, figures, models)."""
     with reported_errors():
         with stdout.status("Running the paper's experiments…") as status:
-            result = run_all(out, progress=lambda text: status.update(text))
+            result = reproduce_experiments(out, progress=lambda text: status.update(text))
         report = result.report
         table = Table(title="Paper vs. demoplan", title_justify="left")
         for column in ("Experiment", "Check", "Paper", "demoplan", "Match"):

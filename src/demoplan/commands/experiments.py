@@ -10,13 +10,15 @@ from pathlib import Path
 from demoplan.experiments import ExperimentsResult, run_experiments
 from demoplan.fileio import staged_folder
 
-__all__ = ["REPORT_FILES", "experiments"]
+__all__ = ["REPORT_FILES", "reproduce_experiments"]
 
 REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
 """The files a report folder holds (an earlier report's are replaced)."""
 
 
-def experiments(out: Path, *, progress: Callable[[str], object] | None = None) -> ExperimentsResult:
+def reproduce_experiments(
+    out: Path, *, progress: Callable[[str], object] | None = None
+) -> ExperimentsResult:
     """Reproduce the paper's experiments (Tables II–V, §IV.C, §V) into the
     folder ``out``: the whole report or none of it — built beside ``out``,
     then put in its place (an earlier report is replaced; a folder of
