@@ -30,9 +30,6 @@ from demoplan.cli.common import (
     working,
 )
 from demoplan.cli.render import print_run_report
-from demoplan.commands.execution import perceive as perceive_image
-from demoplan.commands.execution import run as run_task
-from demoplan.execution.faults import parse_faults
 from demoplan.wording import plural
 
 
@@ -110,6 +107,9 @@ def run(
     ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
+    from demoplan.commands.execution import run as run_task
+    from demoplan.execution.faults import parse_faults
+
     with reported_errors():
         live = stderr.is_terminal and not json_output
         with live_progress(live) as on_event:
@@ -171,6 +171,8 @@ def perceive(
     ] = PERCEPTION_TIMEOUT,
 ) -> None:
     """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
+    from demoplan.commands.execution import perceive as perceive_image
+
     with reported_errors():
         with working("Finding blocks…"):
             found = perceive_image(

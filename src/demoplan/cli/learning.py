@@ -27,8 +27,6 @@ from demoplan.cli.render import (
     print_model,
     print_scene_preview,
 )
-from demoplan.commands.learning import ShownModel, learn_files
-from demoplan.commands.learning import show as show_file
 from demoplan.wording import plural
 
 
@@ -166,6 +164,7 @@ def learn(
     ] = 2,
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
+    from demoplan.commands.learning import learn_files
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
@@ -242,6 +241,9 @@ def show(
     """Print a model as the paper's tables (states, sequences, constraints), or
     preview a scene: where each object stands, which grasps its neighbours
     block, the landmarks and free space (the scene's, else spots near the objects)."""
+    from demoplan.commands.learning import ShownModel
+    from demoplan.commands.learning import show as show_file
+
     with reported_errors():
         shown = show_file(path, model=model_path, plot=plot)
         if shown.figure is not None:

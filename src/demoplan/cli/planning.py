@@ -27,12 +27,8 @@ from demoplan.cli.common import (
 )
 from demoplan.cli.render import plot_no_plan, plot_scene_plan, print_scene_plan
 from demoplan.cli.solving import SolveOptions, solve_text
-from demoplan.commands.planning import plan as plan_task
-from demoplan.commands.planning import write_problem
 from demoplan.commands.solving import export_pddl
 from demoplan.planning.problem import optimality_line
-from demoplan.plotting.figures import check_figure_path
-from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
 
 
 @app.command()
@@ -117,6 +113,10 @@ def plan(
     collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
+    from demoplan.commands.planning import plan as plan_task
+    from demoplan.plotting.figures import check_figure_path
+    from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
+
     with reported_errors():
         if plot is not None:
             check_figure_path(plot, "--plot")
@@ -179,6 +179,8 @@ def problem(
     collisions: CollisionsOption = CollisionSource.rule,
 ) -> None:
     """Write the planning problem of one candidate goal (for 'solve' or a PDDL planner)."""
+    from demoplan.commands.planning import write_problem
+
     with reported_errors():
         written = write_problem(
             model_path,

@@ -21,12 +21,6 @@ from demoplan.cli.common import (
     stderr,
 )
 from demoplan.cli.render import print_steps
-from demoplan.commands.recordings import import_recording
-from demoplan.commands.recordings import segment as segment_stream
-from demoplan.documents.poses import pose_to_dict
-from demoplan.learning.demonstrations import demonstration_to_dict
-from demoplan.segmentation.settings import settings_help
-from demoplan.segmentation.types import parse_object_patterns
 from demoplan.wording import plural
 
 
@@ -76,6 +70,10 @@ def segment(
     rest on a support (docs/segmentation.md); a push along the support is
     reported, not a step; a pause in the air is not a placement.
     """
+    from demoplan.commands.recordings import segment as segment_stream
+    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.segmentation.types import parse_object_patterns
+
     with reported_errors():
         done = segment_stream(
             stream_path,
@@ -103,10 +101,14 @@ def segment(
 
 
 def _segmentation_defaults() -> str:
+    from demoplan.segmentation.settings import settings_help
+
     return settings_help()
 
 
 def _move_json(move: Any) -> dict[str, Any]:
+    from demoplan.documents.poses import pose_to_dict
+
     return {
         "object": move.object,
         "start": round(move.start, 4),
@@ -151,6 +153,8 @@ def import_(
 ) -> None:
     """Import a robot-learning recording: one demonstration file per demonstration in it."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from demoplan.commands.recordings import import_recording
 
     with reported_errors():
         with Progress(

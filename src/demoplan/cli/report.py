@@ -15,7 +15,6 @@ from demoplan.cli.common import (
     stderr,
     stdout,
 )
-from demoplan.commands.experiments import reproduce_experiments
 
 
 @app.command()
@@ -28,6 +27,8 @@ def experiments(
 ) -> None:
     """Reproduce the paper's experiments and write a report: report.md and a
     self-contained report.html (tables, figures, models)."""
+    from demoplan.commands.experiments import reproduce_experiments
+
     with reported_errors():
         with stdout.status("Running the paper's experiments…") as status:
             result = reproduce_experiments(out, progress=lambda text: status.update(text))
