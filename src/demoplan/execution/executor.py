@@ -268,16 +268,34 @@ def execute(
         logger.info("run: %s at step %d: %s", event.kind, event.step, event.text)
         heard(event)
 
+    run = _start_run(model, scene, world, settings, emit, first)
+    while True:
+        if not run.actions:
+            report = run.check_the_end()
+        elif len(run.executed) >= settings.max_actions:
+            report = run.finish(
+                False, f"gave up after {plural(settings.max_actions, 'action')}", gave_up=True
+            )
+        else:
+            report = run.act(run.actions.pop(0))
+        if report is not None:
+            return report
+
+
+def _start_run(
+    model: TaskModel,
+    scene: Scene | PreparedScene,
+    world: World,
+    settings: ExecutionSettings,
+    emit: Callable[[RunEvent], None],
+    first: CandidatePlan | None,
+) -> _Run:
+    """A run's start: the world observed, the first plan (``first``, else made
+    from the observed world where it differs from ``scene``), checked feasible
+    and announced."""
     started = time.perf_counter()
     prepared = prepare(model, scene, clutter=True)
     scene = prepared.scene
-    executed: list[ExecutedAction] = []
-    failures: list[Failure] = []
-    reached: set[str] = set()
-    replans = 0
-    plan_index = 0
-    failed_grasps: dict[GraspKey, int] = {}  # how often each grasp failed at each place
-
     observation = world.observe()
     chosen = first or first_plan(
         model,
@@ -295,9 +313,21 @@ def execute(
     assert chosen.plan is not None
     actions: list[Action] = list(chosen.plan.actions)
     _check_feasible(world, actions, problem, scene.source)
-    first_length = len(actions)
-    reached |= _reached_at_start(problem)
-    expected = dict(observation.poses)
+    run = _Run(
+        model=model,
+        scene=scene,
+        world=world,
+        settings=settings,
+        emit=emit,
+        started=started,
+        goal=goal,
+        problem=problem,
+        names=names,
+        actions=actions,
+        first_length=len(actions),
+        reached=_reached_at_start(problem),
+        expected=dict(observation.poses),
+    )
     emit(
         RunEvent(
             "plan",
@@ -306,107 +336,66 @@ def execute(
             targets=_targets(problem),
         )
     )
+    return run
 
-    def finish(success: bool, reason: str, gave_up: bool = False) -> RunReport:
-        final = world.observe()
-        errors = {
-            obj: _distance(final.poses[obj], pose_of(problem.location(loc)))
-            for obj, loc in problem.problem.goal
-            if obj in final.poses
-        }
-        emit(RunEvent("done", reason, len(executed), replans))
-        return RunReport(
-            success=success,
-            replans=replans,
-            goal=goal,
-            actions=tuple(executed),
-            failures=tuple(failures),
-            final=final,
-            scene=scene,
-            reason=reason,
-            first_plan_length=first_length,
-            pose_errors=errors,
-            reached=tuple(sorted(reached)),
-            seconds=time.perf_counter() - started,
-            world=world.name,
-            gave_up=gave_up,
-            injected=tuple(getattr(world, "injected", ())),
+
+@dataclass(slots=True, kw_only=True)
+class _Run:
+    """A run in progress (:func:`execute`): the plan being carried out, what has
+    been done and seen, and what is expected where."""
+
+    model: TaskModel
+    scene: Scene
+    world: World
+    settings: ExecutionSettings
+    emit: Callable[[RunEvent], None]
+    started: float
+    goal: int
+    problem: SceneProblem
+    names: StableNames
+    actions: list[Action]
+    """The current plan's actions still to do."""
+    first_length: int
+    reached: set[str]
+    expected: dict[str, Pose]
+    """Where every object not in the hand should stand."""
+    executed: list[ExecutedAction] = field(default_factory=list)
+    failures: list[Failure] = field(default_factory=list)
+    replans: int = 0
+    plan_index: int = 0
+    failed_grasps: dict[GraspKey, int] = field(default_factory=dict)
+    """How often each grasp failed at each place."""
+    step: int = 0
+    picked_from: Pose = field(default_factory=lambda: Pose((0.0, 0.0, 0.0)))
+    """Where the object in the hand was taken from."""
+
+    def check_the_end(self) -> RunReport | None:
+        """No action left: the report where the world is as expected and the goal
+        holds, else a failure and a replan (the report where that fails)."""
+        observation = self.world.observe()
+        difference = _compare(self.expected, observation, self.settings, exempt=None)
+        if difference is None and _goal_holds(
+            self.problem, observation, self.reached, self.settings
+        ):
+            return self.finish(True, f"goal of {self.model.demonstration_label(self.goal)} reached")
+        self.failures.append(
+            difference or Failure(self.step, FailureKind.GOAL, "the goal does not hold at the end")
         )
+        return self.replan_or_finish(self.step)
 
-    def replan(step: int) -> str | None:
-        """Plan again from what is observed; None on success, else why not."""
-        nonlocal problem, actions, expected, replans, plan_index
-        if replans >= settings.max_replans:  # the report counts the replans made
-            return f"gave up after {plural(settings.max_replans, 'replan')}"
-        replans += 1
-        plan_index += 1
-        observation = world.observe()
-        current = _scene_of(observation, scene)  # complete: the prepared scene's geometry
-        try:
-            candidate = next(c for c in resolve_goals(model, current) if goal in c.demonstrations)
-            built = build_problem(
-                current,
-                candidate,
-                settings.geometry,
-                frozenset(reached),
-                names,
-                surroundings_of(model, current),
-            )
-        except DemoplanError as exc:
-            return f"cannot plan in the observed world: {exc}"
-        built, why = _without_failed_grasps(built, failed_grasps, observation, settings, world)
-        if why:
-            return why
-        outcome = solve_candidate(built, settings.budget)
-        if outcome.plan is None:
-            return f"no plan from the observed world: {outcome.reason}"
-        try:
-            _check_feasible(world, list(outcome.plan.actions), built, scene.source)
-        except InputError as exc:  # an object moved beyond the robot's reach
-            return exc.message
-        problem, actions = built, list(outcome.plan.actions)
-        reached.update(_reached_at_start(problem))
-        expected = dict(observation.poses)
-        emit(
-            RunEvent(
-                "replan",
-                f"replan {replans}: {plural(len(actions), 'action')}",
-                step,
-                replans,
-                len(actions),
-                _targets(problem),
-            )
-        )
-        return None
-
-    step = 0
-    picked_from = Pose((0.0, 0.0, 0.0))  # where the object in the hand was taken from
-    while True:
-        if not actions:
-            observation = world.observe()
-            difference = _compare(expected, observation, settings, exempt=None)
-            if difference is None and _goal_holds(problem, observation, reached, settings):
-                return finish(True, f"goal of {model.demonstration_label(goal)} reached")
-            failures.append(
-                difference or Failure(step, FailureKind.GOAL, "the goal does not hold at the end")
-            )
-            why = replan(step)
-            if why:
-                return finish(False, why, gave_up=why.startswith("gave up"))
-            continue
-        if len(executed) >= settings.max_actions:
-            return finish(
-                False, f"gave up after {plural(settings.max_actions, 'action')}", gave_up=True
-            )
-        action = actions.pop(0)
-        step += 1
+    def act(self, action: Action) -> RunReport | None:
+        """Carry out ``action`` and check what it did (module docstring); on a
+        difference, a failure and a replan (the report where that fails)."""
+        self.step += 1
+        step = self.step
+        problem, expected, settings, world = self.problem, self.expected, self.settings, self.world
         location = problem.location(action.location)
         target = pose_of(location)
         grasp = next(g for g in problem.grasps if g.name == action.grasp)
-        emit(RunEvent("action", str(action), step, replans, len(actions)))
+        self.emit(RunEvent("action", str(action), step, self.replans, len(self.actions)))
         if action.kind == "GRASP":
-            picked_from = expected.get(action.object, target)
-            world.grasp(action.object, grasp.axis, picked_from)
+            self.picked_from = expected.get(action.object, target)
+            world.grasp(action.object, grasp.axis, self.picked_from)
         else:
             world.put_down(action.object, target)
         observation = world.observe()
@@ -418,31 +407,113 @@ def execute(
             if turn is not None:
                 detail = f"{action.object} is turned {turn:.1f}° from its target"
                 failure = Failure(step, FailureKind.MISPLACED, detail)
-        executed.append(ExecutedAction(step, action, target, plan_index, failure is None))
+        self.executed.append(ExecutedAction(step, action, target, self.plan_index, failure is None))
         if failure is None:
             if action.kind == "GRASP":
                 expected.pop(action.object, None)
             else:
                 expected[action.object] = observation.poses[action.object]
-                _mark_reached(problem, action, reached)
+                _mark_reached(problem, action, self.reached)
             upcoming = [
-                pose_of(problem.location(a.location)) for a in actions if a.kind == "PUT_DOWN"
+                pose_of(problem.location(a.location)) for a in self.actions if a.kind == "PUT_DOWN"
             ]
             world.between_actions(upcoming)
             failure = _compare(expected, world.observe(), settings, exempt=None, step=step)
-        if failure is not None:
-            failures.append(failure)
-            emit(RunEvent("failure", f"{failure.kind}: {failure.detail}", step, replans))
-            if action.kind == "GRASP" and failure.kind == FailureKind.GRASP:
-                key = _grasp_key(action.object, grasp.axis, picked_from, settings)
-                failed_grasps[key] = failed_grasps.get(key, 0) + 1
-            held = world.observe().held
-            if held is not None:
-                # Plans start with an empty hand: put the object back where it was taken.
-                world.put_down(held, picked_from)
-            why = replan(step)
-            if why:
-                return finish(False, why, gave_up=why.startswith("gave up"))
+        if failure is None:
+            return None
+        self.failures.append(failure)
+        self.emit(RunEvent("failure", f"{failure.kind}: {failure.detail}", step, self.replans))
+        if action.kind == "GRASP" and failure.kind == FailureKind.GRASP:
+            key = _grasp_key(action.object, grasp.axis, self.picked_from, settings)
+            self.failed_grasps[key] = self.failed_grasps.get(key, 0) + 1
+        held = world.observe().held
+        if held is not None:
+            # Plans start with an empty hand: put the object back where it was taken.
+            world.put_down(held, self.picked_from)
+        return self.replan_or_finish(step)
+
+    def replan_or_finish(self, step: int) -> RunReport | None:
+        """Replan (:meth:`replan`); the report of the failed run where it cannot."""
+        why = self.replan(step)
+        if why:
+            return self.finish(False, why, gave_up=why.startswith("gave up"))
+        return None
+
+    def finish(self, success: bool, reason: str, gave_up: bool = False) -> RunReport:
+        """The run's report, the world observed a last time."""
+        world, problem = self.world, self.problem
+        final = world.observe()
+        errors = {
+            obj: _distance(final.poses[obj], pose_of(problem.location(loc)))
+            for obj, loc in problem.problem.goal
+            if obj in final.poses
+        }
+        self.emit(RunEvent("done", reason, len(self.executed), self.replans))
+        return RunReport(
+            success=success,
+            replans=self.replans,
+            goal=self.goal,
+            actions=tuple(self.executed),
+            failures=tuple(self.failures),
+            final=final,
+            scene=self.scene,
+            reason=reason,
+            first_plan_length=self.first_length,
+            pose_errors=errors,
+            reached=tuple(sorted(self.reached)),
+            seconds=time.perf_counter() - self.started,
+            world=world.name,
+            gave_up=gave_up,
+            injected=tuple(getattr(world, "injected", ())),
+        )
+
+    def replan(self, step: int) -> str | None:
+        """Plan again from what is observed; None on success, else why not."""
+        settings, world, scene, model = self.settings, self.world, self.scene, self.model
+        if self.replans >= settings.max_replans:  # the report counts the replans made
+            return f"gave up after {plural(settings.max_replans, 'replan')}"
+        self.replans += 1
+        self.plan_index += 1
+        observation = world.observe()
+        current = _scene_of(observation, scene)  # complete: the prepared scene's geometry
+        try:
+            candidate = next(
+                c for c in resolve_goals(model, current) if self.goal in c.demonstrations
+            )
+            built = build_problem(
+                current,
+                candidate,
+                settings.geometry,
+                frozenset(self.reached),
+                self.names,
+                surroundings_of(model, current),
+            )
+        except DemoplanError as exc:
+            return f"cannot plan in the observed world: {exc}"
+        built, why = _without_failed_grasps(built, self.failed_grasps, observation, settings, world)
+        if why:
+            return why
+        outcome = solve_candidate(built, settings.budget)
+        if outcome.plan is None:
+            return f"no plan from the observed world: {outcome.reason}"
+        try:
+            _check_feasible(world, list(outcome.plan.actions), built, scene.source)
+        except InputError as exc:  # an object moved beyond the robot's reach
+            return exc.message
+        self.problem, self.actions = built, list(outcome.plan.actions)
+        self.reached.update(_reached_at_start(self.problem))
+        self.expected = dict(observation.poses)
+        self.emit(
+            RunEvent(
+                "replan",
+                f"replan {self.replans}: {plural(len(self.actions), 'action')}",
+                step,
+                self.replans,
+                len(self.actions),
+                _targets(self.problem),
+            )
+        )
+        return None
 
 
 def _check_feasible(

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import PLANNING_SECONDS, Budget
 from demoplan.errors import InputError, UsageError
@@ -26,6 +26,9 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import CandidatePlan
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.scene import Scene
+
+if TYPE_CHECKING:
+    from demoplan.execution.frames import FrameWriter
 
 __all__ = ["make_world", "run_task", "start_world"]
 
@@ -123,24 +126,62 @@ def run_task(
     world, first = start_world(model, prepared, sim, faults, seed, settings, perception)
     recording = None
     if video is not None:
-        video = output_target(video, stream_ok=False)[0]  # a link's file, not the link
-        recording = video.with_name(f".{video.name}.part.mp4")
-        simulator: Any = getattr(world, "world", world)  # a camera world films through its own
-        try:
-            simulator.record_video(recording)
-        except (OSError, RuntimeError) as exc:  # ffmpeg could not start or open the file
-            recording.unlink(missing_ok=True)
-            world_close = getattr(world, "close", None)
-            if world_close is not None:
-                world_close()
-            raise InputError(
-                f"cannot write the video ({_first_line(exc)})", source=str(video)
-            ) from None
+        video, recording = _start_video(world, video)
     writer = None
     if frames is not None:
         from demoplan.execution.frames import FrameWriter
 
         writer = FrameWriter(frames, scene=scene)
+    heard = _listener(world, writer, on_event)
+    finished = False
+    try:
+        report = execute(model, prepared, _FramedWorld(world, writer), settings, heard, first)
+        written: tuple[str, ...] = ()
+        if writer is not None:
+            writer.capture(report.final, "end", _picture(world))
+            writer.storyboard()
+            written = tuple(str(p) for p in writer.written)
+        finished = True
+    finally:
+        _close_world(world, video, recording, finished)
+    simulated: Any = getattr(world, "world", world)
+    return replace(
+        report,
+        frames=written,
+        world=world.name,
+        collisions=tuple(getattr(simulated, "collisions", ())),
+        motions_refused=tuple(getattr(simulated, "motion_failures", ())),
+    )
+
+
+def _start_video(world: World, video: Path) -> tuple[Path, Path]:
+    """Start recording ``world`` into a partial file beside ``video`` (renamed
+    to it once the run is finished: :func:`_close_world`); returns the video's
+    path (a link's file, not the link) and the partial file's. A recording that
+    cannot start closes the world and is an input error."""
+    video = output_target(video, stream_ok=False)[0]  # a link's file, not the link
+    recording = video.with_name(f".{video.name}.part.mp4")
+    simulator: Any = getattr(world, "world", world)  # a camera world films through its own
+    try:
+        simulator.record_video(recording)
+    except (OSError, RuntimeError) as exc:  # ffmpeg could not start or open the file
+        recording.unlink(missing_ok=True)
+        world_close = getattr(world, "close", None)
+        if world_close is not None:
+            world_close()
+        raise InputError(
+            f"cannot write the video ({_first_line(exc)})", source=str(video)
+        ) from None
+    return video, recording
+
+
+def _listener(
+    world: World,
+    writer: FrameWriter | None,
+    on_event: Callable[[RunEvent], object] | None,
+) -> Callable[[RunEvent], None]:
+    """What hears the executor's events: the world's renders are shown the
+    targets, the frames get the start and the failures, then ``on_event``."""
 
     def heard(event: RunEvent) -> None:
         show = getattr(getattr(world, "world", world), "show_targets", None)
@@ -155,75 +196,72 @@ def run_task(
         if on_event is not None:
             on_event(event)
 
-    class Recording:
-        """Captures a frame after each action (the world observed as the executor sees it)."""
+    return heard
 
-        name = world.name
 
-        def observe(self) -> Any:
-            return world.observe()
+class _FramedWorld:
+    """``world`` as the executor acts on it, capturing a frame after each action
+    (the world observed as the executor sees it) where there is a ``writer``."""
 
-        def grasp(self, obj: str, axis: float, where: Any = None) -> None:
-            world.grasp(obj, axis, where)
-            self._frame(f"GRASP {obj}")
+    def __init__(self, world: World, writer: FrameWriter | None) -> None:
+        self._world = world
+        self._writer = writer
+        self.name = world.name
 
-        def put_down(self, obj: str, pose: Any) -> None:
-            world.put_down(obj, pose)
-            self._frame(f"PUT_DOWN {obj}")
+    def observe(self) -> Any:
+        return self._world.observe()
 
-        def between_actions(self, upcoming: Any = ()) -> None:
-            world.between_actions(upcoming)
+    def grasp(self, obj: str, axis: float, where: Any = None) -> None:
+        self._world.grasp(obj, axis, where)
+        self._frame(f"GRASP {obj}")
 
-        def why_not_graspable(self, obj: str) -> str | None:
-            check = getattr(world, "why_not_graspable", None)
-            return None if check is None else check(obj)
+    def put_down(self, obj: str, pose: Any) -> None:
+        self._world.put_down(obj, pose)
+        self._frame(f"PUT_DOWN {obj}")
 
-        def why_not_reachable(self, obj: str, pose: Any) -> str | None:
-            check = getattr(world, "why_not_reachable", None)
-            return None if check is None else check(obj, pose)
+    def between_actions(self, upcoming: Any = ()) -> None:
+        self._world.between_actions(upcoming)
 
-        @property
-        def injected(self) -> Any:  # the simulated world's faults, for the report
-            return getattr(world, "injected", ())
+    def why_not_graspable(self, obj: str) -> str | None:
+        check = getattr(self._world, "why_not_graspable", None)
+        return None if check is None else check(obj)
 
-        def _frame(self, caption: str) -> None:
-            if writer is not None:
-                writer.capture(world.observe(), f"{len(writer.frames)}: {caption}", _picture(world))
+    def why_not_reachable(self, obj: str, pose: Any) -> str | None:
+        check = getattr(self._world, "why_not_reachable", None)
+        return None if check is None else check(obj, pose)
 
-    finished = False
-    try:
-        report = execute(model, prepared, Recording(), settings, heard, first)
-        written: tuple[str, ...] = ()
+    @property
+    def injected(self) -> Any:  # the simulated world's faults, for the report
+        return getattr(self._world, "injected", ())
+
+    def _frame(self, caption: str) -> None:
+        writer = self._writer
         if writer is not None:
-            writer.capture(report.final, "end", _picture(world))
-            writer.storyboard()
-            written = tuple(str(p) for p in writer.written)
-        finished = True
-    finally:
-        close = getattr(world, "close", None)
-        try:
-            if close is not None:
-                close()  # also finishes the video
-        except (OSError, RuntimeError) as exc:  # ffmpeg failed on the way (a full disk)
-            if recording is not None:
-                recording.unlink(missing_ok=True)
-            if finished:
-                raise InputError(
-                    f"cannot write the video ({_first_line(exc)})", source=str(video)
-                ) from None
-        if recording is not None and video is not None:
-            if finished:
-                recording.replace(video)
-            else:
-                recording.unlink(missing_ok=True)
-    simulated: Any = getattr(world, "world", world)
-    return replace(
-        report,
-        frames=written,
-        world=world.name,
-        collisions=tuple(getattr(simulated, "collisions", ())),
-        motions_refused=tuple(getattr(simulated, "motion_failures", ())),
-    )
+            writer.capture(
+                self._world.observe(), f"{len(writer.frames)}: {caption}", _picture(self._world)
+            )
+
+
+def _close_world(world: World, video: Path | None, recording: Path | None, finished: bool) -> None:
+    """Close ``world`` (which also finishes its video) and move the recording to
+    ``video`` when the run ``finished``, else delete it; a video that fails on
+    the way (a full disk) is deleted, an input error when the run finished."""
+    close = getattr(world, "close", None)
+    try:
+        if close is not None:
+            close()  # also finishes the video
+    except (OSError, RuntimeError) as exc:  # ffmpeg failed on the way (a full disk)
+        if recording is not None:
+            recording.unlink(missing_ok=True)
+        if finished:
+            raise InputError(
+                f"cannot write the video ({_first_line(exc)})", source=str(video)
+            ) from None
+    if recording is not None and video is not None:
+        if finished:
+            recording.replace(video)
+        else:
+            recording.unlink(missing_ok=True)
 
 
 def check_video_path(video: Path) -> None:

@@ -272,8 +272,43 @@ def _generate_states(
     demonstrations: Sequence[Demonstration],
     settings: StateGenerationSettings | None = None,
 ) -> StateGeneration:
+    """:func:`generate_states` over distinct demonstrations (paper §IV.A), step by step."""
     settings = settings or StateGenerationSettings()
     world = _World(demonstrations)
+    observed = _relative_placements(demonstrations, world)
+    precision, own_precision = _placement_precision(observed, settings)
+    quantised = _quantise_placements(observed, world, settings, precision, own_precision)
+    letters, members, sequences = _letter_states(demonstrations, quantised.keys)
+    states = [
+        _describe_state(key, letter, members[letter], observed, quantised.decided)
+        for key, letter in letters.items()
+    ]
+    states = [_anywhere(state, precision, settings) for state in states]
+    return StateGeneration(tuple(states), sequences, tuple(quantised.scores), precision)
+
+
+@dataclass(frozen=True, slots=True)
+class _RelativePlacements:
+    """Every object's placements (paper §IV.A: each step is one) and their values
+    relative to each candidate reference defined at them (docs/learning.md,
+    *Placements and candidate references*)."""
+
+    placements: dict[str, list[_Placement]]
+    candidates: dict[str, list[str | None]]
+    relative: dict[tuple[str, Kind, str | None], np.ndarray]
+    """(object, kind, reference) → the object's relative values, one row per placement."""
+    framed: dict[tuple[str, str | None], bool]
+    """(object, reference) → whether positions are in the reference's frame."""
+    everywhere: set[tuple[str, Kind, str | None]]
+    """The keys of ``relative`` whose reference is available at all the object's placements."""
+
+
+def _relative_placements(
+    demonstrations: Sequence[Demonstration], world: _World
+) -> _RelativePlacements:
+    """Paper §IV.A: every step of every demonstration as a placement of its object,
+    expressed relative to every candidate reference — absolute, every other
+    object, every landmark (:func:`_relative_table`)."""
     placements: dict[str, list[_Placement]] = {}
     for d, demo in enumerate(demonstrations):
         for s, step in enumerate(demo.steps):
@@ -283,9 +318,6 @@ def _generate_states(
         | {name for demo in demonstrations for name, _ in demo.landmarks}
         | {name for demo in demonstrations for name, _ in demo.initial}
     )
-
-    keys: dict[tuple[int, int], _StateKey] = {}
-    decided: dict[tuple[int, int], dict[str, float]] = {}  # step → decision → margin
     relative: dict[tuple[str, Kind, str | None], np.ndarray] = {}
     framed: dict[tuple[str, str | None], bool] = {}
     candidates = {obj: [None, *(n for n in names if n != obj)] for obj in placements}
@@ -298,7 +330,18 @@ def _generate_states(
         if key[2] is None
         or all(world.available(p.demo, key[2], p.step) for p in placements[key[0]])
     }
-    steady = {key: values for key, values in relative.items() if key in everywhere}
+    return _RelativePlacements(placements, candidates, relative, framed, everywhere)
+
+
+def _placement_precision(
+    observed: _RelativePlacements, settings: StateGenerationSettings
+) -> tuple[Precision, dict[Kind, dict[str, _Spread]]]:
+    """The precision eq. (2)'s decisions are measured against
+    (:func:`estimate_precision`, over the references available at all of an
+    object's placements), and each object's own (:func:`_own_precisions`)."""
+    steady = {
+        key: values for key, values in observed.relative.items() if key in observed.everywhere
+    }
     tightest = {kind: _tightest(steady, kind, settings) for kind in KINDS}
     precision = _precision(tightest, settings)
     own_precision = {
@@ -314,74 +357,118 @@ def _generate_states(
             precision.orientation,
             settings.orientation_separation,
         )
-    reachable: dict[str, set[str]] = {obj: set() for obj in placements}
-    for obj, _, reference in everywhere:
+    return precision, own_precision
+
+
+@dataclass(frozen=True, slots=True)
+class _Quantised:
+    """Every placement's state key, the margins of the decisions behind it, and
+    every candidate reference's score."""
+
+    keys: dict[tuple[int, int], _StateKey]
+    """(demonstration, step) → its state's key."""
+    decided: dict[tuple[int, int], dict[str, float]]
+    """(demonstration, step) → decision → margin."""
+    scores: list[ReferenceScore]
+
+
+def _quantise_placements(
+    observed: _RelativePlacements,
+    world: _World,
+    settings: StateGenerationSettings,
+    precision: Precision,
+    own_precision: dict[Kind, dict[str, _Spread]],
+) -> _Quantised:
+    """Paper §IV.A, eq. (2): each object's candidate references scored by
+    K-means clustering, and each of its placements quantised to a state key
+    (:func:`_quantise_object`), object by object."""
+    quantised = _Quantised({}, {}, [])
+    reachable: dict[str, set[str]] = {obj: set() for obj in observed.placements}
+    for obj, _, reference in observed.everywhere:
         if reference is not None:
             reachable[obj].add(reference)
-    all_scores: list[ReferenceScore] = []
-    for done, (obj, own) in enumerate(placements.items()):
-        report_progress("objects", done, len(placements))
-        position_precision = _floored(
-            own_precision["position"].get(obj, _Spread(precision.position, precision.position_df)),
-            MIN_POSITION_PRECISION,
+    for done, obj in enumerate(observed.placements):
+        report_progress("objects", done, len(observed.placements))
+        _quantise_object(
+            obj, observed, reachable[obj], world, settings, precision, own_precision, quantised
         )
-        orientation_precision = _floored(
-            own_precision["orientation"].get(
-                obj, _Spread(precision.orientation, precision.orientation_df)
-            ),
-            MIN_ORIENTATION_PRECISION,
-        )
-        position_scores = _score_references(
-            obj, "position", own, candidates[obj], settings, position_precision, relative
-        )
-        orientation_scores = (
-            _score_references(
-                obj,
-                "orientation",
-                own,
-                candidates[obj],
-                settings,
-                orientation_precision,
-                relative,
-            )
-            if precision.orientation < settings.orientation_separation
-            else []  # the demonstrations do not fix orientations: none is learned
-        )
-        all_scores += position_scores + orientation_scores
-        by_position = _Chooser.of(
-            position_scores, reachable[obj], position_precision, settings.significance
-        )
-        by_orientation = (
-            _Chooser.of(
-                orientation_scores, reachable[obj], orientation_precision, settings.significance
-            )
-            if orientation_scores
-            else None
-        )
-        for index, placement in enumerate(own):
-            where = (placement.demo, placement.step)
-            pos = by_position.at(placement, world)
-            decided[where] = _margins(
-                "position", pos, position_scores, placement, world, position_precision.rms
-            )
-            ori_reference, ori_cluster = None, -1  # orientation unknown
-            if by_orientation is not None:
-                ori = by_orientation.at(placement, world)
-                ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
-                decided[where].update(
-                    _margins(
-                        "orientation",
-                        ori,
-                        orientation_scores,
-                        placement,
-                        world,
-                        orientation_precision.rms,
-                    )
-                )
-            keys[where] = _StateKey(
-                obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
-            )
+    return quantised
 
+
+def _quantise_object(
+    obj: str,
+    observed: _RelativePlacements,
+    reachable: set[str],
+    world: _World,
+    settings: StateGenerationSettings,
+    precision: Precision,
+    own_precision: dict[Kind, dict[str, _Spread]],
+    quantised: _Quantised,
+) -> None:
+    """Paper §IV.A, eq. (2) for one object: its position and orientation
+    references scored (:func:`_score_references`) and chosen at each placement
+    (:class:`_Chooser`); its placements' state keys and decision margins added
+    to ``quantised``."""
+    own = observed.placements[obj]
+    position_precision = _floored(
+        own_precision["position"].get(obj, _Spread(precision.position, precision.position_df)),
+        MIN_POSITION_PRECISION,
+    )
+    orientation_precision = _floored(
+        own_precision["orientation"].get(
+            obj, _Spread(precision.orientation, precision.orientation_df)
+        ),
+        MIN_ORIENTATION_PRECISION,
+    )
+    candidates, relative = observed.candidates[obj], observed.relative
+    position_scores = _score_references(
+        obj, "position", own, candidates, settings, position_precision, relative
+    )
+    orientation_scores = (
+        _score_references(
+            obj, "orientation", own, candidates, settings, orientation_precision, relative
+        )
+        if precision.orientation < settings.orientation_separation
+        else []  # the demonstrations do not fix orientations: none is learned
+    )
+    quantised.scores.extend(position_scores + orientation_scores)
+    by_position = _Chooser.of(position_scores, reachable, position_precision, settings.significance)
+    by_orientation = (
+        _Chooser.of(orientation_scores, reachable, orientation_precision, settings.significance)
+        if orientation_scores
+        else None
+    )
+    for index, placement in enumerate(own):
+        where = (placement.demo, placement.step)
+        pos = by_position.at(placement, world)
+        quantised.decided[where] = _margins(
+            "position", pos, position_scores, placement, world, position_precision.rms
+        )
+        ori_reference, ori_cluster = None, -1  # orientation unknown
+        if by_orientation is not None:
+            ori = by_orientation.at(placement, world)
+            ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
+            quantised.decided[where].update(
+                _margins(
+                    "orientation",
+                    ori,
+                    orientation_scores,
+                    placement,
+                    world,
+                    orientation_precision.rms,
+                )
+            )
+        quantised.keys[where] = _StateKey(
+            obj, pos.reference, pos.clustering.labels[index], ori_reference, ori_cluster
+        )
+
+
+def _letter_states(
+    demonstrations: Sequence[Demonstration], keys: dict[tuple[int, int], _StateKey]
+) -> tuple[dict[_StateKey, str], dict[str, list[tuple[int, int]]], tuple[tuple[str, ...], ...]]:
+    """States lettered A, B, … in order of first appearance over the
+    demonstrations in the order given, steps in order (paper §IV.A); each
+    state's members; each demonstration as a sequence of state letters."""
     letters: dict[_StateKey, str] = {}
     members: dict[str, list[tuple[int, int]]] = {}
     sequences: list[tuple[str, ...]] = []
@@ -394,39 +481,43 @@ def _generate_states(
             sequence.append(letters[key])
             members.setdefault(letters[key], []).append((d, s))
         sequences.append(tuple(sequence))
+    return letters, members, tuple(sequences)
 
-    states = []
-    for key, letter in letters.items():
-        obj = key.object
-        chosen = set(members[letter])
-        rows = [i for i, p in enumerate(placements[obj]) if (p.demo, p.step) in chosen]
-        position = relative[(obj, "position", key.position_reference)][rows]
-        orientation = relative.get((obj, "orientation", key.orientation_reference))
-        margins: dict[str, float] = {}
-        for member in members[letter]:
-            for decision, margin in decided.get(member, {}).items():
-                margins[decision] = min(margins.get(decision, math.inf), margin)
-        states.append(
-            State(
-                id=letter,
-                margins=tuple((d, round(m, 3)) for d, m in sorted(margins.items())),
-                object=obj,
-                position=_position(
-                    position,
-                    key.position_reference,
-                    framed.get((obj, key.position_reference), False),
-                ),
-                orientation=_orientation(
-                    None
-                    if key.orientation_cluster == -1 or orientation is None
-                    else orientation[rows],
-                    key.orientation_reference,
-                ),
-                members=tuple(members[letter]),
-            )
-        )
-    states = [_anywhere(state, precision, settings) for state in states]
-    return StateGeneration(tuple(states), tuple(sequences), tuple(all_scores), precision)
+
+def _describe_state(
+    key: _StateKey,
+    letter: str,
+    members: list[tuple[int, int]],
+    observed: _RelativePlacements,
+    decided: dict[tuple[int, int], dict[str, float]],
+) -> State:
+    """State ``letter``: its members' relative position and orientation
+    summarised (paper §IV.A), and the narrowest margin of each decision taken
+    at its members."""
+    obj = key.object
+    chosen = set(members)
+    rows = [i for i, p in enumerate(observed.placements[obj]) if (p.demo, p.step) in chosen]
+    position = observed.relative[(obj, "position", key.position_reference)][rows]
+    orientation = observed.relative.get((obj, "orientation", key.orientation_reference))
+    margins: dict[str, float] = {}
+    for member in members:
+        for decision, margin in decided.get(member, {}).items():
+            margins[decision] = min(margins.get(decision, math.inf), margin)
+    return State(
+        id=letter,
+        margins=tuple((d, round(m, 3)) for d, m in sorted(margins.items())),
+        object=obj,
+        position=_position(
+            position,
+            key.position_reference,
+            observed.framed.get((obj, key.position_reference), False),
+        ),
+        orientation=_orientation(
+            None if key.orientation_cluster == -1 or orientation is None else orientation[rows],
+            key.orientation_reference,
+        ),
+        members=tuple(members),
+    )
 
 
 ANYWHERE_PRECISIONS = 5.0

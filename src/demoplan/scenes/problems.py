@@ -152,6 +152,52 @@ def build_problem(
     (:mod:`demoplan.scenes.table`)."""
     if names is None:
         names = StableNames(settings.merge_distance)
+    shapes = _object_shapes(scene)
+    locations, current = _current_locations(scene, shapes, names)
+    _check_scene_overlaps(scene, locations, settings)
+    target_of = _add_target_locations(locations, candidate, shapes, names, settings)
+    axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
+    grasps = [Grasp(names.grasp(obj, axis), obj, axis) for obj, axis in axes]
+    room = _add_free_space(
+        locations, scene, candidate, shapes, grasps, names, settings, surroundings
+    )
+    support_pairs, obstacles = _supports_and_obstacles(
+        locations, scene, candidate, target_of, settings
+    )
+    facts, comparison = _collisions(locations, scene, grasps, shapes, settings)
+    accepts = []
+    for loc in locations:
+        taken = accepted_objects(loc, shapes, settings)
+        if len(taken) < len(shapes):
+            accepts += [(loc.name, obj) for obj in taken]
+    final: dict[str, str] = {}
+    for subtask in candidate.subtasks:
+        final[subtask.object] = target_of[subtask.label]
+    problem = Problem.create(
+        objects=[obj.name for obj in scene.objects],
+        locations=[loc.name for loc in locations],
+        grasps=[g.name for g in grasps],
+        allowed=[(g.object, g.name) for g in grasps],
+        collisions=facts,
+        initial=list(current.items()),
+        goal=list(final.items()),
+        freespace=[loc.name for loc in locations if loc.kind == "freespace"],
+        supports=support_pairs,
+        exclusions=exclusions(locations, support_pairs, settings),
+        accepts=accepts,
+        subgoals=[Subgoal(s.label, s.object, target_of[s.label]) for s in candidate.subtasks],
+        precedences=candidate.precedences,
+        reached=reached & {s.label for s in candidate.subtasks},
+        name=f"goal-{candidate.goal}",
+        source=scene.source,
+    )
+    return SceneProblem(
+        candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles), comparison, room
+    )
+
+
+def _object_shapes(scene: Scene) -> dict[str, ObjectGeometry]:
+    """Every scene object's geometry; an object without one is an input error."""
     shapes: dict[str, ObjectGeometry] = {}
     for obj in scene.objects:
         if obj.geometry is None:
@@ -162,6 +208,14 @@ def build_problem(
                 field=f"objects.{obj.name}",
             )
         shapes[obj.name] = obj.geometry
+    return shapes
+
+
+def _current_locations(
+    scene: Scene, shapes: dict[str, ObjectGeometry], names: StableNames
+) -> tuple[list[Location], dict[str, str]]:
+    """A location at every object's current pose (``loc…``, in the scene's
+    order), and each object's location name."""
     locations: list[Location] = []
     current: dict[str, str] = {}
     for obj in scene.objects:
@@ -178,7 +232,19 @@ def build_problem(
             )
         )
         current[obj.name] = name
-    _check_scene_overlaps(scene, locations, settings)
+    return locations, current
+
+
+def _add_target_locations(
+    locations: list[Location],
+    candidate: Candidate,
+    shapes: dict[str, ObjectGeometry],
+    names: StableNames,
+    settings: GeometrySettings,
+) -> dict[str, str]:
+    """The subtasks' targets added to ``locations``: a target at a location made
+    for an object of the same shape and size is that location, any other a
+    location of its own. Returns each subtask label's location name."""
     target_of: dict[str, str] = {}
     for subtask in _turned_to_fit(candidate.subtasks, shapes, settings):
         shape = shapes[subtask.object]
@@ -209,8 +275,23 @@ def build_problem(
                 tuple(shapes[o] for o in users),
             )
         target_of[subtask.label] = name
-    axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
-    grasps = [Grasp(names.grasp(obj, axis), obj, axis) for obj, axis in axes]
+    return target_of
+
+
+def _add_free_space(
+    locations: list[Location],
+    scene: Scene,
+    candidate: Candidate,
+    shapes: dict[str, ObjectGeometry],
+    grasps: list[Grasp],
+    names: StableNames,
+    settings: GeometrySettings,
+    surroundings: Surroundings,
+) -> FreeSpaceRoom:
+    """Free-space locations (``freespace…``) added to ``locations``: the scene's
+    spots, else spots generated on its table (inferred where it gives none)
+    around the targets. Returns where they came from and which objects none
+    takes."""
     given = scene.freespace is not None
     table = scene.table
     if scene.freespace is not None:
@@ -249,7 +330,19 @@ def build_problem(
         for name, shape in shapes.items()
         if not any(name in accepted_objects(loc, {name: shape}, settings) for loc in parked)
     )
-    room = FreeSpaceRoom(table, scene.table is None and not given, given, no_room)
+    return FreeSpaceRoom(table, scene.table is None and not given, given, no_room)
+
+
+def _supports_and_obstacles(
+    locations: list[Location],
+    scene: Scene,
+    candidate: Candidate,
+    target_of: dict[str, str],
+    settings: GeometrySettings,
+) -> tuple[list[tuple[str, str]], list[str]]:
+    """What stands on what (:func:`~demoplan.scenes.geometry.supports`), and why
+    the candidate cannot be planned: a target that would stand on nothing. An
+    object standing on nothing now is an input error."""
     support_pairs, floating = supports(locations, settings, landmark_tops(scene))
     obstacles = []
     for name in floating:
@@ -268,6 +361,18 @@ def build_problem(
                 if target_of[s.label] == name
             )
             obstacles.append(f"{owners} at ({_xyz(loc.position)}) would stand on nothing")
+    return support_pairs, obstacles
+
+
+def _collisions(
+    locations: list[Location],
+    scene: Scene,
+    grasps: list[Grasp],
+    shapes: dict[str, ObjectGeometry],
+    settings: GeometrySettings,
+) -> tuple[list[tuple[str, str, str]], CollisionComparison | None]:
+    """The collision facts by the rule (:func:`~demoplan.scenes.geometry.collision_facts`),
+    or with ``--collisions simulation`` the arm's, with both for comparison."""
     grasp_shapes = [(g.name, g.object, shapes[g.object], g.axis) for g in grasps]
     facts = collision_facts(locations, grasp_shapes, scene.gripper, settings)
     comparison = None
@@ -277,35 +382,7 @@ def build_problem(
         ruled = tuple(f for f in facts if (f[0], f[2]) in pairs)
         comparison = CollisionComparison(ruled, tuple(simulated), tuple(unreachable))
         facts = simulated
-    accepts = []
-    for loc in locations:
-        taken = accepted_objects(loc, shapes, settings)
-        if len(taken) < len(shapes):
-            accepts += [(loc.name, obj) for obj in taken]
-    final: dict[str, str] = {}
-    for subtask in candidate.subtasks:
-        final[subtask.object] = target_of[subtask.label]
-    problem = Problem.create(
-        objects=[obj.name for obj in scene.objects],
-        locations=[loc.name for loc in locations],
-        grasps=[g.name for g in grasps],
-        allowed=[(g.object, g.name) for g in grasps],
-        collisions=facts,
-        initial=list(current.items()),
-        goal=list(final.items()),
-        freespace=[loc.name for loc in locations if loc.kind == "freespace"],
-        supports=support_pairs,
-        exclusions=exclusions(locations, support_pairs, settings),
-        accepts=accepts,
-        subgoals=[Subgoal(s.label, s.object, target_of[s.label]) for s in candidate.subtasks],
-        precedences=candidate.precedences,
-        reached=reached & {s.label for s in candidate.subtasks},
-        name=f"goal-{candidate.goal}",
-        source=scene.source,
-    )
-    return SceneProblem(
-        candidate, problem, tuple(locations), tuple(grasps), tuple(obstacles), comparison, room
-    )
+    return facts, comparison
 
 
 TURNS = (0.0, 90.0, -90.0, 180.0, 45.0, -45.0, 135.0, -135.0)

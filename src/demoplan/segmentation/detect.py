@@ -429,13 +429,39 @@ def _runs(mask: NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
 def _segment_track(
     track: ObjectTrack, settings: SegmentationSettings, supports: _Supports
 ) -> _TrackResult:
+    """One object's track → its moves, nudges and pushes (steps 1–7 of the module docstring)."""
     n = len(track)
     times, positions = track.times, track.positions
     if n == 0:
         return _TrackResult([], [], [], None, np.zeros(0))
     speed = track_speed(times, positions, settings.speed_window_s)
-    forced = np.zeros(n, dtype=bool)
-    # Step 2: moves hidden in tracking gaps.
+    forced = _moves_in_gaps(times, positions, speed, settings)
+    starts, ends = _hysteresis(times, speed, forced, settings)
+    starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
+    # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
+    rest_ends = np.concatenate((starts, [last_rest_end]))
+    poses = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings)
+    hover = _pauses_in_the_air(track, starts, ends, rest_ends, poses, settings, supports)
+    moves, nudges, pushes, initial = _steps_nudges_and_pushes(
+        track, starts, ends, poses, hover, forced, settings
+    )
+    if starts.size and hover[starts.size]:
+        logger.warning(
+            "%s: held in the air at the end of the stream (t = %.3f s); "
+            "its last move is not a step",
+            track.name,
+            times[-1],
+        )
+    return _TrackResult(moves, nudges, pushes, initial, speed)
+
+
+def _moves_in_gaps(
+    times: FloatArray, positions: FloatArray, speed: FloatArray, settings: SegmentationSettings
+) -> NDArray[np.bool_]:
+    """Step 2 of the module docstring: the samples around a tracking gap the
+    object moved in count as moving (returned), and ``speed`` there is raised
+    to at least the jump over the gap's duration."""
+    forced = np.zeros(len(times), dtype=bool)
     gap = np.flatnonzero(np.diff(times) > settings.max_gap_s)
     if gap.size:
         jump = _gap_jumps(times, positions, gap, settings.speed_window_s / 2.0)
@@ -445,7 +471,18 @@ def _segment_track(
         gap_speed = jump / (times[gap + 1] - times[gap])
         speed[gap] = np.maximum(speed[gap], gap_speed)
         speed[gap + 1] = np.maximum(speed[gap + 1], gap_speed)
-    # Step 3: hysteresis.
+    return forced
+
+
+def _hysteresis(
+    times: FloatArray,
+    speed: FloatArray,
+    forced: NDArray[np.bool_],
+    settings: SegmentationSettings,
+) -> tuple[IntArray, IntArray]:
+    """Step 3 of the module docstring: the first and last sample of each move —
+    a run above ``stop_speed`` reaching ``start_speed``; moves less than
+    ``min_rest_s`` apart are one."""
     starts, ends = _runs((speed > settings.stop_speed) | forced)
     high = _cumsum0(((speed > settings.start_speed) | forced).astype(float))
     keep = high[ends + 1] - high[starts] > 0
@@ -456,12 +493,18 @@ def _segment_track(
         )
         starts = starts[separate]
         ends = ends[np.concatenate((separate[1:], [True]))]
-    starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
+    return starts, ends
 
-    # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
-    rest_starts = np.concatenate(([0], ends + 1))
-    rest_ends = np.concatenate((starts, [last_rest_end]))
-    orientations = track.orientations
+
+def _rest_poses(
+    track: ObjectTrack,
+    rest_starts: IntArray,
+    rest_ends: IntArray,
+    settings: SegmentationSettings,
+) -> list[Pose | None]:
+    """Step 4 of the module docstring: the pose of each rest (samples
+    ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples."""
+    times, positions, orientations = track.times, track.positions, track.orientations
 
     def rest_pose(k: int) -> Pose | None:
         a, b = int(rest_starts[k]), int(rest_ends[k])
@@ -471,8 +514,21 @@ def _segment_track(
         b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
         return _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
 
-    poses = [rest_pose(k) for k in range(starts.size + 1)]
-    # Step 5: rests in the air are not placements: the move through them continues.
+    return [rest_pose(k) for k in range(len(rest_starts))]
+
+
+def _pauses_in_the_air(
+    track: ObjectTrack,
+    starts: IntArray,
+    ends: IntArray,
+    rest_ends: IntArray,
+    poses: list[Pose | None],
+    settings: SegmentationSettings,
+    supports: _Supports,
+) -> list[bool]:
+    """Step 5 of the module docstring: whether each rest is in the air (not a
+    placement: the move through it continues)."""
+    times, positions = track.times, track.positions
     hover = [False] * (starts.size + 1)
     for k in range(1, starts.size + 1):
         pose = poses[k]
@@ -486,6 +542,22 @@ def _segment_track(
         if not hover[k]:
             at = float(times[int(rest_ends[k]) - 1])
             hover[k] = supports.supported(track.name, pose, at) is False
+    return hover
+
+
+def _steps_nudges_and_pushes(
+    track: ObjectTrack,
+    starts: IntArray,
+    ends: IntArray,
+    poses: list[Pose | None],
+    hover: list[bool],
+    forced: NDArray[np.bool_],
+    settings: SegmentationSettings,
+) -> tuple[list[Move], list[Move], list[Move], Pose | None]:
+    """Step 7 of the module docstring: each move (from rest to rest, through
+    pauses in the air) as a step, a nudge or a push; settling when the track
+    begins is none. Returns the steps, nudges, pushes and the initial pose."""
+    times, positions, orientations = track.times, track.positions, track.orientations
     moves: list[Move] = []
     nudges: list[Move] = []
     pushes: list[Move] = []
@@ -544,14 +616,7 @@ def _segment_track(
             continue
         moves.append(move)
         reference = after
-    if starts.size and hover[starts.size]:
-        logger.warning(
-            "%s: held in the air at the end of the stream (t = %.3f s); "
-            "its last move is not a step",
-            track.name,
-            times[-1],
-        )
-    return _TrackResult(moves, nudges, pushes, initial, speed)
+    return moves, nudges, pushes, initial
 
 
 def _settle_at_the_end(

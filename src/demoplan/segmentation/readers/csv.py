@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import re
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +75,29 @@ def load_csv(
     source = str(path)
     text = read_input_text(path, "a CSV pose stream", MAX_STREAM_BYTES)
     declared = stream_units(text, units, source)
+    table = _read_table(_data_lines(text, source), source)
+    times = _number_column(table, "t")
+    positions = np.stack(
+        [_number_column(table, "x"), _number_column(table, "y"), _number_column(table, "z")],
+        axis=1,
+    )
+    if declared is None:
+        _check_metres(positions, table.names, source)
+    else:
+        positions = positions * LENGTH_SCALE[declared]
+    orientations = _orientations(table)
+    stream = stream_from_samples(
+        table.names, times, positions, orientations, source=source, where=table.where
+    )
+    if objects is None:
+        return stream
+    chosen = set(select_objects(objects, stream.objects, stream.objects, source=source))
+    return PoseStream(tuple(t for t in stream.tracks if t.name in chosen), source)
+
+
+def _data_lines(text: str, source: str) -> list[tuple[int, str]]:
+    """The numbered lines of ``text`` that are neither blank nor comments; none,
+    or a quote left open on its line, is an input error."""
     lines = [
         (number, line)
         for number, line in enumerate(text.splitlines(), start=1)
@@ -88,6 +112,26 @@ def load_csv(
                 source=source,
                 field=f"line {number}",
             )
+    return lines
+
+
+@dataclass(frozen=True, slots=True)
+class _Table:
+    """A CSV stream's checked header and sample rows."""
+
+    source: str
+    columns: dict[str, Any]
+    """Column name → index, and ``__orientation__`` → the orientation columns."""
+    body: list[list[str]]
+    where: list[str]
+    """Each row's ``line N``."""
+    names: list[str]
+    """Each row's object name."""
+
+
+def _read_table(lines: list[tuple[int, str]], source: str) -> _Table:
+    """``lines`` parsed as CSV: a header (:func:`_check_header`) and at least one
+    row, every row as wide as the header and naming its object."""
     reader = csv.reader(line for _, line in lines)
     try:
         rows = list(reader)
@@ -118,69 +162,67 @@ def load_csv(
             raise InputError(
                 "empty object name", source=source, field=f"{where[i]}, column 'object'"
             )
+    return _Table(source, columns, body, where, names)
 
-    def column(name: str, *, optional: bool = False) -> FloatArray:
-        """A numeric column; with ``optional``, empty cells are NaN (no orientation)."""
-        cells = [row[columns[name]] for row in body]
-        empty = np.array([not c.strip() for c in cells]) if optional else None
-        if empty is not None and empty.any():
-            cells = ["nan" if e else c for c, e in zip(cells, empty.tolist(), strict=True)]
-        try:
-            values = np.array(cells, dtype=float)
-        except ValueError:
-            i = next(i for i, c in enumerate(cells) if not _is_number(c))
-            raise InputError(
-                f"{cells[i].strip()!r} is not a number; a number expected",
-                source=source,
-                field=f"{where[i]}, column {name!r}",
-            ) from None
-        finite = np.isfinite(values)
-        if empty is not None:
-            finite |= empty
-        bad_values = np.flatnonzero(~finite)
-        if bad_values.size:
-            i = int(bad_values[0])
-            raise InputError(
-                f"{cells[i].strip()!r} is not a finite number; a finite number expected",
-                source=source,
-                field=f"{where[i]}, column {name!r}",
-            )
-        return values
 
-    def orientation_columns(names: tuple[str, ...]) -> FloatArray:
-        values = np.stack([column(c, optional=True) for c in names], axis=1)
-        missing = np.isnan(values)
-        partial = np.flatnonzero(missing.any(axis=1) & ~missing.all(axis=1))
-        if partial.size:
-            i = int(partial[0])
-            raise InputError(
-                f"orientation cells {','.join(names)} must be all given or all empty",
-                source=source,
-                field=where[i],
-            )
-        return values
+def _number_column(table: _Table, name: str, *, optional: bool = False) -> FloatArray:
+    """A numeric column; with ``optional``, empty cells are NaN (no orientation)."""
+    source, where = table.source, table.where
+    cells = [row[table.columns[name]] for row in table.body]
+    empty = np.array([not c.strip() for c in cells]) if optional else None
+    if empty is not None and empty.any():
+        cells = ["nan" if e else c for c, e in zip(cells, empty.tolist(), strict=True)]
+    try:
+        values = np.array(cells, dtype=float)
+    except ValueError:
+        i = next(i for i, c in enumerate(cells) if not _is_number(c))
+        raise InputError(
+            f"{cells[i].strip()!r} is not a number; a number expected",
+            source=source,
+            field=f"{where[i]}, column {name!r}",
+        ) from None
+    finite = np.isfinite(values)
+    if empty is not None:
+        finite |= empty
+    bad_values = np.flatnonzero(~finite)
+    if bad_values.size:
+        i = int(bad_values[0])
+        raise InputError(
+            f"{cells[i].strip()!r} is not a finite number; a finite number expected",
+            source=source,
+            field=f"{where[i]}, column {name!r}",
+        )
+    return values
 
-    times = column("t")
-    positions = np.stack([column("x"), column("y"), column("z")], axis=1)
-    if declared is None:
-        _check_metres(positions, names, source)
-    else:
-        positions = positions * LENGTH_SCALE[declared]
-    kind = columns["__orientation__"]
-    orientations: FloatArray | None = None
+
+def _orientation_columns(table: _Table, names: tuple[str, ...]) -> FloatArray:
+    """The orientation columns ``names``, each row all given or all empty (NaN)."""
+    values = np.stack([_number_column(table, c, optional=True) for c in names], axis=1)
+    missing = np.isnan(values)
+    partial = np.flatnonzero(missing.any(axis=1) & ~missing.all(axis=1))
+    if partial.size:
+        i = int(partial[0])
+        raise InputError(
+            f"orientation cells {','.join(names)} must be all given or all empty",
+            source=table.source,
+            field=table.where[i],
+        )
+    return values
+
+
+def _orientations(table: _Table) -> FloatArray | None:
+    """The rows' orientations as quaternions (x, y, z, w) from whichever
+    orientation columns the header has; None without any."""
+    kind = table.columns["__orientation__"]
     if kind == ("yaw",):
-        yaw = np.radians(orientation_columns(kind)[:, 0]) / 2.0
+        yaw = np.radians(_orientation_columns(table, kind)[:, 0]) / 2.0
         zeros = np.zeros_like(yaw)
-        orientations = np.stack([zeros, zeros, np.sin(yaw), np.cos(yaw)], axis=1)
-    elif kind == ("roll", "pitch", "yaw"):
-        orientations = quats_from_rpy_array(orientation_columns(kind))
-    elif kind:
-        orientations = normalise_quats(orientation_columns(kind), source, where)
-    stream = stream_from_samples(names, times, positions, orientations, source=source, where=where)
-    if objects is None:
-        return stream
-    chosen = set(select_objects(objects, stream.objects, stream.objects, source=source))
-    return PoseStream(tuple(t for t in stream.tracks if t.name in chosen), source)
+        return np.stack([zeros, zeros, np.sin(yaw), np.cos(yaw)], axis=1)
+    if kind == ("roll", "pitch", "yaw"):
+        return quats_from_rpy_array(_orientation_columns(table, kind))
+    if kind:
+        return normalise_quats(_orientation_columns(table, kind), table.source, table.where)
+    return None
 
 
 def stream_units(text: str, given: str | None, source: str) -> str | None:
