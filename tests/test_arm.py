@@ -270,10 +270,11 @@ def test_a_neighbour_is_in_the_arms_way_only_when_it_reaches_the_cups_column(
     meet the wrist and the forearm, which are wider (found by this test at a
     3.1 cm gap, 19 cm tall). A neighbour lying over a's top is in the way:
     Experiment 2's red over wood, above."""
+    from demoplan.execution.collision_simulation import simulated_collision_facts
     from demoplan.model import ObjectGeometry
     from demoplan.scenes.geometry import Location
     from demoplan.scenes.scene import SceneObject
-    from demoplan.scenes.simulated_collisions import checked_pairs, simulated_collision_facts
+    from demoplan.scenes.simulated_collisions import checked_pairs
 
     block = ObjectGeometry("box", (0.04, 0.04, 0.04))
     other = ObjectGeometry("box", (0.04, 0.04, height))

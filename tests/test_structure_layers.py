@@ -31,7 +31,7 @@ RENDERING_AND_PARSING = {
     "demoplan.segmentation.types.parse_object_patterns",
     "demoplan.segmentation.settings.settings_help",
     "demoplan.scenes.geometry.GeometrySettings",
-    "demoplan.planning.budget.Budget",
+    "demoplan.budget.Budget",
 }
 
 
@@ -81,3 +81,106 @@ def test_the_check_sees_a_call_into_a_stage(tmp_path: Path) -> None:
         "    return plan_in_scene(m, s)\n"
     )
     assert _stage_calls(module) == ["command.py:5: demoplan.scenes.plan.plan_in_scene"]
+
+
+# --- floors: every import, function-level ones included, goes down or level ---
+
+SRC = CLI.parents[1]
+FLOORS = {
+    # the shared floor: the package root's modules (model, poses… errors, fileio,
+    # budget, graphs) and what the files say (documents/)
+    "documents": 0,
+    # the paper's stages, which know nothing of each other's insides but values
+    "learning": 1,
+    "planning": 1,
+    "segmentation": 1,
+    "perception": 1,
+    # a learned task in a scene: goals, locations, problems (uses learning and planning)
+    "scenes": 2,
+    "plotting": 3,
+    "execution": 4,
+    "experiments": 5,
+    "commands": 6,
+    "cli": 7,
+}
+FRONT_ENDS = {"api": 7, "__main__": 7, "launcher": 7}
+VALUE_MODULES = {
+    # The task model records the settings it was learned with: this value
+    # (which imports nothing of demoplan but errors) sits on the model's floor.
+    "demoplan.learning.settings": 0,
+}
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for path in (SRC / "demoplan").rglob("*.py"):
+        name = ".".join(path.relative_to(SRC).with_suffix("").parts)
+        found[name.removesuffix(".__init__")] = path
+    return found
+
+
+def _floor(module: str) -> int:
+    if module in VALUE_MODULES:
+        return VALUE_MODULES[module]
+    parts = module.split(".")
+    if len(parts) == 1:
+        return 7  # the package itself: its lazy names reach every floor
+    return FLOORS.get(parts[1], FRONT_ENDS.get(parts[1], 0))
+
+
+def _imports(modules: dict[str, Path]) -> list[tuple[str, str, int]]:
+    """(importer, imported module, line) for every import of a demoplan module."""
+    edges = []
+    for name, path in modules.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            targets: list[str] = []
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                for alias in node.names:  # `from demoplan import rotations` names a module
+                    full = f"{node.module}.{alias.name}"
+                    targets.append(full if full in modules else node.module)
+            elif isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            edges += [(name, t, node.lineno) for t in targets if t in modules and t != name]
+    return edges
+
+
+def test_no_import_runs_back_up_a_floor() -> None:
+    upward = sorted(
+        {
+            f"{a} (floor {_floor(a)}) imports {b} (floor {_floor(b)}), line {line}"
+            for a, b, line in _imports(_modules())
+            if _floor(b) > _floor(a)
+        }
+    )
+    assert not upward, "\n".join(upward)
+
+
+def test_no_import_circle() -> None:
+    import networkx as nx
+
+    graph = nx.DiGraph((a, b) for a, b, _ in _imports(_modules()))
+    circles = [" -> ".join(c) for c in nx.simple_cycles(graph)]
+    assert not circles, "\n".join(circles)
+
+
+def test_at_most_ten_modules_at_the_package_root() -> None:
+    root = sorted(p.name for p in (SRC / "demoplan").glob("*.py"))
+    assert len(root) <= 10, root
+
+
+def test_the_command_line_starts_without_the_numeric_stack() -> None:
+    """``demoplan --help`` and a lean ``solve`` load the typer application but
+    none of the stages' libraries: the CLI imports the command layer inside
+    each command, so that starting it stays cheap."""
+    import subprocess
+    import sys
+
+    heavy = ("numpy", "scipy", "shapely", "matplotlib", "mujoco", "pydantic", "sklearn")
+    script = (
+        "import sys, demoplan.cli.application, demoplan.cli.launcher\n"
+        f"print(sorted(m for m in {heavy!r} if m in sys.modules))"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    assert loaded == "[]", loaded

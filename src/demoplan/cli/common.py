@@ -287,11 +287,11 @@ CollisionsOption = Annotated[
 def geometry_settings(
     freespace: int | None, collisions: CollisionSource = CollisionSource.rule
 ) -> Any:
-    from demoplan.scenes.geometry import GeometrySettings
+    """The scene geometry's settings for --freespace and --collisions
+    (:func:`demoplan.commands.settings.geometry_settings`)."""
+    from demoplan.commands.settings import geometry_settings as settings_for
 
-    if freespace is None:
-        return GeometrySettings(collisions=collisions.value)
-    return GeometrySettings(n_freespace=freespace, collisions=collisions.value)
+    return settings_for(freespace, collisions.value)
 
 
 class PerceptionName(StrEnum):

@@ -43,6 +43,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import shapely
@@ -55,7 +56,7 @@ from demoplan.model import (
     Vector3,
     footprint,
 )
-from demoplan.scenes.scene import Gripper
+from demoplan.scenes.scene import Gripper, Scene
 
 __all__ = [
     "MAX_GRID",
@@ -81,6 +82,20 @@ MAX_GRID = 250_000
 """Most candidate free-space spots searched (the grid coarsens on a wider table)."""
 
 
+class CollisionSimulator(Protocol):
+    """Decides collision facts ``(a, b, g)`` by simulation: for grasps
+    ``(name, object, shape, axis)`` at the (location, grasp) ``pairs``, the
+    facts and the pairs it could not reach to check."""
+
+    def __call__(
+        self,
+        scene: Scene,
+        locations: Sequence[Location],
+        grasps: Sequence[tuple[str, str, ObjectGeometry, float]],
+        pairs: set[tuple[str, str]],
+    ) -> tuple[list[tuple[str, str, str]], list[tuple[str, str]]]: ...
+
+
 @dataclass(frozen=True, slots=True)
 class GeometrySettings:
     """Tolerances and defaults of scene geometry (metres)."""
@@ -104,7 +119,11 @@ class GeometrySettings:
     collisions: str = "rule"
     """Where collision facts come from: ``rule`` (the finger discs, §V.B) or
     ``simulation`` (the arm of ``--sim arm`` posed in MuJoCo, §IV.C's path
-    planner: :mod:`demoplan.scenes.simulated_collisions`)."""
+    planner: :mod:`demoplan.execution.collision_simulation`, given as
+    ``simulator``)."""
+    simulator: CollisionSimulator | None = None
+    """What decides the facts with ``collisions="simulation"``: the command layer
+    gives the arm's (:func:`demoplan.commands.settings.geometry_settings`)."""
 
 
 @dataclass(frozen=True, slots=True)

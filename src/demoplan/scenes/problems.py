@@ -19,7 +19,7 @@ from typing import Any
 
 from shapely.geometry.base import BaseGeometry
 
-from demoplan.errors import InputError
+from demoplan.errors import InputError, UsageError
 from demoplan.model import ObjectGeometry, Pose, Vector3
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.rotations import quat_from_yaw
@@ -43,7 +43,6 @@ from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.simulated_collisions import (
     CollisionComparison,
     checked_pairs,
-    simulated_collision_facts,
 )
 from demoplan.scenes.table import Surroundings, Table, infer_table
 from demoplan.scenes.targets import Candidate, Subtask
@@ -377,8 +376,13 @@ def _collisions(
     facts = collision_facts(locations, grasp_shapes, scene.gripper, settings)
     comparison = None
     if settings.collisions == "simulation":
+        if settings.simulator is None:
+            raise UsageError(
+                "--collisions simulation needs a collision simulator (GeometrySettings."
+                "simulator: demoplan.execution.collision_simulation.simulated_collision_facts)"
+            )
         pairs = checked_pairs(locations, grasp_shapes, shapes, settings)
-        simulated, unreachable = simulated_collision_facts(scene, locations, grasp_shapes, pairs)
+        simulated, unreachable = settings.simulator(scene, locations, grasp_shapes, pairs)
         ruled = tuple(f for f in facts if (f[0], f[2]) in pairs)
         comparison = CollisionComparison(ruled, tuple(simulated), tuple(unreachable))
         facts = simulated
