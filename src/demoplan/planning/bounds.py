@@ -12,9 +12,7 @@ rules out, a finish with one straight move per object.
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Iterable
-
+from demoplan.graphs import disjoint_cycles, minimum_feedback_set, strongly_connected
 from demoplan.planning.compiled import Compiled
 
 __all__ = [
@@ -25,8 +23,6 @@ __all__ = [
     "LowerBounds",
     "Move",
     "OutOfNodesError",
-    "acyclic",
-    "strongly_connected",
 ]
 
 DEAD_END = 1 << 40
@@ -267,11 +263,11 @@ class LowerBounds:
             known = self._feedback_cache.get(edges)
             if known is None:
                 if len(component) > MAX_EXACT_COMPONENT:
-                    known = _disjoint_cycles(
+                    known = disjoint_cycles(
                         {y: [x for x in in_cycles[y] if x in members] for y in component}
                     )
                 else:
-                    known = _minimum_feedback_set(component, edges)
+                    known = minimum_feedback_set(component, edges)
                 self._feedback_cache[edges] = known
             total += known
         return total
@@ -433,7 +429,7 @@ class LowerBounds:
                     not ok(x, positions[x], positions[y]) or not ok(y, positions[y], c.goal[x])
                 ):
                     before.setdefault(x, []).append(y)  # y before x
-        return pairs + _disjoint_cycles(before)
+        return pairs + disjoint_cycles(before)
 
     def move_mask(self, obj: int, source: int) -> int:
         """The places where another object keeps ``obj`` from moving from
@@ -632,112 +628,6 @@ class LowerBounds:
         ]
         peeled, stuck = c.peel(away)
         return None if stuck else peeled
-
-
-def _disjoint_cycles(edges: dict[int, list[int]]) -> int:
-    """How many vertex-disjoint cycles a search finds in the digraph ``edges``
-    (node -> successors), each cycle's nodes set aside once found: a lower
-    bound on the most such cycles (any disjoint set is one)."""
-    taken: set[int] = set()
-    count = 0
-    for root in sorted(edges):
-        if root in taken:
-            continue
-        # Depth-first from root along untaken nodes, looking for a way back to root.
-        path = [root]
-        on_path = {root}
-        stacks = [iter(edges.get(root, ()))]
-        visited = {root}
-        while stacks:
-            step = next(stacks[-1], None)
-            if step is None:
-                stacks.pop()
-                on_path.discard(path.pop())
-                continue
-            if step == root:
-                taken |= on_path
-                count += 1
-                break
-            if step in taken or step in visited:
-                continue
-            visited.add(step)
-            path.append(step)
-            on_path.add(step)
-            stacks.append(iter(edges.get(step, ())))
-    return count
-
-
-def strongly_connected(edges: dict[int, list[int]]) -> list[list[int]]:
-    """The strongly connected components of the digraph ``edges`` (node ->
-    successors, every successor a key), by Tarjan's algorithm without recursion."""
-    index: dict[int, int] = {}
-    low: dict[int, int] = {}
-    on_stack: set[int] = set()
-    stack: list[int] = []
-    components: list[list[int]] = []
-    for root in edges:
-        if root in index:
-            continue
-        work = [(root, iter(edges[root]))]
-        index[root] = low[root] = len(index)
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            node, successors = work[-1]
-            step = next(successors, None)
-            if step is not None:
-                if step not in index:
-                    index[step] = low[step] = len(index)
-                    stack.append(step)
-                    on_stack.add(step)
-                    work.append((step, iter(edges[step])))
-                elif step in on_stack:
-                    low[node] = min(low[node], index[step])
-                continue
-            work.pop()
-            if work:
-                parent = work[-1][0]
-                low[parent] = min(low[parent], low[node])
-            if low[node] == index[node]:
-                component = []
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.append(member)
-                    if member == node:
-                        break
-                components.append(component)
-    return components
-
-
-def _minimum_feedback_set(nodes: list[int], edges: tuple[tuple[int, int], ...]) -> int:
-    """The fewest nodes whose removal leaves the digraph acyclic, by trying
-    sets of growing size (small components only)."""
-    for size in range(1, len(nodes)):
-        for removed in itertools.combinations(nodes, size):
-            if acyclic(set(nodes).difference(removed), edges):
-                return size
-    return len(nodes) - 1
-
-
-def acyclic(nodes: set[int], edges: Iterable[tuple[int, int]]) -> bool:
-    """Whether the digraph on ``nodes`` (edges among them only) has no cycle."""
-    successors: dict[int, list[int]] = {node: [] for node in nodes}
-    waiting = dict.fromkeys(nodes, 0)
-    for a, b in edges:
-        if a in waiting and b in waiting:
-            successors[a].append(b)
-            waiting[b] += 1
-    ready = [node for node, count in waiting.items() if not count]
-    done = 0
-    while ready:
-        node = ready.pop()
-        done += 1
-        for nxt in successors[node]:
-            waiting[nxt] -= 1
-            if not waiting[nxt]:
-                ready.append(nxt)
-    return done == len(nodes)
 
 
 def _indices(mask: int, index_at: dict[int, int]) -> int:
