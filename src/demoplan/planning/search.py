@@ -200,6 +200,10 @@ class Progress:
     plan: tuple[Action, ...] | None = None  # the best plan found so far
     found_by: str = ""  # the phase that found it
 
+    def max_states(self) -> int:
+        """The states a phase may keep: the budget's memory limit."""
+        return self.request.budget.max_states or MAX_STATES
+
     def elapsed(self) -> float:
         """Seconds since the search started."""
         return time.perf_counter() - self.started
@@ -251,7 +255,7 @@ def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progr
     minimum = progress.request.first_plan_seconds
     if minimum > (clock.remaining() or 0.0):
         clock = Clock(Budget(timeout=minimum))
-    moves = greedy_moves(c, bounds, clock)
+    moves = greedy_moves(c, bounds, clock, max_states=progress.max_states())
     if moves is not None:
         progress.offer(_actions(c, moves), "greedy")
     return None
@@ -260,8 +264,7 @@ def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progr
 def dive_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
     """A plan as long as the root bound, so shortest, by a depth-first dive
     (:func:`~demoplan.planning.plateau.plateau_moves`; finding none proves nothing)."""
-    max_states = progress.request.budget.max_states or MAX_STATES
-    found = plateau_moves(c, bounds, clock, progress.bound // 2, max_states)
+    found = plateau_moves(c, bounds, clock, progress.bound // 2, progress.max_states())
     return None if found is None else progress.shortest(found, c, "plateau")
 
 
@@ -291,7 +294,10 @@ def improve_phase(
     proved shortest."""
     if progress.plan is None or len(progress.plan) <= progress.bound:
         return None
-    better = greedy_moves(c, bounds, clock, weight=weight, upper=len(progress.plan) // 2)
+    upper = len(progress.plan) // 2
+    better = greedy_moves(
+        c, bounds, clock, weight=weight, upper=upper, max_states=progress.max_states()
+    )
     if better is not None:
         progress.offer(_actions(c, better), "greedy")
     return None
