@@ -31,7 +31,6 @@ from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.planning.budget import Budget, Clock
 from demoplan.planning.compiled import Compiled
 from demoplan.planning.problem import Action, Plan, Problem
-from demoplan.planning.strips import InvalidPlanError, validate
 
 __all__ = [
     "PartsResult",
@@ -132,6 +131,10 @@ def solve_by_parts(
     group's two searches share the time left in proportion to the objects it
     must move (a group with none gets no time of its own: its plan is empty),
     so the groups solved quickly leave their time to the others."""
+    # Here, not at the top: only a problem in parts needs the plain rules, and
+    # `demoplan solve` starts faster without them.
+    from demoplan.planning.strips import InvalidPlanError, validate
+
     weights = [_movers(c, group) for group in groups]
     clock = Clock(budget)
     bound = 0
