@@ -3,8 +3,8 @@
 What it measures
 ----------------
 Generated problems of two families — table setting
-(:func:`demoplan.planning.generate.table_problem`) and pyramid building with
-stacked starts (:func:`~demoplan.planning.generate.blocks_problem`) — with
+(:func:`tests.planning_families.table_problem`) and pyramid building with
+stacked starts (:func:`~tests.planning_families.blocks_problem`) — with
 N = 3, 5, 7, 10, 15, 20, 30 objects (``--quick``: N = 3, 5, 7 for every planner
 plus N = 20 and 30 for demoplan alone, to check its targets). Each problem is
 written once as the paper's XML (:func:`demoplan.planning.xml.save_problem`) and
@@ -69,8 +69,8 @@ and on planner time.
 Hard families (issue 13)
 ------------------------
 ``parking``, ``parking-dense`` and ``parking-crowded``
-(:func:`demoplan.planning.generate.parking_problem` with the settings of
-:data:`~demoplan.planning.generate.PARKING_FAMILIES`): goal places on a dense
+(:func:`tests.planning_families.parking_problem` with the settings of
+:data:`~tests.planning_families.PARKING_FAMILIES`): goal places on a dense
 grid whose neighbours block each other's grasps, objects starting on one
 another's goal places in swaps and 3-cycles (forced parking), distractors
 without a goal standing on goal places, objects starting on the grid between
@@ -148,16 +148,21 @@ from rich.table import Table
 import demoplan
 from common import Target, print_targets
 from demoplan.errors import DemoplanError
-from demoplan.planning.generate import (
+from demoplan.planning.pddl import action_from_pddl, save_pddl
+from demoplan.planning.problem import Action, Problem
+from demoplan.planning.strips import validate
+from demoplan.planning.xml import save_problem
+
+# The repository root, for tests/planning_families.py (the problem families the tests use too).
+REPO = Path(__file__).resolve().parent.parent
+if str(REPO) not in sys.path:
+    sys.path.insert(1, str(REPO))
+from tests.planning_families import (  # noqa: E402
     PARKING_FAMILIES,
     blocks_problem,
     parking_problem,
     table_problem,
 )
-from demoplan.planning.pddl import action_from_pddl, save_pddl
-from demoplan.planning.problem import Action, Problem
-from demoplan.planning.strips import validate
-from demoplan.planning.xml import save_problem
 
 FULL_SIZES = (3, 5, 7, 10, 15, 20, 30)
 QUICK_SIZES = (3, 5, 7)

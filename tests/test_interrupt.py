@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.xml import save_problem
 from tests.helpers import wait_for_signal_handlers
+from tests.planning_families import PARKING_FAMILIES, parking_problem
 
 HANG_SECONDS = 30.0
 """Seconds from the signal to the exit beyond which the search is taken not to

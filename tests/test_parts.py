@@ -13,9 +13,9 @@ from demoplan.errors import NoPlanError
 from demoplan.planning.bfs import breadth_first_search
 from demoplan.planning.budget import Budget
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.parts import object_groups, plan_by_parts
+from demoplan.planning.parts import object_groups
 from demoplan.planning.problem import Problem, Subgoal
-from demoplan.planning.search import explain_unsolvable, solve
+from demoplan.planning.search import explain_unsolvable, plan_by_parts, solve
 from demoplan.planning.strips import validate
 from tests.test_search import small_problems
 

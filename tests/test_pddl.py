@@ -16,13 +16,13 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from demoplan.planning.generate import blocks_problem, table_problem
 from demoplan.planning.pddl import action_from_pddl, problem_to_pddl, save_pddl
 from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.search import breadth_first_search, solve
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
 from tests.helpers import EXAMPLES
+from tests.planning_families import blocks_problem, table_problem
 from tests.test_search import small_problems
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"

@@ -14,10 +14,10 @@ import pytest
 
 from demoplan.errors import LimitReachedError
 from demoplan.planning.budget import Budget
-from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
 from demoplan.planning.xml import load_problem, save_problem
+from tests.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_solve_cli import PAPER
 
 
@@ -69,6 +69,21 @@ def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
     for search in ("astar", "bfs"):
         with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
             solve(problem, search, Budget(max_states=5000), optimal=True)  # no clock to race
+
+
+def test_the_first_plan_search_stops_at_the_state_limit() -> None:
+    """The greedy search keeps about 500 states for its plan of this draw; with
+    room for 100 it gives up (None) instead of growing past the memory limit."""
+    from demoplan.planning.bounds import LowerBounds
+    from demoplan.planning.budget import Clock
+    from demoplan.planning.compiled import compile_problem
+    from demoplan.planning.greedy import greedy_moves
+
+    problem = parking_problem(10, 0, **PARKING_FAMILIES["parking-crowded"])
+    c = compile_problem(problem)
+    bounds = LowerBounds(c)
+    assert greedy_moves(c, bounds, Clock(Budget(timeout=600))) is not None  # no clock to race
+    assert greedy_moves(c, bounds, Clock(Budget(timeout=600)), max_states=100) is None
 
 
 def test_bfs_stops_at_its_node_budget_with_its_bound() -> None:

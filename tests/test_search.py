@@ -9,12 +9,6 @@ from hypothesis import strategies as st
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.planning.bounds import LowerBounds
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.generate import (
-    PARKING_FAMILIES,
-    blocks_problem,
-    parking_problem,
-    table_problem,
-)
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.search import (
     Budget,
@@ -25,6 +19,12 @@ from demoplan.planning.search import (
 from demoplan.planning.strips import InvalidPlanError, validate
 from demoplan.planning.xml import load_problem
 from tests.helpers import EXAMPLES
+from tests.planning_families import (
+    PARKING_FAMILIES,
+    blocks_problem,
+    parking_problem,
+    table_problem,
+)
 
 PAPER_PLAN = [
     "GRASP box loc264 grasp6",

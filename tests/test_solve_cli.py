@@ -11,11 +11,11 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
 from tests.helpers import EXAMPLES
+from tests.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_problem_xml import BOMB
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"

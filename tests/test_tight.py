@@ -13,11 +13,11 @@ from demoplan.planning.bfs import breadth_first_search
 from demoplan.planning.bounds import LowerBounds
 from demoplan.planning.budget import Budget, Clock
 from demoplan.planning.compiled import compile_problem
-from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
 from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
 from demoplan.planning.strips import validate
 from demoplan.planning.tight import TightResult, tight_plan
+from tests.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_search import small_problems
 
 

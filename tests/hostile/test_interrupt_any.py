@@ -56,8 +56,8 @@ MOMENTS = 4  # per command
 
 @pytest.fixture(scope="module")
 def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
     from demoplan.planning.xml import save_problem
+    from tests.planning_families import PARKING_FAMILIES, parking_problem
 
     folder = tmp_path_factory.mktemp("interrupt")
     shutil.copytree(EXAMPLES / "set_table", folder / "set_table")

@@ -12,9 +12,9 @@ rules out, a finish with one straight move per object.
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Iterable
+from typing import NamedTuple
 
+from demoplan.graphs import disjoint_cycles, minimum_feedback_set, strongly_connected
 from demoplan.planning.compiled import Compiled
 
 __all__ = [
@@ -25,8 +25,6 @@ __all__ = [
     "LowerBounds",
     "Move",
     "OutOfNodesError",
-    "acyclic",
-    "strongly_connected",
 ]
 
 DEAD_END = 1 << 40
@@ -267,11 +265,11 @@ class LowerBounds:
             known = self._feedback_cache.get(edges)
             if known is None:
                 if len(component) > MAX_EXACT_COMPONENT:
-                    known = _disjoint_cycles(
+                    known = disjoint_cycles(
                         {y: [x for x in in_cycles[y] if x in members] for y in component}
                     )
                 else:
-                    known = _minimum_feedback_set(component, edges)
+                    known = minimum_feedback_set(component, edges)
                 self._feedback_cache[edges] = known
             total += known
         return total
@@ -433,7 +431,7 @@ class LowerBounds:
                     not ok(x, positions[x], positions[y]) or not ok(y, positions[y], c.goal[x])
                 ):
                     before.setdefault(x, []).append(y)  # y before x
-        return pairs + _disjoint_cycles(before)
+        return pairs + disjoint_cycles(before)
 
     def move_mask(self, obj: int, source: int) -> int:
         """The places where another object keeps ``obj`` from moving from
@@ -478,89 +476,115 @@ class LowerBounds:
         some needy object moves twice: +1, which like the deadlock bound
         counts a needy object's second move.
         """
-        c = self.c
-        goal_of, grasps_of = c.goal, c.grasps_of
-        single: list[int] = []
-        wildcards = False
-        for obj, location in enumerate(positions):
-            goal = goal_of[obj]
-            pending = any(not reached >> s & 1 for s in c.subgoals_of[obj])
-            if pending:
-                wildcards = True
-            elif goal >= 0 and goal != location:
-                if not grasps_of[obj]:
-                    return 0  # a dead end is another bound's business
-                single.append(obj)
-        if not single:
+        found = self._single_movers(positions, reached)
+        if found is None:
             return 0
-        index_at_source: dict[int, int] = {}
-        index_at_goal: dict[int, int] = {}
-        sources = goals = 0
-        for i, obj in enumerate(single):
-            index_at_source[positions[obj]] = i
-            index_at_goal[goal_of[obj]] = i
-            sources |= 1 << positions[obj]
-            goals |= 1 << goal_of[obj]
-        block, above, exclusive, below = c.block, c.above, c.exclusive, c.below
-        everyone = (1 << len(single)) - 1
+        single, wildcards = found
+        order = _SingleMoves.of(single, positions, self.c.goal)
         before = [0] * len(single)  # i -> mask of the indices that must move before i
         for i, obj in enumerate(single):
-            source, goal = positions[obj], goal_of[obj]
-            must_before = must_after = 0
-            if not wildcards:
-                support = below[goal] & ~fixed
-                while support:
-                    low = support & -support
-                    support ^= low
-                    location = low.bit_length() - 1
-                    starter = index_at_source.get(location, -1) if location != source else -1
-                    ender = index_at_goal.get(location, -1)
-                    if starter < 0 and ender < 0:
-                        return 1  # nothing can ever hold the goal up
-                    if ender < 0:
-                        must_after |= 1 << starter
-                    elif starter < 0:
-                        must_before |= 1 << ender
-            common_before = common_after = everyone
-            usable = False
-            for g in grasps_of[obj]:
-                forbid = (
-                    block[source][g] | above[source] | block[goal][g] | exclusive[goal] | 1 << goal
-                )
-                if forbid & fixed:
-                    continue
-                b = _indices(forbid & sources & ~(1 << source), index_at_source)
-                a = _indices(forbid & goals & ~(1 << goal), index_at_goal)
-                if b & a:
-                    continue
-                usable = True
-                common_before &= b
-                common_after &= a
-            if not usable:
+            demands = self._order_demands(obj, positions[obj], fixed, order, wildcards)
+            if demands is None:
                 return 1
-            must_before |= common_before
-            must_after |= common_after
-            if must_before & must_after:
-                return 1
+            must_before, must_after = demands
             before[i] |= must_before & ~(1 << i)
             after = must_after & ~(1 << i)
             while after:
                 low = after & -after
                 after ^= low
                 before[low.bit_length() - 1] |= 1 << i
-        # Take away objects with nothing left to wait for; what stays holds a cycle.
-        remaining = everyone
-        changed = True
-        while changed and remaining:
-            changed = False
-            rest = remaining
-            while rest:
-                low = rest & -rest
-                rest ^= low
-                if not before[low.bit_length() - 1] & remaining:
-                    remaining ^= low
-                    changed = True
-        return 1 if remaining else 0
+        return 1 if _holds_cycle(before, order.everyone) else 0
+
+    def _single_movers(
+        self, positions: tuple[int, ...], reached: int
+    ) -> tuple[list[int], bool] | None:
+        """For :meth:`order_cycle`: the objects away from their final goals with
+        no pending subgoal, and whether some object has a pending subgoal (it
+        may stand anywhere); None when there is no such object, or one cannot
+        be grasped (a dead end is another bound's business)."""
+        c = self.c
+        single: list[int] = []
+        wildcards = False
+        for obj, location in enumerate(positions):
+            goal = c.goal[obj]
+            if any(not reached >> s & 1 for s in c.subgoals_of[obj]):
+                wildcards = True
+            elif goal >= 0 and goal != location:
+                if not c.grasps_of[obj]:
+                    return None
+                single.append(obj)
+        return (single, wildcards) if single else None
+
+    def _order_demands(
+        self, obj: int, source: int, fixed: int, order: _SingleMoves, wildcards: bool
+    ) -> tuple[int, int] | None:
+        """For :meth:`order_cycle`: the single objects (masks of indices) that
+        must move before and after ``obj``'s one move, from the supports of its
+        goal (unless ``wildcards``) and what every usable grasp demands; None
+        when they cannot be met (no usable grasp, an unsupportable goal, or an
+        object needed both before and after)."""
+        must_before = must_after = 0
+        if not wildcards:
+            supports = self._support_demands(source, self.c.goal[obj], fixed, order)
+            if supports is None:
+                return None
+            must_before, must_after = supports
+        grasps = self._grasp_demands(obj, source, fixed, order)
+        if grasps is None:
+            return None
+        must_before |= grasps[0]
+        must_after |= grasps[1]
+        if must_before & must_after:
+            return None
+        return must_before, must_after
+
+    def _support_demands(
+        self, source: int, goal: int, fixed: int, order: _SingleMoves
+    ) -> tuple[int, int] | None:
+        """The single objects that must move before / after a move to ``goal``
+        to hold it up: the one object ending on a support (before) or the one
+        starting there (after), where only one of them exists; None when
+        nothing can ever hold the goal up."""
+        must_before = must_after = 0
+        support = self.c.below[goal] & ~fixed
+        while support:
+            low = support & -support
+            support ^= low
+            location = low.bit_length() - 1
+            starter = order.index_at_source.get(location, -1) if location != source else -1
+            ender = order.index_at_goal.get(location, -1)
+            if starter < 0 and ender < 0:
+                return None
+            if ender < 0:
+                must_after |= 1 << starter
+            elif starter < 0:
+                must_before |= 1 << ender
+        return must_before, must_after
+
+    def _grasp_demands(
+        self, obj: int, source: int, fixed: int, order: _SingleMoves
+    ) -> tuple[int, int] | None:
+        """The single objects that every usable grasp of ``obj``'s move needs
+        moved before / after it (their sources, resp. goals, forbid the
+        grasp); None when no grasp is usable (a fixed object forbids it, or a
+        single object would have to move both before and after)."""
+        c = self.c
+        goal = c.goal[obj]
+        block, above, exclusive = c.block, c.above, c.exclusive
+        common_before = common_after = order.everyone
+        usable = False
+        for g in c.grasps_of[obj]:
+            forbid = block[source][g] | above[source] | block[goal][g] | exclusive[goal] | 1 << goal
+            if forbid & fixed:
+                continue
+            b = _indices(forbid & order.sources & ~(1 << source), order.index_at_source)
+            a = _indices(forbid & order.goals & ~(1 << goal), order.index_at_goal)
+            if b & a:
+                continue
+            usable = True
+            common_before &= b
+            common_after &= a
+        return (common_before, common_after) if usable else None
 
     def move_ok(self, obj: int, source: int, obstacle: int) -> bool:
         """Can ``obj`` move from ``source`` to its goal with one other object at ``obstacle``?"""
@@ -634,110 +658,48 @@ class LowerBounds:
         return None if stuck else peeled
 
 
-def _disjoint_cycles(edges: dict[int, list[int]]) -> int:
-    """How many vertex-disjoint cycles a search finds in the digraph ``edges``
-    (node -> successors), each cycle's nodes set aside once found: a lower
-    bound on the most such cycles (any disjoint set is one)."""
-    taken: set[int] = set()
-    count = 0
-    for root in sorted(edges):
-        if root in taken:
-            continue
-        # Depth-first from root along untaken nodes, looking for a way back to root.
-        path = [root]
-        on_path = {root}
-        stacks = [iter(edges.get(root, ()))]
-        visited = {root}
-        while stacks:
-            step = next(stacks[-1], None)
-            if step is None:
-                stacks.pop()
-                on_path.discard(path.pop())
-                continue
-            if step == root:
-                taken |= on_path
-                count += 1
-                break
-            if step in taken or step in visited:
-                continue
-            visited.add(step)
-            path.append(step)
-            on_path.add(step)
-            stacks.append(iter(edges.get(step, ())))
-    return count
+class _SingleMoves(NamedTuple):
+    """The single objects of :meth:`LowerBounds.order_cycle` by index: which
+    index starts / ends at a location, their sources and goals as masks, and
+    the mask of every index."""
+
+    index_at_source: dict[int, int]
+    index_at_goal: dict[int, int]
+    sources: int
+    goals: int
+    everyone: int
+
+    @classmethod
+    def of(
+        cls, single: list[int], positions: tuple[int, ...], goal_of: tuple[int, ...]
+    ) -> _SingleMoves:
+        index_at_source: dict[int, int] = {}
+        index_at_goal: dict[int, int] = {}
+        sources = goals = 0
+        for i, obj in enumerate(single):
+            index_at_source[positions[obj]] = i
+            index_at_goal[goal_of[obj]] = i
+            sources |= 1 << positions[obj]
+            goals |= 1 << goal_of[obj]
+        return cls(index_at_source, index_at_goal, sources, goals, (1 << len(single)) - 1)
 
 
-def strongly_connected(edges: dict[int, list[int]]) -> list[list[int]]:
-    """The strongly connected components of the digraph ``edges`` (node ->
-    successors, every successor a key), by Tarjan's algorithm without recursion."""
-    index: dict[int, int] = {}
-    low: dict[int, int] = {}
-    on_stack: set[int] = set()
-    stack: list[int] = []
-    components: list[list[int]] = []
-    for root in edges:
-        if root in index:
-            continue
-        work = [(root, iter(edges[root]))]
-        index[root] = low[root] = len(index)
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            node, successors = work[-1]
-            step = next(successors, None)
-            if step is not None:
-                if step not in index:
-                    index[step] = low[step] = len(index)
-                    stack.append(step)
-                    on_stack.add(step)
-                    work.append((step, iter(edges[step])))
-                elif step in on_stack:
-                    low[node] = min(low[node], index[step])
-                continue
-            work.pop()
-            if work:
-                parent = work[-1][0]
-                low[parent] = min(low[parent], low[node])
-            if low[node] == index[node]:
-                component = []
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.append(member)
-                    if member == node:
-                        break
-                components.append(component)
-    return components
-
-
-def _minimum_feedback_set(nodes: list[int], edges: tuple[tuple[int, int], ...]) -> int:
-    """The fewest nodes whose removal leaves the digraph acyclic, by trying
-    sets of growing size (small components only)."""
-    for size in range(1, len(nodes)):
-        for removed in itertools.combinations(nodes, size):
-            if acyclic(set(nodes).difference(removed), edges):
-                return size
-    return len(nodes) - 1
-
-
-def acyclic(nodes: set[int], edges: Iterable[tuple[int, int]]) -> bool:
-    """Whether the digraph on ``nodes`` (edges among them only) has no cycle."""
-    successors: dict[int, list[int]] = {node: [] for node in nodes}
-    waiting = dict.fromkeys(nodes, 0)
-    for a, b in edges:
-        if a in waiting and b in waiting:
-            successors[a].append(b)
-            waiting[b] += 1
-    ready = [node for node, count in waiting.items() if not count]
-    done = 0
-    while ready:
-        node = ready.pop()
-        done += 1
-        for nxt in successors[node]:
-            waiting[nxt] -= 1
-            if not waiting[nxt]:
-                ready.append(nxt)
-    return done == len(nodes)
+def _holds_cycle(before: list[int], everyone: int) -> bool:
+    """Whether the precedences ``before`` (index -> mask of the indices that
+    must come first) hold a cycle: objects with nothing left to wait for are
+    taken away until none is; what stays holds one."""
+    remaining = everyone
+    changed = True
+    while changed and remaining:
+        changed = False
+        rest = remaining
+        while rest:
+            low = rest & -rest
+            rest ^= low
+            if not before[low.bit_length() - 1] & remaining:
+                remaining ^= low
+                changed = True
+    return bool(remaining)
 
 
 def _indices(mask: int, index_at: dict[int, int]) -> int:

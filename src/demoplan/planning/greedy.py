@@ -29,7 +29,7 @@ from __future__ import annotations
 import heapq
 
 from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
-from demoplan.planning.budget import Clock
+from demoplan.planning.budget import MAX_STATES, Clock
 from demoplan.planning.compiled import Compiled
 
 __all__ = ["greedy_moves", "guidance", "helpful_moves", "shorten", "valid_moves"]
@@ -47,9 +47,10 @@ def greedy_moves(
     *,
     weight: float | None = None,
     upper: int | None = None,
+    max_states: int = MAX_STATES,
 ) -> list[Move] | None:
-    """A plan as moves, shortened; None where the search runs out of time or
-    of helpful moves.
+    """A plan as moves, shortened; None where the search runs out of time, of
+    helpful moves or of states (about ``max_states`` kept: the memory limit).
 
     ``weight`` None: greedy best-first search on the guidance. A number w:
     weighted A* on g + w × guidance, for a shorter plan once one is known —
@@ -89,8 +90,8 @@ def greedy_moves(
             best_g[child] = g + 1
             parent[child] = (state, move)
             counter += 1
-            if not counter & 63 and clock.expired():  # an expansion can take long
-                return None
+            if not counter & 63 and (clock.expired() or len(best_g) >= max_states):
+                return None  # checked within an expansion: one can take long
             priority = scale * (g + 1) + factor * guidance(c, *child)
             heapq.heappush(heap, (priority, g + 1, counter, child))
     return None

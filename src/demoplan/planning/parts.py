@@ -14,7 +14,7 @@ subgoals.
   only allows more. A plan for the whole, restricted to a group's objects,
   is a plan for that group alone, and every move moves one object, so the
   shortest plans of the groups add up to a lower bound of the whole.
-- **A plan** (:func:`plan_by_parts`): the groups one after another in the
+- **A plan** (:func:`solve_by_parts`): the groups one after another in the
   whole problem, each solved with the other objects standing still and the
   goal places of the groups still to come reserved for their owners; the
   concatenation is checked by the plain rules (:mod:`~demoplan.planning.strips`).
@@ -25,13 +25,30 @@ When the plan is as long as the bound, it is shortest.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
+from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.planning.budget import Budget, Clock
 from demoplan.planning.compiled import Compiled
 from demoplan.planning.problem import Action, Plan, Problem
 
-__all__ = ["PartsResult", "needs_moves", "object_groups", "parts_plan", "plan_by_parts"]
+__all__ = [
+    "PartsResult",
+    "SolvePart",
+    "needs_moves",
+    "object_groups",
+    "parts_plan",
+    "solve_by_parts",
+]
+
+SolvePart = Callable[[Problem, Budget], Plan]
+"""How a part is solved: a plan within the budget, or NoPlanError (none
+exists) / LimitReachedError (none found in time) — the planner's own
+:func:`~demoplan.planning.search.solve_part`, passed in by the caller."""
+
+_NO_PLAN_FOR_PART = (NoPlanError, LimitReachedError)
+"""What :data:`SolvePart` raises for a part without a plan: then no plan, or
+no bound, comes from that part."""
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
@@ -102,15 +119,20 @@ def _movers(c: Compiled, group: Sequence[str]) -> int:
     return sum(c.must_move(c.objects.index(name)) for name in group)
 
 
-def plan_by_parts(
-    problem: Problem, groups: Sequence[Sequence[str]], budget: Budget, c: Compiled
+def solve_by_parts(
+    problem: Problem,
+    groups: Sequence[Sequence[str]],
+    budget: Budget,
+    c: Compiled,
+    solve_part: SolvePart,
 ) -> PartsResult:
     """A plan group by group and the bound of the groups alone (module
-    docstring), within ``budget``: each group's two searches share the time
-    left in proportion to the objects it must move (a group with none gets
-    no time of its own: its plan is empty), so the groups solved quickly
-    leave their time to the others."""
-    from demoplan.planning.search import solve_part
+    docstring), within ``budget``, each part solved by ``solve_part``: each
+    group's two searches share the time left in proportion to the objects it
+    must move (a group with none gets no time of its own: its plan is empty),
+    so the groups solved quickly leave their time to the others."""
+    # Here, not at the top: only a problem in parts needs the plain rules, and
+    # `demoplan solve` starts faster without them.
     from demoplan.planning.strips import InvalidPlanError, validate
 
     weights = [_movers(c, group) for group in groups]
@@ -133,7 +155,7 @@ def plan_by_parts(
         alone = _alone(problem, group)
         try:
             relaxed = solve_part(alone, Budget(timeout=share))
-        except Exception:  # no plan for a part, or out of time: no bound from it
+        except _NO_PLAN_FOR_PART:  # no plan for a part, or out of time: no bound from it
             bound_proved = False
         else:
             bound += len(relaxed) if relaxed.optimal else relaxed.bound
@@ -142,7 +164,7 @@ def plan_by_parts(
         later = [o for g in groups[k + 1 :] for o in g]
         try:
             part = solve_part(_in_turn(problem, group, state, later, owners), Budget(timeout=share))
-        except Exception:  # the part has no plan with the others standing still
+        except _NO_PLAN_FOR_PART:  # the part has no plan with the others standing still
             planned = False
             continue
         actions += part.actions

@@ -46,10 +46,11 @@ demoplan's, never put an object on its place before its predecessors.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from demoplan.planning.compiled import compile_problem
+from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import Rules
 
@@ -113,88 +114,137 @@ def problem_to_pddl(problem: Problem, *, grounded: bool = False) -> tuple[str, s
 def _grounded_pddl(problem: Problem) -> tuple[str, str]:
     """One parameterless action per GRASP / PUT_DOWN (and per subgoal reached)."""
     c = compile_problem(problem)
-    names, subgoal_names = _unique_names(problem)
-    locations, objects, grasps = c.locations, c.objects, c.grasps  # grasps: per pair
+    facts = _GroundedFacts(*_unique_names(problem))
+    revisits = _revisits(problem, c.objects)
+    domain_name = _name(f"demoplan-{problem.name}")
+    actions = _grounded_actions(problem, c, facts, revisits)
+    domain = _grounded_domain(problem, c, facts, domain_name, actions)
+    return domain, _grounded_problem(problem, c, facts, domain_name, revisits)
 
-    def at(o: str, loc: str) -> str:
-        return f"located {names[o]} {names[loc]}"
 
-    def free(loc: str) -> str:
-        return f"free {names[loc]}"
+@dataclass(frozen=True, slots=True)
+class _GroundedFacts:
+    """The grounded export's facts, written with the PDDL names of things."""
 
-    def occupied(loc: str) -> str:
-        return f"occupied {names[loc]}"
+    names: dict[str, str]  # object, location or grasp -> its PDDL name
+    subgoal_names: dict[str, str]  # subgoal id -> its PDDL name
 
-    def holding(o: str, g: str) -> str:
-        return f"holding {names[o]} {names[g]}"
+    def at(self, o: str, loc: str) -> str:
+        return f"located {self.names[o]} {self.names[loc]}"
 
-    def reached(sid: str) -> str:
-        return f"reached {subgoal_names[sid]}"
+    def free(self, loc: str) -> str:
+        return f"free {self.names[loc]}"
 
-    def pending(sid: str) -> str:
-        return f"pending {subgoal_names[sid]}"
+    def occupied(self, loc: str) -> str:
+        return f"occupied {self.names[loc]}"
 
-    def mask(bits: int) -> list[str]:
-        return [locations[i] for i in range(len(locations)) if bits >> i & 1]
+    def holding(self, o: str, g: str) -> str:
+        return f"holding {self.names[o]} {self.names[g]}"
 
-    def away(o: str, loc: str) -> str:
-        return f"away {names[o]} {names[loc]}"
+    def reached(self, sid: str) -> str:
+        return f"reached {self.subgoal_names[sid]}"
 
-    # "No move ends where it started" (docs/planning.md) changes no fact, so no shortest
-    # plan needs a rule for it — except where an object has two subgoals at one
-    # place: putting it back there would reach the second. For those places
-    # (away o l) says o has been put down elsewhere since it last stood at l.
+    def pending(self, sid: str) -> str:
+        return f"pending {self.subgoal_names[sid]}"
+
+    def away(self, o: str, loc: str) -> str:
+        return f"away {self.names[o]} {self.names[loc]}"
+
+
+def _revisits(problem: Problem, objects: Sequence[str]) -> dict[str, list[str]]:
+    """Per object, the places where it has two subgoals or more.
+
+    "No move ends where it started" (docs/planning.md) changes no fact, so no
+    shortest plan needs a rule for it — except where an object has two
+    subgoals at one place: putting it back there would reach the second. For
+    those places (away o l) says o has been put down elsewhere since it last
+    stood at l."""
     revisits: dict[str, list[str]] = {}
     for o in objects:
         places = [s.location for s in problem.subgoals if s.object == o]
         revisits[o] = sorted({p for p in places if places.count(p) > 1})
+    return revisits
 
+
+def _grounded_actions(
+    problem: Problem, c: Compiled, facts: _GroundedFacts, revisits: dict[str, list[str]]
+) -> list[str]:
+    """Every GRASP of an object with a grasp it allows at a location, and the
+    PUT_DOWNs that go with it."""
+    names, locations = facts.names, c.locations
     actions: list[str] = []
-    for oi, o in enumerate(objects):
+    for oi, o in enumerate(c.objects):
         for gi in c.grasps_of[oi]:
-            g = grasps[gi]
+            g = c.grasps[gi]
             for li, loc in enumerate(locations):
-                pre = ["handempty", at(o, loc)]
-                pre += [free(b) for b in mask(c.block[li][gi] | c.above[li])]
+                pre = ["handempty", facts.at(o, loc)]
+                pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.above[li])]
                 actions.append(
                     _action(
                         f"grasp__{names[o]}__{names[loc]}__{names[g]}",
                         pre,
-                        add=[holding(o, g), free(loc)],
-                        delete=["handempty", at(o, loc), occupied(loc)],
+                        add=[facts.holding(o, g), facts.free(loc)],
+                        delete=["handempty", facts.at(o, loc), facts.occupied(loc)],
                     )
                 )
-                if not c.accepts[li] >> oi & 1:
-                    continue  # this location does not take o: no such PUT_DOWN
-                pre = [holding(o, g), free(loc)]
-                pre += [free(b) for b in mask(c.block[li][gi] | c.exclusive[li])]
-                pre += [occupied(b) for b in mask(c.below[li])]
-                add = ["handempty", at(o, loc), occupied(loc)]
-                add += [away(o, p) for p in revisits[o] if p != loc]
-                delete = [holding(o, g), free(loc)]
-                delete += [away(o, loc)] if loc in revisits[o] else []
-                base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
-                # The order rule (docs/planning.md): o is put down at the place of a subgoal
-                # only to reach it — the first one there not yet reached, once its
-                # predecessors are — or once all of them there are reached.
-                here = [s for s in problem.subgoals if s.object == o and s.location == loc]
-                actions.append(_action(base, [*pre, *(reached(s.id) for s in here)], add, delete))
-                for i, s in enumerate(here):  # the same PUT_DOWN, reaching a subgoal
-                    before = [reached(a) for a, b in sorted(problem.precedences) if b == s.id]
-                    earlier = [reached(e.id) for e in here[:i]]
-                    earlier += [away(o, loc)] if i else []
-                    actions.append(
-                        _action(
-                            f"{base}__reach__{subgoal_names[s.id]}",
-                            [*pre, pending(s.id), *earlier, *before],
-                            [*add, reached(s.id)],
-                            [*delete, pending(s.id)],
-                        )
-                    )
-    constants = [names[n] for n in (*objects, *locations, *problem.grasps)]
-    constants += [subgoal_names[s.id] for s in problem.subgoals]
-    domain_name = _name(f"demoplan-{problem.name}")
-    domain = (
+                if c.accepts[li] >> oi & 1:  # else this location does not take o
+                    actions += _put_downs(problem, c, facts, revisits[o], (oi, gi, li))
+    return actions
+
+
+def _put_downs(
+    problem: Problem,
+    c: Compiled,
+    facts: _GroundedFacts,
+    revisits: list[str],
+    move: tuple[int, int, int],
+) -> list[str]:
+    """The PUT_DOWN of ``move`` (object, grasp, location indices): a plain one,
+    and one per subgoal of the object at that place that it reaches."""
+    oi, gi, li = move
+    o, g, loc = c.objects[oi], c.grasps[gi], c.locations[li]
+    names = facts.names
+    pre = [facts.holding(o, g), facts.free(loc)]
+    pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.exclusive[li])]
+    pre += [facts.occupied(b) for b in _places(c, c.below[li])]
+    add = ["handempty", facts.at(o, loc), facts.occupied(loc)]
+    add += [facts.away(o, p) for p in revisits if p != loc]
+    delete = [facts.holding(o, g), facts.free(loc)]
+    delete += [facts.away(o, loc)] if loc in revisits else []
+    base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
+    # The order rule (docs/planning.md): o is put down at the place of a subgoal
+    # only to reach it — the first one there not yet reached, once its
+    # predecessors are — or once all of them there are reached.
+    here = [s for s in problem.subgoals if s.object == o and s.location == loc]
+    actions = [_action(base, [*pre, *(facts.reached(s.id) for s in here)], add, delete)]
+    for i, s in enumerate(here):  # the same PUT_DOWN, reaching a subgoal
+        before = [facts.reached(a) for a, b in sorted(problem.precedences) if b == s.id]
+        earlier = [facts.reached(e.id) for e in here[:i]]
+        earlier += [facts.away(o, loc)] if i else []
+        actions.append(
+            _action(
+                f"{base}__reach__{facts.subgoal_names[s.id]}",
+                [*pre, facts.pending(s.id), *earlier, *before],
+                [*add, facts.reached(s.id)],
+                [*delete, facts.pending(s.id)],
+            )
+        )
+    return actions
+
+
+def _places(c: Compiled, bits: int) -> list[str]:
+    """The locations of the mask ``bits``."""
+    return [c.locations[i] for i in range(len(c.locations)) if bits >> i & 1]
+
+
+def _grounded_domain(
+    problem: Problem, c: Compiled, facts: _GroundedFacts, domain_name: str, actions: list[str]
+) -> str:
+    """The grounded domain: every name a constant, and the ``actions``."""
+    names = facts.names
+    constants = [names[n] for n in (*c.objects, *c.locations, *problem.grasps)]
+    constants += [facts.subgoal_names[s.id] for s in problem.subgoals]
+    return (
         f"(define (domain {domain_name})\n"
         "  (:requirements :strips)\n"
         "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
@@ -204,24 +254,33 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
         + "".join(actions)
         + ")\n"
     )
+
+
+def _grounded_problem(
+    problem: Problem,
+    c: Compiled,
+    facts: _GroundedFacts,
+    domain_name: str,
+    revisits: dict[str, list[str]],
+) -> str:
+    """The grounded problem: the start's facts and the goal's."""
     taken = {loc for _, loc in problem.initial}
     init = ["handempty"]
-    init += [at(o, loc) for o, loc in problem.initial]
-    init += [occupied(loc) if loc in taken else free(loc) for loc in locations]
+    init += [facts.at(o, loc) for o, loc in problem.initial]
+    init += [facts.occupied(loc) if loc in taken else facts.free(loc) for loc in c.locations]
     start = dict(problem.initial)
-    init += [away(o, p) for o in objects for p in revisits[o] if start[o] != p]
+    init += [facts.away(o, p) for o in c.objects for p in revisits[o] if start[o] != p]
     for i, s in enumerate(problem.subgoals):
-        init.append(reached(s.id) if c.start_reached >> i & 1 else pending(s.id))
-    goal = ["handempty", *(at(o, loc) for o, loc in problem.goal)]
-    goal += [reached(s.id) for s in problem.subgoals]
-    problem_text = (
+        init.append(facts.reached(s.id) if c.start_reached >> i & 1 else facts.pending(s.id))
+    goal = ["handempty", *(facts.at(o, loc) for o, loc in problem.goal)]
+    goal += [facts.reached(s.id) for s in problem.subgoals]
+    return (
         f"(define (problem {_name(problem.name)})\n"
         f"  (:domain {domain_name})\n"
         "  (:init\n" + "".join(f"    ({fact})\n" for fact in init) + "  )\n"
         "  (:goal (and\n" + "".join(f"    ({fact})\n" for fact in goal) + "  ))\n"
         ")\n"
     )
-    return domain, problem_text
 
 
 def _action(name: str, pre: list[str], add: list[str], delete: list[str]) -> str:

@@ -4,21 +4,29 @@ Two searches, chosen by name from :data:`SEARCHES`:
 
 - ``bfs`` — :func:`~demoplan.planning.bfs.breadth_first_search`, the paper's
   method and our reference;
-- ``astar`` — :func:`~demoplan.planning.astar.astar_search`, the default: A*
-  over moves with the admissible bounds of :mod:`demoplan.planning.bounds`.
+- ``astar`` — the default: the *anytime* phases of :data:`PHASES` in turn,
+  each with a share of the time left, ending with A* over moves
+  (:class:`~demoplan.planning.astar.AStar`) with the admissible bounds of
+  :mod:`demoplan.planning.bounds`.
 
-:func:`solve` turns a search's :class:`~demoplan.planning.budget.SearchOutcome`
-into a :class:`~demoplan.planning.problem.Plan` or raises NoPlanError (exit 3)
-/ LimitReachedError (exit 4); :func:`explain_unsolvable` finds the reasons
-that need no search.
+Each phase is a function ``(compiled problem, bounds, clock, progress) ->
+plan | None``: a plan ends the search (it is proved shortest, or the phase
+is the last); None hands on to the next phase, with what the phase found —
+a plan not yet proved shortest, a larger lower bound — in :class:`Progress`.
+
+:func:`solve` turns the result into a :class:`~demoplan.planning.problem.Plan`
+or raises NoPlanError (exit 3) / LimitReachedError (exit 4);
+:func:`explain_unsolvable` finds the reasons that need no search.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
-from typing import NoReturn
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import partial
+from typing import NamedTuple, NoReturn
 
 from demoplan.errors import LimitReachedError, NoPlanError
 from demoplan.graphs import find_cycle
@@ -28,26 +36,31 @@ from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
 from demoplan.planning.budget import MAX_STATES, Budget, Clock, SearchOutcome
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.greedy import greedy_moves
-from demoplan.planning.parts import needs_moves, object_groups, parts_plan, plan_by_parts
+from demoplan.planning.parts import (
+    PartsResult,
+    needs_moves,
+    object_groups,
+    parts_plan,
+    solve_by_parts,
+)
 from demoplan.planning.plateau import plateau_moves
 from demoplan.planning.problem import Action, Plan, Problem
 from demoplan.planning.tight import tight_plan
 
 __all__ = [
+    "PHASES",
     "SEARCHES",
     "Budget",
+    "Phase",
+    "Progress",
     "SearchOutcome",
     "astar_search",
     "breadth_first_search",
     "explain_unsolvable",
+    "plan_by_parts",
     "solve",
+    "solve_part",
 ]
-
-
-SEARCHES: dict[str, Callable[[Problem, Budget], SearchOutcome]] = {
-    "astar": astar_search,
-    "bfs": breadth_first_search,
-}
 
 
 def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> list[str]:
@@ -112,22 +125,10 @@ def solve(
 ) -> Plan:
     """A plan for ``problem`` within ``budget``: shortest where it can be proved.
 
-    ``astar`` is *anytime*, in phases that share the budget:
-
-    0. where the start's bound has a rigid shape, a plan exactly that long is
-       built from an order of the moves, or shown not to exist — the bound
-       then grows by a move (:func:`~demoplan.planning.tight.tight_plan`);
-    1. greedy best-first search (:func:`~demoplan.planning.greedy.greedy_moves`)
-       finds a first plan fast (it may take the whole budget, and never less
-       than 0.2 s);
-    2. a depth-first dive (:func:`~demoplan.planning.plateau.plateau_moves`)
-       looks for a plan as long as the start's lower bound — shortest;
-    3. where the objects fall into groups that never meet, the groups are
-       solved one by one (:mod:`~demoplan.planning.parts`): a plan, and a
-       lower bound that adds up;
-    4. weighted A* passes on the greedy guidance shorten the plan;
-    5. A* looks for a shorter plan, dropping every state whose lower bound
-       reaches the plan's length.
+    ``astar`` runs the phases of :data:`PHASES` in turn, sharing the budget:
+    a tight plan (or its refutation), a greedy first plan, a dive for a plan
+    as long as the bound, groups that never meet solved apart, weighted A*
+    passes that shorten the plan, and A* over moves for the proof.
 
     A plan as long as a proven lower bound, or A* finding a plan or running
     out of states, proves the plan shortest; the budget ending first leaves
@@ -148,6 +149,23 @@ def solve_part(problem: Problem, budget: Budget) -> Plan:
     return _solve(problem, "astar", budget, False, 0.0)
 
 
+def plan_by_parts(
+    problem: Problem, groups: Sequence[Sequence[str]], budget: Budget, c: Compiled
+) -> PartsResult:
+    """:func:`~demoplan.planning.parts.solve_by_parts` with each part solved
+    by this planner (:func:`solve_part`)."""
+    return solve_by_parts(problem, groups, budget, c, solve_part)
+
+
+@dataclass(frozen=True, slots=True)
+class _Request:
+    """What the caller of :func:`solve` asked for, besides the problem."""
+
+    budget: Budget
+    optimal: bool  # only a plan proved shortest will do
+    first_plan_seconds: float  # the first plan's search gets at least this long
+
+
 def _solve(
     problem: Problem, search: str, budget: Budget, optimal: bool, first_plan_seconds: float
 ) -> Plan:
@@ -159,76 +177,209 @@ def _solve(
     if reasons:
         raise NoPlanError("no plan: " + "; ".join(reasons))
     started = time.perf_counter()
-    if search == "bfs":
-        outcome = breadth_first_search(problem, budget, c)
-        seconds = time.perf_counter() - started
-        if outcome.actions is not None:
-            return _plan(outcome.actions, outcome, seconds, search)
-        _raise_without_plan(outcome, seconds, None)
-    bounds = LowerBounds(c)
-    clock = Clock(budget)
-    root = 2 * bounds.estimate(c.start, c.start_reached)
-    if root >= 2 * DEAD_END:  # A* proves it: no state to expand
-        outcome = AStar(c, bounds, clock).run()
-        _raise_without_plan(outcome, time.perf_counter() - started, None)
+    return SEARCHES[search](problem, c, _Request(budget, optimal, first_plan_seconds), started)
 
-    def elapsed() -> float:
-        return time.perf_counter() - started
 
-    def actions_of(moves: list[Move]) -> tuple[Action, ...]:
-        return tuple(action for move in moves for action in c.move_actions(*move))
+def _breadth_first(problem: Problem, c: Compiled, request: _Request, started: float) -> Plan:
+    """``--search bfs``: the paper's exact search, over primitive actions."""
+    outcome = breadth_first_search(problem, request.budget, c)
+    seconds = time.perf_counter() - started
+    if outcome.actions is not None:
+        return _plan(outcome.actions, outcome, seconds, "bfs")
+    _raise_without_plan(outcome, seconds, None)
 
-    # A plan as long as the feedback bound from an order of the moves, or
-    # the proof that there is none (tight.py).
-    ordering = Clock(Budget(timeout=_share(clock, _TIGHT_SHARE)))
-    tight = tight_plan(bounds, c.start, c.start_reached, ordering)
+
+@dataclass(slots=True)
+class Progress:
+    """What the phases so far have established, handed from one to the next."""
+
+    problem: Problem
+    request: _Request
+    started: float  # time.perf_counter() when the search started
+    bound: int  # a proven lower bound, in actions: no plan is shorter
+    plan: tuple[Action, ...] | None = None  # the best plan found so far
+    found_by: str = ""  # the phase that found it
+
+    def max_states(self) -> int:
+        """The states a phase may keep: the budget's memory limit."""
+        return self.request.budget.max_states or MAX_STATES
+
+    def elapsed(self) -> float:
+        """Seconds since the search started."""
+        return time.perf_counter() - self.started
+
+    def offer(self, actions: tuple[Action, ...], found_by: str) -> None:
+        """Keep ``actions`` if it is the first plan or shorter than the best."""
+        if self.plan is None or len(actions) < len(self.plan):
+            self.plan, self.found_by = actions, found_by
+
+    def proved(self) -> Plan | None:
+        """The best plan, if it is as long as the bound (so shortest)."""
+        if self.plan is None or len(self.plan) > self.bound:
+            return None
+        return Plan(self.plan, seconds=self.elapsed(), search=self.found_by, bound=self.bound)
+
+    def shortest(self, moves: list[Move], c: Compiled, search: str) -> Plan:
+        """``moves``, as long as the bound: a plan proved shortest."""
+        return Plan(_actions(c, moves), seconds=self.elapsed(), search=search, bound=self.bound)
+
+
+Phase = Callable[[Compiled, LowerBounds, Clock, Progress], Plan | None]
+"""One phase of the anytime search: given the compiled problem, its bounds,
+a clock for the phase's share of the time and what the phases before it
+found, a plan that ends the search, or None (what it found is in the
+:class:`Progress`)."""
+
+
+def _actions(c: Compiled, moves: list[Move]) -> tuple[Action, ...]:
+    return tuple(action for move in moves for action in c.move_actions(*move))
+
+
+def tight_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+    """A plan as long as the feedback bound, from an order of the moves of its
+    rigid shape — shortest at once — or the proof that there is none, which
+    raises the bound by a move (:func:`~demoplan.planning.tight.tight_plan`)."""
+    tight = tight_plan(bounds, c.start, c.start_reached, clock)
     if tight.moves is not None:
-        return Plan(actions_of(tight.moves), seconds=elapsed(), search="tight", bound=root)
+        return progress.shortest(tight.moves, c, "tight")
     if tight.refuted:
-        root += 2
-    first = Budget(timeout=max(_share(clock, 1.0), first_plan_seconds))
-    moves = greedy_moves(c, bounds, Clock(first))
-    incumbent = None if moves is None else actions_of(moves)
-    found_by = "greedy"  # the phase that found the incumbent
-    if incumbent is not None and len(incumbent) <= root:  # as long as the bound: shortest
-        return Plan(incumbent, seconds=elapsed(), search=found_by, bound=root)
-    # A plan as long as the root bound is shortest: dive for one (plateau.py).
-    dive = Clock(Budget(timeout=_share(clock, _PLATEAU_SHARE)))
-    found = plateau_moves(c, bounds, dive, root // 2, budget.max_states or MAX_STATES)
-    if found is not None:
-        return Plan(actions_of(found), seconds=elapsed(), search="plateau", bound=root)
+        progress.bound += 2
+    return None
+
+
+def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+    """A first plan fast, by greedy best-first search on the guidance
+    (:func:`~demoplan.planning.greedy.greedy_moves`): it may take all the time
+    left, and never less than the request's ``first_plan_seconds`` (an easy
+    problem must not go without a plan for want of a few milliseconds)."""
+    minimum = progress.request.first_plan_seconds
+    if minimum > (clock.remaining() or 0.0):
+        clock = Clock(Budget(timeout=minimum))
+    moves = greedy_moves(c, bounds, clock, max_states=progress.max_states())
+    if moves is not None:
+        progress.offer(_actions(c, moves), "greedy")
+    return None
+
+
+def dive_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+    """A plan as long as the root bound, so shortest, by a depth-first dive
+    (:func:`~demoplan.planning.plateau.plateau_moves`; finding none proves nothing)."""
+    found = plateau_moves(c, bounds, clock, progress.bound // 2, progress.max_states())
+    return None if found is None else progress.shortest(found, c, "plateau")
+
+
+def parts_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+    """Where the objects fall into two or more groups that never meet and need
+    moves, the groups solved one by one (:mod:`~demoplan.planning.parts`): a
+    plan, and a lower bound that adds up."""
+    problem = progress.problem
     groups = object_groups(problem, c)
-    if sum(needs_moves(c, g) for g in groups) > 1:
-        # Groups of objects that never meet: their shortest plans add up (parts.py).
-        parts = plan_by_parts(problem, groups, Budget(timeout=_share(clock, _PARTS_SHARE)), c)
-        by_parts = parts_plan(parts, elapsed())
-        if by_parts is not None and by_parts.optimal:
-            return by_parts
-        root = max(root, parts.bound)
-        if parts.actions is not None and (incumbent is None or len(parts.actions) < len(incumbent)):
-            incumbent, found_by = parts.actions, "parts"
-    # Shorter plans by weighted A* on the same guidance, while they come fast.
-    for weight in _WEIGHTS:
-        if incumbent is None or len(incumbent) <= root:
-            break
-        improve = Clock(Budget(timeout=_share(clock, _IMPROVE_SHARE)))
-        better = greedy_moves(c, bounds, improve, weight=weight, upper=len(incumbent) // 2)
-        if better is not None and 2 * len(better) < len(incumbent):
-            incumbent, found_by = actions_of(better), "greedy"
-    if incumbent is not None and len(incumbent) <= root:
-        return Plan(incumbent, seconds=elapsed(), search=found_by, bound=root)
+    if sum(needs_moves(c, g) for g in groups) <= 1:
+        return None
+    parts = plan_by_parts(problem, groups, clock.budget, c)
+    by_parts = parts_plan(parts, progress.elapsed())
+    if by_parts is not None and by_parts.optimal:
+        return by_parts
+    progress.bound = max(progress.bound, parts.bound)
+    if parts.actions is not None:
+        progress.offer(parts.actions, "parts")
+    return None
+
+
+def improve_phase(
+    c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress, *, weight: float
+) -> Plan | None:
+    """A shorter plan by weighted A* on the greedy guidance with ``weight``
+    (LAMA's way of improving its first plan), where there is a plan not yet
+    proved shortest."""
+    if progress.plan is None or len(progress.plan) <= progress.bound:
+        return None
+    upper = len(progress.plan) // 2
+    better = greedy_moves(
+        c, bounds, clock, weight=weight, upper=upper, max_states=progress.max_states()
+    )
+    if better is not None:
+        progress.offer(_actions(c, better), "greedy")
+    return None
+
+
+def astar_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan:
+    """A* over moves (:class:`~demoplan.planning.astar.AStar`) with the rest of
+    the budget, dropping every state whose bound reaches the best plan's
+    length: a plan it finds is shortest, and so is the best plan when it runs
+    out of states. Otherwise the best plan unproved (not with ``optimal``), or
+    LimitReachedError / NoPlanError."""
+    incumbent = progress.plan
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
-    seconds = elapsed()
-    name = "astar" if incumbent is None else f"{found_by}+astar"
+    seconds = progress.elapsed()
+    name = "astar" if incumbent is None else f"{progress.found_by}+astar"
     if outcome.actions is not None:
         return _plan(outcome.actions, outcome, seconds, name)
     if incumbent is not None:
         if outcome.exhausted:  # nothing shorter exists
             return _plan(incumbent, outcome, seconds, name)
-        if not optimal:
-            bound = max(outcome.bound, root)
+        if not progress.request.optimal:
+            bound = max(outcome.bound, progress.bound)
             return _plan(incumbent, outcome, seconds, name, optimal=False, bound=bound)
     _raise_without_plan(outcome, seconds, incumbent)
+
+
+class PhaseRow(NamedTuple):
+    """A row of :data:`PHASES`."""
+
+    name: str
+    run: Phase
+    share: float | None  # of the time left when it starts; None: the whole budget left
+
+
+_WEIGHTS = (3.0, 2.0, 1.5)
+"""Weights of the weighted-A* passes that shorten the first plan."""
+_IMPROVE_SHARE = 0.2
+"""Each pass may take this share of the time left."""
+
+
+PHASES: list[PhaseRow] = [
+    PhaseRow("tight", tight_phase, 0.25),
+    PhaseRow("greedy", greedy_phase, 1.0),
+    PhaseRow("plateau", dive_phase, 0.3),
+    PhaseRow("parts", parts_phase, 0.4),
+    *(
+        PhaseRow(f"improve w={weight:g}", partial(improve_phase, weight=weight), _IMPROVE_SHARE)
+        for weight in _WEIGHTS
+    ),
+    PhaseRow("astar", astar_phase, None),
+]
+"""The phases of ``--search astar``, in order: name, function, share of the
+time left when the phase starts (None: A*, which has the rest of the budget
+with its limits of expansions and states). After each phase, a best plan as
+long as the bound is returned, proved shortest. docs/planning.md describes
+them."""
+
+
+def _anytime(problem: Problem, c: Compiled, request: _Request, started: float) -> Plan:
+    """``--search astar``: the :data:`PHASES` in turn, until one gives the plan."""
+    bounds = LowerBounds(c)
+    clock = Clock(request.budget)
+    root = 2 * bounds.estimate(c.start, c.start_reached)
+    if root >= 2 * DEAD_END:  # A* proves it: no state to expand
+        outcome = AStar(c, bounds, clock).run()
+        _raise_without_plan(outcome, time.perf_counter() - started, None)
+    progress = Progress(problem, request, started, root)
+    for phase in PHASES:
+        plan = phase.run(c, bounds, _phase_clock(clock, phase.share), progress)
+        if plan is None:  # what the phase found may prove the best plan shortest
+            plan = progress.proved()
+        if plan is not None:
+            return plan
+    raise AssertionError("the last phase (A*) always answers")
+
+
+SEARCHES: dict[str, Callable[[Problem, Compiled, _Request, float], Plan]] = {
+    "astar": _anytime,
+    "bfs": _breadth_first,
+}
+"""What runs for each ``--search``: the anytime :data:`PHASES`, or the paper's
+breadth-first search."""
 
 
 def _plan(
@@ -255,27 +406,6 @@ _UNBOUNDED_SECONDS = 10.0
 """The time the phases share when the budget sets none."""
 
 
-_TIGHT_SHARE = 0.25
-"""The share of the time left that ordering the moves of a plan as long as the
-feedback bound may take."""
-
-
-_PLATEAU_SHARE = 0.3
-"""The share of the time left that the dive for a plan as long as the root
-bound may take."""
-
-
-_PARTS_SHARE = 0.4
-"""The share of the time left that solving group by group may take (when the
-objects fall into several groups that need moves)."""
-
-
-_WEIGHTS = (3.0, 2.0, 1.5)
-"""Weights of the weighted-A* passes that shorten the first plan."""
-_IMPROVE_SHARE = 0.2
-"""Each pass may take this share of the time left."""
-
-
 _MIN_GREEDY_SECONDS = 0.2
 """The first plan's search gets at least this long, even where the budget is
 spent before it starts (a slow start-up on a loaded machine): an easy problem
@@ -288,6 +418,12 @@ def _share(clock: Clock, share: float) -> float:
     early phase cannot take forever before the exact search."""
     left = clock.remaining()
     return share * (_UNBOUNDED_SECONDS if left is None or math.isinf(left) else left)
+
+
+def _phase_clock(clock: Clock, share: float | None) -> Clock:
+    """The clock of a phase with ``share`` of the time left on ``clock`` (None:
+    ``clock`` itself, with every limit of the budget)."""
+    return clock if share is None else Clock(Budget(timeout=_share(clock, share)))
 
 
 def _raise_without_plan(

@@ -39,13 +39,8 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from demoplan.planning.bounds import (
-    MAX_EXACT_COMPONENT,
-    LowerBounds,
-    Move,
-    acyclic,
-    strongly_connected,
-)
+from demoplan.graphs import acyclic, strongly_connected
+from demoplan.planning.bounds import MAX_EXACT_COMPONENT, LowerBounds, Move
 from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 

@@ -28,6 +28,7 @@ Parsing refuses DTDs, entity declarations and external references
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree.ElementTree import Element, ParseError, SubElement, indent, tostring
 
@@ -48,8 +49,36 @@ _KEYWORDS = {"support", "exclusive", "accepts", "reached", "subgoal", "before"}
 
 def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
     """Parse the paper's XML into a checked :class:`Problem`."""
+    root = _parse_root(text, source)
+    kinds, freespace = _declarations(root, source)
+    state, goal = _sections(root, source)
+    facts = _state_facts(state, kinds, source)
+    wanted = _goal_facts(goal, kinds, source)
+    _check_subgoal_ids(wanted, facts, source)
+    return Problem.create(
+        objects=[n for n, k in kinds.items() if k == "Object"],
+        locations=[n for n, k in kinds.items() if k == "Location"],
+        grasps=[n for n, k in kinds.items() if k == "Grasp"],
+        allowed=facts.allowed,
+        collisions=facts.collisions,
+        initial=facts.initial,
+        goal=wanted.goal,
+        freespace=freespace,
+        supports=facts.supports,
+        exclusions=facts.exclusions,
+        accepts=facts.accepts,
+        subgoals=wanted.subgoals,
+        precedences=wanted.precedences,
+        reached=facts.reached,
+        name=root.get("name") or Path(source).stem,
+        source=source,
+    )
+
+
+def _parse_root(text: str, source: str) -> Element:
+    """The ``<problem>`` element, parsed safely, with only known children."""
     try:
-        root = SafeElementTree.fromstring(text, forbid_dtd=True)
+        root: Element = SafeElementTree.fromstring(text, forbid_dtd=True)
     except defusedxml.DefusedXmlException as exc:
         raise InputError(
             f"refused: {type(exc).__name__} "
@@ -74,6 +103,12 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
                 source=source,
                 field=f"problem/{child.tag}[{index}]",
             )
+    return root
+
+
+def _declarations(root: Element, source: str) -> tuple[dict[str, str], list[str]]:
+    """The ``<object>`` declarations: each name's type (Object, Location or
+    Grasp) in file order, and the locations that are free space."""
     kinds: dict[str, str] = {}
     freespace: list[str] = []
     for index, element in enumerate(root.findall("object")):
@@ -109,6 +144,11 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
             )
         if kinds[name] == "Location" and free:
             freespace.append(name)
+    return kinds, freespace
+
+
+def _sections(root: Element, source: str) -> tuple[Element, Element | None]:
+    """The one ``<state>`` and the ``<goal>``, if any."""
     states, goals = root.findall("state"), root.findall("goal")
     if len(states) != 1:
         raise InputError(
@@ -118,19 +158,31 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
         raise InputError(
             f"{len(goals)} <goal> elements; at most one expected", source=source, field="goal"
         )
+    return states[0], goals[0] if goals else None
 
-    allowed: list[tuple[str, str]] = []
-    collisions: list[tuple[str, str, str]] = []
-    initial: list[tuple[str, str]] = []
-    supports: list[tuple[str, str]] = []
-    exclusions: list[tuple[str, str]] = []
-    accepts: list[tuple[str, str]] = []
-    reached: list[str] = []
-    reached_at: dict[str, str] = {}
+
+@dataclass
+class _StateFacts:
+    """The facts of ``<state>``, and where each ``reached`` fact was given."""
+
+    allowed: list[tuple[str, str]] = field(default_factory=list)
+    collisions: list[tuple[str, str, str]] = field(default_factory=list)
+    initial: list[tuple[str, str]] = field(default_factory=list)
+    supports: list[tuple[str, str]] = field(default_factory=list)
+    exclusions: list[tuple[str, str]] = field(default_factory=list)
+    accepts: list[tuple[str, str]] = field(default_factory=list)
+    reached: list[str] = field(default_factory=list)
+    reached_at: dict[str, str] = field(default_factory=dict)
+
+
+def _state_facts(state: Element, kinds: dict[str, str], source: str) -> _StateFacts:
+    """The facts of ``<state>``: one location per object and one object per
+    location, every object placed, the hand empty."""
+    facts = _StateFacts()
     hand_empty = False
     placed: dict[str, str] = {}  # object -> where its location was given
     holder: dict[str, tuple[str, str]] = {}  # location -> (object, where)
-    for index, tokens in _args(states[0], source, "state"):
+    for index, tokens in _args(state, source, "state"):
         where = f"state/arg[{index}]"
         types = [kinds.get(t) for t in tokens]
         if tokens == ["hand-empty"]:
@@ -151,18 +203,19 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
                     field=where,
                 )
             placed[obj], holder[loc] = where, (obj, where)
-            initial.append((obj, loc))
+            facts.initial.append((obj, loc))
         elif types == ["Object", "Grasp"]:
-            allowed.append((tokens[0], tokens[1]))
+            facts.allowed.append((tokens[0], tokens[1]))
         elif types == ["Location", "Location", "Grasp"]:
-            collisions.append((tokens[0], tokens[1], tokens[2]))
+            facts.collisions.append((tokens[0], tokens[1], tokens[2]))
         elif tokens[0] in {"support", "exclusive"} and types[1:] == ["Location", "Location"]:
-            (supports if tokens[0] == "support" else exclusions).append((tokens[1], tokens[2]))
+            pairs = facts.supports if tokens[0] == "support" else facts.exclusions
+            pairs.append((tokens[1], tokens[2]))
         elif tokens[0] == "accepts" and types[1:] == ["Location", "Object"]:
-            accepts.append((tokens[1], tokens[2]))
+            facts.accepts.append((tokens[1], tokens[2]))
         elif tokens[0] == "reached" and len(tokens) == 2:
-            reached.append(tokens[1])
-            reached_at[tokens[1]] = where
+            facts.reached.append(tokens[1])
+            facts.reached_at[tokens[1]] = where
         else:
             raise InputError(_unknown_arg(tokens, types), source=source, field=where)
     if not hand_empty:
@@ -178,13 +231,24 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
             source=source,
             field="state",
         )
+    return facts
 
-    goal: list[tuple[str, str]] = []
-    subgoals: list[Subgoal] = []
-    precedences: list[tuple[str, str]] = []
-    before_at: dict[tuple[str, str], str] = {}
+
+@dataclass
+class _GoalFacts:
+    """The facts of ``<goal>``, and where each ``before`` fact was given."""
+
+    goal: list[tuple[str, str]] = field(default_factory=list)
+    subgoals: list[Subgoal] = field(default_factory=list)
+    precedences: list[tuple[str, str]] = field(default_factory=list)
+    before_at: dict[tuple[str, str], str] = field(default_factory=dict)
+
+
+def _goal_facts(goal: Element | None, kinds: dict[str, str], source: str) -> _GoalFacts:
+    """The facts of ``<goal>`` (none without one): one goal per object."""
+    wanted = _GoalFacts()
     goal_at: dict[str, str] = {}
-    for index, tokens in _args(goals[0], source, "goal") if goals else []:
+    for index, tokens in _args(goal, source, "goal") if goal is not None else []:
         where = f"goal/arg[{index}]"
         types = [kinds.get(t) for t in tokens]
         if types == ["Object", "Location"]:
@@ -195,16 +259,21 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
                     field=where,
                 )
             goal_at[tokens[0]] = where
-            goal.append((tokens[0], tokens[1]))
+            wanted.goal.append((tokens[0], tokens[1]))
         elif tokens[0] == "subgoal" and types[2:] == ["Object", "Location"] and len(tokens) == 4:
-            subgoals.append(Subgoal(tokens[1], tokens[2], tokens[3]))
+            wanted.subgoals.append(Subgoal(tokens[1], tokens[2], tokens[3]))
         elif tokens[0] == "before" and len(tokens) == 3:
-            precedences.append((tokens[1], tokens[2]))
-            before_at[(tokens[1], tokens[2])] = where
+            wanted.precedences.append((tokens[1], tokens[2]))
+            wanted.before_at[(tokens[1], tokens[2])] = where
         else:
             raise InputError(_unknown_arg(tokens, types), source=source, field=where)
-    ids = {s.id for s in subgoals}
-    for pair, where in before_at.items():
+    return wanted
+
+
+def _check_subgoal_ids(wanted: _GoalFacts, facts: _StateFacts, source: str) -> None:
+    """Every id a ``before`` or ``reached`` fact names is a declared subgoal's."""
+    ids = {s.id for s in wanted.subgoals}
+    for pair, where in wanted.before_at.items():
         for sid in pair:
             if sid not in ids:
                 raise InputError(
@@ -212,32 +281,13 @@ def problem_from_xml(text: str, source: str = "<xml>") -> Problem:
                     source=source,
                     field=where,
                 )
-    for sid, where in reached_at.items():
+    for sid, where in facts.reached_at.items():
         if sid not in ids:
             raise InputError(
                 f"{sid!r} is not a subgoal id; one declared by 'subgoal ID OBJECT LOCATION'",
                 source=source,
                 field=where,
             )
-
-    return Problem.create(
-        objects=[n for n, k in kinds.items() if k == "Object"],
-        locations=[n for n, k in kinds.items() if k == "Location"],
-        grasps=[n for n, k in kinds.items() if k == "Grasp"],
-        allowed=allowed,
-        collisions=collisions,
-        initial=initial,
-        goal=goal,
-        freespace=freespace,
-        supports=supports,
-        exclusions=exclusions,
-        accepts=accepts,
-        subgoals=subgoals,
-        precedences=precedences,
-        reached=reached,
-        name=root.get("name") or Path(source).stem,
-        source=source,
-    )
 
 
 def _args(parent: Element, source: str, where: str) -> list[tuple[int, list[str]]]:

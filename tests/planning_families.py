@@ -1,4 +1,5 @@
-"""Generated planning problems for tests and benchmarks (paper §V.B geometry).
+"""Generated planning problems for tests and benchmarks (paper §V.B geometry);
+benchmarks/planning.py imports them from here too.
 
 Objects are 4 cm blocks on a table; each allows two side grasps, fingers along
 x or along y. Collision facts follow the paper's rule for blocks: location a
