@@ -16,11 +16,6 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "demoplan"
 MAX_BODY_LINES = 100
 
-# TODO(issue 26): the planning package's long functions (problem_from_xml,
-# _grounded_pddl, order_cycle, ...) are split on a separate branch; this
-# exclusion goes when that split is merged.
-NOT_YET_SPLIT = ("planning",)
-
 Function = ast.FunctionDef | ast.AsyncFunctionDef
 
 
@@ -41,11 +36,7 @@ def long_functions(source: str, limit: int = MAX_BODY_LINES) -> list[tuple[str, 
 
 
 def _modules() -> list[Path]:
-    return [
-        path
-        for path in sorted(PACKAGE.rglob("*.py"))
-        if path.relative_to(PACKAGE).parts[0] not in NOT_YET_SPLIT
-    ]
+    return sorted(PACKAGE.rglob("*.py"))
 
 
 def test_no_function_body_is_longer_than_a_screen() -> None:

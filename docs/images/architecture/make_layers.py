@@ -33,7 +33,14 @@ FLOORS: list[tuple[str, list[str]]] = [
 ]
 
 
+VALUE_MODULES = {"demoplan.learning.settings"}
+"""Values drawn on the shared floor, as tests/test_structure_layers.py counts
+them: the task model records the settings it was learned with."""
+
+
 def package_of(module: str) -> str:
+    if module in VALUE_MODULES:
+        return "root"
     parts = module.split(".")
     if len(parts) == 1 or (len(parts) == 2 and parts[1] not in _PACKAGES):
         return "api" if parts[-1] in ("api", "__main__", "launcher") else "root"
