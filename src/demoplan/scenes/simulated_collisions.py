@@ -7,17 +7,7 @@ MuJoCo along each grasp's approach — is execution's
 below execution, never imports it.
 
 A fact ``(a, b, g)`` says grasp ``g`` at location ``a`` hits whatever stands at
-``b``. Here every location is a static body in MuJoCo with the outlines of the
-objects it is made for, the arm (:mod:`demoplan.execution.arm_model`) stands
-where ``--sim arm`` puts it, and for each grasp at each location that takes its
-object the cup's last approach is solved by inverse kinematics — from 10 cm
-above the object's top straight down onto it, turned as the grasp turns — and
-the arm (links, stem, cup) is posed at every centimetre of it. Whatever
-location the arm then touches (a contact MuJoCo makes active, other than the
-object being taken) is in the way: a fact. The same motion serves a put-down
-with that grasp at ``a`` (the cup comes down the same way, holding the object).
-
-The two need not agree, and the difference is the point: the finger rule
+``b``. The two need not agree, and the difference is the point: the finger rule
 blocks a grasp whose finger discs reach a neighbour's outline; the suction cup
 comes from above and is blocked only where a neighbour reaches up into the
 arm's way. :class:`CollisionComparison` keeps both sets of facts.
