@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 from demoplan.cli import app
 from demoplan.masses import MAX_DENSITY
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose, TaskModel
-from demoplan.scenes.scene import complete_geometry, load_scene
+from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -73,6 +73,31 @@ def test_household_weights_go_by_the_tool_that_carries_them(name: str) -> None:
     assert f"{100 * geometry.size[0]:.1f} cm across" in choice.why
     for tool in ("suction", "fingers"):
         assert carries(geometry, pick, place, tool, choice.axis) != (True, True), tool
+
+
+def test_the_arm_changes_tools_between_objects() -> None:
+    """The mug by the fingers, then a wooden block by the cup (the jaws drawn
+    up again): each lifted by the tool chosen for it and put down within 1 cm
+    of its place, the arm touching nothing but its load."""
+    shapes = {"mug": HOUSEHOLD["mug"], "block": WOODEN_BLOCK}
+    starts = {"mug": Pose((0.35, -0.15, 0.0)), "block": Pose((0.45, -0.1, 0.0))}
+    targets = {"mug": Pose((0.35, 0.15, 0.0)), "block": Pose((0.45, 0.1, 0.0))}
+    scene = Scene(
+        objects=tuple(SceneObject(name, starts[name], shapes[name]) for name in shapes),
+        robot=(0.0, 0.0, 0.0),
+    )
+    world = ArmWorld(scene)
+    try:
+        for name, tool in (("mug", "fingers"), ("block", "suction")):
+            world.grasp(name, 0.0)
+            assert world.observe().held == name and world.tool == tool
+            world.put_down(name, targets[name])
+            seen = world.observe()
+            assert seen.held is None
+            assert math.dist(seen.poses[name].position, targets[name].position) < 0.01
+        assert world.collisions == [] and world.motion_failures == []
+    finally:
+        world.close()
 
 
 @pytest.fixture(scope="module")
