@@ -25,7 +25,7 @@ from demoplan.execution.faults import parse_faults
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
-from demoplan.model import Pose, TaskModel
+from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of
 from tests.helpers import EXAMPLES, paper_model
 
@@ -153,7 +153,8 @@ def test_the_suction_holds_by_force_not_a_weld(blocks: TaskModel) -> None:
     world.grasp("red", 0.0)
     assert world.observe().held == "red"
     assert world.data.ctrl[world.suction] == 1.0
-    assert world.model.neq == 0  # no weld, no equality constraint of any kind
+    # no weld: the one equality constraint couples the two fingers' joints
+    assert world.model.neq == 1 and world.model.eq_type[0] == world.mujoco.mjtEq.mjEQ_JOINT
     world.data.ctrl[world.suction] = 0.0
     world._settle(0.5)
     assert world.observe().held is None
@@ -203,11 +204,12 @@ def test_an_object_in_the_arms_base_is_refused(blocks_file: Path, tmp_path: Path
 
 
 def test_a_too_heavy_object_is_refused(kit: TaskModel, tmp_path: Path) -> None:
-    """The kit's cable as a 4 × 4 × 50 cm wooden column (0.48 kg), beyond what the
-    cup's 5 N carry with a safety factor of 2: one line naming it and its
-    weight, exit 1, before any motion."""
+    """The kit's cable as a 4 × 4 × 50 cm steel column (6.28 kg), beyond what
+    the cup's 5 N and the fingers' 40 N pinch carry: one line naming it, its
+    weight and both tools, exit 1, before any motion."""
     scene = json.loads(KIT.read_text())
     scene["objects"]["cable"]["size"] = [0.04, 0.04, 0.5]
+    scene["objects"]["cable"]["density"] = 7850
     path = tmp_path / "column.json"
     path.write_text(json.dumps(scene))
     model = tmp_path / "kit.json"
@@ -215,15 +217,22 @@ def test_a_too_heavy_object_is_refused(kit: TaskModel, tmp_path: Path) -> None:
     result = _run_cli(model, path)
     assert result.exit_code == 1, result.output
     lines = result.output.strip().splitlines()
-    assert len(lines) == 1 and "cable weighs 0.48 kg; the suction cup" in lines[0], lines
+    assert len(lines) == 1 and "cable weighs 6.28 kg; the suction cup" in lines[0], lines
+    assert "the fingers (40 N) do not lift it either" in lines[0], lines
 
 
-def test_an_object_without_a_flat_top_is_refused(blocks: TaskModel) -> None:
+def test_an_object_without_a_flat_top_goes_by_the_fingers_or_is_refused(blocks: TaskModel) -> None:
+    """A ball has no flat top for the cup: a 4 cm one goes by the fingers; a
+    10 cm one is wider than they open, and refused saying both."""
     scene = complete_geometry(load_scene(BLOCKS), blocks)
     world = ArmWorld(scene)
-    world.geometry["red"] = type(world.geometry["red"])("sphere", (0.04, 0.04, 0.04))
-    assert "no flat top" in (world.why_not_graspable("red") or "")
-    assert world.why_not_graspable("green") is None
+    world.geometry["red"] = ObjectGeometry("sphere", (0.04, 0.04, 0.04))
+    assert world.why_not_graspable("red") is None
+    assert world._tool_for("red") == "fingers"
+    world.geometry["green"] = ObjectGeometry("sphere", (0.1, 0.1, 0.1))
+    why = world.why_not_graspable("green") or ""
+    assert "no flat top" in why and "10.0 cm across" in why, why
+    assert world.why_not_graspable("wood") is None
 
 
 # -- collision facts from the arm (--collisions simulation) ---------------------------------

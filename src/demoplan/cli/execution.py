@@ -68,7 +68,7 @@ def run(
         SimName,
         typer.Option(
             help="kinematic (exact, fast), mujoco (physics, a floating gripper) or arm "
-            "(physics, a 6-DOF Kinova Jaco with a suction cup)."
+            "(physics, a 6-DOF Kinova Jaco with a suction cup and two fingers)."
         ),
     ] = SimName.kinematic,
     faults: Annotated[

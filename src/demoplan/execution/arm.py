@@ -1,6 +1,6 @@
 """A 6-DOF arm in MuJoCo (``--sim arm``): dm_control's Kinova Jaco with a
-suction cup, inverse kinematics by mink, joint-space motions checked against
-collisions before they run.
+suction cup and two fingers, inverse kinematics by mink, joint-space motions
+checked against collisions before they run.
 
 **The arm.** The Jaco model (``dm_control/third_party/kinova/jaco_arm.xml``,
 shipped in dm_control's wheel: six hinge joints, two of them limited, real link
@@ -8,15 +8,20 @@ masses and joint friction) stands on the table at :attr:`ArmWorld.base`. Each
 joint is driven by a position servo, as a robot controller drives it; the
 links are gravity-compensated, as the Jaco's own controller does.
 
-**The tool.** A suction cup on an 8 cm stem in place of the Jaco's three-finger
-hand: the paper's cutlery is 5–8 mm thin, the napkin 3 mm, the kit's pcb 1 cm,
-and no parallel jaw in simulation lifts them off a table (the floating hand's
-pads need 13 mm). The cup holds by force, not by a weld: MuJoCo's *adhesion*
+**The tool.** A combined tool in place of the Jaco's three-finger hand: a
+suction cup on an 8 cm stem between the two fingers of a parallel-jaw
+gripper (a Robotiq 2F-85's 85 mm stroke, 40 N of grip, rubber pads) whose
+housing slides along the stem. The paper's cutlery is 5–8 mm thin, the napkin
+3 mm, the kit's pcb 1 cm: the cup takes them from the top, the jaws drawn up
+out of its way. The cup holds by force, not by a weld: MuJoCo's *adhesion*
 actuator pulls the cup's contacts together with up to :data:`SUCTION_FORCE`
-newtons, so a held object is carried by that force and the pad's friction, and
-an object with no face to seal on, or that the cup does not carry in a trial
-carry in this same simulation (its size, shape and mass), is refused before
-the run (:func:`why_not_carried`).
+newtons, so a held object is carried by that force and the pad's friction.
+What the 10 mm cup does not carry (a mug) the fingers take from the sides,
+the jaws lowered past the pad: the fingers' servos squeeze with up to
+:data:`~demoplan.execution.arm_model.GRIP_FORCE` newtons and the load hangs on
+the pads' friction. Each object goes by the cup where the cup carries it, else
+by the fingers, else it is refused before the run, saying why
+(:func:`choose_tool`: trial carries in this same simulation).
 
 **Motions.** Every move of the cup is a straight line (up to the travel height,
 across, straight down), cut into waypoints 1 cm apart; each waypoint is solved
@@ -34,19 +39,26 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import replace
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Literal
 
 import numpy as np
 
 from demoplan.execution.arm_model import (
     ARM_GROUP,
+    FINGER_HALF,
+    FINGER_REACH,
+    GRIP_FORCE,
     HOME,
+    JAW_SLIDE,
+    JAW_STROKE,
+    JAWS_CLOSED,
     PAD_HALF,
     REACH,
     SUCTION_FORCE,
     ArmKinematics,
+    add_tool_drives,
     arm_base,
     arm_bodies,
     arm_joints,
@@ -66,11 +78,22 @@ from demoplan.execution.arm_motion import (
 from demoplan.execution.faults import Faults
 from demoplan.execution.physics import MujocoWorld, scene_xml
 from demoplan.model import ObjectGeometry, Pose
-from demoplan.scenes.scene import Scene, SceneObject, yaw_of
+from demoplan.scenes.geometry import half_extent
+from demoplan.scenes.scene import DEFAULT_GRASPS, Scene, SceneObject, yaw_of
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["ArmWorld", "MotionError", "carries", "why_not_carried"]
+__all__ = [
+    "ArmWorld",
+    "MotionError",
+    "Tool",
+    "ToolChoice",
+    "carries",
+    "choose_tool",
+    "why_not_carried",
+]
+
+Tool = Literal["suction", "fingers"]
 
 SPEED = 0.25  # m/s of the cup along a straight line
 TURN_SPEED = 120.0  # deg/s of the cup about the vertical
@@ -85,10 +108,15 @@ TRIAL_MARGIN = 1.25
 """The trial carries the object this many times as heavy: near the cup's limit
 whether a load stays on depends on where the arm moves it (its posture, how
 far, how fast), and an object the check accepts must be carried anywhere."""
+JAW_CLEARANCE = 0.01  # m: between an open finger and the object's side, where there is room
+MIN_JAW_CLEARANCE = 0.002  # m: the least room the open jaws leave on either side
+FINGERTIP_GAP = 0.003  # m: the fingertips stop this far above what the object stands on
+TOP_GAP = 0.005  # m: between the object's top and the pad when the fingers take it
+TOOL_NAMES = {"suction": "suction cup", "fingers": "fingers"}
 
 
 class ArmWorld(MujocoWorld):
-    """The scene in MuJoCo with the Jaco arm and its suction cup; see the module docstring."""
+    """The scene in MuJoCo with the Jaco arm and its tool; see the module docstring."""
 
     name = "arm"
     video_speed = 2.0  # the arm moves carefully: its videos play at twice the speed
@@ -110,6 +138,8 @@ class ArmWorld(MujocoWorld):
         self.grip_yaw = 0.0
         self.allowed: str | None = None  # the object the cup may touch now
         self.parked = False  # turned round behind the base (park)
+        self.tool: Tool = "suction"  # the tool in use: the jaws drawn up, or lowered
+        self.tools: dict[str, Tool] = {}  # each object's tool, chosen when first taken
         super().__init__(scene, faults, seed, schedule)
         self.hidden_from_top = (ARM_GROUP,)
         self.oracle.reachable = self._comfortably_reached
@@ -138,7 +168,16 @@ class ArmWorld(MujocoWorld):
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"_joint{k}")
             for k in range(1, 7)
         ]
-        self.suction = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, "_suction")
+        actuator = mujoco.mjtObj.mjOBJ_ACTUATOR
+        self.suction = mujoco.mj_name2id(self.model, actuator, "_suction")
+        self.jaw_slide = mujoco.mj_name2id(self.model, actuator, "_jaw_slide")
+        self.jaw_servos = [
+            mujoco.mj_name2id(self.model, actuator, f"_finger_{side}") for side in ("left", "right")
+        ]
+        self.finger_geoms = {
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"arm/finger_{side}")
+            for side in ("left", "right")
+        }
         self.tcp = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "arm/tcp")
         self.pad = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "arm/pad")
         self.arm_bodies = arm_bodies(mujoco, self.model)
@@ -148,6 +187,16 @@ class ArmWorld(MujocoWorld):
         home = np.array(HOME)
         self.data.qpos[self.joints] = home
         self.data.ctrl[self.servos] = home
+        self.finger_joints = [
+            int(
+                self.model.jnt_qposadr[
+                    mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, f"arm/finger_{side}")
+                ]
+            )
+            for side in ("left", "right")
+        ]
+        self.data.qpos[self.finger_joints] = JAWS_CLOSED
+        self.data.ctrl[self.jaw_servos] = JAWS_CLOSED
         mujoco.mj_forward(self.model, self.data)
         self.q = home
         self.cup_yaw = self._cup_yaw()
@@ -167,11 +216,7 @@ class ArmWorld(MujocoWorld):
             servo.set_to_position(kp=2000.0 if k <= 3 else 800.0, dampratio=1.0)
             servo.forcerange = [-60.0, 60.0] if k <= 3 else [-25.0, 25.0]
             servo.forcelimited = True
-        suction = world.add_actuator(
-            name="_suction", target="arm/cup", trntype=mujoco.mjtTrn.mjTRN_BODY
-        )
-        suction.set_to_adhesion(gain=SUCTION_FORCE)
-        suction.ctrlrange = [0.0, 1.0]
+        add_tool_drives(mujoco, world)
         return world.compile()
 
     # -- reading ---------------------------------------------------------------------------
@@ -191,18 +236,30 @@ class ArmWorld(MujocoWorld):
         return self._cup()[0]
 
     def _touching(self, obj: str, data: Any = None) -> bool:
+        """The tool in use touches ``obj``: the suction pad, or the fingers with
+        ``obj`` between them (a finger touches it and they stopped short of
+        closing, as a gripper senses an object by where its fingers stall:
+        MuJoCo's contact between a flat pad and a curved side comes and goes)."""
         data = self.data if data is None else data
         body = self._body(obj)
+        mine = {self.pad} if self.tool == "suction" else self.finger_geoms
+        if self.tool == "fingers" and float(np.min(data.qpos[self.finger_joints])) < 0.001:
+            return False
+        touching = set()
         for contact in data.contact[: data.ncon]:
             pair = (int(contact.geom1), int(contact.geom2))
-            if self.pad in pair:
-                other = pair[1] if pair[0] == self.pad else pair[0]
-                if int(self.model.geom_bodyid[other]) == body and contact.dist < 0.002:
-                    return True
-        return False
+            for geom, other in (pair, pair[::-1]):
+                if (
+                    geom in mine
+                    and int(self.model.geom_bodyid[other]) == body
+                    and contact.dist < 0.002
+                ):
+                    touching.add(geom)
+        return bool(touching)
 
     def _lifted(self, name: str) -> bool:
-        """Sealed on the cup and off whatever it stood on."""
+        """Held by the tool (sealed on the cup, or between both fingers) and off
+        whatever it stood on."""
         centre = self.data.xpos[self._body(name)]
         return bool(self._touching(name) and centre[2] > 0.004 + self.geometry[name].size[2] / 2)
 
@@ -331,13 +388,13 @@ class ArmWorld(MujocoWorld):
         self, start: tuple[float, float] | None = None, goal: tuple[float, float] | None = None
     ) -> float:
         """A height for the cup to cross from ``start`` to ``goal`` (x, y): 3 cm
-        over the load above the tallest object near that line (every object
-        without one)."""
-        carried = 0.0
+        over the load, or the lowered fingertips, above the tallest object near
+        that line (every object without one)."""
+        carried = FINGER_REACH if self.tool == "fingers" else 0.0
         sweep = 0.05
         if self.held is not None:
             shape = self.geometry[self.held]
-            carried = shape.size[2]
+            carried = max(carried, float(self.grip[2, 3]) + shape.size[2] / 2)
             sweep += math.hypot(shape.size[0], shape.size[1]) / 2
         tops = []
         for name in self._active():
@@ -359,36 +416,136 @@ class ArmWorld(MujocoWorld):
         if self.held is not None or obj not in self._active():
             return
         pose = where if where is not None else self._pose(obj)
-        top = pose.position[2] + self.geometry[obj].size[2]
-        x, y = pose.position[0], pose.position[1]
+        tool = self._tool_for(obj)
         missed = self.oracle._chance(self.faults.grasp, "grasp")
-        if missed:  # the cup comes down 3 cm beside the object and seals on air
+        if missed:
             self.oracle.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
-            angle = math.radians(yaw_of(pose) + axis + 90.0)
-            x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
         try:
             self.allowed = obj
-            logger.info("arm: over %s at (%.3f, %.3f) and down onto its top", obj, x, y)
-            self._come_down(obj, x, y, top, missed)
-            self.data.ctrl[self.suction] = 1.0
-            self._settle(0.3)
-            if self._touching(obj):
-                self.held = obj
-                self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
-                self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
-            logger.info(
-                "arm: suction on, lifting %s (%s)", obj, "sealed" if self.held else "no seal"
-            )
-            self._go([x, y, top + APPROACH])
-            self._settle(0.2)
+            if tool == "suction":
+                self._grasp_by_suction(obj, pose, axis, missed)
+            else:
+                self._grasp_by_fingers(obj, pose, axis, missed)
         except MotionError as exc:
             self._give_up(str(exc))
         finally:
             self.allowed = None
         if self.held is not None and not self._lifted(self.held):
+            self._let_go()
             self.held = None
-            self.data.ctrl[self.suction] = 0.0
             self._settle(0.2)
+
+    def _grasp_by_suction(self, obj: str, pose: Pose, axis: float, missed: bool) -> None:
+        """Down onto ``obj``'s top, suction on, and up (``missed``: the cup comes
+        down 3 cm beside it and seals on air)."""
+        top = pose.position[2] + self.geometry[obj].size[2]
+        x, y = pose.position[0], pose.position[1]
+        if missed:
+            angle = math.radians(yaw_of(pose) + axis + 90.0)
+            x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
+        self._switch_tool("suction")
+        logger.info("arm: over %s at (%.3f, %.3f) and down onto its top", obj, x, y)
+
+        def onto_top() -> None:
+            if not missed:
+                self._go([x, y, top + 0.002], landing=True)
+                self._press(obj, x, y, top)
+
+        self._come_down(x, y, top, (0.0, 90.0, -90.0, 180.0), onto_top)
+        self.data.ctrl[self.suction] = 1.0
+        self._settle(0.3)
+        self._hold_if_touching(obj)
+        logger.info("arm: suction on, lifting %s (%s)", obj, "sealed" if self.held else "no seal")
+        self._go([x, y, top + APPROACH])
+        self._settle(0.2)
+
+    def _grasp_by_fingers(self, obj: str, pose: Pose, axis: float, missed: bool) -> None:
+        """The jaws lowered and open round ``obj`` across ``axis`` (deg, in its
+        frame), down beside it until the pad is just over its top (or the
+        fingertips just over what it stands on), closed with the grip force,
+        and up (``missed``: they come down beside it and close on air)."""
+        shape = self.geometry[obj]
+        half = half_extent(shape, axis)
+        if half + MIN_JAW_CLEARANCE > JAW_STROKE / 2:
+            raise MotionError(
+                f"{obj} is {200 * half:.1f} cm across grasp {axis:g}°; "
+                f"the jaws open to {100 * JAW_STROKE:.1f} cm"
+            )
+        across = yaw_of(pose) + axis
+        yaw = self.cup_yaw + ((across - self.cup_yaw + 90.0) % 180.0) - 90.0
+        x, y = pose.position[0], pose.position[1]
+        if missed:
+            angle = math.radians(across + 90.0)
+            off = half_extent(shape, axis + 90.0) + FINGER_HALF[1] + 0.01
+            x, y = x + off * math.cos(angle), y + off * math.sin(angle)
+        low = pose.position[2] + max(shape.size[2] + TOP_GAP, FINGER_REACH + FINGERTIP_GAP)
+        self._switch_tool("fingers", min(half + JAW_CLEARANCE, JAW_STROKE / 2))
+        logger.info("arm: over %s at (%.3f, %.3f), the fingers down round it", obj, x, y)
+        self._come_down(x, y, low, (0.0, 180.0), lambda: self._go([x, y, low], landing=True), yaw)
+        self.grip_axis = axis
+        self._jaws(0.0)  # the servos close until the grip force stops them
+        self._settle(0.5)
+        self._hold_if_touching(obj)
+        logger.info("arm: fingers closed, lifting %s (%s)", obj, "held" if self.held else "empty")
+        self._go([x, y, low + APPROACH])
+        self._settle(0.2)
+
+    def _hold_if_touching(self, obj: str) -> None:
+        """``obj`` is held when the tool touches it: its frame in the cup's is kept."""
+        if self._touching(obj):
+            self.held = obj
+            self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
+            self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
+
+    def _tool_for(self, obj: str) -> Tool:
+        """The tool that takes ``obj`` (:func:`choose_tool`; the suction cup for
+        one the check refused, as before a second tool existed)."""
+        if obj not in self.tools:
+            choice = choose_tool(self.geometry[obj], self._axes(obj))
+            self.tools[obj] = choice.tool or "suction"
+            logger.info("arm: %s goes by the %s", obj, TOOL_NAMES[self.tools[obj]])
+        return self.tools[obj]
+
+    def _axes(self, obj: str) -> tuple[float, ...]:
+        """The finger axes (deg) ``obj``'s scene entry allows."""
+        return next((o.grasps for o in self.scene.objects if o.name == obj), DEFAULT_GRASPS)
+
+    def _switch_tool(self, tool: Tool, opening: float = JAWS_CLOSED) -> None:
+        """The jaws lowered past the pad and opened to ``opening`` (half the gap,
+        m) for the fingers, or drawn up and closed round the stem for the
+        suction cup: high enough first that the fingertips clear everything."""
+        if tool == self.tool and abs(float(self.data.ctrl[self.jaw_servos[0]]) - opening) < 1e-4:
+            return
+        here, _ = self._cup()
+        lowered = tool == "fingers" and self.tool == "suction"
+        height = self._travel_height() + (FINGER_REACH if lowered else 0.0)
+        if here[2] < height:
+            self._go([here[0], here[1], height])
+        if tool != self.tool:
+            logger.info("arm: the jaws %s", "lowered" if tool == "fingers" else "drawn up")
+        self.tool = tool
+        self.data.ctrl[self.jaw_slide] = JAW_SLIDE if tool == "fingers" else 0.0
+        self._jaws(opening)
+        self._settle(0.5)
+
+    def _jaws(self, opening: float) -> None:
+        """Command the fingers to ``opening`` (half the gap between them, m)."""
+        self.data.ctrl[self.jaw_servos] = min(max(opening, 0.0), JAW_STROKE / 2)
+
+    def _open(self) -> None:
+        """At the start: the suction cup's posture, the jaws drawn up and closed."""
+        self._jaws(JAWS_CLOSED)
+
+    def _let_go(self) -> None:
+        """Suction off, or the fingers opened a little (not wide: the
+        neighbours are close)."""
+        if self.tool == "suction":
+            self.data.ctrl[self.suction] = 0.0
+            return
+        half = JAWS_CLOSED
+        if self.held is not None:
+            half = half_extent(self.geometry[self.held], self.grip_axis)
+        self._jaws(min(half + JAW_CLEARANCE, JAW_STROKE / 2))
 
     def put_down(self, obj: str, pose: Pose) -> None:
         self.oracle.actions += 1
@@ -411,22 +568,30 @@ class ArmWorld(MujocoWorld):
         logger.info("arm: carrying %s to (%.3f, %.3f) and setting it down", obj, *pose.position[:2])
         self._release_at(pose, 0.002, None, "")
 
-    def _come_down(self, obj: str, x: float, y: float, top: float, missed: bool) -> None:
-        """Over (x, y) and down onto ``obj``'s top (``missed``: stop 3 cm above).
-        The cup is round to the object, so its turn is free: where a straight
-        descent would take the wrist through a singularity (its fifth joint
-        straight) the cup tries again turned by 90°, −90° and 180°."""
+    def _come_down(
+        self,
+        x: float,
+        y: float,
+        low: float,
+        turns: Sequence[float],
+        last: Callable[[], None],
+        across: float | None = None,
+    ) -> None:
+        """Over (x, y), down to :data:`APPROACH` above ``low`` and the ``last``
+        straight descent, turned to ``across`` (deg; None: as the cup is) plus
+        the first of ``turns`` that works: where a straight descent would take
+        the wrist through a singularity (its fifth joint straight) the cup
+        tries the next turn (the cup is round: any; the fingers: either way
+        across the grasp), and last a new posture made up over there."""
         problem = ""
-        for turn in (0.0, 90.0, -90.0, 180.0, None):
-            yaw = self.cup_yaw + (turn or 0.0)
+        for turn, new_posture in [(turn, False) for turn in turns] + [(0.0, True)]:
+            yaw = (self.cup_yaw if across is None else across) + turn
             try:
-                self._travel((x, y), yaw, top + APPROACH)
-                if turn is None:  # last: a new posture, made up there
-                    self._repose(np.array([x, y, top + 0.002]), yaw)
-                self._go([x, y, top + APPROACH], yaw)
-                if not missed:
-                    self._go([x, y, top + 0.002], landing=True)
-                    self._press(obj, x, y, top)
+                self._travel((x, y), yaw, low + APPROACH)
+                if new_posture:
+                    self._repose(np.array([x, y, low + 0.002]), yaw)
+                self._go([x, y, low + APPROACH], yaw)
+                last()
                 return
             except MotionError as exc:
                 problem = str(exc)
@@ -482,7 +647,7 @@ class ArmWorld(MujocoWorld):
         except MotionError as exc:
             self._give_up(str(exc))
             return
-        self.data.ctrl[self.suction] = 0.0
+        self._let_go()
         self._settle(0.3)
         self.held = None
         try:
@@ -539,9 +704,8 @@ class ArmWorld(MujocoWorld):
     # -- checks before the run -----------------------------------------------------------
 
     def why_not_graspable(self, obj: str) -> str | None:
-        """Why the suction cup cannot take ``obj`` and carry it (no flat top it
-        seals on, or lost in a trial carry in this same simulation), or None."""
-        return why_not_carried(self.geometry[obj])
+        """Why neither tool can take ``obj`` and carry it (:func:`choose_tool`), or None."""
+        return why_not_carried(self.geometry[obj], self._axes(obj))
 
     def why_not_reachable(self, obj: str, pose: Pose) -> str | None:
         """Why the cup cannot come down on ``obj`` standing at ``pose`` (out of the
@@ -561,16 +725,48 @@ class ArmWorld(MujocoWorld):
         return None
 
 
+@dataclass(frozen=True, slots=True)
+class ToolChoice:
+    """The tool that takes an object (None: neither), the finger axis (deg, in
+    the object's frame) its trial used, and why it is refused."""
+
+    tool: Tool | None
+    axis: float
+    why: str | None
+
+
 @functools.cache
-def why_not_carried(shape: ObjectGeometry) -> str | None:
-    """Why the suction cup cannot take an object of ``shape`` (its size and
-    mass) and carry it, or None: a sphere has no flat top, a top narrower than
-    the pad none to seal on, and every other object is tried in this same
-    simulation — the arm, the cup, the servos and the motions of a run — taken
-    at :data:`TRIAL_PICK`, carried across the arm's front and turned by 90°
-    to :data:`TRIAL_PLACE`, :data:`TRIAL_MARGIN` times as heavy. It is carried
-    when it ends there within 1 cm.
+def choose_tool(shape: ObjectGeometry, axes: tuple[float, ...] = DEFAULT_GRASPS) -> ToolChoice:
+    """The tool that carries an object of ``shape`` (its size and mass) whose
+    scene allows finger ``axes``: the suction cup where it carries it, else the
+    fingers, else neither, with why. Each is tried in this same simulation —
+    the arm, the tool, the servos and the motions of a run — on the object
+    :data:`TRIAL_MARGIN` times as heavy, taken at :data:`TRIAL_PICK`, carried
+    across the arm's front and turned by 90° to :data:`TRIAL_PLACE`; it is
+    carried when it ends there within 1 cm. Before a trial, what rules a tool
+    out by geometry alone: a sphere has no flat top for the cup, a top
+    narrower than the pad none to seal on; the fingers need the object
+    narrower than their stroke across one of ``axes`` (the trial takes the
+    narrowest) and taller than the gap they leave over the table.
     The check is the physics itself, not a model of it (docs/execution.md)."""
+    suction = _why_not_by_suction(shape)
+    fits = sorted(axes, key=lambda a: half_extent(shape, a))
+    axis = fits[0] if fits else 0.0
+    if suction is None:
+        return ToolChoice("suction", axis, None)
+    fingers = _why_not_by_fingers(shape, axis, suction.startswith("weighs"))
+    if fingers is None:
+        return ToolChoice("fingers", axis, None)
+    return ToolChoice(None, axis, f"{suction}; {fingers}")
+
+
+def why_not_carried(shape: ObjectGeometry, axes: tuple[float, ...] = DEFAULT_GRASPS) -> str | None:
+    """Why neither the suction cup nor the fingers carry an object of ``shape``
+    (:func:`choose_tool`), or None."""
+    return choose_tool(shape, axes).why
+
+
+def _why_not_by_suction(shape: ObjectGeometry) -> str | None:
     if shape.shape == "sphere":
         return "is a sphere: it has no flat top for the suction cup to seal on"
     width = min(shape.size[0], shape.size[1])
@@ -579,33 +775,72 @@ def why_not_carried(shape: ObjectGeometry) -> str | None:
             f"has a top {1000 * width:.0f} mm across; the suction pad needs "
             f"{2000 * PAD_HALF:.0f} mm"
         )
+    return _why_not_in_trial(shape, "suction", 0.0, f"the suction cup ({SUCTION_FORCE:g} N)", True)
+
+
+def _why_not_by_fingers(shape: ObjectGeometry, axis: float, weighed: bool) -> str | None:
+    """Why the fingers do not carry ``shape`` taken across ``axis`` (``weighed``:
+    the cup's reason already gave its weight)."""
+    half = half_extent(shape, axis)
+    if half + MIN_JAW_CLEARANCE > JAW_STROKE / 2:
+        return (
+            f"it is {200 * half:.1f} cm across its narrowest grasp; the fingers open to "
+            f"{100 * JAW_STROKE:.1f} cm"
+        )
+    if shape.size[2] < FINGERTIP_GAP + 0.002:
+        return (
+            f"it is {1000 * shape.size[2]:.0f} mm tall; the fingertips stop "
+            f"{1000 * FINGERTIP_GAP:.0f} mm above the table"
+        )
+    return _why_not_in_trial(shape, "fingers", axis, f"the fingers ({GRIP_FORCE:g} N)", not weighed)
+
+
+def _why_not_in_trial(
+    shape: ObjectGeometry, tool: Tool, axis: float, named: str, weigh: bool
+) -> str | None:
+    """Why ``tool`` loses ``shape`` :data:`TRIAL_MARGIN` times as heavy in the
+    trial carry, or None (``weigh``: the reason starts with the object's weight)."""
     heavier = replace(shape, mass=TRIAL_MARGIN * shape.kg)
-    lifted, placed, refused = _carry(heavier, TRIAL_PICK, TRIAL_PLACE)
+    lifted, placed, refused = _carry(heavier, TRIAL_PICK, TRIAL_PLACE, tool, axis)
     if lifted and placed:
         return None
     if refused:  # not the load: the arm could not make the motions
-        return f"cannot be carried by the arm in a trial carry: {refused[0]}"
-    what = "does not lift" if not lifted else "lifts but loses on the way"
-    return (
-        f"weighs {shape.kg:.3g} kg; the suction cup ({SUCTION_FORCE:g} N) {what} "
-        f"{TRIAL_MARGIN:g} times that in a trial carry in the simulation"
+        return f"the {TOOL_NAMES[tool]} cannot carry it in a trial carry: {refused[0]}"
+    what = (
+        ("does not lift" if tool == "suction" else "do not lift")
+        if not lifted
+        else ("lifts but loses" if tool == "suction" else "lift but lose")
     )
+    if weigh:
+        return (
+            f"weighs {shape.kg:.3g} kg; {named} {what} {TRIAL_MARGIN:g} times that "
+            "in a trial carry in the simulation"
+        )
+    return f"{named} {what} it either"
 
 
-def carries(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool]:
-    """Whether the arm's suction cup, alone on a table with an object of
-    ``shape`` standing at ``pick`` (the base at the origin facing +x), lifts it
-    and puts it down at ``place`` within 1 cm: (lifted, placed)."""
-    lifted, placed, _ = _carry(shape, pick, place)
+def carries(
+    shape: ObjectGeometry, pick: Pose, place: Pose, tool: Tool | None = None, axis: float = 0.0
+) -> tuple[bool, bool]:
+    """Whether the arm, alone on a table with an object of ``shape`` standing at
+    ``pick`` (the base at the origin facing +x), lifts it and puts it down at
+    ``place`` within 1 cm: (lifted, placed). ``tool``: the one it uses (None:
+    the one :func:`choose_tool` chooses, as in a run); ``axis``: the fingers'."""
+    lifted, placed, _ = _carry(shape, pick, place, tool, axis)
     return lifted, placed
 
 
-def _carry(shape: ObjectGeometry, pick: Pose, place: Pose) -> tuple[bool, bool, list[str]]:
+def _carry(
+    shape: ObjectGeometry, pick: Pose, place: Pose, tool: Tool | None, axis: float
+) -> tuple[bool, bool, list[str]]:
     """:func:`carries`, and the motions the arm refused on the way."""
     name = "load"
-    world = ArmWorld(Scene(objects=(SceneObject(name, pick, shape),), robot=(0.0, 0.0, 0.0)))
+    scene = Scene(objects=(SceneObject(name, pick, shape, (axis,)),), robot=(0.0, 0.0, 0.0))
+    world = ArmWorld(scene)
+    if tool is not None:
+        world.tools[name] = tool
     try:
-        world.grasp(name, 0.0, pick)
+        world.grasp(name, axis, pick)
         if world.observe().held != name:
             return False, False, world.motion_failures
         world.put_down(name, place)

@@ -1,6 +1,8 @@
-"""The arm of ``--sim arm`` as a model: dm_control's Kinova Jaco with a suction
-cup in MuJoCo, its inverse kinematics (mink), where it stands, and what it can
-take (see :mod:`demoplan.execution.arm` for the world that moves it)."""
+"""The arm of ``--sim arm`` as a model: dm_control's Kinova Jaco with a
+combined tool in MuJoCo (a suction cup on a stem between the two fingers of a
+parallel-jaw gripper on a slide), its inverse kinematics (mink), where it
+stands, and what it can take (see :mod:`demoplan.execution.arm` for the world
+that moves it)."""
 
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from demoplan.scenes.scene import Scene
 
 __all__ = [
     "ArmKinematics",
+    "add_tool_drives",
     "arm_base",
     "arm_bodies",
     "arm_joints",
@@ -31,6 +34,21 @@ SUCTION_FORCE = 5.0
 holds 0.785 cm² × 6 N/cm² = 4.7 N)."""
 PAD_HALF = 0.005  # m: half the side of the square suction pad
 STEM = 0.08  # m: from the wrist flange to the pad's face
+JAW_STROKE = 0.085
+"""m: how far the fingers open (a Robotiq 2F-85's stroke)."""
+GRIP_FORCE = 40.0
+"""N: each finger's squeeze at most (a Robotiq 2F-85 grips with 20–235 N)."""
+FINGER_FRICTION = 1.0
+"""The finger pads' friction: rubber on a dry glazed or plastic surface."""
+FINGER_HALF = (0.004, 0.011, 0.025)
+"""m: half the thickness, width and length of a finger (its inner face is the pad)."""
+FINGER_REACH = 2 * FINGER_HALF[2]
+"""m: how far the extended fingertips reach past the suction pad's face."""
+JAW_SLIDE = 0.08
+"""m: the slide that lowers the jaws past the pad for a finger grasp; drawn
+up, the housing is level with the wrist flange and the fingertips stay 3 cm
+behind the pad's face, out of the cup's way."""
+JAWS_CLOSED = 0.012  # m: half the gap the drawn-up fingers leave round the stem
 ARM_GROUP = 2
 """MuJoCo geom group of the arm's links: the top camera masks them out, as a
 robot's perception filters out the robot's own links by its kinematics."""
@@ -62,8 +80,12 @@ def jaco_folder() -> Path:
     return folder
 
 
-def _arm_spec(mujoco: Any) -> Any:
-    """The Jaco arm with the suction tool on its wrist flange, links gravity-compensated."""
+def _arm_spec(mujoco: Any, jaws: bool = True) -> Any:
+    """The Jaco arm with the combined tool on its wrist flange, links
+    gravity-compensated: a suction cup on a stem, and (``jaws``; the inverse
+    kinematics does without them: they do not move the cup) a parallel-jaw
+    gripper whose housing slides along the stem, its two fingers each on a
+    slide joint."""
     arm = mujoco.MjSpec.from_file(str(jaco_folder() / _ARM_XML))
     flange = arm.site("wristsite")
     tool = arm.body("b_6").add_body(name="tool", pos=flange.pos, quat=flange.quat)
@@ -93,6 +115,8 @@ def _arm_spec(mujoco: Any) -> Any:
         solimp=[0.99, 0.999, 0.0005, 0.5, 2.0],
     )
     cup.add_site(name="tcp", pos=[0, 0, 0.008])
+    if jaws:
+        _add_jaws(mujoco, tool)
     for body in arm.bodies:
         body.gravcomp = 1
     for geom in arm.geoms:
@@ -100,12 +124,112 @@ def _arm_spec(mujoco: Any) -> Any:
     return arm
 
 
-def attach_arm(mujoco: Any, world: Any, base: tuple[float, float, float]) -> None:
-    """The arm (prefix ``arm/``) at ``base`` = (x, y, yaw°) in ``world``."""
+def _add_jaws(mujoco: Any, tool: Any) -> None:
+    """The parallel-jaw gripper round the stem: a housing on a slide along the
+    tool's axis (0: drawn up, :data:`JAW_SLIDE`: lowered so the fingertips
+    reach :data:`FINGER_REACH` past the pad), and two fingers on slide joints
+    across it (0: closed, :data:`JAW_STROKE`/2: open), rubber pads with
+    torsional friction (a pad's patch resists the load turning about the grasp)."""
+    housing = tool.add_body(name="jaws")
+    housing.add_joint(
+        name="jaw_slide",
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[0, 0, 1],
+        range=[0, JAW_SLIDE],
+        damping=300.0,
+        solref_limit=[0.004, 1.0],
+    )
+    housing.add_geom(
+        name="housing",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[JAW_STROKE / 2 + 2 * FINGER_HALF[0], 0.015, 0.0075],
+        pos=[0, 0, -0.0075],
+        rgba=[0.3, 0.3, 0.35, 1],
+        mass=0.4,
+    )
+    for side, sign in (("left", -1.0), ("right", 1.0)):
+        finger = housing.add_body(name=f"finger_{side}", pos=[0, 0, FINGER_HALF[2]])
+        finger.add_joint(
+            name=f"finger_{side}",
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=[sign, 0, 0],
+            range=[0, JAW_STROKE / 2],
+            damping=400.0,  # closes at 0.1 m/s under the full grip force
+        )
+        finger.add_geom(
+            name=f"finger_{side}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=list(FINGER_HALF),
+            pos=[sign * FINGER_HALF[0], 0, 0],
+            rgba=[0.2, 0.2, 0.22, 1],
+            mass=0.05,
+            friction=[FINGER_FRICTION, 0.01, 0.0001],
+            condim=6,
+            priority=1,
+            solref=[0.004, 1.0],
+            solimp=[0.99, 0.999, 0.0005, 0.5, 2.0],
+        )
+
+
+def add_tool_drives(mujoco: Any, world: Any) -> None:
+    """The tool's drives in ``world`` (the arm attached by :func:`attach_arm`):
+    the suction (an adhesion actuator on the cup, :data:`SUCTION_FORCE`), the
+    jaws' slide (a stiff position servo) and one position servo per finger,
+    force-limited to :data:`GRIP_FORCE`, the two fingers coupled; the tool's
+    parts do not collide with each other or the wrist (the fingers close round
+    the stem)."""
+    suction = world.add_actuator(
+        name="_suction", target="arm/cup", trntype=mujoco.mjtTrn.mjTRN_BODY
+    )
+    suction.set_to_adhesion(gain=SUCTION_FORCE)
+    suction.ctrlrange = [0.0, 1.0]
+    slide = world.add_actuator(
+        name="_jaw_slide", target="arm/jaw_slide", trntype=mujoco.mjtTrn.mjTRN_JOINT
+    )
+    slide.set_to_position(kp=5000.0)
+    slide.ctrlrange = [0.0, JAW_SLIDE]
+    slide.forcerange = [-100.0, 100.0]
+    slide.forcelimited = True
+    for side in ("left", "right"):
+        finger = world.add_actuator(
+            name=f"_finger_{side}", target=f"arm/finger_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
+        finger.set_to_position(kp=10000.0)
+        finger.ctrlrange = [0.0, JAW_STROKE / 2]
+        finger.forcerange = [-GRIP_FORCE, GRIP_FORCE]
+        finger.forcelimited = True
+    # one mechanism moves both fingers, as a real parallel gripper's rack or
+    # linkage does: held between two independent force servos, a load would shake
+    world.add_equality(
+        type=mujoco.mjtEq.mjEQ_JOINT,
+        name1="arm/finger_left",
+        name2="arm/finger_right",
+        data=[0, 1, 0, 0, 0] + [0] * 7,
+        solref=[0.004, 1.0],
+    )
+    parts = [
+        "arm/b_5",
+        "arm/b_6",
+        "arm/tool",
+        "arm/cup",
+        "arm/jaws",
+        "arm/finger_left",
+        "arm/finger_right",
+    ]
+    for k, first in enumerate(parts):
+        for second in parts[k + 1 :]:
+            world.add_exclude(bodyname1=first, bodyname2=second)
+
+
+def attach_arm(
+    mujoco: Any, world: Any, base: tuple[float, float, float], jaws: bool = True
+) -> None:
+    """The arm (prefix ``arm/``) at ``base`` = (x, y, yaw°) in ``world`` (with
+    the jaws, or without: :func:`_arm_spec`)."""
     x, y, yaw = base
     half = math.radians(yaw) / 2
     frame = world.worldbody.add_frame(pos=[x, y, 0], quat=[math.cos(half), 0, 0, math.sin(half)])
-    world.attach(_arm_spec(mujoco), prefix="arm/", frame=frame)
+    world.attach(_arm_spec(mujoco, jaws), prefix="arm/", frame=frame)
 
 
 def arm_joints(mujoco: Any, model: Any) -> list[int]:
@@ -145,7 +269,7 @@ class ArmKinematics:
 
         self.mink = mink
         world = mujoco.MjSpec()
-        attach_arm(mujoco, world, base)
+        attach_arm(mujoco, world, base, jaws=False)
         self.model = world.compile()
         self.configuration = mink.Configuration(self.model)
         self.task = mink.FrameTask("arm/tcp", "site", position_cost=1.0, orientation_cost=0.5)
