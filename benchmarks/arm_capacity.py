@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import math
 
+from demoplan.documents.masses import MAX_DENSITY
 from demoplan.execution.arm import TRIAL_PICK, TRIAL_PLACE, Tool, carries
-from demoplan.masses import MAX_DENSITY
 from demoplan.model import ObjectGeometry
 from demoplan.scenes.geometry import half_extent
 

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.masses import MAX_DENSITY
+from demoplan.documents.masses import MAX_DENSITY
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
