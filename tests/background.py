@@ -7,8 +7,10 @@ controller (tests/conftest.py) starts a job as soon as the workers' collection
 holds one of those files, so it runs beside the tests instead of holding up
 one worker while the other waits for it; the fixture
 :func:`tests.conftest.shared_result` waits for the job where a test needs it.
-Without xdist (or without ``fcntl``) the fixture computes the result in the
-test's own process, once per session.
+Without xdist (or without ``fcntl``) the fixture runs the job itself, once
+per session, and waits for it (:func:`run_now`). A job runs in a process of
+its own in either case: it may change its working folder, environment and
+signal handlers (the experiments run through the command's entry point).
 
 The job holds an exclusive ``flock`` on ``FOLDER/NAME/lock`` for its whole
 life (taken by the controller before the job starts, inherited by it): a
@@ -58,10 +60,42 @@ JOBS = {
 }
 
 
-def compute(name: str, folder: Path) -> Any:
-    """Job ``name``'s result, computed here (``folder``: its own, existing)."""
+def _compute(name: str, folder: Path) -> Any:
+    """Job ``name``'s result, computed in this process (``folder``: its own, existing)."""
     module, _, function = JOBS[name].function.partition(":")
     return getattr(importlib.import_module(module), function)(folder)
+
+
+def _environment() -> dict[str, str]:
+    """The job's environment: as the hostile suite runs a command (harness.run)."""
+    env = dict(os.environ, PYTHONWARNINGS="default")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def _load(name: str, place: Path) -> Any:
+    done = place / "result.pickle"
+    if not done.exists():
+        log = (place / "log.txt").read_text(errors="replace")
+        raise RuntimeError(f"the shared job {name!r} failed:\n{log[-5000:]}")
+    with done.open("rb") as file:
+        return pickle.load(file)
+
+
+def run_now(name: str, folder: Path) -> Any:
+    """Run job ``name`` in ``folder/name`` and wait for its result."""
+    place = folder / name
+    place.mkdir(parents=True)
+    with (place / "log.txt").open("wb") as log:
+        subprocess.run(
+            [sys.executable, "-m", "tests.background", name, str(place)],
+            cwd=ROOT,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env=_environment(),
+            check=False,
+        )
+    return _load(name, place)
 
 
 def needed(ids: list[str] | tuple[str, ...]) -> list[str]:
@@ -84,6 +118,7 @@ def start(name: str, folder: Path) -> subprocess.Popen[bytes] | None:
                 cwd=ROOT,
                 stdout=log,
                 stderr=subprocess.STDOUT,
+                env=_environment(),
                 pass_fds=(lock,),
             )
     finally:
@@ -102,19 +137,14 @@ def result(name: str, folder: Path) -> Any | None:
         fcntl.flock(lock, fcntl.LOCK_SH)  # granted when the job has ended
     finally:
         os.close(lock)
-    done = place / "result.pickle"
-    if not done.exists():
-        log = (place / "log.txt").read_text(errors="replace")
-        raise RuntimeError(f"the shared job {name!r} failed:\n{log[-5000:]}")
-    with done.open("rb") as file:
-        return pickle.load(file)
+    return _load(name, place)
 
 
 def _main(name: str, place: Path) -> int:
     work = place / "work"
     work.mkdir()
     try:
-        value = compute(name, work)
+        value = _compute(name, work)
     except BaseException:
         traceback.print_exc()
         return 1

@@ -63,14 +63,14 @@ def shared_result(
     name: str, config: pytest.Config, tmp_path_factory: pytest.TempPathFactory
 ) -> Any:
     """Job ``name``'s result: the controller's job's if it started one, else
-    computed in this process (once per session)."""
+    one this process runs (once per session)."""
     workerinput = getattr(config, "workerinput", {})
     if "demoplan_shared" in workerinput:
         found = background.result(name, Path(workerinput["demoplan_shared"]))
         if found is not None:
             return found
     if name not in _computed_here:
-        _computed_here[name] = background.compute(name, tmp_path_factory.mktemp(name))
+        _computed_here[name] = background.run_now(name, tmp_path_factory.mktemp(name))
     return _computed_here[name]
 
 

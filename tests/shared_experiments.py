@@ -3,9 +3,13 @@
 The command takes minutes (the arm's two runs in MuJoCo are most of it), and
 several tests read what it writes: the report (tests/test_experiments.py) and
 every figure as it was written (tests/test_figure_labels.py). They share this
-run, made through the CLI with the figures observed as they are saved
+run, made through the command's entry point with the figures observed as they are saved
 (:func:`demoplan.plotting.observing_saved_figures`), in a process of its own
 beside the tests (tests/background.py, the fixture ``experiments_run``).
+
+The same run is the hostile suite's ``experiments --open`` without a web
+browser (tests/hostile/test_new_options.py): it is made as that test made it,
+through the command's entry point in a process of its own, with stderr apart.
 
 The arm's runs are recorded with their inputs (:class:`ArmRun`): a test that
 runs the experiments again with a changed paper table (the mismatch test) may
@@ -15,17 +19,17 @@ does not depend on the paper's tables.
 
 from __future__ import annotations
 
+import os
 import shutil
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import pytest
 from matplotlib.colors import to_hex
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
-from typer.testing import CliRunner
 
 
 @dataclass
@@ -101,13 +105,15 @@ class ArmRun:
 
 @dataclass
 class ExperimentsRun:
-    """``demoplan experiments --out REPORT`` run once: its exit code and output,
-    the report folder, every figure it wrote (by its path in the report
-    folder) and the arm's runs by experiment title."""
+    """``demoplan experiments --out report --open`` run once, in a folder of its
+    own and a process of its own, without a web browser: its exit code, stdout
+    and stderr, the report folder, every figure it wrote (by its path in the
+    report folder) and the arm's runs by experiment title."""
 
     report: Path
     exit_code: int
     output: str
+    stderr: str
     figures: dict[str, list[AxesRecord]] = field(default_factory=dict)
     arm_runs: dict[str, ArmRun] = field(default_factory=dict)
 
@@ -130,15 +136,26 @@ class ExperimentsRun:
         return replay
 
 
+NO_BROWSER = ("DISPLAY", "WAYLAND_DISPLAY", "TERM", "BROWSER")
+"""Without these no web browser is found: ``--open`` says to open the page by hand."""
+
+
 def run_experiments_once(folder: Path) -> ExperimentsRun:
-    """Run ``demoplan experiments --out FOLDER/report`` through the CLI, the
-    figures observed as they are saved and the arm's runs recorded."""
+    """``demoplan experiments --out report --open`` in ``folder``, through the
+    entry point of the ``demoplan`` command (:func:`demoplan.launcher.main`),
+    the figures observed as they are saved and the arm's runs recorded. Run
+    in a process of its own (tests/background.py): it changes the working
+    folder, the environment and the process's signal handlers."""
     import demoplan.experiments as experiments
-    from demoplan.cli import app
+    from demoplan.launcher import main
     from demoplan.plotting import observing_saved_figures
 
-    report = folder / "report"
-    run = ExperimentsRun(report, -1, "")
+    for name in NO_BROWSER:
+        os.environ.pop(name, None)
+    os.environ["COLUMNS"] = "100"
+    folder = Path(folder).resolve()
+    os.chdir(folder)
+    run = ExperimentsRun(folder / "report", -1, "", "")
     execute = experiments.execute_experiment
 
     def recorded(title: str, model: Any, scene: Any, frames: Path, vision: bool) -> Any:
@@ -148,11 +165,30 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
 
     def observe(figure: Any, renderer: Any, path: Path) -> None:
         # written into a folder beside the report, renamed to it at the end
-        inside = Path(*path.relative_to(folder).parts[1:])
+        inside = Path(*(folder / path).relative_to(folder).parts[1:])  # folder: the cwd
         run.figures[inside.as_posix()] = axes_records(figure, renderer)
 
-    with pytest.MonkeyPatch.context() as patch, observing_saved_figures(observe):
-        patch.setattr(experiments, "execute_experiment", recorded)
-        result = CliRunner().invoke(app, ["experiments", "--out", str(report)])
-    run.exit_code, run.output = result.exit_code, result.output
+    experiments.execute_experiment = recorded  # type: ignore[assignment]
+    sys.argv = ["demoplan", "experiments", "--out", "report", "--open"]
+    with (
+        (folder / "stdout.txt").open("wb") as out,
+        (folder / "stderr.txt").open("wb") as err,
+        observing_saved_figures(observe),
+    ):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = os.dup(1), os.dup(2)
+        os.dup2(out.fileno(), 1)
+        os.dup2(err.fileno(), 2)
+        try:
+            main()
+        except SystemExit as end:
+            run.exit_code = end.code if isinstance(end.code, int) else 1
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+    run.output = (folder / "stdout.txt").read_text(errors="replace")
+    run.stderr = (folder / "stderr.txt").read_text(errors="replace")
     return run

@@ -22,9 +22,9 @@ from tests.shared_experiments import ExperimentsRun
 def report(experiments_run: ExperimentsRun) -> Path:
     """The folder ``demoplan experiments`` wrote (run once for the session,
     tests/shared_experiments.py)."""
-    out = experiments_run.report
-    assert experiments_run.exit_code == 0, experiments_run.output
-    assert f"Report page: {out / 'report.html'}" in experiments_run.output
+    out = experiments_run.report  # --out report, run in its parent folder
+    assert experiments_run.exit_code == 0, experiments_run.stderr
+    assert "Report page: report/report.html" in experiments_run.output
     return out
 
 
