@@ -1,6 +1,12 @@
 """Results several test files share (tests/background.py), computed once per
 session: under pytest-xdist in a process of their own that the controller
-starts as soon as the workers have collected a test that reads one."""
+starts as soon as the workers have collected a test that reads one.
+
+And the order the tests are handed out in: pytest-xdist gives each worker the
+next tests of the collection as it finishes its own, so a long test collected
+late can leave one worker running it alone at the end. The long ones go
+first; the tests that read a shared result next (by then it is ready); the
+rest, short, fill in and end the run."""
 
 from __future__ import annotations
 
@@ -14,6 +20,39 @@ import pytest
 
 from tests import background
 from tests.shared_experiments import ExperimentsRun
+
+LONG_FIRST = (
+    # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
+    "tests/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
+    "tests/test_docs_shell.py::",
+    "tests/hostile/test_concurrency.py::",
+    "tests/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
+    "tests/test_readme.py::test_tour_commands_run",
+    "tests/test_arm.py::test_experiment_",
+    "tests/test_arm.py::test_kitting_on_the_arm",
+    "tests/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
+    "tests/test_pddl.py::test_fast_downward_optimal_lengths_match",
+)
+SHARED_FIXTURES = ("experiments_run", "hard_parking")
+
+
+def _rank(item: pytest.Item) -> int:
+    """0, 1, …: the LONG_FIRST entries; then tests marked slow; then those that
+    read a shared result; then the rest."""
+    for rank, prefix in enumerate(LONG_FIRST):
+        if item.nodeid.startswith(prefix):
+            return rank
+    reads_shared = any(name in SHARED_FIXTURES for name in getattr(item, "fixturenames", ()))
+    if reads_shared:
+        return len(LONG_FIRST) + 1
+    if item.get_closest_marker("slow") is not None:
+        return len(LONG_FIRST)
+    return len(LONG_FIRST) + 2
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    items.sort(key=_rank)  # stable: each group in collection order
+
 
 _started: dict[str, subprocess.Popen[bytes] | None] = {}
 _folder: list[Path] = []  # the controller's folder for the jobs (under xdist)
