@@ -15,15 +15,16 @@ from typer.testing import CliRunner
 from demoplan.cli import app
 from demoplan.experiments import run_experiments
 from demoplan.learning.modelfile import load_model
+from tests.shared_experiments import ExperimentsRun
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The folder ``demoplan experiments`` wrote (run once for this module)."""
-    out = tmp_path_factory.mktemp("experiments") / "report"
-    result = CliRunner().invoke(app, ["experiments", "--out", str(out)])
-    assert result.exit_code == 0, result.output
-    assert f"Report page: {out / 'report.html'}" in result.output
+def report(experiments_run: ExperimentsRun) -> Path:
+    """The folder ``demoplan experiments`` wrote (run once for the session,
+    tests/shared_experiments.py)."""
+    out = experiments_run.report  # --out report, run in its parent folder
+    assert experiments_run.exit_code == 0, experiments_run.stderr
+    assert "Report page: report/report.html" in experiments_run.output
     return out
 
 
@@ -88,12 +89,17 @@ def test_the_report_measures_table_ii_on_fresh_draws(report: Path) -> None:
         assert page.count('src="data:video/mp4;base64,') == 2
 
 
-def test_a_mismatch_with_the_paper_is_reported(tmp_path: Path, monkeypatch: object) -> None:
+def test_a_mismatch_with_the_paper_is_reported(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, experiments_run: ExperimentsRun
+) -> None:
     import demoplan.experiments as experiments
 
     changed = list(experiments.PAPER_TABLE_III)
     changed[0] = "A-B-C-D-E-G-F"
-    monkeypatch.setattr(experiments, "PAPER_TABLE_III", tuple(changed))  # type: ignore[attr-defined]
+    monkeypatch.setattr(experiments, "PAPER_TABLE_III", tuple(changed))
+    # The arm (most of the minutes) is given the very same model and scene as in
+    # the session's run, which the replay checks: its runs are that run's.
+    monkeypatch.setattr(experiments, "execute_experiment", experiments_run.replaying_the_arm())
     result = run_experiments(tmp_path)
     failed = [c for c in result.checks if not c.ok]
     assert [(c.name, c.paper, c.ours) for c in failed] == [
@@ -101,9 +107,7 @@ def test_a_mismatch_with_the_paper_is_reported(tmp_path: Path, monkeypatch: obje
     ]
     # The command on that result (not a second run of the experiments, which
     # takes minutes): exit 1, one line naming what differs.
-    monkeypatch.setattr(  # type: ignore[attr-defined]
-        experiments, "run_experiments", lambda folder, progress=None: result
-    )
+    monkeypatch.setattr(experiments, "run_experiments", lambda folder, progress=None: result)
     answer = CliRunner().invoke(app, ["experiments", "--out", str(tmp_path / "again")])
     assert answer.exit_code == 1, answer.output
     assert "1 results differ from the paper (Experiment 1 Sequence 1)" in answer.output

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,12 +22,11 @@ from hypothesis import strategies as st
 
 matplotlib.use("Agg")
 
-from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
 
-from demoplan.experiments import run_experiments
 from demoplan.plotting.colours import object_colour
 from demoplan.plotting.figures import Leader, observing_saved_figures, place_boxes
+from tests.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (
     "experiment1-set-table-demonstrations.png",
@@ -39,73 +37,12 @@ REPORT_FIGURES = (
 )
 
 
-@dataclass
-class AxesRecord:
-    """What one axes of a written figure showed, in display coordinates."""
-
-    frame: Bbox
-    ylabel: str
-    texts: list[tuple[str, Bbox]]
-    rectangles: list[tuple[str, float, bool, str, float, float]]
-    """Each rectangle: face colour (or edge colour if unfilled), alpha, filled,
-    line style, and its bottom and top in data coordinates."""
-
-
-def _text_box(text: Any, renderer: Any) -> Bbox:
-    """A text's letters and the box drawn around them (the constraint graphs' circles)."""
-    box = text.get_window_extent(renderer)
-    patch = text.get_bbox_patch()
-    if patch is not None:
-        box = Bbox.union([box, patch.get_window_extent(renderer)])
-    return box.frozen()
-
-
-def _rectangles(ax: Any) -> list[tuple[str, float, bool, str, float, float]]:
-    from matplotlib.colors import to_hex
-
-    found = []
-    for patch in ax.patches:
-        if isinstance(patch, Rectangle):
-            colour = patch.get_facecolor() if patch.get_fill() else patch.get_edgecolor()
-            box = patch.get_bbox()
-            found.append(
-                (
-                    to_hex(colour),
-                    patch.get_alpha() or 1.0,
-                    bool(patch.get_fill()),
-                    str(patch.get_linestyle()),
-                    float(box.y0),
-                    float(box.y1),
-                )
-            )
-    return found
-
-
 @pytest.fixture(scope="module")
-def figures(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[AxesRecord]]:
-    """Every figure run_experiments writes, by its path under the output folder."""
-    out = tmp_path_factory.mktemp("experiments")
-    written: dict[str, list[AxesRecord]] = {}
-
-    def record(figure: Any, renderer: Any, path: Path) -> None:
-        written[path.relative_to(out).as_posix()] = [
-            AxesRecord(
-                frame=ax.get_window_extent(renderer).frozen(),
-                ylabel=ax.get_ylabel(),
-                texts=[
-                    (t.get_text(), _text_box(t, renderer))
-                    for t in ax.texts
-                    if t.get_visible() and t.get_text()
-                ],
-                rectangles=_rectangles(ax),
-            )
-            for ax in figure.axes
-            if ax.get_visible()
-        ]
-
-    with observing_saved_figures(record):
-        run_experiments(out)
-    return written
+def figures(experiments_run: ExperimentsRun) -> dict[str, list[AxesRecord]]:
+    """Every figure ``demoplan experiments`` writes, by its path under the
+    output folder (the session's run, tests/shared_experiments.py)."""
+    assert experiments_run.exit_code == 0, experiments_run.output
+    return experiments_run.figures
 
 
 def _rounded(box: Bbox) -> tuple[float, ...]:
@@ -309,7 +246,7 @@ def test_kinematic_storyboard_frames_keep_their_names_apart(tmp_path: Path) -> N
 
     def record(figure: Any, renderer: Any, path: Path) -> None:
         for k, ax in enumerate(figure.axes):
-            texts = [(t.get_text(), _text_box(t, renderer)) for t in ax.texts if t.get_visible()]
+            texts = [(t.get_text(), text_box(t, renderer)) for t in ax.texts if t.get_visible()]
             boxes[f"{path.name}#{k}"] = [(n, b) for n, b in texts if n]
 
     with observing_saved_figures(record):

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
+from demoplan.planning.problem import Problem
 from demoplan.planning.xml import save_problem
 from tests.helpers import wait_for_signal_handlers
-from tests.planning_families import PARKING_FAMILIES, parking_problem
 
 HANG_SECONDS = 30.0
 """Seconds from the signal to the exit beyond which the search is taken not to
@@ -25,11 +25,11 @@ have stopped: a hang guard, far above the usual hundredths of a second."""
 
 
 @pytest.fixture(scope="module")
-def hard_problem(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def hard_problem(tmp_path_factory: pytest.TempPathFactory, hard_parking: Problem) -> Path:
     """A problem no search solves in a minute (30 objects of the crowded parking
     family; Fast Downward's lama-first finds no plan in 60 s either)."""
     path = tmp_path_factory.mktemp("interrupt") / "hard.xml"
-    save_problem(parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"]), path)
+    save_problem(hard_parking, path)
     return path
 
 

@@ -11,7 +11,6 @@ from demoplan.planning.compiled import compile_problem
 from demoplan.planning.plateau import plateau_moves
 from demoplan.planning.problem import Problem
 from demoplan.planning.strips import validate
-from tests.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_search import small_problems
 
 
@@ -30,10 +29,10 @@ def test_a_plan_the_dive_finds_is_valid_and_shortest(problem: Problem) -> None:
     assert 2 * len(moves) == len(reference.actions)
 
 
-def test_the_dive_stops_at_its_state_limit() -> None:
-    # A crowded draw the dive cannot finish: it gives up at the states it may keep.
-    problem = parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"])
-    c = compile_problem(problem)
+def test_the_dive_stops_at_its_state_limit(hard_parking: Problem) -> None:
+    # A crowded draw the dive cannot finish (tests/helpers.py: hard_parking_problem):
+    # it gives up at the states it may keep.
+    c = compile_problem(hard_parking)
     bounds = LowerBounds(c)
     root = bounds.estimate(c.start, c.start_reached)
     entered = []

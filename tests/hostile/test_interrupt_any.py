@@ -22,6 +22,7 @@ import signal
 import subprocess
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -55,9 +56,8 @@ MOMENTS = 4  # per command
 
 
 @pytest.fixture(scope="module")
-def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def workspace(tmp_path_factory: pytest.TempPathFactory, hard_parking: Any) -> Path:
     from demoplan.planning.xml import save_problem
-    from tests.planning_families import PARKING_FAMILIES, parking_problem
 
     folder = tmp_path_factory.mktemp("interrupt")
     shutil.copytree(EXAMPLES / "set_table", folder / "set_table")
@@ -65,7 +65,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
     shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
-    save_problem(parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"]), folder / "hard.xml")
+    save_problem(hard_parking, folder / "hard.xml")
     done = subprocess.run(
         [DEMOPLAN, "learn", "demos.json", "--paper", "-o", "model.json"],
         cwd=folder,

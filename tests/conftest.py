@@ -1,0 +1,129 @@
+"""Results several test files share (tests/background.py), computed once per
+session: under pytest-xdist in a process of their own that the controller
+starts as soon as the workers have collected a test that reads one.
+
+And the order the tests are handed out in: pytest-xdist gives each worker the
+next tests of the collection as it finishes its own, so a long test collected
+late can leave one worker running it alone at the end. The long ones go
+first; the tests that read a shared result next (by then it is ready); the
+rest, short, fill in and end the run."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests import background
+from tests.shared_experiments import ExperimentsRun
+
+LONG_FIRST = (
+    # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
+    "tests/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
+    "tests/test_docs_shell.py::",
+    "tests/hostile/test_concurrency.py::",
+    "tests/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
+    "tests/test_readme.py::test_tour_commands_run",
+    "tests/test_arm.py::test_experiment_",
+    "tests/test_arm.py::test_kitting_on_the_arm",
+    "tests/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
+    "tests/test_pddl.py::test_fast_downward_optimal_lengths_match",
+)
+SHARED_FIXTURES = ("experiments_run", "hard_parking")
+
+
+def _rank(item: pytest.Item) -> int:
+    """0, 1, …: the LONG_FIRST entries; then tests marked slow; then those that
+    read a shared result; then the rest."""
+    for rank, prefix in enumerate(LONG_FIRST):
+        if item.nodeid.startswith(prefix):
+            return rank
+    reads_shared = any(name in SHARED_FIXTURES for name in getattr(item, "fixturenames", ()))
+    if reads_shared:
+        return len(LONG_FIRST) + 1
+    if item.get_closest_marker("slow") is not None:
+        return len(LONG_FIRST)
+    return len(LONG_FIRST) + 2
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    items.sort(key=_rank)  # stable: each group in collection order
+
+
+_started: dict[str, subprocess.Popen[bytes] | None] = {}
+_folder: list[Path] = []  # the controller's folder for the jobs (under xdist)
+
+
+def _is_xdist_controller(config: pytest.Config) -> bool:
+    return (
+        not hasattr(config, "workerinput")
+        and config.pluginmanager.hasplugin("xdist")
+        and bool(config.getoption("numprocesses", None))
+        and config.getoption("dist", "no") != "no"
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if _is_xdist_controller(config):
+        _folder.append(Path(tempfile.mkdtemp(prefix="demoplan-tests-shared-")))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    if _folder:
+        node.workerinput["demoplan_shared"] = str(_folder[0])
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node: Any, ids: list[str]) -> None:
+    for name in background.needed(ids):
+        if _folder and name not in _started:
+            _started[name] = background.start(name, _folder[0])
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    for process in _started.values():  # only ours, by their Popen objects
+        if process is not None and process.poll() is None:
+            process.kill()
+            process.wait()
+    _started.clear()
+    if _folder:
+        shutil.rmtree(_folder.pop(), ignore_errors=True)
+
+
+_computed_here: dict[str, Any] = {}
+
+
+def shared_result(
+    name: str, config: pytest.Config, tmp_path_factory: pytest.TempPathFactory
+) -> Any:
+    """Job ``name``'s result: the controller's job's if it started one, else
+    one this process runs (once per session)."""
+    workerinput = getattr(config, "workerinput", {})
+    if "demoplan_shared" in workerinput:
+        found = background.result(name, Path(workerinput["demoplan_shared"]))
+        if found is not None:
+            return found
+    if name not in _computed_here:
+        _computed_here[name] = background.run_now(name, tmp_path_factory.mktemp(name))
+    return _computed_here[name]
+
+
+@pytest.fixture(scope="session")
+def experiments_run(
+    pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory
+) -> ExperimentsRun:
+    """``demoplan experiments`` run once per session (tests/shared_experiments.py)."""
+    run: ExperimentsRun = shared_result("experiments", pytestconfig, tmp_path_factory)
+    return run
+
+
+@pytest.fixture(scope="session")
+def hard_parking(pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> Any:
+    """A parking problem no search solves in a minute (tests/helpers.py), drawn
+    once per session: the draw takes half a minute."""
+    return shared_result("hard-parking", pytestconfig, tmp_path_factory)
