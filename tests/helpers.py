@@ -126,6 +126,6 @@ def hard_parking_problem(folder: Path | None = None) -> Any:
     """A problem no search solves in a minute: 30 objects of the crowded
     parking family (Fast Downward's lama-first finds no plan in 60 s either).
     Drawing it takes about half a minute (tests/background.py shares it)."""
-    from demoplan.planning.generate import PARKING_FAMILIES, parking_problem
+    from tests.planning_families import PARKING_FAMILIES, parking_problem
 
     return parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"])
