@@ -21,6 +21,7 @@ from demoplan.errors import InputError
 from demoplan.fileio import read_document
 from demoplan.learning.demonstrations import demonstrations_from_document, load_demonstrations
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
+from demoplan.plotting.segmentation import plot_segmentation
 from demoplan.rotations import angle_between, quat_from_rpy, quat_from_yaw
 from demoplan.segmentation import (
     ObjectTrack,
@@ -28,7 +29,6 @@ from demoplan.segmentation import (
     SegmentationSettings,
     compare_steps,
     load_stream,
-    plot_segmentation,
     segment,
     stream_from_demonstration,
     write_bag,
