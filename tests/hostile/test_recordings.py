@@ -30,6 +30,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.segmentation.types import ObjectTrack, PoseStream
+from demoplan.segmentation.writers import write_bag, write_csv
 from tests.hostile.harness import DEMOPLAN, Answer, check_refused, fingerprint, run
 from tests.test_import import MODEL, box_states, write_recording
 
@@ -50,13 +52,15 @@ def folder() -> Iterator[Path]:
 
 def import_refused(recording: Path, cwd: Path, *names: str) -> Answer:
     """``import RECORDING -o out``: one error line naming the recording (and
-    ``names``), exit 1, no output folder."""
+    ``names``), exit 1, no output folder, no file changed or made under ``cwd``."""
     out = cwd / "out"
+    before = fingerprint(cwd)
     answer = run(["import", recording, "-o", out], cwd)
     check_refused(answer, [str(recording)], codes={1})
     for name in names:
         assert name in answer.stderr, f"{name!r} not named: {answer}"
     assert not out.exists(), answer
+    assert fingerprint(cwd) == before, answer
     return answer
 
 
@@ -457,3 +461,65 @@ def test_figure_texts_are_literal_but_tick_labels_keep_their_notation() -> None:
     assert not ax.get_legend().get_texts()[0].get_parse_math()
     ticks = [t for t in ax.yaxis.get_ticklabels() if t.get_text()]
     assert ticks and all(t.get_parse_math() for t in ticks)
+
+
+# --------------------------------------------------------------------------- TF trees
+
+
+def carried_track(name: str, offset: float = 0.0) -> ObjectTrack:
+    """4 s at 100 Hz: rests, carried 0.3 m along x during 1-2 s, rests."""
+    t = np.arange(400) * 0.01
+    s = np.clip(t - 1.0, 0.0, 1.0)
+    positions = np.column_stack((offset + 0.3 * s, np.full_like(t, 0.2), 0.1 * np.sin(np.pi * s)))
+    return ObjectTrack(name, t, positions)
+
+
+def still_track(name: str, x: float) -> ObjectTrack:
+    t = np.arange(400) * 0.01
+    return ObjectTrack(name, t, np.column_stack((np.full_like(t, x), np.zeros_like(t), t * 0)))
+
+
+CONTROLS = st.sampled_from(["\x1b[2J", "\x1b]0;title\x07", "\x07", "\u202e", "\n", "\r"])
+FRAME_NAMES = st.tuples(CONTROLS, NAMES).map(lambda p: "cup" + p[0] + p[1] + "x")
+
+
+@given(name=FRAME_NAMES.filter(lambda n: "/" not in n))
+@settings(max_examples=6, deadline=None, derandomize=True)
+def test_tf_frame_names_with_escapes_are_printed_as_text(name: str) -> None:
+    with folder() as root:
+        write_bag(PoseStream((carried_track(name),)), root / "bag", kind="tf")
+        answer = run(["segment", root / "bag", "-o", root / "demo.json"], root)
+        assert answer.code == 0, answer
+        controls = {c for c in answer.stdout + answer.stderr if not c.isprintable() and c != "\n"}
+        assert not controls, f"{controls} reached the terminal: {answer}"
+        assert json.loads((root / "demo.json").read_text())["steps"][0]["object"] == name
+
+
+@pytest.mark.parametrize("kilometres", [5.0, 50.0])
+def test_a_tf_tree_placing_an_object_kilometres_away_is_refused(
+    kilometres: float, tmp_path: Path
+) -> None:
+    """A cup 0.3 m from its parent frame ``base``, which is ``kilometres`` from
+    the world: composed, the cup is that far from the origin."""
+    stream = PoseStream((still_track("base", kilometres * 1000.0), carried_track("cup")))
+    write_bag(stream, tmp_path / "bag", kind="tf", parents={"base": "world", "cup": "base"})
+    answer = run(["segment", tmp_path / "bag", "-o", tmp_path / "demo.json"], tmp_path)
+    check_refused(answer, [str(tmp_path / "bag")], codes={1})
+    assert "1 km" in answer.stderr and "'cup'" in answer.stderr, answer
+    assert not (tmp_path / "demo.json").exists()
+
+
+def test_a_warning_naming_an_object_is_one_escaped_line(tmp_path: Path) -> None:
+    """An object still moving when the stream ends is warned about by name:
+    the name's escape sequence and bell are written as text."""
+    name = "cup\x1b[2J\x07\u202efake"
+    track = carried_track(name)
+    moving = ObjectTrack(name, track.times[:150], track.positions[:150])  # cut mid-carry
+    stream = PoseStream((carried_track("plate", 1.0), moving))
+    path = tmp_path / "stream.csv"
+    write_csv(stream, path)
+    answer = run(["segment", path, "-o", tmp_path / "demo.json"], tmp_path)
+    assert answer.code == 0, answer
+    warnings = [line for line in answer.stderr.splitlines() if "WARNING" in line]
+    assert warnings and all("cup\\x1b[2J\\x07\\u202efake" in line for line in warnings), answer
+    assert not {c for c in answer.stderr + answer.stdout if not c.isprintable() and c != "\n"}
