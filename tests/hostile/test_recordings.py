@@ -373,7 +373,7 @@ OUT_OF_RANGE: dict[str, tuple[Callable[[Path], Path], tuple[str, ...]]] = {
 }
 
 
-@pytest.mark.parametrize("case", list(OUT_OF_RANGE))
+@pytest.mark.parametrize("case", list(OUT_OF_RANGE), ids=[f"import {c}" for c in OUT_OF_RANGE])
 def test_numbers_beyond_the_documented_limits_are_refused(case: str, tmp_path: Path) -> None:
     make, names = OUT_OF_RANGE[case]
     recording = make(tmp_path / "toy.hdf5")
@@ -408,7 +408,9 @@ def test_a_dataset_cut_short_is_refused(tmp_path: Path) -> None:
     import_refused(recording, tmp_path, "states", "never written, or cut short")
 
 
-@pytest.mark.parametrize("attribute", ["model_file", "env"])
+@pytest.mark.parametrize(
+    "attribute", ["model_file", "env"], ids=["import model_file", "import env"]
+)
 def test_text_that_is_not_utf8_is_refused(attribute: str, tmp_path: Path) -> None:
     recording = write_recording(tmp_path / "toy.hdf5", box_states())
     with h5py.File(recording, "a") as handle:
