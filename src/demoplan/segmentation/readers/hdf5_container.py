@@ -20,6 +20,7 @@ at most :data:`MAX_ARRAY_BYTES`) before reading it, so a dataset declaring
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -70,49 +71,88 @@ def open_recording(path: Path) -> h5py.File:
     return handle
 
 
+_CHECKED: dict[tuple[int, ...], None] = {}
+"""Files found closed, by device, inode, size and change times: a recording is
+opened once per demonstration, and checked once."""
+
+
 def _refuse_outside_reads(handle: h5py.File, source: str) -> None:
     """One InputError for the first external link, externally stored or virtual
-    dataset of the file; nothing it points to is opened."""
+    dataset of the file; nothing it points to is opened. h5py's low-level
+    interface: links listed with their kinds, datasets' creation properties
+    read without building Dataset objects (4,000 datasets: 0.7 s)."""
     import h5py
 
+    info = os.fstat(handle.id.get_vfd_handle()) if handle.driver == "sec2" else None
+    identity = (
+        (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+        if info is not None
+        else None
+    )
+    if identity is not None and identity in _CHECKED:
+        return
     refusal = "; a recording is read alone, from the one file named (docs/limits.md)"
-    names: list[str] = []
+    links: list[tuple[bytes, int]] = []
 
-    def collect(name: str) -> bool | None:
-        names.append(name)
-        return True if len(names) > MAX_LINKS else None  # not None: stop (h5py's visit)
+    def collect(name: bytes, link: Any) -> bool | None:
+        links.append((name, link.type))
+        return True if len(links) > MAX_LINKS else None  # not None: stop (h5py's visit)
 
-    handle.visit_links(collect)  # the links themselves, never followed
-    if len(names) > MAX_LINKS:
+    handle.id.links.visit(collect, info=True)  # the links themselves, never followed
+    if len(links) > MAX_LINKS:
         raise InputError(
             f"more than {MAX_LINKS:,} groups and datasets; {EXPECTED} expected", source=source
         )
-    for name in names:
-        link = handle.get(name, getlink=True)
-        if isinstance(link, h5py.ExternalLink):
+    for name, kind in links:
+        if kind == h5py.h5l.TYPE_EXTERNAL:
+            file_name, inside = handle.id.links.get_val(name)
             raise InputError(
-                f"an external link to {link.filename}:{link.path}" + refusal,
+                f"an external link to {_decoded(file_name)}:{_decoded(inside)}" + refusal,
                 source=source,
-                field=name,
+                field=_decoded(name),
             )
-        item = handle.get(name) if isinstance(link, h5py.HardLink) else None
-        if not isinstance(item, h5py.Dataset):
-            continue
-        external = item.external
-        if external:
-            files = ", ".join(sorted({str(entry[0]) for entry in external}))
+    datasets: list[bytes] = []
+
+    def collect_dataset(name: bytes, item: Any) -> None:
+        if item.type == h5py.h5o.TYPE_DATASET:
+            datasets.append(name)
+
+    h5py.h5o.visit(handle.id, collect_dataset, info=True)  # hard links only
+    for name in datasets:
+        properties = h5py.h5d.open(handle.id, name).get_create_plist()
+        if properties.get_external_count():
+            files = sorted(
+                {
+                    _decoded(properties.get_external(i)[0])
+                    for i in range(properties.get_external_count())
+                }
+            )
             raise InputError(
-                f"a dataset whose bytes are stored in {files}" + refusal,
+                f"a dataset whose bytes are stored in {', '.join(files)}" + refusal,
                 source=source,
-                field=name,
+                field=_decoded(name),
             )
-        if item.is_virtual:
-            origins = ", ".join(
-                sorted({f"{v.file_name}:{v.dset_name}" for v in item.virtual_sources()})
+        if properties.get_layout() == h5py.h5d.VIRTUAL:
+            origins = sorted(
+                {
+                    f"{properties.get_virtual_filename(i)}:{properties.get_virtual_dsetname(i)}"
+                    for i in range(properties.get_virtual_count())
+                }
             )
             raise InputError(
-                f"a virtual dataset made of {origins}" + refusal, source=source, field=name
+                f"a virtual dataset made of {', '.join(origins)}" + refusal,
+                source=source,
+                field=_decoded(name),
             )
+    if identity is not None:
+        if len(_CHECKED) > 64:
+            _CHECKED.clear()
+        _CHECKED[identity] = None
+
+
+def _decoded(name: bytes | str) -> str:
+    """An HDF5 name or file name as text (bytes that are not UTF-8 escaped)."""
+    return name if isinstance(name, str) else name.decode("utf-8", "backslashreplace")
 
 
 def read_float_table(
