@@ -695,18 +695,23 @@ def safe_file_name(name: str, tag: str = "") -> str:
 
 def file_inside(folder: Path, name: str, suffix: str, taken: Sequence[Path] = ()) -> Path:
     """``folder / (safe_file_name(name) + suffix)`` — with ``-2``, ``-3``, …
-    after the name when that file is ``taken`` already — checked to name an
-    entry of ``folder`` itself, never a path elsewhere."""
+    after the name when that file is ``taken`` already — checked to stay in
+    ``folder`` once resolved: a link planted there under that name, leading
+    elsewhere, is refused (it would be written through)."""
     target = folder / (safe_file_name(name) + suffix)
     repeat = 1
     while target in taken:
         repeat += 1
         target = folder / (safe_file_name(name, f"-{repeat}") + suffix)
     inside = folder.resolve(strict=False)
-    if (inside / target.name).parent != inside or target.name in {".", ".."}:
+    try:
+        resolved = target.resolve(strict=False)
+    except (OSError, RuntimeError):  # a loop of links
+        resolved = Path("/")
+    if resolved.parent != inside or target.name in {".", ".."}:
         raise InputError(
-            f"the output {display_path(target)} would be written outside the folder "
-            f"{display_path(folder)}; a file inside it expected",
+            f"is a link leading outside the folder {display_path(folder)} (to "
+            f"{display_path(resolved)}); a file inside the folder expected",
             source=display_path(target),
         )
     return target

@@ -525,3 +525,22 @@ def test_a_warning_naming_an_object_is_one_escaped_line(tmp_path: Path) -> None:
     warnings = [line for line in answer.stderr.splitlines() if "WARNING" in line]
     assert warnings and all("cup\\x1b[2J\\x07\\u202efake" in line for line in warnings), answer
     assert not {c for c in answer.stderr + answer.stdout if not c.isprintable() and c != "\n"}
+
+
+@pytest.mark.parametrize("planted", ["../victim.txt", "/nonexistent-demoplan/x.json", "loop"])
+def test_a_link_planted_in_the_output_folder_is_not_written_through(
+    planted: str, tmp_path: Path
+) -> None:
+    """``out/toy-demo_1.json`` is a link leading out of ``out``: refused, the
+    file it names untouched (a link to nowhere or a loop of links alike)."""
+    recording = write_recording(tmp_path / "toy.hdf5", box_states())
+    victim = tmp_path / "victim.txt"
+    victim.write_text("victim")
+    (tmp_path / "out").mkdir()
+    link = tmp_path / "out" / "toy-demo_1.json"
+    link.symlink_to(link if planted == "loop" else Path(planted))
+    before = fingerprint(tmp_path)
+    answer = run(["import", recording, "-o", tmp_path / "out"], tmp_path)
+    check_refused(answer, [str(link)], codes={1})
+    assert "outside the folder" in answer.stderr, answer
+    assert fingerprint(tmp_path) == before and victim.read_text() == "victim"
