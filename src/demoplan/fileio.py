@@ -35,6 +35,7 @@ __all__ = [
     "describe_validation_error",
     "display_path",
     "dump_json",
+    "file_inside",
     "locked_for_update",
     "os_error",
     "os_reason",
@@ -43,6 +44,7 @@ __all__ = [
     "read_input_text",
     "refuse_overwriting_inputs",
     "require_regular_file",
+    "safe_file_name",
     "staged_folder",
     "write_atomic",
     "write_atomic_bytes",
@@ -668,3 +670,48 @@ def refuse_overwriting_inputs(target: Path, inputs: Sequence[Path]) -> None:
                 "demonstration next time; write the model elsewhere",
                 source=str(target),
             )
+
+
+MAX_FILE_NAME_BYTES = 120
+"""The longest file name (UTF-8 bytes, before its extension) made from a name
+read in an input (a recording's environment or keys): a file system takes 255."""
+_UNSAFE_IN_FILE_NAME = re.compile(r"[^\w.+-]")
+
+
+def safe_file_name(name: str, tag: str = "") -> str:
+    """``name`` (drawn from an input file) reduced to one safe file name
+    (docs/limits.md): every character but letters, digits and ``. _ + -`` —
+    separators, control characters, spaces — becomes ``_``, a run of dots one
+    dot, leading dots and dashes go (no ``..``, no hidden file, nothing a
+    command would read as an option), the length is bounded by
+    :data:`MAX_FILE_NAME_BYTES`; ``unnamed`` when nothing is left. ``tag``
+    (safe already: ``-2``) is kept whole at the end."""
+    reduced = re.sub(r"\.{2,}", ".", _UNSAFE_IN_FILE_NAME.sub("_", name)).lstrip(".-")
+    reduced = reduced or "unnamed"
+    while len((reduced + tag).encode("utf-8", "surrogatepass")) > MAX_FILE_NAME_BYTES:
+        reduced = reduced[:-1]
+    return reduced + tag
+
+
+def file_inside(folder: Path, name: str, suffix: str, taken: Sequence[Path] = ()) -> Path:
+    """``folder / (safe_file_name(name) + suffix)`` — with ``-2``, ``-3``, …
+    after the name when that file is ``taken`` already — checked to stay in
+    ``folder`` once resolved: a link planted there under that name, leading
+    elsewhere, is refused (it would be written through)."""
+    target = folder / (safe_file_name(name) + suffix)
+    repeat = 1
+    while target in taken:
+        repeat += 1
+        target = folder / (safe_file_name(name, f"-{repeat}") + suffix)
+    inside = folder.resolve(strict=False)
+    try:
+        resolved = target.resolve(strict=False)
+    except (OSError, RuntimeError):  # a loop of links
+        resolved = Path("/")
+    if resolved.parent != inside or target.name in {".", ".."}:
+        raise InputError(
+            f"is a link leading outside the folder {display_path(folder)} (to "
+            f"{display_path(resolved)}); a file inside the folder expected",
+            source=display_path(target),
+        )
+    return target

@@ -1,11 +1,20 @@
-"""Words in messages: counted nouns (``1 replan``, ``2 replans``) and "did you mean"."""
+"""Words in messages: counted nouns (``1 replan``, ``2 replans``), "did you mean",
+and names read from files made safe to show on a terminal."""
 
 from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
 
-__all__ = ["did_you_mean", "plural"]
+__all__ = ["did_you_mean", "plural", "printable"]
+
+
+def printable(text: str) -> str:
+    """``text`` with every character that is not printable — an escape
+    sequence, a newline, a bidirectional override in a name read from a file —
+    written as its escape (``\\x1b``, ``\\n``, ``\\u202e``), as the error line
+    does (:func:`~demoplan.errors.error_line`): a name never drives the terminal."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def plural(count: int, noun: str, many: str | None = None) -> str:

@@ -17,6 +17,16 @@ _GENERATED = {
     "test_show_and_plan_with_a_mutated_model": ("show/plan", 60),
     "test_solve_a_mutated_problem": ("solve", 60),
     "test_segment_a_mutated_stream": ("segment", 40),
+    # test_recordings (at most so many: hypothesis stops when a space is exhausted)
+    "test_a_recording_pointing_to_another_file_is_refused_and_that_file_never_opened": (
+        "import",
+        12,
+    ),
+    "test_names_in_a_recording_become_safe_file_names_inside_the_output_folder": ("import", 12),
+    "test_non_finite_huge_and_degenerate_model_numbers_are_refused": ("import", 12),
+    "test_deeply_nested_models_are_refused_without_recursion": ("import", 6),
+    "test_a_dataset_declaring_more_than_the_file_holds_is_refused_before_reading": ("import", 6),
+    "test_tf_frame_names_with_escapes_are_printed_as_text": ("segment", 6),
 }
 
 

@@ -118,6 +118,16 @@ class _HeldWarnings(logging.Handler):
         self.records.clear()
 
 
+class _PrintableFormatter(logging.Formatter):
+    """A log line with its control characters escaped (:func:`~demoplan.wording.printable`):
+    a warning naming an object read from a file never drives the terminal."""
+
+    def formatMessage(self, record: logging.LogRecord) -> str:  # noqa: N802 (logging's name)
+        from demoplan.wording import printable
+
+        return printable(super().formatMessage(record))
+
+
 _HELD = _HeldWarnings()
 _LOG_FORMAT = "demoplan: %(levelname)s: %(message)s"
 
@@ -170,9 +180,11 @@ def _main(
     mark_command_start()
     _HELD.discard()
     if verbose:
-        logging.basicConfig(level=logging.INFO, format=_LOG_FORMAT, stream=sys.stderr, force=True)
+        shown = logging.StreamHandler(sys.stderr)
+        shown.setFormatter(_PrintableFormatter(_LOG_FORMAT))
+        logging.basicConfig(level=logging.INFO, handlers=[shown], force=True)
     else:  # warnings are printed when the command ends (reported_errors)
-        _HELD.setFormatter(logging.Formatter(_LOG_FORMAT))
+        _HELD.setFormatter(_PrintableFormatter(_LOG_FORMAT))
         logging.basicConfig(level=logging.WARNING, handlers=[_HELD], force=True)
     # Warnings of the libraries (NumPy overflow, shapely, MuJoCo) never reach the
     # terminal as raw text: bad numbers are refused with our one-line errors

@@ -21,7 +21,8 @@ from demoplan.cli.common import (
     stderr,
 )
 from demoplan.cli.render import print_steps
-from demoplan.wording import plural
+from demoplan.fileio import display_path
+from demoplan.wording import plural, printable
 
 
 @app.command()
@@ -94,7 +95,7 @@ def segment(
         print_steps(f"Steps found in {stream_path.name}", found)
         stderr.print(
             f"{count_of(len(found.moves), 'step')} ({count_of(len(found.pushes), 'push')} and "
-            f"{count_of(len(found.nudges), 'nudge')} left out); wrote {output}",
+            f"{count_of(len(found.nudges), 'nudge')} left out); wrote {display_path(output)}",
             markup=False,
             highlight=False,
         )
@@ -165,10 +166,11 @@ def import_(
             transient=True,
             disable=not stderr.is_terminal,
         ) as bar:
-            task = bar.add_task(recording.name, total=None)
+            task = bar.add_task(printable(recording.name), total=None)
 
             def advance(done: int, total: int, key: str) -> None:
-                bar.update(task, completed=done, total=total, description=f"{recording.name} {key}")
+                description = printable(f"{recording.name} {key}")
+                bar.update(task, completed=done, total=total, description=description)
 
             imported = import_recording(
                 recording,
@@ -181,7 +183,9 @@ def import_(
         for item in items:
             if item.demonstration is None:
                 stderr.print(
-                    f"demoplan: warning: {item.problem}; not written", markup=False, highlight=False
+                    f"demoplan: WARNING: {printable(item.problem or '')}; not written",
+                    markup=False,
+                    highlight=False,
                 )
         if json_output:
             print_json(
@@ -208,11 +212,12 @@ def import_(
         for item in items:
             title = f"{item.key}: {item.recorded.samples} samples"
             if item.key in targets:
-                title += f" → {targets[item.key]}"
+                title += f" → {display_path(targets[item.key])}"
             print_steps(title, item.segmentation)
         stderr.print(
             f"{len(targets)} of {plural(len(items), 'demonstration')} imported, "
-            f"{plural(sum(len(i.segmentation.moves) for i in items), 'step')}; wrote {output}",
+            f"{plural(sum(len(i.segmentation.moves) for i in items), 'step')}; wrote "
+            f"{display_path(output)}",
             markup=False,
             highlight=False,
         )

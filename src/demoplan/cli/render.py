@@ -18,7 +18,7 @@ from demoplan.cli.common import (
     stdout,
     xyz_text,
 )
-from demoplan.wording import plural
+from demoplan.wording import plural, printable
 
 if TYPE_CHECKING:
     from demoplan.model import TaskModel
@@ -259,18 +259,18 @@ def print_run_report(report: Any) -> None:
 
 def print_steps(title: str, found: Any) -> None:
     """A segmentation's steps as a table on stdout, each push it left out on stderr."""
-    table = Table(title=Text(title), title_justify="left")
+    table = Table(title=Text(printable(title)), title_justify="left")
     for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
         table.add_column(Text(column), justify="left" if column == "object" else "right")
     for index, move in enumerate(found.moves, 1):
         x, y, z = move.pose.position
         cells = (f"{move.start:.2f}", f"{move.end:.2f}", f"{x:.4f}", f"{y:.4f}", f"{z:.4f}")
-        table.add_row(str(index), Text(move.object), *cells)
+        table.add_row(str(index), Text(printable(move.object)), *cells)
     stdout.print(table)
     for push in found.pushes:
         stderr.print(
-            f"push (not a step): {push.object} slid {push.distance * 100:.1f} cm along its "
-            f"support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
+            f"push (not a step): {printable(push.object)} slid {push.distance * 100:.1f} cm "
+            f"along its support at t = {push.start:.2f}–{push.end:.2f} s without being lifted",
             markup=False,
             highlight=False,
         )

@@ -12,7 +12,13 @@ from pathlib import Path
 from typing import Any
 
 from demoplan.errors import InputError, UsageError
-from demoplan.fileio import StagedOutputs, check_output_folder, dump_json, refuse_overwriting_inputs
+from demoplan.fileio import (
+    StagedOutputs,
+    check_output_folder,
+    dump_json,
+    file_inside,
+    refuse_overwriting_inputs,
+)
 from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
 from demoplan.model import Demonstration
 from demoplan.segmentation.detect import Segmentation
@@ -121,7 +127,10 @@ def import_recording(
 ) -> Imported:
     """One demonstration file in folder ``output`` per demonstration of a
     robosuite or robomimic HDF5 ``recording`` that has a step — every file or
-    none; ``progress(done, total, key)`` hears each one read."""
+    none; ``progress(done, total, key)`` hears each one read. A file is named
+    after its demonstration, reduced to a safe file name
+    (:func:`~demoplan.fileio.safe_file_name`: no separator, ``..`` or control
+    character) and kept inside ``output``."""
     geometry = None if objects_file is None else load_object_geometry(objects_file)
     if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
         raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
@@ -138,7 +147,9 @@ def import_recording(
     for item in items:
         if item.demonstration is None:
             continue
-        target = output / f"{item.demonstration.name}.json"
+        # The name comes from the recording (its environment, its keys): a file
+        # name made safe, inside the folder named, one per demonstration.
+        target = file_inside(output, item.demonstration.name, ".json", list(targets.values()))
         refuse_overwriting_inputs(
             target, [recording, *([objects_file] if objects_file is not None else [])]
         )

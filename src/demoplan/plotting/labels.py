@@ -29,6 +29,7 @@ __all__ = [
     "Leader",
     "add_label",
     "figure_renderer",
+    "literal_texts",
     "place_boxes",
     "place_labels",
 ]
@@ -337,6 +338,26 @@ def figure_renderer(figure: Figure) -> RendererBase:
     return renderer
 
 
+def literal_texts(figure: Figure) -> None:
+    """Every text of ``figure`` but its tick labels — titles, axis labels,
+    annotations, legends — drawn as written, never as TeX: an object's name
+    read from a file may hold ``$`` (``$\\sqrt{$`` would fail to parse,
+    ``$x$`` would show an italic x). Tick labels keep matplotlib's own
+    notation (a log axis writes ``$10^{2}$``)."""
+    from matplotlib.text import Text
+
+    ticks = set()
+    for ax in figure.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            ticks.add(id(axis.offsetText))
+            for tick in [*axis.get_major_ticks(), *axis.get_minor_ticks()]:
+                ticks.update((id(tick.label1), id(tick.label2)))
+    for text in figure.findobj(Text):
+        if id(text) not in ticks:
+            text.set_usetex(False)
+            text.set_parse_math(False)
+
+
 def place_labels(figure: Figure) -> list[Annotation]:
     """Move the figure's labels (:func:`add_label`) so that no two texts of an
     axes overlap and every label lies inside its axes, at the figure's current
@@ -347,10 +368,12 @@ def place_labels(figure: Figure) -> list[Annotation]:
     each at the free spot nearest to where it was asked to be, clear of the
     axes' other texts and of its legend (whose position is fixed first). A
     label moved away from the point it names gets a thin line to it. Calling
-    this again starts from the asked-for positions.
+    this again starts from the asked-for positions. Every text but the tick
+    labels is made literal first (:func:`literal_texts`).
     """
     from matplotlib.text import Annotation
 
+    literal_texts(figure)
     axes_labels = [
         (ax, [t for t in ax.texts if isinstance(t, Annotation) and t in _LABELS])
         for ax in figure.axes

@@ -28,6 +28,7 @@ __all__ = [
     "FloatArray",
     "ObjectTrack",
     "PoseStream",
+    "check_stream_limits",
     "normalise_quats",
     "parse_object_patterns",
     "select_objects",
@@ -183,6 +184,30 @@ def _codes(names: Sequence[str]) -> tuple[NDArray[np.intp], list[str]]:
     return codes, list(table)
 
 
+MAX_QUATERNION_NORM = 1e6
+"""The longest quaternion a stream may give (it is scaled to unit length):
+components of 1e200 overflow on the way."""
+
+
+def check_stream_limits(stream: PoseStream) -> None:
+    """Every position of ``stream`` finite and within 1 km of the origin on
+    each axis (docs/limits.md, as a demonstration file's); one InputError
+    naming the object and the time."""
+    from demoplan.documents.poses import MAX_DISTANCE_M
+
+    for track in stream:
+        far = np.flatnonzero(~(np.abs(track.positions) <= MAX_DISTANCE_M).all(axis=1))
+        if far.size:
+            x, y, z = (float(v) for v in track.positions[far[0]])
+            raise InputError(
+                f"{track.name!r} at t = {float(track.times[far[0]]):g} s is at ({x:g}, {y:g}, "
+                f"{z:g}) m, more than 1 km from the origin; a position on a table expected (a "
+                "documented limit: docs/limits.md)",
+                source=stream.source,
+                field=f"object {track.name!r}",
+            )
+
+
 def normalise_quats(
     quats: FloatArray, source: str | None, where: Sequence[str] | None
 ) -> FloatArray:
@@ -191,12 +216,14 @@ def normalise_quats(
     A zero quaternion is an :class:`~demoplan.errors.InputError` naming
     ``where[i]`` (or ``sample i``).
     """
-    norms = np.linalg.norm(quats, axis=1)
-    bad = np.flatnonzero(~(norms > 1e-9) & ~np.isnan(norms))
+    with np.errstate(over="ignore"):
+        norms = np.linalg.norm(quats, axis=1)
+    bad = np.flatnonzero(~((norms > 1e-9) & (norms <= MAX_QUATERNION_NORM)) & ~np.isnan(norms))
     if bad.size:
         i = int(bad[0])
         raise InputError(
-            "zero quaternion; a non-zero quaternion (qx, qy, qz, qw) expected",
+            f"quaternion of length {float(norms[i]):g}; a non-zero quaternion (qx, qy, qz, qw) "
+            f"of length at most {MAX_QUATERNION_NORM:g} expected",
             source=source,
             field=where[i] if where is not None else f"sample {i}",
         )

@@ -14,7 +14,7 @@ from demoplan.errors import InputError
 from demoplan.fileio import require_regular_file
 from demoplan.segmentation.readers.bag import load_bag
 from demoplan.segmentation.readers.csv import load_csv
-from demoplan.segmentation.types import PoseStream
+from demoplan.segmentation.types import PoseStream, check_stream_limits
 
 __all__ = ["load_bag", "load_csv", "load_stream"]
 
@@ -57,5 +57,8 @@ def load_stream(
                 source=str(path),
                 field="units",
             )
-        return load_bag(path, frame=frame, objects=objects)
-    return load_csv(path, objects=objects, units=units)
+        stream = load_bag(path, frame=frame, objects=objects)
+    else:
+        stream = load_csv(path, objects=objects, units=units)
+    check_stream_limits(stream)
+    return stream

@@ -62,11 +62,17 @@ from xml.etree.ElementTree import Element
 import numpy as np
 from numpy.typing import NDArray
 
+from demoplan.documents.poses import MAX_COORDINATE, MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
 from demoplan.errors import InputError
-from demoplan.fileio import require_regular_file
+from demoplan.fileio import read_input_text
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.rotations import quat_from_yaw
-from demoplan.segmentation.types import ObjectTrack, PoseStream
+from demoplan.segmentation.readers.hdf5_container import (
+    attribute_text,
+    open_recording,
+    read_float_table,
+)
+from demoplan.segmentation.types import ObjectTrack, PoseStream, check_stream_limits
 
 if TYPE_CHECKING:
     import h5py
@@ -92,6 +98,11 @@ EXCLUDED_LANDMARKS = re.compile(r"^(table|floor|ground)$|mount|pedestal|^visual"
 SETTLE_WINDOW_S = 0.25  # s: an object has settled when it stays within SETTLE_TOLERANCE this long
 SETTLE_TOLERANCE = 0.001  # m
 SUPPORT_SLACK = 0.005  # m: a surface counts as "under" a point up to this far above it
+MAX_MODEL_DEPTH = 100
+"""The deepest nesting of elements in a model's XML (robosuite's go 12 deep)."""
+QUATERNION_TOLERANCE = 1e-3
+"""How far a free joint's quaternion in the states may be from unit length
+(MuJoCo normalises it at every step; robosuite's are within 1e-15)."""
 
 
 # --------------------------------------------------------------------------- values
@@ -301,6 +312,12 @@ class _ModelReader:
             raise InputError(
                 f"<{element.tag} {key}={text!r}>: {count} numbers expected", source=self.source
             )
+        if not all(abs(v) <= MAX_COORDINATE for v in values):  # NaN fails too
+            raise InputError(
+                f"<{element.tag} name={element.get('name')!r} {key}={text!r}>: finite numbers "
+                f"within ±{MAX_COORDINATE:g} expected (a documented limit: docs/limits.md)",
+                source=self.source,
+            )
         return values
 
     def frame(self, element: Element, cls: str) -> tuple[FloatArray, FloatArray]:
@@ -333,12 +350,18 @@ class _ModelReader:
             return rot
         if element.get("xyaxes") is not None:
             v = np.array(self.floats(element, "xyaxes", cls, 6)[:6])
+            if float(np.linalg.norm(v[:3])) < 1e-9:
+                raise ValueError("xyaxes: a zero x axis")
             x_axis = v[:3] / np.linalg.norm(v[:3])
             y_axis = v[3:] - x_axis * float(x_axis @ v[3:])
+            if float(np.linalg.norm(y_axis)) < 1e-9:
+                raise ValueError("xyaxes: a y axis zero or parallel to the x axis")
             y_axis /= np.linalg.norm(y_axis)
             return np.column_stack((x_axis, y_axis, np.cross(x_axis, y_axis)))
         if element.get("zaxis") is not None:
             z_axis = np.array(self.floats(element, "zaxis", cls, 3)[:3])
+            if float(np.linalg.norm(z_axis)) < 1e-9:
+                raise ValueError("zaxis: a zero axis")
             z_axis /= np.linalg.norm(z_axis)
             axis = np.cross([0.0, 0.0, 1.0], z_axis)
             if float(np.linalg.norm(axis)) < 1e-12:
@@ -349,6 +372,12 @@ class _ModelReader:
     def geom(self, element: Element, cls: str) -> _Geom:
         kind = self.defaults.get(element, "type", cls, "sphere") or "sphere"
         size = tuple(self.floats(element, "size", cls))
+        if any(v < 0 for v in size):
+            raise InputError(
+                f"<geom name={element.get('name')!r} size={' '.join(map(str, size))!r}>: "
+                "sizes of at least 0 expected",
+                source=self.source,
+            )
         fromto = self.floats(element, "fromto", cls)
         if len(fromto) == 6 and kind in {"capsule", "cylinder", "box", "ellipsoid"}:
             start, end = np.array(fromto[:3]), np.array(fromto[3:])
@@ -428,16 +457,31 @@ def _activations(root: Element, defaults: _Defaults) -> int:
         if element.tag == "general":
             dyntype = defaults.get(element, "dyntype", cls, "none")
             if dyntype and dyntype != "none":
-                actdim = defaults.get(element, "actdim", cls, "-1") or "-1"
-                na += int(float(actdim)) if float(actdim) > 0 else 1
+                actdim = int(defaults.get(element, "actdim", cls, "-1") or "-1")
+                na += actdim if actdim > 0 else 1
         elif element.tag in {"muscle", "intvelocity"}:
             na += 1
         elif element.tag in {"cylinder", "position"}:
             default = "1" if element.tag == "cylinder" else "0"
             timeconst = defaults.get(element, "timeconst", cls, default) or default
-            if float(timeconst) > 0:
+            if float(timeconst) > 0:  # NaN: none
                 na += 1
     return na
+
+
+def _check_depth(root: Element, source: str) -> None:
+    """Refuse elements nested deeper than :data:`MAX_MODEL_DEPTH` (the reader
+    recurses through bodies and default classes), walking without recursion."""
+    stack = [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        if depth > MAX_MODEL_DEPTH:
+            raise InputError(
+                f"<{element.tag}> nested {depth} elements deep; a MuJoCo model nesting at most "
+                f"{MAX_MODEL_DEPTH} expected (a documented limit: docs/limits.md)",
+                source=source,
+            )
+        stack.extend((child, depth + 1) for child in element)
 
 
 def model_layout(xml: str, source: str) -> ModelLayout:
@@ -454,6 +498,7 @@ def model_layout(xml: str, source: str) -> ModelLayout:
         raise InputError(f"malformed model XML ({exc})", source=source) from None
     except DefusedXmlException as exc:
         raise InputError(f"model XML refused ({exc})", source=source) from None
+    _check_depth(root, source)
     if root.tag != "mujoco":
         raise InputError(
             f"root element <{root.tag}>; a MuJoCo model (<mujoco>) expected", source=source
@@ -482,7 +527,9 @@ def model_layout(xml: str, source: str) -> ModelLayout:
     try:
         na = _activations(root, reader.defaults)
     except ValueError:
-        raise InputError("actuator with a non-numeric actdim / timeconst", source=source) from None
+        raise InputError(
+            "an actuator's actdim is not an integer or its timeconst not a number", source=source
+        ) from None
     return ModelLayout(
         bodies=tuple(reader.bodies),
         free_bodies=tuple(free),
@@ -655,21 +702,6 @@ def _natural_key(key: str) -> tuple[str, int, str]:
     return (match.group(1), int(match.group(2)), key) if match else (key, -1, key)
 
 
-def _open(path: Path) -> h5py.File:
-    import h5py
-
-    source = str(path)
-    require_regular_file(path, "a robosuite / robomimic HDF5 recording")
-    try:
-        return h5py.File(path, "r")
-    except OSError as exc:
-        detail = " ".join(str(exc).split())
-        raise InputError(
-            f"not a readable HDF5 file ({detail}); a robosuite / robomimic recording expected",
-            source=source,
-        ) from None
-
-
 @contextmanager
 def _h5_errors(source: str) -> Iterator[None]:
     """A damaged file can fail at any read: one InputError naming it."""
@@ -699,7 +731,7 @@ def demonstration_keys(path: str | Path) -> tuple[str, ...]:
     """The demonstrations' keys in a recording (``demo_1``, ``demo_2``, … in number order)."""
     path = Path(path)
     source = str(path)
-    with _open(path) as handle, _h5_errors(source):
+    with open_recording(path) as handle, _h5_errors(source):
         data = _data_group(handle, source)
         keys = sorted((str(k) for k in data), key=_natural_key)
     if not keys:
@@ -707,18 +739,10 @@ def demonstration_keys(path: str | Path) -> tuple[str, ...]:
     return tuple(keys)
 
 
-def _text(value: Any) -> str | None:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", errors="replace")
-    if (isinstance(value, np.ndarray) and value.shape == ()) or isinstance(value, np.generic):
-        return _text(value.item())
-    return value if isinstance(value, str) else None
-
-
 def _model_xml(group: Any, path: Path, key: str) -> tuple[str, str]:
     """The demonstration's model XML and a name for it (the file, or "model_file attribute")."""
     source = f"{path}: {key}"
-    value = _text(group.attrs.get("model_file"))
+    value = attribute_text(group.attrs, "model_file", source)
     if value is None:
         raise InputError(
             "no 'model_file' attribute; the MuJoCo model (XML text or a file name) expected",
@@ -728,12 +752,17 @@ def _model_xml(group: Any, path: Path, key: str) -> tuple[str, str]:
     if value.lstrip().startswith("<"):
         return value, f"{source}: model_file"
     name = Path(value).name
+    folder = path.parent.resolve()
     for candidate in (path.parent / "models" / name, path.parent / name):
         if candidate.is_file():
-            try:
-                return candidate.read_text(encoding="utf-8"), str(candidate)
-            except (OSError, UnicodeDecodeError) as exc:
-                raise InputError(f"cannot read model ({exc})", source=str(candidate)) from None
+            if not candidate.resolve().is_relative_to(folder):
+                raise InputError(
+                    f"model file {str(candidate)!r} leads outside the recording's folder (to "
+                    f"{str(candidate.resolve())!r}); the model beside the recording expected",
+                    source=source,
+                    field="model_file",
+                )
+            return read_input_text(candidate, "a MuJoCo model (XML)"), str(candidate)
     raise InputError(
         f"model file {value!r} not found in {path.parent / 'models'} or {path.parent}",
         source=source,
@@ -747,7 +776,7 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
 
     path = Path(path)
     source = f"{path}: {key}"
-    with _open(path) as handle, _h5_errors(source):
+    with open_recording(path) as handle, _h5_errors(source):
         data = _data_group(handle, str(path))
         group = data.get(key)
         if not isinstance(group, h5py.Group):
@@ -760,14 +789,16 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
                 field="states",
             )
         try:
-            states = np.asarray(dataset[()], dtype=float)
+            states = read_float_table(dataset, source, "states", int(handle.id.get_filesize()))
         except (OSError, ValueError, TypeError) as exc:
+            if isinstance(exc, InputError):
+                raise
             raise InputError(f"cannot read states ({exc})", source=source, field="states") from None
         xml, model_source = _model_xml(group, path, key)
-        env = _text(data.attrs.get("env"))
-        version = _text(data.attrs.get("repository_version"))
+        env = attribute_text(data.attrs, "env", str(path))
+        version = attribute_text(data.attrs, "repository_version", str(path))
         if env is None:
-            env = _env_from_robomimic(data.attrs.get("env_args"))
+            env = _env_from_robomimic(attribute_text(data.attrs, "env_args", str(path)))
     if states.ndim != 2 or states.shape[0] == 0:
         raise InputError(
             f"states of shape {states.shape}; a table (samples × (1 + nq + nv)) expected",
@@ -797,9 +828,8 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
     return _demonstration(path, key, states, times, layout, env, version, model_source)
 
 
-def _env_from_robomimic(value: Any) -> str | None:
+def _env_from_robomimic(text: str | None) -> str | None:
     """robomimic's ``data`` attribute ``env_args`` is JSON with ``env_name``."""
-    text = _text(value)
     if text is None:
         return None
     import json
@@ -825,13 +855,20 @@ def _demonstration(
     qpos = states[:, 1 : 1 + layout.nq]
     names = _object_names(layout)
     surfaces = _static_surfaces(layout)
-    body_pos, body_quat, rests = [], [], []
+    body_pos: list[FloatArray] = []
+    body_quat: list[FloatArray] = []
+    rests: list[int] = []
     for address in layout.qpos_address:
         p = qpos[:, address : address + 3]
         q = qpos[:, address + 3 : address + 7]
-        if not (np.linalg.norm(q, axis=1) > 1e-9).all():
+        off = np.flatnonzero(~(np.abs(np.linalg.norm(q, axis=1) - 1.0) <= QUATERNION_TOLERANCE))
+        if off.size:
             raise InputError(
-                "zero quaternion in a free joint's qpos", source=f"{path}: {key}", field="states"
+                f"the quaternion of {layout.bodies[layout.free_bodies[len(body_pos)]].name!r} at "
+                f"sample {int(off[0])} ({', '.join(f'{v:g}' for v in q[off[0]])}) is not of unit "
+                f"length; a unit quaternion (within {QUATERNION_TOLERANCE:g}) expected",
+                source=f"{path}: {key}",
+                field="states",
             )
         body_pos.append(p)
         body_quat.append(q)
@@ -865,6 +902,7 @@ def _demonstration(
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
         tracks.append(ObjectTrack(names[k], times.copy(), np.ascontiguousarray(positions), quats))
     landmarks, landmark_geometry = _landmarks(layout, table_z, set(names))
+    _check_limits(tracks, landmarks, geometry + landmark_geometry, f"{path}: {key}")
     provenance: list[tuple[str, ProvenanceValue]] = [
         ("source", str(path)),
         ("demonstration", key),
@@ -882,6 +920,35 @@ def _demonstration(
         geometry=tuple(geometry + landmark_geometry),
         provenance=tuple(provenance),
     )
+
+
+def _check_limits(
+    tracks: Sequence[ObjectTrack],
+    landmarks: Sequence[tuple[str, Pose]],
+    geometry: Sequence[tuple[str, ObjectGeometry]],
+    source: str,
+) -> None:
+    """The limits every demonstration file keeps (docs/limits.md, as
+    :func:`~demoplan.documents.poses.check_physical`): positions within 1 km of
+    the origin, extents within 0.1 mm – 10 m; one InputError naming the object."""
+    limit = "(a documented limit: docs/limits.md)"
+    check_stream_limits(PoseStream(tuple(tracks), source))
+    for name, pose in landmarks:
+        if not all(abs(v) <= MAX_DISTANCE_M for v in pose.position):
+            raise InputError(
+                f"landmark {name!r} is at ({', '.join(f'{v:g}' for v in pose.position)}) m, more "
+                f"than 1 km from the origin; a position on a table expected {limit}",
+                source=source,
+                field="model_file",
+            )
+    for name, shape in geometry:
+        if not all(MIN_SIZE_M <= v <= MAX_SIZE_M for v in shape.size):
+            raise InputError(
+                f"{name!r} is {' × '.join(f'{v:g}' for v in shape.size)} m; extents within "
+                f"0.1 mm – 10 m expected {limit}",
+                source=source,
+                field="model_file",
+            )
 
 
 def _landmarks(
