@@ -252,14 +252,63 @@ def test_an_import_that_fails_half_way_restores_the_earlier_import(
     first = run(["import", "first.hdf5", "-o", "out", "--name-prefix", "toy"], tmp_path)
     assert first.code == 0, first
     assert _names(tmp_path / "out") == ["toy-demo_1.json", "toy-demo_2.json"]
-    second = tmp_path / "out" / "toy-demo_2.json"
-    made = subprocess.run(["chattr", "+i", str(second)], check=False, capture_output=True)
-    if made.returncode:
-        pytest.skip(f"chattr +i is not supported here: {made.stderr.decode().strip()}")
-    immutable.append(second)
+    _make_immutable(tmp_path / "out" / "toy-demo_2.json", immutable)
     before = fingerprint(tmp_path)
     answer = run(["import", "toy.hdf5", "-o", "out", "--name-prefix", "toy"], tmp_path)
     _refused_and_unchanged(answer, ["out"], before, fingerprint(tmp_path))
+
+
+def _make_immutable(path: Path, immutable: list[Path]) -> None:
+    made = subprocess.run(["chattr", "+i", str(path)], check=False, capture_output=True)
+    if made.returncode:
+        pytest.skip(f"chattr +i is not supported here: {made.stderr.decode().strip()}")
+    immutable.append(path)
+
+
+@pytest.mark.parametrize(
+    ("args", "second"),
+    [
+        (["pddl", "problem.xml", "-o", "pd"], "pd/problem.pddl"),
+        (["problem", "model.json", "scene.json", "--pddl", "-o", "p.pddl"], "p.pddl"),
+    ],
+    ids=["pddl", "problem-pddl"],
+)
+def test_a_pddl_pair_that_fails_half_way_keeps_the_earlier_pair(
+    workspace: Path, tmp_path: Path, immutable: list[Path], args: list[str], second: str
+) -> None:
+    """The domain and the problem over an earlier pair whose second file (the
+    problem, renamed after the domain) cannot be replaced: the domain is put
+    back, never left new beside the old problem."""
+    folder = _case(workspace, tmp_path)
+    shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
+    earlier = run(args, folder)
+    assert earlier.code == 0, earlier
+    for path in (folder / second).parent.iterdir():
+        if path.suffix == ".pddl":
+            path.write_text(f"; an earlier {path.name}\n")  # so that the new one differs
+    _make_immutable(folder / second, immutable)
+    before = fingerprint(folder)
+    answer = run(args, folder)
+    _refused_and_unchanged(answer, [second], before, fingerprint(folder))
+
+
+@pytest.mark.parametrize("link", ["loop", "loop/s.json", "a"])
+def test_an_output_through_a_loop_of_links_is_refused(
+    workspace: Path, tmp_path: Path, link: str
+) -> None:
+    """``perceive -o`` (and any file output) through a link to itself or a
+    loop of two: one line, nothing written anywhere."""
+    folder = _case(workspace, tmp_path)
+    shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
+    (folder / "loop").symlink_to("loop")
+    (folder / "a").symlink_to("b")
+    (folder / "b").symlink_to("a")
+    before = fingerprint(folder)
+    answer = run(
+        ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21", "-o", link],
+        folder,
+    )
+    _refused_and_unchanged(answer, [link], before, fingerprint(folder))
 
 
 # ---------------------------------------------------------------------------------------
