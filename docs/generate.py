@@ -1466,15 +1466,21 @@ def other_section() -> str:
             "the extension chooses the "
             f"format: {figures}.\n"
             "- **Frames** (`run --frames DIR`): `frame-0000.png`, `frame-0001.png`, … (the "
-            "world from above after each action) and `storyboard.png`; the folder is "
-            "replaced whole.\n"
+            "world from above after each action), `storyboard.png` and the manifest; an "
+            "earlier run's folder is replaced whole.\n"
+            "- **Manifest** (`.demoplan-manifest.json` in a `run --frames` or "
+            "`experiments --out` folder): `format` `demoplan/manifest-1`, `written_by` "
+            "(the command), `files` (each file's path in the folder: its SHA-256) and "
+            "`folders`. It is what lets a later run replace the folder: a folder holding "
+            "anything it does not list, or a listed file changed, is refused, never "
+            "removed (docs/limits.md, \"Outputs\").\n"
             "- **PDDL** (`pddl PROBLEM.xml -o DIR`: `DIR/domain.pddl` and "
             "`DIR/problem.pddl`; `problem --pddl -o FILE`: `FILE` and "
             "`FILE-domain.pddl`, the extension of FILE replaced): the problem for any "
             "PDDL planner, lifted, or grounded STRIPS with `--grounded`. docs/planning.md.\n"
             "- **Report** (`experiments --out DIR`): `report.md`, `report.html` (one "
             "self-contained page) and `summary.json`, with the figures and models the "
-            "report shows; the folder is replaced whole.",
+            "report shows, and the manifest; an earlier report's folder is replaced whole.",
         ]
     )
 

@@ -16,6 +16,7 @@ from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
@@ -180,8 +181,9 @@ def test_run_json_report(blocks_model_file: Path, tmp_path: Path) -> None:
     assert all(len(a) == 4 for a in data["actions"])
     assert all({"step", "kind", "detail"} <= set(f) for f in data["failures"])
     assert data["final_scene"]["format"] == "demoplan/scene-1"
-    frames = sorted((tmp_path / "frames").iterdir())
-    assert (tmp_path / "frames" / "storyboard.png") in frames
+    written = sorted(p.name for p in (tmp_path / "frames").iterdir())
+    frames = [name for name in written if name != MANIFEST]  # and the list of what was written
+    assert "storyboard.png" in frames and MANIFEST in written
     assert len(frames) == len(data["actions"]) + 3  # start, one per action, end, storyboard
     assert data["frames"]
 

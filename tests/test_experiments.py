@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.experiments import run_experiments
+from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import load_model
 from tests.shared_experiments import ExperimentsRun
 
@@ -63,7 +64,13 @@ def test_experiments_command_reproduces_the_papers_tables(report: Path) -> None:
         assert (out / f"{stem}-demonstrations.png").read_bytes().startswith(b"\x89PNG")
         assert (out / f"{stem}-plan.png").read_bytes().startswith(b"\x89PNG")
         assert load_model(out / f"{stem}.model.json").states
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temp files left
+    # No temporary file left; the one dotfile is the manifest of what was written.
+    hidden = sorted(p.name for p in out.iterdir() if p.name.startswith("."))
+    assert hidden == [MANIFEST]
+    listed = json.loads((out / MANIFEST).read_text())["files"]
+    assert set(listed) == {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()} - {
+        MANIFEST
+    }
 
 
 def test_the_report_measures_table_ii_on_fresh_draws(report: Path) -> None:

@@ -17,8 +17,8 @@ import re
 import stat
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FORMAT_VERSION",
+    "MANIFEST",
     "StagedOutputs",
     "check_format",
     "check_output_folder",
@@ -37,12 +38,14 @@ __all__ = [
     "dump_json",
     "file_inside",
     "locked_for_update",
+    "make_folders",
     "os_error",
     "os_reason",
     "output_target",
     "read_document",
     "read_input_text",
     "refuse_overwriting_inputs",
+    "remove_made_folders",
     "require_regular_file",
     "safe_file_name",
     "staged_folder",
@@ -429,18 +432,22 @@ class StagedOutputs:
     """The output files of one command, written all or none.
 
     Each target follows :func:`output_target`. :meth:`add` stages a file in
-    a temporary file beside its target; leaving the ``with`` block normally
+    a temporary file beside its target (created exclusively, never through a
+    link), making the folders it needs; leaving the ``with`` block normally
     first writes the character devices and pipes among the targets (which
     cannot be staged), then renames the staged files into place with SIGINT
     and SIGTERM held back, so that Ctrl-C cannot split the renames. Leaving it
     by an exception — a failed plot, a full disk, Ctrl-C — or a failed write
-    into a device removes the temporary files and leaves every regular target
-    as it was. A special file is never renamed over, removed or truncated.
+    into a device or a failed rename removes the temporary files and the
+    folders it made, and puts back every file it had already replaced: every
+    regular target is as it was. A special file is never renamed over,
+    removed or truncated.
     """
 
     def __init__(self) -> None:
         self._staged: list[tuple[Path, Path]] = []
         self._streams: list[tuple[Path, bytes]] = []
+        self._made: list[Path] = []
 
     def __enter__(self) -> StagedOutputs:
         return self
@@ -450,7 +457,9 @@ class StagedOutputs:
         if stream:
             self._streams.append((target, data))
         else:
-            self._staged.append((_write_temporary(target, data), target))
+            temporary, made = _write_temporary(target, data)
+            self._made.extend(made)
+            self._staged.append((temporary, target))
 
     def __exit__(self, kind: object, error: object, trace: object) -> None:
         if kind is not None:
@@ -467,24 +476,121 @@ class StagedOutputs:
         held = {signal.SIGINT, signal.SIGTERM}
         previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
         try:
-            for temporary, path in self._staged:
-                try:
-                    temporary.replace(path)
-                except OSError as exc:
-                    self._discard()
-                    raise InputError(
-                        f"cannot write ({os_reason(exc)})", source=display_path(path)
-                    ) from None
-            for folder in {path.parent for _, path in self._staged}:
-                _sync_folder(folder if str(folder) else Path())
+            self._rename_all()
         finally:
             signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+    def _rename_all(self) -> None:
+        """Every staged file renamed over its target, the old files kept aside
+        (hard links) until all are in place; on a failure the replaced files
+        are put back and the new ones removed."""
+        done: list[tuple[Path, Path | None]] = []  # (target, the old file kept aside)
+        try:
+            for temporary, path in self._staged:
+                kept = _keep_aside(path)
+                try:
+                    temporary.replace(path)
+                except OSError:
+                    if kept is not None:
+                        kept.unlink(missing_ok=True)
+                    raise
+                done.append((path, kept))
+        except (OSError, InputError) as exc:
+            for replaced, kept in reversed(done):
+                with suppress(OSError):
+                    if kept is None:
+                        replaced.unlink()
+                    else:
+                        kept.replace(replaced)
+            self._discard()
+            if isinstance(exc, InputError):
+                raise
+            raise InputError(
+                f"cannot write ({os_reason(exc)})", source=display_path(path)
+            ) from None
+        for _, kept in done:
+            if kept is not None:
+                kept.unlink(missing_ok=True)
+        for folder in {path.parent for _, path in self._staged}:
+            _sync_folder(folder if str(folder) else Path())
 
     def _discard(self) -> None:
         for temporary, _ in self._staged:
             temporary.unlink(missing_ok=True)
+        remove_made_folders(self._made)
         self._staged.clear()
         self._streams.clear()
+        self._made.clear()
+
+
+def _keep_aside(path: Path) -> Path | None:
+    """The file at ``path`` kept under a new name beside it — a hard link,
+    made exclusively (or a copy where the file system has no hard links) —
+    to put back if a later rename of the same command fails; None where
+    there is no file yet."""
+    import secrets
+    import shutil
+
+    folder = path.parent if str(path.parent) else Path()
+    for _ in range(100):
+        aside = folder / f".{_short(path.name)}.{secrets.token_hex(4)}.old"
+        try:
+            os.link(path, aside, follow_symlinks=False)
+        except FileNotFoundError:
+            return None
+        except FileExistsError:
+            continue
+        except OSError:  # no hard links here (EPERM, ENOTSUP): an exclusive copy
+            break
+        return aside
+    try:
+        fd, name = tempfile.mkstemp(prefix=f".{_short(path.name)}.", suffix=".old", dir=folder)
+        with os.fdopen(fd, "wb") as copy, path.open("rb") as original:
+            shutil.copyfileobj(original, copy)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise InputError(f"cannot write ({os_reason(exc)})", source=display_path(path)) from None
+    return Path(name)
+
+
+def _short(name: str) -> str:
+    """A file name cut to leave room for a temporary name's additions (a name
+    is at most 255 bytes)."""
+    return name if len(os.fsencode(name)) <= 200 else name[:50]
+
+
+def make_folders(folder: Path) -> list[Path]:
+    """Make ``folder`` and the folders above it that are missing; the ones
+    this call made, outermost first (for :func:`remove_made_folders` if the
+    command fails). On an error, nothing is left made and OSError is raised."""
+    missing: list[Path] = []
+    current = Path(folder)
+    while str(current) not in {"", "."} and not os.path.lexists(current):
+        missing.append(current)
+        if current.parent == current:
+            break
+        current = current.parent
+    made: list[Path] = []
+    try:
+        for path in reversed(missing):
+            try:
+                path.mkdir()
+            except FileExistsError:  # made meanwhile by someone else: not ours to remove
+                continue
+            made.append(path)
+    except BaseException:
+        remove_made_folders(made)
+        raise
+    return made
+
+
+def remove_made_folders(made: Sequence[Path]) -> None:
+    """Remove the folders :func:`make_folders` made, innermost first, each
+    only if it is empty (someone else may have written there meanwhile)."""
+    for path in reversed(made):
+        with suppress(OSError):
+            path.rmdir()
 
 
 def check_output_folder(path: Path) -> None:
@@ -505,62 +611,246 @@ def check_output_folder(path: Path) -> None:
         )
 
 
+MANIFEST = ".demoplan-manifest.json"
+"""The file in each output folder (``run --frames``, ``experiments --out``)
+that lists what demoplan wrote there: the files it may later replace."""
+
+
 @contextmanager
-def staged_folder(target: Path, ours: Callable[[str], bool]) -> Iterator[Path]:
-    """A folder of outputs written all or none: the block fills a temporary
-    folder beside ``target``; leaving it normally puts that folder in
-    ``target``'s place (an old ``target`` is moved aside first and removed
-    after, with SIGINT and SIGTERM held back over the two renames); leaving
-    it by an exception removes the temporary folder and leaves ``target`` as
-    it was. An existing ``target`` is replaced only if it is empty or every
-    name in it is ``ours`` (an earlier run's output): a folder of other files
-    is refused, never removed."""
+def staged_folder(target: Path, writer: str) -> Iterator[Path]:
+    """A folder of outputs written all or none, that replaces an earlier one
+    only where demoplan can prove it wrote every file in it (docs/limits.md,
+    "Outputs").
+
+    The block fills a new private folder beside ``target`` (``mkdtemp``:
+    exclusive, never through a link). Leaving it normally writes the
+    manifest :data:`MANIFEST` into it — every file and folder written, each
+    file with its SHA-256, and ``writer`` (the command) — and puts it in
+    ``target``'s place: an old ``target`` is moved aside, then only the files
+    its own manifest lists (unchanged) are removed, with SIGINT and SIGTERM
+    held back over the two renames. A link to a folder is followed: the link
+    stays, the folder it names is replaced.
+
+    An existing ``target`` is replaced only if it is empty or holds exactly
+    what its manifest lists, unchanged: a folder with other files, a changed
+    file or no manifest (an older demoplan's output) is refused in one line,
+    before the work and again before the swap, and never removed. Leaving
+    the block by an exception removes the private folder and the folders
+    made for it: ``target`` is as it was."""
     import shutil
-    import signal
 
     target = Path(target)
     check_output_folder(target)
+    if target.is_symlink() and target.is_dir():
+        target = Path(os.path.realpath(target))  # the link stays; its folder is replaced
     if target.is_dir():
-        others = sorted(entry.name for entry in target.iterdir() if not ours(entry.name))
-        if others:
-            raise InputError(
-                f"holds other files ({', '.join(others[:3])}{', …' if len(others) > 3 else ''}); "
-                "an empty folder, an earlier run's output or a new name expected",
-                source=str(target),
-            )
+        _proven_outputs(target)  # refused before any work
     parent = target.parent if str(target.parent) else Path()
+    made: list[Path] = []
     try:
-        parent.mkdir(parents=True, exist_ok=True)
-        building = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
+        made = make_folders(parent)
+        building = Path(
+            tempfile.mkdtemp(prefix=f".{_short(target.name)}.", suffix=".tmp", dir=parent)
+        )
     except OSError as exc:
+        remove_made_folders(made)
         raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     try:
         yield building
+        _write_manifest(building, writer)
+        building.chmod(0o777 & ~_umask())  # a folder as mkdir makes it, not mkdtemp's 0700
+        if target.is_dir():
+            _proven_outputs(target)  # again: the work took time, a file may have come
+        _swap_in(building, target)
     except InputError as exc:  # name the file as the user will know it, not the temporary one
         shutil.rmtree(building, ignore_errors=True)
+        remove_made_folders(made)
         inside = exc.source is not None and exc.source.startswith(str(building))
         if not inside:
             raise
         shown = str(target) + exc.source[len(str(building)) :]  # type: ignore[index]
         raise InputError(exc.message, source=shown, field=exc.field) from None
+    except OSError as exc:
+        shutil.rmtree(building, ignore_errors=True)
+        remove_made_folders(made)
+        raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     except BaseException:
         shutil.rmtree(building, ignore_errors=True)
+        remove_made_folders(made)
         raise
-    old = parent / f".{target.name}.old-{building.name}"
+
+
+def _swap_in(building: Path, target: Path) -> None:
+    """Put ``building`` in ``target``'s place, an old ``target`` moved into a
+    new private folder first (put back if the second rename fails); then
+    remove what the old folder's manifest proves demoplan wrote. SIGINT and
+    SIGTERM are held back throughout. OSError if a rename fails."""
+    import signal
+
+    parent = target.parent if str(target.parent) else Path()
+    aside: Path | None = None
     held = {signal.SIGINT, signal.SIGTERM}
     previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
     try:
-        if target.exists():
-            target.replace(old)
-        building.replace(target)
-    except OSError as exc:
-        if old.exists() and not target.exists():
-            old.replace(target)
-        shutil.rmtree(building, ignore_errors=True)
-        raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
+        if os.path.lexists(target):
+            aside = Path(
+                tempfile.mkdtemp(prefix=f".{_short(target.name)}.old-", suffix=".tmp", dir=parent)
+            )
+            try:
+                target.replace(aside / "old")
+            except OSError:
+                aside.rmdir()
+                raise
+        try:
+            building.replace(target)
+        except OSError:
+            if aside is not None:
+                (aside / "old").replace(target)
+                aside.rmdir()
+            raise
+        _sync_folder(parent)
+        if aside is not None:  # Ctrl-C waits for this too: no half-removed old folder
+            _remove_old_outputs(aside / "old", target)
+            with suppress(OSError):
+                aside.rmdir()
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-    shutil.rmtree(old, ignore_errors=True)
+
+
+def _sha256(path: Path) -> str:
+    import hashlib
+
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _folder_entries(folder: Path) -> tuple[dict[str, Path], list[str], list[str]]:
+    """Everything under ``folder`` (links not followed), by path relative to
+    it: the regular files, the folders, and anything else (links, devices)."""
+    files: dict[str, Path] = {}
+    folders: list[str] = []
+    others: list[str] = []
+    for root, dirs, names in os.walk(folder, followlinks=False):
+        for name in sorted(dirs + names):
+            path = Path(root) / name
+            relative = path.relative_to(folder).as_posix()
+            info = path.lstat()
+            if stat.S_ISDIR(info.st_mode):
+                folders.append(relative)
+            elif stat.S_ISREG(info.st_mode):
+                files[relative] = path
+            else:
+                others.append(relative)
+    return files, folders, others
+
+
+def _write_manifest(folder: Path, writer: str) -> None:
+    """The manifest of ``folder``: every file with its SHA-256, every folder."""
+    files, folders, _ = _folder_entries(folder)
+    document = {
+        "format": f"demoplan/manifest-{FORMAT_VERSION}",
+        "written_by": writer,
+        "files": {name: _sha256(path) for name, path in files.items()},
+        "folders": folders,
+    }
+    write_atomic(folder / MANIFEST, dump_json(document))
+
+
+def _proven_outputs(folder: Path) -> dict[str, str]:
+    """The files of ``folder`` (relative path: SHA-256) that its manifest
+    proves demoplan wrote, if that is everything in it; else one InputError
+    saying what is there and what to do. An empty folder proves nothing and
+    holds nothing: ``{}``."""
+    shown = display_path(folder)
+    files, folders, others = _folder_entries(folder)
+    if not files and not folders and not others:
+        return {}
+    if MANIFEST not in files:
+        listed = sorted([*files, *folders, *others])
+        raise InputError(
+            f"holds files ({_first_names(listed)}) and no {MANIFEST}, so demoplan did not "
+            "write them (or an older demoplan did); remove the folder yourself or choose "
+            "another name",
+            source=shown,
+        )
+    proven, proven_folders = _read_manifest(folder)
+    del files[MANIFEST]
+    foreign = sorted(
+        [n for n in files if n not in proven]
+        + [n for n in folders if n not in proven_folders]
+        + others
+    )
+    changed = sorted(n for n, p in files.items() if n in proven and _sha256(p) != proven[n])
+    if foreign or changed:
+        what = (
+            f"holds files demoplan did not write ({_first_names(foreign)})"
+            if foreign
+            else f"holds files changed since demoplan wrote them ({_first_names(changed)})"
+        )
+        raise InputError(
+            f"{what}; an empty folder, one demoplan wrote or a new name expected (demoplan "
+            "never removes a file it did not write)",
+            source=shown,
+        )
+    return {n: proven[n] for n in files}
+
+
+def _read_manifest(folder: Path) -> tuple[dict[str, str], set[str]]:
+    """The files (relative path: SHA-256) and folders that the manifest of
+    ``folder`` lists; one InputError if it is not a manifest demoplan wrote."""
+    manifest = folder / MANIFEST
+    try:
+        if not stat.S_ISREG(manifest.lstat().st_mode):
+            raise ValueError("not a regular file")
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+        check_format(data, {"manifest"}, str(manifest))
+        files = {str(k): str(v) for k, v in data["files"].items() if isinstance(v, str)}
+        folders = {str(f) for f in data["folders"]}
+    except (OSError, ValueError, TypeError, KeyError, AttributeError, InputError):
+        raise InputError(
+            f"its {MANIFEST} is not one demoplan wrote; remove the folder yourself or "
+            "choose another name",
+            source=display_path(folder),
+        ) from None
+    return files, folders
+
+
+def _first_names(names: Sequence[str]) -> str:
+    shown = ", ".join(display_path(n) for n in names[:3])
+    return shown + (", …" if len(names) > 3 else "")
+
+
+def _remove_old_outputs(old: Path, target: Path) -> None:
+    """Remove the files of a replaced output folder ``old`` that its manifest
+    proves demoplan wrote — checked again, file by file — then its folders
+    when empty; anything else stays, and a warning says where."""
+    import logging
+
+    try:
+        proven, _ = _read_manifest(old)
+    except InputError:  # an empty folder (or a manifest changed since the check): no proof
+        proven = None
+    files, folders, _ = _folder_entries(old)
+    for name, digest in (proven or {}).items():
+        path = files.get(name)
+        if name != MANIFEST and path is not None and _sha256(path) == digest:
+            path.unlink()
+    if proven is not None:
+        (old / MANIFEST).unlink()
+    for name in sorted(folders, key=lambda n: -n.count("/")):
+        with suppress(OSError):
+            (old / name).rmdir()
+    try:
+        old.rmdir()
+    except OSError:
+        logging.getLogger(__name__).warning(
+            "%s: files appeared in it while it was replaced; they are kept in %s",
+            display_path(target),
+            display_path(old),
+        )
 
 
 def write_atomic(path: Path, text: str) -> None:
@@ -585,18 +875,22 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
         outputs.add(path, data)
 
 
-def _write_temporary(path: Path, data: bytes) -> Path:
+def _write_temporary(path: Path, data: bytes) -> tuple[Path, list[Path]]:
     """``data`` in a new temporary file beside ``path`` with ``path``'s
     permissions, flushed to disk: the first half of an atomic write (the
-    caller renames it into place). On failure nothing is left and one
-    InputError names ``path``."""
+    caller renames it into place). The temporary file is created
+    exclusively (``mkstemp``: ``O_EXCL``, never through a link). Returns it
+    and the folders made for it. On failure nothing is left (the folders
+    made are removed) and one InputError names ``path``."""
     if path.is_dir():
         raise InputError("is a folder; a file name expected", source=display_path(path))
     folder = path.parent if str(path.parent) else Path()
+    made: list[Path] = []
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        made = make_folders(folder)
+        fd, name = tempfile.mkstemp(prefix=f".{_short(path.name)}.", suffix=".tmp", dir=folder)
     except OSError as exc:
+        remove_made_folders(made)
         raise InputError(f"cannot write ({os_reason(exc)})", source=display_path(path)) from None
     temporary = Path(name)
     try:
@@ -607,11 +901,12 @@ def _write_temporary(path: Path, data: bytes) -> Path:
             os.fsync(handle.fileno())
     except BaseException as exc:
         temporary.unlink(missing_ok=True)
+        remove_made_folders(made)
         if isinstance(exc, OSError):
             reason = os_reason(exc)
             raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
         raise
-    return temporary
+    return temporary, made
 
 
 def _set_mode(fd: int, path: Path) -> None:

@@ -13,17 +13,10 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__all__ = ["FRAME_FILES", "REPORT_FILES", "app", "fitted_table", "main", "states_table"]
-
-
-_WHERE = {
-    "FRAME_FILES": "demoplan.commands.execution",
-    "REPORT_FILES": "demoplan.commands.experiments",
-}
+__all__ = ["app", "fitted_table", "main", "states_table"]
 
 
 def __getattr__(name: str) -> Any:
     if name in __all__:
-        module = _WHERE.get(name, "demoplan.cli.application")
-        return getattr(importlib.import_module(module), name)
+        return getattr(importlib.import_module("demoplan.cli.application"), name)
     raise AttributeError(f"module 'demoplan.cli' has no attribute {name!r}")

@@ -61,10 +61,6 @@ app = typer.Typer(
 stdout = Console(soft_wrap=False, emoji=False, width=None if sys.stdout.isatty() else 140)
 stderr = Console(stderr=True, soft_wrap=True, emoji=False)
 
-"""Names ``experiments`` writes: a folder of only these is an earlier report."""
-
-"""Names ``run --frames`` writes: a folder of only these holds an earlier run's frames."""
-
 
 @contextmanager
 def reported_errors() -> Iterator[None]:

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -14,7 +13,8 @@ from demoplan.budget import PERCEPTION_TIMEOUT, PLANNING_SECONDS, Budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
-from demoplan.execution.runner import check_video_path, run_task
+from demoplan.execution.runner import run_task
+from demoplan.execution.video_output import check_video_path
 from demoplan.execution.world import World
 from demoplan.fileio import dump_json, refuse_overwriting_inputs, staged_folder, write_atomic
 from demoplan.model import TaskModel
@@ -24,10 +24,7 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
-__all__ = ["FRAME_FILES", "Perceived", "perceive", "run"]
-
-FRAME_FILES = re.compile(r"frame-\d+\.png$|storyboard\.png$")
-"""The files a ``--frames`` folder holds (an earlier run's are replaced)."""
+__all__ = ["Perceived", "perceive", "run"]
 
 
 def run(
@@ -87,7 +84,7 @@ def run(
         if frames is None:
             return run_task(task, prepared.scene, **options)
         # The frames folder whole or not at all: built beside it, swapped in at the end.
-        with staged_folder(frames, lambda name: bool(FRAME_FILES.match(name))) as building:
+        with staged_folder(frames, "demoplan run --frames") as building:
             report = run_task(task, prepared.scene, frames=building, **options)
         moved = tuple(str(frames / Path(f).name) for f in report.frames)  # where they now are
         return replace(report, frames=moved)

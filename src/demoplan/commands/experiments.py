@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -10,10 +9,7 @@ from pathlib import Path
 from demoplan.experiments import ExperimentsResult, run_experiments
 from demoplan.fileio import staged_folder
 
-__all__ = ["REPORT_FILES", "reproduce_experiments"]
-
-REPORT_FILES = re.compile(r"report\.(md|html)$|summary\.json$|experiment\d")
-"""The files a report folder holds (an earlier report's are replaced)."""
+__all__ = ["reproduce_experiments"]
 
 
 def reproduce_experiments(
@@ -21,9 +17,11 @@ def reproduce_experiments(
 ) -> ExperimentsResult:
     """Reproduce the paper's experiments (Tables II–V, §IV.C, §V) into the
     folder ``out``: the whole report or none of it — built beside ``out``,
-    then put in its place (an earlier report is replaced; a folder of
-    anything else is refused). ``progress(text)`` hears each stage."""
-    with staged_folder(out, lambda name: bool(REPORT_FILES.match(name))) as building:
+    then put in its place. An earlier report is replaced when its
+    manifest proves demoplan wrote every file in it; a folder holding
+    anything else is refused, never removed (:func:`~demoplan.fileio.staged_folder`).
+    ``progress(text)`` hears each stage."""
+    with staged_folder(out, "demoplan experiments") as building:
         result = run_experiments(building, progress=progress)
     return replace(
         result,

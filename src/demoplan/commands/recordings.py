@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
-from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -164,16 +163,10 @@ def import_recording(
 
 def _write_all(files: list[tuple[Path, str]], folder: Path) -> None:
     """Write every file or none (:class:`~demoplan.fileio.StagedOutputs`): on
-    any failure, or Ctrl-C, the files are as they were (and ``folder`` is
-    removed when this call created it)."""
+    any failure, or Ctrl-C, the files are as they were — an earlier import's
+    file replaced on the way is put back — and the folders made for them
+    are removed."""
     check_output_folder(folder)
-    created = not folder.exists()
-    try:
-        with StagedOutputs() as outputs:
-            for path, text in files:
-                outputs.add(path, text.encode("utf-8", "backslashreplace"))  # as write_atomic
-    except BaseException:
-        if created:
-            with suppress(OSError):  # not empty: someone else wrote there meanwhile
-                folder.rmdir()
-        raise
+    with StagedOutputs() as outputs:
+        for path, text in files:
+            outputs.add(path, text.encode("utf-8", "backslashreplace"))  # as write_atomic

@@ -272,6 +272,7 @@ class MujocoWorld:
         self.targets: dict[str, Pose] = {}  # drawn in renders (show_targets)
         self.hidden_from_top: tuple[int, ...] = ()  # geom groups the top camera masks out
         self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
+        self.video_failed: str | None = None  # why ffmpeg stopped taking frames
         self.video_every = 0.0  # simulated seconds between video frames
         self.video_due = 0.0
         self._open()
@@ -346,7 +347,11 @@ class MujocoWorld:
             self.video_due += self.video_every
             image = self.render(*VIDEO_SIZE)
             if image is not None:
-                self.video.send(np.ascontiguousarray(image))
+                try:
+                    self.video.send(np.ascontiguousarray(image))
+                except OSError as exc:  # ffmpeg is gone (a full disk): the run goes on
+                    self.video = None
+                    self.video_failed = _ffmpeg_problem(exc)
 
     def _settle(self, seconds: float = 0.3) -> None:
         self._step(seconds)
@@ -590,7 +595,8 @@ class MujocoWorld:
         self.video_due = self.simulated
 
     def close(self) -> None:
-        """Finish a video being recorded, and free the renderers' GL contexts."""
+        """Finish a video being recorded, and free the renderers' GL contexts;
+        OSError if ffmpeg stopped taking frames on the way."""
         if self.video is not None:
             video, self.video = self.video, None
             video.close()
@@ -598,6 +604,9 @@ class MujocoWorld:
             if renderer:
                 renderer.close()
         self.renderer = self.top_renderer = None
+        if self.video_failed is not None:
+            failed, self.video_failed = self.video_failed, None
+            raise OSError(failed)
 
     # -- helpers -------------------------------------------------------------------------
 
@@ -670,3 +679,12 @@ class MujocoWorld:
 
 def _xy(pose: Pose) -> str:
     return f"({pose.position[0]:.3f}, {pose.position[1]:.3f})"
+
+
+def _ffmpeg_problem(exc: OSError) -> str:
+    """Why ffmpeg took no more frames, in words: imageio-ffmpeg's message
+    starts with the pipe's error and goes on with ffmpeg's command line."""
+    first = (str(exc).strip().splitlines() or [""])[0]
+    if "Broken pipe" in first or isinstance(exc, BrokenPipeError):
+        return "ffmpeg stopped taking frames"
+    return first or "ffmpeg stopped taking frames"

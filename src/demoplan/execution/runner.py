@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import PLANNING_SECONDS, Budget
-from demoplan.errors import InputError, UsageError
+from demoplan.errors import UsageError
 from demoplan.execution.executor import (
     ExecutionSettings,
     RunEvent,
@@ -19,8 +19,9 @@ from demoplan.execution.executor import (
 )
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.video_output import VideoOutput
 from demoplan.execution.world import World
-from demoplan.fileio import os_reason, output_target
+from demoplan.fileio import output_target
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import CandidatePlan
@@ -124,17 +125,17 @@ def run_task(
         budget=Budget(timeout=planning_seconds),
     )
     world, first = start_world(model, prepared, sim, faults, seed, settings, perception)
-    recording = None
-    if video is not None:
-        video, recording = _start_video(world, video)
-    writer = None
-    if frames is not None:
-        from demoplan.execution.frames import FrameWriter
-
-        writer = FrameWriter(frames, scene=scene)
-    heard = _listener(world, writer, on_event)
+    recording: VideoOutput | None = None
     finished = False
-    try:
+    try:  # from here on the world is closed and the video finished or removed however it ends
+        if video is not None:
+            recording = _start_video(world, video)
+        writer = None
+        if frames is not None:
+            from demoplan.execution.frames import FrameWriter
+
+            writer = FrameWriter(frames, scene=scene)
+        heard = _listener(world, writer, on_event)
         report = execute(model, prepared, _FramedWorld(world, writer), settings, heard, first)
         written: tuple[str, ...] = ()
         if writer is not None:
@@ -143,7 +144,7 @@ def run_task(
             written = tuple(str(p) for p in writer.written)
         finished = True
     finally:
-        _close_world(world, video, recording, finished)
+        _close_world(world, recording, finished)
     simulated: Any = getattr(world, "world", world)
     return replace(
         report,
@@ -154,25 +155,24 @@ def run_task(
     )
 
 
-def _start_video(world: World, video: Path) -> tuple[Path, Path]:
-    """Start recording ``world`` into a partial file beside ``video`` (renamed
-    to it once the run is finished: :func:`_close_world`); returns the video's
-    path (a link's file, not the link) and the partial file's. A recording that
-    cannot start closes the world and is an input error."""
-    video = output_target(video, stream_ok=False)[0]  # a link's file, not the link
-    recording = video.with_name(f".{video.name}.part.mp4")
+def _start_video(world: World, video: Path) -> VideoOutput:
+    """Start recording ``world`` into a private folder beside ``video``
+    (:class:`~demoplan.execution.video_output.VideoOutput`; the file is put at
+    ``video``, or at the file a link there names, once the run is finished:
+    :func:`_close_world`). A recording that cannot start leaves nothing and
+    is an input error (the caller closes the world)."""
+    output = VideoOutput(output_target(video, stream_ok=False)[0])
     simulator: Any = getattr(world, "world", world)  # a camera world films through its own
     try:
-        simulator.record_video(recording)
+        simulator.record_video(output.recording)
     except (OSError, RuntimeError) as exc:  # ffmpeg could not start or open the file
-        recording.unlink(missing_ok=True)
-        world_close = getattr(world, "close", None)
-        if world_close is not None:
-            world_close()
-        raise InputError(
-            f"cannot write the video ({_first_line(exc)})", source=str(video)
-        ) from None
-    return video, recording
+        error = output.error(_first_line(exc))
+        output.discard()
+        raise error from None
+    except BaseException:  # Ctrl-C while ffmpeg starts
+        output.discard()
+        raise
+    return output
 
 
 def _listener(
@@ -242,42 +242,27 @@ class _FramedWorld:
             )
 
 
-def _close_world(world: World, video: Path | None, recording: Path | None, finished: bool) -> None:
-    """Close ``world`` (which also finishes its video) and move the recording to
-    ``video`` when the run ``finished``, else delete it; a video that fails on
-    the way (a full disk) is deleted, an input error when the run finished."""
+def _close_world(world: World, recording: VideoOutput | None, finished: bool) -> None:
+    """Close ``world`` (which also finishes its video) and put the recording
+    at its target when the run ``finished`` and the video is complete, else
+    remove it; a video that failed on the way (a full disk, ffmpeg gone) is
+    an input error when the run finished."""
     close = getattr(world, "close", None)
     try:
         if close is not None:
             close()  # also finishes the video
     except (OSError, RuntimeError) as exc:  # ffmpeg failed on the way (a full disk)
         if recording is not None:
-            recording.unlink(missing_ok=True)
+            error = recording.error(_first_line(exc))  # before the partial file goes
+            recording.discard()
+            if finished:
+                raise error from None
+        return
+    if recording is not None:
         if finished:
-            raise InputError(
-                f"cannot write the video ({_first_line(exc)})", source=str(video)
-            ) from None
-    if recording is not None and video is not None:
-        if finished:
-            recording.replace(video)
+            recording.finish()
         else:
-            recording.unlink(missing_ok=True)
-
-
-def check_video_path(video: Path) -> None:
-    """Before any work: ``video`` can be written — an .mp4 path that is not a
-    folder or a device, in a folder that exists or can be made and takes a file."""
-    if video.suffix.lower() != ".mp4":
-        raise UsageError(f"--video {video}: an .mp4 file expected")
-    # An MP4 is finished by seeking back to its index: never a device or a pipe.
-    output_target(video, stream_ok=False)
-    probe = video.with_name(f".{video.name}.part.mp4")
-    try:
-        video.parent.mkdir(parents=True, exist_ok=True)
-        probe.open("wb").close()
-    except OSError as exc:
-        raise InputError(f"cannot write the video ({os_reason(exc)})", source=str(video)) from None
-    probe.unlink(missing_ok=True)
+            recording.discard()
 
 
 def _first_line(exc: BaseException) -> str:
