@@ -1188,7 +1188,9 @@ def recording_section() -> str:
             "demonstrations; `import` reads it and writes one demonstration file per "
             "demonstration in it, named `<name>-<key>.json`: the name is `--name-prefix`, "
             "or the file's stem, or the environment when the stem says nothing (`demo`, "
-            "`low_dim`).",
+            "`low_dim`), reduced to a safe file name (no `/`, `..` or control character: "
+            '[limits.md](limits.md), "Recordings"). A recording must be self-contained: '
+            "external links, external storage and virtual datasets are refused.",
             fenced("text", layout),
             "The model is read as XML, not compiled (recordings ship without their "
             "meshes). The objects are its free-jointed bodies, named without robosuite's "
@@ -1473,7 +1475,7 @@ def other_section() -> str:
             "(the command), `files` (each file's path in the folder: its SHA-256) and "
             "`folders`. It is what lets a later run replace the folder: a folder holding "
             "anything it does not list, or a listed file changed, is refused, never "
-            "removed (docs/limits.md, \"Outputs\").\n"
+            'removed (docs/limits.md, "Outputs").\n'
             "- **PDDL** (`pddl PROBLEM.xml -o DIR`: `DIR/domain.pddl` and "
             "`DIR/problem.pddl`; `problem --pddl -o FILE`: `FILE` and "
             "`FILE-domain.pddl`, the extension of FILE replaced): the problem for any "
