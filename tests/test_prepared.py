@@ -56,12 +56,14 @@ def test_one_planning_budget_default() -> None:
     import inspect
 
     import demoplan.api as api
+    from demoplan.budget import default_budget
     from demoplan.cli.clock import DEFAULT_TIMEOUT
     from demoplan.cli.execution import run as run_command
     from demoplan.execution.executor import ExecutionSettings
 
     assert ExecutionSettings().budget.timeout == PLANNING_SECONDS == DEFAULT_TIMEOUT
-    assert inspect.signature(api.plan).parameters["timeout"].default == PLANNING_SECONDS
+    assert inspect.signature(api.plan).parameters["timeout"].default is None  # default_budget()
+    assert default_budget().timeout == PLANNING_SECONDS
     assert inspect.signature(api.run).parameters["planning_seconds"].default == PLANNING_SECONDS
     assert inspect.signature(run_task).parameters["planning_seconds"].default == PLANNING_SECONDS
     assert inspect.signature(run_command).parameters["timeout"].default == PLANNING_SECONDS

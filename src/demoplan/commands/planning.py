@@ -26,13 +26,15 @@ def plan(
     model: TaskModel | str | Path,
     scene: Scene | str | Path,
     *,
+    timeout: float | None = None,
     budget: Budget | None = None,
     settings: GeometrySettings = GeometrySettings(),
     clutter: bool = False,
     optimal: bool = False,
 ) -> ScenePlan:
     """Every demonstrated goal planned in ``scene``, the shortest chosen (§IV.C),
-    within ``budget`` in all (default :func:`~demoplan.budget.default_budget`);
+    within ``timeout`` seconds in all, or the limits of ``budget`` (neither:
+    :func:`~demoplan.budget.default_budget`);
     ``clutter``: objects the model never saw may stand in the scene;
     ``optimal``: only a plan proved shortest (else LimitReachedError).
 
@@ -43,13 +45,21 @@ def plan(
     with model_named(model):
         prepared = prepare(task, raw_scene, clutter=clutter)
         result = plan_in_scene(
-            task, prepared, budget=budget or default_budget(), settings=settings, clutter=clutter
+            task, prepared, budget=_budget(timeout, budget), settings=settings, clutter=clutter
         )
     if optimal and not result.optimal:
         raise LimitReachedError(
             f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"
         )
     return result
+
+
+def _budget(timeout: float | None, budget: Budget | None) -> Budget:
+    if timeout is not None and budget is not None:
+        raise UsageError("give a timeout or a budget, not both")
+    if timeout is not None:
+        return Budget(timeout=timeout)
+    return budget or default_budget()
 
 
 @dataclass(frozen=True, slots=True)
