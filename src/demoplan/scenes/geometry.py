@@ -49,6 +49,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from demoplan.budget import check_time
 from demoplan.model import (
     LEVEL_TOLERANCE,
     SUPPORT_FRACTION,
@@ -212,29 +213,49 @@ def collision_facts(
     settings: GeometrySettings = GeometrySettings(),
 ) -> list[tuple[str, str, str]]:
     """Facts ``(a, b, g)`` for grasps ``(name, object, shape, axis)`` (see the module
-    docstring). Vectorised over the locations b with shapely / NumPy."""
-    prints = [location_footprint(loc) for loc in locations]
-    prints_array = np.array(prints, dtype=object)
-    centres = np.array([loc.position for loc in locations], dtype=float)
+    docstring), in the order grasp, a, b. Vectorised with NumPy over the pairs
+    (a, b), a block of rows at a time; shapely measures a finger's reach into a
+    footprint only where the footprint's bounding circle is within reach."""
+    prints = np.array([location_footprint(loc) for loc in locations], dtype=object)
+    centres = np.array([loc.position for loc in locations], dtype=float).reshape(-1, 3)
     tops = np.array([loc.top for loc in locations])
-    blocks = np.array([all(is_block(s) for s in loc.shapes) for loc in locations])
+    blocks = np.array([all(is_block(s) for s in loc.shapes) for loc in locations], dtype=bool)
     radii = np.array([max(s.size[0] for s in loc.shapes) / 2 for loc in locations])
+    circles = np.array([max(bounding_radius(s) for s in loc.shapes) for loc in locations])
+    finger = gripper.finger_radius
     facts: list[tuple[str, str, str]] = []
+    where = f"at the collision facts ({len(locations)} locations × {len(grasps)} grasps)"
     for grasp, _obj, shape, axis in grasps:
         block_grasp = is_block(shape)
-        for i, a in enumerate(locations):
-            tips = fingers(a, shape, axis, gripper)
-            hit = np.zeros(len(locations), dtype=bool)
-            for tip in tips:
-                paper = np.linalg.norm(centres - tip, axis=1) < radii + gripper.finger_radius
-                point = shapely.Point(tip[0], tip[1])
-                reach = shapely.distance(prints_array, point) < gripper.finger_radius
-                above = tops > a.bottom + settings.level_tolerance
-                general = reach & above
-                hit |= np.where(blocks & block_grasp, paper, general)
-            hit[i] = False
-            facts += [(a.name, locations[int(j)].name, grasp) for j in np.flatnonzero(hit)]
+        offset = finger_offset(shape, axis, gripper)
+        turns = [math.radians(loc.yaw + axis) for loc in locations]  # as fingers() does
+        g = np.array([[offset * math.cos(t), offset * math.sin(t), 0.0] for t in turns])
+        for rows in range(0, len(locations), _FACT_ROWS):
+            check_time(where)  # a budget set by the caller (demoplan.budget), if any
+            a = slice(rows, rows + _FACT_ROWS)
+            above = tops[None, :] > centres[a, 2, None] + settings.level_tolerance
+            paper_rule = blocks[None, :] & block_grasp
+            hit = np.zeros(above.shape, dtype=bool)
+            for tips in (centres[a] + g[a], centres[a] - g[a]):
+                apart = centres[None, :, :] - tips[:, None, :]
+                paper = np.linalg.norm(apart, axis=2) < radii + finger
+                near = np.linalg.norm(apart[:, :, :2], axis=2) - circles < finger + 1e-9
+                i, j = np.nonzero(near & above & ~paper_rule)
+                reach = np.zeros(above.shape, dtype=bool)
+                reach[i, j] = shapely.distance(prints[j], shapely.points(tips[i, :2])) < finger
+                hit |= np.where(paper_rule, paper, reach)
+            i, j = np.nonzero(hit)
+            facts += [
+                (locations[rows + int(r)].name, locations[int(c)].name, grasp)
+                for r, c in zip(i, j, strict=True)
+                if rows + int(r) != int(c)
+            ]
     return facts
+
+
+_FACT_ROWS = 256
+"""Locations a whose facts :func:`collision_facts` computes at once (memory:
+rows × locations × 3 floats)."""
 
 
 def supports(
@@ -251,6 +272,7 @@ def supports(
     pairs: list[tuple[str, str]] = []
     floating: list[str] = []
     for i, upper in enumerate(locations):
+        check_time(f"at what stands on what ({len(locations)} locations)")
         if upper.bottom <= settings.level_tolerance:
             continue
         area = prints[i].area
@@ -304,6 +326,7 @@ def exclusions(
     supported = set(support_pairs) | {(b, a) for a, b in support_pairs}
     pairs = []
     for i, a in enumerate(locations):
+        check_time(f"at the locations that exclude each other ({len(locations)} locations)")
         for j in range(i + 1, len(locations)):
             b = locations[j]
             if (a.name, b.name) in supported:
@@ -425,7 +448,9 @@ def free_space(
     # fingers must miss) and to the nearest grasp zone (what its object must miss)
     to_print = np.full(len(grid), np.inf)
     to_zone = np.full(len(grid), np.inf)
+    where = f"at the free space ({len(locations)} locations, {len(grid)} candidate spots)"
     for location in locations:
+        check_time(where)
         print_distance, zone_distance = _distances(grid, location, grasp_axes, gripper)
         to_print = np.minimum(to_print, print_distance)
         to_zone = np.minimum(to_zone, zone_distance)
@@ -441,6 +466,7 @@ def free_space(
     chosen: list[FreeSpot] = []
 
     def place(radius: float) -> bool:
+        check_time(where)
         ok = (
             (to_edge >= radius)
             & (to_print >= spot_reach(radius, gripper) + margin)
@@ -482,11 +508,10 @@ def accepted_objects(
         return [name for name, shape in shapes.items() if bounding_radius(shape) <= room]
     area = location_footprint(location).buffer(settings.touch_tolerance)
     heights = [s.size[2] for s in location.shapes]
-    taken = []
-    for name, shape in shapes.items():
-        if name in location.objects or (
-            any(abs(shape.size[2] - h) <= settings.level_tolerance for h in heights)
-            and area.contains(footprint(shape, location.position, location.yaw))
-        ):
-            taken.append(name)
-    return taken
+    fits: dict[ObjectGeometry, bool] = {}  # many objects of one shape: one test
+    for shape in shapes.values():
+        if shape not in fits:
+            fits[shape] = any(
+                abs(shape.size[2] - h) <= settings.level_tolerance for h in heights
+            ) and area.contains(footprint(shape, location.position, location.yaw))
+    return [name for name, shape in shapes.items() if name in location.objects or fits[shape]]
