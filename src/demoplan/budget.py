@@ -15,6 +15,7 @@ hostile data makes it minutes. Without a budget nothing is checked.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from collections.abc import Callable, Iterator
@@ -100,6 +101,14 @@ class Clock:
     def remaining(self) -> float | None:
         """Seconds left, if there is a deadline."""
         return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
+
+    def at_least(self, seconds: float) -> Clock:
+        """This clock, with at least ``seconds`` left from now (its limits of
+        states and expansions as they are)."""
+        clock = copy.copy(self)
+        if clock.deadline is not None:
+            clock.deadline = max(clock.deadline, time.monotonic() + seconds)
+        return clock
 
 
 _current: ContextVar[tuple[Clock, str] | None] = ContextVar("budget", default=None)

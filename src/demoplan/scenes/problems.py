@@ -221,9 +221,10 @@ def _current_locations(
     order), and each object's location name."""
     locations: list[Location] = []
     current: dict[str, str] = {}
+    used: set[str] = set()
     for obj in scene.objects:
-        used = {loc.name for loc in locations}
         name = names.place("loc", obj.pose.position, used, any_prefix=True)
+        used.add(name)
         locations.append(
             Location(
                 name,
@@ -322,9 +323,12 @@ def _add_free_space(
             settings,
             surroundings.landmark_outlines(),
         )
+    used = {loc.name for loc in locations}
     for spot in spots:
+        check_time(f"at the free space ({len(spots)} spots)")
         fits = [s.size[2] for s in shapes.values() if bounding_radius(s) <= spot.radius + 1e-6]
-        name = names.place("freespace", spot.position, {loc.name for loc in locations})
+        name = names.place("freespace", spot.position, used)
+        used.add(name)
         shape = spot_shape(spot.radius, max(fits, default=0.0) or 0.001)
         locations.append(Location(name, spot.position, 0.0, "freespace", (), (shape,)))
     parked = [loc for loc in locations if loc.kind == "freespace"]
