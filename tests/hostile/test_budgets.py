@@ -63,7 +63,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("budgets")
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
-    for count in (200, 500, 1000):
+    for count in (200, 500, 990, 1000):
         (folder / f"clutter-{count}.json").write_text(json.dumps(_clutter(count)))
     for count in (2000, 10000):
         (folder / f"spots-{count}.json").write_text(json.dumps(_spots(count)))
@@ -81,8 +81,8 @@ def check_out_of_time(answer: Any, option: str = "--timeout") -> None:
         pytest.param([*PLAN, "clutter-1000.json", "--clutter"], id="plan-1000-unknown"),
         pytest.param([*RUN, "clutter-1000.json", "--clutter"], id="run-1000-unknown"),
         pytest.param(
-            [*RUN, "clutter-1000.json", "--clutter", *ARM],
-            id="run-arm-1000-unknown",
+            [*RUN, "clutter-990.json", "--clutter", *ARM],  # within the arm's 1000 objects
+            id="run-arm-990-unknown",
         ),
         pytest.param([*PLAN, "spots-10000.json"], id="plan-10000-spots"),
     ],
@@ -159,3 +159,72 @@ def test_a_deep_tf_chain_stops_at_the_learning_budget(tmp_path: Path) -> None:
     check_out_of_time(answer)
     assert "TF" in answer.stderr, answer
     assert not (tmp_path / "m.json").exists()
+
+
+def test_k_means_restarts_beyond_the_limit_are_refused(workspace: Path, tmp_path: Path) -> None:
+    """A model whose settings ask for 10⁹ K-means restarts (45 GB side by
+    side): learn --update refuses the field in one line, naming the limit."""
+    model = json.loads((workspace / "model.json").read_text())
+    model["settings"]["n_init"] = 10**9
+    (tmp_path / "model.json").write_text(json.dumps(model))
+    shutil.copy(workspace / "demos.json", tmp_path / "demos.json")
+    answer = run(["learn", "demos.json", "--update", "model.json"], tmp_path)
+    check_refused(answer, ["settings.n_init"], codes={1})
+    assert "1000" in answer.stderr, answer
+
+
+@pytest.mark.parametrize("side", ["1e300", "11"])
+def test_a_block_side_beyond_ten_metres_is_refused(tmp_path: Path, side: str) -> None:
+    """--side 1e300 overflowed into a traceback; a side beyond an object's
+    largest extent (10 m) is a usage error naming --side."""
+    shutil.copy(EXAMPLES / "perception" / "blocks-top.png", tmp_path / "top.png")
+    args = ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0", "0", "--side", side]
+    check_refused(run(args, tmp_path), ["--side"], codes={2})
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-300])
+def test_samples_nanoseconds_apart_are_refused(tmp_path: Path, scale: float) -> None:
+    """The set-table stream with its times scaled down: segment ran for minutes
+    (windows of billions of samples) or asked for 400 GB; now one line naming
+    the track and the sample rate."""
+    lines = (EXAMPLES / "streams" / "set-table-1.csv").read_text().splitlines()
+    scaled = [lines[0]]
+    for line in lines[1:]:
+        t, rest = line.split(",", 1)
+        scaled.append(f"{float(t) * scale!r},{rest}")
+    (tmp_path / "fast.csv").write_text("\n".join(scaled) + "\n")
+    answer = run(["segment", "fast.csv", "-o", "steps.json"], tmp_path)
+    check_refused(answer, ["fast.csv"], codes={1})
+    assert "a second" in answer.stderr and "seconds expected" in answer.stderr, answer
+    assert not (tmp_path / "steps.json").exists()
+
+
+def test_a_large_yaml_document_is_refused_before_parsing(tmp_path: Path) -> None:
+    """A 3 MB YAML list (a 50 MB one parsed for half an hour): refused by its
+    size in one line that says to write JSON."""
+    scene = _fig4()
+    header = "format: demoplan/scene-1\nobjects:\n"
+    objects = "".join(
+        f"  {name}: {{position: {obj['position']}, size: {obj['size']}}}\n"
+        for name, obj in scene["objects"].items()
+    )
+    spot = "- [0.123456, 0.654321]\n"
+    spots = "freespace:\n" + spot * (3 * 1024 * 1024 // len(spot))
+    (tmp_path / "scene.yaml").write_text(header + objects + spots)
+    answer = run(["show", "scene.yaml"], tmp_path)
+    check_refused(answer, ["scene.yaml"], codes={1})
+    assert "YAML" in answer.stderr and "JSON" in answer.stderr, answer
+
+
+@pytest.mark.parametrize("sim", ["mujoco", "arm"])
+def test_a_physics_world_of_thousands_of_bodies_is_refused(
+    workspace: Path, tmp_path: Path, sim: str
+) -> None:
+    """2000 objects would be 2000 free bodies settled before the run (20 s;
+    20,000: minutes, outside any budget): refused up front, naming the field
+    and the limit."""
+    (tmp_path / "scene.json").write_text(json.dumps(_clutter(2000)))
+    shutil.copy(workspace / "model.json", tmp_path / "model.json")
+    answer = run(["run", "model.json", "scene.json", "--clutter", "--sim", sim], tmp_path)
+    check_refused(answer, ["scene.json: objects"], codes={1})
+    assert "1,000" in answer.stderr, answer
