@@ -191,7 +191,8 @@ def building_within(budget: Budget) -> Iterator[None]:
     limit = "the time budget" if budget.timeout is None else f"--timeout {budget.timeout:g} s"
     message = (
         f"no plan within {limit}: the time ran out building the planning problems, "
-        "{where}, before any search; give it more time (--timeout), or the scene fewer objects"
+        "{where}, before any search; give it more time (--timeout), or the scene fewer objects "
+        "or free-space spots"
     )
     with time_budget(Budget(deadline=deadline), message):
         yield
