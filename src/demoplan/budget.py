@@ -15,6 +15,7 @@ hostile data makes it minutes. Without a budget nothing is checked.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from collections.abc import Callable, Iterator
@@ -101,29 +102,43 @@ class Clock:
         """Seconds left, if there is a deadline."""
         return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
 
+    def at_least(self, seconds: float) -> Clock:
+        """This clock, with at least ``seconds`` left from now (its limits of
+        states and expansions as they are)."""
+        clock = copy.copy(self)
+        if clock.deadline is not None:
+            clock.deadline = max(clock.deadline, time.monotonic() + seconds)
+        return clock
+
 
 _current: ContextVar[tuple[Clock, str] | None] = ContextVar("budget", default=None)
 
 
 @contextmanager
-def time_budget(seconds: float | None, message: str) -> Iterator[None]:
-    """The work inside the block stops after ``seconds`` (None or inf: no limit)
-    with ``message`` (what stopped and how to give it more)."""
-    if seconds is None or math.isinf(seconds):
+def time_budget(seconds: float | Budget | None, message: str) -> Iterator[None]:
+    """The work inside the block stops after ``seconds`` (None or inf: no limit;
+    a :class:`Budget`: its time limits) with ``message`` (what stopped and how
+    to give it more; ``{where}`` in it: the work under way, as
+    :func:`check_time` says it)."""
+    budget = seconds if isinstance(seconds, Budget) else Budget(timeout=seconds)
+    clock = Clock(budget)
+    if clock.deadline is None or math.isinf(clock.deadline):
         yield
         return
-    token = _current.set((Clock(Budget(timeout=seconds)), message))
+    token = _current.set((clock, message))
     try:
         yield
     finally:
         _current.reset(token)
 
 
-def check_time() -> None:
-    """Raise LimitReachedError if the current budget is spent."""
+def check_time(where: str = "") -> None:
+    """Raise LimitReachedError if the current budget is spent; ``where``: the
+    work under way, put in place of ``{where}`` in the budget's message (where
+    the time went)."""
     current = _current.get()
     if current is not None and current[0].expired():
-        raise LimitReachedError(current[1])
+        raise LimitReachedError(current[1].replace("{where}", where))
 
 
 Progress = Callable[[str, int, int], None]  # (what, done, total)

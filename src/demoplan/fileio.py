@@ -144,6 +144,12 @@ def display_path(path: Path | str | bytes) -> str:
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in shown)
 
 
+MAX_YAML_BYTES = 2 * 1024 * 1024
+"""Largest YAML document read: PyYAML parses and builds in Python (libyaml's
+parser too builds in Python), about 15–30 s a megabyte on the shared machine,
+where JSON of 64 MiB reads in seconds (docs/limits.md)."""
+
+
 def read_document(path: Path) -> dict[str, Any]:
     """Parse a JSON (or YAML, by extension) file into a dict, or raise one clear InputError.
 
@@ -152,6 +158,14 @@ def read_document(path: Path) -> dict[str, Any]:
     """
     path = Path(path)
     source = display_path(path)
+    if path.suffix.lower() in {".yaml", ".yml"}:
+        size = require_regular_file(path, "a JSON or YAML document")
+        if size > MAX_YAML_BYTES:
+            raise InputError(
+                f"a YAML document of {size:,} bytes; at most {MAX_YAML_BYTES:,} expected (YAML "
+                "is parsed in Python: 5 MB took over a minute); write it as JSON (up to 64 MiB)",
+                source=source,
+            )
     text = read_input_text(path, "a JSON or YAML document")
     if path.suffix.lower() in {".yaml", ".yml"}:
         data = _parse_yaml(text, source)

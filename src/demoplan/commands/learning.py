@@ -114,7 +114,7 @@ def learn_files(
         locked_for_update(update_path) if update_path is not None else nullcontext(),
         time_budget(
             timeout,
-            f"learning stopped at its time budget (--timeout {timeout:g} s); give it more "
+            f"learning stopped at its time budget (--timeout {timeout:g} s){{where}}; give it more "
             "time, or for many scattered placements cap the clusters (--max-clusters 5)",
         ),
         working() if working is not None else nullcontext(),

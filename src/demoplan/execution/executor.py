@@ -40,7 +40,12 @@ from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.naming import StableNames
-from demoplan.scenes.plan import CandidatePlan, plan_in_scene, solve_candidate
+from demoplan.scenes.plan import (
+    CandidatePlan,
+    building_within,
+    plan_in_scene,
+    solve_candidate,
+)
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
@@ -480,14 +485,15 @@ class _Run:
             candidate = next(
                 c for c in resolve_goals(model, current) if self.goal in c.demonstrations
             )
-            built = build_problem(
-                current,
-                candidate,
-                settings.geometry,
-                frozenset(self.reached),
-                self.names,
-                surroundings_of(model, current),
-            )
+            with building_within(settings.budget):
+                built = build_problem(
+                    current,
+                    candidate,
+                    settings.geometry,
+                    frozenset(self.reached),
+                    self.names,
+                    surroundings_of(model, current),
+                )
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
         built, why = _without_failed_grasps(built, self.failed_grasps, observation, settings, world)

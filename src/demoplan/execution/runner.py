@@ -34,6 +34,24 @@ if TYPE_CHECKING:
 __all__ = ["make_world", "run_task", "start_world"]
 
 
+MAX_SIMULATED_OBJECTS = 1000
+"""Most objects a physics world (``--sim mujoco``, ``arm``) is built with: each
+is a free body that the world lets settle before the run (500 took 3.5 s,
+2000 took 20 s on the shared machine; 20,000 would take minutes, outside any
+planning budget). ``--sim kinematic`` has no such limit."""
+
+
+def _check_simulated_size(sim: str, scene: Scene) -> None:
+    if sim in ("mujoco", "arm") and len(scene.objects) > MAX_SIMULATED_OBJECTS:
+        raise InputError(
+            f"{len(scene.objects):,} objects; --sim {sim} simulates at most "
+            f"{MAX_SIMULATED_OBJECTS:,} (each a free body settled before the run: 2000 took "
+            "20 s); --sim kinematic has no such limit",
+            source=scene.source,
+            field="objects",
+        )
+
+
 def make_world(
     sim: str,
     scene: Scene,
@@ -48,6 +66,7 @@ def make_world(
     the objects (the plan's targets), where it places its base."""
     if perception not in ("state", "camera"):
         raise UsageError(f"--perception {perception}: expected state or camera")
+    _check_simulated_size(sim, scene)
     if sim == "kinematic":
         if perception == "camera":
             raise UsageError("--perception camera needs --sim mujoco (a world that renders)")
@@ -83,6 +102,7 @@ def start_world(
     too: the arm stands where it reaches that plan's targets, and the executor
     starts from it (``execute(first=…)``) instead of planning it again."""
     scene = prepared.scene
+    _check_simulated_size(sim, scene)  # before the arm's first plan
     if sim != "arm":
         return make_world(sim, scene, faults, seed, perception), None
     first = first_plan(model, prepared, settings)

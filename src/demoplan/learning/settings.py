@@ -92,7 +92,7 @@ class LearningSettings:
                 field="significance",
             )
         object.__setattr__(self, "significance", float(level))
-        _check_whole(self.n_init, "n_init", 1)
+        _check_whole(self.n_init, "n_init", 1, most=(MAX_RESTARTS, "restarts run side by side"))
         _check_whole(self.seed, "seed", 0)
         _check_whole(self.max_clusters, "max_clusters", 0, " (0: no cap)")
         _check_whole(self.min_support, "min_support", 1, " (1: the paper's rule)")
@@ -118,9 +118,24 @@ _POSITIVE = (
 )
 
 
-def _check_whole(value: object, name: str, least: int, note: str = "") -> None:
+def _check_whole(
+    value: object, name: str, least: int, note: str = "", most: tuple[int, str] | None = None
+) -> None:
+    """A whole number ≥ ``least`` (``note``: what the least means) and, with
+    ``most`` (the largest, why), at most that."""
     if isinstance(value, bool) or not isinstance(value, int) or value < least:
         raise InputError(f"expected a whole number ≥ {least}{note}, got {value!r}", field=name)
+    if most is not None and value > most[0]:
+        raise InputError(
+            f"expected a whole number from {least} to {most[0]} ({most[1]}), got {value!r}",
+            field=name,
+        )
+
+
+MAX_RESTARTS = 1000
+"""Most K-means restarts (``n_init``): they run side by side, each on its own
+copy of the placements (``n_init`` × placements × 3 floats: 10⁹ restarts of
+the Fig. 4 example asked for 45 GB)."""
 
 
 PAPER_SETTINGS = LearningSettings(position_noise=0.003, orientation_noise=0.5, significance=0.0)

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from demoplan.budget import check_time
+
 __all__ = ["PALETTE", "ColourRegion", "colour_regions", "name_colour"]
 
 MAX_CHROMA_DISTANCE = 0.3
@@ -83,16 +85,20 @@ def colour_regions(
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour."""
+    where = f" modelling the table under {image.shape[1]} × {image.shape[0]} pixels"
     rgb = image.astype(float)
     edges = [rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]]
     table = np.median(np.concatenate(edges), axis=0)
+    check_time(where)  # a budget set by the caller (demoplan.budget), if any
     background = _table_model(rgb)
+    check_time(where)
     # sensor noise from neighbouring border pixels (a smooth shading does not count)
     steps = np.abs(np.concatenate([np.diff(edge, axis=0) for edge in edges]))
     sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
     threshold = max(min_contrast, 6 * sigma)
     distance = np.linalg.norm(rgb - background, axis=2)
     foreground = distance > threshold / 2
+    check_time(where)
     labels, _ = ndimage.label(foreground, structure=np.ones((3, 3)))
     regions: list[ColourRegion] = []
     names, _ = _palette()

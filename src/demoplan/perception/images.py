@@ -6,9 +6,12 @@ picture, or the pictures before and after the last move for stacking (paper
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
+from demoplan.documents.poses import MAX_SIZE_M
 from demoplan.errors import InputError, UsageError
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, load_image
@@ -36,6 +39,11 @@ def perceive_files(
     needs one."""
     if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
         raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
+        raise UsageError(
+            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+            "(an object's largest extent, docs/limits.md)"
+        )
     camera = Camera(px_per_m, origin)
     settings = PerceptionSettings()
     if side is not None:
@@ -43,10 +51,13 @@ def perceive_files(
             min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
         )
     tracker = BlockTracker()
-    with time_budget(
-        timeout,
-        f"perception stopped at its time budget (--timeout {timeout:g} s): many small "
-        "regions; give it more time, or say the blocks' size (--side)",
+    with (
+        time_budget(
+            timeout,
+            f"perception stopped at its time budget (--timeout {timeout:g} s){{where}}: many "
+            "small regions or a large image; give it more time, or say the blocks' size (--side)",
+        ),
+        _memory_refused(image),
     ):
         if before is not None:
             earlier = detect_blocks(load_image(before), camera, settings)
@@ -60,3 +71,17 @@ def perceive_files(
             source=str(image),
         )
     return blocks
+
+
+@contextmanager
+def _memory_refused(image: Path) -> Iterator[None]:
+    """A MemoryError inside the block becomes one line: perception holds about
+    115 bytes a pixel at its peak (a 7000 × 7000 image: 5.6 GB)."""
+    try:
+        yield
+    except MemoryError:
+        raise InputError(
+            "the image does not fit in memory to perceive (about 115 bytes a pixel: "
+            "49 megapixels took 5.6 GB); a smaller image expected",
+            source=str(image),
+        ) from None

@@ -310,6 +310,8 @@ def astar_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progre
     out of states. Otherwise the best plan unproved (not with ``optimal``), or
     LimitReachedError / NoPlanError."""
     incumbent = progress.plan
+    if incumbent is None:  # no plan yet: whether there is one at all (exit 3 or 4)
+        clock = clock.at_least(_MIN_PROOF_SECONDS)
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
     seconds = progress.elapsed()
     name = "astar" if incumbent is None else f"{progress.found_by}+astar"
@@ -410,6 +412,13 @@ _MIN_GREEDY_SECONDS = 0.2
 """The first plan's search gets at least this long, even where the budget is
 spent before it starts (a slow start-up on a loaded machine): an easy problem
 must not go without a plan for want of a few milliseconds."""
+
+
+_MIN_PROOF_SECONDS = 0.2
+"""A* (the last phase, the one that proves there is no plan) gets at least
+this long when no phase before it found a plan, even where the budget is
+spent before it starts: a goal proved unreachable in a few states is
+reported so (exit 3), not as out of time."""
 
 
 def _share(clock: Clock, share: float) -> float:

@@ -49,6 +49,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from demoplan.budget import check_time
 from demoplan.model import (
     LEVEL_TOLERANCE,
     SUPPORT_FRACTION,
@@ -212,29 +213,63 @@ def collision_facts(
     settings: GeometrySettings = GeometrySettings(),
 ) -> list[tuple[str, str, str]]:
     """Facts ``(a, b, g)`` for grasps ``(name, object, shape, axis)`` (see the module
-    docstring). Vectorised over the locations b with shapely / NumPy."""
-    prints = [location_footprint(loc) for loc in locations]
-    prints_array = np.array(prints, dtype=object)
-    centres = np.array([loc.position for loc in locations], dtype=float)
+    docstring), in the order grasp, a, b. Vectorised with NumPy over the pairs
+    (a, b) where a finger at a is within reach of b's bounding circle along x
+    (a binary search in the locations sorted by x finds them, a block of rows
+    a at a time); shapely measures a finger's reach into a footprint only there."""
+    if not locations:
+        return []
+    prints = np.array([location_footprint(loc) for loc in locations], dtype=object)
+    centres = np.array([loc.position for loc in locations], dtype=float).reshape(-1, 3)
     tops = np.array([loc.top for loc in locations])
-    blocks = np.array([all(is_block(s) for s in loc.shapes) for loc in locations])
+    blocks = np.array([all(is_block(s) for s in loc.shapes) for loc in locations], dtype=bool)
     radii = np.array([max(s.size[0] for s in loc.shapes) / 2 for loc in locations])
+    circles = np.array([max(bounding_radius(s) for s in loc.shapes) for loc in locations])
+    finger = gripper.finger_radius
+    by_x = np.argsort(centres[:, 0], kind="stable")
+    xs = centres[by_x, 0]
+    within = float(max(circles.max(), radii.max())) + finger + 1e-9  # any b a finger hits
+
+    def hits(rows: int, tips: np.ndarray, block_grasp: bool) -> set[tuple[int, int]]:
+        """The pairs (a, b), a from ``rows`` on, where a finger at ``tips`` hits b."""
+        low = np.searchsorted(xs, tips[:, 0] - within, side="left")
+        counts = np.searchsorted(xs, tips[:, 0] + within, side="right") - low
+        a = np.repeat(np.arange(len(tips)), counts)
+        if len(a) == 0:
+            return set()
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        b = by_x[np.arange(len(a)) - starts + np.repeat(low, counts)]
+        apart = centres[b] - tips[a]
+        paper = np.linalg.norm(apart, axis=1) < radii[b] + finger
+        above = tops[b] > centres[rows + a, 2] + settings.level_tolerance
+        near = np.linalg.norm(apart[:, :2], axis=1) - circles[b] < finger + 1e-9
+        paper_rule = blocks[b] & block_grasp
+        ask = np.flatnonzero(near & above & ~paper_rule)
+        reach = np.zeros(len(a), dtype=bool)
+        reach[ask] = shapely.distance(prints[b[ask]], shapely.points(tips[a[ask], :2])) < finger
+        hit = np.where(paper_rule, paper, reach)
+        return set(zip((rows + a[hit]).tolist(), b[hit].tolist(), strict=True))
+
     facts: list[tuple[str, str, str]] = []
+    where = f"at the collision facts ({len(locations)} locations × {len(grasps)} grasps)"
     for grasp, _obj, shape, axis in grasps:
         block_grasp = is_block(shape)
-        for i, a in enumerate(locations):
-            tips = fingers(a, shape, axis, gripper)
-            hit = np.zeros(len(locations), dtype=bool)
-            for tip in tips:
-                paper = np.linalg.norm(centres - tip, axis=1) < radii + gripper.finger_radius
-                point = shapely.Point(tip[0], tip[1])
-                reach = shapely.distance(prints_array, point) < gripper.finger_radius
-                above = tops > a.bottom + settings.level_tolerance
-                general = reach & above
-                hit |= np.where(blocks & block_grasp, paper, general)
-            hit[i] = False
-            facts += [(a.name, locations[int(j)].name, grasp) for j in np.flatnonzero(hit)]
+        offset = finger_offset(shape, axis, gripper)
+        turns = [math.radians(loc.yaw + axis) for loc in locations]  # as fingers() does
+        g = np.array([[offset * math.cos(t), offset * math.sin(t), 0.0] for t in turns])
+        for rows in range(0, len(locations), _FACT_ROWS):
+            check_time(where)  # a budget set by the caller (demoplan.budget), if any
+            block = slice(rows, rows + _FACT_ROWS)
+            pairs = hits(rows, centres[block] + g[block], block_grasp)
+            pairs |= hits(rows, centres[block] - g[block], block_grasp)
+            facts += [
+                (locations[a].name, locations[b].name, grasp) for a, b in sorted(pairs) if a != b
+            ]
     return facts
+
+
+_FACT_ROWS = 256
+"""Locations a whose facts :func:`collision_facts` finds at once."""
 
 
 def supports(
@@ -251,6 +286,7 @@ def supports(
     pairs: list[tuple[str, str]] = []
     floating: list[str] = []
     for i, upper in enumerate(locations):
+        check_time(f"at what stands on what ({len(locations)} locations)")
         if upper.bottom <= settings.level_tolerance:
             continue
         area = prints[i].area
@@ -299,31 +335,38 @@ def exclusions(
     support_pairs: Sequence[tuple[str, str]],
     settings: GeometrySettings = GeometrySettings(),
 ) -> list[tuple[str, str]]:
-    """Pairs of locations that cannot both be occupied (see the module docstring)."""
-    shrunk = [location_footprint(loc).buffer(-settings.touch_tolerance) for loc in locations]
+    """Pairs of locations that cannot both be occupied (see the module docstring).
+    Vectorised with NumPy over the second of each pair; shapely compares two
+    footprints only where their bounding circles meet."""
+    shrunk = np.array(
+        [location_footprint(loc).buffer(-settings.touch_tolerance) for loc in locations],
+        dtype=object,
+    )
+    centres = np.array([loc.position[:2] for loc in locations], dtype=float).reshape(-1, 2)
+    circles = np.array([max(bounding_radius(s) for s in loc.shapes) for loc in locations])
+    bottoms = np.array([loc.bottom for loc in locations])
+    tops = np.array([loc.top for loc in locations])
     supported = set(support_pairs) | {(b, a) for a, b in support_pairs}
+    tolerance = settings.level_tolerance
     pairs = []
     for i, a in enumerate(locations):
-        for j in range(i + 1, len(locations)):
-            b = locations[j]
-            if (a.name, b.name) in supported:
-                continue
-            # One above the other (a top meets a bottom, to the tolerance): no
-            # clash. Thin objects side by side at one level do clash, however
-            # thin (a 5 mm knife on an obstacle's spot).
-            tolerance = settings.level_tolerance
-            if _above(a, b, tolerance) or _above(b, a, tolerance):
-                continue
-            if shrunk[i].intersects(shrunk[j]):
+        check_time(f"at the locations that exclude each other ({len(locations)} locations)")
+        rest = slice(i + 1, None)
+        # One above the other — its bottom at or over the other's top (to the
+        # tolerance) and higher than the other's bottom: no clash. Thin objects
+        # side by side at one level do clash, however thin (a 5 mm knife on an
+        # obstacle's spot).
+        a_over = (a.bottom >= tops[rest] - tolerance) & (a.bottom > bottoms[rest] + tolerance)
+        b_over = (bottoms[rest] >= tops[i] - tolerance) & (bottoms[rest] > a.bottom + tolerance)
+        meet = (
+            np.linalg.norm(centres[rest] - centres[i], axis=1) <= circles[rest] + circles[i] + 1e-9
+        )
+        others = np.flatnonzero(meet & ~a_over & ~b_over) + i + 1
+        for j in others[shapely.intersects(shrunk[i], shrunk[others])]:
+            b = locations[int(j)]
+            if (a.name, b.name) not in supported:
                 pairs.append((a.name, b.name))
     return pairs
-
-
-def _above(upper: Location, lower: Location, tolerance: float) -> bool:
-    """``upper`` stands on a level above ``lower``: its bottom at or over
-    ``lower``'s top, and higher than ``lower``'s bottom (two thin objects on
-    one level are side by side, not stacked)."""
-    return upper.bottom >= lower.top - tolerance and upper.bottom > lower.bottom + tolerance
 
 
 @dataclass(frozen=True, slots=True)
@@ -425,7 +468,9 @@ def free_space(
     # fingers must miss) and to the nearest grasp zone (what its object must miss)
     to_print = np.full(len(grid), np.inf)
     to_zone = np.full(len(grid), np.inf)
+    where = f"at the free space ({len(locations)} locations, {len(grid)} candidate spots)"
     for location in locations:
+        check_time(where)
         print_distance, zone_distance = _distances(grid, location, grasp_axes, gripper)
         to_print = np.minimum(to_print, print_distance)
         to_zone = np.minimum(to_zone, zone_distance)
@@ -441,6 +486,7 @@ def free_space(
     chosen: list[FreeSpot] = []
 
     def place(radius: float) -> bool:
+        check_time(where)
         ok = (
             (to_edge >= radius)
             & (to_print >= spot_reach(radius, gripper) + margin)
@@ -482,11 +528,10 @@ def accepted_objects(
         return [name for name, shape in shapes.items() if bounding_radius(shape) <= room]
     area = location_footprint(location).buffer(settings.touch_tolerance)
     heights = [s.size[2] for s in location.shapes]
-    taken = []
-    for name, shape in shapes.items():
-        if name in location.objects or (
-            any(abs(shape.size[2] - h) <= settings.level_tolerance for h in heights)
-            and area.contains(footprint(shape, location.position, location.yaw))
-        ):
-            taken.append(name)
-    return taken
+    fits: dict[ObjectGeometry, bool] = {}  # many objects of one shape: one test
+    for shape in shapes.values():
+        if shape not in fits:
+            fits[shape] = any(
+                abs(shape.size[2] - h) <= settings.level_tolerance for h in heights
+            ) and area.contains(footprint(shape, location.position, location.yaw))
+    return [name for name, shape in shapes.items() if name in location.objects or fits[shape]]

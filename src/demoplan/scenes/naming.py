@@ -25,6 +25,10 @@ class StableNames:
     _places: list[tuple[str, Vector3]] = field(default_factory=list)
     _counts: dict[str, int] = field(default_factory=dict)
     _grasps: dict[tuple[str, float], str] = field(default_factory=dict)
+    _cells: dict[tuple[int, int, int], list[int]] = field(default_factory=dict)
+    """The places in each cube of side ``tolerance`` (indices into ``_places``):
+    a place this close to a position is in its cube or a neighbouring one, so
+    thousands of places are named without comparing every pair."""
 
     @classmethod
     def of(
@@ -37,7 +41,7 @@ class StableNames:
         ``(name, object, axis)`` of its grasps — to keep in the next ones."""
         names = cls(tolerance)
         for name, position in places:
-            names._places.append((name, position))
+            names._add(name, position)
             prefix, number = _split(name)
             names._counts[prefix] = max(names._counts.get(prefix, 0), number)
         for name, obj, axis in grasps:
@@ -53,7 +57,16 @@ class StableNames:
         place this close, unless this problem uses it already (``taken``).
         ``any_prefix``: an earlier name of another kind counts too (an object
         put down on ``freespace1`` stands at ``freespace1``)."""
-        for name, known in self._places:
+        x, y, z = self._cell(position)
+        near = sorted(
+            index
+            for dx in (-1, 0, 1)
+            for dy in (-1, 0, 1)
+            for dz in (-1, 0, 1)
+            for index in self._cells.get((x + dx, y + dy, z + dz), ())
+        )
+        for index in near:  # the earliest named first
+            name, known = self._places[index]
             if (
                 (any_prefix or _split(name)[0] == prefix)
                 and name not in taken
@@ -62,8 +75,17 @@ class StableNames:
                 return name
         self._counts[prefix] = self._counts.get(prefix, 0) + 1
         name = f"{prefix}{self._counts[prefix]}"
-        self._places.append((name, position))
+        self._add(name, position)
         return name
+
+    def _cell(self, position: Vector3) -> tuple[int, int, int]:
+        size = self.tolerance if self.tolerance > 0 else 1.0
+        x, y, z = (math.floor(v / size) for v in position)
+        return x, y, z
+
+    def _add(self, name: str, position: Vector3) -> None:
+        self._cells.setdefault(self._cell(position), []).append(len(self._places))
+        self._places.append((name, position))
 
     def grasp(self, obj: str, axis: float) -> str:
         """The name of grasp ``axis`` (deg) of ``obj``: ``grasp`` + number."""

@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
-from demoplan.budget import Clock
+from demoplan.budget import Clock, time_budget
 from demoplan.errors import LimitReachedError, NoPlanError, UsageError
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Plan
@@ -33,6 +35,7 @@ __all__ = [
     "SceneLimitReachedError",
     "SceneNoPlanError",
     "ScenePlan",
+    "building_within",
     "goal_problem",
     "plan_in_scene",
     "scene_problems",
@@ -166,6 +169,35 @@ def _target(problem: SceneProblem, label: str) -> str:
     return next(s.location for s in problem.problem.subgoals if s.id == label)
 
 
+BUILDING_SECONDS = 0.5
+"""Preparing a scene and building its planning problems get at least this
+long, even where the budget is spent before they start (a slow start-up on a
+loaded machine): a small scene is always planned, and a goal with no plan is
+reported as such (exit 3), not as out of time."""
+
+
+@contextmanager
+def building_within(budget: Budget) -> Iterator[None]:
+    """Scene preparation and problem building inside the block stop at
+    ``budget``'s time (given at least :data:`BUILDING_SECONDS`) with
+    LimitReachedError (exit 4), naming the option that raises the budget and
+    the work the time ran out in: a flood of objects or free-space spots
+    makes the geometry (collision facts: grasps × locations²) take minutes."""
+    clock = Clock(budget)
+    if clock.deadline is None or math.isinf(clock.deadline):
+        yield
+        return
+    deadline = max(clock.deadline, time.monotonic() + BUILDING_SECONDS)
+    limit = "the time budget" if budget.timeout is None else f"--timeout {budget.timeout:g} s"
+    message = (
+        f"no plan within {limit}: the time ran out building the planning problems, "
+        "{where}, before any search; give it more time (--timeout), or the scene fewer objects "
+        "or free-space spots"
+    )
+    with time_budget(Budget(deadline=deadline), message):
+        yield
+
+
 def scene_problems(
     model: TaskModel,
     scene: Scene | PreparedScene,
@@ -234,9 +266,10 @@ def plan_in_scene(
     found but some candidate's search was cut short. ``clutter``: objects the
     model never saw may stand in the scene (moved out of the way if need be).
     """
-    prepared = prepare(model, scene, clutter=clutter)
-    problems = scene_problems(model, prepared, settings)
     clock = Clock(budget)
+    with building_within(budget):
+        prepared = prepare(model, scene, clutter=clutter)
+        problems = scene_problems(model, prepared, settings)
     outcomes = []
     for index, problem in enumerate(problems):
         left = clock.remaining()

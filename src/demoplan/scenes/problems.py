@@ -17,8 +17,11 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+import shapely
 from shapely.geometry.base import BaseGeometry
 
+from demoplan.budget import check_time
 from demoplan.errors import InputError, UsageError
 from demoplan.model import ObjectGeometry, Pose, Vector3
 from demoplan.planning.problem import Problem, Subgoal
@@ -166,6 +169,7 @@ def build_problem(
     facts, comparison = _collisions(locations, scene, grasps, shapes, settings)
     accepts = []
     for loc in locations:
+        check_time(f"at what each location takes ({len(locations)} locations)")
         taken = accepted_objects(loc, shapes, settings)
         if len(taken) < len(shapes):
             accepts += [(loc.name, obj) for obj in taken]
@@ -217,9 +221,10 @@ def _current_locations(
     order), and each object's location name."""
     locations: list[Location] = []
     current: dict[str, str] = {}
+    used: set[str] = set()
     for obj in scene.objects:
-        used = {loc.name for loc in locations}
         name = names.place("loc", obj.pose.position, used, any_prefix=True)
+        used.add(name)
         locations.append(
             Location(
                 name,
@@ -318,12 +323,16 @@ def _add_free_space(
             settings,
             surroundings.landmark_outlines(),
         )
+    used = {loc.name for loc in locations}
     for spot in spots:
+        check_time(f"at the free space ({len(spots)} spots)")
         fits = [s.size[2] for s in shapes.values() if bounding_radius(s) <= spot.radius + 1e-6]
-        name = names.place("freespace", spot.position, {loc.name for loc in locations})
+        name = names.place("freespace", spot.position, used)
+        used.add(name)
         shape = spot_shape(spot.radius, max(fits, default=0.0) or 0.001)
         locations.append(Location(name, spot.position, 0.0, "freespace", (), (shape,)))
     parked = [loc for loc in locations if loc.kind == "freespace"]
+    check_time(f"at the free space ({len(locations)} locations)")
     no_room = tuple(
         (name, shape)
         for name, shape in shapes.items()
@@ -493,20 +502,26 @@ def _check_scene_overlaps(
     scene: Scene, locations: list[Location], settings: GeometrySettings
 ) -> None:
     """Two objects of the scene cannot stand in each other's space."""
+    shrunk = np.array(
+        [location_footprint(loc).buffer(-settings.touch_tolerance) for loc in locations],
+        dtype=object,
+    )
+    bottoms = np.array([loc.bottom for loc in locations])
+    tops = np.array([loc.top for loc in locations])
     for i, la in enumerate(locations):
-        for lb in locations[i + 1 :]:
-            low, high = max(la.bottom, lb.bottom), min(la.top, lb.top)
-            if high - low <= settings.level_tolerance:
-                continue
-            pa = location_footprint(la).buffer(-settings.touch_tolerance)
-            pb = location_footprint(lb).buffer(-settings.touch_tolerance)
-            if pa.intersects(pb):
-                raise InputError(
-                    f"{lb.objects[0]} overlaps {la.objects[0]} (their footprints intersect "
-                    "at the same height); objects that do not pass through each other expected",
-                    source=scene.source,
-                    field=f"objects.{lb.objects[0]}.position",
-                )
+        check_time(f"at the scene's overlaps ({len(locations)} objects)")
+        low = np.maximum(bottoms[i + 1 :], la.bottom)
+        high = np.minimum(tops[i + 1 :], la.top)
+        level = np.flatnonzero(high - low > settings.level_tolerance) + i + 1
+        clashing = level[shapely.intersects(shrunk[i], shrunk[level])]
+        if len(clashing):
+            lb = locations[int(clashing[0])]
+            raise InputError(
+                f"{lb.objects[0]} overlaps {la.objects[0]} (their footprints intersect "
+                "at the same height); objects that do not pass through each other expected",
+                source=scene.source,
+                field=f"objects.{lb.objects[0]}.position",
+            )
 
 
 def pose_of(location: Location) -> Pose:

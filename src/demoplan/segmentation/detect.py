@@ -106,6 +106,12 @@ MIN_FINAL_REST_SAMPLES = 3
 MIN_HALF_WINDOW_SAMPLES = 4  # a half window shorter than this is widened (sparse samples)
 INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
 MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
+MIN_SAMPLE_STEP = 1e-5
+"""Seconds between samples, at least (median of a track): 100,000 samples a
+second, fifty times a fast motion-capture system. The windows of the
+segmentation are seconds long, so samples nanoseconds apart (times written
+in ns, or in s but scaled) made windows of billions of samples: segment ran
+for minutes or asked for 400 GB."""
 UNKNOWN_FOOTPRINT_M = 0.1  # an object of unknown size this close beneath may be a support
 
 
@@ -263,6 +269,7 @@ def segment(
     geometry only the motion tells a pause in the air from a placement.
     """
     settings = settings or SegmentationSettings()
+    _check_sample_steps(stream)
     supports = _Supports(stream, geometry or {}, landmarks or {}, settings)
     moves: list[Move] = []
     nudges: list[Move] = []
@@ -290,6 +297,21 @@ def segment(
         objects=stream.objects,
         source=stream.source,
     )
+
+
+def _check_sample_steps(stream: PoseStream) -> None:
+    """Refuse a track whose samples come more than 1 / :data:`MIN_SAMPLE_STEP` a second."""
+    for track in stream.tracks:
+        if len(track.times) < 2:
+            continue
+        step = float(np.median(np.diff(track.times)))
+        if step < MIN_SAMPLE_STEP:
+            raise InputError(
+                f"{track.name}: samples {step:.3g} s apart (the median), more than "
+                f"{1 / MIN_SAMPLE_STEP:,.0f} a second; sample times in seconds expected "
+                "(convert times written in ms, µs or ns)",
+                source=stream.source,
+            )
 
 
 class _Supports:

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.rotations import quat_inverse, quat_multiply, quat_slerp, rotate_vectors
 from demoplan.segmentation.types import FloatArray, ObjectTrack
@@ -131,9 +132,10 @@ class TransformTree:
         done: set[str] = set()
         for start in self.links:
             path: list[str] = []
+            on_path: set[str] = set()  # path's frames: a deep chain is walked once
             frame: str | None = start
             while frame is not None and frame not in done:
-                if frame in path:
+                if frame in on_path:
                     cycle = [*path[path.index(frame) :], frame]
                     raise InputError(
                         f"the TF frames form a cycle {' → '.join(cycle)}; a tree expected",
@@ -141,6 +143,7 @@ class TransformTree:
                         field=f"frame {frame}",
                     )
                 path.append(frame)
+                on_path.add(frame)
                 link = self.links.get(frame)
                 frame = link.parent if link is not None else None
             done.update(path)
@@ -194,7 +197,9 @@ class TransformTree:
             n = len(times)
             return np.zeros((n, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
         pose = own if own is not None else interpolate_link(self.links[chain[0]], times)
+        where = f" composing frame {chain[0]!r} through {len(chain) - 1} TF links"
         for frame in chain[1:-1]:
+            check_time(where)  # a budget set by the caller (demoplan.budget), if any
             pose = _compose(interpolate_link(self.links[frame], times), pose)
         return pose
 
@@ -211,7 +216,8 @@ class TransformTree:
         if link.parent == world:
             return track
         up, across = self.chain(frame), self.chain(world)
-        common = next(f for f in up if f in set(across))
+        ancestors = set(across)
+        common = next(f for f in up if f in ancestors)
         own = (track.positions, track.orientations)
         pose = self._relative_to_ancestor(up[: up.index(common) + 1], track.times, own)
         if common != world:
@@ -231,6 +237,7 @@ class TransformTree:
         """Tracks of ``frames`` in ``world``; frames not connected to it are left out (logged)."""
         tracks: dict[str, ObjectTrack] = {}
         for frame in frames:
+            check_time(f" composing the TF tree's {len(frames)} frames in {world!r}")
             if frame not in self.links:
                 logger.warning(
                     "%s: frame %r is a root of the TF tree, with no transforms of its own; "
