@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import PLANNING_SECONDS, Budget
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import (
     ExecutionSettings,
     RunEvent,
