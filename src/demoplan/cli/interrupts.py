@@ -16,6 +16,7 @@ __all__ = [
     "interrupted_by_signal",
     "interrupted_exit_code",
     "on_signal",
+    "quiet_after_signal",
     "redeliver_lost_signal",
     "signals_received",
 ]
@@ -61,6 +62,21 @@ def redeliver_lost_signal(unraisable: Any) -> None:
         signal.setitimer(signal.ITIMER_REAL, 0.005)
         return
     sys.__unraisablehook__(unraisable)
+
+
+def quiet_after_signal(hook: Any) -> Any:
+    """``sys.excepthook`` that says nothing once a signal has arrived. A C
+    extension interrupted while it loads (shapely's, importing NumPy through
+    the C API) prints the interrupted import through ``sys.excepthook`` before
+    it fails with "initialization failed"; the command's one line,
+    ``demoplan: interrupted``, already says what happened. Before a signal,
+    ``hook`` reports as it would."""
+
+    def quiet(exc_type: Any, exc: Any, tb: Any) -> None:
+        if not signals_received:
+            hook(exc_type, exc, tb)
+
+    return quiet
 
 
 def interrupted_by_signal() -> bool:

@@ -28,6 +28,7 @@ from demoplan.cli.interrupts import (
     INTERRUPTED_EXIT,
     TERMINATED_EXIT,
     on_signal,
+    quiet_after_signal,
     redeliver_lost_signal,
     signals_received,
 )
@@ -112,6 +113,7 @@ def main() -> None:
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
     sys.unraisablehook = redeliver_lost_signal
+    sys.excepthook = quiet_after_signal(sys.excepthook)  # before typer keeps it as its fallback
     # Started with stdout (or stderr) closed: what would be printed is dropped,
     # as if sent to /dev/null; a command whose job is a file still does it.
     if sys.stdout is None:
