@@ -28,6 +28,7 @@ from pydantic import (
     field_validator,
 )
 
+from demoplan.documents.poses import Coordinate
 from demoplan.errors import InputError
 from demoplan.fileio import (
     check_format,
@@ -64,7 +65,7 @@ class _Schema(BaseModel):
 
 class _PositionSchema(_Schema):
     reference: str | None
-    value: list[Number] = Field(min_length=2, max_length=3)
+    value: list[Coordinate] = Field(min_length=2, max_length=3)  # m, within ±MAX_COORDINATE
     spread: Number = 0.0
     frame: Literal["world", "reference"] = "world"
     anywhere: bool = False
