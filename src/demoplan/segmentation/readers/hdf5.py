@@ -752,8 +752,10 @@ def _model_xml(group: Any, path: Path, key: str) -> tuple[str, str]:
     if value.lstrip().startswith("<"):
         return value, f"{source}: model_file"
     name = Path(value).name
-    folder = path.parent.resolve()
-    for candidate in (path.parent / "models" / name, path.parent / name):
+    # The recording as named may be a link (to a download cache): its model is
+    # the one beside the file it names, and nothing outside that folder.
+    folder = path.resolve().parent
+    for candidate in (folder / "models" / name, folder / name):
         if candidate.is_file():
             if not candidate.resolve().is_relative_to(folder):
                 raise InputError(
@@ -764,7 +766,7 @@ def _model_xml(group: Any, path: Path, key: str) -> tuple[str, str]:
                 )
             return read_input_text(candidate, "a MuJoCo model (XML)"), str(candidate)
     raise InputError(
-        f"model file {value!r} not found in {path.parent / 'models'} or {path.parent}",
+        f"model file {value!r} not found in {folder / 'models'} or {folder}",
         source=source,
         field="model_file",
     )
