@@ -78,3 +78,34 @@ def test_euler_at_gimbal_lock_gives_the_same_rotation(
     q = rotations.quat_from_rpy([roll, pitch, yaw])
     again = rotations.quat_from_rpy(rotations.rpy_from_quat(q))
     assert rotations.angle_between(q, again) < 1e-6
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    yaws=st.lists(st.floats(-180.0, 180.0), min_size=2, max_size=5),
+    offset=st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5)).filter(
+        lambda xy: np.hypot(*xy) >= 1e-4 or xy == (0.0, 0.0)
+    ),
+    period=st.sampled_from([90.0, 120.0, 180.0]),
+    data=st.data(),
+)
+def test_frames_agreeing_do_not_depend_on_the_order_of_the_frames(
+    yaws: list[float], offset: tuple[float, float], period: float, data: st.DataObject
+) -> None:
+    """A symmetric reference put down at several yaws (each frame as given
+    or turned by periods) with the same thing at the same place on it (given
+    in world axes): the frame copies chosen for
+    each placement are the same whichever placement comes first — a tie
+    between equally tight arrangements is broken by the frames, not by the
+    first of them."""
+    quats = Rotation.from_euler("z", np.array(yaws)[:, None], degrees=True).as_quat()
+    turns = data.draw(st.lists(st.integers(0, 3), min_size=len(yaws), max_size=len(yaws)))
+    seen_at = [y + t * period for y, t in zip(yaws, turns, strict=True)]
+    offsets = Rotation.from_euler("z", np.array(seen_at)[:, None], degrees=True).apply(
+        [offset[0], offset[1], 0.0]
+    )
+    order = data.draw(st.permutations(range(len(yaws))))
+    chosen = rotations.frames_agreeing(quats, offsets, period)
+    permuted = rotations.frames_agreeing(quats[order], offsets[order], period)
+    for row, original in enumerate(order):
+        assert abs(float(permuted[row] @ chosen[original])) == pytest.approx(1.0, abs=1e-9)

@@ -296,6 +296,11 @@ def modulo_symmetry(quats: FloatArray, period_deg: float) -> FloatArray:
     return modulo_group(q, group)
 
 
+CENTRED = 1e-5
+"""Offsets (m) within this of a symmetric reference's axis lie on it: no copy of
+its frame is better than another, so :func:`frames_agreeing` keeps each as given."""
+
+
 def frames_agreeing(quats: FloatArray, offsets: FloatArray, period_deg: float) -> FloatArray:
     """``(n, 4)`` frames of one symmetric reference, each turned about its own
     z axis by a multiple of ``period_deg`` so that ``offsets`` (``(n, 3)``,
@@ -310,6 +315,8 @@ def frames_agreeing(quats: FloatArray, offsets: FloatArray, period_deg: float) -
     if period_deg <= 0.0 or period_deg >= 360.0 or len(q) < 2:
         return modulo_symmetry(q, period_deg)
     d = np.asarray(offsets, dtype=float).reshape(-1, 3)
+    if float(np.hypot(d[:, 0], d[:, 1]).max()) < CENTRED:
+        return _canonical_rows(q)  # on the axis of symmetry: every copy agrees; as given
     turns = np.radians(period_deg) * np.arange(round(360.0 / period_deg))
     copies = np.stack([quat_multiply(q, _about_z(np.full(len(q), t))) for t in turns])
     local = np.stack([rotate_vectors(quat_inverse(c), d) for c in copies])  # (copies, n, 3)
@@ -325,7 +332,26 @@ def frames_agreeing(quats: FloatArray, offsets: FloatArray, period_deg: float) -
         if best is None or spread < best[0] - 1e-12:
             best = (spread, choice)
     assert best is not None
-    return _canonical_rows(copies[best[1], rows])
+    return _canonical_rows(copies[_as_given_most(best[1], local), rows])
+
+
+def _as_given_most(choice: np.ndarray, local: FloatArray) -> np.ndarray:
+    """Of the equally tight choices ``(choice + k) mod copies`` (the whole
+    arrangement turned by ``k`` periods), the one that takes the most frames as
+    given; on a tie, the one whose mean offset lies nearest the frame's +x
+    axis (+y before -y). These ignore the order of the frames, so the learned value
+    does not depend on which demonstration came first."""
+    count = local.shape[0]
+    rows = np.arange(local.shape[1])
+
+    def preference(turn: int) -> tuple[int, float, float]:
+        shifted = (choice + turn) % count
+        mean = local[shifted, rows].mean(axis=0)
+        angle = math.degrees(math.atan2(float(mean[1]), float(mean[0])))
+        return (-int(np.count_nonzero(shifted == 0)), round(abs(angle), 6), round(angle % 360, 6))
+
+    turned: np.ndarray = (choice + min(range(count), key=preference)) % count
+    return turned
 
 
 def _turn(axis: int, degrees: float) -> FloatArray:
