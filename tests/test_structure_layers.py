@@ -31,6 +31,7 @@ RENDERING_AND_PARSING = {
     "demoplan.segmentation.types.parse_object_patterns",
     "demoplan.segmentation.settings.settings_help",
     "demoplan.scenes.geometry.GeometrySettings",
+    "demoplan.segmentation.streams.StreamOptions",
     "demoplan.budget.Budget",
 }
 

@@ -165,6 +165,7 @@ def learn(
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
     from demoplan.commands.learning import learn_files
+    from demoplan.segmentation.streams import StreamOptions
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
@@ -190,11 +191,13 @@ def learn(
             require_file=require_file,
             paper=paper,
             overrides={k: v for k, v in options.items() if v is not None},
-            frame=frame,
-            objects=parse_object_patterns(objects),
-            units=None if units is None else units.value,
-            landmarks=parse_object_patterns(landmarks),
-            objects_file=objects_file,
+            stream=StreamOptions(
+                frame=frame,
+                objects=parse_object_patterns(objects),
+                units=None if units is None else units.value,
+                landmarks=parse_object_patterns(landmarks) or (),
+                objects_file=objects_file,
+            ),
             timeout=timeout,
             working=lambda: working("Learning states and constraints…"),
         )

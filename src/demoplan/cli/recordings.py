@@ -73,6 +73,7 @@ def segment(
     """
     from demoplan.commands.recordings import segment as segment_stream
     from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.segmentation.streams import StreamOptions
     from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
@@ -82,11 +83,13 @@ def segment(
             name=name,
             plot=plot,
             thresholds=thresholds or (),
-            frame=frame,
-            objects=parse_object_patterns(objects),
-            landmarks=parse_object_patterns(landmarks),
-            units=None if units is None else units.value,
-            objects_file=objects_file,
+            options=StreamOptions(
+                frame=frame,
+                objects=parse_object_patterns(objects),
+                units=None if units is None else units.value,
+                landmarks=parse_object_patterns(landmarks) or (),
+                objects_file=objects_file,
+            ),
         )
         found, demo = done.segmentation, done.demonstration
         if json_output:

@@ -11,15 +11,19 @@ former imports neither).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from demoplan.errors import InputError
 from demoplan.learning.demonstrations import check_demonstrations, demonstrations_from_path
 from demoplan.learning.modelfile import load_model
-from demoplan.model import Demonstration, ObjectGeometry, TaskModel
+from demoplan.model import Demonstration, TaskModel
 from demoplan.scenes.scene import Scene, load_scene
+
+if TYPE_CHECKING:
+    from demoplan.segmentation.streams import StreamOptions
 
 __all__ = [
     "STREAM_SUFFIXES",
@@ -43,26 +47,26 @@ def is_pose_stream(path: Path) -> bool:
 def load_inputs(
     paths: Iterable[str | Path],
     *,
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-    units: str | None = None,
-    landmarks: Sequence[str] | None = None,
-    geometry: Mapping[str, ObjectGeometry] | None = None,
-    geometry_source: str | None = None,
+    stream: StreamOptions | None = None,
 ) -> list[Demonstration]:
     """Read demonstration files and folders (``*.json``, ``*.yaml``, in name order);
     a pose stream (CSV, ROS 2 bag) is segmented into a demonstration on the way
     (:func:`~demoplan.segmentation.streams.demonstration_from_stream`, default
     settings), named after the file.
 
-    ``frame``, ``objects``, ``units`` and ``landmarks`` are for pose streams
-    (the world frame of a TF tree, the objects to keep, a CSV's unit of length,
-    the tracked frames that are landmarks), as ``segment`` takes them;
-    ``geometry`` (an objects file, read from ``geometry_source``) is written
-    into each stream's demonstration — every name must be an object of some
-    stream. Demonstration files ignore all of them: they carry their own
+    ``stream`` says how pose streams are read
+    (:class:`~demoplan.segmentation.streams.StreamOptions`: the world frame of
+    a TF tree, the objects to keep, a CSV's unit of length, the tracked frames
+    that are landmarks), as ``segment`` takes them; its objects file's geometry
+    is written into each stream's demonstration — every name must be an
+    object of some stream. Demonstration files ignore all of it: they carry their own
     objects and landmarks (an object's geometry must agree across all
     demonstrations, :func:`~demoplan.learning.demonstrations.check_demonstrations`)."""
+    from demoplan.segmentation.streams import StreamOptions
+
+    options = stream or StreamOptions()
+    geometry = options.geometry()
+    geometry_source = None if options.objects_file is None else str(options.objects_file)
     demos: list[Demonstration] = []
     tracked: dict[str, None] = {}
     streams = 0
@@ -70,15 +74,7 @@ def load_inputs(
         if is_pose_stream(path):
             from demoplan.segmentation.streams import demonstration_from_stream
 
-            segmented = demonstration_from_stream(
-                path,
-                frame=frame,
-                objects=objects,
-                units=units,
-                landmarks=landmarks,
-                geometry=geometry,
-                geometry_source=geometry_source,
-            )
+            segmented = demonstration_from_stream(path, options=options, geometry=geometry)
             tracked.update(dict.fromkeys(segmented.stream.objects))
             demos.append(segmented.demonstration)
             streams += 1

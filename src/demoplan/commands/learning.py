@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import LEARNING_TIMEOUT, time_budget
 from demoplan.commands.inputs import load_inputs
@@ -23,6 +23,9 @@ from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
 from demoplan.model import Demonstration, TaskModel
 from demoplan.scenes.preview import ScenePreview
+
+if TYPE_CHECKING:
+    from demoplan.segmentation.streams import StreamOptions
 
 __all__ = [
     "LearnedFiles",
@@ -81,11 +84,7 @@ def learn_files(
     require_file: Path | None = None,
     paper: bool = False,
     overrides: Mapping[str, Any] | None = None,
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-    units: str | None = None,
-    landmarks: Sequence[str] | None = None,
-    objects_file: Path | None = None,
+    stream: StreamOptions | None = None,
     timeout: float = LEARNING_TIMEOUT,
     working: Callable[[], AbstractContextManager[object]] | None = None,
 ) -> LearnedFiles:
@@ -95,11 +94,9 @@ def learn_files(
     ``overrides`` (settings by name); ``working``: a progress display around
     the work. Nothing is written when neither ``output`` nor ``update_path``
     is given. Two updates of one model at once both land (the second waits).
-    ``frame``, ``objects``, ``units``, ``landmarks`` and ``objects_file`` (the
-    geometry of the streams' objects) are for pose streams
+    ``stream``: how pose streams are read
     (:func:`demoplan.commands.inputs.load_inputs`)."""
-    from demoplan.learning.demonstrations import load_object_geometry
-
+    objects_file = None if stream is None else stream.objects_file
     target = output or update_path
     if target is not None:
         refuse_overwriting_inputs(
@@ -120,15 +117,7 @@ def learn_files(
         working() if working is not None else nullcontext(),
     ):
         try:
-            new = load_inputs(
-                inputs,
-                frame=frame,
-                objects=objects,
-                units=units,
-                landmarks=landmarks,
-                geometry=None if objects_file is None else load_object_geometry(objects_file),
-                geometry_source=None if objects_file is None else str(objects_file),
-            )
+            new = load_inputs(inputs, stream=stream)
             changes = None
             if update_path is not None:
                 previous = load_model(update_path)

@@ -23,7 +23,7 @@ from demoplan.model import Demonstration
 from demoplan.segmentation.detect import Segmentation
 from demoplan.segmentation.importing import ImportedDemonstration, import_recording_details
 from demoplan.segmentation.settings import settings_from_text
-from demoplan.segmentation.streams import demonstration_from_stream
+from demoplan.segmentation.streams import StreamOptions, demonstration_from_stream
 
 __all__ = ["Imported", "Segmented", "import_recording", "segment"]
 
@@ -44,18 +44,16 @@ def segment(
     name: str | None = None,
     plot: Path | None = None,
     thresholds: Sequence[str] = (),
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-    landmarks: Sequence[str] | None = None,
-    units: str | None = None,
-    objects_file: Path | None = None,
+    options: StreamOptions = StreamOptions(),
 ) -> Segmented:
     """Segment ``stream`` (CSV, ROS 2 bag) into pick-and-place steps and write the
     demonstration to ``output`` — and with ``plot`` the segmentation figure,
     both or neither (docs/segmentation.md). ``thresholds``: ``NAME=VALUE``
-    settings; ``objects_file``: the geometry of the stream's objects."""
+    settings; ``options``: how the stream is read (its objects file: the
+    geometry of the stream's objects)."""
     from demoplan.plotting.figures import check_figure_path
 
+    objects_file = options.objects_file
     inputs = [stream, *([objects_file] if objects_file is not None else [])]
     refuse_overwriting_inputs(output, inputs)
     if plot is not None:
@@ -65,12 +63,7 @@ def segment(
         stream,
         name=name or stream.stem,
         settings=settings_from_text(list(thresholds)),
-        frame=frame,
-        objects=objects,
-        units=units,
-        landmarks=landmarks,
-        geometry=None if objects_file is None else load_object_geometry(objects_file),
-        geometry_source=None if objects_file is None else str(objects_file),
+        options=options,
         geometry_of_this_stream=True,
     )
     found, demo = segmented.segmentation, segmented.demonstration

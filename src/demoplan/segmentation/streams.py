@@ -27,10 +27,34 @@ from demoplan.segmentation.types import PoseStream, select_objects
 
 __all__ = [
     "SegmentedStream",
+    "StreamOptions",
     "check_geometry_names",
     "demonstration_from_stream",
     "stream_name",
 ]
+
+
+@dataclass(frozen=True, slots=True)
+class StreamOptions:
+    """How a pose stream is read, as ``segment``, ``learn`` and ``import`` take it.
+
+    ``frame``: the world frame of a TF tree; ``objects``: names or globs of
+    the tracked frames to keep (None: all); ``units``: a CSV's unit of
+    length; ``landmarks``: names or globs of tracked frames that are
+    landmarks (a tray, a box), not objects; ``objects_file``: an objects
+    file giving the geometry of the stream's objects."""
+
+    frame: str | None = None
+    objects: Sequence[str] | None = None
+    units: str | None = None
+    landmarks: Sequence[str] = ()
+    objects_file: Path | None = None
+
+    def geometry(self) -> dict[str, ObjectGeometry] | None:
+        """The objects file's geometry (None: no file given)."""
+        from demoplan.learning.demonstrations import load_object_geometry
+
+        return None if self.objects_file is None else load_object_geometry(self.objects_file)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -54,12 +78,8 @@ def demonstration_from_stream(
     *,
     name: str | None = None,
     settings: SegmentationSettings | None = None,
-    frame: str | None = None,
-    objects: Sequence[str] | None = None,
-    units: str | None = None,
-    landmarks: Sequence[str] | None = None,
+    options: StreamOptions = StreamOptions(),
     geometry: Mapping[str, ObjectGeometry] | None = None,
-    geometry_source: str | None = None,
     geometry_of_this_stream: bool = False,
 ) -> SegmentedStream:
     """Read, segment and write the demonstration of one pose stream.
@@ -69,25 +89,29 @@ def demonstration_from_stream(
     path : the stream (CSV, ROS 2 bag).
     name : the demonstration's name (default: :func:`stream_name`).
     settings : the segmentation's thresholds (default: the documented ones).
-    frame, objects, units : passed to :func:`~demoplan.segmentation.readers.load_stream`;
-        the landmarks are kept along with ``objects``.
-    landmarks : names or :mod:`fnmatch` globs of tracked frames that are
-        landmarks (a tray, a box): not objects; each one's first rest pose is
-        the demonstration's landmark. A pattern matching no tracked frame, or
-        a landmark that moved (a step), is an :class:`InputError`.
-    geometry : object (and landmark) geometry, from an objects file: it checks
-        placements against their supports and is written into the
+    options : how the stream is read (:class:`StreamOptions`): ``frame``,
+        ``objects`` and ``units`` go to :func:`~demoplan.segmentation.readers.load_stream`
+        (the landmarks are kept along with ``objects``); each landmark's first
+        rest pose is the demonstration's landmark — a pattern matching no
+        tracked frame, or a landmark that moved (a step), is an
+        :class:`InputError`.
+    geometry : object (and landmark) geometry, already read from
+        ``options.objects_file`` (None: read here when a file is given): it
+        checks placements against their supports and is written into the
         demonstration for the stream's objects; every object that moves must
         then have one (a demonstration's ``objects`` list them all), else an
-        :class:`InputError` naming ``geometry_source``. Names outside this
+        :class:`InputError` naming the objects file. Names outside this
         stream are ignored, unless ``geometry_of_this_stream`` (one stream,
         ``segment``): then each must be one of its objects
         (:func:`check_geometry_names`); several streams are checked together.
     """
     path = Path(path)
-    patterns = list(landmarks or ())
-    keep = None if objects is None else [*objects, *patterns]
-    stream = load_stream(path, frame=frame, objects=keep, units=units)
+    if geometry is None:
+        geometry = options.geometry()
+    geometry_source = None if options.objects_file is None else str(options.objects_file)
+    patterns = list(options.landmarks)
+    keep = None if options.objects is None else [*options.objects, *patterns]
+    stream = load_stream(path, frame=options.frame, objects=keep, units=options.units)
     chosen = (
         select_objects(patterns, stream.objects, (), source=str(path), field="landmarks")
         if patterns
