@@ -803,7 +803,13 @@ def compute() -> Computed:
     model = learn(load_demonstrations([ROOT / BLOCKS]), settings=PAPER_SETTINGS)
     scene = load_scene(ROOT / PYRAMID)
     plan = solve(load_problem(ROOT / PAPER_PROBLEM), "astar", Budget())
-    report = run_task(model, scene, faults=RUN_FAULTS, seed=RUN_SEED, planning_seconds=math.inf)
+    report = run_task(
+        model,
+        scene,
+        faults=RUN_FAULTS,
+        seed=RUN_SEED,
+        settings=ExecutionSettings(budget=Budget(timeout=math.inf)),
+    )
     return Computed(
         model={k: v for k, v in model_to_dict(model).items() if k != "demonstrations"},
         solve_text=format_plan(plan),

@@ -64,8 +64,8 @@ def test_one_planning_budget_default() -> None:
     assert ExecutionSettings().budget.timeout == PLANNING_SECONDS == DEFAULT_TIMEOUT
     assert inspect.signature(api.plan).parameters["timeout"].default is None  # default_budget()
     assert default_budget().timeout == PLANNING_SECONDS
-    assert inspect.signature(api.run).parameters["planning_seconds"].default == PLANNING_SECONDS
-    assert inspect.signature(run_task).parameters["planning_seconds"].default == PLANNING_SECONDS
+    assert inspect.signature(api.run).parameters["settings"].default is None  # ExecutionSettings()
+    assert inspect.signature(run_task).parameters["settings"].default is None
     assert inspect.signature(run_command).parameters["timeout"].default == PLANNING_SECONDS
 
 

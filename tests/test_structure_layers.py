@@ -33,6 +33,7 @@ RENDERING_AND_PARSING = {
     "demoplan.scenes.geometry.GeometrySettings",
     "demoplan.segmentation.streams.StreamOptions",
     "demoplan.budget.Budget",
+    "demoplan.execution.executor.ExecutionSettings",
 }
 
 

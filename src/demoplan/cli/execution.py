@@ -107,7 +107,9 @@ def run(
     ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
+    from demoplan.budget import Budget
     from demoplan.commands.execution import run as run_task
+    from demoplan.execution.executor import ExecutionSettings
     from demoplan.execution.faults import parse_faults
 
     with reported_errors():
@@ -120,11 +122,13 @@ def run(
                 faults=parse_faults(faults),
                 seed=seed,
                 frames=frames,
-                max_replans=max_replans,
                 perception=perception.value,
-                geometry=geometry_settings(freespace, collisions),
+                settings=ExecutionSettings(
+                    max_replans=max_replans,
+                    geometry=geometry_settings(freespace, collisions),
+                    budget=Budget(timeout=timeout),
+                ),
                 on_event=on_event,
-                planning_seconds=timeout,
                 clutter=clutter,
                 video=video,
             )

@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from demoplan.budget import PERCEPTION_TIMEOUT, PLANNING_SECONDS, Budget
+from demoplan.budget import PERCEPTION_TIMEOUT
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
@@ -20,7 +20,6 @@ from demoplan.fileio import dump_json, refuse_overwriting_inputs, staged_folder,
 from demoplan.model import TaskModel
 from demoplan.perception.images import perceive_files
 from demoplan.perception.stacking import TrackedBlock, scene_document
-from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
@@ -35,10 +34,8 @@ def run(
     sim: str = "kinematic",
     faults: Faults = Faults(),
     seed: int = 0,
-    max_replans: int = 25,
     perception: str = "state",
-    geometry: GeometrySettings | None = None,
-    planning_seconds: float = PLANNING_SECONDS,
+    settings: ExecutionSettings | None = None,
     clutter: bool = False,
     frames: Path | None = None,
     video: Path | None = None,
@@ -51,8 +48,10 @@ def run(
     in that one — it must start as ``scene`` describes (that is where a real
     robot plugs in). ``frames``: a folder for a frame per action and a
     storyboard, written whole or not at all; ``video``: an MP4 of the run;
-    ``planning_seconds``: each (re)planning's budget; ``clutter``: objects the
-    model never saw are allowed (no goal; moved only when in the way);
+    ``settings``: tolerances, the replans allowed and each (re)planning's
+    budget (default: :class:`~demoplan.execution.executor.ExecutionSettings`'s);
+    ``clutter``: objects the model never saw are allowed (no goal; moved only
+    when in the way);
     ``on_event`` hears the run's progress."""
     if video is not None:
         check_video_path(video)
@@ -63,21 +62,16 @@ def run(
     with model_named(model):
         prepared = prepare(task, start, clutter=clutter)  # checked and completed once
         if world is not None:
-            settings = ExecutionSettings(
-                max_replans=max_replans,
-                geometry=geometry or GeometrySettings(),
-                budget=Budget(timeout=planning_seconds),
+            return execute(
+                task, prepared, world, settings or ExecutionSettings(), on_event=on_event
             )
-            return execute(task, prepared, world, settings, on_event=on_event)
         options: dict[str, Any] = {
             "sim": sim,
             "faults": faults,
             "seed": seed,
-            "max_replans": max_replans,
             "perception": perception,
-            "geometry": geometry,
+            "settings": settings,
             "on_event": on_event,
-            "planning_seconds": planning_seconds,
             "clutter": clutter,
             "video": video,
         }

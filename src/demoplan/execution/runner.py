@@ -7,7 +7,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.budget import PLANNING_SECONDS, Budget
 from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import (
     ExecutionSettings,
@@ -23,7 +22,6 @@ from demoplan.execution.video_output import VideoOutput
 from demoplan.execution.world import World
 from demoplan.fileio import output_target
 from demoplan.model import TaskModel
-from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import CandidatePlan
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.scene import Scene
@@ -118,11 +116,9 @@ def run_task(
     faults: Faults = Faults(),
     seed: int = 0,
     frames: Path | None = None,
-    max_replans: int = 25,
     perception: str = "state",
-    geometry: GeometrySettings | None = None,
+    settings: ExecutionSettings | None = None,
     on_event: Callable[[RunEvent], object] | None = None,
-    planning_seconds: float = PLANNING_SECONDS,
     clutter: bool = False,
     video: Path | None = None,
 ) -> RunReport:
@@ -131,19 +127,15 @@ def run_task(
     ``frames``: a folder for a frame per action and a storyboard;
     ``video``: an MP4 of the run from the fixed overview camera (``sim``
     ``mujoco``; written whole or not at all);
-    ``planning_seconds``: the time budget of each (re)planning; ``clutter``:
+    ``settings``: tolerances, the replans allowed and the budget of each
+    (re)planning (default: :class:`~demoplan.execution.executor.ExecutionSettings`'s); ``clutter``:
     objects the model never saw are allowed (as in ``plan``: they get no goal
     and are moved only when in the way), else an input error."""
     prepared = prepare(model, scene, clutter=clutter)  # once per run
     scene = prepared.scene
     if video is not None and sim not in ("mujoco", "arm"):
         raise UsageError("--video records the physics simulation: it needs --sim mujoco or arm")
-    settings = ExecutionSettings(
-        max_replans=max_replans,
-        geometry=geometry or GeometrySettings(),
-        position_tolerance=0.01,
-        budget=Budget(timeout=planning_seconds),
-    )
+    settings = settings or ExecutionSettings()
     world, first = start_world(model, prepared, sim, faults, seed, settings, perception)
     recording: VideoOutput | None = None
     finished = False
