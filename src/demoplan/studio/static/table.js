@@ -206,7 +206,15 @@ export class TableView {
   shape(parent, name, geometry, pose, kind) {
     const g = el("g", { class: kind, transform: `translate(${this.px(pose.position[0])} ${this.py(pose.position[1])})` }, parent);
     const turn = el("g", { transform: `rotate(${-(pose.yaw || 0)})` }, g);
-    const size = geometry.size || [0.05, 0.05, 0.01];
+    if (kind === "landmark" && !geometry.size) {
+      // a landmark known only by its pose: a frame marker (x axis longer)
+      el("circle", { r: 6, class: "marker" }, turn);
+      el("line", { x1: 0, y1: 0, x2: 18, y2: 0, class: "marker-axis" }, turn);
+      el("line", { x1: 0, y1: 0, x2: 0, y2: -10, class: "marker-axis" }, turn);
+      el("text", { class: "label", y: -10 }, g).textContent = name;
+      return g;
+    }
+    const size = geometry.size;
     const fill = kind === "outline" ? "none" : geometry.colour || "#999";
     const stroke = kind === "outline" ? geometry.colour || "#333" : darker(geometry.colour);
     const w = size[0] / this.mpp;
