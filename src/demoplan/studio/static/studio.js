@@ -145,12 +145,14 @@ async function place(name, xy, yaw, amend) {
       steps.push({ ...step, before });
     }
     state.teach.poses[name] = pose;
+    keepInView(state.teach.poses);
     state.teach.saved = false;
     renderSteps();
     say(`${name} put down at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
       (answer.on ? ` on ${answer.on}` : ""));
   } else {
     state.plan.poses[name] = pose;
+    keepInView(state.plan.poses);
     clearPlan();
     say(`${name} now starts at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
       (answer.on ? ` on ${answer.on}` : ""));
@@ -174,7 +176,50 @@ function renderSteps() {
   $("undo").disabled = state.teach.steps.length === 0;
 }
 
+// The drawn table: the layout's, grown to cover every object shown (a file's
+// layout may be drawn around its start only) and, for the same objects, the
+// table drawn before (so that the view does not jump between demonstrations).
+function cover(table_, poses, margin = 0.05) {
+  let [x0, y0] = table_.origin;
+  let [x1, y1] = [x0 + table_.size[0], y0 + table_.size[1]];
+  for (const pose of Object.values(poses)) {
+    const [x, y] = pose.position;
+    x0 = Math.min(x0, x - margin);
+    y0 = Math.min(y0, y - margin);
+    x1 = Math.max(x1, x + margin);
+    y1 = Math.max(y1, y + margin);
+  }
+  return { origin: [x0, y0], size: [x1 - x0, y1 - y0] };
+}
+
+function sameObjects(a, b) {
+  const names = (l) => Object.keys(l.objects).sort().join(" ");
+  return names(a) === names(b);
+}
+
+function corners(table_) {
+  const [x0, y0] = table_.origin;
+  return {
+    a: { position: [x0, y0] },
+    b: { position: [x0 + table_.size[0], y0 + table_.size[1]] },
+  };
+}
+
+// Grow the drawn table when an object has left it.
+function keepInView(poses) {
+  const grown = cover(state.layout.table, poses);
+  const [w0, h0] = state.layout.table.size;
+  if (grown.size[0] > w0 + 1e-9 || grown.size[1] > h0 + 1e-9) {
+    state.layout.table = grown;
+    table.setLayout(state.layout, tableRoom());
+  }
+}
+
 function startDemonstration(layout, note) {
+  if (state.layout && sameObjects(state.layout, layout)) {
+    layout.table = cover(layout.table, corners(state.layout.table), 0);
+  }
+  layout.table = cover(layout.table, layout.poses);
   state.layout = layout;
   state.teach.initial = clone(layout.poses);
   state.teach.poses = clone(layout.poses);
@@ -334,7 +379,7 @@ function renderLearned(result) {
     const row = body.insertRow();
     row.dataset.state = s.id;
     const cells = [
-      s.id, s.object, s.reference, mm(s.spread), mm(s.margin),
+      s.id, s.object, s.reference, mm(s.spread), s.margin === null || s.margin === undefined ? "—" : `${fmt(s.margin, 2)} ×`,
       s.position.map((v) => fmt(v)).join(", "), s.yaw === null ? "any" : `${fmt(s.yaw, 1)}°`,
     ];
     cells.forEach((text, i) => {
@@ -357,6 +402,7 @@ function renderLearned(result) {
   drawGraph($("graph"), result.constraints, objectOf);
   const warnings = $("warnings");
   warnings.replaceChildren();
+  $("warnings-title").textContent = `Warnings (${result.warnings.length})`;
   for (const line of result.warnings) {
     const li = document.createElement("li");
     li.textContent = line;
@@ -397,6 +443,7 @@ function clearPlan() {
   state.plan.step = 0;
   $("plan-result").hidden = true;
   $("no-plan").hidden = true;
+  $("candidates-box").hidden = true;
 }
 
 async function scramble() {
@@ -405,6 +452,7 @@ async function scramble() {
   const layout = await post("/api/scramble", { layout: layoutWith(state.plan.poses), seed });
   $("scramble-seed").value = String(seed + 1);
   state.plan.poses = clone(layout.poses);
+  keepInView(state.plan.poses);
   clearPlan();
   redraw();
   say(`Scrambled (seed ${seed}).`);
@@ -422,11 +470,13 @@ async function makePlan() {
     const figure = $("no-plan-figure");
     figure.hidden = !result.no_plan.figure;
     if (result.no_plan.figure) figure.src = `data:image/svg+xml;charset=utf-8,${encodeURIComponent(result.no_plan.figure)}`;
+    renderCandidates(result);
     say("No plan.");
     redraw();
     return;
   }
   $("plan-result").hidden = false;
+  renderCandidates(result);
   const list = $("plan-list");
   list.replaceChildren();
   for (const line of result.plan) {
@@ -434,20 +484,26 @@ async function makePlan() {
     li.textContent = line;
     list.appendChild(li);
   }
-  const body = $("candidates").tBodies[0];
-  body.replaceChildren();
-  for (const c of result.candidates) {
-    const row = body.insertRow();
-    if (c.goal === result.chosen) row.className = "chosen";
-    row.insertCell().textContent = String(c.goal);
-    row.insertCell().textContent = c.length === null || c.length === undefined ? "—" : String(c.length);
-    row.insertCell().textContent = c.goal === result.chosen ? `chosen${c.outcome ? ` (${c.outcome})` : ""}` : c.outcome || "";
-  }
   $("optimal").textContent = result.optimal ? "The plan is proved shortest." : "The plan is not proved shortest.";
   const slider = $("plan-step");
   slider.max = String(result.moves.length);
   setPlanStep(0);
   say(`Plan of ${result.plan.length} actions.`);
+}
+
+function renderCandidates(result) {
+  const body = $("candidates").tBodies[0];
+  body.replaceChildren();
+  for (const c of result.candidates) {
+    const row = body.insertRow();
+    if (c.goal === result.chosen) row.className = "chosen";
+    // as the CLI's table: the demonstrations sharing this goal (numbered from 1)
+    const names = Array.isArray(c.demonstrations) && c.demonstrations.length ? c.demonstrations.join(", ") : String(c.goal + 1);
+    row.insertCell().textContent = names;
+    row.insertCell().textContent = c.length === null || c.length === undefined ? "—" : String(c.length);
+    row.insertCell().textContent = c.outcome || (c.goal === result.chosen ? "chosen" : "");
+  }
+  $("candidates-box").hidden = !result.candidates.length;
 }
 
 function planPosesAt(step) {
@@ -534,7 +590,7 @@ function setRunStep(step) {
   redraw();
 }
 
-const MARKS = { failure: "✗", replan: "↻", done: "✓", action: "•" };
+const MARKS = { plan: "▸", failure: "✗", replan: "↻", done: "✓", action: "•" };
 
 function renderRun() {
   const status = state.run.status;
