@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints, field_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StringConstraints, field_validator
 
 from demoplan.documents.poses import MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
 
@@ -174,7 +174,7 @@ class ScrambleRequest(_Body):
 class PlanRequest(_Body):
     model: FileName
     scene: dict[str, Any]
-    clutter: bool = False
+    clutter: StrictBool = False
 
     @field_validator("scene")
     @classmethod
