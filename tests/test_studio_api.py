@@ -440,6 +440,14 @@ def test_unknown_objects_and_bad_values_are_refused(client: TestClient) -> None:
     one_line_error(answer, 422, "needs red, which the scene lacks")
 
 
+def test_the_limits_are_the_files_limits() -> None:
+    from demoplan.documents import poses
+    from demoplan.studio import requests
+
+    assert requests.MAX_DISTANCE_M == poses.MAX_DISTANCE_M
+    assert (requests.MIN_SIZE_M, requests.MAX_SIZE_M) == (poses.MIN_SIZE_M, poses.MAX_SIZE_M)
+
+
 @settings(
     max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
