@@ -12,9 +12,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints, field_validator
-
-from demoplan.documents.poses import MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StringConstraints, field_validator
 
 __all__ = [
     "MAX_BODY_BYTES",
@@ -30,6 +28,13 @@ __all__ = [
     "ScrambleRequest",
 ]
 
+MAX_DISTANCE_M = 1000.0
+"""m: a position's limit on any axis, as in every file (``demoplan.documents.poses``;
+repeated here so that the server starts without the numeric stack, and checked
+equal by tests/test_studio_api.py)."""
+MIN_SIZE_M = 1e-4
+MAX_SIZE_M = 10.0
+"""m: an object's extents, as in every file (``demoplan.documents.poses``)."""
 MAX_BODY_BYTES = 1024 * 1024
 """A request body's limit (HTTP 413 beyond)."""
 MAX_OBJECTS = 200
@@ -174,7 +179,7 @@ class ScrambleRequest(_Body):
 class PlanRequest(_Body):
     model: FileName
     scene: dict[str, Any]
-    clutter: bool = False
+    clutter: StrictBool = False
 
     @field_validator("scene")
     @classmethod

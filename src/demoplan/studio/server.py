@@ -59,14 +59,20 @@ def serve(workdir: Path, host: str = "127.0.0.1", port: int = 0, open_browser: b
     app = create_app(workdir)
     sock = bind(host, port)
     url = url_of(sock)
+    folder = app.state.workfolder.root
+
+    class Announced(uvicorn.Server):
+        """The server that says where it listens once it answers there."""
+
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+            await super().startup(sockets=sockets)
+            sys.stdout.write(f"demoplan studio: {url} (work folder {folder}); Ctrl-C stops it\n")
+            sys.stdout.flush()
+            if open_browser:
+                threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()
+
     config = uvicorn.Config(app, log_level="warning", access_log=False, lifespan="off")
-    server = uvicorn.Server(config)
-    sys.stdout.write(
-        f"demoplan studio: {url} (work folder {app.state.workfolder.root}); Ctrl-C stops it\n"
-    )
-    sys.stdout.flush()
-    if open_browser:
-        threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()
+    server = Announced(config)
     try:
         server.run(sockets=[sock])
     finally:
