@@ -18,6 +18,7 @@ import pytest
 from demoplan.commands.execution import run
 from demoplan.commands.learning import learn_model
 from demoplan.commands.planning import plan
+from demoplan.errors import NoPlanError, error_line
 from demoplan.execution.faults import Faults
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
@@ -260,6 +261,19 @@ def test_blocks_taught_planned_from_fig4_and_run_with_a_drop_fault(
         t.split(" ", 1)[1] for t in failures
     ]
     page.screenshot("run")
+
+    # a start with no free space to park in: no plan, and the CLI's reason
+    write_json(workdir / "no-room.json", {**_load(FIG4), "freespace": []})
+    page.view("Plan")
+    page.tab.get_by_label("Scene file").select_option("no-room.json")
+    page.button("Load scene").click()
+    page.settle()
+    page.button("Plan").click()
+    page.settle()
+    with pytest.raises(NoPlanError) as caught:
+        plan(workdir / "model.json", workdir / "no-room.json")
+    assert page.tab.locator("#no-plan-reason").inner_text() == error_line(caught.value)
+    assert page.tab.locator('[data-testid="plan"] > li').count() == 0
 
 
 def _arrange(page: Studio, scene: dict[str, Any]) -> None:

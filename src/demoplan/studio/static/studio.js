@@ -18,7 +18,7 @@ const state = {
   source: { kind: "template", id: "set_table" },
   teach: { initial: {}, poses: {}, steps: [], saved: false },
   learn: { result: null },
-  plan: { poses: null, result: null, step: 0, timer: null },
+  plan: { poses: null, extras: null, result: null, step: 0, timer: null },
   run: { id: null, status: null, step: 0, timer: null, poll: null },
   selected: null,
   files: { demonstrations: [], models: [], scenes: [] },
@@ -226,6 +226,7 @@ function startDemonstration(layout, note) {
   state.teach.steps = [];
   state.teach.saved = false;
   state.plan.poses = null;
+  state.plan.extras = null;
   state.selected = null;
   clearPlan();
   table.setLayout(layout, tableRoom());
@@ -344,6 +345,16 @@ async function refreshFiles() {
     label.append(input, ` ${name}`);
     box.appendChild(label);
   }
+  const planFile = $("plan-file");
+  const keepPlan = planFile.value;
+  planFile.replaceChildren(new Option("(none)", ""));
+  for (const kind of ["scenes", "demonstrations"]) {
+    const group = document.createElement("optgroup");
+    group.label = kind;
+    for (const name of state.files[kind]) group.appendChild(new Option(name, name));
+    if (state.files[kind].length) planFile.appendChild(group);
+  }
+  planFile.value = state.files.scenes.includes(keepPlan) || state.files.demonstrations.includes(keepPlan) ? keepPlan : "";
   const models = $("plan-model");
   const current = models.value;
   models.replaceChildren();
@@ -425,10 +436,54 @@ function sceneDocument() {
     objects[name] = { ...poseDocument(pose), size: geometry.size };
     if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
   }
-  const scene = { format: "demoplan/scene-1", objects };
+  const extras = state.plan.extras || { scene: {}, objects: {} };
+  for (const [name, fields] of Object.entries(extras.objects)) {
+    if (objects[name]) Object.assign(objects[name], fields);
+  }
+  const scene = { format: "demoplan/scene-1", objects, ...extras.scene };
   const landmarks = landmarksDocument();
   if (Object.keys(landmarks).length) scene.landmarks = landmarks;
   return scene;
+}
+
+// What a loaded scene file says beyond the poses (free space, gripper, table,
+// robot; per object grasps and mass), kept for planning it; only for files in
+// the default units, the page's own.
+const SCENE_EXTRAS = ["freespace", "gripper", "table", "robot"];
+const OBJECT_EXTRAS = ["grasps", "mass", "density"];
+
+function sceneExtras(document_) {
+  const extras = { scene: {}, objects: {} };
+  if (!document_ || document_.units) return extras;
+  for (const key of SCENE_EXTRAS) if (document_[key] !== undefined && document_[key] !== null) extras.scene[key] = document_[key];
+  for (const [name, object] of Object.entries(document_.objects || {})) {
+    const fields = {};
+    for (const key of OBJECT_EXTRAS) if (object[key] !== undefined && object[key] !== null) fields[key] = object[key];
+    if (Object.keys(fields).length) extras.objects[name] = fields;
+  }
+  return extras;
+}
+
+async function loadPlanScene() {
+  const name = $("plan-file").value;
+  if (!name) {
+    alarm("choose a scene or demonstration of the work folder first");
+    return;
+  }
+  const answer = await get(`/api/files/${encodeURIComponent(name)}`);
+  if (!answer.layout) {
+    alarm(`${name}: not a scene or a demonstration`);
+    return;
+  }
+  if (!state.layout || !sameObjects(state.layout, answer.layout)) {
+    startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
+  }
+  state.plan.poses = clone(answer.layout.poses);
+  keepInView(state.plan.poses);
+  state.plan.extras = answer.document && answer.document.format === "demoplan/scene-1" ? sceneExtras(answer.document) : null;
+  clearPlan();
+  redraw();
+  say(`The plan starts from ${name}.`);
 }
 
 function chosenModel() {
@@ -442,6 +497,7 @@ function clearPlan() {
   state.plan.result = null;
   state.plan.step = 0;
   $("plan-result").hidden = true;
+  $("plan-list").replaceChildren();
   $("no-plan").hidden = true;
   $("candidates-box").hidden = true;
 }
@@ -729,8 +785,10 @@ function wire() {
   $("undo").addEventListener("click", undo);
   $("learn").addEventListener("click", () => guarded(learn));
   $("scramble").addEventListener("click", () => guarded(scramble));
+  $("load-plan-file").addEventListener("click", () => guarded(loadPlanScene));
   $("start-from-teach").addEventListener("click", () => {
     state.plan.poses = clone(state.teach.poses);
+    state.plan.extras = null;
     clearPlan();
     redraw();
     say("The plan starts from the table as taught.");
