@@ -307,6 +307,34 @@ def test_learning_through_the_api_equals_the_command_layer(client: TestClient) -
     assert client.get("/api/files").json()["models"] == ["table.json"]
 
 
+def test_learning_warns_as_the_command_line_does(client: TestClient) -> None:
+    documents = [json.loads(p.read_text()) for p in sorted((EXAMPLES / "set_table").iterdir())]
+    documents[2]["steps"][1]["position"] = [*documents[2]["steps"][1]["position"][:2], 0.1]
+    names = [
+        client.post("/api/demonstrations", json={"document": d}).json()["file"] for d in documents
+    ]
+    answer = client.post("/api/learn", json={"files": names, "output": "m.json"}).json()
+    printed = subprocess.run(
+        [*COMMAND, "learn", *names, "-o", "cli.json"],
+        cwd=work(client),
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stderr.splitlines()
+    assert answer["warnings"] == [line for line in printed if not line.startswith("wrote ")]
+    assert any("fork released 10 cm above the table" in line for line in answer["warnings"])
+
+
+def test_learning_and_planning_beyond_the_limit_are_refused(client: TestClient) -> None:
+    jobs = client.app.state.jobs  # type: ignore[attr-defined]
+    save_blocks_and_learn(client)
+    with jobs.working(), jobs.working():
+        one_line_error(client.post("/api/learn", json={"output": "model.json"}), 429, "at most 2")
+        body = {"model": "model.json", "scene": scene_body()}
+        one_line_error(client.post("/api/plan", json=body), 429, "at most 2")
+    assert client.post("/api/plan", json=body).status_code == 200
+
+
 def test_plan_through_the_api_is_the_command_lines(client: TestClient) -> None:
     learned = save_blocks_and_learn(client)
     scene = scene_body()

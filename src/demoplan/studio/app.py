@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import threading
 from collections.abc import Awaitable, Callable, Iterator, MutableMapping
 from contextlib import contextmanager
@@ -198,7 +199,7 @@ def create_app(workdir: Path) -> FastAPI:
     _add_error_handlers(app)
     _add_page(app)
     _add_layout_routes(app, folder)
-    _add_learning_routes(app, folder)
+    _add_learning_routes(app, folder, jobs)
     _add_run_routes(app, folder, jobs)
     return app
 
@@ -273,7 +274,7 @@ def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
         return {"file": folder.create(document, body.name, "scene")}
 
 
-def _add_learning_routes(app: FastAPI, folder: WorkFolder) -> None:
+def _add_learning_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
     """Learning a model and planning with it."""
 
     @app.post("/api/learn")
@@ -299,11 +300,15 @@ def _add_learning_routes(app: FastAPI, folder: WorkFolder) -> None:
                     f"output: {body.output} is not a model file; a model's file name expected"
                 )
         scene = _scene(body.scene, "scene") if body.scene is not None else None
-        with logged_warnings() as warnings:
-            learned = learn_files(paths, output=output)
-            model = learned.model
+        with jobs.working(), logged_warnings() as logged:
+            model = learn_files(paths, output=output).model
+        # as `learn` prints them: the model's diagnostics, then what was logged,
+        # files named as in the work folder
+        where = f"{folder.root}{os.sep}"
+        warnings = [f"warning: {line}" for line in diagnostic_lines(model)]
+        warnings += [line.replace(where, "") for line in dict.fromkeys(logged)]
+        with jobs.working():
             targets = targets_json(model, scene if scene is not None else final_scene(model))
-        warnings += [f"warning: {line}" for line in diagnostic_lines(model)]
         return {"model": body.output, **model_json(model), "targets": targets, "warnings": warnings}
 
     @app.post("/api/plan")
@@ -315,7 +320,8 @@ def _add_learning_routes(app: FastAPI, folder: WorkFolder) -> None:
         model = _model_path(folder, body.model)
         scene = _scene(body.scene, "scene")
         try:
-            result = plan_task(model, scene, clutter=body.clutter)
+            with jobs.working():
+                result = plan_task(model, scene, clutter=body.clutter)
         except (SceneNoPlanError, SceneLimitReachedError) as failure:
             return no_plan_json(failure)
         return plan_json(result)

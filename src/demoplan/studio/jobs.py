@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import secrets
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,8 @@ __all__ = [
 
 MAX_ACTIVE_RUNS = 2
 """Runs going on at once."""
+MAX_ACTIVE_WORK = 2
+"""Learning and planning requests answered at once."""
 MAX_KEPT_RUNS = 50
 """Finished runs remembered (the oldest is forgotten beyond)."""
 MAX_EVENTS = 10_000
@@ -84,6 +87,7 @@ class Jobs:
     def __init__(self) -> None:
         self._jobs: dict[str, Job] = {}
         self._lock = threading.Lock()
+        self._slots = threading.BoundedSemaphore(MAX_ACTIVE_WORK)
 
     def start(self, work: Work) -> Job:
         """Start ``work`` in a new thread (TooManyRunsError beyond the limit)."""
@@ -132,6 +136,21 @@ class Jobs:
             job.state, job.result, job.error = state, result, error
             if events is not None:
                 job.events = events
+
+    @contextmanager
+    def working(self) -> Iterator[None]:
+        """A learning or planning request: at most :data:`MAX_ACTIVE_WORK` at
+        once (TooManyRunsError beyond, HTTP 429), each under the command
+        layer's time budget."""
+        if not self._slots.acquire(blocking=False):
+            raise TooManyRunsError(
+                f"{MAX_ACTIVE_WORK} learning or planning requests are going on, at most "
+                f"{MAX_ACTIVE_WORK} at once; try again when one has answered"
+            )
+        try:
+            yield
+        finally:
+            self._slots.release()
 
     def get(self, run_id: str) -> Job:
         with self._lock:
