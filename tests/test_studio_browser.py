@@ -9,6 +9,8 @@ DEMOPLAN_STUDIO_SCREENSHOTS=1, to docs/images/studio/.
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -165,6 +167,17 @@ def test_the_paper_set_table_is_taught_by_dragging_and_learned_as_the_cli_learns
     assert [(s.id, s.object, s.position.reference) for s in expected.states] == [
         (s.id, s.object, s.position.reference) for s in shipped.states
     ]
+    # the warnings as `demoplan learn` prints them
+    printed = subprocess.run(
+        [sys.executable, "-m", "demoplan", "learn", *names, "-o", "cli.json"],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stderr.splitlines()
+    shown_warnings = page.tab.locator("#warnings > li").all_inner_texts()
+    assert shown_warnings == [line for line in printed if not line.startswith("wrote ")]
+    assert shown_warnings
     outlines = page.tab.locator("#table [data-target]")
     assert outlines.count() == len(expected.states)
     assert page.tab.locator("#graph [data-state]").count() == len(expected.states)
