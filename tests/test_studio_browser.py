@@ -9,6 +9,7 @@ DEMOPLAN_STUDIO_SCREENSHOTS=1, to docs/images/studio/.
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -377,3 +378,30 @@ def test_the_kit_by_keyboard_a_placed_landmark_and_a_stack_that_cannot_be_taken_
     assert saved["landmarks"]["tray"]["position"][:2] == [0.5, 0.15]
     assert saved["steps"] == [{"object": "screws", "position": [0.12, 0.3, 0.05], "yaw": 0.0}]
     assert learn_model([workdir / "demonstration-1.json"]).states[0].object == "screws"
+
+
+def test_a_long_run_on_the_arm_is_cancelled_from_the_page(studio: tuple[Studio, Path]) -> None:
+    pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
+    pytest.importorskip("mink", reason="mink is not installed (pip install -e '.[sim]')")
+    page, workdir = studio
+    shutil.copyfile(BLOCKS, workdir / "blocks.json")
+    shutil.copyfile(FIG4, workdir / "fig4.json")
+    page.view("Learn")
+    page.tab.wait_for_selector('#learn-files input[value="blocks.json"]')
+    page.button("Learn").click()
+    page.settle()
+    page.view("Plan")
+    page.tab.get_by_label("Scene file").select_option("fig4.json")
+    page.button("Load scene").click()
+    page.settle()
+    page.view("Run")
+    page.tab.get_by_label("World").select_option("arm")
+    page.button("Run").click()
+    page.tab.wait_for_selector('#run-state[data-state="running"]')
+    cancel = page.button("Cancel")
+    assert cancel.is_enabled()
+    cancel.click()
+    page.tab.wait_for_selector('#run-state[data-state="cancelled"]', timeout=60_000)
+    assert page.button("Cancel").is_disabled()
+    assert page.button("Run").is_enabled()
+    assert "cancelled" in page.tab.locator("#run-summary").inner_text()
