@@ -249,7 +249,7 @@ def test_blocks_taught_planned_from_fig4_and_run_with_a_drop_fault(
     # a run with dropped objects: failures detected and replanned
     page.view("Run")
     page.tab.get_by_label("Faults").fill("drop=0.5")
-    page.tab.get_by_label("Seed", exact=True).last.fill("0")
+    page.tab.get_by_label("Run seed").fill("0")
     page.button("Run").click()
     page.tab.wait_for_selector(
         '#run-state:not([data-state="running"]):not([data-state="idle"])', timeout=120_000
