@@ -44,7 +44,8 @@ FIG4 = EXAMPLES / "scenes" / "pyramid-fig4.json"
 
 @pytest.fixture
 def client(tmp_path: Path) -> Iterator[TestClient]:
-    with TestClient(create_app(tmp_path / "work")) as test_client:
+    # the studio answers requests sent to its loopback address only
+    with TestClient(create_app(tmp_path / "work"), base_url="http://127.0.0.1") as test_client:
         yield test_client
 
 
@@ -491,6 +492,25 @@ def test_any_number_is_answered_or_refused_in_one_line(client: TestClient, x: fl
     else:
         assert answer.status_code == 422
         assert "\n" not in answer.json()["detail"]
+
+
+def test_requests_from_other_sites_are_refused(client: TestClient) -> None:
+    one_line_error(
+        client.get("/api/files", headers={"host": "attacker.example"}), 403, "attacker.example"
+    )
+    assert client.get("/api/files", headers={"host": "localhost:8765"}).status_code == 200
+    assert client.get("/api/files", headers={"host": "[::1]:8765"}).status_code == 200
+    body = {"document": blocks_demonstrations()[0]}
+    other = {"origin": "http://attacker.example"}
+    one_line_error(client.post("/api/demonstrations", json=body, headers=other), 403, "Origin")
+    mine = {"origin": "http://127.0.0.1:8765"}
+    assert client.post("/api/demonstrations", json=body, headers=mine).status_code == 201
+    form = {"content-type": "text/plain"}
+    text = json.dumps(body)
+    one_line_error(
+        client.post("/api/demonstrations", content=text, headers=form), 415, "application/json"
+    )
+    assert client.get("/api/files").json()["demonstrations"] == ["demonstration-1.json"]
 
 
 def test_a_large_body_is_refused_before_it_is_read(client: TestClient) -> None:
