@@ -589,7 +589,10 @@ def test_any_file_name_is_saved_inside_or_refused(client: TestClient, name: str)
 # --- the command ---
 
 
-def test_the_command_prints_its_url_answers_and_stops_with_130(tmp_path: Path) -> None:
+@pytest.mark.parametrize(("stop", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_the_command_prints_its_url_answers_and_stops_as_every_command(
+    tmp_path: Path, stop: signal.Signals, code: int
+) -> None:
     process = subprocess.Popen(
         [*COMMAND, "studio", "--no-browser", "--port", "0", "--workdir", str(tmp_path / "w")],
         stdout=subprocess.PIPE,
@@ -605,8 +608,8 @@ def test_the_command_prints_its_url_answers_and_stops_with_130(tmp_path: Path) -
         with urllib.request.urlopen(url + "api/templates", timeout=60) as answer:
             ids = [t["id"] for t in json.loads(answer.read())["templates"]]
         assert ids == ["set_table", "blocks", "kit"]
-        process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=60) == 130
+        process.send_signal(stop)
+        assert process.wait(timeout=60) == code
         assert process.stderr is not None
         assert process.stderr.read().strip() == "demoplan: interrupted"
     finally:

@@ -60,6 +60,11 @@ def serve(workdir: Path, host: str = "127.0.0.1", port: int = 0, open_browser: b
     bound = sock.getsockname()[0]
     # served to a network on purpose (0.0.0.0, an address of this machine): any Host
     loopback = bound.startswith("127.") or bound == "::1"
+    if not loopback:
+        sys.stderr.write(
+            f"demoplan: WARNING: --host {host}: the studio is served to the network; anyone "
+            "who reaches it can read and write the work folder\n"
+        )
     try:
         app = create_app(workdir, hosts=(*LOOPBACK_NAMES, bound, host) if loopback else None)
     except BaseException:
