@@ -513,6 +513,76 @@ def test_requests_from_other_sites_are_refused(client: TestClient) -> None:
     assert client.get("/api/files").json()["demonstrations"] == ["demonstration-1.json"]
 
 
+JSON_LEAVES = (
+    st.none()
+    | st.booleans()
+    | st.integers(-(10**6), 10**6)
+    | st.floats(allow_nan=False, allow_infinity=False)
+    | st.text(max_size=8)
+)
+JSON_VALUES = st.recursive(
+    JSON_LEAVES,
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
+    ),
+    max_leaves=10,
+)
+
+
+def _places(value: Any, where: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
+    yield where
+    items = (
+        value.items()
+        if isinstance(value, dict)
+        else enumerate(value)
+        if isinstance(value, list)
+        else ()
+    )
+    for key, inner in items:
+        yield from _places(inner, (*where, key))
+
+
+@st.composite
+def mutated(draw: Any, base: dict[str, Any]) -> Any:
+    """``base`` with one value anywhere in it replaced by any JSON value."""
+    where = draw(st.sampled_from(list(_places(base))))
+    value = draw(JSON_VALUES)
+    if not where:
+        return value
+    copy = json.loads(json.dumps(base))
+    inner = copy
+    for key in where[:-1]:
+        inner = inner[key]
+    inner[where[-1]] = value
+    return copy
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.data())
+def test_any_mangled_request_is_answered_or_refused_in_one_line(
+    client: TestClient, data: st.DataObject
+) -> None:
+    layout = client.get("/api/templates/kit").json()
+    drop = {"layout": layout, "object": "pcb", "position": [0.3, 0.3], "yaw": 5}
+    demonstration = {"document": blocks_demonstrations()[0], "name": None}
+    path, base = data.draw(
+        st.sampled_from(
+            [
+                ("/api/drop", drop),
+                ("/api/scramble", {"layout": layout, "seed": 3}),
+                ("/api/demonstrations", demonstration),
+                ("/api/scenes", {"document": scene_body(), "name": None}),
+            ]
+        )
+    )
+    answer = client.post(path, json=data.draw(mutated(base)))  # a 500 raises here
+    if answer.status_code >= 300:
+        assert answer.status_code < 500
+        one_line_error(answer, answer.status_code)
+
+
 def test_a_large_body_is_refused_before_it_is_read(client: TestClient) -> None:
     big = b'{"document": {"steps": [], "x": "' + b"x" * (10 * 1024 * 1024) + b'"}}'
     headers = {"content-type": "application/json"}
