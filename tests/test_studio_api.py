@@ -44,7 +44,8 @@ FIG4 = EXAMPLES / "scenes" / "pyramid-fig4.json"
 
 @pytest.fixture
 def client(tmp_path: Path) -> Iterator[TestClient]:
-    with TestClient(create_app(tmp_path / "work")) as test_client:
+    # the studio answers requests sent to its loopback address only
+    with TestClient(create_app(tmp_path / "work"), base_url="http://127.0.0.1") as test_client:
         yield test_client
 
 
@@ -493,6 +494,95 @@ def test_any_number_is_answered_or_refused_in_one_line(client: TestClient, x: fl
         assert "\n" not in answer.json()["detail"]
 
 
+def test_requests_from_other_sites_are_refused(client: TestClient) -> None:
+    one_line_error(
+        client.get("/api/files", headers={"host": "attacker.example"}), 403, "attacker.example"
+    )
+    assert client.get("/api/files", headers={"host": "localhost:8765"}).status_code == 200
+    assert client.get("/api/files", headers={"host": "[::1]:8765"}).status_code == 200
+    body = {"document": blocks_demonstrations()[0]}
+    other = {"origin": "http://attacker.example"}
+    one_line_error(client.post("/api/demonstrations", json=body, headers=other), 403, "Origin")
+    mine = {"origin": "http://127.0.0.1:8765"}
+    assert client.post("/api/demonstrations", json=body, headers=mine).status_code == 201
+    form = {"content-type": "text/plain"}
+    text = json.dumps(body)
+    one_line_error(
+        client.post("/api/demonstrations", content=text, headers=form), 415, "application/json"
+    )
+    assert client.get("/api/files").json()["demonstrations"] == ["demonstration-1.json"]
+
+
+JSON_LEAVES = (
+    st.none()
+    | st.booleans()
+    | st.integers(-(10**6), 10**6)
+    | st.floats(allow_nan=False, allow_infinity=False)
+    | st.text(max_size=8)
+)
+JSON_VALUES = st.recursive(
+    JSON_LEAVES,
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
+    ),
+    max_leaves=10,
+)
+
+
+def _places(value: Any, where: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
+    yield where
+    items = (
+        value.items()
+        if isinstance(value, dict)
+        else enumerate(value)
+        if isinstance(value, list)
+        else ()
+    )
+    for key, inner in items:
+        yield from _places(inner, (*where, key))
+
+
+@st.composite
+def mutated(draw: Any, base: dict[str, Any]) -> Any:
+    """``base`` with one value anywhere in it replaced by any JSON value."""
+    where = draw(st.sampled_from(list(_places(base))))
+    value = draw(JSON_VALUES)
+    if not where:
+        return value
+    copy = json.loads(json.dumps(base))
+    inner = copy
+    for key in where[:-1]:
+        inner = inner[key]
+    inner[where[-1]] = value
+    return copy
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.data())
+def test_any_mangled_request_is_answered_or_refused_in_one_line(
+    client: TestClient, data: st.DataObject
+) -> None:
+    layout = client.get("/api/templates/kit").json()
+    drop = {"layout": layout, "object": "pcb", "position": [0.3, 0.3], "yaw": 5}
+    demonstration = {"document": blocks_demonstrations()[0], "name": None}
+    path, base = data.draw(
+        st.sampled_from(
+            [
+                ("/api/drop", drop),
+                ("/api/scramble", {"layout": layout, "seed": 3}),
+                ("/api/demonstrations", demonstration),
+                ("/api/scenes", {"document": scene_body(), "name": None}),
+            ]
+        )
+    )
+    answer = client.post(path, json=data.draw(mutated(base)))  # a 500 raises here
+    if answer.status_code >= 300:
+        assert answer.status_code < 500
+        one_line_error(answer, answer.status_code)
+
+
 def test_a_large_body_is_refused_before_it_is_read(client: TestClient) -> None:
     big = b'{"document": {"steps": [], "x": "' + b"x" * (10 * 1024 * 1024) + b'"}}'
     headers = {"content-type": "application/json"}
@@ -569,7 +659,10 @@ def test_any_file_name_is_saved_inside_or_refused(client: TestClient, name: str)
 # --- the command ---
 
 
-def test_the_command_prints_its_url_answers_and_stops_with_130(tmp_path: Path) -> None:
+@pytest.mark.parametrize(("stop", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_the_command_prints_its_url_answers_and_stops_as_every_command(
+    tmp_path: Path, stop: signal.Signals, code: int
+) -> None:
     process = subprocess.Popen(
         [*COMMAND, "studio", "--no-browser", "--port", "0", "--workdir", str(tmp_path / "w")],
         stdout=subprocess.PIPE,
@@ -585,8 +678,8 @@ def test_the_command_prints_its_url_answers_and_stops_with_130(tmp_path: Path) -
         with urllib.request.urlopen(url + "api/templates", timeout=60) as answer:
             ids = [t["id"] for t in json.loads(answer.read())["templates"]]
         assert ids == ["set_table", "blocks", "kit"]
-        process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=60) == 130
+        process.send_signal(stop)
+        assert process.wait(timeout=60) == code
         assert process.stderr is not None
         assert process.stderr.read().strip() == "demoplan: interrupted"
     finally:

@@ -15,7 +15,7 @@ import json
 import logging
 import os
 import threading
-from collections.abc import Awaitable, Callable, Iterator, MutableMapping
+from collections.abc import Awaitable, Callable, Collection, Iterator, MutableMapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -63,6 +63,57 @@ def one_line(text: str) -> str:
     """``text`` on one line, control characters written as escapes."""
     flat = " ".join(text.split())
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in flat)
+
+
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
+"""The names a page served on loopback is reached by (the ``Host`` it is sent)."""
+
+
+class LocalOnly:
+    """ASGI middleware against other web pages: a request must name an allowed
+    host in its ``Host`` header (a page of another site that resolves its own
+    name to 127.0.0.1 — DNS rebinding — names its own), a request from a page
+    must come from the studio's origin (``Origin``), and a body must be JSON
+    (``Content-Type: application/json``: a form of another page cannot send
+    one without the browser asking first). 403 / 415 with one line."""
+
+    def __init__(self, app: ASGIApp, hosts: Collection[str] | None = LOOPBACK_NAMES) -> None:
+        self.app = app
+        self.hosts = None if hosts is None else {h.strip("[]").lower() for h in hosts}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or self.hosts is None:
+            await self.app(scope, receive, send)
+            return
+        headers = dict(scope.get("headers") or [])
+        host = _host_name(headers.get(b"host", b"").decode("latin-1"))
+        if host not in self.hosts:
+            await _answer(send, 403, f"Host: {host!r} is not this studio's; {_names(self.hosts)}")
+            return
+        origin = headers.get(b"origin")
+        if origin is not None and origin != b"null":
+            text = origin.decode("latin-1")
+            if _host_name(text.partition("://")[2]) not in self.hosts:
+                await _answer(send, 403, f"Origin: {text!r} is another site's page")
+                return
+        if scope["method"] in {"POST", "PUT", "PATCH"}:
+            kind = headers.get(b"content-type", b"").split(b";")[0].strip().lower()
+            if kind != b"application/json":
+                await _answer(send, 415, "Content-Type: application/json expected")
+                return
+        await self.app(scope, receive, send)
+
+
+def _host_name(value: str) -> str:
+    """``127.0.0.1:8000`` → ``127.0.0.1``; ``[::1]:8000`` → ``::1``."""
+    value = value.strip().lower()
+    if value.startswith("["):
+        return value[1:].partition("]")[0]
+    return value.rpartition(":")[0] if value.count(":") == 1 else value
+
+
+def _names(hosts: Collection[str]) -> str:
+    return "one of " + ", ".join(sorted(hosts)) + " expected"
 
 
 class BodyLimit:
@@ -188,14 +239,17 @@ def logged_warnings() -> Iterator[list[str]]:
         logger.removeHandler(handler)
 
 
-def create_app(workdir: Path) -> FastAPI:
-    """The studio on the work folder ``workdir`` (made if missing)."""
+def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) -> FastAPI:
+    """The studio on the work folder ``workdir`` (made if missing), answering
+    requests sent to ``hosts`` only (None: any, for a studio served to a
+    network on purpose)."""
     folder = WorkFolder(workdir)
     jobs = Jobs()
     app = FastAPI(title="demoplan studio", docs_url=None, redoc_url=None, openapi_url=None)
     app.state.workfolder = folder
     app.state.jobs = jobs
     app.add_middleware(BodyLimit)
+    app.add_middleware(LocalOnly, hosts=hosts)  # the outermost: checked first
     _add_error_handlers(app)
     _add_page(app)
     _add_layout_routes(app, folder)

@@ -54,10 +54,22 @@ def serve(workdir: Path, host: str = "127.0.0.1", port: int = 0, open_browser: b
             "pip install 'demoplan[studio]'"
         ) from None
 
-    from demoplan.studio.app import create_app
+    from demoplan.studio.app import LOOPBACK_NAMES, create_app
 
-    app = create_app(workdir)
     sock = bind(host, port)
+    bound = sock.getsockname()[0]
+    # served to a network on purpose (0.0.0.0, an address of this machine): any Host
+    loopback = bound.startswith("127.") or bound == "::1"
+    if not loopback:
+        sys.stderr.write(
+            f"demoplan: WARNING: --host {host}: the studio is served to the network; anyone "
+            "who reaches it can read and write the work folder\n"
+        )
+    try:
+        app = create_app(workdir, hosts=(*LOOPBACK_NAMES, bound, host) if loopback else None)
+    except BaseException:
+        sock.close()
+        raise
     url = url_of(sock)
     folder = app.state.workfolder.root
 
