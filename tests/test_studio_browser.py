@@ -378,6 +378,20 @@ def test_the_kit_by_keyboard_a_placed_landmark_and_a_stack_that_cannot_be_taken_
     assert saved["landmarks"]["tray"]["position"][:2] == [0.5, 0.15]
     assert saved["steps"] == [{"object": "screws", "position": [0.12, 0.3, 0.05], "yaw": 0.0}]
     assert learn_model([workdir / "demonstration-1.json"]).states[0].object == "screws"
+    # a randomised start: the server's scattered layout of that seed
+    from demoplan.studio.layouts import template_layout
+
+    page.tab.get_by_label("randomise").check()
+    page.tab.get_by_label("Start seed").fill("7")
+    page.button("New demonstration").click()
+    page.settle()
+    assert page.steps() == 0
+    scattered = template_layout("kit", seed=7)["poses"]
+    for name, pose in scattered.items():
+        x, y, z, yaw = page.pose(name)
+        assert (x, y, z) == pytest.approx(tuple(pose["position"]), abs=1e-6)
+        assert yaw == pytest.approx(pose["yaw"], abs=1e-3)
+    assert page.tab.get_by_label("Start seed").input_value() == "8"
 
 
 def test_a_long_run_on_the_arm_is_cancelled_from_the_page(studio: tuple[Studio, Path]) -> None:

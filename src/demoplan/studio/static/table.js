@@ -281,6 +281,7 @@ export class TableView {
 
   pointerDown(event) {
     if (event.button !== 0 || !this.options.interactive) return;
+    if (document.body.dataset.pending !== "0") return; // the last release is still being placed
     const target = event.target.closest("[data-object],[data-landmark]");
     if (!target) return;
     const isObject = target.dataset.object !== undefined;
