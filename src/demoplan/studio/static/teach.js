@@ -12,7 +12,7 @@ export function renderSteps() {
   list.replaceChildren();
   for (const step of state.teach.steps) {
     const li = document.createElement("li");
-    li.dataset.object = step.object;
+    li.dataset.moved = step.object; // not data-object: that names the table's elements only
     const [x, y, z] = step.position;
     li.textContent = `${step.object} → (${fmt(x, 4)}, ${fmt(y, 4)}, ${fmt(z, 4)}) yaw ${fmt(step.yaw, 1)}°` +
       (step.on ? ` on ${step.on}` : "");
