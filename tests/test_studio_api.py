@@ -371,8 +371,8 @@ def test_no_plan_is_an_answer_with_the_command_lines_reason(client: TestClient) 
     assert body["no_plan"]["figure"] is None or "<svg" in body["no_plan"]["figure"]
 
 
-def wait_for(client: TestClient, run: str) -> dict[str, Any]:
-    for _ in range(600):
+def wait_for(client: TestClient, run: str, tries: int = 600) -> dict[str, Any]:
+    for _ in range(tries):
         state: dict[str, Any] = client.get(f"/api/runs/{run}").json()
         if state["state"] != "running":
             return state
@@ -403,6 +403,21 @@ def test_a_run_without_faults_puts_every_block_on_its_target(client: TestClient)
     state = wait_for(client, client.post("/api/runs", json=body).json()["run"])
     assert state["result"]["success"] is True and state["result"]["failures"] == []
     assert len(learned["states"]) == 3
+
+
+@pytest.mark.slow
+def test_an_arm_run_records_a_video_served_from_the_work_folder(client: TestClient) -> None:
+    pytest.importorskip("mujoco")
+    pytest.importorskip("imageio_ffmpeg")
+    save_blocks_and_learn(client)
+    body = {"model": "model.json", "scene": scene_body(), "sim": "arm"}
+    state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=3000)
+    assert state["state"] == "done", state
+    video = state["result"]["video"]
+    assert video == f"/api/media/run-{state['run']}.mp4"
+    answer = client.get(video)
+    assert answer.status_code == 200 and answer.headers["content-type"] == "video/mp4"
+    assert answer.content == (work(client) / f"run-{state['run']}.mp4").read_bytes()
 
 
 def blocking_work(job: Job) -> tuple[dict[str, Any], None]:

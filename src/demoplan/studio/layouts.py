@@ -15,7 +15,6 @@ from __future__ import annotations
 import random
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import shapely
@@ -305,12 +304,3 @@ def _landmark(geometry: ObjectGeometry | None, pose: Pose, colour: str) -> dict[
 
 def _pose(pose: Pose) -> dict[str, Any]:
     return {"position": list(pose.position), "yaw": round(yaw_of(pose), 6)}
-
-
-def template_files(template_id: str) -> list[Path]:
-    """The example files of a template (the demonstrations it was drawn from)."""
-    from demoplan.experiments.runs import examples_dir
-
-    template = next(t for t in TEMPLATES if t.id == template_id)
-    path = examples_dir() / template.example
-    return sorted(path.glob("*.json")) if path.is_dir() else [path]
