@@ -37,7 +37,7 @@ RENDERING_AND_PARSING = {
 }
 
 
-def _stage_calls(path: Path) -> list[str]:
+def _stage_calls(path: Path, allowed: set[str] = RENDERING_AND_PARSING) -> list[str]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     origin: dict[str, str] = {}
     for node in ast.walk(tree):
@@ -59,10 +59,7 @@ def _stage_calls(path: Path) -> list[str]:
         target = origin[func.id]
         if not target.startswith(STAGES):
             continue
-        if any(
-            target == allowed or target.startswith(allowed + ".")
-            for allowed in RENDERING_AND_PARSING
-        ):
+        if any(target == name or target.startswith(name + ".") for name in allowed):
             continue
         found.append(f"{path.name}:{node.lineno}: {target}")
     return found
@@ -71,6 +68,38 @@ def _stage_calls(path: Path) -> list[str]:
 def test_cli_modules_call_the_command_layer_not_the_stages() -> None:
     calls = [call for path in sorted(CLI.glob("*.py")) for call in _stage_calls(path)]
     assert not calls, "work inside CLI commands:\n" + "\n".join(calls)
+
+
+STUDIO = CLI.parent / "studio"
+STUDIO_HELPERS = RENDERING_AND_PARSING | {
+    # the readers `learn` and `plan` validate with
+    "demoplan.learning.demonstrations.demonstrations_from_document",
+    "demoplan.scenes.scene.scene_from_document",
+    # values built to hand to the command layer, and the yaw of a pose
+    "demoplan.scenes.scene.Scene",
+    "demoplan.scenes.scene.SceneObject",
+    "demoplan.scenes.scene.yaw_of",
+    # the constraint graph as the report draws it
+    "demoplan.learning.constraints.goal_order",
+    "demoplan.learning.constraints.visit_sequence",
+    # where a released object rests: the support rule of docs/scenes.md
+    "demoplan.scenes.geometry.supports",
+    "demoplan.scenes.geometry.Location",
+    # the learned targets in a scene, resolved as `plan` resolves them
+    "demoplan.scenes.prepared.prepare",
+    # the shipped examples the templates start from
+    "demoplan.experiments.runs.examples_dir",
+}
+
+
+def test_the_studio_calls_the_command_layer_not_the_stages() -> None:
+    """The studio holds no second copy of learning, planning or execution: it
+    calls the command layer and only the readers, renderers and the support
+    rule named in :data:`STUDIO_HELPERS`."""
+    modules = sorted(STUDIO.glob("*.py"))
+    assert len(modules) >= 5
+    calls = [call for path in modules for call in _stage_calls(path, STUDIO_HELPERS)]
+    assert not calls, "work inside the studio:\n" + "\n".join(calls)
 
 
 def test_the_check_sees_a_call_into_a_stage(tmp_path: Path) -> None:
@@ -104,6 +133,8 @@ FLOORS = {
     "experiments": 5,
     "commands": 6,
     "cli": 7,
+    # the studio's web application: a front end over the command layer, as the CLI
+    "studio": 7,
 }
 FRONT_ENDS = {"api": 7, "__main__": 7, "launcher": 7}
 VALUE_MODULES = {

@@ -22,7 +22,7 @@ from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 HERE = Path(__file__).resolve().parent
 SRC = HERE.parents[2] / "src"
 FLOORS: list[tuple[str, list[str]]] = [
-    ("front ends", ["cli", "api"]),
+    ("front ends", ["cli", "studio", "api"]),
     ("command layer", ["commands"]),
     ("report", ["experiments"]),
     ("execution", ["execution"]),

@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from demoplan.cli import execution, learning, planning, recordings, report  # noqa: F401 - commands
+from demoplan.cli import (  # noqa: F401 - commands
+    execution,
+    learning,
+    planning,
+    recordings,
+    report,
+    studio,
+)
 from demoplan.cli.common import app
 from demoplan.cli.render import fitted_table, states_table
 

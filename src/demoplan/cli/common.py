@@ -37,6 +37,7 @@ COMMANDS = (
     "segment",
     "import",
     "experiments",
+    "studio",
 )
 """The commands in the order ``--help`` lists them: the pipeline's order,
 whatever order their modules are imported in."""

@@ -1,0 +1,306 @@
+"""Layouts the studio's page draws: the templates (the shipped examples' first
+demonstrations), the layout of a demonstration or scene file, objects
+scattered at random (seeded, not overlapping, on the table), and where an
+object comes to rest when it is released (on the table, or on the top of
+what it lands on — the support rule of docs/scenes.md).
+
+A layout is the JSON of docs/studio-api.md: ``objects`` (shape, size,
+colour), ``landmarks`` (shape, size where known, pose, colour), ``poses``
+(each object's ``position`` [x, y, z], z its bottom, and ``yaw`` in
+degrees) and ``table`` (the rectangle drawn: ``origin`` and ``size``).
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import shapely
+from shapely.geometry.base import BaseGeometry
+
+from demoplan.errors import InputError
+from demoplan.model import Demonstration, ObjectGeometry, Pose, footprint
+from demoplan.plotting.colours import assign_colours
+from demoplan.scenes.geometry import GeometrySettings, Location, supports
+from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.studio.requests import Layout
+from demoplan.studio.workfolder import FileMissingError
+
+__all__ = [
+    "TABLE_MARGIN",
+    "TEMPLATES",
+    "Template",
+    "dropped_pose",
+    "layout_of_demonstration",
+    "layout_of_scene",
+    "scattered",
+    "template_layout",
+]
+
+TABLE_MARGIN = 0.1
+"""m: the table drawn reaches this far beyond everything on it."""
+SCATTER_GAP = 0.01
+"""m: the least gap between two scattered objects (or an object and a landmark)."""
+SCATTER_TRIES = 2000
+"""Random places tried per object before the scatter gives up."""
+
+
+@dataclass(frozen=True, slots=True)
+class Template:
+    """A task to teach: its id, its title, and the shipped example it starts from."""
+
+    id: str
+    title: str
+    example: str
+    """The example's file or folder, relative to ``examples/``."""
+
+
+TEMPLATES = (
+    Template("set_table", "Set the table (the paper's Experiment 1)", "set_table"),
+    Template("blocks", "Stack the blocks (the paper's Experiment 2)", "blocks/demonstrations.json"),
+    Template("kit", "Fill the kit tray", "kitting/demonstrations.json"),
+)
+
+
+def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]:
+    """The template's initial layout: the first demonstration's ``initial``, or
+    with ``seed`` its objects scattered (:func:`scattered`)."""
+    from demoplan.commands.inputs import load_inputs
+    from demoplan.experiments.runs import examples_dir
+
+    template = next((t for t in TEMPLATES if t.id == template_id), None)
+    if template is None:
+        raise FileMissingError(
+            f"template: no template {template_id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
+        )
+    demonstrations = load_inputs([examples_dir() / template.example])
+    layout = layout_of_demonstration(demonstrations[0], demonstrations, template.id)
+    if seed is None:
+        return layout
+    return scattered(Layout.model_validate(layout), seed)
+
+
+def layout_of_demonstration(
+    demonstration: Demonstration,
+    context: Iterable[Demonstration] = (),
+    template: str | None = None,
+) -> dict[str, Any]:
+    """The layout of ``demonstration`` before its first step; the table holds
+    every pose of it and of ``context`` (the other demonstrations of the task)."""
+    geometry = demonstration.geometry()
+    landmark_names = {name for name, _ in demonstration.landmarks}
+    objects = {n: g for n, g in geometry.items() if n not in landmark_names}
+    colours = assign_colours([*objects, *landmark_names])
+    poses = demonstration.initial_poses()
+    outlines: list[BaseGeometry] = []
+    for demo in [demonstration, *context]:
+        shapes = demo.geometry()
+        placed = [*demo.initial, *((s.object, s.pose) for s in demo.steps), *demo.landmarks]
+        outlines += [_outline(shapes.get(name), pose) for name, pose in placed]
+    return {
+        "template": template,
+        "objects": {name: _shape(g, colours[name]) for name, g in objects.items()},
+        "landmarks": {
+            name: _landmark(geometry.get(name), pose, colours[name])
+            for name, pose in demonstration.landmarks
+        },
+        "poses": {name: _pose(poses[name]) for name in objects if name in poses},
+        "table": _table(outlines),
+    }
+
+
+def layout_of_scene(scene: Scene) -> dict[str, Any]:
+    """The layout of a scene: its objects where they stand (size null where the
+    scene leaves it to the model), its landmarks, its table or one around all."""
+    landmark_shapes = dict(scene.landmark_geometry)
+    colours = assign_colours([*scene.names, *scene.landmark_names])
+    outlines = [_outline(o.geometry, o.pose) for o in scene.objects]
+    outlines += [_outline(landmark_shapes.get(n), pose) for n, pose in scene.landmarks]
+    if scene.table is not None:
+        (x0, y0), (x1, y1) = scene.table
+        table = {"origin": [x0, y0], "size": [x1 - x0, y1 - y0]}
+    else:
+        table = _table(outlines)
+    return {
+        "template": None,
+        "objects": {
+            o.name: (
+                _shape(o.geometry, colours[o.name])
+                if o.geometry is not None
+                else {"shape": "box", "size": None, "colour": colours[o.name]}
+            )
+            for o in scene.objects
+        },
+        "landmarks": {
+            name: _landmark(landmark_shapes.get(name), pose, colours[name])
+            for name, pose in scene.landmarks
+        },
+        "poses": {o.name: _pose(o.pose) for o in scene.objects},
+        "table": table,
+    }
+
+
+def scattered(layout: Layout, seed: int) -> dict[str, Any]:
+    """``layout`` with its objects scattered on the table at random (seeded: the
+    same seed, the same layout): standing on the table, apart from each other
+    and from the landmarks by :data:`SCATTER_GAP`, at any yaw."""
+    table = layout.table or _table_body(layout)
+    (x0, y0), (width, depth) = table.origin, table.size
+    rng = random.Random(seed)
+    taken: list[BaseGeometry] = [
+        footprint(_geometry(mark.shape, mark.size), mark.xyz, mark.yaw)
+        for mark in layout.landmarks.values()
+        if mark.size is not None
+    ]
+    poses: dict[str, Any] = {}
+    for name in sorted(layout.objects):
+        shape = layout.objects[name]
+        if shape.size is None:
+            raise InputError(
+                "has no size; a layout to scatter gives every object's size",
+                field=f"layout.objects.{name}.size",
+            )
+        geometry = _geometry(shape.shape, shape.size)
+        reach = max(geometry.size[0], geometry.size[1]) / 2 * 2**0.5
+        for _ in range(SCATTER_TRIES):
+            x = x0 + reach + rng.random() * max(width - 2 * reach, 0.0)
+            y = y0 + reach + rng.random() * max(depth - 2 * reach, 0.0)
+            yaw = float(rng.randrange(360))
+            outline = footprint(geometry, (x, y), yaw)
+            if not any(outline.distance(other) < SCATTER_GAP for other in taken):
+                break
+        else:
+            raise InputError(
+                f"no room on the table ({width:g} × {depth:g} m) for {name!r} among "
+                f"{len(taken)} others; a larger table or fewer objects expected",
+                field="layout.table",
+            )
+        taken.append(outline)
+        poses[name] = {"position": [round(x, 4), round(y, 4), 0.0], "yaw": yaw}
+    out = layout.model_dump()
+    out["poses"] = {name: poses[name] for name in layout.objects}
+    out["table"] = table.model_dump()
+    return out
+
+
+def dropped_pose(
+    layout: Layout, name: str, position: tuple[float, float], yaw: float
+) -> dict[str, Any]:
+    """Where ``name`` comes to rest released over ``position`` at ``yaw``: on
+    the highest top under it that holds it up (an object or a landmark whose
+    outline covers at least the support share of its own), else on the table.
+
+    What stands on ``name`` now moves with it: landing on that is refused, as
+    is an object of unknown size."""
+    settings = GeometrySettings()
+    shapes = {n: _known(layout, n) for n in layout.objects}
+    if name not in shapes:
+        raise InputError(
+            f"unknown object {name!r}; expected one of {sorted(shapes)}", field="object"
+        )
+    riders = _carried(layout, shapes, name, settings)
+    moved = footprint(shapes[name], position, yaw)
+    area = moved.area
+    landing: list[tuple[float, str]] = []
+    for other, shape in shapes.items():
+        if other == name:
+            continue
+        pose = layout.poses[other]
+        outline = footprint(shape, pose.xyz, pose.yaw)
+        if moved.intersection(outline).area >= settings.support_fraction * area:
+            landing.append((pose.xyz[2] + shape.size[2], other))
+    for mark_name, mark in layout.landmarks.items():
+        if mark.size is None:
+            continue
+        outline = footprint(_geometry(mark.shape, mark.size), mark.xyz, mark.yaw)
+        if moved.intersection(outline).area >= settings.support_fraction * area:
+            landing.append((mark.xyz[2] + mark.size[2], mark_name))
+    if not landing:
+        return {"pose": {"position": [position[0], position[1], 0.0], "yaw": yaw}, "on": None}
+    top, support = max(landing)
+    if support in riders:
+        raise InputError(
+            f"{name!r} would land on {support!r}, which stands on it and moves with it; "
+            "a place clear of what it carries expected",
+            field="position",
+        )
+    return {"pose": {"position": [position[0], position[1], top], "yaw": yaw}, "on": support}
+
+
+def _carried(
+    layout: Layout, shapes: Mapping[str, ObjectGeometry], name: str, settings: GeometrySettings
+) -> set[str]:
+    """The objects standing on ``name``, directly or on each other (they move with it)."""
+    locations = [
+        Location(n, layout.poses[n].xyz, layout.poses[n].yaw, "current", (n,), (shape,))
+        for n, shape in shapes.items()
+    ]
+    pairs, _ = supports(locations, settings)
+    carried: set[str] = set()
+    frontier = {name}
+    while frontier:
+        below = frontier
+        frontier = {upper for upper, lower in pairs if lower in below} - carried - {name}
+        carried |= frontier
+    return carried
+
+
+def _known(layout: Layout, name: str) -> ObjectGeometry:
+    shape = layout.objects[name]
+    if shape.size is None:
+        raise InputError(
+            "has no size; every object's size expected", field=f"layout.objects.{name}.size"
+        )
+    return _geometry(shape.shape, shape.size)
+
+
+def _geometry(shape: str, size: list[float]) -> ObjectGeometry:
+    return ObjectGeometry(shape, (size[0], size[1], size[2]))
+
+
+def _outline(shape: ObjectGeometry | None, pose: Pose) -> BaseGeometry:
+    if shape is None:
+        return shapely.Point(pose.position[0], pose.position[1])
+    return footprint(shape, pose.position, yaw_of(pose))
+
+
+def _table(outlines: list[BaseGeometry]) -> dict[str, Any]:
+    if not outlines:
+        return {"origin": [-0.5, -0.5], "size": [1.0, 1.0]}
+    x0, y0, x1, y1 = shapely.union_all(outlines).bounds
+    return {
+        "origin": [round(x0 - TABLE_MARGIN, 4), round(y0 - TABLE_MARGIN, 4)],
+        "size": [round(x1 - x0 + 2 * TABLE_MARGIN, 4), round(y1 - y0 + 2 * TABLE_MARGIN, 4)],
+    }
+
+
+def _table_body(layout: Layout) -> Any:
+    from demoplan.studio.requests import TableBody
+
+    outlines: list[BaseGeometry] = []
+    for name, pose in layout.poses.items():
+        size = layout.objects[name].size
+        point = shapely.Point(pose.xyz[0], pose.xyz[1])
+        outlines.append(point if size is None else point.buffer(max(size[:2]) / 2))
+    outlines += [shapely.Point(m.xyz[0], m.xyz[1]) for m in layout.landmarks.values()]
+    return TableBody.model_validate(_table(outlines))
+
+
+def _shape(geometry: ObjectGeometry, colour: str) -> dict[str, Any]:
+    return {"shape": geometry.shape, "size": list(geometry.size), "colour": colour}
+
+
+def _landmark(geometry: ObjectGeometry | None, pose: Pose, colour: str) -> dict[str, Any]:
+    return {
+        "shape": geometry.shape if geometry is not None else "box",
+        "size": list(geometry.size) if geometry is not None else None,
+        "position": list(pose.position),
+        "yaw": round(yaw_of(pose), 6),
+        "colour": colour,
+    }
+
+
+def _pose(pose: Pose) -> dict[str, Any]:
+    return {"position": list(pose.position), "yaw": round(yaw_of(pose), 6)}

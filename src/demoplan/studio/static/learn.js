@@ -1,0 +1,64 @@
+// The Learn view: the model learned from the chosen demonstrations (POST /api/learn).
+
+import { post } from "./api.js";
+import { $, alarm, fmt, mm, say, state } from "./common.js";
+import { drawGraph } from "./graph.js";
+import { redraw } from "./stage.js";
+import { refreshFiles } from "./teach.js";
+
+// --- learn ----------------------------------------------------------------
+
+export async function learn() {
+  const files = [...document.querySelectorAll("#learn-files input:checked")].map((i) => i.value);
+  if (!files.length) {
+    alarm("choose at least one demonstration to learn from (save one in the Teach view)");
+    return;
+  }
+  const output = $("model-name").value.trim() || "model.json";
+  say("Learning…");
+  const result = await post("/api/learn", { files, output, scene: null });
+  state.learn.result = result;
+  renderLearned(result);
+  await refreshFiles();
+  $("plan-model").value = result.model;
+  say(`Learned ${result.states.length} states from ${files.length} demonstrations; saved ${result.model}.`);
+  redraw();
+}
+
+export function renderLearned(result) {
+  const body = $("states").tBodies[0];
+  body.replaceChildren();
+  for (const s of result.states) {
+    const row = body.insertRow();
+    row.dataset.state = s.id;
+    const cells = [
+      s.id, s.object, s.reference, mm(s.spread), s.margin === null || s.margin === undefined ? "—" : `${fmt(s.margin, 2)} ×`,
+      s.position.map((v) => fmt(v)).join(", "), s.yaw === null ? "any" : `${fmt(s.yaw, 1)}°`,
+    ];
+    cells.forEach((text, i) => {
+      const cell = i === 0 ? document.createElement("th") : row.insertCell();
+      if (i === 0) {
+        cell.scope = "row";
+        row.appendChild(cell);
+      }
+      cell.textContent = text;
+    });
+  }
+  const sequences = $("sequences");
+  sequences.replaceChildren();
+  for (const sequence of result.sequences) {
+    const li = document.createElement("li");
+    li.textContent = sequence.join(" → ");
+    sequences.appendChild(li);
+  }
+  const objectOf = Object.fromEntries(result.states.map((s) => [s.id, s.object]));
+  drawGraph($("graph"), result.constraints, objectOf);
+  const warnings = $("warnings");
+  warnings.replaceChildren();
+  $("warnings-title").textContent = `Warnings (${result.warnings.length})`;
+  for (const line of result.warnings) {
+    const li = document.createElement("li");
+    li.textContent = line;
+    warnings.appendChild(li);
+  }
+}

@@ -1,0 +1,205 @@
+// The Plan view: the start scene, the plan in the CLI's words and its animation (POST /api/plan).
+
+import { ApiError, get, post } from "./api.js";
+import { $, SHAPES_IN_SCENES, alarm, clone, say, state } from "./common.js";
+import { runEvents, setRunStep } from "./run.js";
+import { keepInView, layoutWith, redraw, sameObjects } from "./stage.js";
+import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
+
+// --- plan -----------------------------------------------------------------
+
+export function ensurePlanStart() {
+  if (!state.plan.poses && state.layout) state.plan.poses = clone(state.teach.poses);
+}
+
+export function sceneDocument() {
+  ensurePlanStart();
+  const objects = {};
+  for (const [name, geometry] of Object.entries(state.layout.objects)) {
+    const pose = state.plan.poses[name];
+    if (!pose) continue;
+    objects[name] = { ...poseDocument(pose), size: geometry.size };
+    if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
+  }
+  const extras = state.plan.extras || { scene: {}, objects: {} };
+  for (const [name, fields] of Object.entries(extras.objects)) {
+    if (objects[name]) Object.assign(objects[name], fields);
+  }
+  const scene = { format: "demoplan/scene-1", objects, ...extras.scene };
+  const landmarks = landmarksDocument();
+  if (Object.keys(landmarks).length) scene.landmarks = landmarks;
+  return scene;
+}
+
+// What a loaded scene file says beyond the poses (free space, gripper, table,
+// robot; per object grasps and mass), kept for planning it; only for files in
+// the default units, the page's own.
+export const SCENE_EXTRAS = ["freespace", "gripper", "table", "robot"];
+export const OBJECT_EXTRAS = ["grasps", "mass", "density"];
+
+export function sceneExtras(document_) {
+  const extras = { scene: {}, objects: {} };
+  if (!document_ || document_.units) return extras;
+  for (const key of SCENE_EXTRAS) if (document_[key] !== undefined && document_[key] !== null) extras.scene[key] = document_[key];
+  for (const [name, object] of Object.entries(document_.objects || {})) {
+    const fields = {};
+    for (const key of OBJECT_EXTRAS) if (object[key] !== undefined && object[key] !== null) fields[key] = object[key];
+    if (Object.keys(fields).length) extras.objects[name] = fields;
+  }
+  return extras;
+}
+
+export async function loadPlanScene() {
+  const name = $("plan-file").value;
+  if (!name) {
+    alarm("choose a scene or demonstration of the work folder first");
+    return;
+  }
+  const answer = await get(`/api/files/${encodeURIComponent(name)}`);
+  if (!answer.layout) {
+    alarm(`${name}: not a scene or a demonstration`);
+    return;
+  }
+  if (!state.layout || !sameObjects(state.layout, answer.layout)) {
+    startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
+  }
+  state.plan.poses = clone(answer.layout.poses);
+  keepInView(state.plan.poses);
+  state.plan.extras = answer.document && answer.document.format === "demoplan/scene-1" ? sceneExtras(answer.document) : null;
+  clearPlan();
+  redraw();
+  say(`The plan starts from ${name}.`);
+}
+
+export function chosenModel() {
+  const model = $("plan-model").value;
+  if (!model) throw new ApiError(0, "no model in the work folder yet: learn one in the Learn view");
+  return model;
+}
+
+export function clearPlan() {
+  stopAnimation("plan");
+  state.plan.result = null;
+  state.plan.step = 0;
+  $("plan-result").hidden = true;
+  $("plan-list").replaceChildren();
+  $("no-plan").hidden = true;
+  $("candidates-box").hidden = true;
+}
+
+export async function scramble() {
+  ensurePlanStart();
+  const seed = Number($("scramble-seed").value) || 0;
+  const layout = await post("/api/scramble", { layout: layoutWith(state.plan.poses), seed });
+  $("scramble-seed").value = String(seed + 1);
+  state.plan.poses = clone(layout.poses);
+  keepInView(state.plan.poses);
+  clearPlan();
+  redraw();
+  say(`Scrambled (seed ${seed}).`);
+}
+
+export async function makePlan() {
+  const model = chosenModel();
+  clearPlan();
+  say("Planning…");
+  const result = await post("/api/plan", { model, scene: sceneDocument(), clutter: $("clutter").checked });
+  state.plan.result = result;
+  if (result.no_plan) {
+    $("no-plan").hidden = false;
+    $("no-plan-reason").textContent = result.no_plan.reason;
+    const figure = $("no-plan-figure");
+    figure.hidden = !result.no_plan.figure;
+    if (result.no_plan.figure) figure.src = `data:image/svg+xml;charset=utf-8,${encodeURIComponent(result.no_plan.figure)}`;
+    renderCandidates(result);
+    say("No plan.");
+    redraw();
+    return;
+  }
+  $("plan-result").hidden = false;
+  renderCandidates(result);
+  const list = $("plan-list");
+  list.replaceChildren();
+  for (const line of result.plan) {
+    const li = document.createElement("li");
+    li.textContent = line;
+    list.appendChild(li);
+  }
+  $("optimal").textContent = result.optimal ? "The plan is proved shortest." : "The plan is not proved shortest.";
+  const slider = $("plan-step");
+  slider.max = String(result.moves.length);
+  setPlanStep(0);
+  say(`Plan of ${result.plan.length} actions.`);
+}
+
+export function renderCandidates(result) {
+  const body = $("candidates").tBodies[0];
+  body.replaceChildren();
+  for (const c of result.candidates) {
+    const row = body.insertRow();
+    if (c.goal === result.chosen) row.className = "chosen";
+    // as the CLI's table: the demonstrations sharing this goal (numbered from 1)
+    const names = Array.isArray(c.demonstrations) && c.demonstrations.length ? c.demonstrations.join(", ") : String(c.goal + 1);
+    row.insertCell().textContent = names;
+    row.insertCell().textContent = c.length === null || c.length === undefined ? "—" : String(c.length);
+    row.insertCell().textContent = c.outcome || (c.goal === result.chosen ? "chosen" : "");
+  }
+  $("candidates-box").hidden = !result.candidates.length;
+}
+
+export function planPosesAt(step) {
+  const poses = clone(state.plan.poses);
+  const moves = state.plan.result ? state.plan.result.moves : [];
+  for (const move of moves.slice(0, step)) poses[move.object] = clone(move.pose);
+  return poses;
+}
+
+export function heldAt(step) {
+  const moves = state.plan.result ? state.plan.result.moves : [];
+  const move = moves[step - 1];
+  return move && /^GRASP\b/.test(move.action) ? move.object : null;
+}
+
+export function setPlanStep(step) {
+  const total = state.plan.result ? state.plan.result.moves.length : 0;
+  state.plan.step = Math.max(0, Math.min(step, total));
+  $("plan-step").value = String(state.plan.step);
+  $("plan-step-out").textContent = `${state.plan.step} / ${total}`;
+  document.querySelectorAll("#plan-list li").forEach((li, i) => {
+    if (i === state.plan.step - 1) li.setAttribute("aria-current", "step");
+    else li.removeAttribute("aria-current");
+  });
+  $("panel-plan").dataset.step = String(state.plan.step);
+  redraw();
+}
+
+export function stopAnimation(which) {
+  const holder = state[which];
+  if (holder.timer) {
+    clearInterval(holder.timer);
+    holder.timer = null;
+    $(which === "plan" ? "play-plan" : "play-run").textContent = "▶ Play";
+  }
+}
+
+export function play(which) {
+  const holder = state[which];
+  if (holder.timer) {
+    stopAnimation(which);
+    redraw();
+    return;
+  }
+  const total = which === "plan" ? (holder.result ? holder.result.moves.length : 0) : runEvents().length;
+  if (!total) return;
+  const set = which === "plan" ? setPlanStep : setRunStep;
+  if (holder.step >= total) set(0);
+  $(which === "plan" ? "play-plan" : "play-run").textContent = "❚❚ Pause";
+  holder.timer = setInterval(() => {
+    if (holder.step >= total) {
+      stopAnimation(which);
+      redraw();
+      return;
+    }
+    set(holder.step + 1);
+  }, 550);
+}

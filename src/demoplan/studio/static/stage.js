@@ -1,0 +1,157 @@
+// The table shared by the four views: what it shows, and where a released object comes to rest (POST /api/drop).
+
+import { post } from "./api.js";
+import { $, alarm, clone, fmt, guarded, say, state } from "./common.js";
+import { clearPlan, heldAt, planPosesAt } from "./plan.js";
+import { runPosesAt } from "./run.js";
+import { TableView, ridersOf, snap, turned } from "./table.js";
+import { renderSteps } from "./teach.js";
+
+// --- the table ------------------------------------------------------------
+
+export const table = new TableView($("table"), $("heights"), {
+  canPickUp: (name) => {
+    const poses = currentPoses();
+    const riders = ridersOf(name, state.layout, poses);
+    if (riders.length) {
+      alarm(`${name} cannot be picked up: ${riders.join(", ")} stands on it (move ${riders.join(", ")} first)`);
+      return false;
+    }
+    alarm("");
+    return true;
+  },
+  select: (name) => {
+    state.selected = name;
+    redraw();
+  },
+  drop: (name, xy, yaw) => guarded(() => place(name, xy, yaw, false)),
+  rotate: (name, degrees) => {
+    const pose = currentPoses()[name];
+    if (!pose) return;
+    guarded(() => place(name, pose.position.slice(0, 2), turned(pose.yaw || 0, degrees), true));
+  },
+  nudge: (name, dx, dy) => {
+    const pose = currentPoses()[name];
+    if (!pose || !table.handlers.canPickUp(name)) return;
+    guarded(() => place(name, [snap(pose.position[0] + dx), snap(pose.position[1] + dy)], pose.yaw || 0, true));
+  },
+  landmarkMoved: (name) => {
+    const p = state.layout.landmarks[name].position;
+    say(`landmark ${name} placed at x ${fmt(p[0])}, y ${fmt(p[1])} m`);
+    redraw();
+  },
+});
+
+export function interactive() {
+  return (state.view === "teach" || state.view === "plan") && !state.plan.timer && !state.run.timer;
+}
+
+export function currentPoses() {
+  if (state.view === "plan" || state.view === "run") return state.plan.poses || state.teach.poses;
+  return state.teach.poses;
+}
+
+export function shownPoses() {
+  if (state.view === "plan" && state.plan.result && state.plan.step > 0) return planPosesAt(state.plan.step);
+  if (state.view === "run" && state.run.status && state.run.step > 0) return runPosesAt(state.run.step);
+  return currentPoses();
+}
+
+export function redraw() {
+  if (!state.layout) return;
+  const options = {
+    selected: state.selected,
+    interactive: interactive() && !(state.view === "plan" && state.plan.step > 0),
+    landmarksMovable: state.view === "teach" && state.teach.steps.length === 0,
+    outlines: state.view === "learn" && state.learn.result ? state.learn.result.targets : [],
+    held: state.view === "plan" ? heldAt(state.plan.step) : null,
+  };
+  table.draw(shownPoses(), options);
+  const captions = {
+    teach: "Teach: move the objects as the task should be done; each release is one step.",
+    learn: "Learn: the learned targets are drawn as outlines.",
+    plan: state.plan.step > 0 ? `Plan: after action ${state.plan.step}.` : "Plan: the start scene.",
+    run: state.run.step > 0 ? `Run: after event ${state.run.step}.` : "Run: the start scene.",
+  };
+  $("stage-caption").textContent = captions[state.view];
+}
+
+// Room for the table at this window size: beside the panel and the height strip.
+export function tableRoom() {
+  return [window.innerWidth - 440 - 90 - 56, window.innerHeight - 150];
+}
+
+export function layoutWith(poses) {
+  return { ...state.layout, poses };
+}
+
+// Drop `name` at xy (metres) with `yaw`: the server says where it comes to rest.
+// amend: a turn or a nudge right after placing the same object changes that step.
+export async function place(name, xy, yaw, amend) {
+  const poses = currentPoses();
+  const before = clone(poses[name]);
+  const answer = await post("/api/drop", { layout: layoutWith(poses), object: name, position: xy, yaw });
+  const pose = { position: answer.pose.position, yaw: answer.pose.yaw };
+  if (state.view === "teach") {
+    const steps = state.teach.steps;
+    const last = steps[steps.length - 1];
+    const step = { object: name, position: pose.position, yaw: pose.yaw, on: answer.on };
+    if (amend && last && last.object === name) {
+      steps[steps.length - 1] = { ...step, before: last.before };
+    } else {
+      steps.push({ ...step, before });
+    }
+    state.teach.poses[name] = pose;
+    keepInView(state.teach.poses);
+    state.teach.saved = false;
+    renderSteps();
+    say(`${name} put down at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
+      (answer.on ? ` on ${answer.on}` : ""));
+  } else {
+    state.plan.poses[name] = pose;
+    keepInView(state.plan.poses);
+    clearPlan();
+    say(`${name} now starts at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
+      (answer.on ? ` on ${answer.on}` : ""));
+  }
+  redraw();
+}
+
+// The drawn table: the layout's, grown to cover every object shown (a file's
+// layout may be drawn around its start only) and, for the same objects, the
+// table drawn before (so that the view does not jump between demonstrations).
+export function cover(table_, poses, margin = 0.05) {
+  let [x0, y0] = table_.origin;
+  let [x1, y1] = [x0 + table_.size[0], y0 + table_.size[1]];
+  for (const pose of Object.values(poses)) {
+    const [x, y] = pose.position;
+    x0 = Math.min(x0, x - margin);
+    y0 = Math.min(y0, y - margin);
+    x1 = Math.max(x1, x + margin);
+    y1 = Math.max(y1, y + margin);
+  }
+  return { origin: [x0, y0], size: [x1 - x0, y1 - y0] };
+}
+
+export function sameObjects(a, b) {
+  const names = (l) => Object.keys(l.objects).sort().join(" ");
+  return names(a) === names(b);
+}
+
+export function corners(table_) {
+  const [x0, y0] = table_.origin;
+  return {
+    a: { position: [x0, y0] },
+    b: { position: [x0 + table_.size[0], y0 + table_.size[1]] },
+  };
+}
+
+// Grow the drawn table when an object has left it.
+export function keepInView(poses) {
+  const grown = cover(state.layout.table, poses);
+  const [w0, h0] = state.layout.table.size;
+  if (grown.size[0] > w0 + 1e-9 || grown.size[1] > h0 + 1e-9) {
+    state.layout.table = grown;
+    table.setLayout(state.layout, tableRoom());
+  }
+}

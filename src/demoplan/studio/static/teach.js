@@ -1,0 +1,171 @@
+// The Teach view: demonstrations recorded step by step, saved in the project's format; the work folder's files.
+
+import { get, post } from "./api.js";
+import { $, alarm, clone, fmt, say, state } from "./common.js";
+import { clearPlan } from "./plan.js";
+import { cover, corners, redraw, sameObjects, table, tableRoom } from "./stage.js";
+
+// --- teach ----------------------------------------------------------------
+
+export function renderSteps() {
+  const list = $("steps");
+  list.replaceChildren();
+  for (const step of state.teach.steps) {
+    const li = document.createElement("li");
+    li.dataset.moved = step.object; // not data-object: that names the table's elements only
+    const [x, y, z] = step.position;
+    li.textContent = `${step.object} → (${fmt(x, 4)}, ${fmt(y, 4)}, ${fmt(z, 4)}) yaw ${fmt(step.yaw, 1)}°` +
+      (step.on ? ` on ${step.on}` : "");
+    list.appendChild(li);
+  }
+  $("undo").disabled = state.teach.steps.length === 0;
+}
+
+export function startDemonstration(layout, note) {
+  if (state.layout && sameObjects(state.layout, layout)) {
+    layout.table = cover(layout.table, corners(state.layout.table), 0);
+  }
+  layout.table = cover(layout.table, layout.poses);
+  state.layout = layout;
+  state.teach.initial = clone(layout.poses);
+  state.teach.poses = clone(layout.poses);
+  state.teach.steps = [];
+  state.teach.saved = false;
+  state.plan.poses = null;
+  state.plan.extras = null;
+  state.selected = null;
+  clearPlan();
+  table.setLayout(layout, tableRoom());
+  renderSteps();
+  redraw();
+  say(note);
+}
+
+export async function newDemonstration() {
+  const randomise = $("randomise").checked;
+  const seed = Number($("seed").value) || 0;
+  let layout;
+  if (state.source.kind === "template") {
+    const query = randomise ? `?seed=${seed}` : "";
+    layout = await get(`/api/templates/${encodeURIComponent(state.source.id)}${query}`);
+  } else {
+    layout = (await get(`/api/files/${encodeURIComponent(state.source.name)}`)).layout;
+    if (randomise) layout = await post("/api/scramble", { layout, seed });
+  }
+  if (randomise) $("seed").value = String(seed + 1);
+  const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${state.teach.steps.length} unsaved steps discarded)` : "";
+  const from = state.source.kind === "template" ? `template ${state.source.id}` : state.source.name;
+  startDemonstration(layout, `New demonstration from ${from}${randomise ? `, randomised (seed ${seed})` : ""}${unsaved}.`);
+}
+
+export function undo() {
+  const step = state.teach.steps.pop();
+  if (!step) return;
+  state.teach.poses[step.object] = step.before;
+  state.teach.saved = false;
+  renderSteps();
+  redraw();
+  say(`undone: ${step.object} is back at x ${fmt(step.before.position[0])}, y ${fmt(step.before.position[1])} m`);
+}
+
+export function poseDocument(pose) {
+  return { position: pose.position.map((v) => Math.round(v * 1e6) / 1e6), yaw: Math.round((pose.yaw || 0) * 1000) / 1000 };
+}
+
+export function landmarksDocument() {
+  const out = {};
+  for (const [name, mark] of Object.entries(state.layout.landmarks || {})) {
+    out[name] = { ...poseDocument(mark), shape: mark.shape || "box" };
+    if (mark.size) out[name].size = mark.size;
+  }
+  return out;
+}
+
+export function demonstrationDocument() {
+  const objects = {};
+  for (const [name, geometry] of Object.entries(state.layout.objects)) {
+    objects[name] = { shape: geometry.shape, size: geometry.size };
+  }
+  const initial = {};
+  for (const [name, pose] of Object.entries(state.teach.initial)) initial[name] = poseDocument(pose);
+  const document_ = { format: "demoplan/demonstration-1", objects, initial, steps: [] };
+  const landmarks = landmarksDocument();
+  if (Object.keys(landmarks).length) document_.landmarks = landmarks;
+  document_.steps = state.teach.steps.map((s) => ({ object: s.object, ...poseDocument(s) }));
+  return document_;
+}
+
+export async function save() {
+  if (!state.teach.steps.length) {
+    alarm("nothing to save: move at least one object first (each release is one step)");
+    return;
+  }
+  const name = $("save-name").value.trim() || null;
+  const answer = await post("/api/demonstrations", { document: demonstrationDocument(), name });
+  state.teach.saved = true;
+  $("save-name").value = "";
+  say(`Saved ${answer.file} (${state.teach.steps.length} steps).`);
+  await refreshFiles();
+}
+
+export async function loadFile() {
+  const name = $("file").value;
+  if (!name) {
+    alarm("choose a file of the work folder first");
+    return;
+  }
+  const answer = await get(`/api/files/${encodeURIComponent(name)}`);
+  if (!answer.layout) {
+    alarm(`${name}: not a demonstration or a scene; a model is chosen in the Plan view`);
+    return;
+  }
+  state.source = { kind: "file", name };
+  startDemonstration(answer.layout, `Loaded ${name}: its initial layout is on the table.`);
+}
+
+// --- work-folder files ----------------------------------------------------
+
+export async function refreshFiles() {
+  state.files = await get("/api/files");
+  const file = $("file");
+  const keep = file.value;
+  file.replaceChildren(new Option("(none)", ""));
+  for (const kind of ["demonstrations", "scenes"]) {
+    const group = document.createElement("optgroup");
+    group.label = kind;
+    for (const name of state.files[kind]) group.appendChild(new Option(name, name));
+    if (state.files[kind].length) file.appendChild(group);
+  }
+  file.value = state.files.demonstrations.includes(keep) || state.files.scenes.includes(keep) ? keep : "";
+  const chosen = new Set([...document.querySelectorAll("#learn-files input:not(:checked)")].map((i) => i.value));
+  const box = $("learn-files");
+  box.replaceChildren();
+  if (!state.files.demonstrations.length) box.textContent = "No demonstrations saved yet.";
+  for (const name of state.files.demonstrations) {
+    const label = document.createElement("label");
+    label.className = "check";
+    const input = document.createElement("input");
+    input.type = "checkbox";
+    input.value = name;
+    input.checked = !chosen.has(name);
+    label.append(input, ` ${name}`);
+    box.appendChild(label);
+  }
+  const planFile = $("plan-file");
+  const keepPlan = planFile.value;
+  planFile.replaceChildren(new Option("(none)", ""));
+  for (const kind of ["scenes", "demonstrations"]) {
+    const group = document.createElement("optgroup");
+    group.label = kind;
+    for (const name of state.files[kind]) group.appendChild(new Option(name, name));
+    if (state.files[kind].length) planFile.appendChild(group);
+  }
+  planFile.value = state.files.scenes.includes(keepPlan) || state.files.demonstrations.includes(keepPlan) ? keepPlan : "";
+  const models = $("plan-model");
+  const current = models.value;
+  models.replaceChildren();
+  for (const name of state.files.models) models.appendChild(new Option(name, name));
+  if (state.files.models.includes(current)) models.value = current;
+  $("workfolder").textContent = `work folder: ${state.files.demonstrations.length} demonstrations, ` +
+    `${state.files.models.length} models, ${state.files.scenes.length} scenes`;
+}

@@ -1,0 +1,250 @@
+"""What the command layer returns, as the JSON of the studio's API
+(docs/studio-api.md): the learned model's states, sequences, constraints and
+targets; a plan's lines in the CLI's words, the poses it moves the objects
+to, its candidates, or why there is none; a run's events and report. Values
+are only turned into JSON here, as the command line renders them
+(:mod:`demoplan.cli.render`); nothing is learned, planned or run.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from demoplan.errors import DemoplanError, error_line
+from demoplan.model import Pose, TaskModel
+from demoplan.scenes.scene import Scene, SceneObject, yaw_of
+
+if TYPE_CHECKING:
+    from demoplan.execution.executor import RunEvent, RunReport
+    from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError, ScenePlan
+
+__all__ = [
+    "event_json",
+    "final_scene",
+    "model_json",
+    "no_plan_json",
+    "plan_json",
+    "pose_json",
+    "run_result_json",
+    "targets_json",
+]
+
+
+def pose_json(pose: Pose) -> dict[str, Any]:
+    """``{"position": [x, y, z], "yaw": deg}``."""
+    return {"position": [float(v) for v in pose.position], "yaw": round(yaw_of(pose), 6)}
+
+
+def model_json(model: TaskModel) -> dict[str, Any]:
+    """The states (as the paper's Tables II and IV: reference, value, spread,
+    margin), the state sequences and the constraints as the report draws them
+    (each demonstration's transitive reduction, together)."""
+    from demoplan.learning.constraints import goal_order, visit_sequence
+
+    states = []
+    for state in model.states:
+        rpy = state.orientation.rpy
+        margins = [m for _, m in state.margins]
+        if state.position.anywhere:
+            reference = "anywhere"
+        else:
+            reference = state.position.reference or "absolute"
+        states.append(
+            {
+                "id": state.id,
+                "object": state.object,
+                "reference": reference,
+                "orientation_reference": state.orientation.reference,
+                "position": [float(v) for v in state.position.value],
+                "yaw": None if rpy is None else round(rpy[2], 6),
+                "spread": math.sqrt(state.position.spread),
+                "yaw_spread": (
+                    None if state.orientation.value is None else math.sqrt(state.orientation.spread)
+                ),
+                "members": len(state.members),
+                "margin": round(min(margins), 6) if margins else None,
+            }
+        )
+    nodes: dict[str, None] = {}
+    edges: dict[tuple[str, str], None] = {}
+    for sequence in model.sequences:
+        nodes.update(dict.fromkeys(visit_sequence(sequence)))
+        order = goal_order(sequence, model.constraints)
+        edges.update(dict.fromkeys(sorted(order.drawn)))
+    return {
+        "states": states,
+        "sequences": [list(sequence) for sequence in model.sequences],
+        "goals": [list(goal) for goal in model.goals],
+        "constraints": {"nodes": list(nodes), "edges": [list(edge) for edge in edges]},
+    }
+
+
+def final_scene(model: TaskModel) -> Scene:
+    """The first demonstration's layout after its last step, as a scene (where
+    the learned targets are shown when no scene is given)."""
+    demo = model.demonstrations[0]
+    poses = demo.initial_poses()
+    for step in demo.steps:
+        poses[step.object] = step.pose
+    geometry = demo.geometry()
+    landmarks = demo.landmark_poses()
+    return Scene(
+        objects=tuple(
+            SceneObject(name, pose, geometry.get(name))
+            for name, pose in poses.items()
+            if name not in landmarks
+        ),
+        landmarks=tuple(landmarks.items()),
+        landmark_geometry=tuple((n, g) for n, g in geometry.items() if n in landmarks),
+        source="the first demonstration's final layout",
+    )
+
+
+def targets_json(model: TaskModel, scene: Scene) -> list[dict[str, Any]]:
+    """The states of the first demonstration's goal resolved in ``scene``
+    (where planning would put each object)."""
+    from demoplan.scenes.prepared import prepare
+
+    prepared = prepare(model, scene, clutter=True)
+    if not prepared.candidates:
+        return []
+    return [
+        {"state": subtask.state, "label": subtask.label, "object": subtask.object}
+        | pose_json(subtask.pose)
+        for subtask in prepared.candidates[0].subtasks
+    ]
+
+
+def plan_json(result: ScenePlan) -> dict[str, Any]:
+    """The chosen plan in the CLI's words, each action's pose of its object
+    after it, and every candidate goal with its length or why it has none."""
+    model, chosen, scene = result.model, result.chosen, result.scene
+    assert model is not None and chosen.plan is not None and scene is not None
+    current = {obj.name: pose_json(obj.pose) for obj in scene.objects}
+    moves = []
+    for action in chosen.plan.actions:
+        if action.kind == "PUT_DOWN":
+            location = chosen.problem.location(action.location)
+            current[action.object] = {
+                "position": [float(v) for v in location.position],
+                "yaw": round(location.yaw, 6),
+            }
+        moves.append(
+            {
+                "action": str(action),
+                "kind": action.kind,
+                "object": action.object,
+                "location": action.location,
+                "pose": current.get(action.object),
+            }
+        )
+    return {
+        "plan": [str(action) for action in chosen.plan.actions],
+        "moves": moves,
+        "candidates": [_candidate(model, c, c is chosen) for c in result.candidates],
+        "chosen": chosen.goal,
+        "optimal": result.optimal,
+        "no_plan": None,
+    }
+
+
+def _candidate(model: TaskModel, candidate: Any, chosen: bool) -> dict[str, Any]:
+    return {
+        "goal": candidate.goal,
+        "demonstrations": [
+            model.demonstration_number(k) for k in candidate.problem.candidate.demonstrations
+        ],
+        "length": candidate.length,
+        "outcome": "chosen" if chosen else (candidate.reason or ""),
+    }
+
+
+def no_plan_json(failure: SceneNoPlanError | SceneLimitReachedError) -> dict[str, Any]:
+    """No plan: the CLI's line, every candidate's outcome, and the figure
+    ``plan --plot`` draws then (SVG text; None without matplotlib)."""
+    return {
+        "plan": [],
+        "moves": [],
+        "candidates": [
+            {
+                "goal": outcome.goal,
+                "demonstrations": [
+                    failure.model.demonstration_number(k)
+                    for k in outcome.problem.candidate.demonstrations
+                ],
+                "length": outcome.length,
+                "outcome": outcome.reason or "",
+            }
+            for outcome in failure.outcomes
+        ],
+        "chosen": None,
+        "optimal": False,
+        "no_plan": {"reason": error_line(failure), "figure": _no_plan_figure(failure)},
+    }
+
+
+def _no_plan_figure(failure: SceneNoPlanError | SceneLimitReachedError) -> str | None:
+    """The figure of ``plan --plot`` without a plan, as SVG text."""
+    from demoplan.plotting.figures import save_scene_targets
+
+    first = failure.outcomes[0].problem
+    goal = first.candidate.demonstrations[0]
+    title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
+    with tempfile.TemporaryDirectory(prefix="demoplan-studio-") as folder:
+        path = Path(folder) / "no-plan.svg"
+        try:
+            save_scene_targets(failure.scene, first, str(failure), path, title)
+        except (ImportError, DemoplanError):
+            return None
+        return path.read_text(encoding="utf-8")
+
+
+def event_json(event: RunEvent) -> dict[str, Any]:
+    """A run's event as the CLI's live display words it (``step N: text``)."""
+    return {
+        "kind": event.kind,
+        "text": event.text,
+        "step": event.step,
+        "replans": event.replans,
+        "remaining": event.remaining,
+        "poses": None,
+        "targets": {name: pose_json(pose) for name, pose in event.targets} or None,
+    }
+
+
+def run_result_json(report: RunReport, video: str | None) -> dict[str, Any]:
+    """The run's report: success, replans, the failures as the CLI prints them."""
+    return {
+        "success": report.success,
+        "replans": report.replans,
+        "reason": report.reason,
+        "actions": len(report.actions),
+        "failures": [f"step {f.step}: {f.kind}: {f.detail}" for f in report.failures],
+        "injected": [
+            f"injected at action {fault.action}: {fault.kind}: {fault.detail}"
+            for fault in report.injected
+        ],
+        "final": {name: pose_json(pose) for name, pose in report.final.poses.items()},
+        "video": video,
+    }
+
+
+def events_with_poses(events: list[dict[str, Any]], report: RunReport) -> list[dict[str, Any]]:
+    """``events`` with each action's pose of its object (the place it was taken
+    from at a GRASP, put at a PUT_DOWN: what the report recorded), and the
+    final poses at ``done``."""
+    by_step = {executed.step: executed for executed in report.actions}
+    out = []
+    for event in events:
+        if event["kind"] == "action" and event["step"] in by_step:
+            executed = by_step[event["step"]]
+            event = event | {"poses": {executed.action.object: pose_json(executed.pose)}}
+        elif event["kind"] == "done":
+            event = event | {
+                "poses": {name: pose_json(pose) for name, pose in report.final.poses.items()}
+            }
+        out.append(event)
+    return out
