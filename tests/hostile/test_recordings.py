@@ -192,8 +192,28 @@ def test_a_model_file_beside_the_recording_that_links_elsewhere_is_refused(tmp_p
     (tmp_path / "rec" / "models").mkdir(parents=True)
     (tmp_path / "rec" / "models" / "model_1.xml").symlink_to(secret)
     recording = write_recording(tmp_path / "rec" / "toy.hdf5", box_states(), "model_1.xml")
-    answer = import_refused(recording, tmp_path, "model_file", "outside the recording's folder")
+    answer = import_refused(recording, tmp_path, "model_file", "outside the recording's models/")
     assert str(secret) in answer.stderr
+
+
+@pytest.mark.parametrize(
+    ("model_file", "linked"),
+    [("secret.xml", False), ("../secret.xml", False), ("model_1.xml", True)],
+    ids=["a file beside", "a name with ..", "a link in models/ to a file beside"],
+)
+def test_a_model_file_is_read_from_models_only(
+    model_file: str, linked: bool, tmp_path: Path
+) -> None:
+    """Only models/ beside the recording holds its model: not the recording's
+    other neighbours (a user's download folder), by name or through a link."""
+    (tmp_path / "rec" / "models").mkdir(parents=True)
+    secret = tmp_path / "rec" / "secret.xml"
+    secret.write_text(MODEL)  # a valid model: reading it would succeed
+    if linked:
+        (tmp_path / "rec" / "models" / model_file).symlink_to(secret)
+    recording = write_recording(tmp_path / "rec" / "toy.hdf5", box_states(), model_file)
+    answer = import_refused(recording, tmp_path, "model_file")
+    assert str(tmp_path / "rec" / "models") in answer.stderr, answer
 
 
 # --------------------------------------------------------------------------- names
