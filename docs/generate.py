@@ -1056,7 +1056,9 @@ def demonstration_section() -> str:
             "One demonstration of the task, segmented: the pose of an object after each "
             "pick-and-place step. `segment` and `import` write them; `learn` reads files, "
             "and folders of them (every `*.json`, `*.yaml` and `*.yml` file in name "
-            "order; hidden files are skipped).",
+            "order; hidden files are skipped; a file that is a link leading out of the "
+            "folder is refused, naming it: a folder's files are read, not what its links "
+            "lead to — name such a file on the command line to read it).",
             "A step is one object picked up and released; its pose is where the object "
             "was released. An object may be moved more than once. `landmarks` do not move "
             "but placements may be relative to them. `initial` says where objects stood "
