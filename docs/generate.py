@@ -1154,7 +1154,8 @@ def stream_section() -> str:
             "### ROS 2 bag",
             "A bag in sqlite3 or mcap storage — its folder, its `.db3` or `.mcap` file, or "
             "its `metadata.yaml` — read with the `rosbags` library (no ROS installation "
-            "needed). Two kinds of topic are read, others are ignored:",
+            "needed), from its own folder: a file there that is a link leading out of the "
+            "folder is refused, naming it. Two kinds of topic are read, others are ignored:",
             "- `tf2_msgs/msg/TFMessage` (`/tf`, and `/tf_static` — any topic of the type; "
             "one whose name ends in `tf_static` holds static transforms): a tree of "
             "frames, each posed in its parent. Each object's pose is composed to the world "
