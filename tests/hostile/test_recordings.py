@@ -13,12 +13,8 @@ pointed to.
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
-import subprocess
 import tempfile
-import time
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -32,7 +28,8 @@ from hypothesis import strategies as st
 
 from demoplan.segmentation.types import ObjectTrack, PoseStream
 from demoplan.segmentation.writers import write_bag, write_csv
-from tests.hostile.harness import DEMOPLAN, Answer, check_refused, fingerprint, run
+from tests.hostile import file_audit
+from tests.hostile.harness import Answer, check_refused, fingerprint, run
 from tests.test_import import MODEL, box_states, write_recording
 
 GENERATED = settings(
@@ -66,52 +63,13 @@ def import_refused(recording: Path, cwd: Path, *names: str) -> Answer:
 
 # --------------------------------------------------------------------------- containers
 
-_OPENED = re.compile(r'\b(?:open|openat|openat2|creat)\((?:[A-Z_]+, |\d+, )?"((?:[^"\\]|\\.)*)"')
-
-
-def _strace_works() -> bool:
-    strace = shutil.which("strace")
-    if strace is None:
-        return False
-    done = subprocess.run(
-        [strace, "-f", "-o", os.devnull, "true"], capture_output=True, check=False
-    )
-    return done.returncode == 0
-
-
-STRACE = _strace_works()
-
 
 def run_audited(args: list[str | Path], cwd: Path) -> tuple[Answer, set[Path]]:
-    """Run ``demoplan ARGS`` under ``strace -f``: its answer and every path it
-    (or a thread or child of it) tried to open, resolved against ``cwd``."""
-    if not STRACE:
-        pytest.skip("strace is not installed or not permitted here")
-    log = cwd / "strace.log"
-    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
-    started = time.monotonic()
-    done = subprocess.run(
-        ["strace", "-f", "-s", "4096", "-e", "trace=open,openat,openat2,creat", "-o", str(log)]
-        + [str(DEMOPLAN), *(str(a) for a in args)],
-        cwd=cwd,
-        capture_output=True,
-        env=env,
-        timeout=240,
-        check=False,
-    )
-    answer = Answer(
-        tuple(str(a) for a in args),
-        done.returncode,
-        done.stdout.decode("utf-8", "replace"),
-        done.stderr.decode("utf-8", "replace"),
-        time.monotonic() - started,
-    )
-    opened = {
-        (cwd / match.group(1)).resolve()
-        for match in _OPENED.finditer(log.read_text(errors="replace"))
-    }
-    log.unlink()
-    return answer, opened
+    """Run ``demoplan ARGS`` under ``strace -f`` (tests/hostile/file_audit.py):
+    its answer and every path it (or a thread or child of it) tried to open,
+    as named and as opened (links followed)."""
+    audit = file_audit.run_audited(args, cwd)
+    return audit.answer, {Path(path) for path in audit.touched()}
 
 
 def valid_recording(path: Path) -> Path:
