@@ -468,7 +468,13 @@ def check_accesses(
 ) -> None:
     """Fail on any access the rule does not allow, on any access at all of a
     path in ``never`` (a secret: by its name or as the file opened), and on
-    anything left in the private temporary folder."""
+    anything left in the private temporary folder; and, lest a monitor that
+    sees nothing pass everything, where the command succeeded, unless the
+    first named input was seen opened."""
+    if audit.answer.code == 0 and allowed.inputs:
+        first = os.path.normpath(os.fspath(allowed.inputs[0]))
+        seen = any(_under(path, first) for path in audit.touched())
+        assert seen, f"the audit saw no open of {first}: {len(audit.accesses)} accesses"
     for secret in never:
         names = {os.path.normpath(os.fspath(secret)), os.path.realpath(secret)}
         touched = [str(a) for a in audit.accesses if {a.path, a.real} & names]

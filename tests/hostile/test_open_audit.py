@@ -244,6 +244,26 @@ def test_learn_opens_the_demonstrations_only(what: str, caches: Path, tmp_path: 
         assert out.is_file()
 
 
+def test_learn_update_opens_the_model_and_the_demonstrations_only(
+    caches: Path, tmp_path: Path
+) -> None:
+    """``--update`` locks the model's folder while it reads and writes the
+    model back; a model beside it is never opened."""
+    root = tmp_path
+    (root / "work").mkdir()
+    models = root / "work" / "models"
+    models.mkdir()
+    first, second = (EXAMPLES / "set_table" / f"demonstration-{i}.json" for i in (1, 2))
+    model = models / "model 'é'.json"
+    assert run(["learn", first, "-o", model], root / "work").code == 0
+    secret = models / "model.json"
+    shutil.copy(model, secret)
+    rule = allowed(root, caches, [second, model], [model])
+    audit = audited(["learn", "--update", model, second], root / "work", rule, never=[secret])
+    assert audit.answer.code == 0, audit.answer
+    assert model.read_bytes() != secret.read_bytes()  # written back, with the new one
+
+
 # --------------------------------------------------------------------------- plan and run
 
 
