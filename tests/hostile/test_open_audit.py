@@ -158,6 +158,7 @@ def test_import_opens_the_recording_and_its_model_only(
 # --------------------------------------------------------------------------- segment
 
 
+@pytest.mark.slow  # a few commands under strace: handed out early
 @given(name=NAMES, output=NAMES)
 @FEW
 def test_segment_opens_the_stream_only(name: str, output: str, caches: Path) -> None:
@@ -279,6 +280,7 @@ def blocks_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return model
 
 
+@pytest.mark.slow  # a few commands under strace: handed out early
 @given(name=NAMES, plot=NAMES)
 @FEW
 def test_plan_opens_the_model_and_the_scene_only(
