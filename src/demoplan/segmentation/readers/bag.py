@@ -146,10 +146,15 @@ def _refuse_links_out_of(folder: Path) -> None:
     refused before anything is opened (docs/limits.md, "What demoplan opens")."""
     inside = folder.resolve()
     for entry in sorted(folder.iterdir()):
-        target = entry.resolve()
-        if entry.is_symlink() and not target.is_relative_to(inside):
+        if not entry.is_symlink():
+            continue
+        try:
+            target = str(entry.resolve())
+        except (OSError, RuntimeError):  # a loop of links leads nowhere in the folder
+            target = str(entry.readlink())
+        if not Path(target).is_relative_to(inside):
             raise InputError(
-                f"a link leading out of the bag's folder (to {str(target)!r}); a bag's "
+                f"a link leading out of the bag's folder (to {target!r}); a bag's "
                 "own files expected",
                 source=str(entry),
             )
