@@ -1062,7 +1062,9 @@ def demonstration_section() -> str:
             "One demonstration of the task, segmented: the pose of an object after each "
             "pick-and-place step. `segment` and `import` write them; `learn` reads files, "
             "and folders of them (every `*.json`, `*.yaml` and `*.yml` file in name "
-            "order; hidden files are skipped).",
+            "order; hidden files are skipped; a file that is a link leading out of the "
+            "folder is refused, naming it: a folder's files are read, not what its links "
+            "lead to — name such a file on the command line to read it).",
             "A step is one object picked up and released; its pose is where the object "
             "was released. An object may be moved more than once. `landmarks` do not move "
             "but placements may be relative to them. `initial` says where objects stood "
@@ -1158,7 +1160,8 @@ def stream_section() -> str:
             "### ROS 2 bag",
             "A bag in sqlite3 or mcap storage — its folder, its `.db3` or `.mcap` file, or "
             "its `metadata.yaml` — read with the `rosbags` library (no ROS installation "
-            "needed). Two kinds of topic are read, others are ignored:",
+            "needed), from its own folder: a file there that is a link leading out of the "
+            "folder is refused, naming it. Two kinds of topic are read, others are ignored:",
             "- `tf2_msgs/msg/TFMessage` (`/tf`, and `/tf_static` — any topic of the type; "
             "one whose name ends in `tf_static` holds static transforms): a tree of "
             "frames, each posed in its parent. Each object's pose is composed to the world "

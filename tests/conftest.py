@@ -22,11 +22,14 @@ from tests import background
 from tests.shared_experiments import ExperimentsRun
 
 LONG_FIRST = (
+    # The experiments under strace: 3 to 5 min on two cores, the longest of all.
+    "tests/hostile/test_open_audit.py::test_experiments_opens_its_package_data_only",
     # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
     "tests/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
     "tests/test_docs_shell.py::",
     "tests/hostile/test_concurrency.py::",
     "tests/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
+    "tests/hostile/test_open_audit.py::test_run_with_video_and_frames_opens_its_inputs_only",
     "tests/test_readme.py::test_tour_commands_run",
     "tests/test_arm.py::test_experiment_",
     "tests/test_arm.py::test_kitting_on_the_arm",

@@ -159,6 +159,29 @@ def test_the_report_page_is_one_file_with_every_image_inside(report: Path) -> No
     assert "<table>" in page and "Where the data come from" in page
 
 
+def test_embedded_files_get_their_media_type_whatever_the_machine_s_mime_tables(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The page is the same on every machine: the media types are the
+    report's own, not the machine's ``/etc/mime.types`` (which the command
+    would otherwise open; a table mapping ``.png`` to text is not followed)."""
+    import mimetypes
+
+    from demoplan.experiments.report_html import markdown_to_html
+
+    for name in ("a.png", "b.SVG", "c.jpeg", "d.bin"):
+        (tmp_path / name).write_bytes(b"x")
+    (tmp_path / "e.mp4").write_bytes(b"x")
+    markdown = '![a](a.png) ![b](b.SVG) ![c](c.jpeg) ![d](d.bin)\n\n<video src="e.mp4"></video>\n'
+    page = markdown_to_html(markdown, tmp_path, "t")
+    kinds = re.findall(r'src="data:([^;]+);base64,', page)
+    assert kinds == ["image/png", "image/svg+xml", "image/jpeg", "application/octet-stream"] + [
+        "video/mp4"
+    ]
+    monkeypatch.setattr(mimetypes, "guess_type", lambda *a, **k: ("text/plain", None))
+    assert markdown_to_html(markdown, tmp_path, "t") == page
+
+
 def test_the_report_page_opens_in_headless_chromium(report: Path) -> None:
     executable = _chromium()
     from playwright.sync_api import sync_playwright

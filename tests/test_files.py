@@ -184,6 +184,28 @@ def test_folder_is_read_in_name_order(tmp_path: Path) -> None:
     assert [d.steps[0].pose.position[0] for d in demos] == [0.1, 0.2, 0.3]
 
 
+@pytest.mark.parametrize("inside", [True, False], ids=["link inside", "link leading out"])
+def test_a_link_in_a_folder_is_read_only_if_it_stays_in_the_folder(
+    tmp_path: Path, inside: bool
+) -> None:
+    folder = tmp_path / "demos"
+    folder.mkdir()
+    write(folder / "a.json", json.dumps(demo([{"object": "plate", "position": [0.1, 0.0]}])))
+    target = (folder if inside else tmp_path) / "target.data"
+    write(target, json.dumps(demo([{"object": "plate", "position": [0.2, 0.0]}])))
+    (folder / "b.json").symlink_to(target)
+    if inside:
+        assert [d.steps[0].pose.position[0] for d in load_demonstrations([folder])] == [0.1, 0.2]
+        return
+    with pytest.raises(InputError) as error:
+        load_demonstrations([folder])
+    assert error.value.source == str(folder / "b.json")
+    assert "a link leading out of the folder" in str(error.value) and str(target) in str(
+        error.value
+    )
+    assert load_demonstrations([folder / "b.json"])[0].steps[0].pose.position[0] == 0.2  # named
+
+
 def test_set_table_folder_is_in_order() -> None:
     demos = load_demonstrations([SET_TABLE])
     assert [d.name for d in demos] == ["set-table-1", "set-table-2", "set-table-3"]

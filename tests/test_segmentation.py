@@ -600,6 +600,29 @@ def test_a_bag_with_a_nan_pose_names_the_topic(tmp_path: Path) -> None:
     assert info.value.field is not None and "/cup/pose" in info.value.field
 
 
+@pytest.mark.parametrize("entry", ["nan.db3", "metadata.yaml", "loop.db3"])
+def test_a_link_leading_out_of_a_bag_folder_is_refused_before_reading(
+    tmp_path: Path, entry: str
+) -> None:
+    """A bag is read from its own folder: a storage file or metadata.yaml that
+    links elsewhere (a valid bag's, which rosbags would read) is refused."""
+    stream = PoseStream((ObjectTrack("cup", np.arange(0.0, 1.0, 0.1), np.zeros((10, 3))),))
+    write_bag(stream, tmp_path / "nan", kind="pose")
+    assert load_stream(tmp_path / "nan").objects == ("cup",)  # read as written
+    (tmp_path / "elsewhere").mkdir()
+    target = tmp_path / "elsewhere" / entry
+    if entry == "loop.db3":  # a link to itself: leads nowhere in the folder
+        target = Path(entry)
+    else:
+        (tmp_path / "nan" / entry).rename(target)
+    (tmp_path / "nan" / entry).symlink_to(target)
+    for named in (tmp_path / "nan", tmp_path / "nan" / "metadata.yaml"):
+        with pytest.raises(InputError, match="a link leading out of the bag's folder") as info:
+            load_stream(named)
+        assert info.value.source == str(tmp_path / "nan" / entry)
+        assert str(target) in str(info.value)
+
+
 def test_a_corrupt_bag_is_an_input_error(tmp_path: Path) -> None:
     (tmp_path / "broken.mcap").write_bytes(b"not an mcap file at all")
     with pytest.raises(InputError, match=r"broken\.mcap"):

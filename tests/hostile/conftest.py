@@ -27,6 +27,10 @@ _GENERATED = {
     "test_deeply_nested_models_are_refused_without_recursion": ("import", 6),
     "test_a_dataset_declaring_more_than_the_file_holds_is_refused_before_reading": ("import", 6),
     "test_tf_frame_names_with_escapes_are_printed_as_text": ("segment", 6),
+    # test_open_audit: each example a whole command under strace
+    "test_segment_opens_the_stream_only": ("segment", 4),
+    "test_plan_opens_the_model_and_the_scene_only": ("plan", 4),
+    "test_run_kinematic_with_frames_opens_its_inputs_only": ("run", 2),
 }
 
 

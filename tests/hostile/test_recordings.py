@@ -13,12 +13,8 @@ pointed to.
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
-import subprocess
 import tempfile
-import time
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -32,7 +28,8 @@ from hypothesis import strategies as st
 
 from demoplan.segmentation.types import ObjectTrack, PoseStream
 from demoplan.segmentation.writers import write_bag, write_csv
-from tests.hostile.harness import DEMOPLAN, Answer, check_refused, fingerprint, run
+from tests.hostile import file_audit
+from tests.hostile.harness import Answer, check_refused, fingerprint, run
 from tests.test_import import MODEL, box_states, write_recording
 
 GENERATED = settings(
@@ -66,52 +63,13 @@ def import_refused(recording: Path, cwd: Path, *names: str) -> Answer:
 
 # --------------------------------------------------------------------------- containers
 
-_OPENED = re.compile(r'\b(?:open|openat|openat2|creat)\((?:[A-Z_]+, |\d+, )?"((?:[^"\\]|\\.)*)"')
-
-
-def _strace_works() -> bool:
-    strace = shutil.which("strace")
-    if strace is None:
-        return False
-    done = subprocess.run(
-        [strace, "-f", "-o", os.devnull, "true"], capture_output=True, check=False
-    )
-    return done.returncode == 0
-
-
-STRACE = _strace_works()
-
 
 def run_audited(args: list[str | Path], cwd: Path) -> tuple[Answer, set[Path]]:
-    """Run ``demoplan ARGS`` under ``strace -f``: its answer and every path it
-    (or a thread or child of it) tried to open, resolved against ``cwd``."""
-    if not STRACE:
-        pytest.skip("strace is not installed or not permitted here")
-    log = cwd / "strace.log"
-    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
-    started = time.monotonic()
-    done = subprocess.run(
-        ["strace", "-f", "-s", "4096", "-e", "trace=open,openat,openat2,creat", "-o", str(log)]
-        + [str(DEMOPLAN), *(str(a) for a in args)],
-        cwd=cwd,
-        capture_output=True,
-        env=env,
-        timeout=240,
-        check=False,
-    )
-    answer = Answer(
-        tuple(str(a) for a in args),
-        done.returncode,
-        done.stdout.decode("utf-8", "replace"),
-        done.stderr.decode("utf-8", "replace"),
-        time.monotonic() - started,
-    )
-    opened = {
-        (cwd / match.group(1)).resolve()
-        for match in _OPENED.finditer(log.read_text(errors="replace"))
-    }
-    log.unlink()
-    return answer, opened
+    """Run ``demoplan ARGS`` under ``strace -f`` (tests/hostile/file_audit.py):
+    its answer and every path it (or a thread or child of it) tried to open,
+    as named and as opened (links followed)."""
+    audit = file_audit.run_audited(args, cwd)
+    return audit.answer, {Path(path) for path in audit.touched()}
 
 
 def valid_recording(path: Path) -> Path:
@@ -192,8 +150,28 @@ def test_a_model_file_beside_the_recording_that_links_elsewhere_is_refused(tmp_p
     (tmp_path / "rec" / "models").mkdir(parents=True)
     (tmp_path / "rec" / "models" / "model_1.xml").symlink_to(secret)
     recording = write_recording(tmp_path / "rec" / "toy.hdf5", box_states(), "model_1.xml")
-    answer = import_refused(recording, tmp_path, "model_file", "outside the recording's folder")
+    answer = import_refused(recording, tmp_path, "model_file", "outside the recording's models/")
     assert str(secret) in answer.stderr
+
+
+@pytest.mark.parametrize(
+    ("model_file", "linked"),
+    [("secret.xml", False), ("../secret.xml", False), ("model_1.xml", True)],
+    ids=["a file beside", "a name with ..", "a link in models/ to a file beside"],
+)
+def test_a_model_file_is_read_from_models_only(
+    model_file: str, linked: bool, tmp_path: Path
+) -> None:
+    """Only models/ beside the recording holds its model: not the recording's
+    other neighbours (a user's download folder), by name or through a link."""
+    (tmp_path / "rec" / "models").mkdir(parents=True)
+    secret = tmp_path / "rec" / "secret.xml"
+    secret.write_text(MODEL)  # a valid model: reading it would succeed
+    if linked:
+        (tmp_path / "rec" / "models" / model_file).symlink_to(secret)
+    recording = write_recording(tmp_path / "rec" / "toy.hdf5", box_states(), model_file)
+    answer = import_refused(recording, tmp_path, "model_file")
+    assert str(tmp_path / "rec" / "models") in answer.stderr, answer
 
 
 # --------------------------------------------------------------------------- names

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import base64
 import html
-import mimetypes
 import re
 from pathlib import Path
 
@@ -18,6 +17,19 @@ from markdown_it.token import Token
 __all__ = ["markdown_to_html"]
 
 _VIDEO_SOURCE = re.compile(r'src="([^":]+\.mp4)"')
+MEDIA_TYPES = {
+    ".png": "image/png",
+    ".svg": "image/svg+xml",
+    ".jpg": "image/jpeg",
+    ".jpeg": "image/jpeg",
+    ".gif": "image/gif",
+    ".mp4": "video/mp4",
+}
+"""The media type of each kind of file a report embeds, fixed here rather
+than read from the machine's MIME tables (``mimetypes`` reads
+``/etc/mime.types`` and the like): the page does not depend on the machine,
+and the command opens no file it was not given (docs/limits.md, "What
+demoplan opens")."""
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 70rem; margin: 2rem auto;
@@ -71,7 +83,5 @@ def _data_uri(folder: Path, source: str) -> str | None:
     path = (folder / source).resolve()
     if not path.is_file() or not path.is_relative_to(folder.resolve()):
         return None
-    kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
-    if path.suffix.lower() == ".mp4":
-        kind = "video/mp4"
+    kind = MEDIA_TYPES.get(path.suffix.lower(), "application/octet-stream")
     return f"data:{kind};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"

@@ -292,6 +292,7 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
         )
         if not files:
             raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+        _refuse_links_out_of(path, files)
     else:
         files = [path]
     demos: list[Demonstration] = []
@@ -299,6 +300,22 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
         demos += demonstrations_from_document(read_document(file), str(file))
     warn_unsupported_releases(demos)
     return demos
+
+
+def _refuse_links_out_of(folder: Path, files: Sequence[Path]) -> None:
+    """A folder named is read, not what its links lead to: a file that is a
+    link leading out of the folder (an unpacked archive's ``demo.json`` →
+    ``~/.ssh/id_rsa``) is refused before anything is opened (docs/limits.md,
+    "What demoplan opens"). A file meant to be read is named itself."""
+    inside = folder.resolve()
+    for file in files:
+        target = file.resolve()
+        if not target.is_relative_to(inside):
+            raise InputError(
+                f"a link leading out of the folder (to {str(target)!r}); a folder's own "
+                "demonstration files expected (name a file elsewhere on the command line)",
+                source=str(file),
+            )
 
 
 def check_demonstrations(demos: Sequence[Demonstration]) -> None:

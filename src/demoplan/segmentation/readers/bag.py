@@ -73,6 +73,8 @@ def load_bag(
     path = Path(path)
     source = str(path)
     bag = _bag_folder(path)
+    if bag.is_dir():
+        _refuse_links_out_of(bag)
     samples = _Samples()
     try:
         with AnyReader([bag]) as reader:
@@ -135,6 +137,27 @@ def _bag_folder(path: Path) -> Path:
     if path.name == "metadata.yaml" or (path.parent / "metadata.yaml").exists():
         return path.parent
     return path  # a storage file without metadata.yaml (rosbags reads mcap files alone)
+
+
+def _refuse_links_out_of(folder: Path) -> None:
+    """A bag is read from its own folder: ``metadata.yaml`` and the storage
+    files it lists are opened there, so an entry that is a link leading out
+    of the folder (an unpacked archive's ``bag_0.db3`` → another file) is
+    refused before anything is opened (docs/limits.md, "What demoplan opens")."""
+    inside = folder.resolve()
+    for entry in sorted(folder.iterdir()):
+        if not entry.is_symlink():
+            continue
+        try:
+            target = str(entry.resolve())
+        except (OSError, RuntimeError):  # a loop of links leads nowhere in the folder
+            target = str(entry.readlink())
+        if not Path(target).is_relative_to(inside):
+            raise InputError(
+                f"a link leading out of the bag's folder (to {target!r}); a bag's "
+                "own files expected",
+                source=str(entry),
+            )
 
 
 def _pose_topic_names(connections: Iterable[Connection], source: str) -> dict[str, str]:

@@ -753,20 +753,23 @@ def _model_xml(group: Any, path: Path, key: str) -> tuple[str, str]:
         return value, f"{source}: model_file"
     name = Path(value).name
     # The recording as named may be a link (to a download cache): its model is
-    # the one beside the file it names, and nothing outside that folder.
-    folder = path.resolve().parent
-    for candidate in (folder / "models" / name, folder / name):
-        if candidate.is_file():
-            if not candidate.resolve().is_relative_to(folder):
-                raise InputError(
-                    f"model file {str(candidate)!r} leads outside the recording's folder (to "
-                    f"{str(candidate.resolve())!r}); the model beside the recording expected",
-                    source=source,
-                    field="model_file",
-                )
-            return read_input_text(candidate, "a MuJoCo model (XML)"), str(candidate)
+    # the one in models/ beside the file it names, and nothing outside models/
+    # (not the recording's other neighbours: a name such as "../notes.txt" or
+    # a link in models/ leading to one would make demoplan read them).
+    models = path.resolve().parent / "models"
+    candidate = models / name
+    if candidate.is_file():
+        if not candidate.resolve().is_relative_to(models):
+            raise InputError(
+                f"model file {str(candidate)!r} leads outside the recording's models/ folder "
+                f"(to {str(candidate.resolve())!r}); a model in models/ beside the recording "
+                "expected",
+                source=source,
+                field="model_file",
+            )
+        return read_input_text(candidate, "a MuJoCo model (XML)"), str(candidate)
     raise InputError(
-        f"model file {value!r} not found in {folder / 'models'} or {folder}",
+        f"model file {value!r} not found in {models}",
         source=source,
         field="model_file",
     )
