@@ -62,7 +62,7 @@ from xml.etree.ElementTree import Element
 import numpy as np
 from numpy.typing import NDArray
 
-from demoplan.documents.poses import MAX_COORDINATE, MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
+from demoplan.documents.poses import MAX_COORDINATE, check_physical
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
 from demoplan.model import ObjectGeometry, Pose
@@ -948,27 +948,21 @@ def _check_limits(
     geometry: Sequence[tuple[str, ObjectGeometry]],
     source: str,
 ) -> None:
-    """The limits every demonstration file keeps (docs/limits.md, as
-    :func:`~demoplan.documents.poses.check_physical`): positions within 1 km of
-    the origin, extents within 0.1 mm – 10 m; one InputError naming the object."""
-    limit = "(a documented limit: docs/limits.md)"
+    """The limits every demonstration file keeps (docs/limits.md), by the same
+    validation (:func:`~demoplan.documents.poses.check_physical`): every
+    sample's position within 1 km of the origin (:func:`check_stream_limits`),
+    the landmarks' too, the extents of objects and landmarks within
+    0.1 mm – 10 m; one InputError naming the object. (The spread of what is
+    imported is checked on each demonstration made: ``check_measured``.)"""
     check_stream_limits(PoseStream(tuple(tracks), source))
-    for name, pose in landmarks:
-        if not all(abs(v) <= MAX_DISTANCE_M for v in pose.position):
-            raise InputError(
-                f"landmark {name!r} is at ({', '.join(f'{v:g}' for v in pose.position)}) m, more "
-                f"than 1 km from the origin; a position on a table expected {limit}",
-                source=source,
-                field="model_file",
-            )
-    for name, shape in geometry:
-        if not all(MIN_SIZE_M <= v <= MAX_SIZE_M for v in shape.size):
-            raise InputError(
-                f"{name!r} is {' × '.join(f'{v:g}' for v in shape.size)} m; extents within "
-                f"0.1 mm – 10 m expected {limit}",
-                source=source,
-                field="model_file",
-            )
+    check_physical(
+        {
+            "landmarks": {name: {"position": list(pose.position)} for name, pose in landmarks},
+            "objects": {name: {"size": list(shape.size)} for name, shape in geometry},
+        },
+        "m",
+        source,
+    )
 
 
 def _landmarks(
