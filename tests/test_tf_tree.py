@@ -406,3 +406,40 @@ def test_csv_streams_take_objects_too(tmp_path: Path, world: PoseStream) -> None
     assert load_stream(tmp_path / "s.csv", objects=["fork", "kn*"]).objects == ("knife", "fork")
     with pytest.raises(InputError, match="no object matches 'cup'"):
         load_stream(tmp_path / "s.csv", objects=["cup"])
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    parents_of=st.lists(st.integers(0, 100), min_size=2, max_size=12),
+    shared_times=st.booleans(),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_poses_kept_between_frames_change_no_frame(
+    parents_of: list[int], shared_times: bool, seed: int
+) -> None:
+    """Composing every frame of one tree in turn (the poses of ancestors kept
+    for the next frame at the same times) gives each frame what a tree of
+    its own, composing it alone, gives — with all frames at one set of times
+    and with each at its own. (A quaternion may come out negated: a frame's
+    own samples are used where the other composes its interpolation.)"""
+    rng = np.random.default_rng(seed)
+    links = []
+    for k, pick in enumerate(parents_of):
+        parent = "world" if k == 0 else f"f{pick % k}"
+        n = 6 if shared_times else int(rng.integers(2, 9))
+        times = np.arange(n) * 0.1 if shared_times else np.sort(rng.uniform(0, 1, n))
+        times = np.unique(times)
+        quats = Rotation.random(len(times), random_state=int(rng.integers(2**31))).as_quat()
+        track = ObjectTrack(f"f{k}", times, rng.normal(size=(len(times), 3)), quats)
+        links.append(FrameLink(parent, track))
+    names = [link.name for link in links]
+    together = TransformTree(links).tracks_in(names, "world")
+    for name in names:
+        alone = TransformTree(links).track_in(name, "world")
+        assert alone is not None
+        np.testing.assert_allclose(together[name].positions, alone.positions, atol=1e-9)
+        # The same rotations: q and -q (slerp between a link's samples may give either).
+        q_together, q_alone = together[name].orientations, alone.orientations
+        assert q_together is not None and q_alone is not None
+        sign = np.sign(np.sum(q_together * q_alone, axis=1))[:, None]
+        np.testing.assert_allclose(q_together, sign * q_alone, atol=1e-9)

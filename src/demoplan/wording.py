@@ -6,7 +6,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
-__all__ = ["did_you_mean", "plural", "printable"]
+__all__ = ["did_you_mean", "plural", "printable", "printable_json", "printable_lines"]
 
 
 def printable(text: str) -> str:
@@ -15,6 +15,33 @@ def printable(text: str) -> str:
     written as its escape (``\\x1b``, ``\\n``, ``\\u202e``), as the error line
     does (:func:`~demoplan.errors.error_line`): a name never drives the terminal."""
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def printable_lines(text: str) -> str:
+    """:func:`printable` for text of several lines: its line breaks stay,
+    every other character that is not printable (``\\r``, escape sequences,
+    bidirectional overrides) is written as its escape. What demoplan's
+    consoles write (:mod:`demoplan.cli.common`) goes through it, so a name
+    printed anywhere — a table cell, a plan's actions — never drives the terminal."""
+    return "\n".join(printable(line) for line in text.split("\n"))
+
+
+def printable_json(text: str) -> str:
+    """JSON text with every character that is not printable (but line breaks)
+    written as a ``\\uXXXX`` escape: the same document (such characters
+    stand only inside its strings), safe on a terminal. ``json.dumps``
+    escapes only the C0 controls; this also catches DEL, the C1 controls
+    (``\\x9b`` starts an escape sequence on some terminals) and bidirectional
+    overrides."""
+
+    def escaped(c: str) -> str:
+        code = ord(c)
+        if code <= 0xFFFF:
+            return f"\\u{code:04x}"
+        code -= 0x10000  # a UTF-16 surrogate pair, as JSON spells it
+        return f"\\u{0xD800 + (code >> 10):04x}\\u{0xDC00 + (code & 0x3FF):04x}"
+
+    return "".join(c if c.isprintable() or c == "\n" else escaped(c) for c in text)
 
 
 def plural(count: int, noun: str, many: str | None = None) -> str:

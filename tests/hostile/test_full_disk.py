@@ -179,9 +179,8 @@ def test_a_full_device_is_an_error(workspace: Path, tmp_path: Path, args: list[s
 def test_a_video_onto_a_full_disk_is_an_error(
     workspace: Path, small_disk: Path, free_kb: int
 ) -> None:
-    """``run --video`` where the video does not fit (ffmpeg says nothing and
-    its exit status is not seen: the MP4 is checked whole): one line, exit 1,
-    nothing left."""
+    """``run --video`` where the video does not fit (ffmpeg's exit status is
+    checked, and the MP4 checked whole): one line, exit 1, nothing left."""
     (small_disk / "new").mkdir()
     _fill(small_disk, free_kb)
     before = fingerprint(small_disk)

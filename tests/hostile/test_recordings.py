@@ -330,15 +330,15 @@ ACTUATOR = '<actuator><general joint="shoulder" dyntype="filter" actdim="inf"/><
 OUT_OF_RANGE: dict[str, tuple[Callable[[Path], Path], tuple[str, ...]]] = {
     "an object 40 m wide": (
         model_replaced('size="0.05 0.05 0.05"', 'size="20 20 20"'),
-        ("'box'", "0.1 mm – 10 m"),
+        ("objects.box", "0.1 mm – 10 m"),
     ),
     "an object 1 µm wide": (
         model_replaced('size="0.05 0.05 0.05"', 'size="5e-7 5e-7 5e-7"'),
-        ("'box'", "0.1 mm – 10 m"),
+        ("objects.box", "0.1 mm – 10 m"),
     ),
     "a landmark 5 km away": (
         model_replaced('pos="0.3 -0.3 0.9"', 'pos="5000 -0.3 0.9"'),
-        ("'post'", "1 km"),
+        ("landmarks.post", "1 km"),
     ),
     "positions 5 km from the origin": (states_with(5, 5000.0), ("'box'", "1 km")),
     "quaternion components of 1e200": (states_with(8, 1e200), ("states", "unit quaternion")),

@@ -23,6 +23,7 @@ from demoplan.cli.common import (
     SimName,
     app,
     geometry_settings,
+    plain_text,
     print_json,
     reported_errors,
     stderr,
@@ -48,7 +49,7 @@ def live_progress(show: bool) -> Iterator[Callable[[Any], None] | None]:
 
     def on_event(event: Any) -> None:
         live.update(
-            Text(
+            plain_text(
                 f"step {event.step} · {event.text} · replans {event.replans} · "
                 f"{plural(event.remaining, 'action')} to go"
             )

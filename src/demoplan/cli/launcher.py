@@ -98,8 +98,10 @@ def run_solve(options: SolveOptions) -> int:
     except OSError as exc:
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         return 1
-    sys.stdout.write(text)
-    sys.stderr.write(note)
+    from demoplan.wording import printable_lines
+
+    sys.stdout.write(printable_lines(text))
+    sys.stderr.write(printable_lines(note))
     return 0
 
 

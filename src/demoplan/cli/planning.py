@@ -29,6 +29,7 @@ from demoplan.cli.render import plot_no_plan, plot_scene_plan, print_scene_plan
 from demoplan.cli.solving import SolveOptions, solve_text
 from demoplan.commands.solving import export_pddl
 from demoplan.planning.problem import optimality_line
+from demoplan.wording import printable_lines
 
 
 @app.command()
@@ -66,8 +67,8 @@ def solve(
         # a spinner while a long search runs on a terminal; nothing when piped
         spinner = stderr.status if stderr.is_terminal else None
         text, note = solve_text(options, spinner)
-        sys.stdout.write(text)
-        sys.stderr.write(note)
+        sys.stdout.write(printable_lines(text))
+        sys.stderr.write(printable_lines(note))
 
 
 @app.command()

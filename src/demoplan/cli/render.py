@@ -13,6 +13,7 @@ from rich.table import Table
 from rich.text import Text
 
 from demoplan.cli.common import (
+    plain_text,
     say,
     stderr,
     stdout,
@@ -42,11 +43,11 @@ def fitted_table(
         if header[k] in names:  # wrapped between words at most, never cut within one
             words = [word for row in body for word in row[k].split()] + header[k].split()
             widest = max(len(word) for word in words)
-            table.add_column(Text(header[k]), min_width=min(widest, 24), overflow="fold")
+            table.add_column(plain_text(header[k]), min_width=min(widest, 24), overflow="fold")
         else:
-            table.add_column(Text(header[k]), overflow="fold")
+            table.add_column(plain_text(header[k]), overflow="fold")
     for row in body:
-        table.add_row(*(Text(row[k]) for k in keep))
+        table.add_row(*(plain_text(row[k]) for k in keep))
     return table
 
 
@@ -137,12 +138,12 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
         )
         size = " × ".join(f"{v:g}" for v in obj.geometry.size)
         table.add_row(
-            Text(obj.name),
+            plain_text(obj.name),
             xyz_text(obj.position, decimals),
             f"{obj.yaw:.0f}°",
             f"{obj.geometry.shape} {size}",
-            Text(", ".join(obj.on) or "table"),
-            Text(grasps),
+            plain_text(", ".join(obj.on) or "table"),
+            plain_text(grasps),
         )
     stdout.print(table)
     for name, position in preview.landmarks:
@@ -206,17 +207,17 @@ def print_scene_plan(result: ScenePlan) -> None:
         )
         length = candidate.length
         table.add_row(
-            Text(names),
+            plain_text(names),
             "—" if length is None else str(length),
             "—" if length is None else str(length // 2),
-            "chosen" if candidate is result.chosen else Text(candidate.reason or ""),
+            "chosen" if candidate is result.chosen else plain_text(candidate.reason or ""),
         )
     stdout.print(table)
     sys.stdout.flush()
     chosen = result.chosen
     assert chosen.plan is not None
     for action in chosen.plan.actions:
-        sys.stdout.write(f"{action}\n")
+        sys.stdout.write(printable(f"{action}") + "\n")
     sys.stdout.flush()
     used = dict.fromkeys(a.location for a in chosen.plan.actions)
     locations = Table(title="Locations used", title_justify="left")
@@ -225,7 +226,9 @@ def print_scene_plan(result: ScenePlan) -> None:
     for name in used:
         loc = chosen.problem.location(name)
         what = loc.kind if not loc.objects else f"{loc.kind} of {', '.join(loc.objects)}"
-        locations.add_row(name, *(f"{v:.3f}" for v in loc.position), f"{loc.yaw:.1f}", Text(what))
+        locations.add_row(
+            name, *(f"{v:.3f}" for v in loc.position), f"{loc.yaw:.1f}", plain_text(what)
+        )
     stdout.print(locations)
 
 
@@ -236,7 +239,7 @@ def print_run_report(report: Any) -> None:
     for executed in report.actions:
         table.add_row(
             str(executed.step),
-            Text(str(executed.action)),
+            plain_text(str(executed.action)),
             str(executed.plan),
             "yes" if executed.ok else "NO",
         )
@@ -261,7 +264,7 @@ def print_steps(title: str, found: Any) -> None:
     """A segmentation's steps as a table on stdout, each push it left out on stderr."""
     table = Table(title=Text(printable(title)), title_justify="left")
     for column in ("step", "object", "picked up [s]", "at rest [s]", "x [m]", "y [m]", "z [m]"):
-        table.add_column(Text(column), justify="left" if column == "object" else "right")
+        table.add_column(plain_text(column), justify="left" if column == "object" else "right")
     for index, move in enumerate(found.moves, 1):
         x, y, z = move.pose.position
         cells = (f"{move.start:.2f}", f"{move.end:.2f}", f"{x:.4f}", f"{y:.4f}", f"{z:.4f}")

@@ -7,10 +7,10 @@ from typing import Annotated
 
 import typer
 from rich.table import Table
-from rich.text import Text
 
 from demoplan.cli.common import (
     app,
+    plain_text,
     reported_errors,
     stderr,
     stdout,
@@ -38,7 +38,7 @@ def experiments(
             table.add_column(column)
         for check in result.checks:
             cells = (check.experiment, check.name, check.paper, check.ours)
-            table.add_row(*map(Text, cells), "yes" if check.ok else "NO")
+            table.add_row(*map(plain_text, cells), "yes" if check.ok else "NO")
         stdout.print(table)
         stdout.print(f"Report: {report}", markup=False, highlight=False)
         if result.html is not None:

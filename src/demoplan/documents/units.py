@@ -26,13 +26,15 @@ import math
 from collections.abc import Iterator, Mapping
 from typing import Any
 
-from demoplan.documents.poses import LENGTH_SCALE, UnitsSchema
+from demoplan.documents.poses import LENGTH_SCALE, UnitsSchema, check_physical
 from demoplan.errors import InputError
 
 __all__ = [
     "MAX_CARRIED_M",
     "MAX_SPREAD_M",
     "MAX_SPREAD_PER_OBJECT",
+    "check_document",
+    "check_measured",
     "check_units",
     "radians_suspected",
 ]
@@ -84,8 +86,34 @@ def check_units(
             )
 
 
-def _length_problem(document: Mapping[str, Any], length: str) -> str | None:
-    """What in ``document`` does not fit ``length``, or None."""
+def check_document(
+    document: Mapping[str, Any], units: UnitsSchema, source: str, prefix: str = ""
+) -> None:
+    """The one validation of a demonstration's or scene's lengths (docs/limits.md
+    "Numbers that no tabletop holds"): the file-wide bounds of
+    :func:`check_units`, then every position and extent
+    (:func:`~demoplan.documents.poses.check_physical`). Files call it as they
+    are read; a demonstration made from a stream or a recording, through
+    :func:`check_measured`."""
+    check_units(document, units, source, prefix)
+    check_physical(document, units.length, source, prefix)
+
+
+def check_measured(document: Mapping[str, Any], source: str, field: str | None = None) -> None:
+    """:func:`check_document` for a document in metres made from measurements
+    (a pose stream, a recording: ``segment``, ``import``): the same bounds, and
+    no unit to suggest — a CSV's unit is its ``--units``, a recording's is metres."""
+    problem = _length_problem(document, "m", advise=False)
+    if problem is not None:
+        raise InputError(
+            f"{problem} (a documented limit: docs/limits.md)", source=source, field=field
+        )
+    check_physical(document, "m", source)
+
+
+def _length_problem(document: Mapping[str, Any], length: str, advise: bool = True) -> str | None:
+    """What in ``document`` does not fit ``length``, or None (``advise``: with
+    the unit that would fit)."""
     scale = LENGTH_SCALE[length]
     positions = list(_positions(document))
     carried = list(_carried_sizes(document))
@@ -114,15 +142,18 @@ def _length_problem(document: Mapping[str, Any], length: str) -> str | None:
         )
         return f'in {other}, {shown}: give the unit, "units": {{"length": "{other}"}}'
 
+    def tail() -> str:
+        return f": {advice()}" if advise else ""
+
     if spread_m > MAX_SPREAD_M:
         return (
             f"its positions spread {spread_m:.4g} m along {axis} ({low} to {high}); a tabletop "
-            f"spans less than {MAX_SPREAD_M:g} m: {advice()}"
+            f"spans less than {MAX_SPREAD_M:g} m{tail()}"
         )
     if largest_m > MAX_CARRIED_M:
         return (
             f"objects.{largest_name} is {largest_m:.4g} m across; an object a hand or gripper "
-            f"moves is under {MAX_CARRIED_M:g} m: {advice()}"
+            f"moves is under {MAX_CARRIED_M:g} m{tail()}"
         )
     if largest_m > 0 and spread_m > MAX_SPREAD_PER_OBJECT * largest_m:
         return (

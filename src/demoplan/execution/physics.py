@@ -271,7 +271,7 @@ class MujocoWorld:
         self.overview_azimuth = 120.0  # deg: the direction the overview camera looks in
         self.targets: dict[str, Pose] = {}  # drawn in renders (show_targets)
         self.hidden_from_top: tuple[int, ...] = ()  # geom groups the top camera masks out
-        self.video: Any = None  # an imageio-ffmpeg writer while a video is recorded
+        self.video: Any = None  # a FrameEncoder while a video is recorded
         self.video_failed: str | None = None  # why ffmpeg stopped taking frames
         self.video_every = 0.0  # simulated seconds between video frames
         self.video_due = 0.0
@@ -348,9 +348,10 @@ class MujocoWorld:
             image = self.render(*VIDEO_SIZE)
             if image is not None:
                 try:
-                    self.video.send(np.ascontiguousarray(image))
+                    self.video.send(image)
                 except OSError as exc:  # ffmpeg is gone (a full disk): the run goes on
-                    self.video = None
+                    gone, self.video = self.video, None
+                    gone.kill()
                     self.video_failed = _ffmpeg_problem(exc)
 
     def _settle(self, seconds: float = 0.3) -> None:
@@ -584,26 +585,25 @@ class MujocoWorld:
         """From now on, write what the overview camera sees to ``path`` (MP4 at
         ``fps`` frames per second, :attr:`video_speed` times faster than
         simulated time) until :meth:`close`."""
-        import imageio_ffmpeg  # type: ignore[import-untyped]
+        from demoplan.execution.encoder import FrameEncoder
 
-        width, height = VIDEO_SIZE
-        self.video = imageio_ffmpeg.write_frames(
-            str(path), (width, height), fps=fps, macro_block_size=8, ffmpeg_log_level="quiet"
-        )
-        self.video.send(None)  # start ffmpeg
+        self.video = FrameEncoder(path, VIDEO_SIZE, fps)
         self.video_every = self.video_speed / fps
         self.video_due = self.simulated
 
     def close(self) -> None:
         """Finish a video being recorded, and free the renderers' GL contexts;
-        OSError if ffmpeg stopped taking frames on the way."""
-        if self.video is not None:
-            video, self.video = self.video, None
-            video.close()
-        for renderer in (self.renderer, self.top_renderer):
-            if renderer:
-                renderer.close()
-        self.renderer = self.top_renderer = None
+        OSError if ffmpeg stopped taking frames on the way or did not finish the
+        file (its exit status: :class:`~demoplan.execution.encoder.FrameEncoder`)."""
+        try:
+            if self.video is not None:
+                video, self.video = self.video, None
+                video.close()
+        finally:
+            for renderer in (self.renderer, self.top_renderer):
+                if renderer:
+                    renderer.close()
+            self.renderer = self.top_renderer = None
         if self.video_failed is not None:
             failed, self.video_failed = self.video_failed, None
             raise OSError(failed)

@@ -4,7 +4,8 @@ ffmpeg writes the video into a new private folder beside the target
 (``mkdtemp``: created exclusively, mode 0700, so no file or link planted
 beside the target is ever opened, followed or truncated); when the run is
 over the file is checked to be a complete MP4 and renamed over the target.
-A run that fails, a video ffmpeg could not finish (a full disk) or Ctrl-C
+A run that fails, a video ffmpeg could not finish (a full disk, an exit
+status other than 0: :mod:`demoplan.execution.encoder`) or Ctrl-C
 removes the private folder and the folders made for it: nothing is left
 (docs/limits.md, "Outputs").
 """

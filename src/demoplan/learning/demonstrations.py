@@ -31,11 +31,10 @@ from demoplan.documents.poses import (
     ObjectSchema,
     PoseSchema,
     UnitsSchema,
-    check_physical,
     pose_from_dict,
     pose_to_dict,
 )
-from demoplan.documents.units import check_units
+from demoplan.documents.units import check_document, check_measured
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.learning.releases import warn_unsupported_releases
@@ -135,6 +134,15 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     return out
 
 
+def check_measured_demonstration(demo: Demonstration, source: str) -> None:
+    """A demonstration made from a pose stream or a recording (``segment``,
+    ``import``, ``learn`` of a stream) keeps the limits of a demonstration file,
+    checked by the same validation on its file form
+    (:func:`~demoplan.documents.units.check_measured`): positions, landmarks
+    and extents, the spread of its positions, the size of what it moves."""
+    check_measured(demonstration_to_dict(demo), source)
+
+
 def load_object_geometry(
     path: Path, *, known: Collection[str] | None = None
 ) -> dict[str, ObjectGeometry]:
@@ -219,8 +227,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         raise describe_validation_error(exc, source, prefix) from None
     where = f"{prefix}." if prefix else ""
     units = parsed.units
-    check_units(data, units, source, prefix)
-    check_physical(data, units.length, source, prefix)
+    check_document(data, units, source, prefix)
     scale = LENGTH_SCALE[units.length]
     objects = tuple(
         (name, _geometry(name, g, scale, source, where)) for name, g in parsed.objects.items()

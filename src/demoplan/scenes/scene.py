@@ -34,12 +34,11 @@ from demoplan.documents.poses import (
     Number,
     PoseSchema,
     UnitsSchema,
-    check_physical,
     pose_from_dict,
     pose_to_dict,
     positive_extents,
 )
-from demoplan.documents.units import check_units
+from demoplan.documents.units import check_document
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
@@ -214,8 +213,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         parsed = _SceneSchema.model_validate(data)
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
-    check_units(data, parsed.units, source)
-    check_physical(data, parsed.units.length, source)
+    check_document(data, parsed.units, source)
     scale = LENGTH_SCALE[parsed.units.length]
     to_deg = math.degrees if parsed.units.angle == "rad" else float
     objects = []

@@ -85,7 +85,7 @@ from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
 from demoplan.segmentation.settings import SegmentationSettings
-from demoplan.segmentation.types import ObjectTrack, PoseStream
+from demoplan.segmentation.types import ObjectTrack, PoseStream, check_object_count
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -269,6 +269,7 @@ def segment(
     geometry only the motion tells a pause in the air from a placement.
     """
     settings = settings or SegmentationSettings()
+    check_object_count(len(stream.tracks), "objects", stream.source, None)
     _check_sample_steps(stream)
     supports = _Supports(stream, geometry or {}, landmarks or {}, settings)
     moves: list[Move] = []

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from demoplan.errors import InputError
+from demoplan.learning.demonstrations import check_measured_demonstration
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, SegmentationSettings, segment
 from demoplan.segmentation.readers.hdf5 import (
@@ -123,6 +124,7 @@ def import_recording_details(
                 *((k, v) for k, v in demo.provenance if k != "source"),
             ),
         )
+        check_measured_demonstration(demo, f"{path}: {key}")
         out.append(ImportedDemonstration(key, demo, recorded, found))
         if progress is not None:
             progress(done, len(keys), key)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from demoplan.errors import InputError
-from demoplan.learning.demonstrations import check_geometry_names
+from demoplan.learning.demonstrations import check_geometry_names, check_measured_demonstration
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, segment
 from demoplan.segmentation.readers import load_stream
@@ -131,4 +131,5 @@ def demonstration_from_stream(
                 field="objects",
             )
     demo = found.to_demonstration(name or stream_name(path), objects=shapes, landmarks=chosen)
+    check_measured_demonstration(demo, str(path))
     return SegmentedStream(stream, found, demo)

@@ -127,6 +127,9 @@ class TransformTree:
         self.parents_with_children = frozenset(link.parent for link in links)
         #: Frames without a parent, in order of first appearance.
         self.roots: tuple[str, ...] = tuple(f for f in self.frames if f not in self.links)
+        # Poses in an ancestor composed at one set of sample times (_relative_to_ancestor).
+        self._composed_key: tuple[int, int] | None = None
+        self._composed: dict[tuple[str, str], Transform] = {}
 
     def _check_acyclic(self) -> None:
         done: set[str] = set()
@@ -192,15 +195,34 @@ class TransformTree:
         """Compose the links of ``chain[:-1]`` (child first) at ``times``: pose in ``chain[-1]``.
 
         ``own`` replaces the first link's interpolation (a frame's own samples).
+        The poses composed on the way are kept for the next call at the same
+        times (TF frames are mostly published together): a chain of d frames,
+        each an object, costs d compositions rather than d²/2. Only the poses at
+        one set of times are kept, so memory stays that of the frames composed.
         """
+        n = len(times)
         if len(chain) == 1:
-            n = len(times)
             return np.zeros((n, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
-        pose = own if own is not None else interpolate_link(self.links[chain[0]], times)
+        key = (n, hash(np.ascontiguousarray(times).tobytes()))
+        if self._composed_key != key:
+            self._composed_key, self._composed = key, {}
+        ancestor = chain[-1]
         where = f" composing frame {chain[0]!r} through {len(chain) - 1} TF links"
-        for frame in chain[1:-1]:
+        # The nearest ancestor of chain[0] whose pose in ``ancestor`` is known at these times.
+        top, pose = len(chain) - 1, None
+        for k in range(1, len(chain) - 1):
+            known = self._composed.get((chain[k], ancestor))
+            if known is not None:
+                top, pose = k, known
+                break
+        for k in range(top - 1, 0, -1):
             check_time(where)  # a budget set by the caller (demoplan.budget), if any
-            pose = _compose(interpolate_link(self.links[frame], times), pose)
+            link = interpolate_link(self.links[chain[k]], times)
+            pose = link if pose is None else _compose(pose, link)
+            self._composed[(chain[k], ancestor)] = pose
+        first = own if own is not None else interpolate_link(self.links[chain[0]], times)
+        pose = first if pose is None else _compose(pose, first)
+        self._composed[(chain[0], ancestor)] = pose
         return pose
 
     def track_in(self, frame: str, world: str) -> ObjectTrack | None:

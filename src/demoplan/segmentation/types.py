@@ -25,9 +25,11 @@ from demoplan.errors import InputError
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "MAX_OBJECTS",
     "FloatArray",
     "ObjectTrack",
     "PoseStream",
+    "check_object_count",
     "check_stream_limits",
     "normalise_quats",
     "parse_object_patterns",
@@ -133,6 +135,7 @@ def stream_from_samples(
     samples of one object at the same time are refused.
     """
     codes, order_names = _codes(names)
+    check_object_count(len(order_names), "objects", source, None)
     label = (lambda i: where[i]) if where is not None else (lambda i: f"sample {i}")
     has_q: NDArray[np.bool_] | None = None
     if orientations is not None:
@@ -184,6 +187,27 @@ def _codes(names: Sequence[str]) -> tuple[NDArray[np.intp], list[str]]:
     return codes, list(table)
 
 
+MAX_OBJECTS = 1000
+"""The most objects a stream may follow — tracks of a CSV file or a bag, frames
+of a TF tree, free-jointed bodies of a recording's model (docs/limits.md).
+Segmenting costs a few milliseconds an object: a model of 20,000 free bodies
+took a minute and 800 MB to import, a TF tree of 5,000 frames two minutes to
+read; robot tasks follow tens, and a robot's TF tree holds hundreds."""
+
+
+def check_object_count(count: int, what: str, source: str | None, field: str | None) -> None:
+    """Refuse ``count`` objects (``what`` they are, e.g. "TF frames") beyond
+    :data:`MAX_OBJECTS`, in one InputError: checked as early as the count is
+    known, before the work that grows with it."""
+    if count > MAX_OBJECTS:
+        raise InputError(
+            f"{count:,} {what}; at most {MAX_OBJECTS:,} objects followed in one stream "
+            "(a documented limit: docs/limits.md)",
+            source=source,
+            field=field,
+        )
+
+
 MAX_QUATERNION_NORM = 1e6
 """The longest quaternion a stream may give (it is scaled to unit length):
 components of 1e200 overflow on the way."""
@@ -192,9 +216,10 @@ components of 1e200 overflow on the way."""
 def check_stream_limits(stream: PoseStream) -> None:
     """Every position of ``stream`` finite and within 1 km of the origin on
     each axis (docs/limits.md, as a demonstration file's); one InputError
-    naming the object and the time."""
+    naming the object and the time. At most :data:`MAX_OBJECTS` objects."""
     from demoplan.documents.poses import MAX_DISTANCE_M
 
+    check_object_count(len(stream.tracks), "objects", stream.source, None)
     for track in stream:
         far = np.flatnonzero(~(np.abs(track.positions) <= MAX_DISTANCE_M).all(axis=1))
         if far.size:

@@ -37,6 +37,7 @@ from demoplan.segmentation.types import (
     FloatArray,
     ObjectTrack,
     PoseStream,
+    check_object_count,
     normalise_quats,
     select_objects,
     stream_from_samples,
@@ -75,7 +76,7 @@ def load_bag(
     bag = _bag_folder(path)
     if bag.is_dir():
         _refuse_links_out_of(bag)
-    samples = _Samples()
+    samples = _Samples(source)
     try:
         with AnyReader([bag]) as reader:
             tf = [c for c in reader.connections if c.msgtype == TF_TYPE]
@@ -182,12 +183,14 @@ def _pose_topic_names(connections: Iterable[Connection], source: str) -> dict[st
 class _Samples:
     """Accumulates decoded bag samples as flat lists, in the order they were read."""
 
-    def __init__(self) -> None:
+    def __init__(self, source: str) -> None:
+        self.source = source
         self.names: list[str] = []
         self.values: list[tuple[float, ...]] = []
         self.where: list[str] = []
         self.parents: list[str | None] = []  # a transform's parent frame; None for a pose
         self.static: list[bool] = []
+        self.distinct: set[str] = set()  # the names read so far (frames, pose objects)
 
     @staticmethod
     def _time(stamp: Any, timestamp: int) -> float:
@@ -199,11 +202,23 @@ class _Samples:
     def add_transform(self, transform: Any, timestamp: int, topic: str) -> None:
         t = self._time(transform.header.stamp, timestamp)
         p, q = transform.transform.translation, transform.transform.rotation
-        self.names.append(str(transform.child_frame_id).lstrip("/"))
+        child, parent = str(transform.child_frame_id).lstrip("/"), str(transform.header.frame_id)
+        self.names.append(child)
         self.values.append((t, p.x, p.y, p.z, q.x, q.y, q.z, q.w))
         self.where.append(f"topic {topic}, frame {transform.child_frame_id}, t = {t:.9f}")
-        self.parents.append(str(transform.header.frame_id).lstrip("/"))
+        self.parents.append(parent.lstrip("/"))
         self.static.append(topic.endswith("tf_static"))
+        self._count(child, topic)
+
+    def _count(self, name: str, topic: str) -> None:
+        """Refuse the bag as soon as it names more than MAX_OBJECTS frames and
+        objects (a tree of thousands of frames is refused after reading a few
+        of its messages, not after minutes of decoding)."""
+        if name not in self.distinct:
+            self.distinct.add(name)
+            check_object_count(
+                len(self.distinct), "TF frames and pose objects", self.source, f"topic {topic}"
+            )
 
     def add_pose(self, name: str, message: Any, timestamp: int, topic: str) -> None:
         t = self._time(message.header.stamp, timestamp)
@@ -213,6 +228,7 @@ class _Samples:
         self.where.append(f"topic {topic}, t = {t:.9f}")
         self.parents.append(None)
         self.static.append(False)
+        self._count(name, topic)
 
     def stream(self, source: str, frame: str | None, objects: Sequence[str] | None) -> PoseStream:
         """The stream of the chosen objects: pose topics as read, TF frames composed."""

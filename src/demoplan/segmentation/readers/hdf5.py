@@ -62,7 +62,7 @@ from xml.etree.ElementTree import Element
 import numpy as np
 from numpy.typing import NDArray
 
-from demoplan.documents.poses import MAX_COORDINATE, MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
+from demoplan.documents.poses import MAX_COORDINATE, check_physical
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
 from demoplan.model import ObjectGeometry, Pose
@@ -72,7 +72,12 @@ from demoplan.segmentation.readers.hdf5_container import (
     open_recording,
     read_float_table,
 )
-from demoplan.segmentation.types import ObjectTrack, PoseStream, check_stream_limits
+from demoplan.segmentation.types import (
+    ObjectTrack,
+    PoseStream,
+    check_object_count,
+    check_stream_limits,
+)
 
 if TYPE_CHECKING:
     import h5py
@@ -100,6 +105,10 @@ SETTLE_TOLERANCE = 0.001  # m
 SUPPORT_SLACK = 0.005  # m: a surface counts as "under" a point up to this far above it
 MAX_MODEL_DEPTH = 100
 """The deepest nesting of elements in a model's XML (robosuite's go 12 deep)."""
+MAX_MODEL_BODIES = 10_000
+"""Bodies in a recording's model, at most (robosuite's have about a hundred):
+reading one costs about a quarter of a millisecond, and the model's text is
+read whole before its free bodies can be counted."""
 QUATERNION_TOLERANCE = 1e-3
 """How far a free joint's quaternion in the states may be from unit length
 (MuJoCo normalises it at every step; robosuite's are within 1e-15)."""
@@ -499,6 +508,13 @@ def model_layout(xml: str, source: str) -> ModelLayout:
     except DefusedXmlException as exc:
         raise InputError(f"model XML refused ({exc})", source=source) from None
     _check_depth(root, source)
+    bodies = sum(1 for _ in root.iter("body"))
+    if bodies > MAX_MODEL_BODIES:
+        raise InputError(
+            f"{bodies:,} <body> elements; a MuJoCo model of at most {MAX_MODEL_BODIES:,} "
+            "expected (a documented limit: docs/limits.md)",
+            source=source,
+        )
     if root.tag != "mujoco":
         raise InputError(
             f"root element <{root.tag}>; a MuJoCo model (<mujoco>) expected", source=source
@@ -793,13 +809,16 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
                 source=source,
                 field="states",
             )
+        # The model first: its size is checked before the states it sizes are read.
+        xml, model_source = _model_xml(group, path, key)
+        layout = model_layout(xml, model_source)
+        check_object_count(len(layout.free_bodies), "free-jointed bodies", model_source, None)
         try:
             states = read_float_table(dataset, source, "states", int(handle.id.get_filesize()))
         except (OSError, ValueError, TypeError) as exc:
             if isinstance(exc, InputError):
                 raise
             raise InputError(f"cannot read states ({exc})", source=source, field="states") from None
-        xml, model_source = _model_xml(group, path, key)
         env = attribute_text(data.attrs, "env", str(path))
         version = attribute_text(data.attrs, "repository_version", str(path))
         if env is None:
@@ -810,7 +829,6 @@ def read_demonstration(path: str | Path, key: str) -> RecordedDemonstration:
             source=source,
             field="states",
         )
-    layout = model_layout(xml, model_source)
     if not layout.free_bodies:
         raise InputError(
             "the model has no free-jointed body (no objects to follow)", source=model_source
@@ -933,27 +951,21 @@ def _check_limits(
     geometry: Sequence[tuple[str, ObjectGeometry]],
     source: str,
 ) -> None:
-    """The limits every demonstration file keeps (docs/limits.md, as
-    :func:`~demoplan.documents.poses.check_physical`): positions within 1 km of
-    the origin, extents within 0.1 mm – 10 m; one InputError naming the object."""
-    limit = "(a documented limit: docs/limits.md)"
+    """The limits every demonstration file keeps (docs/limits.md), by the same
+    validation (:func:`~demoplan.documents.poses.check_physical`): every
+    sample's position within 1 km of the origin (:func:`check_stream_limits`),
+    the landmarks' too, the extents of objects and landmarks within
+    0.1 mm – 10 m; one InputError naming the object. (The spread of what is
+    imported is checked on each demonstration made: ``check_measured``.)"""
     check_stream_limits(PoseStream(tuple(tracks), source))
-    for name, pose in landmarks:
-        if not all(abs(v) <= MAX_DISTANCE_M for v in pose.position):
-            raise InputError(
-                f"landmark {name!r} is at ({', '.join(f'{v:g}' for v in pose.position)}) m, more "
-                f"than 1 km from the origin; a position on a table expected {limit}",
-                source=source,
-                field="model_file",
-            )
-    for name, shape in geometry:
-        if not all(MIN_SIZE_M <= v <= MAX_SIZE_M for v in shape.size):
-            raise InputError(
-                f"{name!r} is {' × '.join(f'{v:g}' for v in shape.size)} m; extents within "
-                f"0.1 mm – 10 m expected {limit}",
-                source=source,
-                field="model_file",
-            )
+    check_physical(
+        {
+            "landmarks": {name: {"position": list(pose.position)} for name, pose in landmarks},
+            "objects": {name: {"size": list(shape.size)} for name, shape in geometry},
+        },
+        "m",
+        source,
+    )
 
 
 def _landmarks(
