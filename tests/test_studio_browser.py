@@ -9,6 +9,7 @@ DEMOPLAN_STUDIO_SCREENSHOTS=1, to docs/images/studio/.
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -19,7 +20,7 @@ from typing import Any
 import pytest
 
 from demoplan.commands.execution import run
-from demoplan.commands.learning import learn_model
+from demoplan.commands.learning import learn_files, learn_model
 from demoplan.commands.planning import plan
 from demoplan.errors import NoPlanError, error_line
 from demoplan.execution.faults import Faults
@@ -288,6 +289,64 @@ def test_blocks_taught_planned_from_fig4_and_run_with_a_drop_fault(
         plan(workdir / "model.json", workdir / "no-room.json")
     assert page.tab.locator("#no-plan-reason").inner_text() == error_line(caught.value)
     assert page.tab.locator('[data-testid="plan"] > li').count() == 0
+
+
+def test_a_clutter_object_on_a_target_is_cleared_by_the_plan_and_never_taught(
+    studio: tuple[Studio, Path],
+) -> None:
+    """A clutter object added in the Plan view and dragged onto a free target:
+    the plan shown is the CLI's for the same scene with --clutter, and it moves
+    the clutter out of the way; a demonstration saved afterwards knows nothing
+    of it."""
+    page, workdir = studio
+    learn_files([BLOCKS], output=workdir / "model.json")
+    shutil.copyfile(FIG4, workdir / "fig4.json")
+    page.tab.get_by_label("Template").select_option("blocks")
+    page.settle()
+    page.view("Plan")
+    page.tab.get_by_label("Model", exact=True).select_option("model.json")
+    page.tab.get_by_label("Scene file").select_option("fig4.json")
+    page.button("Load scene").click()
+    page.settle()
+    page.button("Add clutter object").click()
+    page.settle()
+    assert page.alert() == ""
+    assert page.tab.get_by_label("clutter", exact=True).is_checked()
+    # a target no block of the start stands on
+    scene = _load(FIG4)
+    answer = plan(workdir / "model.json", FIG4).to_json()
+    starts = [value["position"][:2] for value in scene["objects"].values()]
+    targets = [answer["locations"][s["location"]]["position"][:2] for s in answer["subgoals"]]
+    free = [t for t in targets if all(math.dist(t, p) > 0.05 for p in starts)]
+    assert free, "Fig. 4 has a target no block stands on"
+    page.drag("clutter1", *free[0], yaw=0)
+    assert page.alert() == ""
+    x, y, z, yaw = page.pose("clutter1")
+    assert (x, y, z) == pytest.approx((*free[0], 0.0), abs=1e-4)
+    page.button("Plan").click()
+    page.settle()
+    assert page.alert() == ""
+    clutter = {"position": [x, y, z], "yaw": yaw, "shape": "box", "size": [0.05, 0.05, 0.05]}
+    write_json(
+        workdir / "with-clutter.json",
+        {**scene, "objects": {**scene["objects"], "clutter1": clutter}},
+    )
+    expected = plan(workdir / "model.json", workdir / "with-clutter.json", clutter=True)
+    assert expected.chosen.plan is not None
+    lines = [str(action) for action in expected.chosen.plan.actions]
+    shown = page.tab.locator('[data-testid="plan"] > li').all_inner_texts()
+    assert shown == lines
+    assert any(line.startswith("GRASP clutter1 ") for line in shown)
+
+    page.view("Teach")
+    wood = page.pose("wood")
+    page.drag("wood", wood[0] + 0.02, wood[1], yaw=0)
+    page.tab.get_by_label("File name").fill("taught.json")
+    page.button("Save").click()
+    page.settle()
+    assert page.alert() == ""
+    saved = _load(workdir / "taught.json")
+    assert set(saved["objects"]) == {"wood", "green", "red"}
 
 
 def _arrange(page: Studio, scene: dict[str, Any]) -> None:

@@ -16,6 +16,7 @@ export const state = {
   learn: { result: null },
   plan: { poses: null, extras: null, result: null, step: 0, timer: null },
   run: { id: null, status: null, step: 0, timer: null, poll: null },
+  clutter: [], // objects added in the Plan view that the model never saw
   selected: null,
   files: { demonstrations: [], models: [], scenes: [] },
 };

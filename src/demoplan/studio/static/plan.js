@@ -3,7 +3,8 @@
 import { ApiError, get, post } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, say, state } from "./common.js";
 import { runEvents, setRunStep } from "./run.js";
-import { keepInView, layoutWith, redraw, sameObjects } from "./stage.js";
+import { keepInView, layoutWith, place, redraw, sameObjects } from "./stage.js";
+import { snap } from "./table.js";
 import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
 
 // --- plan -----------------------------------------------------------------
@@ -97,6 +98,28 @@ export async function scramble() {
   clearPlan();
   redraw();
   say(`Scrambled (seed ${seed}).`);
+}
+
+// A clutter object: a box the model never saw, added to the start (the scene
+// only, never a demonstration), which the plan moves only where it is in the way.
+export const CLUTTER_SIZE = [0.05, 0.05, 0.05];
+export const CLUTTER_COLOUR = "#7f7f7f";
+
+export async function addClutter() {
+  ensurePlanStart();
+  let n = 1;
+  while (state.layout.objects[`clutter${n}`]) n += 1;
+  const name = `clutter${n}`;
+  state.layout.objects[name] = { shape: "box", size: [...CLUTTER_SIZE], colour: CLUTTER_COLOUR };
+  state.clutter.push(name);
+  const [x0, y0] = state.layout.table.origin;
+  const [w, h] = state.layout.table.size;
+  const xy = [snap(x0 + w / 2), snap(y0 + h / 2)];
+  state.plan.poses[name] = { position: [...xy, 0], yaw: 0 };
+  $("clutter").checked = true;
+  await place(name, xy, 0, true); // it comes to rest on whatever stands there
+  say(`${name} added (a ${CLUTTER_SIZE[0] * 100} cm box the model never saw): drag it where it ` +
+    "should stand; the plan moves it only where it is in the way.");
 }
 
 export async function makePlan() {

@@ -81,8 +81,11 @@ export function tableRoom() {
   return [window.innerWidth - 440 - 90 - 56, window.innerHeight - 150];
 }
 
+// The layout with these poses: its objects that have one (a clutter object
+// added in the Plan view has none on the taught table).
 export function layoutWith(poses) {
-  return { ...state.layout, poses };
+  const objects = Object.fromEntries(Object.entries(state.layout.objects).filter(([name]) => poses[name]));
+  return { ...state.layout, objects, poses };
 }
 
 // Drop `name` at xy (metres) with `yaw`: the server says where it comes to rest.
@@ -134,7 +137,7 @@ export function cover(table_, poses, margin = 0.05) {
 }
 
 export function sameObjects(a, b) {
-  const names = (l) => Object.keys(l.objects).sort().join(" ");
+  const names = (l) => Object.keys(l.objects).filter((n) => !state.clutter.includes(n)).sort().join(" ");
   return names(a) === names(b);
 }
 

@@ -6,7 +6,7 @@
 import { $, clone, guarded, say, state } from "./common.js";
 import { learn } from "./learn.js";
 import {
-  clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, scramble, setPlanStep, stopAnimation,
+  addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, scramble, setPlanStep, stopAnimation,
 } from "./plan.js";
 import { cancelRun, setRunStep, startRun } from "./run.js";
 import { redraw, table, tableRoom } from "./stage.js";
@@ -60,6 +60,7 @@ function wire() {
   $("undo").addEventListener("click", undo);
   $("learn").addEventListener("click", () => guarded(learn));
   $("scramble").addEventListener("click", () => guarded(scramble));
+  $("add-clutter").addEventListener("click", () => guarded(addClutter));
   $("load-plan-file").addEventListener("click", () => guarded(loadPlanScene));
   $("start-from-teach").addEventListener("click", () => {
     state.plan.poses = clone(state.teach.poses);

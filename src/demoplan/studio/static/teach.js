@@ -33,6 +33,7 @@ export function startDemonstration(layout, note) {
   state.teach.saved = false;
   state.plan.poses = null;
   state.plan.extras = null;
+  state.clutter = [];
   state.selected = null;
   clearPlan();
   table.setLayout(layout, tableRoom());
@@ -84,7 +85,7 @@ export function landmarksDocument() {
 export function demonstrationDocument() {
   const objects = {};
   for (const [name, geometry] of Object.entries(state.layout.objects)) {
-    objects[name] = { shape: geometry.shape, size: geometry.size };
+    if (!state.clutter.includes(name)) objects[name] = { shape: geometry.shape, size: geometry.size };
   }
   const initial = {};
   for (const [name, pose] of Object.entries(state.teach.initial)) initial[name] = poseDocument(pose);
