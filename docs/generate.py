@@ -243,7 +243,7 @@ POSE_FIELDS = {
     "position": "`[x, y]` or `[x, y, z]`: the resting point; a missing z is 0",
     "yaw": "turn about z (degrees, or radians with `units.angle`)",
     "rpy": "`[roll, pitch, yaw]`: turns about the fixed x, then y, then z axes",
-    "quat": "unit quaternion `[x, y, z, w]` (normalised when read; not all zero)",
+    "quat": "unit quaternion `[x, y, z, w]`: its length within 0.1 of 1 (normalised when read)",
 }
 UNITS = FieldTable(
     "Units",

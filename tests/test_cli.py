@@ -83,7 +83,7 @@ BAD_INPUTS: list[tuple[str, Any, list[str]]] = [
     (
         "zero quaternion",
         demo([{"object": "a", "position": [0, 0], "quat": [0, 0, 0, 0]}]),
-        ["steps[0]", "non-zero quaternion"],
+        ["steps[0]", "a unit quaternion expected"],
     ),
     (
         "wrong-length position",

@@ -294,7 +294,7 @@ BAD_DEMONSTRATIONS: list[tuple[str, Any, str]] = [
     (
         "zero quaternion",
         demo([{"object": "a", "position": [0, 0], "quat": [0, 0, 0, 0]}]),
-        r"steps\[0\]: quat must be a non-zero",
+        r"steps\[0\]: quat \[x, y, z, w\]: a unit quaternion expected",
     ),
     (
         "short quaternion",
@@ -656,7 +656,10 @@ BAD_MODELS = [
         "two-number orientation",
         r"states\[0\]\.orientation\.value: expected \[yaw\] or \[roll, pitch, yaw\]",
     ),
-    ("zero quaternion", r"states\[0\]\.orientation\.quat: quat must be a non-zero"),
+    (
+        "zero quaternion",
+        r"states\[0\]\.orientation\.quat: quat \[x, y, z, w\]: a unit quaternion expected",
+    ),
     ("duplicate state", r"states: state id 'A' appears twice"),
     ("lowercase id", r"states\[0\]\.id"),
     ("position as text", r"states\[0\]\.position\.value\[0\]"),

@@ -423,7 +423,7 @@ def test_csv_orientation_columns_and_row_order(tmp_path: Path) -> None:
     path.write_text("t,object,x,y,z,roll,pitch,yaw\n0,a,0,0,0,10,20,30\n")
     q = load_stream(path).tracks[0].orientations
     assert q is not None and angle_between(tuple(q[0]), quat_from_rpy([10, 20, 30])) < 1e-9
-    path.write_text("t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,0,0,0,2\n")
+    path.write_text("t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,0,0,0,1.05\n")  # noise: normalised
     q = load_stream(path).tracks[0].orientations
     assert q is not None and q[0].tolist() == [0.0, 0.0, 0.0, 1.0]
 
@@ -446,7 +446,8 @@ def test_vectorised_rpy_matches_the_scalar_conversion() -> None:
         ("t,object,x,y,z\n0,a,0,0\n", "line 2", "4 cells; 5 expected"),
         ("t,object,x,y,z\n0,,0,0,0\n", "line 2, column 'object'", "empty object"),
         ("t,object,x,y,z\n0,a,0,0,0\n0,a,1,0,0\n", "line 3", "two samples"),
-        ("t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,0,0,0,0\n", "line 2", "zero quaternion"),
+        ("t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,0,0,0,0\n", "line 2", "unit quaternion expected"),
+        ("t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,0,0,0,2\n", "line 2", "this one is 2 long"),
         (
             "t,object,x,y,z,qx,qy,qz,qw\n0,a,0,0,0,,,,\n1,a,0,0,0,0,0,0,1\n",
             "line 2",

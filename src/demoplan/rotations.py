@@ -22,6 +22,7 @@ Quaternion = tuple[float, float, float, float]
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "UNIT_TOLERANCE",
     "Quaternion",
     "angle_between",
     "axis_modulo_flip",
@@ -42,8 +43,25 @@ __all__ = [
     "rotate_vectors",
     "rotvecs_from_quats",
     "rpy_from_quat",
+    "unit_length_expected",
     "yaws_of",
 ]
+
+UNIT_TOLERANCE = 0.1
+"""How far from 1 a quaternion's length may be, in every input (files, pose
+streams, TF, recordings): a unit quaternion written with rounding or measured
+with noise, normalised on reading. Farther, it is not a rotation but a mistake
+(angles in its columns, a scaled or zero vector) and is refused."""
+
+
+def unit_length_expected(length: float) -> str | None:
+    """Why a quaternion of ``length`` is refused (:data:`UNIT_TOLERANCE`), or None."""
+    if abs(length - 1.0) <= UNIT_TOLERANCE:
+        return None
+    return (
+        f"a unit quaternion expected (length within {UNIT_TOLERANCE:g} of 1, docs/limits.md); "
+        f"this one is {length:.6g} long"
+    )
 
 
 def canonical_quat(quat: Sequence[float]) -> Quaternion:

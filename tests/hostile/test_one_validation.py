@@ -48,12 +48,21 @@ def carried(times: np.ndarray, distance: float, height: float = 0.0) -> np.ndarr
     return positions
 
 
-def made(door: str, cwd: Path, distance: float, half: float = 0.05) -> list[str]:
+def made(
+    door: str, cwd: Path, distance: float, half: float = 0.05, quat_length: float = 1.0
+) -> list[str]:
     """The input of ``door`` in ``cwd`` (a box of half extent ``half`` carried
-    ``distance`` m) and the command reading it."""
+    ``distance`` m, its quaternion ``quat_length`` long) and the command reading it."""
+    if door == "file":
+        quat = [0.0, 0.0, 0.0, quat_length]
+        steps = [{"object": "box", "position": [distance, 0.0], "quat": quat}]
+        document = {"format": "demoplan/demonstration-1", "steps": steps}
+        (cwd / "demo.json").write_text(json.dumps(document))
+        return ["learn", "demo.json", "-o", "out"]
     if door == "import":
         states = box_states()
         states[:, 5:8] = carried(states[:, 0], distance, 0.8 + half) + [0.1, 0.2, 0.0]
+        states[:, 8] = quat_length
         model = MODEL.replace('size="0.05 0.05 0.05"', f'size="{half} {half} {half}"')
         write_recording(cwd / "rec.hdf5", states, model)
         return ["import", "rec.hdf5", "-o", "out"]
@@ -61,7 +70,10 @@ def made(door: str, cwd: Path, distance: float, half: float = 0.05) -> list[str]
     stream = PoseStream(
         (
             ObjectTrack(
-                "box", times, carried(times, distance), np.tile([0.0, 0.0, 0.0, 1.0], (400, 1))
+                "box",
+                times,
+                carried(times, distance),
+                np.tile([0.0, 0.0, 0.0, quat_length], (400, 1)),
             ),
         )
     )
@@ -111,5 +123,33 @@ def test_a_carried_box_within_the_limits_passes_every_door(tmp_path: Path) -> No
         cwd = tmp_path / door
         cwd.mkdir()
         answer = run(made(door, cwd, 0.3), cwd)
+        assert answer.code == 0, answer
+        assert (cwd / "out").exists(), answer
+
+
+QUATERNION_DOORS = [*DOORS, "file"]
+
+
+@GENERATED
+@given(
+    door=st.sampled_from(QUATERNION_DOORS),
+    length=st.one_of(st.floats(0.0, 0.89), st.floats(1.11, 1e200)),
+)
+def test_a_quaternion_far_from_unit_length_is_refused_at_every_door(
+    door: str, length: float
+) -> None:
+    """One rule for quaternions (docs/limits.md): a recording's states, a bag,
+    a CSV stream and a demonstration file alike refuse one whose length is
+    not within 0.1 of 1 — zero, scaled, overflowing."""
+    with folder() as cwd:
+        refused(made(door, cwd, 0.3, quat_length=length), cwd, "a unit quaternion expected")
+
+
+@GENERATED
+@given(door=st.sampled_from(QUATERNION_DOORS), length=st.floats(0.91, 1.09))
+def test_a_quaternion_near_unit_length_is_read_at_every_door(door: str, length: float) -> None:
+    """Rounding and noise pass every door: the quaternion is normalised."""
+    with folder() as cwd:
+        answer = run(made(door, cwd, 0.3, quat_length=length), cwd)
         assert answer.code == 0, answer
         assert (cwd / "out").exists(), answer

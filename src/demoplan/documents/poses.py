@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, Pose
-from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw
+from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw, unit_length_expected
 
 __all__ = [
     "LENGTH_SCALE",
@@ -66,8 +66,8 @@ class PoseSchema(_Schema):
         given = [k for k in ("yaw", "rpy", "quat") if getattr(self, k) is not None]
         if len(given) > 1:
             raise ValueError(f"give one orientation (yaw, rpy or quat), got {' and '.join(given)}")
-        if self.quat is not None and math.hypot(*self.quat) < 1e-9:
-            raise ValueError("quat must be a non-zero quaternion [x, y, z, w]")
+        if self.quat is not None and (problem := unit_length_expected(math.hypot(*self.quat))):
+            raise ValueError(f"quat [x, y, z, w]: {problem}")
         return self
 
 

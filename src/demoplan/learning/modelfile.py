@@ -41,7 +41,7 @@ from demoplan.learning.constraints import constraint_support, label_key
 from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.learning.settings import LearningSettings
 from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
-from demoplan.rotations import canonical_quat, quat_from_rpy
+from demoplan.rotations import canonical_quat, quat_from_rpy, unit_length_expected
 
 __all__ = [
     "load_model",
@@ -86,9 +86,9 @@ class _OrientationSchema(_Schema):
 
     @field_validator("quat")
     @classmethod
-    def _non_zero(cls, quat: list[float] | None) -> list[float] | None:
-        if quat is not None and math.hypot(*quat) < 1e-9:
-            raise ValueError("quat must be a non-zero quaternion [x, y, z, w]")
+    def _unit_length(cls, quat: list[float] | None) -> list[float] | None:
+        if quat is not None and (problem := unit_length_expected(math.hypot(*quat))):
+            raise ValueError(f"quat [x, y, z, w]: {problem}")
         return quat
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from demoplan.errors import InputError
+from demoplan.rotations import UNIT_TOLERANCE, unit_length_expected
 
 FloatArray = NDArray[np.float64]
 
@@ -208,11 +209,6 @@ def check_object_count(count: int, what: str, source: str | None, field: str | N
         )
 
 
-MAX_QUATERNION_NORM = 1e6
-"""The longest quaternion a stream may give (it is scaled to unit length):
-components of 1e200 overflow on the way."""
-
-
 def check_stream_limits(stream: PoseStream) -> None:
     """Every position of ``stream`` finite and within 1 km of the origin on
     each axis (docs/limits.md, as a demonstration file's); one InputError
@@ -238,17 +234,17 @@ def normalise_quats(
 ) -> FloatArray:
     """``(n, 4)`` quaternions scaled to unit length; NaN rows (no orientation) stay NaN.
 
-    A zero quaternion is an :class:`~demoplan.errors.InputError` naming
-    ``where[i]`` (or ``sample i``).
+    A quaternion farther than :data:`~demoplan.rotations.UNIT_TOLERANCE` from
+    unit length (zero, scaled, components of 1e200) is an
+    :class:`~demoplan.errors.InputError` naming ``where[i]`` (or ``sample i``).
     """
     with np.errstate(over="ignore"):
         norms = np.linalg.norm(quats, axis=1)
-    bad = np.flatnonzero(~((norms > 1e-9) & (norms <= MAX_QUATERNION_NORM)) & ~np.isnan(norms))
+    bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_TOLERANCE) & ~np.isnan(norms))
     if bad.size:
         i = int(bad[0])
         raise InputError(
-            f"quaternion of length {float(norms[i]):g}; a non-zero quaternion (qx, qy, qz, qw) "
-            f"of length at most {MAX_QUATERNION_NORM:g} expected",
+            f"quaternion (qx, qy, qz, qw): {unit_length_expected(float(norms[i]))}",
             source=source,
             field=where[i] if where is not None else f"sample {i}",
         )

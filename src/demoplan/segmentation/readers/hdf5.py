@@ -66,7 +66,7 @@ from demoplan.documents.poses import MAX_COORDINATE, check_physical
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
 from demoplan.model import ObjectGeometry, Pose
-from demoplan.rotations import quat_from_yaw
+from demoplan.rotations import UNIT_TOLERANCE, quat_from_yaw, unit_length_expected
 from demoplan.segmentation.readers.hdf5_container import (
     attribute_text,
     open_recording,
@@ -109,9 +109,6 @@ MAX_MODEL_BODIES = 10_000
 """Bodies in a recording's model, at most (robosuite's have about a hundred):
 reading one costs about a quarter of a millisecond, and the model's text is
 read whole before its free bodies can be counted."""
-QUATERNION_TOLERANCE = 1e-3
-"""How far a free joint's quaternion in the states may be from unit length
-(MuJoCo normalises it at every step; robosuite's are within 1e-15)."""
 
 
 # --------------------------------------------------------------------------- values
@@ -884,12 +881,13 @@ def _demonstration(
     for address in layout.qpos_address:
         p = qpos[:, address : address + 3]
         q = qpos[:, address + 3 : address + 7]
-        off = np.flatnonzero(~(np.abs(np.linalg.norm(q, axis=1) - 1.0) <= QUATERNION_TOLERANCE))
+        lengths = np.linalg.norm(q, axis=1)
+        off = np.flatnonzero(~(np.abs(lengths - 1.0) <= UNIT_TOLERANCE))
         if off.size:
             raise InputError(
                 f"the quaternion of {layout.bodies[layout.free_bodies[len(body_pos)]].name!r} at "
-                f"sample {int(off[0])} ({', '.join(f'{v:g}' for v in q[off[0]])}) is not of unit "
-                f"length; a unit quaternion (within {QUATERNION_TOLERANCE:g}) expected",
+                f"sample {int(off[0])} ({', '.join(f'{v:g}' for v in q[off[0]])}): "
+                f"{unit_length_expected(float(lengths[off[0]]))} (MuJoCo keeps it within 1e-15)",
                 source=f"{path}: {key}",
                 field="states",
             )
