@@ -11,6 +11,7 @@ removes the private folder and the folders made for it: nothing is left
 
 from __future__ import annotations
 
+import glob
 import os
 import shutil
 import tempfile
@@ -27,7 +28,7 @@ from demoplan.fileio import (
     remove_made_folders,
 )
 
-__all__ = ["VideoOutput", "check_video_path", "complete_mp4"]
+__all__ = ["VideoOutput", "check_video_path", "complete_mp4", "partial_folders"]
 
 _PARTIAL = "recording.mp4"  # ffmpeg picks the container from the extension
 
@@ -91,6 +92,18 @@ class VideoOutput:
         """Remove the recording, its private folder and the folders made for it."""
         shutil.rmtree(self._private, ignore_errors=True)
         remove_made_folders(self._made)
+
+
+def partial_folders(target: Path) -> list[Path]:
+    """The private folders a recording of ``target`` left beside it: none
+    unless the process recording was killed (SIGKILL) before :meth:`VideoOutput.discard`
+    ran. Its folders only, never a link."""
+    folder = target.parent if str(target.parent) else Path()
+    return [
+        path
+        for path in folder.glob(f".{glob.escape(_short(target.name))}.*.part")
+        if path.is_dir() and not path.is_symlink()
+    ]
 
 
 def complete_mp4(path: Path) -> bool:
