@@ -315,8 +315,10 @@ def _worker_environment() -> dict[str, str]:
     kept in the run's process group."""
     import demoplan
 
-    source = str(Path(demoplan.__file__).resolve().parent.parent)
-    paths = [source, *(p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p)]
+    source = Path(demoplan.__file__).resolve().parent.parent
+    paths = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    if source.name not in ("site-packages", "dist-packages"):  # installed: found anyway,
+        paths.insert(0, str(source))  # and never put before the standard library
     return os.environ | {
         "PYTHONPATH": os.pathsep.join(dict.fromkeys(paths)),
         "IMAGEIO_FFMPEG_NO_PREVENT_SIGINT": "1",
