@@ -887,3 +887,18 @@ def test_the_command_prints_its_url_answers_and_stops_as_every_command(
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_the_folders_a_killed_recording_leaves_are_found_and_only_they(tmp_path: Path) -> None:
+    from demoplan.execution.video_output import VideoOutput, partial_folders
+
+    target = tmp_path / "run-0123.mp4"
+    recording = VideoOutput(target)
+    other = VideoOutput(tmp_path / "run-0123.mp4.mp4")  # another target's, named alike
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / ".run-0123.mp4.planted_.part").symlink_to(tmp_path / "elsewhere")  # never removed
+    (tmp_path / ".run-0123.mp4.a_file_0.part").write_text("")  # a file, not a folder
+    assert partial_folders(target) == [recording.recording.parent]
+    recording.discard()
+    assert partial_folders(target) == []
+    assert partial_folders(other.target) == [other.recording.parent]

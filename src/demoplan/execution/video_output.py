@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import glob
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -99,10 +100,12 @@ def partial_folders(target: Path) -> list[Path]:
     unless the process recording was killed (SIGKILL) before :meth:`VideoOutput.discard`
     ran. Its folders only, never a link."""
     folder = target.parent if str(target.parent) else Path()
+    # mkdtemp's part: 8 of [a-z0-9_] (another target's folder, ``.NAME.mp4.….part``, is not)
+    named = re.compile(rf"\.{re.escape(_short(target.name))}\.[a-z0-9_]{{8}}\.part")
     return [
         path
         for path in folder.glob(f".{glob.escape(_short(target.name))}.*.part")
-        if path.is_dir() and not path.is_symlink()
+        if named.fullmatch(path.name) and path.is_dir() and not path.is_symlink()
     ]
 
 
