@@ -33,7 +33,6 @@ from demoplan.model import ObjectGeometry, footprint
 from demoplan.plotting.colours import assign_colours
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
-from demoplan.studio.jobs import Job
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.helpers import EXAMPLES
 
@@ -406,45 +405,232 @@ def test_a_run_without_faults_puts_every_block_on_its_target(client: TestClient)
 
 
 @pytest.mark.slow
-def test_an_arm_run_records_a_video_served_from_the_work_folder(client: TestClient) -> None:
+def test_two_arm_runs_one_after_the_other_each_record_a_video(client: TestClient) -> None:
+    # each run renders in a process of its own: a second MuJoCo renderer in
+    # one process (as when runs were threads) could hang in EGL
     pytest.importorskip("mujoco")
     pytest.importorskip("imageio_ffmpeg")
     save_blocks_and_learn(client)
     body = {"model": "model.json", "scene": scene_body(), "sim": "arm"}
-    state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=3000)
-    assert state["state"] == "done", state
-    video = state["result"]["video"]
-    assert video == f"/api/media/run-{state['run']}.mp4"
-    answer = client.get(video)
-    assert answer.status_code == 200 and answer.headers["content-type"] == "video/mp4"
-    assert answer.content == (work(client) / f"run-{state['run']}.mp4").read_bytes()
+    for _ in range(2):
+        state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=6000)
+        assert state["state"] == "done", state
+        video = state["result"]["video"]
+        assert video == f"/api/media/run-{state['run']}.mp4"
+        answer = client.get(video)
+        assert answer.status_code == 200 and answer.headers["content-type"] == "video/mp4"
+        assert answer.content == (work(client) / f"run-{state['run']}.mp4").read_bytes()
+    assert not list(work(client).glob(".*.part"))
 
 
-def blocking_work(job: Job) -> tuple[dict[str, Any], None]:
-    while True:  # a long run: an event every 10 ms until cancelled
-        job.add_event({"kind": "action", "text": "waiting", "poses": None})
-        time.sleep(0.01)
+# --- runs in processes of their own: cancelled, killed, stopped with the studio ---
+
+BLOCKING_WORKER = (
+    sys.executable,
+    "-c",
+    "import json, time\n"
+    "while True:  # a long run: an event every 10 ms until stopped\n"
+    "    print(json.dumps({'event': {'kind': 'action', 'text': 'waiting'}}), flush=True)\n"
+    "    time.sleep(0.01)\n",
+)
+SET_TABLE_CLUTTERED = EXAMPLES / "scenes" / "set-table-cluttered.json"
 
 
-def test_delete_cancels_a_run_and_its_thread_stops(client: TestClient) -> None:
-    job = client.app.state.jobs.start(blocking_work)  # type: ignore[attr-defined]
-    assert client.get(f"/api/runs/{job.id}").json()["state"] == "running"
-    assert client.delete(f"/api/runs/{job.id}").json()["state"] == "cancelled"
-    assert job.thread is not None
-    job.thread.join(timeout=60)
-    assert not job.thread.is_alive()
-    assert client.get(f"/api/runs/{job.id}").json()["state"] == "cancelled"
+def no_video(run_id: str) -> dict[str, Any]:
+    return {"video": None}
+
+
+def process_state(pid: int) -> str | None:
+    """The state letter of process ``pid`` in /proc (R, S, T, Z…), None when gone."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return None
+    return stat.rsplit(")", 1)[1].split()[0]
+
+
+def is_gone(pid: int) -> bool:
+    """No such process, or a zombie (it runs nothing; its parent may not reap it)."""
+    return process_state(pid) in (None, "Z")
+
+
+def wait_gone(pids: list[int], seconds: float = 60.0) -> None:
+    """Every process of ``pids`` gone, waiting at most ``seconds`` (a loaded machine)."""
+    deadline = time.monotonic() + seconds
+    while not all(is_gone(pid) for pid in pids):
+        assert time.monotonic() < deadline, [(pid, process_state(pid)) for pid in pids]
+        time.sleep(0.05)
+
+
+def descendants(pid: int) -> dict[int, str]:
+    """The live processes below ``pid`` (its children, theirs…) and their names."""
+    parents: dict[int, tuple[int, str]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:
+            continue
+        name = text[text.index("(") + 1 : text.rindex(")")]
+        parents[int(stat.parent.name)] = (int(text.rsplit(")", 1)[1].split()[1]), name)
+    found: dict[int, str] = {}
+    frontier = [pid]
+    while frontier:
+        parent = frontier.pop()
+        for child, (ppid, name) in parents.items():
+            if ppid == parent and child not in found:
+                found[child] = name
+                frontier.append(child)
+    return found
+
+
+def wait_for_events(client: TestClient, run: str, count: int = 1) -> dict[str, Any]:
+    for _ in range(6000):
+        state: dict[str, Any] = client.get(f"/api/runs/{run}").json()
+        if len(state["events"]) >= count or state["state"] != "running":
+            return state
+        time.sleep(0.02)
+    raise AssertionError("the run showed no event")
+
+
+def learn_set_table(client: TestClient) -> str:
+    names = []
+    for path in sorted((EXAMPLES / "set_table").glob("demonstration-*.json")):
+        (work(client) / path.name).write_bytes(path.read_bytes())
+        names.append(path.name)
+    answer = client.post("/api/learn", json={"files": names, "output": "table.json"})
+    assert answer.status_code == 200, answer.text
+    return "table.json"
+
+
+def long_kinematic_run(client: TestClient) -> dict[str, Any]:
+    """A kinematic run of a few seconds: the set table among clutter, every
+    put-down dropped, replanned until it gives up."""
+    model = learn_set_table(client)
+    return {
+        "model": model,
+        "scene": scene_body(SET_TABLE_CLUTTERED),
+        "clutter": True,
+        "faults": "drop=1",
+    }
+
+
+def test_delete_cancels_a_run_and_its_process_is_gone(client: TestClient) -> None:
+    job = client.app.state.jobs.start(no_video, BLOCKING_WORKER)  # type: ignore[attr-defined]
+    assert wait_for_events(client, job.id)["state"] == "running"
+    assert job.process is not None and not is_gone(job.process.pid)
+    answer = client.delete(f"/api/runs/{job.id}")
+    assert answer.status_code == 200 and answer.json()["state"] == "cancelled"
+    wait_gone([job.process.pid])
+    assert job.ended.wait(60)
+    seen = len(client.get(f"/api/runs/{job.id}").json()["events"])
+    time.sleep(0.2)
+    after = client.get(f"/api/runs/{job.id}").json()
+    assert after["state"] == "cancelled" and len(after["events"]) == seen
 
 
 def test_runs_beyond_the_limit_are_refused(client: TestClient) -> None:
     jobs = client.app.state.jobs  # type: ignore[attr-defined]
-    started = [jobs.start(blocking_work) for _ in range(2)]
+    started = [jobs.start(no_video, BLOCKING_WORKER) for _ in range(2)]
     save_blocks_and_learn(client)
     body = {"model": "model.json", "scene": scene_body()}
     one_line_error(client.post("/api/runs", json=body), 429, "at most 2")
     for job in started:
         client.delete(f"/api/runs/{job.id}")
+    assert client.post("/api/runs", json=body).status_code == 202  # the slots are free again
     one_line_error(client.get("/api/runs/nope"), 404, "nope")
+
+
+def test_cancelling_a_kinematic_run_ends_its_process(client: TestClient) -> None:
+    run = client.post("/api/runs", json=long_kinematic_run(client)).json()["run"]
+    job = client.app.state.jobs.get(run)  # type: ignore[attr-defined]
+    assert wait_for_events(client, run)["state"] == "running"
+    pid = job.process.pid
+    assert not is_gone(pid)
+    answer = client.delete(f"/api/runs/{run}")
+    assert answer.json()["state"] == "cancelled"
+    wait_gone([pid])
+    assert job.ended.wait(60)
+    state = client.get(f"/api/runs/{run}").json()
+    assert state["state"] == "cancelled" and state["result"] is None
+
+
+@pytest.mark.slow
+def test_cancelling_an_arm_run_ends_its_process_and_ffmpeg_and_leaves_no_file(
+    client: TestClient,
+) -> None:
+    pytest.importorskip("mujoco")
+    pytest.importorskip("imageio_ffmpeg")
+    save_blocks_and_learn(client)
+    body = {"model": "model.json", "scene": scene_body(), "sim": "arm"}
+    run = client.post("/api/runs", json=body).json()["run"]
+    job = client.app.state.jobs.get(run)  # type: ignore[attr-defined]
+    assert wait_for_events(client, run)["state"] == "running"  # the video is being recorded
+    below = descendants(job.process.pid)
+    assert any("ffmpeg" in name for name in below.values()), below
+    answer = client.delete(f"/api/runs/{run}")
+    assert answer.json()["state"] == "cancelled"
+    wait_gone([job.process.pid, *below])
+    assert job.ended.wait(60)
+    assert sorted(p.name for p in work(client).iterdir() if "run-" in p.name) == []
+
+
+def test_a_run_that_does_not_stop_on_sigterm_is_killed(client: TestClient) -> None:
+    run = client.post("/api/runs", json=long_kinematic_run(client)).json()["run"]
+    job = client.app.state.jobs.get(run)  # type: ignore[attr-defined]
+    assert wait_for_events(client, run)["state"] == "running"  # its SIGTERM handler is set
+    os.kill(job.process.pid, signal.SIGSTOP)  # as deep in a computation as can be: SIGTERM waits
+    answer = client.delete(f"/api/runs/{run}")
+    assert answer.json()["state"] == "cancelled"
+    wait_gone([job.process.pid])
+    assert job.ended.wait(60)
+    assert client.get(f"/api/runs/{run}").json()["state"] == "cancelled"
+
+
+def test_a_run_whose_process_is_killed_fails_in_one_line(client: TestClient) -> None:
+    body = long_kinematic_run(client)
+    run = client.post("/api/runs", json=body).json()["run"]
+    job = client.app.state.jobs.get(run)  # type: ignore[attr-defined]
+    os.kill(job.process.pid, signal.SIGKILL)  # from outside: the kernel out of memory, a person
+    state = wait_for(client, run)
+    assert state["state"] == "failed" and state["result"] is None
+    assert (
+        state["error"]
+        == "the run's process ended without a result (killed by SIGKILL, out of memory?)"
+    )
+    # the slot is free again
+    assert client.post("/api/runs", json=long_kinematic_run(client)).status_code == 202
+
+
+def test_the_studio_stopping_ends_the_runs_processes(tmp_path: Path) -> None:
+    with TestClient(create_app(tmp_path / "work"), base_url="http://127.0.0.1") as client:
+        jobs = client.app.state.jobs  # type: ignore[attr-defined]
+        started = [jobs.start(no_video, BLOCKING_WORKER) for _ in range(2)]
+        for job in started:
+            wait_for_events(client, job.id)
+    wait_gone([job.process.pid for job in started])
+    assert [job.to_json()["state"] for job in started] == ["cancelled", "cancelled"]
+
+
+def test_the_run_process_stops_as_the_command_line_when_the_studio_is_gone(
+    client: TestClient,
+) -> None:
+    body = long_kinematic_run(client)
+    request = body | {"model": str(work(client) / body["model"]), "sim": "kinematic"}
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "demoplan.studio.worker"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        env=os.environ | {"PYTHONPATH": str(Path(__file__).parents[1] / "src")},
+    )
+    assert worker.stdin is not None and worker.stdout is not None
+    worker.stdin.write(json.dumps(request).encode() + b"\n")
+    worker.stdin.flush()
+    first = json.loads(worker.stdout.readline())
+    assert first["event"]["kind"] == "plan"
+    worker.stdin.close()  # the studio's end: as if it was killed
+    assert worker.wait(timeout=60) == 143  # SIGTERM's exit, as the command line's
+    rest = [json.loads(line) for line in worker.stdout]
+    assert all("event" in line for line in rest)  # no result: it stopped
 
 
 # --- hostile input: a 4xx and one line ---
@@ -701,3 +887,18 @@ def test_the_command_prints_its_url_answers_and_stops_as_every_command(
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_the_folders_a_killed_recording_leaves_are_found_and_only_they(tmp_path: Path) -> None:
+    from demoplan.execution.video_output import VideoOutput, partial_folders
+
+    target = tmp_path / "run-0123.mp4"
+    recording = VideoOutput(target)
+    other = VideoOutput(tmp_path / "run-0123.mp4.mp4")  # another target's, named alike
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / ".run-0123.mp4.planted_.part").symlink_to(tmp_path / "elsewhere")  # never removed
+    (tmp_path / ".run-0123.mp4.a_file_0.part").write_text("")  # a file, not a folder
+    assert partial_folders(target) == [recording.recording.parent]
+    recording.discard()
+    assert partial_folders(target) == []
+    assert partial_folders(other.target) == [other.recording.parent]

@@ -12,7 +12,9 @@ removes the private folder and the folders made for it: nothing is left
 
 from __future__ import annotations
 
+import glob
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -28,7 +30,7 @@ from demoplan.fileio import (
     remove_made_folders,
 )
 
-__all__ = ["VideoOutput", "check_video_path", "complete_mp4"]
+__all__ = ["VideoOutput", "check_video_path", "complete_mp4", "partial_folders"]
 
 _PARTIAL = "recording.mp4"  # ffmpeg picks the container from the extension
 
@@ -92,6 +94,20 @@ class VideoOutput:
         """Remove the recording, its private folder and the folders made for it."""
         shutil.rmtree(self._private, ignore_errors=True)
         remove_made_folders(self._made)
+
+
+def partial_folders(target: Path) -> list[Path]:
+    """The private folders a recording of ``target`` left beside it: none
+    unless the process recording was killed (SIGKILL) before :meth:`VideoOutput.discard`
+    ran. Its folders only, never a link."""
+    folder = target.parent if str(target.parent) else Path()
+    # mkdtemp's part: 8 of [a-z0-9_] (another target's folder, ``.NAME.mp4.….part``, is not)
+    named = re.compile(rf"\.{re.escape(_short(target.name))}\.[a-z0-9_]{{8}}\.part")
+    return [
+        path
+        for path in folder.glob(f".{glob.escape(_short(target.name))}.*.part")
+        if named.fullmatch(path.name) and path.is_dir() and not path.is_symlink()
+    ]
 
 
 def complete_mp4(path: Path) -> bool:

@@ -15,8 +15,15 @@ import json
 import logging
 import os
 import threading
-from collections.abc import Awaitable, Callable, Collection, Iterator, MutableMapping
-from contextlib import contextmanager
+from collections.abc import (
+    AsyncIterator,
+    Awaitable,
+    Callable,
+    Collection,
+    Iterator,
+    MutableMapping,
+)
+from contextlib import asynccontextmanager, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +33,7 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError, UsageError
-from demoplan.studio.jobs import Job, Jobs, RunCancelledError, TooManyRunsError
+from demoplan.studio.jobs import Jobs, TooManyRunsError
 from demoplan.studio.requests import (
     MAX_BODY_BYTES,
     MAX_SEED,
@@ -245,7 +252,19 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
     network on purpose)."""
     folder = WorkFolder(workdir)
     jobs = Jobs()
-    app = FastAPI(title="demoplan studio", docs_url=None, redoc_url=None, openapi_url=None)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        yield
+        jobs.cancel_all()  # served with a lifespan: no run's process outlives the studio
+
+    app = FastAPI(
+        title="demoplan studio",
+        docs_url=None,
+        redoc_url=None,
+        openapi_url=None,
+        lifespan=lifespan,
+    )
     app.state.workfolder = folder
     app.state.jobs = jobs
     app.add_middleware(BodyLimit)
@@ -382,16 +401,17 @@ def _add_learning_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
 
 
 def _add_run_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
-    """Runs in worker threads, and the media an arm run writes."""
+    """Runs, each in a process of its own (demoplan.studio.jobs), and the media
+    an arm run writes."""
 
     @app.post("/api/runs", status_code=202)
     def start_run(body: RunRequest) -> dict[str, str]:
         from demoplan.execution.faults import parse_faults
 
         model = _model_path(folder, body.model)
-        scene = _scene(body.scene, "scene")
+        _scene(body.scene, "scene")  # refused here; the run's process reads it again
         try:
-            faults = parse_faults(body.faults or None)
+            parse_faults(body.faults or None)  # refused here; the run's process reads it again
         except DemoplanError as exc:
             raise InputError(str(exc), field="faults") from None
         if body.sim == "arm":
@@ -400,31 +420,22 @@ def _add_run_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
             if find_spec("mujoco") is None:
                 raise InputError("the arm needs MuJoCo (pip install 'demoplan[sim]')", field="sim")
 
-        def work(job: Job) -> tuple[dict[str, Any], list[dict[str, Any]]]:
-            from demoplan.commands.execution import run
-            from demoplan.studio.views import event_json, events_with_poses, run_result_json
+        def order(run_id: str) -> dict[str, Any]:
+            """What the run's process is told (demoplan.studio.worker): the
+            request as checked here; an arm run's video named by the run."""
+            video = f"run-{run_id}.mp4" if body.sim == "arm" else None
+            return {
+                "model": str(model),
+                "scene": body.scene,
+                "sim": body.sim,
+                "faults": body.faults,
+                "seed": body.seed,
+                "clutter": body.clutter,
+                "video": str(folder.root / video) if video else None,
+                "media": f"/api/media/{video}" if video else None,
+            }
 
-            video = None
-            video_path = None
-            if body.sim == "arm":
-                video = f"run-{job.id}.mp4"
-                video_path = folder.root / video
-            report = run(
-                model,
-                scene,
-                sim=body.sim,
-                faults=faults,
-                seed=body.seed,
-                clutter=body.clutter,
-                video=video_path,
-                on_event=lambda event: job.add_event(event_json(event)),
-            )
-            if job.cancel.is_set():
-                raise RunCancelledError
-            media = f"/api/media/{video}" if video and video_path and video_path.is_file() else None
-            return run_result_json(report, media), events_with_poses(list(job.events), report)
-
-        job = jobs.start(work)
+        job = jobs.start(order)
         return {"run": job.id}
 
     @app.get("/api/runs/{run_id}")

@@ -1,28 +1,64 @@
-"""Runs in worker threads: each run of ``POST /api/runs`` goes on in its own
-thread through the command layer's :func:`demoplan.commands.execution.run`,
-its events kept for ``GET /api/runs/{id}``; a cancel flag, checked each time
-the run reports an event, stops it (``DELETE``). At most
-:data:`MAX_ACTIVE_RUNS` run at once (the machine's cores are few): one more
-is refused (HTTP 429)."""
+"""Runs, each in a child process of its own: ``POST /api/runs`` starts
+``python -m demoplan.studio.worker`` (:mod:`demoplan.studio.worker`), which
+runs the request through the command layer's
+:func:`demoplan.commands.execution.run` and writes the run's events and its
+result as JSON lines on its stdout; a thread of the studio reads them into the
+run's :class:`Job` for ``GET /api/runs/{id}``. At most :data:`MAX_ACTIVE_RUNS`
+run at once (the machine's cores are few): one more is refused (HTTP 429).
+
+Why a process, and why a plain subprocess rather than ``multiprocessing``:
+
+- MuJoCo renders through GL contexts bound to a thread and a process: a second
+  renderer made in another thread of the same process can deadlock in
+  ``mujoco.Renderer`` (EGL). A process per run has GL to itself.
+- Cancelling must not wait for the run's next event (a whole replanning
+  budget, longer on the arm): a process can be stopped where it is. Cancel
+  (``DELETE``, the studio shutting down) sends SIGTERM to the run's process
+  group — the worker stops through the CLI's own SIGTERM path
+  (:mod:`demoplan.cli.interrupts`: the world is closed, ffmpeg stopped, the
+  video's private folder removed) — then SIGKILL after
+  :data:`TERMINATE_GRACE_S` to whatever is left of the group.
+- Each run is a session and process group of its own (``start_new_session``),
+  and ffmpeg is kept in it (``IMAGEIO_FFMPEG_NO_PREVENT_SIGINT``: imageio-ffmpeg
+  otherwise gives ffmpeg a group of its own), so ``killpg`` leaves no
+  grandchild behind; the group is swept with SIGKILL whenever the worker ends.
+- JSON lines over a pipe survive a killed child (at worst a cut last line,
+  ignored); a ``multiprocessing`` queue shares a lock with the child that a
+  kill can leave held, and the "spawn" start method re-imports the parent's
+  ``__main__`` (pytest's, uvicorn's). The subprocess is a fresh interpreter
+  that imports only demoplan.
+- A worker that dies without its final line (killed from outside, out of
+  memory) makes the run ``failed`` with one line saying how it ended — never a
+  run left ``running``.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import os
 import secrets
+import shutil
+import signal
+import subprocess
+import sys
 import threading
-from collections.abc import Callable, Iterator
+import time
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import IO, Any
 
-from demoplan.errors import DemoplanError
 from demoplan.studio.workfolder import FileMissingError
 
 __all__ = [
     "MAX_ACTIVE_RUNS",
     "MAX_KEPT_RUNS",
+    "TERMINATE_GRACE_S",
+    "WORKER",
     "Job",
     "Jobs",
-    "RunCancelledError",
     "TooManyRunsError",
 ]
 
@@ -34,10 +70,15 @@ MAX_KEPT_RUNS = 50
 """Finished runs remembered (the oldest is forgotten beyond)."""
 MAX_EVENTS = 10_000
 """Events kept per run (a run of 25 replans has a few hundred)."""
+TERMINATE_GRACE_S = 1.0
+"""s: a cancelled run's process has this long after SIGTERM to clean up before SIGKILL."""
+KILLED_WAIT_S = 10.0
+"""s: at most this long for the process to be gone after SIGKILL (it is at once)."""
+WORKER = (sys.executable, "-m", "demoplan.studio.worker")
+"""The command of a run's process."""
 
-
-class RunCancelledError(Exception):
-    """Raised inside a run's thread, from its event callback, when it was cancelled."""
+Order = Callable[[str], dict[str, Any]]
+"""A run's request for its process, given the run's id."""
 
 
 class TooManyRunsError(Exception):
@@ -46,21 +87,22 @@ class TooManyRunsError(Exception):
 
 @dataclass
 class Job:
-    """One run: its state, its events so far, and its result or error."""
+    """One run: its state, its events so far, and its result or error; the
+    process it goes on in (None once it failed to start)."""
 
     id: str
     state: str = "running"
     events: list[dict[str, Any]] = field(default_factory=list)
     result: dict[str, Any] | None = None
     error: str | None = None
-    cancel: threading.Event = field(default_factory=threading.Event)
     lock: threading.Lock = field(default_factory=threading.Lock)
-    thread: threading.Thread | None = None
+    process: subprocess.Popen[bytes] | None = None
+    ended: threading.Event = field(default_factory=threading.Event)
+    """Set once the process is gone (reaped, its group swept) and the state final."""
+    reaped: bool = False  # the process's id is free again: never signal it (under ``lock``)
+    video: Path | None = None
 
     def add_event(self, event: dict[str, Any]) -> None:
-        """Keep ``event``; stop the run here if it was cancelled."""
-        if self.cancel.is_set():
-            raise RunCancelledError
         with self.lock:
             if len(self.events) < MAX_EVENTS:
                 self.events.append(event)
@@ -75,22 +117,27 @@ class Job:
                 "error": self.error,
             }
 
-
-Work = Callable[[Job], tuple[dict[str, Any], list[dict[str, Any]] | None]]
-"""A run's work: given its job (to report events to), its result and, where
-the finished run tells more of them, its events in full."""
+    def signal(self, signum: int) -> None:
+        """Send ``signum`` to the run's process group (nothing once it is reaped)."""
+        with self.lock:
+            if self.process is None or self.reaped:
+                return
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.process.pid, signum)
 
 
 class Jobs:
     """The runs of one studio."""
 
-    def __init__(self) -> None:
+    def __init__(self, worker: Sequence[str] = WORKER) -> None:
         self._jobs: dict[str, Job] = {}
         self._lock = threading.Lock()
         self._slots = threading.BoundedSemaphore(MAX_ACTIVE_WORK)
+        self.worker = tuple(worker)
 
-    def start(self, work: Work) -> Job:
-        """Start ``work`` in a new thread (TooManyRunsError beyond the limit)."""
+    def start(self, order: Order, worker: Sequence[str] | None = None) -> Job:
+        """Start a run of ``order`` in a new process (TooManyRunsError beyond
+        the limit); ``worker``: its command (default: the studio's worker)."""
         with self._lock:
             active = sum(1 for job in self._jobs.values() if _busy(job))
             if active >= MAX_ACTIVE_RUNS:
@@ -103,39 +150,29 @@ class Jobs:
             finished = [j for j in self._jobs.values() if not _busy(j)]
             for old in finished[: max(0, len(self._jobs) - MAX_KEPT_RUNS)]:
                 del self._jobs[old.id]
-        job.thread = threading.Thread(
-            target=self._work, args=(job, work), name=f"studio-run-{job.id}", daemon=True
-        )
-        job.thread.start()
-        return job
-
-    def _work(self, job: Job, work: Work) -> None:
+        request = order(job.id)
+        job.video = Path(request["video"]) if request.get("video") else None
         try:
-            result, events = work(job)
-        except RunCancelledError:
-            self._finish(job, "cancelled")
-        except DemoplanError as exc:
-            self._finish(job, "failed", error=" ".join(str(exc).split()))
-        except Exception as exc:  # a fault of the studio itself: one line, never a traceback
-            self._finish(job, "failed", error=f"internal error ({type(exc).__name__})")
-        else:
-            self._finish(job, "done", result=result, events=events)
-
-    def _finish(
-        self,
-        job: Job,
-        state: str,
-        *,
-        result: dict[str, Any] | None = None,
-        events: list[dict[str, Any]] | None = None,
-        error: str | None = None,
-    ) -> None:
-        with job.lock:
-            if job.state == "cancelled":  # cancelled while it finished: it stays so
-                return
-            job.state, job.result, job.error = state, result, error
-            if events is not None:
-                job.events = events
+            process = subprocess.Popen(
+                worker or self.worker,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                start_new_session=True,  # a process group: killpg reaches ffmpeg too
+                env=_worker_environment(),
+            )
+        except OSError as exc:
+            _finish(job, "failed", error=f"the run's process could not start ({exc.strerror})")
+            job.ended.set()
+            return job
+        job.process = process
+        assert process.stdin is not None
+        with contextlib.suppress(OSError):  # a worker gone at once says so at its end
+            process.stdin.write(json.dumps(request).encode() + b"\n")
+            process.stdin.flush()
+        threading.Thread(
+            target=_watch, args=(job, process), name=f"studio-run-{job.id}", daemon=True
+        ).start()
+        return job
 
     @contextmanager
     def working(self) -> Iterator[None]:
@@ -160,22 +197,134 @@ class Jobs:
         return job
 
     def cancel(self, run_id: str) -> Job:
-        """Cancel the run: it is ``cancelled`` at once, and its thread stops at
-        its next event (within one (re)planning's budget)."""
+        """Cancel the run: it is ``cancelled`` at once, and its process is
+        stopped (SIGTERM, SIGKILL after :data:`TERMINATE_GRACE_S`) and gone
+        when this returns."""
         job = self.get(run_id)
-        job.cancel.set()
-        with job.lock:
-            if job.state == "running":
-                job.state = "cancelled"
+        _stop([job])
         return job
 
     def cancel_all(self) -> None:
+        """Cancel every run going on (the studio stops), their processes at once."""
         with self._lock:
-            ids = list(self._jobs)
-        for run_id in ids:
-            self.cancel(run_id)
+            jobs = list(self._jobs.values())
+        _stop(jobs)
+
+
+def _stop(jobs: list[Job]) -> None:
+    """Mark ``jobs`` cancelled where they run, and end their processes: SIGTERM
+    to each group, then SIGKILL to what is left after the grace."""
+    for job in jobs:
+        with job.lock:
+            if job.state == "running":
+                job.state = "cancelled"
+    going = [job for job in jobs if not job.ended.is_set()]
+    for job in going:
+        job.signal(signal.SIGTERM)
+    deadline = time.monotonic() + TERMINATE_GRACE_S
+    for job in going:
+        job.ended.wait(max(0.0, deadline - time.monotonic()))
+    left = [job for job in going if not job.ended.is_set()]
+    for job in left:
+        job.signal(signal.SIGKILL)
+    deadline = time.monotonic() + KILLED_WAIT_S
+    for job in left:
+        job.ended.wait(max(0.0, deadline - time.monotonic()))
+
+
+def _watch(job: Job, process: subprocess.Popen[bytes]) -> None:
+    """The run's thread in the studio: read the worker's lines, and when it
+    has ended, sweep its group, reap it and settle the run's state."""
+    outcome: list[dict[str, Any]] = []
+    assert process.stdout is not None
+    reader = threading.Thread(target=_read, args=(job, process.stdout, outcome), daemon=True)
+    reader.start()
+    # ended, not yet reaped: its id (its group's) cannot be taken meanwhile
+    with contextlib.suppress(ChildProcessError):
+        os.waitid(os.P_PID, process.pid, os.WEXITED | os.WNOWAIT)
+    with job.lock:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(process.pid, signal.SIGKILL)  # ffmpeg or any other leftover
+        returncode = process.wait()
+        job.reaped = True
+    reader.join(timeout=KILLED_WAIT_S)  # the group is gone: its stdout ends
+    for stream in (process.stdin, process.stdout):
+        if stream is not None:
+            with contextlib.suppress(OSError):
+                stream.close()
+    if job.video is not None:  # a worker killed before it could remove them
+        from demoplan.execution.video_output import partial_folders
+
+        for folder in partial_folders(job.video):
+            shutil.rmtree(folder, ignore_errors=True)
+    if outcome and "result" in outcome[0]:
+        _finish(job, "done", result=outcome[0]["result"], events=outcome[0].get("events"))
+    elif outcome and "error" in outcome[0]:
+        _finish(job, "failed", error=" ".join(str(outcome[0]["error"]).split()))
+    else:
+        _finish(
+            job, "failed", error=f"the run's process ended without a result ({_how(returncode)})"
+        )
+    job.ended.set()
+
+
+def _read(job: Job, stdout: IO[bytes], outcome: list[dict[str, Any]]) -> None:
+    """Events into ``job`` as they come; the final line into ``outcome``."""
+    for raw in stdout:
+        try:
+            line = json.loads(raw)
+        except ValueError:  # cut short by a kill
+            continue
+        if not isinstance(line, dict):
+            continue
+        if "event" in line:
+            job.add_event(line["event"])
+        elif "result" in line or "error" in line:
+            outcome.append(line)
+
+
+def _finish(
+    job: Job,
+    state: str,
+    *,
+    result: dict[str, Any] | None = None,
+    events: list[dict[str, Any]] | None = None,
+    error: str | None = None,
+) -> None:
+    with job.lock:
+        if job.state == "cancelled":  # cancelled while it finished: it stays so
+            return
+        job.state, job.result, job.error = state, result, error
+        if events is not None:
+            job.events = events[:MAX_EVENTS]
+
+
+def _how(returncode: int) -> str:
+    """How a process ended, in words: ``killed by SIGKILL``, ``exit status 1``."""
+    if returncode < 0:
+        try:
+            name = signal.Signals(-returncode).name
+        except ValueError:
+            name = f"signal {-returncode}"
+        return f"killed by {name}" + (", out of memory?" if name == "SIGKILL" else "")
+    return f"exit status {returncode}"
+
+
+def _worker_environment() -> dict[str, str]:
+    """The studio's environment, with this demoplan importable first and ffmpeg
+    kept in the run's process group."""
+    import demoplan
+
+    source = Path(demoplan.__file__).resolve().parent.parent
+    paths = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    if source.name not in ("site-packages", "dist-packages"):  # installed: found anyway,
+        paths.insert(0, str(source))  # and never put before the standard library
+    return os.environ | {
+        "PYTHONPATH": os.pathsep.join(dict.fromkeys(paths)),
+        "IMAGEIO_FFMPEG_NO_PREVENT_SIGINT": "1",
+    }
 
 
 def _busy(job: Job) -> bool:
-    """The run goes on (a cancelled one until its thread has stopped)."""
-    return job.state == "running" or (job.thread is not None and job.thread.is_alive())
+    """The run goes on (a cancelled one until its process is gone)."""
+    return job.state == "running" or not job.ended.is_set()
