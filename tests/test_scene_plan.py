@@ -267,7 +267,7 @@ def test_fast_downward_agrees_on_scene_problems(
     if which == "table":
         assert problem.accepts  # the case this test is for
     texts = problem_to_pddl(problem, grounded=grounded)
-    status, names, _ = fast_downward_plan(*texts, timeout=120)
+    status, names, _ = fast_downward_plan(*texts)
     assert status == "SOLVED_OPTIMALLY" and names is not None
     actions = [action_from_pddl(problem, name) for name in names]
     validate(problem, actions)
