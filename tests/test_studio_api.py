@@ -374,7 +374,10 @@ def test_no_plan_is_an_answer_with_the_command_lines_reason(client: TestClient) 
     assert body["no_plan"]["figure"] is None or "<svg" in body["no_plan"]["figure"]
 
 
-def wait_for(client: TestClient, run: str, tries: int = 600) -> dict[str, Any]:
+def wait_for(client: TestClient, run: str, tries: int = 3000) -> dict[str, Any]:
+    """The run's state once it has ended; polled every 0.1 s up to ``tries``
+    times, a hang guard (a kinematic run takes seconds unloaded, a loaded
+    machine many times that; a finished run returns at once)."""
     for _ in range(tries):
         state: dict[str, Any] = client.get(f"/api/runs/{run}").json()
         if state["state"] != "running":
@@ -414,7 +417,7 @@ def test_an_arm_run_records_a_video_served_from_the_work_folder(client: TestClie
     pytest.importorskip("imageio_ffmpeg")
     save_blocks_and_learn(client)
     body = {"model": "model.json", "scene": scene_body(), "sim": "arm"}
-    state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=3000)
+    state = wait_for(client, client.post("/api/runs", json=body).json()["run"])
     assert state["state"] == "done", state
     video = state["result"]["video"]
     assert video == f"/api/media/run-{state['run']}.mp4"
