@@ -45,7 +45,7 @@ def test_the_chosen_demonstration_has_one_number_everywhere(tmp_path: Path) -> N
     assert rows["2 (pyramid-2)"] == "chosen" and rows["1 (pyramid-1)"] == ""
     code, out, _ = invoke("plan", model, SCENE, "--json", "--timeout", "inf")
     assert json.loads(out)["goal"] == 1
-    code, out, err = invoke("run", model, SCENE)
+    code, out, err = invoke("run", model, SCENE, "--timeout", "inf")  # the same choice
     assert code == 0, err
     assert "success: goal of demonstration 2 (pyramid-2) reached" in out
     assert "demonstration 1 " not in out
