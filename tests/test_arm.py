@@ -244,7 +244,19 @@ def test_plan_with_collisions_from_the_arm(blocks_file: Path) -> None:
     the finger rule's side-by-side facts (wood and green too close for the
     fingers) are not the suction cup's."""
     result = CliRunner().invoke(
-        app, ["plan", str(blocks_file), str(BLOCKS), "--collisions", "simulation", "--json"]
+        app,
+        # --timeout inf: the arm's collision facts and the proof that 8 is
+        # shortest must not race the default 2 s on a loaded machine
+        [
+            "plan",
+            str(blocks_file),
+            str(BLOCKS),
+            "--collisions",
+            "simulation",
+            "--json",
+            "--timeout",
+            "inf",
+        ],
     )
     assert result.exit_code == 0, result.output
     plan = json.loads(result.stdout)
@@ -256,7 +268,8 @@ def test_plan_with_collisions_from_the_arm(blocks_file: Path) -> None:
     assert any(a == "loc1" and b == "loc3" for a, b, _ in simulated)  # wood under red
     assert any(a == "loc1" and b == "loc2" for a, b, _ in ruled)  # wood beside green
     text = CliRunner().invoke(
-        app, ["plan", str(blocks_file), str(BLOCKS), "--collisions", "simulation"]
+        app,
+        ["plan", str(blocks_file), str(BLOCKS), "--collisions", "simulation", "--timeout", "inf"],
     )
     assert "collision facts from the arm in simulation" in text.output
 

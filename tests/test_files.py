@@ -747,7 +747,7 @@ def test_write_atomic_writes_into_a_pipe_instead_of_replacing_it(tmp_path: Path)
     reader = threading.Thread(target=lambda: received.append(fifo.read_text()))
     reader.start()
     write_atomic(fifo, "hello\n")
-    reader.join(timeout=5)
+    reader.join(timeout=120)  # returns as soon as the writer closes: a hang guard
     assert received == ["hello\n"]
     assert stat.S_ISFIFO(fifo.stat().st_mode)
 

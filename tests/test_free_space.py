@@ -88,7 +88,9 @@ def test_kitting_parks_the_manual_then_builds_the_kit(
     scene_path = kit_with_tray(tmp_path) if tray else KIT_SCENE
     scene = json.loads(scene_path.read_text())
     assert "table" not in scene and "freespace" not in scene
-    result = invoke("plan", kit_file, scene_path, "--json", *(["--clutter"] if tray else []))
+    # --timeout inf: the plan checked is the proved one, not whatever the clock left
+    clutter = ["--clutter"] if tray else []
+    result = invoke("plan", kit_file, scene_path, "--json", "--timeout", "inf", *clutter)
     assert result.exit_code == 0, result.stderr
     plan = json.loads(result.stdout)
     actions = plan["actions"]
@@ -133,7 +135,7 @@ def test_a_table_with_no_room_names_free_space_and_what_to_add(
     data["table"] = {"min": [0.1, -0.15], "max": [0.5, 0.25]}
     path = tmp_path / "tight.json"
     path.write_text(json.dumps(data))
-    result = invoke("plan", kit_file, path)
+    result = invoke("plan", kit_file, path, "--timeout", "inf")  # exit 3 from the search, not 4
     assert result.exit_code == 3, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
     for fragment in ("no free space for manual", "scene's table", '"table"', '"freespace"'):
@@ -155,7 +157,7 @@ def test_the_same_table_with_room_plans(kit_file: Path, tmp_path: Path) -> None:
     data["table"] = {"min": [-0.15, -0.4], "max": [0.75, 0.5]}
     path = tmp_path / "wide.json"
     path.write_text(json.dumps(data))
-    assert invoke("plan", kit_file, path).exit_code == 0
+    assert invoke("plan", kit_file, path, "--timeout", "inf").exit_code == 0  # no clock to race
 
 
 # -- a family of scenes where an object must be parked ------------------------------

@@ -336,11 +336,13 @@ FD_PROBLEMS = [
 
 
 def fast_downward_plan(
-    domain: str, problem: str, timeout: float = 60.0, alias: str = "seq-opt-lmcut"
+    domain: str, problem: str, timeout: float = 600.0, alias: str = "seq-opt-lmcut"
 ) -> tuple[str, list[str] | None, float]:
     """Solve our PDDL with Fast Downward — by default its optimal configuration
     (A* with LM-cut), the planner up-fast-downward ships, run through its own
-    driver: (status, action names, seconds).
+    driver: (status, action names, seconds). ``timeout`` is a hang guard, not
+    a limit of the search (which has none): the largest cases take seconds
+    unloaded, and two at a time on a loaded machine many times that.
 
     unified-planning's reader must accept the files too; its one-shot
     ``fast-downward-opt`` engine is not used because it declared a solvable

@@ -274,7 +274,7 @@ def test_the_feedback_bound_sees_a_swap_a_three_cycle_and_distractors() -> None:
         needs = sum(1 for obj, at in enumerate(c.start) if 0 <= c.goal[obj] != at)
         # at least one parking move per cycle (cycles have 2 or 3 members)
         assert bound >= needs + distractors + -(-cycled // 3)
-        plan = solve(problem, budget=Budget(timeout=5))
+        plan = solve(problem, budget=Budget())  # any plan will do: no clock to race
         assert len(plan) >= 2 * bound
 
 

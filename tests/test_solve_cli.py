@@ -49,7 +49,9 @@ def parse_plan(text: str) -> list[Action]:
 
 @pytest.mark.parametrize("search", [None, "astar", "bfs"])
 def test_solve_prints_the_paper_plan(search: str | None) -> None:
-    result = invoke("solve", PAPER, *(["--search", search] if search else []))
+    # --timeout inf here and below: the proof (or the exhausted search) must not
+    # race the default 2 s on a loaded machine; the budgets are tested apart
+    result = invoke("solve", PAPER, "--timeout", "inf", *(["--search", search] if search else []))
     assert result.exit_code == 0, result.stderr
     assert result.stderr == "demoplan: 8 actions, proved shortest\n"
     actions = parse_plan(result.stdout)
@@ -60,7 +62,7 @@ def test_solve_prints_the_paper_plan(search: str | None) -> None:
 
 @pytest.mark.parametrize("search", ["astar", "bfs"])
 def test_solve_json(search: str) -> None:
-    result = invoke("solve", PAPER, "--json", "--search", search)
+    result = invoke("solve", PAPER, "--json", "--search", search, "--timeout", "inf")
     assert result.exit_code == 0, result.stderr
     data = json.loads(result.stdout)  # stdout holds the JSON and nothing else
     assert data["length"] == 8
@@ -100,12 +102,14 @@ def test_no_plan_found_by_search(tmp_path: Path, search: str) -> None:
     problem = two_objects([("a", "l2"), ("b", "l1")])
     path = tmp_path / "swap.xml"
     save_problem(problem, path)
-    line = one_line_error(invoke("solve", path, "--search", search), 3, "no plan")
+    line = one_line_error(
+        invoke("solve", path, "--search", search, "--timeout", "inf"), 3, "no plan"
+    )
     assert "exhausted" in line
     # with a free place the same swap is solvable: the failure was the search's finding
     roomy = tmp_path / "roomy.xml"
     save_problem(two_objects([("a", "l2"), ("b", "l1")], locations=["freespace1"]), roomy)
-    result = invoke("solve", roomy, "--search", search)
+    result = invoke("solve", roomy, "--search", search, "--timeout", "inf")
     assert result.exit_code == 0, result.stderr
     assert len(parse_plan(result.stdout)) == 6
 

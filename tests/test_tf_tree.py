@@ -21,7 +21,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from demoplan.errors import InputError
+import demoplan.budget
+from demoplan.budget import time_budget
+from demoplan.errors import InputError, LimitReachedError
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import (
     ObjectTrack,
@@ -443,3 +445,43 @@ def test_poses_kept_between_frames_change_no_frame(
         assert q_together is not None and q_alone is not None
         sign = np.sign(np.sum(q_together * q_alone, axis=1))[:, None]
         np.testing.assert_allclose(q_together, sign * q_alone, atol=1e-9)
+
+
+class _TickingClock:
+    """A stand-in for the ``time`` module of :mod:`demoplan.budget` whose
+    monotonic clock moves on a millisecond at every reading: a budget's end
+    comes after a fixed number of readings, however fast the machine."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def monotonic(self) -> float:
+        self.now += 0.001
+        return self.now
+
+
+def _deep_chain(depth: int) -> tuple[TransformTree, list[str]]:
+    links = [_link(f"f{k}", "world" if k == 1 else f"f{k - 1}") for k in range(1, depth + 1)]
+    return TransformTree(links), [f"f{k}" for k in range(1, depth + 1)]
+
+
+def test_a_deep_chain_reads_the_budget_while_it_composes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Composing a chain 1000 frames deep, every frame an object, reads the
+    budget as it goes: with a clock that ticks at each reading, a budget of
+    half a second (500 readings) stops it part-way with LimitReachedError
+    naming the TF composition; without a budget the same chain is composed
+    whole. (The clock is a fake one, so the outcome cannot depend on how
+    fast the machine composes; tests/hostile/test_budgets.py checks the
+    command's answer.)"""
+    clock = _TickingClock()
+    monkeypatch.setattr(demoplan.budget, "time", clock)
+    tree, frames = _deep_chain(1000)
+    assert sorted(tree.tracks_in(frames, "world")) == sorted(frames)  # no budget: all of it
+    tree, frames = _deep_chain(1000)
+    clock.now = 0.0
+    with (
+        pytest.raises(LimitReachedError, match=r"^stopped: composing ") as stopped,
+        time_budget(0.5, "stopped:{where}"),
+    ):
+        tree.tracks_in(frames, "world")
+    assert 0.5 < clock.now < 0.51, stopped.value  # at the first reading past the budget

@@ -85,7 +85,12 @@ CASES: list[object] = [
     ),
     pytest.param(["show", "scene.json", "--plot", "NODE"], "s.png", True, id="show-plot"),
     pytest.param(
-        ["plan", "model.json", "scene.json", "--plot", "NODE"], "p.png", True, id="plan-plot"
+        # no time limit: the default 2 s counts from the process start, and a
+        # loaded machine may spend them before the plan that is to be drawn
+        ["plan", "model.json", "scene.json", "--timeout", "inf", "--plot", "NODE"],
+        "p.png",
+        True,
+        id="plan-plot",
     ),
     pytest.param(
         ["problem", "model.json", "scene.json", "-o", "NODE"], "p.xml", True, id="problem-o"
