@@ -23,7 +23,7 @@ from demoplan.perception.stacking import TrackedBlock, scene_document
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
-__all__ = ["Perceived", "perceive", "run"]
+__all__ = ["Perceived", "perceive", "remove_unfinished_video", "run"]
 
 
 def run(
@@ -82,6 +82,17 @@ def run(
             report = run_task(task, prepared.scene, frames=building, **options)
         moved = tuple(str(frames / Path(f).name) for f in report.frames)  # where they now are
         return replace(report, frames=moved)
+
+
+def remove_unfinished_video(video: Path) -> None:
+    """Remove what a run killed while recording ``video`` (SIGKILL: no cleanup
+    of its own) left beside it — its private part folders, nothing else."""
+    import shutil
+
+    from demoplan.execution.video_output import partial_folders
+
+    for folder in partial_folders(video):
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 @dataclass(frozen=True, slots=True)

@@ -38,7 +38,6 @@ import contextlib
 import json
 import os
 import secrets
-import shutil
 import signal
 import subprocess
 import sys
@@ -253,10 +252,9 @@ def _watch(job: Job, process: subprocess.Popen[bytes]) -> None:
             with contextlib.suppress(OSError):
                 stream.close()
     if job.video is not None:  # a worker killed before it could remove them
-        from demoplan.execution.video_output import partial_folders
+        from demoplan.commands.execution import remove_unfinished_video
 
-        for folder in partial_folders(job.video):
-            shutil.rmtree(folder, ignore_errors=True)
+        remove_unfinished_video(job.video)
     if outcome and "result" in outcome[0]:
         _finish(job, "done", result=outcome[0]["result"], events=outcome[0].get("events"))
     elif outcome and "error" in outcome[0]:
