@@ -15,7 +15,17 @@ signal handlers (the experiments run through the command's entry point).
 The job holds an exclusive ``flock`` on ``FOLDER/NAME/lock`` for its whole
 life (taken by the controller before the job starts, inherited by it): a
 worker's shared lock on the file is granted when the job has ended, however it
-ended. ``python -m tests.background NAME FOLDER`` runs one job.
+ended. ``python -m tests.background NAME FOLDER`` runs one job in an existing
+folder, as it is (:func:`run_now` runs it as the tests do: prepared, and
+audited where the job says so).
+
+An audited job (``Job.audited``: the experiments) runs under ``strace -f``
+where strace works (tests/hostile/file_audit.py's options), its log in
+``FOLDER/NAME/strace.log``, in the environment of an audited command: ``HOME``,
+``TMPDIR`` and the libraries' caches fresh folders in ``FOLDER/NAME`` (whether
+traced or not: the same run). A test reads the log afterwards and checks the
+command's accesses (tests/hostile/test_open_audit.py): the suite audits the
+run it shares instead of running the experiments a second time.
 """
 
 from __future__ import annotations
@@ -23,6 +33,7 @@ from __future__ import annotations
 import importlib
 import os
 import pickle
+import signal
 import subprocess
 import sys
 import traceback
@@ -42,12 +53,20 @@ ROOT = Path(__file__).resolve().parents[1]
 class Job:
     function: str  # module:function, called with a folder of its own
     needed_by: tuple[str, ...]  # test files (node id prefixes) that read it
+    prepare: str | None = None  # module:function called with the working folder, before the run
+    audited: bool = False  # under strace where it works, in an audited command's environment
 
 
 JOBS = {
     "experiments": Job(
         "tests.shared_experiments:run_experiments_once",
-        ("tests/test_experiments.py", "tests/test_figure_labels.py"),
+        (
+            "tests/test_experiments.py",
+            "tests/test_figure_labels.py",
+            "tests/hostile/test_open_audit.py::test_experiments_",
+        ),
+        prepare="tests.shared_experiments:plant_the_users_file",
+        audited=True,
     ),
     "hard-parking": Job(
         "tests.helpers:hard_parking_problem",
@@ -60,42 +79,101 @@ JOBS = {
 }
 
 
+@dataclass(frozen=True)
+class JobFolder:
+    """A job's folder ``FOLDER/NAME`` and what its harness (this module) keeps
+    there: the lock, the job's output (``log.txt``), its result pickle, the
+    working folder the job's function is given, and the strace log of an
+    audited job."""
+
+    path: Path
+
+    @property
+    def work(self) -> Path:
+        return self.path / "work"
+
+    @property
+    def lock(self) -> Path:
+        return self.path / "lock"
+
+    @property
+    def log(self) -> Path:
+        return self.path / "log.txt"
+
+    @property
+    def result(self) -> Path:
+        return self.path / "result.pickle"
+
+    @property
+    def partial_result(self) -> Path:
+        """The pickle as it is written, renamed to :attr:`result` when whole."""
+        return self.path / "result.pickle.partial"
+
+    @property
+    def trace(self) -> Path:
+        return self.path / "strace.log"
+
+    def traced(self) -> Path | None:
+        """The strace log, where the job ran under strace (strace made it)."""
+        return self.trace if self.trace.exists() else None
+
+
+def _call(function: str, folder: Path) -> Any:
+    module, _, name = function.partition(":")
+    return getattr(importlib.import_module(module), name)(folder)
+
+
 def _compute(name: str, folder: Path) -> Any:
     """Job ``name``'s result, computed in this process (``folder``: its own, existing)."""
-    module, _, function = JOBS[name].function.partition(":")
-    return getattr(importlib.import_module(module), function)(folder)
+    return _call(JOBS[name].function, folder)
 
 
-def _environment() -> dict[str, str]:
-    """The job's environment: as the hostile suite runs a command (harness.run)."""
+def _environment(job: JobFolder, audited: bool) -> dict[str, str]:
+    """The job's environment: as the hostile suite runs a command (harness.run),
+    or as it runs an audited one (HOME, TMPDIR and the caches in the job's folder)."""
+    if audited:
+        from tests.hostile.file_audit import audit_environment
+
+        (job.path / "caches").mkdir()  # the libraries make their folders in it
+        return audit_environment(job.path, job.path / "caches")
     env = dict(os.environ, PYTHONWARNINGS="default")
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 
 
-def _load(name: str, place: Path) -> Any:
-    done = place / "result.pickle"
-    if not done.exists():
-        log = (place / "log.txt").read_text(errors="replace")
+def _prepare(name: str, folder: Path) -> tuple[JobFolder, list[str], dict[str, str]]:
+    """Job ``name``'s folder made (its working folder prepared), and the
+    command and environment it runs in: under strace if it is audited and
+    strace works."""
+    job, spec = JobFolder(folder / name), JOBS[name]
+    job.work.mkdir(parents=True)
+    if spec.prepare is not None:
+        _call(spec.prepare, job.work)  # before the trace: the job's own writes only
+    command = [sys.executable, "-m", "tests.background", name, str(job.path)]
+    if spec.audited:
+        from tests.hostile.file_audit import STRACE, strace_command
+
+        if STRACE:
+            command = [*strace_command(job.trace), *command]
+    return job, command, _environment(job, spec.audited)
+
+
+def _load(name: str, job: JobFolder) -> Any:
+    if not job.result.exists():
+        log = job.log.read_text(errors="replace")
         raise RuntimeError(f"the shared job {name!r} failed:\n{log[-5000:]}")
-    with done.open("rb") as file:
+    with job.result.open("rb") as file:
         return pickle.load(file)
 
 
 def run_now(name: str, folder: Path) -> Any:
     """Run job ``name`` in ``folder/name`` and wait for its result."""
-    place = folder / name
-    place.mkdir(parents=True)
-    with (place / "log.txt").open("wb") as log:
+    job, command, env = _prepare(name, folder)
+    with job.log.open("wb") as log:
         subprocess.run(
-            [sys.executable, "-m", "tests.background", name, str(place)],
-            cwd=ROOT,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            env=_environment(),
-            check=False,
+            command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=env, check=False
         )
-    return _load(name, place)
+    return _load(name, job)
 
 
 def needed(ids: list[str] | tuple[str, ...]) -> list[str]:
@@ -104,54 +182,63 @@ def needed(ids: list[str] | tuple[str, ...]) -> list[str]:
 
 
 def start(name: str, folder: Path) -> subprocess.Popen[bytes] | None:
-    """Start job ``name`` in ``folder/name`` (None where there is no ``fcntl``)."""
+    """Start job ``name`` in ``folder/name`` (None where there is no ``fcntl``),
+    in a process group of its own (:func:`stop` ends the job, strace with it)."""
     if fcntl is None:
         return None
-    place = folder / name
-    place.mkdir(parents=True)
-    lock = os.open(place / "lock", os.O_CREAT | os.O_RDWR)
+    job, command, env = _prepare(name, folder)
+    lock = os.open(job.lock, os.O_CREAT | os.O_RDWR)
     try:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        with (place / "log.txt").open("wb") as log:
+        with job.log.open("wb") as log:
             process = subprocess.Popen(
-                [sys.executable, "-m", "tests.background", name, str(place)],
+                command,
                 cwd=ROOT,
                 stdout=log,
                 stderr=subprocess.STDOUT,
-                env=_environment(),
+                env=env,
                 pass_fds=(lock,),
+                start_new_session=True,
             )
     finally:
         os.close(lock)  # the job holds it now
-    (place / "started").touch()
+    (job.path / "started").touch()
     return process
+
+
+def stop(process: subprocess.Popen[bytes]) -> None:
+    """End a job :func:`start` started, if it still runs: its process group
+    (the job, and strace tracing it)."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
 
 
 def result(name: str, folder: Path) -> Any | None:
     """Job ``name``'s result once it has ended; None if it was never started."""
-    place = folder / name
-    if fcntl is None or not (place / "started").exists():
+    job = JobFolder(folder / name)
+    if fcntl is None or not (job.path / "started").exists():
         return None
-    lock = os.open(place / "lock", os.O_RDONLY)
+    lock = os.open(job.lock, os.O_RDONLY)
     try:
-        fcntl.flock(lock, fcntl.LOCK_SH)  # granted when the job has ended
+        fcntl.flock(lock, fcntl.LOCK_SH)  # granted when the job (and strace) has ended
     finally:
         os.close(lock)
-    return _load(name, place)
+    return _load(name, job)
 
 
 def _main(name: str, place: Path) -> int:
-    work = place / "work"
-    work.mkdir()
+    job = JobFolder(place)
+    if not job.work.exists():  # made by _prepare, unless run by hand (no attempt traced)
+        job.work.mkdir()
     try:
-        value = _compute(name, work)
+        value = _compute(name, job.work)
     except BaseException:
         traceback.print_exc()
         return 1
-    partial = place / "result.pickle.partial"
-    with partial.open("wb") as file:
+    with job.partial_result.open("wb") as file:
         pickle.dump(value, file)
-    partial.rename(place / "result.pickle")
+    job.partial_result.rename(job.result)
     return 0
 
 

@@ -22,8 +22,6 @@ from tests import background
 from tests.shared_experiments import ExperimentsRun
 
 LONG_FIRST = (
-    # The experiments under strace: 3 to 5 min on two cores, the longest of all.
-    "tests/hostile/test_open_audit.py::test_experiments_opens_its_package_data_only",
     # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
     "tests/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
     "tests/test_docs_shell.py::",
@@ -90,9 +88,8 @@ def pytest_xdist_node_collection_finished(node: Any, ids: list[str]) -> None:
 
 def pytest_unconfigure(config: pytest.Config) -> None:
     for process in _started.values():  # only ours, by their Popen objects
-        if process is not None and process.poll() is None:
-            process.kill()
-            process.wait()
+        if process is not None:
+            background.stop(process)
     _started.clear()
     if _folder:
         shutil.rmtree(_folder.pop(), ignore_errors=True)

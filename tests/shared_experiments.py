@@ -11,6 +11,11 @@ The same run is the hostile suite's ``experiments --open`` without a web
 browser (tests/hostile/test_new_options.py): it is made as that test made it,
 through the command's entry point in a process of its own, with stderr apart.
 
+The run is audited too (tests/hostile/test_open_audit.py): the job runs under
+``strace -f`` where strace works, with a user's file planted beside the
+report before it starts (:func:`plant_the_users_file`), and the run records
+what its harness itself writes and the environment it was given.
+
 The arm's runs are recorded with their inputs (:class:`ArmRun`): a test that
 runs the experiments again with a changed paper table (the mismatch test) may
 replay them where the arm is given the very same model and scene — its result
@@ -30,6 +35,8 @@ from typing import Any
 from matplotlib.colors import to_hex
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
+
+from tests.background import JobFolder
 
 
 @dataclass
@@ -103,19 +110,49 @@ class ArmRun:
     result: Any
 
 
+USERS_FILE = "experiment1-notes.txt"
+USERS_NOTES = "the user's notes"
+CAPTURED = ("stdout.txt", "stderr.txt")
+"""The files the command's stdout and stderr go to, in the working folder."""
+ENVIRONMENT = ("HOME", "TMPDIR", "MPLCONFIGDIR", "XDG_CACHE_HOME")
+
+
+def plant_the_users_file(folder: Path) -> None:
+    """A user's file beside the report, before the run (tests/background.py
+    calls it, outside the trace): the audit checks it is never touched."""
+    (folder / USERS_FILE).write_text(USERS_NOTES)
+
+
 @dataclass
 class ExperimentsRun:
     """``demoplan experiments --out report --open`` run once, in a folder of its
     own and a process of its own, without a web browser: its exit code, stdout
     and stderr, the report folder, every figure it wrote (by its path in the
-    report folder) and the arm's runs by experiment title."""
+    report folder) and the arm's runs by experiment title; the job's folder
+    (its strace log there if it ran under strace) and the environment's
+    ``HOME``, ``TMPDIR`` and cache folders it was given."""
 
     report: Path
     exit_code: int
     output: str
     stderr: str
+    job: JobFolder
+    environment: dict[str, str] = field(default_factory=dict)
     figures: dict[str, list[AxesRecord]] = field(default_factory=dict)
     arm_runs: dict[str, ArmRun] = field(default_factory=dict)
+
+    @property
+    def users_file(self) -> Path:
+        """The user's file planted beside the report (:func:`plant_the_users_file`)."""
+        return self.report.parent / USERS_FILE
+
+    @property
+    def harness_writes(self) -> tuple[Path, ...]:
+        """What the job's harness itself writes while traced, beside the
+        command's report: the files stdout and stderr go to, and the result
+        pickle (tests/background.py: written whole, then renamed)."""
+        captured = tuple(self.report.parent / name for name in CAPTURED)
+        return (*captured, self.job.partial_result, self.job.result)
 
     def replaying_the_arm(self) -> Callable[..., Any]:
         """A stand-in for ``execute_experiment`` that gives this run's result for
@@ -155,7 +192,9 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     os.environ["COLUMNS"] = "100"
     folder = Path(folder).resolve()
     os.chdir(folder)
-    run = ExperimentsRun(folder / "report", -1, "", "")
+    environment = {name: os.environ[name] for name in ENVIRONMENT if name in os.environ}
+    job = JobFolder(folder.parent)  # folder: the job's working folder (tests/background.py)
+    run = ExperimentsRun(folder / "report", -1, "", "", job, environment)
     execute = experiments.execute_experiment
 
     def recorded(title: str, model: Any, scene: Any, frames: Path, vision: bool) -> Any:
@@ -171,8 +210,8 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     experiments.execute_experiment = recorded  # type: ignore[assignment]
     sys.argv = ["demoplan", "experiments", "--out", "report", "--open"]
     with (
-        (folder / "stdout.txt").open("wb") as out,
-        (folder / "stderr.txt").open("wb") as err,
+        (folder / CAPTURED[0]).open("wb") as out,
+        (folder / CAPTURED[1]).open("wb") as err,
         observing_saved_figures(observe),
     ):
         sys.stdout.flush()
@@ -189,6 +228,6 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
             sys.stderr.flush()
             os.dup2(saved[0], 1)
             os.dup2(saved[1], 2)
-    run.output = (folder / "stdout.txt").read_text(errors="replace")
-    run.stderr = (folder / "stderr.txt").read_text(errors="replace")
+    run.output = (folder / CAPTURED[0]).read_text(errors="replace")
+    run.stderr = (folder / CAPTURED[1]).read_text(errors="replace")
     return run

@@ -271,6 +271,24 @@ def audit_environment(root: Path, caches: Path) -> dict[str, str]:
     return env
 
 
+def skip_without_strace() -> None:
+    """Skip the audit where strace is missing or not permitted; fail instead
+    under ``DEMOPLAN_REQUIRE_STRACE=1`` (CI, whose .ci/run installs it)."""
+    if os.environ.get("DEMOPLAN_REQUIRE_STRACE") == "1":
+        pytest.fail("strace is required (DEMOPLAN_REQUIRE_STRACE=1): missing or not permitted")
+    pytest.skip("strace is not installed or not permitted here")
+
+
+def strace_command(log: Path) -> list[str]:
+    """``strace`` following every process and thread, logging the traced calls
+    (:data:`TRACED`) to ``log`` with descriptors' paths and every string in
+    hexadecimal, as :func:`parse_log` reads them; the command goes after it."""
+    command = ["strace", "-f", "-y", "-xx", "-s", "4096", "-e", f"trace={TRACED}", "-o", str(log)]
+    if SECCOMP:
+        command.append("--seccomp-bpf")
+    return command
+
+
 def run_audited(
     args: Sequence[str | os.PathLike[str]],
     cwd: Path,
@@ -279,14 +297,11 @@ def run_audited(
 ) -> Audit:
     """Run ``demoplan ARGS`` in ``cwd`` under ``strace -f``: its answer and accesses."""
     if not STRACE:
-        pytest.skip("strace is not installed or not permitted here")
+        skip_without_strace()
     log = cwd.parent / f".{cwd.name}.strace.log"  # outside the folder the command works in
-    command = ["strace", "-f", "-y", "-xx", "-s", "4096", "-e", f"trace={TRACED}", "-o", str(log)]
-    if SECCOMP:
-        command.append("--seccomp-bpf")
     started = time.monotonic()
     process = subprocess.Popen(
-        [*command, os.fspath(DEMOPLAN), *(os.fspath(a) for a in args)],
+        [*strace_command(log), os.fspath(DEMOPLAN), *(os.fspath(a) for a in args)],
         cwd=cwd,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,

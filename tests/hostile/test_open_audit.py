@@ -34,14 +34,18 @@ from tests.hostile.file_audit import (
     Audit,
     audit_environment,
     audited,
+    check_accesses,
     parse_log,
+    skip_without_strace,
     violations,
 )
 from tests.hostile.harness import Answer, check_clean, check_refused, run
 from tests.hostile.test_recordings import valid_recording
+from tests.shared_experiments import USERS_NOTES, ExperimentsRun
 from tests.test_import import MODEL, box_states, write_recording
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES, SRC, TESTS = ROOT / "examples", ROOT / "src", ROOT / "tests"
 
 FEW = settings(
     max_examples=4,
@@ -358,27 +362,39 @@ def test_run_with_video_and_frames_opens_its_inputs_only(
 # --------------------------------------------------------------------------- experiments
 
 
-@pytest.mark.slow
-def test_experiments_opens_its_package_data_only(caches: Path, tmp_path: Path) -> None:
+def test_experiments_opens_its_package_data_only(experiments_run: ExperimentsRun) -> None:
     """The experiments read the shipped examples (the checkout's examples/,
     or the package's in a wheel: their named input) and write the report
-    folder only; the user's file beside it is never touched."""
-    root = tmp_path
-    (root / "work").mkdir()
-    secret = root / "work" / "experiment1-notes.txt"
-    secret.write_text("the user's notes")
-    report = root / "work" / "report \u202e'x'"
+    folder only; the user's file beside it is never touched. Audited on the
+    session's shared run (tests/shared_experiments.py: ``experiments --out
+    report --open`` without a browser, under strace in tests/background.py's
+    job), whose harness is Python too: it reads the tests' modules and
+    writes the command's captured stdout and stderr and its result pickle."""
+    job = experiments_run.job
+    trace = job.traced()
+    if trace is None:
+        skip_without_strace()
+        return
+    report, work = experiments_run.report, job.work
     rule = Allowed(
-        (EXAMPLES,),
-        (report,),
-        dict(audit_environment(root, caches), MUJOCO_GL="egl"),
+        (EXAMPLES, SRC, TESTS),  # the harness imports tests/'s modules
+        (report, *experiments_run.harness_writes),
+        experiments_run.environment,
         renders=True,
     )
-    args = ["experiments", "--out", report]
-    audit = audited(args, root / "work", rule, never=[secret], timeout=1800)  # minutes: the arm
+    answer = Answer(
+        ("experiments", "--out", "report", "--open"),
+        experiments_run.exit_code,
+        experiments_run.output,
+        experiments_run.stderr,
+        0.0,
+    )
+    audit = Audit(answer, tuple(parse_log(trace.read_bytes().decode("ascii"), ROOT)))
+    existed = [work, *work.parents]  # the job's folders, made before the run
+    check_accesses(audit, rule, existed=existed, never=[experiments_run.users_file])
     assert audit.answer.code == 0, audit.answer
     assert (report / "report.html").is_file()
-    assert secret.read_text() == "the user's notes"
+    assert experiments_run.users_file.read_text() == USERS_NOTES
 
 
 # --------------------------------------------------------------------------- the monitor
