@@ -14,42 +14,18 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-import pytest
+from tests import browser
 
 ROOT = Path(__file__).resolve().parent.parent
 SCREENSHOTS = ROOT / "docs" / "images" / "studio"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 VIEWPORT = {"width": 1280, "height": 800}
 
 
 def chromium() -> str:
-    """Debian's chromium with Playwright (as tests/test_experiments.py): skipped
-    where either is missing, unless DEMOPLAN_REQUIRE_BROWSER=1 (CI)."""
-    found = shutil.which("chromium") or shutil.which("chromium-browser")
-    try:
-        import playwright.sync_api  # noqa: F401
-        import uvicorn  # noqa: F401
-
-        import demoplan.studio.app  # noqa: F401
-    except ImportError:
-        found = None
-    if found is None:
-        if os.environ.get("DEMOPLAN_REQUIRE_BROWSER") == "1":
-            pytest.fail(
-                "Playwright, Debian's chromium and the studio extra are required "
-                "(DEMOPLAN_REQUIRE_BROWSER=1)"
-            )
-        pytest.skip("no Playwright, no chromium or no studio extra on this machine")
-    return found
+    """Debian's chromium with Playwright and the studio extra (tests/browser.py)."""
+    return browser.chromium(
+        ("uvicorn", "demoplan.studio.app"), "Playwright, Debian's chromium and the studio extra"
+    )
 
 
 @contextmanager

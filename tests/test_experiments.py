@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
 import re
-import shutil
 from pathlib import Path
 
 import pytest
@@ -16,6 +14,7 @@ from demoplan.cli import app
 from demoplan.experiments import run_experiments
 from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import load_model
+from tests.browser import CHROMIUM_ARGS, chromium
 from tests.shared_experiments import ExperimentsRun
 
 
@@ -123,31 +122,6 @@ def test_a_mismatch_with_the_paper_is_reported(
 # The HTML page: Debian's chromium driven by Playwright (skipped where either is
 # missing, unless DEMOPLAN_REQUIRE_BROWSER=1 as in CI, whose .ci/run installs both).
 ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-
-
-def _chromium() -> str:
-    found = shutil.which("chromium") or shutil.which("chromium-browser")
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        found = None
-    if found is None:
-        if os.environ.get("DEMOPLAN_REQUIRE_BROWSER") == "1":
-            pytest.fail(
-                "Playwright and Debian's chromium are required (DEMOPLAN_REQUIRE_BROWSER=1)"
-            )
-        pytest.skip("no Playwright or no chromium on this machine")
-    return found
 
 
 def test_the_report_page_is_one_file_with_every_image_inside(report: Path) -> None:
@@ -183,7 +157,7 @@ def test_embedded_files_get_their_media_type_whatever_the_machine_s_mime_tables(
 
 
 def test_the_report_page_opens_in_headless_chromium(report: Path) -> None:
-    executable = _chromium()
+    executable = chromium()
     from playwright.sync_api import sync_playwright
 
     errors: list[str] = []

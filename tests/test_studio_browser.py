@@ -26,8 +26,8 @@ from demoplan.errors import NoPlanError, error_line
 from demoplan.execution.faults import Faults
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
+from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import (
-    CHROMIUM_ARGS,
     ROOT,
     VIEWPORT,
     Studio,

@@ -49,6 +49,16 @@ from demoplan.studio.workfolder import FileConflictError, FileMissingError, Work
 
 __all__ = ["STATIC", "create_app"]
 
+ERROR_STATUS: tuple[tuple[type[Exception], int], ...] = (
+    (InputError, 422),
+    (UsageError, 422),
+    (LimitReachedError, 422),  # the request's work outgrew its budget: ask for less
+    (FileMissingError, 404),
+    (FileConflictError, 409),
+    (TooManyRunsError, 429),
+)
+"""The answer's status for each refusal (one line, ``{"detail": ...}``)."""
+
 STATIC = Path(__file__).resolve().parent / "static"
 """The page: ``index.html`` and its modules, served as they are."""
 MEDIA_SUFFIXES = {".mp4": "video/mp4", ".png": "image/png", ".svg": "image/svg+xml"}
@@ -502,14 +512,6 @@ def _add_error_handlers(app: FastAPI) -> None:
     async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
         return detail(422, _validation_line(exc))
 
-    @app.exception_handler(InputError)
-    async def bad_input(request: Request, exc: InputError) -> JSONResponse:
-        return detail(422, str(exc))
-
-    @app.exception_handler(UsageError)
-    async def bad_usage(request: Request, exc: UsageError) -> JSONResponse:
-        return detail(422, str(exc))
-
     @app.exception_handler(NoPlanError)
     async def no_plan(request: Request, exc: NoPlanError) -> JSONResponse:
         answer: dict[str, Any] = {
@@ -522,21 +524,14 @@ def _add_error_handlers(app: FastAPI) -> None:
         no = {"reason": one_line(str(exc)), "figure": None}
         return JSONResponse({**answer, "no_plan": no}, status_code=200)
 
-    @app.exception_handler(LimitReachedError)
-    async def limit(request: Request, exc: LimitReachedError) -> JSONResponse:
-        return detail(422, str(exc))
+    def answered_with(status: int) -> Callable[[Request, Exception], Awaitable[JSONResponse]]:
+        async def handler(request: Request, exc: Exception) -> JSONResponse:
+            return detail(status, str(exc))
 
-    @app.exception_handler(FileMissingError)
-    async def missing(request: Request, exc: FileMissingError) -> JSONResponse:
-        return detail(404, str(exc))
+        return handler
 
-    @app.exception_handler(FileConflictError)
-    async def conflict(request: Request, exc: FileConflictError) -> JSONResponse:
-        return detail(409, str(exc))
-
-    @app.exception_handler(TooManyRunsError)
-    async def busy(request: Request, exc: TooManyRunsError) -> JSONResponse:
-        return detail(429, str(exc))
+    for kind, status in ERROR_STATUS:
+        app.add_exception_handler(kind, answered_with(status))
 
     @app.exception_handler(Exception)
     async def internal(request: Request, exc: Exception) -> JSONResponse:

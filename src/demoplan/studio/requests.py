@@ -81,15 +81,10 @@ class ShapeBody(_Body):
     colour: str | None = Field(default=None, pattern=r"^#[0-9a-fA-F]{6}$")
 
 
-class LandmarkBody(ShapeBody):
-    size: list[Extent] | None = Field(default=None, min_length=3, max_length=3)
-    position: list[Coordinate] = Field(min_length=2, max_length=3)
-    yaw: Yaw = 0.0
+class LandmarkBody(ShapeBody, PoseBody):
+    """A landmark: its shape (the size may be unknown) where it stands."""
 
-    @property
-    def xyz(self) -> tuple[float, float, float]:
-        x, y, *rest = self.position
-        return (x, y, rest[0] if rest else 0.0)
+    size: list[Extent] | None = Field(default=None, min_length=3, max_length=3)
 
 
 class TableBody(_Body):
