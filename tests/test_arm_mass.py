@@ -238,7 +238,7 @@ def test_the_check_agrees_with_the_physics(shape: ObjectGeometry, where: tuple[P
 
 @pytest.mark.slow
 @settings(
-    max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+    max_examples=16, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
 )
 @given(shape=_objects, where=_placements())
 def test_the_check_agrees_with_the_physics_at_length(
