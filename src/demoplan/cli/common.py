@@ -342,6 +342,27 @@ def geometry_settings(
     return settings_for(freespace, collisions.value)
 
 
+def stream_options(
+    frame: str | None,
+    objects: str | None,
+    units: Units | None,
+    landmarks: str | None,
+    objects_file: Path | None,
+) -> Any:
+    """How pose streams are read, from --frame, --objects, --units, --landmarks
+    and --objects-file (:class:`demoplan.segmentation.streams.StreamOptions`)."""
+    from demoplan.segmentation.streams import StreamOptions
+    from demoplan.segmentation.types import parse_object_patterns
+
+    return StreamOptions(
+        frame=frame,
+        objects=parse_object_patterns(objects),
+        units=None if units is None else units.value,
+        landmarks=parse_object_patterns(landmarks) or (),
+        objects_file=objects_file,
+    )
+
+
 class PerceptionName(StrEnum):
     """How ``demoplan run`` observes the world."""
 

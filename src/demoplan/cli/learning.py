@@ -20,6 +20,7 @@ from demoplan.cli.common import (
     reported_errors,
     stderr,
     stdout,
+    stream_options,
     working,
 )
 from demoplan.cli.render import (
@@ -165,8 +166,6 @@ def learn(
 ) -> None:
     """Learn a task model (states, constraints, goals) from demonstrations (paper §IV.A–B)."""
     from demoplan.commands.learning import learn_files
-    from demoplan.segmentation.streams import StreamOptions
-    from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
         if update is None and output is None and not json_output:
@@ -191,13 +190,7 @@ def learn(
             require_file=require_file,
             paper=paper,
             overrides={k: v for k, v in options.items() if v is not None},
-            stream=StreamOptions(
-                frame=frame,
-                objects=parse_object_patterns(objects),
-                units=None if units is None else units.value,
-                landmarks=parse_object_patterns(landmarks) or (),
-                objects_file=objects_file,
-            ),
+            stream=stream_options(frame, objects, units, landmarks, objects_file),
             timeout=timeout,
             working=lambda: working("Learning states and constraints…"),
         )

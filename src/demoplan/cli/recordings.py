@@ -19,6 +19,7 @@ from demoplan.cli.common import (
     print_json,
     reported_errors,
     stderr,
+    stream_options,
 )
 from demoplan.cli.render import print_steps
 from demoplan.fileio import display_path
@@ -73,8 +74,6 @@ def segment(
     """
     from demoplan.commands.recordings import segment as segment_stream
     from demoplan.learning.demonstrations import demonstration_to_dict
-    from demoplan.segmentation.streams import StreamOptions
-    from demoplan.segmentation.types import parse_object_patterns
 
     with reported_errors():
         done = segment_stream(
@@ -83,13 +82,7 @@ def segment(
             name=name,
             plot=plot,
             thresholds=thresholds or (),
-            options=StreamOptions(
-                frame=frame,
-                objects=parse_object_patterns(objects),
-                units=None if units is None else units.value,
-                landmarks=parse_object_patterns(landmarks) or (),
-                objects_file=objects_file,
-            ),
+            options=stream_options(frame, objects, units, landmarks, objects_file),
         )
         found, demo = done.segmentation, done.demonstration
         if json_output:
