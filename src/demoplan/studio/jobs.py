@@ -218,17 +218,19 @@ def _stop(jobs: list[Job]) -> None:
             if job.state == "running":
                 job.state = "cancelled"
     going = [job for job in jobs if not job.ended.is_set()]
-    for job in going:
-        job.signal(signal.SIGTERM)
-    deadline = time.monotonic() + TERMINATE_GRACE_S
-    for job in going:
+    left = _signal_and_wait(going, signal.SIGTERM, TERMINATE_GRACE_S)
+    _signal_and_wait(left, signal.SIGKILL, KILLED_WAIT_S)
+
+
+def _signal_and_wait(jobs: list[Job], number: int, seconds: float) -> list[Job]:
+    """Send signal ``number`` to each job's process group and wait up to
+    ``seconds`` in all for them to end; the jobs still going."""
+    for job in jobs:
+        job.signal(number)
+    deadline = time.monotonic() + seconds
+    for job in jobs:
         job.ended.wait(max(0.0, deadline - time.monotonic()))
-    left = [job for job in going if not job.ended.is_set()]
-    for job in left:
-        job.signal(signal.SIGKILL)
-    deadline = time.monotonic() + KILLED_WAIT_S
-    for job in left:
-        job.ended.wait(max(0.0, deadline - time.monotonic()))
+    return [job for job in jobs if not job.ended.is_set()]
 
 
 def _watch(job: Job, process: subprocess.Popen[bytes]) -> None:
