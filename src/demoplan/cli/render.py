@@ -185,13 +185,10 @@ def plot_scene_plan(result: ScenePlan, path: Path) -> None:
 def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
     """The prepared scene, the first candidate goal's targets and why there is no
     plan (the problems the planner was given, carried by ``failure``)."""
-    from demoplan.plotting.figures import figure_errors, save_scene_targets
+    from demoplan.plotting.figures import figure_errors, save_no_plan
 
-    first = failure.outcomes[0].problem
-    goal = first.candidate.demonstrations[0]
-    title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
     with figure_errors(path):
-        save_scene_targets(failure.scene, first, str(failure), path, title)
+        save_no_plan(failure, path)
     stderr.print(f"wrote {path}", markup=False, highlight=False)
 
 

@@ -39,6 +39,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from demoplan.planning.problem import Plan
+    from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
     from demoplan.scenes.problems import SceneProblem
     from demoplan.scenes.scene import Scene
 
@@ -63,6 +64,7 @@ __all__ = [
     "plot_scene_targets",
     "save_demonstrations",
     "save_figure",
+    "save_no_plan",
     "save_scene_plan",
     "save_scene_targets",
     "share_limits",
@@ -489,6 +491,15 @@ def save_scene_targets(
 ) -> None:
     """:func:`plot_scene_targets` into an image file, written atomically."""
     _save_one_axes(lambda ax: plot_scene_targets(scene, problem, reason, ax, title), path)
+
+
+def save_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
+    """What ``plan --plot`` draws when there is no plan: the prepared scene, the
+    first candidate goal's targets and why (the problems carried by ``failure``)."""
+    first = failure.outcomes[0].problem
+    goal = first.candidate.demonstrations[0]
+    title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
+    save_scene_targets(failure.scene, first, str(failure), path, title)
 
 
 def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:

@@ -188,15 +188,12 @@ def no_plan_json(failure: SceneNoPlanError | SceneLimitReachedError) -> dict[str
 
 def _no_plan_figure(failure: SceneNoPlanError | SceneLimitReachedError) -> str | None:
     """The figure of ``plan --plot`` without a plan, as SVG text."""
-    from demoplan.plotting.figures import save_scene_targets
+    from demoplan.plotting.figures import save_no_plan
 
-    first = failure.outcomes[0].problem
-    goal = first.candidate.demonstrations[0]
-    title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
     with tempfile.TemporaryDirectory(prefix="demoplan-studio-") as folder:
         path = Path(folder) / "no-plan.svg"
         try:
-            save_scene_targets(failure.scene, first, str(failure), path, title)
+            save_no_plan(failure, path)
         except (ImportError, DemoplanError):
             return None
         return path.read_text(encoding="utf-8")
