@@ -31,6 +31,7 @@ __all__ = [
     "Demonstration",
     "ObjectGeometry",
     "Pose",
+    "Role",
     "State",
     "StateOrientation",
     "StatePosition",
@@ -38,6 +39,7 @@ __all__ = [
     "TaskModel",
     "Vector3",
     "demonstrated_shapes",
+    "demonstrated_types",
     "footprint",
     "visit_label",
     "yaw_period",
@@ -99,6 +101,22 @@ def yaw_period(shape: ObjectGeometry | None) -> float:
     return 360.0 if shape is None else shape.yaw_period
 
 
+def demonstrated_types(demonstrations: Iterable[Demonstration]) -> dict[str, str]:
+    """Each moved or described object's type: as declared (``"type"``), else its
+    name — an object of its own kind, as every object is unless told."""
+    types: dict[str, str] = {}
+    for demo in demonstrations:
+        declared = dict(demo.types)
+        for name in (
+            *(n for n, _ in demo.objects),
+            *demo.moved_objects,
+            *(n for n, _ in demo.initial),
+        ):
+            if name not in dict(demo.landmarks):
+                types.setdefault(name, declared.get(name, name))
+    return types
+
+
 def demonstrated_shapes(demonstrations: Iterable[Demonstration]) -> dict[str, ObjectGeometry]:
     """Each object's (and landmark's) shape as the first demonstration giving one has it."""
     shapes: dict[str, ObjectGeometry] = {}
@@ -129,6 +147,14 @@ class Demonstration:
     provenance: tuple[tuple[str, str | int | float], ...] = field(default=(), compare=False)
     """Where the demonstration came from (``("source", file)``, ``("demonstration",
     "demo_1")``, ``("samples", 1252)``, …); written as the file's ``provenance``."""
+    types: tuple[tuple[str, str], ...] = ()
+    """Declared types (object name → type) of objects that are one of several
+    interchangeable instances (two plates, three red blocks); an object not
+    listed is of its own type, its name (docs/formats.md)."""
+
+    def type_of(self, name: str) -> str:
+        """``name``'s type: as declared, else its name."""
+        return dict(self.types).get(name, name)
 
     @property
     def moved_objects(self) -> tuple[str, ...]:
@@ -205,6 +231,18 @@ class State:
     smallest over the members); below 1: within the precision."""
 
 
+@dataclass(frozen=True, slots=True)
+class Role:
+    """One of several interchangeable places of a type's instances: ``plate#1``,
+    ``plate#2`` (docs/learning.md, "Identical objects"). ``instances[d]`` is the
+    instance that filled it in demonstration ``d`` (``None``: that demonstration
+    had fewer instances of the type)."""
+
+    name: str
+    type: str
+    instances: tuple[str | None, ...]
+
+
 def visit_label(state_id: str, occurrence: int) -> str:
     """Label of a state's ``occurrence``-th visit in one demonstration.
 
@@ -237,6 +275,15 @@ class TaskModel:
     """The placement precision decisions were measured against: RMS position (m)
     and orientation (deg) — estimated from the demonstrations unless set."""
     precision_estimated: bool = True
+    roles: tuple[Role, ...] = ()
+    """The roles of types with several instances, and which instance filled each
+    in every demonstration; states, constraints and the demonstrations name
+    roles (docs/learning.md, "Identical objects"). Empty where every object is
+    of its own type."""
+
+    def object_types(self) -> dict[str, str]:
+        """Every object (role) of the model and its type."""
+        return demonstrated_types(self.demonstrations)
 
     def state(self, state_id: str) -> State:
         for state in self.states:

@@ -78,9 +78,14 @@ def positive_extents(size: list[float]) -> list[float]:
     return size
 
 
+TYPE_PATTERN = r"^[^#\s]+$"
+"""A type names a kind of object (``plate``): no spaces, no ``#`` (roles are ``plate#1``)."""
+
+
 class ObjectSchema(_Schema):
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Number] = Field(min_length=3, max_length=3)
+    type: str | None = Field(default=None, min_length=1, max_length=100, pattern=TYPE_PATTERN)
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
 

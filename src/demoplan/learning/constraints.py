@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from demoplan.errors import InputError
@@ -223,17 +223,24 @@ def required_pairs(
     requirements: Iterable[Requirement],
     states: Sequence[State],
     sequences: Sequence[Sequence[str]],
+    types: Mapping[str, str] | None = None,
 ) -> tuple[Pair, ...]:
     """Teacher requirements → pairs of visit labels.
 
     A state id or visit label must occur in some demonstration, an object
-    name stands for every state of that object (``plate<napkin``), ``@d.s``
-    must name a step (stable when demonstrations are added). Required pairs
-    that form a cycle are refused: no plan could satisfy them.
+    name stands for every state of that object (``plate<napkin``), a role's
+    (``plate#2``) for its states and a type's (``types``: object → type) for
+    every state of its roles, ``@d.s`` must name a step (stable when
+    demonstrations are added). Required pairs that form a cycle are refused:
+    no plan could satisfy them.
     """
     by_object: dict[str, list[str]] = {}
     for state in states:
         by_object.setdefault(state.object, []).append(state.id)
+    for state in states:
+        kind = (types or {}).get(state.object, state.object)
+        if kind != state.object and kind not in by_object:
+            by_object[kind] = [s.id for s in states if (types or {}).get(s.object) == kind]
     visits = {label for sequence in sequences for label in visit_sequence(sequence)}
     pairs: set[Pair] = set()
     for requirement in requirements:

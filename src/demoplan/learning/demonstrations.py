@@ -118,10 +118,12 @@ class DemonstrationsSchema(_Schema):
 def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     """A demonstration in the file form of docs/formats.md (metres, quaternions)."""
     out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
+    types = dict(demo.types)
     if demo.objects:
         out["objects"] = {
             n: {"shape": g.shape, "size": list(g.size)}
             | ({} if g.mass is None else {"mass": g.mass})
+            | ({"type": types[n]} if n in types else {})
             for n, g in demo.objects
         }
     if demo.landmarks:
@@ -269,6 +271,11 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         initial=tuple((n, pose_from_dict(p, units)) for n, p in parsed.initial.items()),
         source=f"{source}: {prefix}" if prefix else source,
         provenance=tuple(parsed.provenance.items()),
+        types=tuple(
+            (name, entry.type)
+            for name, entry in parsed.objects.items()
+            if entry.type is not None and entry.type != name
+        ),
     )
 
 
@@ -357,6 +364,7 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
                 geometry[name] = (shape, source)
         for name, _ in demo.landmarks:
             landmarks.setdefault(name, source)
+    _check_types(demos)
     for demo in demos:
         for index, step in enumerate(demo.steps):
             if step.object in landmarks:
@@ -366,6 +374,46 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
                     source=demo.source or demo.name,
                     field=f"steps[{index}].object",
                 )
+
+
+def _check_types(demos: Sequence[Demonstration]) -> None:
+    """Instances of one type are interchangeable, so they must be alike: one
+    shape and size per type; and no object may be named as another's role
+    (``plate#1``) or as a type other than its own."""
+    shapes: dict[str, tuple[ObjectGeometry, str, str]] = {}
+    types: dict[str, str] = {}
+    for demo in demos:
+        source = demo.source or demo.name
+        for name, shape in demo.objects:
+            kind = demo.type_of(name)
+            if "#" in name and kind == name:
+                raise InputError(
+                    "'#' names a role of a type (plate#1); an object name without '#' expected",
+                    source=source,
+                    field=f"objects.{name}",
+                )
+            types.setdefault(name, kind)
+            if kind not in shapes:
+                shapes[kind] = (shape, name, source)
+                continue
+            known, other, where = shapes[kind]
+            if known.shape != shape.shape or any(
+                abs(a - b) > GEOMETRY_TOLERANCE for a, b in zip(known.size, shape.size, strict=True)
+            ):
+                raise InputError(
+                    f"{shape.shape} {_metres(shape.size)} differs from {other!r} of the same type "
+                    f"{kind!r} ({known.shape} {_metres(known.size)}, {where}); instances of a type "
+                    "are interchangeable: one shape and size expected",
+                    source=source,
+                    field=f"objects.{name}.type",
+                )
+    for name, kind in types.items():
+        if kind != name and kind in types and types[kind] != kind:
+            raise InputError(
+                f"type {kind!r} is also the name of an object of type {types[kind]!r}; "
+                "a type other objects' names do not use expected",
+                field=f"objects.{name}.type",
+            )
 
 
 def _metres(size: Sequence[float]) -> str:

@@ -23,10 +23,11 @@ from demoplan.learning.constraints import (
     required_pairs,
     visit_sequence,
 )
+from demoplan.learning.correspondence import corresponding_roles, instance_demonstrations
 from demoplan.learning.demonstrations import check_demonstrations
 from demoplan.learning.settings import LearningSettings
 from demoplan.learning.states import ReferenceScore, generate_states
-from demoplan.model import Demonstration, State, TaskModel
+from demoplan.model import Demonstration, State, TaskModel, demonstrated_types
 
 __all__ = ["TaskModelLearner", "learn", "update"]
 
@@ -89,8 +90,15 @@ class TaskModelLearner:
     def _refit(self, demos: list[Demonstration]) -> Self:
         """Learn from ``demos``; on an error the learner keeps its previous state."""
         check_demonstrations(demos)
-        generation = generate_states(demos, self.settings)
-        required = required_pairs(self._requirements, generation.states, generation.sequences)
+        correspondence = corresponding_roles(demos)
+        learned_from = list(correspondence.demonstrations)
+        generation = generate_states(learned_from, self.settings)
+        required = required_pairs(
+            self._requirements,
+            generation.states,
+            generation.sequences,
+            demonstrated_types(learned_from),
+        )
         constraint_set = learn_constraints(
             generation.sequences, required, self.settings.min_support
         )
@@ -114,12 +122,13 @@ class TaskModelLearner:
             sequences=generation.sequences,
             constraints=constraint_set.constraints,
             goals=tuple(goal_states(s, generation.states) for s in generation.sequences),
-            demonstrations=tuple(demos),
+            demonstrations=tuple(learned_from),
             teacher_constraints=required,
             violations=constraint_set.violations,
             settings=self.settings,
             precision=(generation.precision.position, generation.precision.orientation),
             precision_estimated=generation.precision.position_estimated,
+            roles=correspondence.roles,
         )
         return self
 
@@ -207,7 +216,8 @@ def update(
     kept = anchor_requirements(parse_requirements(model.settings.require), model.sequences)
     texts = tuple(dict.fromkeys([*(r.text for r in kept), *require]))
     merged = replace(model.settings, **(settings or {}), require=texts)
-    return TaskModelLearner(merged).fit([*model.demonstrations, *demonstrations]).model_
+    known = instance_demonstrations(model.demonstrations, model.roles)
+    return TaskModelLearner(merged).fit([*known, *demonstrations]).model_
 
 
 def _refuse_cycles(

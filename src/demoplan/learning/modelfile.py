@@ -40,7 +40,15 @@ from demoplan.fileio import (
 from demoplan.learning.constraints import constraint_support, label_key
 from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.learning.settings import LearningSettings
-from demoplan.model import Demonstration, State, StateOrientation, StatePosition, TaskModel
+from demoplan.model import (
+    Demonstration,
+    Role,
+    State,
+    StateOrientation,
+    StatePosition,
+    TaskModel,
+    demonstrated_types,
+)
 from demoplan.rotations import canonical_quat, quat_from_rpy, unit_length_expected
 
 __all__ = [
@@ -112,6 +120,12 @@ class _PrecisionSchema(_Schema):
     estimated: bool = True
 
 
+class _RoleSchema(_Schema):
+    name: str = Field(min_length=1)
+    type: str = Field(min_length=1)
+    instances: list[str | None]
+
+
 class _ModelSchema(_Schema):
     format: str
     states: list[_StateSchema]
@@ -123,6 +137,7 @@ class _ModelSchema(_Schema):
     violations: list[_ViolationSchema] = []
     settings: dict[str, Any] = {}  # read by settings_from_dict
     precision: _PrecisionSchema | None = None
+    roles: list[_RoleSchema] = []
     demonstrations: list[dict[str, Any]] = []
 
 
@@ -193,6 +208,16 @@ def model_to_dict(model: TaskModel) -> dict[str, Any]:
                     "estimated": model.precision_estimated,
                 }
             }
+        ),
+        **(
+            {
+                "roles": [
+                    {"name": r.name, "type": r.type, "instances": list(r.instances)}
+                    for r in model.roles
+                ]
+            }
+            if model.roles
+            else {}
         ),
         "demonstrations": [demonstration_to_dict(d) for d in model.demonstrations],
     }
@@ -310,7 +335,32 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
             else (parsed.precision.position, parsed.precision.orientation)
         ),
         precision_estimated=parsed.precision is None or parsed.precision.estimated,
+        roles=_roles(parsed.roles, demos, source),
     )
+
+
+def _roles(roles: list[_RoleSchema], demos: list[Demonstration], source: str) -> tuple[Role, ...]:
+    """The model's roles: each an object of its demonstrations, of its type,
+    with one instance name (or null) per demonstration."""
+    out = []
+    for index, role in enumerate(roles):
+        where = f"roles[{index}]"
+        if demos and len(role.instances) != len(demos):
+            raise InputError(
+                f"{len(role.instances)} instances for {len(demos)} demonstrations; one per "
+                "demonstration expected (null where it had none)",
+                source=source,
+                field=f"{where}.instances",
+            )
+        types = demonstrated_types(demos)
+        if demos and types.get(role.name) != role.type:
+            raise InputError(
+                f"{role.name!r} is not an object of type {role.type!r} in the demonstrations",
+                source=source,
+                field=f"{where}.name",
+            )
+        out.append(Role(role.name, role.type, tuple(role.instances)))
+    return tuple(out)
 
 
 def _check_references(states: tuple[State, ...], demos: list[Demonstration], source: str) -> None:

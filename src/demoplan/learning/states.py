@@ -166,7 +166,7 @@ class _Placement:
     pose: Pose
 
 
-class _World:
+class DemonstrationWorld:
     """Per-demonstration lookup of where every object and landmark was."""
 
     def __init__(self, demonstrations: Sequence[Demonstration]):
@@ -274,7 +274,7 @@ def _generate_states(
 ) -> StateGeneration:
     """:func:`generate_states` over distinct demonstrations (paper §IV.A), step by step."""
     settings = settings or StateGenerationSettings()
-    world = _World(demonstrations)
+    world = DemonstrationWorld(demonstrations)
     observed = _relative_placements(demonstrations, world)
     precision, own_precision = _placement_precision(observed, settings)
     quantised = _quantise_placements(observed, world, settings, precision, own_precision)
@@ -304,7 +304,7 @@ class _RelativePlacements:
 
 
 def _relative_placements(
-    demonstrations: Sequence[Demonstration], world: _World
+    demonstrations: Sequence[Demonstration], world: DemonstrationWorld
 ) -> _RelativePlacements:
     """Paper §IV.A: every step of every demonstration as a placement of its object,
     expressed relative to every candidate reference — absolute, every other
@@ -374,7 +374,7 @@ class _Quantised:
 
 def _quantise_placements(
     observed: _RelativePlacements,
-    world: _World,
+    world: DemonstrationWorld,
     settings: StateGenerationSettings,
     precision: Precision,
     own_precision: dict[Kind, dict[str, _Spread]],
@@ -399,7 +399,7 @@ def _quantise_object(
     obj: str,
     observed: _RelativePlacements,
     reachable: set[str],
-    world: _World,
+    world: DemonstrationWorld,
     settings: StateGenerationSettings,
     precision: Precision,
     own_precision: dict[Kind, dict[str, _Spread]],
@@ -568,7 +568,7 @@ def _relative_table(
     kind: Kind,
     own: list[_Placement],
     candidates: list[str | None],
-    world: _World,
+    world: DemonstrationWorld,
     relative: dict[tuple[str, Kind, str | None], np.ndarray],
     framed: dict[tuple[str, str | None], bool],
 ) -> None:
@@ -785,7 +785,7 @@ def _score_references(
 
 
 def _relative_values(
-    kind: Kind, obj: str, own: list[_Placement], reference: str | None, world: _World
+    kind: Kind, obj: str, own: list[_Placement], reference: str | None, world: DemonstrationWorld
 ) -> tuple[np.ndarray | None, bool]:
     """``obj``'s placements relative to ``reference`` (docs/learning.md): positions in the
     reference's frame where it has an orientation at every placement (turned
@@ -877,7 +877,7 @@ class _Chooser:
         )
         return cls(scores, own, best, everywhere, noise, significance)
 
-    def at(self, placement: _Placement, world: _World) -> ReferenceScore:
+    def at(self, placement: _Placement, world: DemonstrationWorld) -> ReferenceScore:
         """The reference of one placement: the object's own choice, or a reference
         available only at its step that outscores it (the best of those; ties:
         fewer clusters, then the nearest reference)."""
@@ -936,7 +936,7 @@ def _margins(
     chosen: ReferenceScore,
     scores: list[ReferenceScore],
     placement: _Placement,
-    world: _World,
+    world: DemonstrationWorld,
     precision: float,
 ) -> dict[str, float]:
     """How far each decision of one placement was from going the other way, in units

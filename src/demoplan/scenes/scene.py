@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from demoplan.documents.masses import with_mass
 from demoplan.documents.poses import (
     LENGTH_SCALE,
+    TYPE_PATTERN,
     Coordinate,
     LandmarkSchema,
     Number,
@@ -69,6 +70,14 @@ class SceneObject:
     pose: Pose
     geometry: ObjectGeometry | None
     grasps: tuple[float, ...] = DEFAULT_GRASPS
+    type: str | None = None
+    """Declared type: one of several interchangeable instances (two plates);
+    ``None``: the object is of its own type, its name."""
+
+    @property
+    def kind(self) -> str:
+        """The object's type: as declared, else its name."""
+        return self.type or self.name
 
 
 @dataclass(frozen=True, slots=True)
@@ -129,6 +138,7 @@ class _ObjectSchema(PoseSchema):
     grasps: list[Number] | None = Field(default=None, min_length=1, max_length=16)
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
+    type: str | None = Field(default=None, min_length=1, max_length=100, pattern=TYPE_PATTERN)
 
     @field_validator("size")
     @classmethod
@@ -226,7 +236,9 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
                 field=f"objects.{name}",
             )
         pose = pose_from_dict(
-            PoseSchema(**entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density"})),
+            PoseSchema(
+                **entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density", "type"})
+            ),
             parsed.units,
         )
         if pose.position[2] < -0.005:
@@ -252,7 +264,8 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
                 field=f"objects.{name}.{'mass' if entry.mass is not None else 'density'}",
             )
         grasps = DEFAULT_GRASPS if entry.grasps is None else tuple(to_deg(g) for g in entry.grasps)
-        objects.append(SceneObject(name, pose, geometry, grasps))
+        kind = None if entry.type in (None, name) else entry.type
+        objects.append(SceneObject(name, pose, geometry, grasps, kind))
     freespace = None
     if parsed.freespace is not None:
         freespace = tuple(
@@ -306,17 +319,22 @@ def complete_geometry(scene: Scene, model: TaskModel) -> Scene:
     """Give every object without a size in the scene the geometry the
     demonstrations recorded for it; an object known nowhere is an error."""
     known = demonstrated_shapes(model.demonstrations)  # one geometry per object (checked)
+    types = model.object_types()
+    for name, kind in types.items():  # one geometry per type (checked)
+        if name in known:
+            known.setdefault(kind, known[name])
     objects = []
     for obj in scene.objects:
         if obj.geometry is None:
-            if obj.name not in known:
+            shape = known.get(obj.name, known.get(obj.kind))
+            if shape is None:
                 raise InputError(
                     "has no size and the task model's demonstrations do not give one; "
                     'expected "size": [x, y, z]',
                     source=scene.source,
                     field=f"objects.{obj.name}",
                 )
-            obj = replace(obj, geometry=known[obj.name])
+            obj = replace(obj, geometry=shape)
         objects.append(obj)
     return replace(scene, objects=tuple(objects))
 
@@ -333,6 +351,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
                 entry["mass"] = obj.geometry.mass
         if obj.grasps != DEFAULT_GRASPS:
             entry["grasps"] = list(obj.grasps)
+        if obj.type is not None:
+            entry["type"] = obj.type
         objects[obj.name] = entry
     out: dict[str, Any] = {"format": "demoplan/scene-1", "objects": objects}
     if scene.landmarks:
