@@ -43,7 +43,7 @@ def plan(
     every candidate's outcome and the prepared scene."""
     task, raw_scene = task_and_scene(model, scene)
     with model_named(model):
-        prepared = prepare(task, raw_scene, clutter=clutter)
+        prepared = prepare(task, raw_scene, clutter=clutter, settings=settings)
         result = plan_in_scene(
             task, prepared, budget=_budget(timeout, budget), settings=settings, clutter=clutter
         )

@@ -16,8 +16,11 @@ object with where it should be:
 
 On a difference it replans the chosen goal from the observed world; subgoals
 already reached stay reached (docs/execution.md: a subgoal counts once; the goal still
-needs every object at its final place). It gives up after ``max_replans``
-replans, when no plan exists, or after ``max_actions`` actions.
+needs every object at its final place). Where the model has roles of identical
+objects, the replan weighs every binding of roles to instances again: a plate
+that was dropped may give its role to another plate when that is shorter
+(subgoals then count as reached where the objects stand). It gives up after
+``max_replans`` replans, when no plan exists, or after ``max_actions`` actions.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from demoplan.model import Pose, TaskModel
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
+from demoplan.scenes.binding import Binding, bind_model, lower_bound, role_bindings
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import (
@@ -319,7 +323,9 @@ def _start_run(
     actions: list[Action] = list(chosen.plan.actions)
     _check_feasible(world, actions, problem, scene.source)
     run = _Run(
-        model=model,
+        model=bind_model(model, chosen.binding),
+        roles=model,
+        binding=chosen.binding,
         scene=scene,
         world=world,
         settings=settings,
@@ -350,6 +356,10 @@ class _Run:
     been done and seen, and what is expected where."""
 
     model: TaskModel
+    """The model bound to the instances the current plan moves."""
+    roles: TaskModel
+    """The model as learned (its roles unbound): replans weigh every binding."""
+    binding: Binding
     scene: Scene
     world: World
     settings: ExecutionSettings
@@ -482,26 +492,56 @@ class _Run:
         observation = world.observe()
         current = _scene_of(observation, scene)  # complete: the prepared scene's geometry
         try:
-            candidate = next(
-                c for c in resolve_goals(model, current) if self.goal in c.demonstrations
-            )
-            with building_within(settings.budget):
-                built = build_problem(
-                    current,
-                    candidate,
-                    settings.geometry,
-                    frozenset(self.reached),
-                    self.names,
-                    surroundings_of(model, current),
-                )
+            bindings = role_bindings(self.roles, current)
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
-        built, why = _without_failed_grasps(built, self.failed_grasps, observation, settings, world)
-        if why:
+        # The current binding first; others only where their bound can beat its plan.
+        bindings.sort(key=lambda b: b != self.binding)
+        best: tuple[SceneProblem, CandidatePlan, Binding, TaskModel] | None = None
+        why = ""
+        for binding in bindings:
+            model = bind_model(self.roles, binding)
+            reached = frozenset(self.reached) if binding == self.binding else frozenset()
+            try:
+                candidate = next(
+                    c for c in resolve_goals(model, current) if self.goal in c.demonstrations
+                )
+                floor = lower_bound(candidate, current, 2 * settings.geometry.merge_distance)
+                if best is not None and floor >= len(best[1].plan or ()):
+                    continue
+                with building_within(settings.budget):
+                    built = build_problem(
+                        current,
+                        candidate,
+                        settings.geometry,
+                        reached,
+                        self.names,
+                        surroundings_of(model, current),
+                    )
+            except DemoplanError as exc:
+                why = why or f"cannot plan in the observed world: {exc}"
+                continue
+            built, refused = _without_failed_grasps(
+                built, self.failed_grasps, observation, settings, world
+            )
+            if refused:
+                why = why or refused
+                continue
+            outcome = solve_candidate(built, settings.budget)
+            if outcome.plan is None:
+                why = why or f"no plan from the observed world: {outcome.reason}"
+                continue
+            if best is None or len(outcome.plan) < len(best[1].plan or ()):
+                best = (built, outcome, binding, model)
+        if best is None:
             return why
-        outcome = solve_candidate(built, settings.budget)
-        if outcome.plan is None:
-            return f"no plan from the observed world: {outcome.reason}"
+        built, outcome, binding, model = best
+        assert outcome.plan is not None
+        roles = ""
+        if binding != self.binding:
+            self.reached = set()
+            roles = f" (roles given anew: {binding.describe()})"
+        self.binding, self.model = binding, model
         try:
             _check_feasible(world, list(outcome.plan.actions), built, scene.source)
         except InputError as exc:  # an object moved beyond the robot's reach
@@ -512,7 +552,7 @@ class _Run:
         self.emit(
             RunEvent(
                 "replan",
-                f"replan {self.replans}: {plural(len(self.actions), 'action')}",
+                f"replan {self.replans}: {plural(len(self.actions), 'action')}{roles}",
                 step,
                 self.replans,
                 len(self.actions),

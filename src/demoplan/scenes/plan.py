@@ -15,7 +15,7 @@ import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from demoplan.budget import Clock, time_budget
@@ -23,11 +23,12 @@ from demoplan.errors import LimitReachedError, NoPlanError, UsageError
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Plan
 from demoplan.planning.search import Budget, solve
+from demoplan.scenes.binding import Binding
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene
-from demoplan.scenes.table import surroundings_of
+from demoplan.scenes.table import Surroundings, surroundings_of
 from demoplan.wording import plural
 
 __all__ = [
@@ -37,6 +38,7 @@ __all__ = [
     "ScenePlan",
     "building_within",
     "goal_problem",
+    "plan_goal",
     "plan_in_scene",
     "scene_problems",
     "solve_candidate",
@@ -78,6 +80,12 @@ class CandidatePlan:
     plan: Plan | None
     reason: str | None = None
     limit_reached: bool = False
+    binding: Binding = field(default_factory=lambda: Binding(()))
+    """Which scene instance fills which role of the model (docs/planning.md,
+    "Identical objects"); the problem and the plan name the instances."""
+    bindings_weighed: int = 1
+    """Bindings of the model's roles this goal was weighed under: planned, or
+    set aside by their lower bound."""
 
     @property
     def bound(self) -> float:
@@ -261,6 +269,10 @@ def plan_in_scene(
     """Plan every candidate goal and choose the shortest; ``budget``'s time is
     shared, each candidate getting an equal part of what is left.
 
+    Where the model has roles of identical objects, each goal is planned under
+    the bindings of roles to instances in order of their lower bound, until
+    none left can beat the best plan (:func:`plan_goal`).
+
     Raises :class:`NoPlanError` (exit 3) when no candidate has a plan, with each
     candidate's reason, and :class:`LimitReachedError` (exit 4) when none was
     found but some candidate's search was cut short. ``clutter``: objects the
@@ -268,16 +280,17 @@ def plan_in_scene(
     """
     clock = Clock(budget)
     with building_within(budget):
-        prepared = prepare(model, scene, clutter=clutter)
-        problems = scene_problems(model, prepared, settings)
+        prepared = prepare(model, scene, clutter=clutter, settings=settings)
+        around = surroundings_of(model, prepared.scene)
+    goals = len(prepared.candidates)
     outcomes = []
-    for index, problem in enumerate(problems):
+    for index in range(goals):
         left = clock.remaining()
         share = budget
         if left is not None:  # an equal part of what is left (the timeout stays as named)
-            deadline = time.monotonic() + left / (len(problems) - index)
+            deadline = time.monotonic() + left / (goals - index)
             share = replace(budget, deadline=deadline)
-        outcomes.append(solve_candidate(problem, share, search))
+        outcomes.append(plan_goal(prepared, index, share, settings, search, around))
     solved = [c for c in outcomes if c.plan is not None]
     if not solved:
         reasons = "; ".join(
@@ -288,13 +301,64 @@ def plan_in_scene(
                 f"no candidate goal planned within the budget ({reasons})",
                 tuple(outcomes),
                 prepared.scene,
-                model,
+                prepared.model,
             )
         raise SceneNoPlanError(
             f"no candidate goal can be reached in this scene ({reasons})",
             tuple(outcomes),
             prepared.scene,
-            model,
+            prepared.model,
         )
     chosen = min(solved, key=lambda c: (c.length, c.goal))
-    return ScenePlan(tuple(outcomes), chosen, prepared.scene, model)
+    bound = next(task.model for task in prepared.bindings if task.binding == chosen.binding)
+    return ScenePlan(tuple(outcomes), chosen, prepared.scene, bound)
+
+
+def plan_goal(
+    prepared: PreparedScene,
+    index: int,
+    budget: Budget,
+    settings: GeometrySettings,
+    search: str = "astar",
+    surroundings: Surroundings | None = None,
+) -> CandidatePlan:
+    """Candidate goal ``index`` planned under every binding of the model's roles
+    (:mod:`demoplan.scenes.binding`), lowest lower bound first; a binding whose
+    bound reaches the best plan's length is set aside unplanned, so that the
+    plan returned is the shortest over all bindings where every binding planned
+    proved its own, and its bound is the least over all of them. Each binding
+    gets an equal part of the time left."""
+    clock = Clock(budget)
+    around = surroundings or surroundings_of(prepared.model, prepared.scene)
+    order = sorted(range(len(prepared.bindings)), key=lambda b: prepared.bindings[b].bounds[index])
+    best: CandidatePlan | None = None
+    failed: CandidatePlan | None = None
+    bounds: list[float] = []
+    for position, number in enumerate(order):
+        task = prepared.bindings[number]
+        floor = task.bounds[index]
+        if best is not None and best.plan is not None and floor >= len(best.plan):
+            bounds.append(floor)
+            continue
+        left = clock.remaining()
+        share = budget
+        if left is not None:
+            share = replace(budget, deadline=time.monotonic() + left / (len(order) - position))
+        with building_within(share):
+            problem = build_problem(
+                prepared.scene, task.candidates[index], settings, surroundings=around
+            )
+        outcome = replace(solve_candidate(problem, share, search), binding=task.binding)
+        bounds.append(max(outcome.bound, floor))
+        if outcome.plan is None:
+            failed = failed or outcome
+        elif best is None or best.plan is None or len(outcome.plan) < len(best.plan):
+            best = outcome
+    chosen = best or failed
+    assert chosen is not None
+    weighed = len(order)
+    if chosen.plan is None or weighed == 1:
+        return replace(chosen, bindings_weighed=weighed)
+    bound = int(min(bounds))
+    plan = replace(chosen.plan, bound=bound, optimal=bound >= len(chosen.plan))
+    return replace(chosen, plan=plan, bindings_weighed=weighed)

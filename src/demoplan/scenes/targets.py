@@ -95,17 +95,25 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     """Exit-1 errors for objects the model needs but the scene lacks, and (unless
     ``clutter`` allows them, as objects with no goal) for objects the scene has
     but the model never saw; each names a near name ("did you mean") where there
-    is one."""
+    is one. An instance of a type the model knows is no stranger: it fills one
+    of the type's roles, or stands with no goal (:mod:`demoplan.scenes.binding`
+    counts the instances)."""
     landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
     landmarks |= set(scene.landmark_names)
+    types = model.object_types()
     needed = {state.object for state in model.states}
     for state in model.states:
         for reference in (state.position.reference, state.orientation.reference):
             if reference is not None and reference not in landmarks:
                 needed.add(reference)
     seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
-    missing = sorted(needed - set(scene.names))
-    unknown = sorted(set(scene.names) - seen)
+    known_types = {types.get(name, name) for name in seen}
+    kinds = {obj.name: obj.kind for obj in scene.objects}
+    present = set(scene.names) | set(kinds.values())
+    missing = sorted(name for name in needed if types.get(name, name) not in present)
+    unknown = sorted(
+        name for name in scene.names if name not in seen and kinds[name] not in known_types
+    )
     if missing:
         hint = did_you_mean(missing[0], [*unknown, *scene.landmark_names])
         raise InputError(
