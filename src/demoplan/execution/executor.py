@@ -219,16 +219,15 @@ def world_moved(observation: Observation, scene: Scene) -> bool:
 
 
 def _scene_of(observation: Observation, template: Scene) -> Scene:
-    """The observed world as a scene (grasps, gripper and landmarks from the
-    prepared scene; an object's geometry from it where the world gives none)."""
+    """The observed world as a scene (grasps, types, gripper and landmarks from
+    the prepared scene; an object's geometry from it where the world gives none)."""
     known = {obj.name: obj for obj in template.objects}
     objects = tuple(
-        SceneObject(
-            name,
-            pose,
-            observation.geometry.get(name) or (known[name].geometry if name in known else None),
-            known[name].grasps if name in known else SceneObject(name, pose, None).grasps,
+        replace(
+            known[name], pose=pose, geometry=observation.geometry.get(name) or known[name].geometry
         )
+        if name in known
+        else SceneObject(name, pose, observation.geometry.get(name))
         for name, pose in observation.poses.items()
     )
     return replace(template, objects=objects)
