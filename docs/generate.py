@@ -67,6 +67,7 @@ from demoplan.learning.modelfile import (
     _OrientationSchema,
     _PositionSchema,
     _PrecisionSchema,
+    _RoleSchema,
     _SettingsSchema,
     _StateSchema,
     _ViolationSchema,
@@ -289,6 +290,10 @@ GEOMETRY = FieldTable(
         "shape": "`mesh`: a shape known only by its extents (no symmetry is assumed)",
         "size": "extents `[x, y, z]` in the object's frame; a cylinder's x and y are its diameter",
         **MASS_FIELDS,
+        "type": "the kind of object it is (`plate`), where several interchangeable instances "
+        "are of one kind; default: its name, an object of its own kind. Instances of a type "
+        "have one shape and size; their names need not match between demonstrations "
+        "([learning.md](learning.md#identical-objects))",
     },
 )
 LANDMARK = FieldTable(
@@ -354,6 +359,9 @@ SCENE_OBJECT = FieldTable(
         "grasps": "finger axes in the object's frame, in degrees; default `[0, 90]`: "
         "two side grasps at right angles",
         **MASS_FIELDS,
+        "type": "the kind of object it is (`plate`); any instance of a type may fill the "
+        "model's roles of that type, the planner chooses which "
+        "([planning.md](planning.md#identical-objects)); default: its name",
     },
 )
 GRIPPER = FieldTable(
@@ -396,8 +404,21 @@ MODEL = FieldTable(
         "violations": "demonstrations that contradict a teacher constraint",
         "settings": "the learning settings (below); left out: the defaults",
         "precision": "the placement precision decisions were measured against",
+        "roles": "the roles of types with declared instances (below); left out where every "
+        "object is of its own type",
         "demonstrations": "the demonstrations learned from (demonstration documents), "
-        "for `learn --update`",
+        "for `learn --update`; their instances renamed to the roles they filled",
+    },
+)
+ROLE = FieldTable(
+    "Role",
+    _RoleSchema,
+    {
+        "name": "the role, as states and demonstrations name it: `plate#1`, `plate#2` (the "
+        "type's own name where it has one role)",
+        "type": "the type of the instances that fill it",
+        "instances": "per demonstration, the instance that filled the role (null: that "
+        "demonstration had fewer instances of the type)",
     },
 )
 STATE = FieldTable(
@@ -496,6 +517,7 @@ FIELD_TABLES = (
     STATE_ORIENTATION,
     VIOLATION,
     PRECISION,
+    ROLE,
     SETTINGS,
 )
 LINKED = {entry.schema.__name__: entry for entry in FIELD_TABLES}
@@ -630,6 +652,11 @@ PLAN_JSON = Output(
         "optimal": ("boolean", "proved shortest over every candidate goal"),
         "bound": ("integer", "proven lower bound over every candidate goal"),
         "goal": ("integer", "the demonstration whose goal was chosen, from 0"),
+        "binding": (
+            "object",
+            "only where the model has roles of identical objects: role → the scene's instance "
+            "filling it ([planning.md](planning.md#identical-objects))",
+        ),
         "candidates": ("array", "every candidate goal (below)"),
         "subgoals": ("array", "the chosen goal's subgoals (below)"),
         "precedences": ("array of pairs", "`[X, Y]`: subgoal Y only after X"),
@@ -646,7 +673,7 @@ PLAN_JSON = Output(
             "arm could not check)",
         ),
     },
-    optional=frozenset({"collisions"}),
+    optional=frozenset({"collisions", "binding"}),
 )
 CANDIDATE_JSON = Output(
     {
@@ -656,10 +683,15 @@ CANDIDATE_JSON = Output(
         "optimal": ("boolean or null", "the plan is proved shortest"),
         "bound": ("integer or null", "proven lower bound; null: proved to have no plan"),
         "reason": ("string", "why there is no plan (only then)"),
+        "bindings": (
+            "integer",
+            "only where the model has roles: the bindings of roles to instances weighed "
+            "(planned, or set aside by their lower bound)",
+        ),
         "expanded": ("integer or null", "states expanded"),
         "seconds": ("number or null", "time spent on this candidate"),
     },
-    optional=frozenset({"reason"}),
+    optional=frozenset({"reason", "bindings"}),
 )
 SUBGOAL_JSON = Output(
     {
@@ -1308,6 +1340,7 @@ def model_section(computed: Computed) -> str:
             field_table(STATE_ORIENTATION),
             field_table(VIOLATION),
             field_table(PRECISION),
+            field_table(ROLE),
             field_table(SETTINGS),
         ]
     )

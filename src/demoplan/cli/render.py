@@ -210,8 +210,15 @@ def print_scene_plan(result: ScenePlan) -> None:
             "chosen" if candidate is result.chosen else plain_text(candidate.reason or ""),
         )
     stdout.print(table)
-    sys.stdout.flush()
     chosen = result.chosen
+    if chosen.bindings_weighed > 1:
+        stdout.print(
+            plain_text(
+                f"Roles (of {chosen.bindings_weighed} ways to fill them): "
+                + chosen.binding.describe()
+            )
+        )
+    sys.stdout.flush()
     assert chosen.plan is not None
     for action in chosen.plan.actions:
         sys.stdout.write(printable(f"{action}") + "\n")

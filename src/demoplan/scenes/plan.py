@@ -140,6 +140,11 @@ class ScenePlan:
             "optimal": self.optimal,
             "bound": self.bound,
             "goal": chosen.goal,
+            **(
+                {"binding": dict(chosen.binding.pairs)}
+                if chosen.binding.pairs and not chosen.binding.identity
+                else {}
+            ),
             "candidates": [
                 {
                     "goal": c.goal,
@@ -148,6 +153,7 @@ class ScenePlan:
                     "optimal": None if c.plan is None else c.plan.optimal,
                     "bound": None if math.isinf(c.bound) else int(c.bound),
                     **({"reason": c.reason} if c.reason else {}),
+                    **({"bindings": c.bindings_weighed} if c.bindings_weighed > 1 else {}),
                     "expanded": None if c.plan is None else c.plan.expanded,
                     "seconds": None if c.plan is None else round(c.plan.seconds, 6),
                 }
@@ -326,8 +332,9 @@ def plan_goal(
     (:mod:`demoplan.scenes.binding`), lowest lower bound first; a binding whose
     bound reaches the best plan's length is set aside unplanned, so that the
     plan returned is the shortest over all bindings where every binding planned
-    proved its own, and its bound is the least over all of them. Each binding
-    gets an equal part of the time left."""
+    proved its own, and its bound is the least over all of them. The first
+    binding's search gets half the time, each later one an equal part of what
+    is left; building a binding's problem may take the goal's whole time."""
     clock = Clock(budget)
     around = surroundings or surroundings_of(prepared.model, prepared.scene)
     order = sorted(range(len(prepared.bindings)), key=lambda b: prepared.bindings[b].bounds[index])
@@ -342,9 +349,10 @@ def plan_goal(
             continue
         left = clock.remaining()
         share = budget
-        if left is not None:
-            share = replace(budget, deadline=time.monotonic() + left / (len(order) - position))
-        with building_within(share):
+        if left is not None:  # the most promising binding half, the others equal parts
+            parts = 2 if position == 0 and len(order) > 1 else len(order) - position
+            share = replace(budget, deadline=time.monotonic() + left / parts)
+        with building_within(budget):
             problem = build_problem(
                 prepared.scene, task.candidates[index], settings, surroundings=around
             )
