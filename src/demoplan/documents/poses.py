@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, Pose
@@ -78,14 +78,23 @@ def positive_extents(size: list[float]) -> list[float]:
     return size
 
 
-TYPE_PATTERN = r"^[^#\s]+$"
+def _type_name(text: str) -> str:
+    if not text or len(text) > 100 or "#" in text or any(c.isspace() for c in text):
+        raise ValueError(
+            f"{text!r} is not a type name; a name of 1 to 100 characters without spaces or "
+            "'#' expected (roles are named plate#1, plate#2)"
+        )
+    return text
+
+
+TypeName = Annotated[str, AfterValidator(_type_name)]
 """A type names a kind of object (``plate``): no spaces, no ``#`` (roles are ``plate#1``)."""
 
 
 class ObjectSchema(_Schema):
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Number] = Field(min_length=3, max_length=3)
-    type: str | None = Field(default=None, min_length=1, max_length=100, pattern=TYPE_PATTERN)
+    type: TypeName | None = None
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
 

@@ -141,8 +141,8 @@ class ScenePlan:
             "bound": self.bound,
             "goal": chosen.goal,
             **(
-                {"binding": dict(chosen.binding.pairs)}
-                if chosen.binding.pairs and not chosen.binding.identity
+                {"binding": {r: i for r, i in chosen.binding.pairs if r != i}}
+                if not chosen.binding.identity
                 else {}
             ),
             "candidates": [

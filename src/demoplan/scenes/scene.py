@@ -29,11 +29,11 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from demoplan.documents.masses import with_mass
 from demoplan.documents.poses import (
     LENGTH_SCALE,
-    TYPE_PATTERN,
     Coordinate,
     LandmarkSchema,
     Number,
     PoseSchema,
+    TypeName,
     UnitsSchema,
     pose_from_dict,
     pose_to_dict,
@@ -138,7 +138,7 @@ class _ObjectSchema(PoseSchema):
     grasps: list[Number] | None = Field(default=None, min_length=1, max_length=16)
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
-    type: str | None = Field(default=None, min_length=1, max_length=100, pattern=TYPE_PATTERN)
+    type: TypeName | None = None
 
     @field_validator("size")
     @classmethod
