@@ -1268,7 +1268,9 @@ def objects_section() -> str:
             "cylinder's yaw is taken modulo any turn, docs/learning.md). `import` adds it "
             "to the recording's own geometry, replacing it where both name an object. "
             "`learn` refuses it without a pose stream among its inputs: demonstration "
-            "files carry their own `objects`. JSON or YAML. The geometry of "
+            "files carry their own `objects`. An entry's `type` declares identical objects "
+            "(two tracked plates of type `plate`): it is written into the demonstration "
+            "too ([learning.md](learning.md#identical-objects)). JSON or YAML. The geometry of "
             "`examples/set_table/demonstration-1.json`:",
             fenced("json", compact_json(geometry)),
             field_table(OBJECTS_FILE),

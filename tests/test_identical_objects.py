@@ -12,14 +12,17 @@ least of them).
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.commands.inputs import load_inputs
 from demoplan.execution.executor import ExecutionSettings, execute
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.learning.learner import learn
@@ -30,6 +33,9 @@ from demoplan.scenes.plan import ScenePlan, plan_in_scene, solve_candidate
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.problems import build_problem, pose_of
 from demoplan.scenes.scene import Scene
+from demoplan.segmentation.streams import StreamOptions
+from demoplan.segmentation.synthetic import stream_from_demonstration
+from demoplan.segmentation.writers import write_csv
 from tests.identical_families import (
     SEATS,
     TABLE_TYPES,
@@ -305,3 +311,26 @@ def test_a_scene_with_too_few_instances_names_the_type() -> None:
         Exception, match=r"3 objects of type 'cup' .*the scene has 2 \(cup-x, cup-y\)"
     ):
         role_bindings(model, scene)
+
+
+def test_pose_streams_carry_the_types_of_their_objects_file(tmp_path: Path) -> None:
+    """Two tracked towers (CSV) whose identical reds are named differently, and
+    an objects file declaring their type: ``learn`` of the streams gives the
+    roles the demonstration files give."""
+    taught = tower_with_two_reds([False, True])
+    files = []
+    for index, demo in enumerate(taught.demonstrations):
+        stream = stream_from_demonstration(demo, rng=index, noise_m=0.0005, noise_deg=0.1)
+        files.append(tmp_path / f"tower-{index + 1}.csv")
+        write_csv(stream, files[-1])
+    geometry = dict(taught.demonstrations[0].objects)
+    objects = {
+        name: {"shape": g.shape, "size": list(g.size)} | ({"type": "red"} if "red" in name else {})
+        for name, g in geometry.items()
+    }
+    objects_file = tmp_path / "objects.json"
+    objects_file.write_text(json.dumps({"objects": objects}))
+    demos = load_inputs(files, stream=StreamOptions(objects_file=objects_file))
+    assert [dict(d.types) for d in demos] == [{"red-a": "red", "red-b": "red"}] * 2
+    model = learn(demos)
+    assert _place_of_role(taught, model) == {"red#1": 0, "red#2": 1}

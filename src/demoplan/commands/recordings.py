@@ -18,7 +18,12 @@ from demoplan.fileio import (
     file_inside,
     refuse_overwriting_inputs,
 )
-from demoplan.learning.demonstrations import demonstration_to_dict, load_object_geometry
+from demoplan.learning.demonstrations import (
+    demonstration_to_dict,
+    load_object_geometry,
+    load_object_types,
+    with_declared_types,
+)
 from demoplan.model import Demonstration
 from demoplan.segmentation.detect import Segmentation
 from demoplan.segmentation.importing import ImportedDemonstration, import_recording_details
@@ -124,6 +129,7 @@ def import_recording(
     (:func:`~demoplan.fileio.safe_file_name`: no separator, ``..`` or control
     character) and kept inside ``output``."""
     geometry = None if objects_file is None else load_object_geometry(objects_file)
+    types = {} if objects_file is None else load_object_types(objects_file)
     if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
         raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
     items = import_recording_details(
@@ -146,7 +152,8 @@ def import_recording(
             target, [recording, *([objects_file] if objects_file is not None else [])]
         )
         targets[item.key] = target
-        files.append((target, dump_json(demonstration_to_dict(item.demonstration))))
+        demo = with_declared_types(item.demonstration, types)
+        files.append((target, dump_json(demonstration_to_dict(demo))))
     if not files:
         problems = "; ".join(f"{i.key}: {i.problem}" for i in items)
         raise InputError(f"no demonstration with a step ({problems})", source=str(recording))

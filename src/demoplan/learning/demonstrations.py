@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +50,8 @@ __all__ = [
     "demonstrations_from_path",
     "load_demonstrations",
     "load_object_geometry",
+    "load_object_types",
+    "with_declared_types",
 ]
 
 GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrations
@@ -165,6 +168,24 @@ def load_object_geometry(
     if known is not None:
         check_geometry_names(geometry, list(known), source)
     return geometry
+
+
+def load_object_types(path: Path) -> dict[str, str]:
+    """The ``type`` each entry of an objects file declares (objects of their own
+    type left out): a stream's identical objects (docs/formats.md)."""
+    source = str(path)
+    try:
+        parsed = ObjectsFileSchema.model_validate(read_document(path))
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source) from None
+    return {n: e.type for n, e in parsed.objects.items() if e.type is not None and e.type != n}
+
+
+def with_declared_types(demo: Demonstration, types: Mapping[str, str]) -> Demonstration:
+    """``demo`` with the types of its objects that ``types`` declares."""
+    names = {n for n, _ in demo.objects} | set(demo.moved_objects)
+    declared = tuple((n, t) for n, t in types.items() if n in names)
+    return replace(demo, types=declared) if declared else demo
 
 
 def check_geometry_names(

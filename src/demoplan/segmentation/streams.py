@@ -18,7 +18,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from demoplan.errors import InputError
-from demoplan.learning.demonstrations import check_geometry_names, check_measured_demonstration
+from demoplan.learning.demonstrations import (
+    check_geometry_names,
+    check_measured_demonstration,
+    with_declared_types,
+)
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, segment
 from demoplan.segmentation.readers import load_stream
@@ -55,6 +59,12 @@ class StreamOptions:
         from demoplan.learning.demonstrations import load_object_geometry
 
         return None if self.objects_file is None else load_object_geometry(self.objects_file)
+
+    def types(self) -> dict[str, str]:
+        """The types the objects file declares (identical objects; none without a file)."""
+        from demoplan.learning.demonstrations import load_object_types
+
+        return {} if self.objects_file is None else load_object_types(self.objects_file)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -131,5 +141,6 @@ def demonstration_from_stream(
                 field="objects",
             )
     demo = found.to_demonstration(name or stream_name(path), objects=shapes, landmarks=chosen)
+    demo = with_declared_types(demo, options.types())
     check_measured_demonstration(demo, str(path))
     return SegmentedStream(stream, found, demo)
