@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from demoplan.commands.inputs import load_inputs
 from demoplan.execution.executor import ExecutionSettings, execute
 from demoplan.execution.kinematic import KinematicWorld
-from demoplan.learning.learner import learn
+from demoplan.learning.learner import learn, update
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.planning.search import Budget
 from demoplan.scenes.binding import Binding, bind_model, role_bindings
@@ -334,3 +334,29 @@ def test_pose_streams_carry_the_types_of_their_objects_file(tmp_path: Path) -> N
     assert [dict(d.types) for d in demos] == [{"red-a": "red", "red-b": "red"}] * 2
     model = learn(demos)
     assert _place_of_role(taught, model) == {"red#1": 0, "red#2": 1}
+
+
+def test_a_teacher_constraint_may_name_a_type_or_a_role(table: tuple[Taught, TaskModel]) -> None:
+    taught, model = table
+    types = model.object_types()
+    by_type = learn(taught.demonstrations, require=["glass<fork"])
+    states = {s.id: s.object for s in by_type.states}
+    required = set(by_type.teacher_constraints)
+    glasses = [i for i, o in states.items() if types[o] == "glass"]
+    forks = [i for i, o in states.items() if types[o] == "fork"]
+    assert required == {(g, f) for g in glasses for f in forks}
+    by_role = learn(taught.demonstrations, require=["plate#2<plate#1"])
+    ids = {s.object: s.id for s in by_role.states}
+    assert by_role.teacher_constraints == ((ids["plate#2"], ids["plate#1"]),)
+
+
+def test_update_learns_the_roles_again_from_the_instances(table: tuple[Taught, TaskModel]) -> None:
+    """``learn --update`` renames the roles back to the instances that filled
+    them and learns from all demonstrations: the same model as learning them
+    at once."""
+    taught, _ = table
+    first = learn(taught.demonstrations[:2])
+    updated = update(first, taught.demonstrations[2:])
+    at_once = learn(taught.demonstrations)
+    assert _learned_structure(updated) == _learned_structure(at_once)
+    assert updated.roles == at_once.roles
