@@ -1,0 +1,251 @@
+"""Roles of identical objects in tables and figures (issue 29): which instance
+filled which role, per demonstration, in `learn`/`show`'s roles table, in
+`--json`, in the studio's model JSON, in the report and in the figures'
+labels; and models without roles shown exactly as before.
+
+The data: a table for two (two plates, forks, knives and glasses, one of each
+per seat) whose instance names the generator hands out to the seats at random
+in every demonstration, so that it knows which instance sat where: the truth
+the roles table must show.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+matplotlib.use("Agg")
+
+from demoplan.cli import app
+from demoplan.learning import learn
+from demoplan.learning.demonstrations import demonstration_to_dict
+from demoplan.learning.tables import role_header, role_rows
+from demoplan.model import Demonstration, ObjectGeometry, Pose, Role, Step, TaskModel
+from demoplan.rotations import quat_from_yaw
+from tests.helpers import EXAMPLES
+
+TYPES = ("plate", "fork", "knife", "glass")
+SHAPES = {
+    "plate": ObjectGeometry("cylinder", (0.2, 0.2, 0.02)),
+    "fork": ObjectGeometry("box", (0.03, 0.18, 0.01)),
+    "knife": ObjectGeometry("box", (0.02, 0.2, 0.01)),
+    "glass": ObjectGeometry("cylinder", (0.07, 0.07, 0.12)),
+}
+SEATS = ((0.4, 0.3), (0.4, -0.3))
+BESIDE = {"plate": (0.0, 0.0), "fork": (0.0, 0.14), "knife": (0.0, -0.14), "glass": (0.15, -0.14)}
+"""Where each piece goes relative to its seat's plate."""
+
+Seating = dict[str, tuple[str, str]]
+"""Per type, the instance at seat 1 and the one at seat 2."""
+
+
+def table_for_two(name: str, seating: Seating, seed: int) -> Demonstration:
+    """One demonstration: seat 1 laid (plate, fork, knife, glass), then seat 2,
+    each with the instances ``seating`` gives it; the plates placed within a
+    few cm of their seat, the rest within a mm of their place by the plate."""
+    rng = random.Random(seed)
+    steps = []
+    for seat, (sx, sy) in enumerate(SEATS):
+        px, py = sx + rng.gauss(0, 0.02), sy + rng.gauss(0, 0.02)
+        for kind in TYPES:
+            dx, dy = BESIDE[kind]
+            noise = (0.0, 0.0) if kind == "plate" else (rng.gauss(0, 0.001), rng.gauss(0, 0.001))
+            position = (px + dx + noise[0], py + dy + noise[1], 0.0)
+            steps.append(Step(seating[kind][seat], Pose(position, quat_from_yaw(0.0))))
+    objects = tuple((f"{kind}-{c}", SHAPES[kind]) for kind in TYPES for c in "ab")
+    types = tuple((f"{kind}-{c}", kind) for kind in TYPES for c in "ab")
+    return Demonstration(name, tuple(steps), objects, types=types)
+
+
+def seating_from(swaps: list[dict[str, bool]]) -> list[Seating]:
+    """Per demonstration, per type: ``(a, b)`` or, swapped, ``(b, a)`` at seats 1 and 2."""
+    return [
+        {
+            kind: (f"{kind}-b", f"{kind}-a") if swapped[kind] else (f"{kind}-a", f"{kind}-b")
+            for kind in TYPES
+        }
+        for swapped in swaps
+    ]
+
+
+def expected_rows(seatings: list[Seating]) -> list[tuple[str, ...]]:
+    """The roles table the truth gives: seat 1's pieces are the #1 roles (seat 1
+    is laid first), each role filled in every demonstration by the instance
+    the generator put at that seat."""
+    return [
+        (f"{kind}#{seat + 1}", kind, *(seating[kind][seat] for seating in seatings))
+        for kind in TYPES
+        for seat in (0, 1)
+    ]
+
+
+SWAPS = [
+    {"plate": False, "fork": True, "knife": False, "glass": True},
+    {"plate": True, "fork": False, "knife": True, "glass": False},
+    {"plate": True, "fork": True, "knife": False, "glass": False},
+]
+
+
+@pytest.fixture(scope="module")
+def seatings() -> list[Seating]:
+    return seating_from(SWAPS)
+
+
+@pytest.fixture(scope="module")
+def demos(seatings: list[Seating]) -> list[Demonstration]:
+    return [table_for_two(f"dinner-{k + 1}", s, k) for k, s in enumerate(seatings)]
+
+
+@pytest.fixture(scope="module")
+def model(demos: list[Demonstration]) -> TaskModel:
+    return learn(demos)
+
+
+@pytest.fixture(scope="module")
+def demo_files(demos: list[Demonstration], tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    folder = tmp_path_factory.mktemp("dinner")
+    paths = []
+    for demo in demos:
+        path = folder / f"{demo.name}.json"
+        path.write_text(json.dumps(demonstration_to_dict(demo)))
+        paths.append(path)
+    return paths
+
+
+def invoke(*args: str | Path) -> Any:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def table_rows(text: str, title: str) -> list[tuple[str, ...]]:
+    """The body rows of the rich table printed under ``title`` (cells stripped,
+    a row wrapped onto several lines joined)."""
+    lines = text.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith(title))
+    rows: list[list[str]] = []
+    body = False
+    for line in lines[start + 1 :]:
+        if line.startswith("┡"):
+            body = True
+        elif line.startswith("└"):
+            break
+        elif body and line.startswith("│"):
+            cells = [cell.strip() for cell in line.strip().strip("│").split("│")]
+            if rows and not cells[0]:  # a row wrapped onto this line
+                rows[-1] = [f"{a} {b}".strip() for a, b in zip(rows[-1], cells, strict=True)]
+            else:
+                rows.append(cells)
+    return [tuple(row) for row in rows]
+
+
+# The roles table
+
+
+@settings(max_examples=6, deadline=None)
+@given(
+    swaps=st.lists(
+        st.fixed_dictionaries({kind: st.booleans() for kind in TYPES}), min_size=2, max_size=4
+    ),
+    seed=st.integers(0, 1000),
+)
+def test_the_roles_table_names_the_instance_each_demonstration_put_in_each_seat(
+    swaps: list[dict[str, bool]], seed: int
+) -> None:
+    seatings = seating_from(swaps)
+    demos = [table_for_two(f"d{k}", s, seed + k) for k, s in enumerate(seatings)]
+    model = learn(demos)
+    assert role_rows(model) == expected_rows(seatings)
+    assert role_header(model) == (
+        "Role",
+        "Type",
+        *(f"Demonstration {k}" for k in range(1, len(demos) + 1)),
+    )
+
+
+def test_learn_prints_the_roles_table_before_the_states(
+    demo_files: list[Path], seatings: list[Seating], tmp_path: Path
+) -> None:
+    result = invoke("learn", *demo_files, "-o", tmp_path / "model.json")
+    assert result.exit_code == 0, result.output
+    title = "Roles (identical objects: the instance that filled each role)"
+    assert table_rows(result.stdout, title) == expected_rows(seatings)
+    assert result.stdout.index(title) < result.stdout.index("States (as the paper")
+    states = table_rows(result.stdout, "States (as the paper")
+    # the states name roles where they name objects: every role placed once per seat
+    assert sorted(row[1] for row in states) == sorted(row[0] for row in expected_rows(seatings))
+    shown = invoke("show", tmp_path / "model.json")  # the model file keeps the roles
+    assert shown.exit_code == 0, shown.output
+    assert table_rows(shown.stdout, title) == expected_rows(seatings)
+
+
+def test_learn_json_carries_the_roles(demo_files: list[Path], seatings: list[Seating]) -> None:
+    result = invoke("learn", *demo_files, "--json")
+    assert result.exit_code == 0, result.output
+    roles = json.loads(result.stdout)["roles"]
+    expected = expected_rows(seatings)
+    assert [(r["name"], r["type"], *r["instances"]) for r in roles] == expected
+
+
+def test_a_narrow_terminal_gets_the_demonstrations_numbered_then_listed(
+    model: TaskModel, seatings: list[Seating]
+) -> None:
+    import io
+
+    from rich.console import Console
+
+    from demoplan.cli.render import roles_table
+
+    def rendered(width: int) -> str:
+        console = Console(width=width, file=io.StringIO(), record=True)
+        console.print(roles_table(model, width))
+        return console.export_text()
+
+    title = "Roles (identical"
+    wide, numbered, listed = rendered(100), rendered(56), rendered(40)
+    assert "Demonstration 1" in wide and "Demonstration 1" not in numbered
+    assert table_rows(numbered, title) == expected_rows(seatings)
+    for width, text in ((56, numbered), (40, listed)):
+        assert max(len(line) for line in text.splitlines()) <= width
+    # the listed form: "1:plate-a, 2:plate-b, …" per role, wrapped between entries
+    assert table_rows(listed, title) == [
+        (role, kind, ", ".join(f"{k}:{name}" for k, name in enumerate(filled, 1)))
+        for role, kind, *filled in expected_rows(seatings)
+    ]
+
+
+def test_a_demonstration_without_an_instance_shows_a_dash(model: TaskModel) -> None:
+    first = model.roles[0]
+    short = replace(model, roles=(Role(first.name, first.type, (first.instances[0], None, None)),))
+    assert role_rows(short) == [(first.name, first.type, first.instances[0], "—", "—")]
+
+
+@pytest.mark.parametrize("folder", ["set_table", "blocks"])
+def test_a_model_without_roles_prints_no_roles_table(folder: str, tmp_path: Path) -> None:
+    result = invoke("learn", EXAMPLES / folder, "-o", tmp_path / "m.json", "--paper")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("States (as the paper's Tables II and IV)")
+    assert "Roles" not in result.stdout and "←" not in result.stdout
+    data = json.loads(invoke("learn", EXAMPLES / folder, "--json", "--paper").stdout)
+    assert "roles" not in data
+
+
+# The report
+
+
+def test_the_report_section_has_the_roles_table(model: TaskModel, seatings: list[Seating]) -> None:
+    from demoplan.experiments.report import _learning_section
+    from demoplan.experiments.runs import LearningRun
+
+    text = _learning_section(LearningRun("Dinner", Path("dinner"), model, (), None, 0.0))
+    header = "| Role | Type | " + " | ".join(f"Demonstration {k}" for k in (1, 2, 3)) + " |"
+    assert header in text
+    for row in expected_rows(seatings):
+        assert "| " + " | ".join(row) + " |" in text
