@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import random
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -27,9 +28,12 @@ matplotlib.use("Agg")
 
 from demoplan.cli import app
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstration_to_dict
+from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
+from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Role, Step, TaskModel
+from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
+from demoplan.plotting.labels import role_label
 from demoplan.rotations import quat_from_yaw
 from tests.helpers import EXAMPLES
 
@@ -235,6 +239,85 @@ def test_a_model_without_roles_prints_no_roles_table(folder: str, tmp_path: Path
     assert "Roles" not in result.stdout and "←" not in result.stdout
     data = json.loads(invoke("learn", EXAMPLES / folder, "--json", "--paper").stdout)
     assert "roles" not in data
+
+
+# Figures
+
+
+def _labels(path: Path, draw: Any) -> list[list[str]]:
+    """The texts of every axes of the figure ``draw`` writes to ``path``."""
+    found: list[list[str]] = []
+
+    def record(figure: Any, renderer: Any, written: Path) -> None:
+        found.extend([t.get_text() for t in ax.texts if t.get_text()] for ax in figure.axes)
+
+    with observing_saved_figures(record):
+        draw()
+    return found
+
+
+def test_the_demonstrations_figure_names_the_instance_under_each_role(
+    model: TaskModel, seatings: list[Seating], tmp_path: Path
+) -> None:
+    path = tmp_path / "demos.png"
+    axes = _labels(path, lambda: save_demonstrations(model, path, "dinner"))
+    tops = axes[0::2]  # each demonstration's top view, its constraint graph below it
+    assert len(tops) == len(seatings)
+    truth = {row[0]: row[2:] for row in expected_rows(seatings)}
+    for k, (texts, demo) in enumerate(zip(tops, model.demonstrations, strict=True)):
+        expected = [
+            f"{n} {state} {step.object}\n← {truth[step.object][k]}"
+            for n, (state, step) in enumerate(zip(model.sequences[k], demo.steps, strict=True), 1)
+        ]
+        assert [t for t in texts if t[0].isdigit()] == expected
+    graphs = axes[1::2]  # the graphs name each state's role
+    assert {"plate#1", "glass#2"} <= set(graphs[0])
+
+
+@pytest.mark.parametrize("folder", ["set_table", "blocks"])
+def test_figures_of_models_without_roles_keep_their_labels(folder: str, tmp_path: Path) -> None:
+    model = learn(load_demonstrations([EXAMPLES / folder]), settings=PAPER_SETTINGS)
+    path = tmp_path / "demos.png"
+    axes = _labels(path, lambda: save_demonstrations(model, path, folder))
+    for k, demo in enumerate(model.demonstrations):
+        expected = [
+            f"{n} {state} {step.object}"
+            for n, (state, step) in enumerate(zip(model.sequences[k], demo.steps, strict=True), 1)
+        ]
+        assert [t for t in axes[2 * k] if t[0].isdigit()] == expected
+
+
+def test_scene_figures_name_the_role_an_instance_fills(tmp_path: Path) -> None:
+    """The plan (top and side view) and the no-plan figure: an instance that
+    fills a role of another name is labelled ``role ← instance``, every other
+    label stays as it was."""
+    from demoplan.plotting.figures import save_scene_plan, save_scene_targets
+    from demoplan.scenes.plan import plan_in_scene
+    from demoplan.scenes.preview import preview_scene
+    from demoplan.scenes.scene import load_scene
+
+    scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
+    model = learn(load_demonstrations([EXAMPLES / "blocks"]), settings=PAPER_SETTINGS)
+    result = plan_in_scene(model, scene)
+    chosen = result.chosen
+    assert chosen.plan is not None
+    problem = preview_scene(scene).problem
+    bound = {"block#2": "green"}  # green fills a role of another name
+    path = tmp_path / "figure.png"
+    drawings = {
+        "plan": lambda roles: save_scene_plan(
+            scene, chosen.problem, chosen.plan, path, "plan", roles
+        ),
+        "targets": lambda roles: save_scene_targets(scene, problem, "", path, "no plan", roles),
+    }
+    for kind, draw in drawings.items():
+        plain = _labels(path, partial(draw, None))
+        roles = _labels(path, partial(draw, bound))
+        assert len(plain) == len(roles) == (2 if kind == "plan" else 1)  # the plan stacks
+        for before, after in zip(plain, roles, strict=True):
+            assert "green" in before and "block#2 ← green" not in before
+            assert [t if t != "green" else "block#2 ← green" for t in before] == after
+    assert role_label("plate#1", "plate#1") == "plate#1"  # filled by its own name: no arrow
 
 
 # The report
