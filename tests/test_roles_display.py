@@ -3,16 +3,14 @@ filled which role, per demonstration, in `learn`/`show`'s roles table, in
 `--json`, in the studio's model JSON, in the report and in the figures'
 labels; and models without roles shown exactly as before.
 
-The data: a table for two (two plates, forks, knives and glasses, one of each
-per seat) whose instance names the generator hands out to the seats at random
-in every demonstration, so that it knows which instance sat where: the truth
+The data: a table for two laid with identical objects whose instance names
+are handed out to the seats at random (tests/table_for_two.py), the truth
 the roles table must show.
 """
 
 from __future__ import annotations
 
 import json
-import random
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
@@ -31,72 +29,18 @@ from demoplan.learning import learn
 from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
-from demoplan.model import Demonstration, ObjectGeometry, Pose, Role, Step, TaskModel
+from demoplan.model import Demonstration, Role, TaskModel
 from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
 from demoplan.plotting.labels import role_label
-from demoplan.rotations import quat_from_yaw
 from tests.helpers import EXAMPLES
-
-TYPES = ("plate", "fork", "knife", "glass")
-SHAPES = {
-    "plate": ObjectGeometry("cylinder", (0.2, 0.2, 0.02)),
-    "fork": ObjectGeometry("box", (0.03, 0.18, 0.01)),
-    "knife": ObjectGeometry("box", (0.02, 0.2, 0.01)),
-    "glass": ObjectGeometry("cylinder", (0.07, 0.07, 0.12)),
-}
-SEATS = ((0.4, 0.3), (0.4, -0.3))
-BESIDE = {"plate": (0.0, 0.0), "fork": (0.0, 0.14), "knife": (0.0, -0.14), "glass": (0.15, -0.14)}
-"""Where each piece goes relative to its seat's plate."""
-
-Seating = dict[str, tuple[str, str]]
-"""Per type, the instance at seat 1 and the one at seat 2."""
-
-
-def table_for_two(name: str, seating: Seating, seed: int) -> Demonstration:
-    """One demonstration: seat 1 laid (plate, fork, knife, glass), then seat 2,
-    each with the instances ``seating`` gives it; the plates placed within a
-    few cm of their seat, the rest within a mm of their place by the plate."""
-    rng = random.Random(seed)
-    steps = []
-    for seat, (sx, sy) in enumerate(SEATS):
-        px, py = sx + rng.gauss(0, 0.02), sy + rng.gauss(0, 0.02)
-        for kind in TYPES:
-            dx, dy = BESIDE[kind]
-            noise = (0.0, 0.0) if kind == "plate" else (rng.gauss(0, 0.001), rng.gauss(0, 0.001))
-            position = (px + dx + noise[0], py + dy + noise[1], 0.0)
-            steps.append(Step(seating[kind][seat], Pose(position, quat_from_yaw(0.0))))
-    objects = tuple((f"{kind}-{c}", SHAPES[kind]) for kind in TYPES for c in "ab")
-    types = tuple((f"{kind}-{c}", kind) for kind in TYPES for c in "ab")
-    return Demonstration(name, tuple(steps), objects, types=types)
-
-
-def seating_from(swaps: list[dict[str, bool]]) -> list[Seating]:
-    """Per demonstration, per type: ``(a, b)`` or, swapped, ``(b, a)`` at seats 1 and 2."""
-    return [
-        {
-            kind: (f"{kind}-b", f"{kind}-a") if swapped[kind] else (f"{kind}-a", f"{kind}-b")
-            for kind in TYPES
-        }
-        for swapped in swaps
-    ]
-
-
-def expected_rows(seatings: list[Seating]) -> list[tuple[str, ...]]:
-    """The roles table the truth gives: seat 1's pieces are the #1 roles (seat 1
-    is laid first), each role filled in every demonstration by the instance
-    the generator put at that seat."""
-    return [
-        (f"{kind}#{seat + 1}", kind, *(seating[kind][seat] for seating in seatings))
-        for kind in TYPES
-        for seat in (0, 1)
-    ]
-
-
-SWAPS = [
-    {"plate": False, "fork": True, "knife": False, "glass": True},
-    {"plate": True, "fork": False, "knife": True, "glass": False},
-    {"plate": True, "fork": True, "knife": False, "glass": False},
-]
+from tests.table_for_two import (
+    SWAPS,
+    TYPES,
+    Seating,
+    expected_rows,
+    seating_from,
+    table_for_two,
+)
 
 
 @pytest.fixture(scope="module")
@@ -320,7 +264,18 @@ def test_scene_figures_name_the_role_an_instance_fills(tmp_path: Path) -> None:
     assert role_label("plate#1", "plate#1") == "plate#1"  # filled by its own name: no arrow
 
 
-# The report
+# The studio and the report
+
+
+def test_the_studio_model_json_carries_roles_only_where_there_are_some(
+    model: TaskModel, seatings: list[Seating]
+) -> None:
+    from demoplan.studio.views import model_json
+
+    roles = model_json(model)["roles"]
+    assert [(r["name"], r["type"], *r["instances"]) for r in roles] == expected_rows(seatings)
+    plain = learn(load_demonstrations([EXAMPLES / "blocks"]), settings=PAPER_SETTINGS)
+    assert "roles" not in model_json(plain)
 
 
 def test_the_report_section_has_the_roles_table(model: TaskModel, seatings: list[Seating]) -> None:
