@@ -29,7 +29,7 @@ from demoplan.learning import learn
 from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
-from demoplan.model import Demonstration, Role, TaskModel
+from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel
 from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
 from demoplan.plotting.labels import role_label
 from tests.helpers import EXAMPLES
@@ -123,7 +123,7 @@ def test_learn_prints_the_roles_table_before_the_states(
 ) -> None:
     result = invoke("learn", *demo_files, "-o", tmp_path / "model.json")
     assert result.exit_code == 0, result.output
-    title = "Roles (identical objects: the instance that filled each role)"
+    title = "Roles of identical objects"
     assert table_rows(result.stdout, title) == expected_rows(seatings)
     assert result.stdout.index(title) < result.stdout.index("States (as the paper")
     states = table_rows(result.stdout, "States (as the paper")
@@ -156,7 +156,7 @@ def test_a_narrow_terminal_gets_the_demonstrations_numbered_then_listed(
         console.print(roles_table(model, width))
         return console.export_text()
 
-    title = "Roles (identical"
+    title = "Roles of identical"
     wide, numbered, listed = rendered(100), rendered(56), rendered(40)
     assert "Demonstration 1" in wide and "Demonstration 1" not in numbered
     assert table_rows(numbered, title) == expected_rows(seatings)
@@ -169,10 +169,44 @@ def test_a_narrow_terminal_gets_the_demonstrations_numbered_then_listed(
     ]
 
 
-def test_a_demonstration_without_an_instance_shows_a_dash(model: TaskModel) -> None:
-    first = model.roles[0]
-    short = replace(model, roles=(Role(first.name, first.type, (first.instances[0], None, None)),))
-    assert role_rows(short) == [(first.name, first.type, first.instances[0], "—", "—")]
+def test_a_demonstration_without_an_instance_shows_a_dash(
+    demos: list[Demonstration], seatings: list[Seating]
+) -> None:
+    """The third demonstration lays no glass at the second seat: its glass#2 is ``—``."""
+    last = demos[2]
+    gone = last.steps[-1].object
+    assert gone == seatings[2]["glass"][1]
+    short = replace(
+        last,
+        steps=last.steps[:-1],
+        objects=tuple(o for o in last.objects if o[0] != gone),
+        types=tuple(t for t in last.types if t[0] != gone),
+    )
+    expected = expected_rows(seatings)
+    expected[-1] = (*expected[-1][:-1], "—")
+    assert role_rows(learn([*demos[:2], short])) == expected
+
+
+def test_a_type_with_one_instance_per_demonstration_has_one_role_named_like_it(
+    tmp_path: Path,
+) -> None:
+    cup = ObjectGeometry("cylinder", (0.08, 0.08, 0.1))
+    paths = []
+    for k in (1, 2):
+        steps = (
+            Step(f"cup-{k}", Pose((0.3 + 0.01 * k, 0.2, 0.0))),
+            Step("saucer", Pose((0.5, 0.2 + 0.01 * k, 0.0))),
+        )
+        objects = ((f"cup-{k}", cup), ("saucer", cup))
+        demo = Demonstration(f"d{k}", steps, objects, types=((f"cup-{k}", "cup"),))
+        paths.append(tmp_path / f"d{k}.json")
+        paths[-1].write_text(json.dumps(demonstration_to_dict(demo)))
+    result = invoke("learn", *paths, "-o", tmp_path / "model.json")
+    assert result.exit_code == 0, result.output
+    title = "Roles of identical objects"
+    assert table_rows(result.stdout, title) == [("cup", "cup", "cup-1", "cup-2")]
+    states = table_rows(result.stdout, "States (as the paper")
+    assert [row[1] for row in states] == ["cup", "saucer"]
 
 
 @pytest.mark.parametrize("folder", ["set_table", "blocks"])

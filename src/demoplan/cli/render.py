@@ -87,7 +87,7 @@ def roles_table(model: TaskModel, width: int) -> Table | None:
 
     if not model.roles:
         return None
-    title = "Roles (identical objects: the instance that filled each role)"
+    title = "Roles of identical objects"
     rows = role_rows(model)
     for header in (role_header(model), role_header(model, short=True)):
         table = fitted_table(title, header, rows, header)
