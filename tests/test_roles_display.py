@@ -252,6 +252,36 @@ def test_the_demonstrations_figure_names_the_instance_under_each_role(
     assert {"plate#1", "glass#2"} <= set(graphs[0])
 
 
+def test_the_two_line_labels_get_room_beside_a_long_narrow_table(
+    model: TaskModel, tmp_path: Path
+) -> None:
+    """The table for two is long and narrow (its seats one behind the other):
+    the top views fill their panels, and no two labels of one overlap."""
+    from tests.shared_experiments import text_box
+
+    filled: list[float] = []
+    overlaps: list[str] = []
+
+    def record(figure: Any, renderer: Any, written: Path) -> None:
+        for ax in figure.axes[0::2]:
+            drawn, panel = ax.get_position(), ax.get_position(original=True)
+            filled.append(drawn.width * drawn.height / (panel.width * panel.height))
+            boxes = [(t.get_text(), text_box(t, renderer)) for t in ax.texts if t.get_text()]
+            overlaps.extend(
+                f"{a!r} over {b!r}"
+                for i, (a, box_a) in enumerate(boxes)
+                for b, box_b in boxes[i + 1 :]
+                if box_a.overlaps(box_b)
+            )
+
+    path = tmp_path / "demos.png"
+    with observing_saved_figures(record):
+        save_demonstrations(model, path, "dinner")
+    assert len(filled) == len(model.demonstrations)
+    assert min(filled) > 0.95  # (at the data's own aspect: 0.29 of them)
+    assert overlaps == []
+
+
 @pytest.mark.parametrize("folder", ["set_table", "blocks"])
 def test_figures_of_models_without_roles_keep_their_labels(folder: str, tmp_path: Path) -> None:
     model = learn(load_demonstrations([EXAMPLES / folder]), settings=PAPER_SETTINGS)

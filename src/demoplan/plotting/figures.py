@@ -53,6 +53,7 @@ __all__ = [
     "demonstration_instances",
     "figure_errors",
     "figure_renderer",
+    "fill_panels",
     "object_colour",
     "object_patch",
     "observing_saved_figures",
@@ -317,10 +318,34 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
         fontsize=10,
     )
     fig.tight_layout()
+    if model.roles:  # two-line labels ("1 A plate#1", "← plate-b"): the panels' room for them
+        fill_panels(fig, panels)
+        fig.tight_layout()  # again, around the filled panels' tick labels,
+        fill_panels(fig, panels)  # and filled to the panels that leaves
     try:
         save_figure(fig, path)
     finally:
         plt.close(fig)
+
+
+def fill_panels(figure: Figure, axes: Sequence[Axes]) -> None:
+    """Grow the limits of top views drawn at equal aspect, about their middle,
+    until the data fill each axes' panel: a long, narrow layout (a table for
+    two, its seats one behind the other) then leaves room beside it for the
+    labels instead of drawing narrow axes in a wide panel. Call it once the
+    figure is laid out (its panels placed)."""
+    for ax in axes:
+        box = ax.get_position(original=True)
+        width, height = figure.get_size_inches() * (box.width, box.height)
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        if width <= 0 or height <= 0 or x1 <= x0 or y1 <= y0:
+            continue
+        if (x1 - x0) / (y1 - y0) < width / height:
+            grow = ((y1 - y0) * width / height - (x1 - x0)) / 2
+            ax.set_xlim(x0 - grow, x1 + grow)
+        else:
+            grow = ((x1 - x0) * height / width - (y1 - y0)) / 2
+            ax.set_ylim(y0 - grow, y1 + grow)
 
 
 def demonstration_instances(model: TaskModel, demonstration: int) -> dict[str, str]:
