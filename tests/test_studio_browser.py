@@ -24,6 +24,7 @@ from demoplan.commands.learning import learn_files, learn_model
 from demoplan.commands.planning import plan
 from demoplan.errors import NoPlanError, error_line
 from demoplan.execution.faults import Faults
+from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
 from tests.browser import CHROMIUM_ARGS
@@ -36,6 +37,7 @@ from tests.studio_browser import (
     studio_server,
     write_json,
 )
+from tests.table_for_two import SWAPS, expected_rows, seating_from, table_for_two
 
 pytestmark = pytest.mark.slow
 
@@ -380,6 +382,44 @@ def _free_spot(page: Studio, keep_clear: list[tuple[float, ...]]) -> tuple[float
             if all(abs(x - a) > 0.08 or abs(y - b) > 0.08 for a, b in taken):
                 return x, y
     raise AssertionError("no free spot on the table")
+
+
+def test_a_model_of_identical_objects_shows_which_instance_filled_each_role(
+    studio: tuple[Studio, Path],
+) -> None:
+    """A table for two whose plates, forks, knives and glasses change names
+    between the demonstrations: the Learn view lists each role with its type
+    and the instance that filled it in every demonstration (the generator's
+    truth), and the states name the roles."""
+    page, workdir = studio
+    seatings = seating_from(SWAPS)
+    for k, seating in enumerate(seatings):
+        demo = table_for_two(f"dinner-{k + 1}", seating, k)
+        write_json(workdir / f"dinner-{k + 1}.json", demonstration_to_dict(demo))
+    page.view("Learn")
+    page.button("Learn").click()
+    page.settle()
+    assert page.alert() == ""
+    table = page.tab.get_by_role("table", name="Roles", exact=False)
+    assert table.is_visible()
+    header = table.locator("thead th").all_inner_texts()
+    assert header == ["Role", "Type", "Demonstration 1", "Demonstration 2", "Demonstration 3"]
+    rows = table.locator("tbody tr")
+    shown = [tuple(rows.nth(k).locator("th, td").all_inner_texts()) for k in range(rows.count())]
+    assert shown == expected_rows(seatings)
+    objects = {obj for _, obj, _ in _shown_states(page)}
+    assert objects == {role for role, *_ in expected_rows(seatings)}
+
+
+def test_a_model_without_roles_hides_the_roles_table(studio: tuple[Studio, Path]) -> None:
+    page, workdir = studio
+    shutil.copyfile(BLOCKS, workdir / "blocks.json")
+    page.view("Learn")
+    page.button("Learn").click()
+    page.settle()
+    assert page.alert() == ""
+    assert _shown_states(page)
+    assert page.tab.locator("#roles-box").is_hidden()
 
 
 def test_screenshots_dir_is_in_the_docs() -> None:

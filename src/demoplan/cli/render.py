@@ -76,6 +76,32 @@ def states_table(model: TaskModel, decimals: int, width: int) -> Table:
     return fitted_table(title, header, compact, names)
 
 
+def roles_table(model: TaskModel, width: int) -> Table | None:
+    """Which instance filled each role of identical objects in every demonstration
+    (docs/learning.md, "Roles in tables and figures"): one row per role, one
+    column per demonstration; where that is wider than ``width``, the columns
+    headed by the demonstration's number alone, and where that is still too
+    wide, one column listing ``1:plate-a, 2:plate-b, …`` (wrapped between
+    entries). None for a model without roles."""
+    from demoplan.learning.tables import role_header, role_rows
+
+    if not model.roles:
+        return None
+    title = "Roles of identical objects"
+    rows = role_rows(model)
+    for header in (role_header(model), role_header(model, short=True)):
+        table = fitted_table(title, header, rows, header)
+        if Console(width=10_000).measure(table).maximum <= width:
+            return table
+    listed = [
+        (role, kind, ", ".join(f"{k}:{name}" for k, name in enumerate(filled, 1)))
+        for role, kind, *filled in rows
+    ]
+    return fitted_table(
+        title, ("Role", "Type", "Instance per demonstration"), listed, ("Role", "Type")
+    )
+
+
 def print_model(model: TaskModel, decimals: int) -> None:
     from demoplan.learning.tables import (
         constraint_text,
@@ -86,6 +112,9 @@ def print_model(model: TaskModel, decimals: int) -> None:
         supported_constraint_text,
     )
 
+    roles = roles_table(model, stdout.width)
+    if roles is not None:
+        stdout.print(roles)
     stdout.print(states_table(model, decimals, stdout.width))
     precision = precision_text(model)
     if precision is not None:

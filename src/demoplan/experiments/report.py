@@ -21,7 +21,7 @@ from demoplan.experiments.runs import (
     SegmentationRun,
 )
 from demoplan.fileio import dump_json, write_atomic
-from demoplan.learning.tables import constraint_text, sequence_rows
+from demoplan.learning.tables import constraint_text, role_header, role_rows, sequence_rows
 from demoplan.wording import plural
 
 __all__ = ["TITLE", "write_report"]
@@ -122,6 +122,11 @@ def _learning_section(run: LearningRun) -> str:
     if run.figure:
         lines.append(f"![{run.title}]({run.figure})\n")
     lines += _checks_table(run.checks)
+    if model.roles:  # identical objects: which instance filled each role
+        header = role_header(model)
+        lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+        lines += ["| " + " | ".join(row) + " |" for row in role_rows(model)]
+        lines.append("")
     lines += ["| Demonstration | Sequence | Goal states |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in sequence_rows(model)]
     lines += [

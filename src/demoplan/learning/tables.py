@@ -19,6 +19,8 @@ __all__ = [
     "constraint_text",
     "format_orientation",
     "format_position",
+    "role_header",
+    "role_rows",
     "sequence_rows",
     "state_rows",
     "support_lines",
@@ -105,6 +107,34 @@ def sequence_rows(model: TaskModel) -> list[tuple[str, str, str]]:
         )
         for k, (seq, goal) in enumerate(zip(model.sequences, model.goals, strict=True))
     ]
+
+
+def role_header(model: TaskModel, *, short: bool = False) -> tuple[str, ...]:
+    """Header of :func:`role_rows`: role, type, then one column per demonstration
+    (``Demonstration 1``, or ``1`` where ``short``), numbered as in :func:`sequence_rows`."""
+    count = max([len(model.demonstrations), *(len(role.instances) for role in model.roles)])
+    return (
+        "Role",
+        "Type",
+        *(str(k) if short else f"Demonstration {k}" for k in range(1, count + 1)),
+    )
+
+
+def role_rows(model: TaskModel) -> list[tuple[str, ...]]:
+    """One row per role of identical objects (docs/learning.md, "Roles in tables
+    and figures"): its name (``plate#1``), its type and, per demonstration, the
+    instance that filled it (``—``: that demonstration had no instance for it).
+    No rows for a model whose objects are each of their own type."""
+    count = len(role_header(model)) - 2
+    return [
+        (role.name, role.type, *(_instance(role.instances, k) for k in range(count)))
+        for role in model.roles
+    ]
+
+
+def _instance(instances: Sequence[str | None], demonstration: int) -> str:
+    filled = instances[demonstration] if demonstration < len(instances) else None
+    return "—" if filled is None else filled
 
 
 def constraint_text(pairs: Sequence[tuple[str, str]]) -> str:

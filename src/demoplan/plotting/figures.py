@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -30,6 +30,7 @@ from demoplan.plotting.labels import (
     figure_renderer,
     place_boxes,
     place_labels,
+    role_label,
 )
 from demoplan.rotations import rpy_from_quat
 
@@ -49,8 +50,10 @@ __all__ = [
     "add_label",
     "check_figure_path",
     "constraint_caption",
+    "demonstration_instances",
     "figure_errors",
     "figure_renderer",
+    "fill_panels",
     "object_colour",
     "object_patch",
     "observing_saved_figures",
@@ -62,11 +65,13 @@ __all__ = [
     "plot_scene_plan",
     "plot_scene_side",
     "plot_scene_targets",
+    "role_label",
     "save_demonstrations",
     "save_figure",
     "save_no_plan",
     "save_scene_plan",
     "save_scene_targets",
+    "scene_label",
     "share_limits",
     "side_patch",
 ]
@@ -142,10 +147,14 @@ def plot_demonstration(
     *,
     title: str | None = None,
     states: Sequence[str] = (),
+    instances: Mapping[str, str] | None = None,
 ) -> Axes:
     """Draw one demonstration from above: initial poses faint, each step's placement
     solid and numbered in the order it happened (with its learned state, when
-    ``states`` gives one per step: ``2 B knife``), an arrow for every move."""
+    ``states`` gives one per step: ``2 B knife``), an arrow for every move.
+    ``instances`` (role → instance, :func:`demonstration_instances`): a role's
+    step names the instance that filled it, under the role (``1 A plate#1``,
+    ``← plate-b``)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -176,7 +185,8 @@ def plot_demonstration(
         state = f"{states[number - 1]} " if number <= len(states) else ""
         add_label(
             ax,
-            f"{number} {state}{step.object}",
+            f"{number} {state}"
+            + role_label(step.object, (instances or {}).get(step.object), separator="\n"),
             (x, y),
             offset=(4, 4),
             ha="left",
@@ -293,7 +303,11 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
         title = f"Demonstration {k + 1}: {'-'.join(model.sequences[k])}"
         panels.append(
             plot_demonstration(
-                demo, fig.add_subplot(grid[0, k]), title=title, states=model.sequences[k]
+                demo,
+                fig.add_subplot(grid[0, k]),
+                title=title,
+                states=model.sequences[k],
+                instances=demonstration_instances(model, k),
             )
         )
         plot_constraints(model, k, fig.add_subplot(grid[1, k]))
@@ -304,10 +318,45 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
         fontsize=10,
     )
     fig.tight_layout()
+    if model.roles:  # two-line labels ("1 A plate#1", "← plate-b"): the panels' room for them
+        fill_panels(fig, panels)
+        fig.tight_layout()  # again, around the filled panels' tick labels,
+        fill_panels(fig, panels)  # and filled to the panels that leaves
     try:
         save_figure(fig, path)
     finally:
         plt.close(fig)
+
+
+def fill_panels(figure: Figure, axes: Sequence[Axes]) -> None:
+    """Grow the limits of top views drawn at equal aspect, about their middle,
+    until the data fill each axes' panel: a long, narrow layout (a table for
+    two, its seats one behind the other) then leaves room beside it for the
+    labels instead of drawing narrow axes in a wide panel. Call it once the
+    figure is laid out (its panels placed)."""
+    for ax in axes:
+        box = ax.get_position(original=True)
+        width, height = figure.get_size_inches() * (box.width, box.height)
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        if width <= 0 or height <= 0 or x1 <= x0 or y1 <= y0:
+            continue
+        if (x1 - x0) / (y1 - y0) < width / height:
+            grow = ((y1 - y0) * width / height - (x1 - x0)) / 2
+            ax.set_xlim(x0 - grow, x1 + grow)
+        else:
+            grow = ((x1 - x0) * height / width - (y1 - y0)) / 2
+            ax.set_ylim(y0 - grow, y1 + grow)
+
+
+def demonstration_instances(model: TaskModel, demonstration: int) -> dict[str, str]:
+    """Role → the instance that filled it in ``model``'s demonstration
+    ``demonstration`` (0-based); empty for a model without roles."""
+    return {
+        role.name: filled
+        for role in model.roles
+        if demonstration < len(role.instances)
+        and (filled := role.instances[demonstration]) is not None
+    }
 
 
 def share_limits(axes: list[Axes]) -> None:
@@ -342,10 +391,13 @@ def plot_scene_plan(
     plan: Plan,
     ax: Axes | None = None,
     title: str | None = None,
+    roles: Mapping[str, str] | None = None,
 ) -> Axes:
     """A plan in its scene from above: where the objects stand now (faint), where
     the plan leaves them (solid, higher objects drawn last) and each move as a
-    numbered arrow; free-space spots as dashed circles."""
+    numbered arrow; free-space spots as dashed circles. ``roles`` (role → the
+    scene's instance that fills it, as the plan bound them): an instance
+    filling a role is named ``plate#1 ← plate-b``."""
     import matplotlib.pyplot as plt
     from matplotlib import patches
 
@@ -372,7 +424,7 @@ def plot_scene_plan(
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
     for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
         ax.add_patch(object_patch(pose, geometry[name], colours[name], 0.85))
-        add_label(ax, name, _xy(pose.position), fontsize=7)
+        add_label(ax, scene_label(name, roles), _xy(pose.position), fontsize=7)
     rad = 0.15
     for number, (name, start, end) in enumerate(moves, 1):
         ax.annotate(
@@ -437,12 +489,18 @@ def _legend(ax: Axes, entries: list[tuple[str, str]]) -> None:
 
 
 def plot_scene_targets(
-    scene: Scene, problem: SceneProblem, reason: str, ax: Axes | None = None, title: str = ""
+    scene: Scene,
+    problem: SceneProblem,
+    reason: str,
+    ax: Axes | None = None,
+    title: str = "",
+    roles: Mapping[str, str] | None = None,
 ) -> Axes:
     """A scene that has no plan, from above: the objects where they stand
     (solid), the targets of one candidate goal as dashed outlines named after
     their objects, the free-space spots, and why there is no plan (wrapped
-    under the title)."""
+    under the title). ``roles`` (role → instance): as :func:`plot_scene_plan`;
+    a role's target is named after the role."""
     import textwrap
 
     import matplotlib.pyplot as plt
@@ -473,9 +531,11 @@ def plot_scene_targets(
                 targets.append((name, _xy(spot.position)))
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.85))
-        add_label(ax, obj.name, _xy(obj.pose.position), fontsize=7)
+        add_label(ax, scene_label(obj.name, roles), _xy(obj.pose.position), fontsize=7)
+    filled = {instance: role for role, instance in (roles or {}).items()}
     for name, xy in targets:  # placed after the objects' names, which stay on their objects
-        add_label(ax, f"{name}'s target", xy, fontsize=6, color=colours[name], va="top")
+        owner = filled.get(name, name)
+        add_label(ax, f"{owner}'s target", xy, fontsize=6, color=colours[name], va="top")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.12)
@@ -487,19 +547,29 @@ def plot_scene_targets(
 
 
 def save_scene_targets(
-    scene: Scene, problem: SceneProblem, reason: str, path: Path, title: str
+    scene: Scene,
+    problem: SceneProblem,
+    reason: str,
+    path: Path,
+    title: str,
+    roles: Mapping[str, str] | None = None,
 ) -> None:
     """:func:`plot_scene_targets` into an image file, written atomically."""
-    _save_one_axes(lambda ax: plot_scene_targets(scene, problem, reason, ax, title), path)
+    _save_one_axes(lambda ax: plot_scene_targets(scene, problem, reason, ax, title, roles), path)
 
 
-def save_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
+def save_no_plan(
+    failure: SceneNoPlanError | SceneLimitReachedError,
+    path: Path,
+    roles: Mapping[str, str] | None = None,
+) -> None:
     """What ``plan --plot`` draws when there is no plan: the prepared scene, the
-    first candidate goal's targets and why (the problems carried by ``failure``)."""
+    first candidate goal's targets and why (the problems carried by ``failure``;
+    ``roles``: as :func:`plot_scene_plan`)."""
     first = failure.outcomes[0].problem
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
-    save_scene_targets(failure.scene, first, str(failure), path, title)
+    save_scene_targets(failure.scene, first, str(failure), path, title, roles)
 
 
 def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
@@ -595,13 +665,19 @@ def save_figure(figure: Any, path: Path, dpi: int = 110) -> None:
 
 
 def save_scene_plan(
-    scene: Scene, problem: SceneProblem, plan: Plan, path: Path, title: str
+    scene: Scene,
+    problem: SceneProblem,
+    plan: Plan,
+    path: Path,
+    title: str,
+    roles: Mapping[str, str] | None = None,
 ) -> None:
     """:func:`plot_scene_plan` into an image file, written atomically (raises
     ImportError without matplotlib); where the plan stacks (:func:`plan_stacks`)
-    its side view (:func:`plot_scene_side`) beside it."""
+    its side view (:func:`plot_scene_side`) beside it. ``roles`` (role → the
+    instance that fills it): as :func:`plot_scene_plan`."""
     if not plan_stacks(scene, problem, plan):
-        _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title), path)
+        _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title, roles), path)
         return
     import matplotlib
 
@@ -611,8 +687,8 @@ def save_scene_plan(
     figure = plt.figure(figsize=(12.5, 5.8))
     grid = figure.add_gridspec(1, 2, width_ratios=[1.0, 1.0])
     try:
-        plot_scene_plan(scene, problem, plan, figure.add_subplot(grid[0, 0]), title)
-        plot_scene_side(scene, problem, plan, figure.add_subplot(grid[0, 1]))
+        plot_scene_plan(scene, problem, plan, figure.add_subplot(grid[0, 0]), title, roles)
+        plot_scene_side(scene, problem, plan, figure.add_subplot(grid[0, 1]), roles=roles)
         figure.tight_layout()
         save_figure(figure, path)
     finally:
@@ -663,13 +739,15 @@ def plot_scene_side(
     plan: Plan,
     ax: Axes | None = None,
     title: str | None = None,
+    roles: Mapping[str, str] | None = None,
 ) -> Axes:
     """A plan in its scene from the side (x across, height z up, the table at
     z = 0): where the objects stand now (faint), where the plan leaves them
     (solid), where a move puts an object down on its way (dashed outline), and
     each move as a numbered arrow: up from the top of the object where it is
     picked up, across above everything (move n at the n-th level), down to
-    where its top is once put down, so that unstacking and stacking show."""
+    where its top is once put down, so that unstacking and stacking show.
+    ``roles`` (role → instance): as :func:`plot_scene_plan`."""
     import matplotlib.pyplot as plt
 
     from demoplan.scenes.problems import pose_of
@@ -702,7 +780,7 @@ def plot_scene_side(
             between = True
     for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
         ax.add_patch(side_patch(pose, geometry[name], colours[name], 0.85))
-        add_label(ax, name, _side_middle(pose, geometry[name]), fontsize=7)
+        add_label(ax, scene_label(name, roles), _side_middle(pose, geometry[name]), fontsize=7)
     tops = [obj.pose.position[2] + _height(obj.geometry) for obj in scene.objects]
     tops += [target.position[2] + _height(geometry[name]) for name, _, target in moves]
     highest = max(tops, default=0.05)
@@ -748,6 +826,15 @@ def plot_scene_side(
         entries.append(("outline", "put down on its way"))
     _legend(ax, entries)
     return ax
+
+
+def scene_label(name: str, roles: Mapping[str, str] | None) -> str:
+    """A scene object's label: ``plate#1 ← plate-b`` where ``roles`` (role →
+    instance) has it fill a role of another name, else its name."""
+    for role, instance in (roles or {}).items():
+        if instance == name:
+            return role_label(role, instance)
+    return name
 
 
 def _xy(position: Sequence[float]) -> tuple[float, float]:

@@ -32,6 +32,7 @@ __all__ = [
     "literal_texts",
     "place_boxes",
     "place_labels",
+    "role_label",
 ]
 
 logger = logging.getLogger(__name__)
@@ -47,6 +48,17 @@ LEADER_POINTS = 6.0
 """A label moved further than this (pt) from the point it names gets a thin line to it."""
 LEADER_REACH = 3.0
 """How far (in label sizes) a label may go to keep its line clear of the other labels."""
+
+
+def role_label(name: str, instance: str | None = None, separator: str = " ") -> str:
+    """The label of an object that is a role of identical objects, with the
+    instance that fills it: ``plate#1 ← plate-b`` (docs/learning.md, "Roles in
+    tables and figures"; ``separator`` before the arrow: ``"\\n"`` puts the
+    instance on a line of its own); ``name`` alone where no other instance
+    fills it."""
+    if instance is None or instance == name:
+        return name
+    return f"{name}{separator}← {instance}"
 
 
 @dataclass(frozen=True)

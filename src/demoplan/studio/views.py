@@ -41,7 +41,9 @@ def pose_json(pose: Pose) -> dict[str, Any]:
 def model_json(model: TaskModel) -> dict[str, Any]:
     """The states (as the paper's Tables II and IV: reference, value, spread,
     margin), the state sequences and the constraints as the report draws them
-    (each demonstration's transitive reduction, together)."""
+    (each demonstration's transitive reduction, together); where the model has
+    roles of identical objects, the instance that filled each role in every
+    demonstration (as the model file writes them)."""
     from demoplan.learning.constraints import goal_order, visit_sequence
 
     states = []
@@ -74,12 +76,16 @@ def model_json(model: TaskModel) -> dict[str, Any]:
         nodes.update(dict.fromkeys(visit_sequence(sequence)))
         order = goal_order(sequence, model.constraints)
         edges.update(dict.fromkeys(sorted(order.drawn)))
+    roles = [
+        {"name": role.name, "type": role.type, "instances": list(role.instances)}
+        for role in model.roles
+    ]
     return {
         "states": states,
         "sequences": [list(sequence) for sequence in model.sequences],
         "goals": [list(goal) for goal in model.goals],
         "constraints": {"nodes": list(nodes), "edges": [list(edge) for edge in edges]},
-    }
+    } | ({"roles": roles} if roles else {})
 
 
 def final_scene(model: TaskModel) -> Scene:

@@ -44,6 +44,7 @@ export function renderLearned(result) {
       cell.textContent = text;
     });
   }
+  renderRoles(result.roles || []);
   const sequences = $("sequences");
   sequences.replaceChildren();
   for (const sequence of result.sequences) {
@@ -60,5 +61,30 @@ export function renderLearned(result) {
     const li = document.createElement("li");
     li.textContent = line;
     warnings.appendChild(li);
+  }
+}
+
+// Identical objects: per role its type and, per demonstration, the instance
+// that filled it (hidden for a model without roles).
+function renderRoles(roles) {
+  $("roles-box").hidden = !roles.length;
+  const count = Math.max(0, ...roles.map((r) => r.instances.length));
+  const head = $("roles").tHead.rows[0];
+  head.replaceChildren(...["Role", "Type", ...Array.from({ length: count }, (_, k) => `Demonstration ${k + 1}`)].map((text) => {
+    const th = document.createElement("th");
+    th.scope = "col";
+    th.textContent = text;
+    return th;
+  }));
+  const body = $("roles").tBodies[0];
+  body.replaceChildren();
+  for (const role of roles) {
+    const row = body.insertRow();
+    const th = document.createElement("th");
+    th.scope = "row";
+    th.textContent = role.name;
+    row.appendChild(th);
+    row.insertCell().textContent = role.type;
+    for (const instance of role.instances) row.insertCell().textContent = instance ?? "—";
   }
 }
