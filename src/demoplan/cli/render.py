@@ -208,7 +208,9 @@ def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     label = result.model.demonstration_label(chosen.goal)
     title = f"Goal of {label}: {len(chosen.plan) // 2} moves"
     with figure_errors(path):
-        save_scene_plan(result.scene, chosen.problem, chosen.plan, path, title)
+        save_scene_plan(
+            result.scene, chosen.problem, chosen.plan, path, title, chosen.binding.roles
+        )
 
 
 def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:

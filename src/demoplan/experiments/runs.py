@@ -407,7 +407,14 @@ def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> s
         f"{len(chosen.plan) // 2} moves"
     )
     try:
-        save_scene_plan(complete_scene(scene, model), chosen.problem, chosen.plan, path, title)
+        save_scene_plan(
+            complete_scene(scene, model),
+            chosen.problem,
+            chosen.plan,
+            path,
+            title,
+            chosen.binding.roles,
+        )
     except ImportError:
         return None
     return path.name

@@ -567,6 +567,8 @@ def save_no_plan(
     first candidate goal's targets and why (the problems carried by ``failure``;
     ``roles``: as :func:`plot_scene_plan`)."""
     first = failure.outcomes[0].problem
+    if roles is None:
+        roles = failure.outcomes[0].binding.roles
     goal = first.candidate.demonstrations[0]
     title = f"No plan; the targets of the goal of {failure.model.demonstration_label(goal)}"
     save_scene_targets(failure.scene, first, str(failure), path, title, roles)

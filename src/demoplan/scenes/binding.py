@@ -54,6 +54,12 @@ class Binding:
         return dict(self.pairs)
 
     @property
+    def roles(self) -> dict[str, str]:
+        """Role → instance, for the roles an instance of another name fills (what
+        figures and ``plan --json`` show)."""
+        return {role: instance for role, instance in self.pairs if role != instance}
+
+    @property
     def identity(self) -> bool:
         """Every role is filled by the scene object of its own name."""
         return all(role == instance for role, instance in self.pairs)

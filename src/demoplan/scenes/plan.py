@@ -140,11 +140,7 @@ class ScenePlan:
             "optimal": self.optimal,
             "bound": self.bound,
             "goal": chosen.goal,
-            **(
-                {"binding": {r: i for r, i in chosen.binding.pairs if r != i}}
-                if not chosen.binding.identity
-                else {}
-            ),
+            **({"binding": chosen.binding.roles} if not chosen.binding.identity else {}),
             "candidates": [
                 {
                     "goal": c.goal,
