@@ -1543,9 +1543,11 @@ def pddl_roles_excerpt() -> list[str]:
         "instance (in turn; an instance may bind to itself and stand spare), then moves "
         "roles by the instances playing them: `(grasp INSTANCE LOCATION GRASP ROLE)`. "
         "So an optimal plan has one bind per instance and as many moves as `plan` "
-        "finds over every binding. `--grounded` is refused there (exit 2), and so is "
-        "a goal whose targets depend on the binding (a state placed anywhere, where "
-        "its instance stands). Two cups into a tray's slots — the domain's types and "
+        "finds over every binding. `--grounded` writes the same binds and moves out per "
+        "instance and role (`bind__cup-a__cup-2`, `grasp__cup-b__loc2__grasp2__cup-1`). "
+        "A goal whose targets depend on the binding (a state placed anywhere, where its "
+        "instance stands) is refused (exit 2). Two cups into a tray's slots — the "
+        "domain's types and "
         "`bind`, the problem's objects and goal:",
         fenced("lisp", types.group() + bind.group() + objects.group() + goal.group()),
         "and an optimal plan (`demoplan.planning.pddl.plan_from_pddl` reads it back: "

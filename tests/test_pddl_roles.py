@@ -277,16 +277,49 @@ def test_a_model_without_roles_exports_as_before(tmp_path: Path) -> None:
     assert "bind" not in domain and "(:types item location grip subgoal)" in domain
 
 
-def test_grounded_export_with_roles_is_refused(tmp_path: Path) -> None:
-    with pytest.raises(UsageError, match="--grounded: with identical objects"):
-        write_problem(
-            cups_model(),
-            cups_scene((0.45, 0.1, 75.0)),
-            tmp_path / "goal.pddl",
-            pddl=True,
-            grounded=True,
-        )
-    assert not list(tmp_path.iterdir())
+@pytest.mark.parametrize("index", [1, 2], ids=["tower", "cups"])
+def test_the_grounded_export_with_roles_is_plain_strips_pyperplan_solves(
+    index: int, tmp_path: Path
+) -> None:
+    """pyperplan (A* with h_max, optimal) reads the grounded export: its plan
+    binds, is as long as Fast Downward's of the lifted one would be (the
+    binding's optimum over all bindings), and valid under its binding."""
+    pytest.importorskip("pyperplan", reason="pyperplan not installed (pip install -e '.[fd]')")
+    from pyperplan.grounding import ground
+    from pyperplan.heuristics.relaxation import hMaxHeuristic
+    from pyperplan.pddl.parser import Parser
+    from pyperplan.search import astar_search
+
+    _, model, scene = families()[index]
+    written = write_problem(model, scene, tmp_path / "goal.pddl", pddl=True, grounded=True)
+    problem_path, domain_path = written.files
+    problem, roles = written.problem.problem, written.roles
+    assert roles is not None
+    domain = domain_path.read_text()
+    assert "(:requirements :strips)" in domain
+    for keyword in ("forall", "exists", "when", " or ", "(not (plays", ":typing"):
+        assert keyword not in domain
+    assert "(:action bind__" in domain
+    parser = Parser(str(domain_path), str(problem_path))
+    task = ground(parser.parse_problem(parser.parse_domain()))
+    plan = astar_search(task, hMaxHeuristic(task))
+    assert plan is not None
+    actions, binding = plan_from_pddl(problem, [op.name for op in plan], roles)
+    assert len(plan) == len(actions) + len(roles.kinds)
+    validate(roles.rebind(problem, binding), actions)
+    assert len(actions) == min(binding_lengths(problem, roles, model, scene))
+
+
+def test_fast_downward_reads_the_grounded_export_with_roles(tmp_path: Path) -> None:
+    need_fast_downward()
+    _, model, scene = families()[1]
+    _, _, problem, roles = exported(model, scene, tmp_path)
+    assert roles is not None
+    status, names, _ = fast_downward_plan(*problem_to_pddl(problem, grounded=True, roles=roles))
+    assert status == "SOLVED_OPTIMALLY" and names is not None
+    actions, binding = plan_from_pddl(problem, names, roles)
+    validate(roles.rebind(problem, binding), actions)
+    assert len(actions) == min(binding_lengths(problem, roles, model, scene))
 
 
 def test_targets_that_depend_on_the_binding_are_refused(tmp_path: Path) -> None:

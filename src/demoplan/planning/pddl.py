@@ -42,7 +42,7 @@ reached; the variant that reaches a subgoal needs its predecessors (and the
 object's earlier subgoals there) reached. So Fast Downward's plans, like
 demoplan's, never put an object on its place before its predecessors.
 
-**Roles** (identical objects, :class:`Roles`; lifted only): the problem of
+**Roles** (identical objects, :class:`Roles`): the problem of
 one binding of the model's roles (``plate#1``) to the scene's instances
 (``plate-a``) would fix which instance goes where, so the export lets the
 planner choose. Each type is a subtype of ``item`` holding its instances
@@ -57,7 +57,10 @@ bind. The binds are in one fixed order, since any order gives the same
 plans (and every order would multiply the search: 69 s against 4 s for
 Fast Downward on the table for two). So an optimal plan has one bind per
 instance of a type with roles, then as many moves as demoplan's shortest
-plan over every binding (:func:`plan_from_pddl` reads it back).
+plan over every binding (:func:`plan_from_pddl` reads it back). The
+grounded form writes the same binds and moves out, one action per instance,
+role it may fill (or itself), location and grasp: ``bind__plate-b__plate-1``,
+``grasp__plate-b__loc2__grasp3__plate-1``.
 """
 
 from __future__ import annotations
@@ -67,7 +70,6 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from demoplan.errors import UsageError
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.strips import Rules
@@ -187,14 +189,10 @@ def problem_to_pddl(
     the roles to the instances: ``bind`` actions first give every instance of
     a type a role (or itself: spare), then the moves are of roles; an optimal
     plan has one ``bind`` per instance of a type with roles and as many moves
-    as the shortest demoplan plan over every binding. The grounded form is
-    refused with roles (a UsageError)."""
+    as the shortest demoplan plan over every binding; grounded, the same
+    actions written out per instance and role it may fill."""
     if roles is not None and roles.kinds and grounded:
-        raise UsageError(
-            "--grounded: with identical objects the planner chooses which instance fills "
-            "which role, which the grounded export cannot say in reasonable size; "
-            "use the lifted form (leave out --grounded)"
-        )
+        return _grounded_roles_pddl(problem, _cast(problem, roles))
     if grounded:
         return _grounded_pddl(problem)
     return _lifted_pddl(problem, roles)
@@ -209,6 +207,128 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
     actions = _grounded_actions(problem, c, facts, revisits)
     domain = _grounded_domain(problem, c, facts, domain_name, actions)
     return domain, _grounded_problem(problem, c, facts, domain_name, revisits)
+
+
+def _grounded_roles_pddl(problem: Problem, cast: _Cast) -> tuple[str, str]:
+    """The grounded export with roles: the lifted one's binds and moves, one
+    parameterless action per instance, role it may fill (or itself), and
+    location, grasp (and subgoal reached)."""
+    c = compile_problem(problem)  # the masks are per instance, grasp and location
+    roles = cast.problem  # subgoals, their order and the goal name roles
+    facts = _GroundedFacts(cast.names, cast.subgoal_names)
+    revisits = _revisits(roles, roles.objects)
+    grouped = list(cast.kinds)
+    last = grouped[-1]
+    actions: list[str] = []
+    for o, n in zip(grouped, [*grouped[1:], last], strict=True):
+        actions += _grounded_binds(cast, facts, revisits, o, n)
+    for oi, o in enumerate(c.objects):
+        kind = cast.kinds.get(o)
+        fills = [o] if kind is None else [*(r for r, k in cast.role_kinds.items() if k == kind), o]
+        for r in fills:
+            plays = [] if kind is None else [_plays(cast, o, r)]
+            for gi in c.grasps_of[oi]:
+                for li, loc in enumerate(c.locations):
+                    pre = ["handempty", f"bound {cast.names[last]}", *plays, facts.at(r, loc)]
+                    pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.above[li])]
+                    g = c.grasps[gi]
+                    suffix = "" if kind is None else f"__{cast.names[r]}"
+                    actions.append(
+                        _action(
+                            f"grasp__{cast.names[o]}__{cast.names[loc]}__{cast.names[g]}{suffix}",
+                            pre,
+                            add=[facts.holding(r, g), facts.free(loc)],
+                            delete=["handempty", facts.at(r, loc), facts.occupied(loc)],
+                        )
+                    )
+                    if c.accepts[li] >> oi & 1:
+                        actions += [
+                            _with_role(a, suffix, plays)
+                            for a in _put_downs(roles, c, facts, revisits[r], (oi, gi, li), r)
+                        ]
+    domain_name = _name(f"demoplan-{problem.name}")
+    names = cast.names
+    constants = [names[n] for n in (*roles.objects, *c.locations, *problem.grasps)]
+    constants += [cast.subgoal_names[s.id] for s in problem.subgoals]
+    predicates = [*_GROUNDED_PREDICATES, "(plays ?o ?r)", "(unbound ?o)", "(bound ?o)"]
+    predicates += ["(unfilled ?r)", "(turn ?o)"]
+    domain = (
+        f"(define (domain {domain_name})\n"
+        "  (:requirements :strips)\n"
+        "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
+        "  (:predicates\n"
+        + "".join(f"    {p}\n" for p in predicates)
+        + "  )\n"
+        + "".join(actions)
+        + ")\n"
+    )
+    start = Rules(roles).start()
+    taken = {loc for _, loc in problem.initial}
+    init = ["handempty", *(facts.at(o, loc) for o, loc in problem.initial)]
+    init += [facts.occupied(loc) if loc in taken else facts.free(loc) for loc in c.locations]
+    init += [facts.away(o, p) for o in start.at for p in revisits[o] if start.at[o] != p]
+    init += [
+        facts.reached(s.id) if s.id in start.reached else facts.pending(s.id)
+        for s in roles.subgoals
+    ]
+    init += [f"unbound {names[o]}" for o in grouped]
+    init += [f"unfilled {names[r]}" for r in (*cast.role_kinds, *grouped)]
+    init.append(f"turn {names[grouped[0]]}")
+    goal = ["handempty", *(facts.at(o, loc) for o, loc in roles.goal)]
+    goal += [facts.reached(s.id) for s in roles.subgoals]
+    goal += [f"bound {names[o]}" for o in grouped]
+    text = (
+        f"(define (problem {_name(problem.name)})\n"
+        f"  (:domain {domain_name})\n"
+        "  (:init\n" + "".join(f"    ({fact})\n" for fact in init) + "  )\n"
+        "  (:goal (and\n" + "".join(f"    ({fact})\n" for fact in goal) + "  ))\n"
+        ")\n"
+    )
+    return domain, text
+
+
+def _plays(cast: _Cast, o: str, r: str) -> str:
+    return f"plays {cast.names[o]} {cast.names[r]}"
+
+
+def _with_role(action: str, suffix: str, plays: list[str]) -> str:
+    """A grounded put-down of :func:`_put_downs` named with its role and
+    needing the instance to play it."""
+    if not suffix:
+        return action
+    head, rest = action.split("\n", 1)
+    name = head.removeprefix("  (:action ")
+    base, _, reach = name.partition("__reach__")
+    named = f"  (:action {base}{suffix}" + (f"__reach__{reach}" if reach else "")
+    return (
+        named + "\n" + rest.replace(":precondition (and ", f":precondition (and ({plays[0]}) ", 1)
+    )
+
+
+def _grounded_binds(
+    cast: _Cast, facts: _GroundedFacts, revisits: dict[str, list[str]], o: str, n: str
+) -> list[str]:
+    """Instance o, standing at its start, fills each role of its type, or
+    itself (spare); then n's turn."""
+    names = cast.names
+    start = dict(cast.problem.initial)[o]
+    kind = cast.kinds[o]
+    actions = []
+    for r in [*(r for r, k in cast.role_kinds.items() if k == kind), o]:
+        pre = [f"turn {names[o]}", f"unbound {names[o]}", f"unfilled {names[r]}"]
+        pre.append(facts.at(o, start))
+        add = [f"bound {names[o]}", _plays(cast, o, r), facts.at(r, start)]
+        add += [f"turn {names[n]}"] if n != o else []
+        add += [facts.away(r, p) for p in revisits.get(r, []) if p != start]
+        delete = [f"unbound {names[o]}", f"unfilled {names[r]}"]
+        delete += [f"turn {names[o]}"] if n != o else []
+        delete += [facts.at(o, start)] if r != o else []
+        reached = cast.starts.get((r, start))
+        if reached is not None:
+            add.append(facts.reached(reached))
+            delete.append(facts.pending(reached))
+        actions.append(_action(f"bind__{names[o]}__{names[r]}", pre, add, delete))
+    return actions
 
 
 @dataclass(frozen=True, slots=True)
@@ -287,11 +407,14 @@ def _put_downs(
     facts: _GroundedFacts,
     revisits: list[str],
     move: tuple[int, int, int],
+    role: str | None = None,
 ) -> list[str]:
     """The PUT_DOWN of ``move`` (object, grasp, location indices): a plain one,
-    and one per subgoal of the object at that place that it reaches."""
+    and one per subgoal of the object at that place that it reaches
+    (``role``: of the role the object fills, which the facts are of)."""
     oi, gi, li = move
-    o, g, loc = c.objects[oi], c.grasps[gi], c.locations[li]
+    g, loc = c.grasps[gi], c.locations[li]
+    o = c.objects[oi] if role is None else role
     names = facts.names
     pre = [facts.holding(o, g), facts.free(loc)]
     pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.exclusive[li])]
@@ -300,7 +423,7 @@ def _put_downs(
     add += [facts.away(o, p) for p in revisits if p != loc]
     delete = [facts.holding(o, g), facts.free(loc)]
     delete += [facts.away(o, loc)] if loc in revisits else []
-    base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
+    base = f"put_down__{names[c.objects[oi]]}__{names[loc]}__{names[g]}"
     # The order rule (docs/planning.md): o is put down at the place of a subgoal
     # only to reach it — the first one there not yet reached, once its
     # predecessors are — or once all of them there are reached.
@@ -920,11 +1043,18 @@ def action_from_pddl(problem: Problem, name: str, roles: Roles | None = None) ->
 
 
 def _role_action(problem: Problem, name: str, cast: _Cast) -> Action:
-    parts = name.strip("() ").lower().split()
+    text = name.strip("() ").lower()
     reverse = {v: k for k, v in cast.names.items() if not k.startswith(_ROLE_KEY)}
-    kinds = {"grasp": ("GRASP", 5), "put-down": ("PUT_DOWN", 5)}
-    kinds["put-down-reaching"] = ("PUT_DOWN", 6)
-    if parts and parts[0] in kinds and len(parts) == kinds[parts[0]][1]:
+    if " " in text:  # lifted: (grasp o l g r), (put-down-reaching o l g r s)
+        parts = text.split()
+        kinds = {"grasp": ("GRASP", 5), "put-down": ("PUT_DOWN", 5)}
+        kinds["put-down-reaching"] = ("PUT_DOWN", 6)
+        valid = parts[0] in kinds and len(parts) == kinds[parts[0]][1]
+    else:  # grounded: grasp__o__l__g[__r], put_down__o__l__g[__r][__reach__s]
+        parts = text.split("__")
+        kinds = {"grasp": ("GRASP", 0), "put_down": ("PUT_DOWN", 0)}
+        valid = parts[0] in kinds and 4 <= len(parts) <= 7
+    if valid:
         try:
             o, loc, g = (reverse[p] for p in parts[1:4])
             return Action(kinds[parts[0]][0], o, loc, g)
@@ -946,7 +1076,8 @@ def plan_from_pddl(
     actions: list[Action] = []
     binding: dict[str, str] = {}
     for name in names:
-        parts = name.strip("() ").lower().split()
+        text = name.strip("() ").lower()
+        parts = text.split() if " " in text else text.split("__")
         if parts[:1] in (["bind"], ["bind-reaching"]) and len(parts) >= 3:
             o, r = reverse.get(parts[1], ""), reverse.get(parts[2], "")
             if o in cast.kinds and r in cast.role_kinds:
@@ -958,12 +1089,14 @@ def plan_from_pddl(
     return actions, binding
 
 
-def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -> tuple[Path, Path]:
+def save_pddl(
+    problem: Problem, folder: str | Path, *, grounded: bool = False, roles: Roles | None = None
+) -> tuple[Path, Path]:
     """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (both or neither):
     lifted, or with ``grounded`` the grounded STRIPS export (see :func:`problem_to_pddl`)."""
     from demoplan.fileio import check_output_folder
 
-    domain, problem_text = problem_to_pddl(problem, grounded=grounded)
+    domain, problem_text = problem_to_pddl(problem, grounded=grounded, roles=roles)
     folder = Path(folder)
     check_output_folder(folder)
     paths = (folder / "domain.pddl", folder / "problem.pddl")
