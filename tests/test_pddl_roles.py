@@ -247,6 +247,34 @@ def test_fast_downward_leaves_the_red_under_green_spare(tmp_path: Path) -> None:
     assert check_against_fast_downward(tower_model(), scene, tmp_path / "fd") == min(lengths)
 
 
+def test_a_table_half_laid_binds_the_pieces_already_at_a_seat(tmp_path: Path) -> None:
+    """plate-b stands at the second seat and knife-a beside it, where the
+    model puts them: only the bindings that give them those roles save their
+    moves: 2 for each of the 8 pieces, less the 2 in place, for demoplan and
+    for Fast Downward."""
+    need_fast_downward()
+    model = table_model()
+    states = {s.object: s for s in model.states}
+    seat = states["plate#2"].position.value
+    knife = next(
+        s for s in model.states if s.position.reference == "plate#2" and "knife" in s.object
+    )
+    at = {
+        "plate-b": (seat[0], seat[1], 0.0),
+        "knife-a": (seat[0] + knife.position.value[0], seat[1] + knife.position.value[1], 0.0),
+    }
+    scene = table_scene(np.random.default_rng(8), TABLE_ORDERS[1])
+    scene = replace(
+        scene,
+        objects=tuple(
+            replace(o, pose=Pose(at[o.name], quat_from_yaw(0.0))) if o.name in at else o
+            for o in scene.objects
+        ),
+    )
+    length = check_against_fast_downward(model, scene, tmp_path)
+    assert length == 12
+
+
 # --- the text, and what it refuses ---------------------------------------------------------
 
 
