@@ -29,7 +29,7 @@ from demoplan.errors import UsageError
 from demoplan.learning.learner import learn
 from demoplan.model import Pose, TaskModel
 from demoplan.planning.pddl import Roles, plan_from_pddl, problem_to_pddl
-from demoplan.planning.problem import Problem
+from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.strips import validate
 from demoplan.rotations import quat_from_yaw
@@ -365,3 +365,31 @@ def test_targets_that_depend_on_the_binding_are_refused(tmp_path: Path) -> None:
         write_problem(model, scene, tmp_path / "goal.pddl", pddl=True)
     # the XML export writes the problem of the first binding as before
     write_problem(model, scene, tmp_path / "goal.xml")
+
+
+def test_roles_named_like_instances_and_types_get_names_of_their_own() -> None:
+    """The model's untyped "cup" is a role the scene's "cup" and "cup-2" (type
+    cup) may fill: role, instances and type share a name, which PDDL keeps in
+    one namespace. Fast Downward still finds the 2 binds and 2 moves, and the
+    names map back."""
+    need_fast_downward()
+    problem = Problem.create(
+        objects=["cup", "cup-2"],
+        locations=["l1", "l2", "slot"],
+        grasps=["g1", "g2"],
+        allowed=[("cup", "g1"), ("cup-2", "g2")],
+        initial=[("cup", "l1"), ("cup-2", "l2")],
+        goal=[("cup", "slot")],
+        subgoals=[Subgoal("A", "cup", "slot")],
+    )
+    roles = Roles({"cup": "cup", "cup-2": "cup"}, {"cup": "cup"})
+    domain, text = problem_to_pddl(problem, roles=roles)
+    declared = re.search(r"\(:objects\n(.*?)\n  \)", text, re.S)
+    assert declared is not None
+    words = [w for w in declared.group(1).split() if w != "-"]
+    assert len(words) == len(set(words))
+    status, names, _ = fast_downward_plan(domain, text)
+    assert status == "SOLVED_OPTIMALLY" and names is not None and len(names) == 4
+    actions, binding = plan_from_pddl(problem, names, roles)
+    assert binding["cup"] in {"cup", "cup-2"} and len(actions) == 2
+    validate(roles.rebind(problem, binding), actions)
