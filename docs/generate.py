@@ -1523,12 +1523,72 @@ def other_section() -> str:
             "- **PDDL** (`pddl PROBLEM.xml -o DIR`: `DIR/domain.pddl` and "
             "`DIR/problem.pddl`; `problem --pddl -o FILE`: `FILE` and "
             "`FILE-domain.pddl`, the extension of FILE replaced): the problem for any "
-            "PDDL planner, lifted, or grounded STRIPS with `--grounded`. docs/planning.md.\n"
+            "PDDL planner, lifted, or grounded STRIPS with `--grounded`; with identical "
+            "objects, the planner binds the roles (below). docs/planning.md.\n"
             "- **Report** (`experiments --out DIR`): `report.md`, `report.html` (one "
             "self-contained page) and `summary.json`, with the figures and models the "
             "report shows, and the manifest; an earlier report's folder is replaced whole.",
+            *pddl_roles_excerpt(),
         ]
     )
+
+
+def pddl_roles_excerpt() -> list[str]:
+    """What ``problem --pddl`` writes where the model has roles of identical objects,
+    from the export itself (two cups into a tray's two slots), and a plan of it
+    checked by demoplan's rules."""
+    from demoplan.planning.pddl import Roles, plan_from_pddl, problem_to_pddl
+    from demoplan.planning.problem import Problem, Subgoal
+    from demoplan.planning.strips import validate
+
+    problem = Problem.create(
+        objects=["cup-a", "cup-b", "tray"],
+        locations=["loc1", "loc2", "loc3", "loc4", "loc5"],
+        grasps=["grasp1", "grasp2", "grasp3"],
+        allowed=[("cup-a", "grasp1"), ("cup-b", "grasp2"), ("tray", "grasp3")],
+        initial=[("cup-a", "loc1"), ("cup-b", "loc2"), ("tray", "loc3")],
+        goal=[("cup-a", "loc4"), ("cup-b", "loc5")],
+        supports=[("loc4", "loc3"), ("loc5", "loc3")],
+        subgoals=[Subgoal("A", "cup-a", "loc4"), Subgoal("B", "cup-b", "loc5")],
+        name="goal-1",
+    )
+    roles = Roles({"cup-a": "cup", "cup-b": "cup"}, {"cup-a": "cup#1", "cup-b": "cup#2"})
+    domain, text = problem_to_pddl(problem, roles=roles)
+    types = re.search(r"  \(:types.*?\)\n", domain, re.S)
+    bind = re.search(r"  \(:action bind\n.*?\n    \)\)\n", domain, re.S)
+    objects = re.search(r"  \(:objects\n.*?\n  \)\n", text, re.S)
+    goal = re.search(r"  \(:goal.*?\)\)\n", text, re.S)
+    assert types and bind and objects and goal, "the PDDL export changed: update the excerpt"
+    plan = [
+        "(bind cup-a cup-2 loc1 cup-b)",
+        "(bind cup-b cup-1 loc2 cup-b)",
+        "(grasp cup-b loc2 grasp2 cup-1)",
+        "(put-down-reaching cup-b loc4 grasp2 cup-1 a)",
+        "(grasp cup-a loc1 grasp1 cup-2)",
+        "(put-down-reaching cup-a loc5 grasp1 cup-2 b)",
+    ]
+    actions, binding = plan_from_pddl(problem, plan, roles)
+    validate(roles.rebind(problem, binding), actions)  # the plan shown is one
+    return [
+        "**PDDL with identical objects.** Where the model has roles (`cup#1`, "
+        "`cup#2`: docs/planning.md) and the scene more than one way to fill them, "
+        "`problem --pddl` does not fix which instance goes where: each type is a PDDL "
+        "type under `item` holding its instances and its roles, subgoals and the goal "
+        "name roles, and a plan starts with one `bind INSTANCE ROLE LOCATION NEXT` per "
+        "instance (in turn; an instance may bind to itself and stand spare), then moves "
+        "roles by the instances playing them: `(grasp INSTANCE LOCATION GRASP ROLE)`. "
+        "So an optimal plan has one bind per instance and as many moves as `plan` "
+        "finds over every binding. `--grounded` writes the same binds and moves out per "
+        "instance and role (`bind__cup-a__cup-2`, `grasp__cup-b__loc2__grasp2__cup-1`). "
+        "A goal whose targets depend on the binding (a state placed anywhere, where its "
+        "instance stands) is refused (exit 2). Two cups into a tray's slots — the "
+        "domain's types and "
+        "`bind`, the problem's objects and goal:",
+        fenced("lisp", types.group() + bind.group() + objects.group() + goal.group()),
+        "and an optimal plan (`demoplan.planning.pddl.plan_from_pddl` reads it back: "
+        "the moves, and the binding cup#1=cup-b, cup#2=cup-a):",
+        fenced("lisp", "\n".join(plan)),
+    ]
 
 
 # ----------------------------------------------------------------------------- cli.md

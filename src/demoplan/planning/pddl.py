@@ -41,22 +41,44 @@ PUT_DOWN at a place of one of the object's subgoals needs every subgoal there
 reached; the variant that reaches a subgoal needs its predecessors (and the
 object's earlier subgoals there) reached. So Fast Downward's plans, like
 demoplan's, never put an object on its place before its predecessors.
+
+**Roles** (identical objects, :class:`Roles`): the problem of
+one binding of the model's roles (``plate#1``) to the scene's instances
+(``plate-a``) would fix which instance goes where, so the export lets the
+planner choose. Each type is a subtype of ``item`` holding its instances
+and its roles; subgoals, their order and the goal name roles, and what is
+moved is a role (an object not of such a type is its own role:
+``(plays blue blue)``), by the instance that ``plays`` it — its grasps,
+its size. First ``bind ?o ?r ?l ?n`` gives each instance in turn a role of
+its type or itself (spare), and the role stands where the instance does
+(``bind-reaching`` where standing there reaches a subgoal at the start, as
+:mod:`demoplan.planning.strips` counts it); a grasp waits for the last
+bind. The binds are in one fixed order, since any order gives the same
+plans (and every order would multiply the search: 69 s against 4 s for
+Fast Downward on the table for two). So an optimal plan has one bind per
+instance of a type with roles, then as many moves as demoplan's shortest
+plan over every binding (:func:`plan_from_pddl` reads it back). The
+grounded form writes the same binds and moves out, one action per instance,
+role it may fill (or itself), location and grasp: ``bind__plate-b__plate-1``,
+``grasp__plate-b__loc2__grasp3__plate-1``.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from demoplan.planning.compiled import Compiled, compile_problem
-from demoplan.planning.problem import Action, Problem
+from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.strips import Rules
 
 __all__ = [
+    "Roles",
     "action_from_pddl",
     "pddl_domain_path",
+    "plan_from_pddl",
     "problem_to_pddl",
     "save_pddl",
     "save_pddl_problem",
@@ -79,6 +101,14 @@ _LIFTED_WORDS = (
     "subgoals-at repeated revisit away"
 )
 _LIFTED_RESERVED = _RESERVED | frozenset(_LIFTED_WORDS.split())
+# ... and, with roles, its words for binding them.
+_ROLE_WORDS = (
+    "bind bind-reaching plays may-play unbound bound unfilled start-reaching start-reaches "
+    "turn then last"
+)
+_ROLES_RESERVED = _LIFTED_RESERVED | frozenset(_ROLE_WORDS.split())
+_ROLE_KEY = "\0"
+"""Prefixes a role's name where the problem's names are keys: apart from every instance's."""
 _GROUNDED_PREDICATES = (
     "(handempty)",
     "(located ?o ?l)",
@@ -103,12 +133,69 @@ def _name(text: str) -> str:
     return name
 
 
-def problem_to_pddl(problem: Problem, *, grounded: bool = False) -> tuple[str, str]:
+@dataclass(frozen=True, slots=True)
+class Roles:
+    """Identical objects in a problem (docs/planning.md, "Identical objects").
+
+    ``kinds`` gives the type of every instance of a type whose instances are
+    interchangeable; ``filled`` the role (``plate#1``) each instance fills in
+    ``problem`` — the problem names the instances, as under one binding of
+    roles to instances — the instances of a type filling none standing spare.
+    The export lets a planner choose the binding (see :func:`problem_to_pddl`).
+    """
+
+    kinds: Mapping[str, str]  # instance -> its type
+    filled: Mapping[str, str]  # instance -> the role it fills in the problem
+
+    def check(self, problem: Problem) -> None:
+        """ValueError unless these roles fit ``problem``."""
+        unknown = sorted(set(self.kinds) - set(problem.objects))
+        untyped = sorted(set(self.filled) - set(self.kinds))
+        if unknown or untyped:
+            raise ValueError(f"roles name {unknown or untyped}, not typed objects of the problem")
+        if len(set(self.filled.values())) != len(self.filled):
+            raise ValueError("two instances fill one role")
+        named = {s.object for s in problem.subgoals} | {o for o, _ in problem.goal}
+        spare = sorted(o for o in named & set(self.kinds) if o not in self.filled)
+        if spare:
+            raise ValueError(f"{spare} have goals but fill no role")
+
+    def rebind(self, problem: Problem, binding: Mapping[str, str]) -> Problem:
+        """``problem`` with the instances of ``binding`` (role → instance, a
+        role for every filled instance) in the roles, as demoplan plans it
+        under that binding."""
+        self.check(problem)
+        instance = {o: binding[role] for o, role in self.filled.items()}
+        if sorted(instance.values()) != sorted(set(instance.values())) or any(
+            self.kinds.get(new) != self.kinds[old] for old, new in instance.items()
+        ):
+            raise ValueError(
+                f"{dict(binding)} is not a binding of roles to instances of their types"
+            )
+        subgoals = tuple(
+            Subgoal(s.id, instance.get(s.object, s.object), s.location) for s in problem.subgoals
+        )
+        goal = tuple((instance.get(o, o), loc) for o, loc in problem.goal)
+        return replace(problem, subgoals=subgoals, goal=goal)
+
+
+def problem_to_pddl(
+    problem: Problem, *, grounded: bool = False, roles: Roles | None = None
+) -> tuple[str, str]:
     """``(domain, problem)`` PDDL texts for ``problem``: a lifted domain with the
-    problem's facts in ``:init``, or with ``grounded`` the grounded STRIPS export."""
+    problem's facts in ``:init``, or with ``grounded`` the grounded STRIPS export.
+
+    With ``roles`` (identical objects), the lifted export lets a planner bind
+    the roles to the instances: ``bind`` actions first give every instance of
+    a type a role (or itself: spare), then the moves are of roles; an optimal
+    plan has one ``bind`` per instance of a type with roles and as many moves
+    as the shortest demoplan plan over every binding; grounded, the same
+    actions written out per instance and role it may fill."""
+    if roles is not None and roles.kinds and grounded:
+        return _grounded_roles_pddl(problem, _cast(problem, roles))
     if grounded:
         return _grounded_pddl(problem)
-    return _lifted_pddl(problem)
+    return _lifted_pddl(problem, roles)
 
 
 def _grounded_pddl(problem: Problem) -> tuple[str, str]:
@@ -120,6 +207,128 @@ def _grounded_pddl(problem: Problem) -> tuple[str, str]:
     actions = _grounded_actions(problem, c, facts, revisits)
     domain = _grounded_domain(problem, c, facts, domain_name, actions)
     return domain, _grounded_problem(problem, c, facts, domain_name, revisits)
+
+
+def _grounded_roles_pddl(problem: Problem, cast: _Cast) -> tuple[str, str]:
+    """The grounded export with roles: the lifted one's binds and moves, one
+    parameterless action per instance, role it may fill (or itself), and
+    location, grasp (and subgoal reached)."""
+    c = compile_problem(problem)  # the masks are per instance, grasp and location
+    roles = cast.problem  # subgoals, their order and the goal name roles
+    facts = _GroundedFacts(cast.names, cast.subgoal_names)
+    revisits = _revisits(roles, roles.objects)
+    grouped = list(cast.kinds)
+    last = grouped[-1]
+    actions: list[str] = []
+    for o, n in zip(grouped, [*grouped[1:], last], strict=True):
+        actions += _grounded_binds(cast, facts, revisits, o, n)
+    for oi, o in enumerate(c.objects):
+        kind = cast.kinds.get(o)
+        fills = [o] if kind is None else [*(r for r, k in cast.role_kinds.items() if k == kind), o]
+        for r in fills:
+            plays = [] if kind is None else [_plays(cast, o, r)]
+            for gi in c.grasps_of[oi]:
+                for li, loc in enumerate(c.locations):
+                    pre = ["handempty", f"bound {cast.names[last]}", *plays, facts.at(r, loc)]
+                    pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.above[li])]
+                    g = c.grasps[gi]
+                    suffix = "" if kind is None else f"__{cast.names[r]}"
+                    actions.append(
+                        _action(
+                            f"grasp__{cast.names[o]}__{cast.names[loc]}__{cast.names[g]}{suffix}",
+                            pre,
+                            add=[facts.holding(r, g), facts.free(loc)],
+                            delete=["handempty", facts.at(r, loc), facts.occupied(loc)],
+                        )
+                    )
+                    if c.accepts[li] >> oi & 1:
+                        actions += [
+                            _with_role(a, suffix, plays)
+                            for a in _put_downs(roles, c, facts, revisits[r], (oi, gi, li), r)
+                        ]
+    domain_name = _name(f"demoplan-{problem.name}")
+    names = cast.names
+    constants = [names[n] for n in (*roles.objects, *c.locations, *problem.grasps)]
+    constants += [cast.subgoal_names[s.id] for s in problem.subgoals]
+    predicates = [*_GROUNDED_PREDICATES, "(plays ?o ?r)", "(unbound ?o)", "(bound ?o)"]
+    predicates += ["(unfilled ?r)", "(turn ?o)"]
+    domain = (
+        f"(define (domain {domain_name})\n"
+        "  (:requirements :strips)\n"
+        "  (:constants\n" + "".join(f"    {n}\n" for n in constants) + "  )\n"
+        "  (:predicates\n"
+        + "".join(f"    {p}\n" for p in predicates)
+        + "  )\n"
+        + "".join(actions)
+        + ")\n"
+    )
+    start = Rules(roles).start()
+    taken = {loc for _, loc in problem.initial}
+    init = ["handempty", *(facts.at(o, loc) for o, loc in problem.initial)]
+    init += [facts.occupied(loc) if loc in taken else facts.free(loc) for loc in c.locations]
+    init += [facts.away(o, p) for o in start.at for p in revisits[o] if start.at[o] != p]
+    init += [
+        facts.reached(s.id) if s.id in start.reached else facts.pending(s.id)
+        for s in roles.subgoals
+    ]
+    init += [f"unbound {names[o]}" for o in grouped]
+    init += [f"unfilled {names[r]}" for r in (*cast.role_kinds, *grouped)]
+    init.append(f"turn {names[grouped[0]]}")
+    goal = ["handempty", *(facts.at(o, loc) for o, loc in roles.goal)]
+    goal += [facts.reached(s.id) for s in roles.subgoals]
+    goal += [f"bound {names[o]}" for o in grouped]
+    text = (
+        f"(define (problem {_name(problem.name)})\n"
+        f"  (:domain {domain_name})\n"
+        "  (:init\n" + "".join(f"    ({fact})\n" for fact in init) + "  )\n"
+        "  (:goal (and\n" + "".join(f"    ({fact})\n" for fact in goal) + "  ))\n"
+        ")\n"
+    )
+    return domain, text
+
+
+def _plays(cast: _Cast, o: str, r: str) -> str:
+    return f"plays {cast.names[o]} {cast.names[r]}"
+
+
+def _with_role(action: str, suffix: str, plays: list[str]) -> str:
+    """A grounded put-down of :func:`_put_downs` named with its role and
+    needing the instance to play it."""
+    if not suffix:
+        return action
+    head, rest = action.split("\n", 1)
+    name = head.removeprefix("  (:action ")
+    base, _, reach = name.partition("__reach__")
+    named = f"  (:action {base}{suffix}" + (f"__reach__{reach}" if reach else "")
+    return (
+        named + "\n" + rest.replace(":precondition (and ", f":precondition (and ({plays[0]}) ", 1)
+    )
+
+
+def _grounded_binds(
+    cast: _Cast, facts: _GroundedFacts, revisits: dict[str, list[str]], o: str, n: str
+) -> list[str]:
+    """Instance o, standing at its start, fills each role of its type, or
+    itself (spare); then n's turn."""
+    names = cast.names
+    start = dict(cast.problem.initial)[o]
+    kind = cast.kinds[o]
+    actions = []
+    for r in [*(r for r, k in cast.role_kinds.items() if k == kind), o]:
+        pre = [f"turn {names[o]}", f"unbound {names[o]}", f"unfilled {names[r]}"]
+        pre.append(facts.at(o, start))
+        add = [f"bound {names[o]}", _plays(cast, o, r), facts.at(r, start)]
+        add += [f"turn {names[n]}"] if n != o else []
+        add += [facts.away(r, p) for p in revisits.get(r, []) if p != start]
+        delete = [f"unbound {names[o]}", f"unfilled {names[r]}"]
+        delete += [f"turn {names[o]}"] if n != o else []
+        delete += [facts.at(o, start)] if r != o else []
+        reached = cast.starts.get((r, start))
+        if reached is not None:
+            add.append(facts.reached(reached))
+            delete.append(facts.pending(reached))
+        actions.append(_action(f"bind__{names[o]}__{names[r]}", pre, add, delete))
+    return actions
 
 
 @dataclass(frozen=True, slots=True)
@@ -198,11 +407,14 @@ def _put_downs(
     facts: _GroundedFacts,
     revisits: list[str],
     move: tuple[int, int, int],
+    role: str | None = None,
 ) -> list[str]:
     """The PUT_DOWN of ``move`` (object, grasp, location indices): a plain one,
-    and one per subgoal of the object at that place that it reaches."""
+    and one per subgoal of the object at that place that it reaches
+    (``role``: of the role the object fills, which the facts are of)."""
     oi, gi, li = move
-    o, g, loc = c.objects[oi], c.grasps[gi], c.locations[li]
+    g, loc = c.grasps[gi], c.locations[li]
+    o = c.objects[oi] if role is None else role
     names = facts.names
     pre = [facts.holding(o, g), facts.free(loc)]
     pre += [facts.free(b) for b in _places(c, c.block[li][gi] | c.exclusive[li])]
@@ -211,7 +423,7 @@ def _put_downs(
     add += [facts.away(o, p) for p in revisits if p != loc]
     delete = [facts.holding(o, g), facts.free(loc)]
     delete += [facts.away(o, loc)] if loc in revisits else []
-    base = f"put_down__{names[o]}__{names[loc]}__{names[g]}"
+    base = f"put_down__{names[c.objects[oi]]}__{names[loc]}__{names[g]}"
     # The order rule (docs/planning.md): o is put down at the place of a subgoal
     # only to reach it — the first one there not yet reached, once its
     # predecessors are — or once all of them there are reached.
@@ -371,8 +583,10 @@ class _Lifted:
     revisits: tuple[tuple[str, str], ...]  # (o, l) with two subgoals of o at l
 
 
-def _lifted(problem: Problem) -> _Lifted:
-    names, subgoal_names = _unique_names(problem, _LIFTED_RESERVED)
+def _lifted(
+    problem: Problem, named: tuple[dict[str, str], dict[str, str]] | None = None
+) -> _Lifted:
+    names, subgoal_names = named or _unique_names(problem, _LIFTED_RESERVED)
     rank = {name: i for i, name in enumerate((*problem.locations, *problem.grasps))}
 
     def places(by_key: dict[tuple[str, ...], set[str]]) -> dict[tuple[str, ...], list[str]]:
@@ -442,16 +656,152 @@ def _lifted(problem: Problem) -> _Lifted:
     )
 
 
-def _lifted_pddl(problem: Problem) -> tuple[str, str]:
-    """A typed domain of up to three schemas and a problem whose ``:init`` holds the facts."""
-    lifted = _lifted(problem)
+@dataclass(frozen=True, slots=True)
+class _Cast:
+    """The lifted export with roles: ``problem`` is the one given with its
+    subgoals and goal naming roles (keys :data:`_ROLE_KEY` + role, declared
+    after the instances among its objects); the PDDL names of everything; and
+    which subgoal a role reaches at the start by standing at a place (the
+    rule of :meth:`Rules.reached_where_they_stand`, for the instance that
+    will fill it)."""
+
+    problem: Problem
+    names: dict[str, str]  # objects, role keys, locations, grasps
+    subgoal_names: dict[str, str]
+    kinds: dict[str, str]  # instance -> type, for the types with roles
+    role_kinds: dict[str, str]  # role key -> type
+    kind_names: dict[str, str]  # type -> PDDL type
+    starts: dict[tuple[str, str], str]  # (role key, location) -> the subgoal reached there
+
+    def typed_objects(self) -> list[tuple[list[str], str]]:
+        """Per type, its instances and its roles, in PDDL names."""
+        typed = {**self.kinds, **self.role_kinds}
+        return [
+            ([self.names[o] for o in self.problem.objects if typed.get(o) == kind], name)
+            for kind, name in self.kind_names.items()
+        ]
+
+    def predicates(self) -> list[str]:
+        found = [
+            "(plays ?o - item ?r - item)",
+            "(may-play ?o - item ?r - item)",
+            "(unbound ?o - item)",
+            "(bound ?o - item)",
+            "(unfilled ?r - item)",
+            "(turn ?o - item)",
+            "(then ?o - item ?n - item)",
+            "(last ?o - item)",
+        ]
+        if self.starts:
+            found += [
+                "(start-reaching ?r - item ?l - location)",
+                "(start-reaches ?r - item ?l - location ?s - subgoal)",
+            ]
+        return found
+
+    def schemas(self, revisits: bool) -> list[str]:
+        """``bind ?o ?r ?l ?n``: instance o, standing at l, fills role r (or r = o:
+        o stands spare) and r stands at l from then on; instance n is next;
+        ``bind-reaching`` the same where r standing at l counts as having
+        reached subgoal s."""
+        parameters = "?o - item ?r - item ?l - location ?n - item"
+        pre = ["(turn ?o)", "(then ?o ?n)", "(unbound ?o)", "(unfilled ?r)", "(may-play ?o ?r)"]
+        pre.append("(located ?o ?l)")
+        effect = [
+            "(not (turn ?o))",
+            "(turn ?n)",  # added after the delete: the last instance's turn stays
+            "(not (unbound ?o))",
+            "(bound ?o)",
+            "(not (unfilled ?r))",
+            "(plays ?o ?r)",
+            "(not (located ?o ?l))",
+            "(located ?r ?l)",  # added after the delete: a spare stays where it stands
+        ]
+        if revisits:
+            effect.append(_away_elsewhere("?r", "?l", "?x"))
+        if not self.starts:
+            return [_schema("bind", parameters, pre, effect)]
+        return [
+            _schema("bind", parameters, [*pre, "(not (start-reaching ?r ?l))"], effect),
+            _schema(
+                "bind-reaching",
+                f"{parameters} ?s - subgoal",
+                [*pre, "(start-reaches ?r ?l ?s)"],
+                [*effect, "(reached ?s)", "(not (pending ?s))"],
+            ),
+        ]
+
+    def facts(self) -> list[str]:
+        """The ``:init`` facts of the binding: every object not of a type with
+        roles plays itself; every instance of one is unbound and may fill the
+        roles of its type, or itself."""
+        names = self.names
+        typed = {**self.kinds, **self.role_kinds}
+        facts = [f"plays {names[o]} {names[o]}" for o in self.problem.objects if o not in typed]
+        facts += [f"unbound {names[o]}" for o in self.kinds]
+        # the instances are bound in turn (one order of the binds, not every one)
+        order = [names[o] for o in self.kinds]
+        facts.append(f"turn {order[0]}")
+        facts += [f"then {o} {n}" for o, n in zip(order, [*order[1:], order[-1]], strict=True)]
+        facts.append(f"last {order[-1]}")
+        facts += [f"unfilled {names[r]}" for r in (*self.role_kinds, *self.kinds)]
+        for o, kind in self.kinds.items():
+            fills = [r for r, k in self.role_kinds.items() if k == kind]
+            facts += [f"may-play {names[o]} {names[r]}" for r in (*fills, o)]
+        for (r, loc), sid in self.starts.items():
+            facts.append(f"start-reaching {names[r]} {names[loc]}")
+            facts.append(f"start-reaches {names[r]} {names[loc]} {self.subgoal_names[sid]}")
+        return facts
+
+
+def _cast(problem: Problem, roles: Roles) -> _Cast:
+    """The role export's view of ``problem`` (:class:`_Cast`)."""
+    roles.check(problem)
+    key = {o: _ROLE_KEY + roles.filled[o] for o in problem.objects if o in roles.filled}
+    kinds = {o: roles.kinds[o] for o in problem.objects if o in roles.kinds}
+    role_kinds = {key[o]: kinds[o] for o in key}
+    renamed = replace(
+        problem,
+        objects=(*problem.objects, *role_kinds),
+        subgoals=tuple(
+            Subgoal(s.id, key.get(s.object, s.object), s.location) for s in problem.subgoals
+        ),
+        goal=tuple((key.get(o, o), loc) for o, loc in problem.goal),
+    )
+    unique = _namer(_ROLES_RESERVED)
+    names = {n: unique(n) for n in (*problem.objects, *problem.locations, *problem.grasps)}
+    subgoal_names = {s.id: unique(s.id) for s in problem.subgoals}
+    names |= {r: unique(r.removeprefix(_ROLE_KEY)) for r in role_kinds}
+    kind_names = {kind: unique(kind) for kind in dict.fromkeys(kinds.values())}
+    rules = Rules(renamed)
+    starts: dict[tuple[str, str], str] = {}
+    for r, kind in role_kinds.items():
+        for o, loc in problem.initial:
+            if kinds.get(o) == kind:
+                done = rules.reached_where_they_stand({r: loc}, renamed.reached)
+                for sid in done - renamed.reached:  # one at most
+                    starts[r, loc] = sid
+    return _Cast(renamed, names, subgoal_names, kinds, role_kinds, kind_names, starts)
+
+
+def _lifted_pddl(problem: Problem, roles: Roles | None = None) -> tuple[str, str]:
+    """A typed domain of up to three schemas (five with roles) and a problem
+    whose ``:init`` holds the facts."""
+    cast = None if roles is None or not roles.kinds else _cast(problem, roles)
+    if cast is None:
+        lifted = _lifted(problem)
+    else:
+        problem = cast.problem
+        lifted = _lifted(problem, (cast.names, cast.subgoal_names))
     domain_name = _name(f"demoplan-{problem.name}")
-    return _lifted_domain(problem, lifted, domain_name), _lifted_problem(
-        problem, lifted, domain_name
+    return _lifted_domain(problem, lifted, domain_name, cast), _lifted_problem(
+        problem, lifted, domain_name, cast
     )
 
 
-def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
+def _lifted_domain(
+    problem: Problem, lifted: _Lifted, domain_name: str, cast: _Cast | None = None
+) -> str:
     guard, carries, rests_on, overlaps = (
         lifted.guard,
         lifted.carries,
@@ -472,6 +822,8 @@ def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
     ]
     if problem.accepts:
         predicates += ["(restricted ?l - location)", "(accepts ?l - location ?o - item)"]
+    if cast is not None:
+        predicates += cast.predicates()
     if problem.subgoals:
         predicates += [
             "(subgoal-of ?s - subgoal ?o - item ?l - location)",
@@ -487,42 +839,49 @@ def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
             "(away ?o - item ?l - location)",
         ]
 
-    put_pre = ["(holding ?o ?g)", "(free ?l)", *guard.precondition("?l", "?g")]
+    # With roles, ?r is what is moved (a role, or an object that is its own role)
+    # and ?o the instance playing it, whose grasps and size count.
+    m = "?o" if cast is None else "?r"
+    put_pre = ["(plays ?o ?r)"] if cast is not None else []
+    put_pre += [f"(holding {m} ?g)", "(free ?l)", *guard.precondition("?l", "?g")]
     put_pre += rests_on.precondition("?l") + overlaps.precondition("?l")
     if problem.accepts:
         put_pre.append("(or (not (restricted ?l)) (accepts ?l ?o))")
     put_effect = [
         "(handempty)",
-        "(located ?o ?l)",
+        f"(located {m} ?l)",
         "(occupied ?l)",
         "(not (free ?l))",
-        "(not (holding ?o ?g))",
+        f"(not (holding {m} ?g))",
     ]
     if lifted.revisits:
         put_effect += [
-            "(forall (?r - location) (when (and (revisit ?o ?r) (not (= ?r ?l))) (away ?o ?r)))",
-            "(not (away ?o ?l))",
+            _away_elsewhere(m, "?l", "?r" if cast is None else "?x"),
+            f"(not (away {m} ?l))",
         ]
     parameters = "?o - item ?l - location ?g - grip"
-    grasp_pre = ["(handempty)", "(located ?o ?l)", "(allowed ?o ?g)"]
+    grasp_pre = ["(handempty)"]
+    if cast is not None:  # every instance bound first (the last is bound last)
+        grasp_pre += ["(exists (?z - item) (and (last ?z) (bound ?z)))", "(plays ?o ?r)"]
+    grasp_pre += [f"(located {m} ?l)", "(allowed ?o ?g)"]
     grasp_pre += guard.precondition("?l", "?g") + carries.precondition("?l")
     grasp_effect = [
         "(not (handempty))",
-        "(not (located ?o ?l))",
+        f"(not (located {m} ?l))",
         "(not (occupied ?l))",
         "(free ?l)",
-        "(holding ?o ?g)",
+        f"(holding {m} ?g)",
     ]
+    if cast is not None:
+        parameters += " ?r - item"
     schemas = [
         _schema("grasp", parameters, grasp_pre, grasp_effect),
-        _schema(
-            "put-down", parameters, put_pre + lifted.settled.precondition("?o", "?l"), put_effect
-        ),
+        _schema("put-down", parameters, put_pre + lifted.settled.precondition(m, "?l"), put_effect),
     ]
     if problem.subgoals:
-        reaching = ["(subgoal-of ?s ?o ?l)", "(pending ?s)", *lifted.order.precondition("?s")]
+        reaching = [f"(subgoal-of ?s {m} ?l)", "(pending ?s)", *lifted.order.precondition("?s")]
         if lifted.revisits:
-            reaching.append("(or (not (repeated ?s)) (away ?o ?l))")
+            reaching.append(f"(or (not (repeated ?s)) (away {m} ?l))")
         schemas.append(
             _schema(
                 "put-down-reaching",
@@ -531,6 +890,10 @@ def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
                 [*put_effect, "(reached ?s)", "(not (pending ?s))"],
             )
         )
+    types = "item location grip subgoal"
+    if cast is not None:
+        schemas += cast.schemas(bool(lifted.revisits))
+        types += f" - object\n    {' '.join(cast.kind_names.values())} - item"
     requirements = ":strips :typing :negative-preconditions :disjunctive-preconditions"
     requirements += " :existential-preconditions"
     if lifted.revisits:
@@ -538,12 +901,20 @@ def _lifted_domain(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
     return (
         f"(define (domain {domain_name})\n"
         f"  (:requirements {requirements})\n"
-        "  (:types item location grip subgoal)\n"
+        f"  (:types {types})\n"
         "  (:predicates\n"
         + "".join(f"    {p}\n" for p in predicates)
         + "  )\n"
         + "".join(schemas)
         + ")\n"
+    )
+
+
+def _away_elsewhere(moved: str, place: str, variable: str) -> str:
+    """The effect "``moved`` is away from every place it revisits but ``place``"."""
+    return (
+        f"(forall ({variable} - location) (when (and (revisit {moved} {variable}) "
+        f"(not (= {variable} {place}))) (away {moved} {variable})))"
     )
 
 
@@ -556,11 +927,15 @@ def _schema(name: str, parameters: str, pre: list[str], effect: list[str]) -> st
     )
 
 
-def _lifted_problem(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
+def _lifted_problem(
+    problem: Problem, lifted: _Lifted, domain_name: str, cast: _Cast | None = None
+) -> str:
     names, subgoal_names = lifted.names, lifted.subgoal_names
     start = Rules(problem).start()
+    typed = {} if cast is None else {**cast.kinds, **cast.role_kinds}
     objects = [
-        ([names[o] for o in problem.objects], "item"),
+        ([names[o] for o in problem.objects if o not in typed], "item"),
+        *(cast.typed_objects() if cast is not None else []),
         ([names[loc] for loc in problem.locations], "location"),
         ([names[g] for g in problem.grasps], "grip"),
         ([subgoal_names[s.id] for s in problem.subgoals], "subgoal"),
@@ -583,10 +958,12 @@ def _lifted_problem(problem: Problem, lifted: _Lifted, domain_name: str) -> str:
     init += [f"repeated {sid}" for sid in lifted.repeated]
     for o, loc in lifted.revisits:
         init.append(f"revisit {names[o]} {names[loc]}")
-        if start.at[o] != loc:
+        if o in start.at and start.at[o] != loc:  # a role's: when it is bound
             init.append(f"away {names[o]} {names[loc]}")
+    init += [] if cast is None else cast.facts()
     goal = ["handempty", *(f"located {names[o]} {names[loc]}" for o, loc in problem.goal)]
     goal += [f"reached {subgoal_names[s.id]}" for s in problem.subgoals]
+    goal += [] if cast is None else [f"bound {names[o]}" for o in cast.kinds]
     return (
         f"(define (problem {_name(problem.name)})\n"
         f"  (:domain {domain_name})\n"
@@ -610,6 +987,14 @@ def _unique_names(
     a name a reader could take for a keyword — or, in the lifted export, for
     one of the domain's own words — gets a prefix (``and`` → ``n-and``).
     """
+    unique = _namer(reserved)
+    names = {n: unique(n) for n in (*problem.objects, *problem.locations, *problem.grasps)}
+    subgoal_names = {s.id: unique(s.id) for s in problem.subgoals}
+    return names, subgoal_names
+
+
+def _namer(reserved: frozenset[str]) -> Callable[[str], str]:
+    """A function giving each name it is called with a PDDL name none before had."""
     used: set[str] = set()
 
     def unique(original: str) -> str:
@@ -622,15 +1007,18 @@ def _unique_names(
         used.add(name)
         return name
 
-    names = {n: unique(n) for n in (*problem.objects, *problem.locations, *problem.grasps)}
-    subgoal_names = {s.id: unique(s.id) for s in problem.subgoals}
-    return names, subgoal_names
+    return unique
 
 
-def action_from_pddl(problem: Problem, name: str) -> Action:
+def action_from_pddl(problem: Problem, name: str, roles: Roles | None = None) -> Action:
     """The demoplan action behind a PDDL action as a planner prints it: lifted,
     ``(grasp box loc264 grasp6)``, ``(put-down box freespace1 grasp6)`` or
-    ``(put-down-reaching o l g s)``; grounded, ``(grasp__box__loc264__grasp6)``."""
+    ``(put-down-reaching o l g s)``; grounded, ``(grasp__box__loc264__grasp6)``.
+    With ``roles``, of the export with them: ``(grasp plate-a loc1 grasp3
+    plate-1)`` is plate-a's GRASP (filling role plate#1); a ``bind`` is no
+    action (ValueError; :func:`plan_from_pddl` reads whole plans)."""
+    if roles is not None and roles.kinds:
+        return _role_action(problem, name, _cast(problem, roles))
     text = name.strip("() ").lower()
     lifted = " " in text
     names = _unique_names(problem, _LIFTED_RESERVED if lifted else _RESERVED)
@@ -654,12 +1042,61 @@ def action_from_pddl(problem: Problem, name: str) -> Action:
     return Action(kinds[parts[0]][0], o, loc, g)
 
 
-def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -> tuple[Path, Path]:
+def _role_action(problem: Problem, name: str, cast: _Cast) -> Action:
+    text = name.strip("() ").lower()
+    reverse = {v: k for k, v in cast.names.items() if not k.startswith(_ROLE_KEY)}
+    if " " in text:  # lifted: (grasp o l g r), (put-down-reaching o l g r s)
+        parts = text.split()
+        kinds = {"grasp": ("GRASP", 5), "put-down": ("PUT_DOWN", 5)}
+        kinds["put-down-reaching"] = ("PUT_DOWN", 6)
+        valid = parts[0] in kinds and len(parts) == kinds[parts[0]][1]
+    else:  # grounded: grasp__o__l__g[__r], put_down__o__l__g[__r][__reach__s]
+        parts = text.split("__")
+        kinds = {"grasp": ("GRASP", 0), "put_down": ("PUT_DOWN", 0)}
+        valid = parts[0] in kinds and 4 <= len(parts) <= 7
+    if valid:
+        try:
+            o, loc, g = (reverse[p] for p in parts[1:4])
+            return Action(kinds[parts[0]][0], o, loc, g)
+        except KeyError:
+            pass
+    raise ValueError(f"{name!r} is not an action of this problem's PDDL export")
+
+
+def plan_from_pddl(
+    problem: Problem, names: Sequence[str], roles: Roles | None = None
+) -> tuple[list[Action], dict[str, str]]:
+    """A planner's plan of the export of ``problem`` as demoplan actions, and
+    the binding its ``bind`` actions chose (role → instance; empty without
+    ``roles``): the plan is demoplan's for ``roles.rebind(problem, binding)``."""
+    if roles is None or not roles.kinds:
+        return [action_from_pddl(problem, name) for name in names], {}
+    cast = _cast(problem, roles)
+    reverse = {v: k for k, v in cast.names.items()}
+    actions: list[Action] = []
+    binding: dict[str, str] = {}
+    for name in names:
+        text = name.strip("() ").lower()
+        parts = text.split() if " " in text else text.split("__")
+        if parts[:1] in (["bind"], ["bind-reaching"]) and len(parts) >= 3:
+            o, r = reverse.get(parts[1], ""), reverse.get(parts[2], "")
+            if o in cast.kinds and r in cast.role_kinds:
+                binding[r.removeprefix(_ROLE_KEY)] = o
+            elif not (o in cast.kinds and r == o):
+                raise ValueError(f"{name!r} is not a binding of this problem's PDDL export")
+            continue
+        actions.append(_role_action(problem, name, cast))
+    return actions, binding
+
+
+def save_pddl(
+    problem: Problem, folder: str | Path, *, grounded: bool = False, roles: Roles | None = None
+) -> tuple[Path, Path]:
     """Write ``domain.pddl`` and ``problem.pddl`` into ``folder`` (both or neither):
     lifted, or with ``grounded`` the grounded STRIPS export (see :func:`problem_to_pddl`)."""
     from demoplan.fileio import check_output_folder
 
-    domain, problem_text = problem_to_pddl(problem, grounded=grounded)
+    domain, problem_text = problem_to_pddl(problem, grounded=grounded, roles=roles)
     folder = Path(folder)
     check_output_folder(folder)
     paths = (folder / "domain.pddl", folder / "problem.pddl")
@@ -667,11 +1104,14 @@ def save_pddl(problem: Problem, folder: str | Path, *, grounded: bool = False) -
     return paths
 
 
-def save_pddl_problem(problem: Problem, path: str | Path, *, grounded: bool = False) -> Path:
+def save_pddl_problem(
+    problem: Problem, path: str | Path, *, grounded: bool = False, roles: Roles | None = None
+) -> Path:
     """Write the PDDL problem to ``path`` and its domain beside it, to
-    ``<stem>-domain.pddl`` (both or neither); returns the domain's path."""
+    ``<stem>-domain.pddl`` (both or neither); returns the domain's path.
+    ``roles``: identical objects, bound by the planner (:func:`problem_to_pddl`)."""
     path = Path(path)
-    domain, problem_text = problem_to_pddl(problem, grounded=grounded)
+    domain, problem_text = problem_to_pddl(problem, grounded=grounded, roles=roles)
     domain_path = pddl_domain_path(path)
     _write_both((domain_path, path), (domain, problem_text))
     return domain_path
