@@ -67,6 +67,7 @@ from demoplan.learning.modelfile import (
     _OrientationSchema,
     _PositionSchema,
     _PrecisionSchema,
+    _RoleSchema,
     _SettingsSchema,
     _StateSchema,
     _ViolationSchema,
@@ -288,6 +289,9 @@ GEOMETRY = FieldTable(
     {
         "shape": "`mesh`: a shape known only by its extents (no symmetry is assumed)",
         "size": "extents `[x, y, z]` in the object's frame; a cylinder's x and y are its diameter",
+        "type": "a kind of object (`plate`; no spaces, no `#`): objects of one type are "
+        "interchangeable instances, and learning names their roles (`plate#1`, `plate#2`); "
+        "default: the object is of its own type, its name",
         **MASS_FIELDS,
     },
 )
@@ -353,6 +357,9 @@ SCENE_OBJECT = FieldTable(
         "shape": "the object's shape",
         "grasps": "finger axes in the object's frame, in degrees; default `[0, 90]`: "
         "two side grasps at right angles",
+        "type": "a kind of object (`plate`): one of several interchangeable instances of "
+        "that type (`perceive` writes the colour of two or more blocks of one colour); "
+        "default: the object is of its own type, its name",
         **MASS_FIELDS,
     },
 )
@@ -396,6 +403,9 @@ MODEL = FieldTable(
         "violations": "demonstrations that contradict a teacher constraint",
         "settings": "the learning settings (below); left out: the defaults",
         "precision": "the placement precision decisions were measured against",
+        "roles": "where objects share a type: each role (`name`, e.g. `plate#1`), its "
+        "`type`, and the instance that filled it in each demonstration (`instances`); "
+        "states and constraints name roles (docs/learning.md)",
         "demonstrations": "the demonstrations learned from (demonstration documents), "
         "for `learn --update`",
     },
@@ -444,6 +454,15 @@ VIOLATION = FieldTable(
     {
         "demonstration": "the demonstration (from 0)",
         "required": "the teacher constraint `[X, Y]` it contradicts",
+    },
+)
+ROLE = FieldTable(
+    "Role",
+    _RoleSchema,
+    {
+        "name": "the role: its type and a number, `plate#1`",
+        "type": "the type of the objects that may fill it",
+        "instances": "per demonstration, the object that filled it (`null`: none)",
     },
 )
 PRECISION = FieldTable(
@@ -495,6 +514,7 @@ FIELD_TABLES = (
     STATE_POSITION,
     STATE_ORIENTATION,
     VIOLATION,
+    ROLE,
     PRECISION,
     SETTINGS,
 )
@@ -1307,6 +1327,7 @@ def model_section(computed: Computed) -> str:
             field_table(STATE_POSITION),
             field_table(STATE_ORIENTATION),
             field_table(VIOLATION),
+            field_table(ROLE),
             field_table(PRECISION),
             field_table(SETTINGS),
         ]
@@ -1472,7 +1493,10 @@ def other_section() -> str:
             "- **Camera image** (`perceive IMAGE`): a top-down orthographic colour image of "
             "the table (PNG, or any image Pillow reads): `--px-per-m` pixels per metre, "
             "`--origin X Y` the world x and y of its bottom-left corner, image right = "
-            "world x, image up = world y. docs/perception.md.\n"
+            "world x, image up = world y. `perceive` names each block by its colour "
+            "(`red`; a second red block `red2`; a colour without a name `block1`, "
+            "`block2`…) and writes two or more blocks of one named colour as instances "
+            "of one type, `\"type\": \"red\"` (docs/perception.md).\n"
             f"- **Figures** ({', '.join(c for c in users('other', 1) if '--plot' in c)}): "
             "the extension chooses the "
             f"format: {figures}.\n"
