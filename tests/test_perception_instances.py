@@ -169,6 +169,40 @@ def test_the_moved_red_keeps_its_name(
     assert (now["red2"].x, now["red2"].y) == other and now["red2"].z == 0.0
 
 
+@settings(max_examples=200, deadline=None)
+@given(
+    start=spot,
+    other=spot,
+    third=st.none() | spot,
+    name=st.sampled_from(["red", "red2"]),
+    told=st.booleans(),
+)
+def test_a_red_put_squarely_on_a_red_is_the_one_seen(
+    start: tuple[float, float],
+    other: tuple[float, float],
+    third: tuple[float, float] | None,
+    name: str,
+    told: bool,
+) -> None:
+    """red goes from ``start`` squarely onto red2 and hides it (red3 may stand by).
+    The red seen there — whatever the detector calls it — is red, 4 cm up; red2 is
+    under it where it was. With red3 in view too, the pictures alone cannot say
+    which of the two red was put on (a stack of two reds looks like one red), so
+    the tracker is told where it was put."""
+    assume(clear(start, other))
+    known = [("red", start), ("red2", other)]
+    seen = [detection(name, *other)]
+    expected = {"red": (*other, SIDE), "red2": (*other, 0.0)}
+    if third is not None:
+        assume(told and clear(start, third) and clear(other, third))
+        known.append(("red3", third))
+        seen.append(detection("red3" if name == "red" else "red", *third))
+        expected["red3"] = (*third, 0.0)
+    tracker = BlockTracker(TrackedBlock(n, *p, 0.0, 0.0, SIDE) for n, p in known)
+    now = tracker.update(seen, placed={"red": other} if told else None)
+    assert {n: (b.x, b.y, b.z) for n, b in now.items()} == expected
+
+
 @given(spots=st.lists(spot, min_size=2, max_size=4), held=st.integers(0, 3))
 def test_a_held_red_is_not_taken_for_the_one_on_the_table(
     spots: list[tuple[float, float]], held: int
