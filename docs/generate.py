@@ -67,7 +67,6 @@ from demoplan.learning.modelfile import (
     _OrientationSchema,
     _PositionSchema,
     _PrecisionSchema,
-    _RoleSchema,
     _SettingsSchema,
     _StateSchema,
     _ViolationSchema,
@@ -289,9 +288,6 @@ GEOMETRY = FieldTable(
     {
         "shape": "`mesh`: a shape known only by its extents (no symmetry is assumed)",
         "size": "extents `[x, y, z]` in the object's frame; a cylinder's x and y are its diameter",
-        "type": "a kind of object (`plate`; no spaces, no `#`): objects of one type are "
-        "interchangeable instances, and learning names their roles (`plate#1`, `plate#2`); "
-        "default: the object is of its own type, its name",
         **MASS_FIELDS,
     },
 )
@@ -357,9 +353,6 @@ SCENE_OBJECT = FieldTable(
         "shape": "the object's shape",
         "grasps": "finger axes in the object's frame, in degrees; default `[0, 90]`: "
         "two side grasps at right angles",
-        "type": "a kind of object (`plate`): one of several interchangeable instances of "
-        "that type (`perceive` writes the colour of two or more blocks of one colour); "
-        "default: the object is of its own type, its name",
         **MASS_FIELDS,
     },
 )
@@ -403,9 +396,6 @@ MODEL = FieldTable(
         "violations": "demonstrations that contradict a teacher constraint",
         "settings": "the learning settings (below); left out: the defaults",
         "precision": "the placement precision decisions were measured against",
-        "roles": "where objects share a type: each role (`name`, e.g. `plate#1`), its "
-        "`type`, and the instance that filled it in each demonstration (`instances`); "
-        "states and constraints name roles (docs/learning.md)",
         "demonstrations": "the demonstrations learned from (demonstration documents), "
         "for `learn --update`",
     },
@@ -454,15 +444,6 @@ VIOLATION = FieldTable(
     {
         "demonstration": "the demonstration (from 0)",
         "required": "the teacher constraint `[X, Y]` it contradicts",
-    },
-)
-ROLE = FieldTable(
-    "Role",
-    _RoleSchema,
-    {
-        "name": "the role: its type and a number, `plate#1`",
-        "type": "the type of the objects that may fill it",
-        "instances": "per demonstration, the object that filled it (`null`: none)",
     },
 )
 PRECISION = FieldTable(
@@ -514,7 +495,6 @@ FIELD_TABLES = (
     STATE_POSITION,
     STATE_ORIENTATION,
     VIOLATION,
-    ROLE,
     PRECISION,
     SETTINGS,
 )
@@ -1327,7 +1307,6 @@ def model_section(computed: Computed) -> str:
             field_table(STATE_POSITION),
             field_table(STATE_ORIENTATION),
             field_table(VIOLATION),
-            field_table(ROLE),
             field_table(PRECISION),
             field_table(SETTINGS),
         ]
