@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
@@ -62,6 +64,28 @@ def test_one_to_five_blocks_at_random_poses() -> None:
     position, angle, side = np.array(measured).T
     assert np.median(position) < 1.0 and np.median(angle) < 1.0
     assert position.max() < 1.0 and angle.max() < 1.0 and side.max() < 1.0
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    colour=st.sampled_from(sorted(COLOURS)),
+    x_mm=st.integers(60, 440),
+    y_mm=st.integers(60, 340),
+    side_mm=st.integers(21, 50),
+    seed=st.integers(0, 2**16),
+)
+def test_a_block_on_pixel_borders(
+    colour: str, x_mm: int, y_mm: int, side_mm: int, seed: int
+) -> None:
+    """A block at yaw 0 on whole millimetres (1 px = 1 mm): its edges lie on pixel
+    borders, as in a render of a scene at round coordinates (MuJoCo's top camera).
+    Its centre on a Hough bin border once split the votes, and a square in a corner
+    of the block (two free sides) was taken for it; it is found to a millimetre."""
+    truth = [SyntheticBlock(colour, x_mm / 1000, y_mm / 1000, 0.0, side_mm / 1000)]
+    found = detect_blocks(render_blocks(truth, CAMERA, rng=seed), CAMERA)
+    assert [f.colour for f in found] == [colour]
+    ((position, angle, side),) = errors(truth, found)
+    assert position < 1.0 and angle < 1.0 and side < 1.0
 
 
 @pytest.mark.parametrize("seed", range(6))

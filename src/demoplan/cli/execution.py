@@ -193,10 +193,19 @@ def perceive(
             print_json(found.document)
             return
         table = Table(title=f"Blocks in {image_path.name}", title_justify="left")
-        for column in ("name", "x [m]", "y [m]", "z [m]", "yaw [deg]", "side [m]"):
-            table.add_column(column, justify="left" if column == "name" else "right")
+        types = {n: o.get("type") for n, o in found.document["objects"].items()}
+        typed = any(types.values())  # a type column only where a colour repeats
+        names = ("name", "type") if typed else ("name",)
+        for column in (*names, "x [m]", "y [m]", "z [m]", "yaw [deg]", "side [m]"):
+            table.add_column(column, justify="left" if column in names else "right")
         for name, b in found.blocks.items():
             table.add_row(
-                name, f"{b.x:.4f}", f"{b.y:.4f}", f"{b.z:.3f}", f"{b.yaw:.1f}", f"{b.side:.4f}"
+                name,
+                *((types[name] or "",) if typed else ()),
+                f"{b.x:.4f}",
+                f"{b.y:.4f}",
+                f"{b.z:.3f}",
+                f"{b.yaw:.1f}",
+                f"{b.side:.4f}",
             )
         stdout.print(table)

@@ -8,6 +8,13 @@ What the hand holds comes from the gripper itself (a robot feels that). The
 grasps go where perception says the object is. The start's stacking comes
 from the scene: a camera above cannot see what is under a block it never saw
 being covered.
+
+Blocks are told apart by colour: every object's type (its name, when it
+declares none) must be a colour the camera names. Several blocks of one colour
+(``red`` and ``red2``, both of type ``red``) look alike; each keeps its
+identity from picture to picture by proximity — to where it was last seen, or,
+for the block just put down, to where it was put (:meth:`BlockTracker.identify
+<demoplan.perception.stacking.BlockTracker.identify>`).
 """
 
 from __future__ import annotations
@@ -38,12 +45,13 @@ class CameraWorld:
     def __init__(
         self, world: MujocoWorld, scene: Scene, settings: PerceptionSettings | None = None
     ):
-        plain = [o.name for o in scene.objects if o.name not in PERCEIVED_COLOURS]
+        plain = [o.name for o in scene.objects if o.kind not in PERCEIVED_COLOURS]
         if plain:
+            colours = ", ".join(sorted(PERCEIVED_COLOURS))
             raise UsageError(
-                f"--perception camera names blocks by colour; {', '.join(plain)} "
-                f"{'is' if len(plain) == 1 else 'are'} not one of "
-                f"{', '.join(sorted(PERCEIVED_COLOURS))}"
+                "--perception camera tells blocks apart by colour: an object's type (its "
+                f"name, when it declares none) must be one of {colours}; "
+                f"{', '.join(plain)} {'is' if len(plain) == 1 else 'are'} not"
             )
         self.world = world
         sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]
@@ -59,18 +67,22 @@ class CameraWorld:
                 o.pose.position[2],
                 ((yaw_of(o.pose) + 45.0) % 90.0) - 45.0,
                 o.geometry.size[0] if o.geometry else 0.04,
+                o.kind,
             )
             for o in scene.objects
         )
         self.geometry = {o.name: o.geometry for o in scene.objects if o.geometry is not None}
         self.pictures = 0
+        self.placed: dict[str, tuple[float, float]] = {}
+        """Blocks put down since the last picture, and where (x, y)."""
 
     def observe(self) -> Observation:
         held = self.world.observe().held  # the gripper's own sense
         image = self.world.top_image()
         self.pictures += 1
         detected = detect_blocks(image, self.world.top_camera, self.settings)
-        blocks = self.tracker.update(detected, held)
+        blocks = self.tracker.update(detected, held, self.placed)
+        self.placed = {}
         poses = {n: Pose((b.x, b.y, b.z), quat_from_yaw(b.yaw)) for n, b in blocks.items()}
         geometry = dict(self.geometry)
         for n, b in blocks.items():
@@ -81,6 +93,7 @@ class CameraWorld:
         self.world.grasp(obj, axis, where)
 
     def put_down(self, obj: str, pose: Pose) -> None:
+        self.placed[obj] = (pose.position[0], pose.position[1])
         self.world.put_down(obj, pose)
 
     def between_actions(self, upcoming: Sequence[Pose] = ()) -> None:

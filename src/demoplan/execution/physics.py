@@ -36,7 +36,7 @@ from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
-from demoplan.plotting.colours import assign_colours, object_rgba
+from demoplan.plotting.colours import NAMED, assign_colours, object_rgba
 from demoplan.scenes.geometry import half_extent
 from demoplan.scenes.scene import Scene, yaw_of
 
@@ -106,7 +106,7 @@ def scene_xml(
         x, y, z = obj.pose.position
         half = obj.geometry.size[2] / 2
         w, qx, qy, qz = _wxyz(obj.pose)
-        rgba = object_rgba(obj.name)
+        rgba = object_rgba(rendered_colour(scene, obj.name))
         bodies.append(
             f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
             f'<freejoint/><geom {_geom(obj.geometry)} mass="{obj.geometry.kg}" rgba="{rgba}" '
@@ -201,6 +201,14 @@ def _wxyz(pose: Pose) -> tuple[float, float, float, float]:
         return (1.0, 0.0, 0.0, 0.0)
     x, y, z, w = pose.orientation
     return (w, x, y, z)
+
+
+def rendered_colour(scene: Scene, name: str) -> str:
+    """What an object's colour in renders follows: its type where that names a
+    colour (``red`` and ``red2``, both of type ``red``, are both red — the top
+    camera tells blocks apart by colour), else its name."""
+    kind = next((o.kind for o in scene.objects if o.name == name), name)
+    return kind if kind in NAMED else name
 
 
 class MujocoWorld:
@@ -532,7 +540,8 @@ class MujocoWorld:
             shape = self.geometry.get(name)
             if shape is None or scene.ngeom >= scene.maxgeom:
                 continue
-            red, green, blue, _ = (float(v) for v in object_rgba(name).split())
+            rgba = object_rgba(rendered_colour(self.scene, name))
+            red, green, blue, _ = (float(v) for v in rgba.split())
             x, y, z = pose.position
             half = np.array(shape.size, dtype=float) / 2
             matrix = np.zeros(9)

@@ -5,5 +5,6 @@
 - :mod:`~demoplan.perception.hough`: the paper's Hough transform over (x, y, θ, s);
 - :mod:`~demoplan.perception.blocks`: detection = colours + Hough + sub-pixel fit → a scene;
 - :mod:`~demoplan.perception.stacking`: a block covered after a move is under the moved one;
+  blocks of one colour (instances of one type) told apart by where they were;
 - :mod:`~demoplan.perception.synthetic`: test images of blocks (anti-aliased, noisy, shaded).
 """

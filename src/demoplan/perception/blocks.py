@@ -16,8 +16,10 @@
    are found one after the other. The next Hough maxima are tried when the
    strongest one is not borne out.
 
-Names are colour names (``red``, ``wood``…), ``red2`` for a second red one;
-yaw is given in [−45°, 45°) (a cube looks the same every 90°).
+Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
+(blocks of one named colour are instances of one type in the scene
+:func:`~demoplan.perception.stacking.scene_document` writes); yaw is given in
+[−45°, 45°) (a cube looks the same every 90°).
 """
 
 from __future__ import annotations

@@ -88,6 +88,12 @@ def hough_squares(
     accumulator = accumulator + 0.5 * (
         np.roll(accumulator, 1, axis=0) + np.roll(accumulator, -1, axis=0)
     )
+    # and so do neighbouring centre bins: a centre on a bin border (a square whose
+    # edges lie on pixel borders, as a render of a block at round coordinates has
+    # them) splits its votes over four bins, and a square with only two of its
+    # sides in the crop, sitting in one bin, would outvote it
+    for axis in (2, 3):
+        accumulator = ndimage.convolve1d(accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant")
     found: list[Hypothesis] = []
     flat = accumulator.reshape(-1)
     order = np.argsort(flat)[::-1]

@@ -62,7 +62,7 @@ def perceive_files(
         if before is not None:
             earlier = detect_blocks(load_image(before), camera, settings)
             tracker = BlockTracker(
-                TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side) for b in earlier
+                TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side, b.colour) for b in earlier
             )
         blocks = tracker.update(detect_blocks(load_image(image), camera, settings))
     if not blocks:
