@@ -1510,7 +1510,7 @@ def other_section() -> str:
             "world x, image up = world y. `perceive` names each block by its colour "
             "(`red`; a second red block `red2`; a colour without a name `block1`, "
             "`block2`…) and writes two or more blocks of one named colour as instances "
-            "of one type, `\"type\": \"red\"` (docs/perception.md).\n"
+            'of one type, `"type": "red"` (docs/perception.md).\n'
             f"- **Figures** ({', '.join(c for c in users('other', 1) if '--plot' in c)}): "
             "the extension chooses the "
             f"format: {figures}.\n"

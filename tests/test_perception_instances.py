@@ -515,7 +515,6 @@ def assert_pyramid_built_by_one_red(report: dict[str, Any]) -> None:
     assert other[2] == pytest.approx(0.0, abs=0.003)
 
 
-@pytest.mark.xfail(strict=True, reason="needs the planner's binding of instances to roles")
 def test_the_blocks_experiment_with_a_second_red_plans_and_runs(
     second_red: tuple[Path, Path],
 ) -> None:
@@ -529,7 +528,6 @@ def test_the_blocks_experiment_with_a_second_red_plans_and_runs(
     assert_pyramid_built_by_one_red(json.loads(ran.stdout))
 
 
-@pytest.mark.xfail(strict=True, reason="needs the planner's binding of instances to roles")
 def test_the_blocks_experiment_with_a_second_red_runs_on_vision(
     second_red: tuple[Path, Path],
 ) -> None:
