@@ -88,3 +88,15 @@ def test_colours_are_the_same_in_another_process() -> None:
     lines = done.stdout.splitlines()
     assert lines[0] == object_colour("zebra")
     assert lines[1] == str(sorted(assign_colours(task).items()))
+
+
+def test_numbered_instances_of_a_colour_get_that_colour() -> None:
+    """Identical blocks as perception (``red2``) and learning (``red#2``) name them."""
+    from demoplan.plotting.colours import NAMED, assign_colours, object_colour
+
+    for name in ("red2", "red-2", "red#2", "wood#1"):
+        assert object_colour(name) == NAMED[name.rstrip("0123456789").rstrip("-#")]
+    assert object_colour("reddish") != NAMED["red"] or object_colour("reddish") in NAMED.values()
+    assigned = assign_colours(["red", "red2", "plate#1", "plate#2"])
+    assert assigned["red"] == assigned["red2"] == NAMED["red"]
+    assert assigned["plate#1"] != assigned["plate#2"]

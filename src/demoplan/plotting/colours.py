@@ -2,7 +2,9 @@
 command, so that ``learn``'s figure, ``plan --plot`` and ``run --frames`` of
 one task agree.
 
-An object named after a colour (``red``, ``wood``) gets that colour. Any
+An object named after a colour (``red``, ``wood``) gets that colour, and so
+does a numbered one (``red2``, ``red-2``, the role ``red#2``: identical
+blocks as perception and learning name them). Any
 other gets a colour of :data:`CYCLE` chosen from its name alone (a stable
 hash), so it does not depend on which object happened to be drawn first;
 where two objects of one task would share a colour, :func:`assign_colours`,
@@ -13,6 +15,7 @@ NumPy- and matplotlib-free: the physics world uses it too.
 
 from __future__ import annotations
 
+import re
 import zlib
 from collections.abc import Iterable
 
@@ -61,9 +64,21 @@ _assigned: dict[str, str] = {}
 def object_colour(name: str) -> str:
     """``name``'s colour as ``#rrggbb``: its own where it names one, else the one
     :func:`assign_colours` gave it, else its preferred cycle colour."""
+    named = _named(name)
+    if named is not None:
+        return named
+    return _assigned.get(name) or _preferred(name)
+
+
+_NUMBERED = re.compile(r"^([a-z]+)(?:[-#]?\d+)$")
+
+
+def _named(name: str) -> str | None:
+    """The colour ``name`` names: ``red``, or a numbered ``red2`` / ``red-2`` / ``red#2``."""
     if name in NAMED:
         return NAMED[name]
-    return _assigned.get(name) or _preferred(name)
+    numbered = _NUMBERED.match(name)
+    return NAMED.get(numbered.group(1)) if numbered else None
 
 
 def assign_colours(names: Iterable[str]) -> dict[str, str]:
@@ -72,11 +87,12 @@ def assign_colours(names: Iterable[str]) -> dict[str, str]:
     the cycle that no other of ``names`` has. Remembered for
     :func:`object_colour` for the rest of the process."""
     unique = sorted(set(names))
-    taken = {NAMED[n] for n in unique if n in NAMED}
+    taken = {colour for n in unique if (colour := _named(n)) is not None}
     colours: dict[str, str] = {}
     for name in unique:
-        if name in NAMED:
-            colours[name] = NAMED[name]
+        named = _named(name)
+        if named is not None:
+            colours[name] = named
             continue
         start = CYCLE.index(_preferred(name))
         for step in range(len(CYCLE)):
