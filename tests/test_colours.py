@@ -96,7 +96,6 @@ def test_numbered_instances_of_a_colour_get_that_colour() -> None:
 
     for name in ("red2", "red-2", "red#2", "wood#1"):
         assert object_colour(name) == NAMED[name.rstrip("0123456789").rstrip("-#")]
-    assert object_colour("reddish") != NAMED["red"] or object_colour("reddish") in NAMED.values()
     assigned = assign_colours(["red", "red2", "plate#1", "plate#2"])
     assert assigned["red"] == assigned["red2"] == NAMED["red"]
     assert assigned["plate#1"] != assigned["plate#2"]
