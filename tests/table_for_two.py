@@ -8,17 +8,12 @@ from __future__ import annotations
 
 import random
 
-from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
+from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import quat_from_yaw
+from tests.identical_families import SEATS, TABLE_SHAPES, TABLE_TYPES
 
-TYPES = ("plate", "fork", "knife", "glass")
-SHAPES = {
-    "plate": ObjectGeometry("cylinder", (0.2, 0.2, 0.02)),
-    "fork": ObjectGeometry("box", (0.03, 0.18, 0.01)),
-    "knife": ObjectGeometry("box", (0.02, 0.2, 0.01)),
-    "glass": ObjectGeometry("cylinder", (0.07, 0.07, 0.12)),
-}
-SEATS = ((0.4, 0.3), (0.4, -0.3))
+TYPES = TABLE_TYPES
+SHAPES = TABLE_SHAPES
 BESIDE = {"plate": (0.0, 0.0), "fork": (0.0, 0.14), "knife": (0.0, -0.14), "glass": (0.15, -0.14)}
 """Where each piece goes relative to its seat's plate."""
 
