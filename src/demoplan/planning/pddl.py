@@ -799,9 +799,9 @@ def _lifted_pddl(problem: Problem, roles: Roles | None = None) -> tuple[str, str
     )
 
 
-def _lifted_domain(
-    problem: Problem, lifted: _Lifted, domain_name: str, cast: _Cast | None = None
-) -> str:
+def _lifted_predicates(problem: Problem, lifted: _Lifted, cast: _Cast | None) -> list[str]:
+    """The lifted domain's predicates: the world's, the static facts' listings,
+    the roles' (with ``cast``) and the subgoals'."""
     guard, carries, rests_on, overlaps = (
         lifted.guard,
         lifted.carries,
@@ -838,7 +838,19 @@ def _lifted_domain(
             "(revisit ?o - item ?l - location)",
             "(away ?o - item ?l - location)",
         ]
+    return predicates
 
+
+def _lifted_domain(
+    problem: Problem, lifted: _Lifted, domain_name: str, cast: _Cast | None = None
+) -> str:
+    guard, carries, rests_on, overlaps = (
+        lifted.guard,
+        lifted.carries,
+        lifted.rests_on,
+        lifted.overlaps,
+    )
+    predicates = _lifted_predicates(problem, lifted, cast)
     # With roles, ?r is what is moved (a role, or an object that is its own role)
     # and ?o the instance playing it, whose grasps and size count.
     m = "?o" if cast is None else "?r"
