@@ -56,14 +56,15 @@ with the names shuffled):
 - ``row-N-lids-K``: K cubes in slots, turned 45° and covered by a lid (an
   object the model never saw; ``clutter``) — every plan needs 2N + 2K
   actions, every bound is below it, so all N! bindings are planned: the
-  worst case of the enumeration.
+  worst case of the enumeration (N = 6 only with ``--worst``).
 
 How to run
 ----------
 From the repository root, with demoplan installed (``pip install -e ".[dev]"``)::
 
-    python benchmarks/identical.py             # every case, ~4 min on the busy 2-core machine
-    python benchmarks/identical.py --quick     # no case with more than 120 bindings planned, ~1 min
+    python benchmarks/identical.py             # all but the worst, ~6 min on the busy 2-core box
+    python benchmarks/identical.py --worst     # also row-6-lids-2 (720 bindings planned), ~11 min
+    python benchmarks/identical.py --quick     # no case with more than 120 bindings planned, ~2 min
     python benchmarks/identical.py --cases row-6-lids-2,table-seated --repeats 5
     python benchmarks/identical.py --cases row-6-turned --oracle-max 1000   # exhaustive oracle
     python benchmarks/identical.py --out identical.json
@@ -159,6 +160,7 @@ class Case:
     scene: Scene
     clutter: bool = False
     heavy: bool = False  # plans more than 120 bindings: left out by --quick
+    worst: bool = False  # plans all 720 bindings: only with --worst (or --cases)
 
 
 def slots(n: int) -> list[tuple[float, float]]:
@@ -277,6 +279,7 @@ def build_cases() -> list[Case]:
                 row_scene(n, in_slots=lids, lids=lids),
                 clutter=True,
                 heavy=n >= 6,
+                worst=n >= 6,
             )
         )
     return cases
@@ -645,7 +648,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--quick", action="store_true", help="leave out the cases planning over 120 bindings"
     )
-    parser.add_argument("--cases", help="comma-separated case names (default: all)")
+    parser.add_argument(
+        "--worst",
+        action="store_true",
+        help="also row-6-lids-2, every one of 720 bindings planned (several minutes)",
+    )
+    parser.add_argument("--cases", help="comma-separated case names (default: all but --worst)")
     parser.add_argument(
         "--timeout", type=float, default=DEFAULT_TIMEOUT, help="plan_in_scene's budget (s)"
     )
@@ -687,8 +695,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 2
         cases = [c for c in cases if c.name in wanted]
-    elif args.quick:
-        cases = [c for c in cases if not c.heavy]
+    else:
+        cases = [c for c in cases if args.worst or not c.worst]
+        if args.quick:
+            cases = [c for c in cases if not c.heavy]
     plan_once(cases[0], Budget(timeout=args.timeout))  # warm-up: imports, first-call caches
     rng = np.random.default_rng(args.seed)
     results = []
