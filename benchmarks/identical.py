@@ -62,15 +62,16 @@ How to run
 ----------
 From the repository root, with demoplan installed (``pip install -e ".[dev]"``)::
 
-    python benchmarks/identical.py             # all but the worst, ~6 min on the busy 2-core box
-    python benchmarks/identical.py --worst     # also row-6-lids-2 (720 bindings planned), ~11 min
-    python benchmarks/identical.py --quick     # no case with more than 120 bindings planned, ~2 min
+    python benchmarks/identical.py             # all but the worst: ~4 min (135 s of CPU)
+    python benchmarks/identical.py --worst     # also row-6-lids-2 (720 bindings planned): ~11 min
+    python benchmarks/identical.py --quick     # none planning over 120 bindings: ~2.5 min
     python benchmarks/identical.py --cases row-6-lids-2,table-seated --repeats 5
     python benchmarks/identical.py --cases row-6-turned --oracle-max 1000   # exhaustive oracle
     python benchmarks/identical.py --out identical.json
 
-Times are wall clock on a shared machine: compare medians and ratios between
-runs on one machine, not absolute numbers across machines.
+Run times above are from the shared 2-core machine at a load average of 5 to
+11. Times are wall clock on a shared machine: compare medians and ratios
+between runs on one machine, not absolute numbers across machines.
 """
 
 from __future__ import annotations
