@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Any
 
-from demoplan.budget import PLANNING_SECONDS
+from demoplan.budget import PLANNING_SECONDS, Clock
 from demoplan.errors import DemoplanError, InputError
 from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
@@ -41,7 +41,7 @@ from demoplan.model import Pose, TaskModel
 from demoplan.planning.problem import Action
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
-from demoplan.scenes.binding import Binding, bind_model, lower_bound, role_bindings
+from demoplan.scenes.binding import Binding, bind_model, role_bindings
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import (
@@ -50,11 +50,10 @@ from demoplan.scenes.plan import (
     plan_in_scene,
     solve_candidate,
 )
-from demoplan.scenes.prepared import PreparedScene, prepare
+from demoplan.scenes.prepared import PreparedScene, bound_tasks, goal_floors, prepare
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
 from demoplan.scenes.table import surroundings_of
-from demoplan.scenes.targets import resolve_goals
 from demoplan.wording import plural
 
 logger = logging.getLogger(__name__)
@@ -491,23 +490,36 @@ class _Run:
         observation = world.observe()
         current = _scene_of(observation, scene)  # complete: the prepared scene's geometry
         try:
-            bindings = role_bindings(self.roles, current)
+            tasks = bound_tasks(
+                self.roles,
+                current,
+                role_bindings(self.roles, current),
+                2 * settings.geometry.merge_distance,
+            )
+            index = next(
+                i for i, c in enumerate(tasks[0].candidates) if self.goal in c.demonstrations
+            )
+            floors = goal_floors(tasks, index, current)
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
         # The current binding first; others only where their bound can beat its plan.
-        bindings.sort(key=lambda b: b != self.binding)
+        order = sorted(
+            range(len(tasks)), key=lambda b: (tasks[b].binding != self.binding, floors[b])
+        )
+        clock = Clock(settings.budget)
         best: tuple[SceneProblem, CandidatePlan, Binding, TaskModel] | None = None
         why = ""
-        for binding in bindings:
-            model = bind_model(self.roles, binding)
+        for number in order:
+            binding, floor = tasks[number].binding, floors[number]
+            if best is not None and floor >= len(best[1].plan or ()):
+                continue
+            left = clock.remaining()
+            if best is not None and left is not None and left <= 0:
+                break  # out of time: the plan found stands
+            model = tasks[number].model
             reached = frozenset(self.reached) if binding == self.binding else frozenset()
             try:
-                candidate = next(
-                    c for c in resolve_goals(model, current) if self.goal in c.demonstrations
-                )
-                floor = lower_bound(candidate, current, 2 * settings.geometry.merge_distance)
-                if best is not None and floor >= len(best[1].plan or ()):
-                    continue
+                candidate = tasks[number].candidates[index]
                 with building_within(settings.budget):
                     built = build_problem(
                         current,

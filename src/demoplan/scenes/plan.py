@@ -330,20 +330,33 @@ def plan_goal(
     plan returned is the shortest over all bindings where every binding planned
     proved its own, and its bound is the least over all of them. The first
     binding's search gets half the time, each later one an equal part of what
-    is left; building a binding's problem may take the goal's whole time."""
+    is left; building a binding's problem may take the goal's whole time. When
+    the time is spent, the bindings not planned yet keep their bounds: the plan
+    found is returned, proved shortest only where those bounds say so."""
     clock = Clock(budget)
     around = surroundings or surroundings_of(prepared.model, prepared.scene)
-    order = sorted(range(len(prepared.bindings)), key=lambda b: prepared.bindings[b].bounds[index])
+    floors = prepared.floors(index)
+    order = sorted(range(len(prepared.bindings)), key=floors.__getitem__)
     best: CandidatePlan | None = None
     failed: CandidatePlan | None = None
     bounds: list[float] = []
     for position, number in enumerate(order):
-        task = prepared.bindings[number]
-        floor = task.bounds[index]
+        task, floor = prepared.bindings[number], floors[number]
         if best is not None and best.plan is not None and floor >= len(best.plan):
             bounds.append(floor)
             continue
         left = clock.remaining()
+        if position > 0 and left is not None and left <= 0:
+            # Out of time: the bindings not planned keep their bounds.
+            bounds += [floors[b] for b in order[position:]]
+            if best is None and failed is not None:
+                failed = replace(
+                    failed,
+                    reason=f"{failed.reason}; the time ran out after "
+                    f"{plural(position, 'binding')} of {len(order)} ways to fill the roles",
+                    limit_reached=True,
+                )
+            break
         share = budget
         if left is not None:  # the most promising binding half, the others equal parts
             parts = 2 if position == 0 and len(order) > 1 else len(order) - position
