@@ -57,18 +57,31 @@ def _detected(
     picture = load_image(image)
     check_image_size(calibration, picture, str(image))
     centre = calibration.centre
-    if side is not None and centre is not None and centre.position[2] > 2 * side:
-        top_faces, camera = top_faces_view(picture, calibration, side)
-        settings = PerceptionSettings(
-            min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
-        )
-        return detect_blocks(top_faces, camera, settings)
     rectified, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M)
     settings = PerceptionSettings()
     if side is not None:
         settings = PerceptionSettings(
             min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
         )
+    if centre is not None and side is None:
+        # the cubes' side from the table's view (side faces make it a little
+        # large), then measured again on the top faces' view made with it
+        sides = [
+            top_face_on_table(b.x, b.y, b.side, centre, None)[2]
+            for b in detect_blocks(rectified, camera, settings)
+        ]
+        for _ in range(2):
+            if not sides:
+                break
+            height = float(np.median(sides))
+            if not centre.position[2] > 2 * height:
+                break
+            top_faces, camera = top_faces_view(picture, calibration, height)
+            sides = [b.side for b in detect_blocks(top_faces, camera, settings)]
+        side = height if sides else None
+    if side is not None and centre is not None and centre.position[2] > 2 * side:
+        top_faces, camera = top_faces_view(picture, calibration, side)
+        return detect_blocks(top_faces, camera, settings)
     found = []
     for block in detect_blocks(rectified, camera, settings):
         x, y, cube, _ = top_face_on_table(block.x, block.y, block.side, centre, side)

@@ -705,7 +705,7 @@ def grid_lines(calibration: TableCalibration, spacing: float = 0.05) -> Sequence
 def calibration_overlay(image: np.ndarray, calibration: TableCalibration) -> np.ndarray:
     """The photograph with a grid of the table every 5 cm (cyan; the 10 cm
     lines drawn alike), the detected markers' outlines (green) and their ids
-    (red): a person sees at a glance whether the grid lies flat on the table."""
+    (yellow): a person sees at a glance whether the grid lies flat on the table."""
     import cv2
 
     picture = np.ascontiguousarray(image, dtype=np.uint8).copy()
@@ -721,16 +721,17 @@ def calibration_overlay(image: np.ndarray, calibration: TableCalibration) -> np.
             )
     for marker_id, quad in calibration.marker_corners.items():
         cv2.polylines(picture, [np.rint(quad).astype(np.int32)], True, (40, 220, 40), 2 * thickness)
-        centre = quad.mean(axis=0)
-        cv2.putText(
-            picture,
-            str(marker_id),
-            (int(centre[0]) - 6 * thickness, int(centre[1]) + 5 * thickness),
-            cv2.FONT_HERSHEY_SIMPLEX,
-            0.5 * thickness,
-            (255, 40, 40),
-            thickness + 1,
-        )
+        corner = (int(quad[0][0]), int(quad[0][1]) - 4 * thickness)  # above its first corner
+        for colour, weight in (((0, 0, 0), 3 * thickness + 1), ((255, 230, 40), thickness)):
+            cv2.putText(
+                picture,
+                str(marker_id),
+                corner,
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.6 * thickness,
+                colour,
+                weight,
+            )
     return picture
 
 
