@@ -179,6 +179,7 @@ def test_calibrate_writes_camera_file_and_overlay(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     calibration = load_calibration(tmp_path / "camera.json")
     assert calibration.image_size == (640, 480)
+    assert set(calibration.marker_corners) == set(calibration.markers) >= {0, 2, 3}
     assert (tmp_path / "overlay.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "camera.json",

@@ -177,7 +177,7 @@ class _IntrinsicsSchema(BaseModel):
         "coordinates, (0, 0) the centre of the top-left pixel)."
     )
     distortion: list[float] = Field(
-        default_factory=list,
+        default=[],
         description="OpenCV distortion coefficients (k1, k2, p1, p2[, k3…]); none: no distortion.",
     )
 
@@ -555,6 +555,10 @@ def calibration_document(calibration: TableCalibration) -> dict[str, Any]:
             "dictionary": calibration.dictionary,
             "side": calibration.marker_side,
             "ids": list(calibration.markers),
+            "corners": {
+                str(i): [[round(float(v), 3) for v in point] for point in quad]
+                for i, quad in calibration.marker_corners.items()
+            },
         }
     if calibration.intrinsics is not None:
         document["intrinsics"] = {
@@ -585,6 +589,11 @@ class _UsedMarkersSchema(BaseModel):
     dictionary: str = Field(description="The markers' dictionary.")
     side: float = Field(gt=0, description="Their side (m).")
     ids: list[int] = Field(description="The ids found and used.")
+    corners: dict[str, list[list[float]]] = Field(
+        default={},
+        description="Each id's four corners in the image (px, OpenCV's order): the "
+        "markers are painted over, and the rectified view covers the table around them.",
+    )
 
 
 class _CentreSchema(BaseModel):
@@ -616,7 +625,7 @@ class _CameraSchema(BaseModel):
         None, description="How well it fits the markers."
     )
     markers: _UsedMarkersSchema | None = Field(None, description="The markers it was made from.")
-    intrinsics: dict[str, Any] | None = Field(
+    intrinsics: _IntrinsicsSchema | None = Field(
         None,
         description="`camera_matrix` (3 × 3, px) and `distortion` (OpenCV's coefficients), "
         "when known: images are undistorted first, and the camera centre comes from them.",
@@ -648,12 +657,22 @@ def calibration_from_document(data: dict[str, Any], source: str) -> TableCalibra
             field="image_size",
         )
     intrinsics = (
-        _intrinsics(parsed.intrinsics, source, "intrinsics")
+        _intrinsics(data["intrinsics"], source, "intrinsics")
         if parsed.intrinsics is not None
         else None
     )
     error = parsed.reprojection_error
     used = parsed.markers
+    corners: dict[int, np.ndarray] = {}
+    for key, quad in (used.corners if used else {}).items():
+        points = np.array(quad, dtype=float)
+        if not key.isdigit() or points.shape != (4, 2):
+            raise InputError(
+                "a marker id: four [x, y] corners (px) expected",
+                source=source,
+                field=f"markers.corners.{key}",
+            )
+        corners[int(key)] = points
     calibration = TableCalibration(
         homography / homography[2, 2],
         (width, height),
@@ -663,6 +682,8 @@ def calibration_from_document(data: dict[str, Any], source: str) -> TableCalibra
         used.dictionary if used else "",
         used.side if used else 0.0,
         intrinsics,
+        None,
+        corners,
     )
     return _with_centre(calibration)
 
