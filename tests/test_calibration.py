@@ -260,3 +260,22 @@ def test_bad_inputs_refused_in_one_line(tmp_path: Path) -> None:
     )
     with pytest.raises(InputError, match="unknown dictionary"):
         load_markers(markers_file(tmp_path, dictionary="DICT_NOPE"))
+
+
+@pytest.mark.parametrize("dictionary", ["DICT_4X4_50", "DICT_APRILTAG_36h11"])
+def test_turned_markers_and_apriltags(dictionary: str) -> None:
+    """Markers turned on the table (the file's yaw) and AprilTags: the
+    homography still maps table points where the true camera sees them."""
+    turned = {0: (0.0, 0.0, 30.0), 5: (0.3, 0.0, -60.0), 9: (0.3, 0.2, 90.0), 3: (0.0, 0.2, 180.0)}
+    layout = MarkerLayout(dictionary, MARKER_SIDE, turned)
+    view = camera(20.0, heading=150.0)
+    image = render_table(view, BLOCKS, turned, marker_side=MARKER_SIDE, dictionary=dictionary)
+    calibration = calibrate(image, layout)
+    assert calibration.error_px < 0.5
+    table = np.array([[0.05, 0.05], [0.25, 0.15], [0.15, 0.1]])
+    pixels = view.project(np.c_[table, np.zeros(3)])
+    assert np.linalg.norm(calibration.to_table(pixels) - table, axis=1).max() < 0.001
+    wrong = MarkerLayout(
+        dictionary, MARKER_SIDE, {k: (x, y, 0.0) for k, (x, y, _) in turned.items()}
+    )
+    assert calibrate(image, wrong).error_px > 5  # the yaw matters: without it the corners disagree

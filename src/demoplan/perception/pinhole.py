@@ -110,7 +110,7 @@ def _box_faces(block: SyntheticBlock) -> list[tuple[np.ndarray, np.ndarray]]:
 def render_table(
     camera: PinholeCamera,
     blocks: Sequence[SyntheticBlock],
-    markers: Mapping[int, tuple[float, float]],
+    markers: Mapping[int, tuple[float, float] | tuple[float, float, float]],
     *,
     marker_side: float = 0.05,
     dictionary: str = "DICT_4X4_50",
@@ -120,7 +120,9 @@ def render_table(
     side_faces: bool = True,
     rng: np.random.Generator | int | None = 0,
 ) -> np.ndarray:
-    """An RGB ``uint8`` photograph-like render (camera.height × camera.width × 3);
+    """An RGB ``uint8`` photograph-like render (camera.height × camera.width × 3)
+    of markers (id → centre (x, y) on the table, or (x, y, yaw°): the top of
+    the pattern faces +y at yaw 0, as in a markers file) and ``blocks``;
     ``side_faces=False`` draws each cube's top face alone (a square tile ``side``
     above the table), which isolates the calibration and the height correction
     from telling a top face from the side faces."""
@@ -140,7 +142,9 @@ def render_table(
     # markers: the marker image (with a white margin) warped onto the table
     aruco = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
     cells = 200
-    for marker_id, (x, y) in markers.items():
+    for marker_id, place in markers.items():
+        x, y = place[0], place[1]
+        yaw = math.radians(place[2]) if len(place) > 2 else 0.0
         pattern = cv2.aruco.generateImageMarker(aruco, marker_id, cells)
         margin = cells // 4
         padded = cv2.copyMakeBorder(
@@ -148,12 +152,11 @@ def render_table(
         )
         size = padded.shape[0]
         reach = marker_side / 2 * size / cells
+        c, s = math.cos(yaw), math.sin(yaw)
         corners = np.array(
             [
-                (x - reach, y + reach, 0),
-                (x + reach, y + reach, 0),
-                (x + reach, y - reach, 0),
-                (x - reach, y - reach, 0),
+                (x + c * a - s * b, y + s * a + c * b, 0.0)
+                for a, b in ((-reach, reach), (reach, reach), (reach, -reach), (-reach, -reach))
             ]
         )
         source = np.array(
