@@ -70,15 +70,17 @@ def _detected(
             top_face_on_table(b.x, b.y, b.side, centre, None)[2]
             for b in detect_blocks(rectified, camera, settings)
         ]
-        for _ in range(2):
-            if not sides:
-                break
+        if sides:
             height = float(np.median(sides))
-            if not centre.position[2] > 2 * height:
-                break
-            top_faces, camera = top_faces_view(picture, calibration, height)
-            sides = [b.side for b in detect_blocks(top_faces, camera, settings)]
-        side = height if sides else None
+            if centre.position[2] > 2 * height:
+                # within 30 % of the estimate (it is that close: side faces are thin)
+                near = PerceptionSettings(min_side=0.7 * height, max_side=1.3 * height)
+                top_faces, camera = top_faces_view(picture, calibration, height)
+                found = detect_blocks(top_faces, camera, near)
+                if found:
+                    height = float(np.median([b.side for b in found]))
+                    top_faces, camera = top_faces_view(picture, calibration, height)
+                    return detect_blocks(top_faces, camera, near)
     if side is not None and centre is not None and centre.position[2] > 2 * side:
         top_faces, camera = top_faces_view(picture, calibration, side)
         return detect_blocks(top_faces, camera, settings)
