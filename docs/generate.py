@@ -75,6 +75,15 @@ from demoplan.learning.modelfile import (
 )
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import WOOD_DENSITY
+from demoplan.perception.calibration import (
+    MAX_MARKER_SIDE,
+    _CameraSchema,
+    _CentreSchema,
+    _ErrorSchema,
+    _IntrinsicsSchema,
+    _MarkersSchema,
+    _UsedMarkersSchema,
+)
 from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
@@ -497,7 +506,35 @@ SETTINGS = FieldTable(
         "show it; 1: the paper's rule (`--min-support`)",
     },
 )
+
+
+def described(schema: type[BaseModel]) -> dict[str, str]:
+    """Each field's meaning as its schema describes it (the camera and markers files)."""
+    properties = schema.model_json_schema()["properties"]
+    return {name: node["description"] for name, node in properties.items()}
+
+
+MARKERS_FILE = FieldTable("Markers file fields", _MarkersSchema, described(_MarkersSchema))
+CAMERA_FILE = FieldTable("Camera file fields", _CameraSchema, described(_CameraSchema))
+REPROJECTION = FieldTable(
+    "Reprojection error", _ErrorSchema, described(_ErrorSchema), noun="reprojection error"
+)
+USED_MARKERS = FieldTable(
+    "Markers used", _UsedMarkersSchema, described(_UsedMarkersSchema), noun="markers used"
+)
+INTRINSICS = FieldTable(
+    "Intrinsics", _IntrinsicsSchema, described(_IntrinsicsSchema), noun="intrinsics"
+)
+CAMERA_CENTRE = FieldTable(
+    "Camera centre", _CentreSchema, described(_CentreSchema), noun="camera centre"
+)
 FIELD_TABLES = (
+    MARKERS_FILE,
+    CAMERA_FILE,
+    REPROJECTION,
+    USED_MARKERS,
+    INTRINSICS,
+    CAMERA_CENTRE,
     UNITS,
     POSE,
     DEMONSTRATION,
@@ -886,6 +923,8 @@ TITLES = {
     "objects": "Object geometry file",
     "requirements": "Teacher constraints file",
     "scene": "Scene (`demoplan/scene-1`)",
+    "markers": "Markers file (`demoplan/markers-1`)",
+    "camera": "Camera file (`demoplan/camera-1`)",
     "model": "Task model (`demoplan/model-1`)",
     "problem": "Planning problem (XML)",
     "plan": "Plan",
@@ -914,6 +953,8 @@ def formats_page() -> str:
         objects_section(),
         requirements_section(),
         scene_section(),
+        markers_section(),
+        camera_section(),
         model_section(computed),
         problem_section(),
         plan_section(computed),
@@ -930,6 +971,8 @@ FORMS = {
     "objects": "JSON / YAML",
     "requirements": "text",
     "scene": "JSON / YAML: `demoplan/scene-1`",
+    "markers": "JSON / YAML",
+    "camera": "JSON / YAML: `demoplan/camera-1`",
     "model": "JSON / YAML: `demoplan/model-1`",
     "problem": "XML",
     "plan": "text; JSON",
@@ -943,6 +986,8 @@ SHORT_TITLES = {
     "objects": "Object geometry",
     "requirements": "Teacher constraints",
     "scene": "Scene",
+    "markers": "Markers",
+    "camera": "Camera",
     "model": "Task model",
     "problem": "Planning problem",
 }
@@ -1319,6 +1364,47 @@ def scene_section() -> str:
     )
 
 
+def markers_section() -> str:
+    return blocks(
+        [
+            f"## {TITLES['markers']}",
+            "ArUco or AprilTag markers lying flat on the table, for `calibrate --markers` "
+            "and `perceive --markers`: the OpenCV dictionary they come from, the side of "
+            f"their black square (m, at most {number(MAX_MARKER_SIDE)}) and where each id "
+            "lies on the table — its centre `[x, y]` in the scene's coordinates (m), or "
+            "`[x, y, yaw]` with the marker turned yaw degrees (0: the top of the marker's "
+            "pattern faces +y). Markers found in the image whose ids the file does not "
+            "list are ignored; at least one listed marker (four corners) must be seen, "
+            "and more give a better fit. JSON or YAML; `format` may be left out. "
+            "`examples/perception/markers.json`:",
+            fenced("json", (ROOT / "examples/perception/markers.json").read_text().strip()),
+            field_table(MARKERS_FILE),
+        ]
+    )
+
+
+def camera_section() -> str:
+    return blocks(
+        [
+            f"## {TITLES['camera']}",
+            "What `calibrate` writes and `perceive --camera` reads: the homography from "
+            "the image's pixels to the table, the size of the images it is for (another "
+            "size is refused), how well it fits the markers, and, when known, the "
+            "camera's intrinsics and centre. The camera centre is recomputed from the "
+            "homography (and the intrinsics) when the file is read. A camera file may "
+            "also be written by hand from another calibration: the homography alone is "
+            "enough, without a camera centre nothing is corrected for the blocks' "
+            "height (docs/perception.md). `--intrinsics` (for `calibrate`) reads the "
+            "intrinsics fields below from a JSON or YAML file of their own.",
+            field_table(CAMERA_FILE),
+            field_table(REPROJECTION),
+            field_table(USED_MARKERS),
+            field_table(INTRINSICS),
+            field_table(CAMERA_CENTRE),
+        ]
+    )
+
+
 def model_section(computed: Computed) -> str:
     return blocks(
         [
@@ -1504,11 +1590,13 @@ def other_section() -> str:
     return blocks(
         [
             f"## {TITLES['other']}",
-            "- **Camera image** (`perceive IMAGE`): a top-down orthographic colour image of "
-            "the table (PNG, or any image Pillow reads): `--px-per-m` pixels per metre, "
-            "`--origin X Y` the world x and y of its bottom-left corner, image right = "
-            "world x, image up = world y. `perceive` names each block by its colour "
-            "(`red`; a second red block `red2`; a colour without a name `block1`, "
+            "- **Camera image** (`perceive IMAGE`, `calibrate IMAGE`): a colour image of "
+            "the table (PNG, or any image Pillow reads). A top-down orthographic one with "
+            "`--px-per-m` pixels per metre and `--origin X Y` the world x and y of its "
+            "bottom-left corner, image right = world x, image up = world y; or any view "
+            "with `--camera` or `--markers` (above). `calibrate --plot` draws the markers "
+            "found and a 5 cm grid of the table on it (PNG). `perceive` names each block by "
+            "its colour (`red`; a second red block `red2`; a colour without a name `block1`, "
             "`block2`…) and writes two or more blocks of one named colour as instances "
             'of one type, `"type": "red"` (docs/perception.md).\n'
             f"- **Figures** ({', '.join(c for c in users('other', 1) if '--plot' in c)}): "
@@ -1613,7 +1701,11 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "plan": (("model", "scene"), ("plan", "other --plot")),
     "problem": (("model", "scene"), ("problem", "other --pddl")),
     "run": (("model", "scene"), ("run --json", "other --frames")),
-    "perceive": (("other",), ("scene",)),
+    "calibrate": (
+        ("other", "markers --markers", "camera --intrinsics"),
+        ("camera -o", "other --plot"),
+    ),
+    "perceive": (("other", "camera --camera", "markers --markers"), ("scene",)),
     "segment": (("stream", "objects --objects-file"), ("demonstration", "other --plot")),
     "import": (("recording", "objects --objects-file"), ("demonstration",)),
     "experiments": ((), ("other",)),

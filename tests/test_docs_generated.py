@@ -102,6 +102,10 @@ def load(document: dict[str, Any], tmp_path: Path) -> object:
         return scene_from_document(document, "example")
     if kind == "model":
         return model_from_dict(document, "example")
+    if kind == "markers":  # calibrate --markers, perceive --markers
+        from demoplan.perception.calibration import markers_from_document
+
+        return markers_from_document(document, "example")
     if "final_scene" in document:  # run --json
         return scene_from_document(document["final_scene"], "example: final_scene")
     if "actions" in document:  # solve --json, plan --json

@@ -62,6 +62,24 @@ SLOTS = [
         ".png",
         "top.png",
     ),
+    Slot(
+        "calibrate-image",
+        ("calibrate", FILE, "--markers", "markers.json", "-o", "camera-out.json"),
+        ".png",
+        "oblique.png",
+    ),
+    Slot(
+        "calibrate-markers",
+        ("calibrate", "oblique.png", "--markers", FILE, "-o", "camera-out.json"),
+        ".json",
+        "markers.json",
+    ),
+    Slot(
+        "perceive-camera",
+        ("perceive", "oblique.png", "--camera", FILE, "--side", "0.04"),
+        ".json",
+        "camera.json",
+    ),
     Slot("segment", ("segment", FILE, "-o", "out.json"), ".csv", "stream.csv"),
     Slot("segment-bag", ("segment", FILE, "-o", "out.json"), ".mcap", ""),
     Slot("import", ("import", FILE, "-o", "imported"), ".hdf5", ""),
@@ -136,6 +154,12 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
     shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
+    shutil.copy(EXAMPLES / "perception" / "markers-oblique.png", folder / "oblique.png")
+    shutil.copy(EXAMPLES / "perception" / "markers.json", folder / "markers.json")
+    answer = run(
+        ["calibrate", "oblique.png", "--markers", "markers.json", "-o", "camera.json"], folder
+    )
+    assert answer.code == 0, str(answer)
     (folder / "require.txt").write_text("wood<green\n")
     data = json.loads((folder / "demos.json").read_text())
     (folder / "demos.yaml").write_text(yaml.safe_dump(data))

@@ -35,6 +35,7 @@ COMMANDS = (
     "plan",
     "problem",
     "run",
+    "calibrate",
     "perceive",
     "segment",
     "import",

@@ -143,17 +143,95 @@ def run(
 
 
 @app.command()
+def calibrate(
+    image_path: Annotated[
+        Path,
+        typer.Argument(metavar="IMAGE", help="A photograph of the table with markers on it."),
+    ],
+    markers: Annotated[
+        Path,
+        typer.Option(
+            help="Markers file: their dictionary, side and each id's place on the table "
+            "(docs/formats.md)."
+        ),
+    ],
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Write the camera file here.")
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(help="Draw the markers found and the table's grid on the photograph (PNG)."),
+    ] = None,
+    intrinsics: Annotated[
+        Path | None,
+        typer.Option(help="The camera's matrix and distortion (JSON / YAML), when known."),
+    ] = None,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the camera file's document.")
+    ] = False,
+) -> None:
+    """Calibrate a camera from markers on the table: the image → table homography."""
+    from demoplan.commands.execution import calibrate as calibrate_camera
+
+    with reported_errors():
+        done = calibrate_camera(
+            image_path, markers, output=output, plot=plot, intrinsics=intrinsics
+        )
+        if json_output:
+            print_json(done.document)
+            return
+        calibration = done.calibration
+        stdout.print(
+            f"Calibrated {image_path.name} from markers "
+            f"{', '.join(map(str, calibration.markers))}: reprojection error "
+            f"{calibration.error_px:.2f} px, {calibration.error_mm:.2f} mm on the table",
+            markup=False,
+            highlight=False,
+        )
+        centre = calibration.centre
+        if centre is None:
+            stdout.print(
+                "camera centre: unknown (a view straight down; --intrinsics tells it): "
+                "block heights are not corrected",
+                markup=False,
+                highlight=False,
+            )
+        else:
+            x, y, z = centre.position
+            how = "from --intrinsics" if centre.source == "intrinsics" else "focal length estimated"
+            stdout.print(
+                f"camera centre: ({x:.3f}, {y:.3f}, {z:.3f}) m "
+                f"({how}, f = {centre.focal_px:.0f} px)",
+                markup=False,
+                highlight=False,
+            )
+
+
+@app.command()
 def perceive(
     image_path: Annotated[
-        Path, typer.Argument(metavar="IMAGE", help="A top-down orthographic colour image (PNG).")
+        Path,
+        typer.Argument(
+            metavar="IMAGE",
+            help="A colour image of the table: a top view, or any view with --camera / --markers.",
+        ),
     ],
     px_per_m: Annotated[
-        float, typer.Option("--px-per-m", min=1e-3, max=1e7, help="Pixels per metre.")
-    ],
+        float | None,
+        typer.Option("--px-per-m", min=1e-3, max=1e7, help="Pixels per metre (a top view)."),
+    ] = None,
     origin: Annotated[
-        tuple[float, float],
-        typer.Option(help="World x y (m) of the image's bottom-left corner."),
-    ],
+        tuple[float, float] | None,
+        typer.Option(help="World x y (m) of the image's bottom-left corner (a top view)."),
+    ] = None,
+    camera: Annotated[
+        Path | None,
+        typer.Option(help="A camera file (from calibrate): the image → table mapping."),
+    ] = None,
+    markers: Annotated[
+        Path | None,
+        typer.Option(help="A markers file: calibrate from the markers in IMAGE first."),
+    ] = None,
     json_output: Annotated[bool, typer.Option("--json", help="Print the scene as JSON.")] = False,
     before: Annotated[
         Path | None,
@@ -175,7 +253,7 @@ def perceive(
         ),
     ] = PERCEPTION_TIMEOUT,
 ) -> None:
-    """Find the blocks in a top-view image (paper §V.B: Hough transform over x, y, θ, s)."""
+    """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s)."""
     from demoplan.commands.execution import perceive as perceive_image
 
     with reported_errors():
@@ -184,6 +262,8 @@ def perceive(
                 image_path,
                 px_per_m,
                 origin,
+                camera=camera,
+                markers=markers,
                 before=before,
                 side=side,
                 timeout=timeout,

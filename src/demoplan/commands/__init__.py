@@ -1,5 +1,5 @@
 """The command layer: one function per thing a user does — learn, show,
-segment, import, perceive, plan, problem, solve, pddl, run, experiments —
+segment, import, calibrate, perceive, plan, problem, solve, pddl, run, experiments —
 each taking typed arguments (values, or the files that hold them) and
 returning a frozen value (the model and what an update changed, the plan with
 every candidate and its reason, the run report…), never printing, never
@@ -24,6 +24,7 @@ _WHERE = {
     "segment": "recordings",
     "import_recording": "recordings",
     "perceive": "execution",
+    "calibrate": "execution",
     "run": "execution",
     "plan": "planning",
     "write_problem": "planning",

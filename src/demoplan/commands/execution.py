@@ -11,19 +11,27 @@ from typing import Any
 
 from demoplan.budget import PERCEPTION_TIMEOUT
 from demoplan.commands.inputs import model_named, task_and_scene
+from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import run_task
 from demoplan.execution.video_output import check_video_path
 from demoplan.execution.world import World
-from demoplan.fileio import dump_json, refuse_overwriting_inputs, staged_folder, write_atomic
+from demoplan.fileio import (
+    dump_json,
+    refuse_overwriting_inputs,
+    staged_folder,
+    write_atomic,
+    write_atomic_bytes,
+)
 from demoplan.model import TaskModel
+from demoplan.perception.calibration import TableCalibration
 from demoplan.perception.images import perceive_files
 from demoplan.perception.stacking import TrackedBlock, scene_document
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
-__all__ = ["Perceived", "perceive", "remove_unfinished_video", "run"]
+__all__ = ["Calibrated", "Perceived", "calibrate", "perceive", "remove_unfinished_video", "run"]
 
 
 def run(
@@ -106,22 +114,98 @@ class Perceived:
 
 def perceive(
     image: Path,
-    px_per_m: float,
-    origin: tuple[float, float],
+    px_per_m: float | None = None,
+    origin: tuple[float, float] | None = None,
     *,
+    camera: Path | None = None,
+    markers: Path | None = None,
     before: Path | None = None,
     side: float | None = None,
     timeout: float = PERCEPTION_TIMEOUT,
     output: Path | None = None,
 ) -> Perceived:
-    """The blocks in a top-down orthographic ``image`` (paper §V.B: a Hough
-    transform over x, y, θ, s); with ``before`` (the picture before the last
-    move) a block the moved one covers stands under it; ``output``: also
-    write the scene there."""
+    """The blocks in ``image`` (paper §V.B: a Hough transform over x, y, θ, s):
+    a top-down orthographic picture of ``px_per_m`` pixels per metre with its
+    bottom-left corner at world ``origin``, or a photograph calibrated by a
+    ``camera`` file or by the ``markers`` (a markers file) seen in it — then
+    any view the calibration covers (docs/perception.md "Calibration"). With
+    ``before`` (the picture before the last move) a block the moved one covers
+    stands under it; ``output``: also write the scene there."""
+    from demoplan.perception.calibrated import calibration_for, perceive_calibrated
+    from demoplan.perception.calibration import load_calibration, load_markers
+
+    given = [name for name, v in (("--camera", camera), ("--markers", markers)) if v is not None]
+    scale_given = px_per_m is not None or origin is not None
+    if len(given) > 1 or (given and scale_given):
+        raise UsageError(
+            "one of --px-per-m with --origin, --camera or --markers expected, not "
+            + " and ".join(given + (["--px-per-m/--origin"] if scale_given else []))
+        )
+    if not given and (px_per_m is None or origin is None):
+        raise UsageError(
+            "how pixels map to the table is needed: --px-per-m and --origin (a top view), "
+            "--camera FILE or --markers FILE"
+        )
+    inputs = [image, *([before] if before else []), *(p for p in (camera, markers) if p)]
     if output is not None:
-        refuse_overwriting_inputs(output, [image, *([before] if before else [])])
-    blocks = perceive_files(image, px_per_m, origin, before=before, side=side, timeout=timeout)
+        refuse_overwriting_inputs(output, inputs)
+    if px_per_m is not None and origin is not None:
+        blocks = perceive_files(image, px_per_m, origin, before=before, side=side, timeout=timeout)
+    else:
+        reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
+        calibration = calibration_for(image, reference)
+        blocks = perceive_calibrated(image, calibration, before=before, side=side, timeout=timeout)
     document = scene_document(blocks)
     if output is not None:
         write_atomic(output, dump_json(document))
     return Perceived(blocks, document)
+
+
+@dataclass(frozen=True, slots=True)
+class Calibrated:
+    """A calibration and the camera file's document (``demoplan/camera-1``)."""
+
+    calibration: TableCalibration
+    document: dict[str, Any]
+
+
+def calibrate(
+    image: Path,
+    markers: Path,
+    *,
+    output: Path | None = None,
+    plot: Path | None = None,
+    intrinsics: Path | None = None,
+) -> Calibrated:
+    """The image → table homography from the markers of the markers file seen
+    in ``image`` (docs/perception.md "Calibration"); ``output``: write the camera
+    file there, ``plot``: an overlay of the markers found and the table's grid
+    (both written only when both are made)."""
+    from demoplan.perception.calibration import (
+        calibrate as calibrate_image,
+    )
+    from demoplan.perception.calibration import (
+        calibration_document,
+        calibration_overlay,
+        load_intrinsics,
+        load_markers,
+    )
+    from demoplan.perception.camera import encode_png, load_image
+
+    inputs = [image, markers, *([intrinsics] if intrinsics else [])]
+    for target in (output, plot):
+        if target is not None:
+            refuse_overwriting_inputs(target, inputs)
+    if output is not None and plot is not None and output.resolve() == plot.resolve():
+        raise UsageError("-o and --plot name one file; two files expected")
+    layout = load_markers(markers)
+    camera = load_intrinsics(intrinsics) if intrinsics else None
+    picture = load_image(image)
+    calibration = calibrate_image(picture, layout, source=str(image), intrinsics=camera)
+    document = calibration_document(calibration)
+    overlay = encode_png(calibration_overlay(picture, calibration)) if plot is not None else None
+    if output is not None:
+        write_atomic(output, dump_json(document))
+    if plot is not None and overlay is not None:
+        write_atomic_bytes(plot, overlay)
+    return Calibrated(calibration, document)

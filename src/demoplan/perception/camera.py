@@ -16,7 +16,7 @@ import numpy as np
 from demoplan.errors import InputError
 from demoplan.fileio import require_regular_file
 
-__all__ = ["Camera", "load_image", "save_image"]
+__all__ = ["Camera", "encode_png", "load_image", "save_image"]
 
 MAX_PIXELS = 50_000_000  # a larger "image" is a mistake or an attack (decompression bomb)
 MAX_IMAGE_BYTES = 256 * 1024 * 1024  # the file itself
@@ -70,14 +70,19 @@ def load_image(path: str | Path) -> np.ndarray:
         raise InputError(f"not a readable image ({exc})", source=str(path)) from None
 
 
-def save_image(image: np.ndarray, path: str | Path) -> None:
-    """Write an RGB ``uint8`` image as PNG, atomically."""
+def encode_png(image: np.ndarray) -> bytes:
+    """An RGB ``uint8`` image as PNG bytes."""
     import io
 
     from PIL import Image
 
-    from demoplan.fileio import write_atomic_bytes
-
     buffer = io.BytesIO()
     Image.fromarray(np.asarray(image, dtype=np.uint8)).save(buffer, format="PNG")
-    write_atomic_bytes(Path(path), buffer.getvalue())
+    return buffer.getvalue()
+
+
+def save_image(image: np.ndarray, path: str | Path) -> None:
+    """Write an RGB ``uint8`` image as PNG, atomically."""
+    from demoplan.fileio import write_atomic_bytes
+
+    write_atomic_bytes(Path(path), encode_png(image))

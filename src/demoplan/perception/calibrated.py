@@ -1,0 +1,149 @@
+"""Perceiving blocks in a photograph of the table calibrated by a camera file or
+by markers (docs/perception.md "Calibration"): the photograph is rectified to a
+top view of the table (:func:`~demoplan.perception.calibration.rectify`), the
+detector of :mod:`demoplan.perception.blocks` finds the blocks there, and each
+block's top face is moved down to the table (the height correction of
+:func:`~demoplan.perception.calibration.top_face_on_table`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
+from demoplan.documents.poses import MAX_SIZE_M
+from demoplan.errors import InputError, UsageError
+from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, detect_blocks
+from demoplan.perception.calibration import (
+    MarkerLayout,
+    TableCalibration,
+    calibrate,
+    check_image_size,
+    edge_colour,
+    rectify,
+    top_face_on_table,
+)
+from demoplan.perception.camera import Camera, load_image
+from demoplan.perception.images import SIDE_TOLERANCE
+from demoplan.perception.stacking import BlockTracker, TrackedBlock
+
+__all__ = ["calibration_for", "perceive_calibrated", "top_faces_view"]
+
+RECTIFIED_PX_PER_M = 1000.0
+"""The rectified top view's resolution: 1 px = 1 mm (a 4 cm cube is 40 px across)."""
+
+
+def calibration_for(
+    image: Path, calibration: TableCalibration | MarkerLayout, source: str | None = None
+) -> TableCalibration:
+    """The calibration to read ``image`` with: the given one (its image size
+    checked), or one made from the markers of a layout found in it."""
+    picture = load_image(image)
+    if isinstance(calibration, MarkerLayout):
+        return calibrate(picture, calibration, source=source or str(image))
+    check_image_size(calibration, picture, str(image))
+    return calibration
+
+
+def _detected(
+    image: Path,
+    calibration: TableCalibration,
+    side: float | None,
+) -> list[DetectedBlock]:
+    picture = load_image(image)
+    check_image_size(calibration, picture, str(image))
+    centre = calibration.centre
+    rectified, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M)
+    settings = PerceptionSettings()
+    if side is not None:
+        settings = PerceptionSettings(
+            min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
+        )
+    if centre is not None and side is None:
+        # the cubes' side from the table's view (side faces make it a little
+        # large), then measured again on the top faces' view made with it
+        sides = [
+            top_face_on_table(b.x, b.y, b.side, centre, None)[2]
+            for b in detect_blocks(rectified, camera, settings)
+        ]
+        if sides:
+            height = float(np.median(sides))
+            if centre.position[2] > 2 * height:
+                # within 30 % of the estimate (it is that close: side faces are thin)
+                near = PerceptionSettings(min_side=0.7 * height, max_side=1.3 * height)
+                top_faces, camera = top_faces_view(picture, calibration, height)
+                found = detect_blocks(top_faces, camera, near)
+                if found:
+                    height = float(np.median([b.side for b in found]))
+                    top_faces, camera = top_faces_view(picture, calibration, height)
+                    return detect_blocks(top_faces, camera, near)
+    if side is not None and centre is not None and centre.position[2] > 2 * side:
+        top_faces, camera = top_faces_view(picture, calibration, side)
+        return detect_blocks(top_faces, camera, settings)
+    found = []
+    for block in detect_blocks(rectified, camera, settings):
+        x, y, cube, _ = top_face_on_table(block.x, block.y, block.side, centre, side)
+        found.append(replace(block, x=x, y=y, side=cube))
+    return found
+
+
+def top_faces_view(
+    picture: np.ndarray, calibration: TableCalibration, side: float
+) -> tuple[np.ndarray, Camera]:
+    """A top view of the cubes' top faces alone, at their true place and size.
+
+    The photograph is rectified twice over one grid: on the plane of the top
+    faces (``side`` above the table: a top face is where it is; the side faces
+    trail from it towards the camera's foot) and on the table (a cube's base
+    is where it is; its faces trail away from the camera's foot). A cube's
+    footprint is block in both; each trail is block in one view and table in
+    the other. So each pixel is taken from the view in which it looks more
+    like the table (nearer the colour of the photograph's edge): what is left
+    is the footprints, coloured as the top faces."""
+    top, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M, above=side)
+    base, _ = rectify(picture, calibration, RECTIFIED_PX_PER_M)
+    table = np.array(edge_colour(picture), dtype=float)
+    top_distance = np.linalg.norm(top.astype(float) - table, axis=2)
+    base_distance = np.linalg.norm(base.astype(float) - table, axis=2)
+    combined: np.ndarray = np.where((top_distance <= base_distance)[..., None], top, base)
+    return combined, camera
+
+
+def perceive_calibrated(
+    image: Path,
+    calibration: TableCalibration,
+    *,
+    before: Path | None = None,
+    side: float | None = None,
+    timeout: float = PERCEPTION_TIMEOUT,
+) -> dict[str, TrackedBlock]:
+    """The blocks in ``image`` (a photograph of the table, any view the
+    calibration covers), by name, on the table's coordinates; with ``before``
+    (the picture before the last move, same camera) a block the moved one now
+    covers stands under it. An input error when there is none."""
+    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
+        raise UsageError(
+            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+            "(an object's largest extent, docs/limits.md)"
+        )
+    tracker = BlockTracker()
+    with time_budget(
+        timeout,
+        f"perception stopped at its time budget (--timeout {timeout:g} s){{where}}: many "
+        "small regions or a large image; give it more time, or say the blocks' size (--side)",
+    ):
+        if before is not None:
+            tracker = BlockTracker(
+                TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side, b.colour)
+                for b in _detected(before, calibration, side)
+            )
+        blocks = tracker.update(_detected(image, calibration, side))
+    if not blocks:
+        raise InputError(
+            "no blocks found; a scene needs at least one (--side too strict?)", source=str(image)
+        )
+    return blocks
