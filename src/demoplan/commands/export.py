@@ -1,0 +1,98 @@
+"""``export bt``: a planned task as a BehaviorTree.CPP v4 tree (docs/execution.md
+"Behaviour trees")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from demoplan.budget import Budget
+from demoplan.commands.planning import plan
+from demoplan.errors import NoPlanError, UsageError
+from demoplan.execution.behaviour_tree import task_tree
+from demoplan.execution.executor import ExecutionSettings
+from demoplan.fileio import refuse_overwriting_inputs, write_atomic
+from demoplan.model import TaskModel
+from demoplan.scenes.geometry import GeometrySettings
+from demoplan.scenes.plan import ScenePlan
+from demoplan.scenes.scene import Scene
+from demoplan.wording import plural
+
+__all__ = ["ExportedTree", "behaviour_tree", "export_behaviour_tree"]
+
+
+@dataclass(frozen=True, slots=True)
+class ExportedTree:
+    """The tree written, and the plan it was made from."""
+
+    path: Path
+    xml: str
+    plan: ScenePlan
+
+    @property
+    def summary(self) -> str:
+        """``8 actions, goal of demonstration 2 (pyramid-2)``."""
+        chosen = self.plan.chosen
+        assert chosen.plan is not None
+        return f"{plural(len(chosen.plan), 'action')}, goal of {_goal_label(self.plan)}"
+
+
+def behaviour_tree(
+    model: TaskModel | Path,
+    scene: Scene | Path,
+    *,
+    goal: int | None = None,
+    plan_only: bool = False,
+    budget: Budget | None = None,
+    settings: GeometrySettings = GeometrySettings(),
+    execution: ExecutionSettings = ExecutionSettings(),
+) -> tuple[str, ScenePlan]:
+    """The BehaviorTree.CPP v4 XML of the plan chosen in ``scene`` (``goal``: of
+    the goal of that demonstration, numbered from 1), and the plan.
+
+    Raises NoPlanError (exit 3) where the scene or the goal has no plan."""
+    result = plan(model, scene, budget=budget, settings=settings)
+    if goal is not None:
+        result = _with_goal(result, goal)
+    return task_tree(result, settings=execution, plan_only=plan_only), result
+
+
+def _with_goal(result: ScenePlan, goal: int) -> ScenePlan:
+    demonstrations = {d for c in result.candidates for d in c.problem.candidate.demonstrations}
+    if goal - 1 not in demonstrations:
+        raise UsageError(
+            f"--goal {goal}: the model has demonstrations 1..{max(demonstrations) + 1}"
+        )
+    candidate = next(c for c in result.candidates if goal - 1 in c.problem.candidate.demonstrations)
+    if candidate.plan is None:
+        raise NoPlanError(f"goal of demonstration {goal}: {candidate.reason or 'no plan'}")
+    return replace(result, chosen=candidate)
+
+
+def _goal_label(result: ScenePlan) -> str:
+    goal = result.chosen.goal
+    return (
+        f"demonstration {goal + 1}"
+        if result.model is None
+        else result.model.demonstration_label(goal)
+    )
+
+
+def export_behaviour_tree(
+    model: TaskModel | Path,
+    scene: Scene | Path,
+    output: Path,
+    *,
+    goal: int | None = None,
+    plan_only: bool = False,
+    budget: Budget | None = None,
+    settings: GeometrySettings = GeometrySettings(),
+) -> ExportedTree:
+    """Write :func:`behaviour_tree` to ``output`` (atomically; never over an
+    input); nothing is written where there is no plan."""
+    refuse_overwriting_inputs(output, [p for p in (model, scene) if isinstance(p, Path)])
+    xml, result = behaviour_tree(
+        model, scene, goal=goal, plan_only=plan_only, budget=budget, settings=settings
+    )
+    write_atomic(output, xml)
+    return ExportedTree(output, xml, result)
