@@ -7,18 +7,22 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from demoplan.budget import Budget
+from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.commands.planning import plan
 from demoplan.errors import NoPlanError, UsageError
-from demoplan.execution.behaviour_tree import task_tree
+from demoplan.execution.behaviour_tree import TreeRun, run_behaviour_tree, task_tree
 from demoplan.execution.executor import ExecutionSettings
-from demoplan.fileio import refuse_overwriting_inputs, write_atomic
+from demoplan.execution.faults import Faults
+from demoplan.execution.kinematic import KinematicWorld
+from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs, write_atomic
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import ScenePlan
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 from demoplan.wording import plural
 
-__all__ = ["ExportedTree", "behaviour_tree", "export_behaviour_tree"]
+__all__ = ["ExportedTree", "behaviour_tree", "export_behaviour_tree", "run_tree"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +71,25 @@ def _with_goal(result: ScenePlan, goal: int) -> ScenePlan:
     if candidate.plan is None:
         raise NoPlanError(f"goal of demonstration {goal}: {candidate.reason or 'no plan'}")
     return replace(result, chosen=candidate)
+
+
+def run_tree(
+    tree: Path,
+    model: TaskModel | Path,
+    scene: Scene | Path,
+    *,
+    faults: Faults = Faults(),
+    seed: int = 0,
+) -> TreeRun:
+    """Tick the tree in ``tree`` (as ``export bt`` writes it) in the kinematic
+    world of ``scene`` (completed with ``model``'s shapes), ``faults`` drawn from
+    ``seed``; the tree's leaves bound to the world's operations."""
+    xml = read_input_text(tree, "a behaviour tree (BehaviorTree.CPP v4 XML)")
+    task, start = task_and_scene(model, scene)
+    with model_named(model):
+        prepared = prepare(task, start)
+    world = KinematicWorld(prepared.scene, faults, seed)
+    return run_behaviour_tree(xml, world, source=display_path(tree))
 
 
 def _goal_label(result: ScenePlan) -> str:

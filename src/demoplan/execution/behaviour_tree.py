@@ -30,11 +30,11 @@ import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
-from xml.etree.ElementTree import Element, SubElement, indent, tostring
+from xml.etree.ElementTree import Element, ParseError, SubElement, indent, tostring
 
 from defusedxml.ElementTree import fromstring
 
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import MISPLACED_WITHIN, ExecutionSettings, FailureKind
 from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation, World
@@ -574,16 +574,21 @@ def _subtrees(root: Any) -> Iterator[Any]:
     yield from root.iter("SubTree")
 
 
-def run_behaviour_tree(xml: str, world: World) -> TreeRun:
+def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
     """Load ``xml`` in BehaviorTree.CPP (behaviortreepy), bind its leaves to
-    ``world`` and tick it until it stops (module docstring)."""
+    ``world`` and tick it until it stops (module docstring). A tree the engine
+    does not load is an InputError naming ``source`` and the engine's reason."""
     try:
         import behaviortreepy as bt
     except ImportError as exc:  # pragma: no cover - the bt extra is in dev
         raise UsageError(
             "running a behaviour tree needs behaviortreepy: pip install 'demoplan[bt]'"
         ) from exc
-    binding = _Binding(world, set(world.observe().poses), _put_downs(xml))
+    try:
+        targets = _put_downs(xml)
+    except (ParseError, ValueError) as exc:
+        raise InputError(f"not a behaviour tree ({exc})", source=source) from None
+    binding = _Binding(world, set(world.observe().poses), targets)
     factory = bt.BehaviorTreeFactory()
     factory.register_simple_condition("IsAtCondition", binding.guarded(binding.is_at))
     factory.register_simple_action("GraspAction", binding.guarded(binding.grasp))
@@ -592,7 +597,7 @@ def run_behaviour_tree(xml: str, world: World) -> TreeRun:
     try:
         tree = factory.create_tree_from_text(xml)
     except RuntimeError as exc:
-        raise UsageError(f"the behaviour tree does not load: {exc}") from exc
+        raise InputError(f"the engine does not load the tree: {exc}", source=source) from None
     ticks = 1
     status = tree.tick_once()
     while status == bt.NodeStatus.RUNNING:
