@@ -82,7 +82,11 @@ def _run_tree(
         if json_output:
             print_json(outcome.to_json())
         for fault in outcome.injected:
-            stderr.print(f"injected: {fault.detail}", markup=False, highlight=False)
+            stderr.print(
+                f"injected at action {fault.action}: {fault.kind}: {fault.detail}",
+                markup=False,
+                highlight=False,
+            )
         if outcome.success:
             stderr.print(f"SUCCESS after {outcome.actions} actions", markup=False, highlight=False)
             return

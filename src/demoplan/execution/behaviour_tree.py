@@ -150,7 +150,7 @@ NODES = (
             _OBJECT,
             _AXIS,
             *_POSE_PORTS,
-            Port("tolerance", "input_port", "double", "m"),
+            _CHECK_PORTS[0],
             *_FAILURE_PORTS,
         ),
     ),
