@@ -285,3 +285,25 @@ def test_the_command_writes_the_tree_and_refuses_without_a_plan(tmp_path: Path) 
     assert result.exit_code == 3, result.stderr
     assert "no plan" in result.stderr.lower() or "cannot" in result.stderr.lower()
     assert not missing.exists()
+
+
+def test_the_drawing_has_a_row_per_node_of_the_main_tree(
+    exported: dict[str, tuple[str, ScenePlan]], tmp_path: Path
+) -> None:
+    pytest.importorskip("matplotlib")
+    from demoplan.plotting.behaviour_tree import save_behaviour_tree, tree_rows
+
+    xml, _ = exported["kitting"]
+    task = next(t for t in fromstring(xml).iter("BehaviorTree") if t.get("ID") == "Task")
+    nodes = list(task.iter())[1:]
+    rows = tree_rows(xml)
+    assert len(rows) == len(nodes)
+    parents = {child: parent for parent in task.iter() for child in parent}
+    for row, node in zip(rows, nodes, strict=True):
+        expected = parents[node]
+        assert (row.parent == -1) == (expected is task)
+        if row.parent >= 0:
+            assert nodes[row.parent] is expected
+    picture = tmp_path / "tree.png"
+    save_behaviour_tree(xml, picture)
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

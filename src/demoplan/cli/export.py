@@ -50,6 +50,9 @@ def export(
             min=0.0, help="Seconds for planning, shared by the candidate goals [default: 2]."
         ),
     ] = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the tree into this image (PNG, SVG).")
+    ] = None,
 ) -> None:
     """Export the plan chosen in a scene as a behaviour tree a robot's runtime loads and
     ticks: per subgoal, in the plan's order, a check that the object is at its target, else
@@ -66,9 +69,11 @@ def export(
             plan_only=plan_only,
             budget=command_budget(None, timeout),
             settings=geometry_settings(freespace),
+            plot=plot,
         )
         stderr.print(
-            f"wrote {written.path}: {written.summary}",
+            f"wrote {written.path}: {written.summary}"
+            + (f"; drew it in {plot}" if plot is not None else ""),
             markup=False,
             highlight=False,
         )

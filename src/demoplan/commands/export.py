@@ -110,12 +110,24 @@ def export_behaviour_tree(
     plan_only: bool = False,
     budget: Budget | None = None,
     settings: GeometrySettings = GeometrySettings(),
+    plot: Path | None = None,
 ) -> ExportedTree:
     """Write :func:`behaviour_tree` to ``output`` (atomically; never over an
-    input); nothing is written where there is no plan."""
-    refuse_overwriting_inputs(output, [p for p in (model, scene) if isinstance(p, Path)])
+    input) and, with ``plot``, its drawing there; nothing is written where
+    there is no plan."""
+    from demoplan.plotting.behaviour_tree import save_behaviour_tree
+    from demoplan.plotting.figures import check_figure_path, figure_errors
+
+    inputs = [p for p in (model, scene) if isinstance(p, Path)]
+    refuse_overwriting_inputs(output, inputs)
+    if plot is not None:
+        check_figure_path(plot, "--plot")
+        refuse_overwriting_inputs(plot, [*inputs, output])
     xml, result = behaviour_tree(
         model, scene, goal=goal, plan_only=plan_only, budget=budget, settings=settings
     )
     write_atomic(output, xml)
+    if plot is not None:
+        with figure_errors(plot):
+            save_behaviour_tree(xml, plot)
     return ExportedTree(output, xml, result)
