@@ -939,7 +939,7 @@ FORMS = {
     "problem": "XML",
     "plan": "text; JSON",
     "run": "JSON",
-    "bt": "XML (`BTCPP_format=\"4\"`)",
+    "bt": 'XML (`BTCPP_format="4"`)',
     "other": "images, PDDL, reports",
 }
 SHORT_TITLES = {
@@ -1508,7 +1508,8 @@ def run_section(computed: Computed) -> str:
 
 def tree_section(computed: Computed) -> str:
     lines = computed.tree_xml.splitlines()
-    end = next(i for i, line in enumerate(lines) if "</Fallback>" in line and line.startswith(" " * 6 + "<"))
+    closing = " " * 6 + "</Fallback>"  # the end of the first subgoal
+    end = next(i for i, line in enumerate(lines) if line.startswith(closing))
     excerpt = "\n".join([*lines[: end + 1], "      …"])
     vocabulary = [
         (
@@ -1530,12 +1531,13 @@ def tree_section(computed: Computed) -> str:
             "is a `Sequence` with, per subgoal in the plan's order (which honours the learned "
             "constraints), a `Fallback` whose first child checks the object is already at its "
             "target (`IsAt`) and whose second carries it there (`MoveToFree` for each object "
-            "the plan parks first, then `Grasp` and `PutDown`), inside a "
-            f"`RetryUntilSuccessful num_attempts=\"{ATTEMPTS}\"`; when the attempts are spent "
+            "the plan parks first, unless an `IsAt` finds it still parked, then `Grasp` and "
+            "`PutDown`), inside a "
+            f'`RetryUntilSuccessful num_attempts="{ATTEMPTS}"`; when the attempts are spent '
             "a `Script` names the subgoal on the blackboard and the tree fails. A last "
             "`Sequence`, `the goal holds`, checks every goal object and puts back one a person "
             "moved. `--plan-only` writes the plan's flat `Sequence` of `Grasp` and `PutDown`. "
-            "docs/execution.md, \"Behaviour trees\".",
+            'docs/execution.md, "Behaviour trees".',
             "The vocabulary is four `SubTree` models, declared with their ports in "
             "`TreeNodesModel`; each holds one leaf, declared there too, that reads its ports "
             "from its subtree's blackboard (a robot's runtime registers the four leaves; "

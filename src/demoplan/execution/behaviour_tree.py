@@ -254,7 +254,12 @@ def _subgoal_node(
     SubElement(inner, "SubTree", _put_ports(problem, last, references, settings, "IsAt"))
     steps = SubElement(inner, "Sequence")
     for move in moves[:-1]:
-        SubElement(steps, "SubTree", _put_ports(problem, move, references, settings, "MoveToFree"))
+        # parked by an earlier attempt and still there: not again
+        parking = SubElement(steps, "Fallback", name=f"{move.put_down.object} parked")
+        SubElement(parking, "SubTree", _put_ports(problem, move, references, settings, "IsAt"))
+        SubElement(
+            parking, "SubTree", _put_ports(problem, move, references, settings, "MoveToFree")
+        )
     SubElement(steps, "SubTree", _grasp_ports(problem, last.grasp))
     SubElement(steps, "SubTree", _put_ports(problem, last, references, settings, "PutDown"))
     gave_up = SubElement(outer, "Sequence", name="give up")
@@ -330,7 +335,7 @@ def _put_ports(
     else:
         verb = "is" if id == "IsAt" else "put"
         ports |= {
-            "name": f"{action.object} at {move.subgoal}"
+            "name": f"{action.object} at {move.subgoal or 'its parking spot'}"
             if id == "IsAt"
             else f"{verb} {action.object}",
             "object": action.object,
