@@ -307,3 +307,26 @@ def test_the_drawing_has_a_row_per_node_of_the_main_tree(
     picture = tmp_path / "tree.png"
     save_behaviour_tree(xml, picture)
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_tree_ticks_with_the_floating_hand_in_mujoco(
+    exported: dict[str, tuple[str, ScenePlan]],
+) -> None:
+    """Experiment 2 in physics (``run --bt --sim mujoco``): the same leaves bound to
+    the floating hand reach the goal, each object within the tolerance."""
+    pytest.importorskip("mujoco")
+    from demoplan.execution.physics import MujocoWorld
+
+    xml, result = exported["blocks"]
+    assert result.scene is not None
+    world = MujocoWorld(result.scene, Faults(), 0)
+    try:
+        run = run_behaviour_tree(xml, world)
+        final = world.observe()
+    finally:
+        world.close()
+    assert run.success, run
+    problem = result.chosen.problem
+    for obj, location in problem.problem.goal:
+        target = pose_of(problem.location(location))
+        assert math.dist(final.poses[obj].position, target.position) <= TOLERANCE, obj

@@ -72,13 +72,12 @@ def _run_tree(
 ) -> None:
     """``run --bt``: the tree's outcome, one line (or JSON); exit 3 where it failed."""
     from demoplan.commands.export import run_tree
-    from demoplan.errors import UsageError
     from demoplan.execution.faults import parse_faults
 
     with reported_errors():
-        if sim != SimName.kinematic:
-            raise UsageError("--bt: the tree runs in --sim kinematic only")
-        outcome = run_tree(tree, model_path, scene_path, faults=parse_faults(faults), seed=seed)
+        outcome = run_tree(
+            tree, model_path, scene_path, sim=sim.value, faults=parse_faults(faults), seed=seed
+        )
         if json_output:
             print_json(outcome.to_json())
         for fault in outcome.injected:
@@ -149,7 +148,7 @@ def run(
         typer.Option(
             "--bt",
             metavar="TASK.xml",
-            help="Tick this behaviour tree ('export bt') instead of planning (--sim kinematic).",
+            help="Tick this behaviour tree ('export bt') instead of planning (kinematic, mujoco).",
         ),
     ] = None,
 ) -> None:

@@ -13,7 +13,7 @@ from demoplan.errors import NoPlanError, UsageError
 from demoplan.execution.behaviour_tree import TreeRun, run_behaviour_tree, task_tree
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import Faults
-from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.runner import make_world
 from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs, write_atomic
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
@@ -78,18 +78,29 @@ def run_tree(
     model: TaskModel | Path,
     scene: Scene | Path,
     *,
+    sim: str = "kinematic",
     faults: Faults = Faults(),
     seed: int = 0,
 ) -> TreeRun:
-    """Tick the tree in ``tree`` (as ``export bt`` writes it) in the kinematic
-    world of ``scene`` (completed with ``model``'s shapes), ``faults`` drawn from
-    ``seed``; the tree's leaves bound to the world's operations."""
+    """Tick the tree in ``tree`` (as ``export bt`` writes it) in the simulated
+    world ``sim`` (``kinematic``, ``mujoco`` or ``arm``) set up as ``scene``
+    (completed with ``model``'s shapes), ``faults`` drawn from ``seed``; the
+    tree's leaves bound to the world's operations (``kinematic`` or ``mujoco``,
+    the floating hand; the arm is not bound yet)."""
+    if sim not in ("kinematic", "mujoco"):
+        raise UsageError(f"--bt: the tree runs in --sim kinematic or mujoco, not {sim}")
     xml = read_input_text(tree, "a behaviour tree (BehaviorTree.CPP v4 XML)")
+    source = display_path(tree)
     task, start = task_and_scene(model, scene)
     with model_named(model):
         prepared = prepare(task, start)
-    world = KinematicWorld(prepared.scene, faults, seed)
-    return run_behaviour_tree(xml, world, source=display_path(tree))
+    world = make_world(sim, prepared.scene, faults, seed)
+    try:
+        return run_behaviour_tree(xml, world, source=source)
+    finally:
+        close = getattr(world, "close", None)
+        if close is not None:
+            close()
 
 
 def _goal_label(result: ScenePlan) -> str:

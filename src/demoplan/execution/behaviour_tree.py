@@ -55,6 +55,7 @@ __all__ = [
     "TreeRun",
     "run_behaviour_tree",
     "task_tree",
+    "tree_targets",
 ]
 
 ATTEMPTS = 3
@@ -564,9 +565,13 @@ def _target(blackboard: Any) -> Pose:
     return Pose((x, y, z), quat_from_yaw(yaw))
 
 
-def _put_downs(xml: str) -> list[tuple[str, Pose]]:
-    """The targets of the tree's PutDown and MoveToFree nodes, in document order."""
-    root = fromstring(xml)
+def tree_targets(xml: str, source: str = "tree") -> list[tuple[str, Pose]]:
+    """The targets of the tree's PutDown and MoveToFree nodes, in document order
+    (an InputError naming ``source`` where ``xml`` is not XML)."""
+    try:
+        root = fromstring(xml)
+    except (ParseError, ValueError) as exc:
+        raise InputError(f"not a behaviour tree ({exc})", source=source) from None
     found = []
     for node in _subtrees(root):
         if node.get("ID") in ("PutDown", "MoveToFree"):
@@ -589,10 +594,7 @@ def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
         raise UsageError(
             "running a behaviour tree needs behaviortreepy: pip install 'demoplan[bt]'"
         ) from exc
-    try:
-        targets = _put_downs(xml)
-    except (ParseError, ValueError) as exc:
-        raise InputError(f"not a behaviour tree ({exc})", source=source) from None
+    targets = tree_targets(xml, source)
     binding = _Binding(world, set(world.observe().poses), targets)
     factory = bt.BehaviorTreeFactory()
     factory.register_simple_condition("IsAtCondition", binding.guarded(binding.is_at))
