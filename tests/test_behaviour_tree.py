@@ -330,3 +330,27 @@ def test_the_tree_ticks_with_the_floating_hand_in_mujoco(
     for obj, location in problem.problem.goal:
         target = pose_of(problem.location(location))
         assert math.dist(final.poses[obj].position, target.position) <= TOLERANCE, obj
+
+
+def test_a_tree_grasping_what_the_world_cannot_take_is_refused_before_moving(
+    exported: dict[str, tuple[str, ScenePlan]],
+) -> None:
+    """An object the scene does not have (a hand-edited tree), and, in MuJoCo,
+    objects too thin for the floating hand's pads: one InputError, nothing moved."""
+    xml, result = exported["blocks"]
+    assert result.scene is not None
+    world = KinematicWorld(result.scene)
+    with pytest.raises(InputError, match="'redd', which the scene does not have"):
+        run_behaviour_tree(xml.replace('object="red"', 'object="redd"'), world)
+    assert world.actions == 0
+    pytest.importorskip("mujoco")
+    from demoplan.execution.physics import MujocoWorld
+
+    xml, result = exported["set_table"]
+    assert result.scene is not None
+    hand = MujocoWorld(result.scene, Faults(), 0)
+    try:
+        with pytest.raises(InputError, match="cannot be carried out by this robot: napkin"):
+            run_behaviour_tree(xml, hand)
+    finally:
+        hand.close()

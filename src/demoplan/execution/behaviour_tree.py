@@ -584,6 +584,33 @@ def _subtrees(root: Any) -> Iterator[Any]:
     yield from root.iter("SubTree")
 
 
+def _check_graspable(xml: str, world: World, source: str) -> None:
+    """Before the first motion, as the executor checks a plan: an InputError
+    naming the objects the tree grasps that the world does not have, or that
+    its gripper cannot take (a world that can tell: ``why_not_graspable``)."""
+    grasped = dict.fromkeys(
+        node.get("object")
+        for node in _subtrees(fromstring(xml))
+        if node.get("ID") in ("Grasp", "MoveToFree") and node.get("object") is not None
+    )
+    standing = world.observe().poses
+    unknown = [repr(obj) for obj in grasped if obj not in standing]
+    if unknown:
+        raise InputError(
+            f"grasps {', '.join(unknown)}, which the scene does not have", source=source
+        )
+    graspable = getattr(world, "why_not_graspable", None)
+    if graspable is None:
+        return
+    reasons = [f"{obj} {why}" for obj in grasped if (why := graspable(obj))]
+    if reasons:
+        raise InputError(
+            "cannot be carried out by this robot: " + "; ".join(reasons),
+            source=source,
+            field="objects",
+        )
+
+
 def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
     """Load ``xml`` in BehaviorTree.CPP (behaviortreepy), bind its leaves to
     ``world`` and tick it until it stops (module docstring). A tree the engine
@@ -595,6 +622,7 @@ def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
             "running a behaviour tree needs behaviortreepy: pip install 'demoplan[bt]'"
         ) from exc
     targets = tree_targets(xml, source)
+    _check_graspable(xml, world, source)
     binding = _Binding(world, set(world.observe().poses), targets)
     factory = bt.BehaviorTreeFactory()
     factory.register_simple_condition("IsAtCondition", binding.guarded(binding.is_at))
