@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -342,6 +343,12 @@ def test_a_tree_grasping_what_the_world_cannot_take_is_refused_before_moving(
     world = KinematicWorld(result.scene)
     with pytest.raises(InputError, match="'redd', which the scene does not have"):
         run_behaviour_tree(xml.replace('object="red"', 'object="redd"'), world)
+    assert world.actions == 0
+    first_x = re.search(r'x="[^"]*"', xml)
+    assert first_x is not None
+    bad_number = xml[: first_x.start()] + 'x="abc"' + xml[first_x.end() :]
+    with pytest.raises(InputError, match="x='abc': a finite number expected"):
+        run_behaviour_tree(bad_number, world)
     assert world.actions == 0
     pytest.importorskip("mujoco")
     from demoplan.execution.physics import MujocoWorld

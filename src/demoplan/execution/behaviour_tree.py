@@ -574,10 +574,37 @@ def tree_targets(xml: str, source: str = "tree") -> list[tuple[str, Pose]]:
         raise InputError(f"not a behaviour tree ({exc})", source=source) from None
     found = []
     for node in _subtrees(root):
-        if node.get("ID") in ("PutDown", "MoveToFree"):
-            x, y, z, yaw = (float(node.get(k, "nan")) for k in ("x", "y", "z", "yaw"))
-            found.append((node.get("object", ""), Pose((x, y, z), quat_from_yaw(yaw))))
+        kind, obj = node.get("ID"), node.get("object")
+        if obj is None or kind not in NUMBER_PORTS:
+            continue  # a TreeNodesModel entry, or a node of no port we read
+        numbers = {port: _port_number(node, port, source) for port in NUMBER_PORTS[kind]}
+        if kind in ("PutDown", "MoveToFree"):
+            position = (numbers["x"], numbers["y"], numbers["z"])
+            found.append((obj, Pose(position, quat_from_yaw(numbers["yaw"]))))
     return found
+
+
+NUMBER_PORTS = {
+    "IsAt": ("x", "y", "z", "yaw", "tolerance"),
+    "PutDown": ("x", "y", "z", "yaw", "tolerance"),
+    "MoveToFree": ("x", "y", "z", "yaw", "tolerance", "axis"),
+    "Grasp": ("axis",),
+}
+"""The ports the leaves read as numbers, checked before the first tick."""
+
+
+def _port_number(node: Any, port: str, source: str) -> float:
+    text = node.get(port)
+    try:
+        value = float(text) if text is not None else math.nan
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise InputError(
+            f"{node.get('ID')} {node.get('object')}: {port}={text!r}: a finite number expected",
+            source=source,
+        )
+    return value
 
 
 def _subtrees(root: Any) -> Iterator[Any]:
