@@ -148,7 +148,7 @@ def run(
         typer.Option(
             "--bt",
             metavar="TASK.xml",
-            help="Tick this behaviour tree ('export bt') instead of planning (kinematic, mujoco).",
+            help="Tick this behaviour tree ('export bt') in the simulation instead of planning.",
         ),
     ] = None,
 ) -> None:

@@ -10,7 +10,7 @@ from demoplan.budget import Budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.commands.planning import plan
 from demoplan.errors import NoPlanError, UsageError
-from demoplan.execution.behaviour_tree import TreeRun, run_behaviour_tree, task_tree
+from demoplan.execution.behaviour_tree import TreeRun, run_behaviour_tree, task_tree, tree_targets
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import make_world
@@ -85,16 +85,16 @@ def run_tree(
     """Tick the tree in ``tree`` (as ``export bt`` writes it) in the simulated
     world ``sim`` (``kinematic``, ``mujoco`` or ``arm``) set up as ``scene``
     (completed with ``model``'s shapes), ``faults`` drawn from ``seed``; the
-    tree's leaves bound to the world's operations (``kinematic`` or ``mujoco``,
-    the floating hand; the arm is not bound yet)."""
-    if sim not in ("kinematic", "mujoco"):
-        raise UsageError(f"--bt: the tree runs in --sim kinematic or mujoco, not {sim}")
+    tree's leaves bound to the world's operations. The arm stands where it
+    reaches the tree's targets."""
     xml = read_input_text(tree, "a behaviour tree (BehaviorTree.CPP v4 XML)")
     source = display_path(tree)
     task, start = task_and_scene(model, scene)
     with model_named(model):
         prepared = prepare(task, start)
-    world = make_world(sim, prepared.scene, faults, seed)
+    # the arm stands where it reaches the tree's targets (as a run's first plan's)
+    workspace = [pose.position[:2] for _, pose in tree_targets(xml, source)]
+    world = make_world(sim, prepared.scene, faults, seed, workspace=workspace)
     try:
         return run_behaviour_tree(xml, world, source=source)
     finally:
