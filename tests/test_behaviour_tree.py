@@ -237,7 +237,8 @@ def test_with_random_faults_never_success_off_target(
 @given(seed=st.integers(0, 1000))
 def test_generated_tables_for_two_tick_to_success(seed: int) -> None:
     """A table laid for two (roles of identical plates, forks…), in a generated
-    scene: the tree names the scene's instances and reaches the goal."""
+    scene: the tree names the scene's instances and reaches the goal; with
+    faults, it reaches it or fails with a failure kind, never SUCCESS off target."""
     rng = np.random.default_rng(seed)
     orders = [
         {k: rng.permutation(2).tolist() for k in ("plate", "fork", "knife", "glass")}
@@ -253,6 +254,12 @@ def test_generated_tables_for_two_tick_to_success(seed: int) -> None:
     run, world = tick(xml, result)
     assert run.success, run
     assert off_target(result, world) == []
+    faults = Faults(drop=0.2, displace=0.1, grasp=0.1, block=0.05)
+    run, world = tick(xml, result, faults=faults, seed=seed)
+    if run.success:
+        assert off_target(result, world) == []
+    else:
+        assert run.failure in {k.value for k in FailureKind}
 
 
 def test_the_command_writes_the_tree_and_refuses_without_a_plan(tmp_path: Path) -> None:
