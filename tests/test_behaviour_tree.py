@@ -201,6 +201,23 @@ def test_a_grasp_that_keeps_missing_fails_the_tree_with_the_reason(
     assert len(run.injected) == ATTEMPTS
 
 
+def test_attempts_bound_the_retries() -> None:
+    """One missed grasp: a tree with one attempt per subgoal fails with it, one
+    with two recovers."""
+    model, scene = _examples()["blocks"]
+    for attempts, recovers in ((1, False), (2, True)):
+        xml, result = behaviour_tree(
+            model, scene, attempts=attempts, budget=Budget(timeout=math.inf)
+        )
+        assert f'num_attempts="{attempts}"' in xml
+        run, world = tick(xml, result, schedule={1: "grasp"})
+        assert run.success is recovers
+        if recovers:
+            assert off_target(result, world) == []
+        else:
+            assert run.failure == FailureKind.GRASP
+
+
 def test_an_object_on_a_target_fails_the_tree_as_a_new_object(
     exported: dict[str, tuple[str, ScenePlan]],
 ) -> None:

@@ -43,6 +43,9 @@ def export(
         bool,
         typer.Option("--plan-only", help="The plan's flat sequence: no checks, no retries."),
     ] = False,
+    attempts: Annotated[
+        int, typer.Option(min=1, help="Tries of each subgoal before the tree fails.")
+    ] = 3,  # demoplan.execution.behaviour_tree.ATTEMPTS
     freespace: FreespaceOption = None,
     timeout: Annotated[
         float | None,
@@ -67,6 +70,7 @@ def export(
             output,
             goal=goal,
             plan_only=plan_only,
+            attempts=attempts,
             budget=command_budget(None, timeout),
             settings=geometry_settings(freespace),
             plot=plot,

@@ -10,7 +10,13 @@ from demoplan.budget import Budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.commands.planning import plan
 from demoplan.errors import NoPlanError, UsageError
-from demoplan.execution.behaviour_tree import TreeRun, run_behaviour_tree, task_tree, tree_targets
+from demoplan.execution.behaviour_tree import (
+    ATTEMPTS,
+    TreeRun,
+    run_behaviour_tree,
+    task_tree,
+    tree_targets,
+)
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import make_world
@@ -47,18 +53,23 @@ def behaviour_tree(
     *,
     goal: int | None = None,
     plan_only: bool = False,
+    attempts: int = ATTEMPTS,
     budget: Budget | None = None,
     settings: GeometrySettings = GeometrySettings(),
     execution: ExecutionSettings = ExecutionSettings(),
 ) -> tuple[str, ScenePlan]:
     """The BehaviorTree.CPP v4 XML of the plan chosen in ``scene`` (``goal``: of
-    the goal of that demonstration, numbered from 1), and the plan.
+    the goal of that demonstration, numbered from 1), and the plan; each
+    subgoal tried ``attempts`` times.
 
     Raises NoPlanError (exit 3) where the scene or the goal has no plan."""
+    if attempts < 1:
+        raise UsageError(f"--attempts {attempts}: at least 1 expected")
     result = plan(model, scene, budget=budget, settings=settings)
     if goal is not None:
         result = _with_goal(result, goal)
-    return task_tree(result, settings=execution, plan_only=plan_only), result
+    tree = task_tree(result, settings=execution, plan_only=plan_only, attempts=attempts)
+    return tree, result
 
 
 def _with_goal(result: ScenePlan, goal: int) -> ScenePlan:
@@ -119,6 +130,7 @@ def export_behaviour_tree(
     *,
     goal: int | None = None,
     plan_only: bool = False,
+    attempts: int = ATTEMPTS,
     budget: Budget | None = None,
     settings: GeometrySettings = GeometrySettings(),
     plot: Path | None = None,
@@ -135,7 +147,13 @@ def export_behaviour_tree(
         check_figure_path(plot, "--plot")
         refuse_overwriting_inputs(plot, [*inputs, output])
     xml, result = behaviour_tree(
-        model, scene, goal=goal, plan_only=plan_only, budget=budget, settings=settings
+        model,
+        scene,
+        goal=goal,
+        plan_only=plan_only,
+        attempts=attempts,
+        budget=budget,
+        settings=settings,
     )
     write_atomic(output, xml)
     if plot is not None:
