@@ -46,6 +46,7 @@ from demoplan.documents.poses import (
 )
 from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.errors import InputError, LimitReachedError, NoPlanError, UsageError
+from demoplan.execution.behaviour_tree import ATTEMPTS, NODES, task_tree
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
@@ -863,6 +864,7 @@ class Computed:
     solve_json: dict[str, Any]
     plan_json: dict[str, Any]
     run_json: dict[str, Any]
+    tree_xml: str
 
 
 def compute() -> Computed:
@@ -886,6 +888,7 @@ def compute() -> Computed:
         solve_json=plan_to_json(plan, read_seconds=0.0),
         plan_json=plan_in_scene(model, scene, budget=Budget()).to_json(),
         run_json=report.to_json(),
+        tree_xml=task_tree(plan_in_scene(model, scene, budget=Budget())),
     )
 
 
@@ -929,6 +932,7 @@ TITLES = {
     "problem": "Planning problem (XML)",
     "plan": "Plan",
     "run": "Run report",
+    "bt": "Behaviour tree (BehaviorTree.CPP v4 XML)",
     "other": "Other files",
 }
 
@@ -959,6 +963,7 @@ def formats_page() -> str:
         problem_section(),
         plan_section(computed),
         run_section(computed),
+        tree_section(computed),
         other_section(),
     ]
     return blocks(sections) + "\n"
@@ -977,6 +982,7 @@ FORMS = {
     "problem": "XML",
     "plan": "text; JSON",
     "run": "JSON",
+    "bt": 'XML (`BTCPP_format="4"`)',
     "other": "images, PDDL, reports",
 }
 SHORT_TITLES = {
@@ -990,6 +996,7 @@ SHORT_TITLES = {
     "camera": "Camera",
     "model": "Task model",
     "problem": "Planning problem",
+    "bt": "Behaviour tree",
 }
 
 
@@ -1585,6 +1592,58 @@ def run_section(computed: Computed) -> str:
     )
 
 
+def tree_section(computed: Computed) -> str:
+    lines = computed.tree_xml.splitlines()
+    closing = " " * 6 + "</Fallback>"  # the end of the first subgoal
+    end = next(i for i, line in enumerate(lines) if line.startswith(closing))
+    excerpt = "\n".join([*lines[: end + 1], "      …"])
+    vocabulary = [
+        (
+            code(node.id),
+            f"{code(node.leaf)} ({node.leaf_kind.lower()})",
+            escape(node.description),
+            ", ".join(
+                code(p.name) + (" (out)" if p.kind == "output_port" else "") for p in node.ports
+            ),
+        )
+        for node in NODES
+    ]
+    ports = {p.name: p for node in NODES for p in node.ports}
+    return blocks(
+        [
+            f"## {TITLES['bt']}",
+            "`export bt MODEL SCENE -o TASK.xml` writes the plan chosen in the scene as a "
+            "[BehaviorTree.CPP](https://www.behaviortree.dev/) v4 tree: the main tree `Task` "
+            "is a `Sequence` with, per subgoal in the plan's order (which honours the learned "
+            "constraints), a `Fallback` whose first child checks the object is already at its "
+            "target (`IsAt`) and whose second carries it there (`MoveToFree` for each object "
+            "the plan parks first, unless an `IsAt` finds it still parked, then `Grasp` and "
+            "`PutDown`), inside a "
+            f'`RetryUntilSuccessful num_attempts="{ATTEMPTS}"`; when the attempts are spent '
+            "a `Script` names the subgoal on the blackboard and the tree fails. A last "
+            "`Sequence`, `the goal holds`, checks every goal object and puts back one a person "
+            "moved. `--plan-only` writes the plan's flat `Sequence` of `Grasp` and `PutDown`. "
+            'docs/execution.md, "Behaviour trees".',
+            "The vocabulary is four `SubTree` models, declared with their ports in "
+            "`TreeNodesModel`; each holds one leaf, declared there too, that reads its ports "
+            "from its subtree's blackboard (a robot's runtime registers the four leaves; "
+            "`run --bt` binds them to the simulation):",
+            table(("node", "leaf", "does", "ports"), vocabulary),
+            "The ports (values are text, numbers in metres and degrees, world frame):",
+            table(
+                ("port", "type", "meaning"),
+                [(code(name), code(p.type), escape(p.description)) for name, p in ports.items()],
+            ),
+            "Every node remaps `failure` and `failure_detail` to the main tree's blackboard; "
+            "when the tree fails, `failure` is one of the run report's failure kinds "
+            f"([above](#{slug(TITLES['run'])})), `failure_detail` what was seen and "
+            "`failed_subgoal` the subgoal given up. The first subgoal of the tree that "
+            f"`export bt` writes for the model above in `{PYRAMID}`:",
+            fenced("xml", excerpt),
+        ]
+    )
+
+
 def other_section() -> str:
     figures = ", ".join(f"`.{suffix}`" for suffix in sorted(FIGURE_FORMATS))
     return blocks(
@@ -1700,7 +1759,8 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "pddl": (("problem",), ("other",)),
     "plan": (("model", "scene"), ("plan", "other --plot")),
     "problem": (("model", "scene"), ("problem", "other --pddl")),
-    "run": (("model", "scene"), ("run --json", "other --frames")),
+    "export": (("model", "scene"), ("bt",)),
+    "run": (("model", "scene", "bt --bt"), ("run --json", "other --frames")),
     "calibrate": (
         ("other", "markers --markers", "camera --intrinsics"),
         ("camera -o", "other --plot"),

@@ -133,7 +133,7 @@ def mismatch(expected: tuple[str, ...], output: str) -> str | None:
     return None
 
 
-_PLANNING = re.compile(r"\bdemoplan (plan|solve|run)\b")
+_PLANNING = re.compile(r"\bdemoplan (plan|solve|run|export)\b")
 
 
 def without_time_limit(command: str) -> str | None:

@@ -41,6 +41,12 @@ COMMANDS: dict[str, tuple[list[str], list[str], float]] = {
         ["plan.png"],
         0.8,
     ),
+    "export": (
+        ["export", "bt", "model.json", "scene.json", "-o", "t.xml", "--timeout", "inf"]
+        + ["--plot", "t.png"],
+        ["t.xml", "t.png"],
+        0.8,
+    ),
     "run": (["run", "model.json", "scene.json", "--json"], [], 0.45),
     "run-mujoco": (
         ["run", "model.json", "scene.json", "--sim", "mujoco", "--frames", "frames"],

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from demoplan.cli import (  # noqa: F401 - commands
     execution,
+    export,
     learning,
     planning,
     recordings,

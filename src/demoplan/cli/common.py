@@ -34,6 +34,7 @@ COMMANDS = (
     "pddl",
     "plan",
     "problem",
+    "export",
     "run",
     "calibrate",
     "perceive",

@@ -61,6 +61,43 @@ def live_progress(show: bool) -> Iterator[Callable[[Any], None] | None]:
         yield on_event
 
 
+def _run_tree(
+    tree: Path,
+    model_path: Path,
+    scene_path: Path,
+    sim: SimName,
+    faults: str | None,
+    seed: int,
+    json_output: bool,
+) -> None:
+    """``run --bt``: the tree's outcome, one line (or JSON); exit 3 where it failed."""
+    from demoplan.commands.export import run_tree
+    from demoplan.execution.faults import parse_faults
+
+    with reported_errors():
+        outcome = run_tree(
+            tree, model_path, scene_path, sim=sim.value, faults=parse_faults(faults), seed=seed
+        )
+        if json_output:
+            print_json(outcome.to_json())
+        for fault in outcome.injected:
+            stderr.print(
+                f"injected at action {fault.action}: {fault.kind}: {fault.detail}",
+                markup=False,
+                highlight=False,
+            )
+        if outcome.success:
+            stderr.print(f"SUCCESS after {outcome.actions} actions", markup=False, highlight=False)
+            return
+        where = f" (subgoal {outcome.failed_subgoal})" if outcome.failed_subgoal else ""
+        stderr.print(
+            f"demoplan: error: the tree failed{where}: {outcome.failure}: {outcome.failure_detail}",
+            markup=False,
+            highlight=False,
+        )
+        raise typer.Exit(3)
+
+
 @app.command()
 def run(
     model_path: ModelArgument,
@@ -106,6 +143,14 @@ def run(
             "at twice the speed)."
         ),
     ] = None,
+    tree: Annotated[
+        Path | None,
+        typer.Option(
+            "--bt",
+            metavar="TASK.xml",
+            help="Tick this behaviour tree ('export bt') in the simulation instead of planning.",
+        ),
+    ] = None,
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.budget import Budget
@@ -113,6 +158,9 @@ def run(
     from demoplan.execution.executor import ExecutionSettings
     from demoplan.execution.faults import parse_faults
 
+    if tree is not None:
+        _run_tree(tree, model_path, scene_path, sim, faults, seed, json_output)
+        return
     with reported_errors():
         live = stderr.is_terminal and not json_output
         with live_progress(live) as on_event:
