@@ -25,7 +25,8 @@ Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize
@@ -50,6 +51,14 @@ class PerceptionSettings:
     """RMS difference between mask and fitted square over its pixels, in coverage units."""
     min_free_outline: float = 0.4
     """Share of the outline that must border on table (at least ~2 free sides)."""
+    colours: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
+    """Colours added to the palette (:func:`~demoplan.perception.colours.load_palette`)."""
+
+
+HOUGH_SIDE_PX = 20.0
+"""The Hough transform runs on the masks shrunk by a whole factor so that the
+smallest block's side is at least this many pixels (and under twice it); the
+fit then refines at full resolution."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,14 +106,22 @@ def _outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
     return free / len(points)
 
 
-def _fit(alpha: np.ndarray, start: Hypothesis) -> tuple[np.ndarray, float, float, float]:
+def _fit(
+    alpha: np.ndarray, start: Hypothesis, band: float | None = None
+) -> tuple[np.ndarray, float, float, float]:
     """Least-squares fit of a one-pixel-ramp square to the soft mask near ``start``:
     (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
-    pixels, and the share of free outline."""
+    pixels, and the share of free outline. With ``band`` (px) only the pixels
+    that far from the starting outline take part (inside, a good start's square
+    and the mask agree anyway): a large block costs its outline, not its area."""
     height, width = alpha.shape
     uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
     grown = np.array([start.u, start.v, start.theta, start.side + 5.0])
     near = _square_alpha(grown, uu, vv) > 0
+    if band is not None:
+        outline = np.array([start.u, start.v, start.theta, start.side + 2 * band])
+        inner = np.array([start.u, start.v, start.theta, max(start.side - 2 * band, 0.0)])
+        near = (_square_alpha(outline, uu, vv) > 0) & (_square_alpha(inner, uu, vv) < 1)
     target, us, vs = alpha[near], uu[near], vv[near]
 
     def residual(params: np.ndarray) -> np.ndarray:
@@ -137,13 +154,30 @@ def _fit(alpha: np.ndarray, start: Hypothesis) -> tuple[np.ndarray, float, float
     return params, coverage, rms, _outline_free(alpha, params)
 
 
+def _shrink(alpha: np.ndarray, factor: int) -> np.ndarray:
+    """``alpha`` averaged over ``factor`` × ``factor`` pixel blocks; padded at the
+    top and right, so coordinates from the bottom-left corner scale by ``factor``."""
+    if factor == 1:
+        return alpha
+    height, width = alpha.shape
+    rows, cols = -(-height // factor) * factor, -(-width // factor) * factor
+    padded = np.zeros((rows, cols), dtype=float)
+    padded[rows - height :, :width] = alpha
+    shrunk: np.ndarray = padded.reshape(rows // factor, factor, cols // factor, factor).mean(
+        axis=(1, 3)
+    )
+    return shrunk
+
+
 def detect_blocks(
     image: np.ndarray, camera: Camera, settings: PerceptionSettings = PerceptionSettings()
 ) -> list[DetectedBlock]:
     """Every square block in ``image`` (H × W × 3, top view), in world coordinates."""
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
-    regions, _ = colour_regions(image, min_area=min_area)
+    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours)
+    factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
+    band = None if factor == 1 else 2.0 * factor + 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
         check_time()  # a budget set by the caller (demoplan.budget), if any
@@ -155,8 +189,17 @@ def detect_blocks(
             # a region of area A holds squares no larger than √A
             largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
             accepted = None
-            for start in hough_squares(alpha, (side_px[0], max(side_px[0], largest))):
-                params, coverage, rms, free = _fit(alpha, start)
+            coarse = _shrink(alpha, factor)
+            sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
+            for start in hough_squares(coarse, sides):
+                full = Hypothesis(
+                    start.u * factor,
+                    start.v * factor,
+                    start.theta,
+                    start.side * factor,
+                    start.votes,
+                )
+                params, coverage, rms, free = _fit(alpha, full, band)
                 if (
                     side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
                     and coverage >= settings.min_coverage
