@@ -107,7 +107,10 @@ def _outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
 
 
 def _fit(
-    alpha: np.ndarray, start: Hypothesis, band: float | None = None
+    alpha: np.ndarray,
+    start: Hypothesis,
+    band: float | None = None,
+    turns: tuple[float, ...] = (0.0, 1.5, -1.5),
 ) -> tuple[np.ndarray, float, float, float]:
     """Least-squares fit of a one-pixel-ramp square to the soft mask near ``start``:
     (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
@@ -128,14 +131,35 @@ def _fit(
         difference: np.ndarray = _square_alpha(params, us, vs) - target
         return difference
 
+    def jacobian(params: np.ndarray) -> np.ndarray:
+        """∂ residual / ∂ (u, v, θ, s), exact: on the one-pixel ramp the model is
+        ½ − (max(|q_u|, |q_v|) − s/2), q the pixel in the square's own frame."""
+        u, v, theta, side = params
+        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        du, dv = us - u, vs - v
+        qu = c * du + s * dv
+        qv = -s * du + c * dv
+        along_u = np.abs(qu) >= np.abs(qv)
+        sign = np.where(along_u, np.sign(qu), np.sign(qv))
+        d_du = np.where(along_u, -c, s) * sign
+        d_dv = np.where(along_u, -s, -c) * sign
+        d_dtheta = np.where(along_u, qv, -qu) * sign * (math.pi / 180.0)
+        distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
+        on_ramp = np.abs(distance) < 0.5
+        jac = -np.stack([d_du, d_dv, d_dtheta, np.full_like(du, -0.5)], axis=1)
+        jac[~on_ramp] = 0.0
+        return jac
+
     best = None
-    for theta in (start.theta, start.theta + 1.5, start.theta - 1.5):
+    for theta in (start.theta + turn for turn in turns):
         x0 = np.array([start.u, start.v, theta, start.side])
         result = optimize.least_squares(
             residual,
             x0,
+            jac=jacobian,
             x_scale=[1.0, 1.0, 2.0, 1.0],
-            diff_step=1e-3,
+            xtol=1e-6,
+            ftol=1e-6,
             loss="soft_l1",
             f_scale=0.3,
             max_nfev=200,
@@ -177,7 +201,7 @@ def detect_blocks(
     min_area = 0.3 * side_px[0] ** 2
     regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours)
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
-    band = None if factor == 1 else 2.0 * factor + 3.0
+    band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
         check_time()  # a budget set by the caller (demoplan.budget), if any
@@ -192,14 +216,16 @@ def detect_blocks(
             coarse = _shrink(alpha, factor)
             sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
             for start in hough_squares(coarse, sides):
-                full = Hypothesis(
-                    start.u * factor,
-                    start.v * factor,
-                    start.theta,
-                    start.side * factor,
-                    start.votes,
-                )
-                params, coverage, rms, free = _fit(alpha, full, band)
+                params, coverage, rms, free = _fit(coarse, start)
+                if factor > 1:  # refine at full resolution, near the coarse outline
+                    full = Hypothesis(
+                        params[0] * factor,
+                        params[1] * factor,
+                        params[2],
+                        params[3] * factor,
+                        start.votes,
+                    )
+                    params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
                 if (
                     side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
                     and coverage >= settings.min_coverage

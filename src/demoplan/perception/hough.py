@@ -100,7 +100,7 @@ def hough_squares(
                 accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant"
             )
         flat = accumulator.reshape(-1)
-        best = min(50 * peaks, flat.size)
+        best = min(10 * peaks, flat.size)
         top = np.argpartition(flat, flat.size - best)[flat.size - best :]
         for position in top:
             if flat[position] <= 0:
