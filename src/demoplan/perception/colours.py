@@ -150,9 +150,14 @@ def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
 
 def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
-    distance; L* difference in an image without colour), CIELAB L*, and the
+    distance; L* difference in an image without colour), the image in CIELAB, and the
     foreground threshold; whether the image has colour at all."""
-    lab = cv2.cvtColor(image.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab)
+    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128
+    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab).astype(
+        np.float32
+    )
+    lab[..., 0] *= 100.0 / 255.0
+    lab[..., 1:] -= 128.0
     sample = lab[::4, ::4].reshape(-1, 3)
     coloured = int(np.ptp(image[::2, ::2].astype(np.int16), axis=2).max(initial=0)) > 2
     if coloured:
@@ -165,7 +170,7 @@ def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, boo
     # noise: neighbouring pixels' differences, robustly (edges are few)
     steps = np.abs(np.diff(distinct[::2, :], axis=1))
     sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
-    return distinct, lab[..., 0], max(floor, 6 * sigma), coloured
+    return distinct, lab, max(floor, 6 * sigma), coloured
 
 
 def colour_regions(
@@ -179,7 +184,8 @@ def colour_regions(
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
-    distinct, lightness, threshold, coloured_image = _distinctness(image)
+    distinct, lab, threshold, coloured_image = _distinctness(image)
+    lightness = lab[..., 0]
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
@@ -207,7 +213,11 @@ def colour_regions(
             filled, iterations=1
         )
         ground = np.median(crop[ring], axis=0) if ring.any() else table
+        chroma_crop = lab[rows, cols, 1:]
+        ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
         classes = _classify(crop[core], chroma)
+        if coloured_image:
+            classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
         present = []
         for label in np.unique(classes):
             if label in (-2, -3) and coloured_image:
@@ -229,9 +239,10 @@ def colour_regions(
                 on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
             change = core_offsets[on_top].mean(axis=0)
             mean_rgb = crop[core][on_top].mean(axis=0)
-            classes_found.append((colour, mean_rgb, change, top_face, side_faces))
+            change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
+            classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
-        centre_offsets = np.array([change for _, _, change, _, _ in classes_found])
+        centre_offsets = np.array([found[2] for found in classes_found])
         scores = np.stack(
             [
                 np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
@@ -242,15 +253,26 @@ def colour_regions(
         )
         nearest = np.argmin(scores, axis=1).reshape(member.shape)
         grown = ndimage.binary_dilation(member, iterations=1)
-        for k, (colour, centre, c, top_face, side_faces) in enumerate(classes_found):
+        for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
             alpha = np.clip(projection, 0.0, 1.0)
+            if coloured_image:
+                # and in chroma alone: a shadow beside the block darkens the table,
+                # which the RGB projection would take for a part of a dark block
+                chroma_part = ((chroma_crop - ground_ab) @ c_ab) / max(float(c_ab @ c_ab), 1e-9)
+                alpha = np.minimum(alpha, np.clip(chroma_part, 0.0, 1.0))
             if side_faces is not None:
                 ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
                 alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
             alpha = alpha * (nearest == k) * grown
             if len(classes_found) == 1:
-                alpha[holes] = 1.0
+                # a specular highlight: white (a hole) with a halo brighter than the
+                # top face, well inside the region (rim pixels mix with the table)
+                glare = holes | (
+                    (lightness[rows, cols] > top_face)
+                    & ndimage.binary_erosion(filled, iterations=3)
+                )
+                alpha[glare] = 1.0
             regions.append(
                 ColourRegion(
                     colour,
@@ -260,6 +282,27 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _glare(
+    classes: np.ndarray, lightness: np.ndarray, core: np.ndarray, min_area: float
+) -> np.ndarray:
+    """Which core pixels are a specular highlight: brighter than most of the region
+    (white mixed in; it may then look like another colour, a glint on yellow like
+    wood), in patches smaller than a block (a yellow block beside a blue one is a
+    block's size)."""
+    core_lightness = lightness[core]
+    bright = core_lightness > np.median(core_lightness) + 8.0
+    candidates = np.zeros(core.shape, dtype=bool)
+    candidates[core] = bright
+    labels, count = ndimage.label(candidates)
+    if count == 0:
+        return np.zeros(classes.shape, dtype=bool)
+    sizes = np.bincount(labels.ravel(), minlength=count + 1)
+    small = sizes < 1.5 * min_area
+    small[0] = False
+    glare: np.ndarray = small[labels][core]
+    return glare
 
 
 def _lightness_modes(values: np.ndarray) -> tuple[float, float | None]:
