@@ -111,6 +111,8 @@ def _fit(
     start: Hypothesis,
     band: float | None = None,
     turns: tuple[float, ...] = (0.0, 1.5, -1.5),
+    good_enough: float = 0.08,
+    tolerance: float = 1e-6,
 ) -> tuple[np.ndarray, float, float, float]:
     """Least-squares fit of a one-pixel-ramp square to the soft mask near ``start``:
     (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
@@ -158,15 +160,15 @@ def _fit(
             x0,
             jac=jacobian,
             x_scale=[1.0, 1.0, 2.0, 1.0],
-            xtol=1e-6,
-            ftol=1e-6,
+            xtol=tolerance,
+            ftol=tolerance,
             loss="soft_l1",
             f_scale=0.3,
             max_nfev=200,
         )
         if best is None or result.cost < best.cost:
             best = result
-        if math.sqrt(2 * result.cost / max(target.size, 1)) < 0.08:
+        if math.sqrt(2 * result.cost / max(target.size, 1)) < good_enough:
             break  # a good fit from the Hough estimate: no need to try other angles
     assert best is not None
     params = best.x
@@ -216,8 +218,10 @@ def detect_blocks(
             coarse = _shrink(alpha, factor)
             sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
             for start in hough_squares(coarse, sides):
-                params, coverage, rms, free = _fit(coarse, start)
-                if factor > 1:  # refine at full resolution, near the coarse outline
+                if factor == 1:
+                    params, coverage, rms, free = _fit(alpha, start)
+                else:  # a rough fit where the Hough transform ran, refined at full resolution
+                    params, *_ = _fit(coarse, start, good_enough=0.15, tolerance=1e-4)
                     full = Hypothesis(
                         params[0] * factor,
                         params[1] * factor,

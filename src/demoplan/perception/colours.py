@@ -200,18 +200,16 @@ def colour_regions(
         rows = slice(max(0, y - 5), min(height, y + h + 5))
         cols = slice(max(0, x - 5), min(width, x + w + 5))
         member = labels[rows, cols] == index
-        filled = ndimage.binary_fill_holes(member)
+        filled = _fill_holes(member)
         holes = filled & ~member  # enclosed: a highlight, a marker drawn on the block
         crop = image[rows, cols].astype(float)
         far = distinct[rows, cols]
         # core: clearly foreground and two pixels in from the region's rim, where
         # anti-aliased pixels mix the table's colour into the object's
-        core = ndimage.binary_erosion(member, iterations=2) & (far > threshold)
+        core = _erode(member, 2) & (far > threshold)
         if core.sum() < min_area:
             continue
-        ring = ndimage.binary_dilation(filled, iterations=4) & ~ndimage.binary_dilation(
-            filled, iterations=1
-        )
+        ring = _dilate(filled, 4) & ~_dilate(filled, 1)
         ground = np.median(crop[ring], axis=0) if ring.any() else table
         chroma_crop = lab[rows, cols, 1:]
         ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
@@ -252,7 +250,7 @@ def colour_regions(
             axis=1,
         )
         nearest = np.argmin(scores, axis=1).reshape(member.shape)
-        grown = ndimage.binary_dilation(member, iterations=1)
+        grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
             alpha = np.clip(projection, 0.0, 1.0)
@@ -268,10 +266,7 @@ def colour_regions(
             if len(classes_found) == 1:
                 # a specular highlight: white (a hole) with a halo brighter than the
                 # top face, well inside the region (rim pixels mix with the table)
-                glare = holes | (
-                    (lightness[rows, cols] > top_face)
-                    & ndimage.binary_erosion(filled, iterations=3)
-                )
+                glare = holes | ((lightness[rows, cols] > top_face) & _erode(filled, 3))
                 alpha[glare] = 1.0
             regions.append(
                 ColourRegion(
@@ -284,6 +279,39 @@ def colour_regions(
     return regions, table
 
 
+_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+
+
+def _erode(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` eroded ``steps`` times by the 4-neighbour cross (outside is empty),
+    as ``scipy.ndimage.binary_erosion(mask, iterations=steps)``, with OpenCV."""
+    eroded = cv2.erode(
+        mask.astype(np.uint8),
+        _CROSS,
+        iterations=steps,
+        borderType=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
+    return np.asarray(eroded, dtype=bool)
+
+
+def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` dilated ``steps`` times by the 4-neighbour cross, with OpenCV."""
+    return np.asarray(cv2.dilate(mask.astype(np.uint8), _CROSS, iterations=steps), dtype=bool)
+
+
+def _fill_holes(mask: np.ndarray) -> np.ndarray:
+    """``mask`` with its holes filled: the parts of its outside that do not reach the
+    crop's border (4-connected, as ``scipy.ndimage.binary_fill_holes``)."""
+    count, labels = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    enclosed = np.ones(count, dtype=bool)
+    enclosed[border] = False
+    enclosed[0] = False  # the mask itself
+    filled: np.ndarray = mask | enclosed[labels]
+    return filled
+
+
 def _glare(
     classes: np.ndarray, lightness: np.ndarray, core: np.ndarray, min_area: float
 ) -> np.ndarray:
@@ -292,7 +320,7 @@ def _glare(
     wood), in patches smaller than a block (a yellow block beside a blue one is a
     block's size)."""
     core_lightness = lightness[core]
-    bright = core_lightness > np.median(core_lightness) + 8.0
+    bright = core_lightness > np.median(core_lightness) + 4.0
     candidates = np.zeros(core.shape, dtype=bool)
     candidates[core] = bright
     labels, count = ndimage.label(candidates)

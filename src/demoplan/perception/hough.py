@@ -99,20 +99,22 @@ def hough_squares(
             accumulator = ndimage.convolve1d(
                 accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant"
             )
-        flat = accumulator.reshape(-1)
-        best = min(10 * peaks, flat.size)
-        top = np.argpartition(flat, flat.size - best)[flat.size - best :]
+        # the best θ at each centre, then the best centres
+        strongest = accumulator.max(axis=0).reshape(-1)
+        best_theta = accumulator.argmax(axis=0).reshape(-1)
+        best = min(10 * peaks, strongest.size)
+        top = np.argpartition(strongest, strongest.size - best)[strongest.size - best :]
         for position in top:
-            if flat[position] <= 0:
+            if strongest[position] <= 0:
                 continue
-            t, yb_, xb_ = (int(i) for i in np.unravel_index(int(position), accumulator.shape))
+            yb_, xb_ = (int(i) for i in np.unravel_index(int(position), (n_y, n_x)))
             candidates.append(
                 Hypothesis(
                     u=(xb_ + 0.5) * XY_BIN,
                     v=(yb_ + 0.5) * XY_BIN,
-                    theta=t * THETA_BIN,
+                    theta=int(best_theta[position]) * THETA_BIN,
                     side=float(s),
-                    votes=float(flat[position]),
+                    votes=float(strongest[position]),
                 )
             )
     candidates.sort(key=lambda c: -c.votes)
