@@ -159,7 +159,7 @@ def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, boo
     lab[..., 0] *= 100.0 / 255.0
     lab[..., 1:] -= 128.0
     sample = lab[::4, ::4].reshape(-1, 3)
-    coloured = int(np.ptp(image[::2, ::2].astype(np.int16), axis=2).max(initial=0)) > 2
+    coloured = int(np.ptp(image[::4, ::4].astype(np.int16), axis=2).max(initial=0)) > 2
     if coloured:
         table_a, table_b = np.median(sample[:, 1]), np.median(sample[:, 2])
         distinct = np.hypot(lab[..., 1] - table_a, lab[..., 2] - table_b)
@@ -168,7 +168,7 @@ def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, boo
         distinct = np.abs(lab[..., 0] - np.median(sample[:, 0]))
         floor = MIN_LIGHTNESS_CONTRAST
     # noise: neighbouring pixels' differences, robustly (edges are few)
-    steps = np.abs(np.diff(distinct[::2, :], axis=1))
+    steps = np.abs(np.diff(distinct[::4, :], axis=1))
     sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
     return distinct, lab, max(floor, 6 * sigma), coloured
 
