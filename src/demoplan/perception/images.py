@@ -80,12 +80,12 @@ def perceive_files(
 @contextmanager
 def _memory_refused(image: Path) -> Iterator[None]:
     """A MemoryError inside the block becomes one line: perception holds about
-    115 bytes a pixel at its peak (a 7000 × 7000 image: 5.6 GB)."""
+    30 bytes a pixel at its peak (a 4000 × 4000 image: 0.6 GB)."""
     try:
         yield
     except MemoryError:
         raise InputError(
-            "the image does not fit in memory to perceive (about 115 bytes a pixel: "
-            "49 megapixels took 5.6 GB); a smaller image expected",
+            "the image does not fit in memory to perceive (about 30 bytes a pixel: "
+            "16 megapixels took 0.6 GB); a smaller image expected",
             source=str(image),
         ) from None
