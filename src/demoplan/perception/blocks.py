@@ -25,7 +25,8 @@ Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize
@@ -50,6 +51,14 @@ class PerceptionSettings:
     """RMS difference between mask and fitted square over its pixels, in coverage units."""
     min_free_outline: float = 0.4
     """Share of the outline that must border on table (at least ~2 free sides)."""
+    colours: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
+    """Colours added to the palette (:func:`~demoplan.perception.colours.load_palette`)."""
+
+
+HOUGH_SIDE_PX = 20.0
+"""The Hough transform runs on the masks shrunk by a whole factor so that the
+smallest block's side is at least this many pixels (and under twice it); the
+fit then refines at full resolution."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,35 +106,69 @@ def _outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
     return free / len(points)
 
 
-def _fit(alpha: np.ndarray, start: Hypothesis) -> tuple[np.ndarray, float, float, float]:
+def _fit(
+    alpha: np.ndarray,
+    start: Hypothesis,
+    band: float | None = None,
+    turns: tuple[float, ...] = (0.0, 1.5, -1.5),
+    good_enough: float = 0.08,
+    tolerance: float = 1e-6,
+) -> tuple[np.ndarray, float, float, float]:
     """Least-squares fit of a one-pixel-ramp square to the soft mask near ``start``:
     (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
-    pixels, and the share of free outline."""
+    pixels, and the share of free outline. With ``band`` (px) only the pixels
+    that far from the starting outline take part (inside, a good start's square
+    and the mask agree anyway): a large block costs its outline, not its area."""
     height, width = alpha.shape
     uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
     grown = np.array([start.u, start.v, start.theta, start.side + 5.0])
     near = _square_alpha(grown, uu, vv) > 0
+    if band is not None:
+        outline = np.array([start.u, start.v, start.theta, start.side + 2 * band])
+        inner = np.array([start.u, start.v, start.theta, max(start.side - 2 * band, 0.0)])
+        near = (_square_alpha(outline, uu, vv) > 0) & (_square_alpha(inner, uu, vv) < 1)
     target, us, vs = alpha[near], uu[near], vv[near]
 
     def residual(params: np.ndarray) -> np.ndarray:
         difference: np.ndarray = _square_alpha(params, us, vs) - target
         return difference
 
+    def jacobian(params: np.ndarray) -> np.ndarray:
+        """∂ residual / ∂ (u, v, θ, s), exact: on the one-pixel ramp the model is
+        ½ − (max(|q_u|, |q_v|) − s/2), q the pixel in the square's own frame."""
+        u, v, theta, side = params
+        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        du, dv = us - u, vs - v
+        qu = c * du + s * dv
+        qv = -s * du + c * dv
+        along_u = np.abs(qu) >= np.abs(qv)
+        sign = np.where(along_u, np.sign(qu), np.sign(qv))
+        d_du = np.where(along_u, -c, s) * sign
+        d_dv = np.where(along_u, -s, -c) * sign
+        d_dtheta = np.where(along_u, qv, -qu) * sign * (math.pi / 180.0)
+        distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
+        on_ramp = np.abs(distance) < 0.5
+        jac = -np.stack([d_du, d_dv, d_dtheta, np.full_like(du, -0.5)], axis=1)
+        jac[~on_ramp] = 0.0
+        return jac
+
     best = None
-    for theta in (start.theta, start.theta + 1.5, start.theta - 1.5):
+    for theta in (start.theta + turn for turn in turns):
         x0 = np.array([start.u, start.v, theta, start.side])
         result = optimize.least_squares(
             residual,
             x0,
+            jac=jacobian,
             x_scale=[1.0, 1.0, 2.0, 1.0],
-            diff_step=1e-3,
+            xtol=tolerance,
+            ftol=tolerance,
             loss="soft_l1",
             f_scale=0.3,
             max_nfev=200,
         )
         if best is None or result.cost < best.cost:
             best = result
-        if math.sqrt(2 * result.cost / max(target.size, 1)) < 0.08:
+        if math.sqrt(2 * result.cost / max(target.size, 1)) < good_enough:
             break  # a good fit from the Hough estimate: no need to try other angles
     assert best is not None
     params = best.x
@@ -137,13 +180,30 @@ def _fit(alpha: np.ndarray, start: Hypothesis) -> tuple[np.ndarray, float, float
     return params, coverage, rms, _outline_free(alpha, params)
 
 
+def _shrink(alpha: np.ndarray, factor: int) -> np.ndarray:
+    """``alpha`` averaged over ``factor`` × ``factor`` pixel blocks; padded at the
+    top and right, so coordinates from the bottom-left corner scale by ``factor``."""
+    if factor == 1:
+        return alpha
+    height, width = alpha.shape
+    rows, cols = -(-height // factor) * factor, -(-width // factor) * factor
+    padded = np.zeros((rows, cols), dtype=float)
+    padded[rows - height :, :width] = alpha
+    shrunk: np.ndarray = padded.reshape(rows // factor, factor, cols // factor, factor).mean(
+        axis=(1, 3)
+    )
+    return shrunk
+
+
 def detect_blocks(
     image: np.ndarray, camera: Camera, settings: PerceptionSettings = PerceptionSettings()
 ) -> list[DetectedBlock]:
     """Every square block in ``image`` (H × W × 3, top view), in world coordinates."""
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
-    regions, _ = colour_regions(image, min_area=min_area)
+    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours)
+    factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
+    band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
         check_time()  # a budget set by the caller (demoplan.budget), if any
@@ -155,8 +215,21 @@ def detect_blocks(
             # a region of area A holds squares no larger than √A
             largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
             accepted = None
-            for start in hough_squares(alpha, (side_px[0], max(side_px[0], largest))):
-                params, coverage, rms, free = _fit(alpha, start)
+            coarse = _shrink(alpha, factor)
+            sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
+            for start in hough_squares(coarse, sides):
+                if factor == 1:
+                    params, coverage, rms, free = _fit(alpha, start)
+                else:  # a rough fit where the Hough transform ran, refined at full resolution
+                    params, *_ = _fit(coarse, start, good_enough=0.15, tolerance=1e-4)
+                    full = Hypothesis(
+                        params[0] * factor,
+                        params[1] * factor,
+                        params[2],
+                        params[3] * factor,
+                        start.votes,
+                    )
+                    params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
                 if (
                     side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
                     and coverage >= settings.min_coverage

@@ -1,33 +1,62 @@
-"""Background, foreground and colour classes of a top-view image.
+"""Foreground, colour classes and soft masks of a top-view image.
 
-The table's colour under each pixel is a plane per channel fitted to the
-image border (so a smooth brightness gradient is table, not object); a pixel
-belongs to the foreground when it differs from the table by more than
-``max(min_contrast, 6 σ)``, σ the sensor noise measured between neighbouring
-border pixels (so a smooth brightness gradient is not taken for noise). Each
-connected foreground region is split by colour: its confidently coloured
-("core") pixels are named by the nearest plain colour in brightness-free
-chromaticity (RGB divided by its largest channel, so shading does not change
-it), each colour with enough core pixels becomes a class, and every pixel of
-the region goes to the nearest class. For each class, a *soft mask* α ∈ [0, 1]
-says how much of a pixel the object covers, from where the pixel's colour lies
-between the table's and the class's (an edge pixel half covered is a half-mix):
-that is what the sub-pixel fit works on.
+A pixel is foreground when its colour stands out from the table's: its
+distance in the CIELAB a*b* plane (chroma, brightness left out) from the
+table's a*b* — the median over the image, most of which is table — exceeds
+``max(min_chroma, 6 σ)``, σ the noise of that distance between neighbouring
+pixels. Lightness plays no part, so a grey board, black grid lines, black and
+white markers, shadows and grey or dark machinery are table, and a block in a
+shadow is still a block (an image without any colour — all channels equal —
+is judged by lightness instead). Each connected foreground region (OpenCV's
+connected components; regions smaller than a block are dropped at once) has
+its enclosed holes filled — a specular highlight is white, so not coloured,
+but lies inside the block. The region is split by colour: its confidently
+coloured ("core") pixels are named by the nearest palette colour in
+brightness-free chromaticity (RGB divided by its largest channel, so shading
+does not change it), each colour with enough core pixels becomes a class, and
+every pixel of the region goes to the nearest class.
+
+For each class, a *soft mask* α ∈ [0, 1] says how much of a pixel the block's
+top face covers: where the pixel's colour lies between the table's around the
+region (the median of a ring just outside it) and the class's (an edge pixel
+half covered is a half-mix). A cube seen off-centre shows side faces of its
+own colour, darker than its top (lit from above): when a class's lightness
+falls into two modes far apart, the brighter is the top face and α also ramps
+from the darker mode's lightness (0) to the brighter's (1), so the side faces
+drop out and the top face, whose size is the block's side, is what the Hough
+transform sees.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
+import cv2
 import numpy as np
 from scipy import ndimage
 
 from demoplan.budget import check_time
+from demoplan.errors import InputError
 
-__all__ = ["PALETTE", "ColourRegion", "colour_regions", "name_colour"]
+__all__ = [
+    "PALETTE",
+    "ColourRegion",
+    "colour_regions",
+    "load_palette",
+    "name_colour",
+]
 
 MAX_CHROMA_DISTANCE = 0.3
 """A colour farther than this (in RGB / max RGB) from every plain colour has no name."""
+MIN_CHROMA = 12.0
+"""Foreground: CIELAB a*b* distance from the table's colour (a grey card is ~0, a
+wooden block ~30, a saturated red ~70)."""
+MIN_LIGHTNESS_CONTRAST = 12.0
+"""Foreground in an image without colour: CIELAB L* difference from the table."""
+SIDE_FACE_GAP = 12.0
+"""L* between a class's two lightness modes for the darker one to be side faces."""
 _SPECIAL = {-2: "black", -3: "grey", -4: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
@@ -41,13 +70,16 @@ PALETTE: dict[str, tuple[float, float, float]] = {
     "purple": (0.7, 0.35, 1.0),
 }
 
+Palette = Mapping[str, tuple[float, float, float]]
+
 
 @dataclass(frozen=True, slots=True)
 class ColourRegion:
     """One colour class within one connected foreground region.
 
     ``alpha`` is the soft mask on the crop ``rows × cols`` of the image
-    (``offset`` = its top-left pixel); ``rgb`` the class's mean colour.
+    (``offset`` = its top-left pixel); ``rgb`` the class's mean colour (its top
+    face's when side faces were told apart).
     """
 
     colour: str
@@ -56,20 +88,56 @@ class ColourRegion:
     alpha: np.ndarray
 
 
-def name_colour(rgb: np.ndarray) -> str:
+def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
+    """Colours to add to :data:`PALETTE` from a JSON (or YAML) file mapping a name to
+    the block's colour as the camera sees it, ``[R, G, B]`` in 0–255
+    (docs/perception.md, "Colour names"); stored as RGB / max RGB."""
+    from demoplan.fileio import display_path, read_document
+
+    source = display_path(Path(path))
+    document = read_document(Path(path))  # JSON, or YAML by extension; one-line errors
+    if not document:
+        raise InputError("a mapping of colour names to [R, G, B] expected", source=source)
+    palette: dict[str, tuple[float, float, float]] = {}
+    for name, value in document.items():
+        field = str(name)
+        if not isinstance(name, str) or not name.isidentifier() or name.startswith("block"):
+            raise InputError(
+                "a colour name (letters, digits, _; not starting with 'block') expected",
+                source=source,
+                field=field,
+            )
+        if (
+            not isinstance(value, list)
+            or len(value) != 3
+            or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in value)
+            or not all(0 <= c <= 255 for c in value)
+            or max(value) <= 0
+        ):
+            raise InputError(
+                "[R, G, B] with each in 0–255 (not all 0) expected", source=source, field=field
+            )
+        top = float(max(value))
+        palette[name] = (value[0] / top, value[1] / top, value[2] / top)
+    return palette
+
+
+def name_colour(rgb: np.ndarray, palette: Palette | None = None) -> str:
     """The plain colour name nearest to ``rgb`` (dark or grey: ``black`` / ``grey``;
     ``block`` when no plain colour is near: docs/formats.md then names blocks block1, block2…)."""
-    label = int(_classify(np.asarray(rgb, dtype=float).reshape(1, 3))[0])
-    return _palette()[0][label] if label >= 0 else _SPECIAL[label]
+    names, chroma = _palette(palette)
+    label = int(_classify(np.asarray(rgb, dtype=float).reshape(1, 3), chroma)[0])
+    return names[label] if label >= 0 else _SPECIAL[label]
 
 
-def _palette() -> tuple[list[str], np.ndarray]:
-    return list(PALETTE), np.array(list(PALETTE.values()))
+def _palette(extra: Palette | None = None) -> tuple[list[str], np.ndarray]:
+    merged = dict(PALETTE)
+    merged.update(extra or {})
+    return list(merged), np.array(list(merged.values()), dtype=float)
 
 
-def _classify(pixels: np.ndarray) -> np.ndarray:
+def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     """Palette index per pixel (N × 3 RGB); dark → -2, greyish → -3."""
-    _, chroma = _palette()
     top = pixels.max(axis=1)
     normal = pixels / np.maximum(top, 1.0)[:, None]
     distance = np.linalg.norm(normal[:, None, :] - chroma[None, :, :], axis=2)
@@ -80,55 +148,99 @@ def _classify(pixels: np.ndarray) -> np.ndarray:
     return labels
 
 
+def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
+    distance; L* difference in an image without colour), the image in CIELAB, and the
+    foreground threshold; whether the image has colour at all."""
+    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128
+    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab).astype(
+        np.float32
+    )
+    lab[..., 0] *= 100.0 / 255.0
+    lab[..., 1:] -= 128.0
+    sample = lab[::4, ::4].reshape(-1, 3)
+    coloured = int(np.ptp(image[::4, ::4].astype(np.int16), axis=2).max(initial=0)) > 2
+    if coloured:
+        table_a, table_b = np.median(sample[:, 1]), np.median(sample[:, 2])
+        distinct = np.hypot(lab[..., 1] - table_a, lab[..., 2] - table_b)
+        floor = MIN_CHROMA
+    else:
+        distinct = np.abs(lab[..., 0] - np.median(sample[:, 0]))
+        floor = MIN_LIGHTNESS_CONTRAST
+    # noise: neighbouring pixels' differences, robustly (edges are few)
+    steps = np.abs(np.diff(distinct[::4, :], axis=1))
+    sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
+    return distinct, lab, max(floor, 6 * sigma), coloured
+
+
 def colour_regions(
-    image: np.ndarray, *, min_area: float, min_contrast: float = 30.0
+    image: np.ndarray,
+    *,
+    min_area: float,
+    palette: Palette | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
-    pixels, and the table colour."""
-    where = f" modelling the table under {image.shape[1]} × {image.shape[0]} pixels"
-    rgb = image.astype(float)
-    edges = [rgb[0], rgb[-1], rgb[:, 0], rgb[:, -1]]
-    table = np.median(np.concatenate(edges), axis=0)
+    pixels, and the table colour (the median colour of the image)."""
+    where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
+    table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
-    background = _table_model(rgb)
+    distinct, lab, threshold, coloured_image = _distinctness(image)
+    lightness = lab[..., 0]
+    foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
-    # sensor noise from neighbouring border pixels (a smooth shading does not count)
-    steps = np.abs(np.concatenate([np.diff(edge, axis=0) for edge in edges]))
-    sigma = 1.4826 * float(np.median(steps)) / np.sqrt(2)
-    threshold = max(min_contrast, 6 * sigma)
-    distance = np.linalg.norm(rgb - background, axis=2)
-    foreground = distance > threshold / 2
-    check_time(where)
-    labels, _ = ndimage.label(foreground, structure=np.ones((3, 3)))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
+    names, chroma = _palette(palette)
     regions: list[ColourRegion] = []
-    names, _ = _palette()
-    for index, box in enumerate(ndimage.find_objects(labels), start=1):
-        if box is None:
-            continue
-        rows = slice(max(0, box[0].start - 3), min(labels.shape[0], box[0].stop + 3))
-        cols = slice(max(0, box[1].start - 3), min(labels.shape[1], box[1].stop + 3))
+    height, width = labels.shape
+    for index in range(1, count):
+        x, y, w, h, area = (int(value) for value in stats[index])
+        if area < min_area:
+            continue  # smaller than a block: noise, a speck
+        check_time(where)
+        rows = slice(max(0, y - 5), min(height, y + h + 5))
+        cols = slice(max(0, x - 5), min(width, x + w + 5))
         member = labels[rows, cols] == index
-        crop = rgb[rows, cols]
-        ground = background[rows, cols]
-        far = distance[rows, cols]
+        filled = _fill_holes(member)
+        holes = filled & ~member  # enclosed: a highlight, a marker drawn on the block
+        crop = image[rows, cols].astype(float)
+        far = distinct[rows, cols]
         # core: clearly foreground and two pixels in from the region's rim, where
         # anti-aliased pixels mix the table's colour into the object's
-        core = ndimage.binary_erosion(member, iterations=2) & (far > threshold)
+        core = _erode(member, 2) & (far > threshold)
         if core.sum() < min_area:
             continue
-        classes = _classify(crop[core])
+        ring = _dilate(filled, 4) & ~_dilate(filled, 1)
+        ground = np.median(crop[ring], axis=0) if ring.any() else table
+        chroma_crop = lab[rows, cols, 1:]
+        ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
+        classes = _classify(crop[core], chroma)
+        if coloured_image:
+            classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
         present = []
         for label in np.unique(classes):
+            if label in (-2, -3) and coloured_image:
+                continue  # dark or grey pixels of a coloured region: its side faces, shadow
             chosen = classes == label
             if chosen.sum() >= min_area:
                 colour = names[label] if label >= 0 else _SPECIAL[int(label)]
-                change = (crop[core][chosen] - ground[core][chosen]).mean(axis=0)
-                present.append((colour, crop[core][chosen].mean(axis=0), change))
+                present.append((colour, chosen))
         if not present:
             continue
-        # nearest class, judged on the colour change from the table under each pixel
         offsets = (crop - ground).reshape(-1, 3)
-        centre_offsets = np.array([change for _, _, change in present])
+        core_offsets = crop[core] - ground
+        core_lightness = lightness[rows, cols][core]
+        classes_found = []
+        for colour, chosen in present:
+            top_face, side_faces = _lightness_modes(core_lightness[chosen])
+            on_top = chosen.copy()
+            if side_faces is not None:
+                on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
+            change = core_offsets[on_top].mean(axis=0)
+            mean_rgb = crop[core][on_top].mean(axis=0)
+            change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
+            classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
+        # nearest class, judged on the colour change from the table under each pixel
+        centre_offsets = np.array([found[2] for found in classes_found])
         scores = np.stack(
             [
                 np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
@@ -138,13 +250,24 @@ def colour_regions(
             axis=1,
         )
         nearest = np.argmin(scores, axis=1).reshape(member.shape)
-        for k, (colour, centre, c) in enumerate(present):
+        grown = _dilate(member, 1)
+        for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
-            alpha = (
-                np.clip(projection, 0.0, 1.0)
-                * (nearest == k)
-                * ndimage.binary_dilation(member, iterations=1)
-            )
+            alpha = np.clip(projection, 0.0, 1.0)
+            if coloured_image:
+                # and in chroma alone: a shadow beside the block darkens the table,
+                # which the RGB projection would take for a part of a dark block
+                chroma_part = ((chroma_crop - ground_ab) @ c_ab) / max(float(c_ab @ c_ab), 1e-9)
+                alpha = np.minimum(alpha, np.clip(chroma_part, 0.0, 1.0))
+            if side_faces is not None:
+                ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
+                alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
+            alpha = alpha * (nearest == k) * grown
+            if len(classes_found) == 1:
+                # a specular highlight: white (a hole) with a halo brighter than the
+                # top face, well inside the region (rim pixels mix with the table)
+                glare = holes | ((lightness[rows, cols] > top_face) & _erode(filled, 3))
+                alpha[glare] = 1.0
             regions.append(
                 ColourRegion(
                     colour,
@@ -156,25 +279,72 @@ def colour_regions(
     return regions, table
 
 
-def _table_model(rgb: np.ndarray) -> np.ndarray:
-    """The table's colour under every pixel: a plane per channel fitted (least
-    squares) to the image border, so a smooth brightness gradient is table too."""
-    height, width, _ = rgb.shape
-    rows = np.concatenate(
-        [np.zeros(width), np.full(width, height - 1), np.arange(height), np.arange(height)]
+_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+
+
+def _erode(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` eroded ``steps`` times by the 4-neighbour cross (outside is empty),
+    as ``scipy.ndimage.binary_erosion(mask, iterations=steps)``, with OpenCV."""
+    eroded = cv2.erode(
+        mask.astype(np.uint8),
+        _CROSS,
+        iterations=steps,
+        borderType=cv2.BORDER_CONSTANT,
+        borderValue=0,
     )
-    cols = np.concatenate(
-        [np.arange(width), np.arange(width), np.zeros(height), np.full(height, width - 1)]
-    )
-    values = rgb[rows.astype(int), cols.astype(int)]
-    design = np.stack([np.ones_like(rows), rows / height, cols / width], axis=1)
-    coefficients, *_ = np.linalg.lstsq(design, values, rcond=None)
-    # refit without the border pixels a block touches (far from the first fit)
-    residual = np.linalg.norm(values - design @ coefficients, axis=1)
-    keep = residual <= 3 * max(float(np.median(residual)), 1.0)
-    coefficients, *_ = np.linalg.lstsq(design[keep], values[keep], rcond=None)
-    rr, cc = np.meshgrid(np.arange(height) / height, np.arange(width) / width, indexing="ij")
-    model: np.ndarray = (
-        coefficients[0] + rr[..., None] * coefficients[1] + cc[..., None] * coefficients[2]
-    )
-    return model
+    return np.asarray(eroded, dtype=bool)
+
+
+def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` dilated ``steps`` times by the 4-neighbour cross, with OpenCV."""
+    return np.asarray(cv2.dilate(mask.astype(np.uint8), _CROSS, iterations=steps), dtype=bool)
+
+
+def _fill_holes(mask: np.ndarray) -> np.ndarray:
+    """``mask`` with its holes filled: the parts of its outside that do not reach the
+    crop's border (4-connected, as ``scipy.ndimage.binary_fill_holes``)."""
+    count, labels = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    enclosed = np.ones(count, dtype=bool)
+    enclosed[border] = False
+    enclosed[0] = False  # the mask itself
+    filled: np.ndarray = mask | enclosed[labels]
+    return filled
+
+
+def _glare(
+    classes: np.ndarray, lightness: np.ndarray, core: np.ndarray, min_area: float
+) -> np.ndarray:
+    """Which core pixels are a specular highlight: brighter than most of the region
+    (white mixed in; it may then look like another colour, a glint on yellow like
+    wood), in patches smaller than a block (a yellow block beside a blue one is a
+    block's size)."""
+    core_lightness = lightness[core]
+    bright = core_lightness > np.median(core_lightness) + 4.0
+    candidates = np.zeros(core.shape, dtype=bool)
+    candidates[core] = bright
+    labels, count = ndimage.label(candidates)
+    if count == 0:
+        return np.zeros(classes.shape, dtype=bool)
+    sizes = np.bincount(labels.ravel(), minlength=count + 1)
+    small = sizes < 1.5 * min_area
+    small[0] = False
+    glare: np.ndarray = small[labels][core]
+    return glare
+
+
+def _lightness_modes(values: np.ndarray) -> tuple[float, float | None]:
+    """The top face's lightness (L*) and, when the class's lightness falls into two
+    modes at least :data:`SIDE_FACE_GAP` apart (Otsu's split), the side faces'."""
+    if values.size < 8:
+        return float(np.median(values)) if values.size else 0.0, None
+    as_bytes = np.clip(values * 2.55, 0, 255).astype(np.uint8).reshape(-1, 1)
+    split, _ = cv2.threshold(as_bytes, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+    cut = split / 2.55
+    upper, lower = values[values > cut], values[values <= cut]
+    if upper.size < 8 or lower.size < 8:
+        return float(np.median(values)), None
+    top, side = float(np.median(upper)), float(np.median(lower))
+    if top - side < SIDE_FACE_GAP or upper.size < lower.size / 4:
+        return float(np.median(values)), None
+    return top, side

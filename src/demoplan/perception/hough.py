@@ -57,7 +57,12 @@ def hough_squares(
     alpha: np.ndarray, side_range: tuple[float, float], peaks: int = 4
 ) -> list[Hypothesis]:
     """The ``peaks`` best-supported squares in ``alpha`` with a side in ``side_range``
-    (px), strongest first, at distinct centres."""
+    (px), strongest first, at distinct centres.
+
+    The accumulator is filled one side length at a time (its θ × y × x slice: the
+    shared votes below never cross side bins), so memory stays at one slice
+    whatever the range of sides; the votes of a slice are one vectorised
+    ``bincount``."""
     u, v, nu, nv, g = edge_pixels(alpha)
     if u.size == 0:
         return []
@@ -65,49 +70,58 @@ def hough_squares(
     theta = np.degrees(np.arctan2(nv, nu)) % 90.0
     sides = np.arange(side_range[0], side_range[1] + S_BIN / 2, S_BIN)
     n_theta = round(90.0 / THETA_BIN)
-    n_side = sides.size
     n_x = int(np.ceil(width / XY_BIN))
     n_y = int(np.ceil(height / XY_BIN))
     theta_bin = np.floor(theta / THETA_BIN + 0.5).astype(int) % n_theta
     tangent_u, tangent_v = -nv, nu
-    indices, weights = [], []
-    for k, s in enumerate(sides):
+    size = n_theta * n_y * n_x
+    candidates: list[Hypothesis] = []
+    for s in sides:
         steps = np.arange(-s / 2 + XY_BIN / 2, s / 2, XY_BIN)
         cu = u[:, None] - (s / 2) * nu[:, None] + steps[None, :] * tangent_u[:, None]
         cv = v[:, None] - (s / 2) * nv[:, None] + steps[None, :] * tangent_v[:, None]
         xb = (cu / XY_BIN).astype(int)
         yb = (cv / XY_BIN).astype(int)
         inside = (cu >= 0) & (xb < n_x) & (cv >= 0) & (yb < n_y)
-        index = ((theta_bin[:, None] * n_side + k) * n_y + yb) * n_x + xb
-        indices.append(index[inside])
-        weights.append(np.broadcast_to(g[:, None], index.shape)[inside])
-    size = n_theta * n_side * n_y * n_x
-    total = np.bincount(np.concatenate(indices), weights=np.concatenate(weights), minlength=size)
-    accumulator = total.reshape(n_theta, n_side, n_y, n_x)
-    # neighbouring θ bins share an edge's votes when θ falls near a bin border
-    accumulator = accumulator + 0.5 * (
-        np.roll(accumulator, 1, axis=0) + np.roll(accumulator, -1, axis=0)
-    )
-    # and so do neighbouring centre bins: a centre on a bin border (a square whose
-    # edges lie on pixel borders, as a render of a block at round coordinates has
-    # them) splits its votes over four bins, and a square with only two of its
-    # sides in the crop, sitting in one bin, would outvote it
-    for axis in (2, 3):
-        accumulator = ndimage.convolve1d(accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant")
-    found: list[Hypothesis] = []
-    flat = accumulator.reshape(-1)
-    order = np.argsort(flat)[::-1]
-    for position in order[: 50 * peaks]:
-        if len(found) == peaks or flat[position] <= 0:
-            break
-        t, k, yb, xb = (int(i) for i in np.unravel_index(int(position), accumulator.shape))
-        candidate = Hypothesis(
-            u=(xb + 0.5) * XY_BIN,
-            v=(yb + 0.5) * XY_BIN,
-            theta=t * THETA_BIN,
-            side=float(sides[k]),
-            votes=float(flat[position]),
+        index = (theta_bin[:, None] * n_y + yb) * n_x + xb
+        weight = np.broadcast_to(g[:, None], index.shape)[inside]
+        total = np.bincount(index[inside], weights=weight, minlength=size)
+        accumulator = total.reshape(n_theta, n_y, n_x)
+        # neighbouring θ bins share an edge's votes when θ falls near a bin border
+        accumulator = accumulator + 0.5 * (
+            np.roll(accumulator, 1, axis=0) + np.roll(accumulator, -1, axis=0)
         )
+        # and so do neighbouring centre bins: a centre on a bin border (a square whose
+        # edges lie on pixel borders, as a render of a block at round coordinates has
+        # them) splits its votes over four bins, and a square with only two of its
+        # sides in the crop, sitting in one bin, would outvote it
+        for axis in (1, 2):
+            accumulator = ndimage.convolve1d(
+                accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant"
+            )
+        # the best θ at each centre, then the best centres
+        strongest = accumulator.max(axis=0).reshape(-1)
+        best_theta = accumulator.argmax(axis=0).reshape(-1)
+        best = min(10 * peaks, strongest.size)
+        top = np.argpartition(strongest, strongest.size - best)[strongest.size - best :]
+        for position in top:
+            if strongest[position] <= 0:
+                continue
+            yb_, xb_ = (int(i) for i in np.unravel_index(int(position), (n_y, n_x)))
+            candidates.append(
+                Hypothesis(
+                    u=(xb_ + 0.5) * XY_BIN,
+                    v=(yb_ + 0.5) * XY_BIN,
+                    theta=int(best_theta[position]) * THETA_BIN,
+                    side=float(s),
+                    votes=float(strongest[position]),
+                )
+            )
+    candidates.sort(key=lambda c: -c.votes)
+    found: list[Hypothesis] = []
+    for candidate in candidates[: 50 * peaks]:
+        if len(found) == peaks:
+            break
         # non-maximum suppression: one hypothesis per neighbourhood
         if any(
             abs(c.u - candidate.u) <= 3 * XY_BIN and abs(c.v - candidate.v) <= 3 * XY_BIN

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
@@ -15,6 +16,7 @@ from demoplan.documents.poses import MAX_SIZE_M
 from demoplan.errors import InputError, UsageError
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, load_image
+from demoplan.perception.colours import load_palette
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
 __all__ = ["SIDE_TOLERANCE", "perceive_files"]
@@ -31,12 +33,14 @@ def perceive_files(
     before: Path | None = None,
     side: float | None = None,
     timeout: float = PERCEPTION_TIMEOUT,
+    colours: Path | None = None,
 ) -> dict[str, TrackedBlock]:
     """The blocks in ``image`` (a top-down orthographic picture, ``px_per_m``
     pixels per metre, its bottom-left corner at world ``origin``), by name;
     with ``before`` (the picture before the last move) a block the moved one
-    now covers stands under it. An input error when there is none: a scene
-    needs one."""
+    now covers stands under it; ``colours`` a palette file of colours to add
+    (:func:`~demoplan.perception.colours.load_palette`). An input error when
+    there is none: a scene needs one."""
     if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
         raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
     if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
@@ -45,10 +49,10 @@ def perceive_files(
             "(an object's largest extent, docs/limits.md)"
         )
     camera = Camera(px_per_m, origin)
-    settings = PerceptionSettings()
+    settings = PerceptionSettings(colours=load_palette(colours) if colours is not None else {})
     if side is not None:
-        settings = PerceptionSettings(
-            min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
+        settings = replace(
+            settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
         )
     tracker = BlockTracker()
     with (
@@ -76,12 +80,12 @@ def perceive_files(
 @contextmanager
 def _memory_refused(image: Path) -> Iterator[None]:
     """A MemoryError inside the block becomes one line: perception holds about
-    115 bytes a pixel at its peak (a 7000 × 7000 image: 5.6 GB)."""
+    30 bytes a pixel at its peak (a 4000 × 4000 image: 0.6 GB)."""
     try:
         yield
     except MemoryError:
         raise InputError(
-            "the image does not fit in memory to perceive (about 115 bytes a pixel: "
-            "49 megapixels took 5.6 GB); a smaller image expected",
+            "the image does not fit in memory to perceive (about 30 bytes a pixel: "
+            "16 megapixels took 0.6 GB); a smaller image expected",
             source=str(image),
         ) from None
