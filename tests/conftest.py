@@ -18,6 +18,7 @@ from typing import Any
 
 import pytest
 
+import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
 from tests import background
 from tests.shared_experiments import ExperimentsRun
 

@@ -69,7 +69,7 @@ than a calibration is good for)."""
 
 
 def _dictionaries() -> dict[str, int]:
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     return {
         name: int(getattr(cv2.aruco, name))
@@ -263,7 +263,7 @@ def _apply(homography: np.ndarray, points: np.ndarray) -> np.ndarray:
 def detect_markers(image: np.ndarray, dictionary: str) -> dict[int, np.ndarray]:
     """The markers of ``dictionary`` in an RGB image: id → its 4 corners (px,
     OpenCV's order), refined to sub-pixel accuracy."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     grey = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2GRAY)
     parameters = cv2.aruco.DetectorParameters()
@@ -283,7 +283,7 @@ def detect_markers(image: np.ndarray, dictionary: str) -> dict[int, np.ndarray]:
 def _undistort(points: np.ndarray, intrinsics: Intrinsics | None) -> np.ndarray:
     if intrinsics is None or not np.any(intrinsics.distortion):
         return points
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     undistorted = cv2.undistortPoints(
         points.reshape(-1, 1, 2), intrinsics.matrix, intrinsics.distortion, P=intrinsics.matrix
@@ -302,7 +302,7 @@ def calibrate(
     """The homography image → table from the markers of ``layout`` found in
     ``image`` (RGB), with its reprojection error; an InputError naming
     ``source`` when fewer than four corners of markers in the layout are found."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     found = detect_markers(image, layout.dictionary)
     known = {i: c for i, c in found.items() if i in layout.positions}
@@ -438,7 +438,7 @@ def rectify(
     marker sides on every side (without markers, up to ``MAX_REACH``).
     ``above``: the view of the plane that far above the table instead (it
     needs the camera centre), over the same (x, y) pixel grid."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     picture: np.ndarray = np.ascontiguousarray(image, dtype=np.uint8)
     if calibration.intrinsics is not None and np.any(calibration.intrinsics.distortion):
@@ -514,7 +514,7 @@ def _hide_markers(picture: np.ndarray, calibration: TableCalibration) -> np.ndar
     """The photograph with each marker (and a quarter of its side around it, its
     white margin) painted in the median colour of a ring of table around it:
     black and white squares are no blocks."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     if not calibration.marker_corners:
         return picture
@@ -727,7 +727,7 @@ def calibration_overlay(image: np.ndarray, calibration: TableCalibration) -> np.
     """The photograph with a grid of the table every 5 cm (cyan; the 10 cm
     lines drawn alike), the detected markers' outlines (green) and their ids
     (yellow): a person sees at a glance whether the grid lies flat on the table."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     picture = np.ascontiguousarray(image, dtype=np.uint8).copy()
     height, width = picture.shape[:2]

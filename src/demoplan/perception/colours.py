@@ -33,12 +33,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 from scipy import ndimage
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
+from demoplan.perception.opencv import cv2
 
 __all__ = [
     "PALETTE",

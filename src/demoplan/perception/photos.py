@@ -23,10 +23,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from demoplan.perception.camera import Camera
+from demoplan.perception.opencv import cv2
 from demoplan.perception.synthetic import COLOURS, SyntheticBlock
 
 __all__ = ["PhotoRig", "random_photo_blocks", "render_photo", "top_camera"]
@@ -227,23 +227,20 @@ def render_photo(
         dtype=np.float32,
     )
     if highlight:  # a soft white glint on some tops
-        vv, uu = np.mgrid[0 : rig.height_px, 0 : rig.width]
-        for block in blocks:
-            if generator.random() > highlight:
-                continue
-            spot = np.array([block.x, block.y]) + generator.uniform(-0.25, 0.25, 2) * block.side
-            u, v = rig.to_pixels(float(spot[0]), float(spot[1]), block.side)
-            radius = 0.08 * block.side * rig.focal / (rig.height - block.side)
-            near = (
-                slice(
-                    max(0, int(rig.height_px - v - 4 * radius)),
-                    max(0, int(rig.height_px - v + 4 * radius)),
-                ),
-                slice(max(0, int(u - 4 * radius)), max(0, int(u + 4 * radius))),
-            )
-            r2 = (uu[near] + 0.5 - u) ** 2 + (rig.height_px - vv[near] - 0.5 - v) ** 2
-            glint = 0.8 * np.exp(-r2 / (2 * radius**2))[..., None]
-            image[near] = image[near] * (1 - glint) + 250 * glint
+        _add_glints(image, blocks, rig, highlight, generator)
+    return _lens_and_sensor(image, rig, blur, noise, jpeg_quality, generator)
+
+
+def _lens_and_sensor(
+    image: np.ndarray,
+    rig: PhotoRig,
+    blur: float,
+    noise: float,
+    jpeg_quality: int,
+    generator: np.random.Generator,
+) -> np.ndarray:
+    """The rendered scene as a camera records it: light falling off across the
+    table, blur, sensor noise, 8 bits, JPEG."""
     # lighting falls off across the table, then the lens and the sensor
     ramp = (
         1.0
@@ -265,3 +262,30 @@ def render_photo(
         assert decoded is not None
         photo = np.asarray(cv2.cvtColor(decoded, cv2.COLOR_BGR2RGB), dtype=np.uint8)
     return photo
+
+
+def _add_glints(
+    image: np.ndarray,
+    blocks: Sequence[SyntheticBlock],
+    rig: PhotoRig,
+    highlight: float,
+    generator: np.random.Generator,
+) -> None:
+    """A soft white glint on the top of each block, with chance ``highlight``."""
+    vv, uu = np.mgrid[0 : rig.height_px, 0 : rig.width]
+    for block in blocks:
+        if generator.random() > highlight:
+            continue
+        spot = np.array([block.x, block.y]) + generator.uniform(-0.25, 0.25, 2) * block.side
+        u, v = rig.to_pixels(float(spot[0]), float(spot[1]), block.side)
+        radius = 0.08 * block.side * rig.focal / (rig.height - block.side)
+        near = (
+            slice(
+                max(0, int(rig.height_px - v - 4 * radius)),
+                max(0, int(rig.height_px - v + 4 * radius)),
+            ),
+            slice(max(0, int(u - 4 * radius)), max(0, int(u + 4 * radius))),
+        )
+        r2 = (uu[near] + 0.5 - u) ** 2 + (rig.height_px - vv[near] - 0.5 - v) ** 2
+        glint = 0.8 * np.exp(-r2 / (2 * radius**2))[..., None]
+        image[near] = image[near] * (1 - glint) + 250 * glint

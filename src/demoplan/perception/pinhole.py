@@ -126,7 +126,7 @@ def render_table(
     ``side_faces=False`` draws each cube's top face alone (a square tile ``side``
     above the table), which isolates the calibration and the height correction
     from telling a top face from the side faces."""
-    import cv2
+    from demoplan.perception.opencv import cv2
 
     generator = np.random.default_rng(rng)
     n = supersample

@@ -83,7 +83,9 @@ def role_bindings(model: TaskModel, scene: Scene) -> list[Binding]:
         by_type.setdefault(types.get(role, role), []).append(role)
     instances: dict[str, list[str]] = {}
     for obj in scene.objects:
-        instances.setdefault(obj.kind, []).append(obj.name)
+        # An object named like one of the model's (a role, plate#1) is of its type.
+        kind = obj.type or types.get(obj.name, obj.name)
+        instances.setdefault(kind, []).append(obj.name)
     choices: list[list[tuple[tuple[str, str], ...]]] = []
     count = 1
     for kind, roles in sorted(by_type.items()):

@@ -108,7 +108,7 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
                 needed.add(reference)
     seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
     known_types = {types.get(name, name) for name in seen}
-    kinds = {obj.name: obj.kind for obj in scene.objects}
+    kinds = {obj.name: obj.type or types.get(obj.name, obj.name) for obj in scene.objects}
     present = set(scene.names) | set(kinds.values())
     missing = sorted(name for name in needed if types.get(name, name) not in present)
     unknown = sorted(
