@@ -30,7 +30,8 @@ Read (an open without write access, a folder listed):
     ``.config/fontconfig``, ``.drirc`` — read, never written;
   * the process's own kernel files: ``/proc/self``, ``/proc/<pid>`` of a
     traced process, ``/proc/cpuinfo``, ``/proc/meminfo``, ``/proc/stat``,
-    ``/proc/sys/vm/overcommit_memory`` (the C library's allocator), the CPU
+    ``/proc/sys/vm/overcommit_memory`` (the C library's allocator),
+    ``/proc/sys/crypto/fips_enabled`` (OpenSSL's, loaded with OpenCV), the CPU
     topology under ``/sys/devices/system/cpu`` and the control group's
     limits under ``/sys/fs/cgroup`` (NumPy's BLAS and the libraries count
     the cores they may use); ``/sys/devices`` and ``/sys/bus`` only for the
@@ -352,6 +353,7 @@ SYSTEM_READS = (
     "/proc/meminfo",
     "/proc/stat",
     "/proc/sys/vm/overcommit_memory",
+    "/proc/sys/crypto/fips_enabled",  # OpenSSL's libcrypto (loaded with OpenCV) asks
     "/sys/devices/system/cpu",
     "/sys/fs/cgroup",
     "/dev/null",
