@@ -9,8 +9,8 @@ are unit quaternions ``(x, y, z, w)`` or ``None`` when unknown (docs/formats.md)
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import shapely
 from shapely.geometry.base import BaseGeometry
@@ -151,6 +151,21 @@ class Demonstration:
     """Declared types (object name → type) of objects that are one of several
     interchangeable instances (two plates, three red blocks); an object not
     listed is of its own type, its name (docs/formats.md)."""
+
+    def renamed(self, renaming: Mapping[str, str]) -> Demonstration:
+        """This demonstration with objects renamed (``renaming``: old → new name;
+        others kept): its steps, geometry, initial poses and declared types."""
+
+        def name(old: str) -> str:
+            return renaming.get(old, old)
+
+        return replace(
+            self,
+            steps=tuple(Step(name(s.object), s.pose) for s in self.steps),
+            objects=tuple((name(n), g) for n, g in self.objects),
+            initial=tuple((name(n), p) for n, p in self.initial),
+            types=tuple((name(n), t) for n, t in self.types),
+        )
 
     def type_of(self, name: str) -> str:
         """``name``'s type: as declared, else its name."""

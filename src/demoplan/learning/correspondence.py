@@ -38,7 +38,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from demoplan.learning.states import DemonstrationWorld
-from demoplan.model import Demonstration, Pose, Role, Step
+from demoplan.model import Demonstration, Pose, Role
 from demoplan.rotations import matrices_from_quats
 
 __all__ = [
@@ -124,19 +124,10 @@ def rename_demonstration(demo: Demonstration, renaming: dict[str, str], kind: st
     role), their type recorded where the role's name is not the type."""
     if not renaming:
         return demo
-
-    def name(old: str) -> str:
-        return renaming.get(old, old)
-
-    types = tuple((name(n), t) for n, t in demo.types if name(n) != t)
+    moved = demo.renamed(renaming)
+    types = tuple((n, t) for n, t in moved.types if n != t)
     types += tuple((role, kind) for role in renaming.values() if role != kind)
-    return replace(
-        demo,
-        steps=tuple(Step(name(s.object), s.pose) for s in demo.steps),
-        objects=tuple((name(n), g) for n, g in demo.objects),
-        initial=tuple((name(n), p) for n, p in demo.initial),
-        types=tuple(dict(types).items()),
-    )
+    return replace(moved, types=tuple(dict(types).items()))
 
 
 def instance_demonstrations(
@@ -152,21 +143,9 @@ def instance_demonstrations(
             if index < len(role.instances) and (instance := role.instances[index]) is not None
         }
         kinds = {role.name: role.type for role in roles}
-
-        def name(old: str, renaming: dict[str, str] = renaming) -> str:
-            return renaming.get(old, old)
-
-        types = {name(n): t for n, t in demo.types}
-        types |= {instance: kinds[role] for role, instance in renaming.items()}
-        out.append(
-            replace(
-                demo,
-                steps=tuple(Step(name(s.object), s.pose) for s in demo.steps),
-                objects=tuple((name(n), g) for n, g in demo.objects),
-                initial=tuple((name(n), p) for n, p in demo.initial),
-                types=tuple((n, t) for n, t in types.items() if n != t),
-            )
-        )
+        moved = demo.renamed(renaming)
+        types = dict(moved.types) | {instance: kinds[role] for role, instance in renaming.items()}
+        out.append(replace(moved, types=tuple((n, t) for n, t in types.items() if n != t)))
     return out
 
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 from typing import TypeVar
 
 from demoplan.errors import InputError, LimitReachedError
-from demoplan.model import Demonstration, State, StateOrientation, StatePosition, Step, TaskModel
+from demoplan.model import State, StateOrientation, StatePosition, TaskModel
 from demoplan.scenes.scene import Scene
 from demoplan.scenes.targets import Candidate
 from demoplan.wording import plural
@@ -142,7 +142,7 @@ def bind_model(model: TaskModel, binding: Binding) -> TaskModel:
     return replace(
         model,
         states=tuple(_bind_state(state, renaming) for state in model.states),
-        demonstrations=tuple(_bind_demonstration(demo, renaming) for demo in model.demonstrations),
+        demonstrations=tuple(demo.renamed(renaming) for demo in model.demonstrations),
     )
 
 
@@ -163,19 +163,6 @@ def _bind_reference(part: _Part, renaming: Mapping[str, str]) -> _Part:
     if part.reference is None:
         return part
     return replace(part, reference=renaming.get(part.reference, part.reference))
-
-
-def _bind_demonstration(demo: Demonstration, renaming: Mapping[str, str]) -> Demonstration:
-    def name(old: str) -> str:
-        return renaming.get(old, old)
-
-    return replace(
-        demo,
-        steps=tuple(Step(name(s.object), s.pose) for s in demo.steps),
-        objects=tuple((name(n), g) for n, g in demo.objects),
-        initial=tuple((name(n), p) for n, p in demo.initial),
-        types=tuple((name(n), t) for n, t in demo.types),
-    )
 
 
 def lower_bound(candidate: Candidate, scene: Scene, tolerance: float) -> int:
