@@ -7,7 +7,9 @@ typer application can use it without importing the launcher back.
 from __future__ import annotations
 
 import sys
-from typing import Any
+from collections.abc import Callable
+from types import CodeType
+from typing import Any, TypeVar
 
 __all__ = [
     "INTERRUPTED_EXIT",
@@ -18,7 +20,9 @@ __all__ = [
     "on_signal",
     "quiet_after_signal",
     "redeliver_lost_signal",
+    "reports_signals",
     "signals_received",
+    "stop_redelivery",
 ]
 
 
@@ -38,28 +42,75 @@ def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
 signals_received: list[int] = []  # SIGINT / SIGTERM, in the order they came
 
 
+REDELIVERY_SECONDS = 0.25
+"""How soon a signal whose exception was swallowed is raised again."""
+
+_reporters: set[CodeType] = set()  # the functions that report a signal: never redelivered into
+_Function = TypeVar("_Function", bound=Callable[..., Any])
+
+
 def on_signal(signum: int, frame: object) -> None:
     """Ctrl-C or SIGTERM: remember it (a library may catch the exception and
-    exit in its own way — typer turns Ctrl-C into a silent exit 130) and stop."""
+    exit in its own way — typer turns Ctrl-C into a silent exit 130) and stop.
+    A timer raises it again if the exception is swallowed (:func:`_redeliver`)."""
     import signal
 
     signals_received.append(signum)
+    _arm_redelivery(REDELIVERY_SECONDS)
     raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+def _arm_redelivery(seconds: float) -> None:
+    import signal
+
+    signal.signal(signal.SIGALRM, _redeliver)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+
+
+def _redeliver(_signum: int, frame: Any) -> None:
+    """The redelivery timer: the signal's exception again, unless it is on its way.
+
+    A library may swallow the exception: an extension module interrupted while
+    it loads fails with ``ImportError``, which an optional import's ``except
+    ImportError`` takes for a missing package, and the command ran on to its end.
+    While a ``KeyboardInterrupt`` is being handled (a ``finally`` or ``__exit__``
+    cleaning up as the command unwinds), the timer waits instead of cutting the
+    cleanup short; in a reporting function (:func:`reports_signals`) it stops.
+    """
+    if frame is not None and frame.f_code in _reporters:
+        return
+    if isinstance(sys.exc_info()[1], KeyboardInterrupt):
+        _arm_redelivery(REDELIVERY_SECONDS)
+        return
+    if signals_received:
+        on_signal(signals_received[-1], frame)
+
+
+def reports_signals(function: _Function) -> _Function:
+    """Mark ``function`` as the one that reports a signal (a process's ``main``):
+    the redelivery timer never raises inside it. It calls :func:`stop_redelivery`
+    where it takes the exception (or finds a signal was received)."""
+    _reporters.add(function.__code__)
+    return function
+
+
+def stop_redelivery() -> None:
+    """No more redelivery: the signal has reached the function that reports it."""
+    import signal
+
+    signal.setitimer(signal.ITIMER_REAL, 0)
+    signal.signal(signal.SIGALRM, signal.SIG_IGN)
 
 
 def redeliver_lost_signal(unraisable: Any) -> None:
     """``sys.unraisablehook``: a signal whose exception arrived where Python cannot
     raise it (a weakref callback inside an import lock, a ``__del__``) is
-    neither reported with a traceback nor lost — a timer delivers it again a
-    few milliseconds later, after the hook has returned, so that the command
-    stops at the next line of ordinary code. Other unraisable exceptions go to
-    Python's own report."""
-    import signal
-
+    neither reported with a traceback nor lost — the redelivery timer raises it
+    again a few milliseconds later, after the hook has returned, so that the
+    command stops at the next line of ordinary code. Other unraisable
+    exceptions go to Python's own report."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt) and signals_received:
-        signum = signals_received[-1]
-        signal.signal(signal.SIGALRM, lambda _number, frame: on_signal(signum, frame))
-        signal.setitimer(signal.ITIMER_REAL, 0.005)
+        _arm_redelivery(0.005)
         return
     sys.__unraisablehook__(unraisable)
 

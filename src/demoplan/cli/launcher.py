@@ -30,7 +30,9 @@ from demoplan.cli.interrupts import (
     on_signal,
     quiet_after_signal,
     redeliver_lost_signal,
+    reports_signals,
     signals_received,
+    stop_redelivery,
 )
 from demoplan.cli.solving import SolveOptions, solve_text
 
@@ -105,6 +107,7 @@ def run_solve(options: SolveOptions) -> int:
     return 0
 
 
+@reports_signals
 def main() -> None:
     """Entry point of the ``demoplan`` command."""
     import signal
@@ -136,9 +139,11 @@ def main() -> None:
             if not signals_received:
                 sys.stdout.flush()  # here, where a full disk or a closed pipe is caught
     except KeyboardInterrupt:
+        stop_redelivery()
         if not signals_received:  # raised without a signal (a test, a debugger)
             signals_received.append(signal.SIGINT)
     except Exception as exc:
+        stop_redelivery()
         if not signals_received:
             if not isinstance(exc, OSError):
                 raise
@@ -148,6 +153,7 @@ def main() -> None:
             raise SystemExit(1) from None
         # else the signal surfaced as another error: a C extension interrupted
         # while it loads reports "ImportError: initialization failed"
+    stop_redelivery()  # a signal a library swallowed is reported below all the same
     # The command is over: a signal now would only turn a finished command's
     # exit into Python's own KeyboardInterrupt report.
     signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -264,13 +264,11 @@ def segment_experiment(out: Path) -> SegmentationRun:
         len(steps.steps) == len(demo.steps) and order and worst < 0.005,
     )
     figure = None
-    try:
+    if _can_plot():
         from demoplan.plotting.segmentation import plot_segmentation
 
         plot_segmentation(found, out / "experiment1-segmentation.png")
         figure = "experiment1-segmentation.png"
-    except ImportError:
-        pass
     return SegmentationRun(
         title,
         stream_file,
@@ -355,13 +353,13 @@ def _plot_precision(
     default_counts: list[int],
     out: Path,
 ) -> str | None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    if not _can_plot():
         return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     from demoplan.plotting.figures import save_figure
 
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
@@ -406,22 +404,21 @@ def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> s
         f"Plan for the goal of {model.demonstration_label(chosen.goal)}: "
         f"{len(chosen.plan) // 2} moves"
     )
-    try:
-        save_scene_plan(
-            complete_scene(scene, model),
-            chosen.problem,
-            chosen.plan,
-            path,
-            title,
-            chosen.binding.roles,
-        )
-    except ImportError:
+    if not _can_plot():
         return None
+    save_scene_plan(
+        complete_scene(scene, model),
+        chosen.problem,
+        chosen.plan,
+        path,
+        title,
+        chosen.binding.roles,
+    )
     return path.name
 
 
 def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None:
-    if importlib.util.find_spec("matplotlib") is None:
+    if not _can_plot():
         logger.warning(
             "matplotlib is not installed; the report has no figures (pip install demoplan[plot])"
         )
@@ -430,3 +427,9 @@ def _plot_demonstrations(model: TaskModel, path: Path, title: str) -> str | None
 
     save_demonstrations(model, path, title)
     return path.name
+
+
+def _can_plot() -> bool:
+    """matplotlib is installed (asked of the installation, not by catching an
+    ``ImportError``: an import that Ctrl-C interrupts fails with one too)."""
+    return importlib.util.find_spec("matplotlib") is not None

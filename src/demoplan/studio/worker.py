@@ -35,12 +35,15 @@ import threading
 from pathlib import Path
 from typing import IO, Any, NoReturn
 
+from demoplan.cli.interrupts import reports_signals
+
 __all__ = ["main"]
 
 MAX_EVENTS = 10_000
 """Events kept per run (as :data:`demoplan.studio.jobs.MAX_EVENTS`)."""
 
 
+@reports_signals
 def main() -> NoReturn:
     """Run the request read on stdin, and exit: 0, 130 / 143 when stopped, 1
     when the studio could not be told (its end of the pipe gone)."""
@@ -49,6 +52,7 @@ def main() -> NoReturn:
         on_signal,
         redeliver_lost_signal,
         signals_received,
+        stop_redelivery,
     )
 
     signal.signal(signal.SIGINT, on_signal)
@@ -67,15 +71,19 @@ def main() -> NoReturn:
         finally:
             signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     except KeyboardInterrupt as exc:
+        stop_redelivery()
         code = interrupted_exit_code(exc)
     except Exception as exc:
+        stop_redelivery()
         if signals_received:  # the signal surfaced as another error
             code = 143 if signal.SIGTERM in signals_received else 130
         else:  # the studio's end of the pipe is gone
             sys.stderr.write(f"demoplan studio: run: {type(exc).__name__}: {exc}\n")
             code = 1
     else:
-        code = 0
+        stop_redelivery()
+        # a signal a library swallowed still stops the run
+        code = 0 if not signals_received else 143 if signal.SIGTERM in signals_received else 130
     # No interpreter teardown (MuJoCo's GL contexts, ffmpeg already closed):
     # everything was said.
     sys.stderr.flush()
