@@ -58,6 +58,8 @@ MIN_LIGHTNESS_CONTRAST = 12.0
 """Foreground in an image without colour: CIELAB L* difference from the table."""
 SIDE_FACE_GAP = 12.0
 """L* between a class's two lightness modes for the darker one to be side faces."""
+MAX_PALETTE_COLOURS = 64
+"""Colours a palette file may add: a camera tells a few dozen apart at best."""
 _SPECIAL = {-2: "black", -3: "grey", -4: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
@@ -184,6 +186,10 @@ def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
     document = read_document(Path(path))  # JSON, or YAML by extension; one-line errors
     if not document:
         raise InputError("a mapping of colour names to [R, G, B] expected", source=source)
+    if len(document) > MAX_PALETTE_COLOURS:
+        raise InputError(
+            f"{len(document)} colours; at most {MAX_PALETTE_COLOURS} expected", source=source
+        )
     palette: dict[str, tuple[float, float, float]] = {}
     for name, value in document.items():
         field = str(name)
