@@ -126,7 +126,10 @@ def test_a_small_patch_and_a_disc_are_rejected_with_why(tmp_path: Path) -> None:
         return [
             r
             for r in found.rejected
-            if cv2.pointPolygonTest(np.array(r.outline, dtype=np.float32), (x, y), False) >= 0
+            if any(
+                cv2.pointPolygonTest(np.array(o, dtype=np.float32), (x, y), False) >= 0
+                for o in r.outlines
+            )
         ]
 
     (patch,) = at(0.40, 0.08)
@@ -134,10 +137,11 @@ def test_a_small_patch_and_a_disc_are_rejected_with_why(tmp_path: Path) -> None:
     (disc,) = at(0.12, 0.30)
     assert (disc.reason, disc.colour) == ("not square", "green")
     assert disc.detail.startswith("misfit ")
-    assert all(abs(math.dist(p, (0.12, 0.30)) - 0.025) < 0.003 for p in disc.outline)
+    (outline,) = disc.outlines
+    assert all(abs(math.dist(p, (0.12, 0.30)) - 0.025) < 0.003 for p in outline)
     overlay = load_image(tmp_path / "overlay.png")
     assert overlay.shape == image.shape
-    for x, y in disc.outline:
+    for x, y in outline:
         assert near_colour(overlay, pixel(CAMERA, 400, x, y), REJECTED_COLOUR)
     # the detector alone reports the same
     rejected: list[Rejection] = []
@@ -169,10 +173,10 @@ def test_a_side_face_is_rejected_at_its_cubes_edge() -> None:
     image = render_photo([cube], rig, rng=5, highlight=0.0)
     (seen,) = detect_blocks(image, top_camera(rig, SIDE), settings_, rejected)
     assert math.dist((seen.x, seen.y), (cube.x, cube.y)) < 0.002
-    faces = [r for r in rejected if r.reason == "side face"]
-    assert faces and all(r.colour == "yellow" for r in faces)
-    for face in faces:
-        middle = np.mean(face.outline, axis=0)
+    (face,) = [r for r in rejected if r.reason == "side face"]  # one record per cube
+    assert face.colour == "yellow"
+    for piece in face.outlines:
+        middle = np.mean(piece, axis=0)
         assert 0.008 < math.dist(middle, (cube.x, cube.y)) < 0.03  # at an edge, not inside
 
 

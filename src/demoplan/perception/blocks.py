@@ -88,13 +88,13 @@ class Rejection:
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``no block colour``, ``side face``, ``no square``,
     ``too large``, ``not filled``, ``not square``, ``no free sides``), ``detail``
-    the measure behind it; ``outline`` in world (x, y), metres, on the plane the
-    image shows."""
+    the measure behind it; ``outlines`` its pieces' outlines (one, mostly) in
+    world (x, y), metres, on the plane the image shows."""
 
     reason: str
     detail: str
     colour: str
-    outline: tuple[tuple[float, float], ...]
+    outlines: tuple[tuple[tuple[float, float], ...], ...]
 
 
 def _failure(
@@ -130,18 +130,18 @@ def _unfit(
     why the best fit failed (the strongest Hough candidate's first failed check)."""
     reason, detail = failures[0] if failures else ("no square", "no edges to vote")
     row0, col0 = region.offset
-    return [
-        RejectedPart(reason, detail, region.colour, outline + np.array([col0, row0]))
-        for outline in outlines(alpha > 0.5, REPORTED_SHARE * min_area)
-    ]
+    shift = np.array([col0, row0])
+    pieces = tuple(o + shift for o in outlines(alpha > 0.5, REPORTED_SHARE * min_area))
+    return [RejectedPart(reason, detail, region.colour, pieces)] if pieces else []
 
 
 def _in_world(part: RejectedPart, camera: Camera, height: int) -> Rejection:
-    """A rejected part's outline from image pixels (x right, y down) to the world."""
-    points = tuple(
-        camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in part.outline
+    """A rejected part's outlines from image pixels (x right, y down) to the world."""
+    pieces = tuple(
+        tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
+        for outline in part.outlines
     )
-    return Rejection(part.reason, part.detail, part.colour, points)
+    return Rejection(part.reason, part.detail, part.colour, pieces)
 
 
 def _square_alpha(params: np.ndarray, uu: np.ndarray, vv: np.ndarray) -> np.ndarray:

@@ -95,13 +95,13 @@ class ColourRegion:
 class RejectedPart:
     """A foreground part that is no block, and why: ``reason`` a short phrase
     (``too small``, ``thin or faint``, ``no block colour``, ``side face``),
-    ``detail`` the measure behind it, ``outline`` its outline in image pixels
-    (x right, y down, pixel centres at whole numbers), N × 2."""
+    ``detail`` the measure behind it, ``outlines`` the outlines of its pieces in
+    image pixels (x right, y down, pixel centres at whole numbers), each N × 2."""
 
     reason: str
     detail: str
     colour: str
-    outline: np.ndarray
+    outlines: tuple[np.ndarray, ...]
 
 
 REPORTED_SHARE = 0.1
@@ -133,12 +133,14 @@ class _Recorder:
     def __call__(
         self, mask: np.ndarray, rows: slice, cols: slice, reason: str, detail: str, colour: str = ""
     ) -> None:
-        """``mask``'s parts (on the crop ``rows`` × ``cols``), dropped for ``reason``."""
+        """``mask`` (on the crop ``rows`` × ``cols``), dropped for ``reason``: one
+        record, of the pieces that are not mere specks."""
         if self.rejected is None:
             return
-        for outline in outlines(mask, REPORTED_SHARE * self.min_area):
-            shift = np.array([cols.start or 0, rows.start or 0])
-            self.rejected.append(RejectedPart(reason, detail, colour, outline + shift))
+        shift = np.array([cols.start or 0, rows.start or 0])
+        pieces = tuple(o + shift for o in outlines(mask, REPORTED_SHARE * self.min_area))
+        if pieces:
+            self.rejected.append(RejectedPart(reason, detail, colour, pieces))
 
     def speck(self, labels: np.ndarray, index: int, box: tuple[int, ...]) -> None:
         """A connected foreground part smaller than a block (not mere noise)."""

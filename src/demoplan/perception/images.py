@@ -49,7 +49,7 @@ def seen_now(
             "covered",
             "what is left in view of a covered block",
             d.colour,
-            tuple((float(x), float(y)) for x, y in square_corners(d.x, d.y, d.yaw, d.side)),
+            (tuple((float(x), float(y)) for x, y in square_corners(d.x, d.y, d.yaw, d.side)),),
         )
         for d in detected
         if (d.x, d.y) not in poses

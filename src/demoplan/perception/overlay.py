@@ -123,28 +123,29 @@ def draw_overlay(
                     )
                 return
 
-    rejected_points = [
-        (rejection.reason, to_image(np.asarray(rejection.outline, dtype=float), plane))
+    items = [  # text, outlines in the image, colour, line weight
+        (
+            rejection.reason,
+            [to_image(np.asarray(piece, dtype=float), plane) for piece in rejection.outlines],
+            REJECTED_COLOUR,
+            thickness,
+        )
         for rejection, plane in rejected
     ]
-    found_points = [
+    items += [
         (
             f"{block.name} {round(block.yaw)} deg",
-            to_image(square_corners(block.x, block.y, block.yaw, block.side), block.height),
+            [to_image(square_corners(block.x, block.y, block.yaw, block.side), block.height)],
+            FOUND_COLOUR,
+            2 * thickness,
         )
         for block in found
     ]
-    for points, colour, weight in [
-        *((p, REJECTED_COLOUR, thickness) for _, p in rejected_points),
-        *((p, FOUND_COLOUR, 2 * thickness) for _, p in found_points),
-    ]:
-        drawn = polygon(points)
-        if drawn is not None:
-            cv2.polylines(picture, [drawn], True, colour, weight, cv2.LINE_AA, 4)
-    for text, points, colour in [
-        *((t, p, FOUND_COLOUR) for t, p in found_points),
-        *((t, p, REJECTED_COLOUR) for t, p in rejected_points),
-    ]:
-        if polygon(points) is not None:
-            label(text, points, colour)
+    for _, pieces, colour, weight in items:  # the found blocks' outlines on top
+        drawn = [p for p in map(polygon, pieces) if p is not None]
+        cv2.polylines(picture, drawn, True, colour, weight, cv2.LINE_AA, 4)
+    for text, pieces, colour, _ in items[len(rejected) :] + items[: len(rejected)]:
+        shown = [p for p in pieces if polygon(p) is not None]
+        if shown:  # the found blocks' labels first: they take the best places
+            label(text, np.concatenate(shown), colour)
     return picture
