@@ -257,6 +257,34 @@ def test_colours_names_a_block_of_a_new_colour(tmp_path: Path) -> None:
     assert list(json.loads(named.stdout)["objects"]) == ["pink"]
 
 
+def test_colours_and_plot_on_a_calibrated_photograph(tmp_path: Path) -> None:
+    """``--markers`` with ``--colours`` and ``--plot``: a pink cube in an oblique
+    photograph is named pink, and the overlay is the photograph's size."""
+    from tests.helpers import EXAMPLES
+
+    view = PinholeCamera.looking_at(
+        (0.15, 0.1), tilt=20.0, heading=-60.0, distance=0.6, focal=560.0
+    )
+    markers = {0: (0.0, 0.0), 1: (0.3, 0.0), 2: (0.3, 0.2), 3: (0.0, 0.2)}
+    COLOURS["pink"] = (240, 150, 200)
+    try:
+        cube = SyntheticBlock("pink", 0.15, 0.1, 10.0, SIDE)
+        image = render_table(view, [cube], markers, marker_side=0.04, rng=2)
+    finally:
+        del COLOURS["pink"]
+    save_image(image, tmp_path / "view.png")
+    result = invoke(
+        "perceive", tmp_path / "view.png", "--markers", EXAMPLES / "perception" / "markers.json",
+        "--side", "0.04", "--colours", EXAMPLES / "perception" / "colours.json",
+        "--plot", tmp_path / "overlay.png", "--json",
+    )  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    (pink,) = json.loads(result.stdout)["objects"].items()
+    assert pink[0] == "pink"
+    assert math.dist(pink[1]["position"][:2], (cube.x, cube.y)) < 0.005
+    assert load_image(tmp_path / "overlay.png").shape == image.shape
+
+
 def test_the_example_palette_file_reads() -> None:
     from demoplan.perception.colours import load_palette
     from tests.helpers import EXAMPLES

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -33,6 +33,9 @@ from demoplan.cli.common import (
 )
 from demoplan.cli.render import print_run_report
 from demoplan.wording import plural
+
+if TYPE_CHECKING:
+    from demoplan.perception.blocks import Rejection
 
 
 @contextmanager
@@ -358,7 +361,7 @@ NOUNS = {"side face": "side faces", "side face or shadow": "side faces or shadow
 """Reasons for a rejection that are nouns, and their plurals."""
 
 
-def _rejections_line(rejected: Any, plot: Path) -> str:
+def _rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
     """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``."""
     counts = Counter(r.reason for r in rejected)
     reasons = ", ".join(
