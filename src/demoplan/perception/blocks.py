@@ -86,10 +86,11 @@ class DetectedBlock:
 class Rejection:
     """A coloured region (or part of one) the detector found to be no block, and
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
-    ``thin or faint``, ``no block colour``, ``side face``, ``no square``,
-    ``too large``, ``not filled``, ``not square``, ``no free sides``), ``detail``
-    the measure behind it; ``outlines`` its pieces' outlines (one, mostly) in
-    world (x, y), metres, on the plane the image shows."""
+    ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
+    face``, ``no square``, ``too large``, ``not filled``, ``not square``, ``no
+    free sides``; ``covered`` from the tracker), ``detail`` the measure behind
+    it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
+    metres, on the plane the image shows."""
 
     reason: str
     detail: str
@@ -286,7 +287,8 @@ def detect_blocks(
         for attempt in range(8):
             if (alpha > 0.5).sum() < min_area:
                 if parts is not None and attempt == 0:  # its side faces left too little
-                    parts += _unfit(alpha, region, [("too small", "top face")], min_area)
+                    small = ("too small", f"{int((alpha > 0.5).sum())} px of top face")
+                    parts += _unfit(alpha, region, [small], min_area)
                 break
             # a region of area A holds squares no larger than √A
             largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))

@@ -151,9 +151,9 @@ def perceive_photograph(
     calibration covers), by name, on the table's coordinates; with ``before``
     (the picture before the last move, same camera) a block the moved one now
     covers stands under it; ``colours`` a palette file of colours to add; the
-    regions rejected; with ``overlay``, both drawn
-    on the photograph, mapped back from the rectified view through the
-    calibration. An input error when there is no block."""
+    regions rejected; with ``overlay``, both drawn on the photograph, mapped
+    back from the rectified view through the calibration. An input error when
+    there is no block."""
     if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
         raise UsageError(
             f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
@@ -183,8 +183,8 @@ def perceive_photograph(
     drawn = None
     if overlay:
         # a top face where it shows: on its plane, where the camera's centre is known
-        height = (lambda b: b.side) if calibration.centre is not None else (lambda b: 0.0)
-        found = [Drawn(b.name, b.x, b.y, b.yaw, b.side, height(b)) for b in seen]
+        lifted = calibration.centre is not None
+        found = [Drawn(b.name, b.x, b.y, b.yaw, b.side, b.side if lifted else 0.0) for b in seen]
         drawn = draw_overlay(
             load_image(image),
             found,
