@@ -1409,7 +1409,7 @@ def palette_section() -> str:
             "as RGB divided by its largest channel, so a block in shade is still named; "
             "a block is named by the nearest colour of the palette, and a block farther "
             "than 0.3 from every one is `block1`, `block2`… A built-in name moves that "
-            "colour (`\"wood\": [200, 140, 90]` for a darker wood). "
+            'colour (`"wood": [200, 140, 90]` for a darker wood). '
             "`examples/perception/colours.json`:",
             fenced("json", (ROOT / "examples/perception/colours.json").read_text().strip()),
             table(
@@ -1704,7 +1704,7 @@ def other_section() -> str:
             "bottom-left corner, image right = world x, image up = world y; or any view "
             "with `--camera` or `--markers` (above). `calibrate --plot` draws the markers "
             "found and a 5 cm grid of the table on it, `perceive --plot` the blocks found "
-            "and the regions rejected, and why (docs/perception.md, \"Overlays\"); both "
+            'and the regions rejected, and why (docs/perception.md, "Overlays"); both '
             "write a PNG whatever the name's extension. `perceive` names each block by "
             "its colour (`red`; a second red block `red2`; a colour without a name `block1`, "
             "`block2`…) and writes two or more blocks of one named colour as instances "

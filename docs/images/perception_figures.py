@@ -47,9 +47,7 @@ from demoplan.perception.synthetic import COLOURS, SyntheticBlock
 
 HERE = Path(__file__).resolve().parent
 SIDE = 0.04
-RIG = PhotoRig(
-    width=640, height_px=400, focal=1000.0, nadir=(0.3, 0.2), nadir_px=(312.5, 625 / 3)
-)
+RIG = PhotoRig(width=640, height_px=400, focal=1000.0, nadir=(0.3, 0.2), nadir_px=(312.5, 625 / 3))
 """The camera 1 m above (0.3, 0.2); the plane of the tops (4 cm up) at 1000 / 0.96 px/m
 with the image's bottom-left corner at (0, 0): ``--px-per-m 1041.667 --origin 0 0``."""
 SETTINGS = PerceptionSettings(min_side=0.85 * SIDE, max_side=1.15 * SIDE)  # as --side 0.04
