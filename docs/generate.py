@@ -928,6 +928,7 @@ TITLES = {
     "scene": "Scene (`demoplan/scene-1`)",
     "markers": "Markers file (`demoplan/markers-1`)",
     "camera": "Camera file (`demoplan/camera-1`)",
+    "palette": "Palette file",
     "model": "Task model (`demoplan/model-1`)",
     "problem": "Planning problem (XML)",
     "plan": "Plan",
@@ -959,6 +960,7 @@ def formats_page() -> str:
         scene_section(),
         markers_section(),
         camera_section(),
+        palette_section(),
         model_section(computed),
         problem_section(),
         plan_section(computed),
@@ -978,6 +980,7 @@ FORMS = {
     "scene": "JSON / YAML: `demoplan/scene-1`",
     "markers": "JSON / YAML",
     "camera": "JSON / YAML: `demoplan/camera-1`",
+    "palette": "JSON / YAML",
     "model": "JSON / YAML: `demoplan/model-1`",
     "problem": "XML",
     "plan": "text; JSON",
@@ -994,6 +997,7 @@ SHORT_TITLES = {
     "scene": "Scene",
     "markers": "Markers",
     "camera": "Camera",
+    "palette": "Palette",
     "model": "Task model",
     "problem": "Planning problem",
     "bt": "Behaviour tree",
@@ -1390,6 +1394,46 @@ def markers_section() -> str:
     )
 
 
+def palette_section() -> str:
+    from demoplan.perception.colours import MAX_PALETTE_COLOURS, PALETTE
+
+    built_in = ", ".join(f"`{name}`" for name in PALETTE)
+    return blocks(
+        [
+            f"## {TITLES['palette']}",
+            "Colours for `perceive --colours` to name blocks by, besides the built-in "
+            f"ones ({built_in}): a JSON object — YAML with a `.yaml` / `.yml` name — "
+            "mapping a name to the block's colour as the camera sees its top face, "
+            "`[R, G, B]` in 0–255 (measure it on a picture: the mean of the top face, "
+            "not of a highlight or a shadow). Only the hue counts: the colour is kept "
+            "as RGB divided by its largest channel, so a block in shade is still named; "
+            "a block is named by the nearest colour of the palette, and a block farther "
+            "than 0.3 from every one is `block1`, `block2`… A built-in name moves that "
+            'colour (`"wood": [200, 140, 90]` for a darker wood). '
+            "`examples/perception/colours.json`:",
+            fenced("json", (ROOT / "examples/perception/colours.json").read_text().strip()),
+            table(
+                ("field", "type", "meaning"),
+                [
+                    (
+                        "a name",
+                        "letters, digits and `_`, not starting with a digit or `block`",
+                        "The blocks' name (`pink`, then `pink2`…) and type.",
+                    ),
+                    (
+                        "its value",
+                        "3 numbers in 0–255, not all 0",
+                        "The top face's colour, `[R, G, B]`.",
+                    ),
+                ],
+            ),
+            f"At most {MAX_PALETTE_COLOURS} colours. Anything else is one error line "
+            "naming the file and the colour (exit 1, docs/limits.md); so are NaN, a "
+            "name given twice and a file that is not JSON.",
+        ]
+    )
+
+
 def camera_section() -> str:
     return blocks(
         [
@@ -1644,6 +1688,11 @@ def tree_section(computed: Computed) -> str:
     )
 
 
+def _figure(command: str) -> bool:
+    """Is this a matplotlib figure (not a PNG drawn on a camera image)?"""
+    return "--plot" in command and not command.strip("`").startswith(("calibrate", "perceive"))
+
+
 def other_section() -> str:
     figures = ", ".join(f"`.{suffix}`" for suffix in sorted(FIGURE_FORMATS))
     return blocks(
@@ -1654,11 +1703,13 @@ def other_section() -> str:
             "`--px-per-m` pixels per metre and `--origin X Y` the world x and y of its "
             "bottom-left corner, image right = world x, image up = world y; or any view "
             "with `--camera` or `--markers` (above). `calibrate --plot` draws the markers "
-            "found and a 5 cm grid of the table on it (PNG). `perceive` names each block by "
+            "found and a 5 cm grid of the table on it, `perceive --plot` the blocks found "
+            'and the regions rejected, and why (docs/perception.md, "Overlays"); both '
+            "write a PNG whatever the name's extension. `perceive` names each block by "
             "its colour (`red`; a second red block `red2`; a colour without a name `block1`, "
             "`block2`…) and writes two or more blocks of one named colour as instances "
             'of one type, `"type": "red"` (docs/perception.md).\n'
-            f"- **Figures** ({', '.join(c for c in users('other', 1) if '--plot' in c)}): "
+            f"- **Figures** ({', '.join(c for c in users('other', 1) if _figure(c))}): "
             "the extension chooses the "
             f"format: {figures}.\n"
             "- **Frames** (`run --frames DIR`): `frame-0000.png`, `frame-0001.png`, … (the "
@@ -1765,7 +1816,10 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ("other", "markers --markers", "camera --intrinsics"),
         ("camera -o", "other --plot"),
     ),
-    "perceive": (("other", "camera --camera", "markers --markers"), ("scene",)),
+    "perceive": (
+        ("other", "camera --camera", "markers --markers", "palette --colours"),
+        ("scene", "other --plot"),
+    ),
     "segment": (("stream", "objects --objects-file"), ("demonstration", "other --plot")),
     "import": (("recording", "objects --objects-file"), ("demonstration",)),
     "experiments": ((), ("other",)),

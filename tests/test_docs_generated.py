@@ -116,6 +116,12 @@ def load(document: dict[str, Any], tmp_path: Path) -> object:
         from demoplan.documents.poses import LandmarkSchema
 
         return {n: LandmarkSchema.model_validate(e) for n, e in document["landmarks"].items()}
+    if document and all(isinstance(v, list) and len(v) == 3 for v in document.values()):
+        from demoplan.perception.colours import load_palette  # perceive --colours
+
+        palette = tmp_path / "colours.json"
+        palette.write_text(json.dumps(document), encoding="utf-8")
+        return load_palette(palette)
     path = tmp_path / "objects.json"  # segment --objects-file
     path.write_text(json.dumps(document), encoding="utf-8")
     return load_object_geometry(path)

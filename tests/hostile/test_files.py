@@ -80,6 +80,22 @@ SLOTS = [
         ".json",
         "camera.json",
     ),
+    Slot(
+        "perceive-colours",
+        (
+            "perceive",
+            "top.png",
+            "--px-per-m",
+            "1000",
+            "--origin",
+            "0.05",
+            "-0.21",
+            "--colours",
+            FILE,
+        ),
+        ".json",
+        "colours.json",
+    ),
     Slot("segment", ("segment", FILE, "-o", "out.json"), ".csv", "stream.csv"),
     Slot("segment-bag", ("segment", FILE, "-o", "out.json"), ".mcap", ""),
     Slot("import", ("import", FILE, "-o", "imported"), ".hdf5", ""),
@@ -156,6 +172,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "perception" / "blocks-top.png", folder / "top.png")
     shutil.copy(EXAMPLES / "perception" / "markers-oblique.png", folder / "oblique.png")
     shutil.copy(EXAMPLES / "perception" / "markers.json", folder / "markers.json")
+    shutil.copy(EXAMPLES / "perception" / "colours.json", folder / "colours.json")
     answer = run(
         ["calibrate", "oblique.png", "--markers", "markers.json", "-o", "camera.json"], folder
     )

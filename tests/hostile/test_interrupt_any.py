@@ -54,8 +54,9 @@ COMMANDS: dict[str, tuple[list[str], list[str], float]] = {
         3.0,
     ),
     "perceive": (
-        ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21", "-o", "s.json"],
-        ["s.json"],
+        ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21", "-o", "s.json"]
+        + ["--plot", "o.png"],
+        ["s.json", "o.png"],
         1.1,
     ),
     "segment": (

@@ -113,6 +113,22 @@ CASES: list[object] = [
         True,
         id="perceive-o",
     ),
+    pytest.param(
+        [
+            "perceive",
+            "top.png",
+            "--px-per-m",
+            "1000",
+            "--origin",
+            "0.05",
+            "-0.21",
+            "--plot",
+            "NODE",
+        ],
+        "overlay.png",
+        True,
+        id="perceive-plot",
+    ),
     pytest.param(["pddl", "problem.xml", "-o", "NODE"], "pddl-out", False, id="pddl-o-folder"),
     pytest.param(["import", "toy.hdf5", "-o", "NODE"], "imported", False, id="import-o"),
     pytest.param(

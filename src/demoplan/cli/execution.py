@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections import Counter
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -32,6 +33,9 @@ from demoplan.cli.common import (
 )
 from demoplan.cli.render import print_run_report
 from demoplan.wording import plural
+
+if TYPE_CHECKING:
+    from demoplan.perception.blocks import Rejection
 
 
 @contextmanager
@@ -300,6 +304,16 @@ def perceive(
             min=0.0, help="Seconds perception may take before it stops with exit 4 (inf: none)."
         ),
     ] = PERCEPTION_TIMEOUT,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            help="Draw the blocks found and the regions rejected, and why, on IMAGE (PNG)."
+        ),
+    ] = None,
+    colours: Annotated[
+        Path | None,
+        typer.Option(help="A palette file: colour names to add or move (docs/formats.md)."),
+    ] = None,
 ) -> None:
     """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s)."""
     from demoplan.commands.execution import perceive as perceive_image
@@ -316,6 +330,8 @@ def perceive(
                 side=side,
                 timeout=timeout,
                 output=output,
+                plot=plot,
+                colours=colours,
             )
         if json_output:
             print_json(found.document)
@@ -337,3 +353,22 @@ def perceive(
                 f"{b.side:.4f}",
             )
         stdout.print(table)
+        if plot is not None:
+            stdout.print(plain_text(_rejections_line(found.rejected, plot)), highlight=False)
+
+
+NOUNS = {"side face": "side faces", "side face or shadow": "side faces or shadows"}
+"""Reasons for a rejection that are nouns, and their plurals."""
+
+
+def _rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
+    """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``."""
+    counts = Counter(r.reason for r in rejected)
+    reasons = ", ".join(
+        plural(n, why, NOUNS[why]) if why in NOUNS else f"{n} {why}"
+        for why, n in counts.most_common()
+    )
+    return (
+        f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
+        f"(drawn in {plot.name})"
+    )

@@ -25,8 +25,9 @@ from demoplan.fileio import (
     write_atomic_bytes,
 )
 from demoplan.model import TaskModel
+from demoplan.perception.blocks import Rejection
 from demoplan.perception.calibration import TableCalibration
-from demoplan.perception.images import perceive_files
+from demoplan.perception.images import perceive_top_view
 from demoplan.perception.stacking import TrackedBlock, scene_document
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
@@ -106,10 +107,12 @@ def remove_unfinished_video(video: Path) -> None:
 @dataclass(frozen=True, slots=True)
 class Perceived:
     """The blocks found in an image, by name, and the scene document they make
-    (``demoplan/scene-1``, as ``perceive -o`` writes it)."""
+    (``demoplan/scene-1``, as ``perceive -o`` writes it); the coloured regions
+    found to be no block, each with why (not in the scene)."""
 
     blocks: dict[str, TrackedBlock]
     document: dict[str, Any]
+    rejected: tuple[Rejection, ...] = ()
 
 
 def perceive(
@@ -123,6 +126,8 @@ def perceive(
     side: float | None = None,
     timeout: float = PERCEPTION_TIMEOUT,
     output: Path | None = None,
+    plot: Path | None = None,
+    colours: Path | None = None,
 ) -> Perceived:
     """The blocks in ``image`` (paper §V.B: a Hough transform over x, y, θ, s):
     a top-down orthographic picture of ``px_per_m`` pixels per metre with its
@@ -130,9 +135,13 @@ def perceive(
     ``camera`` file or by the ``markers`` (a markers file) seen in it — then
     any view the calibration covers (docs/perception.md "Calibration"). With
     ``before`` (the picture before the last move) a block the moved one covers
-    stands under it; ``output``: also write the scene there."""
-    from demoplan.perception.calibrated import calibration_for, perceive_calibrated
+    stands under it; ``output``: also write the scene there; ``plot``: the
+    picture with what was found and what was rejected drawn on it (PNG; both
+    files are written only when both are made); ``colours``: a palette file of
+    colours to add or move (docs/formats.md)."""
+    from demoplan.perception.calibrated import calibration_for, perceive_photograph
     from demoplan.perception.calibration import load_calibration, load_markers
+    from demoplan.perception.camera import encode_png
 
     given = [name for name, v in (("--camera", camera), ("--markers", markers)) if v is not None]
     scale_given = px_per_m is not None or origin is not None
@@ -146,19 +155,26 @@ def perceive(
             "how pixels map to the table is needed: --px-per-m and --origin (a top view), "
             "--camera FILE or --markers FILE"
         )
-    inputs = [image, *([before] if before else []), *(p for p in (camera, markers) if p)]
-    if output is not None:
-        refuse_overwriting_inputs(output, inputs)
+    inputs = [image, *(p for p in (before, camera, markers, colours) if p)]
+    for target in (output, plot):
+        if target is not None:
+            refuse_overwriting_inputs(target, inputs)
+    if output is not None and plot is not None and output.resolve() == plot.resolve():
+        raise UsageError("-o and --plot name one file; two files expected")
+    options: dict[str, Any] = {"before": before, "side": side, "timeout": timeout}
+    options |= {"colours": colours, "overlay": plot is not None}
     if px_per_m is not None and origin is not None:
-        blocks = perceive_files(image, px_per_m, origin, before=before, side=side, timeout=timeout)
+        seen = perceive_top_view(image, px_per_m, origin, **options)
     else:
         reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
-        calibration = calibration_for(image, reference)
-        blocks = perceive_calibrated(image, calibration, before=before, side=side, timeout=timeout)
-    document = scene_document(blocks)
+        seen = perceive_photograph(image, calibration_for(image, reference), **options)
+    document = scene_document(seen.blocks)
+    overlay = encode_png(seen.overlay) if seen.overlay is not None else None
     if output is not None:
         write_atomic(output, dump_json(document))
-    return Perceived(blocks, document)
+    if plot is not None and overlay is not None:
+        write_atomic_bytes(plot, overlay)
+    return Perceived(seen.blocks, document, seen.rejected)
 
 
 @dataclass(frozen=True, slots=True)

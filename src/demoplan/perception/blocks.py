@@ -33,10 +33,16 @@ from scipy import optimize
 
 from demoplan.budget import check_time, report_progress
 from demoplan.perception.camera import Camera
-from demoplan.perception.colours import ColourRegion, colour_regions
+from demoplan.perception.colours import (
+    REPORTED_SHARE,
+    ColourRegion,
+    RejectedPart,
+    colour_regions,
+    outlines,
+)
 from demoplan.perception.hough import Hypothesis, hough_squares
 
-__all__ = ["DetectedBlock", "PerceptionSettings", "detect_blocks"]
+__all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,6 +80,69 @@ class DetectedBlock:
     rgb: tuple[float, float, float]
     coverage: float
     residual: float
+
+
+@dataclass(frozen=True, slots=True)
+class Rejection:
+    """A coloured region (or part of one) the detector found to be no block, and
+    why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
+    ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
+    face``, ``no square``, ``too large``, ``not filled``, ``not square``, ``no
+    free sides``; ``covered`` from the tracker), ``detail`` the measure behind
+    it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
+    metres, on the plane the image shows."""
+
+    reason: str
+    detail: str
+    colour: str
+    outlines: tuple[tuple[tuple[float, float], ...], ...]
+
+
+def _failure(
+    params: np.ndarray,
+    coverage: float,
+    rms: float,
+    free: float,
+    side_px: tuple[float, float],
+    settings: PerceptionSettings,
+    px_per_m: float,
+) -> tuple[str, str] | None:
+    """Why a fitted square is no block (the acceptance of :func:`detect_blocks`,
+    checked in its order), or ``None``: it is one."""
+    side_mm = params[3] / px_per_m * 1000
+    allowed = f"{side_px[0] * 0.8 / px_per_m * 1000:.0f}–{side_px[1] * 1.2 / px_per_m * 1000:.0f}"
+    if params[3] < side_px[0] * 0.8:
+        return "too small", f"side {side_mm:.0f} mm, {allowed} mm allowed"
+    if params[3] > side_px[1] * 1.2:
+        return "too large", f"side {side_mm:.0f} mm, {allowed} mm allowed"
+    if coverage < settings.min_coverage:
+        return "not filled", f"{coverage:.0%} of the square covered"
+    if rms > settings.max_residual:
+        return "not square", f"misfit {rms:.2f}"
+    if free < settings.min_free_outline:
+        return "no free sides", f"{free:.0%} of the outline on table"
+    return None
+
+
+def _unfit(
+    alpha: np.ndarray, region: ColourRegion, failures: list[tuple[str, str]], min_area: float
+) -> list[RejectedPart]:
+    """The rest of a region in which no square was borne out, as rejected parts:
+    why the best fit failed (the strongest Hough candidate's first failed check)."""
+    reason, detail = failures[0] if failures else ("no square", "no edges to vote")
+    row0, col0 = region.offset
+    shift = np.array([col0, row0])
+    pieces = tuple(o + shift for o in outlines(alpha > 0.5, REPORTED_SHARE * min_area))
+    return [RejectedPart(reason, detail, region.colour, pieces)] if pieces else []
+
+
+def _in_world(part: RejectedPart, camera: Camera, height: int) -> Rejection:
+    """A rejected part's outlines from image pixels (x right, y down) to the world."""
+    pieces = tuple(
+        tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
+        for outline in part.outlines
+    )
+    return Rejection(part.reason, part.detail, part.colour, pieces)
 
 
 def _square_alpha(params: np.ndarray, uu: np.ndarray, vv: np.ndarray) -> np.ndarray:
@@ -196,12 +265,18 @@ def _shrink(alpha: np.ndarray, factor: int) -> np.ndarray:
 
 
 def detect_blocks(
-    image: np.ndarray, camera: Camera, settings: PerceptionSettings = PerceptionSettings()
+    image: np.ndarray,
+    camera: Camera,
+    settings: PerceptionSettings = PerceptionSettings(),
+    rejected: list[Rejection] | None = None,
 ) -> list[DetectedBlock]:
-    """Every square block in ``image`` (H × W × 3, top view), in world coordinates."""
+    """Every square block in ``image`` (H × W × 3, top view), in world coordinates;
+    ``rejected``, when given, gets the coloured regions found to be no block, each
+    with why (:class:`Rejection`)."""
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
-    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours)
+    parts: list[RejectedPart] | None = None if rejected is None else []
+    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours, rejected=parts)
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
@@ -209,12 +284,16 @@ def detect_blocks(
         check_time()  # a budget set by the caller (demoplan.budget), if any
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
-        for _ in range(8):
+        for attempt in range(8):
             if (alpha > 0.5).sum() < min_area:
+                if parts is not None and attempt == 0:  # its side faces left too little
+                    small = ("too small", f"{int((alpha > 0.5).sum())} px of top face")
+                    parts += _unfit(alpha, region, [small], min_area)
                 break
             # a region of area A holds squares no larger than √A
             largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
             accepted = None
+            failures: list[tuple[str, str]] = []
             coarse = _shrink(alpha, factor)
             sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
             for start in hough_squares(coarse, sides):
@@ -238,7 +317,12 @@ def detect_blocks(
                 ):
                     accepted = params, coverage, rms
                     break
+                if parts is not None:
+                    why = _failure(params, coverage, rms, free, side_px, settings, camera.px_per_m)
+                    failures += [why] if why else []
             if accepted is None:
+                if parts is not None:
+                    parts += _unfit(alpha, region, failures, min_area)
                 break
             params, coverage, rms = accepted
             found.append((region, params, coverage, rms))
@@ -250,6 +334,8 @@ def detect_blocks(
     blocks = []
     counts: dict[str, int] = {}
     height = image.shape[0]
+    if rejected is not None and parts is not None:
+        rejected += [_in_world(part, camera, height) for part in parts]
     for region, params, coverage, rms in found:
         row0, col0 = region.offset
         crop_height = region.alpha.shape[0]

@@ -9,6 +9,7 @@ block's top face is moved down to the table (the height correction of
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import numpy as np
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
 from demoplan.documents.poses import MAX_SIZE_M
 from demoplan.errors import InputError, UsageError
-from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, detect_blocks
+from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.calibration import (
     MarkerLayout,
     TableCalibration,
@@ -25,13 +26,16 @@ from demoplan.perception.calibration import (
     check_image_size,
     edge_colour,
     rectify,
+    table_to_photo,
     top_face_on_table,
 )
 from demoplan.perception.camera import Camera, load_image
-from demoplan.perception.images import SIDE_TOLERANCE
+from demoplan.perception.colours import load_palette
+from demoplan.perception.images import SIDE_TOLERANCE, Perception, seen_now
+from demoplan.perception.overlay import Drawn, draw_overlay
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
-__all__ = ["calibration_for", "perceive_calibrated", "top_faces_view"]
+__all__ = ["calibration_for", "perceive_calibrated", "perceive_photograph", "top_faces_view"]
 
 RECTIFIED_PX_PER_M = 1000.0
 """The rectified top view's resolution: 1 px = 1 mm (a 4 cm cube is 40 px across)."""
@@ -53,15 +57,20 @@ def _detected(
     image: Path,
     calibration: TableCalibration,
     side: float | None,
-) -> list[DetectedBlock]:
+    rejected: list[Rejection] | None = None,
+    palette: Mapping[str, tuple[float, float, float]] | None = None,
+) -> tuple[list[DetectedBlock], float]:
+    """The blocks in the photograph, and the height of the plane the view they
+    were found on shows (the top faces', or the table's); ``rejected`` gets the
+    regions that view's detector rejected."""
     picture = load_image(image)
     check_image_size(calibration, picture, str(image))
     centre = calibration.centre
     rectified, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M)
-    settings = PerceptionSettings()
+    settings = PerceptionSettings(colours=palette or {})
     if side is not None:
-        settings = PerceptionSettings(
-            min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
+        settings = replace(
+            settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
         )
     if centre is not None and side is None:
         # the cubes' side from the table's view (side faces make it a little
@@ -74,21 +83,21 @@ def _detected(
             height = float(np.median(sides))
             if centre.position[2] > 2 * height:
                 # within 30 % of the estimate (it is that close: side faces are thin)
-                near = PerceptionSettings(min_side=0.7 * height, max_side=1.3 * height)
+                near = replace(settings, min_side=0.7 * height, max_side=1.3 * height)
                 top_faces, camera = top_faces_view(picture, calibration, height)
                 found = detect_blocks(top_faces, camera, near)
                 if found:
                     height = float(np.median([b.side for b in found]))
                     top_faces, camera = top_faces_view(picture, calibration, height)
-                    return detect_blocks(top_faces, camera, near)
+                    return detect_blocks(top_faces, camera, near, rejected), height
     if side is not None and centre is not None and centre.position[2] > 2 * side:
         top_faces, camera = top_faces_view(picture, calibration, side)
-        return detect_blocks(top_faces, camera, settings)
+        return detect_blocks(top_faces, camera, settings, rejected), side
     found = []
-    for block in detect_blocks(rectified, camera, settings):
+    for block in detect_blocks(rectified, camera, settings, rejected):
         x, y, cube, _ = top_face_on_table(block.x, block.y, block.side, centre, side)
         found.append(replace(block, x=x, y=y, side=cube))
-    return found
+    return found, 0.0
 
 
 def top_faces_view(
@@ -120,16 +129,37 @@ def perceive_calibrated(
     before: Path | None = None,
     side: float | None = None,
     timeout: float = PERCEPTION_TIMEOUT,
+    colours: Path | None = None,
 ) -> dict[str, TrackedBlock]:
+    """The blocks in ``image``, by name: :func:`perceive_photograph`'s."""
+    return perceive_photograph(
+        image, calibration, before=before, side=side, timeout=timeout, colours=colours
+    ).blocks
+
+
+def perceive_photograph(
+    image: Path,
+    calibration: TableCalibration,
+    *,
+    before: Path | None = None,
+    side: float | None = None,
+    timeout: float = PERCEPTION_TIMEOUT,
+    colours: Path | None = None,
+    overlay: bool = False,
+) -> Perception:
     """The blocks in ``image`` (a photograph of the table, any view the
     calibration covers), by name, on the table's coordinates; with ``before``
     (the picture before the last move, same camera) a block the moved one now
-    covers stands under it. An input error when there is none."""
+    covers stands under it; ``colours`` a palette file of colours to add; the
+    regions rejected; with ``overlay``, both drawn on the photograph, mapped
+    back from the rectified view through the calibration. An input error when
+    there is no block."""
     if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
         raise UsageError(
             f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
             "(an object's largest extent, docs/limits.md)"
         )
+    palette = load_palette(colours) if colours is not None else {}
     tracker = BlockTracker()
     with time_budget(
         timeout,
@@ -139,11 +169,26 @@ def perceive_calibrated(
         if before is not None:
             tracker = BlockTracker(
                 TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side, b.colour)
-                for b in _detected(before, calibration, side)
+                for b in _detected(before, calibration, side, palette=palette)[0]
             )
-        blocks = tracker.update(_detected(image, calibration, side))
+        rejected: list[Rejection] = []
+        detected, plane = _detected(image, calibration, side, rejected, palette)
+        blocks = tracker.update(detected)
     if not blocks:
         raise InputError(
             "no blocks found; a scene needs at least one (--side too strict?)", source=str(image)
         )
-    return blocks
+    seen, left = seen_now(blocks, detected)
+    rejected += left
+    drawn = None
+    if overlay:
+        # a top face where it shows: on its plane, where the camera's centre is known
+        lifted = calibration.centre is not None
+        found = [Drawn(b.name, b.x, b.y, b.yaw, b.side, b.side if lifted else 0.0) for b in seen]
+        drawn = draw_overlay(
+            load_image(image),
+            found,
+            [(r, plane) for r in rejected],
+            lambda points, at: table_to_photo(calibration, points, at),
+        )
+    return Perception(blocks, tuple(rejected), drawn)

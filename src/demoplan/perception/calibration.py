@@ -723,6 +723,28 @@ def grid_lines(calibration: TableCalibration, spacing: float = 0.05) -> Sequence
     return lines
 
 
+def table_to_photo(
+    calibration: TableCalibration, points: np.ndarray, height: float = 0.0
+) -> np.ndarray:
+    """Points (N × 2, m) on the plane ``height`` above the table → pixels of the
+    photograph (x right, y down; distorted again where the intrinsics say the
+    lens distorts). Without the camera centre every plane maps as the table."""
+    from demoplan.perception.opencv import cv2
+
+    plane_to_image = np.linalg.inv(calibration.homography)
+    if height and calibration.centre is not None:
+        plane_to_image[:, 2] += height * calibration.centre.height_column
+    pixels = _apply(plane_to_image, points)
+    lens = calibration.intrinsics
+    if lens is None or not np.any(lens.distortion) or not len(pixels):
+        return pixels
+    normal = _apply(np.linalg.inv(lens.matrix), pixels)
+    rays = np.c_[normal, np.ones(len(normal))]
+    distorted, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), lens.matrix, lens.distortion)
+    result: np.ndarray = distorted.reshape(-1, 2)
+    return result
+
+
 def calibration_overlay(image: np.ndarray, calibration: TableCalibration) -> np.ndarray:
     """The photograph with a grid of the table every 5 cm (cyan; the 10 cm
     lines drawn alike), the detected markers' outlines (green) and their ids

@@ -43,6 +43,7 @@ from demoplan.perception.opencv import cv2
 __all__ = [
     "PALETTE",
     "ColourRegion",
+    "RejectedPart",
     "colour_regions",
     "load_palette",
     "name_colour",
@@ -57,6 +58,8 @@ MIN_LIGHTNESS_CONTRAST = 12.0
 """Foreground in an image without colour: CIELAB L* difference from the table."""
 SIDE_FACE_GAP = 12.0
 """L* between a class's two lightness modes for the darker one to be side faces."""
+MAX_PALETTE_COLOURS = 64
+"""Colours a palette file may add: a camera tells a few dozen apart at best."""
 _SPECIAL = {-2: "black", -3: "grey", -4: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
@@ -88,6 +91,93 @@ class ColourRegion:
     alpha: np.ndarray
 
 
+@dataclass(frozen=True, slots=True)
+class RejectedPart:
+    """A foreground part that is no block, and why: ``reason`` a short phrase
+    (``too small``, ``thin or faint``, ``no block colour``, ``side face``),
+    ``detail`` the measure behind it, ``outlines`` the outlines of its pieces in
+    image pixels (x right, y down, pixel centres at whole numbers), each N × 2."""
+
+    reason: str
+    detail: str
+    colour: str
+    outlines: tuple[np.ndarray, ...]
+
+
+REPORTED_SHARE = 0.1
+"""Parts smaller than this share of the smallest block's area (sensor noise,
+specks) are dropped without a record."""
+
+
+def outlines(mask: np.ndarray, min_area: float) -> list[np.ndarray]:
+    """The outer outlines (N × 2 pixel points, x right, y down) of ``mask``'s parts
+    of at least ``min_area`` pixels (OpenCV's contours)."""
+    contours, _ = cv2.findContours(
+        mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE
+    )
+    return [
+        c.reshape(-1, 2).astype(float)
+        for c in contours
+        if len(c) >= 3 and cv2.contourArea(c) + len(c) / 2 >= min_area
+    ]
+
+
+class _Recorder:
+    """Appends the parts :func:`colour_regions` drops to a list, when there is one
+    (nothing is computed otherwise)."""
+
+    def __init__(self, rejected: list[RejectedPart] | None, min_area: float):
+        self.rejected = rejected
+        self.min_area = min_area
+
+    def __call__(
+        self, mask: np.ndarray, rows: slice, cols: slice, reason: str, detail: str, colour: str = ""
+    ) -> None:
+        """``mask`` (on the crop ``rows`` × ``cols``), dropped for ``reason``: one
+        record, of the pieces that are not mere specks."""
+        if self.rejected is None:
+            return
+        shift = np.array([cols.start or 0, rows.start or 0])
+        pieces = tuple(o + shift for o in outlines(mask, REPORTED_SHARE * self.min_area))
+        if pieces:
+            self.rejected.append(RejectedPart(reason, detail, colour, pieces))
+
+    def speck(self, labels: np.ndarray, index: int, box: tuple[int, ...]) -> None:
+        """A connected foreground part smaller than a block (not mere noise)."""
+        x, y, w, h, area = box
+        if self.rejected is not None and area >= REPORTED_SHARE * self.min_area:
+            mask = labels[y : y + h, x : x + w] == index
+            self(mask, slice(y, y + h), slice(x, x + w), "too small", f"{area} px")
+
+    def shade(
+        self, classes: np.ndarray, core: np.ndarray, lightness: np.ndarray, rows: slice, cols: slice
+    ) -> None:
+        """Core pixels of a coloured region too dark or grey to be named, and darker
+        than most of it (a side face in shadow, a shadow): no class takes them."""
+        if self.rejected is None:
+            return
+        shade = np.zeros_like(core)
+        dim = lightness[core] < np.median(lightness[core])
+        shade[core] = ((classes == -2) | (classes == -3)) & dim
+        why = "dark or grey in a coloured region"
+        self(_dilate(shade, 3), rows, cols, "side face or shadow", why)
+
+    def side_faces(
+        self,
+        core: np.ndarray,
+        darker: np.ndarray,
+        where: tuple[slice, slice],
+        why: str,
+        colour: str,
+    ) -> None:
+        """A class's darker lightness mode (``darker``, over its ``core`` pixels)."""
+        if self.rejected is None:
+            return
+        mask = np.zeros_like(core)
+        mask[core] = darker
+        self(_dilate(mask, 3), *where, "side face", why, colour)
+
+
 def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
     """Colours to add to :data:`PALETTE` from a JSON (or YAML) file mapping a name to
     the block's colour as the camera sees it, ``[R, G, B]`` in 0–255
@@ -98,6 +188,10 @@ def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
     document = read_document(Path(path))  # JSON, or YAML by extension; one-line errors
     if not document:
         raise InputError("a mapping of colour names to [R, G, B] expected", source=source)
+    if len(document) > MAX_PALETTE_COLOURS:
+        raise InputError(
+            f"{len(document)} colours; at most {MAX_PALETTE_COLOURS} expected", source=source
+        )
     palette: dict[str, tuple[float, float, float]] = {}
     for name, value in document.items():
         field = str(name)
@@ -178,9 +272,11 @@ def colour_regions(
     *,
     min_area: float,
     palette: Palette | None = None,
+    rejected: list[RejectedPart] | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
-    pixels, and the table colour (the median colour of the image)."""
+    pixels, and the table colour (the median colour of the image); ``rejected``,
+    when given, gets the parts dropped on the way, each with why."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
@@ -190,11 +286,13 @@ def colour_regions(
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
     names, chroma = _palette(palette)
+    record = _Recorder(rejected, min_area)
     regions: list[ColourRegion] = []
     height, width = labels.shape
     for index in range(1, count):
         x, y, w, h, area = (int(value) for value in stats[index])
         if area < min_area:
+            record.speck(labels, index, (x, y, w, h, area))
             continue  # smaller than a block: noise, a speck
         check_time(where)
         rows = slice(max(0, y - 5), min(height, y + h + 5))
@@ -208,6 +306,7 @@ def colour_regions(
         # anti-aliased pixels mix the table's colour into the object's
         core = _erode(member, 2) & (far > threshold)
         if core.sum() < min_area:
+            record(member, rows, cols, "thin or faint", f"{int(core.sum())} clearly coloured px")
             continue
         ring = _dilate(filled, 4) & ~_dilate(filled, 1)
         ground = np.median(crop[ring], axis=0) if ring.any() else table
@@ -215,6 +314,7 @@ def colour_regions(
         ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
         classes = _classify(crop[core], chroma)
         if coloured_image:
+            record.shade(classes, core, lightness[rows, cols], rows, cols)
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
         present = []
         for label in np.unique(classes):
@@ -225,6 +325,7 @@ def colour_regions(
                 colour = names[label] if label >= 0 else _SPECIAL[int(label)]
                 present.append((colour, chosen))
         if not present:
+            record(member, rows, cols, "no block colour", "dark, grey or mixed colours")
             continue
         offsets = (crop - ground).reshape(-1, 3)
         core_offsets = crop[core] - ground
@@ -235,21 +336,15 @@ def colour_regions(
             on_top = chosen.copy()
             if side_faces is not None:
                 on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
+                why = f"L* {side_faces:.0f} under {top_face:.0f}"
+                record.side_faces(core, chosen & ~on_top, (rows, cols), why, colour)
             change = core_offsets[on_top].mean(axis=0)
             mean_rgb = crop[core][on_top].mean(axis=0)
             change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
         centre_offsets = np.array([found[2] for found in classes_found])
-        scores = np.stack(
-            [
-                np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
-                - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
-                for c in centre_offsets
-            ],
-            axis=1,
-        )
-        nearest = np.argmin(scores, axis=1).reshape(member.shape)
+        nearest = _nearest_class(offsets, centre_offsets).reshape(member.shape)
         grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
@@ -277,6 +372,22 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _nearest_class(offsets: np.ndarray, centre_offsets: np.ndarray) -> np.ndarray:
+    """Per pixel (its colour change from the table, N × 3), the class whose change
+    (K × 3) it is nearest to: the distance from the class's line through the
+    table's colour, less a quarter of how far along it the pixel lies."""
+    scores = np.stack(
+        [
+            np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
+            - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
+            for c in centre_offsets
+        ],
+        axis=1,
+    )
+    nearest: np.ndarray = np.argmin(scores, axis=1)
+    return nearest
 
 
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
