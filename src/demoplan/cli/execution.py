@@ -257,11 +257,12 @@ def calibrate(
 
 @app.command()
 def perceive(
-    image_path: Annotated[
-        Path,
+    image_paths: Annotated[
+        list[Path],
         typer.Argument(
-            metavar="IMAGE",
-            help="A colour image of the table: a top view, or any view with --camera / --markers.",
+            metavar="IMAGE...",
+            help="A colour image of the table: a top view, or any view with --camera / --markers"
+            " (with --sequence: the frames in order, or one video file).",
         ),
     ],
     px_per_m: Annotated[
@@ -300,11 +301,46 @@ def perceive(
             min=0.0, help="Seconds perception may take before it stops with exit 4 (inf: none)."
         ),
     ] = PERCEPTION_TIMEOUT,
+    sequence: Annotated[
+        bool,
+        typer.Option(
+            "--sequence", help="The images are the frames of one demonstration: write it (-o)."
+        ),
+    ] = False,
+    name: Annotated[
+        str | None, typer.Option(help="The demonstration's name (--sequence; default: its file's).")
+    ] = None,
 ) -> None:
-    """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s)."""
+    """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s),
+    or with --sequence the demonstration camera frames show."""
     from demoplan.commands.execution import perceive as perceive_image
 
     with reported_errors():
+        if sequence:
+            if before is not None:
+                raise typer.BadParameter(
+                    "a sequence's frames say what came before; --before is for one IMAGE",
+                    param_hint="--before",
+                )
+            _perceive_sequence(
+                image_paths,
+                px_per_m,
+                origin,
+                camera,
+                markers,
+                side,
+                timeout,
+                output,
+                name,
+                json_output,
+            )
+            return
+        if len(image_paths) != 1:
+            raise typer.BadParameter(
+                "one IMAGE expected (several are the frames of a sequence: --sequence)",
+                param_hint="IMAGE",
+            )
+        image_path = image_paths[0]
         with working("Finding blocks…"):
             found = perceive_image(
                 image_path,
@@ -337,3 +373,49 @@ def perceive(
                 f"{b.side:.4f}",
             )
         stdout.print(table)
+
+
+def _perceive_sequence(
+    frames: list[Path],
+    px_per_m: float | None,
+    origin: tuple[float, float] | None,
+    camera: Path | None,
+    markers: Path | None,
+    side: float | None,
+    timeout: float,
+    output: Path | None,
+    name: str | None,
+    json_output: bool,
+) -> None:
+    """``perceive --sequence``: the demonstration, as a table of its steps."""
+    from demoplan.commands.execution import perceive_sequence
+
+    with working("Perceiving frames…"):
+        found = perceive_sequence(
+            frames,
+            px_per_m,
+            origin,
+            camera=camera,
+            markers=markers,
+            side=side,
+            timeout=timeout,
+            output=output,
+            name=name,
+        )
+    if json_output:
+        print_json(found.document)
+        return
+    demo = found.demonstration
+    table = Table(
+        title=f"Demonstration {demo.name} from {plural(found.frames, 'frame')}",
+        title_justify="left",
+    )
+    for column in ("step", "object", "x [m]", "y [m]", "z [m]", "yaw [deg]"):
+        table.add_column(column, justify="left" if column == "object" else "right")
+    for number, step in enumerate(demo.steps, start=1):
+        x, y, z = step.pose.position
+        yaw = step.pose.rpy[2] if step.pose.rpy is not None else 0.0
+        table.add_row(str(number), step.object, f"{x:.4f}", f"{y:.4f}", f"{z:.3f}", f"{yaw:.1f}")
+    stdout.print(table)
+    if output is not None:
+        stdout.print(f"wrote {output}", markup=False, highlight=False)

@@ -31,7 +31,7 @@ from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.images import SIDE_TOLERANCE
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
-__all__ = ["calibration_for", "perceive_calibrated", "top_faces_view"]
+__all__ = ["calibration_for", "detect_in_photograph", "perceive_calibrated", "top_faces_view"]
 
 RECTIFIED_PX_PER_M = 1000.0
 """The rectified top view's resolution: 1 px = 1 mm (a 4 cm cube is 40 px across)."""
@@ -56,6 +56,14 @@ def _detected(
 ) -> list[DetectedBlock]:
     picture = load_image(image)
     check_image_size(calibration, picture, str(image))
+    return detect_in_photograph(picture, calibration, side)
+
+
+def detect_in_photograph(
+    picture: np.ndarray, calibration: TableCalibration, side: float | None
+) -> list[DetectedBlock]:
+    """The blocks in ``picture`` (a photograph of the calibration's size) on the
+    table's coordinates, each block's top face brought down to the table."""
     centre = calibration.centre
     rectified, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M)
     settings = PerceptionSettings()
