@@ -260,7 +260,7 @@ def perceive(
     image_paths: Annotated[
         list[Path],
         typer.Argument(
-            metavar="IMAGE...",
+            metavar="IMAGE",
             help="A colour image of the table: a top view, or any view with --camera / --markers"
             " (with --sequence: the frames in order, or one video file).",
         ),

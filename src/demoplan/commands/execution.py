@@ -206,7 +206,7 @@ def perceive_sequence(
         demo = demonstration_from_frames(
             source,
             detect,
-            name=name or _sequence_name(frames[0]),
+            name=name or _sequence_name(frames),
             side=side,
             total=source.total,
             provenance=(("source", str(frames[0])),),
@@ -221,11 +221,13 @@ def perceive_sequence(
     return PerceivedSequence(demo, document, int(count))
 
 
-def _sequence_name(first: Path) -> str:
-    """A sequence's default name: its first file's stem, without a frame number."""
+def _sequence_name(frames: Sequence[Path]) -> str:
+    """A sequence's default name: a video's stem, or the first image file's
+    without a frame number."""
     import re
 
-    return re.sub(r"[-_. ]*\d+$", "", first.stem) or first.stem
+    stem = frames[0].stem
+    return stem if len(frames) == 1 else re.sub(r"[-_. ]*\d+$", "", stem) or stem
 
 
 def _check_mapping(
@@ -262,9 +264,8 @@ def _frame_detector(
     import math
 
     from demoplan.documents.poses import MAX_SIZE_M
-    from demoplan.perception.blocks import PerceptionSettings, detect_blocks
     from demoplan.perception.camera import Camera
-    from demoplan.perception.images import SIDE_TOLERANCE
+    from demoplan.perception.sequence import top_view_detector
 
     if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
         raise UsageError(
@@ -274,13 +275,7 @@ def _frame_detector(
     if px_per_m is not None and origin is not None:
         if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
             raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
-        settings = PerceptionSettings()
-        if side is not None:
-            settings = PerceptionSettings(
-                min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
-            )
-        view = Camera(px_per_m, origin)
-        return lambda image: list(detect_blocks(image, view, settings))
+        return top_view_detector(Camera(px_per_m, origin), side)
     from demoplan.perception.calibrated import detect_in_photograph
     from demoplan.perception.calibration import (
         calibrate as calibrate_image,

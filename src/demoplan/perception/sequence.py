@@ -49,7 +49,8 @@ import numpy as np
 from demoplan.budget import check_time, report_progress, reporting_progress
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.perception.blocks import DetectedBlock
+from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, detect_blocks
+from demoplan.perception.camera import Camera
 from demoplan.perception.colours import foreground
 from demoplan.perception.opencv import cv2
 from demoplan.perception.stacking import UNNAMED_COLOUR, BlockTracker, TrackedBlock
@@ -60,10 +61,35 @@ __all__ = [
     "SequenceSettings",
     "demonstration_from_frames",
     "hand_mask",
+    "top_view_detector",
 ]
 
 Detector = Callable[[np.ndarray], list[DetectedBlock]]
 """Blocks in a frame (the hand painted out), on the table's coordinates."""
+
+
+SMALLEST_PIECE = 0.5
+"""With the blocks' side known, colour regions down to this share of it are
+looked at (a strip of a lower block showing beside the one on it is then a
+colour of its own, not part of the upper block's region); only detections
+within :data:`~demoplan.perception.images.SIDE_TOLERANCE` of the side are kept."""
+
+
+def top_view_detector(camera: Camera, side: float | None = None) -> Detector:
+    """The blocks of a top view (``camera``), their side ``side`` when known."""
+    from demoplan.perception.images import SIDE_TOLERANCE
+
+    if side is None:
+        return lambda image: detect_blocks(image, camera)
+    settings = PerceptionSettings(
+        min_side=SMALLEST_PIECE * side, max_side=(1 + SIDE_TOLERANCE) * side
+    )
+
+    def detect(image: np.ndarray) -> list[DetectedBlock]:
+        found = detect_blocks(image, camera, settings)
+        return [d for d in found if abs(d.side - side) <= SIDE_TOLERANCE * side]
+
+    return detect
 
 
 @dataclass(frozen=True, slots=True)
@@ -162,13 +188,16 @@ class _Recorder:
         return abs(turn) > self.settings.turned
 
     def demonstration(
-        self, name: str, provenance: tuple[tuple[str, str | int | float], ...]
+        self, name: str, provenance: tuple[tuple[str, str | int | float], ...], source: str | None
     ) -> Demonstration:
         if self.initial is None:
-            raise InputError("no blocks seen in a still picture; a demonstration needs them")
+            raise InputError(
+                "no blocks seen in a still picture; a demonstration needs them", source=source
+            )
         if not self.steps:
             raise InputError(
-                "no block was moved and left still; a demonstration needs at least one step"
+                "no block was moved and left still; a demonstration needs at least one step",
+                source=source,
             )
         names = list(dict.fromkeys([*self.initial, *(n for n, _ in self.steps)]))
         objects = []
@@ -276,7 +305,8 @@ def demonstration_from_frames(
         previous = current
     if count == 0:
         raise InputError("no frames; a sequence of at least one frame expected")
-    return recorder.demonstration(name, (*provenance, ("frames", count)))
+    source = str(dict(provenance).get("source", first)) or None
+    return recorder.demonstration(name, (*provenance, ("frames", count)), source)
 
 
 def _checked(frames: Iterable[Frame]) -> Iterator[Frame]:
