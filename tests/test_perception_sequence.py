@@ -20,17 +20,16 @@ from demoplan.errors import InputError
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
-from demoplan.model import Demonstration, ObjectGeometry, Pose, State, Step, TaskModel
+from demoplan.model import Demonstration, ObjectGeometry, Pose, State, TaskModel
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, save_image
-from demoplan.perception.filmed import FilmSettings, render_demonstration
+from demoplan.perception.filmed import FilmSettings, random_demonstration, render_demonstration
 from demoplan.perception.sequence import (
     Frame,
     demonstration_from_frames,
     hand_mask,
     top_view_detector,
 )
-from demoplan.rotations import quat_from_yaw
 
 EXAMPLE = Path(__file__).parent.parent / "examples" / "blocks" / "demonstrations.json"
 PYRAMID_CAMERA = Camera(1000.0, (0.0, -0.15))  # 500 × 400 px: x 0–0.5 m, y −0.15–0.25 m
@@ -114,63 +113,6 @@ def test_the_hand_is_found_and_no_block_is_taken_for_it() -> None:
 
 GEN_CAMERA = Camera(1000.0, (0.0, 0.0))
 GEN_FILM = FilmSettings(width=420, height=320, move_frames=3)
-COLOURS = ("red", "green", "blue", "yellow", "wood")
-
-
-def generated_demonstration(seed: int, count: int, moves: int) -> Demonstration:
-    """``count`` blocks of distinct colours (4 cm) at random poses within view,
-    then ``moves`` moves of a block with nothing on it: to a free spot on the
-    table, or (half the time) squarely onto another top block (within 5 mm)."""
-    rng = np.random.default_rng(seed)
-    poses: dict[str, tuple[float, float, float, float]] = {}
-    names = [str(c) for c in rng.permutation(COLOURS)[:count]]
-
-    def free(x: float, y: float, ignore: str) -> bool:
-        return all(
-            math.dist((x, y), p[:2]) > SIDE * math.sqrt(2) + 0.006
-            for n, p in poses.items()
-            if n != ignore
-        )
-
-    def spot(ignore: str) -> tuple[float, float] | None:
-        for _ in range(200):
-            x, y = float(rng.uniform(0.06, 0.36)), float(rng.uniform(0.06, 0.26))
-            if free(x, y, ignore):
-                return x, y
-        return None
-
-    for name in names:
-        place = spot(name)
-        assert place is not None
-        poses[name] = (*place, 0.0, float(rng.uniform(-45, 45)))
-    initial = tuple((n, Pose((p[0], p[1], 0.0), quat_from_yaw(p[3]))) for n, p in poses.items())
-
-    def on_top(name: str) -> bool:
-        x, y, z, _ = poses[name]
-        return not any(
-            o != name and p[2] > z + 0.01 and math.dist(p[:2], (x, y)) < SIDE
-            for o, p in poses.items()
-        )
-
-    steps = []
-    for _ in range(moves):
-        movable = [n for n in names if on_top(n)]
-        block = movable[int(rng.integers(len(movable)))]
-        targets = [n for n in movable if n != block]
-        if targets and rng.random() < 0.5:
-            below = targets[int(rng.integers(len(targets)))]
-            bx, by, bz, byaw = poses[below]
-            offset = rng.uniform(-0.005, 0.005, 2)
-            pose = (bx + offset[0], by + offset[1], bz + SIDE, byaw + float(rng.uniform(-3, 3)))
-        else:
-            place = spot(block)
-            if place is None:
-                continue
-            pose = (*place, 0.0, float(rng.uniform(-45, 45)))
-        poses[block] = pose
-        steps.append(Step(block, Pose(pose[:3], quat_from_yaw(pose[3]))))
-    objects = tuple((n, ObjectGeometry("box", (SIDE,) * 3)) for n in names)
-    return Demonstration(f"generated-{seed}", tuple(steps), objects=objects, initial=initial)
 
 
 def _yaw_error(a: Pose, b: Pose) -> float:
@@ -191,7 +133,7 @@ def test_generated_demonstrations_are_recovered(seed: int, count: int, moves: in
     hand: the steps come back in order, each block within 3 mm and 2°, on the
     right level (the edges of lower blocks showing beside an upper one pull its
     fit by up to ~2.5 mm; docs/perception.md)."""
-    truth = generated_demonstration(seed, count, moves)
+    truth = random_demonstration(seed, count, moves, SIDE, ((0.06, 0.36), (0.06, 0.26)))
     if not truth.steps:
         return
     demo = perceived(truth, GEN_CAMERA, GEN_FILM, rng=seed)

@@ -16,17 +16,19 @@ deterministic.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.model import Demonstration
+from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.perception.camera import Camera
 from demoplan.perception.opencv import cv2
-from demoplan.perception.synthetic import SyntheticBlock, render_blocks
+from demoplan.perception.synthetic import COLOURS, SyntheticBlock, render_blocks
+from demoplan.rotations import quat_from_yaw
 
-__all__ = ["SKIN", "FilmSettings", "render_demonstration", "render_hand"]
+__all__ = ["SKIN", "FilmSettings", "random_demonstration", "render_demonstration", "render_hand"]
 
 SKIN = (214, 150, 118)
 """The hand's colour (RGB): skin, well apart from the table's chroma."""
@@ -182,3 +184,68 @@ def render_demonstration(
             _frame(scene(), camera, None, settings, generator) for _ in range(settings.still_frames)
         ]
     return frames
+
+
+def random_demonstration(
+    seed: int,
+    count: int,
+    moves: int,
+    side: float = 0.04,
+    area: tuple[tuple[float, float], tuple[float, float]] = ((0.06, 0.36), (0.06, 0.26)),
+) -> Demonstration:
+    """``count`` blocks (at most 5) of distinct colours of ``side`` at random
+    poses, centres within ``area`` (x range, y range; m), then ``moves`` moves
+    of a block with nothing on it: to a free spot on the table, or (half the
+    time) squarely onto another top block (within 5 mm, turned by up to 3°).
+    Seeded by ``seed``: the same demonstration every time."""
+    rng = np.random.default_rng(seed)
+    poses: dict[str, tuple[float, float, float, float]] = {}
+    names = [str(c) for c in rng.permutation(list(COLOURS))[:count]]
+
+    def free(x: float, y: float, ignore: str) -> bool:
+        return all(
+            math.dist((x, y), p[:2]) > side * math.sqrt(2) + 0.006
+            for n, p in poses.items()
+            if n != ignore
+        )
+
+    def spot(ignore: str) -> tuple[float, float] | None:
+        for _ in range(200):
+            x, y = float(rng.uniform(*area[0])), float(rng.uniform(*area[1]))
+            if free(x, y, ignore):
+                return x, y
+        return None
+
+    for name in names:
+        place = spot(name)
+        if place is None:
+            raise ValueError(f"no room for {count} blocks in {area}")
+        poses[name] = (*place, 0.0, float(rng.uniform(-45, 45)))
+    initial = tuple((n, Pose((p[0], p[1], 0.0), quat_from_yaw(p[3]))) for n, p in poses.items())
+
+    def on_top(name: str) -> bool:
+        x, y, z, _ = poses[name]
+        return not any(
+            o != name and p[2] > z + 0.01 and math.dist(p[:2], (x, y)) < side
+            for o, p in poses.items()
+        )
+
+    steps = []
+    for _ in range(moves):
+        movable = [n for n in names if on_top(n)]
+        block = movable[int(rng.integers(len(movable)))]
+        targets = [n for n in movable if n != block]
+        if targets and rng.random() < 0.5:
+            below = targets[int(rng.integers(len(targets)))]
+            bx, by, bz, byaw = poses[below]
+            offset = rng.uniform(-0.005, 0.005, 2)
+            pose = (bx + offset[0], by + offset[1], bz + side, byaw + float(rng.uniform(-3, 3)))
+        else:
+            place = spot(block)
+            if place is None:
+                continue
+            pose = (*place, 0.0, float(rng.uniform(-45, 45)))
+        poses[block] = pose
+        steps.append(Step(block, Pose(pose[:3], quat_from_yaw(pose[3]))))
+    objects = tuple((n, ObjectGeometry("box", (side,) * 3)) for n in names)
+    return Demonstration(f"generated-{seed}", tuple(steps), objects=objects, initial=initial)
