@@ -31,6 +31,7 @@ from demoplan.cli.common import (
     working,
 )
 from demoplan.cli.render import print_run_report
+from demoplan.errors import UsageError
 from demoplan.wording import plural
 
 
@@ -318,9 +319,8 @@ def perceive(
     with reported_errors():
         if sequence:
             if before is not None:
-                raise typer.BadParameter(
-                    "a sequence's frames say what came before; --before is for one IMAGE",
-                    param_hint="--before",
+                raise UsageError(
+                    "--before is for one IMAGE; a sequence's frames say what came before"
                 )
             _perceive_sequence(
                 image_paths,
@@ -336,9 +336,9 @@ def perceive(
             )
             return
         if len(image_paths) != 1:
-            raise typer.BadParameter(
-                "one IMAGE expected (several are the frames of a sequence: --sequence)",
-                param_hint="IMAGE",
+            raise UsageError(
+                f"{len(image_paths)} images; one IMAGE expected (the frames of a "
+                "demonstration: --sequence)"
             )
         image_path = image_paths[0]
         with working("Finding blocks…"):
