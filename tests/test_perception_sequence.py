@@ -194,6 +194,32 @@ def test_cli_writes_a_demonstration_that_learn_accepts(
     assert model.exists()
 
 
+def test_cli_with_a_camera_file(frame_files: list[Path], tmp_path: Path) -> None:
+    """--camera: each frame rectified by the camera file's homography (here the
+    top view's own mapping) before the blocks are looked for."""
+    camera = tmp_path / "camera.json"
+    homography = [[0.001, 0, 0.0005], [0, -0.001, -0.15 + 0.3995], [0, 0, 1]]
+    camera.write_text(
+        json.dumps(
+            {
+                "format": "demoplan/camera-1",
+                "image_size": [500, 400],
+                "homography": homography,
+                "reprojection_error": {"px": 0, "mm": 0},
+            }
+        )
+    )
+    result = invoke(
+        "perceive", "--sequence", *frame_files, "--camera", camera, "--side", "0.04", "--json"
+    )
+    assert result.exit_code == 0, result.output
+    steps = json.loads(result.stdout)["steps"]
+    truth = load_demonstrations([EXAMPLE])[0].steps
+    assert [s["object"] for s in steps] == [s.object for s in truth]
+    for step, true in zip(steps, truth, strict=True):  # red on the bridge, 4 cm up
+        assert step["position"] == pytest.approx(list(true.pose.position), abs=0.001)
+
+
 def test_cli_json_and_name(frame_files: list[Path]) -> None:
     result = invoke("perceive", "--sequence", *frame_files, *TOP, "--name", "mine", "--json")
     assert result.exit_code == 0, result.output
