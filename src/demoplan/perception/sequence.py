@@ -118,10 +118,15 @@ class Frame:
     image: np.ndarray
 
 
-def hand_mask(image: np.ndarray, settings: SequenceSettings = SequenceSettings()) -> np.ndarray:
-    """The hand's pixels in ``image``: foreground regions touching the border or
-    larger than ``settings.hand_share`` of the frame, grown by ``hand_margin``."""
-    mask = foreground(image).astype(np.uint8)
+def hand_mask(
+    image: np.ndarray,
+    settings: SequenceSettings = SequenceSettings(),
+    fg: np.ndarray | None = None,
+) -> np.ndarray:
+    """The hand's pixels in ``image``: foreground regions (``fg``, when already
+    known) touching the border or larger than ``settings.hand_share`` of the
+    frame, grown by ``hand_margin``."""
+    mask = (foreground(image) if fg is None else fg).astype(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     height, width = mask.shape
     hand = np.zeros(count, dtype=bool)
@@ -289,7 +294,7 @@ def demonstration_from_frames(
                 source=frame.label,
             )
         fg = foreground(image)
-        hand = hand_mask(image, settings) if fg.any() else np.zeros_like(fg)
+        hand = hand_mask(image, settings, fg) if fg.any() else np.zeros_like(fg)
         current = (fg, hand)
         run = (
             (run + 1 if run else 2)
@@ -313,5 +318,5 @@ def _checked(frames: Iterable[Frame]) -> Iterator[Frame]:
     for frame in frames:
         image = np.asarray(frame.image)
         if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
-            raise InputError("not an RGB frame (H × W × 3, 8 bits) ", source=frame.label)
+            raise InputError("not an RGB frame (H × W × 3, 8 bits expected)", source=frame.label)
         yield replace(frame, image=image)
