@@ -5,7 +5,6 @@ into the demonstration; Experiment 2 learned from its frames."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ from demoplan.errors import InputError
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
-from demoplan.model import Demonstration, ObjectGeometry, Pose, State, TaskModel
+from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.filmed import FilmSettings, random_demonstration, render_demonstration
@@ -59,15 +58,9 @@ def pyramids() -> tuple[list[Demonstration], list[Demonstration]]:
     return files, seen
 
 
-def _margin(state: State, decision: str) -> float:
-    return dict(state.margins).get(decision, math.inf)
-
-
 def assert_same_model(expected: TaskModel, got: TaskModel) -> None:
     """The models' essential content: sequences, constraints, goals and per state
-    its object, members, references and values (to 1 mm, 0.5°). A reference the
-    expected model decided within the precision (margin below 1: the learner's own
-    warning) may go either way on measured poses."""
+    its object, members, references and values (to 1 mm, 0.5°)."""
     assert got.sequences == expected.sequences
     assert got.constraints == expected.constraints
     assert got.goals == expected.goals
@@ -76,11 +69,9 @@ def assert_same_model(expected: TaskModel, got: TaskModel) -> None:
         assert (b.id, b.object, b.members) == (a.id, a.object, a.members)
         assert b.position.reference == a.position.reference
         assert b.position.value == pytest.approx(a.position.value, abs=0.001)
-        if _margin(a, "orientation reference") >= 1.0:
-            assert b.orientation.reference == a.orientation.reference
-        if b.orientation.reference == a.orientation.reference:
-            assert a.orientation.rpy is not None and b.orientation.rpy is not None
-            assert b.orientation.rpy[2] == pytest.approx(a.orientation.rpy[2], abs=0.5)
+        assert b.orientation.reference == a.orientation.reference
+        assert a.orientation.rpy is not None and b.orientation.rpy is not None
+        assert b.orientation.rpy[2] == pytest.approx(a.orientation.rpy[2], abs=0.5)
 
 
 def test_experiment_2_from_camera_frames_learns_table_iv(
@@ -246,7 +237,8 @@ def test_cli_reads_a_video(tmp_path: Path) -> None:
     steps = document["steps"]
     assert [s["object"] for s in steps] == ["wood", "green", "red"]
     for step, truth in zip(steps, files[0].steps, strict=True):
-        assert step["position"] == pytest.approx(list(truth.pose.position), abs=0.001)
+        # H.264 (yuv420p) keeps colour at half resolution: where colours touch, ~1 mm
+        assert step["position"] == pytest.approx(list(truth.pose.position), abs=0.002)
 
 
 def _write(path: Path, data: bytes) -> Path:
