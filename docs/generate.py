@@ -86,6 +86,7 @@ from demoplan.perception.calibration import (
     _UsedMarkersSchema,
 )
 from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
+from demoplan.perception.frames import VIDEO_SUFFIXES
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
@@ -1709,6 +1710,11 @@ def other_section() -> str:
             "its colour (`red`; a second red block `red2`; a colour without a name `block1`, "
             "`block2`…) and writes two or more blocks of one named colour as instances "
             'of one type, `"type": "red"` (docs/perception.md).\n'
+            "- **Camera frames** (`perceive --sequence FRAME…`): the frames of one "
+            "demonstration filmed from above — image files in the order given, or one video "
+            f"file ({', '.join(sorted(VIDEO_SUFFIXES))}; read with imageio-ffmpeg, the `sim` "
+            "extra), each frame the size of the first; `-o` writes the demonstration file "
+            '(docs/perception.md, "Demonstrations from a camera").\n'
             f"- **Figures** ({', '.join(c for c in users('other', 1) if _figure(c))}): "
             "the extension chooses the "
             f"format: {figures}.\n"
@@ -1818,7 +1824,7 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     ),
     "perceive": (
         ("other", "camera --camera", "markers --markers", "palette --colours"),
-        ("scene", "other --plot"),
+        ("scene", "other --plot", "demonstration --sequence"),
     ),
     "segment": (("stream", "objects --objects-file"), ("demonstration", "other --plot")),
     "import": (("recording", "objects --objects-file"), ("demonstration",)),

@@ -32,6 +32,7 @@ from demoplan.cli.common import (
     working,
 )
 from demoplan.cli.render import print_run_report
+from demoplan.errors import UsageError
 from demoplan.wording import plural
 
 if TYPE_CHECKING:
@@ -261,11 +262,12 @@ def calibrate(
 
 @app.command()
 def perceive(
-    image_path: Annotated[
-        Path,
+    image_paths: Annotated[
+        list[Path],
         typer.Argument(
             metavar="IMAGE",
-            help="A colour image of the table: a top view, or any view with --camera / --markers.",
+            help="A colour image of the table: a top view, or any view with --camera / --markers"
+            " (with --sequence: the frames in order, or one video file).",
         ),
     ],
     px_per_m: Annotated[
@@ -314,11 +316,48 @@ def perceive(
         Path | None,
         typer.Option(help="A palette file: colour names to add or move (docs/formats.md)."),
     ] = None,
+    sequence: Annotated[
+        bool,
+        typer.Option(
+            "--sequence", help="The images are the frames of one demonstration: write it (-o)."
+        ),
+    ] = False,
+    name: Annotated[
+        str | None, typer.Option(help="The demonstration's name (--sequence; default: its file's).")
+    ] = None,
 ) -> None:
-    """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s)."""
+    """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s),
+    or with --sequence the demonstration camera frames show."""
     from demoplan.commands.execution import perceive as perceive_image
 
     with reported_errors():
+        if sequence:
+            single = [o for o, v in (("--before", before), ("--plot", plot)) if v is not None]
+            if colours is not None:
+                single.append("--colours")
+            if single:
+                raise UsageError(
+                    f"{' and '.join(single)}: for one IMAGE, not a --sequence of frames"
+                )
+            _perceive_sequence(
+                image_paths,
+                px_per_m,
+                origin,
+                camera,
+                markers,
+                side,
+                timeout,
+                output,
+                name,
+                json_output,
+            )
+            return
+        if len(image_paths) != 1:
+            raise UsageError(
+                f"{len(image_paths)} images; one IMAGE expected (the frames of a "
+                "demonstration: --sequence)"
+            )
+        image_path = image_paths[0]
         with working("Finding blocks…"):
             found = perceive_image(
                 image_path,
@@ -372,3 +411,49 @@ def _rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
         f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
         f"(drawn in {plot.name})"
     )
+
+
+def _perceive_sequence(
+    frames: list[Path],
+    px_per_m: float | None,
+    origin: tuple[float, float] | None,
+    camera: Path | None,
+    markers: Path | None,
+    side: float | None,
+    timeout: float,
+    output: Path | None,
+    name: str | None,
+    json_output: bool,
+) -> None:
+    """``perceive --sequence``: the demonstration, as a table of its steps."""
+    from demoplan.commands.execution import perceive_sequence
+
+    with working("Perceiving frames…"):
+        found = perceive_sequence(
+            frames,
+            px_per_m,
+            origin,
+            camera=camera,
+            markers=markers,
+            side=side,
+            timeout=timeout,
+            output=output,
+            name=name,
+        )
+    if json_output:
+        print_json(found.document)
+        return
+    demo = found.demonstration
+    table = Table(
+        title=f"Demonstration {demo.name} from {plural(found.frames, 'frame')}",
+        title_justify="left",
+    )
+    for column in ("step", "object", "x [m]", "y [m]", "z [m]", "yaw [deg]"):
+        table.add_column(column, justify="left" if column == "object" else "right")
+    for number, step in enumerate(demo.steps, start=1):
+        x, y, z = step.pose.position
+        yaw = step.pose.rpy[2] if step.pose.rpy is not None else 0.0
+        table.add_row(str(number), step.object, f"{x:.4f}", f"{y:.4f}", f"{z:.3f}", f"{yaw:.1f}")
+    stdout.print(table)
+    if output is not None:
+        stdout.print(f"wrote {output}", markup=False, highlight=False)

@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -24,7 +24,7 @@ from demoplan.fileio import (
     write_atomic,
     write_atomic_bytes,
 )
-from demoplan.model import TaskModel
+from demoplan.model import Demonstration, TaskModel
 from demoplan.perception.blocks import Rejection
 from demoplan.perception.calibration import TableCalibration
 from demoplan.perception.images import perceive_top_view
@@ -32,7 +32,16 @@ from demoplan.perception.stacking import TrackedBlock, scene_document
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
-__all__ = ["Calibrated", "Perceived", "calibrate", "perceive", "remove_unfinished_video", "run"]
+__all__ = [
+    "Calibrated",
+    "Perceived",
+    "PerceivedSequence",
+    "calibrate",
+    "perceive",
+    "perceive_sequence",
+    "remove_unfinished_video",
+    "run",
+]
 
 
 def run(
@@ -143,18 +152,7 @@ def perceive(
     from demoplan.perception.calibration import load_calibration, load_markers
     from demoplan.perception.camera import encode_png
 
-    given = [name for name, v in (("--camera", camera), ("--markers", markers)) if v is not None]
-    scale_given = px_per_m is not None or origin is not None
-    if len(given) > 1 or (given and scale_given):
-        raise UsageError(
-            "one of --px-per-m with --origin, --camera or --markers expected, not "
-            + " and ".join(given + (["--px-per-m/--origin"] if scale_given else []))
-        )
-    if not given and (px_per_m is None or origin is None):
-        raise UsageError(
-            "how pixels map to the table is needed: --px-per-m and --origin (a top view), "
-            "--camera FILE or --markers FILE"
-        )
+    _check_mapping(px_per_m, origin, camera, markers)
     inputs = [image, *(p for p in (before, camera, markers, colours) if p)]
     for target in (output, plot):
         if target is not None:
@@ -175,6 +173,147 @@ def perceive(
     if plot is not None and overlay is not None:
         write_atomic_bytes(plot, overlay)
     return Perceived(seen.blocks, document, seen.rejected)
+
+
+@dataclass(frozen=True, slots=True)
+class PerceivedSequence:
+    """The demonstration camera frames show and its file's document
+    (``demoplan/demonstration-1``, as ``perceive --sequence -o`` writes it)."""
+
+    demonstration: Demonstration
+    document: dict[str, Any]
+    frames: int
+
+
+def perceive_sequence(
+    frames: Sequence[Path],
+    px_per_m: float | None = None,
+    origin: tuple[float, float] | None = None,
+    *,
+    camera: Path | None = None,
+    markers: Path | None = None,
+    side: float | None = None,
+    timeout: float = PERCEPTION_TIMEOUT,
+    output: Path | None = None,
+    name: str | None = None,
+) -> PerceivedSequence:
+    """The demonstration a camera filmed (docs/perception.md "Demonstrations from
+    a camera"): ``frames`` are image files in order, or one video file; pixels
+    map to the table as for :func:`perceive` (``markers``: calibrated from the
+    first frame). A step is recorded each time a block has moved and the
+    picture has settled; the hand is ignored. ``timeout``: seconds for the
+    whole sequence; ``name``: the demonstration's (default: the first file's
+    stem); ``output``: also write the demonstration file there."""
+    from demoplan.budget import time_budget
+    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.perception.frames import frame_source
+    from demoplan.perception.sequence import demonstration_from_frames
+
+    _check_mapping(px_per_m, origin, camera, markers)
+    source = frame_source(frames)
+    if output is not None:
+        refuse_overwriting_inputs(output, [*frames, *(p for p in (camera, markers) if p)])
+    with time_budget(
+        timeout,
+        f"perceiving the frames stopped at its time budget (--timeout {timeout:g} s){{where}}; "
+        "give it more time, fewer frames, or say the blocks' size (--side)",
+    ):
+        detect = _frame_detector(px_per_m, origin, camera, markers, side, frames[0])
+        demo = demonstration_from_frames(
+            source,
+            detect,
+            name=name or _sequence_name(frames),
+            side=side,
+            total=source.total,
+            provenance=(("source", str(frames[0])),),
+        )
+    from demoplan.learning.demonstrations import check_measured_demonstration
+
+    check_measured_demonstration(demo, str(frames[0]))
+    document = demonstration_to_dict(demo)
+    if output is not None:
+        write_atomic(output, dump_json(document))
+    count = dict(demo.provenance).get("frames", 0)
+    return PerceivedSequence(demo, document, int(count))
+
+
+def _sequence_name(frames: Sequence[Path]) -> str:
+    """A sequence's default name: a video's stem, or the first image file's
+    without a frame number."""
+    import re
+
+    stem = frames[0].stem
+    return stem if len(frames) == 1 else re.sub(r"[-_. ]*\d+$", "", stem) or stem
+
+
+def _check_mapping(
+    px_per_m: float | None,
+    origin: tuple[float, float] | None,
+    camera: Path | None,
+    markers: Path | None,
+) -> None:
+    """Exactly one way from pixels to the table: a scale and an origin, a camera
+    file, or a markers file."""
+    given = [name for name, v in (("--camera", camera), ("--markers", markers)) if v is not None]
+    scale_given = px_per_m is not None or origin is not None
+    if len(given) > 1 or (given and scale_given):
+        raise UsageError(
+            "one of --px-per-m with --origin, --camera or --markers expected, not "
+            + " and ".join(given + (["--px-per-m/--origin"] if scale_given else []))
+        )
+    if not given and (px_per_m is None or origin is None):
+        raise UsageError(
+            "how pixels map to the table is needed: --px-per-m and --origin (a top view), "
+            "--camera FILE or --markers FILE"
+        )
+
+
+def _frame_detector(
+    px_per_m: float | None,
+    origin: tuple[float, float] | None,
+    camera: Path | None,
+    markers: Path | None,
+    side: float | None,
+    first: Path,
+) -> Callable[[Any], list[Any]]:
+    """The blocks in one frame (an RGB array), on the table's coordinates."""
+    import math
+
+    from demoplan.documents.poses import MAX_SIZE_M
+    from demoplan.perception.camera import Camera
+    from demoplan.perception.sequence import top_view_detector
+
+    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
+        raise UsageError(
+            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+            "(an object's largest extent, docs/limits.md)"
+        )
+    if px_per_m is not None and origin is not None:
+        if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
+            raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+        return top_view_detector(Camera(px_per_m, origin), side)
+    from demoplan.perception.calibrated import detect_in_photograph
+    from demoplan.perception.calibration import (
+        calibrate as calibrate_image,
+    )
+    from demoplan.perception.calibration import (
+        check_image_size,
+        load_calibration,
+        load_markers,
+    )
+    from demoplan.perception.frames import frame_source
+
+    if camera is not None:
+        calibration = load_calibration(camera)
+    else:
+        picture = next(iter(frame_source([first]))).image
+        calibration = calibrate_image(picture, load_markers(markers), source=str(first))  # type: ignore[arg-type]
+
+    def detect(image: Any) -> list[Any]:
+        check_image_size(calibration, image, str(first))
+        return detect_in_photograph(image, calibration, side)[0]
+
+    return detect
 
 
 @dataclass(frozen=True, slots=True)

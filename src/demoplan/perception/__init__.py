@@ -6,5 +6,9 @@
 - :mod:`~demoplan.perception.blocks`: detection = colours + Hough + sub-pixel fit → a scene;
 - :mod:`~demoplan.perception.stacking`: a block covered after a move is under the moved one;
   blocks of one colour (instances of one type) told apart by where they were;
-- :mod:`~demoplan.perception.synthetic`: test images of blocks (anti-aliased, noisy, shaded).
+- :mod:`~demoplan.perception.synthetic`: test images of blocks (anti-aliased, noisy, shaded);
+- :mod:`~demoplan.perception.sequence`: a demonstration from camera frames (the hand
+  ignored, a step when the picture settles); :mod:`~demoplan.perception.frames`: frames
+  from image files or a video; :mod:`~demoplan.perception.filmed`: demonstrations filmed
+  with a hand, for tests.
 """

@@ -35,7 +35,13 @@ from demoplan.perception.images import SIDE_TOLERANCE, Perception, seen_now
 from demoplan.perception.overlay import Drawn, draw_overlay
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
-__all__ = ["calibration_for", "perceive_calibrated", "perceive_photograph", "top_faces_view"]
+__all__ = [
+    "calibration_for",
+    "detect_in_photograph",
+    "perceive_calibrated",
+    "perceive_photograph",
+    "top_faces_view",
+]
 
 RECTIFIED_PX_PER_M = 1000.0
 """The rectified top view's resolution: 1 px = 1 mm (a 4 cm cube is 40 px across)."""
@@ -60,11 +66,23 @@ def _detected(
     rejected: list[Rejection] | None = None,
     palette: Mapping[str, tuple[float, float, float]] | None = None,
 ) -> tuple[list[DetectedBlock], float]:
-    """The blocks in the photograph, and the height of the plane the view they
-    were found on shows (the top faces', or the table's); ``rejected`` gets the
-    regions that view's detector rejected."""
+    """:func:`detect_in_photograph` on the photograph file ``image``."""
     picture = load_image(image)
     check_image_size(calibration, picture, str(image))
+    return detect_in_photograph(picture, calibration, side, rejected, palette)
+
+
+def detect_in_photograph(
+    picture: np.ndarray,
+    calibration: TableCalibration,
+    side: float | None,
+    rejected: list[Rejection] | None = None,
+    palette: Mapping[str, tuple[float, float, float]] | None = None,
+) -> tuple[list[DetectedBlock], float]:
+    """The blocks in ``picture`` (a photograph of the calibration's size) on the
+    table's coordinates, each block's top face brought down to the table, and
+    the height of the plane the view they were found on shows (the top faces',
+    or the table's); ``rejected`` gets the regions that view's detector rejected."""
     centre = calibration.centre
     rectified, camera = rectify(picture, calibration, RECTIFIED_PX_PER_M)
     settings = PerceptionSettings(colours=palette or {})
