@@ -45,9 +45,10 @@ class Hypothesis:
 def edge_pixels(alpha: np.ndarray, fraction: float = 0.25) -> tuple[np.ndarray, ...]:
     """Edge pixels of a soft mask: (u, v, n_u, n_v, strength), n the outward normal."""
     # Sobel as scipy.ndimage.sobel computes it (its border mirrors the edge pixel)
-    sobel = {"ddepth": cv2.CV_64F, "ksize": 3, "borderType": cv2.BORDER_REFLECT}
-    gx = cv2.Sobel(alpha, dx=1, dy=0, **sobel) / 8.0
-    gy = -cv2.Sobel(alpha, dx=0, dy=1, **sobel) / 8.0  # rows run down; v runs up
+    reflect = cv2.BORDER_REFLECT
+    gx = np.asarray(cv2.Sobel(alpha, cv2.CV_64F, 1, 0, ksize=3, borderType=reflect)) / 8.0
+    # rows run down; v runs up
+    gy = -np.asarray(cv2.Sobel(alpha, cv2.CV_64F, 0, 1, ksize=3, borderType=reflect)) / 8.0
     strength = np.hypot(gx, gy)
     if strength.max() <= 0:
         empty = np.empty(0)
@@ -153,17 +154,16 @@ def _votes(
     accumulator[:, 0] = accumulator[:, n_theta]
     accumulator[:, n_theta + 1] = accumulator[:, 1]
     share = np.array([0.5, 1.0, 0.5])
-    rows = accumulator.reshape(sides.size * (n_theta + 2), (n_y + 1) * n_x)
-    rows = cv2.sepFilter2D(rows, cv2.CV_64F, _ONE, share, borderType=cv2.BORDER_CONSTANT)
+    by_theta = accumulator.reshape(sides.size * (n_theta + 2), (n_y + 1) * n_x)
+    border = cv2.BORDER_CONSTANT
+    by_theta = np.asarray(cv2.sepFilter2D(by_theta, cv2.CV_64F, _ONE, share, borderType=border))
     # and so do neighbouring centre bins: a centre on a bin border (a square whose
     # edges lie on pixel borders, as a render of a block at round coordinates has
     # them) splits its votes over four bins, and a square with only two of its
     # sides in the crop, sitting in one bin, would outvote it (the empty rows keep
     # the θ slices apart)
-    rows = cv2.sepFilter2D(
-        rows.reshape(-1, n_x), cv2.CV_64F, share, share, borderType=cv2.BORDER_CONSTANT
-    )
-    shared: np.ndarray = rows.reshape(accumulator.shape)[:, 1 : n_theta + 1, :n_y]
+    rows = cv2.sepFilter2D(by_theta.reshape(-1, n_x), cv2.CV_64F, share, share, borderType=border)
+    shared: np.ndarray = np.asarray(rows).reshape(accumulator.shape)[:, 1 : n_theta + 1, :n_y]
     return shared
 
 
