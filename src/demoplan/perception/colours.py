@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial.distance import cdist
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
@@ -140,7 +141,7 @@ def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     """Palette index per pixel (N × 3 RGB); dark → -2, greyish → -3."""
     top = pixels.max(axis=1)
     normal = pixels / np.maximum(top, 1.0)[:, None]
-    distance = np.linalg.norm(normal[:, None, :] - chroma[None, :, :], axis=2)
+    distance = cdist(normal, chroma)
     labels: np.ndarray = np.argmin(distance, axis=1)
     labels[distance.min(axis=1) > MAX_CHROMA_DISTANCE] = -4  # no plain colour
     labels[normal.min(axis=1) > 0.82] = -3
@@ -148,18 +149,30 @@ def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     return labels
 
 
+_LAB_SCALE = np.array(
+    [[100.0 / 255.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, -128.0], [0.0, 0.0, 1.0, -128.0]],
+    dtype=np.float32,
+)
+"""OpenCV's 8-bit CIELAB to L* in 0–100 and a*, b* around 0 (as cv2.transform's matrix)."""
+
+
+def _largest_channel_spread(pixels: np.ndarray) -> int:
+    """The largest difference between two colour channels of one pixel (0 when grey)."""
+    red, green, blue = cv2.split(np.ascontiguousarray(pixels, dtype=np.uint8))
+    spread = cv2.subtract(cv2.max(cv2.max(red, green), blue), cv2.min(cv2.min(red, green), blue))
+    return int(np.asarray(spread).max(initial=0))
+
+
 def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
     distance; L* difference in an image without colour), the image in CIELAB, and the
     foreground threshold; whether the image has colour at all."""
-    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128
-    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab).astype(
-        np.float32
-    )
-    lab[..., 0] *= 100.0 / 255.0
-    lab[..., 1:] -= 128.0
+    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
+    # scaled back by one affine transform of the pixels
+    lab8 = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
-    coloured = int(np.ptp(image[::4, ::4].astype(np.int16), axis=2).max(initial=0)) > 2
+    coloured = _largest_channel_spread(image[::4, ::4]) > 2
     if coloured:
         table_a, table_b = np.median(sample[:, 1]), np.median(sample[:, 2])
         distinct = np.hypot(lab[..., 1] - table_a, lab[..., 2] - table_b)
@@ -192,10 +205,10 @@ def colour_regions(
     names, chroma = _palette(palette)
     regions: list[ColourRegion] = []
     height, width = labels.shape
-    for index in range(1, count):
-        x, y, w, h, area = (int(value) for value in stats[index])
-        if area < min_area:
-            continue  # smaller than a block: noise, a speck
+    # smaller than a block: noise, a speck
+    large = np.flatnonzero(stats[1:count, cv2.CC_STAT_AREA] >= min_area) + 1
+    for index in large:
+        x, y, w, h, _ = (int(value) for value in stats[index])
         check_time(where)
         rows = slice(max(0, y - 5), min(height, y + h + 5))
         cols = slice(max(0, x - 5), min(width, x + w + 5))
@@ -240,16 +253,18 @@ def colour_regions(
             change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
-        centre_offsets = np.array([found[2] for found in classes_found])
-        scores = np.stack(
-            [
-                np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
-                - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
-                for c in centre_offsets
-            ],
-            axis=1,
-        )
-        nearest = np.argmin(scores, axis=1).reshape(member.shape)
+        nearest = np.zeros(member.shape, dtype=np.intp)
+        if len(classes_found) > 1:
+            centre_offsets = np.array([found[2] for found in classes_found])
+            scores = np.stack(
+                [
+                    np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
+                    - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
+                    for c in centre_offsets
+                ],
+                axis=1,
+            )
+            nearest = np.argmin(scores, axis=1).reshape(member.shape)
         grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
