@@ -139,12 +139,15 @@ def _palette(extra: Palette | None = None) -> tuple[list[str], np.ndarray]:
 
 def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     """Palette index per pixel (N × 3 RGB); dark → -2, greyish → -3."""
-    top = pixels.max(axis=1)
+    red, green, blue = pixels[:, 0], pixels[:, 1], pixels[:, 2]
+    top = np.maximum(np.maximum(red, green), blue)
     normal = pixels / np.maximum(top, 1.0)[:, None]
     distance = cdist(normal, chroma)
     labels: np.ndarray = np.argmin(distance, axis=1)
-    labels[distance.min(axis=1) > MAX_CHROMA_DISTANCE] = -4  # no plain colour
-    labels[normal.min(axis=1) > 0.82] = -3
+    nearest = distance[np.arange(labels.size), labels]
+    labels[nearest > MAX_CHROMA_DISTANCE] = -4  # no plain colour
+    # the smallest channel over the largest: near 1 for grey
+    labels[np.minimum(np.minimum(red, green), blue) / np.maximum(top, 1.0) > 0.82] = -3
     labels[top < 60] = -2
     return labels
 
@@ -226,7 +229,8 @@ def colour_regions(
         ground = np.median(crop[ring], axis=0) if ring.any() else table
         chroma_crop = lab[rows, cols, 1:]
         ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
-        classes = _classify(crop[core], chroma)
+        core_pixels = crop[core]
+        classes = _classify(core_pixels, chroma)
         if coloured_image:
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
         present = []
@@ -240,7 +244,8 @@ def colour_regions(
         if not present:
             continue
         offsets = (crop - ground).reshape(-1, 3)
-        core_offsets = crop[core] - ground
+        core_offsets = core_pixels - ground
+        core_chroma = chroma_crop[core]
         core_lightness = lightness[rows, cols][core]
         classes_found = []
         for colour, chosen in present:
@@ -249,8 +254,8 @@ def colour_regions(
             if side_faces is not None:
                 on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
             change = core_offsets[on_top].mean(axis=0)
-            mean_rgb = crop[core][on_top].mean(axis=0)
-            change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
+            mean_rgb = core_pixels[on_top].mean(axis=0)
+            change_ab = (core_chroma[on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
         nearest = np.zeros(member.shape, dtype=np.intp)
