@@ -95,24 +95,27 @@ def hough_squares(
     votes, rows, cols, thetas, side = (np.concatenate(a) for a in zip(*found, strict=True))
     kept = np.flatnonzero(votes > 0)
     order = kept[np.argsort(-votes[kept], kind="stable")][: 50 * peaks]
+    centre_u = (cols[order] + 0.5) * XY_BIN
+    centre_v = (rows[order] + 0.5) * XY_BIN
+    # non-maximum suppression: one hypothesis per neighbourhood — the strongest
+    # candidate left is taken and its neighbours dropped, until there are enough
+    left = np.ones(order.size, dtype=bool)
     best: list[Hypothesis] = []
-    for i in order:
-        if len(best) == peaks:
-            break
-        candidate = Hypothesis(
-            u=(int(cols[i]) + 0.5) * XY_BIN,
-            v=(int(rows[i]) + 0.5) * XY_BIN,
-            theta=int(thetas[i]) * THETA_BIN,
-            side=float(side[i]),
-            votes=float(votes[i]),
+    while len(best) < peaks and left.any():
+        first = int(np.argmax(left))
+        i = order[first]
+        best.append(
+            Hypothesis(
+                u=float(centre_u[first]),
+                v=float(centre_v[first]),
+                theta=int(thetas[i]) * THETA_BIN,
+                side=float(side[i]),
+                votes=float(votes[i]),
+            )
         )
-        # non-maximum suppression: one hypothesis per neighbourhood
-        if any(
-            abs(c.u - candidate.u) <= 3 * XY_BIN and abs(c.v - candidate.v) <= 3 * XY_BIN
-            for c in best
-        ):
-            continue
-        best.append(candidate)
+        left &= (np.abs(centre_u - centre_u[first]) > 3 * XY_BIN) | (
+            np.abs(centre_v - centre_v[first]) > 3 * XY_BIN
+        )
     return best
 
 
