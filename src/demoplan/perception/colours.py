@@ -258,18 +258,8 @@ def colour_regions(
             change_ab = (core_chroma[on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
-        nearest = np.zeros(member.shape, dtype=np.intp)
-        if len(classes_found) > 1:
-            centre_offsets = np.array([found[2] for found in classes_found])
-            scores = np.stack(
-                [
-                    np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
-                    - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
-                    for c in centre_offsets
-                ],
-                axis=1,
-            )
-            nearest = np.argmin(scores, axis=1).reshape(member.shape)
+        nearest = _nearest_class(offsets, [found[2] for found in classes_found])
+        nearest = nearest.reshape(member.shape)
         grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
@@ -297,6 +287,24 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _nearest_class(offsets: np.ndarray, changes: list[np.ndarray]) -> np.ndarray:
+    """Per pixel (its colour change from the table, N × 3), the class whose change
+    (``changes``) it is nearest to: off the change's line, less a bonus for going
+    far along it. All 0 with one class (nothing to compare)."""
+    if len(changes) == 1:
+        return np.zeros(len(offsets), dtype=np.intp)
+    scores = np.stack(
+        [
+            np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
+            - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
+            for c in changes
+        ],
+        axis=1,
+    )
+    nearest: np.ndarray = np.argmin(scores, axis=1)
+    return nearest
 
 
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
