@@ -163,16 +163,90 @@ def _outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     t = np.linspace(-0.4, 0.4, 9) * side
     out = side / 2 + 2.0
-    points = []
-    for nu, nv in ((c, s), (-c, -s), (-s, c), (s, -c)):
-        points += [(u + out * nu - tt * nv, v + out * nv + tt * nu) for tt in t]
+    normals = np.array([(c, s), (-c, -s), (-s, c), (s, -c)])
+    nu, nv = normals[:, :1], normals[:, 1:]
+    pu = ((u + out * nu) - t * nv).ravel()
+    pv = ((v + out * nv) + t * nu).ravel()
     height, width = alpha.shape
-    free = 0
-    for pu, pv in points:
-        col, row = int(pu), int(height - pv)
-        if not (0 <= row < height and 0 <= col < width) or alpha[row, col] < 0.5:
-            free += 1
-    return free / len(points)
+    cols, rows = pu.astype(np.intp), (height - pv).astype(np.intp)  # truncated, as int()
+    within = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
+    free: np.ndarray = ~within
+    free[within] = alpha[rows[within], cols[within]] < 0.5
+    return int(np.count_nonzero(free)) / int(free.size)
+
+
+def _window(
+    shape: tuple[int, ...], params: np.ndarray, side: float
+) -> tuple[np.ndarray, np.ndarray, tuple[slice, slice]]:
+    """The pixel centres (u, v) of the part of a crop of ``shape`` that holds every
+    pixel a square at ``params``'s centre with ``side`` touches (its one-pixel ramp
+    included), and those rows and columns: a fit's sums over that part are its sums
+    over the crop, the same values in the same order."""
+    height, width = shape
+    reach = (abs(side) / 2 + 0.5) * math.sqrt(2) + 2.0
+    u, v = float(params[0]), float(params[1])
+    if not all(map(math.isfinite, (u, v, reach))):
+        rows, cols = slice(0, height), slice(0, width)
+    else:
+        row = height - v
+        rows = slice(
+            min(height, max(0, math.floor(row - reach))),
+            max(0, min(height, math.ceil(row + reach))),
+        )
+        cols = slice(
+            min(width, max(0, math.floor(u - reach))), max(0, min(width, math.ceil(u + reach)))
+        )
+    uu, vv = np.meshgrid(
+        np.arange(cols.start, cols.stop) + 0.5, height - np.arange(rows.start, rows.stop) - 0.5
+    )
+    return uu, vv, (rows, cols)
+
+
+class _SquareModel:
+    """The one-pixel-ramp square at the points (us, vs), with its exact Jacobian;
+    the square's frame is kept from the residual to the Jacobian at the same
+    parameters (the optimiser asks for both)."""
+
+    def __init__(self, us: np.ndarray, vs: np.ndarray, target: np.ndarray) -> None:
+        self.us, self.vs, self.target = us, vs, target
+        self._at: np.ndarray | None = None
+        self._frame: tuple[np.ndarray, np.ndarray, np.ndarray] = (target, target, target)
+
+    def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q_u, q_v, distance): the points in the square's frame, and their
+        ≈ signed distance to its outline."""
+        if self._at is None or not np.array_equal(params, self._at):
+            u, v, theta, side = params
+            c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+            du, dv = self.us - u, self.vs - v
+            qu = c * du + s * dv
+            qv = -s * du + c * dv
+            distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
+            self._at, self._frame = params.copy(), (qu, qv, distance)
+        return self._frame
+
+    def residual(self, params: np.ndarray) -> np.ndarray:
+        distance = self.frame(params)[2]
+        difference: np.ndarray = np.clip(0.5 - distance, 0.0, 1.0) - self.target
+        return difference
+
+    def jacobian(self, params: np.ndarray) -> np.ndarray:
+        """∂ residual / ∂ (u, v, θ, s), exact: on the one-pixel ramp the model is
+        ½ − (max(|q_u|, |q_v|) − s/2), q the pixel in the square's own frame; off
+        it, constant."""
+        qu, qv, distance = self.frame(params)
+        on_ramp = np.flatnonzero(np.abs(distance) < 0.5)
+        qu, qv = qu[on_ramp], qv[on_ramp]
+        theta = params[2]
+        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        along_u = np.abs(qu) >= np.abs(qv)
+        sign = np.where(along_u, np.sign(qu), np.sign(qv))
+        jac = np.zeros((distance.size, 4))
+        jac[on_ramp, 0] = -(np.where(along_u, -c, s) * sign)
+        jac[on_ramp, 1] = -(np.where(along_u, -s, -c) * sign)
+        jac[on_ramp, 2] = -(np.where(along_u, qv, -qu) * sign * (math.pi / 180.0))
+        jac[on_ramp, 3] = 0.5
+        return jac
 
 
 def _fit(
@@ -187,47 +261,26 @@ def _fit(
     (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
     pixels, and the share of free outline. With ``band`` (px) only the pixels
     that far from the starting outline take part (inside, a good start's square
-    and the mask agree anyway): a large block costs its outline, not its area."""
-    height, width = alpha.shape
-    uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
+    and the mask agree anyway): a large block costs its outline, not its area.
+    Only the part of the crop near the square is looked at (:func:`_window`)."""
     grown = np.array([start.u, start.v, start.theta, start.side + 5.0])
-    near = _square_alpha(grown, uu, vv) > 0
-    if band is not None:
+    if band is None:
+        uu, vv, window = _window(alpha.shape, grown, grown[3])
+        near = _square_alpha(grown, uu, vv) > 0
+    else:
         outline = np.array([start.u, start.v, start.theta, start.side + 2 * band])
         inner = np.array([start.u, start.v, start.theta, max(start.side - 2 * band, 0.0)])
+        uu, vv, window = _window(alpha.shape, outline, outline[3])
         near = (_square_alpha(outline, uu, vv) > 0) & (_square_alpha(inner, uu, vv) < 1)
-    target, us, vs = alpha[near], uu[near], vv[near]
-
-    def residual(params: np.ndarray) -> np.ndarray:
-        difference: np.ndarray = _square_alpha(params, us, vs) - target
-        return difference
-
-    def jacobian(params: np.ndarray) -> np.ndarray:
-        """∂ residual / ∂ (u, v, θ, s), exact: on the one-pixel ramp the model is
-        ½ − (max(|q_u|, |q_v|) − s/2), q the pixel in the square's own frame."""
-        u, v, theta, side = params
-        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-        du, dv = us - u, vs - v
-        qu = c * du + s * dv
-        qv = -s * du + c * dv
-        along_u = np.abs(qu) >= np.abs(qv)
-        sign = np.where(along_u, np.sign(qu), np.sign(qv))
-        d_du = np.where(along_u, -c, s) * sign
-        d_dv = np.where(along_u, -s, -c) * sign
-        d_dtheta = np.where(along_u, qv, -qu) * sign * (math.pi / 180.0)
-        distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
-        on_ramp = np.abs(distance) < 0.5
-        jac = -np.stack([d_du, d_dv, d_dtheta, np.full_like(du, -0.5)], axis=1)
-        jac[~on_ramp] = 0.0
-        return jac
-
+    target = alpha[window][near]
+    model = _SquareModel(uu[near], vv[near], target)
     best = None
     for theta in (start.theta + turn for turn in turns):
         x0 = np.array([start.u, start.v, theta, start.side])
         result = optimize.least_squares(
-            residual,
+            model.residual,
             x0,
-            jac=jacobian,
+            jac=model.jacobian,
             x_scale=[1.0, 1.0, 2.0, 1.0],
             xtol=tolerance,
             ftol=tolerance,
@@ -241,11 +294,13 @@ def _fit(
             break  # a good fit from the Hough estimate: no need to try other angles
     assert best is not None
     params = best.x
-    model = _square_alpha(params, uu, vv)
-    inside = model > 0.99
-    coverage = float(alpha[inside].mean()) if inside.any() else 0.0
-    own = model > 0.01
-    rms = float(np.sqrt(np.mean((model[own] - alpha[own]) ** 2))) if own.any() else 1.0
+    uu, vv, window = _window(alpha.shape, params, params[3])
+    mask = alpha[window]
+    fitted = _square_alpha(params, uu, vv)
+    inside = fitted > 0.99
+    coverage = float(mask[inside].mean()) if inside.any() else 0.0
+    own = fitted > 0.01
+    rms = float(np.sqrt(np.mean((fitted[own] - mask[own]) ** 2))) if own.any() else 1.0
     return params, coverage, rms, _outline_free(alpha, params)
 
 

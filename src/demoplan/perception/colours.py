@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial.distance import cdist
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
@@ -233,28 +234,43 @@ def _palette(extra: Palette | None = None) -> tuple[list[str], np.ndarray]:
 
 def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     """Palette index per pixel (N × 3 RGB); dark → -2, greyish → -3."""
-    top = pixels.max(axis=1)
+    red, green, blue = pixels[:, 0], pixels[:, 1], pixels[:, 2]
+    top = np.maximum(np.maximum(red, green), blue)
     normal = pixels / np.maximum(top, 1.0)[:, None]
-    distance = np.linalg.norm(normal[:, None, :] - chroma[None, :, :], axis=2)
+    distance = cdist(normal, chroma)
     labels: np.ndarray = np.argmin(distance, axis=1)
-    labels[distance.min(axis=1) > MAX_CHROMA_DISTANCE] = -4  # no plain colour
-    labels[normal.min(axis=1) > 0.82] = -3
+    nearest = distance[np.arange(labels.size), labels]
+    labels[nearest > MAX_CHROMA_DISTANCE] = -4  # no plain colour
+    # the smallest channel over the largest: near 1 for grey
+    labels[np.minimum(np.minimum(red, green), blue) / np.maximum(top, 1.0) > 0.82] = -3
     labels[top < 60] = -2
     return labels
+
+
+_LAB_SCALE = np.array(
+    [[100.0 / 255.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, -128.0], [0.0, 0.0, 1.0, -128.0]],
+    dtype=np.float32,
+)
+"""OpenCV's 8-bit CIELAB to L* in 0–100 and a*, b* around 0 (as cv2.transform's matrix)."""
+
+
+def _largest_channel_spread(pixels: np.ndarray) -> int:
+    """The largest difference between two colour channels of one pixel (0 when grey)."""
+    red, green, blue = cv2.split(np.ascontiguousarray(pixels, dtype=np.uint8))
+    spread = cv2.subtract(cv2.max(cv2.max(red, green), blue), cv2.min(cv2.min(red, green), blue))
+    return int(np.asarray(spread).max(initial=0))
 
 
 def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
     distance; L* difference in an image without colour), the image in CIELAB, and the
     foreground threshold; whether the image has colour at all."""
-    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128
-    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab).astype(
-        np.float32
-    )
-    lab[..., 0] *= 100.0 / 255.0
-    lab[..., 1:] -= 128.0
+    # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
+    # scaled back by one affine transform of the pixels
+    lab8 = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
-    coloured = int(np.ptp(image[::4, ::4].astype(np.int16), axis=2).max(initial=0)) > 2
+    coloured = _largest_channel_spread(image[::4, ::4]) > 2
     if coloured:
         table_a, table_b = np.median(sample[:, 1]), np.median(sample[:, 2])
         distinct = np.hypot(lab[..., 1] - table_a, lab[..., 2] - table_b)
@@ -300,11 +316,12 @@ def colour_regions(
     record = _Recorder(rejected, min_area)
     regions: list[ColourRegion] = []
     height, width = labels.shape
-    for index in range(1, count):
-        x, y, w, h, area = (int(value) for value in stats[index])
-        if area < min_area:
-            record.speck(labels, index, (x, y, w, h, area))
-            continue  # smaller than a block: noise, a speck
+    areas = stats[1:count, cv2.CC_STAT_AREA]
+    if rejected is not None:  # smaller than a block: noise, a speck
+        for index in np.flatnonzero(areas < min_area) + 1:
+            record.speck(labels, int(index), tuple(int(v) for v in stats[index]))
+    for index in np.flatnonzero(areas >= min_area) + 1:
+        x, y, w, h, _ = (int(value) for value in stats[index])
         check_time(where)
         rows = slice(max(0, y - 5), min(height, y + h + 5))
         cols = slice(max(0, x - 5), min(width, x + w + 5))
@@ -323,7 +340,8 @@ def colour_regions(
         ground = np.median(crop[ring], axis=0) if ring.any() else table
         chroma_crop = lab[rows, cols, 1:]
         ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
-        classes = _classify(crop[core], chroma)
+        core_pixels = crop[core]
+        classes = _classify(core_pixels, chroma)
         if coloured_image:
             record.shade(classes, core, lightness[rows, cols], rows, cols)
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
@@ -339,7 +357,8 @@ def colour_regions(
             record(member, rows, cols, "no block colour", "dark, grey or mixed colours")
             continue
         offsets = (crop - ground).reshape(-1, 3)
-        core_offsets = crop[core] - ground
+        core_offsets = core_pixels - ground
+        core_chroma = chroma_crop[core]
         core_lightness = lightness[rows, cols][core]
         classes_found = []
         for colour, chosen in present:
@@ -350,12 +369,12 @@ def colour_regions(
                 why = f"L* {side_faces:.0f} under {top_face:.0f}"
                 record.side_faces(core, chosen & ~on_top, (rows, cols), why, colour)
             change = core_offsets[on_top].mean(axis=0)
-            mean_rgb = crop[core][on_top].mean(axis=0)
-            change_ab = (chroma_crop[core][on_top] - ground_ab).mean(axis=0)
+            mean_rgb = core_pixels[on_top].mean(axis=0)
+            change_ab = (core_chroma[on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
-        centre_offsets = np.array([found[2] for found in classes_found])
-        nearest = _nearest_class(offsets, centre_offsets).reshape(member.shape)
+        nearest = _nearest_class(offsets, [found[2] for found in classes_found])
+        nearest = nearest.reshape(member.shape)
         grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
@@ -385,15 +404,17 @@ def colour_regions(
     return regions, table
 
 
-def _nearest_class(offsets: np.ndarray, centre_offsets: np.ndarray) -> np.ndarray:
+def _nearest_class(offsets: np.ndarray, changes: list[np.ndarray]) -> np.ndarray:
     """Per pixel (its colour change from the table, N × 3), the class whose change
-    (K × 3) it is nearest to: the distance from the class's line through the
-    table's colour, less a quarter of how far along it the pixel lies."""
+    (``changes``) it is nearest to: off the change's line, less a bonus for going
+    far along it. All 0 with one class (nothing to compare)."""
+    if len(changes) == 1:
+        return np.zeros(len(offsets), dtype=np.intp)
     scores = np.stack(
         [
             np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
             - 0.25 * (offsets @ c) / np.sqrt(max(c @ c, 1e-9))
-            for c in centre_offsets
+            for c in changes
         ],
         axis=1,
     )

@@ -16,13 +16,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
+
+from demoplan.perception.opencv import cv2
 
 __all__ = ["Hypothesis", "hough_squares"]
+
+_ONE = np.array([1.0])
 
 THETA_BIN = 3.0  # degrees
 XY_BIN = 2.0  # px
 S_BIN = 2.0  # px
+MAX_CELLS = 1 << 20
+"""Accumulator bins (and votes) filled at once: sides are taken in blocks of at most this many."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -39,8 +44,11 @@ class Hypothesis:
 
 def edge_pixels(alpha: np.ndarray, fraction: float = 0.25) -> tuple[np.ndarray, ...]:
     """Edge pixels of a soft mask: (u, v, n_u, n_v, strength), n the outward normal."""
-    gx = ndimage.sobel(alpha, axis=1) / 8.0
-    gy = -ndimage.sobel(alpha, axis=0) / 8.0  # rows run down; v runs up
+    # Sobel as scipy.ndimage.sobel computes it (its border mirrors the edge pixel)
+    reflect = cv2.BORDER_REFLECT
+    gx = np.asarray(cv2.Sobel(alpha, cv2.CV_64F, 1, 0, ksize=3, borderType=reflect)) / 8.0
+    # rows run down; v runs up
+    gy = -np.asarray(cv2.Sobel(alpha, cv2.CV_64F, 0, 1, ksize=3, borderType=reflect)) / 8.0
     strength = np.hypot(gx, gy)
     if strength.max() <= 0:
         empty = np.empty(0)
@@ -59,74 +67,117 @@ def hough_squares(
     """The ``peaks`` best-supported squares in ``alpha`` with a side in ``side_range``
     (px), strongest first, at distinct centres.
 
-    The accumulator is filled one side length at a time (its θ × y × x slice: the
-    shared votes below never cross side bins), so memory stays at one slice
-    whatever the range of sides; the votes of a slice are one vectorised
-    ``bincount``."""
+    The accumulator is filled for several side lengths at once (a block of
+    (s, θ, y, x) bins: votes never cross side bins, so each side's θ × y × x
+    slice is what it would be alone), as many sides as keep the block and the
+    votes under :data:`MAX_CELLS`, so memory stays bounded whatever the range
+    of sides; the votes of a block are one vectorised ``bincount``."""
     u, v, nu, nv, g = edge_pixels(alpha)
-    if u.size == 0:
+    sides = np.arange(side_range[0], side_range[1] + S_BIN / 2, S_BIN)
+    if u.size == 0 or sides.size == 0:
         return []
     height, width = alpha.shape
     theta = np.degrees(np.arctan2(nv, nu)) % 90.0
-    sides = np.arange(side_range[0], side_range[1] + S_BIN / 2, S_BIN)
     n_theta = round(90.0 / THETA_BIN)
-    n_x = int(np.ceil(width / XY_BIN))
-    n_y = int(np.ceil(height / XY_BIN))
-    theta_bin = np.floor(theta / THETA_BIN + 0.5).astype(int) % n_theta
-    tangent_u, tangent_v = -nv, nu
-    size = n_theta * n_y * n_x
-    candidates: list[Hypothesis] = []
-    for s in sides:
-        steps = np.arange(-s / 2 + XY_BIN / 2, s / 2, XY_BIN)
-        cu = u[:, None] - (s / 2) * nu[:, None] + steps[None, :] * tangent_u[:, None]
-        cv = v[:, None] - (s / 2) * nv[:, None] + steps[None, :] * tangent_v[:, None]
-        xb = (cu / XY_BIN).astype(int)
-        yb = (cv / XY_BIN).astype(int)
-        inside = (cu >= 0) & (xb < n_x) & (cv >= 0) & (yb < n_y)
-        index = (theta_bin[:, None] * n_y + yb) * n_x + xb
-        weight = np.broadcast_to(g[:, None], index.shape)[inside]
-        total = np.bincount(index[inside], weights=weight, minlength=size)
-        accumulator = total.reshape(n_theta, n_y, n_x)
-        # neighbouring θ bins share an edge's votes when θ falls near a bin border
-        accumulator = accumulator + 0.5 * (
-            np.roll(accumulator, 1, axis=0) + np.roll(accumulator, -1, axis=0)
+    shape = (n_theta, int(np.ceil(height / XY_BIN)), int(np.ceil(width / XY_BIN)))
+    theta_bin = np.floor(theta / THETA_BIN + 0.5).astype(np.intp) % n_theta
+    # the centres an edge point votes for, for side s: every 2 px along the edge within s/2
+    steps = [np.arange(-s / 2 + XY_BIN / 2, s / 2, XY_BIN) for s in sides]
+    per_side = max((n_theta + 2) * (shape[1] + 1) * shape[2], u.size * max(map(len, steps)))
+    chunk = max(1, MAX_CELLS // per_side)
+    found: list[tuple[np.ndarray, ...]] = []
+    for first in range(0, sides.size, chunk):
+        block = slice(first, first + chunk)
+        accumulator = _votes((u, v, nu, nv, g), theta_bin, sides[block], steps[block], shape)
+        votes, rows, cols, thetas = _side_maxima(accumulator, 10 * peaks)
+        side = np.broadcast_to(sides[block, None], votes.shape)
+        found.append(tuple(a.ravel() for a in (votes, rows, cols, thetas, side)))
+    votes, rows, cols, thetas, side = (np.concatenate(a) for a in zip(*found, strict=True))
+    kept = np.flatnonzero(votes > 0)
+    order = kept[np.argsort(-votes[kept], kind="stable")][: 50 * peaks]
+    centre_u = (cols[order] + 0.5) * XY_BIN
+    centre_v = (rows[order] + 0.5) * XY_BIN
+    # non-maximum suppression: one hypothesis per neighbourhood — the strongest
+    # candidate left is taken and its neighbours dropped, until there are enough
+    left = np.ones(order.size, dtype=bool)
+    best: list[Hypothesis] = []
+    while len(best) < peaks and left.any():
+        first = int(np.argmax(left))
+        i = order[first]
+        best.append(
+            Hypothesis(
+                u=float(centre_u[first]),
+                v=float(centre_v[first]),
+                theta=int(thetas[i]) * THETA_BIN,
+                side=float(side[i]),
+                votes=float(votes[i]),
+            )
         )
-        # and so do neighbouring centre bins: a centre on a bin border (a square whose
-        # edges lie on pixel borders, as a render of a block at round coordinates has
-        # them) splits its votes over four bins, and a square with only two of its
-        # sides in the crop, sitting in one bin, would outvote it
-        for axis in (1, 2):
-            accumulator = ndimage.convolve1d(
-                accumulator, [0.5, 1.0, 0.5], axis=axis, mode="constant"
-            )
-        # the best θ at each centre, then the best centres
-        strongest = accumulator.max(axis=0).reshape(-1)
-        best_theta = accumulator.argmax(axis=0).reshape(-1)
-        best = min(10 * peaks, strongest.size)
-        top = np.argpartition(strongest, strongest.size - best)[strongest.size - best :]
-        for position in top:
-            if strongest[position] <= 0:
-                continue
-            yb_, xb_ = (int(i) for i in np.unravel_index(int(position), (n_y, n_x)))
-            candidates.append(
-                Hypothesis(
-                    u=(xb_ + 0.5) * XY_BIN,
-                    v=(yb_ + 0.5) * XY_BIN,
-                    theta=int(best_theta[position]) * THETA_BIN,
-                    side=float(s),
-                    votes=float(strongest[position]),
-                )
-            )
-    candidates.sort(key=lambda c: -c.votes)
-    found: list[Hypothesis] = []
-    for candidate in candidates[: 50 * peaks]:
-        if len(found) == peaks:
-            break
-        # non-maximum suppression: one hypothesis per neighbourhood
-        if any(
-            abs(c.u - candidate.u) <= 3 * XY_BIN and abs(c.v - candidate.v) <= 3 * XY_BIN
-            for c in found
-        ):
-            continue
-        found.append(candidate)
-    return found
+        left &= (np.abs(centre_u - centre_u[first]) > 3 * XY_BIN) | (
+            np.abs(centre_v - centre_v[first]) > 3 * XY_BIN
+        )
+    return best
+
+
+def _votes(
+    edges: tuple[np.ndarray, ...],
+    theta_bin: np.ndarray,
+    sides: np.ndarray,
+    steps: list[np.ndarray],
+    shape: tuple[int, int, int],
+) -> np.ndarray:
+    """The accumulator over (s, θ, y, x) for ``sides``, its votes shared with the
+    neighbouring θ and centre bins: edge point (u, v) with outward normal n votes,
+    for each side s, for the centres s/2 inside it along −n and ``steps`` along
+    the edge, weighted by its gradient ``g``."""
+    u, v, nu, nv, g = edges
+    n_theta, n_y, n_x = shape
+    # (edge, (side, step)) pairs; in bins (halving is exact: these are the
+    # centres' coordinates / XY_BIN to the last bit)
+    side_of = np.repeat(np.arange(sides.size), [len(s) for s in steps])
+    along = np.concatenate(steps) / XY_BIN
+    half = sides / 2
+    cx = ((u[:, None] - half[None, :] * nu[:, None]) / XY_BIN)[:, side_of]
+    cx -= along[None, :] * nv[:, None]
+    cy = ((v[:, None] - half[None, :] * nv[:, None]) / XY_BIN)[:, side_of]
+    cy += along[None, :] * nu[:, None]
+    inside = (cx >= 0) & (cx < n_x) & (cy >= 0) & (cy < n_y)
+    # bins (s, θ, y, x) with a θ bin before and after (wrapped copies) and an empty
+    # row after each θ slice, so that two 2-D filters do the sharing below
+    slice_of = side_of[None, :] * (n_theta + 2) + theta_bin[:, None] + 1
+    index = slice_of[inside] * (n_y + 1)
+    index += cy[inside].astype(np.intp)
+    index *= n_x
+    index += cx[inside].astype(np.intp)
+    weight = np.broadcast_to(g[:, None], inside.shape)[inside]
+    cells = sides.size * (n_theta + 2) * (n_y + 1) * n_x
+    total = np.bincount(index, weights=weight, minlength=cells)
+    accumulator = total.reshape(sides.size, n_theta + 2, n_y + 1, n_x)
+    # neighbouring θ bins share an edge's votes when θ falls near a bin border (θ wraps)
+    accumulator[:, 0] = accumulator[:, n_theta]
+    accumulator[:, n_theta + 1] = accumulator[:, 1]
+    share = np.array([0.5, 1.0, 0.5])
+    by_theta = accumulator.reshape(sides.size * (n_theta + 2), (n_y + 1) * n_x)
+    border = cv2.BORDER_CONSTANT
+    by_theta = np.asarray(cv2.sepFilter2D(by_theta, cv2.CV_64F, _ONE, share, borderType=border))
+    # and so do neighbouring centre bins: a centre on a bin border (a square whose
+    # edges lie on pixel borders, as a render of a block at round coordinates has
+    # them) splits its votes over four bins, and a square with only two of its
+    # sides in the crop, sitting in one bin, would outvote it (the empty rows keep
+    # the θ slices apart)
+    rows = cv2.sepFilter2D(by_theta.reshape(-1, n_x), cv2.CV_64F, share, share, borderType=border)
+    shared: np.ndarray = np.asarray(rows).reshape(accumulator.shape)[:, 1 : n_theta + 1, :n_y]
+    return shared
+
+
+def _side_maxima(accumulator: np.ndarray, best: int) -> tuple[np.ndarray, ...]:
+    """Per side, the ``best`` strongest centres: their votes, rows and columns (bins,
+    from the bottom) and their best θ bin."""
+    n_sides, _, n_y, n_x = accumulator.shape
+    strongest = accumulator.max(axis=1).reshape(n_sides, -1)
+    best = min(best, n_y * n_x)
+    top = np.argpartition(strongest, n_y * n_x - best, axis=1)[:, n_y * n_x - best :]
+    rows, cols = np.divmod(top, n_x)
+    side = np.arange(n_sides)[:, None]
+    thetas = accumulator[side, :, rows, cols].argmax(axis=2)  # the best θ at each
+    return np.take_along_axis(strongest, top, axis=1), rows, cols, thetas
