@@ -158,7 +158,7 @@ def test_the_cli_says_what_was_rejected_in_one_line(tmp_path: Path) -> None:
         "--side", "0.04", "--plot", tmp_path / "overlay.png",
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
-    assert "2 regions rejected: 1 too small, 1 not square (drawn in overlay.png)" in result.stdout
+    assert "2 regions rejected: 1 not square, 1 too small (drawn in overlay.png)" in result.stdout
     assert (tmp_path / "overlay.png").is_file()
 
 

@@ -401,11 +401,12 @@ NOUNS = {"side face": "side faces", "side face or shadow": "side faces or shadow
 
 
 def _rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
-    """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``."""
+    """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``: most
+    first, ties in the order of the alphabet (the same line on every run)."""
     counts = Counter(r.reason for r in rejected)
     reasons = ", ".join(
         plural(n, why, NOUNS[why]) if why in NOUNS else f"{n} {why}"
-        for why, n in counts.most_common()
+        for why, n in sorted(counts.items(), key=lambda item: (-item[1], item[0]))
     )
     return (
         f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
