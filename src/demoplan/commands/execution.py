@@ -277,20 +277,13 @@ def _frame_detector(
     first: Path,
 ) -> Callable[[Any], list[Any]]:
     """The blocks in one frame (an RGB array), on the table's coordinates."""
-    import math
-
-    from demoplan.documents.poses import MAX_SIZE_M
     from demoplan.perception.camera import Camera
+    from demoplan.perception.images import check_side, check_top_view
     from demoplan.perception.sequence import top_view_detector
 
-    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
-        raise UsageError(
-            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
-            "(an object's largest extent, docs/limits.md)"
-        )
+    check_side(side)
     if px_per_m is not None and origin is not None:
-        if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
-            raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+        check_top_view(px_per_m, origin)
         return top_view_detector(Camera(px_per_m, origin), side)
     from demoplan.perception.calibrated import detect_in_photograph
     from demoplan.perception.calibration import (

@@ -8,7 +8,6 @@ block's top face is moved down to the table (the height correction of
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -16,8 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
-from demoplan.documents.poses import MAX_SIZE_M
-from demoplan.errors import InputError, UsageError
+from demoplan.errors import InputError
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.calibration import (
     MarkerLayout,
@@ -31,7 +29,7 @@ from demoplan.perception.calibration import (
 )
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
-from demoplan.perception.images import SIDE_TOLERANCE, Perception, seen_now
+from demoplan.perception.images import SIDE_TOLERANCE, Perception, check_side, seen_now
 from demoplan.perception.overlay import Drawn, draw_overlay
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
@@ -172,11 +170,7 @@ def perceive_photograph(
     regions rejected; with ``overlay``, both drawn on the photograph, mapped
     back from the rectified view through the calibration. An input error when
     there is no block."""
-    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
-        raise UsageError(
-            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
-            "(an object's largest extent, docs/limits.md)"
-        )
+    check_side(side)
     palette = load_palette(colours) if colours is not None else {}
     tracker = BlockTracker()
     with time_budget(

@@ -61,6 +61,21 @@ SIDE_TOLERANCE = 0.15
 """With the blocks' side known, sizes this far off it (relative) are not blocks."""
 
 
+def check_side(side: float | None) -> None:
+    """``--side``, when given: a block's side in metres, within the size limit."""
+    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
+        raise UsageError(
+            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+            "(an object's largest extent, docs/limits.md)"
+        )
+
+
+def check_top_view(px_per_m: float, origin: tuple[float, float]) -> None:
+    """``--px-per-m`` and ``--origin``: finite, the origin within ±10 km."""
+    if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
+        raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+
+
 def perceive_files(
     image: Path,
     px_per_m: float,
@@ -95,13 +110,8 @@ def perceive_top_view(
     (:func:`~demoplan.perception.colours.load_palette`); the regions rejected;
     with ``overlay``, both drawn on the picture. An input error when there is no
     block: a scene needs one."""
-    if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
-        raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
-    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
-        raise UsageError(
-            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
-            "(an object's largest extent, docs/limits.md)"
-        )
+    check_top_view(px_per_m, origin)
+    check_side(side)
     camera = Camera(px_per_m, origin)
     settings = PerceptionSettings(colours=load_palette(colours) if colours is not None else {})
     if side is not None:
