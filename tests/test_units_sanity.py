@@ -224,11 +224,14 @@ def test_the_user_report_millimetres_without_units(tmp_path: Path) -> None:
 
 def _real_documents() -> list[Path]:
     """The examples' demonstrations and scenes (a markers file of the
-    calibration has no positions of objects to weigh)."""
+    calibration and a palette file have no positions of objects to weigh)."""
     return sorted(
         p
         for p in EXAMPLES.rglob("*.json")
-        if "markers" not in json.loads(p.read_text()).get("format", "")
+        if any(
+            kind in json.loads(p.read_text()).get("format", "")
+            for kind in ("demoplan/demonstration", "demoplan/scene")
+        )
     )
 
 
