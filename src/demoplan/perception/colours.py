@@ -345,14 +345,7 @@ def colour_regions(
         if coloured_image:
             record.shade(classes, core, lightness[rows, cols], rows, cols)
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
-        present = []
-        for label in np.unique(classes):
-            if label in (-2, -3) and coloured_image:
-                continue  # dark or grey pixels of a coloured region: its side faces, shadow
-            chosen = classes == label
-            if chosen.sum() >= min_area:
-                colour = names[label] if label >= 0 else _SPECIAL[int(label)]
-                present.append((colour, chosen))
+        present = _present_classes(classes, names, min_area, coloured_image)
         if not present:
             record(member, rows, cols, "no block colour", "dark, grey or mixed colours")
             continue
@@ -402,6 +395,23 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _present_classes(
+    classes: np.ndarray, names: list[str], min_area: float, coloured_image: bool
+) -> list[tuple[str, np.ndarray]]:
+    """The colours of a region's core pixels (``classes``, per pixel) that cover
+    at least ``min_area``, each with its pixels; in a coloured image not the
+    dark or grey ones (a coloured region's side faces, its shadow)."""
+    present = []
+    for label in np.unique(classes):
+        if label in (-2, -3) and coloured_image:
+            continue
+        chosen = classes == label
+        if chosen.sum() >= min_area:
+            colour = names[label] if label >= 0 else _SPECIAL[int(label)]
+            present.append((colour, chosen))
+    return present
 
 
 def _nearest_class(offsets: np.ndarray, changes: list[np.ndarray]) -> np.ndarray:
