@@ -40,7 +40,9 @@ def test_the_vote_is_the_same_one_side_at_a_time(
     square: tuple[float, float, float, float],
 ) -> None:
     """Sides voted for in one block of bins or one at a time (a tiny MAX_CELLS):
-    the same hypotheses; the strongest is the square, to a bin."""
+    the same hypotheses; the strongest is the square to two bins in each of
+    (x, y, θ, s): votes shared with the neighbouring bins may move the peak by
+    one (a 22 px square at 68.5° peaked 3.5° off, with θ bins of 3°)."""
     mask = square_mask(*square, shape=(90, 110))
     together = hough_squares(mask, (20.0, 40.0))
     with pytest.MonkeyPatch.context() as patch:
@@ -51,7 +53,7 @@ def test_the_vote_is_the_same_one_side_at_a_time(
     u, v, theta, side = square
     assert abs(best.u - u) <= 2 * hough.XY_BIN and abs(best.v - v) <= 2 * hough.XY_BIN
     turn = abs(((best.theta - theta + 45.0) % 90.0) - 45.0)
-    assert turn <= hough.THETA_BIN
+    assert turn <= 2 * hough.THETA_BIN
     assert abs(best.side - side) <= 2 * hough.S_BIN
 
 
