@@ -1,0 +1,98 @@
+"""What an evaluation runs: its settings (``evaluation.json`` in its folder,
+so that ``--resume`` needs nothing else), its scenes (``scenes/NAME.json``,
+each a file ``demoplan run`` reads) and its runs, every scene × every seed."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from demoplan.errors import InputError
+from demoplan.evaluation.runs import RunSpec
+from demoplan.evaluation.scenes import LayoutSettings, random_scene_document
+from demoplan.fileio import display_path, dump_json, read_document, write_atomic
+from demoplan.model import TaskModel
+
+__all__ = ["SETTINGS", "EvaluationSettings", "plan_runs", "read_settings", "write_plan"]
+
+SETTINGS = "evaluation.json"
+FORMAT = "demoplan/evaluation-1"
+
+
+@dataclass(frozen=True, slots=True)
+class EvaluationSettings:
+    """An evaluation: the model file, the scene files given, ``random_scenes``
+    layouts drawn (seeds 0 … N-1), ``seeds`` runs of each scene (seeds 0 … K-1)
+    in ``sim`` with ``faults`` (``--faults`` text); ``clutter`` clutter objects
+    in each random layout (runs allow unknown objects where any scene has them)."""
+
+    model: str
+    scenes: tuple[str, ...] = ()
+    random_scenes: int = 0
+    seeds: int = 1
+    faults: str = ""
+    sim: str = "kinematic"
+    clutter: int = 0
+    layout: LayoutSettings = field(default_factory=LayoutSettings)
+
+    def to_json(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["scenes"] = list(self.scenes)
+        return {"format": FORMAT, **data}
+
+
+def read_settings(folder: Path) -> EvaluationSettings:
+    """The settings an evaluation in ``folder`` was started with."""
+    path = folder / SETTINGS
+    if not path.is_file():
+        raise InputError(
+            f"has no {SETTINGS}; a folder an evaluation wrote (--out) expected",
+            source=display_path(folder),
+        )
+    data = json.loads(path.read_text(encoding="utf-8"))
+    if data.get("format") != FORMAT:
+        raise InputError(f"format: {FORMAT!r} expected", source=display_path(path))
+    data.pop("format")
+    data["scenes"] = tuple(data["scenes"])
+    data["layout"] = LayoutSettings(**data["layout"])
+    return EvaluationSettings(**data)
+
+
+def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
+    documents: dict[str, dict[str, Any]] = {}
+    for given in settings.scenes:
+        name = Path(given).stem
+        if name in documents or name.startswith("random-"):
+            raise InputError(
+                "two scenes of one name, or a name random layouts take; "
+                "scene files of distinct stems expected",
+                source=given,
+            )
+        documents[name] = read_document(Path(given))
+    layout = LayoutSettings(**{**asdict(settings.layout), "clutter": settings.clutter})
+    for seed in range(settings.random_scenes):
+        documents[f"random-{seed}"] = random_scene_document(model, seed, layout)
+    return documents
+
+
+def write_plan(folder: Path, model: TaskModel, settings: EvaluationSettings) -> None:
+    """The settings and every scene's file, in ``folder``."""
+    documents = _scene_documents(model, settings)
+    for name, document in documents.items():
+        write_atomic(folder / "scenes" / f"{name}.json", dump_json(document))
+    write_atomic(folder / SETTINGS, dump_json(settings.to_json()))
+
+
+def plan_runs(folder: Path, settings: EvaluationSettings) -> list[RunSpec]:
+    """Every run, scene by scene (in the order given, then the random ones), seed by seed."""
+    names = [Path(s).stem for s in settings.scenes]
+    names += [f"random-{seed}" for seed in range(settings.random_scenes)]
+    clutter = settings.clutter > 0
+    specs: list[RunSpec] = []
+    for name in names:
+        document = read_document(folder / "scenes" / f"{name}.json")
+        for seed in range(settings.seeds):
+            specs.append(RunSpec(name, document, seed, settings.faults, settings.sim, clutter))
+    return specs
