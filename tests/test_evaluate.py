@@ -8,8 +8,12 @@ in the kinematic world. One Ray session with 2 CPUs serves the whole module
 
 from __future__ import annotations
 
+import json
 import os
+import signal
+import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
@@ -30,6 +34,7 @@ from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
+from tests.helpers import wait_for_signal_handlers
 
 ROOT = Path(__file__).resolve().parent.parent
 EXPERIMENTS = {
@@ -61,8 +66,6 @@ def ray_session() -> Iterator[Any]:
 
 
 def _rows_file(folder: Path) -> list[dict[str, Any]]:
-    import json
-
     return [json.loads(line) for line in (folder / ROWS).read_text().splitlines()]
 
 
@@ -196,3 +199,80 @@ def test_the_wilson_interval_holds_the_rate(n: int, data: st.DataObject) -> None
     assert 0.0 <= low <= high <= 1.0
     if n:
         assert low - 1e-12 <= k / n <= high + 1e-12
+
+
+def _demoplan(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "demoplan", *args],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **(env or {})},
+        timeout=300,
+    )
+
+
+def test_ctrl_c_keeps_the_finished_rows_and_resume_makes_the_others(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    out = tmp_path / "eval"
+    args = ["--random-scenes", "60", "--seeds", "2", "--faults", FAULTS, "--workers", "0"]
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "demoplan",
+            "evaluate",
+            str(model_files["exp2"]),
+            *args,
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    wait_for_signal_handlers(process)
+    journal = out / JOURNAL
+    while process.poll() is None and (not journal.exists() or journal.read_text().count("\n") < 3):
+        time.sleep(0.05)
+    assert process.poll() is None, "the evaluation ended before Ctrl-C"
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 130
+    assert f"--resume {out}" in err
+    kept = (out / ROWS).read_text().splitlines()
+    assert 3 <= len(kept) < 120
+    assert not journal.exists()
+    done = _demoplan("evaluate", "--resume", str(out), "--workers", "0", "--json")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["runs"] == 120
+    rows = (out / ROWS).read_text().splitlines()
+    ids = [json.loads(line)["run_id"] for line in rows]
+    assert len(ids) == len(set(ids)) == 120
+    assert set(kept) <= set(rows)  # the finished rows kept as they were
+
+
+def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_path: Path) -> None:
+    blocker = tmp_path / "no-ray" / "ray"
+    blocker.mkdir(parents=True)
+    (blocker / "__init__.py").write_text("raise ImportError('ray is not installed')\n")
+    path = f"{blocker.parent}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"
+    model = str(model_files["exp2"])
+    no_ray = _demoplan(
+        "evaluate",
+        model,
+        "--random-scenes",
+        "1",
+        "--out",
+        str(tmp_path / "a"),
+        env={"PYTHONPATH": path},
+    )
+    assert no_ray.returncode == 2
+    assert no_ray.stderr.count("\n") == 1
+    assert "pip install 'demoplan[scale]'" in no_ray.stderr
+    both = _demoplan("evaluate", model, "--resume", str(tmp_path / "a"))
+    assert (both.returncode, both.stderr.count("\n")) == (2, 1)
+    nothing = _demoplan("evaluate", model, "--out", str(tmp_path / "b"), "--workers", "0")
+    assert (nothing.returncode, nothing.stderr.count("\n")) == (2, 1)
+    assert "no scenes" in nothing.stderr
