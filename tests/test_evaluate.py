@@ -13,6 +13,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from functools import partial
@@ -96,6 +97,41 @@ def _crash_once(marker: Path, victim: str, model: TaskModel, spec: RunSpec) -> R
         marker.touch()
         os._exit(9)
     return execute_run(model, spec)
+
+
+def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
+    """The victim's first attempt says its worker's process id and waits to be killed."""
+    marker = folder / "pid"
+    if spec.run_id == victim and not marker.exists():
+        (folder / "pid.partial").write_text(str(os.getpid()))
+        (folder / "pid.partial").rename(marker)
+        time.sleep(120)
+    return execute_run(model, spec)
+
+
+def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
+    model_files: dict[str, Path], ray_session: Any, tmp_path: Path
+) -> None:
+    model = load_model(model_files["exp2"])
+    chosen = settings_from_options(
+        model_files["exp2"], [], random_scenes=4, seeds=2, faults=FAULTS, sim="kinematic", clutter=0
+    )
+
+    def kill_the_worker() -> None:
+        while not (tmp_path / "pid").exists():
+            time.sleep(0.02)
+        os.kill(int((tmp_path / "pid").read_text()), signal.SIGKILL)
+
+    killer = threading.Thread(target=kill_the_worker, daemon=True)
+    killer.start()
+    runner = partial(_hang_once, tmp_path, "random-2/seed-1", model)
+    done = evaluate(chosen, tmp_path / "eval", engine=RayEngine(max_retries=2), runner=runner)
+    killer.join(timeout=1)
+    assert len(done.rows) == len({r.run_id for r in done.rows}) == done.planned == 8
+    killed = {r.run_id: r for r in done.rows}["random-2/seed-1"]
+    assert (killed.status, killed.attempts) == ("success", 2)
+    serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
+    assert [r.outcome() for r in done.rows] == [r.outcome() for r in serial.rows]
 
 
 def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
