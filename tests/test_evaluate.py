@@ -312,3 +312,39 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     nothing = _demoplan("evaluate", model, "--out", str(tmp_path / "b"), "--workers", "0")
     assert (nothing.returncode, nothing.stderr.count("\n")) == (2, 1)
     assert "no scenes" in nothing.stderr
+
+
+def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    from demoplan.commands.execution import run
+    from demoplan.evaluation.report import repeat_command
+    from demoplan.execution.faults import parse_faults
+
+    chosen = settings_from_options(
+        model_files["exp1"], [], random_scenes=3, seeds=2, faults=FAULTS, sim="kinematic", clutter=1
+    )
+    done = evaluate(chosen, tmp_path / "eval")
+    for row in done.rows:
+        report = run(
+            model_files["exp1"],
+            done.folder / "scenes" / f"{row.scene}.json",
+            faults=parse_faults(row.faults),
+            seed=row.seed,
+            clutter=True,
+        )
+        assert (report.success, report.replans, len(report.actions)) == (
+            row.success,
+            row.replans,
+            row.actions,
+        )
+        command = repeat_command(chosen, row)
+        assert f"scenes/{row.scene}.json --sim kinematic --seed {row.seed}" in command
+        assert command.endswith("--clutter")
+    page = done.report.read_text()
+    low, high = done.summary.interval
+    assert f"{low:.1%} – {high:.1%}" in page
+    assert "Injected → detected" in page and "<td>drop</td>" in page
+    assert page.count("demoplan run ") == len(done.rows)  # 6 runs: every one among the worst
+    scene = json.loads((done.folder / "scenes" / "random-0.json").read_text())
+    assert "clutter-1" in scene["objects"]

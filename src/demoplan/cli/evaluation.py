@@ -86,7 +86,9 @@ def _print_summary(done: Evaluation) -> None:
     failed = [row for row in summary.worst if not row.success]
     for row in failed:
         stdout.print(f"{row.status}: {row.run_id}: {row.reason}", markup=False, highlight=False)
-    stdout.print(f"wrote {done.folder / 'runs.jsonl'}", markup=False, highlight=False)
+    stdout.print(
+        f"wrote {done.folder / 'runs.jsonl'} and {done.report}", markup=False, highlight=False
+    )
 
 
 @app.command()

@@ -17,6 +17,7 @@ from demoplan.evaluation.plan import (
     read_settings,
     write_plan,
 )
+from demoplan.evaluation.report import write_report
 from demoplan.evaluation.results import (
     Journal,
     Summary,
@@ -37,13 +38,15 @@ SIMS = ("kinematic", "mujoco", "arm")
 @dataclass(frozen=True, slots=True)
 class Evaluation:
     """An evaluation's outcome: its folder, every row (in the runs' order),
-    what they sum up to, and the runs this call made (the others were done)."""
+    what they sum up to, the runs this call made (the others were done) of
+    those planned, and its page (``report.html``)."""
 
     folder: Path
     rows: tuple[RunRow, ...]
     summary: Summary
     made: int
     planned: int
+    report: Path
 
 
 def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -> Engine:
@@ -75,7 +78,7 @@ def evaluate(
     runner: Callable[[RunSpec], RunRow] | None = None,
 ) -> Evaluation:
     """Carry out ``settings``' runs and write their rows in ``out`` (``runs.jsonl``,
-    ``summary.json``, the scenes, the settings). ``resume``: ``out`` holds an
+    ``summary.json``, ``report.html``, the scenes, the settings). ``resume``: ``out`` holds an
     evaluation (its settings; ``settings`` is then None): make only the runs
     with no row. ``on_start(done, planned)`` hears the counts before the first
     run, ``on_row(row, done, planned)`` each row as it comes. A Ctrl-C
@@ -117,7 +120,8 @@ def evaluate(
     ordered = tuple(rows[i] for i in order if i in rows)
     summary = summarise(ordered)
     write_atomic(out / "summary.json", dump_json(summary.to_json()))
-    return Evaluation(out, ordered, summary, len(todo), len(specs))
+    page = write_report(out, settings, list(ordered), summary, len(specs))
+    return Evaluation(out, ordered, summary, len(todo), len(specs), page)
 
 
 def settings_from_options(
