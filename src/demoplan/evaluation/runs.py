@@ -68,6 +68,19 @@ class RunRow:
     execution_s: float = 0.0
     """The run's other seconds: acting, observing, comparing."""
     attempts: int = 1
+    first_plan_length: int = 0
+    gave_up: bool = False
+    """A limit (replans, actions) stopped the run, not a missing plan."""
+    first_failure: str = ""
+    """The first failure the executor detected: ``kind: detail``."""
+    pose_errors_mm: dict[str, float] = field(default_factory=dict)
+    """Each goal object's final position error (mm)."""
+    collisions: int = 0
+    """The robot's contacts with anything but its load (``--sim arm``)."""
+    refused_motions: int = 0
+    """Motions a check found impossible (``--sim arm``)."""
+    simulated_s: float | None = None
+    """Seconds the physics simulated (``mujoco``, ``arm``)."""
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -152,4 +165,13 @@ def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
         reason=report.reason if not report.success else "",
         planning_s=round(clock.planning, 6),
         execution_s=round(max(0.0, total - clock.planning), 6),
+        first_plan_length=report.first_plan_length,
+        gave_up=report.gave_up,
+        first_failure=(
+            f"{report.failures[0].kind}: {report.failures[0].detail}" if report.failures else ""
+        ),
+        pose_errors_mm={k: round(e, 6) for k, e in zip(report.pose_errors, errors, strict=True)},
+        collisions=len(report.collisions),
+        refused_motions=len(report.motions_refused),
+        simulated_s=report.simulated_seconds,
     )
