@@ -16,6 +16,7 @@ from demoplan.evaluation.results import Summary
 from demoplan.evaluation.runs import RunRow
 from demoplan.experiments.report_html import markdown_to_html
 from demoplan.fileio import write_atomic
+from demoplan.wording import plural
 
 __all__ = ["evaluation_markdown", "repeat_command", "write_report"]
 
@@ -81,8 +82,9 @@ def evaluation_markdown(
     lines = [
         f"# Evaluation of {_cell(Path(settings.model).name)}",
         "",
-        f"{len(rows)} of {planned} runs made: {len(settings.scenes)} scene files and "
-        f"{settings.random_scenes} random layouts × {settings.seeds} seeds, "
+        f"{len(rows)} of {planned} runs made: {plural(len(settings.scenes), 'scene file')} "
+        f"and {plural(settings.random_scenes, 'random layout')} × "
+        f"{plural(settings.seeds, 'seed')}, "
         f"`--sim {settings.sim}`, faults `{settings.faults or 'none'}`"
         + (f", {settings.clutter} clutter objects per layout." if settings.clutter else "."),
         "",
