@@ -348,3 +348,30 @@ def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
     assert page.count("demoplan run ") == len(done.rows)  # 6 runs: every one among the worst
     scene = json.loads((done.folder / "scenes" / "random-0.json").read_text())
     assert "clutter-1" in scene["objects"]
+
+
+def test_bad_input_is_one_line_naming_the_file_and_writes_nothing(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    lacking = tmp_path / "lacking.json"
+    lacking.write_text(
+        json.dumps(
+            {
+                "format": "demoplan/scene-1",
+                "objects": {"wood": {"position": [0.3, 0.04, 0.0]}},
+            }
+        )
+    )
+    out = tmp_path / "out"
+    done = _demoplan(
+        "evaluate", str(model_files["exp2"]), str(lacking), "--workers", "0", "--out", str(out)
+    )
+    assert (done.returncode, done.stderr.count("\n")) == (1, 1)
+    assert str(lacking) in done.stderr and "green" in done.stderr
+    assert not out.exists()
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "evaluation.json").write_text("{oops")
+    done = _demoplan("evaluate", "--resume", str(broken), "--workers", "0")
+    assert (done.returncode, done.stderr.count("\n")) == (1, 1)
+    assert "evaluation.json" in done.stderr

@@ -4,7 +4,6 @@ each a file ``demoplan run`` reads) and its runs, every scene × every seed."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -14,6 +13,8 @@ from demoplan.evaluation.runs import RunSpec
 from demoplan.evaluation.scenes import LayoutSettings, random_scene_document
 from demoplan.fileio import display_path, dump_json, read_document, write_atomic
 from demoplan.model import TaskModel
+from demoplan.scenes.scene import complete_geometry, scene_from_document
+from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["SETTINGS", "EvaluationSettings", "plan_runs", "read_settings", "write_plan"]
 
@@ -51,13 +52,19 @@ def read_settings(folder: Path) -> EvaluationSettings:
             f"has no {SETTINGS}; a folder an evaluation wrote (--out) expected",
             source=display_path(folder),
         )
-    data = json.loads(path.read_text(encoding="utf-8"))
+    data = read_document(path)
     if data.get("format") != FORMAT:
-        raise InputError(f"format: {FORMAT!r} expected", source=display_path(path))
-    data.pop("format")
-    data["scenes"] = tuple(data["scenes"])
-    data["layout"] = LayoutSettings(**data["layout"])
-    return EvaluationSettings(**data)
+        raise InputError(f"{FORMAT!r} expected", source=display_path(path), field="format")
+    try:
+        data.pop("format")
+        data["scenes"] = tuple(data["scenes"])
+        data["layout"] = LayoutSettings(**data["layout"])
+        return EvaluationSettings(**data)
+    except (KeyError, TypeError) as exc:
+        raise InputError(
+            f"not the settings an evaluation writes ({exc}); the folder of one expected",
+            source=display_path(path),
+        ) from None
 
 
 def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
@@ -71,6 +78,8 @@ def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str
                 source=given,
             )
         documents[name] = read_document(Path(given))
+        scene = complete_geometry(scene_from_document(documents[name], given), model)
+        check_scene_objects(model, scene, clutter=settings.clutter > 0)  # here, not in each run
     layout = LayoutSettings(**{**asdict(settings.layout), "clutter": settings.clutter})
     for seed in range(settings.random_scenes):
         documents[f"random-{seed}"] = random_scene_document(model, seed, layout)
