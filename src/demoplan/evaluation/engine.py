@@ -9,6 +9,7 @@ makes its run start again, up to ``max_retries`` times; then the run is an
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
@@ -79,10 +80,16 @@ class RayEngine:
             "log_to_driver": False,
             "configure_logging": False,
         }
-        if self.address is not None:
-            ray.init(address=self.address, **options)
-        else:
-            ray.init(num_cpus=self.workers or os.cpu_count() or 1, **options)
+        quiet = logging.getLogger("ray")  # its start-up notes are no demoplan output
+        level = quiet.level
+        quiet.setLevel(logging.ERROR)
+        try:
+            if self.address is not None:
+                ray.init(address=self.address, **options)
+            else:
+                ray.init(num_cpus=self.workers or os.cpu_count() or 1, **options)
+        finally:
+            quiet.setLevel(level)
         return True
 
     def rows(self, specs: Sequence[RunSpec], runner: Runner) -> Iterator[RunRow]:
