@@ -29,7 +29,12 @@ from demoplan.errors import UsageError
 from demoplan.evaluation.engine import RayEngine, SerialEngine
 from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, wilson_interval
 from demoplan.evaluation.runs import RunRow, RunSpec, execute_run
-from demoplan.evaluation.scenes import LayoutSettings, random_scene, random_scene_document
+from demoplan.evaluation.scenes import (
+    LayoutSettings,
+    random_scene,
+    random_scene_document,
+    workspace_box,
+)
 from demoplan.fileio import dump_json
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
@@ -203,28 +208,57 @@ def test_without_ray_evaluate_says_what_to_install(monkeypatch: pytest.MonkeyPat
     assert isinstance(engine_for(0, None), SerialEngine)
 
 
-@settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2**31), clutter=st.integers(0, 2))
-def test_a_random_layout_is_a_function_of_its_seed(seed: int, clutter: int) -> None:
-    model = _blocks()
+@settings(max_examples=40, deadline=None)
+@given(
+    experiment=st.sampled_from(sorted(EXPERIMENTS)),
+    seed=st.integers(0, 2**31),
+    clutter=st.integers(0, 2),
+)
+def test_a_random_layout_is_a_function_of_its_seed_and_can_be_grasped(
+    experiment: str, seed: int, clutter: int
+) -> None:
+    from demoplan.model import footprint
+    from demoplan.scenes.scene import yaw_of
+
+    model = _model(experiment)
     layout = LayoutSettings(clutter=clutter)
     document = random_scene_document(model, seed, layout)
     assert document == random_scene_document(model, seed, layout)
     scene = random_scene(model, seed, layout)
-    names = set(scene.names)
-    assert names >= set(model.object_types())
-    assert len(names) == len(model.object_types()) + clutter
-    on_table = [o for o in scene.objects if o.pose.position[2] < 1e-9]
-    assert on_table  # something stands on the table
+    assert set(scene.names) >= set(model.object_types())
+    assert len(scene.names) == len(model.object_types()) + clutter
+    (x0, y0), (x1, y1) = workspace_box(model, layout.margin)
+    outlines = {}
+    for obj in scene.objects:
+        assert obj.geometry is not None
+        x, y, z = obj.pose.position
+        assert x0 <= x <= x1 and y0 <= y <= y1
+        outlines[obj.name] = (z, footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose)))
+    on_table = [(n, o) for n, (z, o) in outlines.items() if z < 1e-9]
+    reach = 2 * layout.finger_radius + 0.01 - 1e-6  # a gripper's reach apart
+    for i, (a, first) in enumerate(on_table):
+        for b, second in on_table[i + 1 :]:
+            assert first.distance(second) >= reach, (a, b)
+    for obj in scene.objects:  # a stacked object stands on a top of exactly its height
+        z = obj.pose.position[2]
+        if z > 1e-9:
+            below = [
+                o
+                for o in scene.objects
+                if o.geometry is not None
+                and abs(o.pose.position[2] + o.geometry.size[2] - z) < 1e-6
+                and outlines[o.name][1].intersects(outlines[obj.name][1])
+            ]
+            assert below, obj.name
 
 
-_MODEL: list[TaskModel] = []
+_MODELS: dict[str, TaskModel] = {}
 
 
-def _blocks() -> TaskModel:
-    if not _MODEL:
-        _MODEL.append(learn(load_demonstrations([EXPERIMENTS["exp2"]])))
-    return _MODEL[0]
+def _model(experiment: str) -> TaskModel:
+    if experiment not in _MODELS:
+        _MODELS[experiment] = learn(load_demonstrations([EXPERIMENTS[experiment]]))
+    return _MODELS[experiment]
 
 
 @settings(max_examples=200, deadline=None)
@@ -375,3 +409,16 @@ def test_bad_input_is_one_line_naming_the_file_and_writes_nothing(
     done = _demoplan("evaluate", "--resume", str(broken), "--workers", "0")
     assert (done.returncode, done.stderr.count("\n")) == (1, 1)
     assert "evaluation.json" in done.stderr
+
+
+@pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))
+def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
+    model = _model(experiment)
+    stacked = [
+        any(o.pose.position[2] > 0 for o in random_scene(model, seed).objects) for seed in range(20)
+    ]
+    assert any(stacked) and not all(stacked)
+    never = LayoutSettings(stack_probability=0.0)
+    assert not any(
+        o.pose.position[2] > 0 for s in range(5) for o in random_scene(model, s, never).objects
+    )
