@@ -25,7 +25,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan.commands.evaluation import engine_for, evaluate, settings_from_options
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import RayEngine, SerialEngine
 from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, wilson_interval
 from demoplan.evaluation.runs import RunRow, RunSpec, execute_run
@@ -422,3 +422,20 @@ def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
     assert not any(
         o.pose.position[2] > 0 for s in range(5) for o in random_scene(model, s, never).objects
     )
+
+
+def test_out_is_a_new_or_empty_folder(model_files: dict[str, Path], tmp_path: Path) -> None:
+    chosen = settings_from_options(
+        model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
+    )
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "runs.jsonl").write_text("my own notes\n")
+    with pytest.raises(InputError, match="not empty"):
+        evaluate(chosen, mine)
+    assert (mine / "runs.jsonl").read_text() == "my own notes\n"
+    with pytest.raises(InputError, match="not a folder"):
+        evaluate(chosen, mine / "runs.jsonl")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert evaluate(chosen, empty).planned == 1

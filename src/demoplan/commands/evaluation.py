@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-from demoplan.errors import UsageError
+from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine, require_ray
 from demoplan.evaluation.plan import (
     SETTINGS,
@@ -67,6 +67,25 @@ def _check(settings: EvaluationSettings) -> None:
         raise UsageError("--seeds ≥ 1, --random-scenes ≥ 0 and --clutter ≥ 0 expected")
 
 
+def _check_new_folder(out: Path) -> None:
+    """``--out``: a new or empty folder (an evaluation's: ``--resume``); nothing of
+    anyone else's is overwritten."""
+    if (out / SETTINGS).exists():
+        raise UsageError(
+            f"{display_path(out)} holds an evaluation: --resume {display_path(out)} to "
+            "finish it, or another --out"
+        )
+    if out.exists() and not out.is_dir():
+        raise InputError(
+            "exists and is not a folder; a new or empty folder expected", source=display_path(out)
+        )
+    if out.is_dir() and any(out.iterdir()):
+        raise InputError(
+            "is not empty and holds no evaluation; a new or empty folder expected",
+            source=display_path(out),
+        )
+
+
 def evaluate(
     settings: EvaluationSettings | None,
     out: Path,
@@ -89,11 +108,8 @@ def evaluate(
         settings = read_settings(out)
     elif settings is None:
         raise UsageError("settings, or --resume with an evaluation's folder, expected")
-    elif (out / SETTINGS).exists():
-        raise UsageError(
-            f"{display_path(out)} holds an evaluation: --resume {display_path(out)} to "
-            "finish it, or another --out"
-        )
+    else:
+        _check_new_folder(out)
     assert settings is not None
     _check(settings)
     model = load_model(settings.model)
