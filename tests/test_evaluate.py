@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -439,3 +440,33 @@ def test_out_is_a_new_or_empty_folder(model_files: dict[str, Path], tmp_path: Pa
     empty = tmp_path / "empty"
     empty.mkdir()
     assert evaluate(chosen, empty).planned == 1
+
+
+def test_a_terminal_sees_runs_done_successes_and_the_time_left(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    import pty
+
+    master, terminal = pty.openpty()
+    args = ["--random-scenes", "5", "--seeds", "2", "--workers", "0", "--out", str(tmp_path / "o")]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "demoplan", "evaluate", str(model_files["exp2"]), *args],
+        stdout=subprocess.PIPE,
+        stderr=terminal,
+        env={**os.environ, "COLUMNS": "120", "TERM": "xterm"},
+    )
+    os.close(terminal)
+    seen = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the terminal closed
+            break
+        if not chunk:
+            break
+        seen += chunk
+    assert process.wait(timeout=120) == 0
+    text = seen.decode(errors="replace")
+    assert "evaluating" in text and "10/10" in text
+    assert "10/10 succeeded" in text
+    assert re.search(r"\d:\d\d:\d\d", text)  # the time left

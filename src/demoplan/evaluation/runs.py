@@ -173,5 +173,7 @@ def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
         pose_errors_mm={k: round(e, 6) for k, e in zip(report.pose_errors, errors, strict=True)},
         collisions=len(report.collisions),
         refused_motions=len(report.motions_refused),
-        simulated_s=report.simulated_seconds,
+        simulated_s=None
+        if report.simulated_seconds is None
+        else round(report.simulated_seconds, 6),
     )
