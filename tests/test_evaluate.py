@@ -192,7 +192,10 @@ def test_resume_after_ctrl_c_makes_only_the_missing_runs(
     with pytest.raises(UsageError, match="--resume"):
         evaluate(chosen, out, runner=runner)
     made.clear()
+    drawn = (out / "scenes" / "random-2.json").read_text()
+    (out / "scenes" / "random-2.json").unlink()  # as a stop while the scenes were written
     done = evaluate(None, out, resume=True, runner=runner)
+    assert (out / "scenes" / "random-2.json").read_text() == drawn
     assert made == [f"random-{s}/seed-{k}" for s in (1, 2) for k in (0, 1)]
     assert (done.made, done.planned) == (4, 6)
     assert [r["run_id"] for r in _rows_file(out)] == [

@@ -113,8 +113,7 @@ def evaluate(
     assert settings is not None
     _check(settings)
     model = load_model(settings.model)
-    if not resume:
-        write_plan(out, model, settings)
+    write_plan(out, model, settings)  # on resume: the scenes a stop left unwritten
     specs = plan_runs(out, settings)
     rows = read_rows(out)
     order = [spec.run_id for spec in specs]

@@ -87,11 +87,17 @@ def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str
 
 
 def write_plan(folder: Path, model: TaskModel, settings: EvaluationSettings) -> None:
-    """The settings and every scene's file, in ``folder``."""
+    """The settings (first: a folder with them is an evaluation's, to resume) and
+    every scene's file not there yet, in ``folder`` — a layout is a function of
+    its seed, so an evaluation stopped while writing them writes the same ones
+    when resumed. Every scene is checked before anything is written."""
     documents = _scene_documents(model, settings)
+    if not (folder / SETTINGS).exists():
+        write_atomic(folder / SETTINGS, dump_json(settings.to_json()))
     for name, document in documents.items():
-        write_atomic(folder / "scenes" / f"{name}.json", dump_json(document))
-    write_atomic(folder / SETTINGS, dump_json(settings.to_json()))
+        path = folder / "scenes" / f"{name}.json"
+        if not path.exists():
+            write_atomic(path, dump_json(document))
 
 
 def plan_runs(folder: Path, settings: EvaluationSettings) -> list[RunSpec]:
