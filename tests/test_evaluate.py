@@ -210,6 +210,8 @@ def test_without_ray_evaluate_says_what_to_install(monkeypatch: pytest.MonkeyPat
     with pytest.raises(UsageError, match=r"demoplan\[scale\]"):
         engine_for(2, None)
     assert isinstance(engine_for(0, None), SerialEngine)
+    with pytest.raises(UsageError, match="one of them"):
+        engine_for(2, "ray://head:10001")
 
 
 @settings(max_examples=40, deadline=None)

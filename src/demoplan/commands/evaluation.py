@@ -51,7 +51,9 @@ class Evaluation:
 
 def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -> Engine:
     """``--workers 0``: the runs here, one after the other; else Ray (local, or ``address``)."""
-    if workers == 0 and address is None:
+    if workers is not None and address is not None:
+        raise UsageError("--workers starts a local Ray, --address joins a cluster: one of them")
+    if workers == 0:
         return SerialEngine()
     require_ray()
     return RayEngine(workers=workers, address=address, max_retries=max_retries)
