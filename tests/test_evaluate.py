@@ -88,7 +88,7 @@ def test_ray_equals_a_serial_run(
     for done in (serial, parallel):
         ids = [row["run_id"] for row in _rows_file(done.folder)]
         assert sorted(ids) == sorted(
-            {f"random-{s}/seed-{k}" for s in range(SCENES) for k in (0, 1)}
+            {f"random-{s}/seed-{2 * s + k}" for s in range(SCENES) for k in (0, 1)}
         )
         assert not (done.folder / JOURNAL).exists()
     assert [r.outcome() for r in serial.rows] == [r.outcome() for r in parallel.rows]
@@ -130,11 +130,11 @@ def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
 
     killer = threading.Thread(target=kill_the_worker, daemon=True)
     killer.start()
-    runner = partial(_hang_once, tmp_path, "random-2/seed-1", model)
+    runner = partial(_hang_once, tmp_path, "random-2/seed-5", model)
     done = evaluate(chosen, tmp_path / "eval", engine=RayEngine(max_retries=2), runner=runner)
     killer.join(timeout=1)
     assert len(done.rows) == len({r.run_id for r in done.rows}) == done.planned == 8
-    killed = {r.run_id: r for r in done.rows}["random-2/seed-1"]
+    killed = {r.run_id: r for r in done.rows}["random-2/seed-5"]
     assert (killed.status, killed.attempts) == ("success", 2)
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
     assert [r.outcome() for r in done.rows] == [r.outcome() for r in serial.rows]
@@ -153,16 +153,16 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     chosen = settings_from_options(
         model_files["exp2"], [], random_scenes=3, seeds=2, faults=FAULTS, sim="kinematic", clutter=0
     )
-    once = partial(_crash_once, tmp_path / "killed", "random-1/seed-0", model)
+    once = partial(_crash_once, tmp_path / "killed", "random-1/seed-2", model)
     done = evaluate(chosen, tmp_path / "once", engine=RayEngine(max_retries=2), runner=once)
     assert (tmp_path / "killed").exists()
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
-    retried = {r.run_id: r for r in done.rows}["random-1/seed-0"]
+    retried = {r.run_id: r for r in done.rows}["random-1/seed-2"]
     assert (retried.status, retried.attempts) == ("success", 2)
-    always = partial(_crash_always, "random-2/seed-1", model)
+    always = partial(_crash_always, "random-2/seed-5", model)
     done = evaluate(chosen, tmp_path / "always", engine=RayEngine(max_retries=1), runner=always)
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
-    lost = {r.run_id: r for r in done.rows}["random-2/seed-1"]
+    lost = {r.run_id: r for r in done.rows}["random-2/seed-5"]
     assert (lost.status, lost.attempts) == ("error", 2)
     assert "worker died" in lost.reason
     assert sum(r.status == "success" for r in done.rows) == 5
@@ -196,10 +196,10 @@ def test_resume_after_ctrl_c_makes_only_the_missing_runs(
     (out / "scenes" / "random-2.json").unlink()  # as a stop while the scenes were written
     done = evaluate(None, out, resume=True, runner=runner)
     assert (out / "scenes" / "random-2.json").read_text() == drawn
-    assert made == [f"random-{s}/seed-{k}" for s in (1, 2) for k in (0, 1)]
+    assert made == [f"random-{s}/seed-{2 * s + k}" for s in (1, 2) for k in (0, 1)]
     assert (done.made, done.planned) == (4, 6)
     assert [r["run_id"] for r in _rows_file(out)] == [
-        f"random-{s}/seed-{k}" for s in range(3) for k in (0, 1)
+        f"random-{s}/seed-{2 * s + k}" for s in range(3) for k in (0, 1)
     ]
     assert set(read_rows(out)) == {r.run_id for r in done.rows}
     assert (out / "scenes" / "random-2.json").is_file()

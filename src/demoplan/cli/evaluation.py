@@ -110,7 +110,9 @@ def evaluate(
         str | None,
         typer.Option(help="Faults to inject, kind=probability,... (as for run)."),
     ] = None,
-    seeds: Annotated[int, typer.Option(min=1, help="Runs per scene: seeds 0 … K-1.")] = 1,
+    seeds: Annotated[
+        int, typer.Option(min=1, help="Runs per scene (scene j: seeds jK … jK+K-1).")
+    ] = 1,
     sim: Annotated[SimName, typer.Option(help="The simulated world (as for run).")] = (
         SimName.kinematic
     ),

@@ -25,7 +25,8 @@ FORMAT = "demoplan/evaluation-1"
 @dataclass(frozen=True, slots=True)
 class EvaluationSettings:
     """An evaluation: the model file, the scene files given, ``random_scenes``
-    layouts drawn (seeds 0 … N-1), ``seeds`` runs of each scene (seeds 0 … K-1)
+    layouts drawn (layout seeds 0 … N-1), ``seeds`` runs of each scene (each run
+    its own seed, :func:`plan_runs`)
     in ``sim`` with ``faults`` (``--faults`` text); ``clutter`` clutter objects
     in each random layout (runs allow unknown objects where any scene has them)."""
 
@@ -101,13 +102,15 @@ def write_plan(folder: Path, model: TaskModel, settings: EvaluationSettings) -> 
 
 
 def plan_runs(folder: Path, settings: EvaluationSettings) -> list[RunSpec]:
-    """Every run, scene by scene (in the order given, then the random ones), seed by seed."""
+    """Every run, scene by scene (in the order given, then the random ones), seed by
+    seed: scene j's runs have seeds jK … jK+K−1 (K: ``seeds``), so that no two
+    runs draw the same faults and ``demoplan run --seed S`` repeats each."""
     names = [Path(s).stem for s in settings.scenes]
     names += [f"random-{seed}" for seed in range(settings.random_scenes)]
     clutter = settings.clutter > 0
     specs: list[RunSpec] = []
-    for name in names:
+    for index, name in enumerate(names):
         document = read_document(folder / "scenes" / f"{name}.json")
-        for seed in range(settings.seeds):
+        for seed in range(index * settings.seeds, (index + 1) * settings.seeds):
             specs.append(RunSpec(name, document, seed, settings.faults, settings.sim, clutter))
     return specs
