@@ -9,6 +9,7 @@ makes its run start again, up to ``max_retries`` times; then the run is an
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
@@ -115,8 +116,9 @@ class RayEngine:
                     else:
                         yield row
         finally:
-            for ref in pending:
-                ray.cancel(ref, force=True)
+            for ref in pending:  # stopped (Ctrl-C, the caller closed us): the rest goes
+                with contextlib.suppress(Exception):  # finished meanwhile, or its node gone
+                    ray.cancel(ref, force=True)
             if started:
                 ray.shutdown()
 
