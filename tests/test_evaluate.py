@@ -478,3 +478,32 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
     assert "evaluating" in text and "10/10" in text
     assert "10/10 succeeded" in text
     assert re.search(r"\d:\d\d:\d\d", text)  # the time left
+
+
+def test_a_journal_torn_by_a_killed_evaluation_is_resumed(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    chosen = settings_from_options(
+        model_files["exp2"], [], random_scenes=2, seeds=2, faults=FAULTS, sim="kinematic", clutter=0
+    )
+    out = tmp_path / "eval"
+    full = evaluate(chosen, out)
+    lines = (out / ROWS).read_text().splitlines(keepends=True)
+    (out / ROWS).unlink()  # as if killed (SIGKILL) while writing its third row
+    (out / JOURNAL).write_text("".join(lines[:2]) + lines[2][:40])
+    done = evaluate(None, out, resume=True)
+    assert done.made == 2
+    assert [r.outcome() for r in done.rows] == [r.outcome() for r in full.rows]
+    assert not (out / JOURNAL).exists()
+
+
+def test_rows_added_after_a_torn_line_read_back(tmp_path: Path) -> None:
+    from demoplan.evaluation.results import Journal
+
+    rows = [RunRow(f"s/seed-{k}", "s", k, "kinematic", "", "success", True) for k in range(3)]
+    text = "".join(json.dumps(r.to_json()) + "\n" for r in rows[:2])
+    (tmp_path / JOURNAL).write_text(text + text[:30])  # a row torn by a kill
+    journal = Journal(tmp_path)
+    journal.add(rows[2])
+    journal.close()
+    assert list(read_rows(tmp_path).values()) == rows

@@ -76,6 +76,12 @@ class Journal:
 
     def __init__(self, folder: Path) -> None:
         self.path = folder / JOURNAL
+        if (
+            self.path.is_file()
+        ):  # a torn last line (a killed evaluation) goes: its run is made again
+            kept = self.path.read_bytes().rfind(b"\n") + 1
+            with self.path.open("r+b") as torn:
+                torn.truncate(kept)
         self._file: TextIO = self.path.open("a", encoding="utf-8")
 
     def add(self, row: RunRow) -> None:
