@@ -81,6 +81,7 @@ import time  # noqa: E402
 from collections import Counter  # noqa: E402
 from collections.abc import Sequence  # noqa: E402
 from dataclasses import asdict, dataclass, field  # noqa: E402
+from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -89,15 +90,13 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
-from demoplan.errors import InputError  # noqa: E402
-from demoplan.execution.executor import ExecutionSettings, execute  # noqa: E402
-from demoplan.execution.faults import Faults, parse_faults  # noqa: E402
-from demoplan.execution.runner import start_world  # noqa: E402
+from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine  # noqa: E402
+from demoplan.evaluation.runs import RunRow, RunSpec, execute_run  # noqa: E402
+from demoplan.execution.faults import parse_faults  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
 from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
-from demoplan.scenes.prepared import prepare  # noqa: E402
-from demoplan.scenes.scene import Scene, complete_geometry, load_scene  # noqa: E402
+from demoplan.scenes.scene import Scene, complete_geometry, load_scene, scene_to_dict  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
@@ -233,68 +232,38 @@ class Row:
         }
 
 
-def one_run(model: TaskModel, scene: Scene, world: str, faults: Faults, seed: int) -> Run:
-    settings = ExecutionSettings()
-    started = time.perf_counter()
-    instance: Any = None
-    try:
-        prepared = prepare(model, scene, clutter=True)
-        instance, first = start_world(model, prepared, world, faults, seed, settings)
-        report = execute(model, prepared, instance, settings, first=first)
-    except InputError as exc:  # refused before the first motion (an object the gripper cannot take)
-        return Run(
-            seed,
-            False,
-            0,
-            0,
-            0,
-            time.perf_counter() - started,
-            getattr(instance, "simulated", None),
-            _injected(instance),
-            {},
-            {},
-            f"refused before the run: {exc}",
-        )
-    except Exception as exc:  # a crash is a finding: keep it, go on with the next seed
-        wall = time.perf_counter() - started
-        return Run(
-            seed,
-            False,
-            0,
-            0,
-            0,
-            wall,
-            getattr(instance, "simulated", None),
-            _injected(instance),
-            {},
-            {},
-            f"exception: {type(exc).__name__}: {exc}",
-            exception=f"{type(exc).__name__}: {exc}",
-        )
-    wall = time.perf_counter() - started
+def _run_of(row: RunRow) -> Run:
+    """The benchmark's record of one evaluated run (its wall time: the whole
+    ``demoplan run``, preparing the scene, building the world and ``execute``)."""
+    crashed = row.reason.startswith("exception: ")
     return Run(
-        seed,
-        report.success,
-        report.replans,
-        len(report.actions),
-        report.first_plan_length,
-        wall,
-        getattr(instance, "simulated", None),
-        _injected(instance),
-        dict(Counter(f.kind for f in report.failures)),
-        {obj: 1e3 * error for obj, error in report.pose_errors.items()},
-        report.reason,
-        f"{report.failures[0].kind}: {report.failures[0].detail}" if report.failures else "",
-        report.gave_up,
-        collisions=len(getattr(instance, "collisions", ())),
-        refused_motions=len(getattr(instance, "motion_failures", ())),
+        row.seed,
+        row.success,
+        row.replans,
+        row.actions,
+        row.first_plan_length,
+        row.planning_s + row.execution_s,
+        row.simulated_s,
+        dict(row.injected),
+        dict(row.detected),
+        dict(row.pose_errors_mm),
+        row.reason,
+        row.first_failure,
+        row.gave_up,
+        exception=row.reason.removeprefix("exception: ") if crashed else "",
+        collisions=row.collisions,
+        refused_motions=row.refused_motions,
     )
 
 
-def _injected(instance: Any) -> dict[str, int]:
-    if instance is None:
-        return {}
-    return dict(Counter(fault.kind for fault in instance.injected))
+def _specs(name: str, scene: Scene, world: str, faults: str, count: int) -> list[RunSpec]:
+    layout = scene_to_dict(scene)
+    return [RunSpec(name, layout, seed, faults, world, clutter=True) for seed in range(count)]
+
+
+def one_run(model: TaskModel, scene: Scene, world: str, faults: str, seed: int) -> Run:
+    """One run, here (the warm-up)."""
+    return _run_of(execute_run(model, _specs("warm-up", scene, world, faults, seed + 1)[seed]))
 
 
 def run_row(
@@ -303,11 +272,13 @@ def run_row(
     scene: Scene,
     count: int,
     console: Console,
+    engine: Engine,
 ) -> None:
-    faults = parse_faults(row.faults)
+    """The row's runs, seeds 0 … count-1, by the evaluation engine (serial or Ray)."""
     started = time.perf_counter()
-    for seed in range(count):
-        row.runs.append(one_run(model, scene, row.world, faults, seed))
+    specs = _specs(row.experiment, scene, row.world, row.faults, count)
+    finished = sorted(engine.rows(specs, partial(execute_run, model)), key=lambda r: r.seed)
+    row.runs.extend(_run_of(r) for r in finished)
     console.print(
         f"  {row.label}: {count} runs in {time.perf_counter() - started:.1f} s, "
         f"{row.successes}/{count} reached the goal",
@@ -554,6 +525,13 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         default=DEFAULT_FAULTS,
         help=f"faults of the faulty rows (default {DEFAULT_FAULTS})",
     )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        help="0 (default): the runs one after the other here; N: on a local Ray with N "
+        "workers (demoplan[scale])",
+    )
     parser.add_argument("--no-mujoco", action="store_true", help="kinematic rows only")
     parser.add_argument("--no-arm", action="store_true", help="leave out the arm's rows")
     parser.add_argument(
@@ -619,7 +597,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             load_scene(experiment.scene), models[experiment.key]
         )
         # Warm-up, untimed: imports and first-call caches.
-        one_run(models[experiment.key], scenes[experiment.key], KINEMATIC, Faults(), 0)
+        one_run(models[experiment.key], scenes[experiment.key], KINEMATIC, "", 0)
     console.print(
         "learned "
         + ", ".join(
@@ -629,12 +607,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         highlight=False,
     )
 
+    engine: Engine = SerialEngine()
+    if args.workers:  # one local Ray for every row
+        import ray
+
+        ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
+        engine = RayEngine()
     rows: list[Row] = []
     for experiment, world, faults, count in plan:
         if count <= 0:
             continue
         row = Row(experiment.key, world, faults)
-        run_row(row, models[experiment.key], scenes[experiment.key], count, console)
+        run_row(row, models[experiment.key], scenes[experiment.key], count, console, engine)
         rows.append(row)
 
     titles = {e.key: e.title for e in EXPERIMENTS}

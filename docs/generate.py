@@ -1818,6 +1818,7 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "problem": (("model", "scene"), ("problem", "other --pddl")),
     "export": (("model", "scene"), ("bt",)),
     "run": (("model", "scene", "bt --bt"), ("run --json", "other --frames")),
+    "evaluate": (("model", "scene"), ("scene --out", "other --out")),
     "calibrate": (
         ("other", "markers --markers", "camera --intrinsics"),
         ("camera -o", "other --plot"),

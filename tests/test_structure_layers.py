@@ -132,6 +132,8 @@ FLOORS = {
     "execution": 4,
     "experiments": 5,
     "commands": 6,
+    # many runs of the command layer's ``run`` (``evaluate``): beside the commands
+    "evaluation": 6,
     "cli": 7,
     # the studio's web application: a front end over the command layer, as the CLI
     "studio": 7,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from demoplan.cli import (  # noqa: F401 - commands
+    evaluation,
     execution,
     export,
     learning,

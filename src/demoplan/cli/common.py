@@ -36,6 +36,7 @@ COMMANDS = (
     "problem",
     "export",
     "run",
+    "evaluate",
     "calibrate",
     "perceive",
     "segment",

@@ -163,6 +163,8 @@ class RunReport:
     """Contacts of the robot with anything but its load, as they happened (``--sim arm``)."""
     motions_refused: tuple[str, ...] = ()
     """Motions the robot did not make because a check found them impossible (``--sim arm``)."""
+    simulated_seconds: float | None = None
+    """Seconds the physics simulated (``--sim mujoco``, ``arm``); None: no physics."""
 
     @property
     def exit_code(self) -> int:

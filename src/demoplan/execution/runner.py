@@ -164,6 +164,7 @@ def run_task(
         world=world.name,
         collisions=tuple(getattr(simulated, "collisions", ())),
         motions_refused=tuple(getattr(simulated, "motion_failures", ())),
+        simulated_seconds=getattr(simulated, "simulated", None),
     )
 
 

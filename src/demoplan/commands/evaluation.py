@@ -1,0 +1,164 @@
+"""``evaluate``: many seeded runs of a task model, here or on Ray, as a table of rows
+(docs/execution.md "Evaluation")."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+
+from demoplan.errors import InputError, UsageError
+from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine, require_ray
+from demoplan.evaluation.plan import (
+    SETTINGS,
+    EvaluationSettings,
+    plan_runs,
+    read_settings,
+    write_plan,
+)
+from demoplan.evaluation.report import write_report
+from demoplan.evaluation.results import (
+    Journal,
+    Summary,
+    read_rows,
+    summarise,
+    write_rows,
+)
+from demoplan.evaluation.runs import RunRow, RunSpec, execute_run
+from demoplan.execution.faults import parse_faults
+from demoplan.fileio import display_path, dump_json, write_atomic
+from demoplan.learning.modelfile import load_model
+
+__all__ = ["Evaluation", "engine_for", "evaluate"]
+
+SIMS = ("kinematic", "mujoco", "arm")
+
+
+@dataclass(frozen=True, slots=True)
+class Evaluation:
+    """An evaluation's outcome: its folder, every row (in the runs' order),
+    what they sum up to, the runs this call made (the others were done) of
+    those planned, and its page (``report.html``)."""
+
+    folder: Path
+    rows: tuple[RunRow, ...]
+    summary: Summary
+    made: int
+    planned: int
+    report: Path
+
+
+def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -> Engine:
+    """``--workers 0``: the runs here, one after the other; else Ray (local, or ``address``)."""
+    if workers is not None and address is not None:
+        raise UsageError("--workers starts a local Ray, --address joins a cluster: one of them")
+    if workers == 0:
+        return SerialEngine()
+    require_ray()
+    return RayEngine(workers=workers, address=address, max_retries=max_retries)
+
+
+def _check(settings: EvaluationSettings) -> None:
+    parse_faults(settings.faults)  # a usage error names what is wrong
+    if settings.sim not in SIMS:
+        raise UsageError(f"--sim {settings.sim}: one of {', '.join(SIMS)} expected")
+    if not settings.scenes and settings.random_scenes <= 0:
+        raise UsageError("no scenes: SCENE files or --random-scenes N expected")
+    if settings.seeds <= 0 or settings.clutter < 0 or settings.random_scenes < 0:
+        raise UsageError("--seeds ≥ 1, --random-scenes ≥ 0 and --clutter ≥ 0 expected")
+
+
+def _check_new_folder(out: Path) -> None:
+    """``--out``: a new or empty folder (an evaluation's: ``--resume``); nothing of
+    anyone else's is overwritten."""
+    if (out / SETTINGS).exists():
+        raise UsageError(
+            f"{display_path(out)} holds an evaluation: --resume {display_path(out)} to "
+            "finish it, or another --out"
+        )
+    if out.exists() and not out.is_dir():
+        raise InputError(
+            "exists and is not a folder; a new or empty folder expected", source=display_path(out)
+        )
+    if out.is_dir() and any(out.iterdir()):
+        raise InputError(
+            "is not empty and holds no evaluation; a new or empty folder expected",
+            source=display_path(out),
+        )
+
+
+def evaluate(
+    settings: EvaluationSettings | None,
+    out: Path,
+    *,
+    resume: bool = False,
+    engine: Engine | None = None,
+    on_row: Callable[[RunRow, int, int], object] | None = None,
+    on_start: Callable[[int, int], object] | None = None,
+    runner: Callable[[RunSpec], RunRow] | None = None,
+) -> Evaluation:
+    """Carry out ``settings``' runs and write their rows in ``out`` (``runs.jsonl``,
+    ``summary.json``, ``report.html``, the scenes, the settings). ``resume``: ``out`` holds an
+    evaluation (its settings; ``settings`` is then None): make only the runs
+    with no row. ``on_start(done, planned)`` hears the counts before the first
+    run, ``on_row(row, done, planned)`` each row as it comes. A Ctrl-C
+    (KeyboardInterrupt) stops the runs and, before it goes on, writes every
+    finished row. ``runner``: what makes a run (default: :func:`execute_run`
+    with the settings' model)."""
+    if resume:
+        settings = read_settings(out)
+    elif settings is None:
+        raise UsageError("settings, or --resume with an evaluation's folder, expected")
+    else:
+        _check_new_folder(out)
+    assert settings is not None
+    _check(settings)
+    model = load_model(settings.model)
+    write_plan(out, model, settings)  # on resume: the scenes a stop left unwritten
+    specs = plan_runs(out, settings)
+    rows = read_rows(out)
+    order = [spec.run_id for spec in specs]
+    todo = [spec for spec in specs if spec.run_id not in rows]
+    if on_start is not None:
+        on_start(len(specs) - len(todo), len(specs))
+    journal = Journal(out)
+    try:
+        for row in (engine or SerialEngine()).rows(todo, runner or partial(execute_run, model)):
+            if row.run_id in rows:  # never a duplicate row
+                continue
+            rows[row.run_id] = row
+            journal.add(row)
+            if on_row is not None:
+                on_row(row, len(rows), len(specs))
+    finally:
+        journal.close()
+        write_rows(out, rows, order)
+    ordered = tuple(rows[i] for i in order if i in rows)
+    summary = summarise(ordered)
+    write_atomic(out / "summary.json", dump_json(summary.to_json()))
+    page = write_report(out, settings, list(ordered), summary, len(specs))
+    return Evaluation(out, ordered, summary, len(todo), len(specs), page)
+
+
+def settings_from_options(
+    model: Path,
+    scenes: Sequence[Path],
+    *,
+    random_scenes: int,
+    seeds: int,
+    faults: str | None,
+    sim: str,
+    clutter: int,
+) -> EvaluationSettings:
+    """The settings of ``evaluate MODEL SCENE… --random-scenes …`` (paths made absolute:
+    ``--resume`` may run from elsewhere)."""
+    return EvaluationSettings(
+        model=str(model.resolve()),
+        scenes=tuple(str(s.resolve()) for s in scenes),
+        random_scenes=random_scenes,
+        seeds=seeds,
+        faults=faults or "",
+        sim=sim,
+        clutter=clutter,
+    )
