@@ -15,7 +15,7 @@ import numpy as np
 
 from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.world import Observation
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import LEVEL_TOLERANCE, SUPPORT_FRACTION, ObjectGeometry, Pose, footprint
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import bounding_radius, finger_offset
 from demoplan.scenes.scene import Scene, yaw_of
@@ -192,18 +192,22 @@ class KinematicWorld:
         return probability > 0 and float(self.rng.random()) < probability
 
     def _on_top_of(self, obj: str) -> list[str]:
+        """The objects standing on ``obj``: at the level of its top, their outline
+        over at least :data:`~demoplan.model.SUPPORT_FRACTION` of theirs on its
+        outline (the support rule of docs/scenes.md, as the planner has it)."""
         pose, shape = self.poses[obj], self.geometry[obj]
         top = pose.position[2] + shape.size[2]
-        reach = bounding_radius(shape)
-        return [
-            other
-            for other, p in self.poses.items()
-            if other != obj
-            and p.position[2] > pose.position[2] + shape.size[2] / 2
-            and abs(p.position[2] - top) < 0.005
-            and math.dist(p.position[:2], pose.position[:2])
-            < reach + bounding_radius(self.geometry[other])
-        ]
+        below = footprint(shape, pose.position, yaw_of(pose))
+        standing = []
+        for other, p in self.poses.items():
+            if other == obj or abs(p.position[2] - top) >= LEVEL_TOLERANCE:
+                continue
+            if p.position[2] <= pose.position[2] + shape.size[2] / 2:
+                continue
+            upper = footprint(self.geometry[other], p.position, yaw_of(p))
+            if upper.intersection(below).area >= SUPPORT_FRACTION * upper.area:
+                standing.append(other)
+        return standing
 
     def _reach(self, shape: ObjectGeometry) -> float:
         """How far from its centre grasping ``shape`` needs room (fingers included)."""
