@@ -556,3 +556,23 @@ def test_the_worst_runs_link_their_storyboard_as_demoplan_run_frames_draws_it(
     assert (again / "storyboard.png").read_bytes() == (made / "storyboard.png").read_bytes()
     resumed = evaluate(None, done.folder, resume=True)  # nothing to make: the storyboards kept
     assert resumed.storyboards == done.storyboards
+
+
+def test_without_matplotlib_the_worst_runs_say_they_have_no_storyboard(
+    model_files: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import importlib.util
+
+    found = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "matplotlib" else found(name, *a),
+    )
+    chosen = settings_from_options(
+        model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
+    )
+    done = evaluate(chosen, tmp_path / "eval")
+    assert done.storyboards == {"random-0/seed-0": "no storyboard: matplotlib is not installed"}
+    assert not (done.folder / "worst").exists()
+    assert "no storyboard: matplotlib is not installed" in done.report.read_text()
