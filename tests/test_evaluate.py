@@ -507,3 +507,72 @@ def test_rows_added_after_a_torn_line_read_back(tmp_path: Path) -> None:
     journal.add(rows[2])
     journal.close()
     assert list(read_rows(tmp_path).values()) == rows
+
+
+def test_the_worst_runs_link_their_storyboard_as_demoplan_run_frames_draws_it(
+    model_files: dict[str, Path], tmp_path: Path
+) -> None:
+    from html.parser import HTMLParser
+
+    from demoplan.commands.execution import run
+    from demoplan.execution.faults import parse_faults
+
+    pytest.importorskip("matplotlib")
+    chosen = settings_from_options(
+        model_files["exp2"],
+        [],
+        random_scenes=1,
+        seeds=2,
+        faults="grasp=0.9",
+        sim="kinematic",
+        clutter=0,
+    )
+    done = evaluate(chosen, tmp_path / "eval")
+    assert not any(r.success for r in done.summary.worst)  # failures, each with a storyboard
+    assert set(done.storyboards) == {r.run_id for r in done.summary.worst[:5]}
+
+    found: list[str] = []
+
+    class Links(HTMLParser):
+        def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+            found.extend(v or "" for k, v in attrs if tag == "a" and k == "href")
+
+    Links().feed(done.report.read_text())
+    linked = [h for h in found if h.endswith("storyboard.png")]
+    assert linked == [f"worst/{r.run_id}/storyboard.png" for r in done.summary.worst[:5]]
+    assert all((done.folder / h).is_file() for h in linked)
+    assert all(f"]({h})" in (done.folder / "report.md").read_text() for h in linked)
+    row = done.summary.worst[0]
+    again = tmp_path / "again"
+    run(
+        model_files["exp2"],
+        done.folder / "scenes" / f"{row.scene}.json",
+        faults=parse_faults(row.faults),
+        seed=row.seed,
+        frames=again,
+    )
+    made = done.folder / "worst" / row.run_id
+    assert sorted(p.name for p in again.iterdir()) == sorted(p.name for p in made.iterdir())
+    assert (again / "storyboard.png").read_bytes() == (made / "storyboard.png").read_bytes()
+    resumed = evaluate(None, done.folder, resume=True)  # nothing to make: the storyboards kept
+    assert resumed.storyboards == done.storyboards
+
+
+def test_without_matplotlib_the_worst_runs_say_they_have_no_storyboard(
+    model_files: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import importlib.util
+
+    found = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "matplotlib" else found(name, *a),
+    )
+    chosen = settings_from_options(
+        model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
+    )
+    done = evaluate(chosen, tmp_path / "eval")
+    assert done.storyboards == {"random-0/seed-0": "no storyboard: matplotlib is not installed"}
+    assert not (done.folder / "worst").exists()
+    assert "no storyboard: matplotlib is not installed" in done.report.read_text()

@@ -65,6 +65,13 @@ COMMANDS: dict[str, tuple[list[str], list[str], float]] = {
         1.1,
     ),
     "experiments": (["experiments", "--out", "report"], ["report"], 6.0),
+    # evaluate: stopped, its folder holds whole files (the finished rows, the
+    # scenes, the worst runs' storyboards made so far) that --resume goes on from.
+    "evaluate": (
+        ["evaluate", "model.json", "--random-scenes", "2", "--workers", "0", "--out", "ev"],
+        ["ev"],
+        8.0,
+    ),
 }
 MOMENTS = 4  # per command
 
@@ -104,14 +111,16 @@ def started(workspace: Path) -> float:
 
 
 def _complete(path: Path) -> bool:
-    """An output as a finished command leaves it: parseable JSON, a PNG with its
-    end chunk, a folder of complete files."""
+    """An output as a finished command leaves it: parseable JSON (JSON lines:
+    each line), a PNG with its end chunk, a folder of complete files."""
     if path.is_dir():
         return all(_complete(p) for p in path.iterdir())
     data = path.read_bytes()
     if path.suffix == ".json":
         json.loads(data)
         return True
+    if path.suffix == ".jsonl":  # JSON lines: every line whole (none, if no run finished)
+        return all(json.loads(line) is not None for line in data.splitlines())
     if path.suffix == ".png":
         return data.endswith(b"IEND\xaeB`\x82")
     return bool(data)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import partial
@@ -33,6 +34,10 @@ from demoplan.learning.modelfile import load_model
 __all__ = ["Evaluation", "engine_for", "evaluate"]
 
 SIMS = ("kinematic", "mujoco", "arm")
+STORYBOARDS = 5
+"""The worst runs whose storyboard an evaluation makes (each run made again)."""
+WORST = "worst"
+"""The folder of those storyboards, one ``RUN_ID/`` folder each (``demoplan run --frames``)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,6 +52,8 @@ class Evaluation:
     made: int
     planned: int
     report: Path
+    storyboards: dict[str, str]
+    """Each worst run's storyboard (a path in ``folder``), or why it has none."""
 
 
 def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -> Engine:
@@ -137,8 +144,45 @@ def evaluate(
     ordered = tuple(rows[i] for i in order if i in rows)
     summary = summarise(ordered)
     write_atomic(out / "summary.json", dump_json(summary.to_json()))
-    page = write_report(out, settings, list(ordered), summary, len(specs))
-    return Evaluation(out, ordered, summary, len(todo), len(specs), page)
+    boards = make_storyboards(out, settings, summary.worst[:STORYBOARDS])
+    page = write_report(out, settings, list(ordered), summary, len(specs), boards)
+    return Evaluation(out, ordered, summary, len(todo), len(specs), page, boards)
+
+
+def make_storyboards(
+    out: Path, settings: EvaluationSettings, worst: Sequence[RunRow]
+) -> dict[str, str]:
+    """Each of ``worst``'s storyboards: its run made again (a run is a function of
+    its scene file, seed, faults and sim) with ``--frames out/worst/RUN_ID``, here,
+    one after the other; a storyboard already there is kept. By run id: the
+    storyboard's path relative to ``out``, or ``"no storyboard: WHY"``."""
+    from demoplan.commands.execution import run
+
+    if importlib.util.find_spec("matplotlib") is None:
+        return {row.run_id: "no storyboard: matplotlib is not installed" for row in worst}
+    boards: dict[str, str] = {}
+    for row in worst:
+        folder = out / WORST / row.run_id
+        board = folder / "storyboard.png"
+        if not board.is_file():
+            try:
+                run(
+                    settings.model,
+                    out / "scenes" / f"{row.scene}.json",
+                    sim=row.sim,
+                    faults=parse_faults(row.faults),
+                    seed=row.seed,
+                    clutter=settings.clutter > 0,
+                    frames=folder,
+                )
+            except InputError as exc:  # a run that is refused (an error row) draws nothing
+                boards[row.run_id] = f"no storyboard: {exc.message}"
+                continue
+            except Exception as exc:  # nor one that crashes (its row says so)
+                boards[row.run_id] = f"no storyboard: {type(exc).__name__}: {exc}"
+                continue
+        boards[row.run_id] = board.relative_to(out).as_posix()
+    return boards
 
 
 def settings_from_options(

@@ -1,7 +1,8 @@
 """An evaluation's page (``report.html`` in its folder, from ``report.md``):
 the success rate with its Wilson 95 % interval, per injected fault kind what
 the executor detected, the distributions of replans and of final errors, and
-the worst runs, each with the ``demoplan run`` command that repeats it."""
+the worst runs, each with the ``demoplan run`` command that repeats it and a
+link to its storyboard (``worst/RUN_ID/storyboard.png``)."""
 
 from __future__ import annotations
 
@@ -74,10 +75,24 @@ def _distributions(rows: list[RunRow], summary: Summary) -> list[str]:
     return lines
 
 
+def _storyboard(board: str | None) -> str:
+    if board is None:
+        return "—"
+    if board.startswith("no storyboard"):
+        return _cell(board)
+    return f"[storyboard]({board})"
+
+
 def evaluation_markdown(
-    settings: EvaluationSettings, rows: list[RunRow], summary: Summary, planned: int
+    settings: EvaluationSettings,
+    rows: list[RunRow],
+    summary: Summary,
+    planned: int,
+    storyboards: dict[str, str] | None = None,
 ) -> str:
-    """The report's markdown."""
+    """The report's markdown; ``storyboards``: a worst run's storyboard (a path
+    relative to the report) or why it has none, by run id."""
+    boards = storyboards or {}
     low, high = summary.interval
     lines = [
         f"# Evaluation of {_cell(Path(settings.model).name)}",
@@ -104,22 +119,27 @@ def evaluation_markdown(
         lines.append("")
     lines += _distributions(rows, summary)
     lines += ["", "## The worst runs", ""]
-    lines += ["| run | status | replans | injected | detected | reason | repeat |"]
-    lines += ["|---|---|---:|---|---|---|---|"]
+    lines += ["| run | status | replans | injected | detected | reason | repeat | storyboard |"]
+    lines += ["|---|---|---:|---|---|---|---|---|"]
     for row in summary.worst:
         lines.append(
             f"| {_cell(row.run_id)} | {row.status} | {row.replans} | {_counts(row.injected)} | "
             f"{_counts(row.detected)} | {_cell(row.reason) or '—'} | "
-            f"`{_code(repeat_command(settings, row))}` |"
+            f"`{_code(repeat_command(settings, row))}` | {_storyboard(boards.get(row.run_id))} |"
         )
     return "\n".join(lines) + "\n"
 
 
 def write_report(
-    folder: Path, settings: EvaluationSettings, rows: list[RunRow], summary: Summary, planned: int
+    folder: Path,
+    settings: EvaluationSettings,
+    rows: list[RunRow],
+    summary: Summary,
+    planned: int,
+    storyboards: dict[str, str] | None = None,
 ) -> Path:
     """``report.md`` and ``report.html`` in ``folder``; returns the page's path."""
-    markdown = evaluation_markdown(settings, rows, summary, planned)
+    markdown = evaluation_markdown(settings, rows, summary, planned, storyboards)
     write_atomic(folder / "report.md", markdown)
     page = folder / "report.html"
     write_atomic(page, markdown_to_html(markdown, folder, "demoplan evaluate"))
