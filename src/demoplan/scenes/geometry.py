@@ -206,6 +206,12 @@ def fingers(location: Location, shape: ObjectGeometry, axis: float, gripper: Gri
     return np.stack([a + g, a - g])
 
 
+TOUCHING = 1e-9
+"""m: a finger this close to touching a block exactly does not hit it (the
+distance's rounding, which differs between NumPy's ways of summing, does not
+decide)."""
+
+
 def collision_facts(
     locations: Sequence[Location],
     grasps: Sequence[tuple[str, str, ObjectGeometry, float]],
@@ -240,7 +246,8 @@ def collision_facts(
         starts = np.repeat(np.cumsum(counts) - counts, counts)
         b = by_x[np.arange(len(a)) - starts + np.repeat(low, counts)]
         apart = centres[b] - tips[a]
-        paper = np.linalg.norm(apart, axis=1) < radii[b] + finger
+        # a finger that touches b exactly does not hit it (nor one within a rounding error)
+        paper = np.linalg.norm(apart, axis=1) < radii[b] + finger - TOUCHING
         above = tops[b] > centres[rows + a, 2] + settings.level_tolerance
         near = np.linalg.norm(apart[:, :2], axis=1) - circles[b] < finger + 1e-9
         paper_rule = blocks[b] & block_grasp
