@@ -26,7 +26,7 @@ from demoplan.evaluation.results import (
     summarise,
     write_rows,
 )
-from demoplan.evaluation.runs import RunRow, RunSpec, execute_run
+from demoplan.evaluation.runs import RUN_SETTINGS, RunRow, RunSpec, execute_run
 from demoplan.execution.faults import parse_faults
 from demoplan.fileio import display_path, dump_json, write_atomic
 from demoplan.learning.modelfile import load_model
@@ -174,6 +174,7 @@ def make_storyboards(
                     seed=row.seed,
                     clutter=settings.clutter > 0,
                     frames=folder,
+                    settings=RUN_SETTINGS,
                 )
             except InputError as exc:  # a run that is refused (an error row) draws nothing
                 boards[row.run_id] = f"no storyboard: {exc.message}"

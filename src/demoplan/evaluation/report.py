@@ -42,7 +42,7 @@ def _counts(counts: dict[str, int]) -> str:
 def repeat_command(settings: EvaluationSettings, row: RunRow) -> str:
     """The ``demoplan run`` command that makes ``row``'s run again."""
     parts = ["demoplan run", settings.model, f"scenes/{row.scene}.json", f"--sim {row.sim}"]
-    parts.append(f"--seed {row.seed}")
+    parts.append(f"--seed {row.seed} --timeout inf")
     if row.faults:
         parts.append(f"--faults {row.faults}")
     if settings.clutter:

@@ -1,8 +1,12 @@
 """One evaluated run: a scene, a seed, the faults and the world in → one row out.
 
 A run is carried out exactly as ``demoplan run MODEL SCENE --sim SIM --faults
-FAULTS --seed SEED [--clutter]`` carries it out
-(:func:`demoplan.commands.execution.run`); its row keeps what an evaluation
+FAULTS --seed SEED --timeout inf [--clutter]`` carries it out
+(:func:`demoplan.commands.execution.run`): each (re)planning without a time
+limit (:data:`RUN_SETTINGS`), so that a row does not depend on how busy the
+machine or the worker was — with ``run``'s default 2 s, a replan on a loaded
+worker could end with another plan than the same replan in a serial run. Its
+row keeps what an evaluation
 compares (docs/execution.md "Evaluation"). A run that raises is a row too:
 ``status`` ``error`` with the exception, never a lost run.
 """
@@ -14,8 +18,9 @@ from collections import Counter
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
+from demoplan.budget import Budget
 from demoplan.errors import InputError
-from demoplan.execution.executor import RunEvent
+from demoplan.execution.executor import ExecutionSettings, RunEvent
 from demoplan.execution.faults import parse_faults
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import scene_from_document
@@ -126,6 +131,11 @@ class _Clock:
             self.mark = now
 
 
+RUN_SETTINGS = ExecutionSettings(budget=Budget(timeout=None))
+"""An evaluated run's settings: ``run``'s defaults, planning without a time limit
+(``run --timeout inf``; the search's limit of states kept still holds)."""
+
+
 def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
     """Carry ``spec`` out as ``demoplan run`` would; any exception becomes an ``error`` row."""
     from demoplan.commands.execution import run
@@ -142,6 +152,7 @@ def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
             seed=spec.seed,
             clutter=spec.clutter,
             on_event=clock,
+            settings=RUN_SETTINGS,
         )
     except InputError as exc:  # refused before the first motion
         return error_row(spec, f"refused: {exc}")
