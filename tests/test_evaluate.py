@@ -360,6 +360,54 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     nothing = _demoplan("evaluate", model, "--out", str(tmp_path / "b"), "--workers", "0")
     assert (nothing.returncode, nothing.stderr.count("\n")) == (2, 1)
     assert "no scenes" in nothing.stderr
+    too_many = _demoplan(
+        "evaluate", model, "--random-scenes", "500001", "--seeds", "2", "--out", str(tmp_path / "c")
+    )
+    assert (too_many.returncode, too_many.stderr.count("\n")) == (2, 1)
+    assert "--random-scenes: 1,000,002 runs (scenes × seeds); at most 1,000,000" in too_many.stderr
+    clutter = _demoplan(
+        "evaluate", model, "--random-scenes", "1", "--clutter", "21", "--out", str(tmp_path / "d")
+    )
+    assert (clutter.returncode, clutter.stderr.count("\n")) == (2, 1)
+    assert "--clutter: at most 20 expected" in clutter.stderr
+    assert not (tmp_path / "c").exists() and not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "expected"),
+    [
+        (
+            "random_scenes",
+            10**12,
+            "1,000,000,000,000 runs (scenes × seeds); at most 1,000,000 expected",
+        ),
+        ("random_scenes", "many", "a whole number, at least 0, expected, not 'many'"),
+        ("seeds", 0, "a whole number, at least 1, expected, not 0"),
+        ("clutter", True, "a whole number, at least 0, expected, not True"),
+    ],
+)
+def test_a_settings_file_out_of_bounds_is_refused_on_resume(
+    model_files: dict[str, Path], tmp_path: Path, field: str, value: Any, expected: str
+) -> None:
+    out = tmp_path / "eval"
+    made = _demoplan(
+        "evaluate",
+        str(model_files["exp2"]),
+        "--random-scenes",
+        "1",
+        "--workers",
+        "0",
+        "--out",
+        str(out),
+    )
+    assert made.returncode == 0, made.stderr
+    settings = json.loads((out / "evaluation.json").read_text())
+    settings[field] = value
+    (out / "evaluation.json").write_text(json.dumps(settings))
+    resumed = _demoplan("evaluate", "--resume", str(out), "--workers", "0")
+    assert resumed.returncode == 1
+    assert resumed.stderr.startswith(f"demoplan: error: {out / 'evaluation.json'}: {field}: ")
+    assert expected in resumed.stderr and resumed.stderr.count("\n") == 1
 
 
 def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(

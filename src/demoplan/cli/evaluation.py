@@ -169,12 +169,14 @@ def evaluate(
                     on_row=on_row,
                 )
         except KeyboardInterrupt:  # the finished rows are written: say how to go on
-            stderr.print(
-                f"demoplan: the finished runs are in {folder / 'runs.jsonl'}; "
-                f"--resume {folder} makes the others",
-                markup=False,
-                highlight=False,
-            )
+            rows = folder / "runs.jsonl"
+            kept = f"the finished runs are in {rows}" if rows.exists() else "no run had finished"
+            if (folder / "evaluation.json").exists():  # else nothing was begun
+                stderr.print(
+                    f"demoplan: {kept}; --resume {folder} makes the others",
+                    markup=False,
+                    highlight=False,
+                )
             raise
         if json_output:
             print_json(done.summary.to_json())

@@ -14,6 +14,7 @@ from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine, require_
 from demoplan.evaluation.plan import (
     SETTINGS,
     EvaluationSettings,
+    check_settings,
     plan_runs,
     read_settings,
     write_plan,
@@ -198,7 +199,7 @@ def settings_from_options(
 ) -> EvaluationSettings:
     """The settings of ``evaluate MODEL SCENE… --random-scenes …`` (paths made absolute:
     ``--resume`` may run from elsewhere)."""
-    return EvaluationSettings(
+    settings = EvaluationSettings(
         model=str(model.resolve()),
         scenes=tuple(str(s.resolve()) for s in scenes),
         random_scenes=random_scenes,
@@ -207,3 +208,5 @@ def settings_from_options(
         sim=sim,
         clutter=clutter,
     )
+    check_settings(settings)
+    return settings

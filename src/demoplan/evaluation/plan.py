@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from demoplan.errors import InputError
+from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.runs import RunSpec
 from demoplan.evaluation.scenes import LayoutSettings, random_scene_document
 from demoplan.fileio import display_path, dump_json, read_document, write_atomic
@@ -20,6 +20,12 @@ __all__ = ["SETTINGS", "EvaluationSettings", "plan_runs", "read_settings", "writ
 
 SETTINGS = "evaluation.json"
 FORMAT = "demoplan/evaluation-1"
+MAX_RUNS = 1_000_000
+"""Runs of one evaluation at most (scenes × seeds): a 10,000-run evaluation of
+the arm is a day of one core (benchmarks/README.md); a million rows are about
+1 GB of JSON lines."""
+MAX_CLUTTER = 20
+"""Clutter objects in one random layout at most."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,12 +66,39 @@ def read_settings(folder: Path) -> EvaluationSettings:
         data.pop("format")
         data["scenes"] = tuple(data["scenes"])
         data["layout"] = LayoutSettings(**data["layout"])
-        return EvaluationSettings(**data)
+        settings = EvaluationSettings(**data)
     except (KeyError, TypeError) as exc:
         raise InputError(
             f"not the settings an evaluation writes ({exc}); the folder of one expected",
             source=display_path(path),
         ) from None
+    check_settings(settings, display_path(path))
+    return settings
+
+
+def check_settings(settings: EvaluationSettings, source: str | None = None) -> None:
+    """Counts that are whole numbers within the limits (docs/limits.md): the
+    options' (``source`` None: a usage error) or a settings file's."""
+    limits = {"random_scenes": None, "seeds": None, "clutter": MAX_CLUTTER}
+    for name, most in limits.items():
+        value = getattr(settings, name)
+        option = f"--{name.replace('_', '-')}"
+        low = 1 if name == "seeds" else 0
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            expected = f"a whole number, at least {low}, expected, not {value!r}"
+            _refuse(expected, source, name if source else option)
+        if most is not None and value > most:
+            _refuse(f"at most {most} expected, not {value}", source, name if source else option)
+    runs = (len(settings.scenes) + settings.random_scenes) * settings.seeds
+    if runs > MAX_RUNS:
+        why = f"{runs:,} runs (scenes × seeds); at most {MAX_RUNS:,} expected"
+        _refuse(why, source, "random_scenes" if source else "--random-scenes")
+
+
+def _refuse(message: str, source: str | None, field: str) -> None:
+    if source is None:
+        raise UsageError(f"{field}: {message}")
+    raise InputError(message, source=source, field=field)
 
 
 def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
