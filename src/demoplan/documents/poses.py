@@ -44,6 +44,8 @@ LENGTH_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 Number = Annotated[float, Field(strict=True)]
 MAX_COORDINATE = 1.0e4  # m (in the file's units): a table, a room, a building — not 1e300
 Coordinate = Annotated[float, Field(strict=True, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+MAX_ANGLE = 360.0  # deg or rad (in the file's units): a turn or a few, not 1e308
+Angle = Annotated[float, Field(strict=True, ge=-MAX_ANGLE, le=MAX_ANGLE)]
 
 
 class _Schema(BaseModel):
@@ -57,8 +59,8 @@ class UnitsSchema(_Schema):
 
 class PoseSchema(_Schema):
     position: list[Coordinate] = Field(min_length=2, max_length=3)
-    yaw: Number | None = None
-    rpy: list[Number] | None = Field(default=None, min_length=3, max_length=3)
+    yaw: Angle | None = None
+    rpy: list[Angle] | None = Field(default=None, min_length=3, max_length=3)
     quat: list[Number] | None = Field(default=None, min_length=4, max_length=4)
 
     @model_validator(mode="after")
