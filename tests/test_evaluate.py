@@ -635,3 +635,25 @@ def test_without_matplotlib_the_worst_runs_say_they_have_no_storyboard(
     assert done.storyboards == {"random-0/seed-0": "no storyboard: matplotlib is not installed"}
     assert not (done.folder / "worst").exists()
     assert "no storyboard: matplotlib is not installed" in done.report.read_text()
+
+
+def test_a_model_without_shapes_is_refused_for_random_layouts_in_one_line(tmp_path: Path) -> None:
+    """A model learned from demonstrations that give no object's shape (as an
+    import of robosuite's recordings gives for its meshes) cannot be scattered:
+    one line naming the model file, exit 1, nothing written (it was a KeyError)."""
+    data = json.loads(EXPERIMENTS["exp2"].read_text())
+    for demo in data["demonstrations"]:
+        demo.pop("objects", None)
+    demos = tmp_path / "no-shapes.json"
+    demos.write_text(json.dumps(data))
+    model = tmp_path / "model.json"
+    assert _demoplan("learn", str(demos), "-o", str(model)).returncode == 0
+    out = tmp_path / "eval"
+    done = _demoplan(
+        "evaluate", str(model), "--random-scenes", "1", "--workers", "0", "--out", str(out)
+    )
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"demoplan: error: {model}: demonstrations: ")
+    assert "no shape or size" in done.stderr and done.stderr.count("\n") == 1
+    assert "Traceback" not in done.stderr
+    assert not out.exists()

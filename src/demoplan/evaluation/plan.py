@@ -115,8 +115,13 @@ def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str
         scene = complete_geometry(scene_from_document(documents[name], given), model)
         check_scene_objects(model, scene, clutter=settings.clutter > 0)  # here, not in each run
     layout = LayoutSettings(**{**asdict(settings.layout), "clutter": settings.clutter})
-    for seed in range(settings.random_scenes):
-        documents[f"random-{seed}"] = random_scene_document(model, seed, layout)
+    try:
+        for seed in range(settings.random_scenes):
+            documents[f"random-{seed}"] = random_scene_document(model, seed, layout)
+    except InputError as exc:  # the model file's: say which
+        if exc.source is not None:
+            raise
+        raise InputError(exc.message, source=settings.model, field=exc.field) from None
     return documents
 
 

@@ -173,7 +173,13 @@ def random_scene_document(
     names = sorted(types)
     for i in layout.rng.permutation(len(names)):
         name = names[int(i)]
-        shape = shapes.get(name) or shapes[types[name]]
+        shape = shapes.get(name) or shapes.get(types[name])
+        if shape is None:
+            raise InputError(
+                f"{name}: no shape or size in the model's demonstrations; random layouts "
+                "need every object's (or give SCENE files instead of --random-scenes)",
+                field="demonstrations",
+            )
         if layout.rng.random() < settings.stack_probability and layout.stacked(name, shape):
             continue
         layout.on_table(name, shape, None)
