@@ -209,6 +209,7 @@ def test_saved_demonstrations_are_listed_and_read_back(client: TestClient) -> No
     assert client.get("/api/files").json() == {
         "demonstrations": names,
         "models": [],
+        "objects": [],
         "scenes": ["fig4.json"],
     }
     answer = client.get("/api/files/demonstration-2.json").json()

@@ -39,11 +39,14 @@ from demoplan.studio.requests import (
     MAX_SEED,
     DemonstrationRequest,
     DropRequest,
+    LandmarkRequest,
     LearnRequest,
+    ObjectsRequest,
     PlanRequest,
     RunRequest,
     SceneRequest,
     ScrambleRequest,
+    SourceBody,
 )
 from demoplan.studio.workfolder import FileConflictError, FileMissingError, WorkFolder
 
@@ -324,7 +327,54 @@ def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
             from demoplan.studio.layouts import layout_of_scene
 
             answer["layout"] = layout_of_scene(scene_from_document(document, name))
+        elif kind == "objects":
+            from demoplan.commands.objects import objects_from_document
+            from demoplan.studio.layouts import layout_of_objects
+
+            answer["layout"] = layout_of_objects(objects_from_document(document, name), name)
         return answer
+
+    @app.get("/api/source")
+    def source() -> dict[str, Any]:
+        return {"source": folder.source()}
+
+    @app.put("/api/source")
+    def keep_source(body: SourceBody) -> dict[str, Any]:
+        if body.kind == "template":
+            from demoplan.studio.layouts import TEMPLATES
+
+            if body.id not in {t.id for t in TEMPLATES}:
+                raise FileMissingError(
+                    f"id: no template {body.id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
+                )
+        elif not folder.path(body.id, "id").is_file():
+            raise FileMissingError(f"id: no file {body.id!r} in the work folder")
+        folder.keep_source(body.kind, body.id)
+        return {"source": folder.source()}
+
+    @app.put("/api/objects/{name}")
+    def save_objects(name: str, body: ObjectsRequest) -> dict[str, str]:
+        from demoplan.commands.objects import objects_from_document
+        from demoplan.studio.layouts import objects_document
+
+        document = objects_document(body.layout)
+        objects_from_document(document, "layout")  # as the studio reads it back
+        path = folder.path(name)
+        if not path.exists():
+            return {"file": folder.create(document, name, "objects")}
+        if not body.replace or folder.kind(folder.read(name), name) != "objects":
+            how = "only an objects file is replaced" if body.replace else '"replace": true expected'
+            raise FileConflictError(f"name: {name} exists in the work folder; {how}")
+        folder.replace(document, name)
+        return {"file": name}
+
+    @app.post("/api/landmark")
+    def move_landmark(body: LandmarkRequest) -> dict[str, Any]:
+        from demoplan.studio.layouts import placed_landmark
+
+        return placed_landmark(
+            body.layout, body.landmark, (body.position[0], body.position[1]), body.yaw
+        )
 
     @app.post("/api/drop")
     def drop(body: DropRequest) -> dict[str, Any]:
