@@ -441,7 +441,9 @@ def _add_learning_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
         warnings = [f"warning: {line}" for line in diagnostic_lines(model)]
         warnings += [line.replace(where, "") for line in dict.fromkeys(logged)]
         with jobs.working():
-            targets = targets_json(model, scene if scene is not None else final_scene(model))
+            targets = _targets(model, scene) if scene is not None else None
+            if targets is None:  # no scene, or one of another task: the first demonstration's end
+                targets = targets_json(model, final_scene(model))
         return {"model": body.output, **model_json(model), "targets": targets, "warnings": warnings}
 
     @app.post("/api/plan")
@@ -510,6 +512,18 @@ def _add_run_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
     def media(name: str) -> FileResponse:
         path = _media_path(folder, name)
         return FileResponse(path, media_type=MEDIA_SUFFIXES[path.suffix])
+
+
+def _targets(model: Any, scene: Any) -> list[dict[str, Any]] | None:
+    """The learned targets resolved in ``scene`` (the table as the page shows
+    it, landmarks where they stand now), or None where the scene does not hold
+    the model's objects."""
+    from demoplan.studio.views import targets_json
+
+    try:
+        return targets_json(model, scene)
+    except DemoplanError:
+        return None
 
 
 def _model_path(folder: WorkFolder, name: str) -> Path:

@@ -47,8 +47,6 @@ TABLE_MARGIN = 0.1
 """m: the table drawn reaches this far beyond everything on it."""
 SCATTER_GAP = 0.01
 """m: the least gap between two scattered objects (or an object and a landmark)."""
-OVERLAP_TOLERANCE_M2 = 1e-6
-"""m²: outlines overlapping by less (1 mm², a touch) do not collide."""
 SCATTER_TRIES = 2000
 """Random places tried per object before the scatter gives up."""
 
@@ -67,7 +65,10 @@ TEMPLATES = (
     Template("set_table", "Set the table (the paper's Experiment 1)", "set_table"),
     Template("blocks", "Stack the blocks (the paper's Experiment 2)", "blocks/demonstrations.json"),
     Template("kit", "Fill the kit tray", "kitting/demonstrations.json"),
+    Template("empty", "An empty table for your own objects", ""),
 )
+EMPTY_TABLE = {"origin": [0.0, 0.0], "size": [0.8, 0.6]}
+"""m: the table of the empty template."""
 
 
 def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]:
@@ -81,6 +82,14 @@ def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]
         raise FileMissingError(
             f"template: no template {template_id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
         )
+    if not template.example:
+        return {
+            "template": template.id,
+            "objects": {},
+            "landmarks": {},
+            "poses": {},
+            "table": EMPTY_TABLE,
+        }
     demonstrations = load_inputs([examples_dir() / template.example])
     layout = layout_of_demonstration(demonstrations[0], demonstrations, template.id)
     if seed is None:
@@ -237,8 +246,9 @@ def dropped_pose(
     outline covers at least the support share of its own), else on the table.
 
     Things do not pass through each other: a release whose outline overlaps
-    something standing higher than where it would rest (a box it only half
-    covers, an apple beside its landing spot) is refused, as is landing on
+    something standing higher than where it would rest, by more than the touch
+    tolerance (a box's rim it barely covers, an apple beside its landing spot),
+    is refused, as is landing on
     what stands on ``name`` (it moves with it) and an object of unknown size."""
     settings = GeometrySettings()
     shapes = {n: _known(layout, n) for n in layout.objects}
@@ -248,14 +258,14 @@ def dropped_pose(
         )
     riders = _carried(layout, shapes, name, settings)
     moved = footprint(shapes[name], position, yaw)
+    core = moved.buffer(-settings.touch_tolerance)  # a graze within the tolerance is a touch
     area = moved.area
     landing: list[tuple[float, str]] = []
     touched: list[tuple[float, str]] = []  # (top, name) of everything the outline overlaps
     for other, outline, _, top in _things(layout, shapes, exclude=name):
-        overlap = moved.intersection(outline).area
-        if overlap >= settings.support_fraction * area:
+        if moved.intersection(outline).area >= settings.support_fraction * area:
             landing.append((top, other))
-        if overlap > OVERLAP_TOLERANCE_M2 and other not in riders:
+        if core.intersects(outline) and other not in riders:
             touched.append((top, other))
     top, support = max(landing) if landing else (0.0, None)
     if support is not None and support in riders:
@@ -290,11 +300,13 @@ def placed_landmark(
     if mark.size is None:
         return {"pose": pose}
     shapes = {n: _known(layout, n) for n in layout.objects}
-    moved = footprint(_geometry(mark.shape, mark.size), position, yaw)
+    core = footprint(_geometry(mark.shape, mark.size), position, yaw).buffer(
+        -GeometrySettings().touch_tolerance
+    )
     hit = sorted(
         other
         for other, outline, _, _ in _things(layout, shapes, exclude=name)
-        if moved.intersection(outline).area > OVERLAP_TOLERANCE_M2
+        if core.intersects(outline)
     )
     if hit:
         raise InputError(
