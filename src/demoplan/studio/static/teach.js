@@ -1,9 +1,10 @@
 // The Teach view: demonstrations recorded step by step, saved in the project's format; the work folder's files.
 
-import { get, post } from "./api.js";
-import { $, alarm, clone, fmt, say, state } from "./common.js";
+import { api, get, post } from "./api.js";
+import { $, SHAPES_IN_SCENES, alarm, clone, fmt, say, state } from "./common.js";
 import { clearPlan } from "./plan.js";
-import { cover, corners, redraw, sameObjects, table, tableRoom } from "./stage.js";
+import { cover, corners, keepInView, redraw, sameObjects, table, tableRoom } from "./stage.js";
+import { halfExtents, snap } from "./table.js";
 
 // --- teach ----------------------------------------------------------------
 
@@ -31,31 +32,41 @@ export function startDemonstration(layout, note) {
   state.teach.poses = clone(layout.poses);
   state.teach.steps = [];
   state.teach.saved = false;
+  state.teach.edited = false;
   state.plan.poses = null;
+  state.plan.landmarks = null;
   state.plan.extras = null;
   state.clutter = [];
   state.selected = null;
   clearPlan();
   table.setLayout(layout, tableRoom());
   renderSteps();
+  renderThings();
   redraw();
   say(note);
 }
 
+// Each New demonstration is numbered: only the latest one's answer is shown
+// (a template chosen while the last one loads must not show the old objects).
+let asked = 0;
+
 export async function newDemonstration() {
+  const ticket = ++asked;
+  const source = clone(state.source);
   const randomise = $("randomise").checked;
   const seed = Number($("seed").value) || 0;
   let layout;
-  if (state.source.kind === "template") {
+  if (source.kind === "template") {
     const query = randomise ? `?seed=${seed}` : "";
-    layout = await get(`/api/templates/${encodeURIComponent(state.source.id)}${query}`);
+    layout = await get(`/api/templates/${encodeURIComponent(source.id)}${query}`);
   } else {
-    layout = (await get(`/api/files/${encodeURIComponent(state.source.name)}`)).layout;
-    if (randomise) layout = await post("/api/scramble", { layout, seed });
+    layout = (await get(`/api/files/${encodeURIComponent(source.name)}`)).layout;
+    if (randomise && Object.keys(layout.objects).length) layout = await post("/api/scramble", { layout, seed });
   }
+  if (ticket !== asked) return; // a later New demonstration (another template) is on its way
   if (randomise) $("seed").value = String(seed + 1);
   const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${state.teach.steps.length} unsaved steps discarded)` : "";
-  const from = state.source.kind === "template" ? `template ${state.source.id}` : state.source.name;
+  const from = source.kind === "template" ? `template ${source.id}` : source.name;
   startDemonstration(layout, `New demonstration from ${from}${randomise ? `, randomised (seed ${seed})` : ""}${unsaved}.`);
 }
 
@@ -73,9 +84,9 @@ export function poseDocument(pose) {
   return { position: pose.position.map((v) => Math.round(v * 1e6) / 1e6), yaw: Math.round((pose.yaw || 0) * 1000) / 1000 };
 }
 
-export function landmarksDocument() {
+export function landmarksDocument(marks = null) {
   const out = {};
-  for (const [name, mark] of Object.entries(state.layout.landmarks || {})) {
+  for (const [name, mark] of Object.entries(marks || state.layout.landmarks || {})) {
     out[name] = { ...poseDocument(mark), shape: mark.shape || "box" };
     if (mark.size) out[name].size = mark.size;
   }
@@ -85,7 +96,9 @@ export function landmarksDocument() {
 export function demonstrationDocument() {
   const objects = {};
   for (const [name, geometry] of Object.entries(state.layout.objects)) {
-    if (!state.clutter.includes(name)) objects[name] = { shape: geometry.shape, size: geometry.size };
+    if (state.clutter.includes(name)) continue;
+    objects[name] = { shape: geometry.shape, size: geometry.size };
+    for (const key of ["type", "mass", "density"]) if (geometry[key] != null) objects[name][key] = geometry[key];
   }
   const initial = {};
   for (const [name, pose] of Object.entries(state.teach.initial)) initial[name] = poseDocument(pose);
@@ -122,6 +135,230 @@ export async function loadFile() {
   }
   state.source = { kind: "file", name };
   startDemonstration(answer.layout, `Loaded ${name}: its initial layout is on the table.`);
+  await keepSource();
+}
+
+// The table as it stands in the Teach view, as a scene (the Learn view draws
+// the learned targets in it: where the landmarks stand now).
+export function teachSceneDocument() {
+  const objects = {};
+  for (const [name, geometry] of Object.entries(state.layout.objects)) {
+    const pose = state.teach.poses[name];
+    if (!pose || state.clutter.includes(name)) continue;
+    objects[name] = { ...poseDocument(pose), size: geometry.size };
+    if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
+    if (geometry.type != null) objects[name].type = geometry.type;
+  }
+  const scene = { objects };
+  const landmarks = landmarksDocument();
+  if (Object.keys(landmarks).length) scene.landmarks = landmarks;
+  return scene;
+}
+
+// --- the template or file in use, kept in the work folder across reloads ---
+
+function showSource() {
+  const source = state.source;
+  $("template").value = source.kind === "template" ? source.id : "";
+  const edited = state.teach.edited ? " — changed here, not saved (Save objects)" : "";
+  $("source-shown").textContent = source.kind === "template"
+    ? `In use: template ${source.id}${edited}`
+    : `In use: ${source.name}${edited}`;
+}
+
+async function keepSource() {
+  const source = state.source;
+  const body = source.kind === "template" ? { kind: "template", id: source.id } : { kind: "file", id: source.name };
+  await api("PUT", "/api/source", body);
+  showSource();
+}
+
+export async function useTemplate(id) {
+  state.source = { kind: "template", id };
+  showSource();
+  await newDemonstration();
+  await keepSource();
+}
+
+// At start: the template or file last used in this work folder (if it is still there).
+export async function restoreSource() {
+  const { source } = await get("/api/source");
+  const files = state.files;
+  if (source && source.kind === "template" && [...$("template").options].some((o) => o.value === source.id)) {
+    state.source = { kind: "template", id: source.id };
+  } else if (source && source.kind === "file" && ["objects", "scenes", "demonstrations"].some((k) => files[k].includes(source.id))) {
+    state.source = { kind: "file", name: source.id };
+  }
+  showSource();
+}
+
+// --- your own objects -------------------------------------------------------
+
+const cm = (v) => Math.round(v * 1000) / 10;
+
+export function renderThings() {
+  const list = $("things");
+  list.replaceChildren();
+  const layout = state.layout;
+  const entries = [
+    ...Object.entries(layout.objects).filter(([n]) => !state.clutter.includes(n)).map(([n, g]) => [n, g, "object"]),
+    ...Object.entries(layout.landmarks || {}).map(([n, g]) => [n, g, "landmark"]),
+  ];
+  for (const [name, geometry, kind] of entries) {
+    const li = document.createElement("li");
+    li.dataset.thing = name;
+    const swatch = document.createElement("span");
+    swatch.className = "swatch";
+    swatch.style.background = geometry.colour || "#999";
+    const size = geometry.size ? geometry.size.map(cm).join(" × ") + " cm" : "size unknown";
+    const extras = [
+      geometry.mass != null ? `${geometry.mass} kg` : null,
+      geometry.density != null ? `${geometry.density} kg/m³` : null,
+      geometry.type ? `type ${geometry.type}` : null,
+    ].filter(Boolean).join(", ");
+    const text = document.createElement("span");
+    text.textContent = `${name}: ${kind === "landmark" ? "landmark, " : ""}${geometry.shape} ${size}${extras ? `, ${extras}` : ""}`;
+    const edit = document.createElement("button");
+    edit.type = "button";
+    edit.textContent = "Edit";
+    edit.setAttribute("aria-label", `Edit ${name}`);
+    edit.addEventListener("click", () => editThing(name, kind));
+    const remove = document.createElement("button");
+    remove.type = "button";
+    remove.textContent = "Remove";
+    remove.setAttribute("aria-label", `Remove ${name}`);
+    remove.addEventListener("click", () => removeThing(name, kind));
+    li.append(swatch, text, edit, remove);
+    list.appendChild(li);
+  }
+  showSource();
+}
+
+function editThing(name, kind) {
+  const thing = kind === "landmark" ? state.layout.landmarks[name] : state.layout.objects[name];
+  $("thing-kind").value = kind;
+  $("thing-name").value = name;
+  $("thing-shape").value = SHAPES_IN_SCENES.has(thing.shape) ? thing.shape : "box";
+  const size = thing.size || [0.05, 0.05, 0.05];
+  ["thing-x", "thing-y", "thing-z"].forEach((id, k) => { $(id).value = String(cm(size[k])); });
+  $("thing-colour").value = thing.colour || "#999999";
+  $("thing-mass").value = thing.mass != null ? String(thing.mass) : "";
+  $("thing-type").value = thing.type || "";
+  $("thing-name").focus();
+}
+
+// The objects change the start: only before the first step.
+function startCanChange() {
+  if (state.teach.steps.length) {
+    alarm("the objects change the start of a demonstration: Save or Undo its steps first, then press New demonstration");
+    return false;
+  }
+  return true;
+}
+
+function removeThing(name, kind) {
+  if (!startCanChange()) return;
+  if (kind === "landmark") delete state.layout.landmarks[name];
+  else {
+    delete state.layout.objects[name];
+    delete state.teach.poses[name];
+    delete state.teach.initial[name];
+  }
+  state.teach.edited = true;
+  state.plan.poses = null;
+  state.plan.landmarks = null;
+  clearPlan();
+  renderThings();
+  redraw();
+  say(`${name} removed.`);
+}
+
+// Right of everything on the table: a free place for a new thing.
+function freePlace(size, shape) {
+  let right = state.layout.table.origin[0];
+  const things = [
+    ...Object.entries(state.teach.poses).map(([n, p]) => [state.layout.objects[n], p]),
+    ...Object.values(state.layout.landmarks || {}).map((m) => [m, m]),
+  ];
+  for (const [geometry, pose] of things) {
+    if (!geometry || !geometry.size) continue;
+    right = Math.max(right, pose.position[0] + halfExtents(geometry.shape, geometry.size, pose.yaw)[0]);
+  }
+  const [hx, hy] = halfExtents(shape, size, 0);
+  return [snap(right + 0.03 + hx), snap(state.layout.table.origin[1] + 0.03 + hy)];
+}
+
+export function addThing() {
+  if (!startCanChange()) return;
+  const kind = $("thing-kind").value;
+  const name = $("thing-name").value.trim();
+  if (!/^[^\s#]{1,60}$/.test(name)) {
+    alarm("Name: 1–60 characters without spaces or '#' expected (names appear in plans)");
+    return;
+  }
+  const other = kind === "landmark" ? state.layout.objects : state.layout.landmarks || {};
+  if (other[name]) {
+    alarm(`Name: ${name} is already ${kind === "landmark" ? "an object" : "a landmark"}; another name expected`);
+    return;
+  }
+  const shape = $("thing-shape").value;
+  const size = ["thing-x", "thing-y", "thing-z"].map((id) => Math.round(Number($(id).value) * 1000) / 100000);
+  if (size.some((v) => !Number.isFinite(v) || v < 0.001 || v > 3)) {
+    alarm("Size: three extents of 0.1 to 300 cm expected");
+    return;
+  }
+  const mass = $("thing-mass").value.trim();
+  if (mass !== "" && !(Number(mass) > 0 && Number(mass) <= 1000)) {
+    alarm("Mass (kg): a number above 0 and at most 1000 expected (empty: solid wood)");
+    return;
+  }
+  const colour = $("thing-colour").value;
+  const type = $("thing-type").value.trim();
+  if (type && !/^[^\s#]{1,60}$/.test(type)) {
+    alarm("Type: a name without spaces or '#' expected (objects of one type are interchangeable)");
+    return;
+  }
+  if (kind === "landmark") {
+    state.layout.landmarks = state.layout.landmarks || {};
+    const old = state.layout.landmarks[name];
+    const position = old ? old.position : [...freePlace(size, shape), 0];
+    state.layout.landmarks[name] = { shape, size, colour, position, yaw: old ? old.yaw || 0 : 0 };
+  } else {
+    const geometry = { shape, size, colour };
+    if (mass !== "") geometry.mass = Number(mass);
+    if (type) geometry.type = type;
+    const known = state.layout.objects[name];
+    state.layout.objects[name] = geometry;
+    if (!known) {
+      const pose = { position: [...freePlace(size, shape), 0], yaw: 0 };
+      state.teach.poses[name] = pose;
+      state.teach.initial[name] = clone(pose);
+    }
+  }
+  state.layout.template = null;
+  state.teach.edited = true;
+  state.plan.poses = null;
+  state.plan.landmarks = null;
+  clearPlan();
+  keepInView({ ...state.teach.poses, ...state.layout.landmarks });
+  renderThings();
+  redraw();
+  say(`${name} ${kind === "landmark" ? "(landmark) " : ""}is on the table: drag it where the task starts.`);
+}
+
+// The objects, the landmarks and where they stand now, as an objects file;
+// from then on the Teach view starts from it.
+export async function saveObjects() {
+  if (!startCanChange()) return;
+  const name = $("objects-name").value.trim() || "objects.json";
+  const layout = { ...state.layout, poses: state.teach.poses };
+  const replace = state.files.objects.includes(name);
+  const answer = await api("PUT", `/api/objects/${encodeURIComponent(name)}`, { layout, replace });
+  state.teach.edited = false;
+  state.source = { kind: "file", name: answer.file };
+  await refreshFiles();
+  await keepSource();
+  say(`Saved ${answer.file}: New demonstration starts from it (also after a reload).`);
 }
 
 // --- work-folder files ----------------------------------------------------
@@ -131,13 +368,13 @@ export async function refreshFiles() {
   const file = $("file");
   const keep = file.value;
   file.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["demonstrations", "scenes"]) {
+  for (const kind of ["objects", "demonstrations", "scenes"]) {
     const group = document.createElement("optgroup");
     group.label = kind;
     for (const name of state.files[kind]) group.appendChild(new Option(name, name));
     if (state.files[kind].length) file.appendChild(group);
   }
-  file.value = state.files.demonstrations.includes(keep) || state.files.scenes.includes(keep) ? keep : "";
+  file.value = ["objects", "demonstrations", "scenes"].some((k) => state.files[k].includes(keep)) ? keep : "";
   const chosen = new Set([...document.querySelectorAll("#learn-files input:not(:checked)")].map((i) => i.value));
   const box = $("learn-files");
   box.replaceChildren();
@@ -155,13 +392,13 @@ export async function refreshFiles() {
   const planFile = $("plan-file");
   const keepPlan = planFile.value;
   planFile.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["scenes", "demonstrations"]) {
+  for (const kind of ["scenes", "objects", "demonstrations"]) {
     const group = document.createElement("optgroup");
     group.label = kind;
     for (const name of state.files[kind]) group.appendChild(new Option(name, name));
     if (state.files[kind].length) planFile.appendChild(group);
   }
-  planFile.value = state.files.scenes.includes(keepPlan) || state.files.demonstrations.includes(keepPlan) ? keepPlan : "";
+  planFile.value = ["scenes", "objects", "demonstrations"].some((k) => state.files[k].includes(keepPlan)) ? keepPlan : "";
   const models = $("plan-model");
   const current = models.value;
   models.replaceChildren();
