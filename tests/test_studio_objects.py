@@ -20,6 +20,7 @@ from demoplan.commands.objects import objects_from_document, scene_document
 from demoplan.errors import InputError
 from demoplan.scenes.scene import scene_from_document, yaw_of
 from demoplan.studio.app import create_app
+from tests.studio_browser import ROOT
 from tests.test_studio_api import one_line_error, work
 
 BOX_HEIGHT = 0.02
@@ -122,6 +123,15 @@ def test_a_bad_objects_file_in_the_folder_is_one_line_naming_the_field(
         objects_from_document(
             {"format": "demoplan/objects-1", "objects": {"pear": {"position": [0, 0]}}}, "f"
         )
+
+
+def test_the_objects_file_shown_in_formats_md_is_read() -> None:
+    page = (ROOT / "docs" / "formats.md").read_text(encoding="utf-8")
+    section = page.split("## Objects file (`demoplan/objects-1`)")[1]
+    example = section.split("```json")[1].split("```")[0]
+    read = objects_from_document(json.loads(example), "formats.md")
+    assert dict(read.colours) == {"sandwich": "#d9a441", "cookie": "#7f5539", "lunchbox": "#2e86c1"}
+    assert read.scene.object("cookie").type == "biscuit"
 
 
 # --- the source in use ---
