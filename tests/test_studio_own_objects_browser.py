@@ -24,12 +24,12 @@ from tests.studio_browser import VIEWPORT, Studio, chromium, studio_server
 pytestmark = pytest.mark.slow
 
 BOX = (0.26, 0.18, 0.02)
-# name: kind, shape, size (cm), colour, mass (kg, "" for wood), type
+# name: kind, shape, size (cm), colour, mass (kg) or density (kg/m³; "" both: wood), type
 THINGS = [
     ("sandwich", "object", "box", (10, 10, 3), "#d9a441", "0.15", ""),
     ("apple", "object", "sphere", (7, 7, 7), "#c0392b", "0.2", ""),
     ("juice", "object", "box", (4, 6, 10), "#8e44ad", "0.25", ""),
-    ("carrot", "object", "box", (12, 3, 3), "#e67e22", "", ""),
+    ("carrot", "object", "box", (12, 3, 3), "#e67e22", "1050 kg/m3", ""),
     ("cookie", "object", "cylinder", (5, 5, 1), "#7f5539", "", "biscuit"),
     ("lunchbox", "landmark", "box", (26, 18, 2), "#2e86c1", "", ""),
 ]
@@ -123,7 +123,9 @@ def make_things(page: Studio) -> None:
         for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), size, strict=True):
             tab.get_by_label(field, exact=True).fill(str(value))
         tab.get_by_label("Colour").fill(colour)
-        tab.get_by_label("Mass (kg)").fill(mass)
+        weight, _, per_volume = mass.partition(" ")
+        tab.get_by_label("Mass (kg)").fill("" if per_volume else weight)
+        tab.get_by_label("or density (kg/m³)").fill(weight if per_volume else "")
         tab.get_by_label("Type").fill(kind_of)
         page.button("Add or change").click()
         page.settle()
@@ -150,6 +152,7 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
     assert objects["format"] == "demoplan/objects-1"
     assert objects["objects"]["juice"]["size"] == [0.04, 0.06, 0.11]
     assert objects["objects"]["sandwich"]["mass"] == 0.15
+    assert objects["objects"]["carrot"]["density"] == 1050
     assert objects["objects"]["cookie"]["type"] == "biscuit"
     assert objects["landmarks"]["lunchbox"]["size"] == list(BOX)
     # a reload starts from the objects file, and says so

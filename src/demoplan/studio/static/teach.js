@@ -243,6 +243,7 @@ function editThing(name, kind) {
   ["thing-x", "thing-y", "thing-z"].forEach((id, k) => { $(id).value = String(cm(size[k])); });
   $("thing-colour").value = thing.colour || "#999999";
   $("thing-mass").value = thing.mass != null ? String(thing.mass) : "";
+  $("thing-density").value = thing.density != null ? String(thing.density) : "";
   $("thing-type").value = thing.type || "";
   $("thing-name").focus();
 }
@@ -312,6 +313,15 @@ export function addThing() {
     alarm("Mass (kg): a number above 0 and at most 1000 expected (empty: solid wood)");
     return;
   }
+  const density = $("thing-density").value.trim();
+  if (density !== "" && !(Number(density) >= 1.2 && Number(density) <= 22600)) {
+    alarm("density (kg/m³): a number from 1.2 (air) to 22600 (osmium) expected (empty: solid wood)");
+    return;
+  }
+  if (mass !== "" && density !== "") {
+    alarm("Mass (kg) or density (kg/m³): one of them expected, not both");
+    return;
+  }
   const colour = $("thing-colour").value;
   const type = $("thing-type").value.trim();
   if (type && !/^[^\s#]{1,60}$/.test(type)) {
@@ -326,6 +336,7 @@ export function addThing() {
   } else {
     const geometry = { shape, size, colour };
     if (mass !== "") geometry.mass = Number(mass);
+    if (density !== "") geometry.density = Number(density);
     if (type) geometry.type = type;
     const known = state.layout.objects[name];
     state.layout.objects[name] = geometry;
