@@ -290,3 +290,59 @@ def test_object_names_that_plans_cannot_show_are_refused(client: TestClient) -> 
     layout["objects"]["green apple"] = layout["objects"].pop("apple")
     layout["poses"]["green apple"] = layout["poses"].pop("apple")
     one_line_error(client.put("/api/objects/x.json", json={"layout": layout}), 422, "green apple")
+
+
+def landmark_body(**changes: Any) -> dict[str, Any]:
+    body = {"layout": lunch_layout(), "landmark": "lunchbox", "position": [0.4, 0.4], "yaw": 10.0}
+    return body | changes
+
+
+BAD_LANDMARK_MOVES: list[tuple[dict[str, Any], str]] = [
+    (landmark_body(yaw=1e9), "yaw"),
+    (landmark_body(position=[1e6, 0.4]), "position"),
+    (landmark_body(position=[0.4]), "position"),
+    (landmark_body(position=["0.4", 0.4]), "position"),
+    (landmark_body(landmark="box\x00"), "landmark"),
+    (landmark_body(turn=5), "turn"),
+    (landmark_body(landmark="../lunchbox"), "../lunchbox"),
+]
+
+
+@pytest.mark.parametrize(("body", "named"), BAD_LANDMARK_MOVES)
+def test_bad_landmark_moves_are_refused_with_one_line(
+    client: TestClient, body: dict[str, Any], named: str
+) -> None:
+    one_line_error(client.post("/api/landmark", json=body), 422, named)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("shape", "pyramid"),
+        ("size", [0.26, -0.18, 0.02]),
+        ("size", [0.26, 0.18, 1e6]),
+        ("mass", 1.0),
+    ],
+)
+def test_bad_landmarks_in_an_objects_file_are_refused(
+    client: TestClient, field: str, value: Any
+) -> None:
+    layout = lunch_layout()
+    layout["landmarks"]["lunchbox"][field] = value
+    one_line_error(
+        client.put("/api/objects/lunch.json", json={"layout": layout}), 422, "landmarks", field
+    )
+    body = landmark_body(layout=layout)
+    one_line_error(client.post("/api/landmark", json=body), 422, "landmarks", field)
+
+
+def test_an_objects_file_without_objects_or_sizes_is_refused(client: TestClient) -> None:
+    layout = lunch_layout()
+    layout["objects"], layout["poses"] = {}, {}
+    one_line_error(client.put("/api/objects/x.json", json={"layout": layout}), 422, "objects")
+    layout = lunch_layout()
+    layout["objects"]["apple"]["size"] = None
+    one_line_error(
+        client.put("/api/objects/x.json", json={"layout": layout}), 422, "objects.apple.size"
+    )
+    assert client.get("/api/files").json()["objects"] == []
