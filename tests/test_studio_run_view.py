@@ -2,8 +2,9 @@
 in real headless Chromium: the table at every event is the world the run's
 events carry (a dropped object where it fell), the run ends on its final
 world, a run that did not reach its goal is never shown as a success, a
-studio that stops leaves no run "running" on the page. Runs are kinematic
-with seeded faults; the page's values are checked against the studio's API and the command
+studio that stops leaves no run "running" on the page, and a page opened
+again shows the run that ended last. Runs are kinematic with seeded faults;
+the page's values are checked against the studio's API and the command
 layer's own run of the same request.
 """
 
@@ -30,6 +31,7 @@ from demoplan.execution.executor import RunReport
 from demoplan.execution.faults import Faults
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
+from demoplan.studio.jobs import LAST_RUN_FILE
 from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import ROOT, VIEWPORT, Studio, chromium
 
@@ -281,3 +283,51 @@ def test_the_badge_leaves_running_when_the_studio_stops(workdir: Path, tmp_path:
             assert summary.startswith("Stopped: the run's end is unknown: ")
             assert "does not answer" in summary
         assert page.button("Run").is_enabled() and page.button("Cancel").is_disabled()
+
+
+def test_a_page_opened_again_shows_the_last_run_of_the_work_folder(
+    workdir: Path, tmp_path: Path
+) -> None:
+    artifacts = tmp_path / "art"
+    with browsing(artifacts) as browser:
+        with serving(create_app(workdir)) as (url, _):
+            page = open_page(browser, url, artifacts)
+            run_id = start_run(page, DROPS, DROPS_SEED)
+            wait_until_over(page)
+            status = api(url, f"/api/runs/{run_id}")
+            page.tab.close()
+        assert (workdir / LAST_RUN_FILE).is_file()
+        # a studio started again on the work folder, a page opened anew
+        with serving(create_app(workdir)) as (url, _):
+            record = api(url, "/api/last-run")
+            assert record["run"] == run_id and record["events"] == status["events"]
+            page = open_page(browser, url, artifacts)
+            page.view("Run")
+            events = status["events"]
+            timeline = page.tab.locator('[data-testid="timeline"] > li')
+            kinds = [timeline.nth(k).get_attribute("data-kind") for k in range(timeline.count())]
+            assert kinds == [e["kind"] for e in events]
+            assert timeline.last.inner_text() == f"✓ {events[-1]['text']}"
+            assert page.tab.locator("#run-state").get_attribute("data-state") == "done"
+            assert (
+                page.tab.locator("#run-step-out").inner_text() == f"{len(events)} / {len(events)}"
+            )
+            assert_shows(page, status["result"]["world"])
+            show_event(page, 1)  # the start it ran from
+            assert_shows(page, events[0]["world"])
+            assert page.errors == []
+
+
+def test_a_record_that_is_not_a_run_is_refused_in_one_line(workdir: Path) -> None:
+    from fastapi.testclient import TestClient
+
+    with TestClient(create_app(workdir), base_url="http://127.0.0.1") as client:
+        answer = client.get("/api/last-run")
+        assert answer.status_code == 200 and answer.json() is None  # none yet
+        (workdir / LAST_RUN_FILE).write_text('{"format": "demoplan/studio-run-1"}')
+        answer = client.get("/api/last-run")
+        assert answer.status_code == 404
+        detail = answer.json()["detail"]
+        assert detail.startswith(f"run: {LAST_RUN_FILE} is not a run's record")
+        assert "\n" not in detail
+        assert LAST_RUN_FILE not in client.get("/api/files").json()["demonstrations"]

@@ -1,11 +1,13 @@
 // The Run view: a run in a process of its own on the server, polled, its events
 // as a timeline (POST /api/runs); the table shows the world the run observed at
-// each event.
+// each event; the run that ended last is shown again when the page is opened
+// (GET /api/last-run).
 
 import { ApiError, del, get, post } from "./api.js";
 import { $, alarm, clone, guarded, say, state } from "./common.js";
-import { chosenModel, sceneDocument, stopAnimation } from "./plan.js";
-import { keepInView, redraw } from "./stage.js";
+import { chosenModel, sceneDocument, sceneExtras, stopAnimation } from "./plan.js";
+import { keepInView, redraw, sameObjects } from "./stage.js";
+import { startDemonstration } from "./teach.js";
 
 // Polls in a row that may fail (a busy server) before the run is given up as lost.
 export const LOST_AFTER_FAILED_POLLS = 3;
@@ -207,4 +209,31 @@ export async function cancelRun() {
   if (!state.run.id) return;
   await del(`/api/runs/${encodeURIComponent(state.run.id)}`);
   say("Cancelling the run…");
+}
+
+// --- the last run, when the page is opened ----------------------------------
+
+// The run that ended last in the work folder, shown as it ended: the start
+// scene it ran from on the table (the Teach view starts there too when its
+// objects are others), its events, and its final world.
+export async function restoreLastRun() {
+  const record = await get("/api/last-run");
+  if (!record) return; // no run has ended in this work folder yet
+  const layout = record.layout;
+  if (!state.layout || !sameObjects(state.layout, layout)) {
+    startDemonstration(clone(layout), "The table of the last run.");
+  }
+  state.plan.poses = clone(layout.poses);
+  state.plan.extras = sceneExtras({ format: "demoplan/scene-1", ...record.scene });
+  keepInView(state.plan.poses);
+  for (const [id, value] of [["faults", record.faults || ""], ["run-seed", String(record.seed || 0)]]) $(id).value = value;
+  if ([...$("sim").options].some((o) => o.value === record.sim)) $("sim").value = record.sim;
+  if ([...$("plan-model").options].some((o) => o.value === record.model)) $("plan-model").value = record.model;
+  state.run.id = record.run;
+  state.run.status = { state: record.state, events: record.events, result: record.result, error: record.error };
+  state.run.follow = false;
+  $("timeline").replaceChildren();
+  renderRun(true);
+  alarm("");
+  say(`The last run of this work folder (${badgeState(state.run.status)}) is in the Run view.`);
 }
