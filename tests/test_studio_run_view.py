@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 import sys
 import threading
@@ -19,23 +20,25 @@ import time
 import urllib.request
 from collections.abc import Iterator
 from contextlib import contextmanager
+from io import StringIO
 from pathlib import Path
 from typing import Any
 
 import pytest
 from fastapi import FastAPI
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from demoplan.commands.execution import run
 from demoplan.commands.learning import learn_files
 from demoplan.execution.executor import RunReport
 from demoplan.execution.faults import Faults
 from demoplan.scenes.scene import yaw_of
+from demoplan.studio import worker
 from demoplan.studio.app import create_app
 from demoplan.studio.jobs import LAST_RUN_FILE
 from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import ROOT, VIEWPORT, Studio, chromium
-
-pytestmark = pytest.mark.slow
 
 BLOCKS = ROOT / "examples" / "blocks" / "demonstrations.json"
 FIG4 = ROOT / "examples" / "scenes" / "pyramid-fig4.json"
@@ -180,6 +183,7 @@ def command_layer_run(workdir: Path, faults: Faults, seed: int) -> tuple[RunRepo
     return report, texts
 
 
+@pytest.mark.slow
 def test_every_event_shows_the_world_the_run_observed_and_the_run_ends_on_its_final_world(
     workdir: Path, tmp_path: Path
 ) -> None:
@@ -232,6 +236,7 @@ def test_every_event_shows_the_world_the_run_observed_and_the_run_ends_on_its_fi
         assert page.errors == []
 
 
+@pytest.mark.slow
 def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
     workdir: Path, tmp_path: Path
 ) -> None:
@@ -263,6 +268,7 @@ def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
         assert page.errors == []
 
 
+@pytest.mark.slow
 def test_the_badge_leaves_running_when_the_studio_stops(workdir: Path, tmp_path: Path) -> None:
     app = create_app(workdir)
     # a run that never ends by itself: a worker that waits for the studio to go
@@ -285,6 +291,7 @@ def test_the_badge_leaves_running_when_the_studio_stops(workdir: Path, tmp_path:
         assert page.button("Run").is_enabled() and page.button("Cancel").is_disabled()
 
 
+@pytest.mark.slow
 def test_a_page_opened_again_shows_the_last_run_of_the_work_folder(
     workdir: Path, tmp_path: Path
 ) -> None:
@@ -331,3 +338,68 @@ def test_a_record_that_is_not_a_run_is_refused_in_one_line(workdir: Path) -> Non
         assert detail.startswith(f"run: {LAST_RUN_FILE} is not a run's record")
         assert "\n" not in detail
         assert LAST_RUN_FILE not in client.get("/api/files").json()["demonstrations"]
+
+
+@pytest.fixture(scope="module")
+def blocks_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("model")
+    learn_files([BLOCKS], output=folder / "model.json")
+    return folder / "model.json"
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    drop=st.sampled_from([0.0, 0.3, 0.6, 1.0]),
+    misplace=st.sampled_from([0.0, 0.4]),
+    seed=st.integers(0, 10_000),
+)
+def test_the_worlds_a_run_streams_are_what_the_world_saw(
+    blocks_model: Path, drop: float, misplace: float, seed: int
+) -> None:
+    """The worker's events (as streamed, before the end) against the command
+    layer's run of the same request: the same events; the end's world is the
+    report's final observation; a dropped or misplaced object is seen, at the
+    failure, where the world put it; a PUT_DOWN begins with its object in the
+    hand, a GRASP with the hand empty."""
+    scene = json.loads(FIG4.read_text(encoding="utf-8"))
+    scene.pop("format")
+    request = {
+        "model": str(blocks_model),
+        "scene": scene,
+        "sim": "kinematic",
+        "faults": f"drop={drop},misplace={misplace}",
+        "seed": seed,
+    }
+    protocol = StringIO()
+    outcome = worker._run(request, protocol)
+    streamed = [json.loads(line)["event"] for line in protocol.getvalue().splitlines()]
+    report, texts = command_layer_run(
+        blocks_model.parent, Faults(drop=drop, misplace=misplace), seed
+    )
+    assert [f"{e['kind']}: {e['text']}" for e in streamed] == texts
+    assert [e | {"success": report.success} if e["kind"] == "done" else e for e in streamed] == (
+        outcome["events"]
+    )
+    final = streamed[-1]["world"]
+    assert final == outcome["result"]["world"]
+    assert final["held"] == report.final.held
+    assert set(final["objects"]) == set(report.final.poses)
+    for name, pose in report.final.poses.items():
+        assert final["objects"][name]["position"] == pytest.approx(list(pose.position), abs=1e-12)
+    worlds = [e["world"]["objects"] for e in streamed]
+    for fault in report.injected:  # the world's own record of where it put them
+        if fault.position is not None:
+            assert any(
+                seen.get(fault.object, {}).get("position") == list(fault.position)
+                for seen in worlds
+            ), fault
+    for event in streamed:  # the failure's own words: "X stands at (x, y, z), …"
+        words = re.fullmatch(r"(?:dropped|misplaced): (\S+) stands at \(([^)]*)\).*", event["text"])
+        if event["kind"] == "failure" and words:
+            seen = event["world"]["objects"][words[1]]["position"]
+            assert [f"{v:.3f}" for v in seen] == words[2].split(", "), event
+    for event in streamed:
+        if event["kind"] == "action":
+            kind, name = event["text"].split()[:2]
+            assert event["world"]["held"] == (name if kind == "PUT_DOWN" else None), event
+            assert (name in event["world"]["objects"]) == (kind == "GRASP"), event
