@@ -8,7 +8,7 @@ import { learn } from "./learn.js";
 import {
   addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, saveScene, scramble, setPlanStep, stopAnimation,
 } from "./plan.js";
-import { cancelRun, setRunStep, startRun } from "./run.js";
+import { cancelRun, restoreLastRun, setRunStep, startRun } from "./run.js";
 import { redraw, table, tableRoom } from "./stage.js";
 import {
   addThing, loadFile, newDemonstration, refreshFiles, restoreSource, save, saveObjects, undo, useTemplate,
@@ -115,6 +115,7 @@ async function start() {
     await refreshFiles();
     await restoreSource();
     await newDemonstration();
+    await restoreLastRun();
   });
   document.body.dataset.ready = "true";
 }
