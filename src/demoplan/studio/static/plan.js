@@ -29,8 +29,9 @@ export function sceneDocument() {
     if (objects[name]) Object.assign(objects[name], fields);
   }
   const scene = { format: "demoplan/scene-1", objects, ...extras.scene };
-  if (!scene.table) {
-    // free space is generated on the table the page draws (a scene's own table is kept)
+  if (!state.plan.extras) {
+    // free space is generated on the table the page draws; a scene file loaded
+    // is planned as the command line plans it (with its own table, or none)
     const [x0, y0] = state.layout.table.origin;
     const [w, h] = state.layout.table.size;
     const r4 = (v) => Math.round(v * 1e4) / 1e4;
