@@ -13,11 +13,12 @@ from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from demoplan.commands.objects import objects_from_document, scene_document
 from demoplan.errors import InputError
+from demoplan.model import ObjectGeometry, footprint
 from demoplan.scenes.scene import scene_from_document, yaw_of
 from demoplan.studio.app import create_app
 from tests.studio_browser import ROOT
@@ -346,3 +347,69 @@ def test_an_objects_file_without_objects_or_sizes_is_refused(client: TestClient)
         client.put("/api/objects/x.json", json={"layout": layout}), 422, "objects.apple.size"
     )
     assert client.get("/api/files").json()["objects"] == []
+
+
+def outline(entry: dict[str, Any], pose: dict[str, Any]) -> Any:
+    size = entry["size"]
+    return footprint(ObjectGeometry(entry["shape"], tuple(size)), pose["position"], pose["yaw"])
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    box=st.tuples(st.floats(0.2, 0.6), st.floats(0.3, 0.5), st.floats(-180, 180)),
+    near=st.sampled_from(["lunchbox", "sandwich", "apple", "juice", "carrot", "cookie"]),
+    release=st.tuples(st.floats(-0.15, 0.15), st.floats(-0.12, 0.12), st.floats(-180, 180)),
+    thing=st.sampled_from(["sandwich", "juice", "carrot", "cookie"]),
+)
+def test_a_release_never_rests_inside_a_thing(
+    client: TestClient,
+    box: tuple[float, float, float],
+    near: str,
+    release: tuple[float, float, float],
+    thing: str,
+) -> None:
+    """Wherever the box stands and a thing is released near something (by
+    ``release``, an offset from it): it rests on the table
+    or on a top, clear (within the touch tolerance) of everything that stands
+    higher, or the release is refused; released wholly over the box, it stands
+    on the box's top."""
+    layout = lunch_layout()
+    mark = layout["landmarks"]["lunchbox"]
+    mark["position"], mark["yaw"] = [box[0], box[1], 0.0], box[2]
+    poses = layout["poses"]
+    box_outline = outline(mark, mark)
+    for name in list(poses):  # things the box would stand on are taken off the table
+        if outline(layout["objects"][name], poses[name]).intersects(box_outline):
+            del layout["objects"][name], poses[name]
+    if thing not in poses:
+        return
+    if near != "lunchbox" and near not in poses:
+        return
+    centre = (mark if near == "lunchbox" else poses[near])["position"]
+    x, y, yaw = centre[0] + release[0], centre[1] + release[1], release[2]
+    body = {"layout": layout, "object": thing, "position": [x, y], "yaw": yaw}
+    answer = client.post("/api/drop", json=body)
+    dropped = outline(layout["objects"][thing], {"position": [x, y], "yaw": yaw})
+    event(f"{answer.status_code}: on {answer.json().get('on') or 'the table'}")
+    if answer.status_code == 422:
+        assert (
+            "pass through" in answer.json()["detail"] or "moves with it" in answer.json()["detail"]
+        )
+        return
+    assert answer.status_code == 200, answer.text
+    z = answer.json()["pose"]["position"][2]
+    core = dropped.buffer(-0.002)
+    things = [(mark, mark, BOX_HEIGHT)] + [
+        (layout["objects"][n], p, p["position"][2] + layout["objects"][n]["size"][2])
+        for n, p in poses.items()
+        if n != thing
+    ]
+    for entry, pose, top in things:
+        if top > z + 1e-9:
+            assert not core.intersects(outline(entry, pose)), (entry, pose, z)
+    if box_outline.contains(dropped) and not any(
+        dropped.intersects(outline(layout["objects"][n], p)) for n, p in poses.items() if n != thing
+    ):
+        assert answer.json()["on"] == "lunchbox" and z == pytest.approx(BOX_HEIGHT)
