@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
 from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import VIEWPORT, Studio, chromium, studio_server
@@ -191,6 +192,13 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
     page.settle()
     assert page.alert() == ""
     model = load_model(workdir / "model.json")
+    # as `demoplan learn` learns it from the saved files
+    cli = learn_model([workdir / f"lunch-{k}.json" for k in (1, 2, 3)])
+    assert (model.states, model.sequences, model.constraints) == (
+        cli.states,
+        cli.sequences,
+        cli.constraints,
+    )
     references = {s.object: s.position.reference for s in model.states}
     assert references == {
         "sandwich": "lunchbox",
