@@ -37,12 +37,17 @@ THINGS = [
 # where each thing goes in the box's frame (x, y, yaw relative to the box)
 IN_BOX = {
     "sandwich": (-0.07, 0.0, 0.0),
-    "apple": (0.02, 0.045, None),
+    "apple": (0.025, 0.045, None),
     "juice": (0.095, 0.045, 0.0),
     "carrot": (0.055, -0.06, 0.0),
     "cookie": (-0.07, 0.0, None),
 }
 BOX_POSES = [(0.45, 0.40, 0.0), (0.40, 0.42, 30.0), (0.50, 0.38, -20.0)]
+# the sandwich (and the cookie on it) lies a few mm elsewhere in the box each
+# time, as a person's would: the apple is then placed relative to the box, not
+# to the sandwich, by the data rather than by a tie
+SANDWICH_SHIFTS = [(0.0, 0.0), (0.005, 0.004), (-0.002, -0.004)]
+MEAN_SHIFT = (0.001, 0.0)
 ORDERS = [
     ["sandwich", "apple", "juice", "carrot", "cookie"],
     ["sandwich", "carrot", "apple", "juice", "cookie"],
@@ -57,6 +62,14 @@ def in_world(box: tuple[float, float, float], local: tuple[float, float]) -> tup
     c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
     u, v = local
     return round(x + c * u - s * v, 4), round(y + s * u + c * v, 4)
+
+
+def shifted(name: str) -> tuple[float, float]:
+    """Where ``name``'s learned target lies in the box: the mean of its demonstrations."""
+    u, v, _ = IN_BOX[name]
+    if name in ("sandwich", "cookie"):
+        return u + MEAN_SHIFT[0], v + MEAN_SHIFT[1]
+    return u, v
 
 
 def in_box(box: tuple[float, float, float], point: tuple[float, float]) -> tuple[float, float]:
@@ -172,6 +185,8 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
         assert page.steps() == 0
         for name in order:
             u, v, turn = IN_BOX[name]
+            if name in ("sandwich", "cookie"):
+                u, v = u + SANDWICH_SHIFTS[k - 1][0], v + SANDWICH_SHIFTS[k - 1][1]
             page.drag(name, *in_world(box, (u, v)), yaw=None if turn is None else box[2] + turn)
             assert page.alert() == ""
         assert page.pose("sandwich")[2] == pytest.approx(BOX[2])
@@ -215,7 +230,8 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
         target = tab.locator(f'#table [data-target="{state.id}"]')
         x, y = (float(target.get_attribute(f"data-{k}") or "nan") for k in "xy")
         u, v = in_box(BOX_POSES[2], (x, y))
-        assert (u, v) == pytest.approx(IN_BOX[state.object][:2], abs=1e-3)
+        expected = shifted(state.object)
+        assert (u, v) == pytest.approx(expected, abs=1e-3), state.object
 
     # at 1280 and 1440 px the States table fits its panel: no column is cut off
     fits = "e => e.scrollWidth <= e.clientWidth + 1"
@@ -273,10 +289,10 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
     tab.get_by_label("Step", exact=True).fill(str(len(shown)))
     page.settle()
     half_x, half_y, height = BOX[0] / 2, BOX[1] / 2, BOX[2]
-    for name, (u, v, turn) in IN_BOX.items():
+    for name, (_, _, turn) in IN_BOX.items():
         x, y, z, yaw = page.pose(name)
         local = in_box(PLAN_BOX, (x, y))
-        assert local == pytest.approx((u, v), abs=1e-3), name
+        assert local == pytest.approx(shifted(name), abs=1e-3), name
         assert abs(local[0]) < half_x and abs(local[1]) < half_y, name
         assert z == pytest.approx(height + (0.03 if name == "cookie" else 0.0), abs=1e-6)
         if turn is not None:  # a box's yaw, taken modulo a half turn
