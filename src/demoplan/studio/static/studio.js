@@ -10,9 +10,8 @@ import {
 } from "./plan.js";
 import { cancelRun, restoreLastRun, setRunStep, startRun } from "./run.js";
 import { redraw, table, tableRoom } from "./stage.js";
-import {
-  addThing, loadFile, newDemonstration, refreshFiles, restoreSource, save, saveObjects, undo, useTemplate,
-} from "./teach.js";
+import { addThing, restoreSource, saveObjects, useTemplate } from "./objects.js";
+import { loadFile, newDemonstration, refreshFiles, save, undo } from "./teach.js";
 import { get } from "./api.js";
 
 // --- views ----------------------------------------------------------------
