@@ -198,6 +198,7 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
         page.button("Save").click()
         page.settle()
         assert page.alert() == ""
+        assert "move the lunchbox between demonstrations" in tab.get_by_role("status").inner_text()
         saved = json.loads((workdir / f"lunch-{k}.json").read_text())
         assert saved["landmarks"]["lunchbox"]["yaw"] == box[2]
         assert [s["object"] for s in saved["steps"]] == order

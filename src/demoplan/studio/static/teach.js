@@ -118,7 +118,11 @@ export async function save() {
   const answer = await post("/api/demonstrations", { document: demonstrationDocument(), name });
   state.teach.saved = true;
   $("save-name").value = "";
-  say(`Saved ${answer.file} (${state.teach.steps.length} steps).`);
+  const marks = Object.keys(state.layout.landmarks || {});
+  const next = marks.length
+    ? ` Press New demonstration, then move the ${marks.join(" or ")} between demonstrations (moving it is not a step).`
+    : "";
+  say(`Saved ${answer.file} (${state.teach.steps.length} steps).${next}`);
   await refreshFiles();
 }
 
