@@ -927,6 +927,7 @@ TITLES = {
     "objects": "Object geometry file",
     "requirements": "Teacher constraints file",
     "scene": "Scene (`demoplan/scene-1`)",
+    "studio_objects": "Objects file (`demoplan/objects-1`)",
     "markers": "Markers file (`demoplan/markers-1`)",
     "camera": "Camera file (`demoplan/camera-1`)",
     "palette": "Palette file",
@@ -959,6 +960,7 @@ def formats_page() -> str:
         objects_section(),
         requirements_section(),
         scene_section(),
+        studio_objects_section(),
         markers_section(),
         camera_section(),
         palette_section(),
@@ -979,6 +981,7 @@ FORMS = {
     "objects": "JSON / YAML",
     "requirements": "text",
     "scene": "JSON / YAML: `demoplan/scene-1`",
+    "studio_objects": "JSON: `demoplan/objects-1` (the studio's **Save objects**)",
     "markers": "JSON / YAML",
     "camera": "JSON / YAML: `demoplan/camera-1`",
     "palette": "JSON / YAML",
@@ -996,6 +999,7 @@ SHORT_TITLES = {
     "objects": "Object geometry",
     "requirements": "Teacher constraints",
     "scene": "Scene",
+    "studio_objects": "Objects file",
     "markers": "Markers",
     "camera": "Camera",
     "palette": "Palette",
@@ -1372,6 +1376,45 @@ def scene_section() -> str:
             field_table(GRIPPER),
             field_table(TABLE),
             field_table(ROBOT),
+        ]
+    )
+
+
+STUDIO_OBJECTS_EXAMPLE = """{
+  "format": "demoplan/objects-1",
+  "objects": {
+    "sandwich": {"shape": "box", "size": [0.1, 0.1, 0.03], "position": [0.08, 0.08, 0.0],
+                 "yaw": 0.0, "colour": "#d9a441", "mass": 0.15},
+    "cookie": {"shape": "cylinder", "size": [0.05, 0.05, 0.01], "position": [0.5, 0.055, 0.0],
+               "yaw": 0.0, "colour": "#7f5539", "type": "biscuit"}
+  },
+  "landmarks": {
+    "lunchbox": {"shape": "box", "size": [0.26, 0.18, 0.02], "position": [0.45, 0.4, 0.0],
+                 "yaw": 0.0, "colour": "#2e86c1"}
+  }
+}"""
+"""An objects file as the studio writes it (the lunch box of
+tests/test_studio_own_objects_browser.py, shortened); tests/test_studio_objects.py
+reads it from formats.md with the objects file's reader."""
+
+
+def studio_objects_section() -> str:
+    return blocks(
+        [
+            f"## {TITLES['studio_objects']}",
+            "The things of a task of your own, as the studio's **Save objects** writes "
+            'them and its Teach view starts from (docs/studio.md, "Your own objects"): '
+            f"a {link('scene', 'scene')} — every object with its `shape`, `size`, `mass` or "
+            "`density`, `type` and where it stands at the start; every landmark with its "
+            "`shape`, `size` and pose — in which an object or a landmark may also name its "
+            "`colour` (`#rrggbb`; default: the colour every demoplan figure gives it). It is "
+            "read by the scene reader, so every field means and is checked as in a scene, "
+            "and every object must give its `size`; a colour that is not `#rrggbb` is one "
+            "error line naming the file and the field (`objects.pear.colour`). Without its "
+            "colours it is a scene that `plan` and `run` read; the studio's **Save scene** "
+            "writes that scene, with the start as its Plan view shows it. A lunch box "
+            "(tests/test_studio_own_objects_browser.py), shortened:",
+            fenced("json", STUDIO_OBJECTS_EXAMPLE),
         ]
     )
 

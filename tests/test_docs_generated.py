@@ -102,6 +102,10 @@ def load(document: dict[str, Any], tmp_path: Path) -> object:
         return scene_from_document(document, "example")
     if kind == "model":
         return model_from_dict(document, "example")
+    if kind == "objects":  # the studio's objects file
+        from demoplan.commands.objects import objects_from_document
+
+        return objects_from_document(document, "example")
     if kind == "markers":  # calibrate --markers, perceive --markers
         from demoplan.perception.calibration import markers_from_document
 

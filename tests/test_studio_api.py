@@ -87,9 +87,12 @@ def save_blocks_and_learn(client: TestClient) -> dict[str, Any]:
 # --- templates and layouts ---
 
 
-def test_the_templates_are_the_three_tasks(client: TestClient) -> None:
+def test_the_templates_are_the_three_tasks_and_an_empty_table(client: TestClient) -> None:
     ids = [t["id"] for t in client.get("/api/templates").json()["templates"]]
-    assert ids == ["set_table", "blocks", "kit"]
+    assert ids == ["set_table", "blocks", "kit", "empty"]
+    empty = client.get("/api/templates/empty").json()
+    assert empty["objects"] == {} and empty["poses"] == {} and empty["landmarks"] == {}
+    assert empty["table"]["size"] == [0.8, 0.6]
 
 
 @pytest.mark.parametrize(
@@ -209,6 +212,7 @@ def test_saved_demonstrations_are_listed_and_read_back(client: TestClient) -> No
     assert client.get("/api/files").json() == {
         "demonstrations": names,
         "models": [],
+        "objects": [],
         "scenes": ["fig4.json"],
     }
     answer = client.get("/api/files/demonstration-2.json").json()
@@ -884,7 +888,7 @@ def test_the_command_prints_its_url_answers_and_stops_as_every_command(
             assert page.status == 200 and b"<html" in page.read().lower()
         with urllib.request.urlopen(url + "api/templates", timeout=60) as answer:
             ids = [t["id"] for t in json.loads(answer.read())["templates"]]
-        assert ids == ["set_table", "blocks", "kit"]
+        assert ids == ["set_table", "blocks", "kit", "empty"]
         process.send_signal(stop)
         assert process.wait(timeout=60) == code
         assert process.stderr is not None

@@ -39,11 +39,14 @@ from demoplan.studio.requests import (
     MAX_SEED,
     DemonstrationRequest,
     DropRequest,
+    LandmarkRequest,
     LearnRequest,
+    ObjectsRequest,
     PlanRequest,
     RunRequest,
     SceneRequest,
     ScrambleRequest,
+    SourceBody,
 )
 from demoplan.studio.workfolder import FileConflictError, FileMissingError, WorkFolder
 
@@ -325,7 +328,54 @@ def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
             from demoplan.studio.layouts import layout_of_scene
 
             answer["layout"] = layout_of_scene(scene_from_document(document, name))
+        elif kind == "objects":
+            from demoplan.commands.objects import objects_from_document
+            from demoplan.studio.layouts import layout_of_objects
+
+            answer["layout"] = layout_of_objects(objects_from_document(document, name), name)
         return answer
+
+    @app.get("/api/source")
+    def source() -> dict[str, Any]:
+        return {"source": folder.source()}
+
+    @app.put("/api/source")
+    def keep_source(body: SourceBody) -> dict[str, Any]:
+        if body.kind == "template":
+            from demoplan.studio.layouts import TEMPLATES
+
+            if body.id not in {t.id for t in TEMPLATES}:
+                raise FileMissingError(
+                    f"id: no template {body.id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
+                )
+        elif not folder.path(body.id, "id").is_file():
+            raise FileMissingError(f"id: no file {body.id!r} in the work folder")
+        folder.keep_source(body.kind, body.id)
+        return {"source": folder.source()}
+
+    @app.put("/api/objects/{name}")
+    def save_objects(name: str, body: ObjectsRequest) -> dict[str, str]:
+        from demoplan.commands.objects import objects_from_document
+        from demoplan.studio.layouts import objects_document
+
+        document = objects_document(body.layout)
+        objects_from_document(document, "layout")  # as the studio reads it back
+        path = folder.path(name)
+        if not path.exists():
+            return {"file": folder.create(document, name, "objects")}
+        if not body.replace or folder.kind(folder.read(name), name) != "objects":
+            how = "only an objects file is replaced" if body.replace else '"replace": true expected'
+            raise FileConflictError(f"name: {name} exists in the work folder; {how}")
+        folder.replace(document, name)
+        return {"file": name}
+
+    @app.post("/api/landmark")
+    def move_landmark(body: LandmarkRequest) -> dict[str, Any]:
+        from demoplan.studio.layouts import placed_landmark
+
+        return placed_landmark(
+            body.layout, body.landmark, (body.position[0], body.position[1]), body.yaw
+        )
 
     @app.post("/api/drop")
     def drop(body: DropRequest) -> dict[str, Any]:
@@ -392,7 +442,9 @@ def _add_learning_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
         warnings = [f"warning: {line}" for line in diagnostic_lines(model)]
         warnings += [line.replace(where, "") for line in dict.fromkeys(logged)]
         with jobs.working():
-            targets = targets_json(model, scene if scene is not None else final_scene(model))
+            targets = _targets(model, scene) if scene is not None else None
+            if targets is None:  # no scene, or one of another task: the first demonstration's end
+                targets = targets_json(model, final_scene(model))
         return {"model": body.output, **model_json(model), "targets": targets, "warnings": warnings}
 
     @app.post("/api/plan")
@@ -461,6 +513,18 @@ def _add_run_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
     def media(name: str) -> FileResponse:
         path = _media_path(folder, name)
         return FileResponse(path, media_type=MEDIA_SUFFIXES[path.suffix])
+
+
+def _targets(model: Any, scene: Any) -> list[dict[str, Any]] | None:
+    """The learned targets resolved in ``scene`` (the table as the page shows
+    it, landmarks where they stand now), or None where the scene does not hold
+    the model's objects."""
+    from demoplan.studio.views import targets_json
+
+    try:
+        return targets_json(model, scene)
+    except DemoplanError:
+        return None
 
 
 def _model_path(folder: WorkFolder, name: str) -> Path:

@@ -13,13 +13,14 @@ degrees) and ``table`` (the rectangle drawn: ``origin`` and ``size``).
 from __future__ import annotations
 
 import random
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from demoplan.commands.objects import ObjectsFile
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry, Pose, footprint
 from demoplan.plotting.colours import assign_colours
@@ -34,7 +35,10 @@ __all__ = [
     "Template",
     "dropped_pose",
     "layout_of_demonstration",
+    "layout_of_objects",
     "layout_of_scene",
+    "objects_document",
+    "placed_landmark",
     "scattered",
     "template_layout",
 ]
@@ -61,7 +65,10 @@ TEMPLATES = (
     Template("set_table", "Set the table (the paper's Experiment 1)", "set_table"),
     Template("blocks", "Stack the blocks (the paper's Experiment 2)", "blocks/demonstrations.json"),
     Template("kit", "Fill the kit tray", "kitting/demonstrations.json"),
+    Template("empty", "An empty table for your own objects", ""),
 )
+EMPTY_TABLE = {"origin": [0.0, 0.0], "size": [0.8, 0.6]}
+"""m: the table of the empty template."""
 
 
 def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]:
@@ -75,6 +82,14 @@ def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]
         raise FileMissingError(
             f"template: no template {template_id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
         )
+    if not template.example:
+        return {
+            "template": template.id,
+            "objects": {},
+            "landmarks": {},
+            "poses": {},
+            "table": EMPTY_TABLE,
+        }
     demonstrations = load_inputs([examples_dir() / template.example])
     layout = layout_of_demonstration(demonstrations[0], demonstrations, template.id)
     if seed is None:
@@ -127,7 +142,7 @@ def layout_of_scene(scene: Scene) -> dict[str, Any]:
         "template": None,
         "objects": {
             o.name: (
-                _shape(o.geometry, colours[o.name])
+                _shape(o.geometry, colours[o.name], o.type)
                 if o.geometry is not None
                 else {"shape": "box", "size": None, "colour": colours[o.name]}
             )
@@ -140,6 +155,44 @@ def layout_of_scene(scene: Scene) -> dict[str, Any]:
         "poses": {o.name: _pose(o.pose) for o in scene.objects},
         "table": table,
     }
+
+
+def layout_of_objects(objects: ObjectsFile, name: str) -> dict[str, Any]:
+    """The layout of an objects file (``name``): its start as a scene, in the
+    colours, masses and types it gives."""
+    layout = layout_of_scene(objects.scene)
+    layout["template"] = None
+    for thing, colour in objects.colours:
+        entry = layout["objects"].get(thing) or layout["landmarks"].get(thing)
+        if entry is not None:
+            entry["colour"] = colour
+    for thing, key, value in objects.masses:
+        if thing in layout["objects"]:
+            layout["objects"][thing][key] = value
+    return layout
+
+
+def objects_document(layout: Layout) -> dict[str, Any]:
+    """``layout`` as an objects file (``demoplan/objects-1``): every object with
+    its shape, size, colour, mass or density, type and start pose; every
+    landmark with its shape, size, pose and colour."""
+    objects: dict[str, Any] = {}
+    for name, shape in layout.objects.items():
+        pose = layout.poses[name]
+        entry: dict[str, Any] = {"shape": shape.shape, "size": shape.size}
+        entry |= {"position": list(pose.xyz), "yaw": pose.yaw}
+        extras = {"colour": shape.colour, "mass": shape.mass, "density": shape.density}
+        entry |= {k: v for k, v in (extras | {"type": shape.type}).items() if v is not None}
+        objects[name] = entry
+    landmarks: dict[str, Any] = {}
+    for name, mark in layout.landmarks.items():
+        landmarks[name] = {"shape": mark.shape, "position": list(mark.xyz), "yaw": mark.yaw}
+        if mark.size is not None:
+            landmarks[name]["size"] = mark.size
+        if mark.colour is not None:
+            landmarks[name]["colour"] = mark.colour
+    document: dict[str, Any] = {"format": "demoplan/objects-1", "objects": objects}
+    return document | ({"landmarks": landmarks} if landmarks else {})
 
 
 def scattered(layout: Layout, seed: int) -> dict[str, Any]:
@@ -192,8 +245,11 @@ def dropped_pose(
     the highest top under it that holds it up (an object or a landmark whose
     outline covers at least the support share of its own), else on the table.
 
-    What stands on ``name`` now moves with it: landing on that is refused, as
-    is an object of unknown size."""
+    Things do not pass through each other: a release whose outline overlaps
+    something standing higher than where it would rest, by more than the touch
+    tolerance (a box's rim it barely covers, an apple beside its landing spot),
+    is refused, as is landing on
+    what stands on ``name`` (it moves with it) and an object of unknown size."""
     settings = GeometrySettings()
     shapes = {n: _known(layout, n) for n in layout.objects}
     if name not in shapes:
@@ -202,31 +258,78 @@ def dropped_pose(
         )
     riders = _carried(layout, shapes, name, settings)
     moved = footprint(shapes[name], position, yaw)
+    core = moved.buffer(-settings.touch_tolerance)  # a graze within the tolerance is a touch
     area = moved.area
     landing: list[tuple[float, str]] = []
-    for other, shape in shapes.items():
-        if other == name:
-            continue
-        pose = layout.poses[other]
-        outline = footprint(shape, pose.xyz, pose.yaw)
+    touched: list[tuple[float, str]] = []  # (top, name) of everything the outline overlaps
+    for other, outline, _, top in _things(layout, shapes, exclude=name):
         if moved.intersection(outline).area >= settings.support_fraction * area:
-            landing.append((pose.xyz[2] + shape.size[2], other))
-    for mark_name, mark in layout.landmarks.items():
-        if mark.size is None:
-            continue
-        outline = footprint(_geometry(mark.shape, mark.size), mark.xyz, mark.yaw)
-        if moved.intersection(outline).area >= settings.support_fraction * area:
-            landing.append((mark.xyz[2] + mark.size[2], mark_name))
-    if not landing:
-        return {"pose": {"position": [position[0], position[1], 0.0], "yaw": yaw}, "on": None}
-    top, support = max(landing)
-    if support in riders:
+            landing.append((top, other))
+        if core.intersects(outline) and other not in riders:
+            touched.append((top, other))
+    top, support = max(landing) if landing else (0.0, None)
+    if support is not None and support in riders:
         raise InputError(
             f"{name!r} would land on {support!r}, which stands on it and moves with it; "
             "a place clear of what it carries expected",
             field="position",
         )
+    blocking = sorted(other for height, other in touched if height > top + 1e-6)
+    if blocking:
+        raise InputError(
+            f"{name!r} would pass through {', '.join(map(repr, blocking))}; "
+            "a free place, or one on top of a single thing, expected",
+            field="position",
+        )
     return {"pose": {"position": [position[0], position[1], top], "yaw": yaw}, "on": support}
+
+
+def placed_landmark(
+    layout: Layout, name: str, position: tuple[float, float], yaw: float
+) -> dict[str, Any]:
+    """``name``'s landmark moved to ``position`` at ``yaw``: it stands on the
+    table, and may not be put down on or through an object or another landmark
+    (an InputError naming them)."""
+    mark = layout.landmarks.get(name)
+    if mark is None:
+        raise InputError(
+            f"unknown landmark {name!r}; expected one of {sorted(layout.landmarks)}",
+            field="landmark",
+        )
+    pose = {"position": [position[0], position[1], 0.0], "yaw": yaw}
+    if mark.size is None:
+        return {"pose": pose}
+    shapes = {n: _known(layout, n) for n in layout.objects}
+    core = footprint(_geometry(mark.shape, mark.size), position, yaw).buffer(
+        -GeometrySettings().touch_tolerance
+    )
+    hit = sorted(
+        other
+        for other, outline, _, _ in _things(layout, shapes, exclude=name)
+        if core.intersects(outline)
+    )
+    if hit:
+        raise InputError(
+            f"landmark {name!r} would be put down on {', '.join(map(repr, hit))}; "
+            "a clear place on the table expected (move the objects first)",
+            field="position",
+        )
+    return {"pose": pose}
+
+
+def _things(
+    layout: Layout, shapes: Mapping[str, ObjectGeometry], exclude: str
+) -> Iterator[tuple[str, BaseGeometry, float, float]]:
+    """Every object and sized landmark but ``exclude``: name, outline, bottom, top."""
+    for other, shape in shapes.items():
+        if other != exclude:
+            pose = layout.poses[other]
+            bottom = pose.xyz[2]
+            yield other, footprint(shape, pose.xyz, pose.yaw), bottom, bottom + shape.size[2]
+    for mark_name, mark in layout.landmarks.items():
+        if mark_name != exclude and mark.size is not None:
+            outline = footprint(_geometry(mark.shape, mark.size), mark.xyz, mark.yaw)
+            yield mark_name, outline, mark.xyz[2], mark.xyz[2] + mark.size[2]
 
 
 def _carried(
@@ -288,8 +391,9 @@ def _table_body(layout: Layout) -> Any:
     return TableBody.model_validate(_table(outlines))
 
 
-def _shape(geometry: ObjectGeometry, colour: str) -> dict[str, Any]:
-    return {"shape": geometry.shape, "size": list(geometry.size), "colour": colour}
+def _shape(geometry: ObjectGeometry, colour: str, kind: str | None = None) -> dict[str, Any]:
+    shape = {"shape": geometry.shape, "size": list(geometry.size), "colour": colour}
+    return shape if kind is None else {**shape, "type": kind}
 
 
 def _landmark(geometry: ObjectGeometry | None, pose: Pose, colour: str) -> dict[str, Any]:

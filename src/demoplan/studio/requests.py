@@ -20,12 +20,15 @@ __all__ = [
     "MAX_OBJECTS",
     "DemonstrationRequest",
     "DropRequest",
+    "LandmarkRequest",
     "Layout",
     "LearnRequest",
+    "ObjectsRequest",
     "PlanRequest",
     "RunRequest",
     "SceneRequest",
     "ScrambleRequest",
+    "SourceBody",
 ]
 
 MAX_DISTANCE_M = 1000.0
@@ -57,6 +60,14 @@ Coordinate = Annotated[float, Field(strict=True, ge=-MAX_DISTANCE_M, le=MAX_DIST
 Extent = Annotated[float, Field(strict=True, ge=MIN_SIZE_M, le=MAX_SIZE_M)]
 Yaw = Annotated[float, Field(strict=True, ge=-MAX_YAW, le=MAX_YAW)]
 Seed = Annotated[int, Field(strict=True, ge=0, le=MAX_SEED)]
+TypeName = Annotated[
+    str, StringConstraints(min_length=1, max_length=100, pattern=r"^[^\s#\x00-\x1f\x7f]+$")
+]
+"""A type of identical objects (``plate``): no spaces, no ``#`` (roles are ``plate#1``)."""
+MAX_MASS_KG = 1000.0
+"""kg: an object a hand moves; more is a unit mistake."""
+MAX_DENSITY = 22600.0
+"""kg/m³: osmium, the densest element."""
 
 
 class _Body(BaseModel):
@@ -76,15 +87,23 @@ class PoseBody(_Body):
 
 
 class ShapeBody(_Body):
+    """An object: its shape and size; its colour, its mass (kg) or density
+    (kg/m³) and its type (identical objects share one) where given."""
+
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Extent] | None = Field(min_length=3, max_length=3)
     colour: str | None = Field(default=None, pattern=r"^#[0-9a-fA-F]{6}$")
+    mass: Annotated[float, Field(strict=True, gt=0, le=MAX_MASS_KG)] | None = None
+    density: Annotated[float, Field(strict=True, gt=0, le=MAX_DENSITY)] | None = None
+    type: TypeName | None = None
 
 
-class LandmarkBody(ShapeBody, PoseBody):
+class LandmarkBody(PoseBody):
     """A landmark: its shape (the size may be unknown) where it stands."""
 
+    shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Extent] | None = Field(default=None, min_length=3, max_length=3)
+    colour: str | None = Field(default=None, pattern=r"^#[0-9a-fA-F]{6}$")
 
 
 class TableBody(_Body):
@@ -146,6 +165,30 @@ class DemonstrationRequest(_Body):
 
 class SceneRequest(DemonstrationRequest):
     pass
+
+
+class LandmarkRequest(_Body):
+    """A landmark moved or turned: where it is put down."""
+
+    layout: Layout
+    landmark: Name
+    position: list[Coordinate] = Field(min_length=2, max_length=2)
+    yaw: Yaw = 0.0
+
+
+class ObjectsRequest(_Body):
+    """An objects file to write: the layout's objects, landmarks and start."""
+
+    layout: Layout
+    replace: StrictBool = False
+
+
+class SourceBody(_Body):
+    """What the Teach view starts from: a template, or an objects, scene or
+    demonstration file of the work folder."""
+
+    kind: Literal["template", "file"]
+    id: Annotated[str, StringConstraints(min_length=1, max_length=100)]
 
 
 class DropRequest(_Body):

@@ -48,8 +48,12 @@ KINDS = {
     "demonstration": "demonstrations",
     "demonstrations": "demonstrations",
     "model": "models",
+    "objects": "objects",
     "scene": "scenes",
 }
+SOURCE_FILE = ".studio-source.json"
+"""Where the Teach view's template or file in use is kept across reloads
+(hidden: never listed, never a name the API accepts)."""
 
 
 class FileMissingError(LookupError):
@@ -104,7 +108,7 @@ class WorkFolder:
         return read_document(path)
 
     def kind(self, document: dict[str, Any], name: str) -> str | None:
-        """``demonstrations``, ``models`` or ``scenes``: where the listing shows it."""
+        """``demonstrations``, ``models``, ``objects`` or ``scenes``: where the listing shows it."""
         try:
             kind, _ = check_format(document, set(KINDS), name)
         except InputError:
@@ -113,7 +117,12 @@ class WorkFolder:
 
     def listing(self) -> dict[str, list[str]]:
         """The files of the folder by kind (by their ``format``; others left out)."""
-        found: dict[str, list[str]] = {"demonstrations": [], "models": [], "scenes": []}
+        found: dict[str, list[str]] = {
+            "demonstrations": [],
+            "models": [],
+            "objects": [],
+            "scenes": [],
+        }
         for name in sorted(self._names()):
             try:
                 path = self.path(name)
@@ -126,6 +135,21 @@ class WorkFolder:
             if kind is not None:
                 found[kind].append(name)
         return found
+
+    def source(self) -> dict[str, str] | None:
+        keys = ("kind", "id")
+        """The Teach view's source as last chosen (``{"kind", "id"}``), or None."""
+        try:
+            data = json.loads((self.root / SOURCE_FILE).read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            return None
+        if not isinstance(data, dict) or not all(isinstance(data.get(k), str) for k in keys):
+            return None
+        return {"kind": data["kind"], "id": data["id"]}
+
+    def keep_source(self, kind: str, name: str) -> None:
+        """Keep the Teach view's source (written whole, replacing the last)."""
+        write_atomic(self.root / SOURCE_FILE, dump_json({"kind": kind, "id": name}))
 
     def _names(self) -> Iterator[str]:
         for entry in os.scandir(self.root):

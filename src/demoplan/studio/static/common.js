@@ -14,7 +14,7 @@ export const state = {
   source: { kind: "template", id: "set_table" },
   teach: { initial: {}, poses: {}, steps: [], saved: false },
   learn: { result: null },
-  plan: { poses: null, extras: null, result: null, step: 0, timer: null },
+  plan: { poses: null, landmarks: null, extras: null, result: null, step: 0, timer: null },
   run: { id: null, status: null, step: 0, timer: null, poll: null },
   clutter: [], // objects added in the Plan view that the model never saw
   selected: null,

@@ -4,7 +4,7 @@ import { post } from "./api.js";
 import { $, alarm, fmt, mm, say, state } from "./common.js";
 import { drawGraph } from "./graph.js";
 import { redraw } from "./stage.js";
-import { refreshFiles } from "./teach.js";
+import { refreshFiles, teachSceneDocument } from "./teach.js";
 
 // --- learn ----------------------------------------------------------------
 
@@ -16,7 +16,9 @@ export async function learn() {
   }
   const output = $("model-name").value.trim() || "model.json";
   say("Learning…");
-  const result = await post("/api/learn", { files, output, scene: null });
+  // the targets are drawn where the table stands now (its landmarks as placed)
+  const scene = teachSceneDocument();
+  const result = await post("/api/learn", { files, output, scene: Object.keys(scene.objects).length ? scene : null });
   state.learn.result = result;
   renderLearned(result);
   await refreshFiles();

@@ -5,12 +5,13 @@ import { $, SHAPES_IN_SCENES, alarm, clone, say, state } from "./common.js";
 import { runEvents, setRunStep } from "./run.js";
 import { keepInView, layoutWith, place, redraw, sameObjects } from "./stage.js";
 import { snap } from "./table.js";
-import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
+import { landmarksDocument, poseDocument, refreshFiles, startDemonstration } from "./teach.js";
 
 // --- plan -----------------------------------------------------------------
 
 export function ensurePlanStart() {
   if (!state.plan.poses && state.layout) state.plan.poses = clone(state.teach.poses);
+  if (!state.plan.landmarks && state.layout) state.plan.landmarks = clone(state.layout.landmarks || {});
 }
 
 export function sceneDocument() {
@@ -21,13 +22,22 @@ export function sceneDocument() {
     if (!pose) continue;
     objects[name] = { ...poseDocument(pose), size: geometry.size };
     if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
+    for (const key of ["mass", "density", "type"]) if (geometry[key] != null) objects[name][key] = geometry[key];
   }
   const extras = state.plan.extras || { scene: {}, objects: {} };
   for (const [name, fields] of Object.entries(extras.objects)) {
     if (objects[name]) Object.assign(objects[name], fields);
   }
   const scene = { format: "demoplan/scene-1", objects, ...extras.scene };
-  const landmarks = landmarksDocument();
+  if (!state.plan.extras) {
+    // free space is generated on the table the page draws; a scene file loaded
+    // is planned as the command line plans it (with its own table, or none)
+    const [x0, y0] = state.layout.table.origin;
+    const [w, h] = state.layout.table.size;
+    const r4 = (v) => Math.round(v * 1e4) / 1e4;
+    scene.table = { min: [r4(x0), r4(y0)], max: [r4(x0 + w), r4(y0 + h)] };
+  }
+  const landmarks = landmarksDocument(state.plan.landmarks);
   if (Object.keys(landmarks).length) scene.landmarks = landmarks;
   return scene;
 }
@@ -65,6 +75,7 @@ export async function loadPlanScene() {
     startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
   }
   state.plan.poses = clone(answer.layout.poses);
+  state.plan.landmarks = clone(answer.layout.landmarks || {});
   keepInView(state.plan.poses);
   state.plan.extras = answer.document && answer.document.format === "demoplan/scene-1" ? sceneExtras(answer.document) : null;
   clearPlan();
@@ -120,6 +131,18 @@ export async function addClutter() {
   await place(name, xy, 0, true); // it comes to rest on whatever stands there
   say(`${name} added (a ${CLUTTER_SIZE[0] * 100} cm box the model never saw): drag it where it ` +
     "should stand; the plan moves it only where it is in the way.");
+}
+
+// The start as a scene file of the work folder, as `demoplan plan` and `run` read it.
+export async function saveScene() {
+  const document_ = sceneDocument();
+  delete document_.format;
+  const name = $("scene-name").value.trim() || null;
+  const answer = await post("/api/scenes", { document: document_, name });
+  $("scene-name").value = "";
+  const model = $("plan-model").value || "model.json";
+  say(`Saved ${answer.file}: \`demoplan plan ${model} ${answer.file}\` plans this start.`);
+  await refreshFiles();
 }
 
 export async function makePlan() {

@@ -26,21 +26,60 @@ export const table = new TableView($("table"), $("heights"), {
   },
   drop: (name, xy, yaw) => guarded(() => place(name, xy, yaw, false)),
   rotate: (name, degrees) => {
+    const mark = currentLandmarks()[name];
+    if (mark) {
+      if (landmarksMovable()) guarded(() => placeLandmark(name, mark.position.slice(0, 2), turned(mark.yaw || 0, degrees)));
+      else alarm(landmarkHint(name));
+      return;
+    }
     const pose = currentPoses()[name];
     if (!pose) return;
     guarded(() => place(name, pose.position.slice(0, 2), turned(pose.yaw || 0, degrees), true));
   },
   nudge: (name, dx, dy) => {
+    const mark = currentLandmarks()[name];
+    if (mark) {
+      if (landmarksMovable()) guarded(() => placeLandmark(name, [snap(mark.position[0] + dx), snap(mark.position[1] + dy)], mark.yaw || 0));
+      else alarm(landmarkHint(name));
+      return;
+    }
     const pose = currentPoses()[name];
     if (!pose || !table.handlers.canPickUp(name)) return;
     guarded(() => place(name, [snap(pose.position[0] + dx), snap(pose.position[1] + dy)], pose.yaw || 0, true));
   },
-  landmarkMoved: (name) => {
-    const p = state.layout.landmarks[name].position;
-    say(`landmark ${name} placed at x ${fmt(p[0])}, y ${fmt(p[1])} m`);
-    redraw();
-  },
+  landmarkDropped: (name, xy, yaw) => guarded(() => placeLandmark(name, xy, yaw)),
 });
+
+// The landmarks as they stand now: the Plan view's start has its own.
+export function currentLandmarks() {
+  if ((state.view === "plan" || state.view === "run") && state.plan.landmarks) return state.plan.landmarks;
+  return state.layout ? state.layout.landmarks || {} : {};
+}
+
+// Landmarks move before the first step of a demonstration (between
+// demonstrations: moving one is not a step) and in the Plan view's start.
+export function landmarksMovable() {
+  if (state.view === "teach") return state.teach.steps.length === 0;
+  return state.view === "plan" && state.plan.step === 0;
+}
+
+function landmarkHint(name) {
+  return `${name} is a landmark: it moves before the first step of a demonstration (press New demonstration, or Undo) and in the Plan view`;
+}
+
+// Put landmark `name` down at xy with yaw: the server refuses a place on objects.
+export async function placeLandmark(name, xy, yaw) {
+  const marks = currentLandmarks();
+  try {
+    const answer = await post("/api/landmark", { layout: layoutWith(currentPoses()), landmark: name, position: xy, yaw });
+    marks[name] = { ...marks[name], position: answer.pose.position, yaw: answer.pose.yaw };
+  } finally {
+    redraw(); // refused: it is drawn where it stood
+  }
+  if (state.view !== "teach") clearPlan();
+  const p = marks[name];
+  say(`landmark ${name} placed at x ${fmt(p.position[0])}, y ${fmt(p.position[1])} m, yaw ${fmt(p.yaw, 1)}°`);
+}
 
 export function interactive() {
   return (state.view === "teach" || state.view === "plan") && !state.plan.timer && !state.run.timer;
@@ -62,7 +101,8 @@ export function redraw() {
   const options = {
     selected: state.selected,
     interactive: interactive() && !(state.view === "plan" && state.plan.step > 0),
-    landmarksMovable: state.view === "teach" && state.teach.steps.length === 0,
+    landmarksMovable: landmarksMovable(),
+    landmarks: currentLandmarks(),
     outlines: state.view === "learn" && state.learn.result ? state.learn.result.targets : [],
     held: state.view === "plan" ? heldAt(state.plan.step) : null,
   };
@@ -78,14 +118,14 @@ export function redraw() {
 
 // Room for the table at this window size: beside the panel and the height strip.
 export function tableRoom() {
-  return [window.innerWidth - 440 - 90 - 56, window.innerHeight - 150];
+  return [window.innerWidth - 560 - 90 - 56, window.innerHeight - 150];
 }
 
 // The layout with these poses: its objects that have one (a clutter object
 // added in the Plan view has none on the taught table).
 export function layoutWith(poses) {
   const objects = Object.fromEntries(Object.entries(state.layout.objects).filter(([name]) => poses[name]));
-  return { ...state.layout, objects, poses };
+  return { ...state.layout, objects, poses, landmarks: currentLandmarks() };
 }
 
 // Drop `name` at xy (metres) with `yaw`: the server says where it comes to rest.

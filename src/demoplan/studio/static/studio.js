@@ -6,10 +6,11 @@
 import { $, clone, guarded, say, state } from "./common.js";
 import { learn } from "./learn.js";
 import {
-  addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, scramble, setPlanStep, stopAnimation,
+  addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, saveScene, scramble, setPlanStep, stopAnimation,
 } from "./plan.js";
 import { cancelRun, restoreLastRun, setRunStep, startRun } from "./run.js";
 import { redraw, table, tableRoom } from "./stage.js";
+import { addThing, restoreSource, saveObjects, useTemplate } from "./objects.js";
 import { loadFile, newDemonstration, refreshFiles, save, undo } from "./teach.js";
 import { get } from "./api.js";
 
@@ -50,10 +51,10 @@ function wireTabs() {
 
 function wire() {
   wireTabs();
-  $("template").addEventListener("change", () => {
-    state.source = { kind: "template", id: $("template").value };
-    guarded(newDemonstration);
-  });
+  $("template").addEventListener("change", () => guarded(() => useTemplate($("template").value)));
+  $("add-thing").addEventListener("click", () => guarded(addThing));
+  $("save-objects").addEventListener("click", () => guarded(saveObjects));
+  $("save-scene").addEventListener("click", () => guarded(saveScene));
   $("new").addEventListener("click", () => guarded(newDemonstration));
   $("save").addEventListener("click", () => guarded(save));
   $("load").addEventListener("click", () => guarded(loadFile));
@@ -64,6 +65,7 @@ function wire() {
   $("load-plan-file").addEventListener("click", () => guarded(loadPlanScene));
   $("start-from-teach").addEventListener("click", () => {
     state.plan.poses = clone(state.teach.poses);
+    state.plan.landmarks = clone(state.layout.landmarks || {});
     state.plan.extras = null;
     clearPlan();
     redraw();
@@ -110,6 +112,7 @@ async function start() {
       if (known && known.title) option.title = known.title;
     }
     await refreshFiles();
+    await restoreSource();
     await newDemonstration();
     await restoreLastRun();
   });

@@ -82,7 +82,7 @@ export class TableView {
     svg.addEventListener("wheel", (e) => this.wheel(e), { passive: false });
     svg.addEventListener("keydown", (e) => this.key(e));
     svg.addEventListener("focusin", (e) => {
-      const name = e.target.closest?.("[data-object]")?.dataset.object;
+      const name = thingOf(e.target);
       if (name && name !== this.options.selected) this.handlers.select(name);
     });
   }
@@ -124,12 +124,17 @@ export class TableView {
     return [this.origin[0] + u * this.mpp, this.origin[1] + (this.heightPx - v) * this.mpp];
   }
 
+  // The landmarks as shown: options.landmarks (the Plan view's start) or the layout's.
+  landmarks() {
+    return this.options.landmarks || this.layout.landmarks || {};
+  }
+
   // poses: name -> {position:[x,y,z], yaw}; options: {selected, held, outlines:[...],
-  // interactive, landmarksMovable}
+  // interactive, landmarksMovable, landmarks}
   draw(poses, options = {}) {
     this.poses = poses;
     this.options = options;
-    const focused = document.activeElement?.closest?.("[data-object]")?.dataset.object;
+    const focused = thingOf(document.activeElement);
     this.svg.replaceChildren();
     const layout = this.layout;
     if (!layout) return;
@@ -141,11 +146,22 @@ export class TableView {
     }, this.svg);
     this.drawGrid();
     const landmarks = el("g", { class: "landmarks" }, this.svg);
-    for (const [name, mark] of Object.entries(layout.landmarks || {})) {
-      const g = this.shape(landmarks, name, mark, mark, "landmark");
+    const movable = options.interactive && options.landmarksMovable;
+    for (const [name, mark] of Object.entries(this.landmarks())) {
+      const pose = this.drag && this.drag.name === name ? this.drag.pose : mark;
+      const g = this.shape(landmarks, name, mark, pose, "landmark");
       g.dataset.landmark = name;
-      g.setAttribute("aria-label", `landmark ${name}`);
-      g.setAttribute("role", "img");
+      g.dataset.x = String(round6(pose.position[0]));
+      g.dataset.y = String(round6(pose.position[1]));
+      g.dataset.yaw = String(round6(pose.yaw || 0));
+      g.setAttribute(
+        "aria-label",
+        `landmark ${name} at x ${pose.position[0].toFixed(3)}, y ${pose.position[1].toFixed(3)} m, yaw ${(pose.yaw || 0).toFixed(1)}°`,
+      );
+      g.setAttribute("role", movable ? "button" : "img");
+      g.setAttribute("tabindex", movable ? "0" : "-1");
+      if (movable) g.classList.add("movable");
+      if (name === options.selected) g.classList.add("selected");
     }
     const objects = el("g", { class: "objects" }, this.svg);
     const order = Object.keys(layout.objects)
@@ -178,10 +194,15 @@ export class TableView {
       if (!geometry) continue;
       const g = this.shape(outlines, target.object, geometry, target, "outline");
       g.dataset.target = target.state;
+      g.dataset.x = String(round6(target.position[0]));
+      g.dataset.y = String(round6(target.position[1]));
+      g.dataset.yaw = String(round6(target.yaw || 0));
       const label = el("text", { x: this.px(target.position[0]) + 4, y: this.py(target.position[1]) - 4, class: "outline-label" }, outlines);
       label.textContent = target.state;
     }
-    if (focused) this.svg.querySelector(`[data-object="${CSS.escape(focused)}"]`)?.focus();
+    if (focused) {
+      this.svg.querySelector(`[data-object="${CSS.escape(focused)}"],[data-landmark="${CSS.escape(focused)}"]`)?.focus();
+    }
     this.drawHeights(poses);
   }
 
@@ -240,8 +261,9 @@ export class TableView {
     strip.replaceChildren();
     const layout = this.layout;
     const things = [];
-    for (const [name, mark] of Object.entries(layout.landmarks || {})) {
-      if (mark.size) things.push({ name, geometry: mark, pose: mark, landmark: true });
+    for (const [name, mark] of Object.entries(this.landmarks())) {
+      const pose = this.drag && this.drag.name === name ? this.drag.pose : mark;
+      if (mark.size) things.push({ name, geometry: mark, pose, landmark: true });
     }
     for (const [name, geometry] of Object.entries(layout.objects)) {
       const pose = this.drag && this.drag.name === name ? this.drag.pose : poses[name];
@@ -291,7 +313,7 @@ export class TableView {
       event.preventDefault();
       return;
     }
-    const pose = isObject ? this.poses[name] : this.layout.landmarks[name];
+    const pose = isObject ? this.poses[name] : this.landmarks()[name];
     const [x, y] = this.world(event);
     this.drag = {
       name, isObject, id: event.pointerId, moved: false,
@@ -300,10 +322,8 @@ export class TableView {
       pose: { position: [...pose.position, 0].slice(0, 3), yaw: pose.yaw || 0 },
     };
     this.svg.setPointerCapture(event.pointerId);
-    if (isObject) {
-      this.handlers.select(name);
-      this.svg.querySelector(`[data-object="${CSS.escape(name)}"]`)?.focus({ preventScroll: true });
-    }
+    this.handlers.select(name);
+    this.svg.querySelector(`[data-${isObject ? "object" : "landmark"}="${CSS.escape(name)}"]`)?.focus({ preventScroll: true });
     event.preventDefault();
   }
 
@@ -315,12 +335,7 @@ export class TableView {
     const [x, y] = this.world(event);
     drag.pose.position[0] = snap(x + drag.grab[0]);
     drag.pose.position[1] = snap(y + drag.grab[1]);
-    if (drag.isObject) {
-      this.draw(this.poses, this.options);
-    } else {
-      this.layout.landmarks[drag.name].position = [drag.pose.position[0], drag.pose.position[1], drag.pose.position[2]];
-      this.draw(this.poses, this.options);
-    }
+    this.draw(this.poses, this.options);
   }
 
   pointerUp(event) {
@@ -335,7 +350,7 @@ export class TableView {
     if (drag.isObject) {
       this.handlers.drop(drag.name, [drag.pose.position[0], drag.pose.position[1]], drag.pose.yaw);
     } else {
-      this.handlers.landmarkMoved(drag.name);
+      this.handlers.landmarkDropped(drag.name, [drag.pose.position[0], drag.pose.position[1]], drag.pose.yaw);
     }
   }
 
@@ -347,7 +362,7 @@ export class TableView {
 
   wheel(event) {
     if (!this.options.interactive) return;
-    const name = this.drag && this.drag.isObject ? this.drag.name : this.options.selected;
+    const name = this.drag ? this.drag.name : this.options.selected;
     if (!name) return;
     event.preventDefault();
     const delta = event.deltaY !== 0 ? event.deltaY : event.deltaX; // Shift+wheel may scroll sideways
@@ -371,7 +386,7 @@ export class TableView {
       this.cancelDrag();
       return;
     }
-    const name = event.target.closest?.("[data-object]")?.dataset.object || this.options.selected;
+    const name = thingOf(event.target) || this.options.selected;
     if (!name) return;
     const fine = event.shiftKey;
     if (event.code === "BracketRight" || event.code === "BracketLeft") {
@@ -386,6 +401,12 @@ export class TableView {
       this.handlers.nudge(name, moves[event.key][0] * step, moves[event.key][1] * step);
     }
   }
+}
+
+// The object or landmark an element of the table belongs to.
+function thingOf(element) {
+  const thing = element?.closest?.("[data-object],[data-landmark]");
+  return thing ? thing.dataset.object ?? thing.dataset.landmark : undefined;
 }
 
 // A turn by `degrees` goes to the next multiple of |degrees| in that direction

@@ -1,7 +1,8 @@
 // The Teach view: demonstrations recorded step by step, saved in the project's format; the work folder's files.
 
 import { get, post } from "./api.js";
-import { $, alarm, clone, fmt, say, state } from "./common.js";
+import { $, SHAPES_IN_SCENES, alarm, clone, fmt, say, state } from "./common.js";
+import { keepSource, renderThings } from "./objects.js";
 import { clearPlan } from "./plan.js";
 import { cover, corners, redraw, sameObjects, table, tableRoom } from "./stage.js";
 
@@ -31,31 +32,41 @@ export function startDemonstration(layout, note) {
   state.teach.poses = clone(layout.poses);
   state.teach.steps = [];
   state.teach.saved = false;
+  state.teach.edited = false;
   state.plan.poses = null;
+  state.plan.landmarks = null;
   state.plan.extras = null;
   state.clutter = [];
   state.selected = null;
   clearPlan();
   table.setLayout(layout, tableRoom());
   renderSteps();
+  renderThings();
   redraw();
   say(note);
 }
 
+// Each New demonstration is numbered: only the latest one's answer is shown
+// (a template chosen while the last one loads must not show the old objects).
+let asked = 0;
+
 export async function newDemonstration() {
+  const ticket = ++asked;
+  const source = clone(state.source);
   const randomise = $("randomise").checked;
   const seed = Number($("seed").value) || 0;
   let layout;
-  if (state.source.kind === "template") {
+  if (source.kind === "template") {
     const query = randomise ? `?seed=${seed}` : "";
-    layout = await get(`/api/templates/${encodeURIComponent(state.source.id)}${query}`);
+    layout = await get(`/api/templates/${encodeURIComponent(source.id)}${query}`);
   } else {
-    layout = (await get(`/api/files/${encodeURIComponent(state.source.name)}`)).layout;
-    if (randomise) layout = await post("/api/scramble", { layout, seed });
+    layout = (await get(`/api/files/${encodeURIComponent(source.name)}`)).layout;
+    if (randomise && Object.keys(layout.objects).length) layout = await post("/api/scramble", { layout, seed });
   }
+  if (ticket !== asked) return; // a later New demonstration (another template) is on its way
   if (randomise) $("seed").value = String(seed + 1);
   const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${state.teach.steps.length} unsaved steps discarded)` : "";
-  const from = state.source.kind === "template" ? `template ${state.source.id}` : state.source.name;
+  const from = source.kind === "template" ? `template ${source.id}` : source.name;
   startDemonstration(layout, `New demonstration from ${from}${randomise ? `, randomised (seed ${seed})` : ""}${unsaved}.`);
 }
 
@@ -73,9 +84,9 @@ export function poseDocument(pose) {
   return { position: pose.position.map((v) => Math.round(v * 1e6) / 1e6), yaw: Math.round((pose.yaw || 0) * 1000) / 1000 };
 }
 
-export function landmarksDocument() {
+export function landmarksDocument(marks = null) {
   const out = {};
-  for (const [name, mark] of Object.entries(state.layout.landmarks || {})) {
+  for (const [name, mark] of Object.entries(marks || state.layout.landmarks || {})) {
     out[name] = { ...poseDocument(mark), shape: mark.shape || "box" };
     if (mark.size) out[name].size = mark.size;
   }
@@ -85,7 +96,9 @@ export function landmarksDocument() {
 export function demonstrationDocument() {
   const objects = {};
   for (const [name, geometry] of Object.entries(state.layout.objects)) {
-    if (!state.clutter.includes(name)) objects[name] = { shape: geometry.shape, size: geometry.size };
+    if (state.clutter.includes(name)) continue;
+    objects[name] = { shape: geometry.shape, size: geometry.size };
+    for (const key of ["type", "mass", "density"]) if (geometry[key] != null) objects[name][key] = geometry[key];
   }
   const initial = {};
   for (const [name, pose] of Object.entries(state.teach.initial)) initial[name] = poseDocument(pose);
@@ -105,7 +118,11 @@ export async function save() {
   const answer = await post("/api/demonstrations", { document: demonstrationDocument(), name });
   state.teach.saved = true;
   $("save-name").value = "";
-  say(`Saved ${answer.file} (${state.teach.steps.length} steps).`);
+  const marks = Object.keys(state.layout.landmarks || {});
+  const next = marks.length
+    ? ` Press New demonstration, then move the ${marks.join(" or ")} between demonstrations (moving it is not a step).`
+    : "";
+  say(`Saved ${answer.file} (${state.teach.steps.length} steps).${next}`);
   await refreshFiles();
 }
 
@@ -122,6 +139,24 @@ export async function loadFile() {
   }
   state.source = { kind: "file", name };
   startDemonstration(answer.layout, `Loaded ${name}: its initial layout is on the table.`);
+  await keepSource();
+}
+
+// The table as it stands in the Teach view, as a scene (the Learn view draws
+// the learned targets in it: where the landmarks stand now).
+export function teachSceneDocument() {
+  const objects = {};
+  for (const [name, geometry] of Object.entries(state.layout.objects)) {
+    const pose = state.teach.poses[name];
+    if (!pose || state.clutter.includes(name)) continue;
+    objects[name] = { ...poseDocument(pose), size: geometry.size };
+    if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
+    if (geometry.type != null) objects[name].type = geometry.type;
+  }
+  const scene = { objects };
+  const landmarks = landmarksDocument();
+  if (Object.keys(landmarks).length) scene.landmarks = landmarks;
+  return scene;
 }
 
 // --- work-folder files ----------------------------------------------------
@@ -131,13 +166,13 @@ export async function refreshFiles() {
   const file = $("file");
   const keep = file.value;
   file.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["demonstrations", "scenes"]) {
+  for (const kind of ["objects", "demonstrations", "scenes"]) {
     const group = document.createElement("optgroup");
     group.label = kind;
     for (const name of state.files[kind]) group.appendChild(new Option(name, name));
     if (state.files[kind].length) file.appendChild(group);
   }
-  file.value = state.files.demonstrations.includes(keep) || state.files.scenes.includes(keep) ? keep : "";
+  file.value = ["objects", "demonstrations", "scenes"].some((k) => state.files[k].includes(keep)) ? keep : "";
   const chosen = new Set([...document.querySelectorAll("#learn-files input:not(:checked)")].map((i) => i.value));
   const box = $("learn-files");
   box.replaceChildren();
@@ -155,13 +190,13 @@ export async function refreshFiles() {
   const planFile = $("plan-file");
   const keepPlan = planFile.value;
   planFile.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["scenes", "demonstrations"]) {
+  for (const kind of ["scenes", "objects", "demonstrations"]) {
     const group = document.createElement("optgroup");
     group.label = kind;
     for (const name of state.files[kind]) group.appendChild(new Option(name, name));
     if (state.files[kind].length) planFile.appendChild(group);
   }
-  planFile.value = state.files.scenes.includes(keepPlan) || state.files.demonstrations.includes(keepPlan) ? keepPlan : "";
+  planFile.value = ["scenes", "objects", "demonstrations"].some((k) => state.files[k].includes(keepPlan)) ? keepPlan : "";
   const models = $("plan-model");
   const current = models.value;
   models.replaceChildren();
