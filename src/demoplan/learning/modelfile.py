@@ -22,6 +22,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    StrictBool,
     StrictStr,
     ValidationError,
     create_model,
@@ -107,6 +108,7 @@ class _StateSchema(_Schema):
     orientation: _OrientationSchema = _OrientationSchema()
     members: list[tuple[Integer, Integer]] = []
     margins: dict[str, Number] = {}
+    notes: list[str] = []
 
 
 class _ViolationSchema(_Schema):
@@ -152,6 +154,7 @@ def _settings_schema() -> type[BaseModel]:
     new setting cannot be forgotten here. Ranges are checked by the dataclass."""
     kinds: dict[type, Any] = {
         type(None): Number | None,  # estimated from the demonstrations when null
+        bool: StrictBool,
         float: Number,
         int: Integer,
         tuple: Annotated[list[StrictStr], BeforeValidator(_requirement_texts)],
@@ -243,6 +246,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
         },
         "members": [list(m) for m in state.members],
         "margins": dict(state.margins),
+        **({"notes": list(state.notes)} if state.notes else {}),
     }
 
 
@@ -408,6 +412,7 @@ def _state_from_schema(state: _StateSchema) -> State:
         ),
         members=tuple((m[0], m[1]) for m in state.members),
         margins=tuple(sorted(state.margins.items())),
+        notes=tuple(state.notes),
     )
 
 

@@ -280,7 +280,7 @@ def _generate_states(
     quantised = _quantise_placements(observed, world, settings, precision, own_precision)
     letters, members, sequences = _letter_states(demonstrations, quantised.keys)
     states = [
-        _describe_state(key, letter, members[letter], observed, quantised.decided)
+        _describe_state(key, letter, members[letter], observed, quantised)
         for key, letter in letters.items()
     ]
     states = [_anywhere(state, precision, settings) for state in states]
@@ -370,6 +370,8 @@ class _Quantised:
     decided: dict[tuple[int, int], dict[str, float]]
     """(demonstration, step) → decision → margin."""
     scores: list[ReferenceScore]
+    notes: dict[tuple[int, int], list[str]]
+    """(demonstration, step) → decisions taken at an edge of the rules, in words."""
 
 
 def _quantise_placements(
@@ -382,7 +384,7 @@ def _quantise_placements(
     """Paper §IV.A, eq. (2): each object's candidate references scored by
     K-means clustering, and each of its placements quantised to a state key
     (:func:`_quantise_object`), object by object."""
-    quantised = _Quantised({}, {}, [])
+    quantised = _Quantised({}, {}, [], {})
     reachable: dict[str, set[str]] = {obj: set() for obj in observed.placements}
     for obj, _, reference in observed.everywhere:
         if reference is not None:
@@ -447,6 +449,16 @@ def _quantise_object(
         ori_reference, ori_cluster = None, -1  # orientation unknown
         if by_orientation is not None:
             ori = by_orientation.at(placement, world)
+            follows = (
+                by_orientation.following(ori, pos.reference)
+                if settings.orientation_follows_position
+                else None
+            )
+            if follows is not None:
+                ori = follows
+                quantised.notes.setdefault(where, []).append(
+                    by_orientation.follow_note(follows)
+                )
             ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
             quantised.decided[where].update(
                 _margins(
@@ -489,7 +501,7 @@ def _describe_state(
     letter: str,
     members: list[tuple[int, int]],
     observed: _RelativePlacements,
-    decided: dict[tuple[int, int], dict[str, float]],
+    quantised: _Quantised,
 ) -> State:
     """State ``letter``: its members' relative position and orientation
     summarised (paper §IV.A), and the narrowest margin of each decision taken
@@ -500,9 +512,11 @@ def _describe_state(
     position = observed.relative[(obj, "position", key.position_reference)][rows]
     orientation = observed.relative.get((obj, "orientation", key.orientation_reference))
     margins: dict[str, float] = {}
+    notes: dict[str, None] = {}
     for member in members:
-        for decision, margin in decided.get(member, {}).items():
+        for decision, margin in quantised.decided.get(member, {}).items():
             margins[decision] = min(margins.get(decision, math.inf), margin)
+        notes.update(dict.fromkeys(quantised.notes.get(member, [])))
     return State(
         id=letter,
         margins=tuple((d, round(m, 3)) for d, m in sorted(margins.items())),
@@ -517,6 +531,7 @@ def _describe_state(
             key.orientation_reference,
         ),
         members=tuple(members),
+        notes=tuple(notes),
     )
 
 
@@ -906,6 +921,42 @@ class _Chooser:
             (s for s in local if not _beats(top, s, self.noise, self.significance)),
             key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
         )
+
+    def following(self, chosen: ReferenceScore, reference: str | None) -> ReferenceScore | None:
+        """An orientation that follows its position's ``reference`` (docs/learning.md,
+        *A thing in a box turns with the box*): where the orientation's own
+        choice ``chosen`` is a tie within the precision that ``reference`` is part
+        of — neither the best-scoring reference nor ``chosen`` outscores it,
+        with no more clusters — the orientation is taken relative to the same
+        reference as the position. ``None`` where the data decided (the
+        reference turned between demonstrations and explains the orientations
+        worse), where the choice was a reference available at this step only,
+        or where ``reference`` has no orientation to follow."""
+        if reference is None or chosen is not self.own or chosen.reference == reference:
+            return None
+        same = next((s for s in self.scores if s.reference == reference), None)
+        if (
+            same is None
+            or same.clustering.n_clusters > chosen.clustering.n_clusters
+            or _beats(self.best, same, self.noise, self.significance)
+            or _beats(chosen, same, self.noise, self.significance)
+        ):
+            return None
+        return same
+
+    def follow_note(self, follows: ReferenceScore) -> str:
+        """The words for an orientation that :meth:`following` took from its position's
+        reference: never seen turned where absolute ties with it too (the
+        reference kept its yaw as far as the precision tells), else a tie."""
+        absolute = next((s for s in self.scores if s.reference is None), None)
+        if absolute is not None and _tied(absolute, follows, self.noise, self.significance):
+            return f"turns with {follows.reference}: never seen turned"
+        return f"turns with {follows.reference}: a tie within the precision"
+
+
+def _tied(a: ReferenceScore, b: ReferenceScore, noise: _Spread, significance: float) -> bool:
+    """Neither of two references outscores the other (:func:`_beats`)."""
+    return not _beats(a, b, noise, significance) and not _beats(b, a, noise, significance)
 
 
 def _beats(

@@ -78,7 +78,7 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
             s.id,
             s.object,  # as the demonstrations name it: --require takes the same
             "anywhere" if s.position.anywhere else s.position.reference or "",
-            s.orientation.reference or "",
+            orientation_reference_text(s),
             format_position(s, decimals),
             format_orientation(s),
             _spread(s),
@@ -87,6 +87,21 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
         )
         for s in model.states
     ]
+
+
+FOLLOWS = "turns with "
+"""How a note on an orientation that follows its position's reference begins
+(:meth:`demoplan.learning.states._Chooser.follow_note`)."""
+
+
+def orientation_reference_text(state: State) -> str:
+    """The orientation's reference as the states table shows it: its name, or
+    where it was a tie that went to the position's reference, the words for
+    it (``turns with lunchbox: never seen turned``, docs/learning.md)."""
+    reference = state.orientation.reference
+    if reference is None:
+        return ""
+    return next((n for n in state.notes if n.startswith(f"{FOLLOWS}{reference}:")), reference)
 
 
 def _margin(state: State) -> str:
@@ -189,7 +204,12 @@ def diagnostic_lines(model: TaskModel) -> list[str]:
     precision (margin below 1) and states seen once."""
     lines = []
     for state in model.states:
-        close = [f"{d} {m:+.1f}" for d, m in state.margins if m < 1.0]
+        follows = orientation_reference_text(state) != (state.orientation.reference or "")
+        close = [
+            f"{d} {m:+.1f}"
+            for d, m in state.margins
+            if m < 1.0 and not (follows and d == "orientation reference")
+        ]
         if close:
             lines.append(
                 f"state {state.id} ({state.object}): decided within the precision "
@@ -197,4 +217,5 @@ def diagnostic_lines(model: TaskModel) -> list[str]:
             )
         if len(state.members) == 1:
             lines.append(f"state {state.id} ({state.object}): seen in one demonstration only")
+        lines += [f"state {state.id} ({state.object}): {note}" for note in state.notes]
     return lines
