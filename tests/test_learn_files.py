@@ -48,3 +48,50 @@ def test_the_output_may_not_be_an_input(tmp_path: Path) -> None:
     copy.write_bytes(BLOCKS.read_bytes())
     with pytest.raises(InputError, match="is also an input"):
         learn_files([copy], output=copy)
+
+
+def test_learning_from_a_studio_work_folder_skips_its_model_scene_and_objects_file(
+    tmp_path: Path,
+) -> None:
+    """The studio writes its demonstrations, the user's scene and the model it
+    learned into one work folder (demoplan.studio.workfolder), and an objects
+    file may stand beside them: `learn FOLDER` learns from the demonstrations
+    alone and names the other files in one warning line (it stopped at the
+    model: "unknown format 'demoplan/model-1'")."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from demoplan.cli import app
+    from demoplan.learning.modelfile import save_model
+    from demoplan.studio.workfolder import WorkFolder
+
+    folder = WorkFolder(tmp_path / "work")
+    sources = sorted((EXAMPLES / "set_table").glob("demonstration-*.json"))
+    for source in sources:
+        folder.create(json.loads(source.read_text()), None, "demonstration")
+    scene = json.loads((EXAMPLES / "scenes" / "set-table-cluttered.json").read_text())
+    folder.create(scene, "my-scene.json", "scene")
+    learned = learn_files(sources).model
+    save_model(learned, folder.root / "model.json")
+    objects = {"objects": json.loads(sources[0].read_text())["objects"]}
+    (folder.root / "objects.json").write_text(json.dumps(objects))
+    output = tmp_path / "relearned.json"
+    result = CliRunner().invoke(app, ["learn", str(folder.root), "-o", str(output)])
+    assert result.exit_code == 0, result.stderr
+    skipped = [line for line in result.stderr.splitlines() if "skipped" in line]
+    assert skipped == [
+        f"demoplan: WARNING: {folder.root}: skipped 3 files that are not a demonstration: "
+        "model.json (a task model), my-scene.json (a scene), objects.json (an objects file)"
+    ]
+    model = load_model(output)
+    assert len(model.demonstrations) == len(sources)
+    assert model.states == learned.states and model.constraints == learned.constraints
+
+
+def test_a_folder_of_models_only_is_refused_naming_what_it_holds(tmp_path: Path) -> None:
+    from demoplan.learning.modelfile import save_model
+
+    save_model(learn_files([BLOCKS]).model, tmp_path / "model.json")
+    with pytest.raises(InputError, match=r"no demonstration files, only model\.json \(a task"):
+        learn_files([tmp_path])
