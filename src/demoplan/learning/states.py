@@ -283,7 +283,8 @@ def _generate_states(
         _describe_state(key, letter, members[letter], observed, quantised)
         for key, letter in letters.items()
     ]
-    states = [_anywhere(state, precision, settings) for state in states]
+    types = {name: kind for demo in demonstrations for name, kind in demo.types}
+    states = _placed_anywhere(states, types, precision, settings)
     return StateGeneration(tuple(states), sequences, tuple(quantised.scores), precision)
 
 
@@ -538,26 +539,87 @@ def _describe_state(
 ANYWHERE_PRECISIONS = 5.0
 """An absolute state whose placements scatter (RMS) by at least this many
 times the precision — and by at least ``position_separation``, the distance
-that tells two places apart — is placed *anywhere* (:func:`_anywhere`)."""
+that tells two places apart — is placed *anywhere* (:func:`_placed_anywhere`)."""
 
 
-def _anywhere(state: State, precision: Precision, settings: StateGenerationSettings) -> State:
-    """``state``, placed anywhere on its support where its absolute placements
-    scatter far beyond the precision and no reference explains them (one was
-    chosen otherwise): a tray put down at a different place in every
-    demonstration is not meant to go to the mean of them. Its orientation,
-    if absolute and as scattered (RMS at least ``orientation_separation``,
-    as the whole model's orientations are dropped beyond it), is dropped too.
-    The same reading as the paper's eq. (2) stopping at one cluster: the
-    placements are not one place, and no more states are supported."""
-    position = state.position
-    rms = math.sqrt(position.spread)
-    if (
-        position.reference is not None
-        or len(state.members) < 2
-        or rms < max(settings.position_separation, ANYWHERE_PRECISIONS * precision.position)
-    ):
-        return state
+ANYWHERE_EDGE = 0.2
+"""A decision whose spread lies within this fraction of the anywhere threshold
+(:func:`_placed_anywhere`) is a near call and is told, as a precision tie is."""
+ANYWHERE_NOTE = "anywhere"
+PLACED_NOTE = "at its place"
+"""How the notes on an anywhere decision begin: placed anywhere, or at the mean
+of its placements (:func:`_placed_anywhere`)."""
+FOLLOWS_NOTE = "turns with "
+"""How a note on an orientation that follows its position's reference begins
+(:meth:`_Chooser.follow_note`)."""
+
+
+def _placed_anywhere(
+    states: list[State],
+    types: dict[str, str],
+    precision: Precision,
+    settings: StateGenerationSettings,
+) -> list[State]:
+    """``states``, those placed anywhere on their support marked so: absolute
+    states whose placements scatter (RMS) by at least ``position_separation``,
+    the distance that tells two places apart, and at least
+    :data:`ANYWHERE_PRECISIONS` times the precision, with no reference
+    explaining them (one was chosen otherwise) — a tray put down at a
+    different place in every demonstration is not meant to go to the mean of
+    them. The same reading as the paper's eq. (2) stopping at one cluster: the
+    placements are not one place, and no more states are supported.
+
+    The roles of one type (``plate#1``, ``plate#2``: identical objects, laid
+    the same way) are decided together, on their pooled spread: one plate
+    learned *anywhere* at 54 mm and the other at its place at 44 mm was two
+    rules for one way of laying a table. A decision whose spread lies within
+    :data:`ANYWHERE_EDGE` of the threshold, or that the pooling turned for one
+    of the roles, is told in the notes of every state it decided, as a
+    precision tie is."""
+    threshold = max(settings.position_separation, ANYWHERE_PRECISIONS * precision.position)
+    groups: dict[tuple[str, str], list[int]] = {}
+    for index, state in enumerate(states):
+        if state.position.reference is None and len(state.members) >= 2:
+            kind = types.get(state.object)
+            key = (kind, "") if kind is not None else (state.object, state.id)
+            groups.setdefault(key, []).append(index)
+    out = list(states)
+    for (kind, _), indices in groups.items():
+        dof = sum(len(states[i].members) - 1 for i in indices)
+        pooled = math.sqrt(
+            sum((len(states[i].members) - 1) * states[i].position.spread for i in indices) / dof
+        )
+        anywhere = pooled >= threshold
+        near = abs(pooled - threshold) <= ANYWHERE_EDGE * threshold
+        turned = any((states[i].position.spread >= threshold**2) != anywhere for i in indices)
+        for i in indices:
+            state = states[i]
+            own = math.sqrt(state.position.spread)
+            if anywhere:
+                state = _anywhere(state, settings)
+            if near or turned:
+                text = ANYWHERE_NOTE if anywhere else PLACED_NOTE
+                if len(indices) > 1:
+                    text += f", as every {kind}: their pooled spread {1000 * pooled:.1f} mm"
+                    text += f" (its own {1000 * own:.1f} mm)"
+                else:
+                    text += f": spread {1000 * own:.1f} mm"
+                text += (
+                    f", within {100 * ANYWHERE_EDGE:.0f} % of the {1000 * threshold:.1f} mm "
+                    "from which placements are anywhere"
+                    if near
+                    else f"; anywhere from {1000 * threshold:.1f} mm"
+                )
+                state = replace(state, notes=(*state.notes, text))
+            out[i] = state
+    return out
+
+
+def _anywhere(state: State, settings: StateGenerationSettings) -> State:
+    """``state`` placed anywhere on its support (:func:`_placed_anywhere`). Its
+    orientation, if absolute and as scattered (RMS at least
+    ``orientation_separation``, as the whole model's orientations are dropped
+    beyond it), is dropped too."""
     orientation = state.orientation
     if (
         orientation.reference is None
@@ -565,7 +627,7 @@ def _anywhere(state: State, precision: Precision, settings: StateGenerationSetti
         and math.sqrt(orientation.spread) >= settings.orientation_separation
     ):
         orientation = StateOrientation(reference=None, value=None, spread=orientation.spread)
-    return replace(state, position=replace(position, anywhere=True), orientation=orientation)
+    return replace(state, position=replace(state.position, anywhere=True), orientation=orientation)
 
 
 def state_letters(index: int) -> str:
@@ -950,8 +1012,8 @@ class _Chooser:
         reference kept its yaw as far as the precision tells), else a tie."""
         absolute = next((s for s in self.scores if s.reference is None), None)
         if absolute is not None and _tied(absolute, follows, self.noise, self.significance):
-            return f"turns with {follows.reference}: never seen turned"
-        return f"turns with {follows.reference}: a tie within the precision"
+            return f"{FOLLOWS_NOTE}{follows.reference}: never seen turned"
+        return f"{FOLLOWS_NOTE}{follows.reference}: a tie within the precision"
 
 
 def _tied(a: ReferenceScore, b: ReferenceScore, noise: _Spread, significance: float) -> bool:

@@ -11,6 +11,7 @@ from collections import Counter
 from collections.abc import Sequence
 
 from demoplan.learning.constraints import constraint_support, label_key, learn_constraints
+from demoplan.learning.states import ANYWHERE_NOTE, FOLLOWS_NOTE, PLACED_NOTE
 from demoplan.model import State, TaskModel
 from demoplan.wording import plural
 
@@ -77,7 +78,7 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
         (
             s.id,
             s.object,  # as the demonstrations name it: --require takes the same
-            "anywhere" if s.position.anywhere else s.position.reference or "",
+            position_reference_text(s),
             orientation_reference_text(s),
             format_position(s, decimals),
             format_orientation(s),
@@ -89,11 +90,6 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
     ]
 
 
-FOLLOWS = "turns with "
-"""How a note on an orientation that follows its position's reference begins
-(:meth:`demoplan.learning.states._Chooser.follow_note`)."""
-
-
 def orientation_reference_text(state: State) -> str:
     """The orientation's reference as the states table shows it: its name, or
     where it was a tie that went to the position's reference, the words for
@@ -101,7 +97,17 @@ def orientation_reference_text(state: State) -> str:
     reference = state.orientation.reference
     if reference is None:
         return ""
-    return next((n for n in state.notes if n.startswith(f"{FOLLOWS}{reference}:")), reference)
+    return next((n for n in state.notes if n.startswith(f"{FOLLOWS_NOTE}{reference}:")), reference)
+
+
+def position_reference_text(state: State) -> str:
+    """The position's reference as the states table shows it: its name, blank
+    for absolute, ``anywhere``; where the anywhere rule was a near call or
+    decided with the other roles of its type, the words for it."""
+    if state.position.reference is not None:
+        return state.position.reference
+    shown = "anywhere" if state.position.anywhere else ""
+    return next((n for n in state.notes if n.startswith((ANYWHERE_NOTE, PLACED_NOTE))), shown)
 
 
 def _margin(state: State) -> str:
