@@ -95,3 +95,26 @@ def test_a_folder_of_models_only_is_refused_naming_what_it_holds(tmp_path: Path)
     save_model(learn_files([BLOCKS]).model, tmp_path / "model.json")
     with pytest.raises(InputError, match=r"no demonstration files, only model\.json \(a task"):
         learn_files([tmp_path])
+
+
+def test_one_demonstration_is_learned_with_one_plain_warning(tmp_path: Path) -> None:
+    """One demonstration (or exact repeats of it) is learned — `learn --update`
+    adds the next — with one warning line saying to teach at least two, not a
+    warning per state and decision (there were 14 for the dinner table)."""
+    from typer.testing import CliRunner
+
+    from demoplan.cli import app
+
+    first = EXAMPLES / "set_table" / "demonstration-1.json"
+    second = EXAMPLES / "set_table" / "demonstration-2.json"
+    for inputs, told in (([first], "one demonstration"), ([first, first], "one demonstration")):
+        output = str(tmp_path / "model.json")
+        result = CliRunner().invoke(app, ["learn", *map(str, inputs), "-o", output])
+        assert result.exit_code == 0, result.stderr
+        warnings = [line for line in result.stderr.splitlines() if line.startswith("warning:")]
+        assert len(warnings) == 1 and f"learned from {told}" in warnings[0]
+        assert "teach the task at least twice" in warnings[0]
+    output = str(tmp_path / "two.json")
+    result = CliRunner().invoke(app, ["learn", str(first), str(second), "-o", output])
+    assert result.exit_code == 0 and "at least twice" not in result.stderr
+    assert "warning: state" in result.stderr  # two demonstrations: the usual diagnostics

@@ -205,9 +205,30 @@ def precision_text(model: TaskModel) -> str | None:
     return f"Precision: {position * 1000:.1f} mm, {orientation:.1f}° ({how})"
 
 
+def distinct_demonstrations(model: TaskModel) -> int:
+    """How many demonstrations the model rests on: those that do not repeat an
+    earlier one exactly (a repeat adds no evidence, docs/learning.md); the
+    count of sequences for a model file that keeps no demonstrations."""
+    if not model.demonstrations:
+        return len(model.sequences)
+    return len({(d.steps, d.landmarks, d.initial) for d in model.demonstrations})
+
+
 def diagnostic_lines(model: TaskModel) -> list[str]:
     """Warnings a teacher should read (issue 12 item 5): decisions taken within the
-    precision (margin below 1) and states seen once."""
+    precision (margin below 1), states seen once and decisions taken at an edge
+    of the rules (the states' notes). A model learned from one demonstration
+    (or from repeats of one) has one line instead: every state of it is seen
+    once and every decision is a tie."""
+    if distinct_demonstrations(model) < 2:
+        repeats = len(model.sequences) - 1
+        shown = "one demonstration" + (
+            f" (and {plural(repeats, 'exact repeat')} of it)" if repeats > 0 else ""
+        )
+        return [
+            f"learned from {shown}: every state is seen once and every reference is a "
+            "guess; teach the task at least twice, the objects placed anew each time"
+        ]
     lines = []
     for state in model.states:
         follows = orientation_reference_text(state) != (state.orientation.reference or "")
