@@ -118,3 +118,25 @@ def test_one_demonstration_is_learned_with_one_plain_warning(tmp_path: Path) -> 
     result = CliRunner().invoke(app, ["learn", str(first), str(second), "-o", output])
     assert result.exit_code == 0 and "at least twice" not in result.stderr
     assert "warning: state" in result.stderr  # two demonstrations: the usual diagnostics
+
+
+def test_counts_in_a_model_files_errors_are_in_the_singular_for_one(tmp_path: Path) -> None:
+    """"1 goals for 2 sequences" read as a typo; a count of one takes the singular."""
+    import json
+
+    from demoplan.learning.modelfile import save_model
+
+    path = tmp_path / "model.json"
+    save_model(learn_files([BLOCKS]).model, path)
+    document = json.loads(path.read_text())
+    assert len(document["sequences"]) == 2
+    document["goals"] = document["goals"][:1]
+    path.write_text(json.dumps(document))
+    with pytest.raises(InputError, match=r"goals: 1 goal for 2 sequences; one goal per"):
+        load_model(path)
+    document = json.loads(path.read_text())
+    document["demonstrations"] = document["demonstrations"][:1]
+    document["goals"] = document["goals"] * 2
+    path.write_text(json.dumps(document))
+    with pytest.raises(InputError, match=r"1 demonstration for 2 sequences; one sequence per"):
+        load_model(path)

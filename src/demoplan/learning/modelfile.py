@@ -51,6 +51,7 @@ from demoplan.model import (
     demonstrated_types,
 )
 from demoplan.rotations import canonical_quat, quat_from_rpy, unit_length_expected
+from demoplan.wording import plural
 
 __all__ = [
     "load_model",
@@ -291,7 +292,8 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
     sequences = tuple(check(s, f"sequences[{i}]") for i, s in enumerate(parsed.sequences))
     if len(parsed.goals) != len(sequences):
         raise InputError(
-            f"{len(parsed.goals)} goals for {len(sequences)} sequences; one goal per "
+            f"{plural(len(parsed.goals), 'goal')} for {plural(len(sequences), 'sequence')}; "
+            "one goal per "
             "demonstration expected",
             source=source,
             field="goals",
@@ -304,7 +306,8 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         )
         if len(demos) != len(sequences):
             raise InputError(
-                f"{len(demos)} demonstrations for {len(sequences)} sequences; one sequence per "
+                f"{plural(len(demos), 'demonstration')} for "
+                f"{plural(len(sequences), 'sequence')}; one sequence per "
                 "demonstration expected",
                 source=source,
                 field="demonstrations",
@@ -351,7 +354,8 @@ def _roles(roles: list[_RoleSchema], demos: list[Demonstration], source: str) ->
         where = f"roles[{index}]"
         if demos and len(role.instances) != len(demos):
             raise InputError(
-                f"{len(role.instances)} instances for {len(demos)} demonstrations; one per "
+                f"{plural(len(role.instances), 'instance')} for "
+                f"{plural(len(demos), 'demonstration')}; one per "
                 "demonstration expected (null where it had none)",
                 source=source,
                 field=f"{where}.instances",
