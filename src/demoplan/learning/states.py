@@ -583,6 +583,10 @@ def _placed_anywhere(
             kind = types.get(state.object)
             key = (kind, "") if kind is not None else (state.object, state.id)
             groups.setdefault(key, []).append(index)
+    for key, indices in list(groups.items()):  # one role alone: each state by itself
+        if len(indices) > 1 and len({states[i].object for i in indices}) == 1:
+            del groups[key]
+            groups.update({(key[0], states[i].id): [i] for i in indices})
     out = list(states)
     for (kind, _), indices in groups.items():
         dof = sum(len(states[i].members) - 1 for i in indices)
