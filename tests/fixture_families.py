@@ -73,7 +73,8 @@ def fixture_task(
 ) -> FixtureTask:
     """``n_demos`` demonstrations putting ``n_items`` items into the fixture
     ``lunchbox`` (a landmark, or an unmoved object where not ``landmark``),
-    which stands at ``base yaw + U(−turn, turn)`` in each (module docstring)."""
+    which stands at ``base yaw + U(−turn, turn)`` in each, two of them at
+least ``turn``/2 apart (module docstring)."""
     sigma = float(rng.uniform(0.001, 0.003))
     while True:  # items 6 cm apart inside the box's 26 × 18 cm
         offsets = rng.uniform((-0.09, -0.06), (0.09, 0.06), (n_items, 2))
@@ -87,12 +88,15 @@ def fixture_task(
         if all(np.linalg.norm(a - b) >= 0.1 for a, b in itertools.combinations(places, 2)):
             break
     base = float(rng.uniform(-45.0, 45.0))
+    turns = np.zeros(n_demos)
+    while turn > 0 and np.ptp(turns) < turn / 2:  # turned: by at least turn/2 between two
+        turns = rng.uniform(-turn, turn, n_demos)
     item_yaws = rng.uniform(-90.0, 90.0, n_items)
     items = [f"item{i}" for i in range(n_items)]
     top = FIXTURE.size[2]
     demos, fixture_yaws = [], []
     for d in range(n_demos):
-        yaw = base + float(rng.uniform(-turn, turn)) if turn > 0 else base
+        yaw = base + float(turns[d])
         fixture_yaws.append(yaw)
         fixture = Pose((float(places[d][0]), float(places[d][1]), 0.0), quat_from_yaw(yaw))
         steps = []

@@ -28,7 +28,7 @@ import logging
 import math
 from bisect import bisect_left
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -373,6 +373,21 @@ class _Quantised:
     scores: list[ReferenceScore]
     notes: dict[tuple[int, int], list[str]]
     """(demonstration, step) → decisions taken at an edge of the rules, in words."""
+    open_orientations: dict[tuple[int, int], _OpenOrientation] = field(default_factory=dict)
+    """(demonstration, step) → an orientation left to its own choice, which may
+    yet follow its position's reference (:func:`_follow_positions`)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _OpenOrientation:
+    """One placement's orientation as its object's own choice (``chosen``), with
+    what :func:`_follow_positions` needs to take it from the position's reference."""
+
+    placement: _Placement
+    index: int
+    chosen: ReferenceScore
+    chooser: _Chooser
+    precision: float
 
 
 def _quantise_placements(
@@ -395,7 +410,63 @@ def _quantise_placements(
         _quantise_object(
             obj, observed, reachable[obj], world, settings, precision, own_precision, quantised
         )
+    if settings.orientation_follows_position:
+        _follow_positions(quantised, world)
     return quantised
+
+
+def _follow_positions(quantised: _Quantised, world: DemonstrationWorld) -> None:
+    """A thing in a box turns with the box (docs/learning.md): every placement
+    whose orientation was its object's own choice takes it, where that choice
+    is a tie within the precision (:meth:`_Chooser.following`), from its
+    position's reference — or, where that reference's orientation is not part
+    of the tie, from the first one up the chain of position references that is
+    (an item placed against another item in the box: the box)."""
+    for where, open_choice in quantised.open_orientations.items():
+        follows = None
+        for reference in _position_chain(where, quantised.keys, world):
+            follows = open_choice.chooser.following(open_choice.chosen, reference)
+            if follows is not None:
+                break
+        if follows is None:
+            continue
+        key = quantised.keys[where]
+        quantised.keys[where] = replace(
+            key,
+            orientation_reference=follows.reference,
+            orientation_cluster=int(follows.clustering.labels[open_choice.index]),
+        )
+        quantised.decided[where].update(
+            _margins(
+                "orientation",
+                follows,
+                open_choice.chooser.scores,
+                open_choice.placement,
+                world,
+                open_choice.precision,
+            )
+        )
+        quantised.notes.setdefault(where, []).append(open_choice.chooser.follow_note(follows))
+
+
+def _position_chain(
+    where: tuple[int, int], keys: dict[tuple[int, int], _StateKey], world: DemonstrationWorld
+) -> list[str]:
+    """The position references of placement ``where``, its reference's at the
+    reference's own latest placement before it, and so on up to a landmark,
+    an unmoved object or an absolute placement."""
+    demo, step = where
+    chain: list[str] = []
+    reference = keys[where].position_reference
+    while reference is not None and reference not in chain:
+        chain.append(reference)
+        history = world.moves[demo].get(reference)
+        earlier = [s for s in history[0] if s < step] if history else []
+        if not earlier:
+            break
+        step = earlier[-1]
+        reference = keys[(demo, step)].position_reference
+    return chain
 
 
 def _quantise_object(
@@ -450,15 +521,9 @@ def _quantise_object(
         ori_reference, ori_cluster = None, -1  # orientation unknown
         if by_orientation is not None:
             ori = by_orientation.at(placement, world)
-            follows = (
-                by_orientation.following(ori, pos.reference)
-                if settings.orientation_follows_position
-                else None
-            )
-            if follows is not None:
-                ori = follows
-                quantised.notes.setdefault(where, []).append(
-                    by_orientation.follow_note(follows)
+            if ori is by_orientation.own:
+                quantised.open_orientations[where] = _OpenOrientation(
+                    placement, index, ori, by_orientation, orientation_precision.rms
                 )
             ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
             quantised.decided[where].update(
@@ -1012,11 +1077,20 @@ class _Chooser:
 
     def follow_note(self, follows: ReferenceScore) -> str:
         """The words for an orientation that :meth:`following` took from its position's
-        reference: never seen turned where absolute ties with it too (the
-        reference kept its yaw as far as the precision tells), else a tie."""
+        reference: *never seen turned* where the world explains the orientations
+        as well to within the precision (the reference kept its yaw as far as the
+        precision tells); *not told apart from the world* where it explains them
+        worse by more than the precision but not by the F test (too few
+        demonstrations: two need a 19-fold variance); else a tie with another
+        reference."""
         absolute = next((s for s in self.scores if s.reference is None), None)
         if absolute is not None and _tied(absolute, follows, self.noise, self.significance):
-            return f"{FOLLOWS_NOTE}{follows.reference}: never seen turned"
+            if abs(absolute.rms - follows.rms) < self.noise.rms:
+                return f"{FOLLOWS_NOTE}{follows.reference}: never seen turned"
+            return (
+                f"{FOLLOWS_NOTE}{follows.reference}: not told apart from the world by "
+                "these demonstrations"
+            )
         return f"{FOLLOWS_NOTE}{follows.reference}: a tie within the precision"
 
 
