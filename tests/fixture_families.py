@@ -43,7 +43,8 @@ ITEM_PERIOD = 180.0
 def rotate(yaw_deg: float, xy: np.ndarray) -> np.ndarray:
     """``xy`` (…, 2) turned by ``yaw_deg`` about z."""
     c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
-    return np.asarray(xy, dtype=float) @ np.array([[c, s], [-s, c]])
+    turned: np.ndarray = np.asarray(xy, dtype=float) @ np.array([[c, s], [-s, c]])
+    return turned
 
 
 @dataclass(frozen=True)

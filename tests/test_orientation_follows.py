@@ -10,6 +10,8 @@ moved and turned by any angle."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from hypothesis import given, settings
@@ -44,7 +46,9 @@ def yaw_error(got: float, want: float, period: float) -> float:
     return min(diff, period - diff)
 
 
-def check_targets(model: TaskModel, task: FixtureTask, place: tuple[float, float], turn: float):
+def check_targets(
+    model: TaskModel, task: FixtureTask, place: tuple[float, float], turn: float
+) -> None:
     """Every item's target: in the box at its offset turned with the box (3 mm),
     at its yaw in the box plus the box's yaw (1.5°, modulo its half-turn symmetry)."""
     box = Pose((place[0], place[1], 0.0), quat_from_yaw(turn))
@@ -139,3 +143,104 @@ def test_an_item_kept_square_to_the_world_in_a_turned_box_keeps_its_world_yaw() 
         assert state.position.reference == "lunchbox"
         assert state.orientation.reference is None
         assert state.notes == ()
+
+
+def _lunch_demonstration(
+    box: tuple[float, float], middle: list[str], seed: int
+) -> dict[str, Any]:
+    """The issue's lunch box (a 26 × 18 × 2 cm landmark at yaw 0): the sandwich
+    first, ``middle`` (apple, juice box, carrot) in that order, the cookie on
+    the sandwich last; 2 mm and 0.5° of placement noise."""
+    import random
+
+    rng = random.Random(seed)
+    steps: list[dict[str, Any]] = []
+    for name in ["sandwich", *middle]:
+        (dx, dy), yaw = LUNCH[name]
+        x, y = box[0] + dx + rng.gauss(0, 0.002), box[1] + dy + rng.gauss(0, 0.002)
+        steps.append({"object": name, "position": [x, y, 0.02], "yaw": yaw + rng.gauss(0, 0.5)})
+    x, y, _ = steps[0]["position"]
+    steps.append({"object": "cookie", "position": [x, y, 0.05], "yaw": 0.0})
+    return {
+        "format": "demoplan/demonstration-1",
+        "objects": LUNCH_SHAPES,
+        "landmarks": {
+            "lunchbox": {"position": [*box, 0.0], "yaw": 0.0, "size": [0.26, 0.18, 0.02]}
+        },
+        "initial": {
+            name: {"position": [0.2 + 0.12 * k, -0.3, 0.0], "yaw": 0.0}
+            for k, name in enumerate(LUNCH_SHAPES)
+        },
+        "steps": steps,
+    }
+
+
+LUNCH: dict[str, tuple[tuple[float, float], float]] = {  # offset in the box (m), yaw (deg)
+    "sandwich": ((-0.06, 0.0), 0.0),
+    "apple": ((0.05, 0.045), 0.0),
+    "juice": ((0.10, -0.03), 90.0),
+    "carrot": ((0.0, -0.07), 0.0),
+}
+LUNCH_SHAPES = {
+    "sandwich": {"shape": "box", "size": [0.12, 0.10, 0.03]},
+    "apple": {"shape": "cylinder", "size": [0.07, 0.07, 0.07]},
+    "juice": {"shape": "box", "size": [0.04, 0.06, 0.10]},
+    "carrot": {"shape": "box", "size": [0.12, 0.025, 0.025]},
+    "cookie": {"shape": "cylinder", "size": [0.05, 0.05, 0.01]},
+}
+
+
+def test_the_issues_lunch_box_turned_by_30_degrees_is_planned_with_its_contents_turned(
+    tmp_path: Path,
+) -> None:
+    """The issue end to end through the command line: three demonstrations of
+    packing the lunch box, moved and never turned; `plan` with the box moved
+    and turned by 30°. Every target turns with the box (sandwich, carrot and
+    cookie at 30°, the juice box at 30° + 90°, modulo its half-turn symmetry);
+    before, every yaw stayed at 0° and no plan was found (exit 3)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from demoplan.cli import app
+
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
+    orders = [
+        ["apple", "juice", "carrot"],
+        ["carrot", "apple", "juice"],
+        ["juice", "carrot", "apple"],
+    ]
+    for k, (box, middle) in enumerate(zip(boxes, orders, strict=True)):
+        document = _lunch_demonstration(box, middle, seed=k)
+        (demos / f"lunch-{k + 1}.json").write_text(json.dumps(document))
+    scene = {
+        "format": "demoplan/scene-1",
+        "objects": {
+            name: {**shape, "position": [0.2 + 0.12 * k, -0.3, 0.0], "yaw": 0.0}
+            for k, (name, shape) in enumerate(LUNCH_SHAPES.items())
+        },
+        "landmarks": {
+            "lunchbox": {"position": [0.7, 0.35, 0.0], "yaw": 30.0, "size": [0.26, 0.18, 0.02]}
+        },
+    }
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    model = str(tmp_path / "model.json")
+    learned = CliRunner().invoke(app, ["learn", str(demos), "-o", model])
+    assert learned.exit_code == 0, learned.stderr
+    assert "state A (sandwich): turns with lunchbox: never seen turned" in learned.stderr
+    planned = CliRunner().invoke(
+        app, ["plan", model, str(tmp_path / "scene.json"), "--json", "--timeout", "inf"]
+    )
+    assert planned.exit_code == 0, planned.stderr
+    targets = {
+        location["objects"][0]: location
+        for location in json.loads(planned.stdout)["locations"].values()
+        if location["kind"] == "target"
+    }
+    for name, want in (("sandwich", 30), ("juice", 120), ("carrot", 30), ("cookie", 30)):
+        assert yaw_error(targets[name]["yaw"], want, 180.0) <= 2.0, (name, targets[name])
+    for name, ((dx, dy), _) in LUNCH.items():
+        want_xy = np.array([0.7, 0.35]) + rotate(30.0, np.array([dx, dy]))
+        assert math.dist(targets[name]["position"][:2], want_xy) <= 0.006, name

@@ -12,6 +12,7 @@ demonstrations, through the roles the model records.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from hypothesis import given, settings
@@ -31,7 +32,9 @@ def scattered_tables(draw: st.DrawFn) -> tuple[TaskModel, dict[str, np.ndarray]]
     learned, and each plate role's placements (from the demonstrations)."""
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
     count = draw(st.integers(3, 5))
-    orders = [{kind: list(rng.permutation(2)) for kind in TABLE_TYPES} for _ in range(count)]
+    orders: list[dict[str, Sequence[int]]] = [
+        {kind: [int(i) for i in rng.permutation(2)] for kind in TABLE_TYPES} for _ in range(count)
+    ]
     taught = table_for_two(rng, orders, seat_noise=draw(st.floats(0.01, 0.05)))
     model = learn(taught.demonstrations)
     placements = {}
