@@ -444,6 +444,9 @@ STATE = FieldTable(
         "members": "the placements that make the state: `[demonstration, step]`, from 0",
         "margins": "per decision (`position reference`, `position clusters`, …) how far it "
         "was from going the other way, in units of the precision",
+        "notes": "decisions taken at an edge of learning's rules, in words (`turns with "
+        "lunchbox: never seen turned`; docs/learning.md, \"Notes\"); for people, not read back "
+        "into decisions",
     },
 )
 STATE_POSITION = FieldTable(
@@ -506,6 +509,9 @@ SETTINGS = FieldTable(
         "require": "the teacher constraints as given (`A<B`, `plate<napkin`)",
         "min_support": "a learned constraint is kept when at least this many demonstrations "
         "show it; 1: the paper's rule (`--min-support`)",
+        "orientation_follows_position": "an orientation whose reference is a tie within the "
+        "precision takes the position's reference (a thing in a box turns with the box); "
+        "false under `--paper`: the tie goes to absolute",
     },
 )
 

@@ -167,6 +167,62 @@ def test_sizes_in_metres_among_millimetre_positions_are_refused(task: dict[str, 
     assert "sizes and positions in different units" in str(exc)
 
 
+@st.composite
+def warehouses(draw: st.DrawFn) -> tuple[list[dict[str, Any]], float]:
+    """Two demonstrations of a warehouse task in metres: a pallet put down near
+    the dock, a crate put down 11–200 m away along a random axis (0.5 m crates,
+    well within 1000 of their size), each to within a centimetre."""
+    far = draw(st.floats(11.0, 200.0))
+    axis = draw(st.integers(0, 1))
+    documents = []
+    for _ in range(2):
+        jitter = draw(st.floats(-0.01, 0.01))
+        crate = [1.0 + jitter, 1.0, 0.0]
+        crate[axis] += far
+        documents.append(
+            {
+                "format": "demoplan/demonstration-1",
+                "objects": {
+                    "pallet": {"shape": "box", "size": [1.2, 0.8, 0.15]},
+                    "crate": {"shape": "box", "size": [0.5, 0.5, 0.5]},
+                },
+                "steps": [
+                    {"object": "pallet", "position": [1.0, 1.0 + jitter, 0.0]},
+                    {"object": "crate", "position": crate},
+                ],
+            }
+        )
+    return documents, far
+
+
+@settings(max_examples=20, deadline=None)
+@given(task=warehouses())
+def test_a_workspace_wider_than_a_tabletop_is_learned_where_the_file_declares_its_unit(
+    task: tuple[list[dict[str, Any]], float], tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    """A warehouse's positions spread 11–200 m: with ``"units": {"length": "m"}``
+    the user's word stands — one warning per file naming units, and learned;
+    without units, refused as a tabletop file read in the wrong unit (exit 1)."""
+    documents, far = task
+    folder = tmp_path_factory.mktemp("warehouse")
+    for k, document in enumerate(documents):
+        (folder / f"declared-{k}.json").write_text(json.dumps(written_in(document, "m")))
+        (folder / f"silent-{k}.json").write_text(json.dumps(document))
+    declared = [str(folder / f"declared-{k}.json") for k in range(2)]
+    result = CliRunner().invoke(app, ["learn", *declared, "--json"])
+    assert result.exit_code == 0, result.stderr
+    warnings = [line for line in result.stderr.splitlines() if "wider than a tabletop" in line]
+    assert len(warnings) == 2
+    assert all(": units: its positions spread" in line for line in warnings)
+    crate = next(s for s in json.loads(result.stdout)["states"] if s["object"] == "crate")
+    assert max(abs(v) for v in crate["position"]["value"]) >= far - 0.02
+    silent = [str(folder / f"silent-{k}.json") for k in range(2)]
+    result = CliRunner().invoke(app, ["learn", *silent, "--json"])
+    assert result.exit_code == 1
+    (line,) = result.stderr.strip().splitlines()
+    assert 'units: lengths read in metres (the default: it gives no "units")' in line
+
+
 def test_a_collection_names_the_demonstration_whose_units_are_wrong() -> None:
     good = written_in(_tower_document(), "m", declare=False)
     bad = written_in(_tower_document(), "mm", declare=False)

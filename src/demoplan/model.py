@@ -244,6 +244,9 @@ class State:
     """Per decision (``"position reference"``, ``"position clusters"``, …) how far
     it was from going the other way, in units of the precision (docs/learning.md; the
     smallest over the members); below 1: within the precision."""
+    notes: tuple[str, ...] = field(default=(), compare=False)
+    """Decisions learning took at an edge of its rules, in words a teacher reads
+    (docs/learning.md, "Notes"): ``"turns with lunchbox: never seen turned"``."""
 
 
 @dataclass(frozen=True, slots=True)

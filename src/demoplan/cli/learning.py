@@ -38,7 +38,8 @@ def learn(
         typer.Argument(
             metavar="DEMO",
             help="Demonstration files or folders, or pose streams (CSV, ROS 2 bags) to "
-            "segment first (with --update: the new ones).",
+            "segment first (with --update: the new ones). A folder's models, scenes and "
+            "objects files (a studio work folder's) are skipped, named in one warning.",
             show_default=False,
         ),
     ],

@@ -13,6 +13,13 @@ whole, after its length unit, and refuses it in one line naming ``units`` when
 - its positions spread more than :data:`MAX_SPREAD_PER_OBJECT` times the
   largest object it moves (sizes and positions written in different units).
 
+A file that declares its length unit (``"units": {"length": "m"}``) is taken
+at its word on the first rule: a warehouse or a mobile robot's task may span
+more than 10 m, and then gets one ``demoplan: WARNING:`` line, not a refusal
+(the other two rules still refuse: a declared unit does not make a 3 m object
+carried, nor sizes and positions agree). A file that declares nothing is
+refused as before.
+
 Angles read in degrees (the default) whose values all lie within ±2π, not all
 whole numbers, two of them at least π/4, look like radians:
 one ``demoplan: WARNING:`` line names the file and the field (a warning, not an
@@ -65,7 +72,23 @@ def check_units(
     not fit ``units.length`` (an :class:`InputError` on the field ``units``);
     log one warning when its angles look like radians read as degrees."""
     field = f"{prefix}.units" if prefix else "units"
-    problem = _length_problem(document, units.length)
+    declared = isinstance(document.get("units"), Mapping) and "length" in document["units"]
+    problem = _length_problem(document, units.length, wide_ok=declared)
+    spread, axis, low, high = _spread(list(_positions(document)))
+    spread_m = spread * LENGTH_SCALE[units.length]
+    if problem is None and declared and spread_m > MAX_SPREAD_M:
+        logger.warning(
+            "%s: %s: its positions spread %.4g m along %s (%s to %s), wider than a tabletop's "
+            "%g m; read in %s, as its units say (a large workspace)",
+            source,
+            field,
+            spread_m,
+            axis,
+            low,
+            high,
+            MAX_SPREAD_M,
+            _UNIT_NAMES[units.length],
+        )
     if problem is not None:
         given = "as its units say" if "units" in document else 'the default: it gives no "units"'
         raise InputError(
@@ -111,9 +134,12 @@ def check_measured(document: Mapping[str, Any], source: str, field: str | None =
     check_physical(document, "m", source)
 
 
-def _length_problem(document: Mapping[str, Any], length: str, advise: bool = True) -> str | None:
+def _length_problem(
+    document: Mapping[str, Any], length: str, advise: bool = True, wide_ok: bool = False
+) -> str | None:
     """What in ``document`` does not fit ``length``, or None (``advise``: with
-    the unit that would fit)."""
+    the unit that would fit; ``wide_ok``: the unit is declared, so positions
+    spread wider than a tabletop are no problem: :func:`check_units` warns)."""
     scale = LENGTH_SCALE[length]
     positions = list(_positions(document))
     carried = list(_carried_sizes(document))
@@ -145,7 +171,7 @@ def _length_problem(document: Mapping[str, Any], length: str, advise: bool = Tru
     def tail() -> str:
         return f": {advice()}" if advise else ""
 
-    if spread_m > MAX_SPREAD_M:
+    if spread_m > MAX_SPREAD_M and not wide_ok:
         return (
             f"its positions spread {spread_m:.4g} m along {axis} ({low} to {high}); a tabletop "
             f"spans less than {MAX_SPREAD_M:g} m{tail()}"

@@ -8,6 +8,7 @@ orientations (``yaw`` / ``rpy`` / ``quat``) to unit quaternions.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import replace
@@ -40,7 +41,7 @@ from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.learning.releases import warn_unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Step
-from demoplan.wording import did_you_mean
+from demoplan.wording import did_you_mean, plural
 
 __all__ = [
     "check_demonstrations",
@@ -53,6 +54,8 @@ __all__ = [
     "load_object_types",
     "with_declared_types",
 ]
+
+logger = logging.getLogger(__name__)
 
 GEOMETRY_TOLERANCE = 1e-6  # m: sizes of one object must agree across demonstrations
 
@@ -315,7 +318,12 @@ def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
 
 def demonstrations_from_path(path: Path) -> list[Demonstration]:
     """The demonstrations of one file, or of every ``*.json`` / ``*.yaml`` file of a
-    folder (in name order); not yet checked against each other."""
+    folder (in name order); not yet checked against each other.
+
+    A folder's task models, scenes and object geometry files are skipped —
+    the studio's work folder holds them beside the demonstrations — and named
+    in one warning line (:func:`not_a_demonstration`); a file named on its own
+    is read as a demonstration whatever it is."""
     if path.is_dir():
         # Hidden files (editor back-ups, "._x.json" from macOS) are not demonstrations.
         files = sorted(
@@ -331,10 +339,50 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
     else:
         files = [path]
     demos: list[Demonstration] = []
+    skipped: list[str] = []
     for file in files:
-        demos += demonstrations_from_document(read_document(file), str(file))
+        document = read_document(file)
+        other = not_a_demonstration(document) if path.is_dir() else None
+        if other is not None:
+            skipped.append(f"{file.name} ({other})")
+            continue
+        demos += demonstrations_from_document(document, str(file))
+    if skipped and not demos:
+        raise InputError(
+            f"folder holds no demonstration files, only {', '.join(skipped)}; "
+            "demonstrations ('demoplan/demonstration-1') expected",
+            source=str(path),
+        )
+    if skipped:
+        logger.warning(
+            "%s: skipped %s that %s not a demonstration: %s",
+            path,
+            plural(len(skipped), "file"),
+            "is" if len(skipped) == 1 else "are",
+            ", ".join(skipped),
+        )
     warn_unsupported_releases(demos)
     return demos
+
+
+def not_a_demonstration(document: Any) -> str | None:
+    """What a folder's file is where it is one of demoplan's other files — ``a
+    task model``, ``a scene``, ``an objects file`` (an object geometry file:
+    ``objects`` without steps, docs/formats.md) — else None (read it as a
+    demonstration, and let its faults be told)."""
+    if not isinstance(document, dict):
+        return None
+    tag = document.get("format")
+    kind = tag.split("/", 1)[1].rsplit("-", 1)[0] if isinstance(tag, str) and "/" in tag else None
+    if isinstance(tag, str) and tag.startswith("demoplan/") and kind in {"model", "scene"}:
+        return "a task model" if kind == "model" else "a scene"
+    if (
+        (tag is None or kind == "objects")
+        and "objects" in document
+        and not {"steps", "demonstrations"} & set(document)
+    ):
+        return "an objects file"
+    return None
 
 
 def _refuse_links_out_of(folder: Path, files: Sequence[Path]) -> None:

@@ -22,6 +22,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    StrictBool,
     StrictStr,
     ValidationError,
     create_model,
@@ -50,6 +51,7 @@ from demoplan.model import (
     demonstrated_types,
 )
 from demoplan.rotations import canonical_quat, quat_from_rpy, unit_length_expected
+from demoplan.wording import plural
 
 __all__ = [
     "load_model",
@@ -107,6 +109,7 @@ class _StateSchema(_Schema):
     orientation: _OrientationSchema = _OrientationSchema()
     members: list[tuple[Integer, Integer]] = []
     margins: dict[str, Number] = {}
+    notes: list[str] = []
 
 
 class _ViolationSchema(_Schema):
@@ -152,6 +155,7 @@ def _settings_schema() -> type[BaseModel]:
     new setting cannot be forgotten here. Ranges are checked by the dataclass."""
     kinds: dict[type, Any] = {
         type(None): Number | None,  # estimated from the demonstrations when null
+        bool: StrictBool,
         float: Number,
         int: Integer,
         tuple: Annotated[list[StrictStr], BeforeValidator(_requirement_texts)],
@@ -243,6 +247,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
         },
         "members": [list(m) for m in state.members],
         "margins": dict(state.margins),
+        **({"notes": list(state.notes)} if state.notes else {}),
     }
 
 
@@ -287,7 +292,8 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
     sequences = tuple(check(s, f"sequences[{i}]") for i, s in enumerate(parsed.sequences))
     if len(parsed.goals) != len(sequences):
         raise InputError(
-            f"{len(parsed.goals)} goals for {len(sequences)} sequences; one goal per "
+            f"{plural(len(parsed.goals), 'goal')} for {plural(len(sequences), 'sequence')}; "
+            "one goal per "
             "demonstration expected",
             source=source,
             field="goals",
@@ -300,7 +306,8 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         )
         if len(demos) != len(sequences):
             raise InputError(
-                f"{len(demos)} demonstrations for {len(sequences)} sequences; one sequence per "
+                f"{plural(len(demos), 'demonstration')} for "
+                f"{plural(len(sequences), 'sequence')}; one sequence per "
                 "demonstration expected",
                 source=source,
                 field="demonstrations",
@@ -347,7 +354,8 @@ def _roles(roles: list[_RoleSchema], demos: list[Demonstration], source: str) ->
         where = f"roles[{index}]"
         if demos and len(role.instances) != len(demos):
             raise InputError(
-                f"{len(role.instances)} instances for {len(demos)} demonstrations; one per "
+                f"{plural(len(role.instances), 'instance')} for "
+                f"{plural(len(demos), 'demonstration')}; one per "
                 "demonstration expected (null where it had none)",
                 source=source,
                 field=f"{where}.instances",
@@ -408,6 +416,7 @@ def _state_from_schema(state: _StateSchema) -> State:
         ),
         members=tuple((m[0], m[1]) for m in state.members),
         margins=tuple(sorted(state.margins.items())),
+        notes=tuple(state.notes),
     )
 
 

@@ -28,7 +28,7 @@ import logging
 import math
 from bisect import bisect_left
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -280,10 +280,11 @@ def _generate_states(
     quantised = _quantise_placements(observed, world, settings, precision, own_precision)
     letters, members, sequences = _letter_states(demonstrations, quantised.keys)
     states = [
-        _describe_state(key, letter, members[letter], observed, quantised.decided)
+        _describe_state(key, letter, members[letter], observed, quantised)
         for key, letter in letters.items()
     ]
-    states = [_anywhere(state, precision, settings) for state in states]
+    types = {name: kind for demo in demonstrations for name, kind in demo.types}
+    states = _placed_anywhere(states, types, precision, settings)
     return StateGeneration(tuple(states), sequences, tuple(quantised.scores), precision)
 
 
@@ -370,6 +371,23 @@ class _Quantised:
     decided: dict[tuple[int, int], dict[str, float]]
     """(demonstration, step) → decision → margin."""
     scores: list[ReferenceScore]
+    notes: dict[tuple[int, int], list[str]]
+    """(demonstration, step) → decisions taken at an edge of the rules, in words."""
+    open_orientations: dict[tuple[int, int], _OpenOrientation] = field(default_factory=dict)
+    """(demonstration, step) → an orientation left to its own choice, which may
+    yet follow its position's reference (:func:`_follow_positions`)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _OpenOrientation:
+    """One placement's orientation as its object's own choice (``chosen``), with
+    what :func:`_follow_positions` needs to take it from the position's reference."""
+
+    placement: _Placement
+    index: int
+    chosen: ReferenceScore
+    chooser: _Chooser
+    precision: float
 
 
 def _quantise_placements(
@@ -382,7 +400,7 @@ def _quantise_placements(
     """Paper §IV.A, eq. (2): each object's candidate references scored by
     K-means clustering, and each of its placements quantised to a state key
     (:func:`_quantise_object`), object by object."""
-    quantised = _Quantised({}, {}, [])
+    quantised = _Quantised({}, {}, [], {})
     reachable: dict[str, set[str]] = {obj: set() for obj in observed.placements}
     for obj, _, reference in observed.everywhere:
         if reference is not None:
@@ -392,7 +410,63 @@ def _quantise_placements(
         _quantise_object(
             obj, observed, reachable[obj], world, settings, precision, own_precision, quantised
         )
+    if settings.orientation_follows_position:
+        _follow_positions(quantised, world)
     return quantised
+
+
+def _follow_positions(quantised: _Quantised, world: DemonstrationWorld) -> None:
+    """A thing in a box turns with the box (docs/learning.md): every placement
+    whose orientation was its object's own choice takes it, where that choice
+    is a tie within the precision (:meth:`_Chooser.following`), from its
+    position's reference — or, where that reference's orientation is not part
+    of the tie, from the first one up the chain of position references that is
+    (an item placed against another item in the box: the box)."""
+    for where, open_choice in quantised.open_orientations.items():
+        follows = None
+        for reference in _position_chain(where, quantised.keys, world):
+            follows = open_choice.chooser.following(open_choice.chosen, reference)
+            if follows is not None:
+                break
+        if follows is None:
+            continue
+        key = quantised.keys[where]
+        quantised.keys[where] = replace(
+            key,
+            orientation_reference=follows.reference,
+            orientation_cluster=int(follows.clustering.labels[open_choice.index]),
+        )
+        quantised.decided[where].update(
+            _margins(
+                "orientation",
+                follows,
+                open_choice.chooser.scores,
+                open_choice.placement,
+                world,
+                open_choice.precision,
+            )
+        )
+        quantised.notes.setdefault(where, []).append(open_choice.chooser.follow_note(follows))
+
+
+def _position_chain(
+    where: tuple[int, int], keys: dict[tuple[int, int], _StateKey], world: DemonstrationWorld
+) -> list[str]:
+    """The position references of placement ``where``, its reference's at the
+    reference's own latest placement before it, and so on up to a landmark,
+    an unmoved object or an absolute placement."""
+    demo, step = where
+    chain: list[str] = []
+    reference = keys[where].position_reference
+    while reference is not None and reference not in chain:
+        chain.append(reference)
+        history = world.moves[demo].get(reference)
+        earlier = [s for s in history[0] if s < step] if history else []
+        if not earlier:
+            break
+        step = earlier[-1]
+        reference = keys[(demo, step)].position_reference
+    return chain
 
 
 def _quantise_object(
@@ -447,6 +521,10 @@ def _quantise_object(
         ori_reference, ori_cluster = None, -1  # orientation unknown
         if by_orientation is not None:
             ori = by_orientation.at(placement, world)
+            if ori is by_orientation.own:
+                quantised.open_orientations[where] = _OpenOrientation(
+                    placement, index, ori, by_orientation, orientation_precision.rms
+                )
             ori_reference, ori_cluster = ori.reference, ori.clustering.labels[index]
             quantised.decided[where].update(
                 _margins(
@@ -489,7 +567,7 @@ def _describe_state(
     letter: str,
     members: list[tuple[int, int]],
     observed: _RelativePlacements,
-    decided: dict[tuple[int, int], dict[str, float]],
+    quantised: _Quantised,
 ) -> State:
     """State ``letter``: its members' relative position and orientation
     summarised (paper §IV.A), and the narrowest margin of each decision taken
@@ -500,9 +578,11 @@ def _describe_state(
     position = observed.relative[(obj, "position", key.position_reference)][rows]
     orientation = observed.relative.get((obj, "orientation", key.orientation_reference))
     margins: dict[str, float] = {}
+    notes: dict[str, None] = {}
     for member in members:
-        for decision, margin in decided.get(member, {}).items():
+        for decision, margin in quantised.decided.get(member, {}).items():
             margins[decision] = min(margins.get(decision, math.inf), margin)
+        notes.update(dict.fromkeys(quantised.notes.get(member, [])))
     return State(
         id=letter,
         margins=tuple((d, round(m, 3)) for d, m in sorted(margins.items())),
@@ -517,32 +597,98 @@ def _describe_state(
             key.orientation_reference,
         ),
         members=tuple(members),
+        notes=tuple(notes),
     )
 
 
 ANYWHERE_PRECISIONS = 5.0
 """An absolute state whose placements scatter (RMS) by at least this many
 times the precision — and by at least ``position_separation``, the distance
-that tells two places apart — is placed *anywhere* (:func:`_anywhere`)."""
+that tells two places apart — is placed *anywhere* (:func:`_placed_anywhere`)."""
 
 
-def _anywhere(state: State, precision: Precision, settings: StateGenerationSettings) -> State:
-    """``state``, placed anywhere on its support where its absolute placements
-    scatter far beyond the precision and no reference explains them (one was
-    chosen otherwise): a tray put down at a different place in every
-    demonstration is not meant to go to the mean of them. Its orientation,
-    if absolute and as scattered (RMS at least ``orientation_separation``,
-    as the whole model's orientations are dropped beyond it), is dropped too.
-    The same reading as the paper's eq. (2) stopping at one cluster: the
-    placements are not one place, and no more states are supported."""
-    position = state.position
-    rms = math.sqrt(position.spread)
-    if (
-        position.reference is not None
-        or len(state.members) < 2
-        or rms < max(settings.position_separation, ANYWHERE_PRECISIONS * precision.position)
-    ):
-        return state
+ANYWHERE_EDGE = 0.2
+"""A decision whose spread lies within this fraction of the anywhere threshold
+(:func:`_placed_anywhere`) is a near call and is told, as a precision tie is."""
+ANYWHERE_NOTE = "anywhere"
+PLACED_NOTE = "at its place"
+"""How the notes on an anywhere decision begin: placed anywhere, or at the mean
+of its placements (:func:`_placed_anywhere`)."""
+FOLLOWS_NOTE = "turns with "
+"""How a note on an orientation that follows its position's reference begins
+(:meth:`_Chooser.follow_note`)."""
+
+
+def _placed_anywhere(
+    states: list[State],
+    types: dict[str, str],
+    precision: Precision,
+    settings: StateGenerationSettings,
+) -> list[State]:
+    """``states``, those placed anywhere on their support marked so: absolute
+    states whose placements scatter (RMS) by at least ``position_separation``,
+    the distance that tells two places apart, and at least
+    :data:`ANYWHERE_PRECISIONS` times the precision, with no reference
+    explaining them (one was chosen otherwise) — a tray put down at a
+    different place in every demonstration is not meant to go to the mean of
+    them. The same reading as the paper's eq. (2) stopping at one cluster: the
+    placements are not one place, and no more states are supported.
+
+    The roles of one type (``plate#1``, ``plate#2``: identical objects, laid
+    the same way) are decided together, on their pooled spread: one plate
+    learned *anywhere* at 54 mm and the other at its place at 44 mm was two
+    rules for one way of laying a table. A decision whose spread lies within
+    :data:`ANYWHERE_EDGE` of the threshold, or that the pooling turned for one
+    of the roles, is told in the notes of every state it decided, as a
+    precision tie is."""
+    threshold = max(settings.position_separation, ANYWHERE_PRECISIONS * precision.position)
+    groups: dict[tuple[str, str], list[int]] = {}
+    for index, state in enumerate(states):
+        if state.position.reference is None and len(state.members) >= 2:
+            kind = types.get(state.object)
+            key = (kind, "") if kind is not None else (state.object, state.id)
+            groups.setdefault(key, []).append(index)
+    for key, indices in list(groups.items()):  # one role alone: each state by itself
+        if len(indices) > 1 and len({states[i].object for i in indices}) == 1:
+            del groups[key]
+            groups.update({(key[0], states[i].id): [i] for i in indices})
+    out = list(states)
+    for (kind, _), indices in groups.items():
+        dof = sum(len(states[i].members) - 1 for i in indices)
+        pooled = math.sqrt(
+            sum((len(states[i].members) - 1) * states[i].position.spread for i in indices) / dof
+        )
+        anywhere = pooled >= threshold
+        near = abs(pooled - threshold) <= ANYWHERE_EDGE * threshold
+        turned = any((states[i].position.spread >= threshold**2) != anywhere for i in indices)
+        for i in indices:
+            state = states[i]
+            own = math.sqrt(state.position.spread)
+            if anywhere:
+                state = _anywhere(state, settings)
+            if near or turned:
+                text = ANYWHERE_NOTE if anywhere else PLACED_NOTE
+                if len(indices) > 1:
+                    text += f", as every {kind}: their pooled spread {1000 * pooled:.1f} mm"
+                    text += f" (its own {1000 * own:.1f} mm)"
+                else:
+                    text += f": spread {1000 * own:.1f} mm"
+                text += (
+                    f", within {100 * ANYWHERE_EDGE:.0f} % of the {1000 * threshold:.1f} mm "
+                    "from which placements are anywhere"
+                    if near
+                    else f"; anywhere from {1000 * threshold:.1f} mm"
+                )
+                state = replace(state, notes=(*state.notes, text))
+            out[i] = state
+    return out
+
+
+def _anywhere(state: State, settings: StateGenerationSettings) -> State:
+    """``state`` placed anywhere on its support (:func:`_placed_anywhere`). Its
+    orientation, if absolute and as scattered (RMS at least
+    ``orientation_separation``, as the whole model's orientations are dropped
+    beyond it), is dropped too."""
     orientation = state.orientation
     if (
         orientation.reference is None
@@ -550,7 +696,7 @@ def _anywhere(state: State, precision: Precision, settings: StateGenerationSetti
         and math.sqrt(orientation.spread) >= settings.orientation_separation
     ):
         orientation = StateOrientation(reference=None, value=None, spread=orientation.spread)
-    return replace(state, position=replace(position, anywhere=True), orientation=orientation)
+    return replace(state, position=replace(state.position, anywhere=True), orientation=orientation)
 
 
 def state_letters(index: int) -> str:
@@ -906,6 +1052,51 @@ class _Chooser:
             (s for s in local if not _beats(top, s, self.noise, self.significance)),
             key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
         )
+
+    def following(self, chosen: ReferenceScore, reference: str | None) -> ReferenceScore | None:
+        """An orientation that follows its position's ``reference`` (docs/learning.md,
+        *A thing in a box turns with the box*): where the orientation's own
+        choice ``chosen`` is a tie within the precision that ``reference`` is part
+        of — neither the best-scoring reference nor ``chosen`` outscores it,
+        with no more clusters — the orientation is taken relative to the same
+        reference as the position. ``None`` where the data decided (the
+        reference turned between demonstrations and explains the orientations
+        worse), where the choice was a reference available at this step only,
+        or where ``reference`` has no orientation to follow."""
+        if reference is None or chosen is not self.own or chosen.reference == reference:
+            return None
+        same = next((s for s in self.scores if s.reference == reference), None)
+        if (
+            same is None
+            or same.clustering.n_clusters > chosen.clustering.n_clusters
+            or _beats(self.best, same, self.noise, self.significance)
+            or _beats(chosen, same, self.noise, self.significance)
+        ):
+            return None
+        return same
+
+    def follow_note(self, follows: ReferenceScore) -> str:
+        """The words for an orientation that :meth:`following` took from its position's
+        reference: *never seen turned* where the world explains the orientations
+        as well to within the precision (the reference kept its yaw as far as the
+        precision tells); *not told apart from the world* where it explains them
+        worse by more than the precision but not by the F test (too few
+        demonstrations: two need a 19-fold variance); else a tie with another
+        reference."""
+        absolute = next((s for s in self.scores if s.reference is None), None)
+        if absolute is not None and _tied(absolute, follows, self.noise, self.significance):
+            if abs(absolute.rms - follows.rms) < self.noise.rms:
+                return f"{FOLLOWS_NOTE}{follows.reference}: never seen turned"
+            return (
+                f"{FOLLOWS_NOTE}{follows.reference}: not told apart from the world by "
+                "these demonstrations"
+            )
+        return f"{FOLLOWS_NOTE}{follows.reference}: a tie within the precision"
+
+
+def _tied(a: ReferenceScore, b: ReferenceScore, noise: _Spread, significance: float) -> bool:
+    """Neither of two references outscores the other (:func:`_beats`)."""
+    return not _beats(a, b, noise, significance) and not _beats(b, a, noise, significance)
 
 
 def _beats(

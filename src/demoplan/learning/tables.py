@@ -11,6 +11,7 @@ from collections import Counter
 from collections.abc import Sequence
 
 from demoplan.learning.constraints import constraint_support, label_key, learn_constraints
+from demoplan.learning.states import ANYWHERE_NOTE, FOLLOWS_NOTE, PLACED_NOTE
 from demoplan.model import State, TaskModel
 from demoplan.wording import plural
 
@@ -77,8 +78,8 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
         (
             s.id,
             s.object,  # as the demonstrations name it: --require takes the same
-            "anywhere" if s.position.anywhere else s.position.reference or "",
-            s.orientation.reference or "",
+            position_reference_text(s),
+            orientation_reference_text(s),
             format_position(s, decimals),
             format_orientation(s),
             _spread(s),
@@ -87,6 +88,26 @@ def state_rows(model: TaskModel, decimals: int = 2) -> list[tuple[str, ...]]:
         )
         for s in model.states
     ]
+
+
+def orientation_reference_text(state: State) -> str:
+    """The orientation's reference as the states table shows it: its name, or
+    where it was a tie that went to the position's reference, the words for
+    it (``turns with lunchbox: never seen turned``, docs/learning.md)."""
+    reference = state.orientation.reference
+    if reference is None:
+        return ""
+    return next((n for n in state.notes if n.startswith(f"{FOLLOWS_NOTE}{reference}:")), reference)
+
+
+def position_reference_text(state: State) -> str:
+    """The position's reference as the states table shows it: its name, blank
+    for absolute, ``anywhere``; where the anywhere rule was a near call or
+    decided with the other roles of its type, the words for it."""
+    if state.position.reference is not None:
+        return state.position.reference
+    shown = "anywhere" if state.position.anywhere else ""
+    return next((n for n in state.notes if n.startswith((ANYWHERE_NOTE, PLACED_NOTE))), shown)
 
 
 def _margin(state: State) -> str:
@@ -184,12 +205,38 @@ def precision_text(model: TaskModel) -> str | None:
     return f"Precision: {position * 1000:.1f} mm, {orientation:.1f}° ({how})"
 
 
+def distinct_demonstrations(model: TaskModel) -> int:
+    """How many demonstrations the model rests on: those that do not repeat an
+    earlier one exactly (a repeat adds no evidence, docs/learning.md); the
+    count of sequences for a model file that keeps no demonstrations."""
+    if not model.demonstrations:
+        return len(model.sequences)
+    return len({(d.steps, d.landmarks, d.initial) for d in model.demonstrations})
+
+
 def diagnostic_lines(model: TaskModel) -> list[str]:
     """Warnings a teacher should read (issue 12 item 5): decisions taken within the
-    precision (margin below 1) and states seen once."""
+    precision (margin below 1), states seen once and decisions taken at an edge
+    of the rules (the states' notes). A model learned from one demonstration
+    (or from repeats of one) has one line instead: every state of it is seen
+    once and every decision is a tie."""
+    if distinct_demonstrations(model) < 2:
+        repeats = len(model.sequences) - 1
+        shown = "one demonstration" + (
+            f" (and {plural(repeats, 'exact repeat')} of it)" if repeats > 0 else ""
+        )
+        return [
+            f"learned from {shown}: every state is seen once and every reference is a "
+            "guess; teach the task at least twice, the objects placed anew each time"
+        ]
     lines = []
     for state in model.states:
-        close = [f"{d} {m:+.1f}" for d, m in state.margins if m < 1.0]
+        follows = orientation_reference_text(state) != (state.orientation.reference or "")
+        close = [
+            f"{d} {m:+.1f}"
+            for d, m in state.margins
+            if m < 1.0 and not (follows and d == "orientation reference")
+        ]
         if close:
             lines.append(
                 f"state {state.id} ({state.object}): decided within the precision "
@@ -197,4 +244,5 @@ def diagnostic_lines(model: TaskModel) -> list[str]:
             )
         if len(state.members) == 1:
             lines.append(f"state {state.id} ({state.object}): seen in one demonstration only")
+        lines += [f"state {state.id} ({state.object}): {note}" for note in state.notes]
     return lines
