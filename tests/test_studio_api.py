@@ -29,12 +29,14 @@ from demoplan.commands.inputs import load_inputs
 from demoplan.commands.learning import learn_model
 from demoplan.learning.constraints import visit_sequence
 from demoplan.learning.modelfile import load_model
+from demoplan.learning.tables import state_rows
 from demoplan.model import ObjectGeometry, footprint
 from demoplan.plotting.colours import assign_colours
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.helpers import EXAMPLES
+from tests.test_orientation_follows import _lunch_demonstration as lunch_demonstration
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
@@ -309,6 +311,37 @@ def test_learning_through_the_api_equals_the_command_layer(client: TestClient) -
     assert answer["model"] == "table.json"
     assert load_model(work(client) / "table.json").states == oracle.states
     assert client.get("/api/files").json()["models"] == ["table.json"]
+
+
+def test_learning_says_in_words_what_the_states_table_says(client: TestClient) -> None:
+    """The issue's lunch box, moved but never turned in three demonstrations
+    (tests/test_orientation_follows.py): each state's references come back in
+    the words of `learn`'s states table (the same function's), an orientation
+    the data could not decide as ``turns with lunchbox: never seen turned``,
+    with the state's notes."""
+    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
+    orders = [
+        ["apple", "juice", "carrot"],
+        ["carrot", "apple", "juice"],
+        ["juice", "carrot", "apple"],
+    ]
+    for k, (box, middle) in enumerate(zip(boxes, orders, strict=True)):
+        document = lunch_demonstration(box, middle, seed=k)
+        assert client.post("/api/demonstrations", json={"document": document}).status_code == 201
+    answer = client.post("/api/learn", json={"files": None, "output": "lunch.json"}).json()
+    model = load_model(work(client) / "lunch.json")
+    rows = state_rows(model)
+    assert [(s["relative_position"], s["relative_orientation"]) for s in answer["states"]] == [
+        (row[2], row[3]) for row in rows
+    ]
+    assert [s["notes"] for s in answer["states"]] == [list(s.notes) for s in model.states]
+    shown = {s["object"]: s["relative_orientation"] for s in answer["states"]}
+    assert shown["sandwich"] == "turns with lunchbox: never seen turned"
+    for state in answer["states"]:  # the box never turned: no orientation is told from the world
+        assert state["orientation_reference"] is not None
+        assert state["relative_orientation"].startswith(
+            ("turns with ", state["orientation_reference"])
+        )
 
 
 def test_learning_warns_as_the_command_line_does(client: TestClient) -> None:
