@@ -14,7 +14,7 @@ label as id, and the candidate's constraints are its precedences.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -42,6 +42,7 @@ from demoplan.scenes.geometry import (
     yaw_difference,
 )
 from demoplan.scenes.naming import StableNames
+from demoplan.scenes.overhang import overhang_obstacles
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.simulated_collisions import (
     CollisionComparison,
@@ -166,6 +167,7 @@ def build_problem(
     support_pairs, obstacles = _supports_and_obstacles(
         locations, scene, candidate, target_of, settings
     )
+    obstacles += _overhangs(scene, candidate, locations, target_of, shapes)
     facts, comparison = _collisions(locations, scene, grasps, shapes, settings)
     accepts = []
     for loc in locations:
@@ -372,6 +374,43 @@ def _supports_and_obstacles(
     return support_pairs, obstacles
 
 
+def _overhangs(
+    scene: Scene,
+    candidate: Candidate,
+    locations: list[Location],
+    target_of: dict[str, str],
+    shapes: dict[str, ObjectGeometry],
+) -> list[str]:
+    """Targets that hang over what held them up in the demonstrations
+    (:func:`~demoplan.scenes.overhang.overhang_obstacles`), at their locations'
+    poses (a free yaw as turned to fit)."""
+    if not any(s.supports for s in candidate.subtasks):
+        return []
+    at = {loc.name: loc for loc in locations}
+    placements = [
+        (
+            s.label,
+            s.object,
+            s.supports,
+            shapes[s.object],
+            at[target_of[s.label]].position,
+            at[target_of[s.label]].yaw,
+        )
+        for s in candidate.subtasks
+    ]
+    landmark_shapes = dict(scene.landmark_geometry)
+    standing = {
+        name: (pose.position, yaw_of(pose), landmark_shapes[name], f"landmarks.{name}")
+        for name, pose in scene.landmarks
+        if name in landmark_shapes
+    }
+    standing.update(
+        (obj.name, (obj.pose.position, yaw_of(obj.pose), shapes[obj.name], f"objects.{obj.name}"))
+        for obj in scene.objects
+    )
+    return overhang_obstacles(placements, standing, scene.source)
+
+
 def _collisions(
     locations: list[Location],
     scene: Scene,
@@ -432,7 +471,7 @@ def _turned_to_fit(
             for yaw in TURNS:
                 if not clashes(subtask, yaw):
                     pose = Pose(subtask.pose.position, quat_from_yaw(yaw))
-                    subtask = Subtask(subtask.label, subtask.state, subtask.object, pose, True)
+                    subtask = replace(subtask, pose=pose)
                     if final[subtask.object].label == subtask.label:
                         final[subtask.object] = subtask
                     break

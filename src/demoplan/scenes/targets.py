@@ -50,6 +50,7 @@ from demoplan.rotations import (
 )
 from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
+from demoplan.scenes.overhang import Support, demonstrated_supports
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.table import landmarks_of
 from demoplan.wording import did_you_mean
@@ -74,6 +75,9 @@ class Subtask:
     turnable: bool = False
     """The state has no learned orientation: any yaw will do (the pose keeps the
     object's current one unless it would not fit, see ``scenes.problems``)."""
+    supports: tuple[Support, ...] = ()
+    """What the object stood on in every demonstration of the state (an object, a
+    landmark), which must hold the target up too (:mod:`demoplan.scenes.overhang`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -256,6 +260,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         if name not in landmarks
     }
     constraints = set(model.constraints)
+    supported = demonstrated_supports(model)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
     for index, sequence in enumerate(model.sequences):
@@ -270,6 +275,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
                 states[state_id].object,
                 resolver.visit(states[state_id]),
                 turnable=states[state_id].orientation.value is None,
+                supports=supported.get(state_id, ()),
             )
             for label, state_id in zip(labels, sequence, strict=True)
         )
