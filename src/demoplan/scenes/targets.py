@@ -98,19 +98,32 @@ class Candidate:
 def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False) -> None:
     """Exit-1 errors for objects the model needs but the scene lacks, and (unless
     ``clutter`` allows them, as objects with no goal) for objects the scene has
-    but the model never saw; each names a near name ("did you mean") where there
-    is one. An instance of a type the model knows is no stranger: it fills one
-    of the type's roles, or stands with no goal (:mod:`demoplan.scenes.binding`
+    but the model never saw. A scene name near a name the model needs is named
+    as the field, with the model's name as "did you mean" (``sandwhich`` →
+    ``sandwich``); a model's landmark among the scene's objects is refused, and
+    the objects listed as expected are objects, the landmarks said apart. An
+    instance of a type the model knows is no stranger: it fills one of the
+    type's roles, or stands with no goal (:mod:`demoplan.scenes.binding`
     counts the instances)."""
-    landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
-    landmarks |= set(scene.landmark_names)
+    recorded = {name for demo in model.demonstrations for name, _ in demo.landmarks}
+    landmarks = recorded | set(scene.landmark_names)
+    for name in scene.names:
+        if name in recorded:
+            raise InputError(
+                f"{name!r} is a landmark of the task model (it stands still in the "
+                f'demonstrations); expected under "landmarks", not "objects"',
+                source=scene.source,
+                field=f"objects.{name}",
+            )
     types = model.object_types()
     needed = {state.object for state in model.states}
     for state in model.states:
         for reference in (state.position.reference, state.orientation.reference):
             if reference is not None and reference not in landmarks:
                 needed.add(reference)
-    seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
+    seen = needed | {
+        name for demo in model.demonstrations for name, _ in demo.objects if name not in landmarks
+    }
     known_types = {types.get(name, name) for name in seen}
     kinds = {obj.name: obj.type or types.get(obj.name, obj.name) for obj in scene.objects}
     present = set(scene.names) | set(kinds.values())
@@ -118,18 +131,26 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     unknown = sorted(
         name for name in scene.names if name not in seen and kinds[name] not in known_types
     )
+    besides = f" (landmarks: {', '.join(sorted(recorded))})" if recorded else ""
     if missing:
-        hint = did_you_mean(missing[0], [*unknown, *scene.landmark_names])
+        misspelt = next((name for name in unknown if did_you_mean(name, missing)), None)
+        hint = (
+            ""
+            if misspelt is None
+            else (
+                f"; the scene's {misspelt!r} is not one of them" + did_you_mean(misspelt, missing)
+            )
+        )
         raise InputError(
             f"the task model needs {', '.join(missing)}, which the scene lacks; "
-            f"expected objects {sorted(needed)}{hint}",
+            f"expected objects {sorted(needed)}{besides}{hint}",
             source=scene.source,
-            field="objects",
+            field="objects" if misspelt is None else f"objects.{misspelt}",
         )
     if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
-            f"the demonstrations {sorted(seen)} (--clutter plans around them)"
+            f"the demonstrations {sorted(seen)}{besides} (--clutter plans around them)"
             + did_you_mean(unknown[0], seen | landmarks),
             source=scene.source,
             field="objects",
