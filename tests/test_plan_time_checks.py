@@ -27,6 +27,7 @@ from demoplan.scenes.plan import SceneNoPlanError, plan_in_scene
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, scene_from_document
 from demoplan.scenes.validity import hollow_landmarks
+from tests.lunch_box import lunch_demonstrations, lunch_scene
 
 START = (0.0, -0.6)
 """Where the food stands at the start: far from every box."""
@@ -226,11 +227,14 @@ def test_food_at_the_table_level_inside_the_box_is_refused(x: float, y: float, t
     centre = np.array([x - 0.4, y - 0.2])
 
     def gap(axes: np.ndarray, shrink: float) -> float:
+        """The widest gap between the two rectangles, each shrunk by ``shrink``
+        on every side (the touch tolerance), along ``axes``."""
         best = -math.inf
         for axis in axes:
-            reach_box = sum(abs(axis @ a) * h for a, h in zip(box_axes, (0.13, 0.09), strict=True))
-            reach_food = sum(abs(axis @ a) * 0.05 for a in food_axes)
-            best = max(best, abs(axis @ centre) - reach_box - reach_food + 2 * shrink)
+            box_half = (0.13 - shrink, 0.09 - shrink)
+            reach_box = sum(abs(axis @ a) * h for a, h in zip(box_axes, box_half, strict=True))
+            reach_food = sum(abs(axis @ a) * (0.05 - shrink) for a in food_axes)
+            best = max(best, abs(axis @ centre) - reach_box - reach_food)
         return best
 
     separation = max(gap(box_axes, 0.002), gap(food_axes, 0.002))
@@ -265,3 +269,43 @@ def test_a_bin_that_held_things_inside_is_hollow() -> None:
     }
     demos = demonstrations_from_document(document, "bin.json")
     assert hollow_landmarks(TaskModel((), (), (), (), tuple(demos))) == {"bin"}
+
+
+# -- free space lies on the table ---------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("demonstrations", "scene"),
+    [
+        ("lunch", "lunch"),
+        ("kitting/demonstrations.json", "kitting/scene-manual-on-motor.json"),
+        ("set_table", "scenes/set-table-cluttered.json"),
+    ],
+    ids=["lunch-box", "kitting", "set-table-cluttered"],
+)
+def test_free_space_lies_on_the_table_the_studio_draws(demonstrations: str, scene: str) -> None:
+    """A scene without a ``table``: every generated spot's disc (the object
+    parked there turned any way) lies on the table the studio draws for the
+    demonstrations (its own layout code), and the plan still parks what it must.
+    The lunch box's second spot reached 7 cm beyond that table's far edge."""
+    from demoplan.learning import learn
+    from demoplan.learning.demonstrations import load_demonstrations
+    from demoplan.scenes.scene import load_scene
+    from demoplan.studio.layouts import layout_of_demonstration
+    from tests.helpers import EXAMPLES
+
+    if demonstrations == "lunch":
+        demos, start = lunch_demonstrations(), lunch_scene()
+    else:
+        demos = load_demonstrations([EXAMPLES / demonstrations])
+        start = load_scene(EXAMPLES / scene)
+    drawn = layout_of_demonstration(demos[0], demos)["table"]
+    (x0, y0), (width, depth) = drawn["origin"], drawn["size"]
+    result = plan_in_scene(learn(demos), start, clutter=True)
+    spots = [loc for loc in result.chosen.problem.locations if loc.kind == "freespace"]
+    assert spots
+    for spot in spots:
+        x, y, _ = spot.position
+        radius = spot.shapes[0].size[0] / 2
+        assert x0 - 1e-6 <= x - radius and x + radius <= x0 + width + 1e-6, spot
+        assert y0 - 1e-6 <= y - radius and y + radius <= y0 + depth + 1e-6, spot

@@ -48,7 +48,7 @@ from demoplan.scenes.simulated_collisions import (
     CollisionComparison,
     checked_pairs,
 )
-from demoplan.scenes.table import Surroundings, Table, infer_table
+from demoplan.scenes.table import Surroundings, Table, infer_table, workspace_table
 from demoplan.scenes.targets import Candidate, Subtask
 
 __all__ = ["FreeSpaceRoom", "Grasp", "SceneProblem", "build_problem", "landmark_tops"]
@@ -295,8 +295,10 @@ def _add_free_space(
     surroundings: Surroundings,
 ) -> FreeSpaceRoom:
     """Free-space locations (``freespace…``) added to ``locations``: the scene's
-    spots, else spots generated on its table (inferred where it gives none)
-    around the targets. Returns where they came from and which objects none
+    spots, else spots generated on its table around the targets — where it
+    gives none, on the demonstrations' workspace
+    (:func:`~demoplan.scenes.table.workspace_table`), or on the inferred table
+    where that has no room for some object. Returns where they came from and which objects none
     takes."""
     given = scene.freespace is not None
     table = scene.table
@@ -311,20 +313,29 @@ def _add_free_space(
             sum(p[0] for p in targets) / len(targets),
             sum(p[1] for p in targets) / len(targets),
         ]
-        if table is None:
-            table = infer_table(
-                locations, list(shapes.values()), scene.gripper, surroundings, settings
+        tables = [table] if table is not None else []
+        if table is None:  # the workspace first, the inferred table where it has no room
+            workspace = workspace_table(surroundings, settings)
+            tables = [] if workspace is None else [workspace]
+            tables.append(
+                infer_table(locations, list(shapes.values()), scene.gripper, surroundings, settings)
             )
-        spots = free_space(
-            locations,
-            list(shapes.values()),
-            [(g.object, g.axis) for g in grasps],
-            scene.gripper,
-            table,
-            focus,
-            settings,
-            surroundings.landmark_outlines(),
-        )
+        for table in tables:
+            spots = free_space(
+                locations,
+                list(shapes.values()),
+                [(g.object, g.axis) for g in grasps],
+                scene.gripper,
+                table,
+                focus,
+                settings,
+                surroundings.landmark_outlines(),
+            )
+            if all(
+                any(bounding_radius(s) <= spot.radius + 1e-6 for spot in spots)
+                for s in shapes.values()
+            ):
+                break
     used = {loc.name for loc in locations}
     for spot in spots:
         check_time(f"at the free space ({len(spots)} spots)")

@@ -52,7 +52,12 @@ from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.overhang import Support, demonstrated_supports
 from demoplan.scenes.scene import Scene, yaw_of
-from demoplan.scenes.table import landmarks_of
+from demoplan.scenes.table import (
+    Surroundings,
+    demonstrated_workspace,
+    landmarks_of,
+    workspace_table,
+)
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -324,7 +329,8 @@ def _anywhere_places(
     table (not on another object) and clear of every target that does not move
     with it (its own contents follow it). Otherwise it goes to free space: the
     place nearest the demonstrations' mean where its outline, at the yaw it
-    will have, is clear of those targets and of what stays in the scene
+    will have, is clear of those targets and of what stays in the scene, on the
+    scene's table or else the demonstrations' workspace
     (:func:`_nearest_clear_place`) — the mean itself when that is clear."""
     states = {state.id: state for state in model.states}
     visits = [states[s] for s in sequence]
@@ -349,6 +355,8 @@ def _anywhere_places(
         for _, pose, shape in landmarks_of(scene)
         if shape is not None
     ]
+    # on the scene's table, else on the demonstrations' workspace (as free space)
+    table = scene.table or workspace_table(Surroundings(workspace=demonstrated_workspace(model)))
     places: dict[str, tuple[float, float, float]] = {}
     for state in anywhere:
         name = state.object
@@ -378,7 +386,7 @@ def _anywhere_places(
             if obj.name not in moved and obj.geometry is not None
         ]
         places[name] = _nearest_clear_place(
-            shape, (mean[0], mean[1]), yaw, [*blocked, *staying, *landmark_outlines], scene.table
+            shape, (mean[0], mean[1]), yaw, [*blocked, *staying, *landmark_outlines], table
         )
     return places
 
