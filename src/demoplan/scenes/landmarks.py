@@ -20,7 +20,13 @@ from demoplan.model import Pose, TaskModel, demonstrated_shapes
 from demoplan.scenes.scene import Scene, complete_geometry, yaw_of
 from demoplan.wording import did_you_mean
 
-__all__ = ["LANDMARK_STILL", "complete_scene", "landmark_poses", "referenced_landmarks"]
+__all__ = [
+    "LANDMARK_STILL",
+    "complete_scene",
+    "landmark_poses",
+    "moved_landmarks",
+    "referenced_landmarks",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -101,6 +107,18 @@ def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
                 field=field,
             )
     return poses
+
+
+def moved_landmarks(model: TaskModel) -> set[str]:
+    """The landmarks that stood at different places in the demonstrations
+    (beyond :data:`LANDMARK_STILL`, or three times the model's precision): the
+    ones whose pose the task's placements may follow, and a scene must give."""
+    recorded: dict[str, list[Pose]] = {}
+    for demo in model.demonstrations:
+        for name, pose in demo.landmarks:
+            recorded.setdefault(name, []).append(pose)
+    tolerance = _still_tolerance(model)
+    return {name for name, seen in recorded.items() if _movement(seen, tolerance) is not None}
 
 
 def referenced_landmarks(model: TaskModel) -> set[str]:
