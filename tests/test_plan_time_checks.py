@@ -9,6 +9,7 @@ outside a rectangle), sharing no code with demoplan.scenes.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -309,3 +310,34 @@ def test_free_space_lies_on_the_table_the_studio_draws(demonstrations: str, scen
         radius = spot.shapes[0].size[0] / 2
         assert x0 - 1e-6 <= x - radius and x + radius <= x0 + width + 1e-6, spot
         assert y0 - 1e-6 <= y - radius and y + radius <= y0 + depth + 1e-6, spot
+
+
+def test_a_strip_of_free_yaw_is_turned_to_lie_on_its_board() -> None:
+    """A 9 × 2 cm strip laid along a 10 × 6 cm board, its yaw never learned:
+    it keeps the yaw it stands at unless that hangs over the board; standing
+    turned 90° it is put down turned back (world-aligned first) and plans, where
+    keeping its yaw would hang 15 mm over the board's long edge."""
+    board, strip = (0.10, 0.06, 0.02), (0.09, 0.02, 0.005)
+    model = packing_model(board, strip, (0.0, 0.0), follows_box=True)
+    model = replace(
+        model,
+        states=tuple(
+            replace(state, orientation=StateOrientation(None, None, 0.0)) for state in model.states
+        ),
+    )
+    scene = scene_from_document(
+        {
+            "format": "demoplan/scene-1",
+            "objects": {"food": {"position": list(START), "yaw": 90}},
+            "landmarks": {
+                "box": {"position": [0.45, 0.15, 0], "yaw": 0, "shape": "box", "size": list(board)}
+            },
+        },
+        "strip.json",
+    )
+    result = plan_in_scene(model, scene)
+    problem = result.chosen.problem
+    target = problem.location(problem.problem.subgoals[0].location)
+    assert abs((target.yaw + 90) % 180 - 90) < 1e-6  # along the board
+    assert not problem.obstacles
+    assert hang_over(board, strip, (0.0, 0.0), 90.0) == pytest.approx(0.015)
