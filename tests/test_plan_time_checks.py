@@ -341,3 +341,26 @@ def test_a_strip_of_free_yaw_is_turned_to_lie_on_its_board() -> None:
     assert abs((target.yaw + 90) % 180 - 90) < 1e-6  # along the board
     assert not problem.obstacles
     assert hang_over(board, strip, (0.0, 0.0), 90.0) == pytest.approx(0.015)
+
+
+def test_what_held_each_lunch_item_up_is_the_box_or_the_sandwich() -> None:
+    """In the three lunch demonstrations the food stood on the box's top and the
+    cookie on the sandwich, each wholly on it; the lunch box moved and turned
+    30° at plan time, the learned targets (in the box's frame) still lie on it."""
+    from demoplan.learning import learn
+    from demoplan.scenes.overhang import demonstrated_supports
+
+    model = learn(lunch_demonstrations())
+    held = {
+        model.state(state).object: [(s.name, round(s.overhang, 6)) for s in supports]
+        for state, supports in demonstrated_supports(model).items()
+    }
+    assert held == {
+        "sandwich": [("lunchbox", 0.0)],
+        "apple": [("lunchbox", 0.0)],
+        "juice": [("lunchbox", 0.0)],
+        "carrot": [("lunchbox", 0.0)],
+        "cookie": [("sandwich", 0.0)],
+    }
+    result = plan_in_scene(model, lunch_scene())
+    assert not result.chosen.problem.obstacles and result.chosen.plan is not None
