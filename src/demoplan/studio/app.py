@@ -33,7 +33,7 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError, UsageError
-from demoplan.studio.jobs import Jobs, TooManyRunsError
+from demoplan.studio.jobs import LAST_RUN_FILE, Jobs, TooManyRunsError
 from demoplan.studio.requests import (
     MAX_BODY_BYTES,
     MAX_SEED,
@@ -261,7 +261,7 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
     requests sent to ``hosts`` only (None: any, for a studio served to a
     network on purpose)."""
     folder = WorkFolder(workdir)
-    jobs = Jobs()
+    jobs = Jobs(record=folder.root / LAST_RUN_FILE)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -284,6 +284,7 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
     _add_layout_routes(app, folder)
     _add_learning_routes(app, folder, jobs)
     _add_run_routes(app, folder, jobs)
+    _add_last_run_route(app, jobs)
     return app
 
 
@@ -537,3 +538,22 @@ def _add_error_handlers(app: FastAPI) -> None:
     async def internal(request: Request, exc: Exception) -> JSONResponse:
         logging.getLogger(__name__).warning("internal error: %r", exc)
         return detail(500, f"internal error ({type(exc).__name__}); the studio's log says more")
+
+
+def _add_last_run_route(app: FastAPI, jobs: Jobs) -> None:
+    """The run that ended last in the work folder, for a page opened again."""
+
+    @app.get("/api/last-run")
+    def last_run() -> dict[str, Any] | None:
+        from demoplan.studio.layouts import layout_of_scene
+
+        record = jobs.last()
+        if record is None:
+            return None
+        try:
+            layout = layout_of_scene(_scene(record["scene"], "scene"))
+        except DemoplanError as exc:
+            raise FileMissingError(
+                f"run: the last run's scene cannot be drawn ({one_line(str(exc))})"
+            ) from None
+        return record | {"layout": layout}

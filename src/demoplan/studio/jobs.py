@@ -30,12 +30,18 @@ Why a process, and why a plain subprocess rather than ``multiprocessing``:
 - A worker that dies without its final line (killed from outside, out of
   memory) makes the run ``failed`` with one line saying how it ended — never a
   run left ``running``.
+
+Each run that ends (done, failed or cancelled) is written, whole and
+atomically, to the work folder's hidden :data:`LAST_RUN_FILE` with its request
+(``GET /api/last-run``): a page opened again, after its tab was closed or the
+studio restarted, shows it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import os
 import secrets
 import signal
@@ -49,9 +55,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
+from demoplan.errors import DemoplanError
 from demoplan.studio.workfolder import FileMissingError
 
 __all__ = [
+    "LAST_RUN_FILE",
     "MAX_ACTIVE_RUNS",
     "MAX_KEPT_RUNS",
     "TERMINATE_GRACE_S",
@@ -75,6 +83,12 @@ KILLED_WAIT_S = 10.0
 """s: at most this long for the process to be gone after SIGKILL (it is at once)."""
 WORKER = (sys.executable, "-m", "demoplan.studio.worker")
 """The command of a run's process."""
+
+LAST_RUN_FILE = ".studio-last-run.json"
+"""The work folder's record of the run that ended last (hidden: not listed)."""
+LAST_RUN_FORMAT = "demoplan/studio-run-1"
+REQUEST_FIELDS = ("scene", "sim", "faults", "seed", "clutter")
+"""What the last run's record keeps of its request (and the model's file name)."""
 
 Order = Callable[[str], dict[str, Any]]
 """A run's request for its process, given the run's id."""
@@ -100,6 +114,10 @@ class Job:
     """Set once the process is gone (reaped, its group swept) and the state final."""
     reaped: bool = False  # the process's id is free again: never signal it (under ``lock``)
     video: Path | None = None
+    request: dict[str, Any] = field(default_factory=dict)
+    """What the run's process was told (:data:`Order`)."""
+    record: Path | None = None
+    """Where the run is written once it has ended (None: nowhere)."""
 
     def add_event(self, event: dict[str, Any]) -> None:
         with self.lock:
@@ -128,11 +146,14 @@ class Job:
 class Jobs:
     """The runs of one studio."""
 
-    def __init__(self, worker: Sequence[str] = WORKER) -> None:
+    def __init__(self, worker: Sequence[str] = WORKER, record: Path | None = None) -> None:
+        """``record``: the file each run is written to when it ends
+        (:data:`LAST_RUN_FILE` of the work folder; None: none)."""
         self._jobs: dict[str, Job] = {}
         self._lock = threading.Lock()
         self._slots = threading.BoundedSemaphore(MAX_ACTIVE_WORK)
         self.worker = tuple(worker)
+        self.record = record
 
     def start(self, order: Order, worker: Sequence[str] | None = None) -> Job:
         """Start a run of ``order`` in a new process (TooManyRunsError beyond
@@ -144,12 +165,13 @@ class Jobs:
                     f"{active} runs are going on, at most {MAX_ACTIVE_RUNS} at once; "
                     "wait for one to end or cancel it"
                 )
-            job = Job(secrets.token_hex(8))
+            job = Job(secrets.token_hex(8), record=self.record)
             self._jobs[job.id] = job
             finished = [j for j in self._jobs.values() if not _busy(j)]
             for old in finished[: max(0, len(self._jobs) - MAX_KEPT_RUNS)]:
                 del self._jobs[old.id]
         request = order(job.id)
+        job.request = request
         job.video = Path(request["video"]) if request.get("video") else None
         try:
             process = subprocess.Popen(
@@ -161,6 +183,7 @@ class Jobs:
             )
         except OSError as exc:
             _finish(job, "failed", error=f"the run's process could not start ({exc.strerror})")
+            _write_record(job)
             job.ended.set()
             return job
         job.process = process
@@ -194,6 +217,30 @@ class Jobs:
         if job is None:
             raise FileMissingError(f"run: no run {run_id!r}")
         return job
+
+    def last(self) -> dict[str, Any] | None:
+        """The run that ended last in this work folder, as :data:`LAST_RUN_FILE`
+        holds it; None before the first (FileMissingError: the file cannot be
+        read)."""
+        if self.record is None:
+            return None
+        try:
+            text = self.record.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            return None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise FileMissingError(f"run: {LAST_RUN_FILE} cannot be read ({exc})") from None
+        try:
+            document = json.loads(text)
+        except ValueError:
+            document = None
+        if not _is_record(document):
+            raise FileMissingError(
+                f"run: {LAST_RUN_FILE} is not a run's record ({LAST_RUN_FORMAT} expected); "
+                "the next run replaces it"
+            )
+        assert isinstance(document, dict)
+        return document
 
     def cancel(self, run_id: str) -> Job:
         """Cancel the run: it is ``cancelled`` at once, and its process is
@@ -265,7 +312,42 @@ def _watch(job: Job, process: subprocess.Popen[bytes]) -> None:
         _finish(
             job, "failed", error=f"the run's process ended without a result ({_how(returncode)})"
         )
+    _write_record(job)
     job.ended.set()
+
+
+def _write_record(job: Job) -> None:
+    """Write the ended ``job`` to its record, atomically (a warning in the
+    studio's log where the work folder refuses it: the run itself is over)."""
+    if job.record is None:
+        return
+    from demoplan.fileio import write_atomic
+
+    request = job.request
+    document = {
+        "format": LAST_RUN_FORMAT,
+        **job.to_json(),
+        "model": Path(str(request.get("model", ""))).name,
+        **{key: request.get(key) for key in REQUEST_FIELDS},
+    }
+    try:
+        write_atomic(job.record, json.dumps(document) + "\n")
+    except DemoplanError as exc:
+        logging.getLogger(__name__).warning("the run's record was not written: %s", exc)
+
+
+def _is_record(document: object) -> bool:
+    """Whether ``document`` has the shape of a run's record (:func:`_write_record`)."""
+    return (
+        isinstance(document, dict)
+        and document.get("format") == LAST_RUN_FORMAT
+        and isinstance(document.get("run"), str)
+        and isinstance(document.get("state"), str)
+        and isinstance(document.get("events"), list)
+        and all(isinstance(event, dict) for event in document["events"])
+        and isinstance(document.get("scene"), dict)
+        and isinstance(document.get("model"), str)
+    )
 
 
 def _read(job: Job, stdout: IO[bytes], outcome: list[dict[str, Any]]) -> None:

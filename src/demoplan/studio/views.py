@@ -19,17 +19,20 @@ from demoplan.scenes.scene import Scene, SceneObject, yaw_of
 
 if TYPE_CHECKING:
     from demoplan.execution.executor import RunEvent, RunReport
+    from demoplan.execution.world import Observation
     from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError, ScenePlan
 
 __all__ = [
     "event_json",
     "final_scene",
+    "finished_events",
     "model_json",
     "no_plan_json",
     "plan_json",
     "pose_json",
     "run_result_json",
     "targets_json",
+    "world_json",
 ]
 
 
@@ -205,21 +208,38 @@ def _no_plan_figure(failure: SceneNoPlanError | SceneLimitReachedError) -> str |
         return path.read_text(encoding="utf-8")
 
 
-def event_json(event: RunEvent) -> dict[str, Any]:
-    """A run's event as the CLI's live display words it (``step N: text``)."""
+def world_json(observation: Observation | None) -> dict[str, Any] | None:
+    """The world as observed: every object standing in it with its pose
+    (:func:`pose_json`), and the object in the hand (it stands nowhere)."""
+    if observation is None:
+        return None
+    return {
+        "objects": {name: pose_json(pose) for name, pose in observation.poses.items()},
+        "held": observation.held,
+    }
+
+
+def event_json(event: RunEvent, observation: Observation | None = None) -> dict[str, Any]:
+    """A run's event as the CLI's live display words it (``step N: text``),
+    with the world the executor had last observed when it told the event
+    (``observation``, :func:`world_json`): at a plan the start, at an action
+    the world as the action begins, at a failure the world the failed action
+    left (a dropped object where it fell), at a replan the world planned
+    from, at the end the final one."""
     return {
         "kind": event.kind,
         "text": event.text,
         "step": event.step,
         "replans": event.replans,
         "remaining": event.remaining,
-        "poses": None,
+        "world": world_json(observation),
         "targets": {name: pose_json(pose) for name, pose in event.targets} or None,
     }
 
 
 def run_result_json(report: RunReport, video: str | None) -> dict[str, Any]:
-    """The run's report: success, replans, the failures as the CLI prints them."""
+    """The run's report: success, why it ended, replans, the failures as the
+    CLI prints them, the final world (:func:`world_json`)."""
     return {
         "success": report.success,
         "replans": report.replans,
@@ -231,23 +251,17 @@ def run_result_json(report: RunReport, video: str | None) -> dict[str, Any]:
             for fault in report.injected
         ],
         "final": {name: pose_json(pose) for name, pose in report.final.poses.items()},
+        "world": world_json(report.final),
         "video": video,
     }
 
 
-def events_with_poses(events: list[dict[str, Any]], report: RunReport) -> list[dict[str, Any]]:
-    """``events`` with each action's pose of its object (the place it was taken
-    from at a GRASP, put at a PUT_DOWN: what the report recorded), and the
-    final poses at ``done``."""
-    by_step = {executed.step: executed for executed in report.actions}
-    out = []
-    for event in events:
-        if event["kind"] == "action" and event["step"] in by_step:
-            executed = by_step[event["step"]]
-            event = event | {"poses": {executed.action.object: pose_json(executed.pose)}}
-        elif event["kind"] == "done":
-            event = event | {
-                "poses": {name: pose_json(pose) for name, pose in report.final.poses.items()}
-            }
-        out.append(event)
-    return out
+def finished_events(events: list[dict[str, Any]], report: RunReport) -> list[dict[str, Any]]:
+    """``events`` once the run is over: the end (``done``) marked with the
+    run's outcome (``success``: whether the goal was reached) and the final
+    world, which the report observed last."""
+    final = world_json(report.final)
+    return [
+        event | {"success": report.success, "world": final} if event["kind"] == "done" else event
+        for event in events
+    ]

@@ -1,79 +1,146 @@
-// The Run view: a run in a worker thread on the server, polled, its events as a timeline (POST /api/runs).
+// The Run view: a run in a process of its own on the server, polled, its events
+// as a timeline (POST /api/runs); the table shows the world the run observed at
+// each event; the run that ended last is shown again when the page is opened
+// (GET /api/last-run).
 
-import { del, get, post } from "./api.js";
+import { ApiError, del, get, post } from "./api.js";
 import { $, alarm, clone, guarded, say, state } from "./common.js";
-import { chosenModel, sceneDocument, stopAnimation } from "./plan.js";
-import { redraw } from "./stage.js";
+import { chosenModel, sceneDocument, sceneExtras, stopAnimation } from "./plan.js";
+import { keepInView, redraw, sameObjects } from "./stage.js";
+import { startDemonstration } from "./teach.js";
 
-// --- run ------------------------------------------------------------------
+// Polls in a row that may fail (a busy server) before the run is given up as lost.
+export const LOST_AFTER_FAILED_POLLS = 3;
+
+// --- the world at each event ----------------------------------------------
 
 export function runEvents() {
   return state.run.status ? state.run.status.events : [];
 }
 
-export function runPosesAt(step) {
-  const poses = clone(state.plan.poses || state.teach.poses);
-  for (const event of runEvents().slice(0, step)) {
-    if (event.poses) Object.assign(poses, clone(event.poses));
+// The world at event `step` (1-based): the objects standing, with their poses,
+// as the run observed them when the event happened (an object in the hand
+// stands nowhere and is not drawn); before the first event, the start scene.
+export function runWorldAt(step) {
+  const events = runEvents();
+  for (let i = Math.min(step, events.length) - 1; i >= 0; i -= 1) {
+    if (events[i].world) return events[i].world;
   }
-  return poses;
+  return null;
 }
 
-export function setRunStep(step) {
+export function runPosesAt(step) {
+  const world = runWorldAt(step);
+  return world ? clone(world.objects) : clone(state.plan.poses || state.teach.poses);
+}
+
+export function setRunStep(step, { follow = false } = {}) {
   const total = runEvents().length;
   state.run.step = Math.max(0, Math.min(step, total));
+  state.run.follow = follow;
   $("run-step").max = String(total);
   $("run-step").value = String(state.run.step);
   $("run-step-out").textContent = `${state.run.step} / ${total}`;
+  $("panel-run").dataset.step = String(state.run.step);
   document.querySelectorAll("#timeline li").forEach((li, i) => {
     if (i === state.run.step - 1) li.setAttribute("aria-current", "step");
     else li.removeAttribute("aria-current");
   });
+  if (state.layout && state.run.step > 0) keepInView(runPosesAt(state.run.step));
   redraw();
 }
 
-export const MARKS = { plan: "▸", failure: "✗", replan: "↻", done: "✓", action: "•" };
+// --- the timeline, the badge and the summary -------------------------------
 
-export function renderRun() {
-  const status = state.run.status;
+export const MARKS = { plan: "▸", failure: "✗", replan: "↻", action: "•" };
+
+// Whether the run reached its goal: true, false, or null while unknown.
+export function runSucceeded(status) {
+  if (status.result) return Boolean(status.result.success);
+  if (status.state === "running") return null;
+  return false; // failed, cancelled or lost: no goal reached
+}
+
+// How an event is shown: its mark and class. The end is ✓ (green) only when
+// the run reached its goal, ✗ (red) when it did not, ■ until the result says.
+export function eventLook(event, status) {
+  if (event.kind !== "done") return { mark: MARKS[event.kind] || "•", look: event.kind };
+  const success = event.success !== undefined ? event.success : runSucceeded(status);
+  if (success === true) return { mark: "✓", look: "done" };
+  if (success === false) return { mark: "✗", look: "failure" };
+  return { mark: "■", look: "end" };
+}
+
+// The badge: running, done (the goal reached), failed (not reached, or the
+// run's process failed), cancelled, or error (the studio lost).
+export function badgeState(status) {
+  if (status.state === "done") return status.result && status.result.success ? "done" : "failed";
+  return status.state;
+}
+
+function renderTimeline(status) {
   const list = $("timeline");
   const events = status.events;
   while (list.children.length > events.length) list.lastChild.remove();
-  for (let i = list.children.length; i < events.length; i += 1) {
-    const event = events[i];
-    const li = document.createElement("li");
+  events.forEach((event, i) => {
+    const { mark, look } = eventLook(event, status);
+    const text = `${mark} ${event.text}`;
+    let li = list.children[i];
+    if (li && li.dataset.kind === event.kind && li.dataset.look === look && li.firstChild.textContent === text) return;
+    if (!li) {
+      li = document.createElement("li");
+      const button = document.createElement("button");
+      button.type = "button";
+      button.className = "event-button";
+      button.addEventListener("click", () => {
+        stopAnimation("run");
+        setRunStep(i + 1);
+      });
+      li.appendChild(button);
+      list.appendChild(li);
+    }
     li.dataset.kind = event.kind;
-    li.className = `event ${event.kind}`;
-    const button = document.createElement("button");
-    button.type = "button";
-    button.className = "event-button";
-    button.textContent = `${MARKS[event.kind] || "•"} ${event.text}`;
-    button.setAttribute("aria-label", `${event.kind}: ${event.text}`);
-    button.addEventListener("click", () => setRunStep(i + 1));
-    li.appendChild(button);
-    list.appendChild(li);
+    li.dataset.look = look;
+    li.className = `event ${look}`;
+    li.firstChild.textContent = text;
+    li.firstChild.setAttribute("aria-label", `${event.kind === "done" ? "end" : event.kind}: ${event.text}`);
+  });
+}
+
+function summaryOf(status) {
+  const r = status.result;
+  if (r) {
+    const failures = `${r.replans} replans, ${r.failures.length} failures detected.` +
+      (r.failures.length ? ` ${r.failures.join(" ")}` : "");
+    return `${r.success ? "Success" : "Failed"}: ${r.reason}. ${failures}`;
   }
+  if (status.state === "running") return `Running: ${status.events.length} events so far.`;
+  if (status.error) return `Stopped: ${status.error}`;
+  return `Run ${status.state}.`;
+}
+
+// toEnd: show the last event (the final world) whatever was selected.
+export function renderRun(toEnd = false) {
+  const status = state.run.status;
+  renderTimeline(status);
   const badge = $("run-state");
-  badge.textContent = status.state;
-  badge.dataset.state = status.state;
+  const shown = badgeState(status);
+  badge.textContent = shown;
+  badge.dataset.state = shown;
   $("cancel").disabled = status.state !== "running";
   $("run").disabled = status.state === "running";
-  const summary = $("run-summary");
-  if (status.result) {
-    const r = status.result;
-    summary.textContent = `${r.success ? "Success" : "Not done"}: ${r.replans} replans, ` +
-      `${r.failures.length} failures detected.` + (r.failures.length ? ` ${r.failures.join(" ")}` : "");
-    const video = $("video");
-    video.hidden = !r.video;
-    if (r.video && video.getAttribute("src") !== r.video) video.src = r.video;
-  } else if (status.state === "running") {
-    summary.textContent = `Running: ${events.length} events so far.`;
-  } else {
-    summary.textContent = status.error ? `Stopped: ${status.error}` : `Run ${status.state}.`;
-  }
+  $("run-summary").textContent = summaryOf(status);
+  const video = $("video");
+  const source = status.result ? status.result.video : null;
+  video.hidden = !source;
+  if (source && video.getAttribute("src") !== source) video.src = source;
   if (status.error) alarm(status.error);
-  setRunStep(status.state === "running" ? events.length : Math.min(state.run.step || events.length, events.length));
+  const total = status.events.length;
+  const follow = status.state === "running" && state.run.follow;
+  setRunStep(toEnd || follow ? total : Math.min(state.run.step, total), { follow });
 }
+
+// --- starting, following, cancelling ---------------------------------------
 
 export async function startRun() {
   const model = chosenModel();
@@ -86,10 +153,10 @@ export async function startRun() {
   const answer = await post("/api/runs", body);
   state.run.id = answer.run;
   state.run.status = { state: "running", events: [], result: null, error: null };
-  state.run.step = 0;
+  state.run.follow = true;
+  state.run.failedPolls = 0;
   $("timeline").replaceChildren();
-  $("video").hidden = true;
-  renderRun();
+  renderRun(true);
   say(`Run ${answer.run} started.`);
   state.run.poll = setInterval(() => guarded(pollRun), 300);
 }
@@ -101,25 +168,72 @@ export function stopPolling() {
 
 export async function pollRun() {
   const id = state.run.id;
-  if (!id) return;
+  if (!id || state.run.polling) return;
+  state.run.polling = true; // one poll at a time: a slow answer is not asked for twice
   let status;
   try {
     status = await get(`/api/runs/${encodeURIComponent(id)}`);
   } catch (error) {
-    stopPolling();
-    throw error;
+    if (id === state.run.id) lostTrack(error);
+    return;
+  } finally {
+    state.run.polling = false;
   }
   if (id !== state.run.id) return;
+  state.run.failedPolls = 0;
   state.run.status = status;
-  renderRun();
-  if (status.state !== "running") {
-    stopPolling();
-    say(`Run ${status.state}${status.result ? (status.result.success ? ": success" : ": not done") : ""}.`);
-  }
+  const over = status.state !== "running";
+  if (over) stopPolling();
+  renderRun(over);
+  if (over) say(`Run ${badgeState(status)}${status.result ? `: ${status.result.reason}` : ""}.`);
+}
+
+// A poll that failed: after LOST_AFTER_FAILED_POLLS in a row (the studio
+// stopped, or restarted and forgot the run) the run is shown as an error.
+function lostTrack(error) {
+  state.run.failedPolls = (state.run.failedPolls || 0) + 1;
+  const gone = error instanceof ApiError && error.status === 404;
+  if (!gone && state.run.failedPolls < LOST_AFTER_FAILED_POLLS) return;
+  stopPolling();
+  const why = error instanceof ApiError ? error.message : String(error.message || error);
+  state.run.status = {
+    ...state.run.status,
+    state: "error",
+    error: `the run's end is unknown: ${why}`,
+  };
+  renderRun(true);
+  say("The run was lost.");
 }
 
 export async function cancelRun() {
   if (!state.run.id) return;
   await del(`/api/runs/${encodeURIComponent(state.run.id)}`);
   say("Cancelling the run…");
+}
+
+// --- the last run, when the page is opened ----------------------------------
+
+// The run that ended last in the work folder, shown as it ended: the start
+// scene it ran from on the table (the Teach view starts there too when its
+// objects are others), its events, and its final world.
+export async function restoreLastRun() {
+  const record = await get("/api/last-run");
+  if (!record) return; // no run has ended in this work folder yet
+  const layout = record.layout;
+  if (!state.layout || !sameObjects(state.layout, layout)) {
+    startDemonstration(clone(layout), "The table of the last run.");
+  }
+  state.plan.poses = clone(layout.poses);
+  state.plan.extras = sceneExtras({ format: "demoplan/scene-1", ...record.scene });
+  keepInView(state.plan.poses);
+  for (const [id, value] of [["faults", record.faults || ""], ["run-seed", String(record.seed || 0)]]) $(id).value = value;
+  if ([...$("sim").options].some((o) => o.value === record.sim)) $("sim").value = record.sim;
+  if ([...$("plan-model").options].some((o) => o.value === record.model)) $("plan-model").value = record.model;
+  state.run.id = record.run;
+  state.run.status = { state: record.state, events: record.events, result: record.result, error: record.error };
+  state.run.follow = false;
+  $("timeline").replaceChildren();
+  renderRun(true);
+  alarm("");
+  say(`The last run of this work folder (${badgeState(state.run.status)}) is in the Run view.`);
 }

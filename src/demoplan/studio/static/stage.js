@@ -71,7 +71,7 @@ export function redraw() {
     teach: "Teach: move the objects as the task should be done; each release is one step.",
     learn: "Learn: the learned targets are drawn as outlines.",
     plan: state.plan.step > 0 ? `Plan: after action ${state.plan.step}.` : "Plan: the start scene.",
-    run: state.run.step > 0 ? `Run: after event ${state.run.step}.` : "Run: the start scene.",
+    run: state.run.step > 0 ? `Run: the world observed at event ${state.run.step}.` : "Run: the start scene.",
   };
   $("stage-caption").textContent = captions[state.view];
 }

@@ -8,7 +8,7 @@ import { learn } from "./learn.js";
 import {
   addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, scramble, setPlanStep, stopAnimation,
 } from "./plan.js";
-import { cancelRun, setRunStep, startRun } from "./run.js";
+import { cancelRun, restoreLastRun, setRunStep, startRun } from "./run.js";
 import { redraw, table, tableRoom } from "./stage.js";
 import { loadFile, newDemonstration, refreshFiles, save, undo } from "./teach.js";
 import { get } from "./api.js";
@@ -111,6 +111,7 @@ async function start() {
     }
     await refreshFiles();
     await newDemonstration();
+    await restoreLastRun();
   });
   document.body.dataset.ready = "true";
 }
