@@ -138,7 +138,7 @@ def demonstrated_supports(
         supports[state.id] = tuple(
             Support(name, max(m[name] for m in members if m is not None)) for name in sorted(common)
         )
-    return {state: found_ for state, found_ in supports.items() if found_}
+    return {state: held for state, held in supports.items() if held}
 
 
 def overhang_obstacles(
