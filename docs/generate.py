@@ -354,8 +354,9 @@ SCENE = FieldTable(
         "freespace": "spots `[x, y]` or `[x, y, z]` (z = 0) where objects may be parked; "
         "default: generated on the table",
         "gripper": "the parallel-jaw gripper",
-        "table": "where free space may be generated (default: inferred around the objects, "
-        "targets, landmarks and the demonstrations' workspace; docs/scenes.md)",
+        "table": "where free space may be generated (default: the demonstrations' "
+        "workspace grown by 10 cm, the table the studio draws; where that has no room, "
+        "inferred around the objects, targets, landmarks and that workspace; docs/scenes.md)",
         "robot": "where the arm of `run --sim arm` stands (default: placed where it "
         "reaches every object and target)",
     },
@@ -1371,8 +1372,11 @@ def scene_section() -> str:
             "appear in plans, so they have no spaces and are not `loc`, `freespace` or "
             "`grasp` followed by digits (the names demoplan gives locations and grasps). "
             "An object with z > 0 stands on what is under it; no object lies under the "
-            "table top (z below −5 mm), and free-space spots lie on the table. The model's "
-            "objects must all be in the scene; objects the model never saw are refused "
+            "table top (z below −5 mm) nor inside another object or a landmark's body "
+            "(a landmark with a size is solid, unless things stood inside it in the "
+            "demonstrations: a bin), and free-space spots lie on the table. The model's "
+            "objects must all be in the scene, and its landmarks under `landmarks`; "
+            "objects the model never saw are refused "
             "unless planning is told to move them out of the way (`--clutter`). "
             "docs/scenes.md says how a scene becomes a planning problem.",
             f"`{PYRAMID}` (Experiment 2 at run time: red stands on green and wood):",
