@@ -1420,9 +1420,11 @@ def studio_objects_section() -> str:
             "`colour` (`#rrggbb`; default: the colour every demoplan figure gives it). It is "
             "read by the scene reader, so every field means and is checked as in a scene, "
             "and every object must give its `size`; a colour that is not `#rrggbb` is one "
-            "error line naming the file and the field (`objects.pear.colour`). Without its "
-            "colours it is a scene that `plan` and `run` read; the studio's **Save scene** "
-            "writes that scene, with the start as its Plan view shows it. A lunch box "
+            "error line naming the file and the field (`objects.pear.colour`). Every command "
+            "that reads a scene (`show`, `plan`, `problem`, `export`, `run`, `evaluate`) "
+            "reads an objects file as the scene it starts from, its colours checked and "
+            "left out; the studio's **Save scene** writes a plain scene, with the start as "
+            "its Plan view shows it. A lunch box "
             "(tests/test_studio_own_objects_browser.py), shortened:",
             fenced("json", STUDIO_OBJECTS_EXAMPLE),
         ]
@@ -1864,14 +1866,14 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ),
         ("model",),
     ),
-    "show": (("model", "scene"), ("other --plot",)),
+    "show": (("model", "scene", "studio_objects"), ("other --plot",)),
     "solve": (("problem",), ("plan",)),
     "pddl": (("problem",), ("other",)),
-    "plan": (("model", "scene"), ("plan", "other --plot")),
-    "problem": (("model", "scene"), ("problem", "other --pddl")),
-    "export": (("model", "scene"), ("bt",)),
-    "run": (("model", "scene", "bt --bt"), ("run --json", "other --frames")),
-    "evaluate": (("model", "scene"), ("scene --out", "other --out")),
+    "plan": (("model", "scene", "studio_objects"), ("plan", "other --plot")),
+    "problem": (("model", "scene", "studio_objects"), ("problem", "other --pddl")),
+    "export": (("model", "scene", "studio_objects"), ("bt",)),
+    "run": (("model", "scene", "studio_objects", "bt --bt"), ("run --json", "other --frames")),
+    "evaluate": (("model", "scene", "studio_objects"), ("scene --out", "other --out")),
     "calibrate": (
         ("other", "markers --markers", "camera --intrinsics"),
         ("camera -o", "other --plot"),
