@@ -68,3 +68,10 @@ def test_a_colour_that_is_not_rrggbb_is_one_line_naming_its_field(tmp_path: Path
     lines = result.output.strip().splitlines()
     assert len(lines) == 1, result.output
     assert "objects.apple.colour" in lines[0] and "#rrggbb" in lines[0]
+
+
+def test_show_reads_an_objects_file(tmp_path: Path) -> None:
+    objects = _objects_file(tmp_path / "objects.json")
+    result = CliRunner().invoke(app, ["show", str(objects)])
+    assert result.exit_code == 0, result.output
+    assert "lunchbox" in result.output and "sandwich" in result.output
