@@ -354,8 +354,9 @@ SCENE = FieldTable(
         "freespace": "spots `[x, y]` or `[x, y, z]` (z = 0) where objects may be parked; "
         "default: generated on the table",
         "gripper": "the parallel-jaw gripper",
-        "table": "where free space may be generated (default: inferred around the objects, "
-        "targets, landmarks and the demonstrations' workspace; docs/scenes.md)",
+        "table": "where free space may be generated (default: the demonstrations' "
+        "workspace grown by 10 cm, the table the studio draws; where that has no room, "
+        "inferred around the objects, targets, landmarks and that workspace; docs/scenes.md)",
         "robot": "where the arm of `run --sim arm` stands (default: placed where it "
         "reaches every object and target)",
     },
@@ -1371,8 +1372,11 @@ def scene_section() -> str:
             "appear in plans, so they have no spaces and are not `loc`, `freespace` or "
             "`grasp` followed by digits (the names demoplan gives locations and grasps). "
             "An object with z > 0 stands on what is under it; no object lies under the "
-            "table top (z below −5 mm), and free-space spots lie on the table. The model's "
-            "objects must all be in the scene; objects the model never saw are refused "
+            "table top (z below −5 mm) nor inside another object or a landmark's body "
+            "(a landmark with a size is solid, unless things stood inside it in the "
+            "demonstrations: a bin), and free-space spots lie on the table. The model's "
+            "objects must all be in the scene, and its landmarks under `landmarks`; "
+            "objects the model never saw are refused "
             "unless planning is told to move them out of the way (`--clutter`). "
             "docs/scenes.md says how a scene becomes a planning problem.",
             f"`{PYRAMID}` (Experiment 2 at run time: red stands on green and wood):",
@@ -1416,9 +1420,11 @@ def studio_objects_section() -> str:
             "`colour` (`#rrggbb`; default: the colour every demoplan figure gives it). It is "
             "read by the scene reader, so every field means and is checked as in a scene, "
             "and every object must give its `size`; a colour that is not `#rrggbb` is one "
-            "error line naming the file and the field (`objects.pear.colour`). Without its "
-            "colours it is a scene that `plan` and `run` read; the studio's **Save scene** "
-            "writes that scene, with the start as its Plan view shows it. A lunch box "
+            "error line naming the file and the field (`objects.pear.colour`). Every command "
+            "that reads a scene (`show`, `plan`, `problem`, `export`, `run`, `evaluate`) "
+            "reads an objects file as the scene it starts from, its colours checked and "
+            "left out; the studio's **Save scene** writes a plain scene, with the start as "
+            "its Plan view shows it. A lunch box "
             "(tests/test_studio_own_objects_browser.py), shortened:",
             fenced("json", STUDIO_OBJECTS_EXAMPLE),
         ]
@@ -1860,14 +1866,14 @@ COMMAND_FILES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ),
         ("model",),
     ),
-    "show": (("model", "scene"), ("other --plot",)),
+    "show": (("model", "scene", "studio_objects"), ("other --plot",)),
     "solve": (("problem",), ("plan",)),
     "pddl": (("problem",), ("other",)),
-    "plan": (("model", "scene"), ("plan", "other --plot")),
-    "problem": (("model", "scene"), ("problem", "other --pddl")),
-    "export": (("model", "scene"), ("bt",)),
-    "run": (("model", "scene", "bt --bt"), ("run --json", "other --frames")),
-    "evaluate": (("model", "scene"), ("scene --out", "other --out")),
+    "plan": (("model", "scene", "studio_objects"), ("plan", "other --plot")),
+    "problem": (("model", "scene", "studio_objects"), ("problem", "other --pddl")),
+    "export": (("model", "scene", "studio_objects"), ("bt",)),
+    "run": (("model", "scene", "studio_objects", "bt --bt"), ("run --json", "other --frames")),
+    "evaluate": (("model", "scene", "studio_objects"), ("scene --out", "other --out")),
     "calibrate": (
         ("other", "markers --markers", "camera --intrinsics"),
         ("camera -o", "other --plot"),

@@ -136,24 +136,24 @@ def breakfast_model() -> TaskModel:
 
 
 @pytest.mark.parametrize(
-    ("landmarks", "hint"),
+    ("landmarks", "field", "hint"),
     [
-        ({}, ""),  # no tray at all
-        ({"Tray": {"position": [0.5, 0.1, 0.0]}}, "did you mean 'Tray'?"),
-        ({"tary": {"position": [0.5, 0.1, 0.0]}}, "did you mean 'tary'?"),
+        ({}, "landmarks", ""),  # no tray at all
+        ({"Tray": {"position": [0.5, 0.1, 0.0]}}, "landmarks.Tray", "did you mean 'tray'?"),
+        ({"tary": {"position": [0.5, 0.1, 0.0]}}, "landmarks.tary", "did you mean 'tray'?"),
     ],
     ids=["no-tray", "capitalised", "misspelt"],
 )
 def test_a_scene_without_the_moving_tray_is_refused_naming_it(
-    breakfast_model: TaskModel, landmarks: dict[str, object], hint: str
+    breakfast_model: TaskModel, landmarks: dict[str, object], field: str, hint: str
 ) -> None:
     scene = scene_from_document(scene_document(None, **landmarks), "scene.json")
     with pytest.raises(InputError) as caught:
         plan_in_scene(breakfast_model, scene)
     line = str(caught.value)
-    assert line.startswith("scene.json: landmarks: landmark 'tray' is missing"), line
+    assert line.startswith(f"scene.json: {field}: landmark 'tray' is missing"), line
     assert "different places in the demonstrations" in line
-    assert hint in line
+    assert line.endswith(hint), line  # the model's name, not the scene's echoed back
     assert "\n" not in line
 
 

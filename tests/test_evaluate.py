@@ -9,6 +9,7 @@ in the kinematic world. One Ray session with 2 CPUs serves the whole module
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 import signal
@@ -17,6 +18,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -42,6 +44,7 @@ from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
 from tests.helpers import wait_for_signal_handlers
+from tests.lunch_box import lunch_demonstrations
 
 ROOT = Path(__file__).resolve().parent.parent
 EXPERIMENTS = {
@@ -256,6 +259,62 @@ def test_a_random_layout_is_a_function_of_its_seed_and_can_be_grasped(
                 and outlines[o.name][1].intersects(outlines[obj.name][1])
             ]
             assert below, obj.name
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31), clutter=st.integers(0, 2))
+def test_a_random_layout_moves_and_turns_the_lunch_box_keeping_its_shape(
+    seed: int, clutter: int
+) -> None:
+    """The lunch box stood at three places in the demonstrations: a random
+    layout moves and turns it (any yaw), keeps its shape and size, its whole
+    outline in the workspace, and no object on the table within a gripper's
+    reach of it; the layout is a function of its seed."""
+    from demoplan.model import footprint
+    from demoplan.scenes.scene import yaw_of
+
+    model = _lunch_model()
+    layout = LayoutSettings(clutter=clutter)
+    document = random_scene_document(model, seed, layout)
+    assert document == random_scene_document(model, seed, layout)
+    box = document["landmarks"]["lunchbox"]
+    assert (box["shape"], box["size"]) == ("box", [0.26, 0.18, 0.02])
+    scene = random_scene(model, seed, layout)
+    (pose,) = (p for name, p in scene.landmarks if name == "lunchbox")
+    taught = [dict(d.landmarks)["lunchbox"] for d in model.demonstrations]
+    assert all(math.dist(pose.position, t.position) > 1e-9 for t in taught)  # moved
+    outline = footprint(dict(scene.landmark_geometry)["lunchbox"], pose.position, yaw_of(pose))
+    (x0, y0), (x1, y1) = workspace_box(model, layout.margin)
+    bx0, by0, bx1, by1 = outline.bounds
+    assert x0 - 1e-9 <= bx0 and bx1 <= x1 + 1e-9 and y0 - 1e-9 <= by0 and by1 <= y1 + 1e-9
+    reach = 2 * layout.finger_radius + 0.01 - 1e-6
+    for obj in scene.objects:
+        assert obj.geometry is not None
+        if obj.pose.position[2] < 1e-9:
+            at = footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose))
+            assert at.distance(outline) >= reach, obj.name
+
+
+def test_random_layouts_turn_the_lunch_box_every_way_and_keep_a_still_landmark() -> None:
+    model = _lunch_model()
+    yaws = [
+        random_scene_document(model, seed)["landmarks"]["lunchbox"]["yaw"] for seed in range(20)
+    ]
+    assert min(yaws) < -90 and max(yaws) > 90  # turned every way, not only as taught
+    still = learn(
+        [replace(d, landmarks=model.demonstrations[0].landmarks) for d in lunch_demonstrations()]
+    )
+    boxes = [random_scene_document(still, seed)["landmarks"]["lunchbox"] for seed in range(3)]
+    taught = dict(model.demonstrations[0].landmarks)["lunchbox"]
+    for box in boxes:  # it stood still: where it stood, with its shape
+        assert box["position"] == pytest.approx(list(taught.position))
+        assert box["size"] == [0.26, 0.18, 0.02]
+
+
+def _lunch_model() -> TaskModel:
+    if "lunch" not in _MODELS:
+        _MODELS["lunch"] = learn(lunch_demonstrations())
+    return _MODELS["lunch"]
 
 
 _MODELS: dict[str, TaskModel] = {}

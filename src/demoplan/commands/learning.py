@@ -169,10 +169,10 @@ def show(
     )
     from demoplan.scenes.landmarks import complete_scene
     from demoplan.scenes.preview import preview_scene
-    from demoplan.scenes.scene import scene_from_document
+    from demoplan.scenes.scene import scene_from_document, scene_of_objects_file
 
     document = read_document(path)
-    kind, _ = check_format(document, {"model", "scene"}, display_path(path))
+    kind, _ = check_format(document, {"model", "scene", "objects"}, display_path(path))
     if kind == "model" and model is not None:
         raise InputError(f"--model is for a scene; {path} is a model", field="--model")
     if plot is not None:
@@ -183,6 +183,8 @@ def show(
             with figure_errors(plot):
                 save_demonstrations(task, plot, display_path(path))
         return ShownModel(task, plot)
+    if kind == "objects":
+        document = scene_of_objects_file(document, str(path))
     scene = scene_from_document(document, str(path))
     if model is not None:
         scene = complete_scene(scene, load_model(model))

@@ -5,10 +5,14 @@ workspace (the box around every initial pose, release pose and landmark the
 demonstrations recorded, grown by :attr:`LayoutSettings.margin`), stands some
 of them on others (``stack_probability``: an object on a free flat top no
 smaller than its own outline), and with ``clutter`` puts that many small
-objects the model never saw on the goal's table-level targets. The landmarks
-are where the first demonstration recorded them. Objects standing on the
-table keep a gripper's reach clear of each other and of the landmarks, so
-each can be grasped.
+objects the model never saw on the goal's table-level targets. A landmark
+that stood at different places in the demonstrations (a lunch box, a tray) is
+moved and turned at random — any yaw, its whole outline in the workspace,
+clear of the other landmarks — and keeps its shape and size, so that the runs
+test the task following it; one that stood still stays where the first
+demonstration recorded it. Objects standing on the table keep a gripper's
+reach clear of each other and of the landmarks' outlines, so each can be
+grasped and none stands inside a landmark.
 
 A layout is a function of the model and its seed only: :func:`random_scene`
 returns the scene document (``demoplan/scene-1``) that ``demoplan run``
@@ -32,6 +36,7 @@ from demoplan.model import (
     demonstrated_shapes,
     footprint,
 )
+from demoplan.scenes.landmarks import moved_landmarks
 from demoplan.scenes.scene import Scene, scene_from_document, yaw_of
 from demoplan.scenes.table import demonstrated_workspace
 
@@ -85,6 +90,15 @@ class _Placed:
     covered: bool = False
 
 
+def _outline(
+    shape: ObjectGeometry | None, place: tuple[float, float, float, float]
+) -> BaseGeometry:
+    """A landmark's outline at ``(x, y, z, yaw)``: its footprint, or its point where
+    its size is unknown."""
+    x, y, z, yaw = place
+    return shapely.Point(x, y) if shape is None else footprint(shape, (x, y, z), yaw)
+
+
 def _goal_targets(model: TaskModel) -> list[tuple[float, float]]:
     """The table-level release positions of the first demonstration (an object's last)."""
     last: dict[str, tuple[float, float, float]] = {}
@@ -101,15 +115,40 @@ class _Layout:
         self.settings = settings
         self.box = workspace_box(model, settings.margin)
         self.clearance = 2 * settings.finger_radius + 0.01
-        demo = model.demonstrations[0]
         shapes = demonstrated_shapes(model.demonstrations)
-        self.landmarks = [
-            footprint(shapes[name], pose.position, yaw_of(pose)).buffer(self.clearance)
-            if name in shapes
-            else shapely.Point(pose.position[0], pose.position[1]).buffer(self.clearance)
-            for name, pose in demo.landmarks
-        ]
+        moved = moved_landmarks(model)
+        self.landmark_places: dict[str, tuple[float, float, float, float]] = {}
+        self.landmark_shapes: dict[str, ObjectGeometry] = {}
+        self.landmarks: list[BaseGeometry] = []
+        for name, pose in model.demonstrations[0].landmarks:
+            shape = shapes.get(name)
+            x, y, z = pose.position
+            place = (x, y, z, yaw_of(pose))
+            if name in moved:
+                place = self._landmark_place(shape, z) or place
+            self.landmark_places[name] = place
+            if shape is not None:
+                self.landmark_shapes[name] = shape
+            self.landmarks.append(_outline(shape, place).buffer(self.clearance))
         self.placed: list[_Placed] = []
+
+    def _landmark_place(
+        self, shape: ObjectGeometry | None, z: float
+    ) -> tuple[float, float, float, float] | None:
+        """A random place and yaw (any turn) for a landmark: its outline within
+        the workspace box, a gripper's reach clear of the landmarks placed so
+        far. None where no draw fits (it then stays where it stood)."""
+        (x0, y0), (x1, y1) = self.box
+        table = shapely.box(x0, y0, x1, y1)
+        for _ in range(self.settings.attempts):
+            x, y = float(self.rng.uniform(x0, x1)), float(self.rng.uniform(y0, y1))
+            place = (x, y, z, float(self.rng.uniform(-180.0, 180.0)))
+            outline = _outline(shape, place)
+            if table.contains(outline) and not any(
+                outline.buffer(self.clearance).intersects(o) for o in self.landmarks
+            ):
+                return place
+        return None
 
     def _free(self, outline: BaseGeometry) -> bool:
         grown = outline.buffer(self.clearance)
@@ -200,11 +239,17 @@ def random_scene_document(
         "objects": objects,
         "gripper": {"finger_radius": settings.finger_radius},
     }
-    landmarks = model.demonstrations[0].landmarks
-    if landmarks:
-        document["landmarks"] = {
-            name: {"position": list(pose.position), "yaw": yaw_of(pose)} for name, pose in landmarks
-        }
+    if layout.landmark_places:
+        document["landmarks"] = {}
+        for name, (x, y, z, yaw) in layout.landmark_places.items():
+            mark: dict[str, Any] = {
+                "position": [round(x, 6), round(y, 6), round(z, 6)],
+                "yaw": round(yaw, 4),
+            }
+            if name in layout.landmark_shapes:
+                shape = layout.landmark_shapes[name]
+                mark.update(shape=shape.shape, size=list(shape.size))
+            document["landmarks"][name] = mark
     return document
 
 

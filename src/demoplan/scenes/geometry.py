@@ -114,7 +114,11 @@ class GeometrySettings:
     n_freespace: int = 3
     """Free-space spots generated when the scene gives none."""
     table_margin: float = 0.15
-    """How far around the scene's poses generated free space may lie."""
+    """How far around the scene's poses generated free space may lie, where the
+    demonstrations' workspace has no room (docs/scenes.md "Free space")."""
+    workspace_margin: float = 0.1
+    """How far around the demonstrations' workspace free space is sought first:
+    the table the studio draws for them."""
     grid_step: float = 0.01
     """Spacing of the candidate free-space spots."""
     collisions: str = "rule"

@@ -20,7 +20,13 @@ from demoplan.model import Pose, TaskModel, demonstrated_shapes
 from demoplan.scenes.scene import Scene, complete_geometry, yaw_of
 from demoplan.wording import did_you_mean
 
-__all__ = ["LANDMARK_STILL", "complete_scene", "landmark_poses", "referenced_landmarks"]
+__all__ = [
+    "LANDMARK_STILL",
+    "complete_scene",
+    "landmark_poses",
+    "moved_landmarks",
+    "referenced_landmarks",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -54,7 +60,8 @@ def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
     the scene lacks and that moved between the demonstrations is an InputError
     naming it (with "did you mean" for a near name in the scene): falling back
     to one demonstration's pose would put everything relative to it in the
-    wrong place."""
+    wrong place. A near name in the scene (``Tray``) is the error's field, and
+    the model's name the "did you mean"."""
     poses = dict(scene.landmarks)
     given = set(poses) | set(scene.names)
     needed = referenced_landmarks(model)
@@ -82,15 +89,36 @@ def landmark_poses(model: TaskModel, scene: Scene) -> dict[str, Pose]:
                     y,
                 )
         elif name in needed:
-            others = [*scene.landmark_names, *scene.names]
+            # a near name in the scene is the field, the model's name the suggestion
+            misspelt = next(
+                (n for n in (*scene.landmark_names, *scene.names) if did_you_mean(n, [name])), None
+            )
+            field = "landmarks"
+            hint = ""
+            if misspelt is not None:
+                kind = "landmarks" if misspelt in scene.landmark_names else "objects"
+                field = f"{kind}.{misspelt}"
+                hint = f"; the scene's {misspelt!r} is not it" + did_you_mean(misspelt, [name])
             raise InputError(
                 f"landmark {name!r} is missing; it stood at different places in the "
                 f"demonstrations ({moved}), so the scene must say where it is now "
-                f'("landmarks": {{"{name}": {{"position": […]}}}})' + did_you_mean(name, others),
+                f'("landmarks": {{"{name}": {{"position": […]}}}}){hint}',
                 source=scene.source,
-                field="landmarks",
+                field=field,
             )
     return poses
+
+
+def moved_landmarks(model: TaskModel) -> set[str]:
+    """The landmarks that stood at different places in the demonstrations
+    (beyond :data:`LANDMARK_STILL`, or three times the model's precision): the
+    ones whose pose the task's placements may follow, and a scene must give."""
+    recorded: dict[str, list[Pose]] = {}
+    for demo in model.demonstrations:
+        for name, pose in demo.landmarks:
+            recorded.setdefault(name, []).append(pose)
+    tolerance = _still_tolerance(model)
+    return {name for name, seen in recorded.items() if _movement(seen, tolerance) is not None}
 
 
 def referenced_landmarks(model: TaskModel) -> set[str]:

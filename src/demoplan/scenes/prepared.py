@@ -3,10 +3,11 @@
 :func:`prepare` checks the scene against the model (every object it needs,
 none it never saw unless ``clutter``), completes it (sizes from the
 demonstrations, every landmark's pose and shape: :func:`complete_scene`),
-binds the model's roles to the scene's instances (every way there is:
-:mod:`demoplan.scenes.binding`) and resolves each binding's candidate goals
-(paper §IV.C: each demonstrated goal, with target poses in this scene).
-``plan``, ``run``, the figures and the library take the
+refuses an object standing inside a landmark's body
+(:mod:`demoplan.scenes.validity`), binds the model's roles to the scene's
+instances (every way there is: :mod:`demoplan.scenes.binding`) and resolves
+each binding's candidate goals (paper §IV.C: each demonstrated goal, with
+target poses in this scene). ``plan``, ``run``, the figures and the library take the
 :class:`PreparedScene`; the executor's replans resolve the goals again in
 the observed world, which is complete already.
 """
@@ -23,6 +24,7 @@ from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.scene import Scene
 from demoplan.scenes.targets import Candidate, check_scene_objects, resolve_goals
+from demoplan.scenes.validity import check_landmark_overlaps, hollow_landmarks
 
 __all__ = ["BoundTask", "PreparedScene", "bound_tasks", "goal_floors", "prepare"]
 
@@ -165,6 +167,7 @@ def prepare(
         return scene
     check_scene_objects(model, scene, clutter=clutter)
     completed = complete_scene(scene, model)
+    check_landmark_overlaps(completed, hollow_landmarks(model, settings), settings)
     tasks = bound_tasks(
         model, completed, role_bindings(model, completed), 2 * settings.merge_distance
     )

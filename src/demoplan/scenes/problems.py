@@ -14,7 +14,7 @@ label as id, and the candidate's constraints are its precedences.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -42,12 +42,13 @@ from demoplan.scenes.geometry import (
     yaw_difference,
 )
 from demoplan.scenes.naming import StableNames
+from demoplan.scenes.overhang import OVERHANG_TOLERANCE, overhang, overhang_obstacles
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.simulated_collisions import (
     CollisionComparison,
     checked_pairs,
 )
-from demoplan.scenes.table import Surroundings, Table, infer_table
+from demoplan.scenes.table import Surroundings, Table, infer_table, workspace_table
 from demoplan.scenes.targets import Candidate, Subtask
 
 __all__ = ["FreeSpaceRoom", "Grasp", "SceneProblem", "build_problem", "landmark_tops"]
@@ -157,7 +158,8 @@ def build_problem(
     shapes = _object_shapes(scene)
     locations, current = _current_locations(scene, shapes, names)
     _check_scene_overlaps(scene, locations, settings)
-    target_of = _add_target_locations(locations, candidate, shapes, names, settings)
+    standing = _standing(scene, shapes)
+    target_of = _add_target_locations(locations, candidate, shapes, names, settings, standing)
     axes = [(obj.name, axis) for obj in scene.objects for axis in obj.grasps]
     grasps = [Grasp(names.grasp(obj, axis), obj, axis) for obj, axis in axes]
     room = _add_free_space(
@@ -166,6 +168,7 @@ def build_problem(
     support_pairs, obstacles = _supports_and_obstacles(
         locations, scene, candidate, target_of, settings
     )
+    obstacles += _overhangs(scene, candidate, locations, target_of, shapes, standing)
     facts, comparison = _collisions(locations, scene, grasps, shapes, settings)
     accepts = []
     for loc in locations:
@@ -245,12 +248,13 @@ def _add_target_locations(
     shapes: dict[str, ObjectGeometry],
     names: StableNames,
     settings: GeometrySettings,
+    standing: Standing | None = None,
 ) -> dict[str, str]:
     """The subtasks' targets added to ``locations``: a target at a location made
     for an object of the same shape and size is that location, any other a
     location of its own. Returns each subtask label's location name."""
     target_of: dict[str, str] = {}
-    for subtask in _turned_to_fit(candidate.subtasks, shapes, settings):
+    for subtask in _turned_to_fit(candidate.subtasks, shapes, settings, standing or {}):
         shape = shapes[subtask.object]
         index = _coinciding(locations, subtask, shape, settings)
         if index is None:
@@ -293,8 +297,10 @@ def _add_free_space(
     surroundings: Surroundings,
 ) -> FreeSpaceRoom:
     """Free-space locations (``freespace…``) added to ``locations``: the scene's
-    spots, else spots generated on its table (inferred where it gives none)
-    around the targets. Returns where they came from and which objects none
+    spots, else spots generated on its table around the targets — where it
+    gives none, on the demonstrations' workspace
+    (:func:`~demoplan.scenes.table.workspace_table`), or on the inferred table
+    where that has no room for some object. Returns where they came from and which objects none
     takes."""
     given = scene.freespace is not None
     table = scene.table
@@ -309,20 +315,29 @@ def _add_free_space(
             sum(p[0] for p in targets) / len(targets),
             sum(p[1] for p in targets) / len(targets),
         ]
-        if table is None:
-            table = infer_table(
-                locations, list(shapes.values()), scene.gripper, surroundings, settings
+        tables = [table] if table is not None else []
+        if table is None:  # the workspace first, the inferred table where it has no room
+            workspace = workspace_table(surroundings, settings)
+            tables = [] if workspace is None else [workspace]
+            tables.append(
+                infer_table(locations, list(shapes.values()), scene.gripper, surroundings, settings)
             )
-        spots = free_space(
-            locations,
-            list(shapes.values()),
-            [(g.object, g.axis) for g in grasps],
-            scene.gripper,
-            table,
-            focus,
-            settings,
-            surroundings.landmark_outlines(),
-        )
+        for table in tables:
+            spots = free_space(
+                locations,
+                list(shapes.values()),
+                [(g.object, g.axis) for g in grasps],
+                scene.gripper,
+                table,
+                focus,
+                settings,
+                surroundings.landmark_outlines(),
+            )
+            if all(
+                any(bounding_radius(s) <= spot.radius + 1e-6 for spot in spots)
+                for s in shapes.values()
+            ):
+                break
     used = {loc.name for loc in locations}
     for spot in spots:
         check_time(f"at the free space ({len(spots)} spots)")
@@ -372,6 +387,53 @@ def _supports_and_obstacles(
     return support_pairs, obstacles
 
 
+def _overhangs(
+    scene: Scene,
+    candidate: Candidate,
+    locations: list[Location],
+    target_of: dict[str, str],
+    shapes: dict[str, ObjectGeometry],
+    standing: Standing,
+) -> list[str]:
+    """Targets that hang over what held them up in the demonstrations
+    (:func:`~demoplan.scenes.overhang.overhang_obstacles`), at their locations'
+    poses (a free yaw as turned to fit)."""
+    if not any(s.supports for s in candidate.subtasks):
+        return []
+    at = {loc.name: loc for loc in locations}
+    placements = [
+        (
+            s.label,
+            s.object,
+            s.supports,
+            shapes[s.object],
+            at[target_of[s.label]].position,
+            at[target_of[s.label]].yaw,
+        )
+        for s in candidate.subtasks
+    ]
+    return overhang_obstacles(placements, standing, scene.source)
+
+
+Standing = dict[str, tuple[Vector3, float, ObjectGeometry, str]]
+"""Where each landmark with a size and each object stands at the start:
+position, yaw, shape and the scene's field that says so."""
+
+
+def _standing(scene: Scene, shapes: dict[str, ObjectGeometry]) -> Standing:
+    landmark_shapes = dict(scene.landmark_geometry)
+    standing = {
+        name: (pose.position, yaw_of(pose), landmark_shapes[name], f"landmarks.{name}")
+        for name, pose in scene.landmarks
+        if name in landmark_shapes
+    }
+    standing.update(
+        (obj.name, (obj.pose.position, yaw_of(obj.pose), shapes[obj.name], f"objects.{obj.name}"))
+        for obj in scene.objects
+    )
+    return standing
+
+
 def _collisions(
     locations: list[Location],
     scene: Scene,
@@ -404,12 +466,28 @@ current yaw does not fit."""
 
 
 def _turned_to_fit(
-    subtasks: tuple[Subtask, ...], shapes: dict[str, ObjectGeometry], settings: GeometrySettings
+    subtasks: tuple[Subtask, ...],
+    shapes: dict[str, ObjectGeometry],
+    settings: GeometrySettings,
+    standing: Standing,
 ) -> list[Subtask]:
     """Subtasks whose orientation was never learned keep the object's current yaw
-    unless their outline there would overlap another target's; then the first yaw
-    in :data:`TURNS` (world-aligned first) that overlaps none is taken."""
+    unless their outline there would overlap another target's, or hang over what
+    held it up in the demonstrations (:mod:`demoplan.scenes.overhang`: a napkin
+    turned 45° on a plate); then the first yaw in :data:`TURNS` (world-aligned
+    first) that does neither is taken."""
     final = {s.object: s for s in subtasks}  # where each object ends
+    where = dict(standing)  # the supports as the subtasks so far leave them
+
+    def hangs(subtask: Subtask, yaw: float) -> bool:
+        upper = footprint(shapes[subtask.object], subtask.pose.position, yaw)
+        for support in subtask.supports:
+            if support.name in where:
+                at, turn, body, _ = where[support.name]
+                lower = footprint(body, at, turn)
+                if overhang(upper, lower) > support.overhang + OVERHANG_TOLERANCE:
+                    return True
+        return False
 
     def outline(subtask: Subtask, yaw: float) -> BaseGeometry:
         shape = shapes[subtask.object]
@@ -428,15 +506,24 @@ def _turned_to_fit(
 
     turned = []
     for subtask in subtasks:
-        if subtask.turnable and clashes(subtask, yaw_of(subtask.pose)):
+        yaw = yaw_of(subtask.pose)
+        if subtask.turnable and (clashes(subtask, yaw) or hangs(subtask, yaw)):
             for yaw in TURNS:
-                if not clashes(subtask, yaw):
+                if not clashes(subtask, yaw) and not hangs(subtask, yaw):
                     pose = Pose(subtask.pose.position, quat_from_yaw(yaw))
-                    subtask = Subtask(subtask.label, subtask.state, subtask.object, pose, True)
+                    subtask = replace(subtask, pose=pose)
                     if final[subtask.object].label == subtask.label:
                         final[subtask.object] = subtask
                     break
         turned.append(subtask)
+        previous = where.get(subtask.object)
+        field = previous[3] if previous else f"objects.{subtask.object}"
+        where[subtask.object] = (
+            subtask.pose.position,
+            yaw_of(subtask.pose),
+            shapes[subtask.object],
+            field,
+        )
     return turned
 
 

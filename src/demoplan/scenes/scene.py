@@ -46,6 +46,7 @@ from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrate
 from demoplan.rotations import rpy_from_quat
 
 __all__ = [
+    "COLOUR",
     "DEFAULT_GRASPS",
     "Gripper",
     "Scene",
@@ -53,6 +54,7 @@ __all__ = [
     "complete_geometry",
     "load_scene",
     "scene_from_document",
+    "scene_of_objects_file",
     "scene_to_dict",
     "yaw_of",
 ]
@@ -310,9 +312,48 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
     )
 
 
+COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
+"""A colour in an objects file: ``#rrggbb``."""
+
+
+def scene_of_objects_file(document: dict[str, Any], source: str) -> dict[str, Any]:
+    """The scene an objects file (``demoplan/objects-1``, docs/formats.md
+    "Objects file") starts from: the document as a ``demoplan/scene-1`` without
+    the ``colour`` its objects and landmarks may name (each checked to be
+    ``#rrggbb``; one error line naming ``source`` and the field otherwise)."""
+    check_format(document, {"objects"}, source)
+    scene: dict[str, Any] = {**document, "format": "demoplan/scene-1"}
+    for group in ("objects", "landmarks"):
+        entries = document.get(group)
+        if entries is None:
+            continue
+        if not isinstance(entries, dict):
+            raise InputError("an object of named entries expected", source=source, field=group)
+        stripped: dict[str, Any] = {}
+        for name, entry in entries.items():
+            if not isinstance(entry, dict):
+                raise InputError("an object expected", source=source, field=f"{group}.{name}")
+            colour = entry.get("colour")
+            if colour is not None and not (isinstance(colour, str) and COLOUR.match(colour)):
+                raise InputError(
+                    f"{colour!r} is not a colour; #rrggbb expected",
+                    source=source,
+                    field=f"{group}.{name}.colour",
+                )
+            stripped[name] = {k: v for k, v in entry.items() if k != "colour"}
+        scene[group] = stripped
+    return scene
+
+
 def load_scene(path: str | Path) -> Scene:
-    """Read a scene file (JSON or YAML)."""
-    return scene_from_document(read_document(Path(path)), str(path))
+    """Read a scene file (JSON or YAML); an objects file (``demoplan/objects-1``,
+    what the studio's *Save objects* writes) is read as the scene it starts from."""
+    source = str(path)
+    document = read_document(Path(path))
+    kind, _ = check_format(document, {"scene", "objects"}, source)
+    if kind == "objects":
+        document = scene_of_objects_file(document, source)
+    return scene_from_document(document, source)
 
 
 def complete_geometry(scene: Scene, model: TaskModel) -> Scene:

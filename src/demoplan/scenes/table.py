@@ -1,7 +1,12 @@
 """The table free space is generated on, where the scene gives no ``table``
 (docs/scenes.md "Free space").
 
-The table is inferred from everything known about where things stand: the
+Free space is sought first on the demonstrations' workspace grown by
+``GeometrySettings.workspace_margin`` (:func:`workspace_table`: the table the
+studio draws for them), and only where some object has no room there on the
+table :func:`infer_table` infers.
+
+That table is inferred from everything known about where things stand: the
 scene's objects and the goal's targets (their footprints), the landmarks
 (their outlines where their size is known, else their positions) and the
 demonstrations' workspace (every initial pose, every release pose and every
@@ -40,6 +45,7 @@ __all__ = [
     "infer_table",
     "landmarks_of",
     "surroundings_of",
+    "workspace_table",
 ]
 
 Table = tuple[tuple[float, float], tuple[float, float]]
@@ -85,6 +91,27 @@ def demonstrated_workspace(model: TaskModel) -> tuple[tuple[Pose, ObjectGeometry
         workspace += [(step.pose, shapes.get(step.object)) for step in demo.steps]
         workspace += [(pose, shapes.get(name)) for name, pose in demo.landmarks]
     return tuple(workspace)
+
+
+def workspace_table(
+    surroundings: Surroundings, settings: GeometrySettings = GeometrySettings()
+) -> Table | None:
+    """The demonstrations' workspace — every initial pose, release pose and
+    landmark they recorded, with its outline where the size is known — grown by
+    ``settings.workspace_margin`` on each side: the table the studio draws for
+    the demonstrations, where free space is sought first. None where the
+    demonstrations recorded no pose."""
+    if not surroundings.workspace:
+        return None
+    outlines = [
+        shapely.Point(pose.position[0], pose.position[1])
+        if shape is None
+        else footprint(shape, pose.position, yaw_of(pose))
+        for pose, shape in surroundings.workspace
+    ]
+    x0, y0, x1, y1 = shapely.union_all(outlines).bounds
+    margin = settings.workspace_margin
+    return ((x0 - margin, y0 - margin), (x1 + margin, y1 + margin))
 
 
 def infer_table(

@@ -50,8 +50,14 @@ from demoplan.rotations import (
 )
 from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
+from demoplan.scenes.overhang import Support, demonstrated_supports
 from demoplan.scenes.scene import Scene, yaw_of
-from demoplan.scenes.table import landmarks_of
+from demoplan.scenes.table import (
+    Surroundings,
+    demonstrated_workspace,
+    landmarks_of,
+    workspace_table,
+)
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -74,6 +80,9 @@ class Subtask:
     turnable: bool = False
     """The state has no learned orientation: any yaw will do (the pose keeps the
     object's current one unless it would not fit, see ``scenes.problems``)."""
+    supports: tuple[Support, ...] = ()
+    """What the object stood on in every demonstration of the state (an object, a
+    landmark), which must hold the target up too (:mod:`demoplan.scenes.overhang`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,19 +103,32 @@ class Candidate:
 def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False) -> None:
     """Exit-1 errors for objects the model needs but the scene lacks, and (unless
     ``clutter`` allows them, as objects with no goal) for objects the scene has
-    but the model never saw; each names a near name ("did you mean") where there
-    is one. An instance of a type the model knows is no stranger: it fills one
-    of the type's roles, or stands with no goal (:mod:`demoplan.scenes.binding`
+    but the model never saw. A scene name near a name the model needs is named
+    as the field, with the model's name as "did you mean" (``sandwhich`` →
+    ``sandwich``); a model's landmark among the scene's objects is refused, and
+    the objects listed as expected are objects, the landmarks said apart. An
+    instance of a type the model knows is no stranger: it fills one of the
+    type's roles, or stands with no goal (:mod:`demoplan.scenes.binding`
     counts the instances)."""
-    landmarks = {name for demo in model.demonstrations for name, _ in demo.landmarks}
-    landmarks |= set(scene.landmark_names)
+    recorded = {name for demo in model.demonstrations for name, _ in demo.landmarks}
+    landmarks = recorded | set(scene.landmark_names)
+    for name in scene.names:
+        if name in recorded:
+            raise InputError(
+                f"{name!r} is a landmark of the task model (it stands still in the "
+                f'demonstrations); expected under "landmarks", not "objects"',
+                source=scene.source,
+                field=f"objects.{name}",
+            )
     types = model.object_types()
     needed = {state.object for state in model.states}
     for state in model.states:
         for reference in (state.position.reference, state.orientation.reference):
             if reference is not None and reference not in landmarks:
                 needed.add(reference)
-    seen = needed | {name for demo in model.demonstrations for name, _ in demo.objects}
+    seen = needed | {
+        name for demo in model.demonstrations for name, _ in demo.objects if name not in landmarks
+    }
     known_types = {types.get(name, name) for name in seen}
     kinds = {obj.name: obj.type or types.get(obj.name, obj.name) for obj in scene.objects}
     present = set(scene.names) | set(kinds.values())
@@ -114,18 +136,26 @@ def check_scene_objects(model: TaskModel, scene: Scene, *, clutter: bool = False
     unknown = sorted(
         name for name in scene.names if name not in seen and kinds[name] not in known_types
     )
+    besides = f" (landmarks: {', '.join(sorted(recorded))})" if recorded else ""
     if missing:
-        hint = did_you_mean(missing[0], [*unknown, *scene.landmark_names])
+        misspelt = next((name for name in unknown if did_you_mean(name, missing)), None)
+        hint = (
+            ""
+            if misspelt is None
+            else (
+                f"; the scene's {misspelt!r} is not one of them" + did_you_mean(misspelt, missing)
+            )
+        )
         raise InputError(
             f"the task model needs {', '.join(missing)}, which the scene lacks; "
-            f"expected objects {sorted(needed)}{hint}",
+            f"expected objects {sorted(needed)}{besides}{hint}",
             source=scene.source,
-            field="objects",
+            field="objects" if misspelt is None else f"objects.{misspelt}",
         )
     if unknown and not clutter:
         raise InputError(
             f"the task model never saw {', '.join(unknown)}; expected only objects of "
-            f"the demonstrations {sorted(seen)} (--clutter plans around them)"
+            f"the demonstrations {sorted(seen)}{besides} (--clutter plans around them)"
             + did_you_mean(unknown[0], seen | landmarks),
             source=scene.source,
             field="objects",
@@ -256,6 +286,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         if name not in landmarks
     }
     constraints = set(model.constraints)
+    supported = demonstrated_supports(model)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
     for index, sequence in enumerate(model.sequences):
@@ -270,6 +301,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
                 states[state_id].object,
                 resolver.visit(states[state_id]),
                 turnable=states[state_id].orientation.value is None,
+                supports=supported.get(state_id, ()),
             )
             for label, state_id in zip(labels, sequence, strict=True)
         )
@@ -297,7 +329,8 @@ def _anywhere_places(
     table (not on another object) and clear of every target that does not move
     with it (its own contents follow it). Otherwise it goes to free space: the
     place nearest the demonstrations' mean where its outline, at the yaw it
-    will have, is clear of those targets and of what stays in the scene
+    will have, is clear of those targets and of what stays in the scene, on the
+    scene's table or else the demonstrations' workspace
     (:func:`_nearest_clear_place`) — the mean itself when that is clear."""
     states = {state.id: state for state in model.states}
     visits = [states[s] for s in sequence]
@@ -322,6 +355,8 @@ def _anywhere_places(
         for _, pose, shape in landmarks_of(scene)
         if shape is not None
     ]
+    # on the scene's table, else on the demonstrations' workspace (as free space)
+    table = scene.table or workspace_table(Surroundings(workspace=demonstrated_workspace(model)))
     places: dict[str, tuple[float, float, float]] = {}
     for state in anywhere:
         name = state.object
@@ -351,7 +386,7 @@ def _anywhere_places(
             if obj.name not in moved and obj.geometry is not None
         ]
         places[name] = _nearest_clear_place(
-            shape, (mean[0], mean[1]), yaw, [*blocked, *staying, *landmark_outlines], scene.table
+            shape, (mean[0], mean[1]), yaw, [*blocked, *staying, *landmark_outlines], table
         )
     return places
 
