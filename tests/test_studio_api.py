@@ -163,6 +163,20 @@ def test_a_scatter_is_seeded_apart_and_on_the_table(
     assert scrambled["poses"] == layout["poses"]
 
 
+def test_a_table_too_small_for_a_scatter_is_refused_naming_the_others(
+    client: TestClient,
+) -> None:
+    """Two 4 cm blocks on a 10 cm table: the second finds no room beside the
+    first, and the one-line error counts it in the singular."""
+    layout = client.get("/api/templates/blocks").json()
+    two = list(layout["objects"])[:2]
+    layout["objects"] = {name: layout["objects"][name] for name in two}
+    layout["poses"] = {name: layout["poses"][name] for name in two}
+    layout["table"]["size"] = [0.1, 0.1]
+    response = client.post("/api/scramble", json={"layout": layout, "seed": 1})
+    one_line_error(response, 422, "layout.table", "no room on the table", "among 1 other;")
+
+
 def test_different_seeds_give_different_layouts(client: TestClient) -> None:
     layouts = [client.get("/api/templates/set_table", params={"seed": s}).json() for s in (1, 2)]
     assert layouts[0]["poses"] != layouts[1]["poses"]
