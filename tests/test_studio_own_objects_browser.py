@@ -227,9 +227,11 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
     # the States table says what `learn` prints: both references, in its words
     rows = tab.locator("#states tbody tr")
     shown = [rows.nth(k).locator("th, td").all_inner_texts() for k in range(rows.count())]
-    for row, cells in zip(state_rows(model), shown, strict=True):
+    for k, (row, cells) in enumerate(zip(state_rows(model), shown, strict=True)):
         assert cells[2] == (row[2] or "absolute"), cells
         assert cells[3] == (row[3] or ("absolute" if row[5] else "—")), cells
+        notes = model.states[k].notes  # a row's notes on hover
+        assert rows.nth(k).get_attribute("title") == ("\n".join(notes) if notes else None)
     # the apple is round: no demonstration can tell its turn, so it turns with the box
     apple = next(cells for cells in shown if cells[1] == "apple")
     assert apple[3] == "turns with lunchbox: never seen turned"
