@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import re
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -16,6 +17,7 @@ from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
+from tests.fixture_families import fixture_task
 from tests.helpers import EXAMPLES
 
 
@@ -72,3 +74,32 @@ def test_long_object_names_are_never_cut(names: list[str], oriented: bool) -> No
     text = rendered(model)
     assert max(len(line) for line in text.splitlines()) <= 80
     assert set(names) <= words(text)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), items=st.integers(2, 4), demos=st.integers(2, 4))
+def test_the_compact_table_names_a_reference_its_orientation_turns_with_once(
+    seed: int, items: int, demos: int
+) -> None:
+    """A lunch box never turned in the demonstrations (tests/fixture_families.py):
+    every item's orientation turns with its position's reference, and the
+    compact table's one reference column says so without the name twice
+    (``lunchbox; turns with it: never seen turned``, not ``lunchbox / turns
+    with lunchbox: …``), the note's words whole."""
+    task = fixture_task(np.random.default_rng(seed), items, demos, turn=0.0, landmark=True)
+    model = learn(task.demos)
+    table = states_table(model, 2, 80)
+    assert max(len(line) for line in rendered(model).splitlines()) <= 80
+    column = next(c for c in table.columns if str(c.header) == "Relative to")
+    cells = [str(cell) for cell in column.cells]
+    followed = 0
+    for state, cell in zip(model.states, cells, strict=True):
+        reference = state.position.reference
+        assert reference is not None
+        follows = [n for n in state.notes if n.startswith(f"turns with {reference}:")]
+        if state.orientation.reference == reference and follows:
+            followed += 1
+            said = follows[0].removeprefix(f"turns with {reference}")
+            assert cell == f"{reference}; turns with it{said}"
+        assert cell.count(reference) == 1, cell
+    assert followed  # never turned: at least one orientation is a tie that went to the box

@@ -29,12 +29,14 @@ from demoplan.commands.inputs import load_inputs
 from demoplan.commands.learning import learn_model
 from demoplan.learning.constraints import visit_sequence
 from demoplan.learning.modelfile import load_model
+from demoplan.learning.tables import state_rows
 from demoplan.model import ObjectGeometry, footprint
 from demoplan.plotting.colours import assign_colours
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.helpers import EXAMPLES
+from tests.test_orientation_follows import _lunch_demonstration as lunch_demonstration
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
@@ -159,6 +161,20 @@ def test_a_scatter_is_seeded_apart_and_on_the_table(
     # scramble is the same generator
     scrambled = client.post("/api/scramble", json={"layout": layout, "seed": seed}).json()
     assert scrambled["poses"] == layout["poses"]
+
+
+def test_a_table_too_small_for_a_scatter_is_refused_naming_the_others(
+    client: TestClient,
+) -> None:
+    """Two 4 cm blocks on a 10 cm table: the second finds no room beside the
+    first, and the one-line error counts it in the singular."""
+    layout = client.get("/api/templates/blocks").json()
+    two = list(layout["objects"])[:2]
+    layout["objects"] = {name: layout["objects"][name] for name in two}
+    layout["poses"] = {name: layout["poses"][name] for name in two}
+    layout["table"]["size"] = [0.1, 0.1]
+    response = client.post("/api/scramble", json={"layout": layout, "seed": 1})
+    one_line_error(response, 422, "layout.table", "no room on the table", "among 1 other;")
 
 
 def test_different_seeds_give_different_layouts(client: TestClient) -> None:
@@ -309,6 +325,37 @@ def test_learning_through_the_api_equals_the_command_layer(client: TestClient) -
     assert answer["model"] == "table.json"
     assert load_model(work(client) / "table.json").states == oracle.states
     assert client.get("/api/files").json()["models"] == ["table.json"]
+
+
+def test_learning_says_in_words_what_the_states_table_says(client: TestClient) -> None:
+    """The issue's lunch box, moved but never turned in three demonstrations
+    (tests/test_orientation_follows.py): each state's references come back in
+    the words of `learn`'s states table (the same function's), an orientation
+    the data could not decide as ``turns with lunchbox: never seen turned``,
+    with the state's notes."""
+    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
+    orders = [
+        ["apple", "juice", "carrot"],
+        ["carrot", "apple", "juice"],
+        ["juice", "carrot", "apple"],
+    ]
+    for k, (box, middle) in enumerate(zip(boxes, orders, strict=True)):
+        document = lunch_demonstration(box, middle, seed=k)
+        assert client.post("/api/demonstrations", json={"document": document}).status_code == 201
+    answer = client.post("/api/learn", json={"files": None, "output": "lunch.json"}).json()
+    model = load_model(work(client) / "lunch.json")
+    rows = state_rows(model)
+    assert [(s["relative_position"], s["relative_orientation"]) for s in answer["states"]] == [
+        (row[2], row[3]) for row in rows
+    ]
+    assert [s["notes"] for s in answer["states"]] == [list(s.notes) for s in model.states]
+    shown = {s["object"]: s["relative_orientation"] for s in answer["states"]}
+    assert shown["sandwich"] == "turns with lunchbox: never seen turned"
+    for state in answer["states"]:  # the box never turned: no orientation is told from the world
+        assert state["orientation_reference"] is not None
+        assert state["relative_orientation"].startswith(
+            ("turns with ", state["orientation_reference"])
+        )
 
 
 def test_learning_warns_as_the_command_line_does(client: TestClient) -> None:

@@ -422,6 +422,28 @@ def test_a_model_without_roles_hides_the_roles_table(studio: tuple[Studio, Path]
     assert page.tab.locator("#roles-box").is_hidden()
 
 
+def test_a_count_of_one_is_said_in_the_singular(studio: tuple[Studio, Path]) -> None:
+    """One step saved, one demonstration learned into one state and one model:
+    every count the page prints reads "1 step", not "1 steps"."""
+    page, _ = studio
+    status = page.tab.get_by_role("status").first
+    folder = page.tab.locator("#workfolder")
+    assert folder.inner_text() == "work folder: 0 demonstrations, 0 models, 0 scenes"
+    page.drag("glass", 0.3, 0.3)
+    page.tab.get_by_label("File name").fill("one.json")
+    page.button("Save").click()
+    page.settle()
+    assert page.alert() == ""
+    assert "Saved one.json (1 step)." in status.inner_text()
+    assert folder.inner_text() == "work folder: 1 demonstration, 0 models, 0 scenes"
+    page.view("Learn")
+    page.button("Learn").click()
+    page.settle()
+    assert page.alert() == ""
+    assert "Learned 1 state from 1 demonstration;" in status.inner_text()
+    assert folder.inner_text() == "work folder: 1 demonstration, 1 model, 0 scenes"
+
+
 def test_screenshots_dir_is_in_the_docs() -> None:
     # docs/studio.md shows the four views the tests take
     page = (ROOT / "docs" / "studio.md").read_text(encoding="utf-8")

@@ -19,6 +19,7 @@ import pytest
 
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
+from demoplan.learning.tables import state_rows
 from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import VIEWPORT, Studio, chromium, studio_server
 
@@ -223,6 +224,17 @@ def test_a_lunch_box_of_my_own_taught_learned_and_planned_with_the_box_turned(
         "carrot": "lunchbox",
         "biscuit": "sandwich",  # the cookie's state is named by its type
     }
+    # the States table says what `learn` prints: both references, in its words
+    rows = tab.locator("#states tbody tr")
+    shown = [rows.nth(k).locator("th, td").all_inner_texts() for k in range(rows.count())]
+    for k, (row, cells) in enumerate(zip(state_rows(model), shown, strict=True)):
+        assert cells[2] == (row[2] or "absolute"), cells
+        assert cells[3] == (row[3] or ("absolute" if row[5] else "—")), cells
+        notes = model.states[k].notes  # a row's notes on hover
+        assert rows.nth(k).get_attribute("title") == ("\n".join(notes) if notes else None)
+    # the apple is round: no demonstration can tell its turn, so it turns with the box
+    apple = next(cells for cells in shown if cells[1] == "apple")
+    assert apple[3] == "turns with lunchbox: never seen turned"
     # the targets are drawn where the box stands now (demonstration 3's pose)
     assert tab.locator("#table [data-target]").count() == len(model.states)
     for state in model.states:

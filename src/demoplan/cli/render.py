@@ -66,14 +66,31 @@ def states_table(model: TaskModel, decimals: int, width: int) -> Table:
         return table
     compact = []
     for state, obj, by_position, by_orientation, position, yaw, spread, members, margin in rows:
-        if by_orientation and by_orientation != by_position:
-            reference = f"{by_position or '—'} / {by_orientation}"
-        else:
-            reference = by_position
+        reference = merged_reference(by_position, by_orientation)
         value = f"{position} {yaw}°" if yaw else position
         compact.append((state, obj, reference, value, spread, members, margin))
     header = ("State", "Object", "Relative to", "Value [m, deg]", "Spread", "Members", "Margin")
     return fitted_table(title, header, compact, names)
+
+
+def merged_reference(by_position: str, by_orientation: str) -> str:
+    """The compact states table's one reference column: ``Pcb / Motor``
+    (position / orientation), one name where they agree; where the orientation
+    is words (it turns with its position's reference, ``turns with lunchbox:
+    never seen turned``), ``lunchbox; turns with it: never seen turned``
+    rather than the name twice, and ``sandwich; turns with lunchbox: …``
+    where it turns with another."""
+    from demoplan.learning.states import FOLLOWS_NOTE
+
+    if not by_orientation or by_orientation == by_position:
+        return by_position
+    position = by_position or "—"
+    if not by_orientation.startswith(FOLLOWS_NOTE):
+        return f"{position} / {by_orientation}"
+    if by_orientation.startswith(f"{FOLLOWS_NOTE}{by_position}:"):
+        said = by_orientation[len(FOLLOWS_NOTE) + len(by_position) :]
+        return f"{position}; {FOLLOWS_NOTE}it{said}"
+    return f"{position}; {by_orientation}"
 
 
 def roles_table(model: TaskModel, width: int) -> Table | None:

@@ -28,6 +28,7 @@ from demoplan.scenes.geometry import GeometrySettings, Location, supports
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.studio.requests import Layout
 from demoplan.studio.workfolder import FileMissingError
+from demoplan.wording import plural
 
 __all__ = [
     "TABLE_MARGIN",
@@ -227,7 +228,7 @@ def scattered(layout: Layout, seed: int) -> dict[str, Any]:
         else:
             raise InputError(
                 f"no room on the table ({width:g} × {depth:g} m) for {name!r} among "
-                f"{len(taken)} others; a larger table or fewer objects expected",
+                f"{plural(len(taken), 'other')}; a larger table or fewer objects expected",
                 field="layout.table",
             )
         taken.append(outline)

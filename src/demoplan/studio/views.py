@@ -46,8 +46,13 @@ def model_json(model: TaskModel) -> dict[str, Any]:
     margin), the state sequences and the constraints as the report draws them
     (each demonstration's transitive reduction, together); where the model has
     roles of identical objects, the instance that filled each role in every
-    demonstration (as the model file writes them)."""
+    demonstration (as the model file writes them). Each state's two references
+    also in the words of ``learn``'s states table (``relative_position``,
+    ``relative_orientation``: :func:`~demoplan.learning.tables.state_rows`,
+    e.g. ``turns with lunchbox: never seen turned``) and its ``notes``, so the
+    page and the terminal say the same."""
     from demoplan.learning.constraints import goal_order, visit_sequence
+    from demoplan.learning.tables import orientation_reference_text, position_reference_text
 
     states = []
     for state in model.states:
@@ -63,6 +68,9 @@ def model_json(model: TaskModel) -> dict[str, Any]:
                 "object": state.object,
                 "reference": reference,
                 "orientation_reference": state.orientation.reference,
+                "relative_position": position_reference_text(state),
+                "relative_orientation": orientation_reference_text(state),
+                "notes": list(state.notes),
                 "position": [float(v) for v in state.position.value],
                 "yaw": None if rpy is None else round(rpy[2], 6),
                 "spread": math.sqrt(state.position.spread),

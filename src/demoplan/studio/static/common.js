@@ -6,6 +6,9 @@ export const $ = (id) => document.getElementById(id);
 export const clone = (value) => JSON.parse(JSON.stringify(value));
 export const fmt = (v, digits = 3) => (v === null || v === undefined ? "—" : Number(v).toFixed(digits));
 export const mm = (v) => (v === null || v === undefined ? "—" : `${(v * 1000).toFixed(1)} mm`);
+// `count` and `noun`, in the plural unless `count` is 1 (`many` where adding an s
+// is wrong), as src/demoplan/wording.py's plural words it for the command line
+export const plural = (count, noun, many) => `${count} ${count === 1 ? noun : many || `${noun}s`}`;
 export const SHAPES_IN_SCENES = new Set(["box", "cylinder", "sphere"]);
 
 export const state = {

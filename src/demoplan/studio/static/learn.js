@@ -1,7 +1,7 @@
 // The Learn view: the model learned from the chosen demonstrations (POST /api/learn).
 
 import { post } from "./api.js";
-import { $, alarm, fmt, mm, say, state } from "./common.js";
+import { $, alarm, fmt, mm, plural, say, state } from "./common.js";
 import { drawGraph } from "./graph.js";
 import { redraw } from "./stage.js";
 import { refreshFiles, teachSceneDocument } from "./teach.js";
@@ -23,7 +23,7 @@ export async function learn() {
   renderLearned(result);
   await refreshFiles();
   $("plan-model").value = result.model;
-  say(`Learned ${result.states.length} states from ${files.length} demonstrations; saved ${result.model}.`);
+  say(`Learned ${plural(result.states.length, "state")} from ${plural(files.length, "demonstration")}; saved ${result.model}.`);
   redraw();
 }
 
@@ -33,8 +33,10 @@ export function renderLearned(result) {
   for (const s of result.states) {
     const row = body.insertRow();
     row.dataset.state = s.id;
+    // the references in the words of `learn`'s states table (the server's, so the two agree)
     const cells = [
-      s.id, s.object, s.reference, mm(s.spread), s.margin === null || s.margin === undefined ? "—" : `${fmt(s.margin, 2)} ×`,
+      s.id, s.object, s.relative_position || "absolute",
+      s.relative_orientation || (s.yaw === null ? "—" : "absolute"), mm(s.spread), s.margin === null || s.margin === undefined ? "—" : `${fmt(s.margin, 2)} ×`,
       s.position.map((v) => fmt(v)).join(", "), s.yaw === null ? "any" : `${fmt(s.yaw, 1)}°`,
     ];
     cells.forEach((text, i) => {
@@ -45,6 +47,7 @@ export function renderLearned(result) {
       }
       cell.textContent = text;
     });
+    if (s.notes.length) row.title = s.notes.join("\n"); // every note, also those the cells shorten
   }
   renderRoles(result.roles || []);
   const sequences = $("sequences");

@@ -1,7 +1,7 @@
 // The Plan view: the start scene, the plan in the CLI's words and its animation (POST /api/plan).
 
 import { ApiError, get, post } from "./api.js";
-import { $, SHAPES_IN_SCENES, alarm, clone, say, state } from "./common.js";
+import { $, SHAPES_IN_SCENES, alarm, clone, plural, say, state } from "./common.js";
 import { runEvents, setRunStep } from "./run.js";
 import { keepInView, layoutWith, place, redraw, sameObjects } from "./stage.js";
 import { snap } from "./table.js";
@@ -175,7 +175,7 @@ export async function makePlan() {
   const slider = $("plan-step");
   slider.max = String(result.moves.length);
   setPlanStep(0);
-  say(`Plan of ${result.plan.length} actions.`);
+  say(`Plan of ${plural(result.plan.length, "action")}.`);
 }
 
 export function renderCandidates(result) {

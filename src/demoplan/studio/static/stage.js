@@ -14,7 +14,7 @@ export const table = new TableView($("table"), $("heights"), {
     const poses = currentPoses();
     const riders = ridersOf(name, state.layout, poses);
     if (riders.length) {
-      alarm(`${name} cannot be picked up: ${riders.join(", ")} stands on it (move ${riders.join(", ")} first)`);
+      alarm(`${name} cannot be picked up: ${riders.join(", ")} ${riders.length === 1 ? "stands" : "stand"} on it (move ${riders.join(", ")} first)`);
       return false;
     }
     alarm("");

@@ -1,7 +1,7 @@
 // The Teach view: demonstrations recorded step by step, saved in the project's format; the work folder's files.
 
 import { get, post } from "./api.js";
-import { $, SHAPES_IN_SCENES, alarm, clone, fmt, say, state } from "./common.js";
+import { $, SHAPES_IN_SCENES, alarm, clone, fmt, plural, say, state } from "./common.js";
 import { keepSource, renderThings } from "./objects.js";
 import { clearPlan } from "./plan.js";
 import { cover, corners, redraw, sameObjects, table, tableRoom } from "./stage.js";
@@ -65,7 +65,7 @@ export async function newDemonstration() {
   }
   if (ticket !== asked) return; // a later New demonstration (another template) is on its way
   if (randomise) $("seed").value = String(seed + 1);
-  const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${state.teach.steps.length} unsaved steps discarded)` : "";
+  const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${plural(state.teach.steps.length, "unsaved step")} discarded)` : "";
   const from = source.kind === "template" ? `template ${source.id}` : source.name;
   startDemonstration(layout, `New demonstration from ${from}${randomise ? `, randomised (seed ${seed})` : ""}${unsaved}.`);
 }
@@ -122,7 +122,7 @@ export async function save() {
   const next = marks.length
     ? ` Press New demonstration, then move the ${marks.join(" or ")} between demonstrations (moving it is not a step).`
     : "";
-  say(`Saved ${answer.file} (${state.teach.steps.length} steps).${next}`);
+  say(`Saved ${answer.file} (${plural(state.teach.steps.length, "step")}).${next}`);
   await refreshFiles();
 }
 
@@ -202,6 +202,6 @@ export async function refreshFiles() {
   models.replaceChildren();
   for (const name of state.files.models) models.appendChild(new Option(name, name));
   if (state.files.models.includes(current)) models.value = current;
-  $("workfolder").textContent = `work folder: ${state.files.demonstrations.length} demonstrations, ` +
-    `${state.files.models.length} models, ${state.files.scenes.length} scenes`;
+  $("workfolder").textContent = `work folder: ${plural(state.files.demonstrations.length, "demonstration")}, ` +
+    `${plural(state.files.models.length, "model")}, ${plural(state.files.scenes.length, "scene")}`;
 }
