@@ -285,6 +285,7 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
     _add_error_handlers(app)
     _add_page(app)
     _add_layout_routes(app, folder)
+    _add_table_routes(app, folder)
     _add_learning_routes(app, folder, jobs)
     _add_run_routes(app, folder, jobs)
     _add_last_run_route(app, jobs)
@@ -292,7 +293,7 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
 
 
 def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
-    """Templates, files, drops and scrambles, and saving demonstrations and scenes."""
+    """Templates, the work folder's files, and the template or file the Teach view starts from."""
 
     @app.get("/api/templates")
     def templates() -> dict[str, Any]:
@@ -352,6 +353,11 @@ def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
             raise FileMissingError(f"id: no file {body.id!r} in the work folder")
         folder.keep_source(body.kind, body.id)
         return {"source": folder.source()}
+
+
+def _add_table_routes(app: FastAPI, folder: WorkFolder) -> None:
+    """What happens on the table: a user's own objects saved, landmarks moved,
+    drops and scrambles, and saving demonstrations and scenes."""
 
     @app.put("/api/objects/{name}")
     def save_objects(name: str, body: ObjectsRequest) -> dict[str, str]:

@@ -4,7 +4,7 @@
 // (GET /api/last-run).
 
 import { ApiError, del, get, post } from "./api.js";
-import { $, alarm, clone, guarded, say, state } from "./common.js";
+import { $, alarm, clone, guarded, plural, say, state } from "./common.js";
 import { chosenModel, sceneDocument, sceneExtras, stopAnimation } from "./plan.js";
 import { keepInView, redraw, sameObjects } from "./stage.js";
 import { startDemonstration } from "./teach.js";
@@ -110,11 +110,11 @@ function renderTimeline(status) {
 function summaryOf(status) {
   const r = status.result;
   if (r) {
-    const failures = `${r.replans} replans, ${r.failures.length} failures detected.` +
+    const failures = `${plural(r.replans, "replan")}, ${plural(r.failures.length, "failure")} detected.` +
       (r.failures.length ? ` ${r.failures.join(" ")}` : "");
     return `${r.success ? "Success" : "Failed"}: ${r.reason}. ${failures}`;
   }
-  if (status.state === "running") return `Running: ${status.events.length} events so far.`;
+  if (status.state === "running") return `Running: ${plural(status.events.length, "event")} so far.`;
   if (status.error) return `Stopped: ${status.error}`;
   return `Run ${status.state}.`;
 }
