@@ -133,6 +133,7 @@ class ArmWorld(MujocoWorld):
         self.base = arm_base(scene, workspace)
         check_base(scene, self.base)
         self.motion_failures: list[str] = []  # motions not made, and why
+        self.grasp_problems: list[str] = []  # grasps the tool felt fail, and how
         self.collisions: list[str] = []  # arm contacts with anything but its load, as they happened
         self.grip = np.eye(4)  # the held object's frame in the cup's frame
         self.grip_yaw = 0.0
@@ -420,6 +421,7 @@ class ArmWorld(MujocoWorld):
         missed = self.oracle._chance(self.faults.grasp, "grasp")
         if missed:
             self.oracle.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
+        refused = len(self.motion_failures)
         try:
             self.allowed = obj
             if tool == "suction":
@@ -430,10 +432,15 @@ class ArmWorld(MujocoWorld):
             self._give_up(str(exc))
         finally:
             self.allowed = None
+        named = TOOL_NAMES[tool]
         if self.held is not None and not self._lifted(self.held):
+            self.grasp_problems.append(f"{obj} slipped from the {named} as it lifted")
             self._let_go()
             self.held = None
             self._settle(0.2)
+        elif self.held is None and len(self.motion_failures) == refused:
+            took = "did not seal on" if tool == "suction" else "closed without holding"
+            self.grasp_problems.append(f"the {named} {took} {obj}")
 
     def _grasp_by_suction(self, obj: str, pose: Pose, axis: float, missed: bool) -> None:
         """Down onto ``obj``'s top, suction on, and up (``missed``: the cup comes
