@@ -562,8 +562,10 @@ class ArmWorld(MujocoWorld):
         return half_extent(self.geometry[obj], axis) + MIN_JAW_CLEARANCE <= JAW_STROKE / 2
 
     def _hold_if_touching(self, obj: str) -> None:
-        """``obj`` is held when the tool touches it: its frame in the cup's is kept."""
-        if self._touching(obj):
+        """``obj`` is held when the tool touches it, or (the fingers) when they
+        stalled with it between them (:meth:`_in_the_jaws`: the pads' contact
+        may be missing at that step): its frame in the cup's is kept."""
+        if self._touching(obj) or (self.tool == "fingers" and self._in_the_jaws(obj)):
             self.held = obj
             self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
             self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
