@@ -593,7 +593,10 @@ class ArmWorld(MujocoWorld):
         lowered = tool == "fingers" and self.tool == "suction"
         height = self._travel_height() + (FINGER_REACH if lowered else 0.0)
         if here[2] < height:
-            self._go([here[0], here[1], height])
+            try:
+                self._go([here[0], here[1], height])
+            except MotionError:  # straight up passes a singularity: a new posture up there
+                self._swing_to(np.array([here[0], here[1], height]), self.cup_yaw)
         if tool != self.tool:
             logger.info("arm: the jaws %s", "lowered" if tool == "fingers" else "drawn up")
         self.tool = tool
