@@ -118,6 +118,10 @@ def test_faults_on_the_arm_are_detected_and_recovered(blocks: TaskModel, kind: s
     assert report.success and max(report.pose_errors.values()) < 0.01
     assert report.failures and report.replans == len(report.failures)
     assert world.collisions == [] and world.motion_failures == []
+    if kind == "grasp":  # the tool felt it: the failure says so
+        (failure,) = report.failures
+        taken = report.actions[failure.step - 1].action.object
+        assert failure.note == f"the suction cup did not seal on {taken}", failure
 
 
 # -- the checks that make the above mean something ---------------------------------------

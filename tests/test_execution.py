@@ -198,7 +198,8 @@ def test_run_text_and_failure_exit_code(blocks_model_file: Path) -> None:
         "run", blocks_model_file, BLOCKS_SCENE, "--faults", "grasp=1", "--max-replans", "2"
     )
     assert failed.exit_code == 4
-    assert failed.stderr.strip().startswith("demoplan: error: gave up after 2 replans")
+    assert failed.stderr.strip().startswith("demoplan: error: red could not be grasped in 3 ")
+    assert failed.stderr.strip().endswith("; then gave up after 2 replans")
 
 
 def test_run_bad_faults_exit_2(blocks_model_file: Path) -> None:

@@ -52,7 +52,8 @@ def test_a_run_whose_grasps_all_fail_stops_naming_the_object(blocks: TaskModel) 
     report = execute(blocks, scene, KinematicWorld(scene, Faults(grasp=1.0), 0))
     assert not report.success and report.exit_code == 4 and "\n" not in report.reason
     first = report.actions[0].action.object
-    assert report.reason.startswith(f"gave up on {first}: every grasp of it failed 3 times")
+    assert report.reason.startswith(f"{first} could not be grasped in 6 attempts (grasps tried: ")
+    assert f"then gave up on {first}: each of its grasps failed 3 times" in report.reason
     tries = _tries(report)
     assert set(tries.values()) == {MAX_SAME_GRASP} and len(tries) == 2  # blocks: 2 grasps
     assert len(report.failures) == report.replans == 2 * MAX_SAME_GRASP  # the last one stops

@@ -133,6 +133,7 @@ class ArmWorld(MujocoWorld):
         self.base = arm_base(scene, workspace)
         check_base(scene, self.base)
         self.motion_failures: list[str] = []  # motions not made, and why
+        self.grasp_problems: list[str] = []  # grasps the tool felt fail, and how
         self.collisions: list[str] = []  # arm contacts with anything but its load, as they happened
         self.grip = np.eye(4)  # the held object's frame in the cup's frame
         self.grip_yaw = 0.0
@@ -258,10 +259,42 @@ class ArmWorld(MujocoWorld):
         return bool(touching)
 
     def _lifted(self, name: str) -> bool:
-        """Held by the tool (sealed on the cup, or between both fingers) and off
-        whatever it stood on."""
+        """Held by the tool (sealed on the cup, or in the jaws) and off whatever
+        it stood on."""
         centre = self.data.xpos[self._body(name)]
-        return bool(self._touching(name) and centre[2] > 0.004 + self.geometry[name].size[2] / 2)
+        held = self._in_the_jaws(name) if self.tool == "fingers" else self._on_the_cup(name)
+        return bool(held and centre[2] > 0.004 + self.geometry[name].size[2] / 2)
+
+    def _on_the_cup(self, name: str) -> bool:
+        """``name`` hangs on the suction cup, as its vacuum sensor tells: suction
+        on and the pad touching it, or its top at the pad's face (within 4 mm,
+        under the cup) — the pad's contact, like the fingers', may be missing
+        for a step while the load hangs on."""
+        if self.data.ctrl[self.suction] <= 0.0:
+            return False
+        if self._touching(name):
+            return True
+        centre = np.asarray(self.data.xpos[self._body(name)])
+        cup, _ = self._cup()
+        shape = self.geometry[name]
+        under = math.dist(centre[:2], cup[:2]) < min(shape.size[0], shape.size[1]) / 2
+        return bool(under and abs(cup[2] - (centre[2] + shape.size[2] / 2)) < 0.004)
+
+    def _in_the_jaws(self, name: str) -> bool:
+        """``name`` is in the jaws as a gripper senses it: the fingers stalled
+        short of closing, with the object between them — its centre under the
+        tool and within the fingers' reach below the pad. Not by the pads'
+        contacts: between a pad and a load tilted in the grip they come and go
+        from one step to the next while the load is held (a 0.34 kg box was
+        let go, held, because one step had none)."""
+        if float(np.min(self.data.qpos[self.finger_joints])) < 0.001:
+            return False
+        centre = np.asarray(self.data.xpos[self._body(name)])
+        cup, _ = self._cup()
+        shape = self.geometry[name]
+        under = math.dist(centre[:2], cup[:2]) < max(shape.size[0], shape.size[1]) / 2
+        depth = cup[2] - centre[2]
+        return bool(under and 0.0 < depth < FINGER_REACH + shape.size[2] / 2 + 0.01)
 
     def _object_frame(self, name: str, data: Any = None) -> np.ndarray:
         data = self.data if data is None else data
@@ -382,7 +415,28 @@ class ArmWorld(MujocoWorld):
                 return
             except MotionError as exc:
                 problem = str(exc)
-        raise MotionError(problem)
+        # No straight line across (the arm would swing through a new posture on
+        # the way, from close to its base): up, then a joint-space move (checked)
+        # to a posture solved over the goal.
+        height = max(self._travel_height((float(here[0]), float(here[1])), goal_xy), low)
+        try:
+            here, _ = self._cup()
+            self._go([here[0], here[1], max(height, here[2])])
+            self._swing_to(np.array([goal_xy[0], goal_xy[1], height]), yaw)
+        except MotionError:
+            raise MotionError(problem) from None
+
+    def _swing_to(self, point: np.ndarray, yaw: float) -> None:
+        """To ``point`` turned ``yaw`` by a joint-space move from where the arm
+        is, to a posture solved afresh (facing the point, elbow up)."""
+        seed = np.array(HOME)
+        seed[0] += math.atan2(point[1] - self.base[1], point[0] - self.base[0]) - math.radians(
+            self.base[2]
+        )
+        q = self.kinematics.solve_anywhere(point, yaw, seed)
+        if q is None:
+            raise MotionError(f"the cup cannot reach {xyz(point)}")
+        self._joint_move(self.q + wrapped(q - self.q), 30, 2.0)
 
     def _travel_height(
         self, start: tuple[float, float] | None = None, goal: tuple[float, float] | None = None
@@ -417,9 +471,17 @@ class ArmWorld(MujocoWorld):
             return
         pose = where if where is not None else self._pose(obj)
         tool = self._tool_for(obj)
+        if tool == "fingers" and not self._fits(obj, axis):
+            # The plan's grasp is wider than the jaws open: the fingers take the
+            # object across the axis the check tried (they carry it across that one).
+            logger.info(
+                "arm: %s is too wide for the jaws across %g°; taken across another", obj, axis
+            )
+            axis = choose_tool(self.geometry[obj], self._axes(obj)).axis
         missed = self.oracle._chance(self.faults.grasp, "grasp")
         if missed:
             self.oracle.record_fault("grasp", obj, None, f"the grasp of {obj} missed")
+        refused = len(self.motion_failures)
         try:
             self.allowed = obj
             if tool == "suction":
@@ -430,10 +492,15 @@ class ArmWorld(MujocoWorld):
             self._give_up(str(exc))
         finally:
             self.allowed = None
+        named = TOOL_NAMES[tool]
         if self.held is not None and not self._lifted(self.held):
+            self.grasp_problems.append(f"{obj} slipped from the {named} as it lifted")
             self._let_go()
             self.held = None
             self._settle(0.2)
+        elif self.held is None and len(self.motion_failures) == refused:
+            took = "did not seal on" if tool == "suction" else "closed without holding"
+            self.grasp_problems.append(f"the {named} {took} {obj}")
 
     def _grasp_by_suction(self, obj: str, pose: Pose, axis: float, missed: bool) -> None:
         """Down onto ``obj``'s top, suction on, and up (``missed``: the cup comes
@@ -490,9 +557,15 @@ class ArmWorld(MujocoWorld):
         self._go([x, y, low + APPROACH])
         self._settle(0.2)
 
+    def _fits(self, obj: str, axis: float) -> bool:
+        """The open jaws go round ``obj`` across ``axis`` (deg, in its frame)."""
+        return half_extent(self.geometry[obj], axis) + MIN_JAW_CLEARANCE <= JAW_STROKE / 2
+
     def _hold_if_touching(self, obj: str) -> None:
-        """``obj`` is held when the tool touches it: its frame in the cup's is kept."""
-        if self._touching(obj):
+        """``obj`` is held when the tool touches it, or (the fingers) when they
+        stalled with it between them (:meth:`_in_the_jaws`: the pads' contact
+        may be missing at that step): its frame in the cup's is kept."""
+        if self._touching(obj) or (self.tool == "fingers" and self._in_the_jaws(obj)):
             self.held = obj
             self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
             self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
@@ -520,7 +593,10 @@ class ArmWorld(MujocoWorld):
         lowered = tool == "fingers" and self.tool == "suction"
         height = self._travel_height() + (FINGER_REACH if lowered else 0.0)
         if here[2] < height:
-            self._go([here[0], here[1], height])
+            try:
+                self._go([here[0], here[1], height])
+            except MotionError:  # straight up passes a singularity: a new posture up there
+                self._swing_to(np.array([here[0], here[1], height]), self.cup_yaw)
         if tool != self.tool:
             logger.info("arm: the jaws %s", "lowered" if tool == "fingers" else "drawn up")
         self.tool = tool
@@ -641,9 +717,16 @@ class ArmWorld(MujocoWorld):
         yaw = self.cup_yaw + ((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0
         above = cup[:3, 3] + [0.0, 0.0, APPROACH]
         try:
-            self._travel((float(above[0]), float(above[1])), yaw, float(above[2]))
-            self._go(above, yaw)
-            self._go(cup[:3, 3], yaw, landing=True)
+            # as a grasp comes down: where the posture the arm has cannot go
+            # straight down there, a new one made up over the spot
+            self._come_down(
+                float(cup[0, 3]),
+                float(cup[1, 3]),
+                float(cup[2, 3]),
+                (0.0,),
+                lambda: self._go(cup[:3, 3], yaw, landing=True),
+                yaw,
+            )
         except MotionError as exc:
             self._give_up(str(exc))
             return
@@ -709,19 +792,26 @@ class ArmWorld(MujocoWorld):
 
     def why_not_reachable(self, obj: str, pose: Pose) -> str | None:
         """Why the cup cannot come down on ``obj`` standing at ``pose`` (out of the
-        arm's reach), or None."""
+        arm's reach), or None: farther from the base, or nearer, than the cup
+        reaches anywhere (:data:`~demoplan.execution.arm_model.REACH`: closer to
+        the base than that, inverse kinematics may find a posture from which
+        the motions of a run do not hold a load — a 0.12 kg box 19 cm from the
+        base came off the cup it stayed on 20 cm out), or no posture over it."""
         shape = self.geometry[obj]
         top = pose.position[2] + shape.size[2]
         point = np.array([pose.position[0], pose.position[1], top])
+        bx, by, _ = self.base
+        distance = math.hypot(point[0] - bx, point[1] - by)
+        low, high = REACH
+        out = (
+            f"at {_xy(pose)} is out of the arm's reach ({distance:.2f} m from its "
+            f"base at ({bx:.3f}, {by:.3f}); the cup reaches {low:.2f}–{high:.2f} m)"
+        )
+        if not low <= distance <= high:
+            return out
         for height in (0.0, APPROACH):
             if self.kinematics.solve_anywhere(point + [0, 0, height], 0.0, np.array(HOME)) is None:
-                bx, by, _ = self.base
-                distance = math.hypot(point[0] - bx, point[1] - by)
-                low, high = REACH
-                return (
-                    f"at {_xy(pose)} is out of the arm's reach ({distance:.2f} m from its "
-                    f"base at ({bx:.3f}, {by:.3f}); the cup reaches {low:.2f}–{high:.2f} m)"
-                )
+                return out
         return None
 
 

@@ -111,6 +111,16 @@ class CameraWorld:
         """The faults the simulated world injected (the camera does not see them)."""
         return self.world.injected
 
+    @property
+    def motion_failures(self) -> list[str]:
+        """What the robot noticed (executor.ROBOT_NOTES): the motions it refused."""
+        return list(getattr(self.world, "motion_failures", ()))
+
+    @property
+    def grasp_problems(self) -> list[str]:
+        """The grasps the robot felt fail (its own sensing, not the camera's)."""
+        return list(getattr(self.world, "grasp_problems", ()))
+
     def render(self) -> object:
         return self.world.render()
 

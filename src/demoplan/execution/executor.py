@@ -28,10 +28,11 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from typing import Any
+from typing import Any, Literal
 
 from demoplan.budget import PLANNING_SECONDS, Clock
 from demoplan.errors import DemoplanError, InputError
@@ -113,6 +114,9 @@ class Failure:
     step: int
     kind: FailureKind
     detail: str
+    note: str = ""
+    """What the robot itself noticed going wrong in the action (``--sim arm``:
+    a motion it refused, a grasp it felt slip); also at the end of ``detail``."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,10 +128,17 @@ class ExecutedAction:
     ok: bool
 
 
+RunStatus = Literal["succeeded", "failed"]
+"""How a run ended: the goal reached, or not."""
+
+
 @dataclass(frozen=True, slots=True)
 class RunEvent:
     """Progress for a live display: ``kind`` is plan, action, failure, replan or
-    done; a plan or replan carries its ``targets`` (goal object, target pose)."""
+    done; a plan or replan carries its ``targets`` (goal object, target pose).
+    The ``done`` event carries the run's ``status`` (``succeeded`` or
+    ``failed``) and its reason as ``text``; a failed run's text starts with
+    ``FAILED:``, so that no display can show it as a success."""
 
     kind: str
     text: str
@@ -135,6 +146,7 @@ class RunEvent:
     replans: int = 0
     remaining: int = 0
     targets: tuple[tuple[str, Pose], ...] = ()
+    status: RunStatus | None = None
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -171,10 +183,17 @@ class RunReport:
         """docs/cli.md: 0 success, 3 no plan from the observed world, 4 a limit reached."""
         return 0 if self.success else 4 if self.gave_up else 3
 
+    @property
+    def status(self) -> RunStatus:
+        """``succeeded`` where the goal was reached, else ``failed``."""
+        return "succeeded" if self.success else "failed"
+
     def to_json(self) -> dict[str, Any]:
         final_scene = _scene_of(self.final, self.scene)
         return {
             "success": self.success,
+            "status": self.status,
+            "exit_code": self.exit_code,
             "replans": self.replans,
             "actions": [
                 [e.action.kind, e.action.object, e.action.location, e.action.grasp]
@@ -380,6 +399,8 @@ class _Run:
     plan_index: int = 0
     failed_grasps: dict[GraspKey, int] = field(default_factory=dict)
     """How often each grasp failed at each place."""
+    grasp_misses: list[tuple[str, float, Pose]] = field(default_factory=list)
+    """Every grasp that failed, in order: the object, its finger axis and where it stood."""
     step: int = 0
     picked_from: Pose = field(default_factory=lambda: Pose((0.0, 0.0, 0.0)))
     """Where the object in the hand was taken from."""
@@ -408,6 +429,7 @@ class _Run:
         target = pose_of(location)
         grasp = next(g for g in problem.grasps if g.name == action.grasp)
         self.emit(RunEvent("action", str(action), step, self.replans, len(self.actions)))
+        noticed = _note_counts(world)
         if action.kind == "GRASP":
             self.picked_from = expected.get(action.object, target)
             world.grasp(action.object, grasp.axis, self.picked_from)
@@ -422,6 +444,9 @@ class _Run:
             if turn is not None:
                 detail = f"{action.object} is turned {turn:.1f}° from its target"
                 failure = Failure(step, FailureKind.MISPLACED, detail)
+        notes = _notes_since(world, noticed)
+        if failure is not None and notes:  # what the robot itself noticed going wrong
+            failure = replace(failure, detail=f"{failure.detail} ({notes[-1]})", note=notes[-1])
         self.executed.append(ExecutedAction(step, action, target, self.plan_index, failure is None))
         if failure is None:
             if action.kind == "GRASP":
@@ -441,6 +466,7 @@ class _Run:
         if action.kind == "GRASP" and failure.kind == FailureKind.GRASP:
             key = _grasp_key(action.object, grasp.axis, self.picked_from, settings)
             self.failed_grasps[key] = self.failed_grasps.get(key, 0) + 1
+            self.grasp_misses.append((action.object, grasp.axis, self.picked_from))
         held = world.observe().held
         if held is not None:
             # Plans start with an empty hand: put the object back where it was taken.
@@ -454,16 +480,59 @@ class _Run:
             return self.finish(False, why, gave_up=why.startswith("gave up"))
         return None
 
+    def cause(self) -> str:
+        """The failure that brought the run to its end, as a sentence with how
+        often it happened: for a grasp, the attempts at that object and each
+        grasp tried (finger axis, place, times); else the last failure. Empty
+        where nothing failed."""
+        if not self.failures:
+            return ""
+        last = self.failures[-1]
+        actions = {executed.step: executed.action for executed in self.executed}
+        obj = actions[last.step].object if last.step in actions else None
+        if last.kind == FailureKind.GRASP and obj is not None:
+            misses = [(axis, where) for name, axis, where in self.grasp_misses if name == obj]
+            tried = Counter(
+                f"across {axis % 180.0:g}° at ({where.position[0]:.3f}, {where.position[1]:.3f})"
+                for axis, where in misses
+            )
+            grasps = ", ".join(f"{grasp} {plural(times, 'time')}" for grasp, times in tried.items())
+            noun = "grasps" if len(tried) > 1 else "grasp"
+            seen = f"; the last: {last.note}" if last.note else ""
+            return (
+                f"{obj} could not be grasped in {plural(len(misses), 'attempt')} "
+                f"({noun} tried: {grasps}{seen})"
+            )
+        same = [
+            f
+            for f in self.failures
+            if f.kind == last.kind and f.step in actions and actions[f.step].object == obj
+        ]
+        times = f" ({len(same)} times)" if len(same) > 1 else ""
+        return f"step {last.step}: {last.kind}: {last.detail}{times}"
+
     def finish(self, success: bool, reason: str, gave_up: bool = False) -> RunReport:
-        """The run's report, the world observed a last time."""
+        """The run's report, the world observed a last time. A failed run's
+        ``reason`` leads with its cause (:meth:`cause`), then what stopped it."""
         world, problem = self.world, self.problem
+        if not success:
+            cause = self.cause()
+            reason = f"{cause}; then {reason}" if cause else reason
         final = world.observe()
         errors = {
             obj: _distance(final.poses[obj], pose_of(problem.location(loc)))
             for obj, loc in problem.problem.goal
             if obj in final.poses
         }
-        self.emit(RunEvent("done", reason, len(self.executed), self.replans))
+        self.emit(
+            RunEvent(
+                "done",
+                reason if success else f"FAILED: {reason}",
+                len(self.executed),
+                self.replans,
+                status="succeeded" if success else "failed",
+            )
+        )
         return RunReport(
             success=success,
             replans=self.replans,
@@ -558,7 +627,7 @@ class _Run:
         try:
             _check_feasible(world, list(outcome.plan.actions), built, scene.source)
         except InputError as exc:  # an object moved beyond the robot's reach
-            return exc.message
+            return f"the new plan {exc.message}"
         self.problem, self.actions = built, list(outcome.plan.actions)
         self.reached.update(_reached_at_start(self.problem))
         self.expected = dict(observation.poses)
@@ -573,6 +642,24 @@ class _Run:
             )
         )
         return None
+
+
+ROBOT_NOTES = ("motion_failures", "grasp_problems")
+"""A world's lists of what its robot noticed going wrong, as it happened
+(``--sim arm``: the motions it refused, the grasps it felt fail)."""
+
+
+def _note_counts(world: World) -> tuple[int, ...]:
+    return tuple(len(getattr(world, notes, ())) for notes in ROBOT_NOTES)
+
+
+def _notes_since(world: World, counts: tuple[int, ...]) -> list[str]:
+    """What the robot noticed since it had noticed ``counts`` (:func:`_note_counts`)."""
+    return [
+        note
+        for notes, seen in zip(ROBOT_NOTES, counts, strict=True)
+        for note in list(getattr(world, notes, ()))[seen:]
+    ]
 
 
 def _check_feasible(
@@ -652,9 +739,8 @@ def _without_failed_grasps(
             refused = list(getattr(world, "motion_failures", ()))
             cause = f"; the last motion refused: {refused[-1]}" if refused else ""
             return built, (
-                f"gave up on {obj}: every grasp of it failed {MAX_SAME_GRASP} times at "
-                f"({pose.position[0]:.3f}, {pose.position[1]:.3f}), the object not in the "
-                f"hand after it{cause}"
+                f"gave up on {obj}: each of its grasps failed {MAX_SAME_GRASP} times at "
+                f"({pose.position[0]:.3f}, {pose.position[1]:.3f}){cause}"
             )
     return replace(built, problem=replace(built.problem, allowed=allowed)), ""
 

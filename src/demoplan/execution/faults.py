@@ -2,8 +2,9 @@
 
 ``--faults drop=0.2,displace=0.1`` gives each kind a probability:
 
-- ``drop`` (per PUT_DOWN): the held object falls during transport and lands on
-  the table near where it fell;
+- ``drop`` (per PUT_DOWN): the held object falls during transport and lands
+  near where it fell, on the table or on the top of a landmark under it (a
+  tray, a box);
 - ``displace`` (after each action): a person moves a random standing object,
   one with nothing on it, to a random free spot;
 - ``misplace`` (per PUT_DOWN): the object is released 1.5–5 cm off its target,
@@ -13,8 +14,9 @@
 - ``block`` (after each action, at most twice a run): a new object (one the model
   never saw) appears on the target of a later PUT_DOWN.
 
-Every injected fault leaves the world recoverable: objects land on the table,
-clear of the others by a gripper's reach, so each can be grasped again.
+Every injected fault leaves the world recoverable: objects land on the table
+or a landmark's top, clear of the others by a gripper's reach, so each can be
+grasped again.
 """
 
 from __future__ import annotations

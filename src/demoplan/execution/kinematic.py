@@ -49,6 +49,15 @@ class KinematicWorld:
                 raise ValueError(f"{obj.name}: geometry unknown (complete the scene first)")
             self.geometry[obj.name] = obj.geometry
         self.gripper = scene.gripper
+        shapes = dict(scene.landmark_geometry)
+        self.platforms = [  # landmarks with a size: what falls on one lands on its top
+            (
+                footprint(shapes[name], pose.position, yaw_of(pose)),
+                pose.position[2] + shapes[name].size[2],
+            )
+            for name, pose in scene.landmarks
+            if name in shapes
+        ]
         self.faults = faults
         self.rng = np.random.default_rng(seed)
         self.held: str | None = None
@@ -179,8 +188,10 @@ class KinematicWorld:
                 angle = start + 2 * math.pi * k / 24
                 px, py = x + distance * math.cos(angle), y + distance * math.sin(angle)
                 if x0 <= px <= x1 and y0 <= py <= y1 and self._clear(px, py, shape, 0.002):
-                    turn = float(self.rng.uniform(-10, 10))
-                    return Pose((px, py, 0.0), quat_from_yaw(yaw_of(target) + turn))
+                    yaw = yaw_of(target) + float(self.rng.uniform(-10, 10))
+                    z = self._ground(px, py, shape, yaw)
+                    if z is not None:
+                        return Pose((px, py, z), quat_from_yaw(yaw))
         return None
 
     # -- helpers --------------------------------------------------------------------------
@@ -234,10 +245,28 @@ class KinematicWorld:
                 return False
         return True
 
+    def _ground(self, x: float, y: float, shape: ObjectGeometry, yaw: float) -> float | None:
+        """Where ``shape`` standing at (x, y) turned ``yaw`` rests: the top of
+        the landmark (a tray, a box) under all of it, else the table (0); None
+        where it would lie across a landmark's edge."""
+        outline = footprint(shape, (x, y), yaw)
+        height = 0.0
+        for platform, top in self.platforms:
+            covered = outline.intersection(platform).area
+            if covered >= outline.area * (1.0 - 1e-6):
+                height = max(height, top)
+            elif covered > 0.0:
+                return None
+        return height
+
     def _land(self, obj: str, x: float, y: float, yaw: float | None = None) -> Pose:
-        """Put ``obj`` on the table at the clear spot nearest (x, y), turned by up to
-        10° from ``yaw`` (default: as it was when picked up)."""
+        """Put ``obj`` at the clear spot nearest (x, y), on the table or on the
+        top of a landmark under it (:meth:`_ground`), turned by up to 10° from
+        ``yaw`` (default: as it was when picked up)."""
         shape = self.geometry[obj]
+        if yaw is None:
+            yaw = yaw_of(self.picked_from) if self.picked_from is not None else 0.0
+        yaw += float(self.rng.uniform(-10, 10))
         (x0, y0), (x1, y1) = self.region
         best = None
         for radius in np.arange(0.0, 0.6, 0.005):
@@ -246,15 +275,15 @@ class KinematicWorld:
                 angle = 2 * math.pi * k / count
                 px, py = x + radius * math.cos(angle), y + radius * math.sin(angle)
                 if x0 <= px <= x1 and y0 <= py <= y1 and self._clear(px, py, shape, 0.002):
-                    best = (px, py)
-                    break
+                    z = self._ground(px, py, shape, yaw)
+                    if z is not None:
+                        best = (px, py, z)
+                        break
             if best is not None:
                 break
         if best is None:  # a full table: leave it where it is asked to be
-            best = (x, y)
-        if yaw is None:
-            yaw = yaw_of(self.picked_from) if self.picked_from is not None else 0.0
-        pose = Pose((best[0], best[1], 0.0), quat_from_yaw(yaw + float(self.rng.uniform(-10, 10))))
+            best = (x, y, self._ground(x, y, shape, yaw) or 0.0)
+        pose = Pose(best, quat_from_yaw(yaw))
         self.poses[obj] = pose
         return pose
 

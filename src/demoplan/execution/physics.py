@@ -633,7 +633,9 @@ class MujocoWorld:
         shape = self.geometry[obj]
         hand = self._hand()
         yaw = yaw_of(spot) - self.grip_yaw
-        above = np.array([spot.position[0], spot.position[1], shape.size[2] / 2 + 0.012])
+        above = np.array(
+            [spot.position[0], spot.position[1], spot.position[2] + shape.size[2] / 2 + 0.012]
+        )
         goal = above - self._rotated_offset(yaw)
         self._move([*hand[:2], travel])
         self._move([goal[0], goal[1], travel], yaw)

@@ -247,6 +247,14 @@ class _FramedWorld:
     def injected(self) -> Any:  # the simulated world's faults, for the report
         return getattr(self._world, "injected", ())
 
+    @property
+    def motion_failures(self) -> Any:  # what the robot noticed (executor.ROBOT_NOTES)
+        return getattr(self._world, "motion_failures", ())
+
+    @property
+    def grasp_problems(self) -> Any:
+        return getattr(self._world, "grasp_problems", ())
+
     def _frame(self, caption: str) -> None:
         writer = self._writer
         if writer is not None:
