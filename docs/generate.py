@@ -758,6 +758,8 @@ LOCATION_JSON = Output(
 RUN_JSON = Output(
     {
         "success": ("boolean", "the goal was reached"),
+        "status": ("string", "`succeeded` or `failed`: whether the goal was reached, in words"),
+        "exit_code": ("integer", "the exit code `run` ends with (docs/limits.md): 0 when it succeeded"),
         "replans": ("integer", "times the task was planned again"),
         "actions": ("array of actions", "the actions executed, `[KIND, OBJECT, LOCATION, GRASP]`"),
         "failures": ("array", "every difference between expectation and observation (below)"),

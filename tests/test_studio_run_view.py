@@ -249,6 +249,8 @@ def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
         assert report.success is False
         assert status["result"]["success"] is False
         assert status["result"]["reason"] == report.reason
+        assert (status["result"]["status"], status["result"]["exit_code"]) == ("failed", 4)
+        assert status["events"][-1]["status"] == "failed"
         badge = page.tab.locator("#run-state")
         assert badge.get_attribute("data-state") == "failed"
         assert badge.inner_text() == "failed"
@@ -257,7 +259,7 @@ def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
         assert len(texts) == len(status["events"])
         assert not any("✓" in text for text in texts)
         end = page.tab.locator('[data-testid="timeline"] > li[data-kind="done"]')
-        assert end.inner_text() == f"✗ {report.reason}"
+        assert end.inner_text() == f"✗ FAILED: {report.reason}"
         assert "done" not in (end.get_attribute("class") or "").split()
         colour = "el => getComputedStyle(el.querySelector('button')).color"
         failure = page.tab.locator('[data-testid="timeline"] > li[data-kind="failure"]').first

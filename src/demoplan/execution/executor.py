@@ -147,6 +147,12 @@ class RunEvent:
     remaining: int = 0
     targets: tuple[tuple[str, Pose], ...] = ()
     status: RunStatus | None = None
+    observation: Observation | None = None
+    """The world as the executor had last observed it when it told the event:
+    at a plan the start, at an action the world as the action begins, at a
+    failure the world the failed action left (a dropped object where it fell),
+    at a replan the world planned from, at the end the final one. Filled in by
+    :func:`execute`; nothing is observed for it."""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -278,6 +284,24 @@ def first_targets(chosen: CandidatePlan) -> tuple[tuple[str, Pose], ...]:
     )
 
 
+class _Watched:
+    """The run's world, keeping the executor's last observation (:attr:`last`)
+    for its events (:attr:`RunEvent.observation`). Nothing is observed for
+    them: a camera world's tracker or a physics world's check of the hand sees
+    no extra look. Every other attribute is the world's own."""
+
+    def __init__(self, world: World) -> None:
+        self._world = world
+        self.last: Observation | None = None
+
+    def observe(self) -> Observation:
+        self.last = self._world.observe()
+        return self.last
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._world, name)
+
+
 def execute(
     model: TaskModel,
     scene: Scene | PreparedScene,
@@ -290,13 +314,15 @@ def execute(
     docstring. ``first``: the plan for the world as it starts, when the caller
     has made it already (it is not made again)."""
     heard = on_event or (lambda event: None)
+    watched = _Watched(world)
 
     def emit(event: RunEvent) -> None:
-        """Tell the caller; and with --verbose, log the run's phases as they come."""
+        """Tell the caller, with the world last observed; and with --verbose, log
+        the run's phases as they come."""
         logger.info("run: %s at step %d: %s", event.kind, event.step, event.text)
-        heard(event)
+        heard(replace(event, observation=watched.last))
 
-    run = _start_run(model, scene, world, settings, emit, first)
+    run = _start_run(model, scene, watched, settings, emit, first)
     while True:
         if not run.actions:
             report = run.check_the_end()

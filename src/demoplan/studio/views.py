@@ -227,20 +227,19 @@ def world_json(observation: Observation | None) -> dict[str, Any] | None:
     }
 
 
-def event_json(event: RunEvent, observation: Observation | None = None) -> dict[str, Any]:
+def event_json(event: RunEvent) -> dict[str, Any]:
     """A run's event as the CLI's live display words it (``step N: text``),
     with the world the executor had last observed when it told the event
-    (``observation``, :func:`world_json`): at a plan the start, at an action
-    the world as the action begins, at a failure the world the failed action
-    left (a dropped object where it fell), at a replan the world planned
-    from, at the end the final one."""
+    (:attr:`RunEvent.observation`, :func:`world_json`) and, at the end, the
+    run's status (``succeeded`` or ``failed``)."""
     return {
         "kind": event.kind,
         "text": event.text,
         "step": event.step,
         "replans": event.replans,
         "remaining": event.remaining,
-        "world": world_json(observation),
+        "world": world_json(event.observation),
+        "status": None if event.status is None else str(event.status),
         "targets": {name: pose_json(pose) for name, pose in event.targets} or None,
     }
 
@@ -250,6 +249,8 @@ def run_result_json(report: RunReport, video: str | None) -> dict[str, Any]:
     CLI prints them, the final world (:func:`world_json`)."""
     return {
         "success": report.success,
+        "status": str(report.status),
+        "exit_code": report.exit_code,
         "replans": report.replans,
         "reason": report.reason,
         "actions": len(report.actions),

@@ -8,7 +8,7 @@ each, on its stdout:
 
 - ``{"event": {...}}`` for each event of the run as it happens
   (:func:`demoplan.studio.views.event_json`), with the world the executor had
-  last observed when it told the event (:class:`ObservedWorld`);
+  last observed when it told the event (:attr:`~demoplan.execution.executor.RunEvent.observation`);
 - at the end, ``{"result": {...}, "events": [...]}`` (the run's JSON and its
   events, the end's marked with the run's outcome) or ``{"error": "one line"}``.
 
@@ -33,17 +33,15 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from demoplan.cli.interrupts import reports_signals
 
 if TYPE_CHECKING:
-    from demoplan.execution.world import Observation, World
+    pass
 
-__all__ = ["ObservedWorld", "main"]
+__all__ = ["main"]
 
 MAX_EVENTS = 10_000
 """Events kept per run (as :data:`demoplan.studio.jobs.MAX_EVENTS`)."""
@@ -121,74 +119,28 @@ def _run(request: dict[str, Any], protocol: IO[str]) -> dict[str, Any]:
     scene = scene_from_document({"format": "demoplan/scene-1", **request["scene"]}, "scene")
     video = Path(request["video"]) if request.get("video") else None
     events: list[dict[str, Any]] = []
-    observed: list[ObservedWorld] = []
 
     def heard(event: RunEvent) -> None:
-        shown = event_json(event, observed[0].last if observed else None)
+        shown = event_json(event)
         if len(events) < MAX_EVENTS:
             events.append(shown)
         _send(protocol, {"event": shown})
 
-    with _observing(observed.append):
-        report = run(
-            Path(request["model"]),
-            scene,
-            sim=request["sim"],
-            faults=parse_faults(request.get("faults") or None),
-            seed=int(request.get("seed", 0)),
-            clutter=bool(request.get("clutter", False)),
-            video=video,
-            on_event=heard,
-        )
+    report = run(
+        Path(request["model"]),
+        scene,
+        sim=request["sim"],
+        faults=parse_faults(request.get("faults") or None),
+        seed=int(request.get("seed", 0)),
+        clutter=bool(request.get("clutter", False)),
+        video=video,
+        on_event=heard,
+    )
     media = request.get("media") if video is not None and video.is_file() else None
     return {
         "result": run_result_json(report, media),
         "events": finished_events(events, report),
     }
-
-
-class ObservedWorld:
-    """A run's world as the executor acts on it, keeping the executor's last
-    observation (:attr:`last`): what the run's events show as its world.
-
-    Nothing is observed for the studio: an observation is taken only when the
-    executor takes one (a camera world's tracker, a physics world's check of
-    the hand see no extra look). Every other attribute is the world's own."""
-
-    def __init__(self, world: World) -> None:
-        self._world = world
-        self.last: Observation | None = None
-
-    def observe(self) -> Observation:
-        observation = self._world.observe()
-        self.last = observation
-        return observation
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._world, name)
-
-
-@contextmanager
-def _observing(made: Callable[[ObservedWorld], object]) -> Iterator[None]:
-    """While the block runs, the world :func:`demoplan.execution.runner.start_world`
-    makes for ``run`` is wrapped in an :class:`ObservedWorld`, handed to
-    ``made``. The executor's events name no observation, and the command layer
-    builds the world itself (the arm's first plan, the video): this one seam
-    in this one process shows the page the world the executor saw."""
-    from unittest import mock
-
-    from demoplan.execution import runner
-
-    start_world = runner.start_world
-
-    def observed_start(*args: Any, **kwargs: Any) -> tuple[Any, Any]:
-        world, first = start_world(*args, **kwargs)
-        wrapped = ObservedWorld(world)
-        made(wrapped)
-        return wrapped, first
-
-    with mock.patch.object(runner, "start_world", observed_start):
-        yield
 
 
 def _send(protocol: IO[str], line: dict[str, Any]) -> None:

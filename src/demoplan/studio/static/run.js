@@ -65,7 +65,8 @@ export function runSucceeded(status) {
 // the run reached its goal, ✗ (red) when it did not, ■ until the result says.
 export function eventLook(event, status) {
   if (event.kind !== "done") return { mark: MARKS[event.kind] || "•", look: event.kind };
-  const success = event.success !== undefined ? event.success : runSucceeded(status);
+  const told = event.status ? event.status === "succeeded" : runSucceeded(status);
+  const success = event.success !== undefined ? event.success : told;
   if (success === true) return { mark: "✓", look: "done" };
   if (success === false) return { mark: "✗", look: "failure" };
   return { mark: "■", look: "end" };
