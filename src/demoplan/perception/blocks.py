@@ -331,7 +331,13 @@ def detect_blocks(
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
     parts: list[RejectedPart] | None = None if rejected is None else []
-    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours, rejected=parts)
+    regions, _ = colour_regions(
+        image,
+        min_area=min_area,
+        palette=settings.colours,
+        rejected=parts,
+        largest_block=side_px[1] ** 2,
+    )
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
