@@ -3,8 +3,10 @@ the scoring rule of their labels, and properties the detector keeps on them."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -154,3 +156,51 @@ def test_a_table_around_the_board_is_table_not_blocks(
         assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001
         assert nearest.colour == block.colour
     assert any(r.reason == "table" for r in rejected)
+
+
+# --------------------------------------------------------------------------- the time budget
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=st.integers(0, 10_000))
+def test_the_budget_is_read_before_every_hough_transform_and_every_fit(seed: int) -> None:
+    """A large region costs many Hough transforms and fits (a real photograph's took
+    seconds between two readings of the clock): the budget is read before each, so
+    ``--timeout`` stops perception within one fit of its limit."""
+    import demoplan.perception.blocks as blocks_module
+    from demoplan.budget import check_time as real_check
+    from demoplan.perception.hough import hough_squares as real_hough
+
+    events: list[str] = []
+    real_fit = blocks_module._fit
+
+    def check(where: str = "") -> None:
+        events.append("check")
+        real_check(where)
+
+    def hough(*args: Any, **kwargs: Any) -> Any:
+        events.append("hough")
+        return real_hough(*args, **kwargs)
+
+    def fit(*args: Any, **kwargs: Any) -> Any:
+        events.append("fit")
+        return real_fit(*args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as patched:
+        patched.setattr(blocks_module, "check_time", check)
+        patched.setattr(blocks_module, "hough_squares", hough)
+        patched.setattr(blocks_module, "_fit", fit)
+        truth, image = _board_in_a_table(seed, "wood", (0, 0, 0, 0), grid=False)
+        # a disc (no square: every candidate is tried) beside the blocks
+        rows, cols = np.ogrid[:480, :640]
+        disc = (rows - 60) ** 2 + (cols - 590) ** 2 < 30**2
+        image[disc] = (40, 150, 60)
+        found = detect_blocks(image, CAMERA)
+    assert len(found) == len(truth)
+    assert events.count("hough") >= len(truth) + 1
+    for before, event in itertools.pairwise(events):
+        if event == "hough":
+            assert before == "check"
+    # a candidate's fits (a coarse one and its refinement at most) follow a reading
+    runs = "".join("f" if e == "fit" else "." for e in events).split(".")
+    assert max(map(len, runs)) <= 2

@@ -61,6 +61,8 @@ class PerceptionSettings:
     """Colours added to the palette (:func:`~demoplan.perception.colours.load_palette`)."""
 
 
+TIMES = "\u00d7"  # the multiplication sign
+
 HOUGH_SIDE_PX = 20.0
 """The Hough transform runs on the masks shrunk by a whole factor so that the
 smallest block's side is at least this many pixels (and under twice it); the
@@ -342,7 +344,14 @@ def detect_blocks(
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
-        check_time()  # a budget set by the caller (demoplan.budget), if any
+        # a budget set by the caller (demoplan.budget), if any, read before every
+        # Hough transform and fit: one large region costs many of them
+        crop_rows, crop_cols = region.alpha.shape
+        where = (
+            f" fitting squares in colour region {done + 1} of {len(regions)} ({region.colour}, "
+            f"{crop_cols} {TIMES} {crop_rows} px; {len(found)} blocks found before it)"
+        )
+        check_time(where)
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
         for attempt in range(8):
@@ -357,7 +366,9 @@ def detect_blocks(
             failures: list[tuple[str, str]] = []
             coarse = _shrink(alpha, factor)
             sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
+            check_time(where)
             for start in hough_squares(coarse, sides):
+                check_time(where)
                 if factor == 1:
                     params, coverage, rms, free = _fit(alpha, start)
                 else:  # a rough fit where the Hough transform ran, refined at full resolution
