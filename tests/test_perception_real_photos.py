@@ -204,3 +204,40 @@ def test_the_budget_is_read_before_every_hough_transform_and_every_fit(seed: int
     # a candidate's fits (a coarse one and its refinement at most) follow a reading
     runs = "".join("f" if e == "fit" else "." for e in events).split(".")
     assert max(map(len, runs)) <= 2
+
+
+# --------------------------------------------------------------------------- the image's border
+
+
+@settings(max_examples=10, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    edge=st.sampled_from(("left", "right", "top", "bottom")),
+    cut=st.floats(0.1, 0.45),
+    along=st.floats(0.2, 0.8),
+)
+def test_a_block_cut_by_the_border_is_not_reported(
+    seed: int, edge: str, cut: float, along: float
+) -> None:
+    """What the image shows of a block the border cuts (a phone photo's edge
+    through a cube, through a strip of ruled table) is not a block: its size and
+    centre are not seen. The blocks inside are found as without it."""
+    rng = np.random.default_rng(seed)
+    inner = Camera(1000.0, (0.1, 0.1))
+    truth = random_blocks(int(rng.integers(1, 4)), inner, 300, 200, rng, colours=("red", "blue"))
+    side = float(rng.uniform(0.03, 0.05))
+    reach = (0.5 - cut) * side  # the centre this far outside the border
+    x, y = {
+        "left": (-reach, along * 0.4),
+        "right": (0.5 + reach, along * 0.4),
+        "bottom": (along * 0.5, -reach),
+        "top": (along * 0.5, 0.4 + reach),
+    }[edge]
+    cut_block = SyntheticBlock("yellow", x, y, 0.0, side)
+    image = render_blocks([*truth, cut_block], CAMERA, noise=2.0, rng=rng)
+    rejected: list[Rejection] = []
+    found = detect_blocks(image, CAMERA, PerceptionSettings(), rejected)
+    assert sorted(f.colour for f in found) == sorted(b.colour for b in truth)
+    for block in truth:
+        nearest = min(found, key=lambda f: math.dist((f.x, f.y), (block.x, block.y)))
+        assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001

@@ -89,8 +89,9 @@ class Rejection:
     """A coloured region (or part of one) the detector found to be no block, and
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
-    face``, ``no square``, ``too large``, ``not filled``, ``not square``, ``no
-    free sides``; ``covered`` from the tracker), ``detail`` the measure behind
+    face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
+    square``, ``no free sides``, ``cut by the border``; ``covered`` from the
+    tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -108,6 +109,7 @@ def _failure(
     side_px: tuple[float, float],
     settings: PerceptionSettings,
     px_per_m: float,
+    beyond: float = 0.0,
 ) -> tuple[str, str] | None:
     """Why a fitted square is no block (the acceptance of :func:`detect_blocks`,
     checked in its order), or ``None``: it is one."""
@@ -123,7 +125,32 @@ def _failure(
         return "not square", f"misfit {rms:.2f}"
     if free < settings.min_free_outline:
         return "no free sides", f"{free:.0%} of the outline on table"
+    if beyond > MAX_BEYOND_PX:
+        return "cut by the border", f"{beyond:.0f} px of the square beyond the image"
     return None
+
+
+MAX_BEYOND_PX = 0.5
+"""A fitted square reaching further than this (px) past the image's border is no
+block: what the image shows of it is a part of whatever is there (a block or a
+strip of table cut by the border), its size and centre not seen."""
+
+
+def _beyond_image(
+    params: np.ndarray, offset: tuple[int, int], crop: tuple[int, ...], image: tuple[int, ...]
+) -> float:
+    """How far (px) the square ``params`` (on a crop of ``crop`` rows × columns at
+    ``offset`` in an image of ``image`` rows × columns) reaches past the image's
+    border: 0 when it lies inside."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    corners_u = [u + side / 2 * (c * a - s * b) for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    corners_v = [v + side / 2 * (s * a + c * b) for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    xs = [col0 + cu for cu in corners_u]  # image x (right) of the corners
+    ys = [row0 + crop[0] - cv for cv in corners_v]  # image y (down)
+    height, width = image[0], image[1]
+    return max(0.0, -min(xs), max(xs) - width, -min(ys), max(ys) - height)
 
 
 def _unfit(
@@ -381,16 +408,20 @@ def detect_blocks(
                         start.votes,
                     )
                     params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
+                beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
                 if (
                     side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
                     and coverage >= settings.min_coverage
                     and rms <= settings.max_residual
                     and free >= settings.min_free_outline
+                    and beyond <= MAX_BEYOND_PX
                 ):
                     accepted = params, coverage, rms
                     break
                 if parts is not None:
-                    why = _failure(params, coverage, rms, free, side_px, settings, camera.px_per_m)
+                    why = _failure(
+                        params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
+                    )
                     failures += [why] if why else []
             if accepted is None:
                 if parts is not None:

@@ -102,7 +102,7 @@ class ColourRegion:
 @dataclass(frozen=True, slots=True)
 class RejectedPart:
     """A foreground part that is no block, and why: ``reason`` a short phrase
-    (``too small``, ``thin or faint``, ``no block colour``, ``side face``),
+    (``too small``, ``thin or faint``, ``no block colour``, ``side face``, ``table``),
     ``detail`` the measure behind it, ``outlines`` the outlines of its pieces in
     image pixels (x right, y down, pixel centres at whole numbers), each N × 2."""
 
