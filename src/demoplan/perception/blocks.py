@@ -125,32 +125,41 @@ def _failure(
         return "not square", f"misfit {rms:.2f}"
     if free < settings.min_free_outline:
         return "no free sides", f"{free:.0%} of the outline on table"
-    if beyond > MAX_BEYOND_PX:
-        return "cut by the border", f"{beyond:.0f} px of the square beyond the image"
+    if beyond > MAX_BEYOND_SHARE:
+        return "cut by the border", f"{beyond:.0%} of the square beyond the image"
     return None
 
 
-MAX_BEYOND_PX = 0.5
-"""A fitted square reaching further than this (px) past the image's border is no
-block: what the image shows of it is a part of whatever is there (a block or a
-strip of table cut by the border), its size and centre not seen."""
+MAX_BEYOND_SHARE = 0.1
+"""A fitted square with more than this share of its area past the image's border
+is no block: a clipped corner (a few per cent) leaves two whole sides and the
+square's size and centre in view; a tenth means a side's worth is gone, and what
+the image shows is a part of whatever is there (a block, a strip of table ruled
+into squares, cut by the border) — the fit then runs off the image unchecked."""
+
+_SAMPLES = (np.arange(32) + 0.5) / 32 - 0.5
+"""Points across a square (as fractions of its side) that measure its share beyond the image."""
 
 
 def _beyond_image(
     params: np.ndarray, offset: tuple[int, int], crop: tuple[int, ...], image: tuple[int, ...]
 ) -> float:
-    """How far (px) the square ``params`` (on a crop of ``crop`` rows × columns at
-    ``offset`` in an image of ``image`` rows × columns) reaches past the image's
-    border: 0 when it lies inside."""
+    """The share of the square ``params`` (on a crop of ``crop`` rows × columns at
+    ``offset`` in an image of ``image`` rows × columns) that lies past the image's
+    border (0 when it lies inside), from 32 × 32 points over it."""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     row0, col0 = offset
-    corners_u = [u + side / 2 * (c * a - s * b) for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
-    corners_v = [v + side / 2 * (s * a + c * b) for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
-    xs = [col0 + cu for cu in corners_u]  # image x (right) of the corners
-    ys = [row0 + crop[0] - cv for cv in corners_v]  # image y (down)
     height, width = image[0], image[1]
-    return max(0.0, -min(xs), max(xs) - width, -min(ys), max(ys) - height)
+    reach = abs(side) * math.sqrt(0.5)
+    x, y = col0 + u, row0 + crop[0] - v  # image x (right), y (down) of the centre
+    if reach <= min(x, y, width - x, height - y):
+        return 0.0
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = x + c * along - s * across
+    ys = y - (s * along + c * across)
+    outside = (xs < 0) | (xs > width) | (ys < 0) | (ys > height)
+    return float(outside.mean())
 
 
 def _unfit(
@@ -414,7 +423,7 @@ def detect_blocks(
                     and coverage >= settings.min_coverage
                     and rms <= settings.max_residual
                     and free >= settings.min_free_outline
-                    and beyond <= MAX_BEYOND_PX
+                    and beyond <= MAX_BEYOND_SHARE
                 ):
                     accepted = params, coverage, rms
                     break
