@@ -126,16 +126,19 @@ def _failure(
     if free < settings.min_free_outline:
         return "no free sides", f"{free:.0%} of the outline on table"
     if beyond > MAX_BEYOND_SHARE:
-        return "cut by the border", f"{beyond:.0%} of the square beyond the image"
+        return "cut by the border", (
+            "its centre beyond the image" if beyond >= 1 else f"{beyond:.0%} of it beyond the image"
+        )
     return None
 
 
-MAX_BEYOND_SHARE = 0.1
-"""A fitted square with more than this share of its area past the image's border
-is no block: a clipped corner (a few per cent) leaves two whole sides and the
-square's size and centre in view; a tenth means a side's worth is gone, and what
-the image shows is a part of whatever is there (a block, a strip of table ruled
-into squares, cut by the border) — the fit then runs off the image unchecked."""
+MAX_BEYOND_SHARE = 0.5
+"""A fitted square whose centre lies past the image's border (more than half of it
+beyond, for a square along the border) is no block: what the image shows is a
+part of whatever is there (a block, a strip of table ruled into squares, cut by
+the border), its size and centre not seen — and the fit, run off the image, has
+nothing there to check it. A block cut less (a clipped corner, a side) keeps its
+centre in view and is fitted from what shows."""
 
 _SAMPLES = (np.arange(32) + 0.5) / 32 - 0.5
 """Points across a square (as fractions of its side) that measure its share beyond the image."""
@@ -146,7 +149,8 @@ def _beyond_image(
 ) -> float:
     """The share of the square ``params`` (on a crop of ``crop`` rows × columns at
     ``offset`` in an image of ``image`` rows × columns) that lies past the image's
-    border (0 when it lies inside), from 32 × 32 points over it."""
+    border (0 when it lies inside), from 32 × 32 points over it; 1 when its centre
+    does."""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     row0, col0 = offset
@@ -155,6 +159,8 @@ def _beyond_image(
     x, y = col0 + u, row0 + crop[0] - v  # image x (right), y (down) of the centre
     if reach <= min(x, y, width - x, height - y):
         return 0.0
+    if not (0 <= x <= width and 0 <= y <= height):
+        return 1.0  # the centre is out of view (more than half, along a border)
     along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
     xs = x + c * along - s * across
     ys = y - (s * along + c * across)
