@@ -61,6 +61,8 @@ class PerceptionSettings:
     """Colours added to the palette (:func:`~demoplan.perception.colours.load_palette`)."""
 
 
+TIMES = "\u00d7"  # the multiplication sign
+
 HOUGH_SIDE_PX = 20.0
 """The Hough transform runs on the masks shrunk by a whole factor so that the
 smallest block's side is at least this many pixels (and under twice it); the
@@ -87,8 +89,9 @@ class Rejection:
     """A coloured region (or part of one) the detector found to be no block, and
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
-    face``, ``no square``, ``too large``, ``not filled``, ``not square``, ``no
-    free sides``; ``covered`` from the tracker), ``detail`` the measure behind
+    face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
+    square``, ``no free sides``, ``cut by the border``; ``covered`` from the
+    tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -106,6 +109,7 @@ def _failure(
     side_px: tuple[float, float],
     settings: PerceptionSettings,
     px_per_m: float,
+    beyond: float = 0.0,
 ) -> tuple[str, str] | None:
     """Why a fitted square is no block (the acceptance of :func:`detect_blocks`,
     checked in its order), or ``None``: it is one."""
@@ -121,7 +125,47 @@ def _failure(
         return "not square", f"misfit {rms:.2f}"
     if free < settings.min_free_outline:
         return "no free sides", f"{free:.0%} of the outline on table"
+    if beyond > MAX_BEYOND_SHARE:
+        return "cut by the border", (
+            "its centre beyond the image" if beyond >= 1 else f"{beyond:.0%} of it beyond the image"
+        )
     return None
+
+
+MAX_BEYOND_SHARE = 0.5
+"""A fitted square whose centre lies past the image's border (more than half of it
+beyond, for a square along the border) is no block: what the image shows is a
+part of whatever is there (a block, a strip of table ruled into squares, cut by
+the border), its size and centre not seen — and the fit, run off the image, has
+nothing there to check it. A block cut less (a clipped corner, a side) keeps its
+centre in view and is fitted from what shows."""
+
+_SAMPLES = (np.arange(32) + 0.5) / 32 - 0.5
+"""Points across a square (as fractions of its side) that measure its share beyond the image."""
+
+
+def _beyond_image(
+    params: np.ndarray, offset: tuple[int, int], crop: tuple[int, ...], image: tuple[int, ...]
+) -> float:
+    """The share of the square ``params`` (on a crop of ``crop`` rows × columns at
+    ``offset`` in an image of ``image`` rows × columns) that lies past the image's
+    border (0 when it lies inside), from 32 × 32 points over it; 1 when its centre
+    does."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    height, width = image[0], image[1]
+    reach = abs(side) * math.sqrt(0.5)
+    x, y = col0 + u, row0 + crop[0] - v  # image x (right), y (down) of the centre
+    if reach <= min(x, y, width - x, height - y):
+        return 0.0
+    if not (0 <= x <= width and 0 <= y <= height):
+        return 1.0  # the centre is out of view (more than half, along a border)
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = x + c * along - s * across
+    ys = y - (s * along + c * across)
+    outside = (xs < 0) | (xs > width) | (ys < 0) | (ys > height)
+    return float(outside.mean())
 
 
 def _unfit(
@@ -331,12 +375,25 @@ def detect_blocks(
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
     parts: list[RejectedPart] | None = None if rejected is None else []
-    regions, _ = colour_regions(image, min_area=min_area, palette=settings.colours, rejected=parts)
+    regions, _ = colour_regions(
+        image,
+        min_area=min_area,
+        palette=settings.colours,
+        rejected=parts,
+        largest_block=side_px[1] ** 2,
+    )
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
-        check_time()  # a budget set by the caller (demoplan.budget), if any
+        # a budget set by the caller (demoplan.budget), if any, read before every
+        # Hough transform and fit: one large region costs many of them
+        crop_rows, crop_cols = region.alpha.shape
+        where = (
+            f" fitting squares in colour region {done + 1} of {len(regions)} ({region.colour}, "
+            f"{crop_cols} {TIMES} {crop_rows} px; {len(found)} blocks found before it)"
+        )
+        check_time(where)
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
         for attempt in range(8):
@@ -351,7 +408,9 @@ def detect_blocks(
             failures: list[tuple[str, str]] = []
             coarse = _shrink(alpha, factor)
             sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
+            check_time(where)
             for start in hough_squares(coarse, sides):
+                check_time(where)
                 if factor == 1:
                     params, coverage, rms, free = _fit(alpha, start)
                 else:  # a rough fit where the Hough transform ran, refined at full resolution
@@ -364,16 +423,20 @@ def detect_blocks(
                         start.votes,
                     )
                     params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
+                beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
                 if (
                     side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
                     and coverage >= settings.min_coverage
                     and rms <= settings.max_residual
                     and free >= settings.min_free_outline
+                    and beyond <= MAX_BEYOND_SHARE
                 ):
                     accepted = params, coverage, rms
                     break
                 if parts is not None:
-                    why = _failure(params, coverage, rms, free, side_px, settings, camera.px_per_m)
+                    why = _failure(
+                        params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
+                    )
                     failures += [why] if why else []
             if accepted is None:
                 if parts is not None:

@@ -60,6 +60,12 @@ MIN_LIGHTNESS_CONTRAST = 12.0
 """Foreground in an image without colour: CIELAB L* difference from the table."""
 SIDE_FACE_GAP = 12.0
 """L* between a class's two lightness modes for the darker one to be side faces."""
+TABLE_BLOCKS = 8.0
+"""A foreground region that touches the image's border, covers more than this many
+of the largest blocks' areas and is mostly of one colour is a second table (the
+floor or a table around a board, the board being the image's median colour): no
+group of blocks is that large and of one colour; its pixels of that colour are
+table too."""
 MAX_PALETTE_COLOURS = 64
 """Colours a palette file may add: a camera tells a few dozen apart at best."""
 _SPECIAL = {-2: "black", -3: "grey", -4: "block"}
@@ -96,7 +102,7 @@ class ColourRegion:
 @dataclass(frozen=True, slots=True)
 class RejectedPart:
     """A foreground part that is no block, and why: ``reason`` a short phrase
-    (``too small``, ``thin or faint``, ``no block colour``, ``side face``),
+    (``too small``, ``thin or faint``, ``no block colour``, ``side face``, ``table``),
     ``detail`` the measure behind it, ``outlines`` the outlines of its pieces in
     image pixels (x right, y down, pixel centres at whole numbers), each N × 2."""
 
@@ -294,26 +300,73 @@ def foreground(image: np.ndarray) -> np.ndarray:
     return np.asarray(opened, dtype=bool)
 
 
+def _second_tables(
+    distinct: np.ndarray,
+    lab: np.ndarray,
+    threshold: float,
+    largest_block: float,
+    record: _Recorder,
+) -> bool:
+    """Lowers ``distinct`` (in place) to the a*b* distance from a second table's
+    colour over every region of :data:`TABLE_BLOCKS`' kind (a large, one-coloured
+    region at the border); whether there was one."""
+    foreground = (distinct > threshold / 2).astype(np.uint8)
+    # joined over thin dark lines (a table ruled into squares, a plank's seams):
+    # closed by a 7 × 7 square first
+    joined = cv2.morphologyEx(foreground, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
+    height, width = labels.shape
+    found = False
+    for index in range(1, count):
+        x, y, w, h, area = (int(value) for value in stats[index])
+        at_border = x == 0 or y == 0 or x + w == width or y + h == height
+        if not at_border or area <= TABLE_BLOCKS * largest_block:
+            continue
+        rows, cols = slice(y, y + h), slice(x, x + w)
+        member = (labels[rows, cols] == index) & (foreground[rows, cols] > 0)
+        area = int(member.sum())
+        if area <= TABLE_BLOCKS * largest_block:
+            continue
+        chroma = lab[rows, cols, 1:][member]
+        colour = np.median(chroma[:: max(1, chroma.shape[0] // 20000)], axis=0)
+        distance = np.hypot(*(lab[rows, cols, 1:] - colour).transpose(2, 0, 1))
+        near = member & (distance <= threshold)
+        if near.sum() < 0.5 * area:  # of many colours: not a table
+            continue
+        found = True
+        a, b = (float(c) for c in colour)
+        why = f"a*b* ({a:.0f}, {b:.0f}) over {area / largest_block:.0f} largest blocks' area"
+        record(near, rows, cols, "table", why)
+        crop = distinct[rows, cols]
+        crop[member] = np.minimum(crop[member], distance[member])
+    return found
+
+
 def colour_regions(
     image: np.ndarray,
     *,
     min_area: float,
     palette: Palette | None = None,
     rejected: list[RejectedPart] | None = None,
+    largest_block: float | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
-    when given, gets the parts dropped on the way, each with why."""
+    when given, gets the parts dropped on the way, each with why. With
+    ``largest_block`` (the largest block's area, px²) a second table around the
+    first (:data:`TABLE_BLOCKS`) is table too."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
     distinct, lab, threshold, coloured_image = _distinctness(image)
     lightness = lab[..., 0]
+    record = _Recorder(rejected, min_area)
+    if largest_block is not None and coloured_image:
+        _second_tables(distinct, lab, threshold, largest_block, record)
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
     names, chroma = _palette(palette)
-    record = _Recorder(rejected, min_area)
     regions: list[ColourRegion] = []
     height, width = labels.shape
     areas = stats[1:count, cv2.CC_STAT_AREA]
