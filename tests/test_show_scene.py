@@ -115,7 +115,8 @@ def test_a_file_of_neither_kind_is_one_line_naming_both(tmp_path: Path) -> None:
     code, _, err = invoke("show", other)
     assert code == 1
     assert err.count("\n") == 1
-    assert "'demoplan/model-1' or 'demoplan/scene-1'" in err and "format" in err
+    expected = "'demoplan/model-1' or 'demoplan/objects-1' or 'demoplan/scene-1'"
+    assert expected in err and "format" in err
 
 
 def test_sizes_the_scene_omits_come_from_the_model(tmp_path: Path) -> None:
@@ -130,3 +131,26 @@ def test_sizes_the_scene_omits_come_from_the_model(tmp_path: Path) -> None:
     code, out, err = invoke("show", path, "--model", model, "--json")
     assert code == 0, err
     assert json.loads(out)["objects"]["red"]["size"] == [BLOCK, BLOCK, BLOCK]
+
+
+def test_an_object_on_a_landmark_stands_on_it_and_the_landmark_shows_its_turn_and_size(
+    tmp_path: Path,
+) -> None:
+    """A sandwich on the lunch box's top stands on the box, not on the table;
+    the box is shown turned, with its shape (docs/tutorial.md: show tells what
+    each object stands on)."""
+    box = {"position": [0.35, 0.25, 0], "yaw": 30, "shape": "box", "size": [0.26, 0.18, 0.02]}
+    scene = {
+        "format": "demoplan/scene-1",
+        "objects": {
+            "sandwich": {"position": [0.35, 0.25, 0.02], "size": [0.1, 0.1, 0.03]},
+            "apple": {"position": [0.1, -0.3, 0], "size": [0.07, 0.07, 0.07]},
+        },
+        "landmarks": {"lunchbox": box},
+    }
+    stands = {o.name: o.on for o in preview_scene(scene_from_document(scene, "s.json")).objects}
+    assert stands == {"sandwich": ("lunchbox",), "apple": ()}
+    code, out, _ = invoke("show", write(tmp_path / "s.json", scene))
+    assert code == 0
+    assert "Landmark lunchbox at (0.35, 0.25, 0.00), turned 30°, box 0.26 × 0.18 × 0.02" in out
+    assert any("sandwich" in line and "lunchbox" in line for line in out.splitlines())

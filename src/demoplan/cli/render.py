@@ -192,8 +192,15 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
             plain_text(grasps),
         )
     stdout.print(table)
-    for name, position in preview.landmarks:
-        say(f"Landmark {name} at {xyz_text(position, decimals)}")
+    for landmark in preview.landmarks:
+        shape = landmark.geometry
+        size = "" if shape is None else f", {shape.shape} " + " × ".join(
+            f"{v:g}" for v in shape.size
+        )
+        say(
+            f"Landmark {landmark.name} at {xyz_text(landmark.position, decimals)}, "
+            f"turned {landmark.yaw:.0f}°{size}"
+        )
     where = (
         "generated near the objects (the scene lists none; plan generates its own "
         "near each goal's targets)"

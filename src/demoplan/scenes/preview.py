@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from demoplan.model import ObjectGeometry, Vector3
+from demoplan.model import ObjectGeometry, Pose, Vector3, footprint
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, yaw_of
@@ -42,12 +42,23 @@ class ObjectPreview:
     yaw: float
     location: str
     grasps: tuple[GraspPreview, ...]
-    on: tuple[str, ...]  # the objects it stands on (empty: on the table)
+    on: tuple[str, ...]  # the objects or the landmark it stands on (empty: on the table)
 
     @property
     def graspable(self) -> bool:
         """Some grasp is free and nothing stands on it."""
         return any(not g.blocked_by for g in self.grasps)
+
+
+@dataclass(frozen=True, slots=True)
+class LandmarkPreview:
+    """A landmark as the scene places it: where, turned how far, and its shape
+    where the scene knows it."""
+
+    name: str
+    position: Vector3
+    yaw: float
+    geometry: ObjectGeometry | None
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,7 +68,7 @@ class ScenePreview:
 
     source: str
     objects: tuple[ObjectPreview, ...]
-    landmarks: tuple[tuple[str, Vector3], ...]
+    landmarks: tuple[LandmarkPreview, ...]
     freespace: tuple[Vector3, ...]
     freespace_generated: bool
     table: tuple[tuple[float, float], tuple[float, float]] | None
@@ -87,7 +98,7 @@ class ScenePreview:
                 }
                 for o in self.objects
             },
-            "landmarks": {name: list(position) for name, position in self.landmarks},
+            "landmarks": {lm.name: list(lm.position) for lm in self.landmarks},
             "freespace": [list(spot) for spot in self.freespace],
             "freespace_generated": self.freespace_generated,
             "table": None if self.table is None else [list(corner) for corner in self.table],
@@ -117,6 +128,8 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
         assert obj.geometry is not None  # build_problem refused it otherwise
         here = at[obj.name]
         resting_on = tuple(sorted(standing[b] for b in below.get(here, ()) if b in standing))
+        if not resting_on:
+            resting_on = _landmark_under(obj.name, obj.geometry, obj.pose, scene, settings)
         on_top = [standing[u] for u, lows in below.items() if here in lows and u in standing]
         grasps = tuple(
             GraspPreview(
@@ -143,7 +156,10 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
     return ScenePreview(
         scene.source,
         tuple(objects),
-        tuple((name, pose.position) for name, pose in scene.landmarks),
+        tuple(
+            LandmarkPreview(name, pose.position, yaw_of(pose), shape)
+            for name, pose, shape in landmarks_of(scene)
+        ),
         spots,
         scene.freespace is None,
         scene.table if room is None else room.table,
@@ -152,3 +168,22 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
         () if room is None else tuple(name for name, _ in room.no_room),
         None if room is None else room.shortage(),
     )
+
+
+def _landmark_under(
+    name: str, geometry: ObjectGeometry, pose: Pose, scene: Scene, settings: GeometrySettings
+) -> tuple[str, ...]:
+    """The landmark whose top holds up object ``name`` (standing at its level
+    over at least ``support_fraction`` of the object's footprint, as the
+    planner's support rule has it): ``()`` where none does (on the table)."""
+    bottom = pose.position[2]
+    if bottom <= settings.level_tolerance:
+        return ()
+    outline = footprint(geometry, pose.position, yaw_of(pose))
+    for landmark, at, shape in landmarks_of(scene):
+        if shape is None or abs(at.position[2] + shape.size[2] - bottom) > settings.level_tolerance:
+            continue
+        top = footprint(shape, at.position, yaw_of(at))
+        if outline.intersection(top).area >= settings.support_fraction * outline.area:
+            return (landmark,)
+    return ()
