@@ -52,6 +52,29 @@ def studio_server(workdir: Path) -> Iterator[str]:
         thread.join(timeout=30)
 
 
+@contextmanager
+def studio_page(workdir: Path, artifacts: Path) -> Iterator[Studio]:
+    """A studio on ``workdir`` served in a thread and opened in one chromium tab,
+    ready (``body[data-ready]``); the page may log no error while it is used."""
+    executable = chromium()
+    from playwright.sync_api import sync_playwright
+
+    with studio_server(workdir) as url, sync_playwright() as playwright:
+        launched = playwright.chromium.launch(
+            executable_path=executable, args=browser.CHROMIUM_ARGS
+        )
+        try:
+            tab = launched.new_page(viewport=VIEWPORT)
+            page = Studio(tab, artifacts)
+            tab.goto(url)
+            tab.wait_for_selector('body[data-ready="true"]')
+            page.settle()
+            yield page
+            assert page.errors == []
+        finally:
+            launched.close()
+
+
 class Studio:
     """One browser tab on the studio, driven as a person would: by dragging."""
 

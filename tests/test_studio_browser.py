@@ -27,14 +27,11 @@ from demoplan.execution.faults import Faults
 from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
-from tests.browser import CHROMIUM_ARGS
 from tests.studio_browser import (
     ROOT,
-    VIEWPORT,
     Studio,
-    chromium,
     scene_of_initial,
-    studio_server,
+    studio_page,
     write_json,
 )
 from tests.table_for_two import SWAPS, expected_rows, seating_from, table_for_two
@@ -48,25 +45,12 @@ FIG4 = ROOT / "examples" / "scenes" / "pyramid-fig4.json"
 
 @pytest.fixture
 def studio(tmp_path: Path) -> Iterator[tuple[Studio, Path]]:
-    executable = chromium()
-    from playwright.sync_api import sync_playwright
-
     workdir = tmp_path / "work"
     workdir.mkdir()
     artifacts = tmp_path / "artifacts"
     artifacts.mkdir()
-    with studio_server(workdir) as url, sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-        try:
-            tab = browser.new_page(viewport=VIEWPORT)
-            page = Studio(tab, artifacts)
-            tab.goto(url)
-            tab.wait_for_selector('body[data-ready="true"]')
-            page.settle()
-            yield page, workdir
-            assert page.errors == []
-        finally:
-            browser.close()
+    with studio_page(workdir, artifacts) as page:
+        yield page, workdir
 
 
 def _load(path: Path) -> dict[str, Any]:

@@ -20,8 +20,7 @@ import pytest
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.tables import state_rows
-from tests.browser import CHROMIUM_ARGS
-from tests.studio_browser import VIEWPORT, Studio, chromium, studio_server
+from tests.studio_browser import VIEWPORT, Studio, studio_page
 
 pytestmark = pytest.mark.slow
 
@@ -106,23 +105,10 @@ def move_landmark(page: Studio, name: str, x: float, y: float, yaw: float) -> No
 
 @pytest.fixture
 def lunch(tmp_path: Path) -> Iterator[tuple[Studio, Path]]:
-    executable = chromium()
-    from playwright.sync_api import sync_playwright
-
     workdir = tmp_path / "work"
     workdir.mkdir()
-    with studio_server(workdir) as url, sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-        try:
-            tab = browser.new_page(viewport=VIEWPORT)
-            page = Studio(tab, tmp_path)
-            tab.goto(url)
-            tab.wait_for_selector('body[data-ready="true"]')
-            page.settle()
-            yield page, workdir
-            assert page.errors == []
-        finally:
-            browser.close()
+    with studio_page(workdir, tmp_path) as page:
+        yield page, workdir
 
 
 def make_things(page: Studio) -> None:
