@@ -545,8 +545,9 @@ def test_learn_defaults_give_one_state_per_object_on_set_table(tmp_path: Path) -
     assert 0.003 < precision["position"] < 0.03  # hand-drawn deviations: about a centimetre
 
 
-def test_paper_is_its_three_settings(tmp_path: Path) -> None:
-    """--paper is --significance 0 --position-noise 0.003 --orientation-noise 0.5."""
+def test_paper_is_its_four_settings(tmp_path: Path) -> None:
+    """--paper is --significance 0 --position-noise 0.003 --orientation-noise 0.5
+    --orientation-ties world."""
     paper = invoke("learn", SET_TABLE, "-o", tmp_path / "paper.json", "--paper", "--json")
     spelled = invoke(
         "learn",
@@ -559,6 +560,8 @@ def test_paper_is_its_three_settings(tmp_path: Path) -> None:
         "0.003",
         "--orientation-noise",
         "0.5",
+        "--orientation-ties",
+        "world",
         "--json",
     )
     assert paper.exit_code == 0 and spelled.exit_code == 0, (paper.stderr, spelled.stderr)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -29,6 +30,14 @@ from demoplan.cli.render import (
     print_scene_preview,
 )
 from demoplan.wording import plural
+
+
+class OrientationTies(StrEnum):
+    """What an orientation whose reference the demonstrations cannot tell is
+    taken relative to (``LearningSettings.orientation_follows_position``)."""
+
+    follow = "follow"
+    world = "world"
 
 
 @app.command()
@@ -111,6 +120,15 @@ def learn(
             "(what the shipped examples were drawn for); other options still apply.",
         ),
     ] = False,
+    orientation_ties: Annotated[
+        OrientationTies | None,
+        typer.Option(
+            help="An orientation whose reference the demonstrations cannot tell: "
+            "'follow' its position's reference (default: a thing in a box turns with "
+            "the box) or take the 'world' frame (as the paper, --paper).",
+            show_default=False,
+        ),
+    ] = None,
     position_separation: Annotated[
         float | None,
         typer.Option(
@@ -182,6 +200,9 @@ def learn(
             "max_clusters": max_clusters,
             "significance": significance,
             "min_support": min_support,
+            "orientation_follows_position": None
+            if orientation_ties is None
+            else orientation_ties is OrientationTies.follow,
         }
         result = learn_files(
             demos,
