@@ -111,7 +111,8 @@ def demonstrated_supports(
 ) -> dict[str, tuple[Support, ...]]:
     """Per state id, what its object stood on in every member (objects standing
     there at that moment, landmarks with a size), with the most it hung over;
-    states that stood on the table, or on different things, have none."""
+    states that stood on the table, or on different things, and states placed
+    anywhere (their object stays where it stands), have none."""
     shapes = demonstrated_shapes(model.demonstrations)
     # the world just before each step: (demonstration, step) -> what stands where
     found: dict[tuple[int, int], dict[str, float]] = {}
@@ -131,6 +132,8 @@ def demonstrated_supports(
             standing[step.object] = step.pose
     supports: dict[str, tuple[Support, ...]] = {}
     for state in model.states:
+        if state.position.anywhere:  # it stays where it stands: no support to keep
+            continue
         members = [found.get(member) for member in state.members]
         if not members or any(m is None for m in members):
             continue
