@@ -89,6 +89,22 @@ def test_objects_saved_are_listed_and_read_back_with_colour_mass_and_type(
     assert yaw_of(scene.object("juice").pose) == pytest.approx(30.0)
 
 
+def test_an_objects_file_keeps_lengths_without_the_pages_float_noise(
+    client: TestClient, tmp_path: Path
+) -> None:
+    """The page's arithmetic gives 0.1 + 0.005 = 0.10500000000000001; the file
+    says 0.105 (lengths to the micrometre)."""
+    layout = lunch_layout()
+    layout["poses"]["apple"]["position"] = [0.1 + 0.005, 0.1, 0.0]
+    layout["landmarks"]["lunchbox"]["position"] = [0.3 + 0.03, 0.4, 0.0]
+    assert client.put("/api/objects/lunch.json", json={"layout": layout}).status_code == 200
+    text = (tmp_path / "work" / "lunch.json").read_text()
+    assert "0.10500000000000001" not in text and "0.32999999999999996" not in text
+    document = json.loads(text)
+    assert document["objects"]["apple"]["position"][0] == 0.105
+    assert document["landmarks"]["lunchbox"]["position"][0] == 0.33
+
+
 def test_an_objects_file_is_replaced_only_when_asked_and_only_an_objects_file(
     client: TestClient,
 ) -> None:

@@ -180,20 +180,31 @@ def objects_document(layout: Layout) -> dict[str, Any]:
     objects: dict[str, Any] = {}
     for name, shape in layout.objects.items():
         pose = layout.poses[name]
-        entry: dict[str, Any] = {"shape": shape.shape, "size": shape.size}
-        entry |= {"position": list(pose.xyz), "yaw": pose.yaw}
+        entry: dict[str, Any] = {"shape": shape.shape, "size": _tidy(shape.size)}
+        entry |= {"position": _tidy(pose.xyz), "yaw": round(pose.yaw, 6)}
         extras = {"colour": shape.colour, "mass": shape.mass, "density": shape.density}
         entry |= {k: v for k, v in (extras | {"type": shape.type}).items() if v is not None}
         objects[name] = entry
     landmarks: dict[str, Any] = {}
     for name, mark in layout.landmarks.items():
-        landmarks[name] = {"shape": mark.shape, "position": list(mark.xyz), "yaw": mark.yaw}
+        landmarks[name] = {
+            "shape": mark.shape,
+            "position": _tidy(mark.xyz),
+            "yaw": round(mark.yaw, 6),
+        }
         if mark.size is not None:
-            landmarks[name]["size"] = mark.size
+            landmarks[name]["size"] = _tidy(mark.size)
         if mark.colour is not None:
             landmarks[name]["colour"] = mark.colour
     document: dict[str, Any] = {"format": "demoplan/objects-1", "objects": objects}
     return document | ({"landmarks": landmarks} if landmarks else {})
+
+
+def _tidy(values: Iterable[float] | None) -> list[float] | None:
+    """Lengths as a file shows them: to the micrometre, without the last bits of
+    the page's arithmetic (0.10500000000000001 m is 0.105 m; the page snaps to
+    0.1 mm)."""
+    return None if values is None else [round(float(v), 6) for v in values]
 
 
 def scattered(layout: Layout, seed: int) -> dict[str, Any]:
