@@ -449,11 +449,18 @@ def detect_blocks(
             grown = params.copy()
             grown[3] += 3.0
             alpha = alpha * (1.0 - _square_alpha(grown, uu, vv))
+    if rejected is not None and parts is not None:
+        rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
+    return _named_in_world(found, camera, image.shape[0])
+
+
+def _named_in_world(
+    found: list[tuple[ColourRegion, np.ndarray, float, float]], camera: Camera, height: int
+) -> list[DetectedBlock]:
+    """The squares fitted in their regions' crops (``height``: the image's rows)
+    as blocks on the table, named by colour in the order found."""
     blocks = []
     counts: dict[str, int] = {}
-    height = image.shape[0]
-    if rejected is not None and parts is not None:
-        rejected += [_in_world(part, camera, height) for part in parts]
     for region, params, coverage, rms in found:
         row0, col0 = region.offset
         crop_height = region.alpha.shape[0]
