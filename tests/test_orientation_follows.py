@@ -145,6 +145,21 @@ def test_an_item_kept_square_to_the_world_in_a_turned_box_keeps_its_world_yaw() 
         assert state.notes == ()
 
 
+def lunch_documents() -> list[dict[str, Any]]:
+    """The issue's three lunch box demonstrations as files hold them: the box
+    moved but never turned, the middle three in three orders."""
+    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
+    orders = [
+        ["apple", "juice", "carrot"],
+        ["carrot", "apple", "juice"],
+        ["juice", "carrot", "apple"],
+    ]
+    return [
+        _lunch_demonstration(box, middle, seed=k)
+        for k, (box, middle) in enumerate(zip(boxes, orders, strict=True))
+    ]
+
+
 def _lunch_demonstration(
     box: tuple[float, float], middle: list[str], seed: int
 ) -> dict[str, Any]:
@@ -206,14 +221,7 @@ def test_the_issues_lunch_box_turned_by_30_degrees_is_planned_with_its_contents_
 
     demos = tmp_path / "demos"
     demos.mkdir()
-    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
-    orders = [
-        ["apple", "juice", "carrot"],
-        ["carrot", "apple", "juice"],
-        ["juice", "carrot", "apple"],
-    ]
-    for k, (box, middle) in enumerate(zip(boxes, orders, strict=True)):
-        document = _lunch_demonstration(box, middle, seed=k)
+    for k, document in enumerate(lunch_documents()):
         (demos / f"lunch-{k + 1}.json").write_text(json.dumps(document))
     scene = {
         "format": "demoplan/scene-1",

@@ -36,7 +36,7 @@ from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.helpers import EXAMPLES
-from tests.test_orientation_follows import _lunch_demonstration as lunch_demonstration
+from tests.test_orientation_follows import lunch_documents
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
@@ -333,14 +333,7 @@ def test_learning_says_in_words_what_the_states_table_says(client: TestClient) -
     the words of `learn`'s states table (the same function's), an orientation
     the data could not decide as ``turns with lunchbox: never seen turned``,
     with the state's notes."""
-    boxes = [(0.45, 0.30), (0.55, 0.20), (0.40, 0.15)]
-    orders = [
-        ["apple", "juice", "carrot"],
-        ["carrot", "apple", "juice"],
-        ["juice", "carrot", "apple"],
-    ]
-    for k, (box, middle) in enumerate(zip(boxes, orders, strict=True)):
-        document = lunch_demonstration(box, middle, seed=k)
+    for document in lunch_documents():
         assert client.post("/api/demonstrations", json={"document": document}).status_code == 201
     answer = client.post("/api/learn", json={"files": None, "output": "lunch.json"}).json()
     model = load_model(work(client) / "lunch.json")
