@@ -93,7 +93,8 @@ class LocalOnly:
     """ASGI middleware against other web pages: a request must name an allowed
     host in its ``Host`` header (a page of another site that resolves its own
     name to 127.0.0.1 — DNS rebinding — names its own), a request from a page
-    must come from the studio's origin (``Origin``), and a body must be JSON
+    must come from the studio's origin (``Origin``: its scheme, host and port;
+    not ``null``), and a body must be JSON
     (``Content-Type: application/json``: a form of another page cannot send
     one without the browser asking first). 403 / 415 with one line."""
 
@@ -111,17 +112,24 @@ class LocalOnly:
             await _answer(send, 403, f"Host: {host!r} is not this studio's; {_names(self.hosts)}")
             return
         origin = headers.get(b"origin")
-        if origin is not None and origin != b"null":
+        if origin is not None and not _same_origin(origin, headers.get(b"host", b"")):
             text = origin.decode("latin-1")
-            if _host_name(text.partition("://")[2]) not in self.hosts:
-                await _answer(send, 403, f"Origin: {text!r} is another site's page")
-                return
+            await _answer(send, 403, f"Origin: {text!r} is another site's page")
+            return
         if scope["method"] in {"POST", "PUT", "PATCH"}:
             kind = headers.get(b"content-type", b"").split(b";")[0].strip().lower()
             if kind != b"application/json":
                 await _answer(send, 415, "Content-Type: application/json expected")
                 return
         await self.app(scope, receive, send)
+
+
+def _same_origin(origin: bytes, host: bytes) -> bool:
+    """Is ``origin`` the studio's own page: ``http://`` and the very host and
+    port the request was sent to (``Host``)? Another port of the same machine
+    is another site, and ``null`` (a sandboxed or local file's page) is no site."""
+    scheme, _, authority = origin.decode("latin-1").strip().lower().partition("://")
+    return scheme == "http" and authority == host.decode("latin-1").strip().lower()
 
 
 def _host_name(value: str) -> str:
