@@ -11,6 +11,7 @@ parsers) and a bad one is answered with a 4xx and one line,
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -33,6 +34,7 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError, UsageError
+from demoplan.fileio import os_reason
 from demoplan.studio.jobs import LAST_RUN_FILE, Jobs, TooManyRunsError
 from demoplan.studio.requests import (
     MAX_BODY_BYTES,
@@ -612,10 +614,28 @@ def _add_error_handlers(app: FastAPI) -> None:
     for kind, status in ERROR_STATUS:
         app.add_exception_handler(kind, answered_with(status))
 
+    @app.exception_handler(OSError)
+    async def folder_changed(request: Request, exc: OSError) -> JSONResponse:
+        return detail(503, _folder_trouble(app.state.workfolder.root, exc))
+
     @app.exception_handler(Exception)
     async def internal(request: Request, exc: Exception) -> JSONResponse:
         logging.getLogger(__name__).warning("internal error: %r", exc)
         return detail(500, f"internal error ({type(exc).__name__}); the studio's log says more")
+
+
+def _folder_trouble(root: Path, exc: OSError) -> str:
+    """What happened to the work folder under the studio, in words (the
+    answer's one line where a request could not read or write it)."""
+    if not root.exists():
+        happened = "was removed while the studio runs; make it again or start the studio anew"
+    elif not root.is_dir():
+        happened = "is no longer a folder (something replaced it); start the studio anew"
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS) or not os.access(root, os.W_OK):
+        happened = f"cannot be written ({os_reason(exc)}): was it made read-only?"
+    else:
+        happened = f"cannot be read or written ({os_reason(exc)})"
+    return f"the work folder {root} {happened}"
 
 
 def _add_last_run_route(app: FastAPI, jobs: Jobs) -> None:
