@@ -58,6 +58,9 @@ def plot_segmentation(
     """
     from matplotlib.figure import Figure
 
+    from demoplan.plotting.backend import use_agg
+
+    use_agg()
     traces = segmentation.traces
     settings = segmentation.settings
     rows = max(1, len(traces))
@@ -155,6 +158,9 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     if ax is None:
         from matplotlib.figure import Figure
 
+        from demoplan.plotting.backend import use_agg
+
+        use_agg()
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
     origin = _origin(segmentation)
     colours = assign_colours(trace.object for trace in segmentation.traces)
