@@ -2,7 +2,8 @@
 what the cup carries — a 10 × 10 × 3 cm sandwich of wood (0.18 kg), a
 15 × 10 × 3 cm book of 0.2 kg — which it refused, blaming their weight,
 while the pad's contacts dropped a load of a fifth of a kilogram as the cup
-lifted it."""
+lifted it; and what is too heavy is refused, naming its weight, only when its
+weight is the cause."""
 
 from __future__ import annotations
 
@@ -19,9 +20,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
 pytest.importorskip("mink", reason="mink is not installed (pip install -e '.[sim]')")
 
+from demoplan.execution import arm_model
 from demoplan.execution.arm import (
     TRIAL_MARGIN,
     ArmWorld,
+    _why_not_by_suction,
     carries,
     choose_tool,
 )
@@ -99,6 +102,38 @@ def test_the_cup_keeps_a_box_of_its_capacity_flat_on_its_pad() -> None:
         assert len(pad) == 4  # the pad's four corners
     finally:
         world.close()
+
+
+def test_a_book_too_heavy_for_the_cup_is_refused_naming_its_weight() -> None:
+    """A 15 × 10 × 3 cm book of 0.6 kg: more than the cup's 5 N hold, wider
+    than the fingers open — refused, its weight and the force the trial needed
+    named, and the cup indeed drops it at its own weight."""
+    book = ObjectGeometry("box", (0.15, 0.10, 0.03), 0.6)
+    choice = choose_tool(book)
+    assert choice.tool is None
+    assert choice.why is not None
+    assert choice.why.startswith(
+        "weighs 0.6 kg; the suction cup (5 N) does not lift 1.25 times that (7.4 N)"
+    ), choice.why
+    assert "10.0 cm across its narrowest grasp" in choice.why
+    assert carries(book, Pose((0.42, -0.14, 0.0)), Pose((0.42, 0.14, 0.0)), "suction") == (
+        False,
+        False,
+    )
+
+
+def test_a_cup_that_fails_at_any_weight_is_not_said_to_fail_for_the_weight(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With no suction at all (the cup's force 0 N), the trial loses even a
+    10 g copy of a light box: the refusal says what the cup felt, not the
+    box's weight."""
+    monkeypatch.setattr(arm_model, "SUCTION_FORCE", 0.0)
+    why = _why_not_by_suction(ObjectGeometry("box", (0.08, 0.08, 0.03), 0.05))
+    assert why is not None
+    assert "weighs" not in why, why
+    assert why.startswith("the suction cup cannot carry it in a trial carry, even at 10 g: "), why
+    assert "slipped from the suction cup" in why or "did not seal" in why, why
 
 
 def test_the_lunch_box_task_at_its_default_weights_goes_by_the_arms_tools() -> None:
