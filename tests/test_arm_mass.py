@@ -233,12 +233,12 @@ ACROSS = (_pose(0.35, -30.0, 0.0), _pose(0.45, 25.0, 60.0))
 def _check_agrees_with_the_physics(shape: ObjectGeometry, where: tuple[Pose, Pose]) -> None:
     """Accepted: lifted and carried by the tool chosen to a place the
     check's trials never went. Refused: the same object twice as heavy is
-    carried there by neither the suction cup nor the fingers. The
-    check tries 1.25 times the mass at its own places; near the cup's limit a
-    load's fate depends on the motion (docs/execution.md), so elsewhere a
-    refused object may still go at 1.25 times — found here once: a 0.13 kg
-    tray carried at 0.165 kg between two places, dropped at 0.197 kg — but
-    never at twice: the check is never more cautious than that."""
+    carried there by neither the suction cup nor the fingers. Not at 1.25
+    times, the mass the check tries: its margin covers the half turn behind
+    the base (park), which these carries do not make, so between two places
+    a refused object may still go (the cup carries 0.44 kg there, 0.35 kg
+    through a park; docs/execution.md) — but never at twice: the check is
+    never more cautious than that."""
     pick, place = where
     choice = choose_tool(shape)
     event(f"by the {choice.tool}" if choice.tool else "refused")
