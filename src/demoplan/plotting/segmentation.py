@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from demoplan.plotting.backend import use_agg
 from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.plotting.figures import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
@@ -57,8 +58,6 @@ def plot_segmentation(
     heights' axes.
     """
     from matplotlib.figure import Figure
-
-    from demoplan.plotting.backend import use_agg
 
     use_agg()
     traces = segmentation.traces
@@ -157,8 +156,6 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
 
     if ax is None:
         from matplotlib.figure import Figure
-
-        from demoplan.plotting.backend import use_agg
 
         use_agg()
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
