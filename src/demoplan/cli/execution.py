@@ -394,7 +394,7 @@ def perceive(
                 f"{b.side:.4f}",
             )
         stdout.print(table)
-        stdout.print(f"scale from {found.scale}", markup=False, highlight=False)
+        stdout.print(f"scale from {found.scale}", markup=False, highlight=False, soft_wrap=True)
         if plot is not None:
             stdout.print(plain_text(_rejections_line(found.rejected, plot)), highlight=False)
 
