@@ -382,7 +382,7 @@ def _fit(
     alpha: np.ndarray,
     start: Hypothesis,
     band: float | None = None,
-    turns: tuple[float, ...] = (0.0, 1.5, -1.5),
+    turns: tuple[float, ...] = (0.0,),
     good_enough: float = 0.08,
     tolerance: float = 1e-6,
 ) -> tuple[np.ndarray, float, float, float]:
@@ -392,7 +392,9 @@ def _fit(
     ``band`` (px) only the pixels that far from the starting outline take part
     (inside, a good start's square and the mask agree anyway): a large block
     costs its outline, not its area. Only the part of the crop near the square is
-    looked at (:func:`_window`).
+    looked at (:func:`_window`). ``turns``: angles (deg) added to the start's θ
+    to fit from as well until a fit's RMS is under ``good_enough`` (the best
+    kept); none by default — the blurred squares find θ from a Hough bin away.
 
     A start whose central half (a quarter of its area) the mask covers less than
     :data:`MIN_CORE_COVERAGE` is not fitted: its own measures are returned."""
