@@ -442,17 +442,7 @@ def colour_regions(
                 alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
             alpha = alpha * (nearest == k) * grown
             if len(classes_found) == 1:
-                # a specular highlight: the top face's colour with white added
-                # (every channel at least the top's, brighter than it), enclosed
-                # by the block's clearly coloured pixels (a region may hold patches
-                # of a grey table, faintly tinted, beside a dark or saturated
-                # block); and holes in them smaller than a block (a marker drawn on
-                # the block, a glint's white centre)
-                whiter = (lightness[rows, cols] > top_face) & np.all(
-                    crop >= centre - GLARE_SLACK, axis=-1
-                )
-                enclosed = _fill_holes(core)
-                glare = (whiter & enclosed) | _small_parts(enclosed & ~core, min_area)
+                glare = _highlights(crop, lightness[rows, cols], top_face, centre, core, min_area)
                 alpha[glare] = 1.0
             alpha = _without_strands(alpha, min_area)
             regions.append(
@@ -464,6 +454,27 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _highlights(
+    crop: np.ndarray,
+    lightness: np.ndarray,
+    top_face: float,
+    top_rgb: np.ndarray,
+    core: np.ndarray,
+    min_area: float,
+) -> np.ndarray:
+    """Which pixels of a one-class region's crop (RGB ``crop``, L* ``lightness``)
+    are a specular highlight on its block, so covered by its top face: the top
+    face's colour (``top_rgb``, L* ``top_face``) with white added — every channel
+    at least the top's, brighter than it — enclosed by the block's clearly
+    coloured pixels (``core``; a region may hold patches of a grey table, faintly
+    tinted, beside a dark or saturated block), and holes in those smaller than a
+    block (a marker drawn on the block, a glint's white centre)."""
+    whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
+    enclosed = _fill_holes(core)
+    glare: np.ndarray = (whiter & enclosed) | _small_parts(enclosed & ~core, min_area)
+    return glare
 
 
 def _present_classes(
