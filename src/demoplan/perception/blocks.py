@@ -40,6 +40,7 @@ from demoplan.perception.colours import (
     outlines,
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.seams import image_lightness, seamless_side
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks"]
 
@@ -89,7 +90,7 @@ class Rejection:
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
-    square``, ``no free sides``, ``cut by the border``; ``covered`` from the
+    square``, ``no free sides``, ``cut by the border``, ``no seam``; ``covered`` from the
     tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
@@ -490,6 +491,7 @@ def detect_blocks(
         rejected=parts,
         largest_block=side_px[1] ** 2,
     )
+    lightness = image_lightness(image)
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
@@ -532,20 +534,16 @@ def detect_blocks(
                     )
                     params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
                 beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
-                if (
-                    side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
-                    and coverage >= settings.min_coverage
-                    and rms <= settings.max_residual
-                    and free >= settings.min_free_outline
-                    and beyond <= MAX_BEYOND_SHARE
-                ):
+                why = _failure(
+                    params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
+                )
+                if why is None:
+                    seamless = seamless_side(lightness, alpha, region.offset, params)
+                    why = None if seamless is None else ("no seam", seamless)
+                if why is None:
                     accepted = params, coverage, rms
                     break
-                if parts is not None:
-                    why = _failure(
-                        params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
-                    )
-                    failures += [why] if why else []
+                failures.append(why)
             if accepted is None:
                 if parts is not None:
                     parts += _unfit(alpha, region, failures, min_area)
