@@ -27,14 +27,20 @@ RECORDINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...] | None]] = {
     "NutAssembly": (("NutAssembly", "SawyerNutAssembly"), None),
     "NutAssemblySquare": (("NutAssembly", "SawyerNutAssembly"), ("SquareNut",)),
     "NutAssemblyRound": (("NutAssembly", "SawyerNutAssembly"), ("RoundNut",)),
+    "PickPlaceCan": (("PickPlace", "SawyerPickPlace"), ("Can",)),
+    "PickPlace": (("PickPlace", "SawyerPickPlace"), None),
 }
 
 
 def _keep_only(path: Path, objects: tuple[str, ...]) -> None:
     """Rewrite the demonstration file at ``path`` with only ``objects``."""
     document = json.loads(path.read_text())
-    document["objects"] = {k: v for k, v in document["objects"].items() if k in objects}
-    document["initial"] = {k: v for k, v in document["initial"].items() if k in objects}
+    for part in ("objects", "initial"):  # a mesh object has no "objects" entry
+        kept = {k: v for k, v in document.get(part, {}).items() if k in objects}
+        if kept:
+            document[part] = kept
+        else:
+            document.pop(part, None)
     document["steps"] = [s for s in document["steps"] if s["object"] in objects]
     path.write_text(json.dumps(document))
 

@@ -43,8 +43,9 @@ GRIPPER_STEPS = 12
 DOWN = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 """The grip site's frame pointing down with its fingers along the world's +y
 (columns: the site's x, y, z axes in the world)."""
-WRIST_LIMIT = 2.8
-"""rad: how far the last joint may be sent (its range is ±2.9 rad)."""
+WRIST_LIMIT = 2.6
+"""rad: how far the last joint may be sent (its range is ±2.9 rad; the
+controller turns the arm away when it meets a limit)."""
 
 
 def _wrap(angle: float) -> float:
@@ -92,20 +93,34 @@ class PandaHand:
         x_axis = self.frame[:, 0]
         return math.degrees(math.atan2(x_axis[1], x_axis[0]))
 
-    def finger_yaws_within_reach(self, choices: Sequence[float]) -> list[float]:
+    def finger_yaws_within_reach(
+        self, choices: Sequence[float], at: Sequence[float] | np.ndarray
+    ) -> list[float]:
         """Of the finger directions ``choices`` (deg; each also turned by the
-        hand's half turn), those the wrist reaches, each as the turn from the
-        current direction the wrist takes (the least of the laps it allows)."""
+        hand's half turn), those the wrist reaches with the hand at ``at``
+        (world x, y), each as the least turn from the current direction.
+
+        With the hand pointing down its yaw is the first joint's angle minus
+        the last one's (and a constant): going to ``at`` turns the first joint
+        by the change of the hand's bearing from the robot's base, so the
+        last joint ends at its angle now + that change − the turn."""
         wrist = float(self.env.sim.data.qpos[self.wrist])
         now = self.finger_yaw
+        bearing = self._bearing(at) - self._bearing(self.position)
         reached = []
         for choice in choices:
             for half in (0.0, 180.0):
                 turns = [_wrap(choice + half - now) + lap for lap in (-360.0, 0.0, 360.0)]
-                allowed = [t for t in turns if abs(wrist - math.radians(t)) <= WRIST_LIMIT]
+                allowed = [
+                    t for t in turns if abs(wrist + bearing - math.radians(t)) <= WRIST_LIMIT
+                ]
                 if allowed:
                     reached.append(now + min(allowed, key=abs))
         return reached
+
+    def _bearing(self, point: Sequence[float] | np.ndarray) -> float:
+        """rad: the direction of ``point`` (x, y) from the robot's base."""
+        return math.atan2(point[1] - self.base_position[1], point[0] - self.base_position[0])
 
     # -- moving -------------------------------------------------------------------------
 
@@ -121,24 +136,23 @@ class PandaHand:
 
     def move(self, goal: Sequence[float] | np.ndarray, finger_yaw: float | None = None) -> bool:
         """Move the grip site along a straight line to ``goal`` (world, m),
-        turning the fingers to ``finger_yaw`` (deg; the current one if None);
+        pointing down, the fingers turning to ``finger_yaw`` (deg, the way it
+        says: 270 from 45 turns by +225°, not −135°; the current one if None);
         whether it arrived within :data:`MAX_STEPS`."""
         target = np.asarray(goal, dtype=float)
-        frame = hand_frame(self.finger_yaw if finger_yaw is None else finger_yaw)
         start = self.position
-        start_rotation = Rotation.from_matrix(self.frame)
-        total_turn = Rotation.from_matrix(frame) * start_rotation.inv()
-        angle = float(np.linalg.norm(total_turn.as_rotvec()))
+        first_yaw = self.finger_yaw
+        last_yaw = first_yaw if finger_yaw is None else finger_yaw
         ramp = max(
             1,
             math.ceil(float(np.linalg.norm(target - start)) / STEP_LENGTH),
-            math.ceil(angle / STEP_TURN),
+            math.ceil(math.radians(abs(last_yaw - first_yaw)) / STEP_TURN),
         )
         still = 0
         for k in range(MAX_STEPS):
             t = min(1.0, (k + 1) / ramp)
             waypoint = start + t * (target - start)
-            orientation = Rotation.from_rotvec(t * total_turn.as_rotvec()) * start_rotation
+            orientation = Rotation.from_matrix(hand_frame(first_yaw + t * (last_yaw - first_yaw)))
             before = self.position
             error = waypoint - before
             turn = (orientation * Rotation.from_matrix(self.frame).inv()).as_rotvec()

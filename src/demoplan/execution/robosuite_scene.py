@@ -38,6 +38,7 @@ __all__ = [
     "make_environment",
     "object_pose",
     "scene_objects",
+    "table_centre",
     "table_top",
 ]
 
@@ -62,6 +63,9 @@ INSTALL = "pip install 'demoplan[robosuite]' in an environment of its own (docs/
 OFF_TABLE = 2.0
 """m: an object farther than this from the table's centre is parked out of the
 task (NutAssemblySquare keeps its round nut at (10, 10, 10))."""
+
+BIN_FLOOR = 0.02
+"""m: how far the floor of a PickPlace bin rises above its body (robosuite 1.5)."""
 
 HANDLE_GRASPS = (90.0,)
 """A nut is taken at its handle, the fingers across it (the handle runs along
@@ -116,8 +120,18 @@ def make_environment(name: str, seed: int) -> Any:
 
 
 def table_top(env: Any) -> float:
-    """World z (m) of the table top: demoplan's z = 0."""
-    return float(env.table_offset[2])
+    """World z (m) of the table top: demoplan's z = 0. PickPlace has no table:
+    there, as in its imported recordings, the top of the floor of the bin its
+    objects start in (``bin1``)."""
+    if hasattr(env, "table_offset"):
+        return float(env.table_offset[2])
+    return float(env.bin1_pos[2]) + BIN_FLOOR
+
+
+def table_centre(env: Any) -> np.ndarray:
+    """World (x, y) of the table's centre (PickPlace: of the first bin's)."""
+    centre = env.table_offset if hasattr(env, "table_offset") else env.bin1_pos
+    return np.asarray(centre[:2], dtype=float)
 
 
 @dataclass(frozen=True, slots=True)
@@ -179,15 +193,17 @@ def _geometry(
 
 
 def env_objects(env: Any) -> list[EnvObject]:
-    """The environment's objects on the table (:data:`OFF_TABLE`)."""
+    """The environment's objects on the table (:data:`OFF_TABLE`) that collide."""
     model, data = env.sim.model, env.sim.data
-    centre = np.asarray(env.table_offset[:2], dtype=float)
+    centre = table_centre(env)
     out = []
     for obj in env.model.mujoco_objects:
         body = int(model.body_name2id(obj.root_body))
         if np.linalg.norm(np.asarray(data.body_xpos[body][:2]) - centre) > OFF_TABLE:
             continue
         geoms = _colliding_geoms(model, _subtree(model, body))
+        if not geoms:
+            continue  # a marker (PickPlace's Visual* targets collide with nothing)
         low, high = _bounds(env, body, geoms)
         mass = float(sum(model.body_mass[b] for b in _subtree(model, body)))
         handle_site = obj.important_sites.get("handle")
@@ -222,11 +238,13 @@ def scene_objects(env: Any, objects: list[EnvObject]) -> tuple[SceneObject, ...]
 
 def landmarks(
     env: Any,
-) -> tuple[tuple[tuple[str, Pose], ...], tuple[tuple[str, ObjectGeometry], ...]]:
+) -> tuple[tuple[tuple[str, Pose], ...], tuple[tuple[str, ObjectGeometry], ...], dict[str, float]]:
     """The static top-level bodies that collide (pegs, bins): their poses
-    (bottom centre of their colliding geoms' box, the body's yaw) and sizes."""
+    (bottom centre of their colliding geoms' box, the body's yaw) and the
+    sizes of the solid ones (a bin is hollow: :func:`_hollow`); and every
+    one's top (z, demoplan's frame), which the hand passes above."""
     model, data = env.sim.model, env.sim.data
-    poses, shapes = [], []
+    poses, shapes, tops = [], [], {}
     robot_bodies = {
         b
         for robot in env.robots
@@ -249,5 +267,29 @@ def landmarks(
         yaw = math.atan2(frame[1, 0], frame[0, 0])
         quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
         poses.append((name, Pose((x, y, z - table_top(env)), quat)))
-        shapes.append((name, _geometry(model, geoms, low, high, None)))
-    return tuple(poses), tuple(shapes)
+        tops[name] = z - table_top(env) + float(high[2] - low[2])
+        if not _hollow(env, body, geoms, low, high):
+            shapes.append((name, _geometry(model, geoms, low, high, None)))
+    return tuple(poses), tuple(shapes), tops
+
+
+def _hollow(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether the landmark is a container (a bin: walls round an open middle):
+    none of its geoms' boxes holds the middle of its box at three quarters of
+    its height. A container is a reference only (no size): demoplan's
+    landmarks with a size are solid, and things stand inside a bin."""
+    middle = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
+    middle[2] += 0.75 * (high[2] - low[2])
+    return not any(_inside(env, body, g, middle) for g in geoms)
+
+
+def _inside(env: Any, body: int, geom: int, point: np.ndarray) -> bool:
+    """Whether ``point`` (``body``'s frame) lies in ``geom``'s bounding box."""
+    data, model = env.sim.data, env.sim.model
+    world = (
+        np.asarray(data.body_xpos[body]) + np.asarray(data.body_xmat[body]).reshape(3, 3) @ point
+    )
+    frame = np.asarray(data.geom_xmat[geom]).reshape(3, 3)
+    local = frame.T @ (world - np.asarray(data.geom_xpos[geom]))
+    box = np.asarray(model.geom_aabb[geom])
+    return bool(np.all(np.abs(local - box[:3]) <= box[3:]))

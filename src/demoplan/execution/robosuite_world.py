@@ -28,6 +28,7 @@ from demoplan.execution.robosuite_scene import (
     make_environment,
     object_pose,
     scene_objects,
+    table_centre,
     table_top,
 )
 from demoplan.execution.world import Observation
@@ -64,7 +65,7 @@ class RobosuiteWorld:
         self.hand.open()
         self.hand.hold(SETTLE_STEPS)
         self.objects = {o.name: o for o in env_objects(self.env)}
-        self.landmarks, self.landmark_geometry = landmarks(self.env)
+        self.landmarks, self.landmark_geometry, self.landmark_tops = landmarks(self.env)
         self.held: str | None = None
         self.offset = np.zeros(3)  # the held object's bottom from the grip site, hand frame
         self.turn = 0.0  # its yaw minus the fingers'
@@ -75,14 +76,16 @@ class RobosuiteWorld:
 
     def scene(self, source: str) -> Scene:
         """The environment as a scene (the world a run starts from)."""
-        half = np.asarray(self.env.table_full_size[:2], dtype=float) / 2
-        centre = np.asarray(self.env.table_offset[:2], dtype=float)
-        table = (tuple(float(v) for v in centre - half), tuple(float(v) for v in centre + half))
+        table = None
+        if hasattr(self.env, "table_full_size"):  # PickPlace has none
+            half = np.asarray(self.env.table_full_size[:2], dtype=float) / 2
+            low, high = table_centre(self.env) - half, table_centre(self.env) + half
+            table = ((float(low[0]), float(low[1])), (float(high[0]), float(high[1])))
         return Scene(
             objects=scene_objects(self.env, list(self.objects.values())),
             landmarks=self.landmarks,
             landmark_geometry=self.landmark_geometry,
-            table=(table[0][:2], table[1][:2]),  # type: ignore[arg-type]
+            table=table,
             source=source,
         )
 
@@ -109,7 +112,7 @@ class RobosuiteWorld:
         target = self.objects[obj]
         pose = object_pose(self.env, target)
         point = self._grip_point(target, pose)
-        reached = self.hand.finger_yaws_within_reach([yaw_of(pose) + axis])
+        reached = self.hand.finger_yaws_within_reach([yaw_of(pose) + axis], point)
         if not reached:
             self.motion_failures.append(f"the wrist cannot turn the fingers to grasp {obj}")
             return
@@ -136,12 +139,14 @@ class RobosuiteWorld:
             return
         x, y, z = pose.position
         bottom = np.array([x, y, z + table_top(self.env) + PLACE_ABOVE])
-        placements = [
-            (fingers, bottom - hand_frame(fingers) @ self.offset)
-            for fingers in self.hand.finger_yaws_within_reach(
-                [yaw - self.turn for yaw in self._target_yaws(obj, pose)]
-            )
-        ]
+        placements = []
+        for yaw in self._target_yaws(obj, pose):
+            fingers = yaw - self.turn
+            grip = bottom - hand_frame(fingers) @ self.offset
+            placements += [
+                (reached, bottom - hand_frame(reached) @ self.offset)
+                for reached in self.hand.finger_yaws_within_reach([fingers], grip)
+            ]
         if not placements:
             self.motion_failures.append(f"the wrist cannot turn {obj} to its target")
             return
@@ -175,7 +180,9 @@ class RobosuiteWorld:
         """The landmark whose footprint holds ``pose``'s point (a peg), with its shape."""
         shapes = dict(self.landmark_geometry)
         for name, where in self.landmarks:
-            shape = shapes[name]
+            shape = shapes.get(name)
+            if shape is None:
+                continue  # a bin, not a peg
             dx, dy = (pose.position[k] - where.position[k] for k in (0, 1))
             if math.hypot(dx, dy) <= max(shape.size[:2]) / 2:
                 return where, shape
@@ -240,8 +247,7 @@ class RobosuiteWorld:
             for name, o in self.objects.items()
             if name != carried
         ]
-        shapes = dict(self.landmark_geometry)
-        tops += [pose.position[2] + shapes[name].size[2] for name, pose in self.landmarks]
+        tops += list(self.landmark_tops.values())
         below = 0.0 if carried is None else self._carried_depth()
         return table_top(self.env) + max(tops, default=0.0) + CLEARANCE + below
 
