@@ -112,3 +112,16 @@ def test_the_square_nut_alone(tmp_path: Path) -> None:
     model = _learned("NutAssemblySquare", tmp_path)
     report = run_in_robosuite(model, "robosuite:NutAssemblySquare", seed=0)
     assert report.env_success and report.success
+
+
+@needs_robosuite
+def test_the_can_goes_into_its_bin(tmp_path: Path) -> None:
+    """PickPlaceCan: the bins are hollow landmarks (references); the can's
+    target is learned relative to bin2."""
+    from demoplan.execution.robosuite_run import run_in_robosuite
+
+    report = run_in_robosuite(_learned("PickPlaceCan", tmp_path), "robosuite:PickPlaceCan", seed=0)
+    assert report.env_success and report.success
+    bins = {name for name, _ in report.scene.landmarks}
+    assert bins == {"bin1", "bin2"}
+    assert not report.scene.landmark_geometry  # hollow: no solid box to stand in

@@ -274,13 +274,17 @@ def landmarks(
 
 
 def _hollow(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
-    """Whether the landmark is a container (a bin: walls round an open middle):
-    none of its geoms' boxes holds the middle of its box at three quarters of
-    its height. A container is a reference only (no size): demoplan's
-    landmarks with a size are solid, and things stand inside a bin."""
-    middle = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
-    middle[2] += 0.75 * (high[2] - low[2])
-    return not any(_inside(env, body, g, middle) for g in geoms)
+    """Whether the landmark is a container (a bin: walls round open
+    compartments): at three quarters of its height, the middle of its box or
+    the middle of one of its box's quarters (a bin with dividers) lies in none
+    of its geoms' boxes. A container is a reference only (no size):
+    demoplan's landmarks with a size are solid, and things stand inside a bin."""
+    z = low[2] + 0.75 * (high[2] - low[2])
+    points = [
+        np.array([low[0] + fx * (high[0] - low[0]), low[1] + fy * (high[1] - low[1]), z])
+        for fx, fy in ((0.5, 0.5), (0.25, 0.25), (0.25, 0.75), (0.75, 0.25), (0.75, 0.75))
+    ]
+    return any(not any(_inside(env, body, g, point) for g in geoms) for point in points)
 
 
 def _inside(env: Any, body: int, geom: int, point: np.ndarray) -> bool:
