@@ -108,14 +108,13 @@ def run(
     scene_path: Annotated[
         Path | None,
         typer.Argument(
-            metavar="[SCENE]",
+            metavar="SCENE",
             help="The scene at run time (demoplan/scene-1); none with --sim robosuite:ENV.",
         ),
     ] = None,
     sim: Annotated[
         str,
         typer.Option(
-            metavar="<kinematic|mujoco|arm|robosuite:ENV>",
             help="kinematic (exact, fast), mujoco (physics, a floating gripper), arm "
             "(physics, a 6-DOF Kinova Jaco with a suction cup and two fingers) or robosuite:ENV "
             "(robosuite's environment ENV, e.g. Stack, with its Panda; it judges the run too).",
