@@ -51,13 +51,15 @@ def measure(env: str, seeds: int, folder: Path) -> tuple[int, int, float, float]
     judged = reported = steps = 0
     started = time.perf_counter()
     for seed in range(seeds):
+        began = time.perf_counter()
         report = run_in_robosuite(model, f"robosuite:{env}", seed=seed)
         judged += report.env_success
         reported += report.success
         steps += report.control_steps
         print(
             f"  {env} seed {seed}: env_success {report.env_success}, demoplan "
-            f"{report.demoplan_success}, {report.control_steps} steps, {report.reason}",
+            f"{report.demoplan_success}, {report.control_steps} steps, "
+            f"{time.perf_counter() - began:.1f} s, {report.reason}",
             flush=True,
         )
     return judged, reported, steps / seeds, (time.perf_counter() - started) / seeds
