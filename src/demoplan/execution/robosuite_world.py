@@ -8,9 +8,12 @@ object (a nut at its handle), closes, lifts, and asks robosuite whether both
 finger pads touch it (``env._check_grasp``): if not, the hand opens and the
 executor sees the object still standing. A put-down carries the object at a
 travel height above everything, turns it to the target's yaw (of the turns
-its shape allows, the one the wrist reaches), lowers it 5 mm above its
-target, opens, and retreats upwards: robosuite counts a placement only with
-the gripper away from the object.
+its shape allows, the one the wrist reaches with the grip nearest the
+robot's base), corrects the hand by where the object is seen to hang,
+lowers it towards 5 mm above its target until its support stops it, opens,
+and retreats upwards: robosuite counts a placement only with the gripper
+away from the object. The world acts on what it observes itself: the pose a
+grasp is given (``where``) is not used.
 """
 
 from __future__ import annotations
@@ -51,6 +54,7 @@ reach about 1 cm below it; lower they would press on the table)."""
 FREE_YAW_STEP = 30.0
 """deg: the yaws tried for an object whose turn does not matter (a round nut on its peg)."""
 ALIGN_TRIES = 3
+"""Corrections of the hand over the target, at most."""
 ALIGNED = 0.002
 """m: over its target, the held object is moved until it hangs this close above it."""
 
@@ -223,7 +227,7 @@ class RobosuiteWorld:
             self.motion_failures.append(f"the hand did not reach ({where}) in time")
 
     def _holding(self, obj: str) -> bool:
-        """robosuite's grasp check, and the object off its support."""
+        """robosuite's grasp check: both finger pads touch ``obj``."""
         target = self.objects[obj]
         return self.hand.grasping(target.model)
 
