@@ -319,7 +319,9 @@ def perceive(
     side: Annotated[
         float | None,
         typer.Option(
-            min=1e-4, help="The blocks' side (m), when known: sizes 15 % off it are not blocks."
+            min=1e-4,
+            help="The blocks' side (m), when known: sizes 15 % off it are not blocks. Alone "
+            "(no --px-per-m, --camera, --markers) it gives a straight-down view's scale.",
         ),
     ] = None,
     timeout: Annotated[
@@ -414,6 +416,7 @@ def perceive(
                 f"{b.side:.4f}",
             )
         stdout.print(table)
+        stdout.print(f"scale from {found.scale}", markup=False, highlight=False, soft_wrap=True)
         if plot is not None:
             stdout.print(plain_text(_rejections_line(found.rejected, plot)), highlight=False)
 

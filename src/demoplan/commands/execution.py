@@ -89,6 +89,11 @@ def run(
         raise UsageError("a SCENE is needed (only --sim robosuite:ENV observes its own)")
     if video is not None:
         check_video_path(video)
+        if frames is not None and video.resolve().is_relative_to(frames.resolve()):
+            raise UsageError(
+                f"--video {video} lies in the --frames folder {frames}, which is written whole "
+                "or not at all; a video path outside it expected"
+            )
         refuse_overwriting_inputs(
             video, [Path(p) for p in (model, scene) if isinstance(p, str | Path)]
         )
@@ -167,6 +172,9 @@ class Perceived:
     blocks: dict[str, TrackedBlock]
     document: dict[str, Any]
     rejected: tuple[Rejection, ...] = ()
+    scale: str = ""
+    """Where the scale came from: ``--px-per-m …``, the cube size (``--side``),
+    the camera file or the markers (the scene's ``description`` says it too)."""
 
 
 def perceive(
@@ -197,7 +205,7 @@ def perceive(
     from demoplan.perception.calibration import load_calibration, load_markers
     from demoplan.perception.camera import encode_png
 
-    _check_mapping(px_per_m, origin, camera, markers)
+    _check_mapping(px_per_m, origin, camera, markers, side, one_picture=True)
     inputs = [image, *(p for p in (before, camera, markers, colours) if p)]
     for target in (output, plot):
         if target is not None:
@@ -206,18 +214,21 @@ def perceive(
         raise UsageError("-o and --plot name one file; two files expected")
     options: dict[str, Any] = {"before": before, "side": side, "timeout": timeout}
     options |= {"colours": colours, "overlay": plot is not None}
-    if px_per_m is not None and origin is not None:
-        seen = perceive_top_view(image, px_per_m, origin, **options)
+    if camera is None and markers is None:  # a top view: its scale given, or the cubes'
+        seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
+        scale = seen.scale
     else:
         reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
         seen = perceive_photograph(image, calibration_for(image, reference), **options)
+        scale = f"the camera file {camera}" if camera else f"the markers in the image ({markers})"
     document = scene_document(seen.blocks)
+    document["description"] = f"perceived in {image.name}; scale from {scale}"
     overlay = encode_png(seen.overlay) if seen.overlay is not None else None
     if output is not None:
         write_atomic(output, dump_json(document))
     if plot is not None and overlay is not None:
         write_atomic_bytes(plot, overlay)
-    return Perceived(seen.blocks, document, seen.rejected)
+    return Perceived(seen.blocks, document, seen.rejected, scale)
 
 
 @dataclass(frozen=True, slots=True)
@@ -296,9 +307,13 @@ def _check_mapping(
     origin: tuple[float, float] | None,
     camera: Path | None,
     markers: Path | None,
+    side: float | None = None,
+    *,
+    one_picture: bool = False,
 ) -> None:
     """Exactly one way from pixels to the table: a scale and an origin, a camera
-    file, or a markers file."""
+    file, or a markers file; for ``one_picture`` also ``side`` alone, the cubes'
+    size giving the scale of a top view (its origin ``origin``, or 0 0)."""
     given = [name for name, v in (("--camera", camera), ("--markers", markers)) if v is not None]
     scale_given = px_per_m is not None or origin is not None
     if len(given) > 1 or (given and scale_given):
@@ -306,10 +321,13 @@ def _check_mapping(
             "one of --px-per-m with --origin, --camera or --markers expected, not "
             + " and ".join(given + (["--px-per-m/--origin"] if scale_given else []))
         )
+    if one_picture and not given and side is not None and px_per_m is None:
+        return  # the scale from the cubes' size
     if not given and (px_per_m is None or origin is None):
+        cube = ", or the cubes' --side (a view straight down)" if one_picture else ""
         raise UsageError(
             "how pixels map to the table is needed: --px-per-m and --origin (a top view), "
-            "--camera FILE or --markers FILE"
+            f"--camera FILE or --markers FILE{cube}"
         )
 
 

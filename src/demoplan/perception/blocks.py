@@ -29,7 +29,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
 
 from demoplan.budget import check_time, report_progress
 from demoplan.perception.camera import Camera
@@ -41,6 +40,7 @@ from demoplan.perception.colours import (
     outlines,
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.seams import image_lightness, seamless_side
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks"]
 
@@ -90,7 +90,7 @@ class Rejection:
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
-    square``, ``no free sides``, ``cut by the border``; ``covered`` from the
+    square``, ``no free sides``, ``cut by the border``, ``no seam``; ``covered`` from the
     tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
@@ -247,66 +247,161 @@ def _window(
 
 
 class _SquareModel:
-    """The one-pixel-ramp square at the points (us, vs), with its exact Jacobian;
-    the square's frame is kept from the residual to the Jacobian at the same
-    parameters (the optimiser asks for both)."""
+    """The one-pixel-ramp square at the points (us, vs) against the mask values
+    ``target`` there, under the soft-L1 loss ρ(z) = 2(√(1 + z) − 1), z = (r / f)²
+    of the residuals r (f = ``f_scale``): its cost, and the gradient and
+    Gauss–Newton matrix of the cost (the Jacobian is exact and non-zero on the
+    one-pixel ramp only, so only those pixels enter them)."""
 
-    def __init__(self, us: np.ndarray, vs: np.ndarray, target: np.ndarray) -> None:
-        self.us, self.vs, self.target = us, vs, target
-        self._at: np.ndarray | None = None
-        self._frame: tuple[np.ndarray, np.ndarray, np.ndarray] = (target, target, target)
+    def __init__(
+        self, us: np.ndarray, vs: np.ndarray, target: np.ndarray, f_scale: float, ramp: float = 1.0
+    ) -> None:
+        self.us, self.vs, self.target, self.f_scale = us, vs, target, f_scale
+        self.ramp = ramp
+        """The width (px) over which the square's edge ramps from 1 to 0."""
 
     def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q_u, q_v, distance): the points in the square's frame, and their
         ≈ signed distance to its outline."""
-        if self._at is None or not np.array_equal(params, self._at):
-            u, v, theta, side = params
-            c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-            du, dv = self.us - u, self.vs - v
-            qu = c * du + s * dv
-            qv = -s * du + c * dv
-            distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
-            self._at, self._frame = params.copy(), (qu, qv, distance)
-        return self._frame
+        u, v, theta, side = params
+        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        du, dv = self.us - u, self.vs - v
+        qu = c * du + s * dv
+        qv = -s * du + c * dv
+        distance = np.maximum(np.abs(qu), np.abs(qv)) - side / 2
+        return qu, qv, distance
 
     def residual(self, params: np.ndarray) -> np.ndarray:
         distance = self.frame(params)[2]
-        difference: np.ndarray = np.clip(0.5 - distance, 0.0, 1.0) - self.target
+        difference: np.ndarray = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
         return difference
 
-    def jacobian(self, params: np.ndarray) -> np.ndarray:
-        """∂ residual / ∂ (u, v, θ, s), exact: on the one-pixel ramp the model is
-        ½ − (max(|q_u|, |q_v|) − s/2), q the pixel in the square's own frame; off
-        it, constant."""
+    def cost(self, params: np.ndarray) -> float:
+        """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f)."""
+        root = np.sqrt(1.0 + np.square(self.residual(params) / self.f_scale))
+        return float(self.f_scale**2 * np.sum(root - 1.0))
+
+    def normal_equations(self, params: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        """(cost, JᵀWJ, JᵀWr) at ``params``: W the iteratively reweighted least
+        squares weights ρ'(z) = 1 / √(1 + z) of the soft-L1 loss, J = ∂r / ∂(u, v, θ, s)
+        exact — on the one-pixel ramp the model is ½ − (max(|q_u|, |q_v|) − s/2),
+        q the pixel in the square's own frame; off it, constant (scaled by the
+        ramp's width when it is wider)."""
         qu, qv, distance = self.frame(params)
-        on_ramp = np.flatnonzero(np.abs(distance) < 0.5)
+        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
+        root = np.sqrt(1.0 + np.square(residual / self.f_scale))
+        cost = float(self.f_scale**2 * np.sum(root - 1.0))
+        # the ramp's ends included (one-sided there): a square whose edges lie on
+        # pixel borders, as a Hough bin's centre at 0° puts them, has every pixel
+        # centre at an end, and would see no gradient at all
+        on_ramp = np.abs(distance) <= 0.5 * self.ramp
         qu, qv = qu[on_ramp], qv[on_ramp]
-        theta = params[2]
-        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        c, s = math.cos(math.radians(params[2])), math.sin(math.radians(params[2]))
         along_u = np.abs(qu) >= np.abs(qv)
         sign = np.where(along_u, np.sign(qu), np.sign(qv))
-        jac = np.zeros((distance.size, 4))
-        jac[on_ramp, 0] = -(np.where(along_u, -c, s) * sign)
-        jac[on_ramp, 1] = -(np.where(along_u, -s, -c) * sign)
-        jac[on_ramp, 2] = -(np.where(along_u, qv, -qu) * sign * (math.pi / 180.0))
-        jac[on_ramp, 3] = 0.5
-        return jac
+        sign /= self.ramp
+        jac = np.empty((qu.size, 4))
+        jac[:, 0] = np.where(along_u, c, -s) * sign
+        jac[:, 1] = np.where(along_u, s, c) * sign
+        jac[:, 2] = np.where(along_u, -qv, qu) * sign * (math.pi / 180.0)
+        jac[:, 3] = 0.5 / self.ramp
+        weight = 1.0 / root[on_ramp]
+        matrix: np.ndarray = (jac * weight[:, None]).T @ jac
+        gradient: np.ndarray = jac.T @ (weight * residual[on_ramp])
+        return cost, matrix, gradient
+
+
+MIN_CORE_COVERAGE = 0.3
+"""A block's square is at least 85 % covered (:attr:`PerceptionSettings.min_coverage`),
+so at most 15 % of its area is uncovered: the central half of a start within a
+quarter side of it (a quarter of its area, inside it) is then at least
+1 − 0.15 / 0.25 = 40 % covered — on the pixel grid, counting the pixels each
+square covers wholly ((s − 1)² and (s/2 − 1)²), at least 1 − 0.15 (s − 1)² / (s/2 − 1)²:
+30 % for a side s of 14 px and more. A start whose central half is covered less
+is no block's (and the start square itself is less than 85 % covered): the fit,
+the costly step on real photographs, is not run from it."""
+
+COARSE_RAMPS = (4.0, 2.0)
+"""Px over which the edges of the blurred squares a fit starts with ramp, in turn."""
+COARSE_TOLERANCE = 1e-3
+
+
+def _least_squares(
+    model: _SquareModel,
+    start: np.ndarray,
+    scale: np.ndarray,
+    tolerance: float,
+    max_steps: int = 100,
+) -> tuple[np.ndarray, float]:
+    """The parameters near ``start`` that minimise ``model``'s robust cost, and that
+    cost: Levenberg–Marquardt on the reweighted normal equations, the damping
+    (in the units ``scale``) set from how well each step's predicted drop in cost
+    came true (Nielsen's rule), a step kept only when it lowers the cost. Stops
+    when a kept step moves the scaled parameters by less than ``tolerance`` of
+    their size, or lowers the cost by less than ``tolerance`` of it as predicted
+    (SciPy's ``xtol`` and ``ftol``), or when no damping makes a step that lowers
+    it."""
+    params = start.astype(float)
+    cost, matrix, gradient = model.normal_equations(params)
+    metric = 1.0 / np.square(scale)
+    damping = 1e-3 * float(np.max(np.diag(matrix) / metric, initial=0.0)) or 1e-3
+    growth = 2.0
+    for _ in range(max_steps):
+        if not np.any(gradient):
+            break  # no pixel on the ramp (or all matched): nothing moves the square
+        try:
+            step = np.linalg.solve(matrix + damping * np.diag(metric), -gradient)
+        except np.linalg.LinAlgError:
+            damping *= growth
+            growth *= 2.0
+            continue
+        trial = params + step
+        trial_cost = model.cost(trial)
+        predicted = 0.5 * float(step @ (damping * metric * step - gradient))
+        if not trial_cost < cost:
+            damping *= growth
+            growth *= 2.0
+            if damping > 1e12:
+                break
+            continue
+        ratio = (cost - trial_cost) / predicted if predicted > 0 else 1.0
+        damping *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
+        growth = 2.0
+        small_step = np.linalg.norm(step / scale) < tolerance * (
+            tolerance + np.linalg.norm(params / scale)
+        )
+        small_change = max(cost - trial_cost, predicted) < tolerance * cost
+        params = trial
+        if small_step or small_change:
+            cost = trial_cost
+            break
+        cost, matrix, gradient = model.normal_equations(params)
+    return params, cost
 
 
 def _fit(
     alpha: np.ndarray,
     start: Hypothesis,
     band: float | None = None,
-    turns: tuple[float, ...] = (0.0, 1.5, -1.5),
+    turns: tuple[float, ...] = (0.0,),
     good_enough: float = 0.08,
     tolerance: float = 1e-6,
 ) -> tuple[np.ndarray, float, float, float]:
-    """Least-squares fit of a one-pixel-ramp square to the soft mask near ``start``:
-    (u, v, θ, s), the interior coverage, the RMS misfit over the square's own
-    pixels, and the share of free outline. With ``band`` (px) only the pixels
-    that far from the starting outline take part (inside, a good start's square
-    and the mask agree anyway): a large block costs its outline, not its area.
-    Only the part of the crop near the square is looked at (:func:`_window`)."""
+    """Robust least-squares fit of a one-pixel-ramp square to the soft mask near
+    ``start`` (:func:`_least_squares`): (u, v, θ, s), the interior coverage, the RMS
+    misfit over the square's own pixels, and the share of free outline. With
+    ``band`` (px) only the pixels that far from the starting outline take part
+    (inside, a good start's square and the mask agree anyway): a large block
+    costs its outline, not its area. Only the part of the crop near the square is
+    looked at (:func:`_window`). ``turns``: angles (deg) added to the start's θ
+    to fit from as well until a fit's RMS is under ``good_enough`` (the best
+    kept); none by default — the blurred squares find θ from a Hough bin away.
+
+    A start whose central half (a quarter of its area) the mask covers less than
+    :data:`MIN_CORE_COVERAGE` is not fitted: its own measures are returned."""
+    core = np.array([start.u, start.v, start.theta, start.side / 2])
+    if _coverage(alpha, core) < MIN_CORE_COVERAGE:
+        return _measures(alpha, np.array([start.u, start.v, start.theta, start.side]))
     grown = np.array([start.u, start.v, start.theta, start.side + 5.0])
     if band is None:
         uu, vv, window = _window(alpha.shape, grown, grown[3])
@@ -317,27 +412,41 @@ def _fit(
         uu, vv, window = _window(alpha.shape, outline, outline[3])
         near = (_square_alpha(outline, uu, vv) > 0) & (_square_alpha(inner, uu, vv) < 1)
     target = alpha[window][near]
-    model = _SquareModel(uu[near], vv[near], target)
-    best = None
-    for theta in (start.theta + turn for turn in turns):
-        x0 = np.array([start.u, start.v, theta, start.side])
-        result = optimize.least_squares(
-            model.residual,
-            x0,
-            jac=model.jacobian,
-            x_scale=[1.0, 1.0, 2.0, 1.0],
-            xtol=tolerance,
-            ftol=tolerance,
-            loss="soft_l1",
-            f_scale=0.3,
-            max_nfev=200,
-        )
-        if best is None or result.cost < best.cost:
-            best = result
-        if math.sqrt(2 * result.cost / max(target.size, 1)) < good_enough:
+    model = _SquareModel(uu[near], vv[near], target, f_scale=0.3)
+    scale = np.array([1.0, 1.0, 2.0, 1.0])
+    first = np.array([start.u, start.v, start.theta, start.side])
+    if band is None:
+        # first to where a blurred square fits (it pulls from farther away), unless
+        # the start itself fits the sharp square better: a blurred square's fit to a
+        # sharp edge is a fraction of a pixel off, and may fall where the sharp one
+        # is stuck (its cost has kinks where pixels enter and leave the ramp)
+        moved = first
+        for ramp in COARSE_RAMPS:
+            blurred = _SquareModel(model.us, model.vs, target, model.f_scale, ramp)
+            moved, _ = _least_squares(blurred, moved, scale, COARSE_TOLERANCE, max_steps=30)
+        first = min((first, moved), key=model.cost)
+    best: tuple[np.ndarray, float] | None = None
+    for turn in turns:
+        x0 = first + np.array([0.0, 0.0, turn, 0.0])
+        params, cost = _least_squares(model, x0, scale, tolerance)
+        if best is None or cost < best[1]:
+            best = params, cost
+        if math.sqrt(2 * cost / max(target.size, 1)) < good_enough:
             break  # a good fit from the Hough estimate: no need to try other angles
     assert best is not None
-    params = best.x
+    return _measures(alpha, best[0])
+
+
+def _coverage(alpha: np.ndarray, params: np.ndarray) -> float:
+    """The mean of the mask over the pixels the square ``params`` covers wholly."""
+    uu, vv, window = _window(alpha.shape, params, params[3])
+    inside = _square_alpha(params, uu, vv) > 0.99
+    return float(alpha[window][inside].mean()) if inside.any() else 0.0
+
+
+def _measures(alpha: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, float, float, float]:
+    """``params`` with the square's interior coverage, its RMS misfit over its own
+    pixels and its share of free outline."""
     uu, vv, window = _window(alpha.shape, params, params[3])
     mask = alpha[window]
     fitted = _square_alpha(params, uu, vv)
@@ -382,6 +491,7 @@ def detect_blocks(
         rejected=parts,
         largest_block=side_px[1] ** 2,
     )
+    lightness = image_lightness(image)
     factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     band = None if factor == 1 else 3.0
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
@@ -424,20 +534,16 @@ def detect_blocks(
                     )
                     params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
                 beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
-                if (
-                    side_px[0] * 0.8 <= params[3] <= side_px[1] * 1.2
-                    and coverage >= settings.min_coverage
-                    and rms <= settings.max_residual
-                    and free >= settings.min_free_outline
-                    and beyond <= MAX_BEYOND_SHARE
-                ):
+                why = _failure(
+                    params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
+                )
+                if why is None:
+                    seamless = seamless_side(lightness, alpha, region.offset, params)
+                    why = None if seamless is None else ("no seam", seamless)
+                if why is None:
                     accepted = params, coverage, rms
                     break
-                if parts is not None:
-                    why = _failure(
-                        params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
-                    )
-                    failures += [why] if why else []
+                failures.append(why)
             if accepted is None:
                 if parts is not None:
                     parts += _unfit(alpha, region, failures, min_area)

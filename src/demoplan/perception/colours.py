@@ -10,7 +10,8 @@ shadow is still a block (an image without any colour — all channels equal —
 is judged by lightness instead). Each connected foreground region (OpenCV's
 connected components; regions smaller than a block are dropped at once) has
 its enclosed holes filled — a specular highlight is white, so not coloured,
-but lies inside the block. The region is split by colour: its confidently
+but lies inside the block (the top's colour with white added, or a hole
+smaller than a block in its clearly coloured pixels). The region is split by colour: its confidently
 coloured ("core") pixels are named by the nearest palette colour in
 brightness-free chromaticity (RGB divided by its largest channel, so shading
 does not change it), each colour with enough core pixels becomes a class, and
@@ -29,6 +30,7 @@ transform sees.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -68,6 +70,8 @@ group of blocks is that large and of one colour; its pixels of that colour are
 table too."""
 MAX_PALETTE_COLOURS = 64
 """Colours a palette file may add: a camera tells a few dozen apart at best."""
+GLARE_SLACK = 8.0
+"""Grey levels a highlight's channel may fall under the top face's mean (noise)."""
 _SPECIAL = {-2: "black", -3: "grey", -4: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
@@ -380,7 +384,6 @@ def colour_regions(
         cols = slice(max(0, x - 5), min(width, x + w + 5))
         member = labels[rows, cols] == index
         filled = _fill_holes(member)
-        holes = filled & ~member  # enclosed: a highlight, a marker drawn on the block
         crop = image[rows, cols].astype(float)
         far = distinct[rows, cols]
         # core: clearly foreground and two pixels in from the region's rim, where
@@ -398,13 +401,16 @@ def colour_regions(
         if coloured_image:
             record.shade(classes, core, lightness[rows, cols], rows, cols)
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
+        classes = _smoothed_classes(classes, core)
         present = _present_classes(classes, names, min_area, coloured_image)
+        present = _without_rims(present, core, min_area)
         if not present:
             record(member, rows, cols, "no block colour", "dark, grey or mixed colours")
             continue
         offsets = (crop - ground).reshape(-1, 3)
         core_offsets = core_pixels - ground
         core_chroma = chroma_crop[core]
+        present = _one_colour_merged(present, core_chroma)
         core_lightness = lightness[rows, cols][core]
         classes_found = []
         for colour, chosen in present:
@@ -419,26 +425,26 @@ def colour_regions(
             change_ab = (core_chroma[on_top] - ground_ab).mean(axis=0)
             classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
         # nearest class, judged on the colour change from the table under each pixel
-        nearest = _nearest_class(offsets, [found[2] for found in classes_found])
-        nearest = nearest.reshape(member.shape)
+        nearest = _nearest_class(offsets, [found[2] for found in classes_found], member.shape)
         grown = _dilate(member, 1)
         for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
+            on_class = core & (nearest == k)
             projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
-            alpha = np.clip(projection, 0.0, 1.0)
+            alpha = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
             if coloured_image:
                 # and in chroma alone: a shadow beside the block darkens the table,
                 # which the RGB projection would take for a part of a dark block
                 chroma_part = ((chroma_crop - ground_ab) @ c_ab) / max(float(c_ab @ c_ab), 1e-9)
-                alpha = np.minimum(alpha, np.clip(chroma_part, 0.0, 1.0))
+                chroma_alpha = chroma_part / _full_level(chroma_part[on_class])
+                alpha = np.minimum(alpha, np.clip(chroma_alpha, 0.0, 1.0))
             if side_faces is not None:
                 ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
                 alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
             alpha = alpha * (nearest == k) * grown
             if len(classes_found) == 1:
-                # a specular highlight: white (a hole) with a halo brighter than the
-                # top face, well inside the region (rim pixels mix with the table)
-                glare = holes | ((lightness[rows, cols] > top_face) & _erode(filled, 3))
+                glare = _highlights(crop, lightness[rows, cols], top_face, centre, core, min_area)
                 alpha[glare] = 1.0
+            alpha = _without_strands(alpha, min_area)
             regions.append(
                 ColourRegion(
                     colour,
@@ -448,6 +454,27 @@ def colour_regions(
                 )
             )
     return regions, table
+
+
+def _highlights(
+    crop: np.ndarray,
+    lightness: np.ndarray,
+    top_face: float,
+    top_rgb: np.ndarray,
+    core: np.ndarray,
+    min_area: float,
+) -> np.ndarray:
+    """Which pixels of a one-class region's crop (RGB ``crop``, L* ``lightness``)
+    are a specular highlight on its block, so covered by its top face: the top
+    face's colour (``top_rgb``, L* ``top_face``) with white added — every channel
+    at least the top's, brighter than it — enclosed by the block's clearly
+    coloured pixels (``core``; a region may hold patches of a grey table, faintly
+    tinted, beside a dark or saturated block), and holes in those smaller than a
+    block (a marker drawn on the block, a glint's white centre)."""
+    whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
+    enclosed = _fill_holes(core)
+    glare: np.ndarray = (whiter & enclosed) | _small_parts(enclosed & ~core, min_area)
+    return glare
 
 
 def _present_classes(
@@ -467,12 +494,121 @@ def _present_classes(
     return present
 
 
-def _nearest_class(offsets: np.ndarray, changes: list[np.ndarray]) -> np.ndarray:
-    """Per pixel (its colour change from the table, N × 3), the class whose change
-    (``changes``) it is nearest to: off the change's line, less a bonus for going
-    far along it. All 0 with one class (nothing to compare)."""
+FULL_LEVEL_SHARE = 0.25
+"""A class's soft mask is 1 from the level this share of its core pixels falls
+under (its top face's texture, grain and shading make the rest brighter or more
+coloured than the mean, the mean itself short of full for a quarter to half of the
+face); a pixel mixed with the table is below it."""
+
+CLASS_SMOOTHING = 5
+"""Side (px) of the square over which a pixel's distances to the classes are
+averaged before the nearest is taken: two near hues (blue and violet cubes side by
+side) are told apart by their faces, not pixel by pixel through the noise."""
+
+
+def _full_level(values: np.ndarray) -> float:
+    """The level of a soft mask's measure (a projection on the class's colour change)
+    that counts as fully covered: :data:`FULL_LEVEL_SHARE`'s quantile of the class's
+    core pixels, at most 1 (the class's mean change) and at least 0.5."""
+    if values.size == 0:
+        return 1.0
+    return float(np.clip(np.quantile(values, FULL_LEVEL_SHARE), 0.5, 1.0))
+
+
+def _smoothed_classes(classes: np.ndarray, core: np.ndarray) -> np.ndarray:
+    """The core pixels' classes (``classes``, over ``core``'s pixels), each the
+    most common among the core pixels of :data:`CLASS_SMOOTHING`'s square around
+    it: a face's pixels whose colour the noise or the texture put nearer another
+    palette colour (a blue cube's speckles of violet) take their face's."""
+    labels = np.unique(classes)
+    if labels.size < 2:
+        return classes
+    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
+    votes = []
+    for label in labels:
+        mask = np.zeros(core.shape, dtype=np.float32)
+        mask[core] = classes == label
+        votes.append(np.asarray(cv2.blur(mask, size))[core])
+    smoothed: np.ndarray = labels[np.argmax(np.stack(votes, axis=1), axis=1)]
+    return smoothed
+
+
+def _without_strands(alpha: np.ndarray, min_area: float) -> np.ndarray:
+    """``alpha`` without the strands that hang on its faces — a pen line drawn on
+    the board, a cable, a thin shadow or a sliver of side face: the parts of its
+    mask (α > ½) that an opening by a disc a sixth of the smallest block's side
+    across removes, regrown by that much within the mask (a square's corners come
+    back; a strand keeps a stub) and a pixel more for the soft edge."""
+    steps = max(1, round(math.sqrt(min_area / 0.3) / 6))
+    mask = (alpha > 0.5).astype(np.uint8)
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
+    kept = cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc)
+    if np.array_equal(kept, mask):
+        return alpha
+    for _ in range(steps + 1):
+        kept = cv2.bitwise_and(cv2.dilate(kept, _CROSS), mask)
+    kept = cv2.dilate(kept, _CROSS, iterations=2)
+    trimmed: np.ndarray = alpha * kept
+    return trimmed
+
+
+def _one_colour_merged(
+    present: list[tuple[str, np.ndarray]], core_chroma: np.ndarray
+) -> list[tuple[str, np.ndarray]]:
+    """The classes of a region with those of one colour merged: two classes whose
+    mean a*b* (over their core pixels; ``core_chroma``, N × 2) lie less than
+    :data:`MIN_CHROMA` apart — no farther than the table is from a block it must
+    tell apart — are one colour that falls between two palette names (a dark red
+    between red and wood), its pixels split by the noise; the merged class takes
+    the name of the larger."""
+    groups = sorted(present, key=lambda group: -int(group[1].sum()))  # the larger first
+    merged = True
+    while merged and len(groups) > 1:
+        means = [np.mean(core_chroma[chosen], axis=0) for _, chosen in groups]
+        pairs = [
+            (first, second)
+            for first in range(len(groups))
+            for second in range(first + 1, len(groups))
+            if float(np.hypot(*(means[first] - means[second]))) < MIN_CHROMA
+        ]
+        merged = bool(pairs)
+        if merged:
+            first, second = pairs[0]
+            groups[first] = (groups[first][0], groups[first][1] | groups[second][1])
+            del groups[second]
+    return groups
+
+
+def _without_rims(
+    present: list[tuple[str, np.ndarray]], core: np.ndarray, min_area: float
+) -> list[tuple[str, np.ndarray]]:
+    """The classes of a region that hold a face: a class whose core pixels
+    (``chosen``, over ``core``'s pixels) vanish when eroded by a sixth of the
+    smallest block's side is a rim or a strip — a block's edge where its colour
+    mixes with the table's (a violet block's rim looks blue), a side face of
+    another hue — and its pixels go to the classes that remain (the largest class
+    stays when none holds a face)."""
+    if len(present) < 2:
+        return present
+    steps = max(1, round(math.sqrt(min_area / 0.3) / 6))
+    faces = []
+    for colour, chosen in present:
+        mask = np.zeros_like(core)
+        mask[core] = chosen
+        if _erode(mask, steps).sum() >= min_area / 4:
+            faces.append((colour, chosen))
+    return faces or [max(present, key=lambda found: int(found[1].sum()))]
+
+
+def _nearest_class(
+    offsets: np.ndarray, changes: list[np.ndarray], shape: tuple[int, ...]
+) -> np.ndarray:
+    """Per pixel of a crop of ``shape`` (its colour change from the table, N × 3),
+    the class whose change (``changes``) it is nearest to: off the change's line,
+    less a bonus for going far along it, averaged over :data:`CLASS_SMOOTHING`'s
+    square. All 0 with one class (nothing to compare)."""
     if len(changes) == 1:
-        return np.zeros(len(offsets), dtype=np.intp)
+        return np.zeros(shape, dtype=np.intp)
     scores = np.stack(
         [
             np.linalg.norm(offsets - (offsets @ c / max(c @ c, 1e-9))[:, None] * c, axis=1)
@@ -480,8 +616,12 @@ def _nearest_class(offsets: np.ndarray, changes: list[np.ndarray]) -> np.ndarray
             for c in changes
         ],
         axis=1,
+    ).reshape(*shape, len(changes))
+    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
+    smoothed = np.stack(
+        [cv2.blur(scores[..., k].astype(np.float32), size) for k in range(len(changes))], axis=-1
     )
-    nearest: np.ndarray = np.argmin(scores, axis=1)
+    nearest: np.ndarray = np.argmin(smoothed, axis=-1)
     return nearest
 
 
@@ -504,6 +644,15 @@ def _erode(mask: np.ndarray, steps: int) -> np.ndarray:
 def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
     """``mask`` dilated ``steps`` times by the 4-neighbour cross, with OpenCV."""
     return np.asarray(cv2.dilate(mask.astype(np.uint8), _CROSS, iterations=steps), dtype=bool)
+
+
+def _small_parts(mask: np.ndarray, min_area: float) -> np.ndarray:
+    """The connected parts of ``mask`` smaller than ``min_area`` pixels."""
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    small = stats[:, cv2.CC_STAT_AREA] < min_area
+    small[0] = False
+    parts: np.ndarray = small[labels]
+    return parts
 
 
 def _fill_holes(mask: np.ndarray) -> np.ndarray:

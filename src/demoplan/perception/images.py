@@ -20,6 +20,13 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
 from demoplan.perception.overlay import Drawn, draw_overlay, square_corners, top_view_to_image
+from demoplan.perception.sizes import (
+    SIDE_TOLERANCE,
+    block_sizes,
+    held_to_sizes,
+    in_scale,
+    rejection_in_scale,
+)
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
 __all__ = ["SIDE_TOLERANCE", "Perception", "perceive_files", "perceive_top_view", "seen_now"]
@@ -34,6 +41,8 @@ class Perception:
     blocks: dict[str, TrackedBlock]
     rejected: tuple[Rejection, ...]
     overlay: np.ndarray | None = None
+    scale: str = ""
+    """How pixels became metres (``--px-per-m``, the cube size, …): one phrase."""
 
 
 def seen_now(
@@ -55,10 +64,6 @@ def seen_now(
         if (d.x, d.y) not in poses
     ]
     return seen, left
-
-
-SIDE_TOLERANCE = 0.15
-"""With the blocks' side known, sizes this far off it (relative) are not blocks."""
 
 
 def check_side(side: float | None) -> None:
@@ -94,7 +99,7 @@ def perceive_files(
 
 def perceive_top_view(
     image: Path,
-    px_per_m: float,
+    px_per_m: float | None,
     origin: tuple[float, float],
     *,
     before: Path | None = None,
@@ -109,11 +114,25 @@ def perceive_top_view(
     now covers stands under it; ``colours`` a palette file of colours to add
     (:func:`~demoplan.perception.colours.load_palette`); the regions rejected;
     with ``overlay``, both drawn on the picture. An input error when there is no
-    block: a scene needs one."""
-    check_top_view(px_per_m, origin)
+    block: a scene needs one.
+
+    Without ``px_per_m`` the blocks' ``side`` gives the scale (a camera looking
+    straight down: the most common size of the squares found, in pixels, is
+    ``side``; :func:`~demoplan.perception.sizes.block_sizes`). Without
+    ``side`` (and ``before``) the blocks are held to the sizes most squares found
+    share (:func:`~demoplan.perception.sizes.block_sizes`): others are rejected."""
+    if px_per_m is None:
+        if side is None:
+            raise UsageError("the scale is needed: --px-per-m, or the blocks' --side")
+        check_top_view(1.0, origin)
+    else:
+        check_top_view(px_per_m, origin)
     check_side(side)
-    camera = Camera(px_per_m, origin)
     settings = PerceptionSettings(colours=load_palette(colours) if colours is not None else {})
+    if px_per_m is None:
+        assert side is not None
+        return _perceive_at_cube_scale(image, side, origin, settings, before, timeout, overlay)
+    camera = Camera(px_per_m, origin)
     if side is not None:
         settings = replace(
             settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
@@ -135,7 +154,28 @@ def perceive_top_view(
         picture = load_image(image)
         rejected: list[Rejection] = []
         detected = detect_blocks(picture, camera, settings, rejected)
+        if side is None and before is None:
+            # the blocks' size from the photograph (with a picture before, the strips
+            # left in view of covered blocks are the tracker's to place)
+            detected, odd = held_to_sizes(detected, block_sizes([d.side for d in detected]))
+            rejected += odd
         blocks = tracker.update(detected)
+    scale = f"--px-per-m {px_per_m:g}, origin {origin[0]:g} {origin[1]:g}"
+    return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
+
+
+def _perception(
+    image: Path,
+    camera: Camera,
+    picture: np.ndarray,
+    blocks: dict[str, TrackedBlock],
+    detected: list[DetectedBlock],
+    rejected: list[Rejection],
+    overlay: bool,
+    scale: str,
+) -> Perception:
+    """What a picture showed, with the overlay drawn when asked for; an input error
+    when there is no block."""
     if not blocks:
         raise InputError(
             "no blocks found; a scene needs at least one (is --px-per-m right? --side too strict?)",
@@ -148,7 +188,71 @@ def perceive_top_view(
         found = [Drawn(b.name, b.x, b.y, b.yaw, b.side) for b in seen]
         to_image = top_view_to_image(camera, picture.shape[0])
         drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image)
-    return Perception(blocks, tuple(rejected), drawn)
+    return Perception(blocks, tuple(rejected), drawn, scale)
+
+
+MIN_SIDE_PX = 16.0
+"""The smallest block side (px) looked for when the scale is not known: a smaller
+square top does not give a scale to a few per cent."""
+MAX_SIDE_SHARE = 0.25
+"""The largest block side looked for when the scale is not known, as a share of
+the image's shorter side."""
+
+
+def _perceive_at_cube_scale(
+    image: Path,
+    side: float,
+    origin: tuple[float, float],
+    settings: PerceptionSettings,
+    before: Path | None,
+    timeout: float,
+    overlay: bool,
+) -> Perception:
+    """``perceive_top_view`` when only the blocks' ``side`` is known: the blocks
+    found in pixels (sides from :data:`MIN_SIDE_PX` to :data:`MAX_SIDE_SHARE` of
+    the image), the most common size taken to be ``side`` — the scale of a camera
+    looking straight down — and the squares of other sizes rejected; the image's
+    bottom-left corner at ``origin``."""
+    if before is not None:
+        raise UsageError(
+            "--before needs the scale (--px-per-m, --camera or --markers): two pictures "
+            "are compared in metres"
+        )
+    with (
+        time_budget(
+            timeout,
+            f"perception stopped at its time budget (--timeout {timeout:g} s){{where}}: many "
+            "small regions or a large image, the scale not known; give it more time, or "
+            "--px-per-m",
+        ),
+        _memory_refused(image),
+    ):
+        picture = load_image(image)
+        shorter = min(picture.shape[:2])
+        in_pixels = replace(
+            settings, min_side=MIN_SIDE_PX, max_side=max(MIN_SIDE_PX, MAX_SIDE_SHARE * shorter)
+        )
+        rejected: list[Rejection] = []
+        found = detect_blocks(picture, Camera(1.0), in_pixels, rejected)
+    sizes = block_sizes([d.side for d in found])
+    if not sizes:
+        raise InputError(
+            "no blocks found, so no scale from --side; a scene needs at least one "
+            "(or give --px-per-m)",
+            source=str(image),
+        )
+    px_per_m = sizes[0][0] / side
+    kept, odd = held_to_sizes(found, sizes, unit="px")
+    detected = [in_scale(d, px_per_m, origin) for d in kept]
+    rejected = [rejection_in_scale(r, px_per_m, origin) for r in [*rejected, *odd]]
+    blocks = BlockTracker().update(detected)
+    scale = (
+        f"the cube size: --side {side:g} m is {sizes[0][0]:.1f} px, {px_per_m:.1f} px/m "
+        f"(a camera looking straight down), origin {origin[0]:g} {origin[1]:g} at the "
+        "image's bottom-left corner"
+    )
+    camera = Camera(px_per_m, origin)
+    return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
 
 
 @contextmanager

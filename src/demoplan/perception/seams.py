@@ -1,0 +1,99 @@
+"""Seams: is a square found in a region one block, or the end of a longer thing?
+
+A square fitted at the end of a region of one colour may be a block beside
+another of its colour, or the end of a cuboid twice as long (a 2:1 brick lying
+down, a column seen from above). Both look alike in the soft mask; in the
+photograph, two blocks side by side are parted by a *seam* — a dark gap or
+groove between them, or a step in brightness (the two faces lit unlike, or one
+of them a side face). A side the square shares with the rest of its region
+along its whole length, with no seam across it, is no block's side: the square
+is part of a longer thing.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from demoplan.perception.opencv import cv2
+
+__all__ = ["SEAM_CONTRAST", "image_lightness", "seamless_side"]
+
+SEAM_CONTRAST = 3.0
+"""L* by which a seam must be darker than both faces beside it (a groove, a gap),
+or the two faces differ (a step), for a shared side to part two blocks."""
+
+_ALONG = np.linspace(-0.4, 0.4, 17)
+"""Points along a side (as fractions of the square's side) that test whether the
+region goes on beyond it over its whole length: to a tenth of a side from each
+corner (a real block's corners are rounded by bevels and the JPEG's blur; a block
+slid along its neighbour by more than that shows a free end)."""
+_ACROSS = (-2.0, -1.0, 0.0, 1.0, 2.0)
+"""Offsets (px) across the side over which a seam, the darkest of them, is looked for."""
+
+
+def seamless_side(
+    lightness: np.ndarray, alpha: np.ndarray, offset: tuple[int, int], params: np.ndarray
+) -> str | None:
+    """Why the square ``params`` (u, v, θ, s on the crop ``alpha`` whose top-left
+    pixel is ``offset`` = (row, column) in the image; u right, v up from the crop's
+    bottom) is the end of a longer thing, or ``None``: one of its sides has the
+    region's mask beyond it along its whole length, as far as a quarter of a side
+    out (the mask averaged over 5 × 5 px), and the image's lightness
+    (``lightness``, L*, the whole image) shows no seam there
+    (:data:`SEAM_CONTRAST`)."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    height = alpha.shape[0]
+    row0, col0 = offset
+    along = _ALONG * side
+    smooth = np.asarray(cv2.blur(alpha.astype(np.float32), (5, 5)))  # over the face's speckles
+    for nu, nv in ((c, s), (-c, -s), (-s, c), (s, -c)):
+        # points along the side, ``out`` px from the centre: (u, v) on the crop
+        us = u - nv * along
+        vs = v + nu * along
+        if not all(
+            np.all(_sample_mask(smooth, us + nu * out, vs + nv * out))
+            for out in (side / 2 + 3.0, 3 * side / 4)
+        ):
+            continue  # a free or partly free side: no longer thing along it
+        profiles = [
+            _sample(lightness, col0 + us + nu * out - 0.5, row0 + height - (vs + nv * out) - 0.5)
+            for out in (side / 4, 3 * side / 4, *(side / 2 + k for k in _ACROSS))
+        ]
+        inner, outer, line = profiles[0], profiles[1], np.min(profiles[2:], axis=0)
+        dip = float(np.median(np.minimum(inner, outer) - line))
+        step = abs(float(np.median(inner) - np.median(outer)))
+        if dip < SEAM_CONTRAST and step < SEAM_CONTRAST:
+            return f"a side shared without a seam (L* {dip:.0f} darker, {step:.0f} apart)"
+    return None
+
+
+def image_lightness(image: np.ndarray) -> np.ndarray:
+    """CIELAB L* (0–100, float32) of an RGB image (H × W × 3, 8-bit)."""
+    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    return np.asarray(lab[..., 0], dtype=np.float32) * np.float32(100.0 / 255.0)
+
+
+def _sample_mask(alpha: np.ndarray, us: np.ndarray, vs: np.ndarray) -> np.ndarray:
+    """Whether the mask holds (α > ½) at the points (us, vs) of its crop (outside: no)."""
+    height, width = alpha.shape
+    cols, rows = np.floor(us).astype(np.intp), np.floor(height - vs).astype(np.intp)
+    within = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
+    held = np.zeros(us.shape, dtype=bool)
+    held[within] = alpha[rows[within], cols[within]] > 0.5
+    return held
+
+
+def _sample(image: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """``image`` (one channel, float32) at the points (xs, ys) in pixels (x right, y
+    down, pixel centres at whole numbers), bilinearly; the border repeated."""
+    sampled = cv2.remap(
+        image,
+        xs.astype(np.float32).reshape(1, -1),
+        ys.astype(np.float32).reshape(1, -1),
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    return np.asarray(sampled, dtype=float).ravel()

@@ -1,0 +1,130 @@
+"""The blocks' size from the photograph: the common sizes of the square tops found.
+
+A table of cubes holds few sizes. The squares the detector accepts are grouped
+by side — a group is the sides within :data:`SIDE_TOLERANCE` (15 %, as for a
+given ``--side``) of its median — and a group of two or more squares, or the
+largest group, is a block size; a square of no such size (a coloured patch, a
+box lid, the top of something else) is not a block and is rejected with why
+(``not a block size``) when it lies more than 15 % outside the span of the
+block sizes' groups. With ``--side`` and no other scale, the largest group's
+median side in pixels is that side: the scale of a camera looking straight down
+(:func:`demoplan.perception.images.perceive_top_view`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+from demoplan.perception.blocks import DetectedBlock, Rejection
+from demoplan.perception.overlay import square_corners
+
+__all__ = [
+    "SIDE_TOLERANCE",
+    "block_sizes",
+    "held_to_sizes",
+    "in_scale",
+    "rejection_in_scale",
+]
+
+SIDE_TOLERANCE = 0.15
+"""Sides this far off a block size (relative) are not of that size."""
+
+
+def block_sizes(
+    sides: Sequence[float], tolerance: float = SIDE_TOLERANCE
+) -> tuple[tuple[float, float, float], ...]:
+    """The block sizes among ``sides``, most squares first, each as (median,
+    smallest, largest side of its group): greedily, the side with the most
+    others within ``tolerance`` of it (ties: the smaller side) makes a group of
+    those; a group of two or more, or the first, counts."""
+    left = sorted(sides)
+    sizes: list[tuple[float, float, float]] = []
+    while left:
+        counts = [sum(_within(s, other, tolerance) for other in left) for s in left]
+        best = max(range(len(left)), key=lambda i: (counts[i], -left[i]))
+        group = [s for s in left if _within(left[best], s, tolerance)]
+        if sizes and len(group) < 2:
+            break
+        middle = len(group) // 2
+        median = group[middle] if len(group) % 2 else (group[middle - 1] + group[middle]) / 2
+        sizes.append((median, group[0], group[-1]))
+        left = [s for s in left if not _within(left[best], s, tolerance)]
+    return tuple(sizes)
+
+
+def _within(size: float, side: float, tolerance: float) -> bool:
+    return abs(side - size) <= tolerance * size
+
+
+def held_to_sizes(
+    blocks: Sequence[DetectedBlock],
+    sizes: Sequence[tuple[float, float, float]],
+    unit: str = "mm",
+    tolerance: float = SIDE_TOLERANCE,
+) -> tuple[list[DetectedBlock], list[Rejection]]:
+    """The blocks whose side lies within the span of the block sizes (from the
+    smallest side of a block size's group to the largest) or within
+    ``tolerance`` of it — the sides between two sizes included: a cube nearer
+    the camera (on a stack, or under a tilted one) looks larger — renamed as the
+    detector names them (``red``, ``red2``, … in order); the others rejected as
+    ``not a block size``. Sides in metres, shown in ``unit`` (``mm``, or ``px``
+    for an image whose scale is not known yet)."""
+    if not sizes:
+        return list(blocks), []
+    low = min(size[1] for size in sizes) * (1 - tolerance)
+    high = max(size[2] for size in sizes) * (1 + tolerance)
+    kept: list[DetectedBlock] = []
+    rejected: list[Rejection] = []
+    factor = 1000.0 if unit == "mm" else 1.0
+    shown = " / ".join(f"{size[0] * factor:.0f}" for size in sizes)
+    for block in blocks:
+        if low <= block.side <= high:
+            kept.append(block)
+            continue
+        outline = tuple(
+            (float(x), float(y)) for x, y in square_corners(block.x, block.y, block.yaw, block.side)
+        )
+        detail = f"side {block.side * factor:.0f} {unit}, the blocks here {shown} {unit}"
+        rejected.append(Rejection("not a block size", detail, block.colour, (outline,)))
+    return _renamed(kept), rejected
+
+
+def _renamed(blocks: Sequence[DetectedBlock]) -> list[DetectedBlock]:
+    """Blocks named by colour in order (the detector's rule, docs/formats.md): a
+    plain colour names its first block and ``red2``… the others; unnamed
+    colours are ``block1``, ``block2``…"""
+    counts: dict[str, int] = {}
+    named = []
+    for block in blocks:
+        counts[block.colour] = counts.get(block.colour, 0) + 1
+        count = counts[block.colour]
+        name = (
+            f"block{count}"
+            if block.colour == "block"
+            else (block.colour if count == 1 else f"{block.colour}{count}")
+        )
+        named.append(replace(block, name=name))
+    return named
+
+
+def in_scale(block: DetectedBlock, px_per_m: float, origin: tuple[float, float]) -> DetectedBlock:
+    """A block found in pixels (x, y from the image's bottom-left corner, side in
+    px) on the table: ``px_per_m`` pixels per metre, the corner at ``origin``."""
+    return replace(
+        block,
+        x=origin[0] + block.x / px_per_m,
+        y=origin[1] + block.y / px_per_m,
+        side=block.side / px_per_m,
+    )
+
+
+def rejection_in_scale(
+    rejection: Rejection, px_per_m: float, origin: tuple[float, float]
+) -> Rejection:
+    """A rejection's outlines from pixels to the table (as :func:`in_scale`)."""
+    outlines = tuple(
+        tuple((origin[0] + x / px_per_m, origin[1] + y / px_per_m) for x, y in outline)
+        for outline in rejection.outlines
+    )
+    return replace(rejection, outlines=outlines)
