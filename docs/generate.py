@@ -779,7 +779,7 @@ RUN_JSON = Output(
         "final_scene": ("scene", "the world at the end, as a scene document"),
         "goal": ("integer or null", "the demonstration whose goal was pursued, from 0"),
         "reason": ("string", "how the run ended"),
-        "world": ("string", "`kinematic` or `mujoco`"),
+        "world": ("string", "`kinematic`, `mujoco`, `arm` or `robosuite:ENV`"),
         "first_plan_actions": ("integer", "length of the first plan"),
         "extra_actions": ("integer", "actions beyond the first plan's"),
         "reached": ("array of strings", "subgoals reached"),
@@ -787,7 +787,21 @@ RUN_JSON = Output(
         "steps": ("array", "each executed action with the pose it used (below)"),
         "seconds": ("number", "time the run took"),
         "frames": ("array of strings", "images written with `--frames`"),
-    }
+        "env_success": (
+            "boolean",
+            "`--sim robosuite:ENV` only: robosuite's `_check_success()` after the run; "
+            "`success` is true only with it",
+        ),
+        "demoplan_success": (
+            "boolean",
+            "`--sim robosuite:ENV` only: demoplan's executor reached a demonstrated goal",
+        ),
+        "control_steps": (
+            "integer",
+            "`--sim robosuite:ENV` only: the environment's control steps (20 per second)",
+        ),
+    },
+    optional=frozenset({"env_success", "demoplan_success", "control_steps"}),
 )
 FAILURE_JSON = Output(
     {

@@ -20,7 +20,6 @@ from demoplan.cli.common import (
     FreespaceOption,
     ModelArgument,
     PerceptionName,
-    SceneArgument,
     SimName,
     app,
     geometry_settings,
@@ -106,14 +105,21 @@ def _run_tree(
 @app.command()
 def run(
     model_path: ModelArgument,
-    scene_path: SceneArgument,
-    sim: Annotated[
-        SimName,
-        typer.Option(
-            help="kinematic (exact, fast), mujoco (physics, a floating gripper) or arm "
-            "(physics, a 6-DOF Kinova Jaco with a suction cup and two fingers)."
+    scene_path: Annotated[
+        Path | None,
+        typer.Argument(
+            metavar="SCENE",
+            help="The scene at run time (demoplan/scene-1); none with --sim robosuite:ENV.",
         ),
-    ] = SimName.kinematic,
+    ] = None,
+    sim: Annotated[
+        str,
+        typer.Option(
+            help="kinematic (exact, fast), mujoco (physics, a floating gripper), arm "
+            "(physics, a 6-DOF Kinova Jaco with a suction cup and two fingers) or robosuite:ENV "
+            "(robosuite's environment ENV, e.g. Stack, with its Panda; it judges the run too).",
+        ),
+    ] = SimName.kinematic.value,
     faults: Annotated[
         str | None,
         typer.Option(
@@ -163,8 +169,15 @@ def run(
     from demoplan.execution.executor import ExecutionSettings
     from demoplan.execution.faults import parse_faults
 
+    with reported_errors():
+        if not sim.startswith("robosuite:") and sim not in set(SimName):
+            raise UsageError(f"--sim {sim}: expected kinematic, mujoco, arm or robosuite:ENV")
+        if tree is not None and sim.startswith("robosuite:"):
+            raise UsageError(f"--bt: not with --sim {sim} (trees tick in demoplan's worlds)")
     if tree is not None:
-        _run_tree(tree, model_path, scene_path, sim, faults, seed, json_output)
+        _run_tree(
+            tree, model_path, _scene_given(scene_path), SimName(sim), faults, seed, json_output
+        )
         return
     with reported_errors():
         live = stderr.is_terminal and not json_output
@@ -172,7 +185,7 @@ def run(
             report = run_task(
                 model_path,
                 scene_path,
-                sim=sim.value,
+                sim=sim,
                 faults=parse_faults(faults),
                 seed=seed,
                 frames=frames,
@@ -193,6 +206,15 @@ def run(
         if not report.success:
             stderr.print(f"demoplan: error: {report.reason}", markup=False, highlight=False)
             raise typer.Exit(report.exit_code)
+
+
+def _scene_given(scene_path: Path | None) -> Path:
+    """The SCENE argument, which every world but robosuite's needs."""
+    if scene_path is None:
+        with reported_errors():
+            raise UsageError("a SCENE is needed (only --sim robosuite:ENV observes its own)")
+    assert scene_path is not None
+    return scene_path
 
 
 @app.command()

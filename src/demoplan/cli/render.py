@@ -307,6 +307,9 @@ def print_run_report(report: Any) -> None:
         say(f"injected at action {fault.action}: {fault.kind}: {fault.detail}")
     for failure in report.failures:
         say(f"step {failure.step}: {failure.kind}: {failure.detail}")
+    judged = getattr(report, "env_success", None)  # robosuite's own check (--sim robosuite:ENV)
+    if judged is not None:
+        say(f"robosuite's success check: {'passed' if judged else 'FAILED'}")
     verdict = "success" if report.success else "FAILED"
     errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
     stdout.print(

@@ -46,7 +46,7 @@ __all__ = [
 
 def run(
     model: TaskModel | str | Path,
-    scene: Scene | str | Path,
+    scene: Scene | str | Path | None,
     *,
     world: World | None = None,
     sim: str = "kinematic",
@@ -62,7 +62,10 @@ def run(
     """Carry the task out: plan, act, observe, replan where the world differs.
 
     Without ``world``, in a simulated one (``sim``: ``kinematic``, ``mujoco``
-    or ``arm``, with injected ``faults`` drawn from ``seed``); with ``world``,
+    or ``arm``, with injected ``faults`` drawn from ``seed``; or
+    ``robosuite:ENV``, robosuite's environment reset with ``seed``, whose
+    objects are the scene: ``scene`` None, and robosuite judges the run too,
+    :mod:`demoplan.execution.robosuite_run`); with ``world``,
     in that one — it must start as ``scene`` describes (that is where a real
     robot plugs in). ``frames``: a folder for a frame per action and a
     storyboard, written whole or not at all; ``video``: an MP4 of the run;
@@ -71,6 +74,19 @@ def run(
     ``clutter``: objects the model never saw are allowed (no goal; moved only
     when in the way);
     ``on_event`` hears the run's progress."""
+    if sim.startswith("robosuite:"):
+        renders = [
+            ("--frames", frames),
+            ("--video", video),
+            ("--perception", perception != "state"),
+        ]
+        if unsupported := [name for name, given in renders if given]:
+            raise UsageError(
+                f"{', '.join(unsupported)}: not with --sim {sim} (nothing is rendered)"
+            )
+        return _run_in_robosuite(model, scene, sim, seed, settings, faults, clutter, on_event)
+    if scene is None:
+        raise UsageError("a SCENE is needed (only --sim robosuite:ENV observes its own)")
     if video is not None:
         check_video_path(video)
         if frames is not None and video.resolve().is_relative_to(frames.resolve()):
@@ -105,6 +121,35 @@ def run(
             report = run_task(task, prepared.scene, frames=building, **options)
         moved = tuple(str(frames / Path(f).name) for f in report.frames)  # where they now are
         return replace(report, frames=moved)
+
+
+def _run_in_robosuite(
+    model: TaskModel | str | Path,
+    scene: Scene | str | Path | None,
+    sim: str,
+    seed: int,
+    settings: ExecutionSettings | None,
+    faults: Faults,
+    clutter: bool,
+    on_event: Callable[[RunEvent], object] | None,
+) -> RunReport:
+    """``run`` in robosuite: the scene is the environment's, nothing else is drawn."""
+    from demoplan.execution.robosuite_run import run_in_robosuite
+    from demoplan.learning.modelfile import load_model
+
+    if scene is not None:
+        raise UsageError(f"--sim {sim} observes its scene after reset(seed); no SCENE expected")
+    task = model if isinstance(model, TaskModel) else load_model(model)
+    with model_named(model):
+        return run_in_robosuite(
+            task,
+            sim,
+            seed=seed,
+            settings=settings,
+            faults=faults,
+            clutter=clutter,
+            on_event=on_event,
+        )
 
 
 def remove_unfinished_video(video: Path) -> None:

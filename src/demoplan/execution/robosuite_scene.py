@@ -1,0 +1,299 @@
+"""A robosuite environment as demoplan sees it (``--sim robosuite:ENV``): the
+environment made, and its objects and landmarks read from ``sim.data`` in
+demoplan's frame.
+
+The frame is the one the recordings are imported in
+(:mod:`demoplan.segmentation.readers.hdf5`, docs/formats.md): z up, the table
+top at z = 0 (robosuite's ``table_offset``), an object's position the centre
+of the bottom of its colliding geoms' bounding box below its body origin (a
+nut's hole, a cube's centre), so that a model learned from robosuite's
+recordings applies to the environment as it is. The bounding boxes are the
+compiled model's (``geom_aabb``), so mesh objects get their true bottom;
+robosuite's own ``bottom_offset`` is wrong for them. Landmarks are the static
+top-level bodies that collide (the pegs, the bins), with the size of their
+colliding geoms; the table, the floor and the robot are not landmarks.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from demoplan.errors import UsageError
+from demoplan.model import ObjectGeometry, Pose
+from demoplan.scenes.scene import SceneObject
+from demoplan.segmentation.readers.hdf5 import EXCLUDED_LANDMARKS
+
+__all__ = [
+    "CONTROL_FREQUENCY",
+    "ENVIRONMENTS",
+    "EnvObject",
+    "check_installed",
+    "environment_name",
+    "landmarks",
+    "make_environment",
+    "object_pose",
+    "scene_objects",
+    "table_centre",
+    "table_top",
+]
+
+ENVIRONMENTS = (
+    "Stack",
+    "NutAssembly",
+    "NutAssemblySquare",
+    "NutAssemblyRound",
+    "PickPlace",
+    "PickPlaceCan",
+    "PickPlaceMilk",
+    "PickPlaceBread",
+    "PickPlaceCereal",
+)
+"""robosuite's pick-and-place environments whose recordings demoplan imports."""
+
+CONTROL_FREQUENCY = 20
+"""Hz: robosuite's default control rate (its recordings' too)."""
+
+INSTALL = "pip install 'demoplan[robosuite]' in an environment of its own (docs/execution.md)"
+
+OFF_TABLE = 2.0
+"""m: an object farther than this from the table's centre is parked out of the
+task (NutAssemblySquare keeps its round nut at (10, 10, 10))."""
+
+BIN_FLOOR = 0.02
+"""m: how far the floor of a PickPlace bin rises above its body (robosuite 1.5)."""
+
+HANDLE_GRASPS = (90.0,)
+"""A nut is taken at its handle, the fingers across it (the handle runs along
+the nut's x axis)."""
+
+
+def environment_name(sim: str) -> str:
+    """``robosuite:ENV`` → ``ENV``, one of :data:`ENVIRONMENTS`, else a usage error."""
+    name = sim.removeprefix("robosuite:")
+    if name not in ENVIRONMENTS:
+        raise UsageError(
+            f"--sim {sim}: expected robosuite:ENV with ENV one of {', '.join(ENVIRONMENTS)}"
+        )
+    return name
+
+
+def check_installed(sim: str) -> None:
+    """A usage error naming what to install when robosuite is not there."""
+    if importlib.util.find_spec("robosuite") is None:
+        raise UsageError(f"--sim {sim} needs robosuite: {INSTALL}")
+
+
+def make_environment(name: str, seed: int) -> Any:
+    """robosuite's ``name`` with its Panda under its default OSC_POSE controller
+    (delta mode), headless, without a horizon (``ignore_done``: a run takes as
+    many steps as it needs), reset with ``seed``."""
+    import logging
+
+    # robosuite warns at import and setup about what it is not asked for (a macro
+    # file, other robots, a GR1 controller): silenced, its errors still shown.
+    log = logging.getLogger("robosuite_logs")
+    log.disabled = True
+    import robosuite
+    from robosuite.controllers import load_composite_controller_config
+
+    config = load_composite_controller_config(controller="BASIC", robot="Panda")
+    env = robosuite.make(
+        name,
+        robots="Panda",
+        controller_configs=config,
+        has_renderer=False,
+        has_offscreen_renderer=False,
+        use_camera_obs=False,
+        ignore_done=True,
+        control_freq=CONTROL_FREQUENCY,
+        seed=seed,
+    )
+    log.setLevel(logging.ERROR)
+    log.disabled = False
+    env.reset()
+    return env
+
+
+def table_top(env: Any) -> float:
+    """World z (m) of the table top: demoplan's z = 0. PickPlace has no table:
+    there, as in its imported recordings, the top of the floor of the bin its
+    objects start in (``bin1``)."""
+    if hasattr(env, "table_offset"):
+        return float(env.table_offset[2])
+    return float(env.bin1_pos[2]) + BIN_FLOOR
+
+
+def table_centre(env: Any) -> np.ndarray:
+    """World (x, y) of the table's centre (PickPlace: of the first bin's)."""
+    centre = env.table_offset if hasattr(env, "table_offset") else env.bin1_pos
+    return np.asarray(centre[:2], dtype=float)
+
+
+@dataclass(frozen=True, slots=True)
+class EnvObject:
+    """One of the environment's movable objects: demoplan's name, its body, the
+    geoms robosuite checks grasps with, its handle site (nuts), and the bottom
+    of its bounding box below its body origin (m, body frame)."""
+
+    name: str
+    body: int
+    model: Any
+    handle: int | None
+    bottom: float
+    geometry: ObjectGeometry
+
+
+def _colliding_geoms(model: Any, bodies: set[int]) -> list[int]:
+    return [
+        g
+        for g in range(model.ngeom)
+        if int(model.geom_bodyid[g]) in bodies
+        and (int(model.geom_contype[g]) or int(model.geom_conaffinity[g]))
+    ]
+
+
+def _subtree(model: Any, root: int) -> set[int]:
+    out = {root}
+    for body in range(root + 1, model.nbody):
+        if int(model.body_parentid[body]) in out:
+            out.add(body)
+    return out
+
+
+def _bounds(env: Any, body: int, geoms: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The bounding box (low, high corners, body frame) of ``geoms``' own
+    bounding boxes (``geom_aabb``: centre and half sizes in the geom's frame)."""
+    data, model = env.sim.data, env.sim.model
+    origin = np.asarray(data.body_xpos[body])
+    frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
+    corners = []
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    for g in geoms:
+        box = np.asarray(model.geom_aabb[g])
+        local = box[:3] + signs * box[3:]
+        world = (
+            np.asarray(data.geom_xpos[g]) + local @ np.asarray(data.geom_xmat[g]).reshape(3, 3).T
+        )
+        corners.append((world - origin) @ frame)
+    every = np.concatenate(corners)
+    return every.min(axis=0), every.max(axis=0)
+
+
+def _geometry(
+    model: Any, geoms: list[int], low: np.ndarray, high: np.ndarray, mass: float | None
+) -> ObjectGeometry:
+    cylinders = all(int(model.geom_type[g]) == 5 for g in geoms)  # mjGEOM_CYLINDER
+    size = tuple(round(float(v), 6) for v in high - low)
+    return ObjectGeometry("cylinder" if cylinders else "box", (size[0], size[1], size[2]), mass)
+
+
+def env_objects(env: Any) -> list[EnvObject]:
+    """The environment's objects on the table (:data:`OFF_TABLE`) that collide."""
+    model, data = env.sim.model, env.sim.data
+    centre = table_centre(env)
+    out = []
+    for obj in env.model.mujoco_objects:
+        body = int(model.body_name2id(obj.root_body))
+        if np.linalg.norm(np.asarray(data.body_xpos[body][:2]) - centre) > OFF_TABLE:
+            continue
+        geoms = _colliding_geoms(model, _subtree(model, body))
+        if not geoms:
+            continue  # a marker (PickPlace's Visual* targets collide with nothing)
+        low, high = _bounds(env, body, geoms)
+        mass = float(sum(model.body_mass[b] for b in _subtree(model, body)))
+        handle_site = obj.important_sites.get("handle")
+        handle = None if handle_site is None else int(model.site_name2id(handle_site))
+        out.append(
+            EnvObject(
+                obj.name, body, obj, handle, float(low[2]), _geometry(model, geoms, low, high, mass)
+            )
+        )
+    return out
+
+
+def object_pose(env: Any, obj: EnvObject) -> Pose:
+    """``obj``'s pose in demoplan's frame: the bottom below its body origin
+    (turned with the body), the table top at z = 0; orientation x, y, z, w."""
+    data = env.sim.data
+    frame = np.asarray(data.body_xmat[obj.body]).reshape(3, 3)
+    point = np.asarray(data.body_xpos[obj.body]) + frame @ np.array([0.0, 0.0, obj.bottom])
+    w, x, y, z = (float(v) for v in data.body_xquat[obj.body])
+    return Pose((float(point[0]), float(point[1]), float(point[2]) - table_top(env)), (x, y, z, w))
+
+
+def scene_objects(env: Any, objects: list[EnvObject]) -> tuple[SceneObject, ...]:
+    """The objects as a scene's: pose, geometry, and a nut's grasp across its handle."""
+    return tuple(
+        SceneObject(o.name, object_pose(env, o), o.geometry, grasps=HANDLE_GRASPS)
+        if o.handle is not None
+        else SceneObject(o.name, object_pose(env, o), o.geometry)
+        for o in objects
+    )
+
+
+def landmarks(
+    env: Any,
+) -> tuple[tuple[tuple[str, Pose], ...], tuple[tuple[str, ObjectGeometry], ...], dict[str, float]]:
+    """The static top-level bodies that collide (pegs, bins): their poses
+    (bottom centre of their colliding geoms' box, the body's yaw) and the
+    sizes of the solid ones (a bin is hollow: :func:`_hollow`); and every
+    one's top (z, demoplan's frame), which the hand passes above."""
+    model, data = env.sim.model, env.sim.data
+    poses, shapes, tops = [], [], {}
+    robot_bodies = {
+        b
+        for robot in env.robots
+        for b in _subtree(model, int(model.body_name2id(robot.robot_model.root_body)))
+    }
+    for body in range(1, model.nbody):
+        name = model.body_id2name(body)
+        if int(model.body_parentid[body]) != 0 or body in robot_bodies or not name:
+            continue
+        tree = _subtree(model, body)
+        if any(int(model.body_jntnum[b]) for b in tree) or EXCLUDED_LANDMARKS.search(name):
+            continue
+        geoms = _colliding_geoms(model, tree)
+        if not geoms:
+            continue
+        low, high = _bounds(env, body, geoms)
+        frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
+        local = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
+        x, y, z = (float(v) for v in np.asarray(data.body_xpos[body]) + frame @ local)
+        yaw = math.atan2(frame[1, 0], frame[0, 0])
+        quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+        poses.append((name, Pose((x, y, z - table_top(env)), quat)))
+        tops[name] = z - table_top(env) + float(high[2] - low[2])
+        if not _hollow(env, body, geoms, low, high):
+            shapes.append((name, _geometry(model, geoms, low, high, None)))
+    return tuple(poses), tuple(shapes), tops
+
+
+def _hollow(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether the landmark is a container (a bin: walls round open
+    compartments): at three quarters of its height, the middle of its box or
+    the middle of one of its box's quarters (a bin with dividers) lies in none
+    of its geoms' boxes. A container is a reference only (no size):
+    demoplan's landmarks with a size are solid, and things stand inside a bin."""
+    z = low[2] + 0.75 * (high[2] - low[2])
+    points = [
+        np.array([low[0] + fx * (high[0] - low[0]), low[1] + fy * (high[1] - low[1]), z])
+        for fx, fy in ((0.5, 0.5), (0.25, 0.25), (0.25, 0.75), (0.75, 0.25), (0.75, 0.75))
+    ]
+    return any(not any(_inside(env, body, g, point) for g in geoms) for point in points)
+
+
+def _inside(env: Any, body: int, geom: int, point: np.ndarray) -> bool:
+    """Whether ``point`` (``body``'s frame) lies in ``geom``'s bounding box."""
+    data, model = env.sim.data, env.sim.model
+    world = (
+        np.asarray(data.body_xpos[body]) + np.asarray(data.body_xmat[body]).reshape(3, 3) @ point
+    )
+    frame = np.asarray(data.geom_xmat[geom]).reshape(3, 3)
+    local = frame.T @ (world - np.asarray(data.geom_xpos[geom]))
+    box = np.asarray(model.geom_aabb[geom])
+    return bool(np.all(np.abs(local - box[:3]) <= box[3:]))
