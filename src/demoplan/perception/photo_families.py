@@ -58,6 +58,8 @@ from demoplan.perception.photos import PhotoRig
 from demoplan.perception.synthetic import COLOURS
 
 __all__ = [
+    "ACHROMATIC",
+    "CHROMATIC",
     "FAMILIES",
     "HIDDEN_BELOW",
     "PARTIAL_BELOW",

@@ -35,6 +35,7 @@ __all__ = [
     "canvas_points",
     "draw_board",
     "lens_and_sensor",
+    "light_falloff",
     "random_photo_blocks",
     "render_photo",
     "top_camera",
@@ -332,6 +333,17 @@ def render_photo(
     return lens_and_sensor(image, rig, blur, noise, jpeg_quality, generator)
 
 
+def light_falloff(rig: PhotoRig) -> np.ndarray:
+    """The share of the light each pixel gets (rows × columns): 1 at the top-left
+    corner, falling off to 0.82 at the bottom-right."""
+    ramp: np.ndarray = (
+        1.0
+        - 0.12 * np.linspace(0, 1, rig.width)[None, :]
+        - 0.06 * np.linspace(0, 1, rig.height_px)[:, None]
+    )
+    return ramp
+
+
 def lens_and_sensor(
     image: np.ndarray,
     rig: PhotoRig,
@@ -348,12 +360,7 @@ def lens_and_sensor(
     gain, and bright colours clip at 255 — an over-exposed yellow turns pale),
     blur, sensor noise, 8 bits, JPEG."""
     # lighting falls off across the table, then the lens and the sensor
-    ramp = (
-        1.0
-        - 0.12 * np.linspace(0, 1, rig.width)[None, :]
-        - 0.06 * np.linspace(0, 1, rig.height_px)[:, None]
-    )
-    image = image * ramp[..., None]
+    image = image * light_falloff(rig)[..., None]
     if exposure != 1.0:
         grey = image.mean(axis=2, keepdims=True)
         image = np.minimum((grey + (image - grey) / exposure) * exposure, 255.0)
