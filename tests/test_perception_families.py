@@ -6,7 +6,8 @@ scored as the real photographs are (demoplan.perception.labelled: a top face is
 found by a detection within 0.6 of its side of its centre).
 
 The acceptance is the issue's, by hypothesis over each family: at least 90 % of the
-labelled, non-partial top faces found and at most one false block per image, with
+labelled, non-partial top faces found and at most one false block per image (none
+in a photograph without cubes: the shapes photograph of the real set), with
 ``--side`` given or not. Each example renders one 1280 × 720 image and perceives
 it, so the counts are small and failing examples are not shrunk (a smaller seed is
 no simpler a photograph). The other tests check the families' truth itself: where
@@ -65,7 +66,7 @@ def test_a_family_photograph_meets_the_issue_thresholds(
     assert run.exit_code == 0, run.error
     score = run.score
     assert score.found >= 0.9 * score.needed, (case.name, side_given, score)
-    assert score.false <= 1, (case.name, side_given, score)
+    assert score.false <= (1 if score.needed else 0), (case.name, side_given, score)
 
 
 # --------------------------------------------------------------------------- the truth

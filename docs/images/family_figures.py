@@ -6,7 +6,8 @@ From the repository root::
 
     python docs/images/family_figures.py
 
-writes next to this file ``family-NAME.png`` for every family (seed 1): the
+writes next to this file ``family-NAME.png`` for every family (seed 1; for
+``distractors`` seed 2, whose photograph has cubes beside the shapes): the
 1280 × 720 render shrunk to 480 × 270, a green circle of 0.6 side around each
 labelled top face that must be found (the reach of a detection that finds it),
 a magenta one around each partial face (a cube on it, a hand over it, the
@@ -26,12 +27,13 @@ from demoplan.perception.photo_families import FAMILIES, family_case
 
 HERE = Path(__file__).resolve().parent
 SEED = 1
+SEEDS = {"distractors": 2}  # seed 1 has shapes only
 SHRINK = 480 / 1280
 
 
 def figure(family: str) -> np.ndarray:
-    """The family's photograph ``SEED``, shrunk, with its labels drawn on."""
-    case = family_case(family, SEED)
+    """The family's photograph (``SEED``, or its own), shrunk, with its labels drawn on."""
+    case = family_case(family, SEEDS.get(family, SEED))
     shrunk = cv2.resize(case.image, (480, 270), interpolation=cv2.INTER_AREA)
     drawn: np.ndarray = np.ascontiguousarray(shrunk)
     for block in case.label.blocks:

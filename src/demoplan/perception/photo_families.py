@@ -19,7 +19,8 @@ The families (:data:`FAMILIES`, each a function of a random generator):
 - ``tilted``: the camera 10–30° from straight down (the label's scale holds at
   the image's centre only);
 - ``distractors``: cylinders, cuboids, stars and pentagons of the cubes'
-  colours beside the cubes — none is a block.
+  colours beside the cubes — none is a block; about one photograph in seven
+  has shapes only.
 
 A top face less than :data:`PARTIAL_BELOW` in view (a cube on it, a hand over
 it, the image's border through it) is ``partial`` (it need not be found); one
@@ -311,7 +312,7 @@ def tilted(rng: np.random.Generator) -> PhotoScene:
 def distractors(rng: np.random.Generator) -> PhotoScene:
     rig, background = _rig(rng), _background(rng)
     layout = _Layout(rig, rng, background == "board")
-    cubes = _lone_cubes(layout, int(rng.integers(3, 8)), CHROMATIC)
+    cubes = _lone_cubes(layout, int(rng.integers(3, 8)) if rng.random() > 0.15 else 0, CHROMATIC)
     shapes = []
     for _ in range(int(rng.integers(3, 7))):
         kind = str(rng.choice(["cylinder", "cuboid", "star", "pentagon"]))
