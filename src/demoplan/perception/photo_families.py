@@ -187,6 +187,7 @@ def _background(
 
 
 def touching_rows(rng: np.random.Generator) -> PhotoScene:
+    """Two or three rows of two to five cubes face to face, of three colours, and lone cubes."""
     rig, background = _rig(rng), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     palette = {n: CHROMATIC[n] for n in rng.choice(sorted(CHROMATIC), 3, replace=False)}
@@ -200,6 +201,8 @@ def touching_rows(rng: np.random.Generator) -> PhotoScene:
 
 
 def stacks(rng: np.random.Generator) -> PhotoScene:
+    """Two to four stacks two or three cubes high (each a few mm off and up to 12°
+    turned on the one below), and lone cubes; the camera 0.8–1.3 m up."""
     rig, background = _rig(rng, (0.8, 1.3)), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     cubes: list[Cube] = []
@@ -228,6 +231,8 @@ def stacks(rng: np.random.Generator) -> PhotoScene:
 
 
 def achromatic(rng: np.random.Generator) -> PhotoScene:
+    """Black and white cubes (and grey ones on paper) on the board or paper, with up to
+    two coloured ones."""
     rig, background = _rig(rng), _background(rng, ("board", "paper"))
     layout = _Layout(rig, rng, background == "board")
     names = dict(ACHROMATIC)
@@ -239,6 +244,7 @@ def achromatic(rng: np.random.Generator) -> PhotoScene:
 
 
 def patterned(rng: np.random.Generator) -> PhotoScene:
+    """Four to nine cubes, each with a :data:`GLYPHS` pattern printed on its top."""
     rig, background = _rig(rng), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     names = {**CHROMATIC, "white": ACHROMATIC["white"]}
@@ -247,6 +253,8 @@ def patterned(rng: np.random.Generator) -> PhotoScene:
 
 
 def hands(rng: np.random.Generator) -> PhotoScene:
+    """Four to eight cubes and one or two hands reaching for a cube, palm beside it,
+    fingers towards it."""
     rig, background = _rig(rng), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     cubes = _lone_cubes(layout, int(rng.integers(4, 9)), CHROMATIC)
@@ -263,6 +271,7 @@ def hands(rng: np.random.Generator) -> PhotoScene:
 
 
 def side_faces(rng: np.random.Generator) -> PhotoScene:
+    """A camera 0.45–0.6 m up, its axis anywhere up to 300 px beyond the image: large side faces."""
     height = float(rng.uniform(0.45, 0.6))
     rig = PhotoRig(
         height=height,
@@ -276,6 +285,7 @@ def side_faces(rng: np.random.Generator) -> PhotoScene:
 
 
 def overexposed(rng: np.random.Generator) -> PhotoScene:
+    """Mostly yellow cubes under an exposure of 1.4–1.8 and strong glints."""
     rig, background = _rig(rng), _background(rng, ("board", "blue"))
     layout = _Layout(rig, rng, background == "board")
     cubes = _lone_cubes(layout, int(rng.integers(2, 6)), {"yellow": CHROMATIC["yellow"]})
@@ -285,6 +295,8 @@ def overexposed(rng: np.random.Generator) -> PhotoScene:
 
 
 def small(rng: np.random.Generator) -> PhotoScene:
+    """10 to 30 cubes of 25 mm, some in touching pairs, the camera 1.85–2.1 m up (about
+    26 px a side)."""
     rig, background = _rig(rng, (1.85, 2.1)), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     cubes = [
@@ -295,6 +307,7 @@ def small(rng: np.random.Generator) -> PhotoScene:
 
 
 def tilted(rng: np.random.Generator) -> PhotoScene:
+    """Five to ten cubes under a camera tilted 10–30° towards +y (± 30°), 0.8–1.2 m up."""
     tilt = float(rng.uniform(10, 30))
     height = float(rng.uniform(0.8, 1.2))
     rig = PhotoRig(
@@ -310,6 +323,8 @@ def tilted(rng: np.random.Generator) -> PhotoScene:
 
 
 def distractors(rng: np.random.Generator) -> PhotoScene:
+    """Cylinders, cuboids, stars and pentagons beside up to seven cubes (none in about
+    one photograph in seven)."""
     rig, background = _rig(rng), _background(rng)
     layout = _Layout(rig, rng, background == "board")
     cubes = _lone_cubes(layout, int(rng.integers(3, 8)) if rng.random() > 0.15 else 0, CHROMATIC)
@@ -374,6 +389,7 @@ class FamilyCase:
 
     @property
     def name(self) -> str:
+        """``family-seed``: the name of its image and label files."""
         return f"{self.family}-{self.seed}"
 
 

@@ -80,8 +80,10 @@ class PhotoRig:
         t = math.radians(self.tilt)
         cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
         turn = np.eye(3) + math.sin(t) * cross + (1 - math.cos(t)) * cross @ cross
-        return turn @ np.array([1.0, 0, 0]), turn @ np.array([0, 1.0, 0]), turn @ np.array(
-            [0, 0, -1.0]
+        return (
+            turn @ np.array([1.0, 0, 0]),
+            turn @ np.array([0, 1.0, 0]),
+            turn @ np.array([0, 0, -1.0]),
         )
 
     def camera_centre(self) -> tuple[float, float, float]:
