@@ -35,6 +35,7 @@ from demoplan.cli import app
 from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
 from demoplan.documents.masses import MAX_DENSITY, MIN_DENSITY
 from demoplan.documents.poses import (
+    MAX_ANGLE,
     MAX_COORDINATE,
     MAX_DISTANCE_M,
     MAX_SIZE_M,
@@ -46,10 +47,11 @@ from demoplan.documents.poses import (
 )
 from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M, MAX_SPREAD_PER_OBJECT
 from demoplan.errors import InputError, LimitReachedError, NoPlanError, UsageError
-from demoplan.execution.behaviour_tree import ATTEMPTS, NODES, task_tree
+from demoplan.execution.behaviour_tree import ATTEMPTS, MAX_TICKS, NODES, task_tree
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import FAULT_KINDS, Faults
 from demoplan.execution.runner import run_task
+from demoplan.execution.tree_checks import MAX_ATTEMPTS, MAX_TOLERANCE_M, NODE_TYPES
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import (
@@ -1742,6 +1744,20 @@ def tree_section(computed: Computed) -> str:
             "`failed_subgoal` the subgoal given up. The first subgoal of the tree that "
             f"`export bt` writes for the model above in `{PYRAMID}`:",
             fenced("xml", excerpt),
+            "`run --bt` reads a tree file of its own making as strictly as a scene file "
+            "(src/demoplan/execution/tree_checks.py) before the engine sees it, and refuses in "
+            "one line (exit 1): anything under the root but `BehaviorTree` and "
+            "`TreeNodesModel` (`include` is never followed); a `SubTree` naming a tree the file "
+            "does not define, or trees that reach themselves through `SubTree` references; "
+            "node types other than "
+            + ", ".join(code(name) for name in sorted(NODE_TYPES))
+            + "; `Script` code other than `name:='text'` and the engine's scripted attributes "
+            f"(`_skipIf`, `_onSuccess`, …); retry and repeat counts outside 1 … {MAX_ATTEMPTS}; "
+            "on the vocabulary's nodes, unknown ports, input values in braces (the engine "
+            "would read them as blackboard entries), positions farther than "
+            f"{MAX_DISTANCE_M:g} m, angles beyond {MAX_ANGLE:g}°, tolerances not above 0 or "
+            f"above {MAX_TOLERANCE_M:g} m / 180°. A run stops after {MAX_TICKS:,} ticks "
+            "(exit 4) or its run's limit of actions.",
         ]
     )
 

@@ -360,3 +360,24 @@ def test_update_learns_the_roles_again_from_the_instances(table: tuple[Taught, T
     at_once = learn(taught.demonstrations)
     assert _learned_structure(updated) == _learned_structure(at_once)
     assert updated.roles == at_once.roles
+
+
+@pytest.mark.parametrize("typed", [False, True])
+def test_a_scene_object_named_as_a_role_needs_its_type(tmp_path: Path, typed: bool) -> None:
+    """``red#1`` names the first red role: a scene object may carry that name only
+    as an instance of its type, as in demonstration files."""
+    from demoplan.errors import InputError
+    from demoplan.scenes.scene import load_scene
+
+    red = {"position": [0.3, 0.1, 0.0], "size": [0.04, 0.04, 0.04]}
+    document = {
+        "format": "demoplan/scene-1",
+        "objects": {"red#1": red | ({"type": "red"} if typed else {}), "blue": dict(red)},
+    }
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(document))
+    if typed:
+        assert load_scene(path).object("red#1").type == "red"
+    else:
+        with pytest.raises(InputError, match=r"objects\.red#1: '#' names a role of a type"):
+            load_scene(path)

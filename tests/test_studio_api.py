@@ -754,8 +754,16 @@ def test_requests_from_other_sites_are_refused(client: TestClient) -> None:
     body = {"document": blocks_demonstrations()[0]}
     other = {"origin": "http://attacker.example"}
     one_line_error(client.post("/api/demonstrations", json=body, headers=other), 403, "Origin")
-    mine = {"origin": "http://127.0.0.1:8765"}
+    for elsewhere in ("http://127.0.0.1:1", "null", "https://127.0.0.1", "http://localhost"):
+        one_line_error(
+            client.post("/api/demonstrations", json=body, headers={"origin": elsewhere}),
+            403,
+            "Origin",
+        )
+    mine = {"origin": "http://127.0.0.1"}  # the page the client's requests come from
     assert client.post("/api/demonstrations", json=body, headers=mine).status_code == 201
+    on_a_port = {"host": "localhost:8765", "origin": "http://localhost:8765"}
+    assert client.get("/api/files", headers=on_a_port).status_code == 200
     form = {"content-type": "text/plain"}
     text = json.dumps(body)
     one_line_error(

@@ -44,7 +44,7 @@ def export(
         typer.Option("--plan-only", help="The plan's flat sequence: no checks, no retries."),
     ] = False,
     attempts: Annotated[
-        int, typer.Option(min=1, help="Tries of each subgoal before the tree fails.")
+        int, typer.Option(min=1, max=1000, help="Tries of each subgoal before the tree fails.")
     ] = 3,  # demoplan.execution.behaviour_tree.ATTEMPTS
     freespace: FreespaceOption = None,
     timeout: Annotated[

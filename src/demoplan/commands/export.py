@@ -9,7 +9,7 @@ from pathlib import Path
 from demoplan.budget import Budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.commands.planning import plan
-from demoplan.errors import NoPlanError, UsageError
+from demoplan.errors import InputError, NoPlanError, UsageError
 from demoplan.execution.behaviour_tree import (
     ATTEMPTS,
     TreeRun,
@@ -20,6 +20,7 @@ from demoplan.execution.behaviour_tree import (
 from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import make_world
+from demoplan.execution.tree_checks import MAX_ATTEMPTS, check_tree
 from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs, write_atomic
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
@@ -63,12 +64,23 @@ def behaviour_tree(
     subgoal tried ``attempts`` times.
 
     Raises NoPlanError (exit 3) where the scene or the goal has no plan."""
-    if attempts < 1:
-        raise UsageError(f"--attempts {attempts}: at least 1 expected")
+    if not 1 <= attempts <= MAX_ATTEMPTS:
+        raise UsageError(f"--attempts {attempts}: 1 to {MAX_ATTEMPTS} expected")
     result = plan(model, scene, budget=budget, settings=settings)
     if goal is not None:
         result = _with_goal(result, goal)
+    read_as_entries = [
+        name for name in result.chosen.problem.problem.objects if "{" in name or "}" in name
+    ]
+    if read_as_entries:
+        raise InputError(
+            f"object {read_as_entries[0]!r} cannot be named in a behaviour tree: the engine "
+            "reads {…} as a blackboard entry; rename it in the scene and the model",
+            source=display_path(scene) if isinstance(scene, Path) else "scene",
+        )
     tree = task_tree(result, settings=execution, plan_only=plan_only, attempts=attempts)
+    # what the run would refuse is never written (a name the engine reads as {entry})
+    check_tree(tree, source="the exported tree")
     return tree, result
 
 

@@ -30,13 +30,14 @@ import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
-from xml.etree.ElementTree import Element, ParseError, SubElement, indent, tostring
+from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from defusedxml.ElementTree import fromstring
 
-from demoplan.errors import InputError, UsageError
+from demoplan.errors import InputError, LimitReachedError, UsageError
 from demoplan.execution.executor import MISPLACED_WITHIN, ExecutionSettings, FailureKind
 from demoplan.execution.faults import InjectedFault
+from demoplan.execution.tree_checks import check_tree
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
 from demoplan.planning.problem import Action
@@ -49,6 +50,7 @@ from demoplan.scenes.scene import yaw_of
 
 __all__ = [
     "ATTEMPTS",
+    "MAX_TICKS",
     "NODES",
     "NodeModel",
     "Port",
@@ -57,6 +59,10 @@ __all__ = [
     "task_tree",
     "tree_targets",
 ]
+
+MAX_TICKS = 100_000
+"""A tree run stops (exit 4) after this many ticks: a ``KeepRunningUntilFailure``
+around a leaf that never fails would otherwise run until killed."""
 
 ATTEMPTS = 3
 """Each subgoal is tried at most this often (``RetryUntilSuccessful``), as the
@@ -428,6 +434,7 @@ class _Binding:
     upcoming: list[tuple[str, Pose]]
     picked_from: Pose | None = None
     actions: int = 0
+    max_actions: int = ExecutionSettings().max_actions
     errors: list[BaseException] = field(default_factory=list)
 
     # -- helpers
@@ -439,6 +446,11 @@ class _Binding:
 
     def after_action(self) -> None:
         self.actions += 1
+        if self.actions >= self.max_actions:
+            raise LimitReachedError(
+                f"the tree gave up after {self.max_actions} actions (a run's limit; "
+                "a tree that keeps moving objects is not run further)"
+            )
         self.world.between_actions([pose for _, pose in self.upcoming])
 
     def at_target(self, blackboard: Any, obj: str, observation: Observation) -> str | None:
@@ -543,9 +555,11 @@ class _Binding:
         import behaviortreepy as bt
 
         def callback(node: Any) -> Any:
+            if self.errors:  # the rest of the tick ends at once
+                return bt.NodeStatus.FAILURE
             try:
                 ok = leaf(node)
-            except Exception as exc:  # re-raised after the tick
+            except BaseException as exc:  # Ctrl-C too: re-raised after the tick
                 self.errors.append(exc)
                 ok = False
             return bt.NodeStatus.SUCCESS if ok else bt.NodeStatus.FAILURE
@@ -567,11 +581,10 @@ def _target(blackboard: Any) -> Pose:
 
 def tree_targets(xml: str, source: str = "tree") -> list[tuple[str, Pose]]:
     """The targets of the tree's PutDown and MoveToFree nodes, in document order
-    (an InputError naming ``source`` where ``xml`` is not XML)."""
-    try:
-        root = fromstring(xml)
-    except (ParseError, ValueError) as exc:
-        raise InputError(f"not a behaviour tree ({exc})", source=source) from None
+    (an InputError naming ``source`` where ``xml`` is not a tree the engine may
+    be given: :func:`~demoplan.execution.tree_checks.check_tree`)."""
+    check_tree(xml, source)
+    root = fromstring(xml)
     found = []
     for node in _subtrees(root):
         kind, obj = node.get("ID"), node.get("object")
@@ -638,9 +651,12 @@ def _check_graspable(xml: str, world: World, source: str) -> None:
         )
 
 
-def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
+def run_behaviour_tree(
+    xml: str, world: World, source: str = "tree", *, max_ticks: int = MAX_TICKS
+) -> TreeRun:
     """Load ``xml`` in BehaviorTree.CPP (behaviortreepy), bind its leaves to
-    ``world`` and tick it until it stops (module docstring). A tree the engine
+    ``world`` and tick it until it stops (module docstring), at most
+    ``max_ticks`` times (then LimitReachedError, exit 4). A tree the engine
     does not load is an InputError naming ``source`` and the engine's reason."""
     try:
         import behaviortreepy as bt
@@ -662,7 +678,12 @@ def run_behaviour_tree(xml: str, world: World, source: str = "tree") -> TreeRun:
         raise InputError(f"the engine does not load the tree: {exc}", source=source) from None
     ticks = 1
     status = tree.tick_once()
-    while status == bt.NodeStatus.RUNNING:
+    while status == bt.NodeStatus.RUNNING and not binding.errors:
+        if ticks >= max_ticks:
+            raise LimitReachedError(
+                f"{source}: the tree still runs after {max_ticks:,} ticks "
+                f"({binding.actions} actions); a tree that never ends is not run further"
+            )
         ticks += 1
         status = tree.tick_once()
     if binding.errors:

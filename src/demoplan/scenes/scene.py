@@ -231,6 +231,13 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
     objects = []
     for name, entry in parsed.objects.items():
         _check_name(name, source)
+        if "#" in name and entry.type is None:
+            raise InputError(
+                "'#' names a role of a type (plate#1); an object name without '#' expected "
+                "(as in demonstration files)",
+                source=source,
+                field=f"objects.{name}",
+            )
         if name in parsed.landmarks:
             raise InputError(
                 "is both an object and a landmark; one kind expected",

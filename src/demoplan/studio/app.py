@@ -11,6 +11,7 @@ parsers) and a bad one is answered with a 4xx and one line,
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -33,6 +34,7 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError, UsageError
+from demoplan.fileio import os_reason
 from demoplan.studio.jobs import LAST_RUN_FILE, Jobs, TooManyRunsError
 from demoplan.studio.requests import (
     MAX_BODY_BYTES,
@@ -93,7 +95,8 @@ class LocalOnly:
     """ASGI middleware against other web pages: a request must name an allowed
     host in its ``Host`` header (a page of another site that resolves its own
     name to 127.0.0.1 — DNS rebinding — names its own), a request from a page
-    must come from the studio's origin (``Origin``), and a body must be JSON
+    must come from the studio's origin (``Origin``: its scheme, host and port;
+    not ``null``), and a body must be JSON
     (``Content-Type: application/json``: a form of another page cannot send
     one without the browser asking first). 403 / 415 with one line."""
 
@@ -111,17 +114,24 @@ class LocalOnly:
             await _answer(send, 403, f"Host: {host!r} is not this studio's; {_names(self.hosts)}")
             return
         origin = headers.get(b"origin")
-        if origin is not None and origin != b"null":
+        if origin is not None and not _same_origin(origin, headers.get(b"host", b"")):
             text = origin.decode("latin-1")
-            if _host_name(text.partition("://")[2]) not in self.hosts:
-                await _answer(send, 403, f"Origin: {text!r} is another site's page")
-                return
+            await _answer(send, 403, f"Origin: {text!r} is another site's page")
+            return
         if scope["method"] in {"POST", "PUT", "PATCH"}:
             kind = headers.get(b"content-type", b"").split(b";")[0].strip().lower()
             if kind != b"application/json":
                 await _answer(send, 415, "Content-Type: application/json expected")
                 return
         await self.app(scope, receive, send)
+
+
+def _same_origin(origin: bytes, host: bytes) -> bool:
+    """Is ``origin`` the studio's own page: ``http://`` and the very host and
+    port the request was sent to (``Host``)? Another port of the same machine
+    is another site, and ``null`` (a sandboxed or local file's page) is no site."""
+    scheme, _, authority = origin.decode("latin-1").strip().lower().partition("://")
+    return scheme == "http" and authority == host.decode("latin-1").strip().lower()
 
 
 def _host_name(value: str) -> str:
@@ -604,10 +614,28 @@ def _add_error_handlers(app: FastAPI) -> None:
     for kind, status in ERROR_STATUS:
         app.add_exception_handler(kind, answered_with(status))
 
+    @app.exception_handler(OSError)
+    async def folder_changed(request: Request, exc: OSError) -> JSONResponse:
+        return detail(503, _folder_trouble(app.state.workfolder.root, exc))
+
     @app.exception_handler(Exception)
     async def internal(request: Request, exc: Exception) -> JSONResponse:
         logging.getLogger(__name__).warning("internal error: %r", exc)
         return detail(500, f"internal error ({type(exc).__name__}); the studio's log says more")
+
+
+def _folder_trouble(root: Path, exc: OSError) -> str:
+    """What happened to the work folder under the studio, in words (the
+    answer's one line where a request could not read or write it)."""
+    if not root.exists():
+        happened = "was removed while the studio runs; make it again or start the studio anew"
+    elif not root.is_dir():
+        happened = "is no longer a folder (something replaced it); start the studio anew"
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS) or not os.access(root, os.W_OK):
+        happened = f"cannot be written ({os_reason(exc)}): was it made read-only?"
+    else:
+        happened = f"cannot be read or written ({os_reason(exc)})"
+    return f"the work folder {root} {happened}"
 
 
 def _add_last_run_route(app: FastAPI, jobs: Jobs) -> None:
