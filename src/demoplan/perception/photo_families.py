@@ -333,7 +333,7 @@ def distractors(rng: np.random.Generator) -> PhotoScene:
         kind = str(rng.choice(["cylinder", "cuboid", "star", "pentagon"]))
         size = SIDE * float(rng.uniform(0.9, 1.3))
         stretch = float(rng.uniform(1.7, 2.5))
-        spot = layout.spot(size / 2 * (stretch if kind == "cuboid" else 1.0) * 1.1)
+        spot = layout.spot(size / 2 * (0.6 * stretch if kind == "cuboid" else 1.0) * 1.1)
         if spot is None:
             break
         height = {
