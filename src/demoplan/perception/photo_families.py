@@ -95,10 +95,13 @@ class _Layout:
     """Places things apart on the part of the table the image shows (off the
     markers and the machine base of a board)."""
 
-    def __init__(self, rig: PhotoRig, rng: np.random.Generator, board: bool) -> None:
+    def __init__(self, rig: PhotoRig, rng: np.random.Generator, background: str) -> None:
         self.rig, self.rng = rig, rng
         self.taken: list[tuple[float, float, float]] = []
-        if board:
+        # colours no cube has here: a blue cube on the blue table is as lost as
+        # a grey one on the grey board
+        self.unseen = {"blue"} if background == "blue" else set()
+        if background == "board":
             x0, y0, x1, y1 = rig.table_extent()
             r = 0.75 * rig.marker + 0.015
             self.taken += [
@@ -107,6 +110,11 @@ class _Layout:
                 for y in (y0 + 0.015 + rig.marker / 2, y1 - 0.015 - rig.marker / 2)
             ]
             self.taken.append(((x0 + x1) / 2, y1, 0.09))
+
+    def colour(self, names: Mapping[str, tuple[int, int, int]]) -> str:
+        """One of ``names`` at random, none the table hides."""
+        shown = [name for name in names if name not in self.unseen]
+        return shown[int(self.rng.integers(len(shown)))]
 
     def spot(self, radius: float, margin_px: float = 50.0) -> tuple[float, float] | None:
         """A free centre for a thing of ``radius`` (m) wholly in the image, or none."""
@@ -126,10 +134,6 @@ class _Layout:
         return None
 
 
-def _colour(rng: np.random.Generator, names: Mapping[str, tuple[int, int, int]]) -> str:
-    return str(list(names)[int(rng.integers(len(names)))])
-
-
 def _lone_cubes(
     layout: _Layout,
     count: int,
@@ -144,7 +148,7 @@ def _lone_cubes(
         spot = layout.spot(side * 0.75)
         if spot is None:
             break
-        name = _colour(rng, names)
+        name = layout.colour(names)
         pattern = patterns[int(rng.integers(len(patterns)))]
         yaw = float(rng.uniform(-45, 45))
         cubes.append(Cube(name, names[name], *spot, yaw, side, pattern=pattern))
@@ -166,7 +170,7 @@ def _row(
     cubes = []
     for k in range(count):
         x, y = np.array(spot) + (k - (count - 1) / 2) * pitch * along
-        name = _colour(rng, names)
+        name = layout.colour(names)
         turn = float(rng.uniform(-2.0, 2.0))
         cubes.append(Cube(name, names[name], float(x), float(y), yaw + turn, side))
     return cubes
@@ -189,8 +193,9 @@ def _background(
 def touching_rows(rng: np.random.Generator) -> PhotoScene:
     """Two or three rows of two to five cubes face to face, of three colours, and lone cubes."""
     rig, background = _rig(rng), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
-    palette = {n: CHROMATIC[n] for n in rng.choice(sorted(CHROMATIC), 3, replace=False)}
+    layout = _Layout(rig, rng, background)
+    shown = sorted(set(CHROMATIC) - layout.unseen)
+    palette = {n: CHROMATIC[n] for n in rng.choice(shown, 3, replace=False)}
     cubes = [
         c
         for _ in range(int(rng.integers(2, 4)))
@@ -204,13 +209,14 @@ def stacks(rng: np.random.Generator) -> PhotoScene:
     """Two to four stacks two or three cubes high (each a few mm off and up to 12°
     turned on the one below), and lone cubes; the camera 0.8–1.3 m up."""
     rig, background = _rig(rng, (0.8, 1.3)), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes: list[Cube] = []
     for _ in range(int(rng.integers(2, 5))):
         spot = layout.spot(0.8 * SIDE)
         if spot is None:
             break
-        names = list(rng.choice(sorted(CHROMATIC), int(rng.integers(2, 4)), replace=False))
+        shown = sorted(set(CHROMATIC) - layout.unseen)
+        names = list(rng.choice(shown, int(rng.integers(2, 4)), replace=False))
         yaw = float(rng.uniform(-45, 45))
         for level, name in enumerate(names):
             dx, dy = rng.uniform(-0.003, 0.003, 2) if level else (0.0, 0.0)
@@ -234,7 +240,7 @@ def achromatic(rng: np.random.Generator) -> PhotoScene:
     """Black and white cubes (and grey ones on paper) on the board or paper, with up to
     two coloured ones."""
     rig, background = _rig(rng), _background(rng, ("board", "paper"))
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     names = dict(ACHROMATIC)
     if background == "board":
         del names["grey"]  # a grey cube on the grey board: nothing to see
@@ -246,7 +252,7 @@ def achromatic(rng: np.random.Generator) -> PhotoScene:
 def patterned(rng: np.random.Generator) -> PhotoScene:
     """Four to nine cubes, each with a :data:`GLYPHS` pattern printed on its top."""
     rig, background = _rig(rng), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     names = {**CHROMATIC, "white": ACHROMATIC["white"]}
     cubes = _lone_cubes(layout, int(rng.integers(4, 10)), names, patterns=sorted(GLYPHS))
     return PhotoScene(rig, tuple(cubes), background=background)
@@ -256,7 +262,7 @@ def hands(rng: np.random.Generator) -> PhotoScene:
     """Four to eight cubes and one or two hands reaching for a cube, palm beside it,
     fingers towards it."""
     rig, background = _rig(rng), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = _lone_cubes(layout, int(rng.integers(4, 9)), CHROMATIC)
     reaching = []
     for target in rng.choice(len(cubes), min(len(cubes), int(rng.integers(1, 3))), replace=False):
@@ -279,7 +285,7 @@ def side_faces(rng: np.random.Generator) -> PhotoScene:
         nadir_px=(float(rng.uniform(-300, 1580)), float(rng.uniform(-200, 920))),
     )
     background = _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = _lone_cubes(layout, int(rng.integers(4, 9)), CHROMATIC)
     return PhotoScene(rig, tuple(cubes), background=background)
 
@@ -287,7 +293,7 @@ def side_faces(rng: np.random.Generator) -> PhotoScene:
 def overexposed(rng: np.random.Generator) -> PhotoScene:
     """Mostly yellow cubes under an exposure of 1.4–1.8 and strong glints."""
     rig, background = _rig(rng), _background(rng, ("board", "blue"))
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = _lone_cubes(layout, int(rng.integers(2, 6)), {"yellow": CHROMATIC["yellow"]})
     cubes += _lone_cubes(layout, int(rng.integers(1, 5)), CHROMATIC)
     exposure = float(rng.uniform(1.4, 1.8))
@@ -298,7 +304,7 @@ def small(rng: np.random.Generator) -> PhotoScene:
     """10 to 30 cubes of 25 mm, some in touching pairs, the camera 1.85–2.1 m up (about
     26 px a side)."""
     rig, background = _rig(rng, (1.85, 2.1)), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = [
         c for _ in range(int(rng.integers(1, 5))) for c in _row(layout, 2, CHROMATIC, SMALL_SIDE)
     ]
@@ -317,7 +323,7 @@ def tilted(rng: np.random.Generator) -> PhotoScene:
         tilt_towards=float(rng.uniform(60, 120)),
     )
     background = _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = _lone_cubes(layout, int(rng.integers(5, 11)), CHROMATIC)
     return PhotoScene(rig, tuple(cubes), background=background)
 
@@ -326,7 +332,7 @@ def distractors(rng: np.random.Generator) -> PhotoScene:
     """Cylinders, cuboids, stars and pentagons beside up to seven cubes (none in about
     one photograph in seven)."""
     rig, background = _rig(rng), _background(rng)
-    layout = _Layout(rig, rng, background == "board")
+    layout = _Layout(rig, rng, background)
     cubes = _lone_cubes(layout, int(rng.integers(3, 8)) if rng.random() > 0.15 else 0, CHROMATIC)
     shapes = []
     for _ in range(int(rng.integers(3, 7))):
@@ -342,7 +348,7 @@ def distractors(rng: np.random.Generator) -> PhotoScene:
             "star": rng.uniform(0.012, 0.03),
             "pentagon": rng.uniform(0.012, 0.03),
         }[kind]
-        name = _colour(rng, CHROMATIC)
+        name = layout.colour(CHROMATIC)
         shapes.append(
             Shape(
                 kind,
