@@ -15,6 +15,11 @@ then maps to the image by a similarity, so the plane of the cubes' tops
 (z = side) is an exact top-down camera of docs/formats.md: :func:`top_camera`
 gives it, and a cube's top face seen there is centred on the cube's (x, y).
 The truth is the blocks as given (:class:`~demoplan.perception.synthetic.SyntheticBlock`).
+
+A :class:`PhotoRig` may also lean its camera (``tilt``): planes then map to
+the image by a homography, not a similarity, and :func:`top_camera` no longer
+holds; the generated families (:mod:`demoplan.perception.photo_families`) use
+it, with their truth in pixels as the real photographs' labels give it.
 """
 
 from __future__ import annotations
@@ -142,7 +147,8 @@ class PhotoRig:
 
 
 def top_camera(rig: PhotoRig, side: float) -> Camera:
-    """The top-down camera of the plane of the cubes' tops (z = ``side``)."""
+    """The top-down camera of the plane of the cubes' tops (z = ``side``) of a
+    straight-down ``rig`` (no tilt)."""
     scale = rig.focal / (rig.height - side)
     return Camera(
         scale, (rig.nadir[0] - rig.nadir_px[0] / scale, rig.nadir[1] - rig.nadir_px[1] / scale)
