@@ -85,7 +85,7 @@ def _on_ray(
     import ray
 
     started = time.perf_counter()
-    ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    ray.init(address="local", num_cpus=workers, include_dashboard=False, log_to_driver=False)
     ray.get(ray.remote(lambda: None).remote())  # a worker up: start-up complete
     start_s = time.perf_counter() - started
     try:

@@ -611,7 +611,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.workers:  # one local Ray for every row
         import ray
 
-        ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
+        ray.init(
+            address="local", num_cpus=args.workers, include_dashboard=False, log_to_driver=False
+        )
         engine = RayEngine()
     rows: list[Row] = []
     for experiment, world, faults, count in plan:

@@ -40,12 +40,12 @@ def test_what_the_check_accepts_is_carried_at_the_first_attempt(seed: int) -> No
             assert "base at (0.000, 0.000)" in attempt.refused and "reaches" in attempt.refused
 
 
-LUNCH_OBJECTS = {
-    "sandwich": {"shape": "box", "size": [0.10, 0.10, 0.03], "mass": 0.15},
-    "apple": {"shape": "cylinder", "size": [0.07, 0.07, 0.07], "mass": 0.18},
-    "juice": {"shape": "box", "size": [0.04, 0.06, 0.10], "mass": 0.25},
-    "carrot": {"shape": "box", "size": [0.15, 0.025, 0.025], "mass": 0.07},
-    "cookie": {"shape": "cylinder", "size": [0.05, 0.05, 0.01], "mass": 0.02},
+LUNCH_OBJECTS = {  # no masses: solid wood's (the sandwich 0.18 kg, the apple 0.16 kg)
+    "sandwich": {"shape": "box", "size": [0.10, 0.10, 0.03]},
+    "apple": {"shape": "cylinder", "size": [0.07, 0.07, 0.07]},
+    "juice": {"shape": "box", "size": [0.04, 0.06, 0.10]},
+    "carrot": {"shape": "box", "size": [0.15, 0.025, 0.025]},
+    "cookie": {"shape": "cylinder", "size": [0.05, 0.05, 0.01]},
 }
 LUNCHBOX = {"position": [0.50, 0.20, 0.0], "shape": "box", "size": [0.26, 0.18, 0.02]}
 PACKED = {  # on the box's top (2 cm); the cookie on the sandwich
@@ -70,9 +70,11 @@ def _lunch_demonstration(index: int, start: dict[str, list[float]], order: list[
 
 def test_the_lunch_box_is_packed_by_the_arm() -> None:
     """The user's lunch box (a 26 × 18 × 2 cm box, five objects, a cookie on the
-    sandwich): every object ends on the box's top at its place. Before, the
-    arm could not put the sandwich down there — the straight way down from its
-    posture passed a singularity — and gave up after 25 replans."""
+    sandwich; the weights of wood): every object ends on the box's top at its
+    place. Before, the arm could not put the sandwich down there — the
+    straight way down from its posture passed a singularity — and gave up
+    after 25 replans; and the pre-check refused the 0.18 kg sandwich, the
+    cup's contacts dropping it in its trial carry."""
     starts = [
         {
             "sandwich": [0.30, -0.10],

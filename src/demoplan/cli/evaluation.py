@@ -123,7 +123,11 @@ def evaluate(
         ),
     ] = None,
     address: Annotated[
-        str | None, typer.Option(help="Join this Ray cluster (ray://… or host:port).")
+        str | None,
+        typer.Option(
+            help="Join this Ray cluster (host:port, ray://host:port or auto); it has "
+            "30 s to answer."
+        ),
     ] = None,
     out: Annotated[
         Path | None, typer.Option(help="Folder for the rows, scenes and summary.")
@@ -172,8 +176,15 @@ def evaluate(
             rows = folder / "runs.jsonl"
             kept = f"the finished runs are in {rows}" if rows.exists() else "no run had finished"
             if (folder / "evaluation.json").exists():  # else nothing was begun
+                where = (
+                    f" --address {address}"
+                    if address is not None
+                    else f" --workers {workers}"
+                    if workers is not None
+                    else ""
+                )
                 stderr.print(
-                    f"demoplan: {kept}; --resume {folder} makes the others",
+                    f"demoplan: {kept}; --resume {folder}{where} makes the others",
                     markup=False,
                     highlight=False,
                 )

@@ -123,25 +123,27 @@ def evaluate(
     assert settings is not None
     _check(settings)
     model = load_model(settings.model)
-    write_plan(out, model, settings)  # on resume: the scenes a stop left unwritten
-    specs = plan_runs(out, settings)
-    rows = read_rows(out)
-    order = [spec.run_id for spec in specs]
-    todo = [spec for spec in specs if spec.run_id not in rows]
-    if on_start is not None:
-        on_start(len(specs) - len(todo), len(specs))
-    journal = Journal(out)
-    try:
-        for row in (engine or SerialEngine()).rows(todo, runner or partial(execute_run, model)):
-            if row.run_id in rows:  # never a duplicate row
-                continue
-            rows[row.run_id] = row
-            journal.add(row)
-            if on_row is not None:
-                on_row(row, len(rows), len(specs))
-    finally:
-        journal.close()
-        write_rows(out, rows, order)
+    engine = engine or SerialEngine()
+    with engine.session():  # a cluster that does not answer: nothing written
+        write_plan(out, model, settings)  # on resume: the scenes a stop left unwritten
+        specs = plan_runs(out, settings)
+        rows = read_rows(out)
+        order = [spec.run_id for spec in specs]
+        todo = [spec for spec in specs if spec.run_id not in rows]
+        if on_start is not None:
+            on_start(len(specs) - len(todo), len(specs))
+        journal = Journal(out)
+        try:
+            for row in engine.rows(todo, runner or partial(execute_run, model)):
+                if row.run_id in rows:  # never a duplicate row
+                    continue
+                rows[row.run_id] = row
+                journal.add(row)
+                if on_row is not None:
+                    on_row(row, len(rows), len(specs))
+        finally:
+            journal.close()
+            write_rows(out, rows, order)
     ordered = tuple(rows[i] for i in order if i in rows)
     summary = summarise(ordered)
     write_atomic(out / "summary.json", dump_json(summary.to_json()))

@@ -73,6 +73,11 @@ def run(
     ``on_event`` hears the run's progress."""
     if video is not None:
         check_video_path(video)
+        if frames is not None and video.resolve().is_relative_to(frames.resolve()):
+            raise UsageError(
+                f"--video {video} lies in the --frames folder {frames}, which is written whole "
+                "or not at all; a video path outside it expected"
+            )
         refuse_overwriting_inputs(
             video, [Path(p) for p in (model, scene) if isinstance(p, str | Path)]
         )

@@ -83,9 +83,9 @@ def segment(
 def _segmentation_figure(found: Segmentation, plot: Path) -> bytes:
     """The segmentation figure, encoded for ``plot``."""
     try:
-        import matplotlib
+        from demoplan.plotting.backend import use_agg
 
-        matplotlib.use("Agg")
+        use_agg()
         import matplotlib.pyplot as plt
     except ImportError:
         raise InputError(

@@ -12,20 +12,39 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
+import socket
+import subprocess
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 from demoplan.errors import UsageError
 from demoplan.evaluation.runs import RunRow, RunSpec, error_row
+from demoplan.fileio import os_reason
 
-__all__ = ["Engine", "RayEngine", "Runner", "SerialEngine", "require_ray"]
+__all__ = [
+    "CONNECT_SECONDS",
+    "Engine",
+    "RayEngine",
+    "Runner",
+    "SerialEngine",
+    "check_address",
+    "require_ray",
+]
 
 Runner = Callable[[RunSpec], RunRow]
 """One run: a picklable callable (a module-level function, or a partial of one)."""
 
 
 class Engine(Protocol):
+    def session(self) -> contextlib.AbstractContextManager[None]:
+        """Where the runs will be made, made ready (a Ray started or joined) — before
+        an evaluation writes anything, so that a cluster that does not answer
+        leaves no folder to resume — and let go at the end."""
+        ...
+
     def rows(self, specs: Sequence[RunSpec], runner: Runner) -> Iterator[RunRow]:
         """One row per spec, in the order runs finish."""
         ...
@@ -34,6 +53,9 @@ class Engine(Protocol):
 @dataclass(frozen=True, slots=True)
 class SerialEngine:
     """The runs one after the other, here (the reference a Ray evaluation equals)."""
+
+    def session(self) -> contextlib.AbstractContextManager[None]:
+        return contextlib.nullcontext()
 
     def rows(self, specs: Sequence[RunSpec], runner: Runner) -> Iterator[RunRow]:
         for spec in specs:
@@ -55,6 +77,87 @@ def require_ray() -> Any:
     return ray
 
 
+CONNECT_SECONDS = 30.0
+"""How long ``--address`` may take to answer as a Ray cluster."""
+
+_OPTIONS: dict[str, Any] = {
+    "include_dashboard": False,
+    "log_to_driver": False,
+    "configure_logging": False,
+}
+
+_PROBE = """
+import sys
+import ray
+try:
+    ray.init(address=sys.argv[1], include_dashboard=False, log_to_driver=False,
+             configure_logging=False)
+except BaseException as exc:
+    text = str(exc).strip().splitlines()
+    said = type(exc).__name__ + (": " + text[0] if text else "")
+    print("demoplan-probe: " + said, file=sys.stderr, flush=True)
+    sys.exit(3)
+ray.shutdown()
+"""
+"""Joining a cluster in a process of its own: Ray retries an address where
+nothing (or no Ray) answers for minutes, in C++ that neither a timeout nor a
+Ctrl-C reaches; that process can be killed."""
+
+
+def check_address(address: str, seconds: float = CONNECT_SECONDS) -> None:
+    """A UsageError in one line unless ``address`` (``host:port``, ``ray://host:port``
+    or ``auto``) answers as a Ray cluster within ``seconds``."""
+    if not re.fullmatch(
+        r"auto|(ray://)?[A-Za-z0-9._\-]+:\d{1,5}|(ray://)?\[[0-9A-Fa-f:.]+\]:\d{1,5}", address
+    ):
+        raise UsageError(f"--address {address[:80]!r}: host:port, ray://host:port or auto expected")
+    _listening(address)
+    try:
+        probe = subprocess.run(
+            [sys.executable, "-c", _PROBE, address],
+            capture_output=True,
+            text=True,
+            timeout=seconds,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise UsageError(
+            f"--address {address}: no Ray cluster answered within {seconds:g} s "
+            "(nothing listens there, or not Ray)"
+        ) from None
+    if probe.returncode != 0:
+        said = [
+            line.removeprefix("demoplan-probe: ")
+            for line in probe.stderr.splitlines()
+            if line.startswith("demoplan-probe: ")
+        ]
+        reason = said[-1] if said else f"exit code {probe.returncode}"
+        if "InvalidAuthToken" in probe.stderr:
+            reason += (
+                " — the cluster refused this machine's authentication token (Ray's token "
+                "authentication: the cluster's token is needed here, or RAY_AUTH_MODE=disabled "
+                "on both)"
+            )
+        raise UsageError(f"--address {address}: Ray says {reason[:300]}")
+
+
+def _listening(address: str) -> None:
+    """Something accepts connections at ``host:port`` (a refused or unknown one
+    answers at once, where Ray would retry for minutes)."""
+    if address == "auto":
+        return
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5.0).close()
+    except OSError as exc:
+        raise UsageError(f"--address {address}: nothing listens there ({os_reason(exc)})") from None
+
+
+def _first_line(exc: BaseException) -> str:
+    lines = str(exc).strip().splitlines()
+    return type(exc).__name__ + (f": {lines[0][:300]}" if lines else "")
+
+
 def _call(runner: Runner, spec: RunSpec) -> RunRow:
     """The Ray task's body (module level: workers import it)."""
     return runner(spec)
@@ -73,22 +176,40 @@ class RayEngine:
     in_flight: int = 0
     """Tasks submitted at a time (0: four per CPU): a Ctrl-C cancels few."""
 
+    connect_timeout: float = CONNECT_SECONDS
+    """Seconds ``address`` has to answer before the evaluation gives up."""
+
+    @contextlib.contextmanager
+    def session(self) -> Iterator[None]:
+        ray = require_ray()
+        started = self._start(ray)
+        try:
+            yield
+        finally:
+            if started:
+                ray.shutdown()
+
     def _start(self, ray: Any) -> bool:
+        """Start a local Ray, or join ``address`` (checked first: it answers as
+        a Ray cluster within ``connect_timeout``); False where Ray runs in this
+        process already. A local Ray is always a new one (``address="local"``):
+        a cluster running on the machine, or ``RAY_ADDRESS``, is joined only when
+        asked for by ``--address``."""
         if ray.is_initialized():
             return False
-        options: dict[str, Any] = {
-            "include_dashboard": False,
-            "log_to_driver": False,
-            "configure_logging": False,
-        }
+        if self.address is not None:
+            check_address(self.address, self.connect_timeout)
         quiet = logging.getLogger("ray")  # its start-up notes are no demoplan output
         level = quiet.level
         quiet.setLevel(logging.ERROR)
         try:
             if self.address is not None:
-                ray.init(address=self.address, **options)
+                ray.init(address=self.address, **_OPTIONS)
             else:
-                ray.init(num_cpus=self.workers or os.cpu_count() or 1, **options)
+                ray.init(address="local", num_cpus=self.workers or os.cpu_count() or 1, **_OPTIONS)
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            where = f"--address {self.address}" if self.address else "a local Ray"
+            raise UsageError(f"{where}: Ray says {_first_line(exc)}") from None
         finally:
             quiet.setLevel(level)
         return True

@@ -6,14 +6,23 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from demoplan.errors import InputError, UsageError
+from demoplan.evaluation.results import JOURNAL, ROWS
 from demoplan.evaluation.runs import RunSpec
 from demoplan.evaluation.scenes import LayoutSettings, random_scene_document
-from demoplan.fileio import display_path, dump_json, read_document, write_atomic
+from demoplan.fileio import (
+    describe_validation_error,
+    display_path,
+    dump_json,
+    read_document,
+    write_atomic,
+)
 from demoplan.model import TaskModel
-from demoplan.scenes.scene import complete_geometry, scene_from_document
+from demoplan.scenes.scene import MAX_GRIPPER, complete_geometry, scene_from_document
 from demoplan.scenes.targets import check_scene_objects
 
 __all__ = ["SETTINGS", "EvaluationSettings", "plan_runs", "read_settings", "write_plan"]
@@ -26,6 +35,10 @@ the arm is a day of one core (benchmarks/README.md); a million rows are about
 1 GB of JSON lines."""
 MAX_CLUTTER = 20
 """Clutter objects in one random layout at most."""
+MAX_MARGIN_M = 1.0
+"""The most a layout's workspace is grown by on each side (m)."""
+MAX_ATTEMPTS = 100_000
+"""Draws per object at most before a layout is refused as too crowded."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,29 +64,83 @@ class EvaluationSettings:
         return {"format": FORMAT, **data}
 
 
+class _LayoutSchema(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    stack_probability: float = Field(ge=0.0, le=1.0)
+    clutter: int = Field(ge=0, le=MAX_CLUTTER)
+    margin: float = Field(ge=0.0, le=MAX_MARGIN_M)
+    yaw_range: float = Field(ge=0.0, le=180.0)
+    finger_radius: float = Field(gt=0.0, le=MAX_GRIPPER)
+    attempts: int = Field(ge=1, le=MAX_ATTEMPTS)
+
+
+class _SettingsSchema(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    format: Literal["demoplan/evaluation-1"]
+    model: str = Field(min_length=1, max_length=4096)
+    scenes: list[Annotated[str, Field(min_length=1, max_length=4096)]] = Field(max_length=10_000)
+    random_scenes: int = Field(ge=0)
+    seeds: int = Field(ge=1)
+    faults: str = Field(max_length=1000)
+    sim: str = Field(max_length=40)
+    clutter: int = Field(ge=0, le=MAX_CLUTTER)
+    layout: _LayoutSchema
+
+
 def read_settings(folder: Path) -> EvaluationSettings:
-    """The settings an evaluation in ``folder`` was started with."""
+    """The settings an evaluation in ``folder`` was started with, checked field
+    by field (a tampered file is one line naming the field), after the folder
+    itself (:func:`check_closed_folder`)."""
+    check_closed_folder(folder)
     path = folder / SETTINGS
     if not path.is_file():
         raise InputError(
             f"has no {SETTINGS}; a folder an evaluation wrote (--out) expected",
             source=display_path(folder),
         )
+    source = display_path(path)
     data = read_document(path)
-    if data.get("format") != FORMAT:
-        raise InputError(f"{FORMAT!r} expected", source=display_path(path), field="format")
     try:
-        data.pop("format")
-        data["scenes"] = tuple(data["scenes"])
-        data["layout"] = LayoutSettings(**data["layout"])
-        settings = EvaluationSettings(**data)
-    except (KeyError, TypeError) as exc:
-        raise InputError(
-            f"not the settings an evaluation writes ({exc}); the folder of one expected",
-            source=display_path(path),
-        ) from None
-    check_settings(settings, display_path(path))
+        parsed = _SettingsSchema.model_validate(data)
+    except ValidationError as exc:
+        raise describe_validation_error(exc, source) from None
+    settings = EvaluationSettings(
+        model=parsed.model,
+        scenes=tuple(parsed.scenes),
+        random_scenes=parsed.random_scenes,
+        seeds=parsed.seeds,
+        faults=parsed.faults,
+        sim=parsed.sim,
+        clutter=parsed.clutter,
+        layout=LayoutSettings(**parsed.layout.model_dump()),
+    )
+    check_settings(settings, source)
     return settings
+
+
+def check_closed_folder(folder: Path) -> None:
+    """An evaluation's folder is opened closed, as a recording is: the folder,
+    its ``scenes/`` and every entry demoplan reads or writes there (the
+    settings, the rows, the journal, the scene files) is a regular file or
+    folder inside it — no link leading anywhere, no special file."""
+    entries = [folder, folder / SETTINGS, folder / ROWS, folder / JOURNAL]
+    scenes = folder / "scenes"
+    entries.append(scenes)
+    if scenes.is_dir() and not scenes.is_symlink():
+        entries += sorted(scenes.iterdir())
+    for entry in entries:
+        if not entry.is_symlink() and not entry.exists():
+            continue
+        kind = "folder" if entry in (folder, scenes) else "file"
+        regular = entry.is_dir() if kind == "folder" else entry.is_file()
+        if entry.is_symlink() or not regular:
+            raise InputError(
+                f"is a link or a special file; an evaluation's {kind} expected (a folder "
+                "being resumed is read only through its own regular files)",
+                source=display_path(entry),
+            )
 
 
 def check_settings(settings: EvaluationSettings, source: str | None = None) -> None:

@@ -16,15 +16,16 @@ import math
 import os
 from collections import Counter, defaultdict
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, TextIO, get_type_hints
 
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 from scipy.stats import norm
 
 from demoplan.errors import InputError
 from demoplan.evaluation.runs import RunRow
-from demoplan.fileio import display_path, write_atomic
+from demoplan.fileio import describe_validation_error, display_path, write_atomic
 
 __all__ = [
     "JOURNAL",
@@ -41,7 +42,7 @@ ROWS = "runs.jsonl"
 JOURNAL = "runs.partial.jsonl"
 
 
-def _read_lines(path: Path) -> Iterable[dict[str, Any]]:
+def _read_lines(path: Path) -> Iterable[tuple[int, dict[str, Any]]]:
     if not path.is_file():
         return
     with path.open(encoding="utf-8") as lines:
@@ -58,7 +59,7 @@ def _read_lines(path: Path) -> Iterable[dict[str, Any]]:
                 raise InputError(
                     f"line {number}: a run row with a run_id expected", source=display_path(path)
                 )
-            yield data
+            yield number, data
 
 
 def read_rows(folder: Path) -> dict[str, RunRow]:
@@ -66,9 +67,38 @@ def read_rows(folder: Path) -> dict[str, RunRow]:
     journal), by run id; the first row of a run counts."""
     rows: dict[str, RunRow] = {}
     for name in (ROWS, JOURNAL):
-        for data in _read_lines(folder / name):
-            rows.setdefault(str(data["run_id"]), RunRow.from_json(data))
+        for number, data in _read_lines(folder / name):
+            try:
+                checked = _RowSchema.model_validate(data)
+            except ValidationError as exc:
+                raise describe_validation_error(
+                    exc, display_path(folder / name), prefix=f"line {number}"
+                ) from None
+            row = RunRow(**checked.model_dump())
+            rows.setdefault(row.run_id, row)
     return rows
+
+
+def _row_schema() -> type[BaseModel]:
+    """A row as written, each field checked by its type, strictly (``"yes"`` is
+    no ``success``): a tampered row is one line naming the line and the field.
+    Made from :class:`RunRow`'s own fields, so that the two never differ."""
+    hints = get_type_hints(RunRow)
+    declared: dict[str, Any] = {}
+    for row_field in fields(RunRow):
+        if row_field.default_factory is not MISSING:
+            default: Any = Field(default_factory=row_field.default_factory)
+        elif row_field.default is not MISSING:
+            default = row_field.default
+        else:
+            default = ...
+        declared[row_field.name] = (hints[row_field.name], default)
+    config = ConfigDict(extra="ignore", strict=True, allow_inf_nan=False)
+    schema: type[BaseModel] = create_model("RunRowSchema", __config__=config, **declared)
+    return schema
+
+
+_RowSchema = _row_schema()
 
 
 class Journal:

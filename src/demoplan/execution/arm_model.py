@@ -33,6 +33,9 @@ SUCTION_FORCE = 5.0
 """N: the adhesion actuator's pull at full suction (a 10 mm cup at 60 kPa of vacuum
 holds 0.785 cm² × 6 N/cm² = 4.7 N)."""
 PAD_HALF = 0.005  # m: half the side of the square suction pad
+PAD_REACH = 0.001
+"""m: the pad's contact margin (its soft face): contacts push from this far
+off the face; the suction pulls on them from twice as far."""
 STEM = 0.08  # m: from the wrist flange to the pad's face
 JAW_STROKE = 0.085
 """m: how far the fingers open (a Robotiq 2F-85's stroke)."""
@@ -105,7 +108,9 @@ def _arm_spec(mujoco: Any, jaws: bool = True) -> Any:
         pos=[0, 0, 0.004],
         rgba=[0.15, 0.25, 0.7, 1],
         mass=0.01,
-        margin=0.001,
+        # contacts pushing from PAD_REACH off the face, found (the suction
+        # pulling on them) twice as far (_suction_reach)
+        **_suction_reach(mujoco.__version__),
         # a flat pad resists turning and tilting up to about its radius times
         # the normal force: torsional and rolling friction of 5 mm (condim 6)
         friction=[1.5, 0.005, 0.005],
@@ -122,6 +127,23 @@ def _arm_spec(mujoco: Any, jaws: bool = True) -> Any:
     for geom in arm.geoms:
         geom.group = ARM_GROUP
     return arm
+
+
+def _suction_reach(version: str) -> dict[str, float]:
+    """The pad's ``margin`` and ``gap`` in MuJoCo ``version``: its contacts
+    push from :data:`PAD_REACH` off its face, as before, and are found
+    :data:`PAD_REACH` farther out, where they push nothing but the suction
+    (the adhesion actuator) still pulls on them. Without that band the
+    suction holds a load where its contacts begin, at the very edge of where
+    they are found: a tilt of a hundredth of a degree loses the pad's far
+    corners, the whole pull goes to the corner left and the load peels off
+    (a 0.225 kg box, four contacts at 1.0 mm, fell as the 5 N cup lifted it;
+    the cup carried no more than 0.2 kg of any shape). MuJoCo 4 made ``gap``
+    the band found beyond ``margin``; before, the part of ``margin`` in which
+    a contact pushes nothing."""
+    if int(version.split(".")[0]) >= 4:
+        return {"margin": PAD_REACH, "gap": PAD_REACH}
+    return {"margin": 2 * PAD_REACH, "gap": PAD_REACH}
 
 
 def _add_jaws(mujoco: Any, tool: Any) -> None:

@@ -58,6 +58,9 @@ def simulated_collision_facts(
     posing the arm along each grasp's approach (module docstring), at every
     (location, grasp) pair of ``pairs`` (:func:`checked_pairs`); and the pairs
     the arm cannot reach."""
+    from demoplan.execution.physics import check_gl_setting
+
+    check_gl_setting()  # MuJoCo reads MUJOCO_GL when it is imported
     try:
         import mink  # noqa: F401  (the arm's inverse kinematics, imported by ArmKinematics)
         import mujoco

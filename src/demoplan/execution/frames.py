@@ -30,9 +30,9 @@ class FrameWriter:
         self, folder: Path, targets: dict[str, Pose] | None = None, scene: Scene | None = None
     ):
         try:
-            import matplotlib
+            from demoplan.plotting.backend import use_agg
 
-            matplotlib.use("Agg")
+            use_agg()
         except ImportError:
             raise InputError(
                 "matplotlib is not installed; pip install 'demoplan[plot]'", field="--frames"

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from demoplan.errors import InputError
+from demoplan.errors import InputError, UsageError
 from demoplan.execution.faults import Faults, InjectedFault
 from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
@@ -44,6 +44,22 @@ __all__ = ["MujocoWorld", "scene_xml"]
 
 logger = logging.getLogger(__name__)
 os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering, before mujoco is imported
+
+GL_SETTINGS = ("egl", "osmesa", "glx", "glfw", "disable")
+"""The values of ``MUJOCO_GL`` MuJoCo takes on Linux (and their spellings
+``enable``/``disabled``/``off``…, which it takes too)."""
+
+
+def check_gl_setting() -> None:
+    """A UsageError in one line where ``MUJOCO_GL`` holds what MuJoCo refuses (it
+    raises at import, deep in its rendering module)."""
+    value = os.environ.get("MUJOCO_GL", "").lower().strip()
+    spellings = {"", "enable", "enabled", "on", "true", "1", "disabled", "off", "false", "0"}
+    if value not in spellings | set(GL_SETTINGS):
+        raise UsageError(
+            f"MUJOCO_GL={value[:40]!r}: one of {', '.join(GL_SETTINGS)} expected "
+            "(egl renders without a display)"
+        )
 
 TIMESTEP = 0.002  # s
 SPEED = 0.4  # m/s of the hand
@@ -225,6 +241,7 @@ class MujocoWorld:
         schedule: Mapping[int, str] | None = None,
     ):
         os.environ.setdefault("MUJOCO_GL", "egl")
+        check_gl_setting()
         import mujoco
 
         self.mujoco = mujoco

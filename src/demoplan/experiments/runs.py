@@ -355,9 +355,9 @@ def _plot_precision(
 ) -> str | None:
     if not _can_plot():
         return None
-    import matplotlib
+    from demoplan.plotting.backend import use_agg
 
-    matplotlib.use("Agg")
+    use_agg()
     import matplotlib.pyplot as plt
 
     from demoplan.plotting.figures import save_figure

@@ -27,11 +27,12 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from demoplan.documents.poses import Number
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
 from demoplan.perception.camera import Camera
@@ -78,18 +79,31 @@ def _dictionaries() -> dict[str, int]:
     }
 
 
+MARKER_ID_EXPECTED = "a marker id expected: a whole number of 1 to 6 digits 0-9"
+_Row = Annotated[list[Number], Field(min_length=3, max_length=3)]
+_Point = Annotated[list[Number], Field(min_length=2, max_length=2)]
+MAX_PIXELS_FIELD = 1e6
+"""The largest entry of a camera matrix (px)."""
+
+
+def is_marker_id(key: str) -> bool:
+    """``"3"`` is marker 3; ``"²"``, ``"٣"`` (Arabic-Indic 3) or 5,000 digits are not
+    (``str.isdigit`` alone takes them, and ``int`` then fails or reads 3)."""
+    return 1 <= len(key) <= 6 and all("0" <= c <= "9" for c in key)
+
+
 class _MarkersSchema(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=False)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     format: str | None = Field(None, description="`demoplan/markers-1` (may be left out).")
     dictionary: str = Field(
         description="The OpenCV dictionary the markers come from: `DICT_4X4_50`, "
         "`DICT_6X6_250`, `DICT_APRILTAG_36h11`…"
     )
-    side: float = Field(
+    side: Number = Field(
         gt=0, le=MAX_MARKER_SIDE, description="The side of a marker's black square (m)."
     )
-    markers: dict[str, list[float]] = Field(
+    markers: dict[str, list[Number]] = Field(
         description="Each id's position on the table: `[x, y]` (m) of its centre, or "
         "`[x, y, yaw]` with yaw in degrees (0: the marker's top edge faces +y)."
     )
@@ -100,8 +114,8 @@ class _MarkersSchema(BaseModel):
         if not value:
             raise ValueError("at least one marker expected")
         for key, position in value.items():
-            if not key.isdigit():
-                raise ValueError(f"marker id {key!r}: a whole number (the marker's id) expected")
+            if not is_marker_id(key):
+                raise ValueError(f"marker id {key[:20]!r}: {MARKER_ID_EXPECTED}")
             if len(position) not in (2, 3):
                 raise ValueError(f"marker {key}: [x, y] or [x, y, yaw] expected")
         return value
@@ -170,13 +184,15 @@ class Intrinsics:
 
 
 class _IntrinsicsSchema(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    camera_matrix: list[list[float]] = Field(
+    camera_matrix: list[_Row] = Field(
+        min_length=3,
+        max_length=3,
         description="K, 3 × 3: `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]` (px; OpenCV's pixel "
-        "coordinates, (0, 0) the centre of the top-left pixel)."
+        "coordinates, (0, 0) the centre of the top-left pixel).",
     )
-    distortion: list[float] = Field(
+    distortion: list[Number] = Field(
         default=[],
         description="OpenCV distortion coefficients (k1, k2, p1, p2[, k3…]); none: no distortion.",
     )
@@ -197,6 +213,13 @@ def _intrinsics(data: Any, source: str, prefix: str) -> Intrinsics:
         )
     if not np.allclose(matrix[2], [0, 0, 1]) or matrix[1, 0] != 0:
         raise InputError("its last row [0, 0, 1] expected", source=source, field=where)
+    if np.abs(matrix).max() > MAX_PIXELS_FIELD:
+        raise InputError(
+            f"entries within {MAX_PIXELS_FIELD:,.0f} px expected (a focal length and an "
+            "image centre in pixels)",
+            source=source,
+            field=where,
+        )
     if len(parsed.distortion) not in (0, 4, 5, 8, 12, 14):
         raise InputError(
             "4, 5, 8, 12 or 14 OpenCV distortion coefficients expected",
@@ -585,11 +608,13 @@ class _ErrorSchema(BaseModel):
 
 
 class _UsedMarkersSchema(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     dictionary: str = Field(description="The markers' dictionary.")
-    side: float = Field(gt=0, description="Their side (m).")
-    ids: list[int] = Field(description="The ids found and used.")
-    corners: dict[str, list[list[float]]] = Field(
+    side: Number = Field(gt=0, le=MAX_MARKER_SIDE, description="Their side (m).")
+    ids: list[Annotated[int, Field(ge=0, le=999_999)]] = Field(
+        description="The ids found and used."
+    )
+    corners: dict[str, list[_Point]] = Field(
         default={},
         description="Each id's four corners in the image (px, OpenCV's order): the "
         "markers are painted over, and the rectified view covers the table around them.",
@@ -612,14 +637,16 @@ class _CentreSchema(BaseModel):
 
 
 class _CameraSchema(BaseModel):
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
     format: str = Field(description="`demoplan/camera-1`.")
     image_size: list[int] = Field(
         min_length=2, max_length=2, description="[width, height] (px) of the calibrated images."
     )
-    homography: list[list[float]] = Field(
+    homography: list[_Row] = Field(
+        min_length=3,
+        max_length=3,
         description="3 × 3: OpenCV pixel coordinates (x right, y down, (0, 0) the top-left "
-        "pixel's centre) of the undistorted image → table (x, y) in metres."
+        "pixel's centre) of the undistorted image → table (x, y) in metres.",
     )
     reprojection_error: _ErrorSchema | None = Field(
         None, description="How well it fits the markers."
@@ -643,9 +670,14 @@ def calibration_from_document(data: dict[str, Any], source: str) -> TableCalibra
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
     homography = np.array(parsed.homography, dtype=float)
-    if homography.shape != (3, 3) or abs(np.linalg.det(homography)) < 1e-300:
+    scale = float(np.abs(homography).max())
+    if not (
+        0 < scale < 1e150
+        and abs(homography[2, 2]) > 1e-12 * scale
+        and abs(np.linalg.det(homography / scale)) > 1e-300
+    ):
         raise InputError(
-            "an invertible 3 × 3 matrix (pixels → table metres) expected",
+            "an invertible 3 × 3 matrix (pixels → table metres) with its last entry not 0 expected",
             source=source,
             field="homography",
         )
@@ -666,11 +698,11 @@ def calibration_from_document(data: dict[str, Any], source: str) -> TableCalibra
     corners: dict[int, np.ndarray] = {}
     for key, quad in (used.corners if used else {}).items():
         points = np.array(quad, dtype=float)
-        if not key.isdigit() or points.shape != (4, 2):
+        if not is_marker_id(key) or points.shape != (4, 2):
             raise InputError(
                 "a marker id: four [x, y] corners (px) expected",
                 source=source,
-                field=f"markers.corners.{key}",
+                field=f"markers.corners.{key if len(key) <= 12 else key[:12] + '…'}",
             )
         corners[int(key)] = points
     calibration = TableCalibration(

@@ -75,9 +75,9 @@ def _describe(element: Any) -> tuple[str, str]:
 
 def save_behaviour_tree(xml: str, path: Path) -> None:
     """Draw the tree of ``xml`` into ``path`` (its extension: the format), atomically."""
-    import matplotlib
+    from demoplan.plotting.backend import use_agg
 
-    matplotlib.use("Agg")
+    use_agg()
     import matplotlib.pyplot as plt
 
     from demoplan.plotting.figures import save_figure

@@ -290,9 +290,9 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
     """Every demonstration of ``model`` from above (like the paper's Fig. 3),
     each with the constraints among its states below it, on shared axes, in
     one image written atomically; ``heading`` names the task in the title."""
-    import matplotlib
+    from demoplan.plotting.backend import use_agg
 
-    matplotlib.use("Agg")
+    use_agg()
     import matplotlib.pyplot as plt
 
     demos = model.demonstrations
@@ -577,9 +577,9 @@ def save_no_plan(
 def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
     """A one-axes figure drawn by ``draw``, saved atomically (raises ImportError
     without matplotlib)."""
-    import matplotlib
+    from demoplan.plotting.backend import use_agg
 
-    matplotlib.use("Agg")
+    use_agg()
     import matplotlib.pyplot as plt
 
     figure, ax = plt.subplots(figsize=(6.5, 5.8))
@@ -681,9 +681,9 @@ def save_scene_plan(
     if not plan_stacks(scene, problem, plan):
         _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title, roles), path)
         return
-    import matplotlib
+    from demoplan.plotting.backend import use_agg
 
-    matplotlib.use("Agg")
+    use_agg()
     import matplotlib.pyplot as plt
 
     figure = plt.figure(figsize=(12.5, 5.8))

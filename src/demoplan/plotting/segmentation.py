@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from demoplan.plotting.backend import use_agg
 from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.plotting.figures import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
@@ -58,6 +59,7 @@ def plot_segmentation(
     """
     from matplotlib.figure import Figure
 
+    use_agg()
     traces = segmentation.traces
     settings = segmentation.settings
     rows = max(1, len(traces))
@@ -155,6 +157,7 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     if ax is None:
         from matplotlib.figure import Figure
 
+        use_agg()
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
     origin = _origin(segmentation)
     colours = assign_colours(trace.object for trace in segmentation.traces)

@@ -1,0 +1,56 @@
+"""Settings MuJoCo refuses (from the environment) and outputs that would be
+left behind are refused before a run, in one line, exit 2."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from demoplan.learning.modelfile import save_model
+from tests.helpers import EXAMPLES, paper_model
+
+pytest.importorskip("mujoco")
+
+
+@pytest.mark.parametrize("sim", ["mujoco", "arm"])
+def test_a_rendering_backend_mujoco_refuses_is_one_line(tmp_path: Path, sim: str) -> None:
+    model = tmp_path / "model.json"
+    save_model(paper_model("set_table"), model)
+    scene = EXAMPLES / "scenes" / "set-table-cluttered.json"
+    done = subprocess.run(
+        [sys.executable, "-m", "demoplan", "run", str(model), str(scene), "--sim", sim],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "MUJOCO_GL": "bogus"},
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [
+        "demoplan: error: MUJOCO_GL='bogus': one of egl, osmesa, glx, glfw, disable expected "
+        "(egl renders without a display)"
+    ]
+
+
+def test_a_video_inside_the_frames_folder_is_refused_before_the_run(tmp_path: Path) -> None:
+    """The frames folder is written whole or not at all: a video recorded into it
+    was left behind when the folder could not be swapped in."""
+    model = tmp_path / "model.json"
+    save_model(paper_model("blocks"), model)
+    scene = EXAMPLES / "scenes" / "pyramid-fig4.json"
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "demoplan", "run", str(model), str(scene), "--sim", "mujoco"]
+        + ["--frames", str(out), "--video", str(out / "run.mp4")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    assert len(done.stderr.splitlines()) == 1 and "lies in the --frames folder" in done.stderr
+    assert not out.exists()

@@ -1,0 +1,77 @@
+"""Object names read from files are drawn as written in every figure: a name
+holding matplotlib's TeX markup (``$\\sqrt{x$``) neither fails a plot, the
+frames of a run and its storyboard, nor turns into mathematics."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from demoplan.learning.modelfile import save_model
+from tests.helpers import EXAMPLES, paper_model
+
+pytest.importorskip("matplotlib")
+
+NAMES = ["$\\sqrt{x$", "$x^2$", "50$-and-60$"]
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    folder = tmp_path_factory.mktemp("literal")
+    model = folder / "model.json"
+    save_model(paper_model("set_table"), model)
+    scene = json.loads((EXAMPLES / "scenes" / "set-table-cluttered.json").read_text())
+    for index, name in enumerate(NAMES):
+        scene["objects"][name] = {"position": [0.05 + 0.08 * index, 0.05, 0.0], "size": [0.04] * 3}
+    path = folder / "scene.json"
+    path.write_text(json.dumps(scene))
+    return model, path
+
+
+@pytest.mark.parametrize(
+    ("command", "made"),
+    [
+        (["plan", "{model}", "{scene}", "--clutter", "--plot", "{out}/plan.png"], ["plan.png"]),
+        (["show", "{scene}", "--model", "{model}", "--plot", "{out}/show.png"], ["show.png"]),
+        (
+            ["run", "{model}", "{scene}", "--clutter", "--frames", "{out}/frames"],
+            ["frames/storyboard.png", "frames/frame-0000.png"],
+        ),
+    ],
+)
+def test_a_name_with_tex_markup_is_drawn_as_written(
+    inputs: tuple[Path, Path], tmp_path: Path, command: list[str], made: list[str]
+) -> None:
+    model, scene = inputs
+    args = [a.format(model=model, scene=scene, out=tmp_path) for a in command]
+    done = subprocess.run(
+        [sys.executable, "-m", "demoplan", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    for name in made:
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_text_of_a_figure_is_kept_as_written() -> None:
+    """The figure's own text objects hold the name, not parsed (and not measured
+    as TeX: measuring ``$\\sqrt{x$`` raises)."""
+    from demoplan.plotting.backend import use_agg
+
+    use_agg()
+    import matplotlib.pyplot as plt
+
+    figure, ax = plt.subplots()
+    try:
+        text = ax.set_title(NAMES[0])
+        figure.tight_layout()  # measures every text: raised ValueError before
+        assert text.get_text() == NAMES[0] and not text.get_parse_math()
+    finally:
+        plt.close(figure)
