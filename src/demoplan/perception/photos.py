@@ -15,6 +15,11 @@ then maps to the image by a similarity, so the plane of the cubes' tops
 (z = side) is an exact top-down camera of docs/formats.md: :func:`top_camera`
 gives it, and a cube's top face seen there is centred on the cube's (x, y).
 The truth is the blocks as given (:class:`~demoplan.perception.synthetic.SyntheticBlock`).
+
+A :class:`PhotoRig` may also lean its camera (``tilt``): planes then map to
+the image by a homography, not a similarity, and :func:`top_camera` no longer
+holds; the generated families (:mod:`demoplan.perception.photo_families`) use
+it, with their truth in pixels as the real photographs' labels give it.
 """
 
 from __future__ import annotations
@@ -29,7 +34,17 @@ from demoplan.perception.camera import Camera
 from demoplan.perception.opencv import cv2
 from demoplan.perception.synthetic import COLOURS, SyntheticBlock
 
-__all__ = ["PhotoRig", "random_photo_blocks", "render_photo", "top_camera"]
+__all__ = [
+    "BOARD",
+    "PhotoRig",
+    "canvas_points",
+    "draw_board",
+    "lens_and_sensor",
+    "light_falloff",
+    "random_photo_blocks",
+    "render_photo",
+    "top_camera",
+]
 
 BOARD = (150, 152, 150)
 GRID = (25, 25, 25)
@@ -40,9 +55,14 @@ class PhotoRig:
     """The camera and the table of a photograph-like render.
 
     ``focal`` in pixels, ``height`` the camera's height above the table (m),
-    ``nadir`` the world (x, y) straight under it and ``nadir_px`` where that
-    point is in the image (u right, v up from the bottom-left corner);
-    ``grid`` the spacing of the board's black lines (m).
+    ``nadir`` the world (x, y) straight under it and ``nadir_px`` where the
+    optical axis meets the image (u right, v up from the bottom-left corner);
+    ``grid`` the spacing of the board's black lines (m). ``tilt`` (degrees) leans
+    the optical axis from the vertical towards the world direction
+    ``tilt_towards`` (degrees from world x; 90: the camera looks towards +y, as a
+    person at the table's near edge holds a phone); with a tilt, ``nadir_px`` is
+    where the axis meets the image and the point straight under the camera lies
+    elsewhere (often outside the image).
     """
 
     width: int = 1280
@@ -53,25 +73,82 @@ class PhotoRig:
     nadir_px: tuple[float, float] = (640.0, 360.0)
     grid: float = 0.05
     marker: float = 0.06
+    tilt: float = 0.0
+    tilt_towards: float = 90.0
+
+    def _basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The camera's image-right, image-up and viewing directions in the world:
+        the straight-down camera's (x, y, −z) turned by ``tilt`` about the
+        horizontal axis across ``tilt_towards`` (Rodrigues' formula)."""
+        towards = math.radians(self.tilt_towards)
+        axis = np.array([math.sin(towards), -math.cos(towards), 0.0])
+        t = math.radians(self.tilt)
+        cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        turn = np.eye(3) + math.sin(t) * cross + (1 - math.cos(t)) * cross @ cross
+        return (
+            turn @ np.array([1.0, 0, 0]),
+            turn @ np.array([0, 1.0, 0]),
+            turn @ np.array([0, 0, -1.0]),
+        )
+
+    def camera_centre(self) -> tuple[float, float, float]:
+        """The camera's optical centre in the world (m)."""
+        return self.nadir[0], self.nadir[1], self.height
 
     def to_pixels(self, x: float, y: float, z: float = 0.0) -> tuple[float, float]:
         """World point → (u, v) pixels from the image's bottom-left corner, v up."""
-        scale = self.focal / (self.height - z)
+        if not self.tilt:
+            scale = self.focal / (self.height - z)
+            return (
+                self.nadir_px[0] + scale * (x - self.nadir[0]),
+                self.nadir_px[1] + scale * (y - self.nadir[1]),
+            )
+        right, up, view = self._basis()
+        ray = np.array([x - self.nadir[0], y - self.nadir[1], z - self.height])
+        depth = float(view @ ray)
         return (
-            self.nadir_px[0] + scale * (x - self.nadir[0]),
-            self.nadir_px[1] + scale * (y - self.nadir[1]),
+            self.nadir_px[0] + self.focal * float(right @ ray) / depth,
+            self.nadir_px[1] + self.focal * float(up @ ray) / depth,
         )
 
+    def to_table(self, u: float, v: float, z: float = 0.0) -> tuple[float, float]:
+        """The world (x, y) on the plane at height ``z`` that pixel (u, v) (v up)
+        sees: :meth:`to_pixels` undone."""
+        right, up, view = self._basis()
+        ray = (
+            right * (u - self.nadir_px[0]) / self.focal
+            + up * (v - self.nadir_px[1]) / self.focal
+            + view
+        )
+        reach = (z - self.height) / ray[2]
+        return self.nadir[0] + reach * float(ray[0]), self.nadir[1] + reach * float(ray[1])
+
+    def scale_at(self, x: float, y: float, z: float = 0.0) -> float:
+        """Pixels per metre on the plane at height ``z`` around (x, y): the square
+        root of the area ratio of the image there (a straight-down camera: the same
+        everywhere on the plane; a tilted one: larger nearer the camera)."""
+        step = 1e-4
+        u0, v0 = self.to_pixels(x, y, z)
+        ux, vx = self.to_pixels(x + step, y, z)
+        uy, vy = self.to_pixels(x, y + step, z)
+        return math.sqrt(abs((ux - u0) * (vy - v0) - (uy - u0) * (vx - v0))) / step
+
     def table_extent(self) -> tuple[float, float, float, float]:
-        """World (x0, y0, x1, y1) of the table seen in the image."""
-        scale = self.focal / self.height
-        x0 = self.nadir[0] - self.nadir_px[0] / scale
-        y0 = self.nadir[1] - self.nadir_px[1] / scale
-        return x0, y0, x0 + self.width / scale, y0 + self.height_px / scale
+        """World (x0, y0, x1, y1) of the table seen in the image (with a tilt: the
+        box around the table the image's corners see)."""
+        if not self.tilt:
+            scale = self.focal / self.height
+            x0 = self.nadir[0] - self.nadir_px[0] / scale
+            y0 = self.nadir[1] - self.nadir_px[1] / scale
+            return x0, y0, x0 + self.width / scale, y0 + self.height_px / scale
+        seen = [self.to_table(u, v) for u in (0, self.width) for v in (0, self.height_px)]
+        xs, ys = [p[0] for p in seen], [p[1] for p in seen]
+        return min(xs), min(ys), max(xs), max(ys)
 
 
 def top_camera(rig: PhotoRig, side: float) -> Camera:
-    """The top-down camera of the plane of the cubes' tops (z = ``side``)."""
+    """The top-down camera of the plane of the cubes' tops (z = ``side``) of a
+    straight-down ``rig`` (no tilt)."""
     scale = rig.focal / (rig.height - side)
     return Camera(
         scale, (rig.nadir[0] - rig.nadir_px[0] / scale, rig.nadir[1] - rig.nadir_px[1] / scale)
@@ -121,36 +198,35 @@ def _marker_bits(rng: np.random.Generator) -> np.ndarray:
     return bits
 
 
-def render_photo(
-    blocks: Sequence[SyntheticBlock],
-    rig: PhotoRig = PhotoRig(),
-    *,
-    rng: np.random.Generator | int | None = 0,
-    noise: float = 3.0,
-    blur: float = 0.8,
-    jpeg_quality: int = 85,
-    highlight: float = 0.5,
-    machine: bool = True,
-    supersample: int = 3,
-) -> np.ndarray:
-    """An RGB ``uint8`` photograph-like image of ``blocks`` on a gridded board."""
-    generator = np.random.default_rng(rng)
+def canvas_points(rig: PhotoRig, world: np.ndarray, z: float, supersample: int) -> np.ndarray:
+    """World points at height ``z`` → fixed-point (4 fractional bits) pixel
+    coordinates of a canvas ``supersample`` times the image's size, for OpenCV's
+    polygon fills (``shift=4``)."""
     n = supersample
-    rows, cols = rig.height_px * n, rig.width * n
-    canvas = np.empty((rows, cols, 3), dtype=np.uint8)
-    canvas[:] = BOARD
-    shift = 4
+    pixels = []
+    for x, y in world:
+        u, v = rig.to_pixels(float(x), float(y), z)
+        pixels.append(((u * n - 0.5) * 16, ((rig.height_px - v) * n - 0.5) * 16))
+    rounded: np.ndarray = np.rint(np.array(pixels)).astype(np.int32)
+    return rounded
 
-    def points(world: np.ndarray, z: float) -> np.ndarray:
-        pixels = []
-        for x, y in world:
-            u, v = rig.to_pixels(float(x), float(y), z)
-            pixels.append(((u * n - 0.5) * 16, ((rig.height_px - v) * n - 0.5) * 16))
-        rounded: np.ndarray = np.rint(np.array(pixels)).astype(np.int32)
-        return rounded
+
+def draw_board(
+    canvas: np.ndarray,
+    rig: PhotoRig,
+    generator: np.random.Generator,
+    *,
+    supersample: int,
+    machine: bool = True,
+) -> None:
+    """The gridded board on ``canvas`` (``supersample`` times the image's size,
+    filled with the board's colour): black grid lines, four markers near the
+    corners of the table seen, and with ``machine`` a dark arm base at the middle
+    of the top edge."""
 
     def fill(world: np.ndarray, z: float, colour: tuple[int, ...]) -> None:
-        cv2.fillPoly(canvas, [points(world, z)], colour, lineType=cv2.LINE_8, shift=shift)
+        polygon = canvas_points(rig, world, z, supersample)
+        cv2.fillPoly(canvas, [polygon], colour, lineType=cv2.LINE_8, shift=4)
 
     x0, y0, x1, y1 = rig.table_extent()
     line = 0.002
@@ -192,6 +268,40 @@ def render_photo(
         angles = np.linspace(0, 2 * math.pi, 48, endpoint=False)
         disc = np.stack([centre[0] + 0.07 * np.cos(angles), centre[1] + 0.07 * np.sin(angles)], 1)
         fill(disc, 0.05, (60, 62, 66))
+
+
+def render_photo(
+    blocks: Sequence[SyntheticBlock],
+    rig: PhotoRig = PhotoRig(),
+    *,
+    rng: np.random.Generator | int | None = 0,
+    noise: float = 3.0,
+    blur: float = 0.8,
+    jpeg_quality: int = 85,
+    highlight: float = 0.5,
+    machine: bool = True,
+    supersample: int = 3,
+) -> np.ndarray:
+    """An RGB ``uint8`` photograph-like image of ``blocks`` on a gridded board.
+
+    The side faces drawn are those turned away from the camera, which the top
+    then covers but for slivers (the faces a camera sees are drawn by
+    :mod:`demoplan.perception.photo_families`); kept so that a seed gives the
+    image it always gave."""
+    generator = np.random.default_rng(rng)
+    n = supersample
+    rows, cols = rig.height_px * n, rig.width * n
+    canvas = np.empty((rows, cols, 3), dtype=np.uint8)
+    canvas[:] = BOARD
+    shift = 4
+
+    def points(world: np.ndarray, z: float) -> np.ndarray:
+        return canvas_points(rig, world, z, n)
+
+    def fill(world: np.ndarray, z: float, colour: tuple[int, ...]) -> None:
+        cv2.fillPoly(canvas, [points(world, z)], colour, lineType=cv2.LINE_8, shift=shift)
+
+    draw_board(canvas, rig, generator, supersample=n, machine=machine)
     # shadows: each cube's footprint swept away from the light
     light = np.array([0.012, -0.018])
     shadow = np.zeros((rows, cols), dtype=np.uint8)
@@ -228,26 +338,40 @@ def render_photo(
     )
     if highlight:  # a soft white glint on some tops
         _add_glints(image, blocks, rig, highlight, generator)
-    return _lens_and_sensor(image, rig, blur, noise, jpeg_quality, generator)
+    return lens_and_sensor(image, rig, blur, noise, jpeg_quality, generator)
 
 
-def _lens_and_sensor(
+def light_falloff(rig: PhotoRig) -> np.ndarray:
+    """The share of the light each pixel gets (rows × columns): 1 at the top-left
+    corner, falling off to 0.82 at the bottom-right."""
+    ramp: np.ndarray = (
+        1.0
+        - 0.12 * np.linspace(0, 1, rig.width)[None, :]
+        - 0.06 * np.linspace(0, 1, rig.height_px)[:, None]
+    )
+    return ramp
+
+
+def lens_and_sensor(
     image: np.ndarray,
     rig: PhotoRig,
     blur: float,
     noise: float,
     jpeg_quality: int,
     generator: np.random.Generator,
+    *,
+    exposure: float = 1.0,
 ) -> np.ndarray:
-    """The rendered scene as a camera records it: light falling off across the
-    table, blur, sensor noise, 8 bits, JPEG."""
+    """The rendered scene (float RGB, image size) as a camera records it: light
+    falling off across the table, the exposure (a gain; over 1 the channels
+    bleed into each other, a colour's distance from its grey shrinking by the
+    gain, and bright colours clip at 255 — an over-exposed yellow turns pale),
+    blur, sensor noise, 8 bits, JPEG."""
     # lighting falls off across the table, then the lens and the sensor
-    ramp = (
-        1.0
-        - 0.12 * np.linspace(0, 1, rig.width)[None, :]
-        - 0.06 * np.linspace(0, 1, rig.height_px)[:, None]
-    )
-    image = image * ramp[..., None]
+    image = image * light_falloff(rig)[..., None]
+    if exposure != 1.0:
+        grey = image.mean(axis=2, keepdims=True)
+        image = np.minimum((grey + (image - grey) / exposure) * exposure, 255.0)
     if blur:
         image = np.asarray(cv2.GaussianBlur(image, (0, 0), blur), dtype=np.float32)
     if noise:

@@ -1,0 +1,215 @@
+"""Block perception on the generated photograph families (issue 41, docs/perception.md
+"Generated families"): renders carrying what makes real photographs hard — cubes
+touching in rows, stacks, black and white cubes, patterned tops, hands, side faces,
+over-exposure, small cubes, a camera tilted up to 30°, shapes that are no cubes —
+scored as the real photographs are (demoplan.perception.labelled: a top face is
+found by a detection within 0.6 of its side of its centre).
+
+The acceptance is the issue's, by hypothesis over each family: at least 90 % of the
+labelled, non-partial top faces found and at most one false block per image (none
+in a photograph without cubes: the shapes photograph of the real set), with
+``--side`` given or not. Each example renders one 1280 × 720 image and perceives
+it, so the counts are small and failing examples are not shrunk (a smaller seed is
+no simpler a photograph). The other tests check the families' truth itself: where
+the labels put the tops, how much of a face is in view, the tilted camera's mapping,
+and that a saved case reads back as the real photographs' labels do."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
+from demoplan.perception.labelled import load_labelled, score_detections
+from demoplan.perception.photo_families import (
+    ACHROMATIC,
+    CHROMATIC,
+    FAMILIES,
+    HIDDEN_BELOW,
+    PARTIAL_BELOW,
+    family_case,
+    perceive_case,
+    save_case,
+)
+from demoplan.perception.photo_families_scene import (
+    BACKGROUNDS,
+    Cube,
+    Hand,
+    PhotoScene,
+    render_scene,
+)
+from demoplan.perception.photos import PhotoRig, light_falloff, top_camera
+
+EXPENSIVE = settings(
+    deadline=None,
+    phases=(Phase.explicit, Phase.reuse, Phase.generate),
+    suppress_health_check=[HealthCheck.too_slow],
+)
+SEEDS = st.integers(0, 2**31 - 1)
+
+
+# --------------------------------------------------------------------------- the acceptance
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@settings(EXPENSIVE, max_examples=4)
+@given(seed=SEEDS, side_given=st.booleans())
+def test_a_family_photograph_meets_the_issue_thresholds(
+    family: str, seed: int, side_given: bool
+) -> None:
+    case = family_case(family, seed)
+    run = perceive_case(case, side_given=side_given)
+    assert run.exit_code == 0, run.error
+    score = run.score
+    assert score.found >= 0.9 * score.needed, (case.name, side_given, score)
+    assert score.false <= (1 if score.needed else 0), (case.name, side_given, score)
+
+
+# --------------------------------------------------------------------------- the truth
+
+
+@settings(EXPENSIVE, max_examples=8)
+@given(family=st.sampled_from(sorted(FAMILIES)), seed=SEEDS)
+def test_a_labelled_centre_shows_its_cubes_top(family: str, seed: int) -> None:
+    """Around each labelled centre of a plain top in full view the photograph has
+    that cube's colour: of the cubes' colours and the table's, in the light that
+    falls there, the median colour of a disc half the side across is nearest to
+    it (a glint and the noise do not move it to another)."""
+    case = family_case(family, seed)
+    if case.scene.exposure != 1.0:
+        return  # over-exposure clips colours on purpose
+    palette = {**CHROMATIC, **ACHROMATIC, "table": BACKGROUNDS[case.scene.background]}
+    rows, cols = np.mgrid[: case.label.height, : case.label.width]
+    for truth in case.truths:
+        if truth.in_view < 0.99 or truth.cube.pattern:
+            continue
+        disc = (cols - truth.u) ** 2 + (rows - truth.v) ** 2 <= (truth.side_px / 4) ** 2
+        seen = np.median(case.image[disc].astype(float), axis=0)
+        light = light_falloff(case.scene.rig)[round(truth.v), round(truth.u)]
+        nearest = min(
+            palette, key=lambda name: float(np.linalg.norm(seen - light * np.array(palette[name])))
+        )
+        assert nearest == truth.cube.colour, (case.name, truth.cube, seen)
+
+
+@settings(EXPENSIVE, max_examples=8)
+@given(family=st.sampled_from(sorted(FAMILIES)), seed=SEEDS)
+def test_the_label_is_the_cubes_in_view(family: str, seed: int) -> None:
+    """A cube's top face is labelled when 30 % or more of it is in view, partial
+    under 85 %; a straight-down camera's label is the exact top-down camera of the
+    plane of the tops (photos.top_camera) for cubes standing on the table, and
+    detections at the labelled centres find every face."""
+    case = family_case(family, seed)
+    label = case.label
+    labelled = [t for t in case.truths if t.in_view >= HIDDEN_BELOW]
+    assert len(label.blocks) == len(labelled)
+    assert label.needed == sum(t.in_view >= PARTIAL_BELOW for t in labelled)
+    assert all(0 <= b.u < label.width and 0 <= b.v < label.height for b in label.blocks)
+    rig = case.scene.rig
+    if not rig.tilt:
+        camera = top_camera(rig, label.side_m[0])
+        assert label.px_per_m == pytest.approx(camera.px_per_m)
+        for truth in labelled:
+            if truth.cube.z == 0:
+                u, v = camera.to_pixels(truth.cube.x, truth.cube.y)
+                assert truth.u == pytest.approx(u - 0.5, abs=1e-6)
+                assert truth.v == pytest.approx(label.height - v - 0.5, abs=1e-6)
+                assert truth.side_px == pytest.approx(truth.cube.side * camera.px_per_m)
+    centres = [
+        ((b.u + 0.5) / label.px_per_m, (label.height - b.v - 0.5) / label.px_per_m)
+        for b in label.blocks
+    ]
+    score = score_detections(label, centres)
+    assert (score.found, score.false) == (label.needed, 0)
+
+
+def _one_cube_scene(cube: Cube, hands: tuple[Hand, ...] = ()) -> PhotoScene:
+    rig = PhotoRig(height=1.2, nadir=(0.3, 0.2))
+    return PhotoScene(rig, (cube,), hands=hands, background="paper", glints=0.0)
+
+
+@settings(max_examples=10, deadline=None)
+@given(inside=st.floats(-0.4, 1.4), seed=SEEDS)
+def test_the_share_in_view_of_a_top_cut_by_the_border(inside: float, seed: int) -> None:
+    """A top face (turned square to the image) whose left ``inside`` share lies
+    in the image: that share is in view, to the canvas' sampling."""
+    rig = _one_cube_scene(Cube("red", (200, 40, 40), 0.0, 0.0, 0.0, 0.04)).rig
+    scale = rig.scale_at(0.0, 0.0, 0.04)
+    left_edge, _ = rig.to_table(0.0, 360.0, 0.04)
+    x = left_edge + (inside - 0.5) * 0.04  # the face's centre
+    cube = Cube("red", (200, 40, 40), x, 0.2, 0.0, 0.04)
+    _, (truth,) = render_scene(_one_cube_scene(cube), np.random.default_rng(seed), noise=0.0)
+    assert truth.in_view == pytest.approx(min(1.0, max(0.0, inside)), abs=2.0 / (0.04 * scale))
+
+
+def test_a_hand_over_a_cube_and_a_cube_on_a_cube_hide_its_top() -> None:
+    rng = np.random.default_rng(1)
+    cube = Cube("blue", (40, 80, 190), 0.3, 0.2, 10.0, 0.04)
+    _, (alone,) = render_scene(_one_cube_scene(cube), rng)
+    assert alone.in_view >= 0.99
+    palm = Hand(0.3, 0.2, 30.0, 0.085, (224, 172, 140))
+    _, (under_hand,) = render_scene(_one_cube_scene(cube, (palm,)), rng)
+    assert under_hand.in_view < HIDDEN_BELOW
+    fingers = Hand(0.3 - 0.02 - 0.09, 0.2, 0.0, 0.085, (224, 172, 140))  # fingertips over it
+    _, (touched,) = render_scene(_one_cube_scene(cube, (fingers,)), rng)
+    assert HIDDEN_BELOW <= touched.in_view < PARTIAL_BELOW
+    upper = Cube("red", (200, 40, 40), 0.3, 0.2, 10.0, 0.04, z=0.04)
+    scene = PhotoScene(_one_cube_scene(cube).rig, (cube, upper), background="paper")
+    _, (lower, top) = render_scene(scene, rng)
+    assert lower.in_view == 0.0 and top.in_view >= 0.99
+    assert top.side_px > lower.side_px  # nearer the camera
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    tilt=st.floats(0.0, 30.0),
+    towards=st.floats(0.0, 360.0),
+    u=st.floats(0.0, 1280.0),
+    v=st.floats(0.0, 720.0),
+    z=st.floats(0.0, 0.12),
+)
+def test_a_tilted_camera_maps_the_table_and_back(
+    tilt: float, towards: float, u: float, v: float, z: float
+) -> None:
+    """Pixel → table (at height z) → pixel is the identity; the scale grows towards
+    the camera and is the straight-down camera's focal / distance without a tilt."""
+    rig = PhotoRig(tilt=tilt, tilt_towards=towards)
+    x, y = rig.to_table(u, v, z)
+    back = rig.to_pixels(x, y, z)
+    assert math.dist(back, (u, v)) < 1e-6
+    if tilt == 0:
+        assert rig.scale_at(x, y, z) == pytest.approx(rig.focal / (rig.height - z), rel=1e-6)
+    elif tilt > 1:
+        a = math.radians(towards)
+        nearer = (x - 0.05 * math.cos(a), y - 0.05 * math.sin(a))  # back towards the camera
+        assert rig.scale_at(*nearer, z) > rig.scale_at(x, y, z)
+
+
+def test_a_saved_case_reads_back_as_a_real_photographs_label(tmp_path: Path) -> None:
+    case = family_case("stacks", 3)
+    again = family_case("stacks", 3)
+    assert np.array_equal(case.image, again.image) and case.label == again.label
+    read = load_labelled(save_case(case, tmp_path))
+    assert (read.width, read.height, read.needed) == (1280, 720, case.label.needed)
+    assert read.px_per_m == pytest.approx(case.label.px_per_m, abs=1e-3)
+    for saved, block in zip(read.blocks, case.label.blocks, strict=True):
+        assert (saved.u, saved.v, saved.side_px) == pytest.approx(
+            (block.u, block.v, block.side_px), abs=0.01
+        )
+        assert saved.partial == block.partial
+    assert read.image.is_file()
+
+
+def test_shapes_and_hands_are_labelled_as_no_cubes() -> None:
+    case = family_case("distractors", 2)
+    assert case.scene.shapes and len(case.label.blocks) == len(case.scene.cubes)
+    kinds = [entry["kind"] for entry in case.document["non_cubes"]]
+    assert kinds == [shape.kind for shape in case.scene.shapes]
+    held = family_case("hands", 2)
+    assert [e["kind"] for e in held.document["non_cubes"]] == ["hand and forearm"] * len(
+        held.scene.hands
+    )
