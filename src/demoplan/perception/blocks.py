@@ -168,6 +168,66 @@ def _beyond_image(
     return float(outside.mean())
 
 
+_BORDER_BAND = 3.0
+"""Px in from the image's border in which a square's region is looked at along it."""
+
+
+def _runs_on_along_border(
+    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
+) -> bool:
+    """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
+    of ``image`` rows × columns) reaches past a border of the image along which its
+    region runs on beyond it: the mask holds (α > ½) within :data:`_BORDER_BAND` px
+    of that border over most of a stretch a quarter side long (at least 3 px), 2 px
+    past either end of the square's own stretch there. Such a square is a piece of
+    something cut by the border — a strip of table, a board's edge, a row of things —
+    not a block whose top shows whole: a block poking past the border ends with the
+    square along it."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    crop_rows, crop_cols = alpha.shape
+    height, width = image[0], image[1]
+    x, y = col0 + u, row0 + crop_rows - v
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = (x + c * along - s * across).ravel()
+    ys = (y - (s * along + c * across)).ravel()
+    reach = max(3.0, side / 4)
+    stretch = np.arange(2.0, 2.0 + reach) + 0.5
+    depths = np.arange(_BORDER_BAND) + 0.5
+    # each border: the points' depth in from it and place along it; whether it is
+    # upright (left, right) and the image's extent there (0 for left and top)
+    edges = (
+        (xs, ys, True, 0),
+        (width - xs, ys, True, width),
+        (ys, xs, False, 0),
+        (height - ys, xs, False, height),
+    )
+    for depth, place, upright, far in edges:
+        if not np.any(depth < 0):
+            continue  # the square stays inside this border
+        near = place[depth < _BORDER_BAND]
+        length = height if upright else width
+        for ends in (near.min() - stretch, near.max() + stretch):
+            points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
+            px, py = (points_in, points_along) if upright else (points_along, points_in)
+            cols = np.floor(px - col0).astype(np.intp)
+            rows = np.floor(py - row0).astype(np.intp)
+            within = (
+                (rows >= 0)
+                & (rows < crop_rows)
+                & (cols >= 0)
+                & (cols < crop_cols)
+                & (points_along >= 0)
+                & (points_along < length)
+            )
+            held = np.zeros(px.shape, dtype=bool)
+            held[within] = alpha[rows[within], cols[within]] > 0.5
+            if held.any(axis=0).mean() > 0.5:
+                return True
+    return False
+
+
 def _unfit(
     alpha: np.ndarray, region: ColourRegion, failures: list[tuple[str, str]], min_area: float
 ) -> list[RejectedPart]:
@@ -537,6 +597,10 @@ def detect_blocks(
                 why = _failure(
                     params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
                 )
+                if why is None and _runs_on_along_border(
+                    region.alpha, params, region.offset, image.shape
+                ):
+                    why = "cut by the border", "its region runs on along the image's border"
                 if why is None:
                     seamless = seamless_side(lightness, alpha, region.offset, params)
                     why = None if seamless is None else ("no seam", seamless)
