@@ -15,6 +15,8 @@
    the mask and the rest is searched again, so touching blocks of one colour
    are found one after the other. The next Hough maxima are tried when the
    strongest one is not borne out.
+5. Squares that together cover less than half of their region are dropped
+   (:data:`MIN_EXPLAINED_SHARE`): the region is something larger.
 
 Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
 (blocks of one named colour are instances of one type in the scene
@@ -90,8 +92,8 @@ class Rejection:
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
-    square``, ``no free sides``, ``cut by the border``, ``no seam``; ``covered`` from the
-    tracker), ``detail`` the measure behind
+    square``, ``no free sides``, ``cut by the border``, ``no seam``, ``larger than its
+    squares``; ``covered`` from the tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -226,6 +228,26 @@ def _runs_on_along_border(
             if held.any(axis=0).mean() > 0.5:
                 return True
     return False
+
+
+MIN_EXPLAINED_SHARE = 0.5
+"""The least share of a colour region the squares accepted in it must cover
+(their areas over its pixels with α > ½) for them to stand. Seen from above, a
+block's region is its top face and what shows of its sides in its colour (less
+than its top; most of it the side-face test drops), so its top covers at least
+half of it, and touching blocks of one colour each cover their part. A region
+mostly left when its squares are cut out is something larger — a wooden board,
+a table patch crossed by cables — in which squares were fitted between its
+marks: it holds no block (``larger than its squares``)."""
+
+
+def _explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
+    """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
+    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge)."""
+    if not squares:
+        return 1.0
+    area = int(np.count_nonzero(alpha > 0.5))
+    return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
 
 
 def _unfit(
@@ -566,6 +588,7 @@ def detect_blocks(
         check_time(where)
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
+        first_found = len(found)
         for attempt in range(8):
             if (alpha > 0.5).sum() < min_area:
                 if parts is not None and attempt == 0:  # its side faces left too little
@@ -619,6 +642,12 @@ def detect_blocks(
             grown = params.copy()
             grown[3] += 3.0
             alpha = alpha * (1.0 - _square_alpha(grown, uu, vv))
+        explained = _explained_share(region.alpha, [f[1] for f in found[first_found:]])
+        if explained < MIN_EXPLAINED_SHARE:
+            del found[first_found:]
+            if parts is not None:
+                why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
+                parts += _unfit(region.alpha, region, [why], min_area)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
