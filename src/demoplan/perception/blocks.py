@@ -15,6 +15,8 @@
    the mask and the rest is searched again, so touching blocks of one colour
    are found one after the other. The next Hough maxima are tried when the
    strongest one is not borne out.
+5. Squares that together cover less than half of their region are dropped
+   (:data:`MIN_EXPLAINED_SHARE`): the region is something larger.
 
 Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
 (blocks of one named colour are instances of one type in the scene
@@ -90,8 +92,8 @@ class Rejection:
     why: ``reason`` a short phrase (docs/perception.md "Overlays": ``too small``,
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
-    square``, ``no free sides``, ``cut by the border``, ``no seam``; ``covered`` from the
-    tracker), ``detail`` the measure behind
+    square``, ``no free sides``, ``cut by the border``, ``no seam``, ``larger than its
+    squares``; ``covered`` from the tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -166,6 +168,86 @@ def _beyond_image(
     ys = y - (s * along + c * across)
     outside = (xs < 0) | (xs > width) | (ys < 0) | (ys > height)
     return float(outside.mean())
+
+
+_BORDER_BAND = 3.0
+"""Px in from the image's border in which a square's region is looked at along it."""
+
+
+def _runs_on_along_border(
+    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
+) -> bool:
+    """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
+    of ``image`` rows × columns) reaches past a border of the image along which its
+    region runs on beyond it: the mask holds (α > ½) within :data:`_BORDER_BAND` px
+    of that border over most of a stretch a quarter side long (at least 3 px), 2 px
+    past either end of the square's own stretch there. Such a square is a piece of
+    something cut by the border — a strip of table, a board's edge, a row of things —
+    not a block whose top shows whole: a block poking past the border ends with the
+    square along it."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    crop_rows, crop_cols = alpha.shape
+    height, width = image[0], image[1]
+    x, y = col0 + u, row0 + crop_rows - v
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = (x + c * along - s * across).ravel()
+    ys = (y - (s * along + c * across)).ravel()
+    reach = max(3.0, side / 4)
+    stretch = np.arange(2.0, 2.0 + reach) + 0.5
+    depths = np.arange(_BORDER_BAND) + 0.5
+    # each border: the points' depth in from it and place along it; whether it is
+    # upright (left, right) and the image's extent there (0 for left and top)
+    edges = (
+        (xs, ys, True, 0),
+        (width - xs, ys, True, width),
+        (ys, xs, False, 0),
+        (height - ys, xs, False, height),
+    )
+    for depth, place, upright, far in edges:
+        if not np.any(depth < 0):
+            continue  # the square stays inside this border
+        near = place[depth < _BORDER_BAND]
+        length = height if upright else width
+        for ends in (near.min() - stretch, near.max() + stretch):
+            points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
+            px, py = (points_in, points_along) if upright else (points_along, points_in)
+            cols = np.floor(px - col0).astype(np.intp)
+            rows = np.floor(py - row0).astype(np.intp)
+            within = (
+                (rows >= 0)
+                & (rows < crop_rows)
+                & (cols >= 0)
+                & (cols < crop_cols)
+                & (points_along >= 0)
+                & (points_along < length)
+            )
+            held = np.zeros(px.shape, dtype=bool)
+            held[within] = alpha[rows[within], cols[within]] > 0.5
+            if held.any(axis=0).mean() > 0.5:
+                return True
+    return False
+
+
+MIN_EXPLAINED_SHARE = 0.5
+"""The least share of a colour region the squares accepted in it must cover
+(their areas over its pixels with α > ½) for them to stand. Seen from above, a
+block's region is its top face and what shows of its sides in its colour (less
+than its top; most of it the side-face test drops), so its top covers at least
+half of it, and touching blocks of one colour each cover their part. A region
+mostly left when its squares are cut out is something larger — a wooden board,
+a table patch crossed by cables — in which squares were fitted between its
+marks: it holds no block (``larger than its squares``)."""
+
+
+def _explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
+    """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
+    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge)."""
+    if not squares:
+        return 1.0
+    area = int(np.count_nonzero(alpha > 0.5))
+    return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
 
 
 def _unfit(
@@ -506,6 +588,7 @@ def detect_blocks(
         check_time(where)
         report_progress("colour regions", done, len(regions))
         alpha = region.alpha.copy()
+        first_found = len(found)
         for attempt in range(8):
             if (alpha > 0.5).sum() < min_area:
                 if parts is not None and attempt == 0:  # its side faces left too little
@@ -537,6 +620,10 @@ def detect_blocks(
                 why = _failure(
                     params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
                 )
+                if why is None and _runs_on_along_border(
+                    region.alpha, params, region.offset, image.shape
+                ):
+                    why = "cut by the border", "its region runs on along the image's border"
                 if why is None:
                     seamless = seamless_side(lightness, alpha, region.offset, params)
                     why = None if seamless is None else ("no seam", seamless)
@@ -555,6 +642,12 @@ def detect_blocks(
             grown = params.copy()
             grown[3] += 3.0
             alpha = alpha * (1.0 - _square_alpha(grown, uu, vv))
+        explained = _explained_share(region.alpha, [f[1] for f in found[first_found:]])
+        if explained < MIN_EXPLAINED_SHARE:
+            del found[first_found:]
+            if parts is not None:
+                why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
+                parts += _unfit(region.alpha, region, [why], min_area)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
