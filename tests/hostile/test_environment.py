@@ -3,6 +3,7 @@ left behind are refused before a run, in one line, exit 2."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -13,7 +14,11 @@ import pytest
 from demoplan.learning.modelfile import save_model
 from tests.helpers import EXAMPLES, paper_model
 
-pytest.importorskip("mujoco")
+# Asked of the installation, not imported: MuJoCo imported here, before demoplan sets
+# MUJOCO_GL=egl, would leave this test worker unable to render for every later test.
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("mujoco") is None, reason="MuJoCo is not installed"
+)
 
 
 @pytest.mark.parametrize("sim", ["mujoco", "arm"])

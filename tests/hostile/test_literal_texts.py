@@ -60,18 +60,22 @@ def test_a_name_with_tex_markup_is_drawn_as_written(
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_the_text_of_a_figure_is_kept_as_written() -> None:
+def test_the_text_of_a_figure_is_kept_as_written_and_tick_labels_keep_their_notation() -> None:
     """The figure's own text objects hold the name, not parsed (and not measured
-    as TeX: measuring ``$\\sqrt{x$`` raises)."""
-    from demoplan.plotting.backend import use_agg
+    as TeX: measuring ``$\\sqrt{x$`` raises), while a log axis keeps its
+    ``$10^{2}$`` tick labels as mathematics."""
+    from demoplan.plotting.backend import tight_layout, use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
 
     figure, ax = plt.subplots()
     try:
+        ax.set_yscale("log")
+        ax.set_ylim(0.1, 1000)
         text = ax.set_title(NAMES[0])
-        figure.tight_layout()  # measures every text: raised ValueError before
+        tight_layout(figure)  # measures every text: raised ValueError before
         assert text.get_text() == NAMES[0] and not text.get_parse_math()
+        assert all(label.get_parse_math() for label in ax.get_yticklabels())
     finally:
         plt.close(figure)

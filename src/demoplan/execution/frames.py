@@ -57,11 +57,12 @@ class FrameWriter:
         path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
         import matplotlib.pyplot as plt
 
+        from demoplan.plotting.backend import tight_layout
         from demoplan.plotting.figures import save_figure
 
         figure, ax = plt.subplots(figsize=(4.5, 4.0))
         self._panel(ax, len(self.frames) - 1)
-        figure.tight_layout()
+        tight_layout(figure)
         save_figure(figure, path, dpi=90)
         plt.close(figure)
         self.written.append(path)
@@ -93,6 +94,7 @@ class FrameWriter:
             return None
         import matplotlib.pyplot as plt
 
+        from demoplan.plotting.backend import tight_layout
         from demoplan.plotting.figures import save_figure
 
         picks = self.storyboard_frames(max_panels)
@@ -106,7 +108,7 @@ class FrameWriter:
         for ax, index in zip(axes.flat, picks, strict=False):
             ax.set_visible(True)
             self._panel(ax, index)
-        figure.tight_layout()
+        tight_layout(figure)
         path = self.folder / "storyboard.png"
         save_figure(figure, path, dpi=90)
         plt.close(figure)

@@ -355,7 +355,7 @@ def _plot_precision(
 ) -> str | None:
     if not _can_plot():
         return None
-    from demoplan.plotting.backend import use_agg
+    from demoplan.plotting.backend import tight_layout, use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
@@ -386,7 +386,7 @@ def _plot_precision(
     ax.set_title(
         "Fresh demonstrations with Experiment 1's structure (a new scene per draw)", fontsize=9
     )
-    fig.tight_layout()
+    tight_layout(fig)
     path = out / "experiment1-precision.png"
     try:
         save_figure(fig, path)

@@ -1,24 +1,33 @@
-"""How demoplan draws with matplotlib: one place, called before every figure
+"""How demoplan draws with matplotlib: one place, used by every figure
 (plots, frames, storyboards, reports, behaviour trees, recordings).
 
-Figures are drawn off-screen (Agg: no display is needed) and every text is
-drawn as written. Object names come from users' files and may hold ``$``:
-matplotlib would read ``$\\sqrt{$`` as TeX and fail (a plot, a run's frames
-lost), and ``$x$`` would show an italic x. Text objects take this setting
-when they are made, so it holds for titles, labels, legends and annotations
-alike — and for measuring them (``tight_layout``) before a figure is saved.
+Figures are drawn off-screen (Agg: no display is needed) and every text but
+the tick labels is drawn as written (:func:`~demoplan.plotting.labels.literal_texts`):
+object names come from users' files and may hold ``$``; matplotlib would read
+``$\\sqrt{$`` as TeX and fail (a plot, a run's frames lost), and ``$x$`` would
+show an italic x. Tick labels keep matplotlib's notation (a log axis writes
+``$10^{2}$``). A figure's texts are made literal before anything measures them:
+:func:`tight_layout` here, and the save (:func:`~demoplan.plotting.figures.figure_bytes`).
 """
 
 from __future__ import annotations
 
-__all__ = ["use_agg"]
+from typing import Any
+
+__all__ = ["tight_layout", "use_agg"]
 
 
 def use_agg() -> None:
-    """matplotlib off-screen, every text literal (module docstring); raises
-    ImportError without matplotlib (the ``plot`` extra)."""
+    """matplotlib off-screen; raises ImportError without matplotlib (the ``plot`` extra)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    matplotlib.rcParams["text.parse_math"] = False
-    matplotlib.rcParams["text.usetex"] = False
+
+
+def tight_layout(figure: Any) -> None:
+    """``figure.tight_layout()``, its texts made literal first: laying a figure
+    out measures every text, and a name holding TeX markup fails to measure."""
+    from demoplan.plotting.labels import literal_texts
+
+    literal_texts(figure)
+    figure.tight_layout()

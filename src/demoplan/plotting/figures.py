@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from demoplan.errors import InputError
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
+from demoplan.plotting.backend import tight_layout, use_agg
 from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.plotting.labels import (
     BoxPlacement,
@@ -290,7 +291,6 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
     """Every demonstration of ``model`` from above (like the paper's Fig. 3),
     each with the constraints among its states below it, on shared axes, in
     one image written atomically; ``heading`` names the task in the title."""
-    from demoplan.plotting.backend import use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
@@ -317,10 +317,10 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
         f"each the constraints among its states ({len(model.constraints)} learned in all)",
         fontsize=10,
     )
-    fig.tight_layout()
+    tight_layout(fig)
     if model.roles:  # two-line labels ("1 A plate#1", "← plate-b"): the panels' room for them
         fill_panels(fig, panels)
-        fig.tight_layout()  # again, around the filled panels' tick labels,
+        tight_layout(fig)  # again, around the filled panels' tick labels,
         fill_panels(fig, panels)  # and filled to the panels that leaves
     try:
         save_figure(fig, path)
@@ -577,7 +577,6 @@ def save_no_plan(
 def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
     """A one-axes figure drawn by ``draw``, saved atomically (raises ImportError
     without matplotlib)."""
-    from demoplan.plotting.backend import use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
@@ -585,7 +584,7 @@ def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
     figure, ax = plt.subplots(figsize=(6.5, 5.8))
     try:
         draw(ax)
-        figure.tight_layout()
+        tight_layout(figure)
         save_figure(figure, path)
     finally:
         plt.close(figure)
@@ -681,7 +680,6 @@ def save_scene_plan(
     if not plan_stacks(scene, problem, plan):
         _save_one_axes(lambda ax: plot_scene_plan(scene, problem, plan, ax, title, roles), path)
         return
-    from demoplan.plotting.backend import use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
@@ -691,7 +689,7 @@ def save_scene_plan(
     try:
         plot_scene_plan(scene, problem, plan, figure.add_subplot(grid[0, 0]), title, roles)
         plot_scene_side(scene, problem, plan, figure.add_subplot(grid[0, 1]), roles=roles)
-        figure.tight_layout()
+        tight_layout(figure)
         save_figure(figure, path)
     finally:
         plt.close(figure)
