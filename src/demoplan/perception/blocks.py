@@ -27,8 +27,8 @@ Names are colour names (``red``, ``wood``…), ``red2`` for a second red one
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -44,7 +44,7 @@ from demoplan.perception.colours import (
 from demoplan.perception.hough import Hypothesis, hough_squares
 from demoplan.perception.seams import image_lightness, seamless_side
 
-__all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks"]
+__all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks", "named_by_colour"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -659,7 +659,6 @@ def _named_in_world(
     """The squares fitted in their regions' crops (``height``: the image's rows)
     as blocks on the table, named by colour in the order found."""
     blocks = []
-    counts: dict[str, int] = {}
     for region, params, coverage, rms in found:
         row0, col0 = region.offset
         crop_height = region.alpha.shape[0]
@@ -667,26 +666,24 @@ def _named_in_world(
         v = (height - row0 - crop_height) + params[1]
         x, y = camera.to_world(u, v)
         yaw = ((params[2] + 45.0) % 90.0) - 45.0
-        counts[region.colour] = counts.get(region.colour, 0) + 1
-        count = counts[region.colour]
-        # a plain colour names its block (red, red2, …); others are block1, block2, …
-        # (docs/formats.md)
+        side = params[3] / camera.px_per_m
+        blocks.append(DetectedBlock("", region.colour, x, y, yaw, side, region.rgb, coverage, rms))
+    return named_by_colour(blocks)
+
+
+def named_by_colour(blocks: Sequence[DetectedBlock]) -> list[DetectedBlock]:
+    """``blocks`` named by colour in their order (docs/formats.md): a plain colour
+    names its first block and ``red2``… the others; unnamed colours are
+    ``block1``, ``block2``…"""
+    counts: dict[str, int] = {}
+    named = []
+    for block in blocks:
+        counts[block.colour] = counts.get(block.colour, 0) + 1
+        count = counts[block.colour]
         name = (
             f"block{count}"
-            if region.colour == "block"
-            else (region.colour if count == 1 else f"{region.colour}{count}")
+            if block.colour == "block"
+            else (block.colour if count == 1 else f"{block.colour}{count}")
         )
-        blocks.append(
-            DetectedBlock(
-                name,
-                region.colour,
-                x,
-                y,
-                yaw,
-                params[3] / camera.px_per_m,
-                region.rgb,
-                coverage,
-                rms,
-            )
-        )
-    return blocks
+        named.append(replace(block, name=name))
+    return named

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
-from demoplan.perception.blocks import DetectedBlock, Rejection
+from demoplan.perception.blocks import DetectedBlock, Rejection, named_by_colour
 from demoplan.perception.overlay import square_corners
 
 __all__ = [
@@ -87,25 +87,7 @@ def held_to_sizes(
         )
         detail = f"side {block.side * factor:.0f} {unit}, the blocks here {shown} {unit}"
         rejected.append(Rejection("not a block size", detail, block.colour, (outline,)))
-    return _renamed(kept), rejected
-
-
-def _renamed(blocks: Sequence[DetectedBlock]) -> list[DetectedBlock]:
-    """Blocks named by colour in order (the detector's rule, docs/formats.md): a
-    plain colour names its first block and ``red2``… the others; unnamed
-    colours are ``block1``, ``block2``…"""
-    counts: dict[str, int] = {}
-    named = []
-    for block in blocks:
-        counts[block.colour] = counts.get(block.colour, 0) + 1
-        count = counts[block.colour]
-        name = (
-            f"block{count}"
-            if block.colour == "block"
-            else (block.colour if count == 1 else f"{block.colour}{count}")
-        )
-        named.append(replace(block, name=name))
-    return named
+    return named_by_colour(kept), rejected
 
 
 def in_scale(block: DetectedBlock, px_per_m: float, origin: tuple[float, float]) -> DetectedBlock:
