@@ -73,6 +73,13 @@ def _near(found: list[DetectedBlock], point: Point, within_mm: float) -> bool:
     return any(math.dist((b.x, b.y), (x, y)) * 1000 <= within_mm for b in found)
 
 
+def _assert_one_whole_block(found: list[DetectedBlock], centre: Point, side: float) -> None:
+    """One block found, within 1.5 mm of ``centre``, its side within 2 mm of ``side`` (mm)."""
+    assert len(found) == 1, [(b.name, b.x, b.y, b.side) for b in found]
+    assert _near(found, centre, 1.5)
+    assert abs(found[0].side * 1000 - side) < 2.0
+
+
 _BLOCK_COLOURS = sorted(COLOURS)
 _poses = {
     "centre": st.tuples(st.floats(150, 250), st.floats(120, 180)),
@@ -149,10 +156,7 @@ def test_a_line_hanging_on_a_block_does_not_hide_it(
     image = _paint(
         [(_rectangle(centre, yaw, side, side), rgb)], _rng(seed), ((centre, end, 3.0, rgb),)
     )
-    found = detect_blocks(image, CAMERA)
-    assert len(found) == 1, [(b.name, b.x, b.y, b.side) for b in found]
-    assert _near(found, centre, 1.5)
-    assert abs(found[0].side * 1000 - side) < 2.0
+    _assert_one_whole_block(detect_blocks(image, CAMERA), centre, side)
 
 
 @settings(max_examples=8, deadline=None)
@@ -170,10 +174,7 @@ def test_a_colour_between_palette_names_is_one_block(
     red and wood, a violet between blue and purple, as the real photographs' cubes
     are), its pixels named one or the other by the noise: one block, whole."""
     image = _paint([(_rectangle(centre, yaw, side, side), rgb)], _rng(seed))
-    found = detect_blocks(image, CAMERA)
-    assert len(found) == 1, [(b.name, b.x, b.y, b.side) for b in found]
-    assert _near(found, centre, 1.5)
-    assert abs(found[0].side * 1000 - side) < 2.0
+    _assert_one_whole_block(detect_blocks(image, CAMERA), centre, side)
 
 
 @settings(max_examples=8, deadline=None)
