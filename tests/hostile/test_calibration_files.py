@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +22,7 @@ from demoplan.perception.calibration import (
     markers_from_document,
 )
 from tests.helpers import EXAMPLES
+from tests.hostile.harness import check_refused, run
 
 MARKERS = json.loads((EXAMPLES / "perception" / "markers.json").read_text())
 CAMERA: dict[str, Any] = {
@@ -130,23 +129,8 @@ def test_a_marker_id_is_read_exactly_when_it_is_ascii_digits(key: str) -> None:
 def test_the_command_answers_in_one_line(tmp_path: Path) -> None:
     camera = tmp_path / "camera.json"
     camera.write_text(json.dumps(_camera(("homography",), [[1, 0, 0], [0, 1, 0], [0, 1, 0]])))
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "demoplan",
-            "perceive",
-            str(EXAMPLES / "perception" / "blocks-top.png"),
-            "--camera",
-            str(camera),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert done.returncode == 1, done.stderr
-    lines = done.stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"demoplan: error: {camera}: homography"), lines
+    image = EXAMPLES / "perception" / "blocks-top.png"
+    done = run(["perceive", image, "--camera", camera], tmp_path)
+    check_refused(done, [f"demoplan: error: {camera}: homography"], codes={1})
     with pytest.raises(InputError):
         load_calibration(camera)

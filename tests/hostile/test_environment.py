@@ -4,15 +4,13 @@ left behind are refused before a run, in one line, exit 2."""
 from __future__ import annotations
 
 import importlib.util
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from demoplan.learning.modelfile import save_model
 from tests.helpers import EXAMPLES, paper_model
+from tests.hostile.harness import check_refused, run
 
 # Asked of the installation, not imported: MuJoCo imported here, before demoplan sets
 # MUJOCO_GL=egl, would leave this test worker unable to render for every later test.
@@ -22,19 +20,15 @@ pytestmark = pytest.mark.skipif(
 
 
 @pytest.mark.parametrize("sim", ["mujoco", "arm"])
-def test_a_rendering_backend_mujoco_refuses_is_one_line(tmp_path: Path, sim: str) -> None:
+def test_a_rendering_backend_mujoco_refuses_is_one_line(
+    tmp_path: Path, sim: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     model = tmp_path / "model.json"
     save_model(paper_model("set_table"), model)
     scene = EXAMPLES / "scenes" / "set-table-cluttered.json"
-    done = subprocess.run(
-        [sys.executable, "-m", "demoplan", "run", str(model), str(scene), "--sim", sim],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "MUJOCO_GL": "bogus"},
-        check=False,
-    )
-    assert done.returncode == 2, done.stderr
+    monkeypatch.setenv("MUJOCO_GL", "bogus")
+    done = run(["run", model, scene, "--sim", sim], tmp_path)
+    check_refused(done, ["MUJOCO_GL"], codes={2})
     assert done.stderr.splitlines() == [
         "demoplan: error: MUJOCO_GL='bogus': one of egl, osmesa, glx, glfw, disable expected "
         "(egl renders without a display)"
@@ -48,14 +42,9 @@ def test_a_video_inside_the_frames_folder_is_refused_before_the_run(tmp_path: Pa
     save_model(paper_model("blocks"), model)
     scene = EXAMPLES / "scenes" / "pyramid-fig4.json"
     out = tmp_path / "out"
-    done = subprocess.run(
-        [sys.executable, "-m", "demoplan", "run", str(model), str(scene), "--sim", "mujoco"]
-        + ["--frames", str(out), "--video", str(out / "run.mp4")],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
+    done = run(
+        ["run", model, scene, "--sim", "mujoco", "--frames", out, "--video", out / "run.mp4"],
+        tmp_path,
     )
-    assert done.returncode == 2, done.stderr
-    assert len(done.stderr.splitlines()) == 1 and "lies in the --frames folder" in done.stderr
+    check_refused(done, ["lies in the --frames folder"], codes={2})
     assert not out.exists()

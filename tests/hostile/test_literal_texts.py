@@ -5,14 +5,13 @@ frames of a run and its storyboard, nor turns into mathematics."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from demoplan.learning.modelfile import save_model
 from tests.helpers import EXAMPLES, paper_model
+from tests.hostile.harness import check_clean, run
 
 pytest.importorskip("matplotlib")
 
@@ -48,14 +47,9 @@ def test_a_name_with_tex_markup_is_drawn_as_written(
 ) -> None:
     model, scene = inputs
     args = [a.format(model=model, scene=scene, out=tmp_path) for a in command]
-    done = subprocess.run(
-        [sys.executable, "-m", "demoplan", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
+    done = run(args, tmp_path)
+    check_clean(done)
+    assert done.code == 0, done
     for name in made:
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

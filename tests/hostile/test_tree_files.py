@@ -6,10 +6,7 @@ writes what the run refuses."""
 from __future__ import annotations
 
 import math
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -27,6 +24,7 @@ from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.scenes.plan import ScenePlan
 from tests.helpers import EXAMPLES, paper_model
+from tests.hostile.harness import check_refused, run
 
 pytest.importorskip("behaviortreepy")
 
@@ -171,14 +169,5 @@ def test_the_command_answers_in_one_line_where_the_engine_crashed(
     tree.write_text(HOSTILE[case][0])
     model = tmp_path / "model.json"
     save_model(paper_model("set_table"), model)
-    done = subprocess.run(
-        [sys.executable, "-m", "demoplan", "run", "--bt", str(tree), str(model), str(SCENE)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={**os.environ, "PYTHONWARNINGS": "ignore"},
-        check=False,
-    )
-    assert done.returncode == 1, done.stderr
-    lines = done.stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"demoplan: error: {tree}: "), lines
+    done = run(["run", "--bt", tree, model, SCENE], tmp_path)
+    check_refused(done, [f"demoplan: error: {tree}: "], codes={1})
