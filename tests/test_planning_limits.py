@@ -57,6 +57,11 @@ def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
     assert seconds < 120
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="1.04 GB measured in a fresh clone's venv (1.02 GB in CI under the 2 s default); "
+    "110 MB in the working venv — not understood, planner memory (issue 44)",
+)
 def test_a_thousand_objects_solved_to_the_end_stay_far_from_memory_exhaustion(
     tmp_path: Path,
 ) -> None:
