@@ -24,9 +24,9 @@ from demoplan.cli import app
 from demoplan.commands.export import behaviour_tree
 from demoplan.errors import InputError
 from demoplan.execution.behaviour_tree import ATTEMPTS, NODES, TreeRun, run_behaviour_tree
-from demoplan.execution.executor import FailureKind
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.report import FailureKind
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model

@@ -15,9 +15,10 @@ from typer.testing import CliRunner
 import demoplan
 from demoplan.cli import app
 from demoplan.errors import InputError, UsageError
-from demoplan.execution.executor import ExecutionSettings, RunReport, execute
+from demoplan.execution.executor import ExecutionSettings, execute
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.report import RunReport
 from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, TaskModel

@@ -8,9 +8,10 @@ from collections import Counter
 
 import pytest
 
-from demoplan.execution.executor import MAX_SAME_GRASP, RunReport, execute
+from demoplan.execution.executor import MAX_SAME_GRASP, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.report import RunReport
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model

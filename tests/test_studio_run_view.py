@@ -31,8 +31,8 @@ from hypothesis import strategies as st
 
 from demoplan.commands.execution import run
 from demoplan.commands.learning import learn_files
-from demoplan.execution.executor import RunReport
 from demoplan.execution.faults import Faults
+from demoplan.execution.report import RunReport
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio import worker
 from demoplan.studio.app import create_app

@@ -11,9 +11,10 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.execution.executor import MAX_SAME_GRASP, ExecutionSettings, RunEvent, execute
+from demoplan.execution.executor import MAX_SAME_GRASP, ExecutionSettings, execute
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
+from demoplan.execution.report import RunEvent
 from demoplan.learning.modelfile import save_model
 from demoplan.model import Pose, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene

@@ -82,8 +82,8 @@ if TYPE_CHECKING:
     from demoplan.api import learn, plan, run
     from demoplan.commands.inputs import load_inputs
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
-    from demoplan.execution.executor import RunReport
     from demoplan.execution.faults import Faults
+    from demoplan.execution.report import RunReport
     from demoplan.execution.world import Observation, World
     from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.learner import TaskModelLearner

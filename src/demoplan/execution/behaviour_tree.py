@@ -35,8 +35,9 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 from defusedxml.ElementTree import fromstring
 
 from demoplan.errors import InputError, LimitReachedError, UsageError
-from demoplan.execution.executor import MISPLACED_WITHIN, ExecutionSettings, FailureKind
+from demoplan.execution.executor import MISPLACED_WITHIN, ExecutionSettings
 from demoplan.execution.faults import InjectedFault
+from demoplan.execution.report import FailureKind
 from demoplan.execution.tree_checks import check_tree
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel

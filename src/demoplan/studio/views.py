@@ -18,7 +18,7 @@ from demoplan.model import Pose, TaskModel
 from demoplan.scenes.scene import Scene, SceneObject, yaw_of
 
 if TYPE_CHECKING:
-    from demoplan.execution.executor import RunEvent, RunReport
+    from demoplan.execution.report import RunEvent, RunReport
     from demoplan.execution.world import Observation
     from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError, ScenePlan
 

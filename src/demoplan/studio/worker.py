@@ -8,7 +8,7 @@ each, on its stdout:
 
 - ``{"event": {...}}`` for each event of the run as it happens
   (:func:`demoplan.studio.views.event_json`), with the world the executor had
-  last observed when it told the event (:attr:`~demoplan.execution.executor.RunEvent.observation`);
+  last observed when it told the event (:attr:`~demoplan.execution.report.RunEvent.observation`);
 - at the end, ``{"result": {...}, "events": [...]}`` (the run's JSON and its
   events, the end's marked with the run's outcome) or ``{"error": "one line"}``.
 
@@ -111,8 +111,8 @@ def _outcome(request: dict[str, Any], protocol: IO[str]) -> dict[str, Any]:
 
 def _run(request: dict[str, Any], protocol: IO[str]) -> dict[str, Any]:
     from demoplan.commands.execution import run
-    from demoplan.execution.executor import RunEvent
     from demoplan.execution.faults import parse_faults
+    from demoplan.execution.report import RunEvent
     from demoplan.scenes.scene import scene_from_document
     from demoplan.studio.views import event_json, finished_events, run_result_json
 
