@@ -496,12 +496,10 @@ def _quantise_object(
     )
     candidates, relative = observed.candidates[obj], observed.relative
     position_scores = _score_references(
-        obj, "position", own, candidates, settings, position_precision, relative
+        obj, "position", candidates, settings, position_precision, relative
     )
     orientation_scores = (
-        _score_references(
-            obj, "orientation", own, candidates, settings, orientation_precision, relative
-        )
+        _score_references(obj, "orientation", candidates, settings, orientation_precision, relative)
         if precision.orientation < settings.orientation_separation
         else []  # the demonstrations do not fix orientations: none is learned
     )
@@ -894,7 +892,6 @@ def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) 
 def _score_references(
     obj: str,
     kind: Kind,
-    own: list[_Placement],
     candidates: list[str | None],
     settings: StateGenerationSettings,
     precision: _Spread,

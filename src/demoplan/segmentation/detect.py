@@ -381,7 +381,7 @@ def _cumsum0(values: FloatArray) -> FloatArray:
 
 
 def _window_means(
-    t: FloatArray, ct: FloatArray, cp: FloatArray, lo: IntArray, hi: IntArray
+    ct: FloatArray, cp: FloatArray, lo: IntArray, hi: IntArray
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Sample count, mean time and mean position of samples ``lo … hi − 1`` (vectorised)."""
     count = (hi - lo).astype(float)
@@ -421,8 +421,8 @@ def track_speed(times: FloatArray, positions: FloatArray, window_s: float) -> Fl
     lo = np.minimum(np.searchsorted(t, centre - half, side="left"), mid - MIN_HALF_WINDOW_SAMPLES)
     hi = np.maximum(np.searchsorted(t, centre + half, side="right"), mid + MIN_HALF_WINDOW_SAMPLES)
     lo, hi = np.maximum(lo, 0), np.minimum(hi, n)
-    left_n, left_t, left_p = _window_means(t, ct, cp, lo, mid)
-    right_n, right_t, right_p = _window_means(t, ct, cp, mid, hi)
+    left_n, left_t, left_p = _window_means(ct, cp, lo, mid)
+    right_n, right_t, right_p = _window_means(ct, cp, mid, hi)
     dt = right_t - left_t
     valid = (left_n > 0) & (right_n > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -438,8 +438,8 @@ def _gap_jumps(times: FloatArray, positions: FloatArray, gap: IntArray, half: fl
     ct, cp = _cumsum0(t), _cumsum0(positions)
     before_lo = np.searchsorted(t, t[gap] - half, side="left")
     after_hi = np.searchsorted(t, t[gap + 1] + half, side="right")
-    _, _, before = _window_means(t, ct, cp, before_lo, gap + 1)
-    _, _, after = _window_means(t, ct, cp, gap + 1, after_hi)
+    _, _, before = _window_means(ct, cp, before_lo, gap + 1)
+    _, _, after = _window_means(ct, cp, gap + 1, after_hi)
     return np.asarray(np.linalg.norm(after - before, axis=1), dtype=float)
 
 

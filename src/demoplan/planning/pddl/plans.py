@@ -33,7 +33,7 @@ def action_from_pddl(problem: Problem, name: str, roles: Roles | None = None) ->
     plate-1)`` is plate-a's GRASP (filling role plate#1); a ``bind`` is no
     action (ValueError; :func:`plan_from_pddl` reads whole plans)."""
     if roles is not None and roles.kinds:
-        return _role_action(problem, name, cast_roles(problem, roles))
+        return _role_action(name, cast_roles(problem, roles))
     text = name.strip("() ").lower()
     lifted = " " in text
     names = unique_names(problem, LIFTED_RESERVED if lifted else RESERVED)
@@ -57,7 +57,7 @@ def action_from_pddl(problem: Problem, name: str, roles: Roles | None = None) ->
     return Action(kinds[parts[0]][0], o, loc, g)
 
 
-def _role_action(problem: Problem, name: str, cast: Cast) -> Action:
+def _role_action(name: str, cast: Cast) -> Action:
     text = name.strip("() ").lower()
     reverse = {v: k for k, v in cast.names.items() if not k.startswith(ROLE_KEY)}
     if " " in text:  # lifted: (grasp o l g r), (put-down-reaching o l g r s)
@@ -100,5 +100,5 @@ def plan_from_pddl(
             elif not (o in cast.kinds and r == o):
                 raise ValueError(f"{name!r} is not a binding of this problem's PDDL export")
             continue
-        actions.append(_role_action(problem, name, cast))
+        actions.append(_role_action(name, cast))
     return actions, binding
