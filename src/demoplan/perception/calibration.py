@@ -38,7 +38,6 @@ from demoplan.fileio import check_format, describe_validation_error, read_docume
 from demoplan.perception.camera import Camera
 
 __all__ = [
-    "CalibratedBlock",
     "CameraCentre",
     "Intrinsics",
     "MarkerLayout",
@@ -808,20 +807,6 @@ def calibration_overlay(image: np.ndarray, calibration: TableCalibration) -> np.
                 weight,
             )
     return picture
-
-
-@dataclass(frozen=True, slots=True)
-class CalibratedBlock:
-    """A block found in a rectified view: its centre (m), yaw (deg), side (m)
-    on the table, and whether its top face's height was corrected for."""
-
-    name: str
-    colour: str
-    x: float
-    y: float
-    yaw: float
-    side: float
-    height_corrected: bool
 
 
 def top_face_on_table(
