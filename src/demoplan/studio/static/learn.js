@@ -4,7 +4,8 @@ import { post } from "./api.js";
 import { $, alarm, fmt, mm, plural, say, state } from "./common.js";
 import { drawGraph } from "./graph.js";
 import { redraw } from "./stage.js";
-import { refreshFiles, teachSceneDocument } from "./teach.js";
+import { refreshFiles } from "./files.js";
+import { teachSceneDocument } from "./teach.js";
 
 // --- learn ----------------------------------------------------------------
 

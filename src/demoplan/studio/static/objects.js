@@ -5,10 +5,9 @@
 
 import { api, get } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, say, state } from "./common.js";
-import { clearPlan } from "./plan.js";
-import { keepInView, redraw } from "./stage.js";
+import { keepInView, redraw, sceneChanged } from "./stage.js";
 import { halfExtents, snap } from "./table.js";
-import { newDemonstration, refreshFiles } from "./teach.js";
+import { refreshFiles } from "./files.js";
 
 // --- the template or file in use, kept in the work folder across reloads ---
 
@@ -26,13 +25,6 @@ export async function keepSource() {
   const body = source.kind === "template" ? { kind: "template", id: source.id } : { kind: "file", id: source.name };
   await api("PUT", "/api/source", body);
   showSource();
-}
-
-export async function useTemplate(id) {
-  state.source = { kind: "template", id };
-  showSource();
-  await newDemonstration();
-  await keepSource();
 }
 
 // At start: the template or file last used in this work folder (if it is still there).
@@ -123,7 +115,7 @@ function removeThing(name, kind) {
   state.teach.edited = true;
   state.plan.poses = null;
   state.plan.landmarks = null;
-  clearPlan();
+  sceneChanged();
   renderThings();
   redraw();
   say(`${name} removed.`);
@@ -205,7 +197,7 @@ export function addThing() {
   state.teach.edited = true;
   state.plan.poses = null;
   state.plan.landmarks = null;
-  clearPlan();
+  sceneChanged();
   keepInView({ ...state.teach.poses, ...state.layout.landmarks });
   renderThings();
   redraw();

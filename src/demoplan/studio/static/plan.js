@@ -2,10 +2,10 @@
 
 import { ApiError, get, post } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, plural, say, state } from "./common.js";
-import { runEvents, setRunStep } from "./run.js";
-import { keepInView, layoutWith, place, redraw, sameObjects } from "./stage.js";
+import { keepInView, layoutWith, place, redraw, registerView, sameObjects, stopAnimation } from "./stage.js";
 import { snap } from "./table.js";
-import { landmarksDocument, poseDocument, refreshFiles, startDemonstration } from "./teach.js";
+import { refreshFiles } from "./files.js";
+import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
 
 // --- plan -----------------------------------------------------------------
 
@@ -219,33 +219,10 @@ export function setPlanStep(step) {
   redraw();
 }
 
-export function stopAnimation(which) {
-  const holder = state[which];
-  if (holder.timer) {
-    clearInterval(holder.timer);
-    holder.timer = null;
-    $(which === "plan" ? "play-plan" : "play-run").textContent = "▶ Play";
-  }
-}
-
-export function play(which) {
-  const holder = state[which];
-  if (holder.timer) {
-    stopAnimation(which);
-    redraw();
-    return;
-  }
-  const total = which === "plan" ? (holder.result ? holder.result.moves.length : 0) : runEvents().length;
-  if (!total) return;
-  const set = which === "plan" ? setPlanStep : setRunStep;
-  if (holder.step >= total) set(0);
-  $(which === "plan" ? "play-plan" : "play-run").textContent = "❚❚ Pause";
-  holder.timer = setInterval(() => {
-    if (holder.step >= total) {
-      stopAnimation(which);
-      redraw();
-      return;
-    }
-    set(holder.step + 1);
-  }, 550);
-}
+registerView("plan", {
+  posesAt: planPosesAt,
+  held: heldAt,
+  steps: () => (state.plan.result ? state.plan.result.moves.length : 0),
+  setStep: setPlanStep,
+  sceneChanged: clearPlan,
+});

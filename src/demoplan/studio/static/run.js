@@ -5,8 +5,8 @@
 
 import { ApiError, del, get, post } from "./api.js";
 import { $, alarm, clone, guarded, plural, say, state } from "./common.js";
-import { chosenModel, sceneDocument, sceneExtras, stopAnimation } from "./plan.js";
-import { keepInView, redraw, sameObjects } from "./stage.js";
+import { chosenModel, sceneDocument, sceneExtras } from "./plan.js";
+import { keepInView, redraw, registerView, sameObjects, stopAnimation } from "./stage.js";
 import { startDemonstration } from "./teach.js";
 
 // Polls in a row that may fail (a busy server) before the run is given up as lost.
@@ -239,3 +239,5 @@ export async function restoreLastRun() {
   alarm("");
   say(`The last run of this work folder (${badgeState(state.run.status)}) is in the Run view.`);
 }
+
+registerView("run", { posesAt: runPosesAt, steps: () => runEvents().length, setStep: setRunStep });

@@ -2,10 +2,31 @@
 
 import { post } from "./api.js";
 import { $, alarm, clone, fmt, guarded, say, state } from "./common.js";
-import { clearPlan, heldAt, planPosesAt } from "./plan.js";
-import { runPosesAt } from "./run.js";
 import { TableView, ridersOf, snap, turned } from "./table.js";
-import { renderSteps } from "./teach.js";
+
+// --- the views ------------------------------------------------------------
+
+// What the table asks of each view, registered by the view: the views import
+// the stage, never the reverse. A view may register
+//   posesAt(step), held(step): the poses drawn (the object in the hand) after its step `step`;
+//   steps(), setStep(step): how many steps it plays, and show one (Play);
+//   stepsChanged(): the Teach view's steps were changed on the table;
+//   sceneChanged(): the scene it worked from changed (the plan is forgotten).
+const views = {};
+
+export function registerView(name, hooks) {
+  views[name] = hooks;
+}
+
+function ask(view, hook, ...args) {
+  const hooks = views[view];
+  return hooks && hooks[hook] ? hooks[hook](...args) : undefined;
+}
+
+// The scene changed under the views: each forgets what it computed from it.
+export function sceneChanged() {
+  for (const hooks of Object.values(views)) if (hooks.sceneChanged) hooks.sceneChanged();
+}
 
 // --- the table ------------------------------------------------------------
 
@@ -76,7 +97,7 @@ export async function placeLandmark(name, xy, yaw) {
   } finally {
     redraw(); // refused: it is drawn where it stood
   }
-  if (state.view !== "teach") clearPlan();
+  if (state.view !== "teach") sceneChanged();
   const p = marks[name];
   say(`landmark ${name} placed at x ${fmt(p.position[0])}, y ${fmt(p.position[1])} m, yaw ${fmt(p.yaw, 1)}°`);
 }
@@ -91,8 +112,8 @@ export function currentPoses() {
 }
 
 export function shownPoses() {
-  if (state.view === "plan" && state.plan.result && state.plan.step > 0) return planPosesAt(state.plan.step);
-  if (state.view === "run" && state.run.status && state.run.step > 0) return runPosesAt(state.run.step);
+  if (state.view === "plan" && state.plan.result && state.plan.step > 0) return ask("plan", "posesAt", state.plan.step);
+  if (state.view === "run" && state.run.status && state.run.step > 0) return ask("run", "posesAt", state.run.step);
   return currentPoses();
 }
 
@@ -104,7 +125,7 @@ export function redraw() {
     landmarksMovable: landmarksMovable(),
     landmarks: currentLandmarks(),
     outlines: state.view === "learn" && state.learn.result ? state.learn.result.targets : [],
-    held: state.view === "plan" ? heldAt(state.plan.step) : null,
+    held: state.view === "plan" ? ask("plan", "held", state.plan.step) : null,
   };
   table.draw(shownPoses(), options);
   const captions = {
@@ -147,13 +168,13 @@ export async function place(name, xy, yaw, amend) {
     state.teach.poses[name] = pose;
     keepInView(state.teach.poses);
     state.teach.saved = false;
-    renderSteps();
+    ask("teach", "stepsChanged");
     say(`${name} put down at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
       (answer.on ? ` on ${answer.on}` : ""));
   } else {
     state.plan.poses[name] = pose;
     keepInView(state.plan.poses);
-    clearPlan();
+    sceneChanged();
     say(`${name} now starts at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
       (answer.on ? ` on ${answer.on}` : ""));
   }
@@ -197,4 +218,37 @@ export function keepInView(poses) {
     state.layout.table = grown;
     table.setLayout(state.layout, tableRoom());
   }
+}
+
+// --- playing a view's steps -----------------------------------------------
+
+export function stopAnimation(which) {
+  const holder = state[which];
+  if (holder.timer) {
+    clearInterval(holder.timer);
+    holder.timer = null;
+    $(which === "plan" ? "play-plan" : "play-run").textContent = "▶ Play";
+  }
+}
+
+export function play(which) {
+  const holder = state[which];
+  if (holder.timer) {
+    stopAnimation(which);
+    redraw();
+    return;
+  }
+  const total = ask(which, "steps");
+  if (!total) return;
+  const set = (step) => ask(which, "setStep", step);
+  if (holder.step >= total) set(0);
+  $(which === "plan" ? "play-plan" : "play-run").textContent = "❚❚ Pause";
+  holder.timer = setInterval(() => {
+    if (holder.step >= total) {
+      stopAnimation(which);
+      redraw();
+      return;
+    }
+    set(holder.step + 1);
+  }, 550);
 }

@@ -6,12 +6,13 @@
 import { $, clone, guarded, say, state } from "./common.js";
 import { learn } from "./learn.js";
 import {
-  addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, play, saveScene, scramble, setPlanStep, stopAnimation,
+  addClutter, clearPlan, ensurePlanStart, loadPlanScene, makePlan, saveScene, scramble, setPlanStep,
 } from "./plan.js";
 import { cancelRun, restoreLastRun, setRunStep, startRun } from "./run.js";
-import { redraw, table, tableRoom } from "./stage.js";
-import { addThing, restoreSource, saveObjects, useTemplate } from "./objects.js";
-import { loadFile, newDemonstration, refreshFiles, save, undo } from "./teach.js";
+import { play, redraw, stopAnimation, table, tableRoom } from "./stage.js";
+import { refreshFiles } from "./files.js";
+import { addThing, restoreSource, saveObjects } from "./objects.js";
+import { loadFile, newDemonstration, save, undo, useTemplate } from "./teach.js";
 import { get } from "./api.js";
 
 // --- views ----------------------------------------------------------------

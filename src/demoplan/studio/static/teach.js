@@ -2,9 +2,9 @@
 
 import { get, post } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, fmt, plural, say, state } from "./common.js";
-import { keepSource, renderThings } from "./objects.js";
-import { clearPlan } from "./plan.js";
-import { cover, corners, redraw, sameObjects, table, tableRoom } from "./stage.js";
+import { refreshFiles } from "./files.js";
+import { keepSource, renderThings, showSource } from "./objects.js";
+import { cover, corners, redraw, registerView, sameObjects, sceneChanged, table, tableRoom } from "./stage.js";
 
 // --- teach ----------------------------------------------------------------
 
@@ -38,7 +38,7 @@ export function startDemonstration(layout, note) {
   state.plan.extras = null;
   state.clutter = [];
   state.selected = null;
-  clearPlan();
+  sceneChanged();
   table.setLayout(layout, tableRoom());
   renderSteps();
   renderThings();
@@ -68,6 +68,14 @@ export async function newDemonstration() {
   const unsaved = state.teach.steps.length && !state.teach.saved ? ` (${plural(state.teach.steps.length, "unsaved step")} discarded)` : "";
   const from = source.kind === "template" ? `template ${source.id}` : source.name;
   startDemonstration(layout, `New demonstration from ${from}${randomise ? `, randomised (seed ${seed})` : ""}${unsaved}.`);
+}
+
+// A template chosen: the Teach view starts from it (also after a reload).
+export async function useTemplate(id) {
+  state.source = { kind: "template", id };
+  showSource();
+  await newDemonstration();
+  await keepSource();
 }
 
 export function undo() {
@@ -159,49 +167,4 @@ export function teachSceneDocument() {
   return scene;
 }
 
-// --- work-folder files ----------------------------------------------------
-
-export async function refreshFiles() {
-  state.files = await get("/api/files");
-  const file = $("file");
-  const keep = file.value;
-  file.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["objects", "demonstrations", "scenes"]) {
-    const group = document.createElement("optgroup");
-    group.label = kind;
-    for (const name of state.files[kind]) group.appendChild(new Option(name, name));
-    if (state.files[kind].length) file.appendChild(group);
-  }
-  file.value = ["objects", "demonstrations", "scenes"].some((k) => state.files[k].includes(keep)) ? keep : "";
-  const chosen = new Set([...document.querySelectorAll("#learn-files input:not(:checked)")].map((i) => i.value));
-  const box = $("learn-files");
-  box.replaceChildren();
-  if (!state.files.demonstrations.length) box.textContent = "No demonstrations saved yet.";
-  for (const name of state.files.demonstrations) {
-    const label = document.createElement("label");
-    label.className = "check";
-    const input = document.createElement("input");
-    input.type = "checkbox";
-    input.value = name;
-    input.checked = !chosen.has(name);
-    label.append(input, ` ${name}`);
-    box.appendChild(label);
-  }
-  const planFile = $("plan-file");
-  const keepPlan = planFile.value;
-  planFile.replaceChildren(new Option("(none)", ""));
-  for (const kind of ["scenes", "objects", "demonstrations"]) {
-    const group = document.createElement("optgroup");
-    group.label = kind;
-    for (const name of state.files[kind]) group.appendChild(new Option(name, name));
-    if (state.files[kind].length) planFile.appendChild(group);
-  }
-  planFile.value = ["scenes", "objects", "demonstrations"].some((k) => state.files[k].includes(keepPlan)) ? keepPlan : "";
-  const models = $("plan-model");
-  const current = models.value;
-  models.replaceChildren();
-  for (const name of state.files.models) models.appendChild(new Option(name, name));
-  if (state.files.models.includes(current)) models.value = current;
-  $("workfolder").textContent = `work folder: ${plural(state.files.demonstrations.length, "demonstration")}, ` +
-    `${plural(state.files.models.length, "model")}, ${plural(state.files.scenes.length, "scene")}`;
-}
+registerView("teach", { stepsChanged: renderSteps });
