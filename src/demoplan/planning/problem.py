@@ -122,49 +122,56 @@ class Problem:
 
     def check(self, source: str | None = None) -> None:
         """Raise :class:`InputError` unless every fact uses declared names consistently."""
+        self._check_declared(source)
+        self._check_start(source)
+        self._check_goal(source)
+
+    def _check_declared(self, source: str | None) -> None:
+        """No name declared with two types; the static facts name declared ones."""
         objects, locations, grasps = set(self.objects), set(self.locations), set(self.grasps)
         clash = (objects & locations) | (objects & grasps) | (locations & grasps)
         if clash:
             raise InputError(
                 f"{sorted(clash)} declared with two types", source=source, field="object"
             )
-
-        def need(name: str, kind: set[str], what: str, where: str) -> None:
-            if name not in kind:
-                raise InputError(f"{name!r} is not a declared {what}", source=source, field=where)
-
         for obj, grasp in self.allowed:
-            need(obj, objects, "Object", "state")
-            need(grasp, grasps, "Grasp", "state")
+            _need(obj, objects, "Object", "state", source)
+            _need(grasp, grasps, "Grasp", "state", source)
         for la, lb, grasp in self.collisions:
-            need(la, locations, "Location", "state")
-            need(lb, locations, "Location", "state")
-            need(grasp, grasps, "Grasp", "state")
+            _need(la, locations, "Location", "state", source)
+            _need(lb, locations, "Location", "state", source)
+            _need(grasp, grasps, "Grasp", "state", source)
         for name in self.freespace:
-            need(name, locations, "Location", "object")
+            _need(name, locations, "Location", "object", source)
         for pair in self.supports | self.exclusions:
             for loc in pair:
-                need(loc, locations, "Location", "state")
+                _need(loc, locations, "Location", "state", source)
         for loc, obj in self.accepts:
-            need(loc, locations, "Location", "state")
-            need(obj, objects, "Object", "state")
+            _need(loc, locations, "Location", "state", source)
+            _need(obj, objects, "Object", "state", source)
+
+    def _refuse(
+        self, restricted: set[str], obj: str, loc: str, where: str, source: str | None
+    ) -> None:
+        """An error if ``loc`` has accepts facts (is ``restricted``) and none names ``obj``."""
+        if loc in restricted and (loc, obj) not in self.accepts:
+            raise InputError(
+                f"{loc!r} does not accept {obj!r} (its accepts facts name "
+                f"{sorted(o for lo, o in self.accepts if lo == loc)})",
+                source=source,
+                field=where,
+            )
+
+    def _check_start(self, source: str | None) -> None:
+        """Every object at one declared location, one object per location."""
+        objects, locations = set(self.objects), set(self.locations)
         restricted = {loc for loc, _ in self.accepts}
-
-        def refuse(obj: str, loc: str, where: str) -> None:
-            if loc in restricted and (loc, obj) not in self.accepts:
-                raise InputError(
-                    f"{loc!r} does not accept {obj!r} (its accepts facts name "
-                    f"{sorted(o for lo, o in self.accepts if lo == loc)})",
-                    source=source,
-                    field=where,
-                )
-
         seen_objects: set[str] = set()
         seen_locations: dict[str, str] = {}
         for obj, loc in self.initial:
-            need(obj, objects, "Object", "state")
-            need(loc, locations, "Location", "state")
-            refuse(obj, loc, "state")
+            _need(obj, objects, "Object", "state", source)
+            _need(loc, locations, "Location", "state", source)
+            self._refuse(restricted, obj, loc, "state", source)
             if obj in seen_objects:
                 raise InputError(f"{obj!r} is at two locations", source=source, field="state")
             if loc in seen_locations:
@@ -183,11 +190,16 @@ class Problem:
                 source=source,
                 field="state",
             )
+
+    def _check_goal(self, source: str | None) -> None:
+        """One goal location per object; subgoals, their order and those reached by id."""
+        objects, locations = set(self.objects), set(self.locations)
+        restricted = {loc for loc, _ in self.accepts}
         goal_objects: set[str] = set()
         for obj, loc in self.goal:
-            need(obj, objects, "Object", "goal")
-            need(loc, locations, "Location", "goal")
-            refuse(obj, loc, "goal")
+            _need(obj, objects, "Object", "goal", source)
+            _need(loc, locations, "Location", "goal", source)
+            self._refuse(restricted, obj, loc, "goal", source)
             if obj in goal_objects:
                 raise InputError(f"{obj!r} has two goal locations", source=source, field="goal")
             goal_objects.add(obj)
@@ -195,9 +207,9 @@ class Problem:
         if len(set(ids)) != len(ids):
             raise InputError("subgoal ids must be unique", source=source, field="goal")
         for subgoal in self.subgoals:
-            need(subgoal.object, objects, "Object", "goal")
-            need(subgoal.location, locations, "Location", "goal")
-            refuse(subgoal.object, subgoal.location, "goal")
+            _need(subgoal.object, objects, "Object", "goal", source)
+            _need(subgoal.location, locations, "Location", "goal", source)
+            self._refuse(restricted, subgoal.object, subgoal.location, "goal", source)
         for before, after in self.precedences:
             for sid in (before, after):
                 if sid not in ids:
@@ -271,3 +283,9 @@ def plan_to_json(plan: Plan, read_seconds: float | None = None) -> dict[str, obj
         "seconds": round(plan.seconds, 6),
         **timing,
     }
+
+
+def _need(name: str, kind: set[str], what: str, where: str, source: str | None) -> None:
+    """An error unless ``name`` is a declared ``what`` (one of ``kind``)."""
+    if name not in kind:
+        raise InputError(f"{name!r} is not a declared {what}", source=source, field=where)
