@@ -298,21 +298,7 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
             source=source,
             field="goals",
         )
-    demos = []
-    if parsed.demonstrations:
-        demos = demonstrations_from_document(
-            {"format": "demoplan/demonstrations-1", "demonstrations": parsed.demonstrations},
-            source,
-        )
-        if len(demos) != len(sequences):
-            raise InputError(
-                f"{plural(len(demos), 'demonstration')} for "
-                f"{plural(len(sequences), 'sequence')}; one sequence per "
-                "demonstration expected",
-                source=source,
-                field="demonstrations",
-            )
-        _check_references(states, demos, source)
+    demos = _model_demonstrations(parsed, states, len(sequences), source)
     for index, violation in enumerate(parsed.violations):
         if violation.demonstration >= len(sequences):
             raise InputError(
@@ -344,6 +330,29 @@ def model_from_dict(data: dict[str, Any], source: str) -> TaskModel:
         precision_estimated=parsed.precision is None or parsed.precision.estimated,
         roles=_roles(parsed.roles, demos, source),
     )
+
+
+def _model_demonstrations(
+    parsed: _ModelSchema, states: tuple[State, ...], sequences: int, source: str
+) -> list[Demonstration]:
+    """The demonstrations a model keeps (none in an older model), one per
+    sequence, every state's reference an object of theirs."""
+    if not parsed.demonstrations:
+        return []
+    demos = demonstrations_from_document(
+        {"format": "demoplan/demonstrations-1", "demonstrations": parsed.demonstrations},
+        source,
+    )
+    if len(demos) != sequences:
+        raise InputError(
+            f"{plural(len(demos), 'demonstration')} for "
+            f"{plural(sequences, 'sequence')}; one sequence per "
+            "demonstration expected",
+            source=source,
+            field="demonstrations",
+        )
+    _check_references(states, demos, source)
+    return demos
 
 
 def _roles(roles: list[_RoleSchema], demos: list[Demonstration], source: str) -> tuple[Role, ...]:
