@@ -227,67 +227,8 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         raise describe_validation_error(exc, source) from None
     check_document(data, parsed.units, source)
     scale = LENGTH_SCALE[parsed.units.length]
-    to_deg = math.degrees if parsed.units.angle == "rad" else float
-    objects = []
-    for name, entry in parsed.objects.items():
-        _check_name(name, source)
-        if "#" in name and entry.type is None:
-            raise InputError(
-                "'#' names a role of a type (plate#1); an object name without '#' expected "
-                "(as in demonstration files)",
-                source=source,
-                field=f"objects.{name}",
-            )
-        if name in parsed.landmarks:
-            raise InputError(
-                "is both an object and a landmark; one kind expected",
-                source=source,
-                field=f"objects.{name}",
-            )
-        pose = pose_from_dict(
-            PoseSchema(
-                **entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density", "type"})
-            ),
-            parsed.units,
-        )
-        if pose.position[2] < -0.005:
-            raise InputError(
-                f"z = {pose.position[2]:g} m lies under the table top; z ≥ 0 expected",
-                source=source,
-                field=f"objects.{name}.position",
-            )
-        geometry = None
-        if entry.size is not None:
-            size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
-            geometry = with_mass(
-                ObjectGeometry(entry.shape, size),
-                entry.mass,
-                entry.density,
-                source,
-                f"objects.{name}",
-            )
-        elif entry.mass is not None or entry.density is not None:
-            raise InputError(
-                'has no "size" to go with it; a mass or density is given with the size',
-                source=source,
-                field=f"objects.{name}.{'mass' if entry.mass is not None else 'density'}",
-            )
-        grasps = DEFAULT_GRASPS if entry.grasps is None else tuple(to_deg(g) for g in entry.grasps)
-        kind = None if entry.type in (None, name) else entry.type
-        objects.append(SceneObject(name, pose, geometry, grasps, kind))
-    freespace = None
-    if parsed.freespace is not None:
-        freespace = tuple(
-            (s[0] * scale, s[1] * scale, (s[2] if len(s) > 2 else 0.0) * scale)
-            for s in parsed.freespace
-        )
-        for index, spot in enumerate(freespace):
-            if abs(spot[2]) > 0.005:
-                raise InputError(
-                    f"z = {spot[2]:g} m; free-space spots lie on the table (z = 0)",
-                    source=source,
-                    field=f"freespace[{index}]",
-                )
+    objects = [_scene_object(name, entry, parsed, source) for name, entry in parsed.objects.items()]
+    freespace = _freespace(parsed, scale, source)
     gripper = Gripper(parsed.gripper.finger_radius * scale, parsed.gripper.clearance * scale)
     for name in ("finger_radius", "clearance"):
         if getattr(gripper, name) > MAX_GRIPPER:
@@ -317,6 +258,77 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         source=source,
         robot=robot,
     )
+
+
+def _scene_object(
+    name: str, entry: _ObjectSchema, parsed: _SceneSchema, source: str
+) -> SceneObject:
+    """One object of a scene document, checked (lengths to metres)."""
+    scale = LENGTH_SCALE[parsed.units.length]
+    to_deg = math.degrees if parsed.units.angle == "rad" else float
+    _check_name(name, source)
+    if "#" in name and entry.type is None:
+        raise InputError(
+            "'#' names a role of a type (plate#1); an object name without '#' expected "
+            "(as in demonstration files)",
+            source=source,
+            field=f"objects.{name}",
+        )
+    if name in parsed.landmarks:
+        raise InputError(
+            "is both an object and a landmark; one kind expected",
+            source=source,
+            field=f"objects.{name}",
+        )
+    pose = pose_from_dict(
+        PoseSchema(
+            **entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density", "type"})
+        ),
+        parsed.units,
+    )
+    if pose.position[2] < -0.005:
+        raise InputError(
+            f"z = {pose.position[2]:g} m lies under the table top; z ≥ 0 expected",
+            source=source,
+            field=f"objects.{name}.position",
+        )
+    geometry = None
+    if entry.size is not None:
+        size = (entry.size[0] * scale, entry.size[1] * scale, entry.size[2] * scale)
+        geometry = with_mass(
+            ObjectGeometry(entry.shape, size),
+            entry.mass,
+            entry.density,
+            source,
+            f"objects.{name}",
+        )
+    elif entry.mass is not None or entry.density is not None:
+        raise InputError(
+            'has no "size" to go with it; a mass or density is given with the size',
+            source=source,
+            field=f"objects.{name}.{'mass' if entry.mass is not None else 'density'}",
+        )
+    grasps = DEFAULT_GRASPS if entry.grasps is None else tuple(to_deg(g) for g in entry.grasps)
+    kind = None if entry.type in (None, name) else entry.type
+    return SceneObject(name, pose, geometry, grasps, kind)
+
+
+def _freespace(parsed: _SceneSchema, scale: float, source: str) -> tuple[Vector3, ...] | None:
+    """A scene document's free-space spots (lengths to metres), on the table."""
+    if parsed.freespace is None:
+        return None
+    freespace = tuple(
+        (s[0] * scale, s[1] * scale, (s[2] if len(s) > 2 else 0.0) * scale)
+        for s in parsed.freespace
+    )
+    for index, spot in enumerate(freespace):
+        if abs(spot[2]) > 0.005:
+            raise InputError(
+                f"z = {spot[2]:g} m; free-space spots lie on the table (z = 0)",
+                source=source,
+                field=f"freespace[{index}]",
+            )
+    return freespace
 
 
 COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
