@@ -26,7 +26,7 @@ import numpy as np
 from demoplan.errors import UsageError
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.scenes.scene import SceneObject
-from demoplan.segmentation.readers.hdf5 import EXCLUDED_LANDMARKS
+from demoplan.segmentation.readers.support import EXCLUDED_LANDMARKS
 
 __all__ = [
     "CONTROL_FREQUENCY",
