@@ -212,18 +212,6 @@ def compile_problem(problem: Problem) -> Compiled:
     subgoals_of: list[list[int]] = [[] for _ in objects]
     for i, s in enumerate(problem.subgoals):
         subgoals_of[obj_index[s.object]].append(i)
-
-    mentioned = set()
-    for la, lb, _ in problem.collisions:
-        mentioned |= {la, lb}
-    for pair in problem.supports | problem.exclusions:
-        mentioned |= set(pair)
-    mentioned |= {loc for loc, _ in problem.accepts}
-    mentioned |= {loc for _, loc in problem.goal} | {s.location for s in problem.subgoals}
-    plain = 0
-    for name in problem.freespace - mentioned:
-        plain |= 1 << loc_index[name]
-
     compiled = Compiled(
         problem=problem,
         objects=objects,
@@ -244,21 +232,43 @@ def compile_problem(problem: Problem) -> Compiled:
         subgoals_of=tuple(tuple(s) for s in subgoals_of),
         all_subgoals=(1 << len(problem.subgoals)) - 1,
         start_reached=0,
-        plain=plain,
+        plain=_plain_locations(problem, loc_index),
     )
+    return replace(compiled, start_reached=_reached_at_start(compiled, sub_index))
+
+
+def _plain_locations(problem: Problem, loc_index: dict[str, int]) -> int:
+    """The mask of the free-space locations no fact mentions: no collision,
+    support, exclusion, accepts, goal or subgoal."""
+    mentioned = set()
+    for la, lb, _ in problem.collisions:
+        mentioned |= {la, lb}
+    for pair in problem.supports | problem.exclusions:
+        mentioned |= set(pair)
+    mentioned |= {loc for loc, _ in problem.accepts}
+    mentioned |= {loc for _, loc in problem.goal} | {s.location for s in problem.subgoals}
+    plain = 0
+    for name in problem.freespace - mentioned:
+        plain |= 1 << loc_index[name]
+    return plain
+
+
+def _reached_at_start(compiled: Compiled, sub_index: dict[str, int]) -> int:
+    """The mask of the subgoals reached at the start: those the problem says,
+    and where an object stands at one of its subgoals."""
     reached = 0
-    for sid in problem.reached:
+    for sid in compiled.problem.reached:
         reached |= 1 << sub_index[sid]
     # At the start a subgoal counts where its object stands, once its own earlier
     # subgoals are reached (other objects' predecessors are not required; see
     # demoplan.planning.strips); at most one per object.
-    for index, at in enumerate(start):
+    for index, at in enumerate(compiled.start):
         own = 0
-        for sub in subgoals_of[index]:
+        for sub in compiled.subgoals_of[index]:
             own |= 1 << sub
-        for sub in subgoals_of[index]:
+        for sub in compiled.subgoals_of[index]:
             if compiled.subgoal_location[sub] == at and not reached >> sub & 1:
-                if before[sub] & own & ~reached == 0:
+                if compiled.subgoal_before[sub] & own & ~reached == 0:
                     reached |= 1 << sub
                 break
-    return replace(compiled, start_reached=reached)
+    return reached
