@@ -6,6 +6,7 @@ experiments) other than the renderers and option parsers named here."""
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 CLI = Path(__file__).resolve().parents[1] / "src" / "demoplan" / "cli"
@@ -219,3 +220,43 @@ def test_the_command_line_starts_without_the_numeric_stack() -> None:
         [sys.executable, "-c", script], capture_output=True, text=True, check=True
     ).stdout.strip()
     assert loaded == "[]", loaded
+
+
+ARCHITECTURE = SRC.parent / "docs" / "architecture.md"
+
+
+def documented_floors(text: str) -> dict[str, int]:
+    """Each folder (``learning/``) of the floors table in docs/architecture.md
+    and the floor its row names."""
+    floors = {}
+    for line in text.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) >= 3 and cells[0].isdigit():
+            for folder in re.findall(r"`([a-z_]+)/`", cells[1]):
+                floors.setdefault(folder, int(cells[0]))
+        elif line.startswith("## ") and floors:
+            break  # the floors table is the page's first numbered table
+    return floors
+
+
+def test_every_package_is_on_its_floor_in_the_architecture_page() -> None:
+    packages = sorted(path.parent.name for path in (SRC / "demoplan").glob("*/__init__.py"))
+    assert {"learning", "studio", "evaluation"} <= set(packages)  # the walk found them
+    documented = documented_floors(ARCHITECTURE.read_text(encoding="utf-8"))
+    wrong = [
+        f"{package}/: floor {_floor(f'demoplan.{package}')} by the imports, "
+        f"{documented.get(package, 'none')} in docs/architecture.md"
+        for package in packages
+        if documented.get(package) != _floor(f"demoplan.{package}")
+    ]
+    assert not wrong, "\n".join(wrong)
+    assert set(documented) == set(packages), sorted(set(documented) ^ set(packages))
+
+
+def test_the_floors_table_is_read() -> None:
+    text = (
+        "| floor | folders | owns |\n|---|---|---|\n"
+        "| 0 | package root, `fileio/`, `documents/` | `x/` is not read here |\n"
+        "| 6 | `commands/` | ... |\n\n## Next\n\n| 0 | `tight/` | |\n"
+    )
+    assert documented_floors(text) == {"fileio": 0, "documents": 0, "commands": 6}
