@@ -9,11 +9,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
 from demoplan.errors import InputError
 from demoplan.fileio import write_atomic
@@ -124,8 +125,6 @@ def write_bag(
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     header_type = msg["std_msgs/msg/Header"]
     time_type = msg["builtin_interfaces/msg/Time"]
-    vector, quaternion = msg["geometry_msgs/msg/Vector3"], msg["geometry_msgs/msg/Quaternion"]
-    point, pose_type = msg["geometry_msgs/msg/Point"], msg["geometry_msgs/msg/Pose"]
 
     def header(stamp: int, frame_id: str = frame) -> Any:
         return header_type(
@@ -135,45 +134,91 @@ def write_bag(
     try:
         with Writer(path, version=9, storage_plugin=plugin) as writer:
             if kind == "tf":
-                transform_type = msg["geometry_msgs/msg/TransformStamped"]
-                transform3 = msg["geometry_msgs/msg/Transform"]
                 is_static = np.array([name in static_names for name in names], dtype=bool)
-                for topic, chosen in (("/tf", ~is_static), ("/tf_static", is_static)):
-                    rows = np.flatnonzero(chosen)
-                    if not rows.size and topic == "/tf_static":
-                        continue
-                    connection = writer.add_connection(topic, TF_TYPE, typestore=store)
-                    # One message per sample time: runs of equal stamps.
-                    runs = np.flatnonzero(np.r_[True, stamps[rows][1:] != stamps[rows][:-1]])
-                    for run in np.split(rows, runs[1:]):
-                        stamp = int(stamps[run[0]])
-                        transforms = [
-                            transform_type(
-                                header=header(stamp, parent_of.get(names[i], frame)),
-                                child_frame_id=names[i],
-                                transform=transform3(
-                                    translation=vector(*map(float, positions[i])),
-                                    rotation=quaternion(*map(float, quats[i])),
-                                ),
-                            )
-                            for i in run.tolist()
-                        ]
-                        message = msg[TF_TYPE](transforms=transforms)
-                        writer.write(connection, stamp, store.serialize_cdr(message, TF_TYPE))
+                _write_tf_topics(
+                    writer,
+                    store,
+                    header,
+                    names,
+                    stamps,
+                    (positions, quats),
+                    is_static,
+                    parent_of,
+                    frame,
+                )
             else:
-                connections = {
-                    name: writer.add_connection(f"/{name}/pose", POSE_TYPE, typestore=store)
-                    for name in dict.fromkeys(names)
-                }
-                for i, name in enumerate(names):
-                    stamp = int(stamps[i])
-                    message = msg[POSE_TYPE](
-                        header=header(stamp),
-                        pose=pose_type(
-                            position=point(*map(float, positions[i])),
-                            orientation=quaternion(*map(float, quats[i])),
-                        ),
-                    )
-                    writer.write(connections[name], stamp, store.serialize_cdr(message, POSE_TYPE))
+                _write_pose_topics(writer, store, header, names, stamps, (positions, quats), frame)
     except WriterError as exc:
         raise InputError(f"cannot write ROS 2 bag ({exc})", source=str(path)) from None
+
+
+def _write_tf_topics(
+    writer: Any,
+    store: Any,
+    header: Callable[[int, str], Any],
+    names: list[str],
+    stamps: NDArray[np.int64],
+    poses: tuple[FloatArray, FloatArray],
+    is_static: NDArray[np.bool_],
+    parent_of: Mapping[str, str],
+    frame: str,
+) -> None:
+    """``/tf`` and, where a track is static, ``/tf_static``: one message per
+    sample time holding a transform per track sampled then."""
+    msg = store.types
+    transform_type = msg["geometry_msgs/msg/TransformStamped"]
+    transform3 = msg["geometry_msgs/msg/Transform"]
+    vector, quaternion = msg["geometry_msgs/msg/Vector3"], msg["geometry_msgs/msg/Quaternion"]
+    positions, quats = poses
+    for topic, chosen in (("/tf", ~is_static), ("/tf_static", is_static)):
+        rows = np.flatnonzero(chosen)
+        if not rows.size and topic == "/tf_static":
+            continue
+        connection = writer.add_connection(topic, TF_TYPE, typestore=store)
+        # One message per sample time: runs of equal stamps.
+        runs = np.flatnonzero(np.r_[True, stamps[rows][1:] != stamps[rows][:-1]])
+        for run in np.split(rows, runs[1:]):
+            stamp = int(stamps[run[0]])
+            transforms = [
+                transform_type(
+                    header=header(stamp, parent_of.get(names[i], frame)),
+                    child_frame_id=names[i],
+                    transform=transform3(
+                        translation=vector(*map(float, positions[i])),
+                        rotation=quaternion(*map(float, quats[i])),
+                    ),
+                )
+                for i in run.tolist()
+            ]
+            message = msg[TF_TYPE](transforms=transforms)
+            writer.write(connection, stamp, store.serialize_cdr(message, TF_TYPE))
+
+
+def _write_pose_topics(
+    writer: Any,
+    store: Any,
+    header: Callable[[int, str], Any],
+    names: list[str],
+    stamps: NDArray[np.int64],
+    poses: tuple[FloatArray, FloatArray],
+    frame: str,
+) -> None:
+    """One ``PoseStamped`` topic ``/<object>/pose`` per object."""
+    msg = store.types
+    quaternion = msg["geometry_msgs/msg/Quaternion"]
+    point, pose_type = msg["geometry_msgs/msg/Point"], msg["geometry_msgs/msg/Pose"]
+    positions, quats = poses
+    connections = {
+        name: writer.add_connection(f"/{name}/pose", POSE_TYPE, typestore=store)
+        for name in dict.fromkeys(names)
+    }
+    for i, name in enumerate(names):
+        stamp = int(stamps[i])
+        message = msg[POSE_TYPE](
+            header=header(stamp, frame),
+            pose=pose_type(
+                position=point(*map(float, positions[i])),
+                orientation=quaternion(*map(float, quats[i])),
+            ),
+        )
+        writer.write(connections[name], stamp, store.serialize_cdr(message, POSE_TYPE))
