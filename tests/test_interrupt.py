@@ -77,7 +77,7 @@ def test_a_signal_that_lands_where_python_cannot_raise_is_delivered_again() -> N
     the program still stops at the next line of ordinary code."""
     script = (
         "import signal, sys, time\n"
-        "from demoplan.cli import interrupts\n"
+        "from demoplan.frontends import interrupts\n"
         "signal.signal(signal.SIGINT, interrupts.on_signal)\n"
         "sys.unraisablehook = interrupts.redeliver_lost_signal\n"
         "class Boom:\n"

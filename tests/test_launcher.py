@@ -179,7 +179,7 @@ def test_the_executable_takes_the_lean_path() -> None:
 def test_the_cli_does_not_import_the_launcher_back() -> None:
     """launcher → cli only (at dispatch): the typer application reaches the
     command clock and the signal state through demoplan.commands and
-    demoplan.cli.interrupts, never through the launcher."""
+    demoplan.frontends.interrupts, never through the launcher."""
     code = (
         "import sys, demoplan.cli\n"
         "print('demoplan.cli.launcher' in sys.modules)\n"

@@ -138,6 +138,8 @@ FLOORS = {
     "cli": 7,
     # the studio's web application: a front end over the command layer, as the CLI
     "studio": 7,
+    # what the front ends share (Ctrl-C and SIGTERM handling)
+    "frontends": 7,
 }
 FRONT_ENDS = {"api": 7, "__main__": 7, "launcher": 7}
 VALUE_MODULES = {
@@ -197,6 +199,18 @@ def test_no_import_circle() -> None:
     graph = nx.DiGraph((a, b) for a, b, _ in _imports(_modules()))
     circles = [" -> ".join(c) for c in nx.simple_cycles(graph)]
     assert not circles, "\n".join(circles)
+
+
+def test_no_front_end_reaches_into_the_command_line() -> None:
+    """The studio and the library share what they need with the command line
+    through demoplan.frontends (Ctrl-C and SIGTERM), never by importing cli/."""
+    reaching = sorted(
+        f"{a} imports {b}, line {line}"
+        for a, b, line in _imports(_modules())
+        if a.startswith(("demoplan.studio", "demoplan.api", "demoplan.frontends"))
+        and b.startswith("demoplan.cli")
+    )
+    assert not reaching, "\n".join(reaching)
 
 
 def test_at_most_ten_modules_at_the_package_root() -> None:

@@ -120,7 +120,7 @@ def reported_errors() -> Iterator[None]:
         sys.stderr.write(error_line(os_error(exc)) + "\n")
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: exit 130 / 143 (docs/cli.md)
-        from demoplan.cli.interrupts import interrupted_by_signal, interrupted_exit_code
+        from demoplan.frontends.interrupts import interrupted_by_signal, interrupted_exit_code
 
         _HELD.discard()
         if interrupted_by_signal():

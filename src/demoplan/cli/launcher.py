@@ -24,7 +24,8 @@ from typing import Any
 
 # First: the command clock starts when this module is imported, at process start.
 from demoplan.cli.clock import mark_command_start, mark_process_start
-from demoplan.cli.interrupts import (
+from demoplan.cli.solving import SolveOptions, solve_text
+from demoplan.frontends.interrupts import (
     INTERRUPTED_EXIT,
     TERMINATED_EXIT,
     on_signal,
@@ -34,7 +35,6 @@ from demoplan.cli.interrupts import (
     signals_received,
     stop_redelivery,
 )
-from demoplan.cli.solving import SolveOptions, solve_text
 
 __all__ = [
     "SOLVE_OPTIONS",

@@ -15,7 +15,7 @@ Why a process, and why a plain subprocess rather than ``multiprocessing``:
   budget, longer on the arm): a process can be stopped where it is. Cancel
   (``DELETE``, the studio shutting down) sends SIGTERM to the run's process
   group — the worker stops through the CLI's own SIGTERM path
-  (:mod:`demoplan.cli.interrupts`: the world is closed, ffmpeg stopped, the
+  (:mod:`demoplan.frontends.interrupts`: the world is closed, ffmpeg stopped, the
   video's private folder removed) — then SIGKILL after
   :data:`TERMINATE_GRACE_S` to whatever is left of the group.
 - Each run is a session and process group of its own (``start_new_session``),

@@ -13,8 +13,8 @@ each, on its stdout:
   events, the end's marked with the run's outcome) or ``{"error": "one line"}``.
 
 Stopping it is the CLI's own way: SIGTERM (or SIGINT) raises
-:class:`~demoplan.cli.interrupts.Terminated` through the handlers the
-launcher installs (:mod:`demoplan.cli.interrupts`), so the run's ``finally``
+:class:`~demoplan.frontends.interrupts.Terminated` through the handlers the
+launcher installs (:mod:`demoplan.frontends.interrupts`), so the run's ``finally``
 closes the world, stops ffmpeg and removes the video's private folder
 (:mod:`demoplan.execution.video_output`); the process then exits 143 (130)
 without a final line. The studio holds this process's stdin open for as long
@@ -36,7 +36,7 @@ import threading
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
-from demoplan.cli.interrupts import reports_signals
+from demoplan.frontends.interrupts import reports_signals
 
 if TYPE_CHECKING:
     pass
@@ -51,7 +51,7 @@ MAX_EVENTS = 10_000
 def main() -> NoReturn:
     """Run the request read on stdin, and exit: 0, 130 / 143 when stopped, 1
     when the studio could not be told (its end of the pipe gone)."""
-    from demoplan.cli.interrupts import (
+    from demoplan.frontends.interrupts import (
         interrupted_exit_code,
         on_signal,
         redeliver_lost_signal,
@@ -96,8 +96,8 @@ def main() -> NoReturn:
 
 def _outcome(request: dict[str, Any], protocol: IO[str]) -> dict[str, Any]:
     """The run's final line: its result and events, or its error in one line."""
-    from demoplan.cli.interrupts import signals_received
     from demoplan.errors import DemoplanError
+    from demoplan.frontends.interrupts import signals_received
 
     try:
         return _run(request, protocol)

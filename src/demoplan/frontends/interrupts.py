@@ -1,7 +1,8 @@
 """Ctrl-C and SIGTERM, the same way in every command (docs/cli.md: exit 130 /
 143): the handlers :func:`demoplan.cli.launcher.main` installs, and what the CLI
-asks when a command was stopped. Kept apart from the launcher so that the
-typer application can use it without importing the launcher back.
+asks when a command was stopped. Shared by the front ends: the command
+line (the typer application uses it without importing the launcher back) and
+the studio's runs, which stop through the same handlers.
 """
 
 from __future__ import annotations
