@@ -92,7 +92,7 @@ from demoplan.perception.frames import VIDEO_SUFFIXES
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
-from demoplan.plotting.figures import FIGURE_FORMATS
+from demoplan.plotting.output import FIGURE_FORMATS
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.scene import (
     MAX_GRIPPER,

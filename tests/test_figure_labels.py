@@ -25,7 +25,8 @@ matplotlib.use("Agg")
 from matplotlib.transforms import Bbox
 
 from demoplan.plotting.colours import object_colour
-from demoplan.plotting.figures import Leader, observing_saved_figures, place_boxes
+from demoplan.plotting.figures import Leader, place_boxes
+from demoplan.plotting.output import observing_saved_figures
 from tests.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (

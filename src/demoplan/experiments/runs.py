@@ -360,7 +360,7 @@ def _plot_precision(
     use_agg()
     import matplotlib.pyplot as plt
 
-    from demoplan.plotting.figures import save_figure
+    from demoplan.plotting.output import save_figure
 
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     ax.plot(

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from demoplan.plotting.backend import use_agg
 from demoplan.plotting.colours import assign_colours, object_colour
-from demoplan.plotting.figures import save_figure
+from demoplan.plotting.output import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
 
 if TYPE_CHECKING:
