@@ -83,11 +83,6 @@ STUDIO_HELPERS = RENDERING_AND_PARSING | {
     # the constraint graph as the report draws it
     "demoplan.learning.constraints.goal_order",
     "demoplan.learning.constraints.visit_sequence",
-    # where a released object rests: the support rule of docs/scenes.md
-    "demoplan.scenes.geometry.supports",
-    "demoplan.scenes.geometry.Location",
-    # the learned targets in a scene, resolved as `plan` resolves them
-    "demoplan.scenes.prepared.prepare",
     # the shipped examples the templates start from
     "demoplan.experiments.runs.examples_dir",
 }
@@ -95,8 +90,9 @@ STUDIO_HELPERS = RENDERING_AND_PARSING | {
 
 def test_the_studio_calls_the_command_layer_not_the_stages() -> None:
     """The studio holds no second copy of learning, planning or execution: it
-    calls the command layer and only the readers, renderers and the support
-    rule named in :data:`STUDIO_HELPERS`."""
+    calls the command layer (the targets in a scene and what a picked-up object
+    carries included: demoplan.commands.scenes) and only the readers and
+    renderers named in :data:`STUDIO_HELPERS`."""
     modules = sorted(STUDIO.glob("*.py"))
     assert len(modules) >= 5
     calls = [call for path in modules for call in _stage_calls(path, STUDIO_HELPERS)]
