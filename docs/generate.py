@@ -54,7 +54,7 @@ from demoplan.execution.runner import run_task
 from demoplan.execution.tree_checks import MAX_ATTEMPTS, MAX_TOLERANCE_M, NODE_TYPES
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import (
+from demoplan.documents.demonstrations import (
     GEOMETRY_TOLERANCE,
     DemonstrationSchema,
     DemonstrationsSchema,

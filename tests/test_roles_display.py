@@ -25,8 +25,8 @@ from typer.testing import CliRunner
 matplotlib.use("Agg")
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel

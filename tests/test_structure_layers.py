@@ -23,7 +23,6 @@ RENDERING_AND_PARSING = {
     # tables and JSON of values the command layer returned
     "demoplan.learning.tables",
     "demoplan.learning.modelfile.model_to_dict",
-    "demoplan.learning.demonstrations.demonstration_to_dict",
     "demoplan.planning.problem.format_plan",
     "demoplan.planning.problem.optimality_line",
     "demoplan.planning.problem.plan_to_json",
@@ -73,8 +72,7 @@ def test_cli_modules_call_the_command_layer_not_the_stages() -> None:
 
 STUDIO = CLI.parent / "studio"
 STUDIO_HELPERS = RENDERING_AND_PARSING | {
-    # the readers `learn` and `plan` validate with
-    "demoplan.learning.demonstrations.demonstrations_from_document",
+    # the reader `plan` validates scenes with
     "demoplan.scenes.scene.scene_from_document",
     # values built to hand to the command layer, and the yaw of a pose
     "demoplan.scenes.scene.Scene",

@@ -10,6 +10,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.documents.demonstrations import (
+    demonstration_to_dict,
+    load_object_geometry,
+    load_object_types,
+    with_declared_types,
+)
 from demoplan.errors import InputError, UsageError
 from demoplan.fileio import (
     StagedOutputs,
@@ -17,12 +23,6 @@ from demoplan.fileio import (
     dump_json,
     file_inside,
     refuse_overwriting_inputs,
-)
-from demoplan.learning.demonstrations import (
-    demonstration_to_dict,
-    load_object_geometry,
-    load_object_types,
-    with_declared_types,
 )
 from demoplan.model import Demonstration
 from demoplan.segmentation.detect import Segmentation

@@ -329,7 +329,7 @@ def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
         answer: dict[str, Any] = {"name": name, "document": document}
         kind = folder.kind(document, name)
         if kind == "demonstrations":
-            from demoplan.learning.demonstrations import demonstrations_from_document
+            from demoplan.documents.demonstrations import demonstrations_from_document
             from demoplan.studio.layouts import layout_of_demonstration
 
             demonstrations = demonstrations_from_document(document, name)
@@ -409,7 +409,7 @@ def _add_table_routes(app: FastAPI, folder: WorkFolder) -> None:
 
     @app.post("/api/demonstrations", status_code=201)
     def save_demonstration(body: DemonstrationRequest) -> dict[str, str]:
-        from demoplan.learning.demonstrations import demonstrations_from_document
+        from demoplan.documents.demonstrations import demonstrations_from_document
 
         document = {"format": "demoplan/demonstration-1", **body.document}
         demonstrations_from_document(document, "document")  # as `learn` reads it
