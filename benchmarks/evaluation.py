@@ -52,10 +52,10 @@ from rich.table import Table  # noqa: E402
 
 from common import Target, package_version, print_targets  # noqa: E402
 from demoplan.commands.evaluation import Evaluation, evaluate, settings_from_options  # noqa: E402
+from demoplan.documents.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine  # noqa: E402
 from demoplan.fileio import dump_json  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
-from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.learning.modelfile import model_to_dict  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -90,11 +90,11 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
+from demoplan.documents.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine  # noqa: E402
 from demoplan.evaluation.runs import RunRow, RunSpec, execute_run  # noqa: E402
 from demoplan.execution.faults import parse_faults  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
-from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene, scene_to_dict  # noqa: E402
 

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.model import Demonstration
 from demoplan.perception.camera import Camera
 from demoplan.perception.filmed import FilmSettings, random_demonstration, render_demonstration

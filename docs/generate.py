@@ -54,7 +54,7 @@ from demoplan.execution.runner import run_task
 from demoplan.execution.tree_checks import MAX_ATTEMPTS, MAX_TOLERANCE_M, NODE_TYPES
 from demoplan.fileio import FORMAT_VERSION, MAX_FILE_BYTES
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import (
+from demoplan.documents.demonstrations import (
     GEOMETRY_TOLERANCE,
     DemonstrationSchema,
     DemonstrationsSchema,
@@ -92,7 +92,7 @@ from demoplan.perception.frames import VIDEO_SUFFIXES
 from demoplan.planning.problem import format_plan, optimality_line, plan_to_json
 from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
-from demoplan.plotting.figures import FIGURE_FORMATS
+from demoplan.plotting.output import FIGURE_FORMATS
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.scene import (
     MAX_GRIPPER,

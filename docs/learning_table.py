@@ -19,7 +19,7 @@ sys.path.insert(0, str(ROOT))  # for tests.robosuite_data
 from tests.robosuite_data import robosuite_demonstrations  # noqa: E402
 
 from demoplan.learning import learn  # noqa: E402
-from demoplan.learning.demonstrations import load_demonstrations  # noqa: E402
+from demoplan.documents.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings  # noqa: E402
 from demoplan.model import Demonstration, TaskModel  # noqa: E402
 from demoplan.segmentation.importing import import_recording  # noqa: E402

@@ -26,8 +26,8 @@ def paper_model(example: str) -> TaskModel:
     reading, :data:`~demoplan.learning.settings.PAPER_SETTINGS`: the examples
     were drawn for its fixed 3 mm / 0.5° ties, and learned so they give the
     paper's Tables II–V (the defaults estimate the precision from the data)."""
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.settings import PAPER_SETTINGS
 
     return learn(load_demonstrations([EXAMPLES / example]), settings=PAPER_SETTINGS)

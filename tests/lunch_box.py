@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from demoplan.learning.demonstrations import demonstrations_from_document
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import Scene, scene_from_document
 
 LUNCH_BOX = (0.26, 0.18, 0.02)

@@ -185,7 +185,7 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     folder, the environment and the process's signal handlers."""
     import demoplan.experiments as experiments
     from demoplan.cli.launcher import main
-    from demoplan.plotting.figures import observing_saved_figures
+    from demoplan.plotting.output import observing_saved_figures
 
     for name in NO_BROWSER:
         os.environ.pop(name, None)

@@ -20,11 +20,11 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
 from demoplan.execution.report import RunReport
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of

@@ -14,9 +14,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import scene_from_document
 from tests.arm_layouts import attempt_all, layout
 

@@ -22,13 +22,13 @@ from typer.testing import CliRunner
 from demoplan.budget import Budget
 from demoplan.cli import app
 from demoplan.commands.export import behaviour_tree
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError
 from demoplan.execution.behaviour_tree import ATTEMPTS, NODES, TreeRun, run_behaviour_tree
 from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.report import FailureKind
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.scenes.plan import ScenePlan

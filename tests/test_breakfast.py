@@ -19,10 +19,10 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.model import Pose, TaskModel
 from demoplan.rotations import rpy_from_quat
 from demoplan.scenes.plan import plan_in_scene

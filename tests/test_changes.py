@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.learning import learn
 from demoplan.learning.changes import model_changes
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from tests.helpers import EXAMPLES
 

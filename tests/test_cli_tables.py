@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from rich.console import Console
 
 from demoplan.cli import states_table
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
-from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
 from demoplan.plotting.figures import plot_demonstration
 from tests.helpers import EXAMPLES

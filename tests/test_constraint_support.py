@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError
 from demoplan.learning import TaskModelLearner
 from demoplan.learning.constraints import constraint_support, learn_constraints
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
 from tests.helpers import EXAMPLES

@@ -21,7 +21,7 @@ import typer.main
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.learning.demonstrations import demonstrations_from_document, load_object_geometry
+from demoplan.documents.demonstrations import demonstrations_from_document, load_object_geometry
 from demoplan.learning.modelfile import model_from_dict
 from demoplan.model import TaskModel
 from demoplan.planning.xml import problem_from_xml

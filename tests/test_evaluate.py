@@ -28,6 +28,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan.commands.evaluation import engine_for, evaluate, settings_from_options
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import RayEngine, SerialEngine
 from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, wilson_interval
@@ -40,7 +41,6 @@ from demoplan.evaluation.scenes import (
 )
 from demoplan.fileio import dump_json
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
 from tests.helpers import wait_for_signal_handlers

@@ -25,7 +25,8 @@ matplotlib.use("Agg")
 from matplotlib.transforms import Bbox
 
 from demoplan.plotting.colours import object_colour
-from demoplan.plotting.figures import Leader, observing_saved_figures, place_boxes
+from demoplan.plotting.figures import Leader, place_boxes
+from demoplan.plotting.output import observing_saved_figures
 from tests.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (
@@ -233,9 +234,9 @@ def test_a_leader_line_goes_round_the_other_labels() -> None:
 def test_kinematic_storyboard_frames_keep_their_names_apart(tmp_path: Path) -> None:
     """Without MuJoCo's pictures the frames are drawn from above with each
     object's name: the crowded set table must not print one name over another."""
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.execution.runner import run_task
     from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.settings import PAPER_SETTINGS
     from demoplan.scenes.scene import load_scene
     from tests.helpers import EXAMPLES

@@ -17,10 +17,10 @@ from typing import Any
 import pytest
 
 from demoplan import TaskModelLearner, load_demonstrations, load_model, save_model
+from demoplan.documents.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, read_document, write_atomic
 from demoplan.learning import LearningSettings
-from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.learning.modelfile import model_from_dict, model_to_dict
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import TaskModel

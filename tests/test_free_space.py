@@ -20,11 +20,11 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.model import (
     Demonstration,

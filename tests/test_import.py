@@ -17,8 +17,8 @@ import pytest
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import import_recording
 from demoplan.segmentation.readers.hdf5 import model_layout, read_recording
 from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail

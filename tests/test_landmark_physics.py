@@ -11,10 +11,10 @@ from typing import Any
 
 import pytest
 
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import scene_from_document
 
 pytestmark = pytest.mark.skipif(

@@ -8,11 +8,11 @@ from typing import Any
 
 import pytest
 
-from demoplan.errors import InputError
-from demoplan.learning.demonstrations import (
+from demoplan.documents.demonstrations import (
     demonstration_to_dict,
     demonstrations_from_document,
 )
+from demoplan.errors import InputError
 from demoplan.model import WOOD_DENSITY
 from demoplan.scenes.scene import scene_from_document
 

@@ -6,9 +6,9 @@ from typing import Any
 
 import pytest
 
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.errors import InputError
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import scene_from_document
 from demoplan.scenes.targets import check_scene_objects
 from demoplan.wording import did_you_mean

@@ -54,8 +54,8 @@ def test_the_chosen_demonstration_has_one_number_everywhere(tmp_path: Path) -> N
 def test_the_plan_figure_is_titled_with_the_same_number(tmp_path: Path) -> None:
     import matplotlib.pyplot as plt
 
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.settings import PAPER_SETTINGS
 
     model = learn(load_demonstrations([EXAMPLES / "blocks"]), settings=PAPER_SETTINGS)

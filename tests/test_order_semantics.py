@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.search import astar_search, breadth_first_search, solve

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks

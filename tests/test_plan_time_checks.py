@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.errors import InputError, error_line
-from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.learning.modelfile import save_model
 from demoplan.model import State, StateOrientation, StatePosition, TaskModel
 from demoplan.scenes.overhang import OVERHANG_TOLERANCE
@@ -289,8 +289,8 @@ def test_free_space_lies_on_the_table_the_studio_draws(demonstrations: str, scen
     parked there turned any way) lies on the table the studio draws for the
     demonstrations (its own layout code), and the plan still parks what it must.
     The lunch box's second spot reached 7 cm beyond that table's far edge."""
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.scenes.scene import load_scene
     from demoplan.studio.layouts import layout_of_demonstration
     from tests.helpers import EXAMPLES

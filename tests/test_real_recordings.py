@@ -144,8 +144,8 @@ def test_the_same_trajectories_as_csv_or_bags_give_the_same_steps(
 def test_imported_files_of_every_recording_are_read_back_and_learned(tmp_path: Path) -> None:
     """What ``demoplan import`` writes, ``demoplan learn`` reads (PickPlace's mesh
     objects have no geometry: their files carry none)."""
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.learning import learn
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.segmentation import write_demonstration
 
     try:

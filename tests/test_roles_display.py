@@ -25,13 +25,14 @@ from typer.testing import CliRunner
 matplotlib.use("Agg")
 
 from demoplan.cli import app
+from demoplan.documents.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel
-from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
+from demoplan.plotting.figures import save_demonstrations
 from demoplan.plotting.labels import role_label
+from demoplan.plotting.output import observing_saved_figures
 from tests.helpers import EXAMPLES
 from tests.table_for_two import (
     SWAPS,

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.commands.inputs import load_inputs
-from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.segmentation import write_bag, write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from tests.helpers import EXAMPLES

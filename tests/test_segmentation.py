@@ -17,9 +17,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.documents.demonstrations import demonstrations_from_document, load_demonstrations
 from demoplan.errors import InputError
 from demoplan.fileio import read_document
-from demoplan.learning.demonstrations import demonstrations_from_document, load_demonstrations
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.plotting.segmentation import plot_segmentation
 from demoplan.rotations import angle_between, quat_from_rpy, quat_from_yaw
@@ -646,7 +646,7 @@ def test_a_segmented_demonstration_records_the_thresholds_it_was_made_with() -> 
     recorded = dict(demo.provenance)
     assert recorded["segment.min_lift"] == 0.02 and recorded["segment.settle_radius"] == 0.005
     assert recorded["pushes"] == 0
-    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.documents.demonstrations import demonstration_to_dict
 
     (again,) = demonstrations_from_document(demonstration_to_dict(demo), "memory")
     assert dict(again.provenance) == recorded

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import quat_from_rpy
 from demoplan.segmentation import write_csv

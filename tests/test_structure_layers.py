@@ -1,13 +1,16 @@
-"""The command line only parses options and renders what the command layer
-(demoplan.commands) returns: no call from a CLI module into a pipeline stage
-(learning, planning, scenes, execution, segmentation, perception,
-experiments) other than the renderers and option parsers named here."""
+"""The front ends — the command line, the studio, the library (api.py) — only
+parse their input and render what the command layer (demoplan.commands)
+returns: no call from one of their modules into a pipeline stage (learning,
+planning, scenes, execution, segmentation, perception, experiments) other
+than the renderers and parsers named here, one list for all three."""
 
 from __future__ import annotations
 
 import ast
 import re
 from pathlib import Path
+
+import pytest
 
 CLI = Path(__file__).resolve().parents[1] / "src" / "demoplan" / "cli"
 STAGES = (
@@ -23,7 +26,6 @@ RENDERING_AND_PARSING = {
     # tables and JSON of values the command layer returned
     "demoplan.learning.tables",
     "demoplan.learning.modelfile.model_to_dict",
-    "demoplan.learning.demonstrations.demonstration_to_dict",
     "demoplan.planning.problem.format_plan",
     "demoplan.planning.problem.optimality_line",
     "demoplan.planning.problem.plan_to_json",
@@ -35,6 +37,17 @@ RENDERING_AND_PARSING = {
     "demoplan.segmentation.streams.StreamOptions",
     "demoplan.budget.Budget",
     "demoplan.execution.executor.ExecutionSettings",
+    # a scene document parsed as `plan` parses it (the studio's requests)
+    "demoplan.scenes.scene.scene_from_document",
+    # a scene as a value to hand to the command layer, and the yaw of a pose
+    "demoplan.scenes.scene.Scene",
+    "demoplan.scenes.scene.SceneObject",
+    "demoplan.scenes.scene.yaw_of",
+    # the constraint graph as the report draws it
+    "demoplan.learning.constraints.goal_order",
+    "demoplan.learning.constraints.visit_sequence",
+    # the shipped examples a front end starts from
+    "demoplan.experiments.runs.examples_dir",
 }
 
 
@@ -66,41 +79,24 @@ def _stage_calls(path: Path, allowed: set[str] = RENDERING_AND_PARSING) -> list[
     return found
 
 
-def test_cli_modules_call_the_command_layer_not_the_stages() -> None:
-    calls = [call for path in sorted(CLI.glob("*.py")) for call in _stage_calls(path)]
-    assert not calls, "work inside CLI commands:\n" + "\n".join(calls)
-
-
 STUDIO = CLI.parent / "studio"
-STUDIO_HELPERS = RENDERING_AND_PARSING | {
-    # the readers `learn` and `plan` validate with
-    "demoplan.learning.demonstrations.demonstrations_from_document",
-    "demoplan.scenes.scene.scene_from_document",
-    # values built to hand to the command layer, and the yaw of a pose
-    "demoplan.scenes.scene.Scene",
-    "demoplan.scenes.scene.SceneObject",
-    "demoplan.scenes.scene.yaw_of",
-    # the constraint graph as the report draws it
-    "demoplan.learning.constraints.goal_order",
-    "demoplan.learning.constraints.visit_sequence",
-    # where a released object rests: the support rule of docs/scenes.md
-    "demoplan.scenes.geometry.supports",
-    "demoplan.scenes.geometry.Location",
-    # the learned targets in a scene, resolved as `plan` resolves them
-    "demoplan.scenes.prepared.prepare",
-    # the shipped examples the templates start from
-    "demoplan.experiments.runs.examples_dir",
+FRONT_END_MODULES = {
+    "cli": sorted(CLI.rglob("*.py")),
+    "studio": sorted(STUDIO.rglob("*.py")),  # its routes included
+    "api": [CLI.parent / "api.py", CLI.parent / "__main__.py"],
 }
 
 
-def test_the_studio_calls_the_command_layer_not_the_stages() -> None:
-    """The studio holds no second copy of learning, planning or execution: it
-    calls the command layer and only the readers, renderers and the support
-    rule named in :data:`STUDIO_HELPERS`."""
-    modules = sorted(STUDIO.glob("*.py"))
-    assert len(modules) >= 5
-    calls = [call for path in modules for call in _stage_calls(path, STUDIO_HELPERS)]
-    assert not calls, "work inside the studio:\n" + "\n".join(calls)
+@pytest.mark.parametrize("front_end", sorted(FRONT_END_MODULES))
+def test_a_front_end_calls_the_command_layer_not_the_stages(front_end: str) -> None:
+    """No front end holds a second copy of learning, planning or execution:
+    each calls the command layer (the studio's targets in a scene and what a
+    picked-up object carries included: demoplan.commands.scenes) and only the
+    renderers and parsers of :data:`RENDERING_AND_PARSING`."""
+    modules = FRONT_END_MODULES[front_end]
+    assert len(modules) >= 2 and all(path.is_file() for path in modules)
+    calls = [call for path in modules for call in _stage_calls(path)]
+    assert not calls, f"work inside {front_end}:\n" + "\n".join(calls)
 
 
 def test_the_check_sees_a_call_into_a_stage(tmp_path: Path) -> None:

@@ -22,9 +22,9 @@ import pytest
 from demoplan.commands.execution import run
 from demoplan.commands.learning import learn_files, learn_model
 from demoplan.commands.planning import plan
+from demoplan.documents.demonstrations import demonstration_to_dict
 from demoplan.errors import NoPlanError, error_line
 from demoplan.execution.faults import Faults
-from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
 from tests.studio_browser import (

@@ -23,8 +23,8 @@ from scipy.spatial.transform import Rotation
 
 import demoplan.budget
 from demoplan.budget import time_budget
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, LimitReachedError
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import (
     ObjectTrack,
     PoseStream,

@@ -26,13 +26,13 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M
-from demoplan.errors import InputError
-from demoplan.learning.demonstrations import (
+from demoplan.documents.demonstrations import (
     demonstrations_from_document,
     demonstrations_from_path,
 )
-from demoplan.learning.releases import unsupported_releases
+from demoplan.documents.releases import unsupported_releases
+from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M
+from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw, rpy_from_quat
 from demoplan.scenes.scene import scene_from_document
@@ -309,7 +309,7 @@ def test_robosuite_recordings_imported_are_read_without_complaint(
 ) -> None:
     """The nine demonstrations of robosuite's recordings (metres, quaternions,
     stacked cubes, nuts on pegs, objects in bins), written and read back."""
-    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.documents.demonstrations import demonstration_to_dict
     from demoplan.segmentation import import_recording
     from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
 

@@ -35,7 +35,7 @@ _EXPORTS = {
     "Observation": "demoplan.execution.world",
     "Faults": "demoplan.execution.faults",
     "RunReport": "demoplan.execution.executor",
-    "load_demonstrations": "demoplan.learning.demonstrations",
+    "load_demonstrations": "demoplan.documents.demonstrations",
     "load_inputs": "demoplan.commands.inputs",
     "load_model": "demoplan.learning.modelfile",
     "save_model": "demoplan.learning.modelfile",
@@ -81,11 +81,11 @@ __all__ = [
 if TYPE_CHECKING:
     from demoplan.api import learn, plan, run
     from demoplan.commands.inputs import load_inputs
+    from demoplan.documents.demonstrations import load_demonstrations
     from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError
     from demoplan.execution.faults import Faults
     from demoplan.execution.report import RunReport
     from demoplan.execution.world import Observation, World
-    from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.learner import TaskModelLearner
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings

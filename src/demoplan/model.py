@@ -26,6 +26,7 @@ WOOD_DENSITY = 600.0
 
 __all__ = [
     "LEVEL_TOLERANCE",
+    "REST_TOLERANCE",
     "SUPPORT_FRACTION",
     "WOOD_DENSITY",
     "Demonstration",
@@ -324,6 +325,9 @@ class TaskModel:
 LEVEL_TOLERANCE = 0.005
 """m: heights closer than this are one level (a top meets a bottom; an object
 whose bottom is this close to the table stands on it)."""
+REST_TOLERANCE = 0.01
+"""m: an object whose bottom is within this height of the table or of a top
+beneath it rests on it (a segmented rest, a demonstrated release)."""
 SUPPORT_FRACTION = 0.05
 """An object stands on another when their outlines overlap by at least this
 share of the upper one's (the support rule of docs/scenes.md)."""

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from demoplan.commands.export import behaviour_tree
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.filmed import render_demonstration

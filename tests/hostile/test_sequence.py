@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from demoplan.learning.demonstrations import load_demonstrations
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.filmed import render_demonstration
 from tests.helpers import EXAMPLES

@@ -14,13 +14,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan.commands.export import behaviour_tree
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.documents.poses import MAX_DISTANCE_M
 from demoplan.errors import InputError, LimitReachedError, UsageError
 from demoplan.execution.behaviour_tree import run_behaviour_tree
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.tree_checks import MAX_ATTEMPTS, check_tree
 from demoplan.learning import learn
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import save_model
 from demoplan.scenes.plan import ScenePlan
 from tests.helpers import EXAMPLES, paper_model

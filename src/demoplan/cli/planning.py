@@ -115,7 +115,7 @@ def plan(
 ) -> None:
     """Plan the task in a scene: every demonstrated goal, the shortest plan chosen (§IV.C)."""
     from demoplan.commands.planning import plan as plan_task
-    from demoplan.plotting.figures import check_figure_path
+    from demoplan.plotting.output import check_figure_path
     from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
 
     with reported_errors():

@@ -73,7 +73,7 @@ def segment(
     reported, not a step; a pause in the air is not a placement.
     """
     from demoplan.commands.recordings import segment as segment_stream
-    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.documents.demonstrations import demonstration_to_dict
 
     with reported_errors():
         done = segment_stream(

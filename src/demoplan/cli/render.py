@@ -225,7 +225,8 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
 
 def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     """The chosen plan in the scene it was made in (prepared: sizes, landmarks)."""
-    from demoplan.plotting.figures import figure_errors, save_scene_plan
+    from demoplan.plotting.figures import save_scene_plan
+    from demoplan.plotting.output import figure_errors
 
     chosen = result.chosen
     assert result.model is not None and result.scene is not None and chosen.plan is not None
@@ -240,7 +241,8 @@ def plot_scene_plan(result: ScenePlan, path: Path) -> None:
 def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path) -> None:
     """The prepared scene, the first candidate goal's targets and why there is no
     plan (the problems the planner was given, carried by ``failure``)."""
-    from demoplan.plotting.figures import figure_errors, save_no_plan
+    from demoplan.plotting.figures import save_no_plan
+    from demoplan.plotting.output import figure_errors
 
     with figure_errors(path):
         save_no_plan(failure, path)

@@ -1,5 +1,6 @@
 """The command layer: one function per thing a user does — learn, show,
-segment, import, calibrate, perceive, plan, problem, solve, pddl, run, experiments —
+segment, import, calibrate, perceive, plan, problem, solve, pddl, run, experiments,
+and for the studio the targets in a scene and what a picked-up object carries —
 each taking typed arguments (values, or the files that hold them) and
 returning a frozen value (the model and what an update changed, the plan with
 every candidate and its reason, the run report…), never printing, never
@@ -31,6 +32,8 @@ _WHERE = {
     "solve_problem": "solving",
     "export_pddl": "solving",
     "reproduce_experiments": "experiments",
+    "targets": "scenes",
+    "carried_by": "scenes",
 }
 
 __all__ = sorted(_WHERE)

@@ -261,7 +261,7 @@ def perceive_sequence(
     whole sequence; ``name``: the demonstration's (default: the first file's
     stem); ``output``: also write the demonstration file there."""
     from demoplan.budget import time_budget
-    from demoplan.learning.demonstrations import demonstration_to_dict
+    from demoplan.documents.demonstrations import demonstration_to_dict
     from demoplan.perception.frames import frame_source
     from demoplan.perception.sequence import demonstration_from_frames
 
@@ -283,7 +283,7 @@ def perceive_sequence(
             total=source.total,
             provenance=(("source", str(frames[0])),),
         )
-    from demoplan.learning.demonstrations import check_measured_demonstration
+    from demoplan.documents.demonstrations import check_measured_demonstration
 
     check_measured_demonstration(demo, str(frames[0]))
     document = demonstration_to_dict(demo)

@@ -151,7 +151,7 @@ def export_behaviour_tree(
     input) and, with ``plot``, its drawing there; nothing is written where
     there is no plan."""
     from demoplan.plotting.behaviour_tree import save_behaviour_tree
-    from demoplan.plotting.figures import check_figure_path, figure_errors
+    from demoplan.plotting.output import check_figure_path, figure_errors
 
     inputs = [p for p in (model, scene) if isinstance(p, Path)]
     refuse_overwriting_inputs(output, inputs)

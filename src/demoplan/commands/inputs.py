@@ -3,7 +3,7 @@
 files that hold them (:func:`task_and_scene`).
 
 This module sits above the two stages it dispatches to:
-:mod:`demoplan.learning.demonstrations` reads demonstration files only, and
+:mod:`demoplan.documents.demonstrations` reads demonstration files only, and
 :mod:`demoplan.segmentation` turns a pose stream (CSV, ROS 2 bag) into a
 demonstration (it writes demonstration files, so it imports the former; the
 former imports neither).
@@ -16,8 +16,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from demoplan.documents.demonstrations import check_demonstrations, demonstrations_from_path
 from demoplan.errors import InputError
-from demoplan.learning.demonstrations import check_demonstrations, demonstrations_from_path
 from demoplan.learning.modelfile import load_model
 from demoplan.model import Demonstration, TaskModel
 from demoplan.scenes.scene import Scene, load_scene
@@ -61,7 +61,7 @@ def load_inputs(
     is written into each stream's demonstration — every name must be an
     object of some stream. Demonstration files ignore all of it: they carry their own
     objects and landmarks (an object's geometry must agree across all
-    demonstrations, :func:`~demoplan.learning.demonstrations.check_demonstrations`)."""
+    demonstrations, :func:`~demoplan.documents.demonstrations.check_demonstrations`)."""
     from demoplan.segmentation.streams import StreamOptions
 
     options = stream or StreamOptions()
@@ -87,7 +87,7 @@ def load_inputs(
                 "pose stream is given (demonstration files carry their own 'objects')",
                 source=geometry_source,
             )
-        from demoplan.segmentation.streams import check_geometry_names
+        from demoplan.documents.demonstrations import check_geometry_names
 
         check_geometry_names(geometry, list(tracked), geometry_source)
     check_demonstrations(demos)

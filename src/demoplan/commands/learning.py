@@ -161,12 +161,8 @@ def show(
     and free space (``model``: sizes the scene omits; ``plot``: from above)."""
     from demoplan.fileio import check_format, display_path, read_document
     from demoplan.learning.modelfile import model_from_dict
-    from demoplan.plotting.figures import (
-        check_figure_path,
-        figure_errors,
-        save_demonstrations,
-        save_scene_targets,
-    )
+    from demoplan.plotting.figures import save_demonstrations, save_scene_targets
+    from demoplan.plotting.output import check_figure_path, figure_errors
     from demoplan.scenes.landmarks import complete_scene
     from demoplan.scenes.preview import preview_scene
     from demoplan.scenes.scene import scene_from_document, scene_of_objects_file

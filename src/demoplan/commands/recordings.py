@@ -10,6 +10,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.documents.demonstrations import (
+    demonstration_to_dict,
+    load_object_geometry,
+    load_object_types,
+    with_declared_types,
+)
 from demoplan.errors import InputError, UsageError
 from demoplan.fileio import (
     StagedOutputs,
@@ -17,12 +23,6 @@ from demoplan.fileio import (
     dump_json,
     file_inside,
     refuse_overwriting_inputs,
-)
-from demoplan.learning.demonstrations import (
-    demonstration_to_dict,
-    load_object_geometry,
-    load_object_types,
-    with_declared_types,
 )
 from demoplan.model import Demonstration
 from demoplan.segmentation.detect import Segmentation
@@ -56,7 +56,7 @@ def segment(
     both or neither (docs/segmentation.md). ``thresholds``: ``NAME=VALUE``
     settings; ``options``: how the stream is read (its objects file: the
     geometry of the stream's objects)."""
-    from demoplan.plotting.figures import check_figure_path
+    from demoplan.plotting.output import check_figure_path
 
     objects_file = options.objects_file
     inputs = [stream, *([objects_file] if objects_file is not None else [])]
@@ -91,7 +91,7 @@ def _segmentation_figure(found: Segmentation, plot: Path) -> bytes:
         raise InputError(
             "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
         ) from None
-    from demoplan.plotting.figures import figure_bytes
+    from demoplan.plotting.output import figure_bytes
     from demoplan.plotting.segmentation import plot_segmentation
 
     axes = plot_segmentation(found)

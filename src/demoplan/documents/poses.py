@@ -1,6 +1,6 @@
 """Poses, units and object geometry as demoplan's files spell them (docs/formats.md).
 
-The pydantic schemas that demonstration files (:mod:`demoplan.learning.demonstrations`)
+The pydantic schemas that demonstration files (:mod:`demoplan.documents.demonstrations`)
 and scene files (:mod:`demoplan.scenes.scene`) share: a pose is a ``position``
 (two or three coordinates) and at most one orientation (``yaw``, ``rpy`` or
 ``quat``), in the file's ``units``; :func:`pose_from_dict` turns one into a

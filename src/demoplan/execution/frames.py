@@ -58,7 +58,7 @@ class FrameWriter:
         import matplotlib.pyplot as plt
 
         from demoplan.plotting.backend import tight_layout
-        from demoplan.plotting.figures import save_figure
+        from demoplan.plotting.output import save_figure
 
         figure, ax = plt.subplots(figsize=(4.5, 4.0))
         self._panel(ax, len(self.frames) - 1)
@@ -95,7 +95,7 @@ class FrameWriter:
         import matplotlib.pyplot as plt
 
         from demoplan.plotting.backend import tight_layout
-        from demoplan.plotting.figures import save_figure
+        from demoplan.plotting.output import save_figure
 
         picks = self.storyboard_frames(max_panels)
         columns = min(4, len(picks))

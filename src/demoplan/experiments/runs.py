@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.experiments.compare import Check, compare_with_paper, plan_checks
 from demoplan.experiments.paper import (
     PAPER_TABLE_II,
@@ -29,7 +30,6 @@ from demoplan.experiments.paper import (
     table_places,
 )
 from demoplan.learning import TaskModelLearner
-from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings
 from demoplan.model import TaskModel
 from demoplan.scenes.landmarks import complete_scene
@@ -360,7 +360,7 @@ def _plot_precision(
     use_agg()
     import matplotlib.pyplot as plt
 
-    from demoplan.plotting.figures import save_figure
+    from demoplan.plotting.output import save_figure
 
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     ax.plot(

@@ -1,6 +1,7 @@
 """The learning stage: demonstrations in, a task model out (paper §IV.A–B).
 
-- :mod:`demoplan.learning.demonstrations` — demonstration files (docs/formats.md).
+- demonstration files (docs/formats.md) are read by
+  :mod:`demoplan.documents.demonstrations`, below learning and segmentation.
 - :mod:`demoplan.learning.states` and :mod:`demoplan.learning.clustering` —
   state generation (§IV.A, eq. 1–2).
 - :mod:`demoplan.learning.constraints` — task generalization (§IV.B).
@@ -25,12 +26,12 @@ _EXPORTS = {
     "learn": "demoplan.learning.learner",
     "update": "demoplan.learning.learner",
     "LearningSettings": "demoplan.learning.settings",
-    "check_demonstrations": "demoplan.learning.demonstrations",
-    "demonstration_to_dict": "demoplan.learning.demonstrations",
-    "demonstrations_from_document": "demoplan.learning.demonstrations",
-    "demonstrations_from_path": "demoplan.learning.demonstrations",
-    "load_demonstrations": "demoplan.learning.demonstrations",
-    "load_object_geometry": "demoplan.learning.demonstrations",
+    "check_demonstrations": "demoplan.documents.demonstrations",
+    "demonstration_to_dict": "demoplan.documents.demonstrations",
+    "demonstrations_from_document": "demoplan.documents.demonstrations",
+    "demonstrations_from_path": "demoplan.documents.demonstrations",
+    "load_demonstrations": "demoplan.documents.demonstrations",
+    "load_object_geometry": "demoplan.documents.demonstrations",
     "label_key": "demoplan.learning.constraints",
     "visit_sequence": "demoplan.learning.constraints",
     "load_model": "demoplan.learning.modelfile",
@@ -59,8 +60,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from demoplan.learning.constraints import label_key, visit_sequence
-    from demoplan.learning.demonstrations import (
+    from demoplan.documents.demonstrations import (
         check_demonstrations,
         demonstration_to_dict,
         demonstrations_from_document,
@@ -68,6 +68,7 @@ if TYPE_CHECKING:
         load_demonstrations,
         load_object_geometry,
     )
+    from demoplan.learning.constraints import label_key, visit_sequence
     from demoplan.learning.learner import TaskModelLearner, learn, update
     from demoplan.learning.modelfile import load_model, model_from_dict, model_to_dict, save_model
     from demoplan.learning.settings import LearningSettings

@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Self
 
+from demoplan.documents.demonstrations import check_demonstrations
 from demoplan.errors import InputError, NotFittedError
 from demoplan.graphs import find_cycle
 from demoplan.learning.constraints import (
@@ -24,7 +25,6 @@ from demoplan.learning.constraints import (
     visit_sequence,
 )
 from demoplan.learning.correspondence import corresponding_roles, instance_demonstrations
-from demoplan.learning.demonstrations import check_demonstrations
 from demoplan.learning.settings import LearningSettings
 from demoplan.learning.states import ReferenceScore, generate_states
 from demoplan.model import Demonstration, State, TaskModel, demonstrated_types

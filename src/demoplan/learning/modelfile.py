@@ -29,6 +29,7 @@ from pydantic import (
     field_validator,
 )
 
+from demoplan.documents.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.documents.poses import Coordinate
 from demoplan.errors import InputError
 from demoplan.fileio import (
@@ -39,7 +40,6 @@ from demoplan.fileio import (
     write_atomic,
 )
 from demoplan.learning.constraints import constraint_support, label_key
-from demoplan.learning.demonstrations import demonstration_to_dict, demonstrations_from_document
 from demoplan.learning.settings import LearningSettings
 from demoplan.model import (
     Demonstration,

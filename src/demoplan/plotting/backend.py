@@ -7,7 +7,7 @@ object names come from users' files and may hold ``$``; matplotlib would read
 ``$\\sqrt{$`` as TeX and fail (a plot, a run's frames lost), and ``$x$`` would
 show an italic x. Tick labels keep matplotlib's notation (a log axis writes
 ``$10^{2}$``). A figure's texts are made literal before anything measures them:
-:func:`tight_layout` here, and the save (:func:`~demoplan.plotting.figures.figure_bytes`).
+:func:`tight_layout` here, and the save (:func:`~demoplan.plotting.output.figure_bytes`).
 """
 
 from __future__ import annotations

@@ -80,7 +80,7 @@ def save_behaviour_tree(xml: str, path: Path) -> None:
     use_agg()
     import matplotlib.pyplot as plt
 
-    from demoplan.plotting.figures import save_figure
+    from demoplan.plotting.output import save_figure
 
     rows = tree_rows(xml)
     depth = max(r.depth for r in rows)

@@ -5,7 +5,7 @@ matplotlib is imported lazily (the ``plot`` extra); every function takes an
 optional ``ax`` and returns the axes it drew on.
 
 Labels of objects and moves are made with :func:`add_label`; when a figure is
-written (:func:`save_figure`, :func:`figure_bytes`) :func:`place_labels` moves
+written (:mod:`~demoplan.plotting.output`) :func:`place_labels` moves
 them, at the written resolution, so that no two texts of an axes overlap and
 none runs off its axes (:func:`place_boxes` is the placement itself).
 """
@@ -14,12 +14,10 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from demoplan.errors import InputError
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 from demoplan.plotting.backend import tight_layout, use_agg
@@ -33,11 +31,11 @@ from demoplan.plotting.labels import (
     place_labels,
     role_label,
 )
+from demoplan.plotting.output import save_figure
 from demoplan.rotations import rpy_from_quat
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
-    from matplotlib.backend_bases import RendererBase
     from matplotlib.figure import Figure
 
     from demoplan.planning.problem import Plan
@@ -49,15 +47,12 @@ __all__ = [
     "BoxPlacement",
     "Leader",
     "add_label",
-    "check_figure_path",
     "constraint_caption",
     "demonstration_instances",
-    "figure_errors",
     "figure_renderer",
     "fill_panels",
     "object_colour",
     "object_patch",
-    "observing_saved_figures",
     "place_boxes",
     "place_labels",
     "plan_stacks",
@@ -68,7 +63,6 @@ __all__ = [
     "plot_scene_targets",
     "role_label",
     "save_demonstrations",
-    "save_figure",
     "save_no_plan",
     "save_scene_plan",
     "save_scene_targets",
@@ -590,81 +584,6 @@ def _save_one_axes(draw: Callable[[Axes], object], path: Path) -> None:
         plt.close(figure)
 
 
-FIGURE_FORMATS = frozenset(
-    {"png", "pdf", "svg", "svgz", "jpg", "jpeg", "tif", "tiff", "webp", "eps", "ps", "gif"}
-)
-"""Image formats a figure can be written in, by file extension."""
-
-
-@contextmanager
-def figure_errors(path: Path) -> Iterator[None]:
-    """A figure's failures as one-line input errors: matplotlib missing, or the
-    file that cannot be written."""
-    try:
-        yield
-    except ImportError:
-        raise InputError(
-            "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
-        ) from None
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
-
-
-def check_figure_path(path: Path, option: str) -> None:
-    """One InputError, before any work, if ``path`` cannot take a figure: a
-    folder, or an extension that names no image format."""
-    from demoplan.fileio import display_path, output_target
-
-    if path.is_dir():
-        raise InputError(
-            "is a folder; an image file name expected", source=display_path(path), field=option
-        )
-    output_target(path)  # a socket or a block device: refused before any work
-    suffix = path.suffix.lower().lstrip(".")
-    if suffix not in FIGURE_FORMATS:
-        raise InputError(
-            f"'.{suffix}' is not an image format; one of "
-            f"{', '.join('.' + f for f in sorted(FIGURE_FORMATS))} expected",
-            source=display_path(path),
-            field=option,
-        )
-
-
-def figure_bytes(figure: Any, path: Path, dpi: int = 110) -> bytes:
-    """``figure`` encoded in the image format of ``path``'s extension, its
-    labels placed (:func:`place_labels`) at that ``dpi`` first."""
-    import io
-
-    check_figure_path(path, "figure")
-    original = figure.dpi
-    figure.set_dpi(dpi)
-    try:
-        crowded = place_labels(figure)
-        if crowded:
-            logger.warning(
-                "%s: no free place for the label(s) %s; they overlap others",
-                path.name,
-                ", ".join(repr(t.get_text()) for t in crowded),
-            )
-        if _SAVE_OBSERVERS:
-            figure.draw_without_rendering()
-            renderer = figure_renderer(figure)
-            for observer in list(_SAVE_OBSERVERS):
-                observer(figure, renderer, path)
-        buffer = io.BytesIO()
-        figure.savefig(buffer, format=path.suffix.lower().lstrip("."), dpi=dpi)
-    finally:
-        figure.set_dpi(original)
-    return buffer.getvalue()
-
-
-def save_figure(figure: Any, path: Path, dpi: int = 110) -> None:
-    """Write ``figure`` to ``path`` atomically (a temporary file, then a rename)."""
-    from demoplan.fileio import write_atomic_bytes
-
-    write_atomic_bytes(path, figure_bytes(figure, path, dpi))
-
-
 def save_scene_plan(
     scene: Scene,
     problem: SceneProblem,
@@ -785,6 +704,36 @@ def plot_scene_side(
     tops += [target.position[2] + _height(geometry[name]) for name, _, target in moves]
     highest = max(tops, default=0.05)
     spacing = 0.1 * highest
+    carry = _draw_side_moves(ax, moves, geometry, colours, highest, spacing)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(x=0.08)
+    ax.set_ylim(-0.5 * spacing, carry + 2.5 * spacing)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("height z [m]")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_title(title or "From the side: the height of each move", fontsize=9)
+    entries = [
+        ("faint", "where the objects stand now"),
+        ("solid", "where the plan leaves them"),
+        ("arrow", "move n of the plan"),
+    ]
+    if between:
+        entries.append(("outline", "put down on its way"))
+    _legend(ax, entries)
+    return ax
+
+
+def _draw_side_moves(
+    ax: Axes,
+    moves: Sequence[tuple[str, Pose, Pose]],
+    geometry: Mapping[str, ObjectGeometry | None],
+    colours: Mapping[str, str],
+    highest: float,
+    spacing: float,
+) -> float:
+    """Each move as a numbered arrow (:func:`plot_scene_side`); the height of
+    the highest carry."""
     carry = highest
     for number, (name, source, target) in enumerate(moves, 1):
         # Lifted from the top of where it stood, carried above everything (each
@@ -809,23 +758,7 @@ def plot_scene_side(
             color=colours[name],
             fontweight="bold",
         )
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.margins(x=0.08)
-    ax.set_ylim(-0.5 * spacing, carry + 2.5 * spacing)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("height z [m]")
-    ax.grid(True, lw=0.3, alpha=0.5)
-    ax.set_title(title or "From the side: the height of each move", fontsize=9)
-    entries = [
-        ("faint", "where the objects stand now"),
-        ("solid", "where the plan leaves them"),
-        ("arrow", "move n of the plan"),
-    ]
-    if between:
-        entries.append(("outline", "put down on its way"))
-    _legend(ax, entries)
-    return ax
+    return carry
 
 
 def scene_label(name: str, roles: Mapping[str, str] | None) -> str:
@@ -865,23 +798,3 @@ def _arc_middle(
         (start[0] + end[0]) / 2 + rad * dy / 2,
         (start[1] + end[1]) / 2 - rad * dx / 2,
     )
-
-
-# Labels: made with add_label, placed by place_labels when a figure is written.
-
-_SAVE_OBSERVERS: list[Callable[[Figure, RendererBase, Path], object]] = []
-
-
-@contextmanager
-def observing_saved_figures(
-    observer: Callable[[Figure, RendererBase, Path], object],
-) -> Iterator[None]:
-    """Within the block, call ``observer(figure, renderer, path)`` for every
-    figure written by :func:`save_figure` or :func:`figure_bytes`, just before
-    it is encoded: its labels placed, at the dpi it is written at, ``renderer``
-    the one they were measured with."""
-    _SAVE_OBSERVERS.append(observer)
-    try:
-        yield
-    finally:
-        _SAVE_OBSERVERS.remove(observer)

@@ -11,11 +11,14 @@ from typing import TYPE_CHECKING, Any
 
 from demoplan.plotting.backend import use_agg
 from demoplan.plotting.colours import assign_colours, object_colour
-from demoplan.plotting.figures import save_figure
+from demoplan.plotting.output import save_figure
 from demoplan.segmentation.detect import Move, Segmentation
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from demoplan.segmentation.settings import SegmentationSettings
 
 __all__ = ["plot_heights", "plot_segmentation"]
 
@@ -57,29 +60,11 @@ def plot_segmentation(
     e.g. ``.png`` or ``.svg``). Returns the axes: one per object, then the
     heights' axes.
     """
-    from matplotlib.figure import Figure
-
     use_agg()
     traces = segmentation.traces
     settings = segmentation.settings
-    rows = max(1, len(traces))
     wanted = len(traces) + (1 if heights else 0)
-    figure = None
-    if axes is None:
-        if heights:
-            figure = Figure(figsize=(9, 0.5 + 1.0 * rows + 2.4), layout="constrained")
-            created = figure.subplots(
-                rows + 1, 1, sharex=True, squeeze=False, height_ratios=[1.0] * rows + [2.4]
-            )
-        else:
-            figure = Figure(figsize=(9, 0.3 + 1.25 * rows), layout="constrained")
-            created = figure.subplots(rows, 1, sharex=True, squeeze=False)
-        axes_list: list[Axes] = [row[0] for row in created]
-    else:
-        axes_list = list(axes)
-        if len(axes_list) < wanted:
-            what = "one per object" + (" and one for the heights" if heights else "")
-            raise ValueError(f"{wanted} axes expected ({what}), got {len(axes_list)}")
+    figure, axes_list = _segmentation_axes(len(traces), heights, axes)
     speed_axes = axes_list[: len(traces)] if traces else axes_list[:1]
     origin = _origin(segmentation)
     assign_colours(trace.object for trace in segmentation.traces)
@@ -105,20 +90,7 @@ def plot_segmentation(
         for move in segmentation.pushes:
             if move.object == trace.object:
                 _hatch_push(ax, move, origin, colour)
-        ax.axhline(
-            settings.start_speed,
-            color="0.3",
-            linestyle="--",
-            linewidth=0.7,
-            label=f"start speed {settings.start_speed:.2f} m/s",
-        )
-        ax.axhline(
-            settings.stop_speed,
-            color="0.3",
-            linestyle=":",
-            linewidth=0.9,
-            label=f"stop speed {settings.stop_speed:.2f} m/s",
-        )
+        _speed_thresholds(ax, settings)
         ax.set_ylim(0.0, top)
         ax.set_ylabel(f"{trace.object}\nm/s", fontsize=8)
         ax.tick_params(labelsize=7)
@@ -143,6 +115,50 @@ def plot_segmentation(
     return axes_list
 
 
+def _segmentation_axes(
+    objects: int, heights: bool, axes: Any | None
+) -> tuple[Figure | None, list[Axes]]:
+    """The figure made (None when ``axes`` are given) and the axes to draw on:
+    one row per object, and with ``heights`` a taller last row."""
+    from matplotlib.figure import Figure
+
+    rows = max(1, objects)
+    if axes is None:
+        if heights:
+            figure = Figure(figsize=(9, 0.5 + 1.0 * rows + 2.4), layout="constrained")
+            created = figure.subplots(
+                rows + 1, 1, sharex=True, squeeze=False, height_ratios=[1.0] * rows + [2.4]
+            )
+        else:
+            figure = Figure(figsize=(9, 0.3 + 1.25 * rows), layout="constrained")
+            created = figure.subplots(rows, 1, sharex=True, squeeze=False)
+        return figure, [row[0] for row in created]
+    axes_list = list(axes)
+    wanted = objects + (1 if heights else 0)
+    if len(axes_list) < wanted:
+        what = "one per object" + (" and one for the heights" if heights else "")
+        raise ValueError(f"{wanted} axes expected ({what}), got {len(axes_list)}")
+    return None, axes_list
+
+
+def _speed_thresholds(ax: Axes, settings: SegmentationSettings) -> None:
+    """The start and stop speeds as labelled lines."""
+    ax.axhline(
+        settings.start_speed,
+        color="0.3",
+        linestyle="--",
+        linewidth=0.7,
+        label=f"start speed {settings.start_speed:.2f} m/s",
+    )
+    ax.axhline(
+        settings.stop_speed,
+        color="0.3",
+        linestyle=":",
+        linewidth=0.9,
+        label=f"stop speed {settings.stop_speed:.2f} m/s",
+    )
+
+
 def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     """Draw every object's height z (m) over time (s from the stream's start) on
     one axes, one line per object: each step's span shaded in its object's
@@ -151,9 +167,6 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     the move). Objects whose trace has no heights are left out.
     Returns the axes.
     """
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
     if ax is None:
         from matplotlib.figure import Figure
 
@@ -161,22 +174,7 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
         ax = Figure(figsize=(9, 3), layout="constrained").subplots()
     origin = _origin(segmentation)
     colours = assign_colours(trace.object for trace in segmentation.traces)
-    bottom = min(
-        (
-            float(t.height.min())
-            for t in segmentation.traces
-            if t.height is not None and t.height.size
-        ),
-        default=0.0,
-    )
-    peak = max(
-        (
-            float(t.height.max())
-            for t in segmentation.traces
-            if t.height is not None and t.height.size
-        ),
-        default=0.1,
-    )
+    bottom, peak = _height_range(segmentation)
     label_at = peak + 0.06 * max(peak - bottom, 0.05)
     for trace in segmentation.traces:
         if trace.height is not None:
@@ -221,6 +219,36 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     ax.set_ylim(bottom - 0.04 * max(peak - bottom, 0.05), label_at + 0.1 * max(peak - bottom, 0.05))
     ax.set_ylabel("height z (m)", fontsize=8)
     ax.tick_params(labelsize=7)
+    _heights_legend(ax)
+    return ax
+
+
+def _height_range(segmentation: Segmentation) -> tuple[float, float]:
+    """The lowest and the highest height of every trace (0 and 0.1 m without any)."""
+    bottom = min(
+        (
+            float(t.height.min())
+            for t in segmentation.traces
+            if t.height is not None and t.height.size
+        ),
+        default=0.0,
+    )
+    peak = max(
+        (
+            float(t.height.max())
+            for t in segmentation.traces
+            if t.height is not None and t.height.size
+        ),
+        default=0.1,
+    )
+    return bottom, peak
+
+
+def _heights_legend(ax: Axes) -> None:
+    """The objects' lines, and what a shaded, a hatched span and a dot mean."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     handles, _ = ax.get_legend_handles_labels()
     handles += [
         Patch(facecolor="0.5", alpha=0.3, label="step (numbered)"),
@@ -238,7 +266,6 @@ def plot_heights(segmentation: Segmentation, ax: Axes | None = None) -> Axes:
     ax.legend(
         handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7, frameon=False
     )
-    return ax
 
 
 def _hatch_push(ax: Axes, move: Move, origin: float, colour: str) -> None:

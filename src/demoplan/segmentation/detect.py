@@ -79,9 +79,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from demoplan.documents.demonstrations import demonstration_to_dict
 from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
-from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
 from demoplan.segmentation.settings import SegmentationSettings

@@ -14,8 +14,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from demoplan.documents.demonstrations import check_measured_demonstration
 from demoplan.errors import InputError
-from demoplan.learning.demonstrations import check_measured_demonstration
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, SegmentationSettings, segment
 from demoplan.segmentation.readers.hdf5 import (
@@ -129,7 +129,7 @@ def import_recording_details(
         if progress is not None:
             progress(done, len(keys), key)
     if geometry is not None:
-        from demoplan.segmentation.streams import check_geometry_names
+        from demoplan.documents.demonstrations import check_geometry_names
 
         check_geometry_names(geometry, list(named), geometry_source)
     return out

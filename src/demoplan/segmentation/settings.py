@@ -11,6 +11,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, fields
 
 from demoplan.errors import InputError
+from demoplan.model import REST_TOLERANCE
 
 __all__ = ["SegmentationSettings", "settings_from_text", "settings_help"]
 
@@ -73,7 +74,7 @@ class SegmentationSettings:
     max_gap_s: float = 0.25
     min_lift: float = 0.01
     settle_radius: float = 0.01
-    support_tolerance: float = 0.01
+    support_tolerance: float = REST_TOLERANCE
 
     def __post_init__(self) -> None:
         for item in fields(self):

@@ -6,7 +6,7 @@ length unit), segments it (:func:`~demoplan.segmentation.detect.segment`)
 with the objects' geometry, and writes the demonstration: the tracked frames
 named as landmarks are references, not objects — their rest pose is the
 demonstration's landmark — and the geometry of an objects file
-(``--objects-file``, :func:`~demoplan.learning.demonstrations.load_object_geometry`)
+(``--objects-file``, :func:`~demoplan.documents.demonstrations.load_object_geometry`)
 is written into it, so that learning knows which objects are round
 (a cylinder's yaw is not learned, docs/learning.md).
 """
@@ -17,12 +17,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from demoplan.errors import InputError
-from demoplan.learning.demonstrations import (
+from demoplan.documents.demonstrations import (
     check_geometry_names,
     check_measured_demonstration,
     with_declared_types,
 )
+from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry
 from demoplan.segmentation.detect import Segmentation, segment
 from demoplan.segmentation.readers import load_stream
@@ -32,7 +32,6 @@ from demoplan.segmentation.types import PoseStream, select_objects
 __all__ = [
     "SegmentedStream",
     "StreamOptions",
-    "check_geometry_names",
     "demonstration_from_stream",
     "stream_name",
 ]
@@ -56,13 +55,13 @@ class StreamOptions:
 
     def geometry(self) -> dict[str, ObjectGeometry] | None:
         """The objects file's geometry (None: no file given)."""
-        from demoplan.learning.demonstrations import load_object_geometry
+        from demoplan.documents.demonstrations import load_object_geometry
 
         return None if self.objects_file is None else load_object_geometry(self.objects_file)
 
     def types(self) -> dict[str, str]:
         """The types the objects file declares (identical objects; none without a file)."""
-        from demoplan.learning.demonstrations import load_object_types
+        from demoplan.documents.demonstrations import load_object_types
 
         return {} if self.objects_file is None else load_object_types(self.objects_file)
 

@@ -1,5 +1,6 @@
 """The studio's web application (docs/studio-api.md): the HTTP API over the
-work folder and the command layer, and the page in ``static/``.
+work folder and the command layer (its routes: :mod:`demoplan.studio.routes`,
+one router per resource), and the page in ``static/``.
 
 Safe by default: a body is at most :data:`~demoplan.studio.requests.MAX_BODY_BYTES`
 (413, checked before it is parsed), JSON with finite numbers only; every
@@ -15,41 +16,30 @@ import errno
 import json
 import logging
 import os
-import threading
 from collections.abc import (
     AsyncIterator,
     Awaitable,
     Callable,
     Collection,
-    Iterator,
     MutableMapping,
 )
-from contextlib import asynccontextmanager, contextmanager
+from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
-from fastapi import FastAPI, Query, Request
+from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
-from demoplan.errors import DemoplanError, InputError, LimitReachedError, NoPlanError, UsageError
+from demoplan.errors import InputError, LimitReachedError, NoPlanError, UsageError
 from demoplan.fileio import os_reason
 from demoplan.studio.jobs import LAST_RUN_FILE, Jobs, TooManyRunsError
 from demoplan.studio.requests import (
     MAX_BODY_BYTES,
-    MAX_SEED,
-    DemonstrationRequest,
-    DropRequest,
-    LandmarkRequest,
-    LearnRequest,
-    ObjectsRequest,
-    PlanRequest,
-    RunRequest,
-    SceneRequest,
-    ScrambleRequest,
-    SourceBody,
 )
+from demoplan.studio.routes import ROUTERS
+from demoplan.studio.routes.depends import one_line
 from demoplan.studio.workfolder import FileConflictError, FileMissingError, WorkFolder
 
 __all__ = ["STATIC", "create_app"]
@@ -66,7 +56,6 @@ ERROR_STATUS: tuple[tuple[type[Exception], int], ...] = (
 
 STATIC = Path(__file__).resolve().parent / "static"
 """The page: ``index.html`` and its modules, served as they are."""
-MEDIA_SUFFIXES = {".mp4": "video/mp4", ".png": "image/png", ".svg": "image/svg+xml"}
 PLACEHOLDER = """<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>demoplan studio</title></head>
 <body><h1>demoplan studio</h1>
@@ -79,12 +68,6 @@ Message = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[Message]]
 Send = Callable[[Message], Awaitable[None]]
 ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
-
-
-def one_line(text: str) -> str:
-    """``text`` on one line, control characters written as escapes."""
-    flat = " ".join(text.split())
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in flat)
 
 
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
@@ -248,27 +231,6 @@ def _validation_line(exc: RequestValidationError) -> str:
     return one_line(f"{where}: {message}{more}")
 
 
-@contextmanager
-def logged_warnings() -> Iterator[list[str]]:
-    """The warnings demoplan logs in this thread while the block runs, each as
-    the CLI prints it (``demoplan: WARNING: ...``)."""
-    lines: list[str] = []
-    me = threading.get_ident()
-
-    class Held(logging.Handler):
-        def emit(self, record: logging.LogRecord) -> None:
-            if record.thread == me:
-                lines.append(one_line(f"demoplan: {record.levelname}: {record.getMessage()}"))
-
-    handler = Held(logging.WARNING)
-    logger = logging.getLogger("demoplan")
-    logger.addHandler(handler)
-    try:
-        yield lines
-    finally:
-        logger.removeHandler(handler)
-
-
 def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) -> FastAPI:
     """The studio on the work folder ``workdir`` (made if missing), answering
     requests sent to ``hosts`` only (None: any, for a studio served to a
@@ -294,283 +256,9 @@ def create_app(workdir: Path, hosts: Collection[str] | None = LOOPBACK_NAMES) ->
     app.add_middleware(LocalOnly, hosts=hosts)  # the outermost: checked first
     _add_error_handlers(app)
     _add_page(app)
-    _add_layout_routes(app, folder)
-    _add_table_routes(app, folder)
-    _add_learning_routes(app, folder, jobs)
-    _add_run_routes(app, folder, jobs)
-    _add_last_run_route(app, jobs)
+    for router in ROUTERS:
+        app.include_router(router)
     return app
-
-
-def _add_layout_routes(app: FastAPI, folder: WorkFolder) -> None:
-    """Templates, the work folder's files, and the template or file the Teach view starts from."""
-
-    @app.get("/api/templates")
-    def templates() -> dict[str, Any]:
-        from demoplan.studio.layouts import TEMPLATES
-
-        return {"templates": [{"id": t.id, "title": t.title} for t in TEMPLATES]}
-
-    @app.get("/api/templates/{template_id}")
-    def template(
-        template_id: str, seed: int | None = Query(default=None, ge=0, le=MAX_SEED)
-    ) -> dict[str, Any]:
-        from demoplan.studio.layouts import template_layout
-
-        return template_layout(template_id, seed)
-
-    @app.get("/api/files")
-    def files() -> dict[str, list[str]]:
-        return folder.listing()
-
-    @app.get("/api/files/{name}")
-    def file(name: str) -> dict[str, Any]:
-        document = folder.read(name)
-        answer: dict[str, Any] = {"name": name, "document": document}
-        kind = folder.kind(document, name)
-        if kind == "demonstrations":
-            from demoplan.learning.demonstrations import demonstrations_from_document
-            from demoplan.studio.layouts import layout_of_demonstration
-
-            demonstrations = demonstrations_from_document(document, name)
-            answer["layout"] = layout_of_demonstration(demonstrations[0], demonstrations)
-        elif kind == "scenes":
-            from demoplan.scenes.scene import scene_from_document
-            from demoplan.studio.layouts import layout_of_scene
-
-            answer["layout"] = layout_of_scene(scene_from_document(document, name))
-        elif kind == "objects":
-            from demoplan.commands.objects import objects_from_document
-            from demoplan.studio.layouts import layout_of_objects
-
-            answer["layout"] = layout_of_objects(objects_from_document(document, name), name)
-        return answer
-
-    @app.get("/api/source")
-    def source() -> dict[str, Any]:
-        return {"source": folder.source()}
-
-    @app.put("/api/source")
-    def keep_source(body: SourceBody) -> dict[str, Any]:
-        if body.kind == "template":
-            from demoplan.studio.layouts import TEMPLATES
-
-            if body.id not in {t.id for t in TEMPLATES}:
-                raise FileMissingError(
-                    f"id: no template {body.id!r}; one of {', '.join(t.id for t in TEMPLATES)}"
-                )
-        elif not folder.path(body.id, "id").is_file():
-            raise FileMissingError(f"id: no file {body.id!r} in the work folder")
-        folder.keep_source(body.kind, body.id)
-        return {"source": folder.source()}
-
-
-def _add_table_routes(app: FastAPI, folder: WorkFolder) -> None:
-    """What happens on the table: a user's own objects saved, landmarks moved,
-    drops and scrambles, and saving demonstrations and scenes."""
-
-    @app.put("/api/objects/{name}")
-    def save_objects(name: str, body: ObjectsRequest) -> dict[str, str]:
-        from demoplan.commands.objects import objects_from_document
-        from demoplan.studio.layouts import objects_document
-
-        document = objects_document(body.layout)
-        objects_from_document(document, "layout")  # as the studio reads it back
-        path = folder.path(name)
-        if not path.exists():
-            return {"file": folder.create(document, name, "objects")}
-        if not body.replace or folder.kind(folder.read(name), name) != "objects":
-            how = "only an objects file is replaced" if body.replace else '"replace": true expected'
-            raise FileConflictError(f"name: {name} exists in the work folder; {how}")
-        folder.replace(document, name)
-        return {"file": name}
-
-    @app.post("/api/landmark")
-    def move_landmark(body: LandmarkRequest) -> dict[str, Any]:
-        from demoplan.studio.layouts import placed_landmark
-
-        return placed_landmark(
-            body.layout, body.landmark, (body.position[0], body.position[1]), body.yaw
-        )
-
-    @app.post("/api/drop")
-    def drop(body: DropRequest) -> dict[str, Any]:
-        from demoplan.studio.layouts import dropped_pose
-
-        return dropped_pose(
-            body.layout, body.object, (body.position[0], body.position[1]), body.yaw
-        )
-
-    @app.post("/api/scramble")
-    def scramble(body: ScrambleRequest) -> dict[str, Any]:
-        from demoplan.studio.layouts import scattered
-
-        return scattered(body.layout, body.seed)
-
-    @app.post("/api/demonstrations", status_code=201)
-    def save_demonstration(body: DemonstrationRequest) -> dict[str, str]:
-        from demoplan.learning.demonstrations import demonstrations_from_document
-
-        document = {"format": "demoplan/demonstration-1", **body.document}
-        demonstrations_from_document(document, "document")  # as `learn` reads it
-        return {"file": folder.create(document, body.name, "demonstration")}
-
-    @app.post("/api/scenes", status_code=201)
-    def save_scene(body: SceneRequest) -> dict[str, str]:
-        from demoplan.scenes.scene import scene_from_document
-
-        document = {"format": "demoplan/scene-1", **body.document}
-        scene_from_document(document, "document")  # as `plan` reads it
-        return {"file": folder.create(document, body.name, "scene")}
-
-
-def _add_learning_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
-    """Learning a model and planning with it."""
-
-    @app.post("/api/learn")
-    def learn(body: LearnRequest) -> dict[str, Any]:
-        from demoplan.commands.learning import learn_files
-        from demoplan.learning.tables import diagnostic_lines
-        from demoplan.studio.views import final_scene, model_json, targets_json
-
-        names = body.files if body.files is not None else folder.listing()["demonstrations"]
-        if not names:
-            raise InputError(
-                "the work folder holds no demonstrations; save one first", field="files"
-            )
-        paths = [folder.path(name, f"files[{k}]") for k, name in enumerate(names)]
-        for name, path in zip(names, paths, strict=True):
-            if not path.is_file():
-                raise FileMissingError(f"files: no file {name!r} in the work folder")
-        output = folder.path(body.output, "output")
-        if output.exists():
-            kind = folder.kind(folder.read(body.output, "output"), body.output)
-            if kind != "models":
-                raise FileConflictError(
-                    f"output: {body.output} is not a model file; a model's file name expected"
-                )
-        scene = _scene(body.scene, "scene") if body.scene is not None else None
-        with jobs.working(), logged_warnings() as logged:
-            model = learn_files(paths, output=output).model
-        # as `learn` prints them: the model's diagnostics, then what was logged,
-        # files named as in the work folder
-        where = f"{folder.root}{os.sep}"
-        warnings = [f"warning: {line}" for line in diagnostic_lines(model)]
-        warnings += [line.replace(where, "") for line in dict.fromkeys(logged)]
-        with jobs.working():
-            targets = _targets(model, scene) if scene is not None else None
-            if targets is None:  # no scene, or one of another task: the first demonstration's end
-                targets = targets_json(model, final_scene(model))
-        return {"model": body.output, **model_json(model), "targets": targets, "warnings": warnings}
-
-    @app.post("/api/plan")
-    def plan(body: PlanRequest) -> dict[str, Any]:
-        from demoplan.commands.planning import plan as plan_task
-        from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError
-        from demoplan.studio.views import no_plan_json, plan_json
-
-        model = _model_path(folder, body.model)
-        scene = _scene(body.scene, "scene")
-        try:
-            with jobs.working():
-                result = plan_task(model, scene, clutter=body.clutter)
-        except (SceneNoPlanError, SceneLimitReachedError) as failure:
-            return no_plan_json(failure)
-        return plan_json(result)
-
-
-def _add_run_routes(app: FastAPI, folder: WorkFolder, jobs: Jobs) -> None:
-    """Runs, each in a process of its own (demoplan.studio.jobs), and the media
-    an arm run writes."""
-
-    @app.post("/api/runs", status_code=202)
-    def start_run(body: RunRequest) -> dict[str, str]:
-        from demoplan.execution.faults import parse_faults
-
-        model = _model_path(folder, body.model)
-        _scene(body.scene, "scene")  # refused here; the run's process reads it again
-        try:
-            parse_faults(body.faults or None)  # refused here; the run's process reads it again
-        except DemoplanError as exc:
-            raise InputError(str(exc), field="faults") from None
-        if body.sim == "arm":
-            from importlib.util import find_spec
-
-            if find_spec("mujoco") is None:
-                raise InputError("the arm needs MuJoCo (pip install 'demoplan[sim]')", field="sim")
-
-        def order(run_id: str) -> dict[str, Any]:
-            """What the run's process is told (demoplan.studio.worker): the
-            request as checked here; an arm run's video named by the run."""
-            video = f"run-{run_id}.mp4" if body.sim == "arm" else None
-            return {
-                "model": str(model),
-                "scene": body.scene,
-                "sim": body.sim,
-                "faults": body.faults,
-                "seed": body.seed,
-                "clutter": body.clutter,
-                "video": str(folder.root / video) if video else None,
-                "media": f"/api/media/{video}" if video else None,
-            }
-
-        job = jobs.start(order)
-        return {"run": job.id}
-
-    @app.get("/api/runs/{run_id}")
-    def run_state(run_id: str) -> dict[str, Any]:
-        return jobs.get(run_id).to_json()
-
-    @app.delete("/api/runs/{run_id}")
-    def cancel_run(run_id: str) -> dict[str, Any]:
-        return jobs.cancel(run_id).to_json()
-
-    @app.get("/api/media/{name}")
-    def media(name: str) -> FileResponse:
-        path = _media_path(folder, name)
-        return FileResponse(path, media_type=MEDIA_SUFFIXES[path.suffix])
-
-
-def _targets(model: Any, scene: Any) -> list[dict[str, Any]] | None:
-    """The learned targets resolved in ``scene`` (the table as the page shows
-    it, landmarks where they stand now), or None where the scene does not hold
-    the model's objects."""
-    from demoplan.studio.views import targets_json
-
-    try:
-        return targets_json(model, scene)
-    except DemoplanError:
-        return None
-
-
-def _model_path(folder: WorkFolder, name: str) -> Path:
-    path = folder.path(name, "model")
-    if not path.is_file():
-        raise FileMissingError(f"model: no file {name!r} in the work folder")
-    return path
-
-
-def _scene(document: dict[str, Any], field: str) -> Any:
-    """A scene document read by the project's scene parser (as ``plan`` reads a file)."""
-    from demoplan.scenes.scene import scene_from_document
-
-    return scene_from_document({"format": "demoplan/scene-1", **document}, field)
-
-
-def _media_path(folder: WorkFolder, name: str) -> Path:
-    import re
-
-    if not re.fullmatch(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,79}", name) or ".." in name:
-        raise InputError(f"{name!r} is not a media file name", field="name")
-    suffix = Path(name).suffix
-    if suffix not in MEDIA_SUFFIXES:
-        raise InputError(
-            f"{name!r}: one of {', '.join(sorted(MEDIA_SUFFIXES))} expected", field="name"
-        )
-    path = folder.root / name
-    if path.is_symlink() or not path.is_file() or path.resolve().parent != folder.root:
-        raise FileMissingError(f"name: no media file {name!r} in the work folder")
-    return path
 
 
 def _add_page(app: FastAPI) -> None:
@@ -636,22 +324,3 @@ def _folder_trouble(root: Path, exc: OSError) -> str:
     else:
         happened = f"cannot be read or written ({os_reason(exc)})"
     return f"the work folder {root} {happened}"
-
-
-def _add_last_run_route(app: FastAPI, jobs: Jobs) -> None:
-    """The run that ended last in the work folder, for a page opened again."""
-
-    @app.get("/api/last-run")
-    def last_run() -> dict[str, Any] | None:
-        from demoplan.studio.layouts import layout_of_scene
-
-        record = jobs.last()
-        if record is None:
-            return None
-        try:
-            layout = layout_of_scene(_scene(record["scene"], "scene"))
-        except DemoplanError as exc:
-            raise FileMissingError(
-                f"run: the last run's scene cannot be drawn ({one_line(str(exc))})"
-            ) from None
-        return record | {"layout": layout}

@@ -21,10 +21,11 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 from demoplan.commands.objects import ObjectsFile
+from demoplan.commands.scenes import Standing, carried_by
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry, Pose, footprint
 from demoplan.plotting.colours import assign_colours
-from demoplan.scenes.geometry import GeometrySettings, Location, supports
+from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.studio.requests import Layout
 from demoplan.studio.workfolder import FileMissingError
@@ -348,18 +349,10 @@ def _carried(
     layout: Layout, shapes: Mapping[str, ObjectGeometry], name: str, settings: GeometrySettings
 ) -> set[str]:
     """The objects standing on ``name``, directly or on each other (they move with it)."""
-    locations = [
-        Location(n, layout.poses[n].xyz, layout.poses[n].yaw, "current", (n,), (shape,))
-        for n, shape in shapes.items()
-    ]
-    pairs, _ = supports(locations, settings)
-    carried: set[str] = set()
-    frontier = {name}
-    while frontier:
-        below = frontier
-        frontier = {upper for upper, lower in pairs if lower in below} - carried - {name}
-        carried |= frontier
-    return carried
+    standing = {
+        n: Standing(layout.poses[n].xyz, layout.poses[n].yaw, shape) for n, shape in shapes.items()
+    }
+    return set(carried_by(name, standing, settings))
 
 
 def _known(layout: Layout, name: str) -> ObjectGeometry:

@@ -123,15 +123,12 @@ def final_scene(model: TaskModel) -> Scene:
 def targets_json(model: TaskModel, scene: Scene) -> list[dict[str, Any]]:
     """The states of the first demonstration's goal resolved in ``scene``
     (where planning would put each object)."""
-    from demoplan.scenes.prepared import prepare
+    from demoplan.commands.scenes import targets
 
-    prepared = prepare(model, scene, clutter=True)
-    if not prepared.candidates:
-        return []
     return [
-        {"state": subtask.state, "label": subtask.label, "object": subtask.object}
-        | pose_json(subtask.pose)
-        for subtask in prepared.candidates[0].subtasks
+        {"state": target.state, "label": target.label, "object": target.object}
+        | pose_json(target.pose)
+        for target in targets(model, scene)
     ]
 
 

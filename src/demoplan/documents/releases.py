@@ -33,6 +33,7 @@ import shapely
 
 from demoplan.model import (
     LEVEL_TOLERANCE,
+    REST_TOLERANCE,
     SUPPORT_FRACTION,
     Demonstration,
     ObjectGeometry,
@@ -41,7 +42,6 @@ from demoplan.model import (
     footprint,
 )
 from demoplan.rotations import matrices_from_quats, rpy_from_quat
-from demoplan.segmentation.settings import SegmentationSettings
 
 __all__ = [
     "UNKNOWN_REACH_M",
@@ -52,7 +52,7 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-RELEASE_TOLERANCE_M = SegmentationSettings().support_tolerance
+RELEASE_TOLERANCE_M = REST_TOLERANCE
 """A release this close above the table or a top rests on it (as a segmented rest)."""
 UNKNOWN_REACH_M = 0.1
 """An object of unknown size this close beneath (horizontally) may be the support."""

@@ -36,10 +36,10 @@ from demoplan.documents.poses import (
     pose_from_dict,
     pose_to_dict,
 )
+from demoplan.documents.releases import warn_unsupported_releases
 from demoplan.documents.units import check_document, check_measured
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.learning.releases import warn_unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Step
 from demoplan.wording import did_you_mean, plural
 
