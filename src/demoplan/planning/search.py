@@ -24,6 +24,7 @@ or raises NoPlanError (exit 3) / LimitReachedError (exit 4);
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -277,8 +278,10 @@ def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findi
     (:func:`~demoplan.planning.greedy.greedy_moves`): it may take all the time
     left, and never less than what the request's ``first_plan`` clock leaves (an
     easy problem must not go without a plan for want of a few milliseconds)."""
-    least = findings.request.first_plan.remaining() or 0.0
-    moves = greedy_moves(c, bounds, clock.at_least(least))
+    least = findings.request.first_plan.remaining()
+    if least is not None and not math.isinf(least):  # no deadline: the phase's share
+        clock = clock.at_least(least)
+    moves = greedy_moves(c, bounds, clock)
     if moves is not None:
         findings.offer(_actions(c, moves), "greedy")
     return None
