@@ -101,7 +101,7 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 import demoplan.scenes.plan as scene_plan  # noqa: E402
-from demoplan.budget import default_budget  # noqa: E402
+from demoplan.budget import Clock, default_budget  # noqa: E402
 from demoplan.errors import DemoplanError  # noqa: E402
 from demoplan.learning.learner import learn  # noqa: E402
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel  # noqa: E402
@@ -366,7 +366,9 @@ def plan_once(case: Case, budget: Budget) -> Run:
         started = time.perf_counter()
         try:
             result = scene_plan.plan_in_scene(
-                case.model, case.scene, budget=budget, clutter=case.clutter
+                case.model,
+                prepare(case.model, case.scene, clutter=case.clutter),
+                clock=Clock(budget),
             )
         except DemoplanError as exc:
             return Run(time.perf_counter() - started, calls, error=f"{type(exc).__name__}: {exc}")
@@ -419,7 +421,7 @@ def oracle(case: Case, limit: int, sample: int, rng: np.random.Generator) -> Ora
         best: int | None = None
         for candidate in task.candidates:
             problem = build_problem(prepared.scene, candidate, surroundings=around)
-            outcome = scene_plan.solve_candidate(problem, UNLIMITED)
+            outcome = scene_plan.solve_candidate(problem, Clock(UNLIMITED))
             if outcome.plan is not None:
                 optimal = optimal and outcome.plan.optimal
                 best = len(outcome.plan) if best is None else min(best, len(outcome.plan))

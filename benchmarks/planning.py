@@ -118,6 +118,21 @@ From the repository root, with demoplan installed (``pip install -e ".[dev]"``):
     python benchmarks/planning.py --families parking,parking-dense --sizes 10,15
     python benchmarks/planning.py --out results.json --keep /tmp/problems
     python benchmarks/planning.py --fd /path/to/fast-downward.py --timeout 30
+    python benchmarks/planning.py --limits         # only the limits below, ~1 min
+
+Every limit inside every loop (issue 44)
+----------------------------------------
+Every run ends with, and ``--limits`` runs alone: ``demoplan solve`` of a
+1,000-object ring (:func:`tests.planning_families.ring_problem`: each object
+to its neighbour's goal place, each goal place blocking its neighbour's grasp)
+with ``--timeout 0`` and with ``--max-nodes 1 --timeout inf`` — whole-process
+wall time, median of 3, the exit code and the answer's line; the target is
+under 1 s each (before the clock and the node limit were read inside
+compilation, the reasons without search and successor generation: 14.8 s and
+16 s). Beside it, what reading the limits costs: the clock reads of one
+in-process ``solve`` of parking-crowded N = 20 (seed 0, the default 2 s
+budget) counted, times the cost of one read (``Clock.stop``, timed over a
+million), as a share of that solve's time.
 """
 
 from __future__ import annotations
@@ -161,6 +176,7 @@ from tests.planning_families import (  # noqa: E402
     PARKING_FAMILIES,
     blocks_problem,
     parking_problem,
+    ring_problem,
     table_problem,
 )
 
@@ -1634,6 +1650,106 @@ def _seeds(text: str) -> tuple[int, ...]:
 ALL_FAMILIES = (*FAMILIES, *HARD_FAMILIES)
 
 
+# --------------------------------------------------------------------------- limits
+
+LIMIT_OBJECTS = 1000
+LIMIT_RUNS = (
+    ("--timeout 0", ("--timeout", "0")),
+    ("--max-nodes 1", ("--max-nodes", "1", "--timeout", "inf")),
+)
+LIMIT_TARGET_SECONDS = 1.0
+
+
+def limit_timings(root: Path, console: Console, repeats: int = 3) -> dict[str, Any]:
+    """``solve`` of the 1,000-object ring under each of :data:`LIMIT_RUNS`
+    (whole process, median of ``repeats``), and the cost of reading the limits."""
+    path = root / "ring-1000.xml"
+    save_problem(ring_problem(LIMIT_OBJECTS), path)
+    table = Table(title=f"Limits inside the work: solve of a {LIMIT_OBJECTS:,}-object ring")
+    for column in ("options", "exit", "answer", "median s (whole process)", "runs s"):
+        table.add_column(column)
+    rows = []
+    medians: list[tuple[str, float]] = []
+    for name, options in LIMIT_RUNS:
+        runs = [
+            run_process([*demoplan_command(), "solve", str(path), *options], root, 120.0)
+            for _ in range(repeats)
+        ]
+        seconds = [run.seconds for run in runs]
+        medians.append((name, statistics.median(seconds)))
+        last = runs[-1]
+        rows.append(
+            {
+                "options": name,
+                "returncode": last.returncode,
+                "answer": _last_line(last.stderr),
+                "median_s": statistics.median(seconds),
+                "runs_s": seconds,
+            }
+        )
+        table.add_row(
+            name,
+            str(last.returncode),
+            _last_line(last.stderr)[:90],
+            f"{statistics.median(seconds):.2f}",
+            ", ".join(f"{s:.2f}" for s in seconds),
+        )
+    console.print(table)
+    cost = clock_read_cost()
+    console.print(
+        f"Reading the limits: {cost['reads']:,} clock reads in one solve of parking-crowded "
+        f"N = 20 ({cost['solve_s']:.2f} s), {1e9 * cost['read_s']:.0f} ns each: "
+        f"{100 * cost['share']:.2f} % of the solve",
+        highlight=False,
+    )
+    targets = [
+        Target(
+            f"solve {name} on {LIMIT_OBJECTS:,} objects answers in under "
+            f"{LIMIT_TARGET_SECONDS:g} s (whole process, median)",
+            median < LIMIT_TARGET_SECONDS,
+            f"{median:.2f} s",
+        )
+        for name, median in medians
+    ]
+    print_targets(console, targets)
+    return {"runs": rows, "clock_reads": cost, "targets": [asdict(t) for t in targets]}
+
+
+def clock_read_cost() -> dict[str, float]:
+    """Clock reads (``Clock.stop``, ``Clock.expired``) counted during one solve of
+    parking-crowded N = 20, seed 0, and the time of one read."""
+    import timeit
+
+    from demoplan.budget import Budget, Clock
+    from demoplan.planning.search import solve
+
+    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
+    reads = 0
+    stop, expired = Clock.stop, Clock.expired
+
+    def counted_stop(self: Clock, expanded: int, states: int = 0) -> str | None:
+        nonlocal reads
+        reads += 1
+        return stop(self, expanded, states)
+
+    def counted_expired(self: Clock) -> bool:
+        nonlocal reads
+        reads += 1
+        return expired(self)
+
+    Clock.stop, Clock.expired = counted_stop, counted_expired  # type: ignore[method-assign]
+    try:
+        started = time.perf_counter()
+        with contextlib.suppress(DemoplanError):
+            solve(problem, budget=Budget(timeout=2.0))
+        solve_s = time.perf_counter() - started
+    finally:
+        Clock.stop, Clock.expired = stop, expired  # type: ignore[method-assign]
+    clock = Clock(Budget(timeout=600.0))
+    read_s = timeit.timeit(lambda: clock.stop(0, 0), number=1_000_000) / 1_000_000
+    return {"reads": reads, "solve_s": solve_s, "read_s": read_s, "share": reads * read_s / solve_s}
+
+
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="Benchmark demoplan solve against Fast Downward and pyperplan "
@@ -1647,6 +1763,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         f"hard families at N = 10, 20, seeds 0-3, {HARD_QUICK_TIMEOUT:g} s timeout",
     )
     parser.add_argument("--out", type=Path, help="also save the results to this JSON file")
+    parser.add_argument(
+        "--limits",
+        action="store_true",
+        help="only the limits inside the work: solve of a 1,000-object ring with --timeout 0 "
+        "and --max-nodes 1, and the cost of reading the clock",
+    )
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of the table and blocks problems (default 0)"
     )
@@ -1694,8 +1816,8 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     unknown = [f for f in families if f not in ALL_FAMILIES]
     if unknown or not families:
         parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(ALL_FAMILIES)}")
-    args.families = [f for f in families if f in FAMILIES]
-    args.hard_families = [f for f in families if f in HARD_FAMILIES]
+    args.families = [f for f in families if f in FAMILIES] if not args.limits else []
+    args.hard_families = [f for f in families if f in HARD_FAMILIES] if not args.limits else []
     if args.timeout is not None and args.timeout <= 0:
         parser.error("--timeout must be positive")
     args.hard_timeout = args.timeout or (HARD_QUICK_TIMEOUT if args.quick else HARD_TIMEOUT)
@@ -1820,6 +1942,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         if args.hard_families:
             document["hard"] = hard_benchmark(args, planners, root, console)
+        document["limits"] = limit_timings(root, console)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")
     document["total_s"] = total

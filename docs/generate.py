@@ -31,6 +31,7 @@ import typer.core
 import typer.main
 from pydantic import BaseModel
 
+from demoplan.budget import Clock
 from demoplan.cli import app
 from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
 from demoplan.documents.masses import MAX_DENSITY, MIN_DENSITY
@@ -94,6 +95,7 @@ from demoplan.planning.search import Budget, solve
 from demoplan.planning.xml import MAX_XML_BYTES, load_problem
 from demoplan.plotting.output import FIGURE_FORMATS
 from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import (
     MAX_GRIPPER,
     _GripperSchema,
@@ -902,7 +904,7 @@ def compute() -> Computed:
     plan = solve(load_problem(ROOT / PAPER_PROBLEM), "astar", Budget())
     report = run_task(
         model,
-        scene,
+        prepare(model, scene),
         faults=RUN_FAULTS,
         seed=RUN_SEED,
         settings=ExecutionSettings(budget=Budget(timeout=math.inf)),
@@ -912,9 +914,9 @@ def compute() -> Computed:
         solve_text=format_plan(plan),
         solve_note=f"demoplan: {optimality_line(plan)}",
         solve_json=plan_to_json(plan, read_seconds=0.0),
-        plan_json=plan_in_scene(model, scene, budget=Budget()).to_json(),
+        plan_json=plan_in_scene(model, prepare(model, scene), clock=Clock(Budget())).to_json(),
         run_json=report.to_json(),
-        tree_xml=task_tree(plan_in_scene(model, scene, budget=Budget())),
+        tree_xml=task_tree(plan_in_scene(model, prepare(model, scene), clock=Clock(Budget()))),
     )
 
 

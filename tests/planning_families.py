@@ -34,6 +34,7 @@ __all__ = [
     "collision_facts",
     "grasp_collides",
     "parking_problem",
+    "ring_problem",
     "table_problem",
 ]
 
@@ -335,4 +336,19 @@ def parking_draw(
         goal,
         n_freespace,
         free_y=-0.45,
+    )
+
+
+def ring_problem(n: int) -> Problem:
+    """n objects, 2n locations: each object to the next one's target row, each
+    target blocking its neighbour's grasp."""
+    objects = [f"o{i}" for i in range(n)]
+    return Problem.create(
+        objects=objects,
+        locations=[f"s{i}" for i in range(n)] + [f"t{i}" for i in range(n)],
+        grasps=[f"g{i}" for i in range(n)],
+        allowed=[(o, f"g{i}") for i, o in enumerate(objects)],
+        collisions=[(f"t{i}", f"t{i + 1}", f"g{i}") for i in range(n - 1)],
+        initial=[(o, f"s{i}") for i, o in enumerate(objects)],
+        goal=[(o, f"t{(i + 1) % n}") for i, o in enumerate(objects)],
     )

@@ -27,6 +27,7 @@ from demoplan.execution.report import RunReport
 from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of
 from tests.helpers import EXAMPLES, paper_model
 
@@ -77,7 +78,7 @@ def _assert_done_on_target(report: RunReport) -> None:
 
 def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
     """§V.B executed by the arm: demonstration 2's goal, 4 moves, the pyramid stands."""
-    report = run_task(blocks, load_scene(BLOCKS), sim="arm")
+    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm")
     _assert_done_on_target(report)
     assert report.goal == 1 and report.first_plan_length == 8
     assert report.final.poses["red"].position[2] == pytest.approx(0.04, abs=0.003)
@@ -86,14 +87,14 @@ def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
 def test_experiment_1_on_the_arm(set_table: TaskModel) -> None:
     """The paper's set-table task: 5–8 mm cutlery, a 3 mm napkin on the plate —
     what the floating hand's pads cannot lift, the suction cup takes."""
-    report = run_task(set_table, load_scene(SET_TABLE), sim="arm")
+    report = run_task(set_table, prepare(set_table, load_scene(SET_TABLE)), sim="arm")
     _assert_done_on_target(report)
     assert report.final.poses["napkin"].position[2] > 0.01  # on the plate
 
 
 def test_kitting_on_the_arm(kit: TaskModel) -> None:
     """The kit: a 1 cm pcb, the manual parked off the motor and put on the pcb last."""
-    report = run_task(kit, load_scene(KIT), sim="arm")
+    report = run_task(kit, prepare(kit, load_scene(KIT)), sim="arm")
     _assert_done_on_target(report)
     manual, pcb = report.final.poses["manual"], report.final.poses["pcb"]
     assert manual.position[2] == pytest.approx(0.01, abs=0.002)
@@ -102,7 +103,7 @@ def test_kitting_on_the_arm(kit: TaskModel) -> None:
 
 def test_experiment_2_on_vision_with_the_arm(blocks: TaskModel) -> None:
     """The arm acting on what the top camera sees (Hough-transform blocks)."""
-    report = run_task(blocks, load_scene(BLOCKS), sim="arm", perception="camera")
+    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm", perception="camera")
     assert report.success, (report.reason, report.failures)
     assert report.collisions == ()
 
@@ -114,7 +115,7 @@ def test_faults_on_the_arm_are_detected_and_recovered(blocks: TaskModel, kind: s
     scene = complete_geometry(load_scene(BLOCKS), blocks)
     at = {"drop": 4, "displace": 4, "misplace": 4, "grasp": 3}[kind]
     world = ArmWorld(scene, schedule={at: kind})
-    report = execute(blocks, scene, world)
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world)
     assert [f.kind for f in world.injected] == [kind]
     assert report.success and max(report.pose_errors.values()) < 0.01
     assert report.failures and report.replans == len(report.failures)
@@ -348,7 +349,11 @@ def test_an_obstacle_on_a_thin_parts_target_is_cleared_and_the_wrist_recovers() 
     singularity: it gave up after 25 replans). Now: reached, no contact."""
     model = learn(load_demonstrations([EXAMPLES / "set_table"]))
     report = run_task(
-        model, load_scene(SET_TABLE), sim="arm", faults=parse_faults("block=0.3"), seed=1
+        model,
+        prepare(model, load_scene(SET_TABLE)),
+        sim="arm",
+        faults=parse_faults("block=0.3"),
+        seed=1,
     )
     assert [f.kind for f in report.injected] == ["block"]
     _assert_done_on_target(report)

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import scene_from_document
 from tests.arm_layouts import attempt_all, layout
 
@@ -117,7 +118,8 @@ def test_the_lunch_box_is_packed_by_the_arm() -> None:
         },
         "lunch.json",
     )
-    report = run_task(learn(demos), scene, sim="arm")
+    model = learn(demos)
+    report = run_task(model, prepare(model, scene), sim="arm")
     assert report.success, (report.reason, report.failures, report.motions_refused)
     assert report.collisions == () and report.motions_refused == ()
     for name, place in PACKED.items():

@@ -71,7 +71,6 @@ def off_target(result: ScenePlan, world: KinematicWorld) -> list[str]:
 
 
 def tick(xml: str, result: ScenePlan, **world: Any) -> tuple[TreeRun, KinematicWorld]:
-    assert result.scene is not None
     kinematic = KinematicWorld(result.scene, **world)
     return run_behaviour_tree(xml, kinematic), kinematic
 
@@ -87,7 +86,6 @@ def test_the_exported_tree_ticks_to_success_in_the_engine(
     assert run.success, run
     assert off_target(result, world) == []
     assert world.held is None
-    assert result.chosen.plan is not None
     assert run.actions == len(result.chosen.plan)
 
 
@@ -106,7 +104,6 @@ def test_the_tree_follows_the_plan_and_honours_the_learned_order(
         if f.get("name", "").startswith("subgoal ")
     ]
     chosen = result.chosen
-    assert chosen.plan is not None
     for before, after in chosen.problem.candidate.precedences:
         if before in subgoals and after in subgoals:
             assert subgoals.index(before) < subgoals.index(after), (before, after)
@@ -160,7 +157,6 @@ def test_plan_only_is_the_flat_sequence_of_the_plan() -> None:
     task = next(t for t in root.iter("BehaviorTree") if t.get("ID") == "Task")
     assert [n.tag for n in task.iter()].count("Fallback") == 0
     steps = [(n.get("ID"), n.get("object")) for n in task.iter("SubTree")]
-    assert result.chosen.plan is not None
     assert steps == [
         ("Grasp" if a.kind == "GRASP" else "PutDown", a.object) for a in result.chosen.plan.actions
     ]
@@ -182,7 +178,6 @@ def test_the_fallbacks_recover_from_one_fault(
     assert [f.kind for f in run.injected] in ([fault], [])
     assert run.success, run
     assert off_target(result, world) == []
-    assert result.chosen.plan is not None
     if fault in ("drop", "grasp") and run.injected:
         assert run.actions > len(result.chosen.plan)
 
@@ -344,7 +339,6 @@ def test_the_tree_ticks_with_the_floating_hand_in_mujoco(
     from demoplan.execution.physics import MujocoWorld
 
     xml, result = exported["blocks"]
-    assert result.scene is not None
     world = MujocoWorld(result.scene, Faults(), 0)
     try:
         run = run_behaviour_tree(xml, world)
@@ -364,7 +358,6 @@ def test_a_tree_grasping_what_the_world_cannot_take_is_refused_before_moving(
     """An object the scene does not have (a hand-edited tree), and, in MuJoCo,
     objects too thin for the floating hand's pads: one InputError, nothing moved."""
     xml, result = exported["blocks"]
-    assert result.scene is not None
     world = KinematicWorld(result.scene)
     with pytest.raises(InputError, match="'redd', which the scene does not have"):
         run_behaviour_tree(xml.replace('object="red"', 'object="redd"'), world)
@@ -379,7 +372,6 @@ def test_a_tree_grasping_what_the_world_cannot_take_is_refused_before_moving(
     from demoplan.execution.physics import MujocoWorld
 
     xml, result = exported["set_table"]
-    assert result.scene is not None
     hand = MujocoWorld(result.scene, Faults(), 0)
     try:
         with pytest.raises(InputError, match="cannot be carried out by this robot: napkin"):

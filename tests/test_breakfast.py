@@ -24,8 +24,10 @@ from demoplan.errors import InputError
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
 from demoplan.model import Pose, TaskModel
+from demoplan.planning.strips import validate
 from demoplan.rotations import rpy_from_quat
 from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import scene_from_document
 from tests.breakfast import (
     LAYOUT,
@@ -86,7 +88,7 @@ def test_the_breakfast_is_laid_out_on_the_turned_tray(
 
     tray = (0.5, 0.15, turn)
     scene = scene_from_document(scene_document(tray), "scene.json")
-    report = run_task(model, scene)
+    report = run_task(model, prepare(model, scene))
     assert report.success, report
     final = report.final.poses
     tray_pose = dict(scene.landmarks)["tray"]
@@ -149,7 +151,7 @@ def test_a_scene_without_the_moving_tray_is_refused_naming_it(
 ) -> None:
     scene = scene_from_document(scene_document(None, **landmarks), "scene.json")
     with pytest.raises(InputError) as caught:
-        plan_in_scene(breakfast_model, scene)
+        plan_in_scene(breakfast_model, prepare(breakfast_model, scene))
     line = str(caught.value)
     assert line.startswith(f"scene.json: {field}: landmark 'tray' is missing"), line
     assert "different places in the demonstrations" in line
@@ -171,8 +173,8 @@ def test_a_landmark_that_stood_still_may_be_left_out_and_the_output_says_so(
     model = learn(demos)
     scene = scene_from_document(scene_document(None), "scene.json")
     with caplog.at_level("WARNING"):
-        result = plan_in_scene(model, scene)
-    assert result.chosen.plan is not None
+        result = plan_in_scene(model, prepare(model, scene))
+    validate(result.chosen.problem.problem, result.chosen.plan.actions)
     said = [r.getMessage() for r in caplog.records if "landmark 'tray'" in r.getMessage()]
     assert said and "all 3 demonstrations" in said[0], said
 
@@ -183,12 +185,15 @@ def test_items_stand_on_the_tray_top(breakfast_model: TaskModel, tmp_path: Path)
     document = scene_document((0.5, 0.1, 30.0))
     document["objects"]["plate"] = {"position": [0.45, 0.1, 0.02]}  # type: ignore[index]
     scene = scene_from_document(document, "scene.json")
-    assert plan_in_scene(breakfast_model, scene).chosen.plan is not None
+    chosen = plan_in_scene(breakfast_model, prepare(breakfast_model, scene)).chosen
+    validate(chosen.problem.problem, chosen.plan.actions)
     del document["landmarks"]["tray"]["size"]  # type: ignore[index]
     (tmp_path / "scene.json").write_text(json.dumps(document))
     sizeless = scene_from_document(document, "scene.json")
     # The demonstrations give the tray's size: the scene need not.
-    assert plan_in_scene(breakfast_model, sizeless).chosen.plan is not None
+    assert (
+        plan_in_scene(breakfast_model, prepare(breakfast_model, sizeless)).chosen.plan is not None
+    )
 
 
 def test_every_figure_draws_the_tray(breakfast_model: TaskModel) -> None:
@@ -206,8 +211,8 @@ def test_every_figure_draws_the_tray(breakfast_model: TaskModel) -> None:
     scene = complete_scene(
         scene_from_document(scene_document((0.5, 0.1, 30.0)), "scene.json"), breakfast_model
     )
-    chosen = plan_in_scene(breakfast_model, scene).chosen
-    assert chosen.plan is not None
+    chosen = plan_in_scene(breakfast_model, prepare(breakfast_model, scene)).chosen
+    validate(chosen.problem.problem, chosen.plan.actions)
     for draw, extent in ((plot_scene_plan, (0.40, 0.30)), (plot_scene_side, None)):
         ax = draw(scene, chosen.problem, chosen.plan)
         trays = [
@@ -265,10 +270,10 @@ def test_a_kit_tray_placed_anywhere_stays_and_is_filled_where_it_stands(
     assert tray_state.position.anywhere, tray_state
     tray = (0.5, 0.12, turn)
     scene = scene_from_document(carried_tray_scene(tray), "scene.json")
-    result = plan_in_scene(model, scene)
-    assert result.chosen.plan is not None
+    result = plan_in_scene(model, prepare(model, scene))
+    validate(result.chosen.problem.problem, result.chosen.plan.actions)
     assert all(a.object != "tray" for a in result.chosen.plan.actions), "the tray was moved"
-    report = run_task(model, scene)
+    report = run_task(model, prepare(model, scene))
     assert report.success, report
     final = report.final.poses
     errors = []
@@ -313,7 +318,12 @@ def test_the_breakfast_recovers_from_drops_and_blocks_on_20_seeds(
     scene = scene_from_document(scene_document((0.5, 0.12, 120.0)), "scene.json")
     injected = 0
     for seed in range(20):
-        report = run_task(breakfast_model, scene, faults=Faults(drop=0.3, block=0.3), seed=seed)
+        report = run_task(
+            breakfast_model,
+            prepare(breakfast_model, scene),
+            faults=Faults(drop=0.3, block=0.3),
+            seed=seed,
+        )
         assert report.success, f"seed {seed}: {report.reason}"
         injected += len(report.injected)
     assert injected >= 10, injected  # the faults were there to recover from
@@ -364,7 +374,7 @@ def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
     document["objects"]["kettle"] = {"position": [0.95, -0.3, 0.0], "shape": "box"}
     document["objects"]["kettle"]["size"] = [0.12, 0.12, 0.15]
     scene = scene_from_document(document, "scene.json")
-    report = run_task(model, scene)
+    report = run_task(model, prepare(model, scene))
     assert report.success, report
     final = report.final.poses
     tray = final["tray"]

@@ -22,6 +22,7 @@ from demoplan.execution.report import RunReport
 from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, TaskModel
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
 
@@ -46,7 +47,7 @@ def run(
 ) -> tuple[RunReport, KinematicWorld]:
     model, scene = task
     world = KinematicWorld(scene, faults, seed, {step: kind for kind, step in schedule.items()})
-    return execute(model, scene, world), world
+    return execute(model, prepare(model, scene, clutter=True), world), world
 
 
 def assert_finished(report: RunReport, model: TaskModel) -> None:
@@ -126,7 +127,9 @@ def test_same_seed_same_run(blocks: tuple[TaskModel, Scene]) -> None:
 def test_gives_up_after_max_replans(blocks: tuple[TaskModel, Scene]) -> None:
     model, scene = blocks
     world = KinematicWorld(scene, Faults(grasp=1.0), 0)
-    report = execute(model, scene, world, ExecutionSettings(max_replans=3))
+    report = execute(
+        model, prepare(model, scene, clutter=True), world, ExecutionSettings(max_replans=3)
+    )
     assert not report.success and report.replans == 3  # as many as the reason says
     assert "gave up after 3 replans" in report.reason and report.exit_code == 4
 
@@ -223,7 +226,7 @@ def test_a_block_turned_on_its_target_is_put_down_again(
     path = tmp_path / "turned.json"
     path.write_text(json.dumps(data))
     turned = complete_geometry(load_scene(path), model)
-    report = execute(model, turned, KinematicWorld(turned))
+    report = execute(model, prepare(model, turned, clutter=True), KinematicWorld(turned))
     assert report.success
     assert "wood" in [e.action.object for e in report.actions]
     wood = report.final.poses["wood"]
@@ -275,7 +278,7 @@ def test_faults_are_reported_as_they_happened_and_detected_as_their_kind(
         injected = detected = 0
         for seed in range(8):
             world = KinematicWorld(scene, Faults(**{kind: 0.3}), seed)
-            report = execute(model, scene, world, ExecutionSettings())
+            report = execute(model, prepare(model, scene, clutter=True), world, ExecutionSettings())
             assert report.success, (kind, seed, report.reason)
             assert report.injected == tuple(world.injected)
             assert {f.kind for f in report.injected} <= {kind}
@@ -322,7 +325,9 @@ def test_a_storyboard_keeps_every_failure_frame(
         if event.kind == "failure":
             writer.mark_failure(event.text)
 
-    report = execute(model, scene, Filmed(), ExecutionSettings(), heard)
+    report = execute(
+        model, prepare(model, scene, clutter=True), Filmed(), ExecutionSettings(), heard
+    )
     assert report.success and [f.kind for f in report.failures] == ["grasp", "dropped"]
     failed = sorted(writer.failed)
     assert len(failed) == 2 and all("FAILED" in writer.frames[k][1] for k in failed)

@@ -27,6 +27,7 @@ from matplotlib.transforms import Bbox
 from demoplan.plotting.colours import object_colour
 from demoplan.plotting.figures import Leader, place_boxes
 from demoplan.plotting.output import observing_saved_figures
+from demoplan.scenes.prepared import prepare
 from tests.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (
@@ -251,7 +252,7 @@ def test_kinematic_storyboard_frames_keep_their_names_apart(tmp_path: Path) -> N
             boxes[f"{path.name}#{k}"] = [(n, b) for n, b in texts if n]
 
     with observing_saved_figures(record):
-        report = run_task(model, scene, frames=tmp_path)
+        report = run_task(model, prepare(model, scene), frames=tmp_path)
     assert report.success and boxes
     named = [key for key, texts in boxes.items() if len(texts) >= 5]
     assert named  # the frames do name the objects

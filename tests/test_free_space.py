@@ -36,8 +36,10 @@ from demoplan.model import (
     Step,
     TaskModel,
 )
+from demoplan.planning.strips import validate
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
@@ -102,7 +104,7 @@ def test_kitting_parks_the_manual_then_builds_the_kit(
     assert [a[1] for a in actions[-2:]] == ["manual", "manual"]
     assert kinds[actions[-1][2]] != "freespace"
     loaded = complete_geometry(load_scene(scene_path), kit)
-    problem = plan_in_scene(kit, loaded, clutter=tray).chosen.problem
+    problem = plan_in_scene(kit, prepare(kit, loaded, clutter=tray)).chosen.problem
     assert_spots_clear(problem, spots_with_what_they_take(problem, loaded), loaded)
 
 
@@ -118,7 +120,7 @@ def test_kitting_recovers_from_drops_and_blocks(tray: bool, kit: TaskModel, tmp_
     injected = 0
     for seed in range(1, 21):
         world = KinematicWorld(scene, faults, seed)
-        report = execute(kit, scene, world)
+        report = execute(kit, prepare(kit, scene, clutter=True), world)
         injected += len(report.injected)
         if not report.success:
             failed.append((seed, report.reason))
@@ -318,9 +320,9 @@ def assert_spots_clear(problem: SceneProblem, parked: dict[str, set[str]], scene
 @given(swap_scenes())
 def test_a_family_of_swaps_plans_with_clear_parking_spots(task: tuple[TaskModel, Scene]) -> None:
     model, scene = task
-    result = plan_in_scene(model, scene)
+    result = plan_in_scene(model, prepare(model, scene))
     chosen = result.chosen
-    assert chosen.plan is not None
+    validate(chosen.problem.problem, chosen.plan.actions)
     problem = chosen.problem
     parked: dict[str, set[str]] = {}
     for action in chosen.plan.actions:
@@ -373,5 +375,7 @@ def test_the_family_recovers_from_drops_and_blocks(task: tuple[TaskModel, Scene]
     model, scene = task
     faults = parse_faults("drop=0.3,block=0.3")
     for seed in range(1, 21):
-        report = execute(model, scene, KinematicWorld(scene, faults, seed))
+        report = execute(
+            model, prepare(model, scene, clutter=True), KinematicWorld(scene, faults, seed)
+        )
         assert report.success, (seed, report.reason)

@@ -22,6 +22,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.budget import Clock
 from demoplan.commands.inputs import load_inputs
 from demoplan.execution.executor import ExecutionSettings, execute
 from demoplan.execution.kinematic import KinematicWorld
@@ -71,7 +72,6 @@ def _place_of_role(taught: Taught, model: TaskModel) -> dict[str, int]:
 
 
 def _grasped(plan: ScenePlan) -> list[str]:
-    assert plan.chosen.plan is not None
     return [a.object for a in plan.chosen.plan.actions if a.kind == "GRASP"]
 
 
@@ -81,7 +81,7 @@ def _shortest_over_bindings(model: TaskModel, scene: Scene) -> int:
     lengths = []
     for task in prepared.bindings:
         for candidate in task.candidates:
-            outcome = solve_candidate(build_problem(prepared.scene, candidate), UNLIMITED)
+            outcome = solve_candidate(build_problem(prepared.scene, candidate), Clock(UNLIMITED))
             assert outcome.plan is None or outcome.plan.optimal
             if outcome.plan is not None:
                 lengths.append(len(outcome.plan))
@@ -115,7 +115,7 @@ def test_a_table_for_two_learns_one_state_per_role(table: tuple[Taught, TaskMode
 def test_a_table_for_two_is_laid_moving_each_object_once(table: tuple[Taught, TaskModel]) -> None:
     _, model = table
     scene = table_scene(np.random.default_rng(5), {k: (1, 0) for k in TABLE_TYPES})
-    result = plan_in_scene(model, scene, budget=UNLIMITED)
+    result = plan_in_scene(model, prepare(model, scene), clock=Clock(UNLIMITED))
     grasped = _grasped(result)
     assert sorted(grasped) == sorted(obj.name for obj in scene.objects)  # each once
     assert len(grasped) == len(set(grasped)) == 8
@@ -137,10 +137,10 @@ def test_the_choice_of_instances_is_the_shortest_over_all_bindings(
         for o in scene.objects
     )
     scene = replace(scene, objects=objects)
-    result = plan_in_scene(model, scene, budget=UNLIMITED)
+    result = plan_in_scene(model, prepare(model, scene), clock=Clock(UNLIMITED))
     assert "plate-a" not in _grasped(result)
     assert result.chosen.binding.renaming["plate#2"] == "plate-a"
-    assert result.chosen.plan is not None and result.optimal
+    assert result.optimal
     assert len(result.chosen.plan) == _shortest_over_bindings(model, scene) == 14
 
 
@@ -157,10 +157,12 @@ def test_a_tower_with_two_identical_reds_is_built_in_the_shortest_plan() -> None
     )
     for seed in range(4):
         scene = tower_scene(np.random.default_rng(seed))
-        result = plan_in_scene(model, scene, budget=UNLIMITED)
-        assert result.optimal and result.chosen.plan is not None
+        result = plan_in_scene(model, prepare(model, scene), clock=Clock(UNLIMITED))
+        assert result.optimal
         assert len(result.chosen.plan) == _shortest_over_bindings(model, scene) == 8
-        report = execute(model, scene, KinematicWorld(prepare(model, scene).scene))
+        report = execute(
+            model, prepare(model, scene, clutter=True), KinematicWorld(prepare(model, scene).scene)
+        )
         assert report.success, report.reason
         heights = sorted(
             (report.final.poses[name].position[2], name)
@@ -188,9 +190,11 @@ def test_three_identical_cups_fill_each_slot_of_a_turned_tray_once(
     model = learn(taught.demonstrations)
     assert sorted(_place_of_role(taught, model).values()) == [0, 1, 2]
     scene = cups_scene((x, y, yaw), names)
-    result = plan_in_scene(model, scene, budget=UNLIMITED)
-    assert result.chosen.plan is not None and len(result.chosen.plan) == 6 and result.optimal
-    report = execute(model, scene, KinematicWorld(prepare(model, scene).scene))
+    result = plan_in_scene(model, prepare(model, scene), clock=Clock(UNLIMITED))
+    assert len(result.chosen.plan) == 6 and result.optimal
+    report = execute(
+        model, prepare(model, scene, clutter=True), KinematicWorld(prepare(model, scene).scene)
+    )
     assert report.success, report.reason
     slots = _slot_positions(model, scene)
     filled = [
@@ -224,7 +228,7 @@ def test_a_cup_that_lands_in_another_slot_takes_that_role() -> None:
     model = learn(taught.demonstrations)
     scene = cups_scene((0.45, 0.05, 30.0))
     prepared = prepare(model, scene)
-    first = plan_in_scene(model, prepared, budget=UNLIMITED).chosen
+    first = plan_in_scene(model, prepared, clock=Clock(UNLIMITED)).chosen
     assert first.plan is not None
     put_downs = [a for a in first.plan.actions if a.kind == "PUT_DOWN"]
     last_slot = pose_of(first.problem.location(put_downs[-1].location))
@@ -275,8 +279,10 @@ def test_renaming_instances_changes_neither_the_roles_nor_the_plan_length(
         replace(o, name=swap[["plate-b", "plate-a"].index(o.name)]) if o.kind == "plate" else o
         for o in scene.objects
     )
-    first = plan_in_scene(model, scene, budget=UNLIMITED).chosen.plan
-    second = plan_in_scene(renamed, replace(scene, objects=objects), budget=UNLIMITED).chosen.plan
+    first = plan_in_scene(model, prepare(model, scene), clock=Clock(UNLIMITED)).chosen.plan
+    second = plan_in_scene(
+        renamed, prepare(renamed, replace(scene, objects=objects)), clock=Clock(UNLIMITED)
+    ).chosen.plan
     assert first is not None and second is not None and len(first) == len(second)
 
 

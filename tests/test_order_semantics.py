@@ -16,6 +16,7 @@ from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.search import astar_search, breadth_first_search, solve
 from demoplan.planning.strips import InvalidPlanError, Rules, validate
 from demoplan.scenes.plan import plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import load_scene
 from tests.helpers import EXAMPLES
@@ -60,8 +61,8 @@ def order_broken(problem: SceneProblem, actions: tuple[Action, ...]) -> list[str
 
 def test_the_kit_parks_the_manual_until_its_predecessors_are_in(kit_model: TaskModel) -> None:
     scene = load_scene(SCENE)
-    chosen = plan_in_scene(kit_model, scene).chosen
-    assert chosen.plan is not None
+    chosen = plan_in_scene(kit_model, prepare(kit_model, scene)).chosen
+    validate(chosen.problem.problem, chosen.plan.actions)
     actions = chosen.plan.actions
     assert order_broken(chosen.problem, actions) == []
     validate(chosen.problem.problem, actions)

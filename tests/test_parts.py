@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, assume, given, settings
 
 from demoplan.errors import NoPlanError
 from demoplan.planning.bfs import breadth_first_search
-from demoplan.planning.budget import Budget
+from demoplan.planning.budget import Budget, Clock
 from demoplan.planning.compiled import compile_problem
 from demoplan.planning.parts import object_groups
 from demoplan.planning.problem import Problem, Subgoal
@@ -72,12 +72,12 @@ def test_two_problems_that_never_meet_are_solved_as_parts(first: Problem, second
     a, b = renamed(unstacked(first), "a"), renamed(unstacked(second), "b")
     whole = together(a, b)
     assume(len(whole.objects) <= 4)
-    reference = breadth_first_search(whole, Budget(max_nodes=200_000))
+    reference = breadth_first_search(whole, Clock(Budget(max_nodes=200_000)))
     assume(reference.actions is not None or reference.exhausted)
     groups = object_groups(whole, compile_problem(whole))
     assert sorted(o for g in groups for o in g) == sorted(whole.objects)
     assert len(groups) >= 2 and all(len({o[-1] for o in g}) == 1 for g in groups)
-    parts = plan_by_parts(whole, groups, Budget(timeout=5.0), compile_problem(whole))
+    parts = plan_by_parts(whole, groups, Clock(Budget(timeout=5.0)), compile_problem(whole))
     if reference.actions is None:  # no plan at all: the parts find none either
         assert parts.actions is None
         return

@@ -24,6 +24,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from demoplan.budget import Clock
 from demoplan.commands.planning import write_problem
 from demoplan.errors import UsageError
 from demoplan.learning.learner import learn
@@ -108,7 +109,7 @@ def check_against_fast_downward(model: TaskModel, scene: Scene, folder: Path) ->
     assert sorted(binding) == sorted(roles.filled.values())
     validate(roles.rebind(problem, binding), actions)
 
-    result = plan_in_scene(model, scene, budget=Budget(timeout=300))
+    result = plan_in_scene(model, prepare(model, scene), clock=Clock(Budget(timeout=300)))
     goal_1 = next(c for c in result.candidates if 0 in c.problem.candidate.demonstrations)
     assert goal_1.plan is not None and goal_1.plan.optimal
     assert len(actions) == len(goal_1.plan)
@@ -360,7 +361,9 @@ def test_targets_that_depend_on_the_binding_are_refused(tmp_path: Path) -> None:
     )
     model = replace(model, states=(anywhere, *model.states[1:]))
     scene = cups_scene((0.45, 0.1, 75.0))
-    plan_in_scene(model, scene, budget=Budget(timeout=60))  # demoplan plans it
+    plan_in_scene(
+        model, prepare(model, scene), clock=Clock(Budget(timeout=60))
+    )  # demoplan plans it
     with pytest.raises(UsageError, match=rf"subgoals {first.id}\b.*placed anywhere"):
         write_problem(model, scene, tmp_path / "goal.pddl", pddl=True)
     # the XML export writes the problem of the first binding as before

@@ -26,6 +26,7 @@ from demoplan.perception.synthetic import (
     render_blocks,
     touching_pair,
 )
+from demoplan.scenes.prepared import prepare
 
 CAMERA = Camera(1000.0, (0.0, 0.0))  # 1 px = 1 mm, the setting
 
@@ -284,7 +285,7 @@ def test_experiment_2_on_vision_in_mujoco() -> None:
     scene = complete_geometry(load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json"), model)
     world = MujocoWorld(scene)
     camera_world = CameraWorld(world, scene)
-    report = execute(model, scene, camera_world)
+    report = execute(model, prepare(model, scene, clutter=True), camera_world)
     assert report.success, (report.reason, report.failures)
     assert camera_world.pictures >= 9  # one per action and the start
     truth = {n: world._pose(n).position for n in ("wood", "green", "red")}

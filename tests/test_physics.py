@@ -15,6 +15,7 @@ from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
 
@@ -52,7 +53,7 @@ def test_experiment_2_builds_the_pyramid(blocks: tuple[TaskModel, Scene]) -> Non
     every block within 1 cm of its target, and the stack still stands 2 s later."""
     model, scene = blocks
     world = MujocoWorld(scene)
-    report = execute(model, scene, world)
+    report = execute(model, prepare(model, scene, clutter=True), world)
     assert report.success, (report.reason, report.failures)
     assert report.goal == 1  # demonstration 2's goal: 4 moves
     assert max(report.pose_errors.values()) < 0.01
@@ -83,7 +84,7 @@ def test_faults_in_physics_are_recovered(blocks: tuple[TaskModel, Scene], kind: 
     model, scene = blocks
     at = {"drop": 4, "displace": 4, "misplace": 4, "grasp": 3}[kind]
     world = MujocoWorld(scene, schedule={at: kind})
-    report = execute(model, scene, world)
+    report = execute(model, prepare(model, scene, clutter=True), world)
     assert [f.kind for f in world.injected] == [kind]
     assert report.success and max(report.pose_errors.values()) < 0.01
     assert report.replans >= 1 or kind == "drop"  # a drop that lands on target needs none

@@ -23,6 +23,7 @@ from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.errors import InputError, error_line
 from demoplan.learning.modelfile import save_model
 from demoplan.model import State, StateOrientation, StatePosition, TaskModel
+from demoplan.planning.strips import validate
 from demoplan.scenes.overhang import OVERHANG_TOLERANCE
 from demoplan.scenes.plan import SceneNoPlanError, plan_in_scene
 from demoplan.scenes.prepared import prepare
@@ -135,7 +136,7 @@ def packings(draw: st.DrawFn) -> tuple[Any, ...]:
 def test_food_that_turns_with_the_box_lies_on_it(packing: tuple[Any, ...]) -> None:
     box, food, offset, where, turn = packing
     model = packing_model(box, food, offset, follows_box=True)
-    result = plan_in_scene(model, packing_scene(box, where, turn))
+    result = plan_in_scene(model, prepare(model, packing_scene(box, where, turn)))
     problem = result.chosen.problem
     target = problem.location(problem.problem.subgoals[0].location)
     # the target in the box's frame is the demonstrated offset, turned with the box
@@ -157,10 +158,10 @@ def test_food_in_world_yaw_hanging_over_the_turned_box_is_refused(
     model = packing_model(box, food, offset, follows_box=False)
     scene = packing_scene(box, where, turn)
     if over < OVERHANG_TOLERANCE:
-        plan_in_scene(model, scene)  # plans
+        plan_in_scene(model, prepare(model, scene))  # plans
         return
     with pytest.raises(SceneNoPlanError) as raised:
-        plan_in_scene(model, scene)
+        plan_in_scene(model, prepare(model, scene))
     line = error_line(raised.value)
     assert raised.value.exit_code == 3
     assert "\n" not in line
@@ -302,7 +303,8 @@ def test_free_space_lies_on_the_table_the_studio_draws(demonstrations: str, scen
         start = load_scene(EXAMPLES / scene)
     drawn = layout_of_demonstration(demos[0], demos)["table"]
     (x0, y0), (width, depth) = drawn["origin"], drawn["size"]
-    result = plan_in_scene(learn(demos), start, clutter=True)
+    model = learn(demos)
+    result = plan_in_scene(model, prepare(model, start, clutter=True))
     spots = [loc for loc in result.chosen.problem.locations if loc.kind == "freespace"]
     assert spots
     for spot in spots:
@@ -335,7 +337,7 @@ def test_a_strip_of_free_yaw_is_turned_to_lie_on_its_board() -> None:
         },
         "strip.json",
     )
-    result = plan_in_scene(model, scene)
+    result = plan_in_scene(model, prepare(model, scene))
     problem = result.chosen.problem
     target = problem.location(problem.problem.subgoals[0].location)
     assert abs((target.yaw + 90) % 180 - 90) < 1e-6  # along the board
@@ -362,5 +364,6 @@ def test_what_held_each_lunch_item_up_is_the_box_or_the_sandwich() -> None:
         "carrot": [("lunchbox", 0.0)],
         "cookie": [("sandwich", 0.0)],
     }
-    result = plan_in_scene(model, lunch_scene())
-    assert not result.chosen.problem.obstacles and result.chosen.plan is not None
+    result = plan_in_scene(model, prepare(model, lunch_scene()))
+    assert not result.chosen.problem.obstacles
+    validate(result.chosen.problem.problem, result.chosen.plan.actions)

@@ -43,5 +43,5 @@ def test_the_dive_stops_at_its_state_limit(hard_parking: Problem) -> None:
         return estimate(positions, reached)
 
     bounds.estimate = counted  # type: ignore[method-assign]
-    assert plateau_moves(c, bounds, Clock(Budget()), root, max_states=200) is None
+    assert plateau_moves(c, bounds, Clock(Budget(max_states=200)), root) is None
     assert 0 < len(entered) <= 200  # each state entered is bounded once

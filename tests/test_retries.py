@@ -13,6 +13,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.report import RunReport
 from demoplan.model import TaskModel
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
 
@@ -39,7 +40,7 @@ def test_a_grasp_that_failed_three_times_gives_way_to_another(blocks: TaskModel)
     the run ends with the pyramid."""
     scene = complete_geometry(load_scene(BLOCKS), blocks)
     world = KinematicWorld(scene, schedule={k: "grasp" for k in range(1, MAX_SAME_GRASP + 1)})
-    report = execute(blocks, scene, world)
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world)
     assert report.success and [f.kind for f in report.failures] == ["grasp"] * MAX_SAME_GRASP
     first, fourth = (report.actions[k].action for k in (0, MAX_SAME_GRASP))
     assert fourth.kind == "GRASP" and (fourth.object, fourth.grasp) != (first.object, first.grasp)
@@ -50,7 +51,9 @@ def test_a_run_whose_grasps_all_fail_stops_naming_the_object(blocks: TaskModel) 
     """Every grasp misses: each is tried three times, then the run stops in one
     line naming the object — not after 25 replans."""
     scene = complete_geometry(load_scene(BLOCKS), blocks)
-    report = execute(blocks, scene, KinematicWorld(scene, Faults(grasp=1.0), 0))
+    report = execute(
+        blocks, prepare(blocks, scene, clutter=True), KinematicWorld(scene, Faults(grasp=1.0), 0)
+    )
     assert not report.success and report.exit_code == 4 and "\n" not in report.reason
     first = report.actions[0].action.object
     assert report.reason.startswith(f"{first} could not be grasped in 6 attempts (grasps tried: ")

@@ -30,9 +30,11 @@ from demoplan.learning import learn
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.tables import role_header, role_rows
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel
+from demoplan.planning.strips import validate
 from demoplan.plotting.figures import save_demonstrations
 from demoplan.plotting.labels import role_label
 from demoplan.plotting.output import observing_saved_figures
+from demoplan.scenes.prepared import prepare
 from tests.helpers import EXAMPLES
 from tests.table_for_two import (
     SWAPS,
@@ -307,9 +309,9 @@ def test_scene_figures_name_the_role_an_instance_fills(tmp_path: Path) -> None:
 
     scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
     model = learn(load_demonstrations([EXAMPLES / "blocks"]), settings=PAPER_SETTINGS)
-    result = plan_in_scene(model, scene)
+    result = plan_in_scene(model, prepare(model, scene))
     chosen = result.chosen
-    assert chosen.plan is not None
+    validate(chosen.problem.problem, chosen.plan.actions)
     problem = preview_scene(scene).problem
     bound = {"block#2": "green"}  # green fills a role of another name
     path = tmp_path / "figure.png"

@@ -22,6 +22,7 @@ from demoplan.planning.problem import Action
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
 from demoplan.scenes.plan import plan_in_scene, scene_problems
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import load_scene
 from tests.helpers import EXAMPLES, paper_model
 from tests.scene_checker import check_scene_plan
@@ -74,7 +75,9 @@ def test_experiment_2_chooses_demonstration_2(
     assert moved == ["red", "green", "wood", "red"]
     first_put = data["locations"][data["actions"][1][2]]
     assert first_put["kind"] == "freespace"  # red is moved out of the way first
-    problem = scene_problems(blocks_model, load_scene(BLOCKS_SCENE))[1].problem
+    problem = scene_problems(blocks_model, prepare(blocks_model, load_scene(BLOCKS_SCENE)))[
+        1
+    ].problem
     validate(problem, [Action(*a) for a in data["actions"]])
     check_scene_plan(
         data, json.loads(BLOCKS_SCENE.read_text()), blocks_model, sizes_of(blocks_model)
@@ -83,7 +86,9 @@ def test_experiment_2_chooses_demonstration_2(
 
 def test_only_red_is_graspable_at_the_start(blocks_model: TaskModel) -> None:
     """Fig. 4 (centre): the scene is built so that red alone can be picked up."""
-    problem = scene_problems(blocks_model, load_scene(BLOCKS_SCENE))[1].problem
+    problem = scene_problems(blocks_model, prepare(blocks_model, load_scene(BLOCKS_SCENE)))[
+        1
+    ].problem
     at = dict(problem.initial)
     for obj in ("wood", "green"):
         lower = at[obj]
@@ -98,7 +103,7 @@ def test_experiment_1_cluttered_scene(table_model: TaskModel, model_files: dict[
     assert [c["demonstrations"] for c in data["candidates"]] == [[0, 2], [1]]
     lengths = [c["length"] for c in data["candidates"]]
     assert data["length"] == min(lengths)
-    problems = scene_problems(table_model, load_scene(TABLE_SCENE))
+    problems = scene_problems(table_model, prepare(table_model, load_scene(TABLE_SCENE)))
     chosen = next(p for p in problems if p.candidate.goal == data["goal"])
     validate(chosen.problem, [Action(*a) for a in data["actions"]])
     check_scene_plan(data, json.loads(TABLE_SCENE.read_text()), table_model, sizes_of(table_model))
@@ -231,7 +236,7 @@ def test_no_plan_exits_3_with_reasons(model_files: dict[str, Path], tmp_path: Pa
 
 
 def test_library_api(blocks_model: TaskModel) -> None:
-    result = plan_in_scene(blocks_model, load_scene(BLOCKS_SCENE))
+    result = plan_in_scene(blocks_model, prepare(blocks_model, load_scene(BLOCKS_SCENE)))
     assert result.chosen.goal == 1
     assert [c.length for c in result.candidates] == [10, 8]
 
@@ -264,7 +269,7 @@ def test_fast_downward_agrees_on_scene_problems(
     from tests.test_pddl import fast_downward_plan
 
     model, scene = (blocks_model, BLOCKS_SCENE) if which == "blocks" else (table_model, TABLE_SCENE)
-    problems = scene_problems(model, load_scene(scene))
+    problems = scene_problems(model, prepare(model, load_scene(scene)))
     problem = next(p.problem for p in problems if goal in p.candidate.demonstrations)
     if which == "table":
         assert problem.accepts  # the case this test is for
@@ -288,8 +293,8 @@ def test_scene_in_centimetres_and_yaml(blocks_model: TaskModel, tmp_path: Path) 
     data["gripper"]["finger_radius"] = 2.0
     path = tmp_path / "scene.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
-    metres = plan_in_scene(blocks_model, load_scene(BLOCKS_SCENE))
-    centimetres = plan_in_scene(blocks_model, load_scene(path))
+    metres = plan_in_scene(blocks_model, prepare(blocks_model, load_scene(BLOCKS_SCENE)))
+    centimetres = plan_in_scene(blocks_model, prepare(blocks_model, load_scene(path)))
     assert centimetres.chosen.plan.actions == metres.chosen.plan.actions  # type: ignore[union-attr]
     assert [c.length for c in centimetres.candidates] == [10, 8]
 

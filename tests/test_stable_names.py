@@ -16,6 +16,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.model import Pose, TaskModel
 from demoplan.scenes.naming import StableNames
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from demoplan.scenes.targets import candidate_goals
@@ -126,7 +127,7 @@ def test_in_a_run_where_an_object_was_put_is_where_it_is_grasped_from(
     replanned = checked = 0
     for seed in range(12):
         world = KinematicWorld(scene, Faults(drop=0.25, displace=0.15), seed)
-        report = execute(model, scene, world, ExecutionSettings())
+        report = execute(model, prepare(model, scene, clutter=True), world, ExecutionSettings())
         replanned += report.replans > 0
         put: dict[str, tuple[str, tuple[float, ...]]] = {}
         seen: dict[str, tuple[float, ...]] = {}

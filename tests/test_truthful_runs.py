@@ -17,6 +17,7 @@ from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.report import RunEvent
 from demoplan.learning.modelfile import save_model
 from demoplan.model import Pose, TaskModel
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
 
@@ -81,7 +82,7 @@ def test_the_reason_names_the_grasp_that_failed_not_the_refused_replan(
     says the new plan was refused; exit 3 (no plan from the observed world)."""
     world = _ReachShrinks(scene, MAX_SAME_GRASP, MAX_SAME_GRASP)
     events: list[RunEvent] = []
-    report = execute(blocks, scene, world, on_event=events.append)
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world, on_event=events.append)
     first = report.actions[0].action.object
     start = scene.object(first).pose.position
     assert not report.success and report.exit_code == 3
@@ -112,7 +113,9 @@ def test_a_run_that_ends_on_a_refused_motion_names_it(blocks: TaskModel, scene: 
 
     world = Refusing(scene)
     world.motion_failures = []
-    report = execute(blocks, scene, world, ExecutionSettings(max_replans=2))
+    report = execute(
+        blocks, prepare(blocks, scene, clutter=True), world, ExecutionSettings(max_replans=2)
+    )
     assert not report.success and report.exit_code == 4
     failure = report.failures[-1]
     assert failure.kind == "release" and failure.note.startswith("the arm would swing near ")
@@ -122,7 +125,12 @@ def test_a_run_that_ends_on_a_refused_motion_names_it(blocks: TaskModel, scene: 
 
 def test_a_run_that_succeeds_says_so_in_its_last_event(blocks: TaskModel, scene: Scene) -> None:
     events: list[RunEvent] = []
-    report = execute(blocks, scene, KinematicWorld(scene, Faults()), on_event=events.append)
+    report = execute(
+        blocks,
+        prepare(blocks, scene, clutter=True),
+        KinematicWorld(scene, Faults()),
+        on_event=events.append,
+    )
     assert report.success and report.status == "succeeded"
     assert (events[-1].kind, events[-1].status, events[-1].text) == (
         "done",

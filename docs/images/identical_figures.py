@@ -30,10 +30,12 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from tests.identical_families import TABLE_TYPES, table_for_two, table_scene  # noqa: E402
 
+from demoplan.budget import Clock  # noqa: E402
 from demoplan.learning.learner import learn  # noqa: E402
 from demoplan.model import ObjectGeometry, TaskModel  # noqa: E402
 from demoplan.planning.search import Budget  # noqa: E402
 from demoplan.scenes.plan import plan_in_scene  # noqa: E402
+from demoplan.scenes.prepared import prepare  # noqa: E402
 from demoplan.scenes.problems import pose_of  # noqa: E402
 
 ORDERS = [
@@ -89,7 +91,7 @@ def _roles_figure(model: TaskModel, path: Path) -> None:
 
 def _binding_figure(model: TaskModel, path: Path) -> None:
     scene = table_scene(np.random.default_rng(5), {k: (1, 0) for k in TABLE_TYPES})
-    result = plan_in_scene(model, scene, budget=Budget(timeout=math.inf))
+    result = plan_in_scene(model, prepare(model, scene), clock=Clock(Budget(timeout=math.inf)))
     chosen = result.chosen
     assert chosen.plan is not None
     role_of = {instance: role for role, instance in chosen.binding.pairs}

@@ -32,6 +32,7 @@ __all__ = [
     "PLANNING_SECONDS",
     "Budget",
     "Clock",
+    "ProgressCallback",
     "check_time",
     "default_budget",
     "report_progress",
@@ -73,14 +74,22 @@ def default_budget() -> Budget:
 
 
 class Clock:
-    """Tells a computation when its budget is spent."""
+    """Tells a computation when its budget is spent: started once, where the
+    command starts, and handed down to every stage, which takes its share
+    with :meth:`part` (every limit kept)."""
 
-    def __init__(self, budget: Budget):
+    def __init__(self, budget: Budget | None = None):
+        budget = Budget() if budget is None else budget
         self.budget = budget
         deadlines = [] if budget.deadline is None else [budget.deadline]
         if budget.timeout is not None:
             deadlines.append(time.monotonic() + budget.timeout)
         self.deadline = min(deadlines) if deadlines else None
+
+    @property
+    def max_states(self) -> int:
+        """States a computation under this clock may keep."""
+        return MAX_STATES if self.budget.max_states is None else self.budget.max_states
 
     def expired(self) -> bool:
         """The time is up."""
@@ -94,13 +103,36 @@ class Clock:
         if self.budget.max_states is not None and states >= self.budget.max_states:
             return f"the memory limit of {self.budget.max_states} states"
         if self.expired():
-            timeout = self.budget.timeout
-            return f"--timeout {timeout:g} s" if timeout is not None else "the time budget"
+            return self.time_limit()
         return None
+
+    def time_limit(self) -> str:
+        """The time limit, named as the option that raises it."""
+        timeout = self.budget.timeout
+        return f"--timeout {timeout:g} s" if timeout is not None else "the time budget"
+
+    def check(self, where: str) -> None:
+        """Raise LimitReachedError (exit 4) once the time is up, naming the
+        limit and ``where`` the time ran out (work with no plan to show yet:
+        compiling a problem, looking for reasons there is no plan)."""
+        if self.expired():
+            raise LimitReachedError(f"{self.time_limit()} reached {where}")
 
     def remaining(self) -> float | None:
         """Seconds left, if there is a deadline."""
         return None if self.deadline is None else max(0.0, self.deadline - time.monotonic())
+
+    def part(self, fraction: float, unbounded: float | None = None) -> Clock:
+        """This clock for a part of the work: ``fraction`` of the time left from
+        now, every other limit (expansions, states) and the names of the limits
+        as they are. Without a deadline (none, or an infinite one): a
+        ``fraction`` of ``unbounded`` seconds where given, else no deadline."""
+        clock = copy.copy(self)
+        left = self.remaining()
+        if left is None or math.isinf(left):
+            left = unbounded
+        clock.deadline = None if left is None else time.monotonic() + fraction * left
+        return clock
 
     def at_least(self, seconds: float) -> Clock:
         """This clock, with at least ``seconds`` left from now (its limits of
@@ -115,13 +147,12 @@ _current: ContextVar[tuple[Clock, str] | None] = ContextVar("budget", default=No
 
 
 @contextmanager
-def time_budget(seconds: float | Budget | None, message: str) -> Iterator[None]:
+def time_budget(seconds: float | Clock | None, message: str) -> Iterator[None]:
     """The work inside the block stops after ``seconds`` (None or inf: no limit;
-    a :class:`Budget`: its time limits) with ``message`` (what stopped and how
-    to give it more; ``{where}`` in it: the work under way, as
-    :func:`check_time` says it)."""
-    budget = seconds if isinstance(seconds, Budget) else Budget(timeout=seconds)
-    clock = Clock(budget)
+    a :class:`Clock`: at its deadline — the command's own clock, not a second
+    one) with ``message`` (what stopped and how to give it more; ``{where}`` in
+    it: the work under way, as :func:`check_time` says it)."""
+    clock = seconds if isinstance(seconds, Clock) else Clock(Budget(timeout=seconds))
     if clock.deadline is None or math.isinf(clock.deadline):
         yield
         return
@@ -141,12 +172,14 @@ def check_time(where: str = "") -> None:
         raise LimitReachedError(current[1].replace("{where}", where))
 
 
-Progress = Callable[[str, int, int], None]  # (what, done, total)
-_progress: ContextVar[Progress | None] = ContextVar("progress", default=None)
+ProgressCallback = Callable[[str, int, int], None]
+"""``callback(what, done, total)``: how far long work is (a progress bar in the
+command line); one shape wherever work reports how far it is."""
+_progress: ContextVar[ProgressCallback | None] = ContextVar("progress", default=None)
 
 
 @contextmanager
-def reporting_progress(callback: Progress | None) -> Iterator[None]:
+def reporting_progress(callback: ProgressCallback | None) -> Iterator[None]:
     """Long work inside the block reports ``callback(what, done, total)`` as it
     goes (a progress bar in the command line; None: nothing)."""
     token = _progress.set(callback)

@@ -154,7 +154,6 @@ def test_export_bounds_the_attempts_and_refuses_names_read_as_entries(tmp_path: 
 
 def test_a_tree_that_never_ends_stops_at_the_tick_limit(exported: tuple[str, ScenePlan]) -> None:
     _, result = exported
-    assert result.scene is not None
     xml = _tree("<KeepRunningUntilFailure><AlwaysSuccess/></KeepRunningUntilFailure>")
     with pytest.raises(LimitReachedError, match="still runs after 1,000 ticks"):
         run_behaviour_tree(xml, KinematicWorld(result.scene), max_ticks=1000)

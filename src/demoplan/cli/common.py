@@ -302,6 +302,22 @@ ModelArgument = Annotated[
 SceneArgument = Annotated[
     Path, typer.Argument(metavar="SCENE", help="The scene at run time (demoplan/scene-1).")
 ]
+
+
+def planning_timeout(what: str) -> Any:
+    """The ``--timeout`` option of a planning command (``solve``, ``plan``,
+    ``run``, ``export bt``): ``what`` its seconds are for; the default it names
+    is read from :data:`~demoplan.cli.clock.DEFAULT_TIMEOUT`, never typed."""
+    from demoplan.cli.clock import DEFAULT_TIMEOUT
+
+    return typer.Option(
+        "--timeout",
+        min=0.0,
+        show_default=False,
+        help=f"{what} [default: {DEFAULT_TIMEOUT:g}] ('inf': no limit).",
+    )
+
+
 ClutterOption = Annotated[
     bool,
     typer.Option(help="Allow objects the model never saw (they get no goal; moved if in the way)."),

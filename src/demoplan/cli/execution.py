@@ -12,7 +12,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from demoplan.budget import PERCEPTION_TIMEOUT, PLANNING_SECONDS
+from demoplan.budget import PERCEPTION_TIMEOUT
 from demoplan.cli.common import (
     ClutterOption,
     CollisionsOption,
@@ -24,6 +24,7 @@ from demoplan.cli.common import (
     app,
     geometry_settings,
     plain_text,
+    planning_timeout,
     print_json,
     reported_errors,
     stderr,
@@ -142,9 +143,9 @@ def run(
     ] = PerceptionName.state,
     freespace: FreespaceOption = None,
     timeout: Annotated[
-        float,
-        typer.Option(min=0.0, help="Seconds for each (re)planning (the best plan found by then)."),
-    ] = PLANNING_SECONDS,
+        float | None,
+        planning_timeout("Seconds for each (re)planning (the best plan found by then)"),
+    ] = None,
     clutter: ClutterOption = False,
     collisions: CollisionsOption = CollisionSource.rule,
     video: Annotated[
@@ -165,6 +166,7 @@ def run(
 ) -> None:
     """Execute the task in simulation: plan, act, observe, replan on failure."""
     from demoplan.budget import Budget
+    from demoplan.cli.clock import DEFAULT_TIMEOUT
     from demoplan.commands.execution import run as run_task
     from demoplan.execution.executor import ExecutionSettings
     from demoplan.execution.faults import parse_faults
@@ -193,7 +195,7 @@ def run(
                 settings=ExecutionSettings(
                     max_replans=max_replans,
                     geometry=geometry_settings(freespace, collisions),
-                    budget=Budget(timeout=timeout),
+                    budget=Budget(timeout=DEFAULT_TIMEOUT if timeout is None else timeout),
                 ),
                 on_event=on_event,
                 clutter=clutter,

@@ -15,6 +15,7 @@ from demoplan.cli.common import (
     SceneArgument,
     app,
     geometry_settings,
+    planning_timeout,
     reported_errors,
     stderr,
 )
@@ -48,10 +49,7 @@ def export(
     ] = 3,  # demoplan.execution.behaviour_tree.ATTEMPTS
     freespace: FreespaceOption = None,
     timeout: Annotated[
-        float | None,
-        typer.Option(
-            min=0.0, help="Seconds for planning, shared by the candidate goals [default: 2]."
-        ),
+        float | None, planning_timeout("Seconds for planning, shared by the candidate goals")
     ] = None,
     plot: Annotated[
         Path | None, typer.Option(help="Also draw the tree into this image (PNG, SVG).")

@@ -21,6 +21,7 @@ from demoplan.cli.common import (
     SearchName,
     app,
     geometry_settings,
+    planning_timeout,
     print_json,
     reported_errors,
     stderr,
@@ -49,10 +50,9 @@ def solve(
     ] = None,
     timeout: Annotated[
         float | None,
-        typer.Option(
-            min=0.0,
-            help="Seconds for the whole command [default: 2]; the best plan found by then is "
-            "printed, with its proven lower bound if not proved shortest ('inf': no limit).",
+        planning_timeout(
+            "Seconds for the whole command; the best plan found by then is printed, with its "
+            "proven lower bound if not proved shortest"
         ),
     ] = None,
     optimal: Annotated[
@@ -98,10 +98,7 @@ def plan(
     ] = None,
     timeout: Annotated[
         float | None,
-        typer.Option(
-            min=0.0,
-            help="Seconds for the whole command, shared by the candidate goals [default: 2].",
-        ),
+        planning_timeout("Seconds for the whole command, shared by the candidate goals"),
     ] = None,
     optimal: Annotated[
         bool,

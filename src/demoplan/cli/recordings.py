@@ -164,7 +164,7 @@ def import_(
         ) as bar:
             task = bar.add_task(printable(recording.name), total=None)
 
-            def advance(done: int, total: int, key: str) -> None:
+            def advance(key: str, done: int, total: int) -> None:
                 description = printable(f"{recording.name} {key}")
                 bar.update(task, completed=done, total=total, description=description)
 

@@ -229,7 +229,6 @@ def plot_scene_plan(result: ScenePlan, path: Path) -> None:
     from demoplan.plotting.output import figure_errors
 
     chosen = result.chosen
-    assert result.model is not None and result.scene is not None and chosen.plan is not None
     label = result.model.demonstration_label(chosen.goal)
     title = f"Goal of {label}: {len(chosen.plan) // 2} moves"
     with figure_errors(path):
@@ -251,7 +250,6 @@ def plot_no_plan(failure: SceneNoPlanError | SceneLimitReachedError, path: Path)
 
 def print_scene_plan(result: ScenePlan) -> None:
     model = result.model
-    assert model is not None and result.chosen.plan is not None
     table = Table(title="Candidate goals", title_justify="left")
     for column in ("goal of demonstration", "actions", "moves", ""):
         table.add_column(column)
@@ -264,7 +262,7 @@ def print_scene_plan(result: ScenePlan) -> None:
             plain_text(names),
             "—" if length is None else str(length),
             "—" if length is None else str(length // 2),
-            "chosen" if candidate is result.chosen else plain_text(candidate.reason or ""),
+            "chosen" if result.is_chosen(candidate) else plain_text(candidate.reason or ""),
         )
     stdout.print(table)
     chosen = result.chosen
@@ -276,7 +274,6 @@ def print_scene_plan(result: ScenePlan) -> None:
             )
         )
     sys.stdout.flush()
-    assert chosen.plan is not None
     for action in chosen.plan.actions:
         sys.stdout.write(printable(f"{action}") + "\n")
     sys.stdout.flush()

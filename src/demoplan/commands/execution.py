@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from demoplan.budget import PERCEPTION_TIMEOUT
+from demoplan.budget import PERCEPTION_TIMEOUT, Clock
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
@@ -29,6 +29,7 @@ from demoplan.perception.blocks import Rejection
 from demoplan.perception.calibration import TableCalibration
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.stacking import TrackedBlock, scene_document
+from demoplan.scenes.plan import building_within
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
@@ -97,13 +98,13 @@ def run(
         refuse_overwriting_inputs(
             video, [Path(p) for p in (model, scene) if isinstance(p, str | Path)]
         )
+    settings = settings or ExecutionSettings()
     task, start = task_and_scene(model, scene)
     with model_named(model):
-        prepared = prepare(task, start, clutter=clutter)  # checked and completed once
+        with building_within(Clock(settings.budget)):  # checked and completed once
+            prepared = prepare(task, start, clutter=clutter, settings=settings.geometry)
         if world is not None:
-            return execute(
-                task, prepared, world, settings or ExecutionSettings(), on_event=on_event
-            )
+            return execute(task, prepared, world, settings, on_event=on_event)
         options: dict[str, Any] = {
             "sim": sim,
             "faults": faults,
@@ -111,14 +112,13 @@ def run(
             "perception": perception,
             "settings": settings,
             "on_event": on_event,
-            "clutter": clutter,
             "video": video,
         }
         if frames is None:
-            return run_task(task, prepared.scene, **options)
+            return run_task(task, prepared, **options)
         # The frames folder whole or not at all: built beside it, swapped in at the end.
         with staged_folder(frames, "demoplan run --frames") as building:
-            report = run_task(task, prepared.scene, frames=building, **options)
+            report = run_task(task, prepared, frames=building, **options)
         moved = tuple(str(frames / Path(f).name) for f in report.frames)  # where they now are
         return replace(report, frames=moved)
 

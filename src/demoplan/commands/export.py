@@ -24,7 +24,7 @@ from demoplan.execution.tree_checks import MAX_ATTEMPTS, check_tree
 from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs, write_atomic
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.plan import ScenePlan
+from demoplan.scenes.plan import ChosenPlan, ScenePlan
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 from demoplan.wording import plural
@@ -44,7 +44,6 @@ class ExportedTree:
     def summary(self) -> str:
         """``8 actions, goal of demonstration 2 (pyramid-2)``."""
         chosen = self.plan.chosen
-        assert chosen.plan is not None
         return f"{plural(len(chosen.plan), 'action')}, goal of {_goal_label(self.plan)}"
 
 
@@ -93,7 +92,8 @@ def _with_goal(result: ScenePlan, goal: int) -> ScenePlan:
     candidate = next(c for c in result.candidates if goal - 1 in c.problem.candidate.demonstrations)
     if candidate.plan is None:
         raise NoPlanError(f"goal of demonstration {goal}: {candidate.reason or 'no plan'}")
-    return replace(result, chosen=candidate)
+    chosen = ChosenPlan.of(candidate, candidate.plan, result.scene, result.model)
+    return replace(result, chosen=chosen)
 
 
 def run_tree(
@@ -127,12 +127,7 @@ def run_tree(
 
 
 def _goal_label(result: ScenePlan) -> str:
-    goal = result.chosen.goal
-    return (
-        f"demonstration {goal + 1}"
-        if result.model is None
-        else result.model.demonstration_label(goal)
-    )
+    return result.model.demonstration_label(result.chosen.goal)
 
 
 def export_behaviour_tree(

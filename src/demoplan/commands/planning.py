@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from demoplan.budget import Budget, default_budget
+from demoplan.budget import Budget, Clock, default_budget
 from demoplan.commands.inputs import model_named, task_and_scene
 from demoplan.errors import LimitReachedError, UsageError
 from demoplan.fileio import refuse_overwriting_inputs
@@ -14,7 +14,7 @@ from demoplan.planning.pddl import Roles, pddl_domain_path, save_pddl_problem
 from demoplan.planning.problem import optimality_line
 from demoplan.planning.xml import save_problem
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.plan import ScenePlan, goal_problem, plan_in_scene
+from demoplan.scenes.plan import ScenePlan, building_within, goal_problem, plan_in_scene
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene
@@ -40,13 +40,14 @@ def plan(
 
     Raises :class:`~demoplan.scenes.plan.SceneNoPlanError` (exit 3) or
     :class:`~demoplan.scenes.plan.SceneLimitReachedError` (exit 4), which carry
-    every candidate's outcome and the prepared scene."""
+    every candidate's outcome and the prepared scene. The scene is prepared
+    once, on the command's clock (a flood of objects stops at the budget)."""
+    clock = Clock(_budget(timeout, budget))
     task, raw_scene = task_and_scene(model, scene)
     with model_named(model):
-        prepared = prepare(task, raw_scene, clutter=clutter, settings=settings)
-        result = plan_in_scene(
-            task, prepared, budget=_budget(timeout, budget), settings=settings, clutter=clutter
-        )
+        with building_within(clock):
+            prepared = prepare(task, raw_scene, clutter=clutter, settings=settings)
+        result = plan_in_scene(task, prepared, clock=clock, settings=settings)
     if optimal and not result.optimal:
         raise LimitReachedError(
             f"{optimality_line(result.as_plan())}; no plan proved shortest (--optimal)"

@@ -5,11 +5,12 @@ robomimic) turned into demonstration files."""
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from demoplan.budget import ProgressCallback
 from demoplan.documents.demonstrations import (
     demonstration_to_dict,
     load_object_geometry,
@@ -120,11 +121,11 @@ def import_recording(
     *,
     name_prefix: str | None = None,
     objects_file: Path | None = None,
-    progress: Callable[[int, int, str], None] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Imported:
     """One demonstration file in folder ``output`` per demonstration of a
     robosuite or robomimic HDF5 ``recording`` that has a step — every file or
-    none; ``progress(done, total, key)`` hears each one read. A file is named
+    none; ``progress(key, done, total)`` hears each one read. A file is named
     after its demonstration, reduced to a safe file name
     (:func:`~demoplan.fileio.safe_file_name`: no separator, ``..`` or control
     character) and kept inside ``output``."""

@@ -45,7 +45,7 @@ from demoplan.planning.problem import Action
 from demoplan.planning.strips import Rules
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import bounding_radius, yaw_difference
-from demoplan.scenes.plan import CandidatePlan, ScenePlan
+from demoplan.scenes.plan import ChosenPlan, ScenePlan
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import yaw_of
 
@@ -187,18 +187,15 @@ def task_tree(
     """The chosen plan of ``scene_plan`` as a BehaviorTree.CPP v4 XML document
     (module docstring); ``plan_only``: the flat ``Sequence`` of its actions."""
     chosen = scene_plan.chosen
-    assert chosen.plan is not None
     problem = chosen.problem
     moves = _moves(problem, chosen.plan.actions)
     references = _references(scene_plan.model, chosen)
 
     root = Element("root", BTCPP_format="4", main_tree_to_execute="Task")
     task = SubElement(root, "BehaviorTree", ID="Task")
-    model = scene_plan.model
-    goal = f"demonstration {chosen.goal + 1}"
     label = (
         "goal of "
-        + (goal if model is None else model.demonstration_label(chosen.goal))
+        + scene_plan.model.demonstration_label(chosen.goal)
         + (f" ({chosen.binding.describe()})" if not chosen.binding.identity else "")
     )
     body = SubElement(task, "Sequence", name=label)
@@ -372,12 +369,10 @@ def _oriented(problem: SceneProblem, subgoal: str | None) -> bool:
 
 
 def _references(
-    model: TaskModel | None, chosen: CandidatePlan
+    model: TaskModel, chosen: ChosenPlan
 ) -> dict[str, tuple[str, tuple[float, float, float], str]]:
     """Subgoal → (reference, offset, offset frame): what its target is relative
     to, named as the scene names it (roles bound to instances)."""
-    if model is None:
-        return {}
     renaming = chosen.binding.renaming
     found = {}
     for subtask in chosen.problem.candidate.subtasks:

@@ -45,19 +45,19 @@ from demoplan.execution.report import (
 )
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
-from demoplan.planning.problem import Action
+from demoplan.planning.problem import Action, Plan
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
-from demoplan.scenes.binding import Binding, bind_model, role_bindings
+from demoplan.scenes.binding import Binding, bind_model
 from demoplan.scenes.geometry import GeometrySettings, yaw_difference
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import (
-    CandidatePlan,
+    ChosenPlan,
     building_within,
     plan_in_scene,
     solve_candidate,
 )
-from demoplan.scenes.prepared import PreparedScene, bound_tasks, goal_floors, prepare
+from demoplan.scenes.prepared import PreparedScene, goal_floors, prepare, prepare_observed
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.table import surroundings_of
@@ -115,19 +115,19 @@ def _distance(a: Pose, b: Pose) -> float:
 
 
 def first_plan(
-    model: TaskModel, scene: Scene | PreparedScene, settings: ExecutionSettings
-) -> CandidatePlan:
-    """The plan a run starts with: every candidate goal planned in ``scene``
-    (objects the model never saw allowed), the shortest chosen."""
+    model: TaskModel, prepared: PreparedScene, settings: ExecutionSettings
+) -> ChosenPlan:
+    """The plan a run starts with: every candidate goal planned in the
+    ``prepared`` scene (objects the model never saw allowed where its caller
+    prepared it so), the shortest chosen, within a clock of the settings' budget."""
     return plan_in_scene(
-        model, scene, budget=settings.budget, settings=settings.geometry, clutter=True
+        model, prepared, clock=Clock(settings.budget), settings=settings.geometry
     ).chosen
 
 
-def first_targets(chosen: CandidatePlan) -> tuple[tuple[str, Pose], ...]:
+def first_targets(chosen: ChosenPlan) -> tuple[tuple[str, Pose], ...]:
     """Where the put-downs of ``chosen`` put their objects (in plan order)."""
     problem = chosen.problem
-    assert chosen.plan is not None
     return tuple(
         (a.object, pose_of(problem.location(a.location)))
         for a in chosen.plan.actions
@@ -155,14 +155,14 @@ class _Watched:
 
 def execute(
     model: TaskModel,
-    scene: Scene | PreparedScene,
+    prepared: PreparedScene,
     world: World,
     settings: ExecutionSettings = ExecutionSettings(),
     on_event: Callable[[RunEvent], object] | None = None,
-    first: CandidatePlan | None = None,
+    first: ChosenPlan | None = None,
 ) -> RunReport:
-    """Carry out the task in ``world`` (which starts as ``scene``); see the module
-    docstring. ``first``: the plan for the world as it starts, when the caller
+    """Carry out the task in ``world`` (which starts as the ``prepared`` scene);
+    see the module docstring. ``first``: the plan for the world as it starts, when the caller
     has made it already (it is not made again)."""
     heard = on_event or (lambda event: None)
     watched = _Watched(world)
@@ -173,7 +173,7 @@ def execute(
         logger.info("run: %s at step %d: %s", event.kind, event.step, event.text)
         heard(replace(event, observation=watched.last))
 
-    run = _start_run(model, scene, watched, settings, emit, first)
+    run = _start_run(model, prepared, watched, settings, emit, first)
     while True:
         if not run.actions:
             report = run.check_the_end()
@@ -189,24 +189,23 @@ def execute(
 
 def _start_run(
     model: TaskModel,
-    scene: Scene | PreparedScene,
+    prepared: PreparedScene,
     world: World,
     settings: ExecutionSettings,
     emit: Callable[[RunEvent], None],
-    first: CandidatePlan | None,
+    first: ChosenPlan | None,
 ) -> _Run:
     """A run's start: the world observed, the first plan (``first``, else made
-    from the observed world where it differs from ``scene``), checked feasible
-    and announced."""
+    from the observed world where it differs from the prepared scene — then
+    prepared too, objects the model never saw allowed), checked feasible and
+    announced."""
     started = time.perf_counter()
-    prepared = prepare(model, scene, clutter=True)
     scene = prepared.scene
     observation = world.observe()
-    chosen = first or first_plan(
-        model,
-        observed_scene(observation, scene) if world_moved(observation, scene) else prepared,
-        settings,
-    )
+    if first is None and world_moved(observation, scene):
+        observed = observed_scene(observation, scene)
+        prepared = prepare(model, observed, clutter=True, settings=settings.geometry)
+    chosen = first or first_plan(model, prepared, settings)
     goal = chosen.goal
     problem: SceneProblem = chosen.problem
     # Replans name the places and grasps of the first plan as it did.
@@ -215,7 +214,6 @@ def _start_run(
         ((g.name, g.object, g.axis) for g in problem.grasps),
         settings.geometry.merge_distance,
     )
-    assert chosen.plan is not None
     actions: list[Action] = list(chosen.plan.actions)
     _check_feasible(world, actions, problem, scene.source)
     run = _Run(
@@ -438,12 +436,7 @@ class _Run:
         observation = world.observe()
         current = observed_scene(observation, scene)  # complete: the prepared scene's geometry
         try:
-            tasks = bound_tasks(
-                self.roles,
-                current,
-                role_bindings(self.roles, current),
-                2 * settings.geometry.merge_distance,
-            )
+            tasks = prepare_observed(self.roles, current, settings.geometry).bindings
             index = next(
                 i for i, c in enumerate(tasks[0].candidates) if self.goal in c.demonstrations
             )
@@ -455,11 +448,11 @@ class _Run:
             range(len(tasks)), key=lambda b: (tasks[b].binding != self.binding, floors[b])
         )
         clock = Clock(settings.budget)
-        best: tuple[SceneProblem, CandidatePlan, Binding, TaskModel] | None = None
+        best: tuple[SceneProblem, Plan, Binding, TaskModel] | None = None
         why = ""
         for number in order:
             binding, floor = tasks[number].binding, floors[number]
-            if best is not None and floor >= len(best[1].plan or ()):
+            if best is not None and floor >= len(best[1]):
                 continue
             left = clock.remaining()
             if best is not None and left is not None and left <= 0:
@@ -468,7 +461,7 @@ class _Run:
             reached = frozenset(self.reached) if binding == self.binding else frozenset()
             try:
                 candidate = tasks[number].candidates[index]
-                with building_within(settings.budget):
+                with building_within(clock):
                     built = build_problem(
                         current,
                         candidate,
@@ -486,26 +479,25 @@ class _Run:
             if refused:
                 why = why or refused
                 continue
-            outcome = solve_candidate(built, settings.budget)
+            outcome = solve_candidate(built, clock)
             if outcome.plan is None:
                 why = why or f"no plan from the observed world: {outcome.reason}"
                 continue
-            if best is None or len(outcome.plan) < len(best[1].plan or ()):
-                best = (built, outcome, binding, model)
+            if best is None or len(outcome.plan) < len(best[1]):
+                best = (built, outcome.plan, binding, model)
         if best is None:
             return why
-        built, outcome, binding, model = best
-        assert outcome.plan is not None
+        built, plan, binding, model = best
         roles = ""
         if binding != self.binding:
             self.reached = set()
             roles = f" (roles given anew: {binding.describe()})"
         self.binding, self.model = binding, model
         try:
-            _check_feasible(world, list(outcome.plan.actions), built, scene.source)
+            _check_feasible(world, list(plan.actions), built, scene.source)
         except InputError as exc:  # an object moved beyond the robot's reach
             return f"the new plan {exc.message}"
-        self.problem, self.actions = built, list(outcome.plan.actions)
+        self.problem, self.actions = built, list(plan.actions)
         self.reached.update(_reached_at_start(self.problem))
         self.expected = dict(observation.poses)
         self.emit(

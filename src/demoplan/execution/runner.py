@@ -22,8 +22,8 @@ from demoplan.execution.video_output import VideoOutput
 from demoplan.execution.world import World
 from demoplan.fileio import output_target
 from demoplan.model import TaskModel
-from demoplan.scenes.plan import CandidatePlan
-from demoplan.scenes.prepared import PreparedScene, prepare
+from demoplan.scenes.plan import ChosenPlan
+from demoplan.scenes.prepared import PreparedScene
 from demoplan.scenes.scene import Scene
 
 if TYPE_CHECKING:
@@ -95,7 +95,7 @@ def start_world(
     seed: int,
     settings: ExecutionSettings,
     perception: str = "state",
-) -> tuple[World, CandidatePlan | None]:
+) -> tuple[World, ChosenPlan | None]:
     """The world of a run (:func:`make_world`), and for the arm the first plan
     too: the arm stands where it reaches that plan's targets, and the executor
     starts from it (``execute(first=…)``) instead of planning it again."""
@@ -110,7 +110,7 @@ def start_world(
 
 def run_task(
     model: TaskModel,
-    scene: Scene,
+    prepared: PreparedScene,
     *,
     sim: str = "kinematic",
     faults: Faults = Faults(),
@@ -119,19 +119,18 @@ def run_task(
     perception: str = "state",
     settings: ExecutionSettings | None = None,
     on_event: Callable[[RunEvent], object] | None = None,
-    clutter: bool = False,
     video: Path | None = None,
 ) -> RunReport:
-    """Run the task in a simulated world; ``on_event`` hears the run's progress
-    (plans, actions, failures, replans: a live display is the caller's);
+    """Run the task in a simulated world set up as the ``prepared`` scene
+    (objects the model never saw allowed where it was prepared so: as in
+    ``plan``, they get no goal and are moved only when in the way); ``on_event``
+    hears the run's progress (plans, actions, failures, replans: a live display
+    is the caller's);
     ``frames``: a folder for a frame per action and a storyboard;
     ``video``: an MP4 of the run from the fixed overview camera (``sim``
     ``mujoco``; written whole or not at all);
     ``settings``: tolerances, the replans allowed and the budget of each
-    (re)planning (default: :class:`~demoplan.execution.executor.ExecutionSettings`'s); ``clutter``:
-    objects the model never saw are allowed (as in ``plan``: they get no goal
-    and are moved only when in the way), else an input error."""
-    prepared = prepare(model, scene, clutter=clutter)  # once per run
+    (re)planning (default: :class:`~demoplan.execution.executor.ExecutionSettings`'s)."""
     scene = prepared.scene
     if video is not None and sim not in ("mujoco", "arm"):
         raise UsageError("--video records the physics simulation: it needs --sim mujoco or arm")

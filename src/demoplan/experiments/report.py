@@ -150,7 +150,7 @@ def _plan_section(learning: LearningRun, run: PlanningRun) -> str:
         names = ", ".join(model.demonstration_number(k) for k in c.problem.candidate.demonstrations)
         length = "—" if c.length is None else str(c.length)
         moves = "—" if c.length is None else str(c.length // 2)
-        note = "chosen" if c is result.chosen else (c.reason or "")
+        note = "chosen" if result.is_chosen(c) else (c.reason or "")
         lines.append(f"| demonstration {names} | {length} | {moves} | {note} |")
     lines.append("")
     if run.checks:

@@ -34,6 +34,7 @@ from demoplan.learning.settings import PAPER_SETTINGS, LearningSettings
 from demoplan.model import TaskModel
 from demoplan.scenes.landmarks import complete_scene
 from demoplan.scenes.plan import ScenePlan, plan_in_scene
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, load_scene
 from demoplan.wording import plural
 
@@ -167,7 +168,7 @@ def plan_experiment(
     ``against_paper``: compare with §V.B's plans (Experiment 2)."""
     started = time.perf_counter()
     scene = load_scene(scene_path)
-    result = plan_in_scene(model, scene)
+    result = plan_in_scene(model, prepare(model, scene))
     checks = plan_checks(title, result) if against_paper else []
     figure = _plot_plan(model, scene, result, out / f"{stem}-plan.png")
     return PlanningRun(
@@ -192,7 +193,8 @@ def execute_experiment(
     started = time.perf_counter()
     filmed = importlib.util.find_spec("imageio_ffmpeg") is not None
     video = frames.parent / f"{frames.name}.mp4" if filmed else None
-    report = run_task(model, scene, sim="arm", frames=frames, video=video)
+    prepared = prepare(model, scene)
+    report = run_task(model, prepared, sim="arm", frames=frames, video=video)
     worst = max(report.pose_errors.values(), default=float("inf"))
     done = Check(
         title,
@@ -205,7 +207,7 @@ def execute_experiment(
     checks = [done]
     seen = None
     if vision:
-        seen = run_task(model, scene, sim="arm", perception="camera")
+        seen = run_task(model, prepared, sim="arm", perception="camera")
         checks.append(
             Check(
                 title,
@@ -399,7 +401,6 @@ def _plot_plan(model: TaskModel, scene: Any, result: ScenePlan, path: Path) -> s
     from demoplan.plotting.figures import save_scene_plan
 
     chosen = result.chosen
-    assert chosen.plan is not None
     title = (
         f"Plan for the goal of {model.demonstration_label(chosen.goal)}: "
         f"{len(chosen.plan) // 2} moves"

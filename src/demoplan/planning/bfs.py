@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections import deque
 
-from demoplan.planning.budget import Budget, Clock, SearchOutcome
+from demoplan.planning.budget import Clock, SearchOutcome
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.problem import Action, Problem
 
@@ -18,12 +18,13 @@ _BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
 
 
 def breadth_first_search(
-    problem: Problem, budget: Budget = Budget(), compiled: Compiled | None = None
+    problem: Problem, clock: Clock | None = None, compiled: Compiled | None = None
 ) -> SearchOutcome:
     """The paper's breadth-first search over primitive GRASP / PUT_DOWN actions
-    (``compiled``: the problem already compiled)."""
+    within ``clock``'s limits (None: only the state limit; ``compiled``: the
+    problem already compiled)."""
     c = compiled or compile_problem(problem)
-    clock = Clock(budget)
+    clock = clock or Clock()
     n_locations = len(c.locations)
     revisits = 0  # objects with two subgoals at one place
     for obj, subgoals in enumerate(c.subgoals_of):

@@ -7,8 +7,12 @@ bitmask, so an operator's collision test is one ``&``. Shared by every search.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 from demoplan.planning.problem import Action, Problem
+
+if TYPE_CHECKING:
+    from demoplan.budget import Clock
 
 __all__ = ["Compiled", "compile_problem"]
 
@@ -164,8 +168,22 @@ class Compiled:
         )
 
 
-def compile_problem(problem: Problem) -> Compiled:
-    """Index a problem; the masks are what :mod:`demoplan.planning.search` tests."""
+_CHECK_EVERY = 4096
+"""Facts compiled between two readings of the clock."""
+
+
+def compile_problem(problem: Problem, clock: Clock | None = None) -> Compiled:
+    """Index a problem; the masks are what :mod:`demoplan.planning.search` tests.
+    ``clock``: read as it goes (LimitReachedError, exit 4, once the time is
+    up: a thousand objects take a large part of a second)."""
+
+    def check() -> None:
+        if clock is not None:
+            clock.check(
+                f"compiling the problem ({len(objects)} objects, {len(locations)} locations), "
+                "before any search"
+            )
+
     objects, locations = problem.objects, problem.locations
     loc_index = {name: i for i, name in enumerate(locations)}
     obj_index = {name: i for i, name in enumerate(objects)}
@@ -177,11 +195,15 @@ def compile_problem(problem: Problem) -> Compiled:
     pairs_named: dict[str, list[int]] = {}
     for index, (_, g) in enumerate(pairs):
         pairs_named.setdefault(g, []).append(index)
-    grasps_of = tuple(
-        tuple(i for i, o in enumerate(grasp_object) if o == oi) for oi in range(len(objects))
-    )
+    pairs_of: list[list[int]] = [[] for _ in objects]
+    for index, owner in enumerate(grasp_object):
+        pairs_of[owner].append(index)
+    grasps_of = tuple(tuple(indices) for indices in pairs_of)
+    check()
     block = [[0] * len(pairs) for _ in locations]
-    for la, lb, g in problem.collisions:
+    for count, (la, lb, g) in enumerate(problem.collisions):
+        if not count % _CHECK_EVERY:
+            check()
         if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
             for pair_index in pairs_named.get(g, ()):
                 block[loc_index[la]][pair_index] |= 1 << loc_index[lb]
@@ -212,6 +234,7 @@ def compile_problem(problem: Problem) -> Compiled:
     subgoals_of: list[list[int]] = [[] for _ in objects]
     for i, s in enumerate(problem.subgoals):
         subgoals_of[obj_index[s.object]].append(i)
+    check()
     compiled = Compiled(
         problem=problem,
         objects=objects,

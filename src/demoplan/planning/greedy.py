@@ -29,7 +29,7 @@ from __future__ import annotations
 import heapq
 
 from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
-from demoplan.planning.budget import MAX_STATES, Clock
+from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 
 __all__ = ["greedy_moves", "guidance", "helpful_moves", "shorten", "valid_moves"]
@@ -47,10 +47,10 @@ def greedy_moves(
     *,
     weight: float | None = None,
     upper: int | None = None,
-    max_states: int = MAX_STATES,
 ) -> list[Move] | None:
-    """A plan as moves, shortened; None where the search runs out of time, of
-    helpful moves or of states (about ``max_states`` kept: the memory limit).
+    """A plan as moves, shortened; None where the search reaches a limit of
+    ``clock`` (time, expansions, states kept: read within an expansion too)
+    or runs out of helpful moves.
 
     ``weight`` None: greedy best-first search on the guidance. A number w:
     weighted A* on g + w × guidance, for a shorter plan once one is known —
@@ -66,7 +66,7 @@ def greedy_moves(
     parent: dict[State, tuple[State, Move] | None] = {start: None}
     best_g = {start: 0}
     heap = [(factor * guidance(c, *start), 0, 0, start)]
-    counter = 0
+    counter = expanded = 0
     limit = upper if upper is not None else 1 << 60
     while heap:
         _, g, _, state = heapq.heappop(heap)
@@ -80,9 +80,13 @@ def greedy_moves(
                 moves.append(move)
                 link = parent[state]
             return shorten(c, moves[::-1])
-        if clock.expired():
+        if clock.stop(expanded, len(best_g)):
             return None
-        for move, child in helpful_moves(c, *state):
+        expanded += 1
+        children = helpful_moves(c, *state, clock)
+        if clock.expired():  # the moves may be cut short: no plan from them
+            return None
+        for move, child in children:
             if best_g.get(child, 1 << 60) <= g + 1:
                 continue
             if upper is not None and g + 1 + bounds.needs(*child) >= limit:
@@ -90,8 +94,8 @@ def greedy_moves(
             best_g[child] = g + 1
             parent[child] = (state, move)
             counter += 1
-            if not counter & 63 and (clock.expired() or len(best_g) >= max_states):
-                return None  # checked within an expansion: one can take long
+            if not counter & 7 and clock.stop(expanded, len(best_g)):
+                return None  # read within an expansion: a child's guidance is O(objects)
             priority = scale * (g + 1) + factor * guidance(c, *child)
             heapq.heappush(heap, (priority, g + 1, counter, child))
     return None
@@ -153,9 +157,11 @@ def _targets(c: Compiled, positions: tuple[int, ...], reached: int) -> dict[int,
 
 
 def helpful_moves(
-    c: Compiled, positions: tuple[int, ...], reached: int
+    c: Compiled, positions: tuple[int, ...], reached: int, clock: Clock | None = None
 ) -> list[tuple[Move, State]]:
-    """The helpful moves from a state (see the module docstring)."""
+    """The helpful moves from a state (see the module docstring); ``clock``:
+    read per mover, the moves found so far returned once its time is up (a
+    thousand movers take a large part of a second; the caller then stops)."""
     occupied = 0
     for location in positions:
         occupied |= 1 << location
@@ -190,6 +196,8 @@ def helpful_moves(
     productive: list[tuple[Move, State]] = []
     parking: list[tuple[Move, State]] = []
     for obj in sorted(movers):
+        if clock is not None and clock.expired():
+            break
         source = positions[obj]
         if occupied & c.above[source]:
             continue

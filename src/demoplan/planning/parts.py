@@ -28,7 +28,7 @@ import dataclasses
 from collections.abc import Callable, Sequence
 
 from demoplan.errors import LimitReachedError, NoPlanError
-from demoplan.planning.budget import Budget, Clock
+from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 from demoplan.planning.problem import Action, Plan, Problem
 
@@ -41,8 +41,8 @@ __all__ = [
     "solve_by_parts",
 ]
 
-SolvePart = Callable[[Problem, Budget], Plan]
-"""How a part is solved: a plan within the budget, or NoPlanError (none
+SolvePart = Callable[[Problem, Clock], Plan]
+"""How a part is solved: a plan within the clock, or NoPlanError (none
 exists) / LimitReachedError (none found in time) — the planner's own
 :func:`~demoplan.planning.search.solve_part`, passed in by the caller."""
 
@@ -61,9 +61,10 @@ class PartsResult:
     bound: int
 
 
-def object_groups(problem: Problem, c: Compiled) -> list[list[str]]:
+def object_groups(problem: Problem, c: Compiled, clock: Clock | None = None) -> list[list[str]]:
     """The objects in groups that never meet (see the module docstring), in
-    the problem's order; one group when the problem stacks (supports)."""
+    the problem's order; one group when the problem stacks (supports), or
+    when ``clock``'s time is up before the pairs are weighed (nothing split)."""
     if problem.supports:
         return [list(problem.objects)]
     index = {name: k for k, name in enumerate(c.locations)}
@@ -97,6 +98,8 @@ def object_groups(problem: Problem, c: Compiled) -> list[list[str]]:
         for place in places:
             masks[obj] |= touching.get(place, 0)
     for a in range(len(c.objects)):
+        if clock is not None and not a % 64 and clock.expired():
+            return [list(problem.objects)]
         for b in range(a + 1, len(c.objects)):
             if masks[a] & own[b] or masks[b] & own[a]:
                 parent[find(a)] = find(b)
@@ -122,12 +125,13 @@ def _movers(c: Compiled, group: Sequence[str]) -> int:
 def solve_by_parts(
     problem: Problem,
     groups: Sequence[Sequence[str]],
-    budget: Budget,
+    clock: Clock,
     c: Compiled,
     solve_part: SolvePart,
 ) -> PartsResult:
     """A plan group by group and the bound of the groups alone (module
-    docstring), within ``budget``, each part solved by ``solve_part``: each
+    docstring), within ``clock`` (its limits of expansions and states hold in
+    each part's searches), each part solved by ``solve_part``: each
     group's two searches share the time left in proportion to the objects it
     must move (a group with none gets no time of its own: its plan is empty),
     so the groups solved quickly leave their time to the others."""
@@ -136,7 +140,6 @@ def solve_by_parts(
     from demoplan.planning.strips import InvalidPlanError, validate
 
     weights = [_movers(c, group) for group in groups]
-    clock = Clock(budget)
     bound = 0
     bound_proved = True
     state = dict(problem.initial)
@@ -150,11 +153,10 @@ def solve_by_parts(
     for k, group in enumerate(groups):
         if clock.expired():  # out of time: no plan and no bound from the parts
             return PartsResult(None, 0)
-        left = clock.remaining()
-        share = None if left is None else left * weights[k] / (2 * max(1, sum(weights[k:])))
+        share = weights[k] / (2 * max(1, sum(weights[k:])))  # of the time left, per search
         alone = _alone(problem, group)
         try:
-            relaxed = solve_part(alone, Budget(timeout=share))
+            relaxed = solve_part(alone, clock.part(share))
         except _NO_PLAN_FOR_PART:  # no plan for a part, or out of time: no bound from it
             bound_proved = False
         else:
@@ -163,7 +165,7 @@ def solve_by_parts(
             continue
         later = [o for g in groups[k + 1 :] for o in g]
         try:
-            part = solve_part(_in_turn(problem, group, state, later, owners), Budget(timeout=share))
+            part = solve_part(_in_turn(problem, group, state, later, owners), clock.part(share))
         except _NO_PLAN_FOR_PART:  # the part has no plan with the others standing still
             planned = False
             continue

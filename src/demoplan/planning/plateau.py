@@ -23,7 +23,7 @@ nothing, and the planner goes on with its other phases.
 from __future__ import annotations
 
 from demoplan.planning.bounds import LowerBounds, Move
-from demoplan.planning.budget import MAX_STATES, Clock
+from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
 from demoplan.planning.greedy import State, guidance, helpful_moves
 
@@ -32,20 +32,25 @@ __all__ = ["plateau_moves"]
 _Children = list[tuple[int, Move, State]]  # (guidance, move, state), best first
 
 
-def plateau_moves(
-    c: Compiled, bounds: LowerBounds, clock: Clock, limit: int, max_states: int = MAX_STATES
-) -> list[Move] | None:
+def plateau_moves(c: Compiled, bounds: LowerBounds, clock: Clock, limit: int) -> list[Move] | None:
     """Moves of a plan of at most ``limit`` moves found by the dive (module
-    docstring), or None: none found before the clock ran out, ``max_states``
-    states were entered, or the helpful moves were exhausted."""
+    docstring), or None: none found before a limit of ``clock`` (time,
+    expansions, states kept), or the helpful moves were exhausted."""
     start: State = (c.start, c.start_reached)
     if c.is_goal(*start):
         return []
     fewest = {start: 0}  # state -> the fewest moves it was entered with
+    expanded = 0
 
     def children(state: State, g: int) -> _Children:
-        found = []
-        for move, child in helpful_moves(c, *state):
+        """The children worth entering, best first (an expansion); none once a
+        limit is reached — read per child, whose guidance is O(objects)."""
+        nonlocal expanded
+        expanded += 1
+        found: _Children = []
+        for move, child in helpful_moves(c, *state, clock):
+            if clock.stop(expanded, len(fewest)):
+                return []
             if fewest.get(child, limit + 1) <= g + 1 or g + 1 + bounds.needs(*child) > limit:
                 continue
             found.append((guidance(c, *child), move, child))
@@ -54,7 +59,6 @@ def plateau_moves(
 
     path: list[Move] = []
     frames = [(children(start, 0), 0)]  # per depth: the children and the next to try
-    entered = 0
     while frames:
         candidates, next_index = frames[-1]
         if next_index == len(candidates):
@@ -68,8 +72,7 @@ def plateau_moves(
         if fewest.get(child, limit + 1) <= g:
             continue  # entered since with as few moves
         fewest[child] = g
-        entered += 1
-        if clock.expired() or len(fewest) >= max_states:
+        if clock.stop(expanded, len(fewest)):
             return None
         if g + bounds.estimate(*child) > limit:
             continue

@@ -9,10 +9,13 @@ Two searches, chosen by name from :data:`SEARCHES`:
   (:class:`~demoplan.planning.astar.AStar`) with the admissible bounds of
   :mod:`demoplan.planning.bounds`.
 
-Each phase is a function ``(compiled problem, bounds, clock, progress) ->
+Each phase is a function ``(compiled problem, bounds, clock, findings) ->
 plan | None``: a plan ends the search (it is proved shortest, or the phase
 is the last); None hands on to the next phase, with what the phase found —
-a plan not yet proved shortest, a larger lower bound — in :class:`Progress`.
+a plan not yet proved shortest, a larger lower bound — in :class:`Findings`.
+Every phase runs on its part of the one clock the search was given
+(:meth:`~demoplan.budget.Clock.part`: a share of the time, every other limit
+kept).
 
 :func:`solve` turns the result into a :class:`~demoplan.planning.problem.Plan`
 or raises NoPlanError (exit 3) / LimitReachedError (exit 4);
@@ -33,7 +36,7 @@ from demoplan.graphs import find_cycle
 from demoplan.planning.astar import AStar, astar_search
 from demoplan.planning.bfs import breadth_first_search
 from demoplan.planning.bounds import DEAD_END, LowerBounds, Move
-from demoplan.planning.budget import MAX_STATES, Budget, Clock, SearchOutcome
+from demoplan.planning.budget import Budget, Clock, SearchOutcome
 from demoplan.planning.compiled import Compiled, compile_problem
 from demoplan.planning.greedy import greedy_moves
 from demoplan.planning.parts import (
@@ -51,8 +54,8 @@ __all__ = [
     "PHASES",
     "SEARCHES",
     "Budget",
+    "Findings",
     "Phase",
-    "Progress",
     "SearchOutcome",
     "astar_search",
     "breadth_first_search",
@@ -60,13 +63,26 @@ __all__ = [
     "plan_by_parts",
     "solve",
     "solve_part",
+    "solve_within",
 ]
 
 
-def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> list[str]:
+def explain_unsolvable(
+    problem: Problem, compiled: Compiled | None = None, clock: Clock | None = None
+) -> list[str]:
     """Reasons, where they can be shown without search, why no plan exists
-    (``compiled``: the problem already compiled)."""
-    c = compiled or compile_problem(problem)
+    (``compiled``: the problem already compiled; ``clock``: read as it goes,
+    LimitReachedError once the time is up — the pairs of goal places grow
+    with the square of the objects)."""
+    c = compiled or compile_problem(problem, clock)
+
+    def check() -> None:
+        if clock is not None:
+            clock.check(
+                f"looking for reasons there is no plan ({len(c.objects)} objects), "
+                "before any search"
+            )
+
     reasons = []
     finals: dict[int, int] = {}
     for obj, goal in enumerate(c.goal):
@@ -79,6 +95,7 @@ def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> li
     for obj, name in enumerate(c.objects):
         if c.must_move(obj) and not c.grasps_of[obj]:
             reasons.append(f"{name} must move but allows no grasp")
+    check()
     frozen = c.frozen(c.start)
     stuck = [c.objects[o] for o, loc in enumerate(c.start) if frozen >> loc & 1]
     must_move = [
@@ -89,6 +106,7 @@ def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> li
             f"{', '.join(must_move)} must move but can never be grasped: "
             f"{', '.join(stuck)} block every grasp of one another where they stand"
         )
+    check()
     unmovable = c.never_placed()
     must_place = [
         c.objects[o]
@@ -103,6 +121,8 @@ def explain_unsolvable(problem: Problem, compiled: Compiled | None = None) -> li
             "the last of them put down cannot be"
         )
     for obj, goal in enumerate(c.goal):
+        if not obj % 64:
+            check()
         for other in range(obj + 1, len(c.goal)):
             place = c.goal[other]
             if goal >= 0 and place >= 0 and c.exclusive[goal] >> place & 1:
@@ -138,51 +158,62 @@ def solve(
     is no plan; LimitReachedError (exit 4) which limit stopped a search with
     no plan.
     """
-    return _solve(problem, search, budget, optimal, _MIN_GREEDY_SECONDS)
+    return solve_within(problem, search, Clock(budget), optimal=optimal)
 
 
-def solve_part(problem: Problem, budget: Budget) -> Plan:
+def solve_within(
+    problem: Problem, search: str, clock: Clock, *, optimal: bool = False
+) -> Plan:
+    """:func:`solve` on a clock already running (a command's, or its share of
+    one): the compilation and the checks for reasons without search count
+    against it too."""
+    return _solve(problem, search, clock, optimal, _MIN_GREEDY_SECONDS)
+
+
+def solve_part(problem: Problem, clock: Clock) -> Plan:
     """:func:`solve` for a part of a bigger problem (:mod:`~demoplan.planning.parts`):
-    the budget is kept to the letter — the first plan's search gets no more
+    the clock is kept to the letter — the first plan's search gets no more
     time than is left, since a part without a plan only means the parts give
     no plan."""
-    return _solve(problem, "astar", budget, False, 0.0)
+    return _solve(problem, "astar", clock, False, 0.0)
 
 
 def plan_by_parts(
-    problem: Problem, groups: Sequence[Sequence[str]], budget: Budget, c: Compiled
+    problem: Problem, groups: Sequence[Sequence[str]], clock: Clock, c: Compiled
 ) -> PartsResult:
     """:func:`~demoplan.planning.parts.solve_by_parts` with each part solved
     by this planner (:func:`solve_part`)."""
-    return solve_by_parts(problem, groups, budget, c, solve_part)
+    return solve_by_parts(problem, groups, clock, c, solve_part)
 
 
 @dataclass(frozen=True, slots=True)
 class _Request:
     """What the caller of :func:`solve` asked for, besides the problem."""
 
-    budget: Budget
+    clock: Clock
     optimal: bool  # only a plan proved shortest will do
-    first_plan_seconds: float  # the first plan's search gets at least this long
+    first_plan: Clock  # the clock, with at least the first plan's minimum from the start
 
 
 def _solve(
-    problem: Problem, search: str, budget: Budget, optimal: bool, first_plan_seconds: float
+    problem: Problem, search: str, clock: Clock, optimal: bool, first_plan_seconds: float
 ) -> Plan:
-    """:func:`solve`, where the first plan's search gets at least ``first_plan_seconds``."""
+    """:func:`solve`, where the work up to the first plan (compiling, the reasons
+    without search, the first plan's search) gets at least ``first_plan_seconds``."""
     if search not in SEARCHES:
         raise ValueError(f"unknown search {search!r}; one of {sorted(SEARCHES)}")
-    c = compile_problem(problem)  # once, for every phase
-    reasons = explain_unsolvable(problem, c)
+    first_plan = clock.at_least(first_plan_seconds)
+    c = compile_problem(problem, first_plan)  # once, for every phase
+    reasons = explain_unsolvable(problem, c, first_plan)
     if reasons:
         raise NoPlanError("no plan: " + "; ".join(reasons))
     started = time.perf_counter()
-    return SEARCHES[search](problem, c, _Request(budget, optimal, first_plan_seconds), started)
+    return SEARCHES[search](problem, c, _Request(clock, optimal, first_plan), started)
 
 
 def _breadth_first(problem: Problem, c: Compiled, request: _Request, started: float) -> Plan:
     """``--search bfs``: the paper's exact search, over primitive actions."""
-    outcome = breadth_first_search(problem, request.budget, c)
+    outcome = breadth_first_search(problem, request.clock, c)
     seconds = time.perf_counter() - started
     if outcome.actions is not None:
         return _plan(outcome.actions, outcome, seconds, "bfs")
@@ -190,7 +221,7 @@ def _breadth_first(problem: Problem, c: Compiled, request: _Request, started: fl
 
 
 @dataclass(slots=True)
-class Progress:
+class Findings:
     """What the phases so far have established, handed from one to the next."""
 
     problem: Problem
@@ -199,10 +230,6 @@ class Progress:
     bound: int  # a proven lower bound, in actions: no plan is shorter
     plan: tuple[Action, ...] | None = None  # the best plan found so far
     found_by: str = ""  # the phase that found it
-
-    def max_states(self) -> int:
-        """The states a phase may keep: the budget's memory limit."""
-        return self.request.budget.max_states or MAX_STATES
 
     def elapsed(self) -> float:
         """Seconds since the search started."""
@@ -224,104 +251,101 @@ class Progress:
         return Plan(_actions(c, moves), seconds=self.elapsed(), search=search, bound=self.bound)
 
 
-Phase = Callable[[Compiled, LowerBounds, Clock, Progress], Plan | None]
+Phase = Callable[[Compiled, LowerBounds, Clock, "Findings"], Plan | None]
 """One phase of the anytime search: given the compiled problem, its bounds,
-a clock for the phase's share of the time and what the phases before it
-found, a plan that ends the search, or None (what it found is in the
-:class:`Progress`)."""
+its part of the search's clock and what the phases before it found, a plan
+that ends the search, or None (what it found is in the :class:`Findings`)."""
 
 
 def _actions(c: Compiled, moves: list[Move]) -> tuple[Action, ...]:
     return tuple(action for move in moves for action in c.move_actions(*move))
 
 
-def tight_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+def tight_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
     """A plan as long as the feedback bound, from an order of the moves of its
     rigid shape — shortest at once — or the proof that there is none, which
     raises the bound by a move (:func:`~demoplan.planning.tight.tight_plan`)."""
     tight = tight_plan(bounds, c.start, c.start_reached, clock)
     if tight.moves is not None:
-        return progress.shortest(tight.moves, c, "tight")
+        return findings.shortest(tight.moves, c, "tight")
     if tight.refuted:
-        progress.bound += 2
+        findings.bound += 2
     return None
 
 
-def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
     """A first plan fast, by greedy best-first search on the guidance
     (:func:`~demoplan.planning.greedy.greedy_moves`): it may take all the time
-    left, and never less than the request's ``first_plan_seconds`` (an easy
-    problem must not go without a plan for want of a few milliseconds)."""
-    minimum = progress.request.first_plan_seconds
-    if minimum > (clock.remaining() or 0.0):
-        clock = Clock(Budget(timeout=minimum))
-    moves = greedy_moves(c, bounds, clock, max_states=progress.max_states())
+    left, and never less than what the request's ``first_plan`` clock leaves (an
+    easy problem must not go without a plan for want of a few milliseconds)."""
+    least = findings.request.first_plan.remaining()
+    if least is not None and not math.isinf(least):  # no deadline: the phase's share
+        clock = clock.at_least(least)
+    moves = greedy_moves(c, bounds, clock)
     if moves is not None:
-        progress.offer(_actions(c, moves), "greedy")
+        findings.offer(_actions(c, moves), "greedy")
     return None
 
 
-def dive_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+def dive_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
     """A plan as long as the root bound, so shortest, by a depth-first dive
     (:func:`~demoplan.planning.plateau.plateau_moves`; finding none proves nothing)."""
-    found = plateau_moves(c, bounds, clock, progress.bound // 2, progress.max_states())
-    return None if found is None else progress.shortest(found, c, "plateau")
+    found = plateau_moves(c, bounds, clock, findings.bound // 2)
+    return None if found is None else findings.shortest(found, c, "plateau")
 
 
-def parts_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan | None:
+def parts_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
     """Where the objects fall into two or more groups that never meet and need
     moves, the groups solved one by one (:mod:`~demoplan.planning.parts`): a
     plan, and a lower bound that adds up."""
-    problem = progress.problem
-    groups = object_groups(problem, c)
+    problem = findings.problem
+    groups = object_groups(problem, c, clock)
     if sum(needs_moves(c, g) for g in groups) <= 1:
         return None
-    parts = plan_by_parts(problem, groups, clock.budget, c)
-    by_parts = parts_plan(parts, progress.elapsed())
+    parts = plan_by_parts(problem, groups, clock, c)
+    by_parts = parts_plan(parts, findings.elapsed())
     if by_parts is not None and by_parts.optimal:
         return by_parts
-    progress.bound = max(progress.bound, parts.bound)
+    findings.bound = max(findings.bound, parts.bound)
     if parts.actions is not None:
-        progress.offer(parts.actions, "parts")
+        findings.offer(parts.actions, "parts")
     return None
 
 
 def improve_phase(
-    c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress, *, weight: float
+    c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings, *, weight: float
 ) -> Plan | None:
     """A shorter plan by weighted A* on the greedy guidance with ``weight``
     (LAMA's way of improving its first plan), where there is a plan not yet
     proved shortest."""
-    if progress.plan is None or len(progress.plan) <= progress.bound:
+    if findings.plan is None or len(findings.plan) <= findings.bound:
         return None
-    upper = len(progress.plan) // 2
-    better = greedy_moves(
-        c, bounds, clock, weight=weight, upper=upper, max_states=progress.max_states()
-    )
+    upper = len(findings.plan) // 2
+    better = greedy_moves(c, bounds, clock, weight=weight, upper=upper)
     if better is not None:
-        progress.offer(_actions(c, better), "greedy")
+        findings.offer(_actions(c, better), "greedy")
     return None
 
 
-def astar_phase(c: Compiled, bounds: LowerBounds, clock: Clock, progress: Progress) -> Plan:
+def astar_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan:
     """A* over moves (:class:`~demoplan.planning.astar.AStar`) with the rest of
     the budget, dropping every state whose bound reaches the best plan's
     length: a plan it finds is shortest, and so is the best plan when it runs
     out of states. Otherwise the best plan unproved (not with ``optimal``), or
     LimitReachedError / NoPlanError."""
-    incumbent = progress.plan
+    incumbent = findings.plan
     if incumbent is None:  # no plan yet: whether there is one at all (exit 3 or 4)
         clock = clock.at_least(_MIN_PROOF_SECONDS)
     outcome = AStar(c, bounds, clock).run(None if incumbent is None else len(incumbent) // 2)
-    seconds = progress.elapsed()
-    name = "astar" if incumbent is None else f"{progress.found_by}+astar"
+    seconds = findings.elapsed()
+    name = "astar" if incumbent is None else f"{findings.found_by}+astar"
     if outcome.actions is not None:
         return _plan(outcome.actions, outcome, seconds, name)
     if incumbent is not None:
         if outcome.exhausted:  # nothing shorter exists
             return _plan(incumbent, outcome, seconds, name)
-        if not progress.request.optimal:
-            bound = max(outcome.bound, progress.bound)
+        if not findings.request.optimal:
+            bound = max(outcome.bound, findings.bound)
             return _plan(incumbent, outcome, seconds, name, optimal=False, bound=bound)
     _raise_without_plan(outcome, seconds, incumbent)
 
@@ -361,16 +385,16 @@ them."""
 def _anytime(problem: Problem, c: Compiled, request: _Request, started: float) -> Plan:
     """``--search astar``: the :data:`PHASES` in turn, until one gives the plan."""
     bounds = LowerBounds(c)
-    clock = Clock(request.budget)
+    clock = request.clock
     root = 2 * bounds.estimate(c.start, c.start_reached)
     if root >= 2 * DEAD_END:  # A* proves it: no state to expand
         outcome = AStar(c, bounds, clock).run()
         _raise_without_plan(outcome, time.perf_counter() - started, None)
-    progress = Progress(problem, request, started, root)
+    findings = Findings(problem, request, started, root)
     for phase in PHASES:
-        plan = phase.run(c, bounds, _phase_clock(clock, phase.share), progress)
+        plan = phase.run(c, bounds, _phase_clock(clock, phase.share), findings)
         if plan is None:  # what the phase found may prove the best plan shortest
-            plan = progress.proved()
+            plan = findings.proved()
         if plan is not None:
             return plan
     raise AssertionError("the last phase (A*) always answers")
@@ -409,9 +433,11 @@ _UNBOUNDED_SECONDS = 10.0
 
 
 _MIN_GREEDY_SECONDS = 0.2
-"""The first plan's search gets at least this long, even where the budget is
-spent before it starts (a slow start-up on a loaded machine): an easy problem
-must not go without a plan for want of a few milliseconds."""
+"""The work up to the first plan (compiling the problem, the reasons without
+search, the first plan's search) gets at least this long from the start of
+:func:`solve`, even where the budget is spent before it starts (a slow
+start-up on a loaded machine): an easy problem must not go without a plan for
+want of a few milliseconds."""
 
 
 _MIN_PROOF_SECONDS = 0.2
@@ -421,18 +447,12 @@ spent before it starts: a goal proved unreachable in a few states is
 reported so (exit 3), not as out of time."""
 
 
-def _share(clock: Clock, share: float) -> float:
-    """Seconds for a phase: ``share`` of the time left; with no deadline (none,
-    or ``--timeout inf``) a share of :data:`_UNBOUNDED_SECONDS`, so that an
-    early phase cannot take forever before the exact search."""
-    left = clock.remaining()
-    return share * (_UNBOUNDED_SECONDS if left is None or math.isinf(left) else left)
-
-
 def _phase_clock(clock: Clock, share: float | None) -> Clock:
-    """The clock of a phase with ``share`` of the time left on ``clock`` (None:
-    ``clock`` itself, with every limit of the budget)."""
-    return clock if share is None else Clock(Budget(timeout=_share(clock, share)))
+    """The clock of a phase: ``share`` of the time left on ``clock``, every other
+    limit kept (None: ``clock`` itself); with no deadline (none, or ``--timeout
+    inf``) a share of :data:`_UNBOUNDED_SECONDS`, so that an early phase cannot
+    take forever before the exact search."""
+    return clock if share is None else clock.part(share, _UNBOUNDED_SECONDS)
 
 
 def _raise_without_plan(

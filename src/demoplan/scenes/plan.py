@@ -3,16 +3,17 @@
 
 Each demonstrated goal (deduplicated) becomes a planning problem
 (:func:`~demoplan.scenes.problems.build_problem`) solved by the anytime
-planner (:func:`~demoplan.planning.search.solve`); the shortest plan wins,
-ties going to the earliest demonstration — Experiment 2 picks demonstration
-2's 4 moves over demonstration 1's 5. A time budget is shared: each
-candidate gets an equal part of what is left when its turn comes.
+planner (:func:`~demoplan.planning.search.solve_within`); the shortest plan
+wins, ties going to the earliest demonstration — Experiment 2 picks
+demonstration 2's 4 moves over demonstration 1's 5. The scene comes
+prepared (:func:`~demoplan.scenes.prepared.prepare`, by the command, inside
+its clock); the command's clock is shared: each candidate gets an equal part
+of what is left when its turn comes (:meth:`~demoplan.budget.Clock.part`).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -22,10 +23,10 @@ from demoplan.budget import Clock, time_budget
 from demoplan.errors import LimitReachedError, NoPlanError, UsageError
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Plan
-from demoplan.planning.search import Budget, solve
+from demoplan.planning.search import solve_within
 from demoplan.scenes.binding import Binding
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.prepared import PreparedScene, prepare
+from demoplan.scenes.prepared import PreparedScene
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import Surroundings, surroundings_of
@@ -33,6 +34,7 @@ from demoplan.wording import plural
 
 __all__ = [
     "CandidatePlan",
+    "ChosenPlan",
     "SceneLimitReachedError",
     "SceneNoPlanError",
     "ScenePlan",
@@ -104,15 +106,57 @@ class CandidatePlan:
 
 
 @dataclass(frozen=True, slots=True)
+class ChosenPlan:
+    """The candidate goal chosen and its plan, in the scene planned in."""
+
+    problem: SceneProblem
+    plan: Plan
+    scene: Scene
+    """The scene planned in, prepared (complete: sizes, landmarks): what figures draw."""
+    model: TaskModel
+    """The task model planned, its roles bound as :attr:`binding` says (its
+    demonstrations name the candidates)."""
+    binding: Binding = field(default_factory=lambda: Binding(()))
+    bindings_weighed: int = 1
+
+    @classmethod
+    def of(
+        cls, candidate: CandidatePlan, plan: Plan, scene: Scene, model: TaskModel
+    ) -> ChosenPlan:
+        """``candidate``, whose plan is ``plan``, chosen in ``scene`` for ``model``."""
+        return cls(
+            candidate.problem, plan, scene, model, candidate.binding, candidate.bindings_weighed
+        )
+
+    @property
+    def goal(self) -> int:
+        return self.problem.candidate.goal
+
+    @property
+    def length(self) -> int:
+        return len(self.plan)
+
+
+@dataclass(frozen=True, slots=True)
 class ScenePlan:
     """Every candidate's outcome and the chosen one."""
 
     candidates: tuple[CandidatePlan, ...]
-    chosen: CandidatePlan
-    scene: Scene | None = None
-    """The scene planned in, prepared (complete: sizes, landmarks): what figures draw."""
-    model: TaskModel | None = None
-    """The task model planned (its demonstrations name the candidates)."""
+    chosen: ChosenPlan
+
+    @property
+    def scene(self) -> Scene:
+        """The scene planned in, prepared: what figures draw."""
+        return self.chosen.scene
+
+    @property
+    def model(self) -> TaskModel:
+        """The task model planned (bound as the chosen plan's roles are)."""
+        return self.chosen.model
+
+    def is_chosen(self, candidate: CandidatePlan) -> bool:
+        """Whether ``candidate`` is the one chosen."""
+        return candidate.problem is self.chosen.problem
 
     @property
     def bound(self) -> int:
@@ -122,18 +166,15 @@ class ScenePlan:
     @property
     def optimal(self) -> bool:
         """The chosen plan is proved shortest over every candidate goal."""
-        assert self.chosen.plan is not None
         return self.bound >= len(self.chosen.plan)
 
     def as_plan(self) -> Plan:
         """The chosen plan, with the optimality and bound of the whole choice."""
-        assert self.chosen.plan is not None
         return replace(self.chosen.plan, optimal=self.optimal, bound=self.bound)
 
     def to_json(self) -> dict[str, Any]:
         """``plan --json`` (docs/formats.md "Plan output")."""
         chosen = self.chosen
-        assert chosen.plan is not None
         return {
             "actions": [[a.kind, a.object, a.location, a.grasp] for a in chosen.plan.actions],
             "length": len(chosen.plan),
@@ -187,37 +228,31 @@ reported as such (exit 3), not as out of time."""
 
 
 @contextmanager
-def building_within(budget: Budget) -> Iterator[None]:
+def building_within(clock: Clock) -> Iterator[None]:
     """Scene preparation and problem building inside the block stop at
-    ``budget``'s time (given at least :data:`BUILDING_SECONDS`) with
+    ``clock``'s deadline (given at least :data:`BUILDING_SECONDS`) with
     LimitReachedError (exit 4), naming the option that raises the budget and
     the work the time ran out in: a flood of objects or free-space spots
     makes the geometry (collision facts: grasps × locations²) take minutes."""
-    clock = Clock(budget)
     if clock.deadline is None or math.isinf(clock.deadline):
         yield
         return
-    deadline = max(clock.deadline, time.monotonic() + BUILDING_SECONDS)
-    limit = "the time budget" if budget.timeout is None else f"--timeout {budget.timeout:g} s"
+    timeout = clock.budget.timeout
+    limit = "the time budget" if timeout is None else f"--timeout {timeout:g} s"
     message = (
         f"no plan within {limit}: the time ran out building the planning problems, "
         "{where}, before any search; give it more time (--timeout), or the scene fewer objects "
         "or free-space spots"
     )
-    with time_budget(Budget(deadline=deadline), message):
+    with time_budget(clock.at_least(BUILDING_SECONDS), message):
         yield
 
 
 def scene_problems(
-    model: TaskModel,
-    scene: Scene | PreparedScene,
-    settings: GeometrySettings = GeometrySettings(),
-    *,
-    clutter: bool = False,
+    model: TaskModel, prepared: PreparedScene, settings: GeometrySettings = GeometrySettings()
 ) -> list[SceneProblem]:
-    """The planning problem of every candidate goal (deduplicated) in ``scene``
-    (prepared here unless it is already: :func:`~demoplan.scenes.prepared.prepare`)."""
-    prepared = prepare(model, scene, clutter=clutter)
+    """The planning problem of every candidate goal (deduplicated) in the
+    ``prepared`` scene."""
     around = surroundings_of(model, prepared.scene)
     return [
         build_problem(prepared.scene, c, settings, surroundings=around) for c in prepared.candidates
@@ -226,31 +261,32 @@ def scene_problems(
 
 def goal_problem(
     model: TaskModel,
-    scene: Scene | PreparedScene,
+    prepared: PreparedScene,
     number: int,
     settings: GeometrySettings = GeometrySettings(),
 ) -> SceneProblem:
     """The planning problem of the goal of demonstration ``number`` (numbered
-    from 1, as people read them) in ``scene``; a usage error for a number the
+    from 1, as people read them) in the ``prepared`` scene; a usage error for a number the
     model does not have."""
     if not 1 <= number <= len(model.sequences):
         raise UsageError(
             f"--goal {number}: the model has {plural(len(model.sequences), 'demonstration')} "
             f"(1..{len(model.sequences)})"
         )
-    problems = scene_problems(model, scene, settings)
+    problems = scene_problems(model, prepared, settings)
     return next(p for p in problems if number - 1 in p.candidate.demonstrations)
 
 
 def solve_candidate(
-    problem: SceneProblem, budget: Budget = Budget(), search: str = "astar"
+    problem: SceneProblem, clock: Clock | None = None, search: str = "astar"
 ) -> CandidatePlan:
-    """Plan one candidate; its failure (no plan, budget reached) becomes the reason."""
+    """Plan one candidate within ``clock`` (None: no limit but the states kept);
+    its failure (no plan, a limit reached) becomes the reason."""
     if problem.obstacles:
         return CandidatePlan(problem, None, "; ".join(problem.obstacles))
     shortage = None if problem.room is None else problem.room.shortage()
     try:
-        return CandidatePlan(problem, solve(problem.problem, search, budget))
+        return CandidatePlan(problem, solve_within(problem.problem, search, clock or Clock()))
     except NoPlanError as exc:
         reason = str(exc) if shortage is None else f"{shortage} ({exc})"
         return CandidatePlan(problem, None, reason)
@@ -261,15 +297,15 @@ def solve_candidate(
 
 def plan_in_scene(
     model: TaskModel,
-    scene: Scene | PreparedScene,
+    prepared: PreparedScene,
     *,
-    budget: Budget = Budget(),
+    clock: Clock | None = None,
     settings: GeometrySettings = GeometrySettings(),
     search: str = "astar",
-    clutter: bool = False,
 ) -> ScenePlan:
-    """Plan every candidate goal and choose the shortest; ``budget``'s time is
-    shared, each candidate getting an equal part of what is left.
+    """Plan every candidate goal in the ``prepared`` scene and choose the
+    shortest; ``clock``'s time (None: no limit but the states kept) is shared,
+    each candidate getting an equal part of what is left.
 
     Where the model has roles of identical objects, each goal is planned under
     the bindings of roles to instances in order of their lower bound, until
@@ -277,23 +313,17 @@ def plan_in_scene(
 
     Raises :class:`NoPlanError` (exit 3) when no candidate has a plan, with each
     candidate's reason, and :class:`LimitReachedError` (exit 4) when none was
-    found but some candidate's search was cut short. ``clutter``: objects the
-    model never saw may stand in the scene (moved out of the way if need be).
+    found but some candidate's search was cut short.
     """
-    clock = Clock(budget)
-    with building_within(budget):
-        prepared = prepare(model, scene, clutter=clutter, settings=settings)
+    clock = clock or Clock()
+    with building_within(clock):
         around = surroundings_of(model, prepared.scene)
     goals = len(prepared.candidates)
     outcomes = []
-    for index in range(goals):
-        left = clock.remaining()
-        share = budget
-        if left is not None:  # an equal part of what is left (the timeout stays as named)
-            deadline = time.monotonic() + left / (goals - index)
-            share = replace(budget, deadline=deadline)
+    for index in range(goals):  # an equal part of what is left (every limit as named)
+        share = clock.part(1 / (goals - index))
         outcomes.append(plan_goal(prepared, index, share, settings, search, around))
-    solved = [c for c in outcomes if c.plan is not None]
+    solved = [(c, c.plan) for c in outcomes if c.plan is not None]
     if not solved:
         reasons = "; ".join(
             f"goal of {model.demonstration_label(c.goal)}: {c.reason}" for c in outcomes
@@ -311,15 +341,15 @@ def plan_in_scene(
             prepared.scene,
             prepared.model,
         )
-    chosen = min(solved, key=lambda c: (c.length, c.goal))
-    bound = next(task.model for task in prepared.bindings if task.binding == chosen.binding)
-    return ScenePlan(tuple(outcomes), chosen, prepared.scene, bound)
+    candidate, plan = min(solved, key=lambda pair: (len(pair[1]), pair[0].goal))
+    bound = next(task.model for task in prepared.bindings if task.binding == candidate.binding)
+    return ScenePlan(tuple(outcomes), ChosenPlan.of(candidate, plan, prepared.scene, bound))
 
 
 def plan_goal(
     prepared: PreparedScene,
     index: int,
-    budget: Budget,
+    clock: Clock,
     settings: GeometrySettings,
     search: str = "astar",
     surroundings: Surroundings | None = None,
@@ -333,7 +363,6 @@ def plan_goal(
     is left; building a binding's problem may take the goal's whole time. When
     the time is spent, the bindings not planned yet keep their bounds: the plan
     found is returned, proved shortest only where those bounds say so."""
-    clock = Clock(budget)
     around = surroundings or surroundings_of(prepared.model, prepared.scene)
     floors = prepared.floors(index)
     order = sorted(range(len(prepared.bindings)), key=floors.__getitem__)
@@ -357,11 +386,10 @@ def plan_goal(
                     limit_reached=True,
                 )
             break
-        share = budget
-        if left is not None:  # the most promising binding half, the others equal parts
-            parts = 2 if position == 0 and len(order) > 1 else len(order) - position
-            share = replace(budget, deadline=time.monotonic() + left / parts)
-        with building_within(budget):
+        # the most promising binding half, the others equal parts
+        parts = 2 if position == 0 and len(order) > 1 else len(order) - position
+        share = clock.part(1 / parts)
+        with building_within(clock):
             problem = build_problem(
                 prepared.scene, task.candidates[index], settings, surroundings=around
             )

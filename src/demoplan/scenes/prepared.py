@@ -8,8 +8,10 @@ refuses an object standing inside a landmark's body
 instances (every way there is: :mod:`demoplan.scenes.binding`) and resolves
 each binding's candidate goals (paper §IV.C: each demonstrated goal, with
 target poses in this scene). ``plan``, ``run``, the figures and the library take the
-:class:`PreparedScene`; the executor's replans resolve the goals again in
-the observed world, which is complete already.
+:class:`PreparedScene` — the planner, the problem builder and the executor
+never prepare a scene themselves. Each replan prepares the observed world
+once (:func:`prepare_observed`: complete already and checked when the run
+started, so only its roles are bound and its goals resolved).
 """
 
 from __future__ import annotations
@@ -26,7 +28,14 @@ from demoplan.scenes.scene import Scene
 from demoplan.scenes.targets import Candidate, check_scene_objects, resolve_goals
 from demoplan.scenes.validity import check_landmark_overlaps, hollow_landmarks
 
-__all__ = ["BoundTask", "PreparedScene", "bound_tasks", "goal_floors", "prepare"]
+__all__ = [
+    "BoundTask",
+    "PreparedScene",
+    "bound_tasks",
+    "goal_floors",
+    "prepare",
+    "prepare_observed",
+]
 
 
 class BoundTask:
@@ -156,15 +165,13 @@ def _targets_fixed(tasks: Sequence[BoundTask], index: int) -> bool:
 
 def prepare(
     model: TaskModel,
-    scene: Scene | PreparedScene,
+    scene: Scene,
     *,
     clutter: bool = False,
     settings: GeometrySettings = GeometrySettings(),
 ) -> PreparedScene:
-    """``scene`` made ready for ``model`` (see the module docstring); a scene
-    prepared already is returned as it is."""
-    if isinstance(scene, PreparedScene):
-        return scene
+    """``scene`` made ready for ``model`` (see the module docstring): once per
+    command."""
     check_scene_objects(model, scene, clutter=clutter)
     completed = complete_scene(scene, model)
     check_landmark_overlaps(completed, hollow_landmarks(model, settings), settings)
@@ -174,3 +181,17 @@ def prepare(
     floors = goal_floors(tasks, 0, completed) if tasks[0].candidates else []
     order = sorted(range(len(tasks)), key=lambda b: floors[b] if floors else 0)
     return PreparedScene(completed, clutter, tuple(tasks[b] for b in order))
+
+
+def prepare_observed(
+    model: TaskModel, scene: Scene, settings: GeometrySettings = GeometrySettings()
+) -> PreparedScene:
+    """The world observed during a run made ready for a replan: ``scene`` is
+    complete (the prepared scene's geometry, the observed poses) and objects the
+    model never saw are allowed (planned around as clutter); its roles are bound
+    to its instances in :func:`~demoplan.scenes.binding.role_bindings`' order
+    (the replan orders them itself), nothing resolved yet."""
+    bindings = role_bindings(model, scene)
+    return PreparedScene(
+        scene, True, bound_tasks(model, scene, bindings, 2 * settings.merge_distance)
+    )

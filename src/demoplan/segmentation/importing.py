@@ -10,10 +10,11 @@ recording's landmarks, geometry and provenance.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from demoplan.budget import ProgressCallback
 from demoplan.documents.demonstrations import check_measured_demonstration
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry
@@ -28,8 +29,6 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["ImportedDemonstration", "import_recording", "import_recording_details"]
 
-Progress = Callable[[int, int, str], None]
-"""``progress(done, total, key)``, called after each demonstration."""
 
 GENERIC_STEMS = frozenset({"demo", "demos", "low_dim", "image", "depth", "data"})
 
@@ -60,7 +59,7 @@ def recording_name(path: Path, env: str | None) -> str:
 def import_recording_details(
     path: str | Path,
     settings: SegmentationSettings | None = None,
-    progress: Progress | None = None,
+    progress: ProgressCallback | None = None,
     *,
     name_prefix: str | None = None,
     skip_empty: bool = False,
@@ -103,7 +102,7 @@ def import_recording_details(
                 raise
             out.append(ImportedDemonstration(key, None, recorded, found, str(exc)))
             if progress is not None:
-                progress(done, len(keys), key)
+                progress(key, done, len(keys))
             continue
         # A demonstration file's objects, when given, name every object it moves:
         # where the model has no primitive shape for one (PickPlace's meshes), no
@@ -127,7 +126,7 @@ def import_recording_details(
         check_measured_demonstration(demo, f"{path}: {key}")
         out.append(ImportedDemonstration(key, demo, recorded, found))
         if progress is not None:
-            progress(done, len(keys), key)
+            progress(key, done, len(keys))
     if geometry is not None:
         from demoplan.documents.demonstrations import check_geometry_names
 
@@ -138,7 +137,7 @@ def import_recording_details(
 def import_recording(
     path: str | Path,
     settings: SegmentationSettings | None = None,
-    progress: Progress | None = None,
+    progress: ProgressCallback | None = None,
 ) -> list[Demonstration]:
     """The demonstrations of a robosuite / robomimic recording, segmented.
 
@@ -146,7 +145,7 @@ def import_recording(
     ``SawyerStack-demo_1``) and carries the recording's landmarks, the
     geometry of its objects and landmarks, and its provenance (source file,
     demonstration key, samples, environment, robosuite version).
-    ``progress(done, total, key)`` is called after each demonstration.
+    ``progress(key, done, total)`` is called after each demonstration.
     Raises :class:`~demoplan.errors.InputError` for an unreadable recording
     or a demonstration in which no step is found.
     """

@@ -136,7 +136,6 @@ def plan_json(result: ScenePlan) -> dict[str, Any]:
     """The chosen plan in the CLI's words, each action's pose of its object
     after it, and every candidate goal with its length or why it has none."""
     model, chosen, scene = result.model, result.chosen, result.scene
-    assert model is not None and chosen.plan is not None and scene is not None
     current = {obj.name: pose_json(obj.pose) for obj in scene.objects}
     moves = []
     for action in chosen.plan.actions:
@@ -158,7 +157,7 @@ def plan_json(result: ScenePlan) -> dict[str, Any]:
     return {
         "plan": [str(action) for action in chosen.plan.actions],
         "moves": moves,
-        "candidates": [_candidate(model, c, c is chosen) for c in result.candidates],
+        "candidates": [_candidate(model, c, result.is_chosen(c)) for c in result.candidates],
         "chosen": chosen.goal,
         "optimal": result.optimal,
         "no_plan": None,
