@@ -207,20 +207,7 @@ def compile_problem(problem: Problem, clock: Clock | None = None) -> Compiled:
         if la != lb:  # "no *other* object at lb": the grasped object itself stands at la
             for pair_index in pairs_named.get(g, ()):
                 block[loc_index[la]][pair_index] |= 1 << loc_index[lb]
-    restricted: dict[int, int] = {}
-    for loc, obj in problem.accepts:
-        restricted[loc_index[loc]] = restricted.get(loc_index[loc], 0) | 1 << obj_index[obj]
-    everything_objects = (1 << len(objects)) - 1
-    accepts = [restricted.get(li, everything_objects) for li in range(len(locations))]
-    below = [0] * len(locations)
-    above = [0] * len(locations)
-    for upper, lower in problem.supports:
-        below[loc_index[upper]] |= 1 << loc_index[lower]
-        above[loc_index[lower]] |= 1 << loc_index[upper]
-    exclusive = [0] * len(locations)
-    for a, b in problem.exclusions:
-        exclusive[loc_index[a]] |= 1 << loc_index[b]
-        exclusive[loc_index[b]] |= 1 << loc_index[a]
+    accepts, below, above, exclusive = _location_masks(problem, loc_index, obj_index)
     start = [0] * len(objects)
     for obj, loc in problem.initial:
         start[obj_index[obj]] = loc_index[loc]
@@ -258,6 +245,28 @@ def compile_problem(problem: Problem, clock: Clock | None = None) -> Compiled:
         plain=_plain_locations(problem, loc_index),
     )
     return replace(compiled, start_reached=_reached_at_start(compiled, sub_index))
+
+
+def _location_masks(
+    problem: Problem, loc_index: dict[str, int], obj_index: dict[str, int]
+) -> tuple[list[int], list[int], list[int], list[int]]:
+    """Per location: the objects it takes, the locations it stands on, those
+    standing on it, and those it excludes (masks)."""
+    restricted: dict[int, int] = {}
+    for loc, obj in problem.accepts:
+        restricted[loc_index[loc]] = restricted.get(loc_index[loc], 0) | 1 << obj_index[obj]
+    everything_objects = (1 << len(problem.objects)) - 1
+    accepts = [restricted.get(li, everything_objects) for li in range(len(problem.locations))]
+    below = [0] * len(problem.locations)
+    above = [0] * len(problem.locations)
+    for upper, lower in problem.supports:
+        below[loc_index[upper]] |= 1 << loc_index[lower]
+        above[loc_index[lower]] |= 1 << loc_index[upper]
+    exclusive = [0] * len(problem.locations)
+    for a, b in problem.exclusions:
+        exclusive[loc_index[a]] |= 1 << loc_index[b]
+        exclusive[loc_index[b]] |= 1 << loc_index[a]
+    return accepts, below, above, exclusive
 
 
 def _plain_locations(problem: Problem, loc_index: dict[str, int]) -> int:
