@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from demoplan.commands.execution import run
 from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine, require_ray
 from demoplan.evaluation.plan import (
@@ -31,8 +32,9 @@ from demoplan.evaluation.runs import RUN_SETTINGS, RunRow, RunSpec, execute_run
 from demoplan.execution.faults import parse_faults
 from demoplan.fileio import display_path, dump_json, write_atomic
 from demoplan.learning.modelfile import load_model
+from demoplan.model import TaskModel
 
-__all__ = ["Evaluation", "engine_for", "evaluate"]
+__all__ = ["Evaluation", "engine_for", "evaluate", "run_one"]
 
 SIMS = ("kinematic", "mujoco", "arm")
 STORYBOARDS = 5
@@ -65,6 +67,12 @@ def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -
         return SerialEngine()
     require_ray()
     return RayEngine(workers=workers, address=address, max_retries=max_retries)
+
+
+def run_one(model: TaskModel, spec: RunSpec) -> RunRow:
+    """One evaluated run, made as ``demoplan run`` makes it (:func:`execute_run`
+    with :func:`demoplan.commands.execution.run`)."""
+    return execute_run(run, model, spec)
 
 
 def _check(settings: EvaluationSettings) -> None:
@@ -112,7 +120,7 @@ def evaluate(
     with no row. ``on_start(done, planned)`` hears the counts before the first
     run, ``on_row(row, done, planned)`` each row as it comes. A Ctrl-C
     (KeyboardInterrupt) stops the runs and, before it goes on, writes every
-    finished row. ``runner``: what makes a run (default: :func:`execute_run`
+    finished row. ``runner``: what makes a run (default: :func:`run_one`
     with the settings' model)."""
     if resume:
         settings = read_settings(out)
@@ -134,7 +142,7 @@ def evaluate(
             on_start(len(specs) - len(todo), len(specs))
         journal = Journal(out)
         try:
-            for row in engine.rows(todo, runner or partial(execute_run, model)):
+            for row in engine.rows(todo, runner or partial(run_one, model)):
                 if row.run_id in rows:  # never a duplicate row
                     continue
                 rows[row.run_id] = row
@@ -159,8 +167,6 @@ def make_storyboards(
     its scene file, seed, faults and sim) with ``--frames out/worst/RUN_ID``, here,
     one after the other; a storyboard already there is kept. By run id: the
     storyboard's path relative to ``out``, or ``"no storyboard: WHY"``."""
-    from demoplan.commands.execution import run
-
     if importlib.util.find_spec("matplotlib") is None:
         return {row.run_id: "no storyboard: matplotlib is not installed" for row in worst}
     boards: dict[str, str] = {}

@@ -1,8 +1,8 @@
 """One evaluated run: a scene, a seed, the faults and the world in → one row out.
 
 A run is carried out exactly as ``demoplan run MODEL SCENE --sim SIM --faults
-FAULTS --seed SEED --timeout inf [--clutter]`` carries it out
-(:func:`demoplan.commands.execution.run`): each (re)planning without a time
+FAULTS --seed SEED --timeout inf [--clutter]`` carries it out (the command
+layer's ``run`` is passed in: :data:`RunFunction`): each (re)planning without a time
 limit (:data:`RUN_SETTINGS`), so that a row does not depend on how busy the
 machine or the worker was — with ``run``'s default 2 s, a replan on a loaded
 worker could end with another plan than the same replan in a serial run. Its
@@ -15,17 +15,23 @@ from __future__ import annotations
 
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 from demoplan.budget import Budget
 from demoplan.errors import InputError
-from demoplan.execution.executor import ExecutionSettings, RunEvent
+from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport
 from demoplan.execution.faults import parse_faults
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import scene_from_document
 
-__all__ = ["TIMING_FIELDS", "RunRow", "RunSpec", "error_row", "execute_run"]
+__all__ = ["TIMING_FIELDS", "RunFunction", "RunRow", "RunSpec", "error_row", "execute_run"]
+
+RunFunction = Callable[..., RunReport]
+"""What carries a run out: :func:`demoplan.commands.execution.run`'s signature
+(model, scene; ``sim``, ``faults``, ``seed``, ``clutter``, ``on_event``,
+``settings`` by keyword)."""
 
 TIMING_FIELDS = ("planning_s", "execution_s", "attempts")
 """Fields of a row that differ between two runs of one spec (the clock, the engine)."""
@@ -136,10 +142,9 @@ RUN_SETTINGS = ExecutionSettings(budget=Budget(timeout=None))
 (``run --timeout inf``; the search's limit of states kept still holds)."""
 
 
-def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
-    """Carry ``spec`` out as ``demoplan run`` would; any exception becomes an ``error`` row."""
-    from demoplan.commands.execution import run
-
+def execute_run(run: RunFunction, model: TaskModel, spec: RunSpec) -> RunRow:
+    """Carry ``spec`` out with ``run`` as ``demoplan run`` would; any exception
+    becomes an ``error`` row."""
     started = time.perf_counter()
     clock = _Clock()
     try:
