@@ -30,6 +30,8 @@ from demoplan.evaluation.results import (
 )
 from demoplan.evaluation.runs import RUN_SETTINGS, RunRow, RunSpec, execute_run
 from demoplan.execution.faults import parse_faults
+from demoplan.execution.robosuite_run import is_robosuite
+from demoplan.execution.robosuite_scene import check_installed, environment_name
 from demoplan.fileio import display_path, dump_json, write_atomic
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
@@ -75,10 +77,32 @@ def run_one(model: TaskModel, spec: RunSpec) -> RunRow:
     return execute_run(run, model, spec)
 
 
+def _check_robosuite(settings: EvaluationSettings) -> None:
+    """``--sim robosuite:ENV``: a known environment, and none of the options that
+    make or change scenes (robosuite's ``reset(seed)`` makes each run's)."""
+    environment_name(settings.sim)  # a usage error names the environments
+    given = [
+        ("SCENE files", bool(settings.scenes)),
+        ("--random-scenes", settings.random_scenes > 0),
+        ("--clutter", settings.clutter > 0),
+        ("--faults", bool(settings.faults)),
+    ]
+    if refused := [name for name, on in given if on]:
+        raise UsageError(
+            f"{', '.join(refused)}: not with --sim {settings.sim} (each run's scene is "
+            "robosuite's environment after reset(seed), which injects nothing); --seeds N expected"
+        )
+
+
 def _check(settings: EvaluationSettings) -> None:
+    if is_robosuite(settings.sim):
+        _check_robosuite(settings)
+        return
     parse_faults(settings.faults)  # a usage error names what is wrong
     if settings.sim not in SIMS:
-        raise UsageError(f"--sim {settings.sim}: one of {', '.join(SIMS)} expected")
+        raise UsageError(
+            f"--sim {settings.sim}: one of {', '.join(SIMS)} or robosuite:ENV expected"
+        )
     if not settings.scenes and settings.random_scenes <= 0:
         raise UsageError("no scenes: SCENE files or --random-scenes N expected")
     if settings.seeds <= 0 or settings.clutter < 0 or settings.random_scenes < 0:
@@ -121,7 +145,9 @@ def evaluate(
     run, ``on_row(row, done, planned)`` each row as it comes. A Ctrl-C
     (KeyboardInterrupt) stops the runs and, before it goes on, writes every
     finished row. ``runner``: what makes a run (default: :func:`run_one`
-    with the settings' model)."""
+    with the settings' model). With ``--sim robosuite:ENV`` (robosuite
+    installed) run k is robosuite's environment after ``reset(k)``, judged by
+    robosuite too (the rows' ``env_success``)."""
     if resume:
         settings = read_settings(out)
     elif settings is None:
@@ -130,6 +156,8 @@ def evaluate(
         _check_new_folder(out)
     assert settings is not None
     _check(settings)
+    if is_robosuite(settings.sim):
+        check_installed(settings.sim)  # before anything is written
     model = load_model(settings.model)
     engine = engine or SerialEngine()
     with engine.session():  # a cluster that does not answer: nothing written
@@ -164,9 +192,10 @@ def make_storyboards(
     out: Path, settings: EvaluationSettings, worst: Sequence[RunRow]
 ) -> dict[str, str]:
     """Each of ``worst``'s storyboards: its run made again (a run is a function of
-    its scene file, seed, faults and sim) with ``--frames out/worst/RUN_ID``, here,
-    one after the other; a storyboard already there is kept. By run id: the
-    storyboard's path relative to ``out``, or ``"no storyboard: WHY"``."""
+    its scene file, seed, faults and sim; in robosuite of its seed) with
+    ``--frames out/worst/RUN_ID``, here, one after the other; a storyboard
+    already there is kept. By run id: the storyboard's path relative to
+    ``out``, or ``"no storyboard: WHY"``."""
     if importlib.util.find_spec("matplotlib") is None:
         return {row.run_id: "no storyboard: matplotlib is not installed" for row in worst}
     boards: dict[str, str] = {}
@@ -177,7 +206,7 @@ def make_storyboards(
             try:
                 run(
                     settings.model,
-                    out / "scenes" / f"{row.scene}.json",
+                    None if is_robosuite(row.sim) else out / "scenes" / f"{row.scene}.json",
                     sim=row.sim,
                     faults=parse_faults(row.faults),
                     seed=row.seed,
