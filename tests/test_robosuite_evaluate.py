@@ -15,6 +15,10 @@ import importlib.util
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -30,10 +34,10 @@ from demoplan.commands.evaluation import run_one, settings_from_options
 from demoplan.evaluation.engine import RayEngine
 from demoplan.evaluation.plan import plan_runs, read_settings, write_plan
 from demoplan.evaluation.report import evaluation_markdown
-from demoplan.evaluation.results import ROWS, read_rows, summarise, wilson_interval
+from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, summarise, wilson_interval
 from demoplan.evaluation.runs import RunRow
 from demoplan.learning.modelfile import load_model, model_to_dict
-from tests.helpers import EXAMPLES
+from tests.helpers import EXAMPLES, wait_for_signal_handlers
 from tests.robosuite_data import RobosuiteDataError, skip_or_fail
 
 INSTALLED = importlib.util.find_spec("robosuite") is not None
@@ -302,6 +306,30 @@ def test_resume_makes_the_missing_run_and_it_repeats_its_row(serial: Path, tmp_p
     again = read_rows(folder)
     assert again[rows[1]["run_id"]].outcome() == RunRow.from_json(rows[1]).outcome()
     assert len(_rows(folder)) == SEEDS
+
+
+def test_ctrl_c_keeps_the_finished_rows_and_says_how_to_resume(
+    stack_model: Path, tmp_path: Path
+) -> None:
+    """As in demoplan's own worlds: SIGINT after the first row (of 50 planned)
+    ends with exit 130, the finished rows written and the resume command named."""
+    out = tmp_path / "eval"
+    command = [sys.executable, "-m", "demoplan", "evaluate", str(stack_model)]
+    command += ["--sim", "robosuite:Stack", "--seeds", "50", "--workers", "0", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for_signal_handlers(process)
+    journal = out / JOURNAL
+    while process.poll() is None and (not journal.exists() or not journal.read_text()):
+        time.sleep(0.05)
+    assert process.poll() is None, "the evaluation ended before Ctrl-C"
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=300)
+    assert process.returncode == 130, f"exit {process.returncode}: {err[-500:]}"
+    assert f"--resume {out} --workers 0" in err
+    kept = _rows(out)
+    assert 1 <= len(kept) < 50
+    assert [r["run_id"] for r in kept] == [f"Stack/seed-{k}" for k in range(len(kept))]
+    assert not journal.exists() and not (out / "worst").exists()
 
 
 def test_a_ray_worker_makes_the_rows_a_serial_run_makes(serial: Path, stack_model: Path) -> None:
