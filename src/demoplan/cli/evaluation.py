@@ -108,7 +108,8 @@ def evaluate(
         typer.Argument(metavar="MODEL", help="A model file (from learn); not with --resume."),
     ] = None,
     scene_paths: Annotated[
-        list[Path] | None, typer.Argument(metavar="SCENE", help="Scene files to run in.")
+        list[Path] | None,
+        typer.Argument(metavar="SCENE", help="Scene files to run in (none with robosuite:ENV)."),
     ] = None,
     random_scenes: Annotated[
         int, typer.Option(min=0, help="Also N random start layouts from the model's workspace.")
@@ -121,7 +122,10 @@ def evaluate(
         typer.Option(help="Faults to inject, kind=probability,... (as for run)."),
     ] = None,
     seeds: Annotated[
-        int, typer.Option(min=1, help="Runs per scene (scene j: seeds jK … jK+K-1).")
+        int,
+        typer.Option(
+            min=1, help="Runs per scene (scene j: seeds jK … jK+K-1; robosuite: seeds 0 … K-1)."
+        ),
     ] = 1,
     sim: Annotated[
         str,
