@@ -90,9 +90,10 @@ from rich.table import Table  # noqa: E402
 
 import demoplan  # noqa: E402
 from common import Target, median, package_version, percentile, print_targets  # noqa: E402
+from demoplan.commands.evaluation import run_one  # noqa: E402
 from demoplan.documents.demonstrations import load_demonstrations  # noqa: E402
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine  # noqa: E402
-from demoplan.evaluation.runs import RunRow, RunSpec, execute_run  # noqa: E402
+from demoplan.evaluation.runs import RunRow, RunSpec  # noqa: E402
 from demoplan.execution.faults import parse_faults  # noqa: E402
 from demoplan.learning import learn  # noqa: E402
 from demoplan.model import TaskModel  # noqa: E402
@@ -263,7 +264,7 @@ def _specs(name: str, scene: Scene, world: str, faults: str, count: int) -> list
 
 def one_run(model: TaskModel, scene: Scene, world: str, faults: str, seed: int) -> Run:
     """One run, here (the warm-up)."""
-    return _run_of(execute_run(model, _specs("warm-up", scene, world, faults, seed + 1)[seed]))
+    return _run_of(run_one(model, _specs("warm-up", scene, world, faults, seed + 1)[seed]))
 
 
 def run_row(
@@ -277,7 +278,7 @@ def run_row(
     """The row's runs, seeds 0 … count-1, by the evaluation engine (serial or Ray)."""
     started = time.perf_counter()
     specs = _specs(row.experiment, scene, row.world, row.faults, count)
-    finished = sorted(engine.rows(specs, partial(execute_run, model)), key=lambda r: r.seed)
+    finished = sorted(engine.rows(specs, partial(run_one, model)), key=lambda r: r.seed)
     row.runs.extend(_run_of(r) for r in finished)
     console.print(
         f"  {row.label}: {count} runs in {time.perf_counter() - started:.1f} s, "

@@ -27,12 +27,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demoplan.commands.evaluation import engine_for, evaluate, settings_from_options
+from demoplan.commands.evaluation import engine_for, evaluate, run_one, settings_from_options
 from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import RayEngine, SerialEngine
 from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, wilson_interval
-from demoplan.evaluation.runs import RunRow, RunSpec, execute_run
+from demoplan.evaluation.runs import RunRow, RunSpec
 from demoplan.evaluation.scenes import (
     LayoutSettings,
     random_scene,
@@ -111,7 +111,7 @@ def _crash_once(marker: Path, victim: str, model: TaskModel, spec: RunSpec) -> R
     if spec.run_id == victim and not marker.exists():
         marker.touch()
         os._exit(9)
-    return execute_run(model, spec)
+    return run_one(model, spec)
 
 
 def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
@@ -121,7 +121,7 @@ def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> Ru
         (folder / "pid.partial").write_text(str(os.getpid()))
         (folder / "pid.partial").rename(marker)
         time.sleep(120)
-    return execute_run(model, spec)
+    return run_one(model, spec)
 
 
 def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
@@ -152,7 +152,7 @@ def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
 def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
     if spec.run_id == victim:
         os._exit(9)
-    return execute_run(model, spec)
+    return run_one(model, spec)
 
 
 def test_a_killed_worker_s_run_is_retried_or_an_error_row(
@@ -188,7 +188,7 @@ def test_resume_after_ctrl_c_makes_only_the_missing_runs(
 
     def runner(spec: RunSpec) -> RunRow:
         made.append(spec.run_id)
-        return execute_run(model, spec)
+        return run_one(model, spec)
 
     def stop_after_two(row: RunRow, done: int, planned: int) -> None:
         if done == 2:

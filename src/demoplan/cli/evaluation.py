@@ -73,6 +73,16 @@ def _print_summary(done: Evaluation) -> None:
         f"{done.made} of {done.planned}",
     )
     stdout.print(table)
+    if summary.judged is not None:
+        judged = summary.judged
+        env_low, env_high = judged.env_interval
+        stdout.print(
+            f"robosuite's check: {judged.env_successes} of {summary.runs} "
+            f"({env_low:.1%} – {env_high:.1%}); demoplan's goal reached: "
+            f"{judged.demoplan_successes}; succeeded counts runs where both say so",
+            markup=False,
+            highlight=False,
+        )
     replans = ", ".join(f"{k}: {v}" for k, v in summary.replans.items())
     stdout.print(f"replans (count: runs): {replans}", markup=False, highlight=False)
     if summary.confusion:
@@ -98,7 +108,8 @@ def evaluate(
         typer.Argument(metavar="MODEL", help="A model file (from learn); not with --resume."),
     ] = None,
     scene_paths: Annotated[
-        list[Path] | None, typer.Argument(metavar="SCENE", help="Scene files to run in.")
+        list[Path] | None,
+        typer.Argument(metavar="SCENE", help="Scene files to run in (none with robosuite:ENV)."),
     ] = None,
     random_scenes: Annotated[
         int, typer.Option(min=0, help="Also N random start layouts from the model's workspace.")
@@ -111,11 +122,19 @@ def evaluate(
         typer.Option(help="Faults to inject, kind=probability,... (as for run)."),
     ] = None,
     seeds: Annotated[
-        int, typer.Option(min=1, help="Runs per scene (scene j: seeds jK … jK+K-1).")
+        int,
+        typer.Option(
+            min=1, help="Runs per scene (scene j: seeds jK … jK+K-1; robosuite: seeds 0 … K-1)."
+        ),
     ] = 1,
-    sim: Annotated[SimName, typer.Option(help="The simulated world (as for run).")] = (
-        SimName.kinematic
-    ),
+    sim: Annotated[
+        str,
+        typer.Option(
+            help="The simulated world (as for run): kinematic, mujoco, arm or robosuite:ENV "
+            "(run k: robosuite's ENV after reset(k); no SCENE, --random-scenes, --clutter "
+            "or --faults)."
+        ),
+    ] = SimName.kinematic.value,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -158,7 +177,7 @@ def evaluate(
                 random_scenes=random_scenes,
                 seeds=seeds,
                 faults=faults,
-                sim=sim.value,
+                sim=sim,
                 clutter=clutter,
             )
         engine = engine_for(workers, address)

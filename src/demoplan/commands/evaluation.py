@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from demoplan.commands.execution import run
 from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.engine import Engine, RayEngine, SerialEngine, require_ray
 from demoplan.evaluation.plan import (
@@ -29,10 +30,13 @@ from demoplan.evaluation.results import (
 )
 from demoplan.evaluation.runs import RUN_SETTINGS, RunRow, RunSpec, execute_run
 from demoplan.execution.faults import parse_faults
+from demoplan.execution.robosuite_run import is_robosuite
+from demoplan.execution.robosuite_scene import check_installed, environment_name
 from demoplan.fileio import display_path, dump_json, write_atomic
 from demoplan.learning.modelfile import load_model
+from demoplan.model import TaskModel
 
-__all__ = ["Evaluation", "engine_for", "evaluate"]
+__all__ = ["Evaluation", "engine_for", "evaluate", "run_one"]
 
 SIMS = ("kinematic", "mujoco", "arm")
 STORYBOARDS = 5
@@ -67,10 +71,38 @@ def engine_for(workers: int | None, address: str | None, max_retries: int = 2) -
     return RayEngine(workers=workers, address=address, max_retries=max_retries)
 
 
+def run_one(model: TaskModel, spec: RunSpec) -> RunRow:
+    """One evaluated run, made as ``demoplan run`` makes it (:func:`execute_run`
+    with :func:`demoplan.commands.execution.run`)."""
+    return execute_run(run, model, spec)
+
+
+def _check_robosuite(settings: EvaluationSettings) -> None:
+    """``--sim robosuite:ENV``: a known environment, and none of the options that
+    make or change scenes (robosuite's ``reset(seed)`` makes each run's)."""
+    environment_name(settings.sim)  # a usage error names the environments
+    given = [
+        ("SCENE files", bool(settings.scenes)),
+        ("--random-scenes", settings.random_scenes > 0),
+        ("--clutter", settings.clutter > 0),
+        ("--faults", bool(settings.faults)),
+    ]
+    if refused := [name for name, on in given if on]:
+        raise UsageError(
+            f"{', '.join(refused)}: not with --sim {settings.sim} (each run's scene is "
+            "robosuite's environment after reset(seed), which injects nothing); --seeds N expected"
+        )
+
+
 def _check(settings: EvaluationSettings) -> None:
+    if is_robosuite(settings.sim):
+        _check_robosuite(settings)
+        return
     parse_faults(settings.faults)  # a usage error names what is wrong
     if settings.sim not in SIMS:
-        raise UsageError(f"--sim {settings.sim}: one of {', '.join(SIMS)} expected")
+        raise UsageError(
+            f"--sim {settings.sim}: one of {', '.join(SIMS)} or robosuite:ENV expected"
+        )
     if not settings.scenes and settings.random_scenes <= 0:
         raise UsageError("no scenes: SCENE files or --random-scenes N expected")
     if settings.seeds <= 0 or settings.clutter < 0 or settings.random_scenes < 0:
@@ -112,8 +144,10 @@ def evaluate(
     with no row. ``on_start(done, planned)`` hears the counts before the first
     run, ``on_row(row, done, planned)`` each row as it comes. A Ctrl-C
     (KeyboardInterrupt) stops the runs and, before it goes on, writes every
-    finished row. ``runner``: what makes a run (default: :func:`execute_run`
-    with the settings' model)."""
+    finished row. ``runner``: what makes a run (default: :func:`run_one`
+    with the settings' model). With ``--sim robosuite:ENV`` (robosuite
+    installed) run k is robosuite's environment after ``reset(k)``, judged by
+    robosuite too (the rows' ``env_success``)."""
     if resume:
         settings = read_settings(out)
     elif settings is None:
@@ -122,6 +156,8 @@ def evaluate(
         _check_new_folder(out)
     assert settings is not None
     _check(settings)
+    if is_robosuite(settings.sim):
+        check_installed(settings.sim)  # before anything is written
     model = load_model(settings.model)
     engine = engine or SerialEngine()
     with engine.session():  # a cluster that does not answer: nothing written
@@ -134,7 +170,7 @@ def evaluate(
             on_start(len(specs) - len(todo), len(specs))
         journal = Journal(out)
         try:
-            for row in engine.rows(todo, runner or partial(execute_run, model)):
+            for row in engine.rows(todo, runner or partial(run_one, model)):
                 if row.run_id in rows:  # never a duplicate row
                     continue
                 rows[row.run_id] = row
@@ -156,11 +192,10 @@ def make_storyboards(
     out: Path, settings: EvaluationSettings, worst: Sequence[RunRow]
 ) -> dict[str, str]:
     """Each of ``worst``'s storyboards: its run made again (a run is a function of
-    its scene file, seed, faults and sim) with ``--frames out/worst/RUN_ID``, here,
-    one after the other; a storyboard already there is kept. By run id: the
-    storyboard's path relative to ``out``, or ``"no storyboard: WHY"``."""
-    from demoplan.commands.execution import run
-
+    its scene file, seed, faults and sim; in robosuite of its seed) with
+    ``--frames out/worst/RUN_ID``, here, one after the other; a storyboard
+    already there is kept. By run id: the storyboard's path relative to
+    ``out``, or ``"no storyboard: WHY"``."""
     if importlib.util.find_spec("matplotlib") is None:
         return {row.run_id: "no storyboard: matplotlib is not installed" for row in worst}
     boards: dict[str, str] = {}
@@ -171,7 +206,7 @@ def make_storyboards(
             try:
                 run(
                     settings.model,
-                    out / "scenes" / f"{row.scene}.json",
+                    None if is_robosuite(row.sim) else out / "scenes" / f"{row.scene}.json",
                     sim=row.sim,
                     faults=parse_faults(row.faults),
                     seed=row.seed,

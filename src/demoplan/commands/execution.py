@@ -76,16 +76,14 @@ def run(
     when in the way);
     ``on_event`` hears the run's progress."""
     if sim.startswith("robosuite:"):
-        renders = [
-            ("--frames", frames),
-            ("--video", video),
-            ("--perception", perception != "state"),
-        ]
+        renders = [("--video", video), ("--perception", perception != "state")]
         if unsupported := [name for name, given in renders if given]:
             raise UsageError(
-                f"{', '.join(unsupported)}: not with --sim {sim} (nothing is rendered)"
+                f"{', '.join(unsupported)}: not with --sim {sim} (it renders --frames only)"
             )
-        return _run_in_robosuite(model, scene, sim, seed, settings, faults, clutter, on_event)
+        return _run_in_robosuite(
+            model, scene, sim, seed, settings, faults, clutter, frames, on_event
+        )
     if scene is None:
         raise UsageError("a SCENE is needed (only --sim robosuite:ENV observes its own)")
     if video is not None:
@@ -131,25 +129,26 @@ def _run_in_robosuite(
     settings: ExecutionSettings | None,
     faults: Faults,
     clutter: bool,
+    frames: Path | None,
     on_event: Callable[[RunEvent], object] | None,
 ) -> RunReport:
-    """``run`` in robosuite: the scene is the environment's, nothing else is drawn."""
+    """``run`` in robosuite: the scene is the environment's; ``frames`` rendered
+    by MuJoCo (the folder written whole or not at all)."""
     from demoplan.execution.robosuite_run import run_in_robosuite
     from demoplan.learning.modelfile import load_model
 
     if scene is not None:
         raise UsageError(f"--sim {sim} observes its scene after reset(seed); no SCENE expected")
     task = model if isinstance(model, TaskModel) else load_model(model)
+    options: dict[str, Any] = {"seed": seed, "settings": settings, "faults": faults}
+    options |= {"clutter": clutter, "on_event": on_event}
     with model_named(model):
-        return run_in_robosuite(
-            task,
-            sim,
-            seed=seed,
-            settings=settings,
-            faults=faults,
-            clutter=clutter,
-            on_event=on_event,
-        )
+        if frames is None:
+            return run_in_robosuite(task, sim, **options)
+        with staged_folder(frames, "demoplan run --frames") as building:
+            report = run_in_robosuite(task, sim, frames=building, **options)
+        moved = tuple(str(frames / Path(f).name) for f in report.frames)
+        return replace(report, frames=moved)
 
 
 def remove_unfinished_video(video: Path) -> None:

@@ -14,6 +14,8 @@ from demoplan.errors import InputError, UsageError
 from demoplan.evaluation.results import JOURNAL, ROWS
 from demoplan.evaluation.runs import RunSpec
 from demoplan.evaluation.scenes import LayoutSettings, random_scene_document
+from demoplan.execution.robosuite_run import is_robosuite
+from demoplan.execution.robosuite_scene import environment_name
 from demoplan.fileio import (
     describe_validation_error,
     display_path,
@@ -156,6 +158,11 @@ def check_settings(settings: EvaluationSettings, source: str | None = None) -> N
             _refuse(expected, source, name if source else option)
         if most is not None and value > most:
             _refuse(f"at most {most} expected, not {value}", source, name if source else option)
+    if is_robosuite(settings.sim):  # one scene: the environment after reset(seed)
+        if settings.seeds > MAX_RUNS:
+            why = f"{settings.seeds:,} runs; at most {MAX_RUNS:,} expected"
+            _refuse(why, source, "seeds" if source else "--seeds")
+        return
     runs = (len(settings.scenes) + settings.random_scenes) * settings.seeds
     if runs > MAX_RUNS:
         why = f"{runs:,} runs (scenes × seeds); at most {MAX_RUNS:,} expected"
@@ -170,6 +177,8 @@ def _refuse(message: str, source: str | None, field: str) -> None:
 
 def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
     documents: dict[str, dict[str, Any]] = {}
+    if is_robosuite(settings.sim):  # robosuite's reset(seed) makes each run's scene
+        return documents
     for given in settings.scenes:
         name = Path(given).stem
         if name in documents or name.startswith("random-"):
@@ -209,7 +218,12 @@ def write_plan(folder: Path, model: TaskModel, settings: EvaluationSettings) -> 
 def plan_runs(folder: Path, settings: EvaluationSettings) -> list[RunSpec]:
     """Every run, scene by scene (in the order given, then the random ones), seed by
     seed: scene j's runs have seeds jK … jK+K−1 (K: ``seeds``), so that no two
-    runs draw the same faults and ``demoplan run --seed S`` repeats each."""
+    runs draw the same faults and ``demoplan run --seed S`` repeats each. With
+    ``--sim robosuite:ENV`` one scene, ``ENV``, without a document: run k is
+    robosuite's environment after ``reset(k)``."""
+    if is_robosuite(settings.sim):
+        env = environment_name(settings.sim)
+        return [RunSpec(env, None, seed, "", settings.sim) for seed in range(settings.seeds)]
     names = [Path(s).stem for s in settings.scenes]
     names += [f"random-{seed}" for seed in range(settings.random_scenes)]
     clutter = settings.clutter > 0

@@ -15,6 +15,7 @@ import numpy as np
 from demoplan.evaluation.plan import EvaluationSettings
 from demoplan.evaluation.results import Summary
 from demoplan.evaluation.runs import RunRow
+from demoplan.execution.robosuite_run import is_robosuite
 from demoplan.experiments.report_html import markdown_to_html
 from demoplan.fileio import write_atomic
 from demoplan.wording import plural
@@ -41,7 +42,10 @@ def _counts(counts: dict[str, int]) -> str:
 
 def repeat_command(settings: EvaluationSettings, row: RunRow) -> str:
     """The ``demoplan run`` command that makes ``row``'s run again."""
-    parts = ["demoplan run", settings.model, f"scenes/{row.scene}.json", f"--sim {row.sim}"]
+    parts = ["demoplan run", settings.model]
+    if not is_robosuite(row.sim):  # robosuite's reset(seed) is the scene
+        parts.append(f"scenes/{row.scene}.json")
+    parts.append(f"--sim {row.sim}")
     parts.append(f"--seed {row.seed} --timeout inf")
     if row.faults:
         parts.append(f"--faults {row.faults}")
@@ -94,19 +98,39 @@ def evaluation_markdown(
     relative to the report) or why it has none, by run id."""
     boards = storyboards or {}
     low, high = summary.interval
+    if is_robosuite(settings.sim):
+        made = (
+            f"{len(rows)} of {planned} runs made: robosuite's environment after "
+            f"`reset(seed)` for seeds 0 … {settings.seeds - 1}, `--sim {settings.sim}`."
+        )
+    else:
+        made = (
+            f"{len(rows)} of {planned} runs made: {plural(len(settings.scenes), 'scene file')} "
+            f"and {plural(settings.random_scenes, 'random layout')} × "
+            f"{plural(settings.seeds, 'seed')}, "
+            f"`--sim {settings.sim}`, faults `{settings.faults or 'none'}`"
+            + (f", {settings.clutter} clutter objects per layout." if settings.clutter else ".")
+        )
     lines = [
         f"# Evaluation of {_cell(Path(settings.model).name)}",
         "",
-        f"{len(rows)} of {planned} runs made: {plural(len(settings.scenes), 'scene file')} "
-        f"and {plural(settings.random_scenes, 'random layout')} × "
-        f"{plural(settings.seeds, 'seed')}, "
-        f"`--sim {settings.sim}`, faults `{settings.faults or 'none'}`"
-        + (f", {settings.clutter} clutter objects per layout." if settings.clutter else "."),
+        made,
         "",
         f"**Success: {summary.successes} of {summary.runs} = {summary.rate:.1%}** "
         f"(95 % Wilson interval {low:.1%} – {high:.1%}); {summary.errors} runs ended in an error.",
         "",
     ]
+    if summary.judged is not None:
+        judged = summary.judged
+        env_low, env_high = judged.env_interval
+        env_rate = judged.env_successes / summary.runs if summary.runs else 0.0
+        lines += [
+            f"**robosuite's own check (`_check_success()`): {judged.env_successes} of "
+            f"{summary.runs} = {env_rate:.1%}** (95 % Wilson interval {env_low:.1%} – "
+            f"{env_high:.1%}); demoplan's executor reached its goal in "
+            f"{judged.demoplan_successes}. A run succeeds only where both say so.",
+            "",
+        ]
     if summary.confusion:
         kinds = sorted({k for seen in summary.confusion.values() for k in seen} - {"runs"})
         lines += ["## Injected → detected", "", "Runs a fault kind was injected in, and in how"]

@@ -25,12 +25,14 @@ from scipy.stats import norm
 
 from demoplan.errors import InputError
 from demoplan.evaluation.runs import RunRow
+from demoplan.execution.robosuite_run import is_robosuite
 from demoplan.fileio import describe_validation_error, display_path, write_atomic
 
 __all__ = [
     "JOURNAL",
     "ROWS",
     "Journal",
+    "Judged",
     "Summary",
     "read_rows",
     "summarise",
@@ -147,6 +149,25 @@ def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[f
 
 
 @dataclass(frozen=True, slots=True)
+class Judged:
+    """The runs robosuite's ``_check_success()`` passed (``env_successes``, with
+    its Wilson 95 % interval) and those demoplan's executor ended at a goal; a
+    run's ``success`` needs both. An error row counts as failed in each."""
+
+    env_successes: int
+    env_interval: tuple[float, float]
+    demoplan_successes: int
+
+    def to_json(self, runs: int) -> dict[str, Any]:
+        return {
+            "env_successes": self.env_successes,
+            "env_success_rate": self.env_successes / runs if runs else 0.0,
+            "env_wilson_95": list(self.env_interval),
+            "demoplan_successes": self.demoplan_successes,
+        }
+
+
+@dataclass(frozen=True, slots=True)
 class Summary:
     """What an evaluation's rows sum up to. ``confusion[kind]``: the runs a
     fault of ``kind`` was injected in (``runs``) and the failure kinds the
@@ -159,13 +180,16 @@ class Summary:
     replans: dict[int, int]
     confusion: dict[str, dict[str, int]] = field(default_factory=dict)
     worst: tuple[RunRow, ...] = ()
+    judged: Judged | None = None
+    """robosuite's and demoplan's verdicts apart (``--sim robosuite:ENV``); else None."""
 
     @property
     def rate(self) -> float:
         return self.successes / self.runs if self.runs else 0.0
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        judged = {} if self.judged is None else self.judged.to_json(self.runs)
+        return judged | {
             "runs": self.runs,
             "successes": self.successes,
             "errors": self.errors,
@@ -200,4 +224,17 @@ def summarise(rows: Iterable[RunRow], worst: int = 10) -> Summary:
         replans=dict(sorted(Counter(r.replans for r in listed).items())),
         confusion={k: dict(sorted(v.items())) for k, v in sorted(confusion.items())},
         worst=tuple(sorted(listed, key=_badness)[:worst]),
+        judged=_judged(listed),
+    )
+
+
+def _judged(rows: list[RunRow]) -> Judged | None:
+    """robosuite's verdicts apart, where the runs were made in robosuite."""
+    if not any(is_robosuite(r.sim) for r in rows):
+        return None
+    env = sum(r.env_success is True for r in rows)
+    return Judged(
+        env_successes=env,
+        env_interval=wilson_interval(env, len(rows)),
+        demoplan_successes=sum(r.demoplan_success is True for r in rows),
     )

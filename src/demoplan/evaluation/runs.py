@@ -1,8 +1,9 @@
 """One evaluated run: a scene, a seed, the faults and the world in → one row out.
 
 A run is carried out exactly as ``demoplan run MODEL SCENE --sim SIM --faults
-FAULTS --seed SEED --timeout inf [--clutter]`` carries it out
-(:func:`demoplan.commands.execution.run`): each (re)planning without a time
+FAULTS --seed SEED --timeout inf [--clutter]`` carries it out (the command
+layer's ``run`` is passed in: :data:`RunFunction`; ``--sim robosuite:ENV``
+takes no SCENE): each (re)planning without a time
 limit (:data:`RUN_SETTINGS`), so that a row does not depend on how busy the
 machine or the worker was — with ``run``'s default 2 s, a replan on a loaded
 worker could end with another plan than the same replan in a serial run. Its
@@ -15,17 +16,24 @@ from __future__ import annotations
 
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 from demoplan.budget import Budget
 from demoplan.errors import InputError
-from demoplan.execution.executor import ExecutionSettings, RunEvent
+from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport
 from demoplan.execution.faults import parse_faults
+from demoplan.execution.robosuite_run import JudgedRunReport
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import scene_from_document
 
-__all__ = ["TIMING_FIELDS", "RunRow", "RunSpec", "error_row", "execute_run"]
+__all__ = ["TIMING_FIELDS", "RunFunction", "RunRow", "RunSpec", "error_row", "execute_run"]
+
+RunFunction = Callable[..., RunReport]
+"""What carries a run out: :func:`demoplan.commands.execution.run`'s signature
+(model, scene or None; ``sim``, ``faults``, ``seed``, ``clutter``, ``on_event``,
+``settings`` by keyword)."""
 
 TIMING_FIELDS = ("planning_s", "execution_s", "attempts")
 """Fields of a row that differ between two runs of one spec (the clock, the engine)."""
@@ -34,10 +42,12 @@ TIMING_FIELDS = ("planning_s", "execution_s", "attempts")
 @dataclass(frozen=True, slots=True)
 class RunSpec:
     """One run to make: ``scene`` names the scene document ``layout`` (a file's
-    stem or ``random-N``), ``faults`` is ``--faults``' text."""
+    stem or ``random-N``; with ``--sim robosuite:ENV`` the environment's name and
+    no layout: robosuite's ``reset(seed)`` makes the scene), ``faults`` is
+    ``--faults``' text."""
 
     scene: str
-    layout: dict[str, Any]
+    layout: dict[str, Any] | None
     seed: int
     faults: str = ""
     sim: str = "kinematic"
@@ -85,7 +95,12 @@ class RunRow:
     refused_motions: int = 0
     """Motions a check found impossible (``--sim arm``)."""
     simulated_s: float | None = None
-    """Seconds the physics simulated (``mujoco``, ``arm``)."""
+    """Seconds the physics simulated (``mujoco``, ``arm``, ``robosuite:ENV``)."""
+    env_success: bool | None = None
+    """robosuite's ``_check_success()`` after the run (``robosuite:ENV``; else None)."""
+    demoplan_success: bool | None = None
+    """Whether demoplan's executor reached a goal (``robosuite:ENV``: ``success``
+    is this and ``env_success`` together; else None)."""
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -136,14 +151,13 @@ RUN_SETTINGS = ExecutionSettings(budget=Budget(timeout=None))
 (``run --timeout inf``; the search's limit of states kept still holds)."""
 
 
-def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
-    """Carry ``spec`` out as ``demoplan run`` would; any exception becomes an ``error`` row."""
-    from demoplan.commands.execution import run
-
+def execute_run(run: RunFunction, model: TaskModel, spec: RunSpec) -> RunRow:
+    """Carry ``spec`` out with ``run`` as ``demoplan run`` would; any exception
+    becomes an ``error`` row."""
     started = time.perf_counter()
     clock = _Clock()
     try:
-        scene = scene_from_document(spec.layout, spec.scene)
+        scene = None if spec.layout is None else scene_from_document(spec.layout, spec.scene)
         report = run(
             model,
             scene,
@@ -159,6 +173,7 @@ def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
     except Exception as exc:  # a crash is a finding: kept as the run's row
         return error_row(spec, f"exception: {type(exc).__name__}: {exc}")
     total = time.perf_counter() - started
+    judged = report if isinstance(report, JudgedRunReport) else None
     errors = [1e3 * e for e in report.pose_errors.values()]
     return RunRow(
         spec.run_id,
@@ -187,4 +202,6 @@ def execute_run(model: TaskModel, spec: RunSpec) -> RunRow:
         simulated_s=None
         if report.simulated_seconds is None
         else round(report.simulated_seconds, 6),
+        env_success=judged.env_success if judged else None,
+        demoplan_success=judged.demoplan_success if judged else None,
     )

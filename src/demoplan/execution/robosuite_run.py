@@ -11,16 +11,20 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
+from demoplan.execution.frames import FrameWriter
+from demoplan.execution.robosuite_frames import FramedRobosuiteWorld, SceneCamera
 from demoplan.execution.robosuite_scene import (
     CONTROL_FREQUENCY,
     check_installed,
     environment_name,
 )
+from demoplan.execution.world import World
 from demoplan.model import TaskModel
 from demoplan.scenes.prepared import prepare
 
@@ -60,24 +64,38 @@ def run_in_robosuite(
     settings: ExecutionSettings | None = None,
     faults: Faults = Faults(),
     clutter: bool = False,
+    frames: Path | None = None,
     on_event: Callable[[RunEvent], object] | None = None,
 ) -> JudgedRunReport:
     """Carry ``model``'s task out in robosuite's ``sim`` (``robosuite:ENV``)
     reset with ``seed``: observe, plan, act, replan (as :func:`execute`),
-    then ask robosuite whether the task is done."""
+    then ask robosuite whether the task is done. ``frames``: a folder for a
+    frame at the start, after each action and at the end, rendered by MuJoCo
+    (:mod:`demoplan.execution.robosuite_frames`), and their storyboard."""
     name = environment_name(sim)
     if faults != Faults():
         raise UsageError(f"--faults: --sim {sim} injects none (robosuite's world is its own)")
     check_installed(sim)
+    writer = FrameWriter(frames) if frames is not None else None  # matplotlib first
     from demoplan.execution.robosuite_world import RobosuiteWorld
 
     world = RobosuiteWorld(name, seed)
+    camera = SceneCamera(world.env)
     try:
         prepared = prepare(model, world.scene(f"{sim} (seed {seed})"), clutter=clutter)
-        report = execute(model, prepared, world, settings or ExecutionSettings(), on_event)
+        acting: World = world
+        heard = on_event
+        if writer is not None:
+            writer.scene = prepared.scene
+            acting = framed = FramedRobosuiteWorld(world, writer, camera)
+            heard = framed.heard(on_event)
+        report = execute(model, prepared, acting, settings or ExecutionSettings(), heard)
+        if writer is not None:
+            framed.capture_end(report.final)
         judged = world.env_success()
         steps = world.hand.steps
     finally:
+        camera.close()
         world.close()
     values = {f.name: getattr(report, f.name) for f in fields(report)}
     values |= {
@@ -85,6 +103,7 @@ def run_in_robosuite(
         "world": sim,
         "motions_refused": tuple(world.motion_failures),
         "simulated_seconds": steps / CONTROL_FREQUENCY,
+        "frames": tuple(str(p) for p in writer.written) if writer is not None else (),
     }
     if report.success and not judged:
         values["reason"] = f"robosuite's success check fails after demoplan's {report.reason}"
