@@ -341,6 +341,7 @@ class _SquareModel:
         self.us, self.vs, self.target, self.f_scale = us, vs, target, f_scale
         self.ramp = ramp
         """The width (px) over which the square's edge ramps from 1 to 0."""
+        self._last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
 
     def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q_u, q_v, distance): the points in the square's frame, and their
@@ -354,13 +355,24 @@ class _SquareModel:
         return qu, qv, distance
 
     def residual(self, params: np.ndarray) -> np.ndarray:
-        distance = self.frame(params)[2]
-        difference: np.ndarray = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
-        return difference
+        return self._evaluated(params)[3]
+
+    def _evaluated(self, params: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(q_u, q_v, distance, residual, √(1 + (r / f)²)) at ``params``; those of
+        the last parameters asked for are kept: Levenberg–Marquardt asks for the
+        normal equations where it has just measured the cost of a step it takes."""
+        key = params.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        qu, qv, distance = self.frame(params)
+        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
+        root = np.sqrt(1.0 + np.square(residual / self.f_scale))
+        self._last = key, (qu, qv, distance, residual, root)
+        return self._last[1]
 
     def cost(self, params: np.ndarray) -> float:
         """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f)."""
-        root = np.sqrt(1.0 + np.square(self.residual(params) / self.f_scale))
+        root = self._evaluated(params)[4]
         return float(self.f_scale**2 * np.sum(root - 1.0))
 
     def normal_equations(self, params: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -369,9 +381,7 @@ class _SquareModel:
         exact — on the one-pixel ramp the model is ½ − (max(|q_u|, |q_v|) − s/2),
         q the pixel in the square's own frame; off it, constant (scaled by the
         ramp's width when it is wider)."""
-        qu, qv, distance = self.frame(params)
-        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
-        root = np.sqrt(1.0 + np.square(residual / self.f_scale))
+        qu, qv, distance, residual, root = self._evaluated(params)
         cost = float(self.f_scale**2 * np.sum(root - 1.0))
         # the ramp's ends included (one-sided there): a square whose edges lie on
         # pixel borders, as a Hough bin's centre at 0° puts them, has every pixel
