@@ -608,12 +608,14 @@ def _hough_starts(
     accumulator of an octave has about as many cells at any size — and its
     :data:`HOUGH_PEAKS` maxima taken. The votes (edge strength summed over an
     outline's pixels, fewer pixels on a shrunk mask) are scaled by the factor to
-    be compared across octaves. The budget (``where``) is read before each vote."""
+    be compared across octaves. The budget (``where``) is read before each vote and
+    within it (:func:`~demoplan.perception.hough.hough_squares`)."""
     found: list[tuple[Hypothesis, int, np.ndarray]] = []
     for factor, low, high in _octaves(sides, base):
         coarse = _shrink(alpha, factor)
         check_time(where)
-        for start in hough_squares(coarse, (low / factor, high / factor), HOUGH_PEAKS):
+        shrunk_sides = (low / factor, high / factor)
+        for start in hough_squares(coarse, shrunk_sides, HOUGH_PEAKS, lambda: check_time(where)):
             found.append((start, factor, coarse))
     found.sort(key=lambda f: -f[0].votes * f[1])
     return found
