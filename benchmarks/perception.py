@@ -741,8 +741,9 @@ def run_photo(seed: int) -> PhotoOutcome:
 @dataclass(frozen=True, slots=True)
 class CommandRun:
     """One ``demoplan perceive`` command in a process of its own: its exit code, wall
-    time (``time.perf_counter`` around it), user + system CPU time and peak resident
-    memory (MB), the last two of that process alone (``os.wait4``)."""
+    time (``time.perf_counter`` around it and the small process that starts it),
+    user + system CPU time and peak resident memory (MB), the last two of that
+    process alone (``os.wait4``, :data:`MEASURED_CHILD`)."""
 
     exit_code: int
     seconds: float
@@ -760,6 +761,18 @@ class RealRun:
     command: CommandRun | None
 
 
+MEASURED_CHILD = """
+import os, subprocess, sys
+process = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+_, status, usage = os.wait4(process.pid, 0)
+print(os.waitstatus_to_exitcode(status), usage.ru_utime + usage.ru_stime, usage.ru_maxrss)
+"""
+"""Runs a command and prints its exit code, CPU seconds and peak resident memory
+(KiB): started from this small process, not from the benchmark's, because a
+process's peak memory counts the pages of the process it was forked from (a
+child of the benchmark's 250 MB process peaks at 250 MB whatever it does)."""
+
+
 def perceive_command(photo: LabelledPhoto) -> CommandRun:
     """``demoplan perceive IMAGE --px-per-m S --origin 0 0 --timeout T`` on ``photo``
     as a user runs it (``python -m demoplan``: the interpreter's start, the imports,
@@ -768,16 +781,15 @@ def perceive_command(photo: LabelledPhoto) -> CommandRun:
     command += ["--px-per-m", f"{photo.px_per_m:g}", "--origin", "0", "0"]
     command += ["--timeout", f"{REAL_TIMEOUT:g}"]
     start = time.perf_counter()
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(process.pid, 0)
-    seconds = time.perf_counter() - start
-    process.returncode = os.waitstatus_to_exitcode(status)
-    return CommandRun(
-        process.returncode,
-        seconds,
-        usage.ru_utime + usage.ru_stime,
-        usage.ru_maxrss / 1024.0,  # KiB on Linux
+    measured = subprocess.run(
+        [sys.executable, "-c", MEASURED_CHILD, *command],
+        capture_output=True,
+        text=True,
+        check=True,
     )
+    seconds = time.perf_counter() - start
+    exit_code, cpu, peak_kib = measured.stdout.split()
+    return CommandRun(int(exit_code), seconds, float(cpu), int(peak_kib) / 1024.0)
 
 
 def real_photographs(commands: bool = True) -> list[RealRun]:
