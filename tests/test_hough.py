@@ -1,10 +1,12 @@
 """The Hough transform over (x, y, θ, s) and the sub-pixel fit, on soft masks of one
 square: the vote does not depend on how many side lengths are filled at once, and
 the fit, which looks only at the crop's part near the square, reports the whole
-crop's coverage and misfit."""
+crop's coverage and misfit; large sides are voted for an octave at a time on
+shrunk masks and fitted at full resolution."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -12,9 +14,20 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demoplan.perception import hough
-from demoplan.perception.blocks import _fit, _square_alpha
+from demoplan.perception import blocks, hough
+from demoplan.perception.blocks import (
+    HOUGH_SIDE_PX,
+    OCTAVE_END,
+    OCTAVE_SLACK,
+    PerceptionSettings,
+    _fit,
+    _octaves,
+    _square_alpha,
+    detect_blocks,
+)
+from demoplan.perception.camera import Camera
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.synthetic import SyntheticBlock, render_blocks
 
 
 def square_mask(
@@ -83,3 +96,61 @@ def test_the_fit_reports_the_whole_crop(
     own = model > 0.01
     assert rms == pytest.approx(float(np.sqrt(np.mean((model[own] - mask[own]) ** 2))), abs=1e-12)
     assert free == 1.0  # nothing but table around it
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(16.0, 400.0), st.floats(1.0, 20.0))
+def test_the_octaves_cover_the_sides_each_at_least_the_vote_s_size(
+    low: float, ratio: float
+) -> None:
+    """The octaves of a side range follow each other without gap from its smallest
+    side to its largest, each at twice the previous factor, and every side of every
+    octave is at least :data:`HOUGH_SIDE_PX` (px) on its shrunk mask and at most
+    ``OCTAVE_END`` × ``OCTAVE_SLACK`` times that: the vote sees every square at
+    about the same size in pixels."""
+    high = low * ratio
+    base = max(1, int(low // HOUGH_SIDE_PX))
+    octaves = _octaves((low, high), base)
+    assert octaves[0][:2] == (base, low)
+    assert octaves[-1][2] == high
+    for (factor, _, end), (following, start, _) in itertools.pairwise(octaves):
+        assert start == end
+        assert following == 2 * factor
+    for factor, first, last in octaves:
+        assert first <= last
+        assert first / factor >= min(HOUGH_SIDE_PX, low)
+        assert last / factor <= OCTAVE_END * OCTAVE_SLACK * HOUGH_SIDE_PX + 1e-9
+
+
+@settings(max_examples=5, deadline=None)
+@given(st.integers(0, 10_000))
+def test_a_large_block_is_voted_for_on_a_shrunk_mask_and_fitted_at_full_resolution(
+    seed: int,
+) -> None:
+    """A block of 9–15 cm at 1 px = 1 mm among sizes of 2–16 cm: its side is voted
+    for on a mask shrunk by 2 or 4 (its octave), and the fit at full resolution
+    finds it as exactly as a small block's: its centre to a fiftieth of a pixel, its
+    corners to a twentieth (the turn), its side to a tenth (the render's edge pixels
+    are sampled)."""
+    rng = np.random.default_rng(seed)
+    camera = Camera(1000.0, (0.0, 0.0))
+    side = float(rng.uniform(0.09, 0.15))
+    x, yaw = float(rng.uniform(0.18, 0.22)), float(rng.uniform(-45, 45))
+    truth = SyntheticBlock("red", x, 0.15, yaw, side)
+    image = render_blocks([truth], camera, width=400, height=300, noise=2.0, shading=0.1, rng=rng)
+    voted: list[tuple[int, int]] = []
+
+    def spied(alpha: np.ndarray, *args: object, **kwargs: object) -> list[Hypothesis]:
+        voted.append(alpha.shape)
+        return hough_squares(alpha, *args, **kwargs)  # type: ignore[arg-type]
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(blocks, "hough_squares", spied)
+        found = detect_blocks(image, camera, PerceptionSettings(min_side=0.02, max_side=0.16))
+    assert len(set(voted)) > 1  # the same crop at more than one resolution
+    assert len(found) == 1
+    block = found[0]
+    assert math.dist((block.x, block.y), (truth.x, truth.y)) < 2e-5
+    turn = math.radians(abs(((block.yaw - truth.yaw + 45.0) % 90.0) - 45.0))
+    assert turn * side / 2 * camera.px_per_m < 0.05
+    assert abs(block.side - side) < 1e-4

@@ -67,8 +67,20 @@ TIMES = "\u00d7"  # the multiplication sign
 
 HOUGH_SIDE_PX = 20.0
 """The Hough transform runs on the masks shrunk by a whole factor so that the
-smallest block's side is at least this many pixels (and under twice it); the
-fit then refines at full resolution."""
+smallest side it looks for is at least this many pixels (and under twice it);
+the fit then refines at full resolution. Larger sides are looked for an octave
+at a time, each at twice the previous factor (:func:`_hough_starts`)."""
+OCTAVE_END = 2.5
+"""An octave of sides ends at this many times :data:`HOUGH_SIDE_PX` on its shrunk
+mask: the next, at twice the factor, starts at 25 px there. (Ending at 2, where
+a side at the next factor would be 20 px, moved the starts of 40–50 px cubes of
+the real photographs, a few of which were then not found.)"""
+OCTAVE_SLACK = 1.25
+"""An octave of sides takes the rest of the range when that ends within this
+factor of the octave's end: a narrow range (``--side``, a small region) is one
+Hough transform."""
+HOUGH_PEAKS = 4
+"""Hough maxima tried as starts, strongest first, per search of a region."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -341,6 +353,7 @@ class _SquareModel:
         self.us, self.vs, self.target, self.f_scale = us, vs, target, f_scale
         self.ramp = ramp
         """The width (px) over which the square's edge ramps from 1 to 0."""
+        self._last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
 
     def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q_u, q_v, distance): the points in the square's frame, and their
@@ -354,13 +367,24 @@ class _SquareModel:
         return qu, qv, distance
 
     def residual(self, params: np.ndarray) -> np.ndarray:
-        distance = self.frame(params)[2]
-        difference: np.ndarray = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
-        return difference
+        return self._evaluated(params)[3]
+
+    def _evaluated(self, params: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(q_u, q_v, distance, residual, √(1 + (r / f)²)) at ``params``; those of
+        the last parameters asked for are kept: Levenberg–Marquardt asks for the
+        normal equations where it has just measured the cost of a step it takes."""
+        key = params.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        qu, qv, distance = self.frame(params)
+        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
+        root = np.sqrt(1.0 + np.square(residual / self.f_scale))
+        self._last = key, (qu, qv, distance, residual, root)
+        return self._last[1]
 
     def cost(self, params: np.ndarray) -> float:
         """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f)."""
-        root = np.sqrt(1.0 + np.square(self.residual(params) / self.f_scale))
+        root = self._evaluated(params)[4]
         return float(self.f_scale**2 * np.sum(root - 1.0))
 
     def normal_equations(self, params: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -369,9 +393,7 @@ class _SquareModel:
         exact — on the one-pixel ramp the model is ½ − (max(|q_u|, |q_v|) − s/2),
         q the pixel in the square's own frame; off it, constant (scaled by the
         ramp's width when it is wider)."""
-        qu, qv, distance = self.frame(params)
-        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
-        root = np.sqrt(1.0 + np.square(residual / self.f_scale))
+        qu, qv, distance, residual, root = self._evaluated(params)
         cost = float(self.f_scale**2 * np.sum(root - 1.0))
         # the ramp's ends included (one-sided there): a square whose edges lie on
         # pixel borders, as a Hough bin's centre at 0° puts them, has every pixel
@@ -554,6 +576,51 @@ def _shrink(alpha: np.ndarray, factor: int) -> np.ndarray:
     return shrunk
 
 
+FIT_BAND = 3.0
+"""Px either side of a start's outline that a fit refined from a shrunk mask looks at."""
+
+
+def _octaves(sides: tuple[float, float], base: int) -> list[tuple[int, float, float]]:
+    """The side range ``sides`` (px) cut into octaves searched on masks shrunk by
+    ``base``, twice that, … : (factor, smallest, largest side in px), each from
+    where the previous ends up to :data:`OCTAVE_END` × :data:`HOUGH_SIDE_PX` × its
+    factor (the last one to the end of the range when that is near,
+    :data:`OCTAVE_SLACK`)."""
+    low, high = sides
+    octaves = []
+    factor = base
+    while True:
+        end = OCTAVE_END * HOUGH_SIDE_PX * factor
+        if high <= OCTAVE_SLACK * end:
+            octaves.append((factor, low, high))
+            return octaves
+        octaves.append((factor, low, end))
+        low, factor = end, 2 * factor
+
+
+def _hough_starts(
+    alpha: np.ndarray, sides: tuple[float, float], base: int, where: str
+) -> list[tuple[Hypothesis, int, np.ndarray]]:
+    """The best-supported squares in ``alpha`` with a side in ``sides`` (px),
+    strongest first, each with the factor its mask was shrunk by for the vote and
+    that mask: every octave of sides (:func:`_octaves`) voted on at its own
+    resolution — a large square costs its size over the factor squared, so the
+    accumulator of an octave has about as many cells at any size — and its
+    :data:`HOUGH_PEAKS` maxima taken. The votes (edge strength summed over an
+    outline's pixels, fewer pixels on a shrunk mask) are scaled by the factor to
+    be compared across octaves. The budget (``where``) is read before each vote and
+    within it (:func:`~demoplan.perception.hough.hough_squares`)."""
+    found: list[tuple[Hypothesis, int, np.ndarray]] = []
+    for factor, low, high in _octaves(sides, base):
+        coarse = _shrink(alpha, factor)
+        check_time(where)
+        shrunk_sides = (low / factor, high / factor)
+        for start in hough_squares(coarse, shrunk_sides, HOUGH_PEAKS, lambda: check_time(where)):
+            found.append((start, factor, coarse))
+    found.sort(key=lambda f: -f[0].votes * f[1])
+    return found
+
+
 def detect_blocks(
     image: np.ndarray,
     camera: Camera,
@@ -574,8 +641,7 @@ def detect_blocks(
         largest_block=side_px[1] ** 2,
     )
     lightness = image_lightness(image)
-    factor = max(1, int(side_px[0] // HOUGH_SIDE_PX))
-    band = None if factor == 1 else 3.0
+    base = max(1, int(side_px[0] // HOUGH_SIDE_PX))
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
         # a budget set by the caller (demoplan.budget), if any, read before every
@@ -599,10 +665,8 @@ def detect_blocks(
             largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
             accepted = None
             failures: list[tuple[str, str]] = []
-            coarse = _shrink(alpha, factor)
-            sides = (side_px[0] / factor, max(side_px[0], largest) / factor)
-            check_time(where)
-            for start in hough_squares(coarse, sides):
+            sides = (side_px[0], max(side_px[0], largest))
+            for start, factor, coarse in _hough_starts(alpha, sides, base, where):
                 check_time(where)
                 if factor == 1:
                     params, coverage, rms, free = _fit(alpha, start)
@@ -615,7 +679,7 @@ def detect_blocks(
                         params[3] * factor,
                         start.votes,
                     )
-                    params, coverage, rms, free = _fit(alpha, full, band, turns=(0.0,))
+                    params, coverage, rms, free = _fit(alpha, full, FIT_BAND, turns=(0.0,))
                 beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
                 why = _failure(
                     params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond

@@ -13,6 +13,7 @@ keeps those the mask bears out.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,7 +63,10 @@ def edge_pixels(alpha: np.ndarray, fraction: float = 0.25) -> tuple[np.ndarray, 
 
 
 def hough_squares(
-    alpha: np.ndarray, side_range: tuple[float, float], peaks: int = 4
+    alpha: np.ndarray,
+    side_range: tuple[float, float],
+    peaks: int = 4,
+    check: Callable[[], None] | None = None,
 ) -> list[Hypothesis]:
     """The ``peaks`` best-supported squares in ``alpha`` with a side in ``side_range``
     (px), strongest first, at distinct centres.
@@ -71,7 +75,9 @@ def hough_squares(
     (s, θ, y, x) bins: votes never cross side bins, so each side's θ × y × x
     slice is what it would be alone), as many sides as keep the block and the
     votes under :data:`MAX_CELLS`, so memory stays bounded whatever the range
-    of sides; the votes of a block are one vectorised ``bincount``."""
+    of sides; the votes of a block are one vectorised ``bincount``. ``check``
+    is called before each block (a time budget's clock: a large region's vote
+    is many blocks, each some milliseconds)."""
     u, v, nu, nv, g = edge_pixels(alpha)
     sides = np.arange(side_range[0], side_range[1] + S_BIN / 2, S_BIN)
     if u.size == 0 or sides.size == 0:
@@ -87,6 +93,8 @@ def hough_squares(
     chunk = max(1, MAX_CELLS // per_side)
     found: list[tuple[np.ndarray, ...]] = []
     for first in range(0, sides.size, chunk):
+        if check is not None:
+            check()
         block = slice(first, first + chunk)
         accumulator = _votes((u, v, nu, nv, g), theta_bin, sides[block], steps[block], shape)
         votes, rows, cols, thetas = _side_maxima(accumulator, 10 * peaks)

@@ -1,0 +1,131 @@
+"""Perception's time budget on real photographs (docs/limits.md): ``--timeout`` is
+read in every expensive loop — between colour regions, before every Hough
+transform and fit, and between the blocks of sides a Hough transform votes for —
+so wherever it runs out, perception stops there with exit 4 and one line saying
+where the time went. No test here depends on the machine's speed: the clock is
+made to run out after a given number of readings, or the budget is zero."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from demoplan import budget
+from demoplan.errors import DemoplanError, LimitReachedError
+from demoplan.perception import hough
+from demoplan.perception.hough import hough_squares
+from demoplan.perception.images import perceive_top_view
+from demoplan.perception.labelled import load_labelled
+from tests.hostile.harness import check_refused, run
+
+PHOTOS = Path(__file__).parent / "data" / "photos"
+LARGEST = "langtable_real"
+"""The development set's photograph whose regions are largest (640 × 360 px)."""
+
+
+def _readings(name: str) -> int:
+    """How often perceiving photograph ``name`` reads its clock, with time to spare."""
+    count = 0
+    expired = budget.Clock.expired
+
+    def counting(self: budget.Clock) -> bool:
+        nonlocal count
+        count += 1
+        return expired(self)
+
+    photo = load_labelled(PHOTOS / f"{name}.json")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(budget.Clock, "expired", counting)
+        # a photograph without blocks (exit 1) reads its clock all the same
+        with contextlib.suppress(DemoplanError):
+            perceive_top_view(photo.image, photo.px_per_m, (0.0, 0.0), timeout=1e9)
+    return count
+
+
+_counted: dict[str, int] = {}
+
+
+@settings(max_examples=4, deadline=None)
+@given(share=st.floats(0.0, 0.99))
+def test_a_budget_running_out_anywhere_in_a_real_photograph_stops_it_with_exit_4(
+    share: float,
+) -> None:
+    """The clock runs out at its n-th reading, n anywhere among the readings a whole
+    perception of the photograph makes: perception stops there — exit 4, one line
+    naming ``--timeout`` and the work under way — instead of running on."""
+    total = _counted.setdefault(LARGEST, _readings(LARGEST))
+    assert total > 20  # the clock is read often, not only between regions
+    stop_at = 1 + int(share * total)
+    readings = 0
+
+    def expiring(self: budget.Clock) -> bool:
+        nonlocal readings
+        readings += 1
+        return readings >= stop_at
+
+    photo = load_labelled(PHOTOS / f"{LARGEST}.json")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(budget.Clock, "expired", expiring)
+        with pytest.raises(LimitReachedError) as stopped:
+            perceive_top_view(photo.image, photo.px_per_m, (0.0, 0.0), timeout=1e9)
+    assert readings == stop_at  # stopped at the reading that found the time up
+    assert stopped.value.exit_code == 4
+    message = str(stopped.value)
+    assert "\n" not in message
+    assert "--timeout" in message
+    assert "coloured regions" in message or "colour region" in message
+
+
+def test_a_hough_transform_reads_the_clock_between_its_blocks_of_sides() -> None:
+    """A large region's vote is many blocks of sides (as many as fit in
+    :data:`~demoplan.perception.hough.MAX_CELLS`): the clock is read before each,
+    and a clock that has run out stops the vote at its first block."""
+    rows, cols = np.mgrid[:200, :300]
+    mask = ((np.abs(rows - 100) < 30) & (np.abs(cols - 150) < 30)).astype(float)
+    readings: list[int] = []
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(hough, "MAX_CELLS", 1)  # one side at a time
+        found = hough_squares(mask, (40.0, 80.0), check=lambda: readings.append(1))
+        assert len(readings) == 21  # sides 40, 42, ..., 80
+        assert found and math.isclose(found[0].side, 60.0, abs_tol=2 * hough.S_BIN)
+
+        def out_of_time() -> None:
+            raise LimitReachedError("out of time")
+
+        readings.clear()
+        with pytest.raises(LimitReachedError):
+            hough_squares(mask, (40.0, 80.0), check=out_of_time)
+
+
+@pytest.mark.parametrize("name", [LARGEST, "mrhan_touching"])
+def test_a_zero_budget_on_a_real_photograph_is_exit_4_and_one_line(
+    name: str, tmp_path: Path
+) -> None:
+    """``demoplan perceive PHOTO --timeout 0``: exit 4 and one line naming
+    ``--timeout``, nothing written."""
+    photo = load_labelled(PHOTOS / f"{name}.json")
+    out = tmp_path / "scene.json"
+    answer = run(
+        [
+            "perceive",
+            str(photo.image),
+            "--px-per-m",
+            f"{photo.px_per_m:g}",
+            "--origin",
+            "0",
+            "0",
+            "--timeout",
+            "0",
+            "-o",
+            str(out),
+        ],
+        tmp_path,
+    )
+    check_refused(answer, ["--timeout 0 s"], codes={4})
+    assert not out.exists()
