@@ -444,9 +444,10 @@ def colour_regions(
                 ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
                 alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
             alpha = alpha * (nearest == k) * grown
-            if len(classes_found) == 1:
-                glare = _highlights(crop, lightness[rows, cols], top_face, centre, core, min_area)
-                alpha[glare] = 1.0
+            # enclosed by this class's own clearly coloured pixels: a glint on a red
+            # cube in a row of yellow ones is the red top's, the yellow beside it not
+            glare = _highlights(crop, lightness[rows, cols], top_face, centre, on_class, min_area)
+            alpha[glare] = 1.0
             alpha = _without_strands(alpha, min_area)
             regions.append(
                 ColourRegion(
