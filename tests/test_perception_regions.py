@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.camera import Camera
+from demoplan.perception.colours import name_colour
 from demoplan.perception.labelled import load_labelled, perceive_labelled
 from demoplan.perception.synthetic import COLOURS, TABLE
 
@@ -220,6 +221,86 @@ def test_table_between_a_dark_block_and_a_pen_line_stays_table(
     assert len(near) == 1, [(b.name, b.x, b.y, b.side) for b in found]
     assert _near(near, centre, 1.5)
     assert abs(near[0].side * 1000 - side) < 2.0
+
+
+_UNNAMED_COLOURS = ((107, 48, 51), (41, 118, 85), (150, 60, 150), (40, 110, 120), (90, 130, 40))
+"""Cube colours no palette name is near (a dark red, a bluish green, a magenta, a
+teal, a yellow green), a*b* well apart from each other."""
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    centre=_poses["centre"],
+    yaw=_poses["yaw"],
+    side=_poses["side"],
+    seed=_poses["seed"],
+    pair=st.permutations(range(len(_UNNAMED_COLOURS))).map(lambda order: order[:2]),
+)
+def test_two_touching_blocks_of_two_unnamed_colours_are_two_blocks(
+    centre: Point, yaw: float, side: float, seed: int, pair: list[int]
+) -> None:
+    """Two blocks face to face, flush and without a seam, each of a colour no
+    palette name is near (the real photographs' dark red cube beside a bluish
+    green one): both are ``block``, yet two colours — two blocks found, each
+    where it is, its size kept (not one class whose darker top is taken for the
+    other's side faces)."""
+    colours = [_UNNAMED_COLOURS[k] for k in pair]
+    assert all(name_colour(np.array(rgb)) == "block" for rgb in colours)
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    offset = (c * side / 2, -s * side / 2)
+    first = (centre[0] - offset[0], centre[1] - offset[1])
+    second = (centre[0] + offset[0], centre[1] + offset[1])
+    squares = [
+        (_rectangle(point, yaw, side, side), rgb)
+        for point, rgb in zip((first, second), colours, strict=True)
+    ]
+    image = _paint(squares, _rng(seed))
+    found = detect_blocks(image, CAMERA)
+    assert len(found) == 2, [(b.name, b.x, b.y, b.side) for b in found]
+    for point in (first, second):
+        near = [b for b in found if math.dist((b.x, b.y), _world(point)) < 0.5 * side / 1000]
+        assert len(near) == 1 and _near(near, point, 1.5)
+        assert abs(near[0].side * 1000 - side) < 2.0
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    centre=_poses["centre"],
+    yaw=_poses["yaw"],
+    side=_poses["side"],
+    seed=_poses["seed"],
+    colours=st.permutations(("red", "yellow", "blue", "green")).map(lambda order: order[:2]),
+    glint=st.tuples(st.floats(-0.25, 0.25), st.floats(-0.25, 0.25)),
+)
+def test_a_glint_on_a_block_beside_one_of_another_colour_is_its_top(
+    centre: Point,
+    yaw: float,
+    side: float,
+    seed: int,
+    colours: list[str],
+    glint: Point,
+) -> None:
+    """Two blocks of two colours face to face (a row of cubes), a white glint a
+    quarter of a side across on the first one's top (as the renders' and real cubes'
+    specular highlights): the glint is the first top's, filled into its mask though
+    its region holds two colours — both blocks found, each where it is, its size
+    kept."""
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    offset = (c * side / 2, -s * side / 2)
+    first = (centre[0] - offset[0], centre[1] - offset[1])
+    second = (centre[0] + offset[0], centre[1] + offset[1])
+    squares = [
+        (_rectangle(point, yaw, side, side), COLOURS[colour])
+        for point, colour in zip((first, second), colours, strict=True)
+    ]
+    spot = (first[0] + glint[0] * side, first[1] + glint[1] * side)
+    dot = (spot, (spot[0] + 0.1, spot[1]), side / 4, (250, 250, 250))
+    found = detect_blocks(_paint(squares, _rng(seed), (dot,)), CAMERA)
+    assert len(found) == 2, [(b.name, b.x, b.y, b.side) for b in found]
+    for point in (first, second):
+        near = [b for b in found if math.dist((b.x, b.y), _world(point)) < 0.5 * side / 1000]
+        assert len(near) == 1 and _near(near, point, 1.5)
+        assert abs(near[0].side * 1000 - side) < 2.0
 
 
 def test_a_photograph_of_shapes_that_are_no_cubes_finds_nothing() -> None:

@@ -72,7 +72,10 @@ MAX_PALETTE_COLOURS = 64
 """Colours a palette file may add: a camera tells a few dozen apart at best."""
 GLARE_SLACK = 8.0
 """Grey levels a highlight's channel may fall under the top face's mean (noise)."""
-_SPECIAL = {-2: "black", -3: "grey", -4: "block"}
+UNNAMED = -4
+"""The class of colours no plain colour is near (``block``); the unnamed colours of one
+region that differ are the classes −4, −5, … (:func:`_unnamed_split`)."""
+_SPECIAL = {-2: "black", -3: "grey", UNNAMED: "block"}
 
 PALETTE: dict[str, tuple[float, float, float]] = {
     # brightness-free chromaticity: RGB / max(RGB)
@@ -250,7 +253,7 @@ def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     distance = cdist(normal, chroma)
     labels: np.ndarray = np.argmin(distance, axis=1)
     nearest = distance[np.arange(labels.size), labels]
-    labels[nearest > MAX_CHROMA_DISTANCE] = -4  # no plain colour
+    labels[nearest > MAX_CHROMA_DISTANCE] = UNNAMED  # no plain colour
     # the smallest channel over the largest: near 1 for grey
     labels[np.minimum(np.minimum(red, green), blue) / np.maximum(top, 1.0) > 0.82] = -3
     labels[top < 60] = -2
@@ -397,7 +400,7 @@ def colour_regions(
         chroma_crop = lab[rows, cols, 1:]
         ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
         core_pixels = crop[core]
-        classes = _classify(core_pixels, chroma)
+        classes = _unnamed_split(_classify(core_pixels, chroma), chroma_crop[core], min_area)
         if coloured_image:
             record.shade(classes, core, lightness[rows, cols], rows, cols)
             classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
@@ -441,9 +444,10 @@ def colour_regions(
                 ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
                 alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
             alpha = alpha * (nearest == k) * grown
-            if len(classes_found) == 1:
-                glare = _highlights(crop, lightness[rows, cols], top_face, centre, core, min_area)
-                alpha[glare] = 1.0
+            # enclosed by this class's own clearly coloured pixels: a glint on a red
+            # cube in a row of yellow ones is the red top's, the yellow beside it not
+            glare = _highlights(crop, lightness[rows, cols], top_face, centre, on_class, min_area)
+            alpha[glare] = 1.0
             alpha = _without_strands(alpha, min_area)
             regions.append(
                 ColourRegion(
@@ -489,7 +493,7 @@ def _present_classes(
             continue
         chosen = classes == label
         if chosen.sum() >= min_area:
-            colour = names[label] if label >= 0 else _SPECIAL[int(label)]
+            colour = names[label] if label >= 0 else _SPECIAL[max(int(label), UNNAMED)]
             present.append((colour, chosen))
     return present
 
@@ -577,6 +581,60 @@ def _one_colour_merged(
             groups[first] = (groups[first][0], groups[first][1] | groups[second][1])
             del groups[second]
     return groups
+
+
+def _unnamed_split(classes: np.ndarray, core_chroma: np.ndarray, min_area: float) -> np.ndarray:
+    """The core pixels' classes (``classes``) with those no plain colour is near
+    (:data:`UNNAMED`) parted by colour: halved again and again along their a*b*
+    (``core_chroma``, N × 2) by two-means while the halves' means lie at least
+    :data:`MIN_CHROMA` apart — two colours, as far apart as a block from the table —
+    and each half holds ``min_area`` pixels; the parts are the classes −4, −5, ….
+    A dark red cube beside a bluish green one, neither near a palette colour, is
+    then two classes, not one whose darker part (the red top) would be taken for
+    its side faces; one colour's noise splits it into halves far closer than that."""
+    unnamed = np.flatnonzero(classes == UNNAMED)
+    parts = [unnamed]
+    done: list[np.ndarray] = []
+    while parts:
+        part = parts.pop()
+        halves = _two_means(core_chroma[part])
+        if halves is None or min(halves.sum(), (~halves).sum()) < min_area:
+            done.append(part)
+            continue
+        means = [core_chroma[part][half].mean(axis=0) for half in (halves, ~halves)]
+        if float(np.hypot(*(means[0] - means[1]))) < MIN_CHROMA:
+            done.append(part)
+            continue
+        parts += [part[halves], part[~halves]]
+    split = classes.copy()
+    for number, part in enumerate(sorted(done, key=len, reverse=True)):
+        split[part] = UNNAMED - number
+    return split
+
+
+def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
+    """Which of ``points`` (N × 2) fall in the first of two clusters (Lloyd's
+    iterations from the two ends of their principal axis; deterministic), or
+    ``None`` when fewer than two points differ."""
+    if len(points) < 2:
+        return None
+    centred = points - points.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred[:: max(1, len(points) // 4000)], full_matrices=False)
+    along = centred @ axes[0]
+    if float(along.max() - along.min()) <= 0:
+        return None
+    centres = np.stack([points[np.argmin(along)], points[np.argmax(along)]])
+    first = np.ones(len(points), dtype=bool)
+    for _ in range(steps):
+        distance = cdist(points, centres)
+        first = distance[:, 0] <= distance[:, 1]
+        if first.all() or not first.any():
+            return None
+        moved = np.stack([points[first].mean(axis=0), points[~first].mean(axis=0)])
+        if np.allclose(moved, centres):
+            break
+        centres = moved
+    return first
 
 
 def _without_rims(
