@@ -268,13 +268,16 @@ def valid_moves(c: Compiled, moves: list[Move]) -> bool:
 
 
 def shorten(c: Compiled, moves: list[Move]) -> list[Move]:
-    """``moves`` with every move dropped that the plan can do without."""
+    """``moves`` with every move dropped that the plan can do without: a
+    move whose object's next move can start where it started (the object
+    waits), or whose object's next move can be made in its place (the object
+    goes straight to where that move took it — a parking skipped)."""
     plan = list(moves)
     changed = True
     while changed:
         changed = False
         for index in range(len(plan) - 1, -1, -1):
-            shorter = _without(c, plan, index)
+            shorter = _without(c, plan, index) or _sooner(c, plan, index)
             if shorter is not None:
                 plan, changed = shorter, True
                 break
@@ -286,7 +289,7 @@ def _without(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
     this one started, with any grasp that works), if it is still valid."""
     obj, source, _, _ = plan[index]
     rest = plan[:index] + plan[index + 1 :]
-    following = next((i for i in range(index, len(rest)) if rest[i][0] == obj), None)
+    following = _next_move_of(rest, obj, index)
     if following is None:
         return rest if valid_moves(c, rest) else None
     _, _, target, _ = rest[following]
@@ -299,3 +302,29 @@ def _without(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
         if valid_moves(c, patched):
             return patched
     return None
+
+
+def _sooner(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
+    """The plan with move ``index`` going straight to where the object's next
+    move takes it, and that next move dropped (with any grasp that works),
+    if it is still valid. Where the next move brings it back, :func:`_without`
+    has tried dropping both."""
+    obj, source, _, _ = plan[index]
+    following = _next_move_of(plan, obj, index + 1)
+    if following is None:
+        return None
+    _, _, target, _ = plan[following]
+    if target == source:
+        return None
+    rest = plan[:following] + plan[following + 1 :]
+    for grasp in c.grasps_of[obj]:
+        patched = list(rest)
+        patched[index] = (obj, source, target, grasp)
+        if valid_moves(c, patched):
+            return patched
+    return None
+
+
+def _next_move_of(plan: list[Move], obj: int, start: int) -> int | None:
+    """The index of ``obj``'s first move in ``plan`` from ``start`` on, if any."""
+    return next((i for i in range(start, len(plan)) if plan[i][0] == obj), None)
