@@ -13,7 +13,8 @@ Per case, on this machine:
   calls of ``demoplan.scenes.plan.solve_candidate`` counted by wrapping it
   here (``src/`` is not touched) — against those set aside by their bound;
 - the chosen plan's **length**, whether it is **proved** shortest, its bound;
-- the median wall time of ``plan_in_scene(model, scene, budget=Budget(timeout=T))``
+- the median wall time of
+  ``plan_in_scene(model, prepare(model, scene), clock=Clock(Budget(timeout=T)))``
   (``--timeout``, 120 s: long enough to prove every case here) over
   ``--repeats`` runs (3) for runs under 2 s, one run above; and where it goes:
   ``prepare`` (checking the scene, enumerating the bindings, resolving every

@@ -74,19 +74,17 @@ def test_every_limit_is_read_inside_the_work_on_a_thousand_objects(
         assert lines[0].startswith(f"demoplan: error: {named} reached"), lines[0]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="1.04 GB measured in a fresh clone's venv (1.02 GB in CI under the 2 s default); "
-    "110 MB in the working venv — not understood, planner memory (issue 44)",
-)
 def test_a_thousand_objects_solved_to_the_end_stay_far_from_memory_exhaustion(
     tmp_path: Path,
 ) -> None:
-    """Memory measured without a time limit, so that the search takes the same
-    path on any machine (about 110 MB measured). Under the default 2 s budget a
-    loaded machine ended another path at 1.03 GB, twice (CI and a full run
-    beside busy processes) — a finding for the planner's memory inside a phase
-    the clock ends, not asserted here, where it would depend on the machine's speed."""
+    """Memory measured without a time limit. --timeout inf still gives the
+    early phases shares of an unbounded default: the tight phase, which proves
+    this ring's plan, used to get 2.5 s of it, and where it did not finish in
+    time (a slower environment: 1.04 GB in a fresh clone's venv) the later
+    phases and A* kept thousands of 1,000-object states — 712 MB after 61 s,
+    measured by giving the tight phase no time. Its work is bounded, so
+    without a deadline it now runs to its end: the same path on any machine
+    (55 MB measured)."""
     path = tmp_path / "ring.xml"
     save_problem(ring_problem(1000), path)
     returncode, stderr, peak_kb = _run_alone(

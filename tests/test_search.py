@@ -352,8 +352,12 @@ def test_an_infinite_budget_gives_each_phase_a_finite_share() -> None:
     import math
 
     from demoplan.planning.budget import Budget, Clock
-    from demoplan.planning.search import _UNBOUNDED_SECONDS, _phase_clock
+    from demoplan.planning.search import _UNBOUNDED_SECONDS, PHASES, _phase_clock
 
+    greedy = next(p for p in PHASES if p.name == "greedy")
+    tight = next(p for p in PHASES if p.name == "tight")
     for budget in (Budget(), Budget(timeout=math.inf)):
-        left = _phase_clock(Clock(budget), 0.25).remaining()
-        assert left is not None and 0 < left <= 0.25 * _UNBOUNDED_SECONDS
+        left = _phase_clock(Clock(budget), greedy).remaining()
+        assert left is not None and 0 < left <= greedy.share * _UNBOUNDED_SECONDS
+        # its work bounded, the tight phase runs to its end: no machine-speed path
+        assert _phase_clock(Clock(budget), tight).remaining() is None
