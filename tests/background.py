@@ -68,14 +68,6 @@ JOBS = {
         prepare="tests.shared_experiments:plant_the_users_file",
         audited=True,
     ),
-    "hard-parking": Job(
-        "tests.helpers:hard_parking_problem",
-        (
-            "tests/test_interrupt.py",
-            "tests/hostile/test_interrupt_any.py",
-            "tests/test_plateau.py",
-        ),
-    ),
 }
 
 

@@ -19,8 +19,10 @@ from typing import Any
 import pytest
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
+from demoplan.planning.problem import Problem
 from tests import background
 from tests.shared_experiments import ExperimentsRun
+from tests.support.fixed_problems import load_fixed
 
 LONG_FIRST = (
     # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
@@ -35,7 +37,7 @@ LONG_FIRST = (
     "tests/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
     "tests/test_pddl.py::test_fast_downward_optimal_lengths_match",
 )
-SHARED_FIXTURES = ("experiments_run", "hard_parking")
+SHARED_FIXTURES = ("experiments_run",)
 
 
 def _rank(item: pytest.Item) -> int:
@@ -124,7 +126,7 @@ def experiments_run(
 
 
 @pytest.fixture(scope="session")
-def hard_parking(pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> Any:
-    """A parking problem no search solves in a minute (tests/helpers.py), drawn
-    once per session: the draw takes half a minute."""
-    return shared_result("hard-parking", pytestconfig, tmp_path_factory)
+def hard_parking() -> Problem:
+    """A parking problem no search solves in a minute, checked in as a file
+    (tests/data/hard-parking.xml, tests/support/fixed_problems.py)."""
+    return load_fixed("hard-parking")

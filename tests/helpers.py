@@ -120,12 +120,3 @@ def wait_for_signal_handlers(process: subprocess.Popen[str], limit: float = 120.
         if not caught or int(caught[0], 16) >> (signal.SIGTERM - 1) & 1:
             return
         time.sleep(0.005)
-
-
-def hard_parking_problem(folder: Path | None = None) -> Any:
-    """A problem no search solves in a minute: 30 objects of the crowded
-    parking family (Fast Downward's lama-first finds no plan in 60 s either).
-    Drawing it takes about half a minute (tests/background.py shares it)."""
-    from tests.planning_families import PARKING_FAMILIES, parking_problem
-
-    return parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"])

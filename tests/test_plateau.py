@@ -30,7 +30,7 @@ def test_a_plan_the_dive_finds_is_valid_and_shortest(problem: Problem) -> None:
 
 
 def test_the_dive_stops_at_its_state_limit(hard_parking: Problem) -> None:
-    # A crowded draw the dive cannot finish (tests/helpers.py: hard_parking_problem):
+    # A crowded draw the dive cannot finish (tests/data/hard-parking.xml):
     # it gives up at the states it may keep.
     c = compile_problem(hard_parking)
     bounds = LowerBounds(c)
