@@ -16,15 +16,12 @@ from demoplan.cli import app
 from demoplan.learning.modelfile import load_model, model_to_dict
 from tests.helpers import EXAMPLES, demo, raw, write
 from tests.learning_families import PAPER_TABLE_II, PAPER_TABLE_III
+from tests.support.cli import invoke
 
 SET_TABLE = EXAMPLES / "set_table"
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
 # Without the script (an unusual install), run the same entry point through python.
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def assert_one_line_error(result: Any, *fragments: str) -> str:

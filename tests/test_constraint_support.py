@@ -5,14 +5,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.errors import InputError
 from demoplan.learning import TaskModelLearner
 from demoplan.learning.constraints import constraint_support, learn_constraints
@@ -20,6 +17,7 @@ from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 
 STATES = "ABCDEFG"
 # Families of demonstrations: 1-8 sequences over up to 7 states, a state
@@ -124,10 +122,6 @@ def test_the_model_file_keeps_support_and_min_support(tmp_path: Path) -> None:
     del document["support"], document["settings"]["min_support"]
     (tmp_path / "old.json").write_text(json.dumps(document))
     assert load_model(tmp_path / "old.json").settings.min_support == 1
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @settings(max_examples=5, deadline=None)

@@ -9,20 +9,15 @@ from typing import Any
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.perception.blocks import detect_blocks
 from demoplan.perception.camera import Camera, load_image, save_image
 from demoplan.perception.synthetic import SyntheticBlock, render_blocks
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 
 SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 CAMERA = Camera(1000.0, (0.0, 0.0))
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @pytest.fixture(scope="module")

@@ -10,10 +10,8 @@ from typing import Any
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
 import demoplan
-from demoplan.cli import app
 from demoplan.errors import InputError, UsageError
 from demoplan.execution.executor import ExecutionSettings, RunReport, execute
 from demoplan.execution.faults import Faults, parse_faults
@@ -23,6 +21,7 @@ from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.helpers import EXAMPLES, paper_model
+from tests.support.cli import invoke
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
@@ -157,10 +156,6 @@ def blocks_model_file(
     path = tmp_path_factory.mktemp("run") / "blocks.json"
     save_model(blocks[0], path)
     return path
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def test_run_json_report(blocks_model_file: Path, tmp_path: Path) -> None:

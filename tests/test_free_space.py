@@ -17,9 +17,7 @@ import pytest
 import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.execution.executor import execute
 from demoplan.execution.faults import parse_faults
 from demoplan.execution.kinematic import KinematicWorld
@@ -42,16 +40,13 @@ from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 
 KIT = EXAMPLES / "kitting"
 KIT_SCENE = KIT / "scene-manual-on-motor.json"
 FINGER = 0.02  # the default gripper's finger radius (m)
 TRAY = {"position": [0.05, -0.05, 0.0], "yaw": 90, "size": [0.3, 0.2, 0.02]}
 """A 30 × 20 cm tray beside the kit (an object the model never saw: clutter)."""
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @pytest.fixture(scope="module")

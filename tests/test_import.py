@@ -9,19 +9,17 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import h5py
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.errors import InputError
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import import_recording
 from demoplan.segmentation.readers.hdf5 import model_layout, read_recording
 from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
+from tests.support.cli import invoke
 
 OBJECTS = {
     "SawyerPickPlace": ["Milk", "Bread", "Cereal", "Can"],
@@ -48,10 +46,6 @@ def recordings() -> dict[str, Path]:
         return robosuite_demonstrations()
     except RobosuiteDataError as exc:
         skip_or_fail(exc)
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def model_xml(path: Path, key: str = "demo_1") -> str:

@@ -11,18 +11,12 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.wording import plural
 from tests.helpers import EXAMPLES
+from tests.support.cli import exit_and_output as invoke
 
 SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
-
-
-def invoke(*args: str | Path) -> tuple[int, str, str]:
-    result = CliRunner().invoke(app, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
 
 
 def test_the_chosen_demonstration_has_one_number_everywhere(tmp_path: Path) -> None:

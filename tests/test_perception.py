@@ -6,15 +6,12 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.colours import name_colour
@@ -26,6 +23,7 @@ from demoplan.perception.synthetic import (
     render_blocks,
     touching_pair,
 )
+from tests.support.cli import invoke
 
 CAMERA = Camera(1000.0, (0.0, 0.0))  # 1 px = 1 mm, the setting
 
@@ -193,10 +191,6 @@ def test_a_held_block_is_left_out() -> None:
     red = SyntheticBlock("red", 0.15, 0.1, 10.0, 0.04)
     tracker = BlockTracker([tracked(red)])
     assert tracker.update([], held="red") == {}
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def test_perceive_cli_json_and_stacking(tmp_path: Path) -> None:

@@ -16,9 +16,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.model import Pose
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, detect_blocks
 from demoplan.perception.camera import Camera, save_image
@@ -26,14 +24,11 @@ from demoplan.perception.stacking import BlockTracker, TrackedBlock, scene_docum
 from demoplan.perception.synthetic import COLOURS, SyntheticBlock, render_blocks
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import load_scene
+from tests.support.cli import invoke
 
 CAMERA = Camera(1000.0, (0.0, 0.0))  # 1 px = 1 mm
 SIDE = 0.04
 TIGHT = PerceptionSettings(min_side=0.85 * SIDE, max_side=1.15 * SIDE)  # as --side 0.04
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def apart(a: SyntheticBlock, b: SyntheticBlock, gap: float = 0.01) -> bool:

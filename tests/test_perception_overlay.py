@@ -12,15 +12,12 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.commands.execution import perceive
 from demoplan.perception.blocks import PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.calibrated import perceive_photograph
@@ -32,6 +29,7 @@ from demoplan.perception.overlay import FOUND_COLOUR, REJECTED_COLOUR, square_co
 from demoplan.perception.photos import PhotoRig, render_photo, top_camera
 from demoplan.perception.pinhole import PinholeCamera, render_table
 from demoplan.perception.synthetic import COLOURS, SyntheticBlock, render_blocks
+from tests.support.cli import invoke
 
 CAMERA = Camera(1000.0, (0.0, 0.0))  # 1 px = 1 mm
 SIDE = 0.04
@@ -39,10 +37,6 @@ BLOCKS = [
     SyntheticBlock("red", 0.10, 0.10, 10.0, SIDE),
     SyntheticBlock("blue", 0.30, 0.22, -25.0, SIDE),
 ]
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def pixel(camera: Camera, height: int, x: float, y: float) -> tuple[float, float]:

@@ -12,9 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.errors import InputError
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
@@ -29,15 +27,12 @@ from demoplan.perception.sequence import (
     hand_mask,
     top_view_detector,
 )
+from tests.support.cli import invoke
 
 EXAMPLE = Path(__file__).parent.parent / "examples" / "blocks" / "demonstrations.json"
 PYRAMID_CAMERA = Camera(1000.0, (0.0, -0.15))  # 500 × 400 px: x 0–0.5 m, y −0.15–0.25 m
 SIDE = 0.04
 NEAR = PerceptionSettings(min_side=0.85 * SIDE, max_side=1.15 * SIDE)
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def perceived(demo: Demonstration, camera: Camera, film: FilmSettings, rng: int) -> Demonstration:

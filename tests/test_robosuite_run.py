@@ -14,16 +14,14 @@ import importlib.util
 import json
 import os
 from pathlib import Path
-from typing import Any
 
 import pytest
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.learning.modelfile import model_to_dict
 from demoplan.model import TaskModel
 from tests.helpers import EXAMPLES
 from tests.robosuite_data import RobosuiteDataError, skip_or_fail
+from tests.support.cli import invoke
 
 INSTALLED = importlib.util.find_spec("robosuite") is not None
 MISSING = (
@@ -40,10 +38,6 @@ def robosuite_installed() -> None:
         if os.environ.get("DEMOPLAN_REQUIRE_ROBOSUITE") == "1":
             pytest.fail(MISSING)
         pytest.skip(MISSING)
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @pytest.fixture(scope="module")

@@ -20,11 +20,9 @@ import matplotlib
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
 matplotlib.use("Agg")
 
-from demoplan.cli import app
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import demonstration_to_dict, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
@@ -33,6 +31,7 @@ from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel
 from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
 from demoplan.plotting.labels import role_label
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 from tests.table_for_two import (
     SWAPS,
     TYPES,
@@ -67,10 +66,6 @@ def demo_files(demos: list[Demonstration], tmp_path_factory: pytest.TempPathFact
         path.write_text(json.dumps(demonstration_to_dict(demo)))
         paths.append(path)
     return paths
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def table_rows(text: str, title: str) -> list[tuple[str, ...]]:

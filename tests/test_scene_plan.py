@@ -13,9 +13,7 @@ from typing import Any
 
 import pytest
 import yaml
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.planning.problem import Action
@@ -25,6 +23,7 @@ from demoplan.scenes.plan import plan_in_scene, scene_problems
 from demoplan.scenes.scene import load_scene
 from tests.helpers import EXAMPLES, paper_model
 from tests.scene_checker import check_scene_plan
+from tests.support.cli import invoke
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
@@ -42,10 +41,6 @@ def table_model() -> TaskModel:
 
 def sizes_of(model: TaskModel) -> dict[str, tuple[str, list[float]]]:
     return {n: (g.shape, list(g.size)) for d in model.demonstrations for n, g in d.objects}
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @pytest.fixture(scope="module")

@@ -6,22 +6,16 @@ import json
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
 
 import pytest
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.commands.inputs import load_inputs
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import write_bag, write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 from tests.test_tf_tree import SET_TABLE, robot_tree
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 @pytest.fixture(scope="module")

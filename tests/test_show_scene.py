@@ -14,20 +14,14 @@ matplotlib.use("Agg")
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.scene import scene_from_document
 from tests.helpers import EXAMPLES, write
+from tests.support.cli import exit_and_output as invoke
 
 PYRAMID = EXAMPLES / "scenes" / "pyramid-fig4.json"
 BLOCK = 0.04
-
-
-def invoke(*args: str | Path) -> tuple[int, str, str]:
-    result = CliRunner().invoke(app, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
 
 
 def blocks_scene(positions: list[tuple[float, float]]) -> dict[str, Any]:

@@ -8,22 +8,17 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
 from tests.helpers import EXAMPLES
 from tests.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.cli import invoke
 from tests.test_problem_xml import BOMB
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"
 LINE = re.compile(r"(GRASP|PUT_DOWN) (\S+) (\S+) (\S+)")
-
-
-def invoke(*args: str | Path) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def one_line_error(result: Any, code: int, *fragments: str) -> str:

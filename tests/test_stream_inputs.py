@@ -15,25 +15,20 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import quat_from_rpy
 from demoplan.segmentation import write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from tests.helpers import EXAMPLES
+from tests.support.cli import invoke
 
 KITTING = load_demonstrations([EXAMPLES / "kitting" / "demonstrations.json"])
 SET_TABLE = load_demonstrations([EXAMPLES / "set_table"])
 FOLDER_SETTINGS = settings(
     max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
-
-
-def invoke(*args: Any) -> Any:
-    return CliRunner().invoke(app, [str(a) for a in args])
 
 
 def write_scaled(source: Path, target: Path, factor: float, comment: str | None = None) -> None:
