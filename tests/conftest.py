@@ -54,7 +54,58 @@ def _rank(item: pytest.Item) -> int:
     return len(LONG_FIRST) + 2
 
 
+SLOW = (
+    # Whole folders and files: each test starts demoplan processes, a browser,
+    # Ray or a MuJoCo arm run, or reads the shared experiments run (minutes).
+    "hostile/",  # one or more demoplan processes per case (about a thousand)
+    "test_docs_shell.py",
+    "test_docs_generated.py",
+    "test_experiments.py",
+    "test_figure_labels.py",
+    "test_interrupt.py",
+    "test_launcher.py",
+    "test_segment_cli.py",
+    "test_self_contained.py",
+    "test_planning_limits.py",
+    "test_arm.py",
+    "test_arm_flat.py",
+    "test_arm_layouts.py",
+    "test_drops.py",
+    "test_landmark_physics.py",
+    "test_robosuite_run.py",
+    "test_real_recordings.py",
+    "test_perception_real_photos.py",
+    # Single tests: Ray, the CLI's processes, long physics.
+    "test_evaluate.py::test_ray_equals_a_serial_run",
+    "test_evaluate.py::test_a_worker_killed_from_outside",
+    "test_evaluate.py::test_a_killed_worker_s_run",
+    "test_evaluate.py::test_resume_after_ctrl_c",
+    "test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
+    "test_evaluate.py::test_evaluate_s_usage_errors",
+    "test_evaluate.py::test_a_settings_file_out_of_bounds",
+    "test_evaluate.py::test_every_run_repeats_with_demoplan_run",
+    "test_evaluate.py::test_bad_input_is_one_line",
+    "test_evaluate.py::test_a_terminal_sees_runs_done",
+    "test_evaluate.py::test_the_worst_runs_link_their_storyboard",
+    "test_evaluate.py::test_a_model_without_shapes_is_refused",
+)
+"""Tests marked ``slow`` here (beside those marked in their files), by their
+node id below tests/ (a folder, a file, or a file and a test name's start):
+``python -m pytest -m "not slow"`` is the quick loop (tests/README.md)."""
+
+TESTS = Path(__file__).resolve().parent
+
+
+def _below_tests(item: pytest.Item) -> str:
+    file = Path(str(item.path)).resolve().relative_to(TESTS).as_posix()
+    return f"{file}::{item.name}"
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        if _below_tests(item).startswith(SLOW):
+            item.add_marker(pytest.mark.slow)
     items.sort(key=_rank)  # stable: each group in collection order
 
 
