@@ -57,54 +57,55 @@ def _rank(item: pytest.Item) -> int:
 SLOW = (
     # Whole folders and files: each test starts demoplan processes, a browser,
     # Ray or a MuJoCo arm run, or reads the shared experiments run (minutes).
-    "hostile/",  # one or more demoplan processes per case (about a thousand)
-    "test_docs_shell.py",
-    "test_docs_generated.py",
-    "test_experiments.py",
-    "test_figure_labels.py",
-    "test_interrupt.py",
-    "test_launcher.py",
-    "test_segment_cli.py",
-    "test_self_contained.py",
-    "test_planning_limits.py",
-    "test_arm.py",
-    "test_arm_flat.py",
-    "test_arm_layouts.py",
-    "test_drops.py",
-    "test_landmark_physics.py",
-    "test_robosuite_run.py",
-    "test_real_recordings.py",
-    "test_perception_real_photos.py",
+    "tests/hostile/",  # one or more demoplan processes per case (about a thousand)
+    "tests/test_docs_shell.py",
+    "tests/test_docs_generated.py",
+    "tests/test_experiments.py",
+    "tests/test_figure_labels.py",
+    "tests/test_interrupt.py",
+    "tests/test_launcher.py",
+    "tests/test_segment_cli.py",
+    "tests/test_self_contained.py",
+    "tests/test_planning_limits.py",
+    "tests/test_arm.py",
+    "tests/test_arm_flat.py",
+    "tests/test_arm_layouts.py",
+    "tests/test_drops.py",
+    "tests/test_landmark_physics.py",
+    "tests/test_robosuite_run.py",
+    "tests/test_real_recordings.py",
+    "tests/test_perception_real_photos.py",
     # Single tests: Ray, the CLI's processes, long physics.
-    "test_evaluate.py::test_ray_equals_a_serial_run",
-    "test_evaluate.py::test_a_worker_killed_from_outside",
-    "test_evaluate.py::test_a_killed_worker_s_run",
-    "test_evaluate.py::test_resume_after_ctrl_c",
-    "test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
-    "test_evaluate.py::test_evaluate_s_usage_errors",
-    "test_evaluate.py::test_a_settings_file_out_of_bounds",
-    "test_evaluate.py::test_every_run_repeats_with_demoplan_run",
-    "test_evaluate.py::test_bad_input_is_one_line",
-    "test_evaluate.py::test_a_terminal_sees_runs_done",
-    "test_evaluate.py::test_the_worst_runs_link_their_storyboard",
-    "test_evaluate.py::test_a_model_without_shapes_is_refused",
+    "tests/test_evaluate.py::test_ray_equals_a_serial_run",
+    "tests/test_evaluate.py::test_a_worker_killed_from_outside",
+    "tests/test_evaluate.py::test_a_killed_worker_s_run",
+    "tests/test_evaluate.py::test_resume_after_ctrl_c",
+    "tests/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
+    "tests/test_evaluate.py::test_evaluate_s_usage_errors",
+    "tests/test_evaluate.py::test_a_settings_file_out_of_bounds",
+    "tests/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
+    "tests/test_evaluate.py::test_bad_input_is_one_line",
+    "tests/test_evaluate.py::test_a_terminal_sees_runs_done",
+    "tests/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
+    "tests/test_evaluate.py::test_a_model_without_shapes_is_refused",
 )
 """Tests marked ``slow`` here (beside those marked in their files), by their
-node id below tests/ (a folder, a file, or a file and a test name's start):
+node id (a folder, a file, or a file and a test name's start):
 ``python -m pytest -m "not slow"`` is the quick loop (tests/README.md)."""
 
-TESTS = Path(__file__).resolve().parent
+ROOT = Path(__file__).resolve().parents[1]
 
 
-def _below_tests(item: pytest.Item) -> str:
-    file = Path(str(item.path)).resolve().relative_to(TESTS).as_posix()
+def _node(item: pytest.Item) -> str:
+    """``tests/…/test_x.py::test_name[…]``, wherever pytest was started."""
+    file = Path(str(item.path)).resolve().relative_to(ROOT).as_posix()
     return f"{file}::{item.name}"
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
-        if _below_tests(item).startswith(SLOW):
+        if _node(item).startswith(SLOW):
             item.add_marker(pytest.mark.slow)
     items.sort(key=_rank)  # stable: each group in collection order
 
