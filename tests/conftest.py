@@ -1,4 +1,4 @@
-"""Results several test files share (tests/background.py), computed once per
+"""Results several test files share (tests/support/background.py), computed once per
 session: under pytest-xdist in a process of their own that the controller
 starts as soon as the workers have collected a test that reads one.
 
@@ -20,9 +20,9 @@ import pytest
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
 from demoplan.planning.problem import Problem
-from tests import background
-from tests.shared_experiments import ExperimentsRun
+from tests.support import background
 from tests.support.fixed_problems import load_fixed
+from tests.support.shared_experiments import ExperimentsRun
 
 LONG_FIRST = (
     # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
@@ -172,7 +172,7 @@ def shared_result(
 def experiments_run(
     pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory
 ) -> ExperimentsRun:
-    """``demoplan experiments`` run once per session (tests/shared_experiments.py)."""
+    """``demoplan experiments`` run once per session (tests/support/shared_experiments.py)."""
     run: ExperimentsRun = shared_result("experiments", pytestconfig, tmp_path_factory)
     return run
 

@@ -29,7 +29,7 @@ from demoplan.execution.arm import (
     choose_tool,
 )
 from demoplan.scenes.scene import Scene, SceneObject
-from tests.lunch_box import LUNCH, lunch_demonstrations
+from tests.support.lunch_box import LUNCH, lunch_demonstrations
 
 CUP_CARRIES = 0.44
 """kg: the heaviest load the 5 N cup carries in the trial carry, whatever the

@@ -1,5 +1,5 @@
 """The arm grasps what it accepted: over cluttered household layouts
-(tests/arm_layouts.py), what its check before a run accepts it carries at the
+(tests/support/arm_layouts.py), what its check before a run accepts it carries at the
 first attempt, and what the check refuses is named before the arm moves — a
 reach refusal with the arm's base and reach. The measured rate over a large
 sample is benchmarks/arm_grasps.py's; here a few layouts every run. And the
@@ -18,7 +18,7 @@ from demoplan.execution.runner import run_task
 from demoplan.learning import learn
 from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import scene_from_document
-from tests.arm_layouts import attempt_all, layout
+from tests.support.arm_layouts import attempt_all, layout
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("mujoco") is None or importlib.util.find_spec("mink") is None,

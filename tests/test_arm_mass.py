@@ -20,7 +20,7 @@ from demoplan.cli import app
 from demoplan.documents.masses import MAX_DENSITY
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")

@@ -34,8 +34,8 @@ from demoplan.model import TaskModel
 from demoplan.scenes.plan import ScenePlan
 from demoplan.scenes.problems import pose_of
 from demoplan.scenes.scene import Scene
-from tests.helpers import EXAMPLES, paper_model
-from tests.identical_families import table_for_two, table_scene
+from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.identical_families import table_for_two, table_scene
 
 pytest.importorskip("behaviortreepy")
 

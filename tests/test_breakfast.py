@@ -1,4 +1,4 @@
-"""A user's own task end to end: the breakfast tray (tests/breakfast.py).
+"""A user's own task end to end: the breakfast tray (tests/support/breakfast.py).
 
 A family of tasks drawn by hypothesis — the tray anywhere and at any yaw in
 every demonstration, 3–5 demonstrations, 5–15 mm scatter — learned from the
@@ -27,7 +27,7 @@ from demoplan.model import Pose, TaskModel
 from demoplan.rotations import rpy_from_quat
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.scene import scene_from_document
-from tests.breakfast import (
+from tests.support.breakfast import (
     LAYOUT,
     demonstration_documents,
     draw_family,
@@ -249,7 +249,7 @@ def test_a_kit_tray_placed_anywhere_stays_and_is_filled_where_it_stands(
     fills it, every item within 4 mm of its place in the turned tray (the
     tray is a rectangle: its place by either of its two frames, the same for
     every item)."""
-    from tests.breakfast import carried_tray_documents, carried_tray_scene, laid_out
+    from tests.support.breakfast import carried_tray_documents, carried_tray_scene, laid_out
 
     family = draw_family(seed, count, scatter)
     spots = np.array([t[:2] for t in family.trays])
@@ -286,7 +286,7 @@ def test_a_kit_tray_placed_anywhere_stays_and_is_filled_where_it_stands(
 def test_the_states_table_and_the_model_file_say_anywhere(tmp_path: Path) -> None:
     from demoplan.learning.modelfile import load_model, save_model
     from demoplan.learning.tables import state_rows
-    from tests.breakfast import carried_tray_documents
+    from tests.support.breakfast import carried_tray_documents
 
     documents = carried_tray_documents(draw_family(3, 3, 0.004), 3)
     demos = [
@@ -324,7 +324,7 @@ def _kettle_documents(trays: tuple[tuple[float, float, float], ...]) -> list[dic
     same place (0.5, 0) every time — where the trays' mean is."""
     from dataclasses import replace
 
-    from tests.breakfast import carried_tray_documents
+    from tests.support.breakfast import carried_tray_documents
 
     family = replace(draw_family(7, len(trays), 0.004), trays=trays)
     documents = carried_tray_documents(family, 7)
@@ -349,7 +349,7 @@ def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
 
     from demoplan.scenes.geometry import footprint
     from demoplan.scenes.scene import yaw_of
-    from tests.breakfast import TRAY, carried_tray_scene, laid_out
+    from tests.support.breakfast import TRAY, carried_tray_scene, laid_out
 
     trays = ((0.2, 0.0, 90.0), (0.8, 0.0, 90.0), (0.5, 0.36, 0.0), (0.5, -0.36, 0.0))
     documents = _kettle_documents(trays)

@@ -6,7 +6,7 @@ from demoplan.learning import learn
 from demoplan.learning.changes import model_changes
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 
 def test_a_new_demonstration_reports_the_states_and_constraints_it_adds() -> None:

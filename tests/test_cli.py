@@ -14,9 +14,9 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.learning.modelfile import load_model, model_to_dict
-from tests.helpers import EXAMPLES, demo, raw, write
-from tests.learning_families import PAPER_TABLE_II, PAPER_TABLE_III
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES, demo, raw, write
+from tests.support.learning_families import PAPER_TABLE_II, PAPER_TABLE_III
 
 SET_TABLE = EXAMPLES / "set_table"
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script

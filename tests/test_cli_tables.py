@@ -17,8 +17,8 @@ from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
-from tests.fixture_families import fixture_task
-from tests.helpers import EXAMPLES
+from tests.support.fixture_families import fixture_task
+from tests.support.helpers import EXAMPLES
 
 
 def rendered(model: TaskModel, width: int = 80) -> str:
@@ -81,7 +81,7 @@ def test_long_object_names_are_never_cut(names: list[str], oriented: bool) -> No
 def test_the_compact_table_names_a_reference_its_orientation_turns_with_once(
     seed: int, items: int, demos: int
 ) -> None:
-    """A lunch box never turned in the demonstrations (tests/fixture_families.py):
+    """A lunch box never turned in the demonstrations (tests/support/fixture_families.py):
     every item's orientation turns with its position's reference, and the
     compact table's one reference column says so without the name twice
     (``lunchbox; turns with it: never seen turned``, not ``lunchbox / turns

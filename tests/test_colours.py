@@ -19,7 +19,7 @@ from matplotlib.colors import to_hex
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
 from demoplan.plotting.figures import plot_demonstration
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 
 def test_an_object_has_one_colour_in_every_demonstration_figure() -> None:

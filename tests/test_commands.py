@@ -16,7 +16,7 @@ from demoplan.commands import execution, learning, planning
 from demoplan.learning.modelfile import save_model
 from demoplan.scenes import plan as scene_plan
 from demoplan.scenes.plan import SceneNoPlanError
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 

@@ -16,8 +16,8 @@ from demoplan.learning.constraints import constraint_support, learn_constraints
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, save_model
 from demoplan.learning.settings import LearningSettings, paper_overrides
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
 
 STATES = "ABCDEFG"
 # Families of demonstrations: 1-8 sequences over up to 7 states, a state

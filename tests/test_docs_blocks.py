@@ -1,11 +1,11 @@
-"""The comparison the docs test makes (tests/docs_blocks.py): what a block
+"""The comparison the docs test makes (tests/support/docs_blocks.py): what a block
 shows against a real output — that it fails when the output changes."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from tests.docs_blocks import blocks, mismatch, without_time_limit
+from tests.support.docs_blocks import blocks, mismatch, without_time_limit
 
 OUTPUT = """Candidate goals
 ┏━━━━━━━━━━━━━━━┳━━━━━━━━━┓

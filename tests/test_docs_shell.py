@@ -1,5 +1,5 @@
 """Every shell block of README.md, docs/ and the examples' READMEs runs, and
-prints what the block shows (see tests/docs_blocks.py for the comparison);
+prints what the block shows (see tests/support/docs_blocks.py for the comparison);
 every Python block runs. Each document's blocks run in order, in a fresh
 folder where ``examples/``, ``benchmarks/`` and ``docs/`` are the
 repository's, so a block may use what an earlier one wrote.
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.docs_blocks import ROOT, Block, blocks, documents, mismatch, without_time_limit
+from tests.support.docs_blocks import ROOT, Block, blocks, documents, mismatch, without_time_limit
 
 TIMEOUT = 900
 """Seconds per command: a hang guard only (an arm run takes 70-90 s alone, several
@@ -99,7 +99,11 @@ def _provide(document: Path, folder: Path) -> None:
     robosuite's demo.hdf5 (docs/segmentation.md), from PyPI, cached."""
     if document.name != "segmentation.md":
         return
-    from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
+    from tests.support.robosuite_data import (
+        RobosuiteDataError,
+        robosuite_demonstrations,
+        skip_or_fail,
+    )
 
     try:
         source = robosuite_demonstrations()["Stack"]

@@ -13,8 +13,8 @@ import pytest
 from demoplan.perception.blocks import detect_blocks
 from demoplan.perception.camera import Camera, load_image, save_image
 from demoplan.perception.synthetic import SyntheticBlock, render_blocks
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
 
 SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 CAMERA = Camera(1000.0, (0.0, 0.0))

@@ -43,8 +43,8 @@ from demoplan.learning import learn
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
-from tests.helpers import wait_for_signal_handlers
-from tests.lunch_box import lunch_demonstrations
+from tests.support.helpers import wait_for_signal_handlers
+from tests.support.lunch_box import lunch_demonstrations
 
 ROOT = Path(__file__).resolve().parent.parent
 EXPERIMENTS = {

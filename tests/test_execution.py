@@ -20,8 +20,8 @@ from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.helpers import EXAMPLES, paper_model
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES, paper_model
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"

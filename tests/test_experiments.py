@@ -14,14 +14,14 @@ from demoplan.cli import app
 from demoplan.experiments import run_experiments
 from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import load_model
-from tests.browser import CHROMIUM_ARGS, chromium
-from tests.shared_experiments import ExperimentsRun
+from tests.support.browser import CHROMIUM_ARGS, chromium
+from tests.support.shared_experiments import ExperimentsRun
 
 
 @pytest.fixture(scope="module")
 def report(experiments_run: ExperimentsRun) -> Path:
     """The folder ``demoplan experiments`` wrote (run once for the session,
-    tests/shared_experiments.py)."""
+    tests/support/shared_experiments.py)."""
     out = experiments_run.report  # --out report, run in its parent folder
     assert experiments_run.exit_code == 0, experiments_run.stderr
     assert "Report page: report/report.html" in experiments_run.output

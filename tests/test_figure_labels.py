@@ -26,7 +26,7 @@ from matplotlib.transforms import Bbox
 
 from demoplan.plotting.colours import object_colour
 from demoplan.plotting.figures import Leader, observing_saved_figures, place_boxes
-from tests.shared_experiments import AxesRecord, ExperimentsRun, text_box
+from tests.support.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (
     "experiment1-set-table-demonstrations.png",
@@ -40,7 +40,7 @@ REPORT_FIGURES = (
 @pytest.fixture(scope="module")
 def figures(experiments_run: ExperimentsRun) -> dict[str, list[AxesRecord]]:
     """Every figure ``demoplan experiments`` writes, by its path under the
-    output folder (the session's run, tests/shared_experiments.py)."""
+    output folder (the session's run, tests/support/shared_experiments.py)."""
     assert experiments_run.exit_code == 0, experiments_run.output
     return experiments_run.figures
 
@@ -238,7 +238,7 @@ def test_kinematic_storyboard_frames_keep_their_names_apart(tmp_path: Path) -> N
     from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.learning.settings import PAPER_SETTINGS
     from demoplan.scenes.scene import load_scene
-    from tests.helpers import EXAMPLES
+    from tests.support.helpers import EXAMPLES
 
     model = learn(load_demonstrations([EXAMPLES / "set_table"]), settings=PAPER_SETTINGS)
     scene = load_scene(EXAMPLES / "scenes" / "set-table-cluttered.json")

@@ -39,8 +39,8 @@ from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
 
 KIT = EXAMPLES / "kitting"
 KIT_SCENE = KIT / "scene-manual-on-motor.json"

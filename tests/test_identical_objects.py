@@ -2,7 +2,7 @@
 executed with instances that may swap roles (docs/learning.md and
 docs/planning.md, "Identical objects").
 
-The tasks are generated (tests/identical_families.py) with what was meant per
+The tasks are generated (tests/support/identical_families.py) with what was meant per
 seat, slot or level, so every assertion checks the learned roles against that
 truth, whatever the instances were called. Plans are checked against an
 independent count (each object away from its target moves at least once) and
@@ -36,7 +36,7 @@ from demoplan.scenes.scene import Scene
 from demoplan.segmentation.streams import StreamOptions
 from demoplan.segmentation.synthetic import stream_from_demonstration
 from demoplan.segmentation.writers import write_csv
-from tests.identical_families import (
+from tests.support.identical_families import (
     SEATS,
     TABLE_TYPES,
     Taught,
@@ -47,7 +47,7 @@ from tests.identical_families import (
     tower_scene,
     tower_with_two_reds,
 )
-from tests.learning_families import shifted_scene_family
+from tests.support.learning_families import shifted_scene_family
 
 UNLIMITED = Budget(timeout=math.inf)
 

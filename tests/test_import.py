@@ -1,7 +1,7 @@
 """`demoplan import`: robosuite / robomimic HDF5 recordings → demonstration files.
 
 The real data are robosuite's human demonstrations from its 0.3.0 and 1.0.0
-source distributions (:mod:`tests.robosuite_data`); the bad inputs are made
+source distributions (:mod:`tests.support.robosuite_data`); the bad inputs are made
 here with h5py.
 """
 
@@ -18,8 +18,8 @@ from demoplan.errors import InputError
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import import_recording
 from demoplan.segmentation.readers.hdf5 import model_layout, read_recording
-from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
 from tests.support.cli import invoke
+from tests.support.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
 
 OBJECTS = {
     "SawyerPickPlace": ["Milk", "Bread", "Cereal", "Can"],

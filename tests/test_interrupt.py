@@ -17,7 +17,7 @@ import pytest
 
 from demoplan.planning.problem import Problem
 from demoplan.planning.xml import save_problem
-from tests.helpers import wait_for_signal_handlers
+from tests.support.helpers import wait_for_signal_handlers
 
 HANG_SECONDS = 30.0
 """Seconds from the signal to the exit beyond which the search is taken not to

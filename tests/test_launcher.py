@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 from demoplan.cli import app
 from demoplan.cli.launcher import SOLVE_OPTIONS, SolveOptions, parse_solve_options, run_solve
 from demoplan.planning.xml import save_problem
-from tests.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_problem_xml import BOMB
 from tests.test_solve_cli import PAPER, two_objects
 

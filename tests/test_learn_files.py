@@ -10,7 +10,7 @@ import pytest
 from demoplan.commands.learning import learn_files, read_requirements
 from demoplan.errors import InputError
 from demoplan.learning.modelfile import load_model
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 BLOCKS = EXAMPLES / "blocks" / "demonstrations.json"
 

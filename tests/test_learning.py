@@ -12,7 +12,7 @@ from demoplan.learning import update
 from demoplan.learning.constraints import ordered_pairs
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, Step, TaskModel
-from tests.helpers import EXAMPLES, random_task_demonstrations
+from tests.support.helpers import EXAMPLES, random_task_demonstrations
 
 
 def _signature(model: TaskModel, label: str) -> tuple[object, ...]:

@@ -1,5 +1,5 @@
 """What learning must produce at default settings over generated families of
-demonstrations (hypothesis; generators in ``tests/learning_families.py``).
+demonstrations (hypothesis; generators in ``tests/support/learning_families.py``).
 
 The families are the acceptance list of state generation (docs/learning.md): scenes
 shifted by metres with 1 cm noise, a fixture turned by ±30° carrying its
@@ -26,7 +26,7 @@ from demoplan.model import Demonstration, Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import Scene, SceneObject, yaw_of
 from demoplan.scenes.targets import candidate_goals
-from tests.learning_families import (
+from tests.support.learning_families import (
     PAPER_ORDERS,
     PAPER_TABLE_II,
     PAPER_TABLE_III,

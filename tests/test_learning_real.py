@@ -28,7 +28,7 @@ from demoplan.learning import learn
 from demoplan.model import Demonstration, State, TaskModel
 from demoplan.rotations import modulo_symmetry, rotate_vectors
 from demoplan.segmentation.importing import import_recording
-from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
+from tests.support.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
 
 BIN_SIZE = (0.39, 0.49)  # robosuite 0.3's table_full_size for PickPlace: the bin's extent
 BIN_INDEX = {"Milk": 0, "Bread": 1, "Cereal": 2, "Can": 3}
@@ -132,7 +132,7 @@ def test_update_with_a_repeated_demonstration_changes_nothing_and_says_so(
     from subprocess import run
     from sys import executable
 
-    from tests.helpers import EXAMPLES
+    from tests.support.helpers import EXAMPLES
 
     folder = Path(str(tmp_path))
     model = folder / "model.json"

@@ -12,7 +12,7 @@ from demoplan.learning.demonstrations import demonstrations_from_document
 from demoplan.scenes.scene import scene_from_document
 from demoplan.scenes.targets import check_scene_objects
 from demoplan.wording import did_you_mean
-from tests.helpers import paper_model
+from tests.support.helpers import paper_model
 
 
 @pytest.mark.parametrize(

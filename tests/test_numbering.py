@@ -13,8 +13,8 @@ matplotlib.use("Agg")
 
 
 from demoplan.wording import plural
-from tests.helpers import EXAMPLES
 from tests.support.cli import exit_and_output as invoke
+from tests.support.helpers import EXAMPLES
 
 SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 

@@ -14,7 +14,7 @@ from demoplan.cli import app
 from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
 from demoplan.scenes.scene import load_scene, scene_to_dict
-from tests.lunch_box import LUNCH, lunch_demonstrations, lunch_scene
+from tests.support.lunch_box import LUNCH, lunch_demonstrations, lunch_scene
 
 COLOURS = {"sandwich": "#C8A165", "apple": "#cc2222", "lunchbox": "#3366aa"}
 

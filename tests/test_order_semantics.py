@@ -18,7 +18,7 @@ from demoplan.planning.strips import InvalidPlanError, Rules, validate
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import load_scene
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 KIT = EXAMPLES / "kitting"
 SCENE = KIT / "scene-manual-on-motor.json"

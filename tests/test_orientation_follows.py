@@ -2,7 +2,7 @@
 turns with the box"): where an orientation's reference is a tie within the
 precision and the position is relative to an object or landmark, the
 orientation is taken relative to the same reference. Generated fixture tasks
-(``tests/fixture_families.py``): a lunch box — a landmark with a shape, or an
+(``tests/support/fixture_families.py``): a lunch box — a landmark with a shape, or an
 object the demonstrations never move — never turned, or turned by up to 40°
 between demonstrations; items inside it; learned, then planned with the box
 moved and turned by any angle."""
@@ -23,7 +23,13 @@ from demoplan.model import Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import yaw_of
 from demoplan.scenes.targets import candidate_goals
-from tests.fixture_families import ITEM_PERIOD, FixtureTask, fixture_scene, fixture_task, rotate
+from tests.support.fixture_families import (
+    ITEM_PERIOD,
+    FixtureTask,
+    fixture_scene,
+    fixture_task,
+    rotate,
+)
 
 SEEDS = st.integers(0, 2**32 - 1)
 

@@ -21,8 +21,8 @@ from demoplan.planning.problem import Action, Problem, Subgoal
 from demoplan.planning.search import breadth_first_search, solve
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
-from tests.helpers import EXAMPLES
-from tests.planning_families import blocks_problem, table_problem
+from tests.support.helpers import EXAMPLES
+from tests.support.planning_families import blocks_problem, table_problem
 from tests.test_search import small_problems
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"

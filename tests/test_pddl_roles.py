@@ -8,7 +8,7 @@ many moves as demoplan's branch and bound over the bindings
 (demoplan.scenes.plan) and as the best of demoplan's own optimal plans of
 every binding's problem, one by one; and its moves must be valid by
 demoplan's rules (demoplan.planning.strips) under the binding it chose.
-Data: the generated tasks of tests/identical_families.py (a table for two, a
+Data: the generated tasks of tests/support/identical_families.py (a table for two, a
 tower with two reds, three cups into a tray) and a hypothesis family of
 towers half built in scenes with two or three identical reds."""
 
@@ -38,7 +38,7 @@ from demoplan.scenes.prepared import prepare
 from demoplan.scenes.problems import build_problem
 from demoplan.scenes.scene import Scene, SceneObject
 from demoplan.scenes.table import surroundings_of
-from tests.identical_families import (
+from tests.support.identical_families import (
     BLOCK,
     cups_into_tray,
     cups_scene,

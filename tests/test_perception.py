@@ -272,7 +272,7 @@ def test_experiment_2_on_vision_in_mujoco() -> None:
     from demoplan.execution.executor import execute
     from demoplan.execution.physics import MujocoWorld
     from demoplan.scenes.scene import complete_geometry, load_scene
-    from tests.helpers import EXAMPLES, paper_model
+    from tests.support.helpers import EXAMPLES, paper_model
 
     model = paper_model("blocks/demonstrations.json")
     scene = complete_geometry(load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json"), model)

@@ -254,7 +254,7 @@ def test_colours_names_a_block_of_a_new_colour(tmp_path: Path) -> None:
 def test_colours_and_plot_on_a_calibrated_photograph(tmp_path: Path) -> None:
     """``--markers`` with ``--colours`` and ``--plot``: a pink cube in an oblique
     photograph is named pink, and the overlay is the photograph's size."""
-    from tests.helpers import EXAMPLES
+    from tests.support.helpers import EXAMPLES
 
     view = PinholeCamera.looking_at(
         (0.15, 0.1), tilt=20.0, heading=-60.0, distance=0.6, focal=560.0
@@ -281,7 +281,7 @@ def test_colours_and_plot_on_a_calibrated_photograph(tmp_path: Path) -> None:
 
 def test_the_example_palette_file_reads() -> None:
     from demoplan.perception.colours import load_palette
-    from tests.helpers import EXAMPLES
+    from tests.support.helpers import EXAMPLES
 
     palette = load_palette(EXAMPLES / "perception" / "colours.json")
     assert palette and all(max(rgb) == 1.0 for rgb in palette.values())

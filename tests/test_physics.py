@@ -16,7 +16,7 @@ from demoplan.execution.faults import parse_faults
 from demoplan.learning.modelfile import save_model
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # before MuJoCo is imported: headless rendering
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")

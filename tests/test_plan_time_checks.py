@@ -28,7 +28,7 @@ from demoplan.scenes.plan import SceneNoPlanError, plan_in_scene
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, scene_from_document
 from demoplan.scenes.validity import hollow_landmarks
-from tests.lunch_box import lunch_demonstrations, lunch_scene
+from tests.support.lunch_box import lunch_demonstrations, lunch_scene
 
 START = (0.0, -0.6)
 """Where the food stands at the start: far from every box."""
@@ -293,7 +293,7 @@ def test_free_space_lies_on_the_table_the_studio_draws(demonstrations: str, scen
     from demoplan.learning.demonstrations import load_demonstrations
     from demoplan.scenes.scene import load_scene
     from demoplan.studio.layouts import layout_of_demonstration
-    from tests.helpers import EXAMPLES
+    from tests.support.helpers import EXAMPLES
 
     if demonstrations == "lunch":
         demos, start = lunch_demonstrations(), lunch_scene()

@@ -17,7 +17,7 @@ from demoplan.planning.budget import Budget
 from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
 from demoplan.planning.xml import load_problem, save_problem
-from tests.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_solve_cli import PAPER
 
 

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt
 from demoplan import TaskModelLearner, load_demonstrations
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.plotting.figures import plot_constraints, plot_demonstration
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 
 def test_fig_2_transitive_reduction() -> None:

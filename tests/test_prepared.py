@@ -15,7 +15,7 @@ from demoplan.execution.runner import run_task
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.prepared import PreparedScene, prepare
 from demoplan.scenes.scene import load_scene
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 
 @pytest.fixture

@@ -12,8 +12,8 @@ import pytest
 from demoplan.errors import InputError
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.planning.xml import load_problem, problem_from_xml, problem_to_xml, save_problem
-from tests.helpers import EXAMPLES
-from tests.planning_families import blocks_problem, table_problem
+from tests.support.helpers import EXAMPLES
+from tests.support.planning_families import blocks_problem, table_problem
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"
 

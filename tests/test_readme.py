@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.docs_blocks import blocks
+from tests.support.docs_blocks import blocks
 from tests.test_docs_shell import DOCUMENTS
 
 ROOT = Path(__file__).resolve().parents[1]

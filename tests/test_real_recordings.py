@@ -5,11 +5,11 @@ The same trajectories are also written as 20 Hz CSV files and ROS 2 bags
 relative to a static, turned ``table`` frame) and must give the same steps.
 
 Six files from the ``robosuite==0.3.0`` and ``==1.0.0`` source distributions on
-PyPI (``tests/robosuite_data.py`` downloads and caches them): PickPlace,
+PyPI (``tests/support/robosuite_data.py`` downloads and caches them): PickPlace,
 NutAssembly and Stack, two Sawyer demonstrations each in 0.3 and one Panda
 demonstration each in 1.0.
 
-The expected steps (``EXPECTED`` in ``tests/robosuite_data.py``, shared with
+The expected steps (``EXPECTED`` in ``tests/support/robosuite_data.py``, shared with
 ``benchmarks/segmentation.py``) were written down by hand from plots of every
 object's height over time (``docs/segmentation.md`` shows one): the order in
 which the objects are carried is the order of their lifts; where each ends
@@ -40,7 +40,7 @@ from demoplan.segmentation import (
     write_csv,
 )
 from demoplan.segmentation.importing import import_recording_details
-from tests.robosuite_data import (
+from tests.support.robosuite_data import (
     EXPECTED,
     PEG,
     PUSHED,

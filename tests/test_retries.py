@@ -13,7 +13,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.model import TaskModel
 from demoplan.scenes.scene import complete_geometry, load_scene
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 BLOCKS = EXAMPLES / "scenes" / "pyramid-fig4.json"
 

@@ -19,9 +19,9 @@ import pytest
 
 from demoplan.learning.modelfile import model_to_dict
 from demoplan.model import TaskModel
-from tests.helpers import EXAMPLES
-from tests.robosuite_data import RobosuiteDataError, skip_or_fail
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
+from tests.support.robosuite_data import RobosuiteDataError, skip_or_fail
 
 INSTALLED = importlib.util.find_spec("robosuite") is not None
 MISSING = (
@@ -50,7 +50,7 @@ def blocks_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _learned(env: str, folder: Path) -> TaskModel:
-    from tests.robosuite_tasks import task_model
+    from tests.support.robosuite_tasks import task_model
 
     try:
         return task_model(env, folder)

@@ -4,7 +4,7 @@ filled which role, per demonstration, in `learn`/`show`'s roles table, in
 labels; and models without roles shown exactly as before.
 
 The data: a table for two laid with identical objects whose instance names
-are handed out to the seats at random (tests/table_for_two.py), the truth
+are handed out to the seats at random (tests/support/table_for_two.py), the truth
 the roles table must show.
 """
 
@@ -30,9 +30,9 @@ from demoplan.learning.tables import role_header, role_rows
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step, TaskModel
 from demoplan.plotting.figures import observing_saved_figures, save_demonstrations
 from demoplan.plotting.labels import role_label
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
-from tests.table_for_two import (
+from tests.support.helpers import EXAMPLES
+from tests.support.table_for_two import (
     SWAPS,
     TYPES,
     Seating,
@@ -252,7 +252,7 @@ def test_the_two_line_labels_get_room_beside_a_long_narrow_table(
 ) -> None:
     """The table for two is long and narrow (its seats one behind the other):
     the top views fill their panels, and no two labels of one overlap."""
-    from tests.shared_experiments import text_box
+    from tests.support.shared_experiments import text_box
 
     filled: list[float] = []
     overlaps: list[str] = []

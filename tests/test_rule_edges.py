@@ -2,7 +2,7 @@
 "Notes"): the roles of one type are placed by one rule, decided on their
 pooled spread, and a decision near its threshold is told in words.
 
-The family is the table for two of ``tests/identical_families.py`` with the
+The family is the table for two of ``tests/support/identical_families.py`` with the
 seats scattered by 1–5 cm between demonstrations (a user's seats about 3 cm
 apart learned ``plate#1`` *anywhere* at 53.8 mm and ``plate#2`` at its place
 at 43.6 mm); the truth of each plate's spread is taken from the
@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from demoplan import learn
 from demoplan.learning.tables import diagnostic_lines, state_rows
 from demoplan.model import TaskModel
-from tests.identical_families import TABLE_TYPES, table_for_two
+from tests.support.identical_families import TABLE_TYPES, table_for_two
 
 SEPARATION = 0.05  # m: the default position_separation
 

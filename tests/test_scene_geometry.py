@@ -31,7 +31,7 @@ from demoplan.scenes.geometry import (
 from demoplan.scenes.problems import build_problem
 from demoplan.scenes.scene import Gripper, Scene, SceneObject, yaw_of
 from demoplan.scenes.targets import candidate_goals
-from tests.planning_families import grasp_collides
+from tests.support.planning_families import grasp_collides
 
 BLOCK = ObjectGeometry("box", (0.04, 0.04, 0.04))
 PLATE = ObjectGeometry("cylinder", (0.07, 0.07, 0.015))

@@ -21,9 +21,9 @@ from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem
 from demoplan.scenes.plan import plan_in_scene, scene_problems
 from demoplan.scenes.scene import load_scene
-from tests.helpers import EXAMPLES, paper_model
-from tests.scene_checker import check_scene_plan
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.scene_checker import check_scene_plan
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"

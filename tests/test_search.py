@@ -18,8 +18,8 @@ from demoplan.planning.search import (
 )
 from demoplan.planning.strips import InvalidPlanError, validate
 from demoplan.planning.xml import load_problem
-from tests.helpers import EXAMPLES
-from tests.planning_families import (
+from tests.support.helpers import EXAMPLES
+from tests.support.planning_families import (
     PARKING_FAMILIES,
     blocks_problem,
     parking_problem,

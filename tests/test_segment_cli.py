@@ -13,8 +13,8 @@ from demoplan.commands.inputs import load_inputs
 from demoplan.learning.demonstrations import load_demonstrations
 from demoplan.segmentation import write_bag, write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
 from tests.test_tf_tree import SET_TABLE, robot_tree
 
 

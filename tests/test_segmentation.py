@@ -37,7 +37,7 @@ from demoplan.segmentation import (
 )
 from demoplan.segmentation.detect import track_speed
 from demoplan.segmentation.readers.csv import quats_from_rpy_array
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 TOLERANCE = 0.005  # m: the acceptance bound on step poses
 SET_TABLE = load_demonstrations([EXAMPLES / "set_table"])

@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.scene import scene_from_document
-from tests.helpers import EXAMPLES, write
 from tests.support.cli import exit_and_output as invoke
+from tests.support.helpers import EXAMPLES, write
 
 PYRAMID = EXAMPLES / "scenes" / "pyramid-fig4.json"
 BLOCK = 0.04

@@ -12,9 +12,9 @@ import pytest
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
-from tests.helpers import EXAMPLES
-from tests.planning_families import PARKING_FAMILIES, parking_problem
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_problem_xml import BOMB
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"

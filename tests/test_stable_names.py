@@ -19,7 +19,7 @@ from demoplan.scenes.naming import StableNames
 from demoplan.scenes.problems import SceneProblem, build_problem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from demoplan.scenes.targets import candidate_goals
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 SCENES = {
     "blocks": EXAMPLES / "scenes" / "pyramid-fig4.json",

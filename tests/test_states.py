@@ -17,8 +17,12 @@ from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.learning.states import generate_states, state_letters
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import angle_between, quat_from_yaw
-from tests.helpers import EXAMPLES, TABLE_II
-from tests.learning_families import constraints_from_sequences, distinct_places, table_places
+from tests.support.helpers import EXAMPLES, TABLE_II
+from tests.support.learning_families import (
+    constraints_from_sequences,
+    distinct_places,
+    table_places,
+)
 
 TABLE_III = [tuple("ABCDEFG"), tuple("AEHIJFG"), tuple("ACBFEDG")]
 

@@ -21,8 +21,8 @@ from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import quat_from_rpy
 from demoplan.segmentation import write_csv
 from demoplan.segmentation.synthetic import stream_from_demonstration
-from tests.helpers import EXAMPLES
 from tests.support.cli import invoke
+from tests.support.helpers import EXAMPLES
 
 KITTING = load_demonstrations([EXAMPLES / "kitting" / "demonstrations.json"])
 SET_TABLE = load_demonstrations([EXAMPLES / "set_table"])

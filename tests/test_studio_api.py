@@ -35,7 +35,7 @@ from demoplan.plotting.colours import assign_colours
 from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 from tests.test_orientation_follows import lunch_documents
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"

@@ -27,14 +27,14 @@ from demoplan.execution.faults import Faults
 from demoplan.learning.demonstrations import demonstration_to_dict
 from demoplan.learning.modelfile import load_model
 from demoplan.model import TaskModel
-from tests.studio_browser import (
+from tests.support.studio_browser import (
     ROOT,
     Studio,
     scene_of_initial,
     studio_page,
     write_json,
 )
-from tests.table_for_two import SWAPS, expected_rows, seating_from, table_for_two
+from tests.support.table_for_two import SWAPS, expected_rows, seating_from, table_for_two
 
 pytestmark = pytest.mark.slow
 

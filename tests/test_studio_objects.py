@@ -21,7 +21,7 @@ from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, footprint
 from demoplan.scenes.scene import scene_from_document, yaw_of
 from demoplan.studio.app import create_app
-from tests.studio_browser import ROOT
+from tests.support.studio_browser import ROOT
 from tests.test_studio_api import one_line_error, work
 
 BOX_HEIGHT = 0.02

@@ -20,7 +20,7 @@ import pytest
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.tables import state_rows
-from tests.studio_browser import VIEWPORT, Studio, studio_page
+from tests.support.studio_browser import VIEWPORT, Studio, studio_page
 
 pytestmark = pytest.mark.slow
 

@@ -37,8 +37,8 @@ from demoplan.scenes.scene import yaw_of
 from demoplan.studio import worker
 from demoplan.studio.app import create_app
 from demoplan.studio.jobs import LAST_RUN_FILE
-from tests.browser import CHROMIUM_ARGS
-from tests.studio_browser import ROOT, VIEWPORT, Studio, chromium
+from tests.support.browser import CHROMIUM_ARGS
+from tests.support.studio_browser import ROOT, VIEWPORT, Studio, chromium
 
 BLOCKS = ROOT / "examples" / "blocks" / "demonstrations.json"
 FIG4 = ROOT / "examples" / "scenes" / "pyramid-fig4.json"

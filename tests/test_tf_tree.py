@@ -35,7 +35,7 @@ from demoplan.segmentation import (
     write_csv,
 )
 from demoplan.segmentation.tftree import FrameLink, TransformTree, interpolate_link
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 SET_TABLE = load_demonstrations([EXAMPLES / "set_table"])
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])

@@ -17,7 +17,7 @@ from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
 from demoplan.planning.strips import validate
 from demoplan.planning.tight import TightResult, tight_plan
-from tests.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 from tests.test_search import small_problems
 
 

@@ -17,7 +17,7 @@ from demoplan.execution.kinematic import KinematicWorld
 from demoplan.learning.modelfile import save_model
 from demoplan.model import Pose, TaskModel
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 BLOCKS = EXAMPLES / "scenes" / "pyramid-fig4.json"
 

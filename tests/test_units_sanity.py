@@ -36,7 +36,7 @@ from demoplan.learning.releases import unsupported_releases
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw, rpy_from_quat
 from demoplan.scenes.scene import scene_from_document
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 FAMILY = settings(
@@ -311,7 +311,11 @@ def test_robosuite_recordings_imported_are_read_without_complaint(
     stacked cubes, nuts on pegs, objects in bins), written and read back."""
     from demoplan.learning.demonstrations import demonstration_to_dict
     from demoplan.segmentation import import_recording
-    from tests.robosuite_data import RobosuiteDataError, robosuite_demonstrations, skip_or_fail
+    from tests.support.robosuite_data import (
+        RobosuiteDataError,
+        robosuite_demonstrations,
+        skip_or_fail,
+    )
 
     try:
         recordings = robosuite_demonstrations()

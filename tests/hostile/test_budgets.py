@@ -20,8 +20,8 @@ from typing import Any
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, run
+from tests.support.helpers import EXAMPLES
 
 CUBE = [0.04, 0.04, 0.04]
 PLAN = ["plan", "model.json"]

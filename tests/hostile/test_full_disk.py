@@ -17,8 +17,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
+from tests.support.helpers import EXAMPLES
 from tests.test_import import box_states, write_recording
 
 RUN = ["run", "model.json", "scene.json"]

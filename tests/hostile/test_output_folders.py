@@ -32,8 +32,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demoplan.fileio import MANIFEST
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, run
+from tests.support.helpers import EXAMPLES
 from tests.test_import import MODEL, box_states
 
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))

@@ -26,7 +26,7 @@ def hard_parking_draw() -> Problem:
     """A problem no search solves in a minute: 30 objects of the crowded
     parking family, seed 7 (Fast Downward's lama-first finds no plan in 60 s
     either)."""
-    from tests.planning_families import PARKING_FAMILIES, parking_problem
+    from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 
     return parking_problem(30, 7, **PARKING_FAMILIES["parking-crowded"])
 

@@ -22,7 +22,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 ELLIPSIS = "…"
 _FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```", re.S | re.M)
 _BORDER = re.compile(r"^[\s━─┏┓┗┛┳┻┣┫╋┡┩╇┃│└┘┌┐├┤┬┴┼═╞╡╪]*$")

@@ -15,7 +15,7 @@ signal handlers (the experiments run through the command's entry point).
 The job holds an exclusive ``flock`` on ``FOLDER/NAME/lock`` for its whole
 life (taken by the controller before the job starts, inherited by it): a
 worker's shared lock on the file is granted when the job has ended, however it
-ended. ``python -m tests.background NAME FOLDER`` runs one job in an existing
+ended. ``python -m tests.support.background NAME FOLDER`` runs one job in an existing
 folder, as it is (:func:`run_now` runs it as the tests do: prepared, and
 audited where the job says so).
 
@@ -46,7 +46,7 @@ try:
 except ImportError:  # not POSIX: each session computes in its own process
     fcntl = None  # type: ignore[assignment]
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass(frozen=True)
@@ -59,13 +59,13 @@ class Job:
 
 JOBS = {
     "experiments": Job(
-        "tests.shared_experiments:run_experiments_once",
+        "tests.support.shared_experiments:run_experiments_once",
         (
             "tests/test_experiments.py",
             "tests/test_figure_labels.py",
             "tests/hostile/test_open_audit.py::test_experiments_",
         ),
-        prepare="tests.shared_experiments:plant_the_users_file",
+        prepare="tests.support.shared_experiments:plant_the_users_file",
         audited=True,
     ),
 }
@@ -141,7 +141,7 @@ def _prepare(name: str, folder: Path) -> tuple[JobFolder, list[str], dict[str, s
     job.work.mkdir(parents=True)
     if spec.prepare is not None:
         _call(spec.prepare, job.work)  # before the trace: the job's own writes only
-    command = [sys.executable, "-m", "tests.background", name, str(job.path)]
+    command = [sys.executable, "-m", "tests.support.background", name, str(job.path)]
     if spec.audited:
         from tests.hostile.file_audit import STRACE, strace_command
 

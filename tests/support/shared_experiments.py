@@ -5,7 +5,7 @@ several tests read what it writes: the report (tests/test_experiments.py) and
 every figure as it was written (tests/test_figure_labels.py). They share this
 run, made through the command's entry point with the figures observed as they are saved
 (:func:`demoplan.plotting.observing_saved_figures`), in a process of its own
-beside the tests (tests/background.py, the fixture ``experiments_run``).
+beside the tests (tests/support/background.py, the fixture ``experiments_run``).
 
 The same run is the hostile suite's ``experiments --open`` without a web
 browser (tests/hostile/test_new_options.py): it is made as that test made it,
@@ -36,7 +36,7 @@ from matplotlib.colors import to_hex
 from matplotlib.patches import Rectangle
 from matplotlib.transforms import Bbox
 
-from tests.background import JobFolder
+from tests.support.background import JobFolder
 
 
 @dataclass
@@ -118,7 +118,7 @@ ENVIRONMENT = ("HOME", "TMPDIR", "MPLCONFIGDIR", "XDG_CACHE_HOME")
 
 
 def plant_the_users_file(folder: Path) -> None:
-    """A user's file beside the report, before the run (tests/background.py
+    """A user's file beside the report, before the run (tests/support/background.py
     calls it, outside the trace): the audit checks it is never touched."""
     (folder / USERS_FILE).write_text(USERS_NOTES)
 
@@ -150,7 +150,7 @@ class ExperimentsRun:
     def harness_writes(self) -> tuple[Path, ...]:
         """What the job's harness itself writes while traced, beside the
         command's report: the files stdout and stderr go to, and the result
-        pickle (tests/background.py: written whole, then renamed)."""
+        pickle (tests/support/background.py: written whole, then renamed)."""
         captured = tuple(self.report.parent / name for name in CAPTURED)
         return (*captured, self.job.partial_result, self.job.result)
 
@@ -181,7 +181,7 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     """``demoplan experiments --out report --open`` in ``folder``, through the
     entry point of the ``demoplan`` command (:func:`demoplan.cli.launcher.main`),
     the figures observed as they are saved and the arm's runs recorded. Run
-    in a process of its own (tests/background.py): it changes the working
+    in a process of its own (tests/support/background.py): it changes the working
     folder, the environment and the process's signal handlers."""
     import demoplan.experiments as experiments
     from demoplan.cli.launcher import main
@@ -193,7 +193,7 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     folder = Path(folder).resolve()
     os.chdir(folder)
     environment = {name: os.environ[name] for name in ENVIRONMENT if name in os.environ}
-    job = JobFolder(folder.parent)  # folder: the job's working folder (tests/background.py)
+    job = JobFolder(folder.parent)  # folder: the job's working folder (tests/support/background.py)
     run = ExperimentsRun(folder / "report", -1, "", "", job, environment)
     execute = experiments.execute_experiment
 

@@ -14,15 +14,15 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from tests import browser
+from tests.support import browser
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SCREENSHOTS = ROOT / "docs" / "images" / "studio"
 VIEWPORT = {"width": 1280, "height": 800}
 
 
 def chromium() -> str:
-    """Debian's chromium with Playwright and the studio extra (tests/browser.py)."""
+    """Debian's chromium with Playwright and the studio extra (tests/support/browser.py)."""
     return browser.chromium(
         ("uvicorn", "demoplan.studio.app"), "Playwright, Debian's chromium and the studio extra"
     )

@@ -2,7 +2,7 @@
 (tests/test_robosuite_run.py, benchmarks/robosuite_tasks.py).
 
 Each environment's model is learned at default settings from the recordings in
-robosuite's source distributions (:mod:`tests.robosuite_data`): the Panda's
+robosuite's source distributions (:mod:`tests.support.robosuite_data`): the Panda's
 (1.0) and the Sawyer's (0.3) of the same task, three demonstrations each. A
 single-object environment (``NutAssemblySquare``) learns from the same
 recordings watching that object only: the other objects are left out of the
@@ -17,7 +17,7 @@ from pathlib import Path
 from demoplan.commands.learning import learn_model
 from demoplan.commands.recordings import import_recording
 from demoplan.model import TaskModel
-from tests.robosuite_data import robosuite_demonstrations
+from tests.support.robosuite_data import robosuite_demonstrations
 
 __all__ = ["RECORDINGS", "task_model"]
 

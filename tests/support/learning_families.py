@@ -29,7 +29,7 @@ from demoplan.experiments.paper import distinct_places as distinct_places
 from demoplan.experiments.paper import table_places as table_places
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw
-from tests.helpers import TABLE_II
+from tests.support.helpers import TABLE_II
 
 __all__ = [
     "PAPER_ORDERS",

@@ -10,7 +10,7 @@ import random
 
 from demoplan.model import Demonstration, Pose, Step
 from demoplan.rotations import quat_from_yaw
-from tests.identical_families import SEATS, TABLE_SHAPES, TABLE_TYPES
+from tests.support.identical_families import SEATS, TABLE_SHAPES, TABLE_TYPES
 
 TYPES = TABLE_TYPES
 SHAPES = TABLE_SHAPES

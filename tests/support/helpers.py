@@ -15,7 +15,7 @@ from demoplan.experiments.paper import PAPER_TABLE_II
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 # Table II: state, object, relative position, (x, y) — the library's transcription.
 TABLE_II = [(r.id, r.object, r.position_reference, r.position) for r in PAPER_TABLE_II]
