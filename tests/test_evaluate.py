@@ -2,7 +2,7 @@
 serial run, a killed worker's run retried or recorded, resume after Ctrl-C.
 
 Both paper experiments are evaluated over ``DEMOPLAN_EVALUATE_SCENES`` random
-layouts (default 50) × 2 seeds with faults
+layouts (default 10, as docs/execution.md says) × 2 seeds with faults
 in the kinematic world. One Ray session with 2 CPUs serves the whole module
 (its start-up costs seconds)."""
 
@@ -51,7 +51,7 @@ EXPERIMENTS = {
     "exp1": ROOT / "examples" / "set_table",
     "exp2": ROOT / "examples" / "blocks" / "demonstrations.json",
 }
-SCENES = int(os.environ.get("DEMOPLAN_EVALUATE_SCENES", "50"))
+SCENES = int(os.environ.get("DEMOPLAN_EVALUATE_SCENES", "10"))
 FAULTS = "drop=0.2,displace=0.1"
 
 
