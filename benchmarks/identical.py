@@ -24,7 +24,7 @@ Per case, on this machine:
   (``default_budget()``, 2 s in all): length, proved, bindings planned —
   what a user gets who gives no ``--timeout``;
 - the **oracle**: every binding's every goal built and planned alone with no
-  time limit (as ``tests/test_identical_objects.py`` checks it), the least
+  time limit (as ``tests/scenes/test_identical_objects.py`` checks it), the least
   length, and its time; ``oracle / B&B`` is the time the bound saves. Above
   ``--oracle-max`` bindings (200) the oracle plans a random sample of
   ``--oracle-sample`` (100) and its time is extrapolated (marked ``~``); the

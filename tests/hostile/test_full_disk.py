@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
+from tests.segmentation.test_import import box_states, write_recording
 from tests.support.helpers import EXAMPLES
-from tests.test_import import box_states, write_recording
 
 RUN = ["run", "model.json", "scene.json"]
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))

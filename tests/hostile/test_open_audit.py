@@ -41,8 +41,8 @@ from tests.hostile.file_audit import (
 )
 from tests.hostile.harness import Answer, check_clean, check_refused, run
 from tests.hostile.test_recordings import valid_recording
+from tests.segmentation.test_import import MODEL, box_states, write_recording
 from tests.support.shared_experiments import USERS_NOTES, ExperimentsRun
-from tests.test_import import MODEL, box_states, write_recording
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES, SRC, TESTS = ROOT / "examples", ROOT / "src", ROOT / "tests"

@@ -1,6 +1,6 @@
 """Cluttered household layouts for the arm, and what the arm does with them:
 its check before it moves (the run's pre-check) against its first attempt
-to carry each object (shared by tests/test_arm_layouts.py and
+to carry each object (shared by tests/execution/test_arm_layouts.py and
 benchmarks/arm_grasps.py).
 
 A layout is a few household objects — boxes, cylinders and spheres 3–12 cm,

@@ -61,8 +61,8 @@ JOBS = {
     "experiments": Job(
         "tests.support.shared_experiments:run_experiments_once",
         (
-            "tests/test_experiments.py",
-            "tests/test_figure_labels.py",
+            "tests/experiments/test_experiments.py",
+            "tests/experiments/test_figure_labels.py",
             "tests/hostile/test_open_audit.py::test_experiments_",
         ),
         prepare="tests.support.shared_experiments:plant_the_users_file",

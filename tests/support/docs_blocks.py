@@ -1,5 +1,5 @@
 """The shell and Python blocks of the documentation, and how a real output is
-compared with what a block shows (for tests/test_docs_shell.py).
+compared with what a block shows (for tests/e2e/test_docs_shell.py).
 
 A ```console block holds commands, each on a line starting with ``$ ``,
 followed by the output the reader should see. The output shown must be the

@@ -3,7 +3,7 @@ function kept here so the file can be made again and checked.
 
 A draw can take long (the crowded parking problem: about 15 s of CPU, drawn
 until it is not unsolvable on its face), so the tests read the file
-(:func:`load_fixed`), and one slow test (tests/test_fixed_problems.py) checks
+(:func:`load_fixed`), and one slow test (tests/support/test_fixed_problems.py) checks
 that drawing again gives the very same file. To write them again after a
 change to a family::
 

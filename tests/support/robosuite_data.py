@@ -43,7 +43,7 @@ DEMONSTRATIONS: dict[str, tuple[str, str]] = {
 _ASSETS = "robosuite/models/assets/demonstrations"
 
 # The steps read by hand from plots of every object's height over time (see
-# tests/test_real_recordings.py): (recording, demonstration) → the objects in the
+# tests/segmentation/test_real_recordings.py): (recording, demonstration) → the objects in the
 # order they are carried. Each object is carried once and ends where it was put.
 EXPECTED: dict[tuple[str, str], list[str]] = {
     ("SawyerPickPlace", "demo_1"): ["Can", "Cereal", "Milk", "Bread"],

@@ -1,5 +1,5 @@
 """Task models learned from robosuite's own recordings, for ``--sim robosuite:ENV``
-(tests/test_robosuite_run.py, benchmarks/robosuite_tasks.py).
+(tests/execution/test_robosuite_run.py, benchmarks/robosuite_tasks.py).
 
 Each environment's model is learned at default settings from the recordings in
 robosuite's source distributions (:mod:`tests.support.robosuite_data`): the Panda's

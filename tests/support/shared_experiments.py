@@ -1,8 +1,8 @@
 """One run of ``demoplan experiments`` for the whole test session.
 
 The command takes minutes (the arm's two runs in MuJoCo are most of it), and
-several tests read what it writes: the report (tests/test_experiments.py) and
-every figure as it was written (tests/test_figure_labels.py). They share this
+several tests read what it writes: the report (tests/experiments/test_experiments.py) and
+every figure as it was written (tests/experiments/test_figure_labels.py). They share this
 run, made through the command's entry point with the figures observed as they are saved
 (:func:`demoplan.plotting.observing_saved_figures`), in a process of its own
 beside the tests (tests/support/background.py, the fixture ``experiments_run``).

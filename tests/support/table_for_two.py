@@ -2,7 +2,7 @@
 knives and glasses, one of each per seat, whose instance names the generator
 hands out to the seats at random in every demonstration, so that it knows
 which instance filled which role: the truth the roles table and the figures
-must show (tests/test_roles_display.py, tests/test_studio_browser.py)."""
+must show (tests/plotting/test_roles_display.py, tests/studio/test_studio_browser.py)."""
 
 from __future__ import annotations
 
