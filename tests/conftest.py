@@ -31,7 +31,7 @@ LONG_FIRST = (
     "tests/hostile/test_concurrency.py::",
     "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
     "tests/hostile/test_open_audit.py::test_run_with_video_and_frames_opens_its_inputs_only",
-    "tests/e2e/test_readme.py::test_tour_commands_run",
+    "tests/evaluation/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
     "tests/execution/test_arm.py::test_experiment_",
     "tests/execution/test_arm.py::test_kitting_on_the_arm",
     "tests/scenes/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
