@@ -149,6 +149,7 @@ HELPERS = (
 )
 """Helper modules (not tests) shared by tests, benchmarks and docs: tests/support."""
 
+SCRIPTS = (".ci/",)  # CI's scripts, without a suffix
 TEXT = (".py", ".md", ".toml", ".yml", ".yaml", ".cfg", ".ini", ".txt", ".sh", ".html", ".js")
 _DEEPER = (  # a moved file's way up to the repository: one folder more
     (r"Path\(__file__\)\.resolve\(\)\.parents\[1\]", "Path(__file__).resolve().parents[2]"),
@@ -171,7 +172,11 @@ def _tracked() -> list[Path]:
     listed = subprocess.run(
         ["git", "ls-files", "-z"], cwd=ROOT, capture_output=True, check=True
     ).stdout.decode()
-    return [ROOT / name for name in listed.split("\0") if name.endswith(TEXT)]
+    return [
+        ROOT / name
+        for name in listed.split("\0")
+        if name.endswith(TEXT) or name.startswith(SCRIPTS)
+    ]
 
 
 def rewritten(text: str, planned: dict[str, str]) -> str:
