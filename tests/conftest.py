@@ -56,12 +56,11 @@ def _rank(item: pytest.Item) -> int:
 
 SLOW = (
     # Whole folders and files: each test starts demoplan processes, a browser,
-    # Ray or a MuJoCo arm run, or reads the shared experiments run (minutes).
+    # Ray or a MuJoCo arm run (and every test that reads the shared experiments
+    # run, minutes: SHARED_FIXTURES).
     "tests/hostile/",  # one or more demoplan processes per case (about a thousand)
     "tests/e2e/test_docs_shell.py",
     "tests/e2e/test_docs_generated.py",
-    "tests/experiments/test_experiments.py",
-    "tests/experiments/test_figure_labels.py",
     "tests/e2e/test_interrupt.py",
     "tests/cli/test_launcher.py",
     "tests/segmentation/test_segment_cli.py",
@@ -105,7 +104,8 @@ def _node(item: pytest.Item) -> str:
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
-        if _node(item).startswith(SLOW):
+        reads_shared = any(n in SHARED_FIXTURES for n in getattr(item, "fixturenames", ()))
+        if reads_shared or _node(item).startswith(SLOW):
             item.add_marker(pytest.mark.slow)
     items.sort(key=_rank)  # stable: each group in collection order
 
