@@ -2,7 +2,7 @@
 
 What it measures
 ----------------
-Over cluttered household layouts (``tests/arm_layouts.py``: three objects —
+Over cluttered household layouts (``tests/support/arm_layouts.py``: three objects —
 boxes, cylinders, spheres 3–12 cm, 0.05–1 kg — at random 18–65 cm in front of
 an arm at the origin, 5 cm apart, each with a random place to go and either of
 the default grasps), for each object in turn: the check a run makes before
@@ -40,7 +40,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np
-from tests.arm_layouts import GAP, Attempt, Item, attempt_all, layout
+from tests.support.arm_layouts import GAP, Attempt, Item, attempt_all, layout
 
 from demoplan.execution.arm import choose_tool
 from demoplan.model import ObjectGeometry, Pose
@@ -84,7 +84,7 @@ def _reason(attempt: Attempt) -> str:
 def flat_item(seed: int, shape: ObjectGeometry | None = None) -> Item:
     """One flat box (``shape``, or drawn from ``seed``) at a random spot 30–55 cm
     in front of the arm, ±60° of its front, with a random place to go at least
-    :data:`~tests.arm_layouts.GAP` clear of it."""
+    :data:`~tests.support.arm_layouts.GAP` clear of it."""
     rng = np.random.default_rng(seed)
     if shape is None:
         x, y = (float(v) for v in rng.uniform(*FLAT_SIZES, 2))

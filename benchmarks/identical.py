@@ -25,7 +25,7 @@ Per case, on this machine:
   (``default_budget()``, 2 s in all): length, proved, bindings planned —
   what a user gets who gives no ``--timeout``;
 - the **oracle**: every binding's every goal built and planned alone with no
-  time limit (as ``tests/test_identical_objects.py`` checks it), the least
+  time limit (as ``tests/scenes/test_identical_objects.py`` checks it), the least
   length, and its time; ``oracle / B&B`` is the time the bound saves. Above
   ``--oracle-max`` bindings (200) the oracle plans a random sample of
   ``--oracle-sample`` (100) and its time is extrapolated (marked ``~``); the
@@ -38,7 +38,7 @@ bound is no more than the oracle's least.
 
 The cases
 ---------
-From ``tests/identical_families.py`` (the tests' generated tasks; this script
+From ``tests/support/identical_families.py`` (the tests' generated tasks; this script
 puts the repository root on ``sys.path``): the **table for two** (two plates,
 forks, knives, glasses; 2!⁴ = 16 bindings) from a scrambled start and with a
 plate already at a seat; the **tower** blue < red < red < green from four
@@ -114,11 +114,11 @@ from demoplan.scenes.problems import build_problem  # noqa: E402
 from demoplan.scenes.scene import Scene, SceneObject  # noqa: E402
 from demoplan.scenes.table import surroundings_of  # noqa: E402
 
-# The repository root, for tests/identical_families.py (the tasks the tests use too).
+# The repository root, for tests/support/identical_families.py (the tasks the tests use too).
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:
     sys.path.insert(1, str(REPO))
-from tests.identical_families import (  # noqa: E402
+from tests.support.identical_families import (  # noqa: E402
     TABLE_TYPES,
     cups_into_tray,
     cups_scene,

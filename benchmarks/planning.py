@@ -3,8 +3,8 @@
 What it measures
 ----------------
 Generated problems of two families — table setting
-(:func:`tests.planning_families.table_problem`) and pyramid building with
-stacked starts (:func:`~tests.planning_families.blocks_problem`) — with
+(:func:`tests.support.planning_families.table_problem`) and pyramid building with
+stacked starts (:func:`~tests.support.planning_families.blocks_problem`) — with
 N = 3, 5, 7, 10, 15, 20, 30 objects (``--quick``: N = 3, 5, 7 for every planner
 plus N = 20 and 30 for demoplan alone, to check its targets). Each problem is
 written once as the paper's XML (:func:`demoplan.planning.xml.save_problem`) and
@@ -69,8 +69,8 @@ and on planner time.
 Hard families (issue 13)
 ------------------------
 ``parking``, ``parking-dense`` and ``parking-crowded``
-(:func:`tests.planning_families.parking_problem` with the settings of
-:data:`~tests.planning_families.PARKING_FAMILIES`): goal places on a dense
+(:func:`tests.support.planning_families.parking_problem` with the settings of
+:data:`~tests.support.planning_families.PARKING_FAMILIES`): goal places on a dense
 grid whose neighbours block each other's grasps, objects starting on one
 another's goal places in swaps and 3-cycles (forced parking), distractors
 without a goal standing on goal places, objects starting on the grid between
@@ -168,11 +168,12 @@ from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import save_problem
 
-# The repository root, for tests/planning_families.py (the problem families the tests use too).
+# The repository root, for tests/support/planning_families.py (the problem families
+# the tests use too).
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:
     sys.path.insert(1, str(REPO))
-from tests.planning_families import (  # noqa: E402
+from tests.support.planning_families import (  # noqa: E402
     PARKING_FAMILIES,
     blocks_problem,
     parking_problem,

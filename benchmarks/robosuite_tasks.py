@@ -4,7 +4,7 @@ and judged by robosuite.
 What it measures
 ----------------
 For each environment: its task model is learned at default settings from the
-recordings in robosuite's source distributions (tests/robosuite_tasks.py: the
+recordings in robosuite's source distributions (tests/support/robosuite_tasks.py: the
 Panda's and the Sawyer's, three demonstrations), then ``demoplan run MODEL
 --sim robosuite:ENV --seed S`` for seeds 0 … N−1 (robosuite's Panda, its
 OSC_POSE controller; docs/execution.md "robosuite"). Printed per environment:
@@ -22,7 +22,7 @@ at https://robomimic.github.io/docs/model_zoo/robomimic_v0.1.html: Can (PH)
 Needs the ``robosuite`` extra in its own environment (docs/execution.md).
 Run: ``MUJOCO_GL=egl python benchmarks/robosuite_tasks.py --seeds 50``
 (``--env Stack`` for one environment; every environment of
-tests/robosuite_tasks.py by default, the full PickPlace and NutAssemblyRound
+tests/support/robosuite_tasks.py by default, the full PickPlace and NutAssemblyRound
 included; 2–11 s per run on a quiet core).
 """
 
@@ -35,10 +35,10 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
-if str(REPO) not in sys.path:  # tests/robosuite_tasks.py: the recordings and the models
+if str(REPO) not in sys.path:  # tests/support/robosuite_tasks.py: the recordings and the models
     sys.path.insert(1, str(REPO))
 
-from tests.robosuite_tasks import RECORDINGS, task_model  # noqa: E402
+from tests.support.robosuite_tasks import RECORDINGS, task_model  # noqa: E402
 
 from demoplan.execution.robosuite_run import run_in_robosuite  # noqa: E402
 

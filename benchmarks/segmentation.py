@@ -20,11 +20,11 @@ What it measures
 
 2. **robosuite's teleoperated demonstrations**: the nine human
    demonstrations in the six ``demo.hdf5`` files of robosuite 0.3 and 1.0
-   (PickPlace, NutAssembly, Stack; ``tests/robosuite_data.py`` fetches and
+   (PickPlace, NutAssembly, Stack; ``tests/support/robosuite_data.py`` fetches and
    caches them), imported as ``demoplan import`` does, then the same
    trajectories resampled to 20 Hz, written as CSV and read back (segmented
    without geometry). Per demonstration: the hand-read steps
-   (``tests/robosuite_data.py: EXPECTED``, which the tests check too) and the
+   (``tests/support/robosuite_data.py: EXPECTED``, which the tests check too) and the
    found ones, step precision / recall (``compare_steps``, each expected step
    placed where its object rests at the end of the recording, within 2 cm),
    the position error of the matched steps against that resting place
@@ -85,7 +85,8 @@ from rich.table import Table  # noqa: E402
 import demoplan  # noqa: E402
 from common import package_version  # noqa: E402
 
-# The repository root, for tests/robosuite_data.py (the demonstrations and their hand-read steps).
+# The repository root, for tests/support/robosuite_data.py (the demonstrations and
+# their hand-read steps).
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:
     sys.path.insert(1, str(REPO))
@@ -293,7 +294,7 @@ def score_recording(
 ) -> Recording:
     """Segment with ``run`` (timed, median of ``repeats``) and score against the hand-read
     steps, each placed where its object rests at the end of ``final``."""
-    from tests.robosuite_data import EXPECTED
+    from tests.support.robosuite_data import EXPECTED
 
     seconds = timed(run, repeats)
     result = run()
@@ -323,7 +324,7 @@ def score_recording(
 
 def run_recordings(*, quick: bool) -> list[Recording] | str:
     """Every robosuite demonstration, from its HDF5 file and as 20 Hz CSV; or why not."""
-    from tests.robosuite_data import (
+    from tests.support.robosuite_data import (
         EXPECTED,
         RobosuiteDataError,
         resampled,

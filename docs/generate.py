@@ -9,7 +9,7 @@ validate with, its examples from ``examples/`` and from running the library
 on them, and cli.md from the typer application itself; the prose is kept
 here. Nothing depends on the terminal or the environment: no help text is
 wrapped to a terminal width, example paths are relative to the repository,
-and the computed examples leave out their timings. ``tests/test_docs_generated.py``
+and the computed examples leave out their timings. ``tests/e2e/test_docs_generated.py``
 checks that the committed files are what this script writes.
 """
 
@@ -1424,7 +1424,7 @@ STUDIO_OBJECTS_EXAMPLE = """{
   }
 }"""
 """An objects file as the studio writes it (the lunch box of
-tests/test_studio_own_objects_browser.py, shortened); tests/test_studio_objects.py
+tests/studio/test_studio_own_objects_browser.py, shortened); tests/studio/test_studio_objects.py
 reads it from formats.md with the objects file's reader."""
 
 
@@ -1445,7 +1445,7 @@ def studio_objects_section() -> str:
             "reads an objects file as the scene it starts from, its colours checked and "
             "left out; the studio's **Save scene** writes a plain scene, with the start as "
             "its Plan view shows it. A lunch box "
-            "(tests/test_studio_own_objects_browser.py), shortened:",
+            "(tests/studio/test_studio_own_objects_browser.py), shortened:",
             fenced("json", STUDIO_OBJECTS_EXAMPLE),
         ]
     )

@@ -14,9 +14,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # for tests.robosuite_data
+sys.path.insert(0, str(ROOT))  # for tests.support.robosuite_data
 
-from tests.robosuite_data import robosuite_demonstrations  # noqa: E402
+from tests.support.robosuite_data import robosuite_demonstrations  # noqa: E402
 
 from demoplan.learning import learn  # noqa: E402
 from demoplan.documents.demonstrations import load_demonstrations  # noqa: E402

@@ -1,4 +1,4 @@
-"""Results several test files share (tests/background.py), computed once per
+"""Results several test files share (tests/support/background.py), computed once per
 session: under pytest-xdist in a process of their own that the controller
 starts as soon as the workers have collected a test that reads one.
 
@@ -19,23 +19,25 @@ from typing import Any
 import pytest
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
-from tests import background
-from tests.shared_experiments import ExperimentsRun
+from demoplan.planning.problem import Problem
+from tests.support import background
+from tests.support.fixed_problems import load_fixed
+from tests.support.shared_experiments import ExperimentsRun
 
 LONG_FIRST = (
     # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
-    "tests/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
-    "tests/test_docs_shell.py::",
+    "tests/execution/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
+    "tests/e2e/test_docs_shell.py::",
     "tests/hostile/test_concurrency.py::",
-    "tests/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
+    "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
     "tests/hostile/test_open_audit.py::test_run_with_video_and_frames_opens_its_inputs_only",
-    "tests/test_readme.py::test_tour_commands_run",
-    "tests/test_arm.py::test_experiment_",
-    "tests/test_arm.py::test_kitting_on_the_arm",
-    "tests/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
-    "tests/test_pddl.py::test_fast_downward_optimal_lengths_match",
+    "tests/evaluation/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
+    "tests/execution/test_arm.py::test_experiment_",
+    "tests/execution/test_arm.py::test_kitting_on_the_arm",
+    "tests/scenes/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
+    "tests/planning/test_pddl.py::test_fast_downward_optimal_lengths_match",
 )
-SHARED_FIXTURES = ("experiments_run", "hard_parking")
+SHARED_FIXTURES = ("experiments_run",)
 
 
 def _rank(item: pytest.Item) -> int:
@@ -52,7 +54,109 @@ def _rank(item: pytest.Item) -> int:
     return len(LONG_FIRST) + 2
 
 
+SLOW = (
+    # Whole folders and files: each test starts demoplan processes, a browser,
+    # Ray or a MuJoCo arm run (and every test that reads the shared experiments
+    # run, minutes: SHARED_FIXTURES).
+    "tests/hostile/",  # one or more demoplan processes per case (about a thousand)
+    "tests/e2e/test_docs_shell.py",
+    "tests/e2e/test_docs_generated.py",
+    "tests/e2e/test_interrupt.py",
+    "tests/cli/test_launcher.py",
+    "tests/segmentation/test_segment_cli.py",
+    "tests/e2e/test_self_contained.py",
+    "tests/planning/test_planning_limits.py",
+    "tests/execution/test_arm.py",
+    "tests/execution/test_arm_flat.py",
+    "tests/execution/test_arm_layouts.py",
+    "tests/execution/test_drops.py",
+    "tests/execution/test_landmark_physics.py",
+    "tests/execution/test_robosuite_run.py",
+    "tests/segmentation/test_real_recordings.py",
+    "tests/perception/test_perception_real_photos.py",
+    # Single tests: Ray, the CLI's processes, long physics.
+    "tests/evaluation/test_evaluate.py::test_ray_equals_a_serial_run",
+    "tests/evaluation/test_evaluate.py::test_a_worker_killed_from_outside",
+    "tests/evaluation/test_evaluate.py::test_a_killed_worker_s_run",
+    "tests/evaluation/test_evaluate.py::test_resume_after_ctrl_c",
+    "tests/evaluation/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
+    "tests/evaluation/test_evaluate.py::test_evaluate_s_usage_errors",
+    "tests/evaluation/test_evaluate.py::test_a_settings_file_out_of_bounds",
+    "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
+    "tests/evaluation/test_evaluate.py::test_bad_input_is_one_line",
+    "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
+    "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
+    "tests/evaluation/test_evaluate.py::test_a_model_without_shapes_is_refused",
+    # Single tests of 2 s of CPU or more: 20 s or more of a quick loop's
+    # --durations on two cores shared with a load of about 20 (its CPU time was
+    # a ninth of its summed durations); each package keeps its other tests.
+    "tests/e2e/test_breakfast.py::test_a_kit_tray_placed_anywhere_stays_and_is_filled_where_it_stands",
+    "tests/e2e/test_breakfast.py::test_the_breakfast_is_laid_out_on_the_turned_tray",
+    "tests/evaluation/test_evaluate.py::test_a_journal_torn_by_a_killed_evaluation_is_resumed",
+    "tests/evaluation/test_evaluate.py::test_out_is_a_new_or_empty_folder",
+    "tests/execution/test_arm_mass.py::test_household_weights_go_by_the_tool_that_carries_them",
+    "tests/execution/test_arm_mass.py::test_the_arm_changes_tools_between_objects",
+    "tests/execution/test_arm_mass.py::test_the_check_agrees_with_the_physics",
+    "tests/execution/test_behaviour_tree.py::test_the_tree_ticks_with_the_arm",
+    "tests/execution/test_execution.py::test_a_storyboard_keeps_every_failure_frame",
+    "tests/execution/test_execution.py::test_faults_are_reported_as_they_happened_and_detected_as_their_kind",
+    "tests/execution/test_execution.py::test_monte_carlo_recoverable_faults_always_finish",
+    "tests/execution/test_execution.py::test_run_json_report",
+    "tests/execution/test_physics.py::test_run_records_a_video_from_a_fixed_camera",
+    "tests/execution/test_stable_names.py::test_in_a_run_where_an_object_was_put_is_where_it_is_grasped_from",
+    "tests/learning/test_clustering.py::test_kmeans_is_as_good_as_scikit_learn_on_arbitrary_data",
+    "tests/learning/test_constraint_graph.py::test_drawn_edges_are_constraints_whose_closure_is_the_goals_order",
+    "tests/learning/test_learning_real.py::test_update_with_a_repeated_demonstration_changes_nothing_and_says_so",
+    "tests/learning/test_rule_edges.py::test_the_plates_of_a_table_for_two_are_placed_by_one_rule",
+    "tests/perception/test_calibration.py::test_bad_inputs_refused_in_one_line",
+    "tests/perception/test_calibration.py::test_calibrate_writes_camera_file_and_overlay",
+    "tests/perception/test_calibration.py::test_oblique_views_give_blocks_within_5mm",
+    "tests/perception/test_perception.py::test_experiment_2_on_vision_in_mujoco",
+    "tests/perception/test_perception_false_blocks.py::test_a_board_crossed_by_cables_is_no_block",
+    "tests/perception/test_perception_families.py::test_a_family_photograph_meets_the_issue_thresholds",
+    "tests/perception/test_perception_photos.py::test_blocks_on_a_gridded_board_are_found_to_5_mm",
+    "tests/perception/test_perception_sequence.py::test_cli_reads_a_video",
+    "tests/perception/test_perception_sequence.py::test_cli_writes_a_demonstration_that_learn_accepts",
+    "tests/perception/test_perception_sequence.py::test_experiment_2_from_camera_frames_learns_table_iv",
+    "tests/perception/test_perception_sequence.py::test_generated_demonstrations_are_recovered",
+    "tests/perception/test_perception_sequence.py::test_the_hand_is_found_and_no_block_is_taken_for_it",
+    "tests/planning/test_parts.py::test_two_problems_that_never_meet_are_solved_as_parts",
+    "tests/planning/test_pddl.py::test_a_grasp_shared_by_an_object_a_place_refuses_does_not_block_one_it_takes",
+    "tests/planning/test_pddl.py::test_fast_downward_agrees_under_the_order_rule",
+    "tests/planning/test_pddl.py::test_fast_downward_optimal_lengths_match",
+    "tests/planning/test_pddl.py::test_pyperplan_agrees_with_demoplan",
+    "tests/planning/test_pddl_roles.py::test_every_binding_has_the_exported_problem_with_its_instances_in_the_roles",
+    "tests/planning/test_pddl_roles.py::test_fast_downward_agrees_on_half_built_towers",
+    "tests/planning/test_pddl_roles.py::test_fast_downward_reads_the_grounded_export_with_roles",
+    "tests/planning/test_plateau.py::test_a_plan_the_dive_finds_is_valid_and_shortest",
+    "tests/planning/test_search.py::test_generated_problems_match_bfs",
+    "tests/scenes/test_free_space.py::test_kitting_recovers_from_drops_and_blocks",
+    "tests/scenes/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
+    "tests/scenes/test_geometry_pairs.py::test_collision_facts_are_the_rule_pair_by_pair",
+    "tests/scenes/test_geometry_pairs.py::test_exclusions_are_the_rule_pair_by_pair",
+    "tests/scenes/test_plan_time_checks.py::test_food_in_world_yaw_hanging_over_the_turned_box_is_refused",
+    "tests/scenes/test_plan_time_checks.py::test_food_that_turns_with_the_box_lies_on_it",
+    "tests/scenes/test_scene_plan.py::test_fast_downward_agrees_on_scene_problems",
+)
+"""Tests marked ``slow`` here (beside those marked in their files), by their
+node id (a folder, a file, or a file and a test name's start):
+``python -m pytest -m "not slow"`` is the quick loop (tests/README.md)."""
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _node(item: pytest.Item) -> str:
+    """``tests/…/test_x.py::test_name[…]``, wherever pytest was started."""
+    file = Path(str(item.path)).resolve().relative_to(ROOT).as_posix()
+    return f"{file}::{item.name}"
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        reads_shared = any(n in SHARED_FIXTURES for n in getattr(item, "fixturenames", ()))
+        if reads_shared or _node(item).startswith(SLOW):
+            item.add_marker(pytest.mark.slow)
     items.sort(key=_rank)  # stable: each group in collection order
 
 
@@ -118,13 +222,13 @@ def shared_result(
 def experiments_run(
     pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory
 ) -> ExperimentsRun:
-    """``demoplan experiments`` run once per session (tests/shared_experiments.py)."""
+    """``demoplan experiments`` run once per session (tests/support/shared_experiments.py)."""
     run: ExperimentsRun = shared_result("experiments", pytestconfig, tmp_path_factory)
     return run
 
 
 @pytest.fixture(scope="session")
-def hard_parking(pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> Any:
-    """A parking problem no search solves in a minute (tests/helpers.py), drawn
-    once per session: the draw takes half a minute."""
-    return shared_result("hard-parking", pytestconfig, tmp_path_factory)
+def hard_parking() -> Problem:
+    """A parking problem no search solves in a minute, checked in as a file
+    (tests/data/hard-parking.xml, tests/support/fixed_problems.py)."""
+    return load_fixed("hard-parking")

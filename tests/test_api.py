@@ -13,7 +13,7 @@ import demoplan
 from demoplan import api
 from demoplan.execution.world import Observation
 from demoplan.model import Pose
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"

@@ -25,7 +25,7 @@ from demoplan.learning.modelfile import model_from_dict, model_to_dict
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import TaskModel
 from demoplan.rotations import angle_between
-from tests.helpers import EXAMPLES, demo, raw, write
+from tests.support.helpers import EXAMPLES, demo, raw, write
 
 SET_TABLE = EXAMPLES / "set_table"
 

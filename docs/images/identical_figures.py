@@ -4,7 +4,7 @@ From the repository root::
 
     python docs/images/identical_figures.py
 
-learns the generated table for two (tests/identical_families.py: two plates,
+learns the generated table for two (tests/support/identical_families.py: two plates,
 forks, knives and glasses, instance names shuffled between three
 demonstrations) and writes ``identical-roles.png`` (which instance filled
 which role in each demonstration) and ``identical-binding.png`` (a scene's
@@ -22,13 +22,14 @@ import matplotlib
 matplotlib.use("Agg")
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(1, str(HERE.parent.parent))  # the repository root, for tests.identical_families
+# the repository root, for tests.support.identical_families
+sys.path.insert(1, str(HERE.parent.parent))
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.patches import Circle, Rectangle  # noqa: E402
-from tests.identical_families import TABLE_TYPES, table_for_two, table_scene  # noqa: E402
+from tests.support.identical_families import TABLE_TYPES, table_for_two, table_scene  # noqa: E402
 
 from demoplan.budget import Clock  # noqa: E402
 from demoplan.learning.learner import learn  # noqa: E402

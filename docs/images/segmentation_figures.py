@@ -5,7 +5,7 @@ From the repository root::
     python docs/images/segmentation_figures.py
 
 fetches robosuite's demonstrations if they are not cached
-(``tests/robosuite_data.py``) and writes ``segmentation-nutassembly.png`` and
+(``tests/support/robosuite_data.py``) and writes ``segmentation-nutassembly.png`` and
 ``segmentation-pickplace.png`` next to this file.
 """
 
@@ -19,9 +19,9 @@ import matplotlib
 matplotlib.use("Agg")
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(1, str(HERE.parent.parent))  # the repository root, for tests.robosuite_data
+sys.path.insert(1, str(HERE.parent.parent))  # the repository root, for tests.support.robosuite_data
 
-from tests.robosuite_data import robosuite_demonstrations  # noqa: E402
+from tests.support.robosuite_data import robosuite_demonstrations  # noqa: E402
 
 from demoplan.plotting.segmentation import plot_segmentation  # noqa: E402
 from demoplan.segmentation.importing import import_recording_details  # noqa: E402

@@ -20,8 +20,8 @@ from typing import Any
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, run
+from tests.support.helpers import EXAMPLES
 
 CUBE = [0.04, 0.04, 0.04]
 PLAN = ["plan", "model.json"]
@@ -143,7 +143,7 @@ def test_a_deep_tf_chain_stops_at_the_learning_budget(tmp_path: Path) -> None:
     naming --timeout and the TF composition, and writes no model. (The chain
     is composed in a few seconds now: a budget of 1 s was no longer sure to
     run out first. That the budget is read all through the composition is
-    tests/test_tf_tree.py's, with a fake clock.)"""
+    tests/segmentation/test_tf_tree.py's, with a fake clock.)"""
     import numpy as np
 
     from demoplan.segmentation import PoseStream

@@ -21,8 +21,8 @@ from demoplan.perception.calibration import (
     load_calibration,
     markers_from_document,
 )
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, run
+from tests.support.helpers import EXAMPLES
 
 MARKERS = json.loads((EXAMPLES / "perception" / "markers.json").read_text())
 CAMERA: dict[str, Any] = {

@@ -8,8 +8,8 @@ import os
 import subprocess
 from pathlib import Path
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import DEMOPLAN
+from tests.support.helpers import EXAMPLES
 
 PAIRS = 20
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from demoplan.learning.modelfile import save_model
-from tests.helpers import EXAMPLES, paper_model
 from tests.hostile.harness import check_refused, run
+from tests.support.helpers import EXAMPLES, paper_model
 
 # Asked of the installation, not imported: MuJoCo imported here, before demoplan sets
 # MUJOCO_GL=egl, would leave this test worker unable to render for every later test.

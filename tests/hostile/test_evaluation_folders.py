@@ -17,7 +17,7 @@ from demoplan.errors import InputError
 from demoplan.evaluation.plan import read_settings
 from demoplan.evaluation.results import read_rows
 from demoplan.learning.modelfile import save_model
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 

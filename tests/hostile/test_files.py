@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
+from tests.support.helpers import EXAMPLES
 
 
 @dataclass(frozen=True)

@@ -17,9 +17,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, fingerprint, private_device, run
-from tests.test_import import box_states, write_recording
+from tests.segmentation.test_import import box_states, write_recording
+from tests.support.helpers import EXAMPLES
 
 RUN = ["run", "model.json", "scene.json"]
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))

@@ -27,8 +27,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import ERROR_PREFIX, EXIT_CODES, HANG_SECONDS, NOT_SEEN, fingerprint
+from tests.support.helpers import EXAMPLES
 
 HOSTILE_VALUES: list[Any] = [
     float("nan"),

@@ -14,8 +14,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_clean, check_refused, run
+from tests.support.helpers import EXAMPLES
 
 TOWER = EXAMPLES / "identical" / "tower.json"
 TOWER_SCENE = EXAMPLES / "identical" / "tower-scene.json"

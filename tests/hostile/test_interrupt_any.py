@@ -26,8 +26,8 @@ from typing import Any
 
 import pytest
 
-from tests.helpers import EXAMPLES, wait_for_signal_handlers
 from tests.hostile.harness import DEMOPLAN, HANG_SECONDS, NOT_SEEN, fingerprint
+from tests.support.helpers import EXAMPLES, wait_for_signal_handlers
 
 COMMANDS: dict[str, tuple[list[str], list[str], float]] = {
     # name: (arguments, outputs, seconds over which to spread the signal). solve

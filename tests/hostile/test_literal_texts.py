@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from demoplan.learning.modelfile import save_model
-from tests.helpers import EXAMPLES, paper_model
 from tests.hostile.harness import check_clean, run
+from tests.support.helpers import EXAMPLES, paper_model
 
 pytest.importorskip("matplotlib")
 

@@ -27,7 +27,6 @@ from typing import Any
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import (
     DEMOPLAN,
     ERROR_PREFIX,
@@ -40,7 +39,8 @@ from tests.hostile.harness import (
     private_device,
     run,
 )
-from tests.shared_experiments import ExperimentsRun
+from tests.support.helpers import EXAMPLES
+from tests.support.shared_experiments import ExperimentsRun
 
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))
 needs_video = pytest.mark.skipif(not HAVE_VIDEO, reason="MuJoCo or imageio-ffmpeg not installed")
@@ -535,7 +535,7 @@ def test_experiments_open_without_a_browser(experiments_run: ExperimentsRun) -> 
     """No display, no terminal browser, no $BROWSER: the report is written, exit
     0, and one note on stderr saying to open the page by hand. (The session's
     run of ``experiments --out report --open``, in a process of its own without
-    those variables: tests/shared_experiments.py.)"""
+    those variables: tests/support/shared_experiments.py.)"""
     answer = experiments_run
     assert answer.exit_code == 0, answer.stderr
     for text in NOT_SEEN:

@@ -22,7 +22,7 @@ from demoplan.documents.units import MAX_CARRIED_M, MAX_SPREAD_M
 from demoplan.segmentation.types import ObjectTrack, PoseStream
 from demoplan.segmentation.writers import write_bag, write_csv
 from tests.hostile.harness import check_refused, fingerprint, run
-from tests.test_import import MODEL, box_states, write_recording
+from tests.segmentation.test_import import MODEL, box_states, write_recording
 
 GENERATED = settings(
     max_examples=8,

@@ -41,8 +41,8 @@ from tests.hostile.file_audit import (
 )
 from tests.hostile.harness import Answer, check_clean, check_refused, run
 from tests.hostile.test_recordings import valid_recording
-from tests.shared_experiments import USERS_NOTES, ExperimentsRun
-from tests.test_import import MODEL, box_states, write_recording
+from tests.segmentation.test_import import MODEL, box_states, write_recording
+from tests.support.shared_experiments import USERS_NOTES, ExperimentsRun
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES, SRC, TESTS = ROOT / "examples", ROOT / "src", ROOT / "tests"
@@ -366,8 +366,8 @@ def test_experiments_opens_its_package_data_only(experiments_run: ExperimentsRun
     """The experiments read the shipped examples (the checkout's examples/,
     or the package's in a wheel: their named input) and write the report
     folder only; the user's file beside it is never touched. Audited on the
-    session's shared run (tests/shared_experiments.py: ``experiments --out
-    report --open`` without a browser, under strace in tests/background.py's
+    session's shared run (tests/support/shared_experiments.py: ``experiments --out
+    report --open`` without a browser, under strace in tests/support/background.py's
     job), whose harness is Python too: it reads the tests' modules and
     writes the command's captured stdout and stderr and its result pickle."""
     job = experiments_run.job

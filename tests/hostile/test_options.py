@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, run
+from tests.support.helpers import EXAMPLES
 
 PERCEIVE = ["perceive", "top.png", "--px-per-m", "1000", "--origin", "0.05", "-0.21"]
 # (arguments, a name the error line must contain)

@@ -32,9 +32,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demoplan.fileio import MANIFEST
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, run
-from tests.test_import import MODEL, box_states
+from tests.segmentation.test_import import MODEL, box_states
+from tests.support.helpers import EXAMPLES
 
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))
 needs_video = pytest.mark.skipif(not HAVE_VIDEO, reason="MuJoCo or imageio-ffmpeg not installed")

@@ -22,7 +22,7 @@ import pytest
 from demoplan.errors import UsageError
 from demoplan.evaluation.engine import check_address
 from demoplan.learning.modelfile import save_model
-from tests.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model
 
 pytest.importorskip("ray")
 

@@ -30,7 +30,7 @@ from demoplan.segmentation.types import ObjectTrack, PoseStream
 from demoplan.segmentation.writers import write_bag, write_csv
 from tests.hostile import file_audit
 from tests.hostile.harness import Answer, check_refused, fingerprint, run
-from tests.test_import import MODEL, box_states, write_recording
+from tests.segmentation.test_import import MODEL, box_states, write_recording
 
 GENERATED = settings(
     max_examples=12,

@@ -13,8 +13,8 @@ import pytest
 from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.filmed import render_demonstration
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, private_device, run
+from tests.support.helpers import EXAMPLES
 
 TOP = ["--px-per-m", "1000", "--origin", "0", "-0.15", "--side", "0.04"]
 

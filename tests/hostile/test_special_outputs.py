@@ -26,9 +26,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, run
-from tests.test_import import box_states, write_recording
+from tests.segmentation.test_import import box_states, write_recording
+from tests.support.helpers import EXAMPLES
 
 HAVE_MUJOCO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))
 FULL = os.makedev(1, 7)  # the kernel's "always full" device

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import DEMOPLAN, NOT_SEEN, check_refused, private_device, run
+from tests.support.helpers import EXAMPLES
 
 # The planning commands run without a time limit: what is tested is the answer
 # to a full or closed stdout, not the time. Within the default 2 s (counted

@@ -15,7 +15,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from demoplan.studio.app import create_app
-from tests.test_studio_api import blocks_demonstrations, scene_body
+from tests.studio.test_studio_api import blocks_demonstrations, scene_body
 
 
 @pytest.fixture

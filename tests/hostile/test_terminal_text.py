@@ -21,8 +21,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from demoplan.wording import printable
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import Answer, check_clean, run
+from tests.support.helpers import EXAMPLES
 
 CONTROLS = ["\x1b[2J", "\r", "\x9b", "\u202e", "\x07", "\x08", "\x7f", "\x1b]0;x\x07", "\t", "\n"]
 NAMES = st.lists(st.sampled_from(CONTROLS), min_size=1, max_size=3).map(

@@ -23,8 +23,8 @@ from demoplan.execution.tree_checks import MAX_ATTEMPTS, check_tree
 from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
 from demoplan.scenes.plan import ScenePlan
-from tests.helpers import EXAMPLES, paper_model
 from tests.hostile.harness import check_refused, run
+from tests.support.helpers import EXAMPLES, paper_model
 
 pytest.importorskip("behaviortreepy")
 

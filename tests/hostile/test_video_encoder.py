@@ -20,8 +20,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.helpers import EXAMPLES
 from tests.hostile.harness import check_refused, fingerprint, run
+from tests.support.helpers import EXAMPLES
 
 pytestmark = [
     pytest.mark.slow,

@@ -402,7 +402,7 @@ def select_clustering(
     c could then win), and at a rejected c unless the values still fall into
     more than c groups (:meth:`_Scan.groups`), after at most :data:`PATIENCE`
     rejected counts in a row: more centres on the same data only crowd closer. Where placements form
-    groups this gives the full scan's answer (``tests/test_clustering.py``
+    groups this gives the full scan's answer (``tests/learning/test_clustering.py``
     checks it); where they spread continuously over more than the separation,
     the literal full scan chops them into many small clusters (singletons
     have zero spread), and stopping early deliberately keeps a coarser one.

@@ -34,7 +34,7 @@ __all__ = [
 MAX_DISTANCE_M = 1000.0
 """m: a position's limit on any axis, as in every file (``demoplan.documents.poses``;
 repeated here so that the server starts without the numeric stack, and checked
-equal by tests/test_studio_api.py)."""
+equal by tests/studio/test_studio_api.py)."""
 MIN_SIZE_M = 1e-4
 MAX_SIZE_M = 10.0
 """m: an object's extents, as in every file (``demoplan.documents.poses``)."""

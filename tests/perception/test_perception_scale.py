@@ -1,0 +1,149 @@
+"""The blocks' size from the photograph (demoplan.perception.sizes) and the scale
+of a straight-down view from the cubes' size (``perceive --side`` alone)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from demoplan.cli import app
+from demoplan.commands.execution import perceive
+from demoplan.errors import UsageError
+from demoplan.perception.camera import Camera, save_image
+from demoplan.perception.sizes import SIDE_TOLERANCE, block_sizes
+from demoplan.perception.synthetic import SyntheticBlock, render_blocks
+
+COLOURS = ("red", "green", "blue", "yellow")
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(10.0, 200.0),
+    st.lists(st.floats(-0.05, 0.05), min_size=2, max_size=12),
+    st.floats(1.5, 4.0) | st.floats(0.25, 0.6),
+)
+def test_the_common_size_is_the_most_squares_and_an_odd_one_is_not(
+    size: float, spread: list[float], odd: float
+) -> None:
+    """Two or more sides within 5 % of a size, and one square 1.5–4 times larger or
+    smaller: the first block size is within 5 % of the size, and the odd one lies
+    more than 15 % outside the block sizes' span."""
+    sides = [size * (1 + e) for e in spread] + [size * odd]
+    sizes = block_sizes(sides)
+    assert abs(sizes[0][0] - size) <= 0.05 * size * (1 + 1e-9)  # 5 %, up to rounding
+    low = min(s[1] for s in sizes) * (1 - SIDE_TOLERANCE)
+    high = max(s[2] for s in sizes) * (1 + SIDE_TOLERANCE)
+    assert not low <= size * odd <= high
+
+
+def test_two_sizes_of_several_cubes_each_are_both_block_sizes() -> None:
+    """A table of 38 mm and 25 mm cubes (the ArmLab photograph): both sizes kept."""
+    sides = [38.0, 39.0, 37.5, 38.5, 25.0, 26.0, 24.5]
+    assert block_sizes(sides) == ((38.25, 37.5, 39.0), (25.0, 24.5, 26.0))
+    assert block_sizes([]) == ()
+    assert block_sizes([30.0]) == ((30.0, 30.0, 30.0),)
+
+
+def _scene(seed: int, side: float, count: int, extent: tuple[float, float]) -> list[SyntheticBlock]:
+    """``count`` cubes of ``side`` apart from one another, wholly within a table
+    of ``extent`` (m) from the origin."""
+    rng = np.random.default_rng(seed)
+    placed: list[SyntheticBlock] = []
+    margin = side
+    while len(placed) < count:
+        x = rng.uniform(margin, extent[0] - margin)
+        y = rng.uniform(margin, extent[1] - margin)
+        if all(math.dist((x, y), (b.x, b.y)) > 2.2 * side for b in placed):
+            yaw = float(rng.uniform(-45.0, 45.0))
+            placed.append(SyntheticBlock(COLOURS[len(placed)], x, y, yaw, side))
+    return placed
+
+
+@settings(max_examples=5, deadline=None)
+@given(st.floats(600.0, 1400.0), st.sampled_from([0.03, 0.04, 0.05]), st.integers(0, 2**16))
+def test_the_cubes_size_gives_the_scale_of_a_straight_down_view(
+    tmp_path_factory: pytest.TempPathFactory, px_per_m: float, side: float, seed: int
+) -> None:
+    """A top view of 2–4 cubes at an unknown scale, read with ``--side`` alone: the
+    scale found within 1 % of the true one, every cube within a pixel and that
+    1 % of its distance from the image's bottom-left corner (the origin) of where
+    it is, and the note says so."""
+    blocks = _scene(seed, side, 2 + seed % 3, (500 / px_per_m, 400 / px_per_m))  # 500 × 400 px
+    image = tmp_path_factory.mktemp("scale") / "top.png"
+    save_image(render_blocks(blocks, Camera(px_per_m, (0.0, 0.0)), rng=seed), image)
+    found = perceive(image, side=side)
+    assert "the cube size" in found.scale
+    scale = float(found.scale.split(" px, ")[1].split(" px/m")[0])
+    assert abs(scale - px_per_m) <= 0.01 * px_per_m
+    assert len(found.blocks) == len(blocks)
+    for block in blocks:  # a scale 1 % off moves a point 1 % of its distance from the corner
+        reach = 1 / px_per_m + 0.01 * math.hypot(block.x, block.y)
+        nearest = min(math.dist((block.x, block.y), (b.x, b.y)) for b in found.blocks.values())
+        assert nearest < reach
+    assert found.document["description"].endswith(found.scale)
+
+
+def test_a_block_far_from_the_common_size_is_rejected_with_why(tmp_path: Path) -> None:
+    """Three 4 cm cubes and a 6.5 cm block (within the default 2–8 cm), the scale
+    known, no ``--side``: the three are blocks, the large one is rejected as not a
+    block size."""
+    cubes = [
+        SyntheticBlock("red", 0.09, 0.10, 20.0, 0.04),
+        SyntheticBlock("green", 0.40, 0.08, -10.0, 0.04),
+        SyntheticBlock("blue", 0.10, 0.30, 5.0, 0.04),
+    ]
+    large = SyntheticBlock("wood", 0.30, 0.25, 12.0, 0.065)
+    image = tmp_path / "top.png"
+    save_image(render_blocks([*cubes, large], Camera(1000.0, (0.0, 0.0)), rng=3), image)
+    found = perceive(image, 1000.0, (0.0, 0.0))
+    assert sorted(found.blocks) == sorted(c.colour for c in cubes)
+    odd = [r for r in found.rejected if r.reason == "not a block size"]
+    assert [r.colour for r in odd] == ["wood"]
+    assert "side 65 mm, the blocks here 40 mm" in odd[0].detail
+
+
+def test_neither_a_scale_nor_the_cubes_size_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    image = tmp_path / "top.png"
+    save_image(
+        render_blocks(_scene(1, 0.04, 2, (0.5, 0.4)), Camera(1000.0, (0.0, 0.0)), rng=1), image
+    )
+    with pytest.raises(UsageError, match="--side"):
+        perceive(image)
+    result = CliRunner().invoke(app, ["perceive", str(image)])
+    assert result.exit_code == 2
+    assert "how pixels map to the table is needed" in result.output
+    assert "--side" in result.output
+    shown = CliRunner().invoke(app, ["perceive", str(image), "--side", "0.04"])
+    assert shown.exit_code == 0, shown.output
+    assert "scale from the cube size: --side 0.04 m is" in shown.output
+    given_scale = CliRunner().invoke(
+        app, ["perceive", str(image), "--px-per-m", "1000", "--origin", "0", "0"]
+    )
+    assert "scale from --px-per-m 1000, origin 0 0" in given_scale.output
+
+
+def test_two_cube_sizes_on_a_real_photograph_are_both_kept() -> None:
+    """The ArmLab photograph (tests/data/photos: 38 mm and 25 mm cubes, some on
+    stacks, nearer the camera): no square the detector finds on a labelled top
+    face is rejected as not a block size."""
+    from demoplan.perception.images import perceive_top_view
+    from demoplan.perception.labelled import FOUND_WITHIN, load_labelled
+
+    photo = load_labelled(Path(__file__).parents[1] / "data" / "photos" / "armlab_mrhan4.json")
+    seen = perceive_top_view(photo.image, photo.px_per_m, (0.0, 0.0), timeout=60)
+    assert len(seen.blocks) >= 20
+    for rejection in seen.rejected:
+        if rejection.reason != "not a block size":
+            continue
+        corners = np.array(rejection.outlines[0])
+        u, v = photo.to_pixel(*corners.mean(axis=0))
+        assert all(
+            math.hypot(u - face.u, v - face.v) > FOUND_WITHIN * face.side_px
+            for face in photo.blocks
+        )

@@ -1,0 +1,130 @@
+"""Plans as long as the feedback bound, and their refutation (planning/tight.py),
+checked against exact searches: BFS on small problems, A* (itself checked
+against BFS in test_search.py) on generated parking problems."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from demoplan.planning.astar import astar_search
+from demoplan.planning.bfs import breadth_first_search
+from demoplan.planning.bounds import LowerBounds
+from demoplan.planning.budget import Budget, Clock
+from demoplan.planning.compiled import compile_problem
+from demoplan.planning.problem import Problem
+from demoplan.planning.search import solve
+from demoplan.planning.strips import validate
+from demoplan.planning.tight import TightResult, tight_plan
+from tests.planning.test_search import small_problems
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
+
+
+def tight_at_start(problem: Problem) -> tuple[TightResult, int]:
+    """What tight_plan says at the start, and the feedback bound (moves)."""
+    c = compile_problem(problem)
+    bounds = LowerBounds(c)
+    # No clock: the ordering stops at its own limits of choices and nodes, so
+    # its answer does not depend on the machine's speed.
+    result = tight_plan(bounds, c.start, c.start_reached, Clock(Budget()))
+    return result, bounds.feedback(c.start, c.start_reached)
+
+
+def check_against(problem: Problem, shortest: int | None) -> TightResult:
+    """A tight plan is valid and shortest; a refutation leaves no plan of
+    feedback-bound length (``shortest``: the exact optimum in moves, None:
+    no plan at all)."""
+    result, feedback = tight_at_start(problem)
+    if result.moves is not None:
+        c = compile_problem(problem)
+        validate(problem, [a for move in result.moves for a in c.move_actions(*move)])
+        assert len(result.moves) == shortest == feedback
+    if result.refuted:
+        assert shortest is None or shortest > feedback
+    return result
+
+
+@given(small_problems())
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_tight_plans_and_refutations_agree_with_bfs_on_any_small_problem(problem: Problem) -> None:
+    reference = breadth_first_search(problem)
+    assert reference.actions is not None or reference.exhausted
+    check_against(problem, None if reference.actions is None else len(reference.actions) // 2)
+
+
+@given(
+    st.sampled_from(["parking-dense", "parking-crowded"]),
+    st.integers(3, 5),
+    st.integers(0, 10_000),
+)
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_tight_plans_and_refutations_agree_with_astar_on_parking_problems(
+    family: str, n: int, seed: int
+) -> None:
+    try:
+        problem = parking_problem(n, seed, **PARKING_FAMILIES[family])
+    except ValueError:  # no solvable-looking draw for this seed
+        return
+    reference = astar_search(problem, Budget())  # no clock: only the state limit stops it
+    assert reference.actions is not None or reference.exhausted
+    check_against(problem, None if reference.actions is None else len(reference.actions) // 2)
+
+
+def test_refutations_found_in_a_sweep_hold_by_exhaustive_search() -> None:
+    # A sweep of 478 small parking problems against A* found five refuted;
+    # two that exact searches settle fast: 6 and 11 moves against bounds of 5 and 10.
+    small = parking_problem(3, 21, **PARKING_FAMILIES["parking-crowded"])
+    reference = breadth_first_search(small)
+    assert reference.actions is not None and len(reference.actions) == 12
+    assert check_against(small, 6).refuted
+    larger = parking_problem(6, 48, **PARKING_FAMILIES["parking-crowded"])
+    reference = astar_search(larger, Budget())  # no clock to race
+    assert reference.actions is not None and len(reference.actions) == 22
+    assert check_against(larger, 11).refuted
+
+
+def test_the_dense_ten_object_case_needs_one_move_more_than_its_bound() -> None:
+    """parking-dense, 10 objects, seed 3: the bound is 14 moves (10 objects
+    away, two swaps, two distractors) and the shortest plan has 15 — by hand:
+
+    obj9 (at (4,4), goal (1,3)) cannot move with grasp y: picking it needs
+    (4,3) empty and putting it down needs (1,4) empty, and with one of
+    obj4/obj10 parked those two places are never empty at once. With grasp x
+    obj2 must have left (3,4) before it and obj1 must not yet stand at (2,3).
+    obj1 then has no grasp: x needs (1,3), obj9's goal, empty (obj1 before
+    obj9); y needs (2,2), obj2's goal, empty (obj1 before obj2, so before
+    obj9 too). A* with a 600 s budget found no 14-move plan (2 M states)."""
+    problem = parking_problem(10, 3, **PARKING_FAMILIES["parking-dense"])
+    result, feedback = tight_at_start(problem)
+    assert feedback == 14 and result.refuted
+    plan = solve(problem, budget=Budget())  # the proof must not race the clock
+    validate(problem, plan.actions)
+    assert plan.optimal and len(plan) == plan.bound == 30
+
+
+@pytest.mark.parametrize("family", ["parking", "parking-dense"])
+@pytest.mark.parametrize("n", [10, 20, 30])
+def test_the_benchmark_families_are_proved_at_the_start(family: str, n: int) -> None:
+    # Every draw of the benchmark's hard families is settled at the start: a
+    # plan as long as the bound, or the bound refuted and a plan one move longer.
+    for seed in range(4):
+        problem = parking_problem(n, seed, **PARKING_FAMILIES[family])
+        plan = solve(problem, budget=Budget(timeout=10))
+        validate(problem, plan.actions)
+        assert plan.optimal and plan.search in {"tight", "greedy", "plateau"}
+
+
+def test_no_tight_shape_where_places_stack_or_subgoals_are_pending() -> None:
+    # The rigid shape is argued for flat problems with every subgoal reached.
+    stacked = Problem.create(
+        objects=["a", "b"],
+        locations=["l1", "l2", "top", "base"],
+        grasps=["g"],
+        allowed=[("a", "g"), ("b", "g")],
+        supports=[("top", "base")],
+        initial=[("a", "l1"), ("b", "l2")],
+        goal=[("a", "base"), ("b", "top")],
+    )
+    result, _ = tight_at_start(stacked)
+    assert result == TightResult()

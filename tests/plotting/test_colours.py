@@ -1,0 +1,101 @@
+"""One colour per object in every figure and render of a run (issue: the glass
+was red in one figure and green in another; objects not named after a colour
+rendered grey in MuJoCo)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from matplotlib.colors import to_hex
+
+from demoplan.documents.demonstrations import load_demonstrations
+from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
+from demoplan.plotting.figures import plot_demonstration
+from tests.support.helpers import EXAMPLES
+
+
+def test_an_object_has_one_colour_in_every_demonstration_figure() -> None:
+    """The three set-table demonstrations move the objects in different orders;
+    the placed objects' fills in each figure are exactly their colours from
+    demoplan.plotting.colours (one source for every figure), distinct within a figure."""
+    demos = load_demonstrations([EXAMPLES / "set_table"])
+    for demo in demos:
+        ax = plot_demonstration(demo)
+        colours = {step.object: object_colour(step.object) for step in demo.steps}
+        assert len(set(colours.values())) == len(colours)  # distinct within a figure
+        fills = {
+            to_hex(patch.get_facecolor())
+            for patch in ax.patches
+            if patch.get_alpha() is not None and patch.get_alpha() > 0.5
+        }
+        assert fills == set(colours.values())
+        plt.close("all")
+
+
+def test_named_colours_and_mujoco_rgba_agree() -> None:
+    assert object_colour("red") == NAMED["red"]
+    red, green, blue, alpha = (float(v) for v in object_rgba("glass").split())
+    assert to_hex((red, green, blue)) == object_colour("glass") and alpha == 1.0
+    assert object_colour("glass") == object_colour("glass")
+    assert object_rgba("fork") != "0.6 0.6 0.7 1"  # no longer every plain name grey
+
+
+names_strategy = st.lists(
+    st.text(alphabet="abcdefghijklmnopqrstuvwxyz_0123456789", min_size=1, max_size=12),
+    min_size=1,
+    max_size=len(CYCLE),
+    unique=True,
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(names_strategy, st.randoms(use_true_random=False))
+def test_a_tasks_colours_are_distinct_and_do_not_depend_on_order(
+    names: list[str], shuffle: Any
+) -> None:
+    """However the objects of a task come (learn's figure, plan's, run's
+    frames), they get the same colours, distinct where the cycle allows."""
+    first = assign_colours(names)
+    again = list(names)
+    shuffle.shuffle(again)
+    for name in again:  # drawn one by one, in another order, before anything else
+        object_colour(name)
+    assert assign_colours(again) == first
+    plain = [n for n in names if n not in NAMED]
+    assert len({first[n] for n in plain}) == len(plain)
+    assert all(object_colour(n) == first[n] for n in names)
+
+
+def test_colours_are_the_same_in_another_process() -> None:
+    """A command drawing the plan and another drawing the frames agree: the
+    colour comes from the names, not from what a process drew first."""
+    task = ["motor", "pcb", "screws", "cable", "manual"]
+    code = (
+        "from demoplan.plotting.colours import object_colour\n"
+        "print(object_colour('zebra'))\n"
+        "from demoplan.plotting.colours import assign_colours\n"
+        f"print(sorted(assign_colours({list(reversed(task))!r}).items()))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    lines = done.stdout.splitlines()
+    assert lines[0] == object_colour("zebra")
+    assert lines[1] == str(sorted(assign_colours(task).items()))
+
+
+def test_numbered_instances_of_a_colour_get_that_colour() -> None:
+    """Identical blocks as perception (``red2``) and learning (``red#2``) name them."""
+    from demoplan.plotting.colours import NAMED, assign_colours, object_colour
+
+    for name in ("red2", "red-2", "red#2", "wood#1"):
+        assert object_colour(name) == NAMED[name.rstrip("0123456789").rstrip("-#")]
+    assigned = assign_colours(["red", "red2", "plate#1", "plate#2"])
+    assert assigned["red"] == assigned["red2"] == NAMED["red"]
+    assert assigned["plate#1"] != assigned["plate#2"]
