@@ -10,7 +10,7 @@ from pathlib import Path
 
 import networkx as nx
 
-STATIC = Path(__file__).resolve().parents[1] / "src" / "demoplan" / "studio" / "static"
+STATIC = Path(__file__).resolve().parents[2] / "src" / "demoplan" / "studio" / "static"
 VIEWS = ("teach.js", "learn.js", "plan.js", "run.js", "objects.js")
 
 # `import {...} from "./x.js"` (over several lines too), `export {...} from "./x.js"`,

@@ -24,7 +24,7 @@ from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
 from tests.hostile.harness import check_refused, run
 
-PHOTOS = Path(__file__).parent / "data" / "photos"
+PHOTOS = Path(__file__).parents[1] / "data" / "photos"
 LARGEST = "langtable_real"
 """The development set's photograph whose regions are largest (640 × 360 px)."""
 
