@@ -35,6 +35,7 @@ from tests.support.breakfast import (
     draw_family,
     scene_document,
 )
+from tests.support.helpers import UNTIMED
 
 
 def _learned(seed: int, count: int, scatter: float) -> tuple[TaskModel, list[dict[str, object]]]:
@@ -88,7 +89,7 @@ def test_the_breakfast_is_laid_out_on_the_turned_tray(
 
     tray = (0.5, 0.15, turn)
     scene = scene_from_document(scene_document(tray), "scene.json")
-    report = run_task(model, prepare(model, scene))
+    report = run_task(model, prepare(model, scene), settings=UNTIMED)
     assert report.success, report
     final = report.final.poses
     tray_pose = dict(scene.landmarks)["tray"]
@@ -273,7 +274,7 @@ def test_a_kit_tray_placed_anywhere_stays_and_is_filled_where_it_stands(
     result = plan_in_scene(model, prepare(model, scene))
     validate(result.chosen.problem.problem, result.chosen.plan.actions)
     assert all(a.object != "tray" for a in result.chosen.plan.actions), "the tray was moved"
-    report = run_task(model, prepare(model, scene))
+    report = run_task(model, prepare(model, scene), settings=UNTIMED)
     assert report.success, report
     final = report.final.poses
     errors = []
@@ -323,6 +324,7 @@ def test_the_breakfast_recovers_from_drops_and_blocks_on_20_seeds(
             prepare(breakfast_model, scene),
             faults=Faults(drop=0.3, block=0.3),
             seed=seed,
+            settings=UNTIMED,
         )
         assert report.success, f"seed {seed}: {report.reason}"
         injected += len(report.injected)
@@ -374,7 +376,7 @@ def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
     document["objects"]["kettle"] = {"position": [0.95, -0.3, 0.0], "shape": "box"}
     document["objects"]["kettle"]["size"] = [0.12, 0.12, 0.15]
     scene = scene_from_document(document, "scene.json")
-    report = run_task(model, prepare(model, scene))
+    report = run_task(model, prepare(model, scene), settings=UNTIMED)
     assert report.success, report
     final = report.final.poses
     tray = final["tray"]

@@ -29,7 +29,7 @@ from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of
-from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
@@ -78,7 +78,7 @@ def _assert_done_on_target(report: RunReport) -> None:
 
 def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
     """§V.B executed by the arm: demonstration 2's goal, 4 moves, the pyramid stands."""
-    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm")
+    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm", settings=UNTIMED)
     _assert_done_on_target(report)
     assert report.goal == 1 and report.first_plan_length == 8
     assert report.final.poses["red"].position[2] == pytest.approx(0.04, abs=0.003)
@@ -87,14 +87,16 @@ def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
 def test_experiment_1_on_the_arm(set_table: TaskModel) -> None:
     """The paper's set-table task: 5–8 mm cutlery, a 3 mm napkin on the plate —
     what the floating hand's pads cannot lift, the suction cup takes."""
-    report = run_task(set_table, prepare(set_table, load_scene(SET_TABLE)), sim="arm")
+    report = run_task(
+        set_table, prepare(set_table, load_scene(SET_TABLE)), sim="arm", settings=UNTIMED
+    )
     _assert_done_on_target(report)
     assert report.final.poses["napkin"].position[2] > 0.01  # on the plate
 
 
 def test_kitting_on_the_arm(kit: TaskModel) -> None:
     """The kit: a 1 cm pcb, the manual parked off the motor and put on the pcb last."""
-    report = run_task(kit, prepare(kit, load_scene(KIT)), sim="arm")
+    report = run_task(kit, prepare(kit, load_scene(KIT)), sim="arm", settings=UNTIMED)
     _assert_done_on_target(report)
     manual, pcb = report.final.poses["manual"], report.final.poses["pcb"]
     assert manual.position[2] == pytest.approx(0.01, abs=0.002)
@@ -103,7 +105,13 @@ def test_kitting_on_the_arm(kit: TaskModel) -> None:
 
 def test_experiment_2_on_vision_with_the_arm(blocks: TaskModel) -> None:
     """The arm acting on what the top camera sees (Hough-transform blocks)."""
-    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm", perception="camera")
+    report = run_task(
+        blocks,
+        prepare(blocks, load_scene(BLOCKS)),
+        sim="arm",
+        perception="camera",
+        settings=UNTIMED,
+    )
     assert report.success, (report.reason, report.failures)
     assert report.collisions == ()
 
@@ -354,6 +362,7 @@ def test_an_obstacle_on_a_thin_parts_target_is_cleared_and_the_wrist_recovers() 
         sim="arm",
         faults=parse_faults("block=0.3"),
         seed=1,
+        settings=UNTIMED,
     )
     assert [f.kind for f in report.injected] == ["block"]
     _assert_done_on_target(report)

@@ -20,6 +20,7 @@ from demoplan.learning import learn
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import scene_from_document
 from tests.support.arm_layouts import attempt_all, layout
+from tests.support.helpers import UNTIMED
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("mujoco") is None or importlib.util.find_spec("mink") is None,
@@ -119,7 +120,7 @@ def test_the_lunch_box_is_packed_by_the_arm() -> None:
         "lunch.json",
     )
     model = learn(demos)
-    report = run_task(model, prepare(model, scene), sim="arm")
+    report = run_task(model, prepare(model, scene), sim="arm", settings=UNTIMED)
     assert report.success, (report.reason, report.failures, report.motions_refused)
     assert report.collisions == () and report.motions_refused == ()
     for name, place in PACKED.items():

@@ -15,7 +15,9 @@ from demoplan.documents.demonstrations import demonstrations_from_document
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import run_task
 from demoplan.learning import learn
+from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import scene_from_document
+from tests.support.helpers import UNTIMED
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("mujoco") is None, reason="MuJoCo not installed"
@@ -75,7 +77,9 @@ def _scene(yaw: float) -> Any:
 def test_a_block_stands_on_the_turned_board(
     model: Any, sim: str, seed: int, faults: Faults
 ) -> None:
-    report = run_task(model, _scene(75.0), sim=sim, seed=seed, faults=faults)
+    report = run_task(
+        model, prepare(model, _scene(75.0)), sim=sim, seed=seed, faults=faults, settings=UNTIMED
+    )
     assert report.success, report.reason
     assert bool(report.injected) == faults.any(), report.injected  # the seed injects one
     red = report.final.poses["red"]

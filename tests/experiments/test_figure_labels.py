@@ -28,6 +28,7 @@ from demoplan.plotting.colours import object_colour
 from demoplan.plotting.figures import Leader, place_boxes
 from demoplan.plotting.output import observing_saved_figures
 from demoplan.scenes.prepared import prepare
+from tests.support.helpers import UNTIMED
 from tests.support.shared_experiments import AxesRecord, ExperimentsRun, text_box
 
 REPORT_FIGURES = (
@@ -252,7 +253,7 @@ def test_kinematic_storyboard_frames_keep_their_names_apart(tmp_path: Path) -> N
             boxes[f"{path.name}#{k}"] = [(n, b) for n, b in texts if n]
 
     with observing_saved_figures(record):
-        report = run_task(model, prepare(model, scene), frames=tmp_path)
+        report = run_task(model, prepare(model, scene), frames=tmp_path, settings=UNTIMED)
     assert report.success and boxes
     named = [key for key, texts in boxes.items() if len(texts) >= 5]
     assert named  # the frames do name the objects

@@ -16,7 +16,7 @@ from demoplan.planning.strips import validate
 from demoplan.scenes.plan import plan_in_scene
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import load_scene
-from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
 
 
 @pytest.fixture
@@ -36,7 +36,9 @@ def completions(monkeypatch: pytest.MonkeyPatch) -> list[str]:
 def test_a_run_with_replans_prepares_its_scene_once(completions: list[str]) -> None:
     model = paper_model("blocks")
     scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
-    report = run_task(model, prepare(model, scene), faults=Faults(drop=0.5, block=0.3), seed=2)
+    report = run_task(
+        model, prepare(model, scene), faults=Faults(drop=0.5, block=0.3), seed=2, settings=UNTIMED
+    )
     assert report.replans > 0, "the seed injects no fault: pick another"
     assert report.success, report.reason
     assert len(completions) == 1, completions
@@ -83,7 +85,7 @@ def test_a_run_logs_its_phases_for_verbose(caplog: pytest.LogCaptureFixture) -> 
     model = paper_model("blocks")
     scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
     with caplog.at_level("INFO", logger="demoplan.execution.executor"):
-        report = run_task(model, prepare(model, scene))
+        report = run_task(model, prepare(model, scene), settings=UNTIMED)
     said = [r.getMessage() for r in caplog.records]
     assert said[0].startswith("run: plan at step 0")
     actions = [m for m in said if m.startswith("run: action")]

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.budget import Budget
+from demoplan.execution.executor import ExecutionSettings
 from demoplan.experiments.paper import PAPER_TABLE_II
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
@@ -18,6 +20,12 @@ from demoplan.rotations import quat_from_yaw
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 # Table II: state, object, relative position, (x, y) — the library's transcription.
+UNTIMED = ExecutionSettings(budget=Budget())
+"""A run whose plans have no time limit, for tests that are not about the
+budget: with the default 2 s, a loaded machine (or a worker starved beside
+others) runs out of time building plans, and the test would measure the
+machine instead of the behaviour."""
+
 TABLE_II = [(r.id, r.object, r.position_reference, r.position) for r in PAPER_TABLE_II]
 
 
