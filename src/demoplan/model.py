@@ -19,6 +19,10 @@ from demoplan.learning.settings import LearningSettings
 from demoplan.rotations import Quaternion, rpy_from_quat
 
 Vector3 = tuple[float, float, float]
+Compartment = tuple[float, float, float, float, float, float]
+"""An open interior of a landmark (a bin's compartment), in the landmark's frame
+from its position: ``(x_low, y_low, z_low, x_high, y_high, z_high)`` in metres,
+``z_low`` its floor, ``z_high`` its rim (docs/formats.md "Landmark")."""
 
 WOOD_DENSITY = 600.0
 """kg/m³: an object's density where its file gives neither ``mass`` nor
@@ -28,6 +32,7 @@ __all__ = [
     "LEVEL_TOLERANCE",
     "SUPPORT_FRACTION",
     "WOOD_DENSITY",
+    "Compartment",
     "Demonstration",
     "ObjectGeometry",
     "Pose",
@@ -147,6 +152,9 @@ class Demonstration:
     provenance: tuple[tuple[str, str | int | float], ...] = field(default=(), compare=False)
     """Where the demonstration came from (``("source", file)``, ``("demonstration",
     "demo_1")``, ``("samples", 1252)``, …); written as the file's ``provenance``."""
+    compartments: tuple[tuple[str, tuple[Compartment, ...]], ...] = ()
+    """The open interiors of landmarks that have them (a bin's compartments):
+    landmark name → its compartments (docs/formats.md "Landmark")."""
     types: tuple[tuple[str, str], ...] = ()
     """Declared types (object name → type) of objects that are one of several
     interchangeable instances (two plates, three red blocks); an object not
@@ -207,6 +215,12 @@ class StatePosition:
     beyond the precision with no reference explaining them (``value`` is
     their mean, for information). At run time the object stays where it
     stands when it can (:mod:`demoplan.scenes.targets`)."""
+    region: Compartment | None = None
+    """Placed anywhere inside this compartment of the reference landmark (its
+    frame, as :data:`Compartment`): every demonstrated placement lay inside it
+    (docs/learning.md, "Region goals"); ``value`` is their mean. At run time
+    the object stays where it stands when it is inside, else goes to the
+    point inside nearest ``value`` that the robot reaches."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -51,6 +51,7 @@ from demoplan.rotations import (
 from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.overhang import Support, demonstrated_supports
+from demoplan.scenes.regions import region_target
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.table import (
     Surroundings,
@@ -173,8 +174,10 @@ class _Resolver:
         current: dict[str, Pose],
         landmarks: dict[str, Pose],
         geometry: dict[str, ObjectGeometry] | None = None,
+        reach: tuple[float, float, float] | None = None,
     ):
         self.index = index
+        self.reach = reach
         self.states = states
         self.current = current
         self.landmarks = landmarks
@@ -201,6 +204,19 @@ class _Resolver:
                 frame = self.frame(state.position.reference, reference)
                 position = rotate_vectors(frame[None, :], position[None, :])[0]
             position = position + reference.position
+            if state.position.region is not None and state.position.reference in self.landmarks:
+                x, y, z = (float(v) for v in position)
+                position = np.asarray(
+                    region_target(
+                        state.position.region,
+                        reference,
+                        (x, y, z),
+                        self.current.get(state.object),
+                        self.geometry.get(state.object),
+                        yaw_of(Pose((0.0, 0.0, 0.0), self.orientation(state))),
+                        self.reach,
+                    )
+                )
         return Pose(
             (float(position[0]), float(position[1]), float(position[2])),
             self.orientation(state),
@@ -291,7 +307,9 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
     by_key: dict[tuple[object, ...], int] = {}
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
-        resolver = _Resolver(index, tuple(sequence), states, current, landmarks, geometry)
+        resolver = _Resolver(
+            index, tuple(sequence), states, current, landmarks, geometry, _reach(scene)
+        )
         resolver.placed = _anywhere_places(model, scene, sequence, resolver)
         resolver.targets.clear()
         subtasks = tuple(
@@ -319,6 +337,13 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         by_key[key] = len(candidates)
         candidates.append(Candidate(index, (index,), subtasks, precedences))
     return candidates
+
+
+def _reach(scene: Scene) -> tuple[float, float, float] | None:
+    """The robot's base (x, y) and how far it reaches, where the scene says."""
+    if scene.robot is None or scene.reach is None:
+        return None
+    return (scene.robot[0], scene.robot[1], scene.reach)
 
 
 def _anywhere_places(

@@ -65,8 +65,9 @@ from numpy.typing import NDArray
 from demoplan.documents.poses import MAX_COORDINATE, check_physical
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import UNIT_TOLERANCE, quat_from_yaw, unit_length_expected
+from demoplan.scenes.regions import compartments
 from demoplan.segmentation.readers.hdf5_container import (
     attribute_text,
     open_recording,
@@ -129,6 +130,9 @@ class RecordedDemonstration:
     geometry : tuple of (name, ObjectGeometry)
         Shape and size of objects and landmarks where the model's primitives
         give them.
+    compartments : tuple of (name, compartments)
+        The open interiors of landmarks that have them (a bin's compartments,
+        :func:`demoplan.scenes.regions.compartments`), in the landmark's frame.
     provenance : tuple of (key, value)
         ``source``, ``demonstration``, ``samples``, ``env``,
         ``robosuite_version``, ``model`` and ``table_top_z`` (the simulator's
@@ -140,6 +144,7 @@ class RecordedDemonstration:
     landmarks: tuple[tuple[str, Pose], ...]
     geometry: tuple[tuple[str, ObjectGeometry], ...]
     provenance: tuple[tuple[str, ProvenanceValue], ...]
+    compartments: tuple[tuple[str, tuple[Compartment, ...]], ...] = ()
 
     @property
     def env(self) -> str | None:
@@ -922,7 +927,7 @@ def _demonstration(
         quats = np.ascontiguousarray(body_quat[k][:, [1, 2, 3, 0]])
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
         tracks.append(ObjectTrack(names[k], times.copy(), np.ascontiguousarray(positions), quats))
-    landmarks, landmark_geometry = _landmarks(layout, table_z, set(names))
+    landmarks, landmark_geometry, compartments = _landmarks(layout, table_z, set(names))
     _check_limits(tracks, landmarks, geometry + landmark_geometry, f"{path}: {key}")
     provenance: list[tuple[str, ProvenanceValue]] = [
         ("source", str(path)),
@@ -940,6 +945,7 @@ def _demonstration(
         landmarks=tuple(landmarks),
         geometry=tuple(geometry + landmark_geometry),
         provenance=tuple(provenance),
+        compartments=tuple(compartments),
     )
 
 
@@ -968,8 +974,14 @@ def _check_limits(
 
 def _landmarks(
     layout: ModelLayout, table_z: float, objects: set[str]
-) -> tuple[list[tuple[str, Pose]], list[tuple[str, ObjectGeometry]]]:
-    poses, geometry = [], []
+) -> tuple[
+    list[tuple[str, Pose]],
+    list[tuple[str, ObjectGeometry]],
+    list[tuple[str, tuple[Compartment, ...]]],
+]:
+    """The static top-level bodies that collide: their poses, their sizes, and
+    the compartments of those that have some (a bin's, its frame)."""
+    poses, geometry, found = [], [], []
     for index, body in enumerate(layout.bodies):
         if body.parent != -1 or layout.jointed_subtree(index):
             continue
@@ -986,9 +998,13 @@ def _landmarks(
             local = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
             point = body.pos + body.rot @ local
             geometry.append((body.name, _geometry(geoms, low, high)))
+            parts = [_bounds([g]) for g in geoms]
+            boxes = compartments([(p[0] - local, p[1] - local) for p in parts if p is not None])
+            if boxes:
+                found.append((body.name, boxes))
         x, y, z = (float(v) for v in point)
         poses.append((body.name, Pose((x, y, z - table_z), quat_from_yaw(yaw))))
-    return poses, geometry
+    return poses, geometry, found
 
 
 def read_recording(
