@@ -168,7 +168,9 @@ def test_a_region_goal_holds_anywhere_inside_and_else_targets_a_point_inside(
     inside = _world(
         at, (x0 + 0.03 + fx * (x1 - x0 - 0.06), y0 + 0.03 + fy * (y1 - y0 - 0.06), floor)
     )
-    for start, stays in ((inside, True), ((2.0, 2.0, 0.0), False)):
+    rim = bin_.cells[chosen][5]
+    on_top = (inside[0], inside[1], inside[2] - floor + rim)  # up at the rim: not in it
+    for start, stays in ((inside, True), ((2.0, 2.0, 0.0), False), (on_top, False)):
         scene = Scene(objects=(SceneObject("can", Pose(start), CAN),), landmarks=(("bin", at),))
         (goal,) = {c.subtasks[-1].pose.position for c in candidate_goals(model, scene)}
         if stays:

@@ -41,15 +41,17 @@ def local_point(point: Sequence[float], frame: Pose) -> np.ndarray:
 def in_compartment(
     local: Sequence[float] | np.ndarray, box: Compartment, margin: float = 0.0
 ) -> bool:
-    """Whether ``local`` (the landmark's frame) lies inside ``box``: within its
-    walls (x, y, ``margin`` inside them), no lower than its floor (less
-    :data:`~demoplan.model.LEVEL_TOLERANCE`) and no higher than its rim."""
+    """Whether ``local`` (the landmark's frame; an object's bottom centre) lies
+    inside ``box``: within its walls (x, y, ``margin`` inside them), no lower
+    than its floor (less :data:`~demoplan.model.LEVEL_TOLERANCE`) and in the
+    lower half of its height — on its floor, on something on it, or leaning
+    on a wall, not on top of a wall or a divider."""
     x0, y0, z0, x1, y1, z1 = box
     x, y, z = local[0], local[1], local[2]
     return (
         x0 + margin < x < x1 - margin
         and y0 + margin < y < y1 - margin
-        and z0 - LEVEL_TOLERANCE <= z <= z1
+        and z0 - LEVEL_TOLERANCE <= z <= (z0 + z1) / 2
     )
 
 

@@ -25,7 +25,7 @@ from demoplan.scenes.scene import yaw_of
 
 __all__ = ["WALL_CLEARANCE", "compartments", "region_target"]
 
-WALL_CLEARANCE = 0.005
+WALL_CLEARANCE = 0.01
 """m: how far a region goal's target keeps its object's footprint from the walls."""
 
 
@@ -64,7 +64,7 @@ def region_target(
     nearest ``mean`` of the compartment less its walls' clearance (the
     object's footprint at ``yaw``, deg, world), within
     ``reach`` ((x, y) of the robot's base and the radius, world) where any of
-    it is (else the point nearest the base). The height is the mean's."""
+    it is. The height is the mean's."""
     if standing is not None and in_compartment(local_point(standing.position, landmark), region):
         return standing.position
     centre = local_point(mean, landmark)
@@ -75,15 +75,11 @@ def region_target(
     area: BaseGeometry = shapely.box(x0 + ix, y0 + iy, x1 - ix, y1 - iy)
     if area.is_empty:  # the object fills the compartment: its middle
         area = shapely.Point((x0 + x1) / 2, (y0 + y1) / 2)
-    towards = shapely.Point(centre[0], centre[1])
     if reach is not None:
         base = local_point((reach[0], reach[1], mean[2]), landmark)
         reachable = area.intersection(shapely.Point(base[0], base[1]).buffer(reach[2], 64))
-        if reachable.is_empty:  # out of reach all of it: as near the robot as it goes
-            towards = shapely.Point(base[0], base[1])
-        else:
-            area = reachable
-    point = nearest_points(area, towards)[0]
+        area = reachable if not reachable.is_empty else area
+    point = nearest_points(area, shapely.Point(centre[0], centre[1]))[0]
     return _world(np.array([point.x, point.y, centre[2]]), landmark)
 
 
