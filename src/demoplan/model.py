@@ -12,11 +12,12 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
 from demoplan.learning.settings import LearningSettings
-from demoplan.rotations import Quaternion, rpy_from_quat
+from demoplan.rotations import Quaternion, matrices_from_quats, rpy_from_quat
 
 Vector3 = tuple[float, float, float]
 Compartment = tuple[float, float, float, float, float, float]
@@ -46,6 +47,7 @@ __all__ = [
     "demonstrated_shapes",
     "demonstrated_types",
     "footprint",
+    "lowest_point",
     "visit_label",
     "yaw_period",
 ]
@@ -341,6 +343,19 @@ whose bottom is this close to the table stands on it)."""
 SUPPORT_FRACTION = 0.05
 """An object stands on another when their outlines overlap by at least this
 share of the upper one's (the support rule of docs/scenes.md)."""
+
+
+def lowest_point(shape: ObjectGeometry | None, pose: Pose) -> float:
+    """The height of the lowest corner of ``shape``'s box at ``pose`` (the pose is
+    the centre of its bottom face, turned with it): a knife on its edge reaches
+    half its width below its resting point, a box leaning on a wall its lower
+    edge's height. The pose's height where shape or orientation is unknown."""
+    z = pose.position[2]
+    if shape is None or pose.orientation is None:
+        return z
+    sx, sy, sz = shape.size
+    m = matrices_from_quats(np.asarray([pose.orientation], dtype=float))[0]
+    return float(z - abs(m[6]) * sx / 2 - abs(m[7]) * sy / 2 + min(0.0, m[8] * sz))
 
 
 def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> BaseGeometry:
