@@ -226,3 +226,30 @@ def test_placements_in_two_compartments_are_no_region() -> None:
         members = {d for d, _ in state.members}
         if members == {0, 1, 2}:
             assert state.position.region is None
+
+
+def test_the_scenes_shape_keeps_the_target_clear_of_the_walls() -> None:
+    """Demonstrations without geometry (robosuite's mesh objects): the scene's
+    shape of the can keeps its target's footprint 1 cm from the walls, even
+    when the robot reaches only the compartment's corner (then: nearest the mean)."""
+    cells = ((0.0, 0.0, 0.02, 0.2, 0.2, 0.1),)
+    demos = [
+        Demonstration(
+            name=f"d{k}",
+            steps=(Step("can", Pose((bx + 0.1 + dx, 0.1, 0.02))),),
+            landmarks=(("bin", Pose((bx, 0.0, 0.0))),),
+            initial=(("can", Pose((1.0, 1.0, 0.0))),),
+            compartments=(("bin", cells),),
+        )
+        for k, (bx, dx) in enumerate(((-0.8, 0.0), (0.8, 0.01), (0.0, -0.01)))
+    ]
+    model = learn(demos)
+    scene = Scene(
+        objects=(SceneObject("can", Pose((2.0, 2.0, 0.0)), CAN),),
+        landmarks=(("bin", Pose((0.0, 0.0, 0.0))),),
+        robot=(-0.5, -0.5, 0.0),
+        reach=math.hypot(0.535, 0.535),  # within 3.5 cm of the corner only
+    )
+    (goal,) = {c.subtasks[-1].pose.position for c in candidate_goals(model, scene)}
+    inset = CAN.size[0] / 2 + WALL_CLEARANCE
+    assert in_compartment(goal, cells[0], inset - 1e-6)

@@ -175,9 +175,13 @@ class _Resolver:
         landmarks: dict[str, Pose],
         geometry: dict[str, ObjectGeometry] | None = None,
         reach: tuple[float, float, float] | None = None,
+        sizes: dict[str, ObjectGeometry] | None = None,
     ):
         self.index = index
         self.reach = reach
+        self.sizes = sizes or {}
+        """The scene's objects' shapes (a region goal keeps them clear of the
+        walls; the demonstrations may give none: robosuite's meshes)."""
         self.states = states
         self.current = current
         self.landmarks = landmarks
@@ -212,7 +216,7 @@ class _Resolver:
                         reference,
                         (x, y, z),
                         self.current.get(state.object),
-                        self.geometry.get(state.object),
+                        self.sizes.get(state.object) or self.geometry.get(state.object),
                         yaw_of(Pose((0.0, 0.0, 0.0), self.orientation(state))),
                         self.reach,
                     )
@@ -301,6 +305,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         for name, shape in demonstrated_shapes(model.demonstrations).items()
         if name not in landmarks
     }
+    sizes = {obj.name: obj.geometry for obj in scene.objects if obj.geometry is not None}
     constraints = set(model.constraints)
     supported = demonstrated_supports(model)
     candidates: list[Candidate] = []
@@ -308,7 +313,7 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
         resolver = _Resolver(
-            index, tuple(sequence), states, current, landmarks, geometry, _reach(scene)
+            index, tuple(sequence), states, current, landmarks, geometry, _reach(scene), sizes
         )
         resolver.placed = _anywhere_places(model, scene, sequence, resolver)
         resolver.targets.clear()
