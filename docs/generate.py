@@ -321,6 +321,11 @@ LANDMARK = FieldTable(
         "shape": "its shape, with `size`",
         "size": "extents `[x, y, z]`; z is its height: objects stand on its top, and every "
         "figure draws it (may stand under `objects` instead, as `import` writes it)",
+        "compartments": "its open interiors (a bin's compartments): `[x_low, y_low, z_low, "
+        "x_high, y_high, z_high]` each, in its frame from its position, z from the top of its "
+        "floor to its rim; learning makes placements inside one a region goal "
+        "(docs/learning.md, \"Region goals\"). `import` writes them for a recording's bins "
+        "(the spaces its walls and dividers enclose all round); a scene's are not used",
     },
     noun="landmark",
 )
@@ -465,6 +470,9 @@ STATE_POSITION = FieldTable(
         "`world`: in world axes",
         "anywhere": "`true`: placed anywhere on its support (an absolute state scattered far "
         "beyond the precision, docs/learning.md); `value` is the mean, for information",
+        "region": "a region goal: placed anywhere inside this compartment of the landmark "
+        "`reference`, `[x_low, y_low, z_low, x_high, y_high, z_high]` in metres, its frame "
+        "(docs/learning.md, \"Region goals\"); `value` is the mean of the placements",
     },
 )
 STATE_ORIENTATION = FieldTable(

@@ -12,13 +12,18 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
 from demoplan.learning.settings import LearningSettings
-from demoplan.rotations import Quaternion, rpy_from_quat
+from demoplan.rotations import Quaternion, matrices_from_quats, rpy_from_quat
 
 Vector3 = tuple[float, float, float]
+Compartment = tuple[float, float, float, float, float, float]
+"""An open interior of a landmark (a bin's compartment), in the landmark's frame
+from its position: ``(x_low, y_low, z_low, x_high, y_high, z_high)`` in metres,
+``z_low`` its floor, ``z_high`` its rim (docs/formats.md "Landmark")."""
 
 WOOD_DENSITY = 600.0
 """kg/m³: an object's density where its file gives neither ``mass`` nor
@@ -29,6 +34,7 @@ __all__ = [
     "REST_TOLERANCE",
     "SUPPORT_FRACTION",
     "WOOD_DENSITY",
+    "Compartment",
     "Demonstration",
     "ObjectGeometry",
     "Pose",
@@ -42,6 +48,7 @@ __all__ = [
     "demonstrated_shapes",
     "demonstrated_types",
     "footprint",
+    "lowest_point",
     "visit_label",
     "yaw_period",
 ]
@@ -148,6 +155,9 @@ class Demonstration:
     provenance: tuple[tuple[str, str | int | float], ...] = field(default=(), compare=False)
     """Where the demonstration came from (``("source", file)``, ``("demonstration",
     "demo_1")``, ``("samples", 1252)``, …); written as the file's ``provenance``."""
+    compartments: tuple[tuple[str, tuple[Compartment, ...]], ...] = ()
+    """The open interiors of landmarks that have them (a bin's compartments):
+    landmark name → its compartments (docs/formats.md "Landmark")."""
     types: tuple[tuple[str, str], ...] = ()
     """Declared types (object name → type) of objects that are one of several
     interchangeable instances (two plates, three red blocks); an object not
@@ -208,6 +218,12 @@ class StatePosition:
     beyond the precision with no reference explaining them (``value`` is
     their mean, for information). At run time the object stays where it
     stands when it can (:mod:`demoplan.scenes.targets`)."""
+    region: Compartment | None = None
+    """Placed anywhere inside this compartment of the reference landmark (its
+    frame, as :data:`Compartment`): every demonstrated placement lay inside it
+    (docs/learning.md, "Region goals"); ``value`` is their mean. At run time
+    the object stays where it stands when it is inside, else goes to the
+    point inside nearest ``value`` that the robot reaches."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -331,6 +347,19 @@ beneath it rests on it (a segmented rest, a demonstrated release)."""
 SUPPORT_FRACTION = 0.05
 """An object stands on another when their outlines overlap by at least this
 share of the upper one's (the support rule of docs/scenes.md)."""
+
+
+def lowest_point(shape: ObjectGeometry | None, pose: Pose) -> float:
+    """The height of the lowest corner of ``shape``'s box at ``pose`` (the pose is
+    the centre of its bottom face, turned with it): a knife on its edge reaches
+    half its width below its resting point, a box leaning on a wall its lower
+    edge's height. The pose's height where shape or orientation is unknown."""
+    z = pose.position[2]
+    if shape is None or pose.orientation is None:
+        return z
+    sx, sy, sz = shape.size
+    m = matrices_from_quats(np.asarray([pose.orientation], dtype=float))[0]
+    return float(z - abs(m[6]) * sx / 2 - abs(m[7]) * sy / 2 + min(0.0, m[8] * sz))
 
 
 def footprint(shape: ObjectGeometry, position: Sequence[float], yaw: float) -> BaseGeometry:

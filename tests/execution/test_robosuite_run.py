@@ -121,12 +121,19 @@ def test_the_square_nut_alone(tmp_path: Path) -> None:
 
 @pytest.mark.usefixtures("robosuite_installed")
 def test_the_can_goes_into_its_bin(tmp_path: Path) -> None:
-    """PickPlaceCan: the bins are hollow landmarks (references); the can's
-    target is learned relative to bin2."""
+    """PickPlaceCan: the bins are landmarks without a size (references: the
+    can's target is learned relative to bin2, anywhere in its compartment),
+    their walls and dividers box landmarks of their own."""
     from demoplan.execution.robosuite_run import run_in_robosuite
 
-    report = run_in_robosuite(_learned("PickPlaceCan", tmp_path), "robosuite:PickPlaceCan", seed=0)
+    model = _learned("PickPlaceCan", tmp_path)
+    (can,) = model.states
+    assert can.position.reference == "bin2" and can.position.region is not None
+    report = run_in_robosuite(model, "robosuite:PickPlaceCan", seed=0)
     assert report.env_success and report.success
-    bins = {name for name, _ in report.scene.landmarks}
-    assert bins == {"bin1", "bin2"}
-    assert not report.scene.landmark_geometry  # hollow: no solid box to stand in
+    shapes = dict(report.scene.landmark_geometry)
+    assert "bin1" not in shapes and "bin2" not in shapes  # hollow: no solid box to stand in
+    walls = {name for name, _ in report.scene.landmarks} - {"bin1", "bin2"}
+    assert walls == set(shapes)
+    assert sum(name.startswith("bin1_wall") for name in walls) == 4
+    assert sum(name.startswith("bin2_wall") for name in walls) == 6  # and its two dividers

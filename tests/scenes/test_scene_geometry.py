@@ -19,7 +19,7 @@ from demoplan.model import (
     Step,
     TaskModel,
 )
-from demoplan.rotations import quat_from_yaw
+from demoplan.rotations import quat_from_rpy, quat_from_yaw
 from demoplan.scenes.geometry import (
     GeometrySettings,
     Location,
@@ -335,6 +335,28 @@ def test_floating_object_in_the_scene_is_an_input_error() -> None:
     (candidate,) = candidate_goals(model, scene)
     with pytest.raises(InputError, match=r"objects\.a\.position.*nothing is under it"):
         build_problem(scene, candidate)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(5.0, 40.0), st.floats(0.0, 0.004), st.sampled_from([1.0, -1.0]))
+def test_a_box_leaning_with_its_lowest_edge_on_the_table_stands(
+    tilt: float, lift: float, side: float
+) -> None:
+    """A 10 × 3 × 15 cm box tilted about its x axis (leaning on a bin's wall),
+    its lower edge within the level tolerance of the table: standing, though
+    its bottom centre is up to 2.6 cm high; lifted 2 cm more it floats."""
+    shape = ObjectGeometry("box", (0.1, 0.03, 0.15))
+    centre = 0.015 * math.sin(math.radians(tilt)) + lift
+    model = model_of([absolute("A", "a", 0.3, 0.0)], [["A"]])
+    for z, stands in ((centre, True), (centre + 0.02, False)):
+        pose = Pose((0.1, 0.1, z), quat_from_rpy((side * tilt, 0.0, 0.0)))
+        scene = Scene(objects=(SceneObject("a", pose, shape),), gripper=GRIPPER, source="s.json")
+        (candidate,) = candidate_goals(model, scene)
+        if stands:
+            build_problem(scene, candidate)
+        else:
+            with pytest.raises(InputError, match="nothing is under it"):
+                build_problem(scene, candidate)
 
 
 def test_target_on_nothing_is_an_obstacle() -> None:

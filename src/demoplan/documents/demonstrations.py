@@ -133,7 +133,12 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
             for n, g in demo.objects
         }
     if demo.landmarks:
-        out["landmarks"] = {n: pose_to_dict(p) for n, p in demo.landmarks}
+        compartments = dict(demo.compartments)
+        out["landmarks"] = {
+            n: pose_to_dict(p)
+            | ({"compartments": [list(c) for c in compartments[n]]} if n in compartments else {})
+            for n, p in demo.landmarks
+        }
     if demo.initial:
         out["initial"] = {n: pose_to_dict(p) for n, p in demo.initial}
     if demo.provenance:
@@ -292,6 +297,11 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
         steps=steps,
         objects=objects,
         landmarks=tuple((n, entry.pose(units)) for n, entry in parsed.landmarks.items()),
+        compartments=tuple(
+            (n, entry.compartment_boxes(units))
+            for n, entry in parsed.landmarks.items()
+            if entry.compartments
+        ),
         initial=tuple((n, pose_from_dict(p, units)) for n, p in parsed.initial.items()),
         source=f"{source}: {prefix}" if prefix else source,
         provenance=tuple(parsed.provenance.items()),

@@ -15,7 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from demoplan.errors import InputError
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw, unit_length_expected
 
 __all__ = [
@@ -113,14 +113,36 @@ class LandmarkSchema(PoseSchema):
 
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Number] | None = Field(default=None, min_length=3, max_length=3)
+    compartments: list[Annotated[list[Coordinate], Field(min_length=6, max_length=6)]] = []
+    """Its open interiors (a bin's compartments): ``[x_low, y_low, z_low, x_high,
+    y_high, z_high]`` in its frame from its position; learning makes a placement
+    inside one a region goal (docs/learning.md, "Region goals")."""
 
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float] | None) -> list[float] | None:
         return None if size is None else positive_extents(size)
 
+    @field_validator("compartments")
+    @classmethod
+    def _low_below_high(cls, boxes: list[list[float]]) -> list[list[float]]:
+        for box in boxes:
+            if any(box[k] >= box[k + 3] for k in range(3)):
+                raise ValueError(f"expected [x, y, z] low below [x, y, z] high, got {box}")
+        return boxes
+
     def pose(self, units: UnitsSchema) -> Pose:
-        return pose_from_dict(PoseSchema(**self.model_dump(exclude={"shape", "size"})), units)
+        fields = self.model_dump(exclude={"shape", "size", "compartments"})
+        return pose_from_dict(PoseSchema(**fields), units)
+
+    def compartment_boxes(self, units: UnitsSchema) -> tuple[Compartment, ...]:
+        """Its compartments in metres."""
+        scale = LENGTH_SCALE[units.length]
+        out = []
+        for box in self.compartments:
+            x0, y0, z0, x1, y1, z1 = (v * scale for v in box)
+            out.append((x0, y0, z0, x1, y1, z1))
+        return tuple(out)
 
     def geometry(self, units: UnitsSchema) -> ObjectGeometry | None:
         if self.size is None:

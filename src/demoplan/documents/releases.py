@@ -28,7 +28,6 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import shapely
 
 from demoplan.model import (
@@ -40,8 +39,9 @@ from demoplan.model import (
     Pose,
     demonstrated_shapes,
     footprint,
+    lowest_point,
 )
-from demoplan.rotations import matrices_from_quats, rpy_from_quat
+from demoplan.rotations import rpy_from_quat
 
 __all__ = [
     "UNKNOWN_REACH_M",
@@ -173,15 +173,9 @@ def _under(
 
 
 def _lowest(known: Mapping[str, ObjectGeometry], name: str, pose: Pose) -> float:
-    """The height of the lowest corner of ``name``'s box at ``pose`` (the pose is
-    the centre of its bottom face, turned with it): a knife on its edge reaches
-    half its width below its resting point."""
-    z = pose.position[2]
-    if name not in known or pose.orientation is None:
-        return z
-    sx, sy, sz = known[name].size
-    m = matrices_from_quats(np.asarray([pose.orientation]))[0]
-    return float(z - abs(m[6]) * sx / 2 - abs(m[7]) * sy / 2 + min(0.0, m[8] * sz))
+    """The height of the lowest corner of ``name``'s box at ``pose``
+    (:func:`~demoplan.model.lowest_point`)."""
+    return lowest_point(known.get(name), pose)
 
 
 def _yaw(pose: Pose) -> float:

@@ -10,8 +10,10 @@ nut's hole, a cube's centre), so that a model learned from robosuite's
 recordings applies to the environment as it is. The bounding boxes are the
 compiled model's (``geom_aabb``), so mesh objects get their true bottom;
 robosuite's own ``bottom_offset`` is wrong for them. Landmarks are the static
-top-level bodies that collide (the pegs, the bins), with the size of their
-colliding geoms; the table, the floor and the robot are not landmarks.
+top-level bodies that collide (the pegs, the bins), a peg with the size of
+its colliding geoms, a bin with its compartments and its walls and dividers
+as box landmarks of their own; the table, the floor and the robot are not
+landmarks.
 """
 
 from __future__ import annotations
@@ -24,13 +26,15 @@ from typing import Any
 import numpy as np
 
 from demoplan.errors import UsageError
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import Compartment, ObjectGeometry, Pose
+from demoplan.scenes.regions import WALL_HEIGHT, compartments
 from demoplan.scenes.scene import SceneObject
 from demoplan.segmentation.readers.support import EXCLUDED_LANDMARKS
 
 __all__ = [
     "CONTROL_FREQUENCY",
     "ENVIRONMENTS",
+    "EnvLandmarks",
     "EnvObject",
     "check_installed",
     "environment_name",
@@ -236,15 +240,28 @@ def scene_objects(env: Any, objects: list[EnvObject]) -> tuple[SceneObject, ...]
     )
 
 
-def landmarks(
-    env: Any,
-) -> tuple[tuple[tuple[str, Pose], ...], tuple[tuple[str, ObjectGeometry], ...], dict[str, float]]:
-    """The static top-level bodies that collide (pegs, bins): their poses
-    (bottom centre of their colliding geoms' box, the body's yaw) and the
-    sizes of the solid ones (a bin is hollow: :func:`_hollow`); and every
-    one's top (z, demoplan's frame), which the hand passes above."""
-    model, data = env.sim.model, env.sim.data
-    poses, shapes, tops = [], [], {}
+@dataclass(frozen=True, slots=True)
+class EnvLandmarks:
+    """The environment's landmarks as demoplan sees them: every static
+    top-level body that collides (a peg, a bin) by its pose (bottom centre of
+    its colliding geoms' box, the body's yaw); the solid ones' shapes (a peg);
+    a container's (a bin's) compartments, and its walls and dividers as solid
+    box landmarks of their own (``bin2_wall3``: obstacles things stand beside,
+    and supports); and every landmark's top (z), which the hand passes above."""
+
+    poses: tuple[tuple[str, Pose], ...]
+    shapes: tuple[tuple[str, ObjectGeometry], ...]
+    compartments: tuple[tuple[str, tuple[Compartment, ...]], ...]
+    tops: dict[str, float]
+
+
+def landmarks(env: Any) -> EnvLandmarks:
+    """The static top-level bodies that collide (pegs, bins): :class:`EnvLandmarks`."""
+    model = env.sim.model
+    poses: list[tuple[str, Pose]] = []
+    shapes: list[tuple[str, ObjectGeometry]] = []
+    found: list[tuple[str, tuple[Compartment, ...]]] = []
+    tops: dict[str, float] = {}
     robot_bodies = {
         b
         for robot in env.robots
@@ -261,39 +278,32 @@ def landmarks(
         if not geoms:
             continue
         low, high = _bounds(env, body, geoms)
-        frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
         local = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
-        x, y, z = (float(v) for v in np.asarray(data.body_xpos[body]) + frame @ local)
-        yaw = math.atan2(frame[1, 0], frame[0, 0])
-        quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-        poses.append((name, Pose((x, y, z - table_top(env)), quat)))
-        tops[name] = z - table_top(env) + float(high[2] - low[2])
-        if not _hollow(env, body, geoms, low, high):
+        pose = _landmark_pose(env, body, local)
+        poses.append((name, pose))
+        tops[name] = pose.position[2] + float(high[2] - low[2])
+        parts = [(g, *_bounds(env, body, [g])) for g in geoms]
+        boxes = compartments([(lo - local, hi - local) for _, lo, hi in parts])
+        if not boxes:
             shapes.append((name, _geometry(model, geoms, low, high, None)))
-    return tuple(poses), tuple(shapes), tops
+            continue
+        found.append((name, boxes))
+        tall = WALL_HEIGHT * (high[2] - low[2])
+        walls = [(lo, hi) for _, lo, hi in parts if hi[2] - low[2] > tall]
+        for k, (lo, hi) in enumerate(sorted(walls, key=lambda w: (w[0][0], w[0][1])), 1):
+            bottom = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+            part = f"{name}_wall{k}"
+            poses.append((part, _landmark_pose(env, body, bottom)))
+            size = tuple(round(float(v), 6) for v in hi - lo)
+            shapes.append((part, ObjectGeometry("box", (size[0], size[1], size[2]))))
+    return EnvLandmarks(tuple(poses), tuple(shapes), tuple(found), tops)
 
 
-def _hollow(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
-    """Whether the landmark is a container (a bin: walls round open
-    compartments): at three quarters of its height, the middle of its box or
-    the middle of one of its box's quarters (a bin with dividers) lies in none
-    of its geoms' boxes. A container is a reference only (no size):
-    demoplan's landmarks with a size are solid, and things stand inside a bin."""
-    z = low[2] + 0.75 * (high[2] - low[2])
-    points = [
-        np.array([low[0] + fx * (high[0] - low[0]), low[1] + fy * (high[1] - low[1]), z])
-        for fx, fy in ((0.5, 0.5), (0.25, 0.25), (0.25, 0.75), (0.75, 0.25), (0.75, 0.75))
-    ]
-    return any(not any(_inside(env, body, g, point) for g in geoms) for point in points)
-
-
-def _inside(env: Any, body: int, geom: int, point: np.ndarray) -> bool:
-    """Whether ``point`` (``body``'s frame) lies in ``geom``'s bounding box."""
-    data, model = env.sim.data, env.sim.model
-    world = (
-        np.asarray(data.body_xpos[body]) + np.asarray(data.body_xmat[body]).reshape(3, 3) @ point
-    )
-    frame = np.asarray(data.geom_xmat[geom]).reshape(3, 3)
-    local = frame.T @ (world - np.asarray(data.geom_xpos[geom]))
-    box = np.asarray(model.geom_aabb[geom])
-    return bool(np.all(np.abs(local - box[:3]) <= box[3:]))
+def _landmark_pose(env: Any, body: int, local: np.ndarray) -> Pose:
+    """The pose (demoplan's frame) of ``local`` (``body``'s frame) with the body's yaw."""
+    data = env.sim.data
+    frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
+    x, y, z = (float(v) for v in np.asarray(data.body_xpos[body]) + frame @ local)
+    yaw = math.atan2(frame[1, 0], frame[0, 0])
+    quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    return Pose((x, y, z - table_top(env)), quat)

@@ -55,6 +55,12 @@ FREE_YAW_STEP = 30.0
 """deg: the yaws tried for an object whose turn does not matter (a round nut on its peg)."""
 ALIGN_TRIES = 3
 """Corrections of the hand over the target, at most."""
+REACH = 0.74
+"""m: how far from its base (horizontally) the Panda puts an object down with
+the hand pointing down, as the scene tells a region goal: measured in
+PickPlace (bearings 20° and 35°, the grip 3–7 cm above the bins' floor), at
+0.74 m it goes down and comes back; at 0.78 m the elbow straightens to its
+limit and the hand cannot come back towards the base (docs/execution.md)."""
 ALIGNED = 0.002
 """m: over its target, the held object is moved until it hangs this close above it."""
 
@@ -69,7 +75,9 @@ class RobosuiteWorld:
         self.hand.open()
         self.hand.hold(SETTLE_STEPS)
         self.objects = {o.name: o for o in env_objects(self.env)}
-        self.landmarks, self.landmark_geometry, self.landmark_tops = landmarks(self.env)
+        found = landmarks(self.env)
+        self.landmarks, self.landmark_geometry = found.poses, found.shapes
+        self.landmark_tops = found.tops
         self.held: str | None = None
         self.offset = np.zeros(3)  # the held object's bottom from the grip site, hand frame
         self.turn = 0.0  # its yaw minus the fingers'
@@ -85,12 +93,15 @@ class RobosuiteWorld:
             half = np.asarray(self.env.table_full_size[:2], dtype=float) / 2
             low, high = table_centre(self.env) - half, table_centre(self.env) + half
             table = ((float(low[0]), float(low[1])), (float(high[0]), float(high[1])))
+        base = self.hand.base_position
         return Scene(
             objects=scene_objects(self.env, list(self.objects.values())),
             landmarks=self.landmarks,
             landmark_geometry=self.landmark_geometry,
             table=table,
             source=source,
+            robot=(float(base[0]), float(base[1]), 0.0),
+            reach=REACH,
         )
 
     def env_success(self) -> bool:

@@ -42,6 +42,7 @@ from demoplan.fileio import (
 from demoplan.learning.constraints import constraint_support, label_key
 from demoplan.learning.settings import LearningSettings
 from demoplan.model import (
+    Compartment,
     Demonstration,
     Role,
     State,
@@ -79,6 +80,15 @@ class _PositionSchema(_Schema):
     spread: Number = 0.0
     frame: Literal["world", "reference"] = "world"
     anywhere: bool = False
+    region: list[Coordinate] | None = Field(default=None, min_length=6, max_length=6)
+    """A region goal's compartment (m, the reference's frame): low x, y, z, high x, y, z."""
+
+    @field_validator("region")
+    @classmethod
+    def _low_below_high(cls, region: list[float] | None) -> list[float] | None:
+        if region is not None and any(region[k] >= region[k + 3] for k in range(3)):
+            raise ValueError(f"expected [x, y, z] low below [x, y, z] high, got {region}")
+        return region
 
 
 class _OrientationSchema(_Schema):
@@ -238,6 +248,7 @@ def _state_to_dict(state: State) -> dict[str, Any]:
             "spread": state.position.spread,
             "frame": "reference" if state.position.in_reference_frame else "world",
             **({"anywhere": True} if state.position.anywhere else {}),
+            **({"region": list(state.position.region)} if state.position.region else {}),
         },
         "orientation": {
             "reference": orientation.reference,
@@ -419,6 +430,7 @@ def _state_from_schema(state: _StateSchema) -> State:
             in_reference_frame=state.position.frame == "reference"
             and state.position.reference is not None,
             anywhere=state.position.anywhere and state.position.reference is None,
+            region=_region(state.position.region) if state.position.reference else None,
         ),
         orientation=StateOrientation(
             orientation.reference if quat is not None else None, quat, orientation.spread
@@ -427,6 +439,13 @@ def _state_from_schema(state: _StateSchema) -> State:
         margins=tuple(sorted(state.margins.items())),
         notes=tuple(state.notes),
     )
+
+
+def _region(values: list[float] | None) -> Compartment | None:
+    if values is None:
+        return None
+    x0, y0, z0, x1, y1, z1 = values
+    return (x0, y0, z0, x1, y1, z1)
 
 
 def save_model(model: TaskModel, path: str | Path) -> None:

@@ -50,6 +50,7 @@ from demoplan.learning.clustering import (
     select_clusterings,
     spread_of,
 )
+from demoplan.learning.regions import with_regions
 from demoplan.learning.settings import LearningSettings as StateGenerationSettings
 from demoplan.model import (
     Demonstration,
@@ -285,6 +286,7 @@ def _generate_states(
     ]
     types = {name: kind for demo in demonstrations for name, kind in demo.types}
     states = _placed_anywhere(states, types, precision, settings)
+    states = with_regions(states, demonstrations)
     return StateGeneration(tuple(states), sequences, tuple(quantised.scores), precision)
 
 

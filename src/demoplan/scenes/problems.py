@@ -23,7 +23,7 @@ from shapely.geometry.base import BaseGeometry
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError, UsageError
-from demoplan.model import ObjectGeometry, Pose, Vector3
+from demoplan.model import ObjectGeometry, Pose, Vector3, lowest_point
 from demoplan.planning.problem import Problem, Subgoal
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import (
@@ -370,6 +370,8 @@ def _supports_and_obstacles(
     obstacles = []
     for name in floating:
         loc = next(loc for loc in locations if loc.name == name)
+        if "current" in loc.kind and _leaning(scene, loc.objects[0], settings):
+            continue
         if "current" in loc.kind:
             raise InputError(
                 f"stands at z = {loc.bottom:.3f} m but nothing is under it; an object "
@@ -385,6 +387,13 @@ def _supports_and_obstacles(
             )
             obstacles.append(f"{owners} at ({_xyz(loc.position)}) would stand on nothing")
     return support_pairs, obstacles
+
+
+def _leaning(scene: Scene, name: str, settings: GeometrySettings) -> bool:
+    """Whether ``name`` stands tilted with its lowest corner on the table (a box
+    leaning on a bin's wall): held up by the table and what it leans on."""
+    obj = next((o for o in scene.objects if o.name == name), None)
+    return obj is not None and lowest_point(obj.geometry, obj.pose) <= settings.level_tolerance
 
 
 def _overhangs(

@@ -109,6 +109,10 @@ class Scene:
     landmark_geometry: tuple[tuple[str, ObjectGeometry], ...] = ()
     """The shape and size of landmarks that have one (a tray): things stand on
     their top, and figures draw them."""
+    reach: float | None = None
+    """m: how far from ``robot``'s base (horizontally) the hand puts things down,
+    where a world knows it (robosuite's Panda); a region goal's target is chosen
+    within it (:mod:`demoplan.scenes.regions`). None: anywhere. Not in scene files."""
 
     def object(self, name: str) -> SceneObject:
         for obj in self.objects:

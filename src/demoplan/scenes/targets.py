@@ -51,6 +51,7 @@ from demoplan.rotations import (
 from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.overhang import Support, demonstrated_supports
+from demoplan.scenes.regions import region_target
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.table import (
     Surroundings,
@@ -173,8 +174,14 @@ class _Resolver:
         current: dict[str, Pose],
         landmarks: dict[str, Pose],
         geometry: dict[str, ObjectGeometry] | None = None,
+        reach: tuple[float, float, float] | None = None,
+        sizes: dict[str, ObjectGeometry] | None = None,
     ):
         self.index = index
+        self.reach = reach
+        self.sizes = sizes or {}
+        """The scene's objects' shapes (a region goal keeps them clear of the
+        walls; the demonstrations may give none: robosuite's meshes)."""
         self.states = states
         self.current = current
         self.landmarks = landmarks
@@ -201,6 +208,19 @@ class _Resolver:
                 frame = self.frame(state.position.reference, reference)
                 position = rotate_vectors(frame[None, :], position[None, :])[0]
             position = position + reference.position
+            if state.position.region is not None and state.position.reference in self.landmarks:
+                x, y, z = (float(v) for v in position)
+                position = np.asarray(
+                    region_target(
+                        state.position.region,
+                        reference,
+                        (x, y, z),
+                        self.current.get(state.object),
+                        self.sizes.get(state.object) or self.geometry.get(state.object),
+                        yaw_of(Pose((0.0, 0.0, 0.0), self.orientation(state))),
+                        self.reach,
+                    )
+                )
         return Pose(
             (float(position[0]), float(position[1]), float(position[2])),
             self.orientation(state),
@@ -285,13 +305,16 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         for name, shape in demonstrated_shapes(model.demonstrations).items()
         if name not in landmarks
     }
+    sizes = {obj.name: obj.geometry for obj in scene.objects if obj.geometry is not None}
     constraints = set(model.constraints)
     supported = demonstrated_supports(model)
     candidates: list[Candidate] = []
     by_key: dict[tuple[object, ...], int] = {}
     for index, sequence in enumerate(model.sequences):
         labels = visit_sequence(sequence)
-        resolver = _Resolver(index, tuple(sequence), states, current, landmarks, geometry)
+        resolver = _Resolver(
+            index, tuple(sequence), states, current, landmarks, geometry, _reach(scene), sizes
+        )
         resolver.placed = _anywhere_places(model, scene, sequence, resolver)
         resolver.targets.clear()
         subtasks = tuple(
@@ -319,6 +342,13 @@ def resolve_goals(model: TaskModel, scene: Scene) -> list[Candidate]:
         by_key[key] = len(candidates)
         candidates.append(Candidate(index, (index,), subtasks, precedences))
     return candidates
+
+
+def _reach(scene: Scene) -> tuple[float, float, float] | None:
+    """The robot's base (x, y) and how far it reaches, where the scene says."""
+    if scene.robot is None or scene.reach is None:
+        return None
+    return (scene.robot[0], scene.robot[1], scene.reach)
 
 
 def _anywhere_places(

@@ -118,6 +118,7 @@ def import_recording_details(
             demo,
             objects=tuple(shapes.items()) if complete else (),
             landmarks=recorded.landmarks,
+            compartments=recorded.compartments,
             provenance=(
                 *recorded.provenance,
                 *((k, v) for k, v in demo.provenance if k != "source"),

@@ -63,7 +63,7 @@ from numpy.typing import NDArray
 from demoplan.documents.poses import check_physical
 from demoplan.errors import InputError
 from demoplan.fileio import read_input_text
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import (
     UNIT_TOLERANCE,
     matrices_from_quats,
@@ -125,6 +125,9 @@ class RecordedDemonstration:
     geometry : tuple of (name, ObjectGeometry)
         Shape and size of objects and landmarks where the model's primitives
         give them.
+    compartments : tuple of (name, compartments)
+        The open interiors of landmarks that have them (a bin's compartments,
+        :func:`demoplan.scenes.regions.compartments`), in the landmark's frame.
     provenance : tuple of (key, value)
         ``source``, ``demonstration``, ``samples``, ``env``,
         ``robosuite_version``, ``model`` and ``table_top_z`` (the simulator's
@@ -136,6 +139,7 @@ class RecordedDemonstration:
     landmarks: tuple[tuple[str, Pose], ...]
     geometry: tuple[tuple[str, ObjectGeometry], ...]
     provenance: tuple[tuple[str, ProvenanceValue], ...]
+    compartments: tuple[tuple[str, tuple[Compartment, ...]], ...] = ()
 
     @property
     def env(self) -> str | None:
@@ -381,7 +385,7 @@ def _demonstration(
         quats = np.ascontiguousarray(body_quat[k][:, [1, 2, 3, 0]])
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
         tracks.append(ObjectTrack(names[k], times.copy(), np.ascontiguousarray(positions), quats))
-    landmarks, landmark_geometry = landmark_poses(layout, table_z, set(names))
+    landmarks, landmark_geometry, compartments = landmark_poses(layout, table_z, set(names))
     _check_limits(tracks, landmarks, geometry + landmark_geometry, f"{path}: {key}")
     provenance: list[tuple[str, ProvenanceValue]] = [
         ("source", str(path)),
@@ -399,6 +403,7 @@ def _demonstration(
         landmarks=tuple(landmarks),
         geometry=tuple(geometry + landmark_geometry),
         provenance=tuple(provenance),
+        compartments=tuple(compartments),
     )
 
 

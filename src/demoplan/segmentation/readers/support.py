@@ -14,10 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from demoplan.model import ObjectGeometry, Pose
+from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import (
     quat_from_yaw,
 )
+from demoplan.scenes.regions import compartments
 from demoplan.segmentation.readers.mjcf import PRIMITIVES, Geom, ModelLayout
 
 FloatArray = NDArray[np.float64]
@@ -190,8 +191,14 @@ def table_top(
 
 def landmark_poses(
     layout: ModelLayout, table_z: float, objects: set[str]
-) -> tuple[list[tuple[str, Pose]], list[tuple[str, ObjectGeometry]]]:
-    poses, geometry = [], []
+) -> tuple[
+    list[tuple[str, Pose]],
+    list[tuple[str, ObjectGeometry]],
+    list[tuple[str, tuple[Compartment, ...]]],
+]:
+    """The static top-level bodies that collide: their poses, their sizes, and
+    the compartments of those that have some (a bin's, in its frame)."""
+    poses, geometry, found = [], [], []
     for index, body in enumerate(layout.bodies):
         if body.parent != -1 or layout.jointed_subtree(index):
             continue
@@ -208,6 +215,10 @@ def landmark_poses(
             local = np.array([(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]])
             point = body.pos + body.rot @ local
             geometry.append((body.name, object_geometry(geoms, low, high)))
+            parts = [geom_bounds([g]) for g in geoms]
+            boxes = compartments([(p[0] - local, p[1] - local) for p in parts if p is not None])
+            if boxes:
+                found.append((body.name, boxes))
         x, y, z = (float(v) for v in point)
         poses.append((body.name, Pose((x, y, z - table_z), quat_from_yaw(yaw))))
-    return poses, geometry
+    return poses, geometry, found

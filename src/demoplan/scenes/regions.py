@@ -1,0 +1,155 @@
+"""Where a region goal puts its object (docs/learning.md, "Region goals"): a
+state placed anywhere inside a compartment of a landmark (a bin's).
+
+The object stays where it stands when it stands inside the compartment (the
+goal holds already). Otherwise its target is the point of the compartment,
+its footprint kept :data:`WALL_CLEARANCE` from the walls,
+nearest the demonstrations' mean — among the points the robot reaches
+(``Scene.reach``) when the mean lies out of its reach.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+from shapely.geometry.base import BaseGeometry
+from shapely.ops import nearest_points
+
+from demoplan.learning.regions import in_compartment, local_point
+from demoplan.model import Compartment, ObjectGeometry, Pose, Vector3
+from demoplan.rotations import rotate_vectors
+from demoplan.scenes.scene import yaw_of
+
+__all__ = ["WALL_CLEARANCE", "compartments", "region_target"]
+
+WALL_CLEARANCE = 0.01
+"""m: how far a region goal's target keeps its object's footprint from the walls."""
+
+
+def _world(local: np.ndarray, frame: Pose) -> Vector3:
+    turned = local
+    if frame.orientation is not None:
+        turned = rotate_vectors(np.asarray([frame.orientation], dtype=float), local[None, :])[0]
+    x, y, z = (float(v) for v in turned + np.asarray(frame.position, dtype=float))
+    return (x, y, z)
+
+
+def _half_extents(shape: ObjectGeometry | None, yaw: float) -> tuple[float, float]:
+    """Half the extents along the landmark's x and y of ``shape``'s footprint
+    turned by ``yaw`` (deg) from the landmark's axes (a round one: its radius)."""
+    if shape is None:
+        return (0.0, 0.0)
+    sx, sy = shape.size[0] / 2, shape.size[1] / 2
+    if shape.shape in {"cylinder", "sphere"}:
+        return (max(sx, sy), max(sx, sy))
+    c, s = abs(math.cos(math.radians(yaw))), abs(math.sin(math.radians(yaw)))
+    return (c * sx + s * sy, s * sx + c * sy)
+
+
+def region_target(
+    region: Compartment,
+    landmark: Pose,
+    mean: Vector3,
+    standing: Pose | None,
+    shape: ObjectGeometry | None,
+    yaw: float,
+    reach: tuple[float, float, float] | None,
+) -> Vector3:
+    """The target (world) of an object whose goal is anywhere inside ``region``
+    (``landmark``'s frame; ``mean``: the demonstrations' mean, world):
+    ``standing``, where it stands now, when that is inside; else the point
+    nearest ``mean`` of the compartment less its walls' clearance (the
+    object's footprint at ``yaw``, deg, world), within
+    ``reach`` ((x, y) of the robot's base and the radius, world) where any of
+    it is. The height is the mean's."""
+    if standing is not None and in_compartment(local_point(standing.position, landmark), region):
+        return standing.position
+    centre = local_point(mean, landmark)
+    hx, hy = _half_extents(shape, yaw - yaw_of(landmark))
+    x0, y0, _, x1, y1, _ = region
+    ix = min(hx + WALL_CLEARANCE, (x1 - x0) / 2)
+    iy = min(hy + WALL_CLEARANCE, (y1 - y0) / 2)
+    area: BaseGeometry = shapely.box(x0 + ix, y0 + iy, x1 - ix, y1 - iy)
+    if area.is_empty:  # the object fills the compartment: its middle
+        area = shapely.Point((x0 + x1) / 2, (y0 + y1) / 2)
+    if reach is not None:
+        base = local_point((reach[0], reach[1], mean[2]), landmark)
+        reachable = area.intersection(shapely.Point(base[0], base[1]).buffer(reach[2], 64))
+        area = reachable if not reachable.is_empty else area
+    point = nearest_points(area, shapely.Point(centre[0], centre[1]))[0]
+    return _world(np.array([point.x, point.y, centre[2]]), landmark)
+
+
+WALL_HEIGHT = 0.5
+"""A landmark's part rising above this share of its height is a wall (or a
+divider); lower ones are its floor."""
+NARROWEST = 0.01
+"""m: a compartment is at least this wide and deep."""
+
+
+def compartments(
+    boxes: Sequence[tuple[Sequence[float], Sequence[float]]],
+) -> tuple[Compartment, ...]:
+    """The compartments of a landmark made of ``boxes`` ((low, high) corners,
+    its frame from its position): the rectangular spaces its walls enclose
+    all round (walls: the parts higher than :data:`WALL_HEIGHT` of the whole),
+    from the top of its floor (its lower parts) to the top of its walls. A
+    solid thing, or walls that leave a side open, has none.
+
+    The walls' edges cut the plan into cells; a compartment is a set of
+    connected cells no wall covers, none on the outer ring, that fills its
+    bounding rectangle."""
+    lows = np.array([b[0] for b in boxes], dtype=float).reshape(-1, 3)
+    highs = np.array([b[1] for b in boxes], dtype=float).reshape(-1, 3)
+    if not len(lows):
+        return ()
+    bottom, top = float(lows[:, 2].min()), float(highs[:, 2].max())
+    wall = highs[:, 2] > bottom + WALL_HEIGHT * (top - bottom)
+    if not wall.any():
+        return ()
+    floor = float(highs[~wall, 2].max()) if (~wall).any() else bottom
+    rim = float(highs[wall, 2].max())
+    xs = np.unique(np.concatenate([lows[wall, 0], highs[wall, 0]]))
+    ys = np.unique(np.concatenate([lows[wall, 1], highs[wall, 1]]))
+    free = np.array(
+        [
+            [
+                not any(
+                    lo[0] <= (xs[i] + xs[i + 1]) / 2 <= hi[0]
+                    and lo[1] <= (ys[j] + ys[j + 1]) / 2 <= hi[1]
+                    for lo, hi in zip(lows[wall], highs[wall], strict=True)
+                )
+                for j in range(len(ys) - 1)
+            ]
+            for i in range(len(xs) - 1)
+        ],
+        dtype=bool,
+    ).reshape(len(xs) - 1, len(ys) - 1)
+    out = []
+    seen = np.zeros_like(free)
+    for start in zip(*np.nonzero(free), strict=True):
+        if seen[start]:
+            continue
+        cells, todo = [], [start]
+        seen[start] = True
+        while todo:
+            i, j = todo.pop()
+            cells.append((i, j))
+            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                inside = 0 <= n[0] < free.shape[0] and 0 <= n[1] < free.shape[1]
+                if inside and free[n] and not seen[n]:
+                    seen[n] = True
+                    todo.append(n)
+        rows, columns = [c[0] for c in cells], [c[1] for c in cells]
+        i0, i1, j0, j1 = min(rows), max(rows), min(columns), max(columns)
+        ring = i0 == 0 or j0 == 0 or i1 == free.shape[0] - 1 or j1 == free.shape[1] - 1
+        full = len(cells) == (i1 - i0 + 1) * (j1 - j0 + 1)
+        x0, x1, y0, y1 = float(xs[i0]), float(xs[i1 + 1]), float(ys[j0]), float(ys[j1 + 1])
+        if ring or not full or min(x1 - x0, y1 - y0) < NARROWEST:
+            continue
+        x0, y0, z0, x1, y1, z1 = (round(v, 6) for v in (x0, y0, floor, x1, y1, rim))
+        out.append((x0, y0, z0, x1, y1, z1))
+    return tuple(sorted(out))
