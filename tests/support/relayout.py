@@ -63,6 +63,8 @@ FOLDERS: dict[str, str] = {
     "test_retries": "execution",
     "test_robosuite_run": "execution",
     "test_robosuite_evaluate": "evaluation",
+    "test_robosuite_pickplace": "execution",
+    "test_region_goals": "learning",
     "test_perception_budget": "perception",
     "test_plan_shortening": "planning",
     "test_preparations": "scenes",
