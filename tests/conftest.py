@@ -61,7 +61,7 @@ SLOW = (
     "tests/hostile/",  # one or more demoplan processes per case (about a thousand)
     "tests/e2e/test_docs_shell.py",
     "tests/e2e/test_docs_generated.py",
-    "tests/e2e/test_interrupt.py",
+    "tests/frontends/test_interrupt.py",
     "tests/cli/test_launcher.py",
     "tests/segmentation/test_segment_cli.py",
     "tests/e2e/test_self_contained.py",

@@ -16,12 +16,13 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from demoplan.documents.compartments import compartments
 from demoplan.learning import learn
 from demoplan.learning.modelfile import model_from_dict, model_to_dict
 from demoplan.learning.regions import in_compartment, local_point
 from demoplan.model import Compartment, Demonstration, ObjectGeometry, Pose, Step
 from demoplan.rotations import quat_from_yaw
-from demoplan.scenes.regions import WALL_CLEARANCE, compartments
+from demoplan.scenes.regions import WALL_CLEARANCE
 from demoplan.scenes.scene import Scene, SceneObject
 from demoplan.scenes.targets import candidate_goals
 

@@ -28,7 +28,7 @@ E2E = "e2e"
 FOLDERS: dict[str, str] = {
     # the package's root modules (api.py, fileio.py, rotations.py) and the tree as a whole
     "test_api": "",
-    "test_files": "",
+    "test_files": "fileio",
     "test_rotations": "",
     "test_clock": "",
     "test_structure": "",
@@ -41,7 +41,7 @@ FOLDERS: dict[str, str] = {
     "test_self_contained": E2E,
     "test_breakfast": E2E,
     "test_numbering": E2E,
-    "test_interrupt": E2E,
+    "test_interrupt": "frontends",
     "test_edge_cases": E2E,
     "test_fixed_problems": "support",
     "test_cli": "cli",

@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from demoplan.documents.compartments import WALL_HEIGHT, compartments
 from demoplan.errors import UsageError
 from demoplan.model import Compartment, ObjectGeometry, Pose
-from demoplan.scenes.regions import WALL_HEIGHT, compartments
 from demoplan.scenes.scene import SceneObject
 from demoplan.segmentation.readers.support import EXCLUDED_LANDMARKS
 

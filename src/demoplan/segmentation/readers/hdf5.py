@@ -127,7 +127,7 @@ class RecordedDemonstration:
         give them.
     compartments : tuple of (name, compartments)
         The open interiors of landmarks that have them (a bin's compartments,
-        :func:`demoplan.scenes.regions.compartments`), in the landmark's frame.
+        :func:`demoplan.documents.compartments.compartments`), in the landmark's frame.
     provenance : tuple of (key, value)
         ``source``, ``demonstration``, ``samples``, ``env``,
         ``robosuite_version``, ``model`` and ``table_top_z`` (the simulator's

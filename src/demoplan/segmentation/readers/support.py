@@ -14,11 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from demoplan.documents.compartments import compartments
 from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import (
     quat_from_yaw,
 )
-from demoplan.scenes.regions import compartments
 from demoplan.segmentation.readers.mjcf import PRIMITIVES, Geom, ModelLayout
 
 FloatArray = NDArray[np.float64]
