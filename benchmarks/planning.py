@@ -123,7 +123,7 @@ From the repository root, with demoplan installed (``pip install -e ".[dev]"``):
 Every limit inside every loop (issue 44)
 ----------------------------------------
 Every run ends with, and ``--limits`` runs alone: ``demoplan solve`` of a
-1,000-object ring (:func:`tests.planning_families.ring_problem`: each object
+1,000-object ring (:func:`tests.support.planning_families.ring_problem`: each object
 to its neighbour's goal place, each goal place blocking its neighbour's grasp)
 with ``--timeout 0`` and with ``--max-nodes 1 --timeout inf`` — whole-process
 wall time, median of 3, the exit code and the answer's line; the target is

@@ -37,8 +37,8 @@ from demoplan.evaluation.report import evaluation_markdown
 from demoplan.evaluation.results import JOURNAL, ROWS, read_rows, summarise, wilson_interval
 from demoplan.evaluation.runs import RunRow
 from demoplan.learning.modelfile import load_model, model_to_dict
-from tests.helpers import EXAMPLES, wait_for_signal_handlers
-from tests.robosuite_data import RobosuiteDataError, skip_or_fail
+from tests.support.helpers import EXAMPLES, wait_for_signal_handlers
+from tests.support.robosuite_data import RobosuiteDataError, skip_or_fail
 
 INSTALLED = importlib.util.find_spec("robosuite") is not None
 MISSING = (
@@ -70,9 +70,9 @@ def blocks_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def stack_model(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Stack's model learned from robosuite's recordings (tests/robosuite_tasks.py)."""
+    """Stack's model learned from robosuite's recordings (tests/support/robosuite_tasks.py)."""
     _require_robosuite()
-    from tests.robosuite_tasks import task_model
+    from tests.support.robosuite_tasks import task_model
 
     folder = tmp_path_factory.mktemp("stack")
     try:

@@ -18,7 +18,7 @@ import pytest
 
 from demoplan.learning.regions import in_compartment, local_point
 from demoplan.model import TaskModel
-from tests.robosuite_data import RobosuiteDataError, skip_or_fail
+from tests.support.robosuite_data import RobosuiteDataError, skip_or_fail
 
 INSTALLED = importlib.util.find_spec("robosuite") is not None
 MISSING = (
@@ -36,7 +36,7 @@ def robosuite_installed() -> None:
 
 
 def _learned(env: str, folder: Path) -> TaskModel:
-    from tests.robosuite_tasks import task_model
+    from tests.support.robosuite_tasks import task_model
 
     try:
         return task_model(env, folder)

@@ -12,7 +12,7 @@ from demoplan.planning.compiled import compile_problem
 from demoplan.planning.greedy import greedy_moves, shorten, valid_moves
 from demoplan.planning.problem import Problem
 from demoplan.planning.strips import validate
-from tests.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.planning_families import PARKING_FAMILIES, parking_problem
 
 
 def _swap_with_a_free_goal() -> Problem:

@@ -23,7 +23,7 @@ from demoplan.commands.learning import learn_files
 from demoplan.commands.planning import plan
 from demoplan.execution.faults import Faults
 from demoplan.studio import worker
-from tests.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES
 
 BLOCKS = EXAMPLES / "blocks" / "demonstrations.json"
 FIG4 = EXAMPLES / "scenes" / "pyramid-fig4.json"
