@@ -1661,6 +1661,20 @@ LIMIT_RUNS = (
 LIMIT_TARGET_SECONDS = 1.0
 
 
+LIMIT_MEMORY_MB = 500.0
+
+
+def peak_memory_mb(command: list[str], folder: Path) -> float:
+    """The peak resident memory of ``command``'s own process (MB), from
+    ``os.wait4`` on it: ``RUSAGE_CHILDREN`` would give the largest child this
+    benchmark ever waited for."""
+    process = subprocess.Popen(
+        command, cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
+    _, _, usage = os.wait4(process.pid, 0)
+    return usage.ru_maxrss / 1024
+
+
 def limit_timings(root: Path, console: Console, repeats: int = 3) -> dict[str, Any]:
     """``solve`` of the 1,000-object ring under each of :data:`LIMIT_RUNS`
     (whole process, median of ``repeats``), and the cost of reading the limits."""
@@ -1696,6 +1710,13 @@ def limit_timings(root: Path, console: Console, repeats: int = 3) -> dict[str, A
             ", ".join(f"{s:.2f}" for s in seconds),
         )
     console.print(table)
+    to_the_end = [*demoplan_command(), "solve", str(path), "--timeout", "inf"]
+    peak_mb = [peak_memory_mb(to_the_end, root) for _ in range(repeats)]
+    console.print(
+        f"Peak memory of solve --timeout inf on {LIMIT_OBJECTS:,} objects (to the end, "
+        f"os.wait4's ru_maxrss): {', '.join(f'{mb:.0f}' for mb in peak_mb)} MB",
+        highlight=False,
+    )
     cost = clock_read_cost()
     console.print(
         f"Reading the limits: {cost['reads']:,} clock reads in one solve of parking-crowded "
@@ -1712,6 +1733,14 @@ def limit_timings(root: Path, console: Console, repeats: int = 3) -> dict[str, A
         )
         for name, median in medians
     ]
+    targets.append(
+        Target(
+            f"solve --timeout inf on {LIMIT_OBJECTS:,} objects peaks under "
+            f"{LIMIT_MEMORY_MB:g} MB (the largest of {repeats} runs)",
+            max(peak_mb) < LIMIT_MEMORY_MB,
+            f"{max(peak_mb):.0f} MB",
+        )
+    )
     print_targets(console, targets)
     return {"runs": rows, "clock_reads": cost, "targets": [asdict(t) for t in targets]}
 
