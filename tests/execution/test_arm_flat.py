@@ -24,10 +24,10 @@ from demoplan.execution import arm_model
 from demoplan.execution.arm import (
     TRIAL_MARGIN,
     ArmWorld,
-    _why_not_by_suction,
     carries,
     choose_tool,
 )
+from demoplan.execution.arm_tools import _why_not_by_suction
 from demoplan.scenes.scene import Scene, SceneObject
 from tests.support.lunch_box import LUNCH, lunch_demonstrations
 
@@ -129,7 +129,7 @@ def test_a_cup_that_fails_at_any_weight_is_not_said_to_fail_for_the_weight(
     10 g copy of a light box: the refusal says what the cup felt, not the
     box's weight."""
     monkeypatch.setattr(arm_model, "SUCTION_FORCE", 0.0)
-    why = _why_not_by_suction(ObjectGeometry("box", (0.08, 0.08, 0.03), 0.05))
+    why = _why_not_by_suction(ObjectGeometry("box", (0.08, 0.08, 0.03), 0.05), ArmWorld)
     assert why is not None
     assert "weighs" not in why, why
     assert why.startswith("the suction cup cannot carry it in a trial carry, even at 10 g: "), why

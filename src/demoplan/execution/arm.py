@@ -36,12 +36,10 @@ the path and every contact the arm makes is recorded (:attr:`ArmWorld.collisions
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -49,14 +47,11 @@ from demoplan.execution.arm_model import (
     ARM_GROUP,
     FINGER_HALF,
     FINGER_REACH,
-    GRIP_FORCE,
     HOME,
     JAW_SLIDE,
     JAW_STROKE,
     JAWS_CLOSED,
-    PAD_HALF,
     REACH,
-    SUCTION_FORCE,
     ArmKinematics,
     add_tool_drives,
     arm_base,
@@ -69,21 +64,36 @@ from demoplan.execution.arm_model import (
 from demoplan.execution.arm_motion import (
     WAYPOINT,
     ArmMotion,
-    Load,
     MotionError,
     cup_frame,
     wrapped,
     xyz,
 )
+from demoplan.execution.arm_moves import ArmMoves
+from demoplan.execution.arm_tools import (
+    FINGERTIP_GAP,
+    MIN_JAW_CLEARANCE,
+    TOOL_NAMES,
+    TRIAL_MARGIN,
+    TRIAL_PICK,
+    TRIAL_PLACE,
+    Tool,
+    ToolChoice,
+    carry_in_trial,
+    tool_by_trial,
+)
 from demoplan.execution.faults import Faults
-from demoplan.execution.physics import MujocoWorld, scene_xml
+from demoplan.execution.physics import scene_xml
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.scenes.geometry import half_extent
-from demoplan.scenes.scene import DEFAULT_GRASPS, Scene, SceneObject, yaw_of
+from demoplan.scenes.scene import DEFAULT_GRASPS, Scene, yaw_of
 
 logger = logging.getLogger(__name__)
 
 __all__ = [
+    "TRIAL_MARGIN",
+    "TRIAL_PICK",
+    "TRIAL_PLACE",
     "ArmWorld",
     "MotionError",
     "Tool",
@@ -93,38 +103,12 @@ __all__ = [
     "why_not_carried",
 ]
 
-Tool = Literal["suction", "fingers"]
-
-SPEED = 0.25  # m/s of the cup along a straight line
-TURN_SPEED = 120.0  # deg/s of the cup about the vertical
 APPROACH = 0.03  # m above the contact height where the straight approach starts
-PARK_SECONDS = 2.5  # s for the half turn behind the base (a load creeps on the pad if faster)
-RAISES = (0.0, 0.06, 0.15)  # m: travel heights tried above the tallest object
-TRIAL_PICK = Pose((0.42, -0.14, 0.0))
-TRIAL_PLACE = Pose((0.42, 0.14, 0.0), (0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)))
-"""Where the trial carry (:func:`why_not_carried`) takes an object from and puts it,
-the arm's base at the origin facing +x: 28 cm across its front, turned by 90°."""
-TRIAL_MARGIN = 1.25
-"""The trial carries the object this many times as heavy: an object the check
-accepts must be carried by every motion of a run, and near the cup's limit
-the trial's are not the hardest. Measured (5 N cup, 4 cm block and 15 × 10 ×
-3 cm box alike): the trial carry holds up to 0.44 kg, carries between other
-places 30–50 cm out as much, but the half turn behind the base before a top
-camera's picture (:meth:`ArmWorld.park`) only 0.35 kg (a 20 cm tall box
-0.32 kg): the margin covers that."""
-TRIAL_LIGHT = 0.01
-"""kg: the weight of a second trial carry when the first fails. Carried this
-light, the object's weight is why the tool loses it; not even this light,
-something else is, and the refusal says what the tool felt instead."""
 JAW_CLEARANCE = 0.01  # m: between an open finger and the object's side, where there is room
-MIN_JAW_CLEARANCE = 0.002  # m: the least room the open jaws leave on either side
-FINGERTIP_GAP = 0.003  # m: the fingertips stop this far above what the object stands on
 TOP_GAP = 0.005  # m: between the object's top and the pad when the fingers take it
-TOOL_NAMES = {"suction": "suction cup", "fingers": "fingers"}
-GRAVITY = 9.81  # m/s²: MuJoCo's default, the scenes' (a weight in newtons)
 
 
-class ArmWorld(MujocoWorld):
+class ArmWorld(ArmMoves):
     """The scene in MuJoCo with the Jaco arm and its tool; see the module docstring."""
 
     name = "arm"
@@ -231,14 +215,6 @@ class ArmWorld(MujocoWorld):
 
     # -- reading ---------------------------------------------------------------------------
 
-    def _cup(self, data: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        data = self.data if data is None else data
-        return np.array(data.site_xpos[self.tcp]), np.array(data.site_xmat[self.tcp]).reshape(3, 3)
-
-    def _cup_yaw(self) -> float:
-        _, rotation = self._cup()
-        return math.degrees(math.atan2(rotation[1, 0], rotation[0, 0]))
-
     def _hand(self) -> np.ndarray:
         return self._cup()[0]
 
@@ -315,162 +291,6 @@ class ArmWorld(MujocoWorld):
 
     def _cup_frame(self, data: Any = None) -> np.ndarray:
         return cup_frame(self.data if data is None else data, self.tcp)
-
-    # -- motions ---------------------------------------------------------------------------
-
-    def _path(self, goal: np.ndarray, yaw: float) -> list[np.ndarray]:
-        """Joint waypoints moving the cup in a straight line from where it is to
-        ``goal`` while it turns to ``yaw``; MotionError where one has no solution."""
-        start, _ = self._cup()
-        return self.motion.straight_line(start, self.cup_yaw, self.q, goal, yaw)
-
-    def _step_to(self, point: np.ndarray, yaw: float, q: np.ndarray) -> np.ndarray:
-        return self.motion.step_to(point, yaw, q)
-
-    def _collision(self, path: list[np.ndarray], landing: bool) -> str | None:
-        """The first collision along ``path`` (:meth:`ArmMotion.first_collision`)."""
-        return self.motion.first_collision(
-            self.data.qpos,
-            path,
-            Load(self.held, self._body(self.held), self.grip) if self.held is not None else None,
-            self._body(self.allowed) if self.allowed is not None else None,
-            landing,
-            self._body_label,
-        )
-
-    def _body_label(self, body: int) -> str:
-        if body == 0:
-            return "the table"
-        internal = self.mujoco.mj_id2name(self.model, self.mujoco.mjtObj.mjOBJ_BODY, body)
-        for name, inner in self.body_names.items():
-            if inner == internal:
-                return name
-        return str(internal)
-
-    def _run(self, path: list[np.ndarray], seconds: float) -> None:
-        """Track ``path`` with the joint servos over ``seconds`` (smooth start and stop)."""
-        steps = max(1, math.ceil(seconds / 0.002))
-        points = [self.q, *path]
-        for k in range(1, steps + 1):
-            t = k / steps
-            t = t * t * (3.0 - 2.0 * t)
-            position = t * (len(points) - 1)
-            index = min(int(position), len(points) - 2)
-            frac = position - index
-            self.data.ctrl[self.servos] = points[index] + frac * (points[index + 1] - points[index])
-            self.mujoco.mj_step(self.model, self.data)
-            self._watch()
-            self._tick()
-        self.q = path[-1]
-        for _ in range(150):  # let the servos settle on the last waypoint
-            if np.max(np.abs(self.data.qpos[self.joints] - self.q)) < 2e-3:
-                break
-            self.mujoco.mj_step(self.model, self.data)
-            self._watch()
-            self._tick()
-
-    def _watch(self) -> None:
-        """Record the arm's contacts with anything but its load (a test reads them)."""
-        held = self._body(self.held) if self.held is not None else -1
-        for contact in self.data.contact[: self.data.ncon]:
-            if contact.dist >= contact.includemargin:  # not an active contact: not touching
-                continue
-            first = int(self.model.geom_bodyid[contact.geom1])
-            second = int(self.model.geom_bodyid[contact.geom2])
-            for mine, other in ((first, second), (second, first)):
-                if mine in self.arm_bodies and other not in self.arm_bodies:
-                    allowed = self._body(self.allowed) if self.allowed is not None else -2
-                    if other not in (held, allowed):
-                        label = (
-                            f"the arm touched {self._body_label(other)} at {self.simulated:.2f} s"
-                        )
-                        if not self.collisions or self.collisions[-1] != label:
-                            self.collisions.append(label)
-
-    def _go(
-        self, goal: np.ndarray | list[float], yaw: float | None = None, landing: bool = False
-    ) -> None:
-        """Move the cup in a straight line to ``goal`` (turning to ``yaw``),
-        after checking the path against collisions."""
-        if self.parked:
-            self._unpark()
-        goal = np.asarray(goal, dtype=float)
-        yaw = self.cup_yaw if yaw is None else yaw
-        start, _ = self._cup()
-        path = self._path(goal, yaw)
-        problem = self._collision(path, landing)
-        if problem is not None:
-            raise MotionError(problem)
-        turn = abs(((yaw - self.cup_yaw + 180.0) % 360.0) - 180.0)
-        distance = float(np.linalg.norm(goal - start))
-        self._run(path, max(1.5 * distance / SPEED, turn / TURN_SPEED, 0.1))
-        self.cup_yaw = yaw
-
-    def _travel(self, goal_xy: tuple[float, float], yaw: float, low: float) -> None:
-        """Up, across at the travel height, and down to ``low`` above ``goal_xy``:
-        straight moves above what stands along the way, raised when a check
-        finds a collision."""
-        if self.parked:
-            self._unpark()
-        here, _ = self._cup()
-        problem = ""
-        for raise_by in RAISES:
-            height = max(
-                self._travel_height((float(here[0]), float(here[1])), goal_xy) + raise_by, low
-            )
-            try:
-                self._go([here[0], here[1], max(height, here[2])])
-                self._go([goal_xy[0], goal_xy[1], height], yaw)
-                return
-            except MotionError as exc:
-                problem = str(exc)
-        # No straight line across (the arm would swing through a new posture on
-        # the way, from close to its base): up, then a joint-space move (checked)
-        # to a posture solved over the goal.
-        height = max(self._travel_height((float(here[0]), float(here[1])), goal_xy), low)
-        try:
-            here, _ = self._cup()
-            self._go([here[0], here[1], max(height, here[2])])
-            self._swing_to(np.array([goal_xy[0], goal_xy[1], height]), yaw)
-        except MotionError:
-            raise MotionError(problem) from None
-
-    def _swing_to(self, point: np.ndarray, yaw: float) -> None:
-        """To ``point`` turned ``yaw`` by a joint-space move from where the arm
-        is, to a posture solved afresh (facing the point, elbow up)."""
-        seed = np.array(HOME)
-        seed[0] += math.atan2(point[1] - self.base[1], point[0] - self.base[0]) - math.radians(
-            self.base[2]
-        )
-        q = self.kinematics.solve_anywhere(point, yaw, seed)
-        if q is None:
-            raise MotionError(f"the cup cannot reach {xyz(point)}")
-        self._joint_move(self.q + wrapped(q - self.q), 30, 2.0)
-
-    def _travel_height(
-        self, start: tuple[float, float] | None = None, goal: tuple[float, float] | None = None
-    ) -> float:
-        """A height for the cup to cross from ``start`` to ``goal`` (x, y): 3 cm
-        over the load, or the lowered fingertips, above the tallest object near
-        that line (every object without one)."""
-        carried = FINGER_REACH if self.tool == "fingers" else 0.0
-        sweep = 0.05
-        if self.held is not None:
-            shape = self.geometry[self.held]
-            carried = max(carried, float(self.grip[2, 3]) + shape.size[2] / 2)
-            sweep += math.hypot(shape.size[0], shape.size[1]) / 2
-        tops = []
-        for name in self._active():
-            if name == self.held:
-                continue
-            pose = self._pose(name)
-            shape = self.geometry[name]
-            if start is not None and goal is not None:
-                near = sweep + math.hypot(shape.size[0], shape.size[1]) / 2
-                if _distance_to_segment(pose.position[:2], start, goal) > near:
-                    continue
-            tops.append(pose.position[2] + shape.size[2])
-        return max(tops, default=0.0) + carried + 0.03
 
     # -- the World protocol ------------------------------------------------------------
 
@@ -774,25 +594,6 @@ class ArmWorld(MujocoWorld):
         except MotionError as exc:
             self._give_up(f"parking: {exc}")
 
-    def _unpark(self) -> None:
-        """Back from behind the base: the half turn of :meth:`park` undone."""
-        self.parked = False
-        self._turn_base(-math.pi)
-
-    def _turn_base(self, angle: float) -> None:
-        """Turn the first joint alone by ``angle`` (rad)."""
-        self._joint_move(self.q + np.array([angle, 0, 0, 0, 0, 0]), 36, PARK_SECONDS)
-
-    def _joint_move(self, target: np.ndarray, steps: int, seconds: float) -> None:
-        """From the arm's joint angles straight to ``target`` in joint space, in
-        ``steps`` waypoints checked against collisions, then run over ``seconds``."""
-        path = [self.q + (target - self.q) * k / steps for k in range(1, steps + 1)]
-        problem = self._collision(path, False)
-        if problem is not None:
-            raise MotionError(problem)
-        self._run(path, seconds)
-        self.cup_yaw = self._cup_yaw()
-
     # -- checks before the run -----------------------------------------------------------
 
     def why_not_graspable(self, obj: str) -> str | None:
@@ -824,106 +625,19 @@ class ArmWorld(MujocoWorld):
         return None
 
 
-@dataclass(frozen=True, slots=True)
-class ToolChoice:
-    """The tool that takes an object (None: neither), the finger axis (deg, in
-    the object's frame) its trial used, and why it is refused."""
-
-    tool: Tool | None
-    axis: float
-    why: str | None
-
-
-@functools.cache
 def choose_tool(shape: ObjectGeometry, axes: tuple[float, ...] = DEFAULT_GRASPS) -> ToolChoice:
     """The tool that carries an object of ``shape`` (its size and mass) whose
     scene allows finger ``axes``: the suction cup where it carries it, else the
-    fingers, else neither, with why. Each is tried in this same simulation —
-    the arm, the tool, the servos and the motions of a run — on the object
-    :data:`TRIAL_MARGIN` times as heavy, taken at :data:`TRIAL_PICK`, carried
-    across the arm's front and turned by 90° to :data:`TRIAL_PLACE`; it is
-    carried when it ends there within 1 cm. Before a trial, what rules a tool
-    out by geometry alone: a sphere has no flat top for the cup, a top
-    narrower than the pad none to seal on; the fingers need the object
-    narrower than their stroke across one of ``axes`` (the trial takes the
-    narrowest) and taller than the gap they leave over the table.
+    fingers, else neither, with why — each tried in a trial carry in an
+    :class:`ArmWorld` (:func:`~demoplan.execution.arm_tools.tool_by_trial`).
     The check is the physics itself, not a model of it (docs/execution.md)."""
-    suction = _why_not_by_suction(shape)
-    fits = sorted(axes, key=lambda a: half_extent(shape, a))
-    axis = fits[0] if fits else 0.0
-    if suction is None:
-        return ToolChoice("suction", axis, None)
-    fingers = _why_not_by_fingers(shape, axis, suction.startswith("weighs"))
-    if fingers is None:
-        return ToolChoice("fingers", axis, None)
-    return ToolChoice(None, axis, f"{suction}; {fingers}")
+    return tool_by_trial(shape, axes, ArmWorld)
 
 
 def why_not_carried(shape: ObjectGeometry, axes: tuple[float, ...] = DEFAULT_GRASPS) -> str | None:
     """Why neither the suction cup nor the fingers carry an object of ``shape``
     (:func:`choose_tool`), or None."""
     return choose_tool(shape, axes).why
-
-
-def _why_not_by_suction(shape: ObjectGeometry) -> str | None:
-    if shape.shape == "sphere":
-        return "is a sphere: it has no flat top for the suction cup to seal on"
-    width = min(shape.size[0], shape.size[1])
-    if width < 2 * PAD_HALF:
-        return (
-            f"has a top {1000 * width:.0f} mm across; the suction pad needs "
-            f"{2000 * PAD_HALF:.0f} mm"
-        )
-    return _why_not_in_trial(shape, "suction", 0.0, f"the suction cup ({SUCTION_FORCE:g} N)", True)
-
-
-def _why_not_by_fingers(shape: ObjectGeometry, axis: float, weighed: bool) -> str | None:
-    """Why the fingers do not carry ``shape`` taken across ``axis`` (``weighed``:
-    the cup's reason already gave its weight)."""
-    half = half_extent(shape, axis)
-    if half + MIN_JAW_CLEARANCE > JAW_STROKE / 2:
-        return (
-            f"it is {200 * half:.1f} cm across its narrowest grasp; the fingers open to "
-            f"{100 * JAW_STROKE:.1f} cm"
-        )
-    if shape.size[2] < FINGERTIP_GAP + 0.002:
-        return (
-            f"it is {1000 * shape.size[2]:.0f} mm tall; the fingertips stop "
-            f"{1000 * FINGERTIP_GAP:.0f} mm above the table"
-        )
-    return _why_not_in_trial(shape, "fingers", axis, f"the fingers ({GRIP_FORCE:g} N)", not weighed)
-
-
-def _why_not_in_trial(
-    shape: ObjectGeometry, tool: Tool, axis: float, named: str, weigh: bool
-) -> str | None:
-    """Why ``tool`` loses ``shape`` :data:`TRIAL_MARGIN` times as heavy in the
-    trial carry, or None. Its weight only when the same shape
-    :data:`TRIAL_LIGHT` light is carried (``weigh``: the reason starts with
-    the weight; else the cup's reason gave it), else what went wrong."""
-    heavier = replace(shape, mass=TRIAL_MARGIN * shape.kg)
-    trial = _carry(heavier, TRIAL_PICK, TRIAL_PLACE, tool, axis)
-    if trial.carried:
-        return None
-    if trial.refused:  # not the load: the arm could not make the motions
-        return f"the {TOOL_NAMES[tool]} cannot carry it in a trial carry: {trial.refused[0]}"
-    light = _carry(replace(shape, mass=TRIAL_LIGHT), TRIAL_PICK, TRIAL_PLACE, tool, axis)
-    if not light.carried:  # not its weight
-        return (
-            f"the {TOOL_NAMES[tool]} cannot carry it in a trial carry, even at "
-            f"{1000 * TRIAL_LIGHT:g} g: {light.what_went_wrong()}"
-        )
-    what = (
-        ("does not lift" if tool == "suction" else "do not lift")
-        if not trial.lifted
-        else ("lifts but loses" if tool == "suction" else "lift but lose")
-    )
-    if weigh:
-        return (
-            f"weighs {shape.kg:.3g} kg; {named} {what} {TRIAL_MARGIN:g} times that "
-            f"({TRIAL_MARGIN * shape.kg * GRAVITY:.1f} N) in a trial carry in the simulation"
-        )
-    return f"{named} {what} it either"
 
 
 def carries(
@@ -933,71 +647,8 @@ def carries(
     ``pick`` (the base at the origin facing +x), lifts it and puts it down at
     ``place`` within 1 cm: (lifted, placed). ``tool``: the one it uses (None:
     the one :func:`choose_tool` chooses, as in a run); ``axis``: the fingers'."""
-    trial = _carry(shape, pick, place, tool, axis)
+    trial = carry_in_trial(shape, pick, place, tool, axis, ArmWorld)
     return trial.lifted, trial.carried
-
-
-@dataclass(frozen=True, slots=True)
-class _Trial:
-    """One carry (:func:`_carry`): whether the object was lifted, where it
-    ended (m from its place; None: nowhere to be seen, or still held), the
-    motions the arm refused and what the tool felt go wrong (the object named
-    ``it``)."""
-
-    lifted: bool
-    miss: float | None
-    refused: tuple[str, ...]
-    felt: tuple[str, ...]
-
-    @property
-    def carried(self) -> bool:
-        """Put down within 1 cm of its place."""
-        return self.lifted and self.miss is not None and self.miss < 0.01
-
-    def what_went_wrong(self) -> str:
-        if self.felt:
-            return self.felt[0]
-        if not self.lifted:
-            return "it was not lifted"
-        if self.miss is None:
-            return "it was not put down"
-        return f"it ended {100 * self.miss:.1f} cm from its place"
-
-
-def _carry(
-    shape: ObjectGeometry, pick: Pose, place: Pose, tool: Tool | None, axis: float
-) -> _Trial:
-    """:func:`carries`, with what went wrong on the way."""
-    name = "load"
-    scene = Scene(objects=(SceneObject(name, pick, shape, (axis,)),), robot=(0.0, 0.0, 0.0))
-    world = ArmWorld(scene)
-    if tool is not None:
-        world.tools[name] = tool
-    try:
-        world.grasp(name, axis, pick)
-        lifted = world.observe().held == name
-        if lifted:
-            world.put_down(name, place)
-        final = world.observe()
-        pose = final.poses.get(name)
-        miss = (
-            math.dist(pose.position, place.position)
-            if lifted and final.held is None and pose is not None
-            else None
-        )
-        felt = tuple(problem.replace(name, "it") for problem in world.grasp_problems)
-        return _Trial(lifted, miss, tuple(world.motion_failures), felt)
-    finally:
-        world.close()
-
-
-def _distance_to_segment(
-    point: tuple[float, ...], start: tuple[float, float], goal: tuple[float, float]
-) -> float:
-    p, a, b = np.asarray(point[:2]), np.asarray(start), np.asarray(goal)
-    span = b - a
-    t = 0.0 if not span.any() else float(np.clip(np.dot(p - a, span) / np.dot(span, span), 0, 1))
-    return float(np.linalg.norm(p - (a + t * span)))
 
 
 def _yaw_matrix(yaw: float) -> np.ndarray:

@@ -57,7 +57,13 @@ from demoplan.scenes.plan import (
     plan_in_scene,
     solve_candidate,
 )
-from demoplan.scenes.prepared import PreparedScene, goal_floors, prepare, prepare_observed
+from demoplan.scenes.prepared import (
+    BoundTask,
+    PreparedScene,
+    goal_floors,
+    prepare,
+    prepare_observed,
+)
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
 from demoplan.scenes.scene import Scene, yaw_of
 from demoplan.scenes.table import surroundings_of
@@ -244,6 +250,10 @@ def _start_run(
     return run
 
 
+_Replan = tuple[SceneProblem, Plan, Binding, TaskModel]
+"""A replan found: its problem, its plan, and the binding and model it is under."""
+
+
 @dataclass(slots=True, kw_only=True)
 class _Run:
     """A run in progress (:func:`execute`): the plan being carried out, what has
@@ -428,27 +438,45 @@ class _Run:
 
     def replan(self, step: int) -> str | None:
         """Plan again from what is observed; None on success, else why not."""
-        settings, world, scene, model = self.settings, self.world, self.scene, self.model
-        if self.replans >= settings.max_replans:  # the report counts the replans made
-            return f"gave up after {plural(settings.max_replans, 'replan')}"
+        if self.replans >= self.settings.max_replans:  # the report counts the replans made
+            return f"gave up after {plural(self.settings.max_replans, 'replan')}"
         self.replans += 1
         self.plan_index += 1
-        observation = world.observe()
-        current = observed_scene(observation, scene)  # complete: the prepared scene's geometry
+        observation = self.world.observe()
+        current = observed_scene(observation, self.scene)  # complete: the prepared scene's geometry
         try:
-            tasks = prepare_observed(self.roles, current, settings.geometry).bindings
-            index = next(
-                i for i, c in enumerate(tasks[0].candidates) if self.goal in c.demonstrations
-            )
-            floors = goal_floors(tasks, index, current)
+            tasks, index, floors = self._observed_tasks(current)
         except DemoplanError as exc:
             return f"cannot plan in the observed world: {exc}"
-        # The current binding first; others only where their bound can beat its plan.
+        best, why = self._shortest_replan(tasks, index, floors, current, observation)
+        if best is None:
+            return why
+        return self._adopt_replan(best, observation, step)
+
+    def _observed_tasks(self, current: Scene) -> tuple[tuple[BoundTask, ...], int, list[int]]:
+        """The observed world's bound tasks, the index of the goal being run
+        among their candidates, and each binding's lower bound on its plan."""
+        tasks = prepare_observed(self.roles, current, self.settings.geometry).bindings
+        index = next(i for i, c in enumerate(tasks[0].candidates) if self.goal in c.demonstrations)
+        return tasks, index, goal_floors(tasks, index, current)
+
+    def _shortest_replan(
+        self,
+        tasks: tuple[BoundTask, ...],
+        index: int,
+        floors: list[int],
+        current: Scene,
+        observation: Observation,
+    ) -> tuple[_Replan | None, str]:
+        """The shortest plan to goal ``index`` from the observed world over the
+        bindings — the current binding first; others only where their bound can
+        beat the plan found — and else the first reason none was found."""
+        settings = self.settings
         order = sorted(
             range(len(tasks)), key=lambda b: (tasks[b].binding != self.binding, floors[b])
         )
         clock = Clock(settings.budget)
-        best: tuple[SceneProblem, Plan, Binding, TaskModel] | None = None
+        best: _Replan | None = None
         why = ""
         for number in order:
             binding, floor = tasks[number].binding, floors[number]
@@ -474,7 +502,7 @@ class _Run:
                 why = why or f"cannot plan in the observed world: {exc}"
                 continue
             built, refused = _without_failed_grasps(
-                built, self.failed_grasps, observation, settings, world
+                built, self.failed_grasps, observation, settings, self.world
             )
             if refused:
                 why = why or refused
@@ -485,8 +513,11 @@ class _Run:
                 continue
             if best is None or len(outcome.plan) < len(best[1]):
                 best = (built, outcome.plan, binding, model)
-        if best is None:
-            return why
+        return best, why
+
+    def _adopt_replan(self, best: _Replan, observation: Observation, step: int) -> str | None:
+        """Run on with the plan ``best`` (its binding the run's from now on);
+        None, else why the robot cannot carry it out."""
         built, plan, binding, model = best
         roles = ""
         if binding != self.binding:
@@ -494,7 +525,7 @@ class _Run:
             roles = f" (roles given anew: {binding.describe()})"
         self.binding, self.model = binding, model
         try:
-            _check_feasible(world, list(plan.actions), built, scene.source)
+            _check_feasible(self.world, list(plan.actions), built, self.scene.source)
         except InputError as exc:  # an object moved beyond the robot's reach
             return f"the new plan {exc.message}"
         self.problem, self.actions = built, list(plan.actions)
