@@ -29,7 +29,6 @@ PENDING_FUNCTIONS = {
 }
 PENDING_MODULES = {
     "learning/states.py",  # region goals being added
-    "perception/calibration.py",  # perception's photo work
     # Not split yet: ArmWorld alone is 700 lines, and its tool choice runs trial
     # carries in an ArmWorld, so the two cannot simply go to two modules.
     "execution/arm.py",
