@@ -26,7 +26,6 @@ PENDING_FUNCTIONS = {
     "execution/executor.py:replan",  # the preparation's rework (one prepared scene)
 }
 PENDING_MODULES = {
-    "learning/states.py",  # region goals being added
     # Not split yet: ArmWorld alone is 700 lines, and its tool choice runs trial
     # carries in an ArmWorld, so the two cannot simply go to two modules.
     "execution/arm.py",
