@@ -80,13 +80,15 @@ from demoplan.learning.modelfile import (
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import WOOD_DENSITY
 from demoplan.perception.calibration import (
-    MAX_MARKER_SIDE,
     _CameraSchema,
     _CentreSchema,
     _ErrorSchema,
+    _UsedMarkersSchema,
+)
+from demoplan.perception.calibration_inputs import (
+    MAX_MARKER_SIDE,
     _IntrinsicsSchema,
     _MarkersSchema,
-    _UsedMarkersSchema,
 )
 from demoplan.perception.camera import MAX_IMAGE_BYTES, MAX_PIXELS, MAX_SIDE
 from demoplan.perception.frames import VIDEO_SUFFIXES

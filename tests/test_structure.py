@@ -22,14 +22,8 @@ MAX_MODULE_LINES = 800
 # Over the limits still, each for the reason beside it (mostly: an area
 # another change is reshaping at the same time). The tests below fail when
 # one of them comes under its limit, so that it leaves these lists.
-PENDING_FUNCTIONS = {
-    "perception/blocks.py:detect_blocks",  # perception's photo work
-    "perception/colours.py:colour_regions",
-}
-PENDING_MODULES = {
-    "learning/states.py",  # region goals being added
-    "perception/calibration.py",  # perception's photo work
-}
+PENDING_FUNCTIONS: set[str] = set()
+PENDING_MODULES: set[str] = set()
 
 Function = ast.FunctionDef | ast.AsyncFunctionDef
 

@@ -19,50 +19,58 @@ Position and orientation choose their references independently. A state is
 (object, position reference and cluster, orientation reference and cluster);
 states are lettered A, B, … in order of first appearance over the
 demonstrations in the order given, steps in order. docs/learning.md tells
-the whole method.
+the whole method. The precision is estimated in :mod:`demoplan.learning.precision`,
+the references are scored and chosen in :mod:`demoplan.learning.references`, over
+the placements :class:`~demoplan.learning.world.DemonstrationWorld` reads.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from bisect import bisect_left
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Literal, NamedTuple
 
 import numpy as np
 
-from demoplan import rotations
 from demoplan.budget import report_progress
-from demoplan.learning.clustering import (
-    CONSISTENCY_LEVEL,
-    UNBOUNDED_DF,
-    Clustering,
-    PositionSpace,
-    RotationSpace,
-    Space,
-    closest_pair,
-    cluster_stats,
-    f_critical,
-    kmeans_batch,
-    outscores,
-    select_clusterings,
-    spread_of,
+from demoplan.learning.precision import (
+    KINDS,
+    MIN_ORIENTATION_PRECISION,
+    MIN_POSITION_PRECISION,
+    Kind,
+    Precision,
+    _floored,
+    _own_precisions,
+    _precision,
+    _Spread,
+    _tightest,
+    estimate_precision,
+)
+from demoplan.learning.references import (
+    FOLLOWS_NOTE,
+    ReferenceScore,
+    _Chooser,
+    _margins,
+    _orientation,
+    _position,
+    _relative_values,
+    _score_references,
 )
 from demoplan.learning.regions import with_regions
 from demoplan.learning.settings import LearningSettings as StateGenerationSettings
+from demoplan.learning.world import DemonstrationWorld, _Placement
 from demoplan.model import (
     Demonstration,
-    Pose,
     State,
     StateOrientation,
-    StatePosition,
-    demonstrated_shapes,
-    yaw_period,
 )
 
 __all__ = [
+    "ANYWHERE_NOTE",
+    "FOLLOWS_NOTE",
+    "PLACED_NOTE",
+    "DemonstrationWorld",
     "Precision",
     "ReferenceScore",
     "StateGeneration",
@@ -72,30 +80,8 @@ __all__ = [
     "state_letters",
 ]
 
-Kind = Literal["position", "orientation"]
-KINDS: tuple[Kind, ...] = ("position", "orientation")
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True, slots=True)
-class ReferenceScore:
-    """How well one candidate reference explains one object's placements.
-
-    ``reference`` is ``None`` for absolute; ``distance`` is the mean distance
-    (m, or degrees for orientation) between object and reference, used to
-    break ties towards the nearest reference.
-    """
-
-    object: str
-    kind: Kind
-    reference: str | None
-    clustering: Clustering
-    distance: float
-
-    @property
-    def rms(self) -> float:
-        return math.sqrt(self.clustering.score)
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,46 +95,6 @@ class StateGeneration:
 
 
 @dataclass(frozen=True, slots=True)
-class Precision:
-    """The placement precision decisions were measured against (RMS; m and degrees)
-    and whether each was estimated from the demonstrations or set by the user."""
-
-    position: float
-    orientation: float
-    position_estimated: bool = True
-    orientation_estimated: bool = True
-    position_df: float = UNBOUNDED_DF
-    """Degrees of freedom of the estimate (unbounded where the user set it)."""
-    orientation_df: float = UNBOUNDED_DF
-
-
-class _Spread(NamedTuple):
-    """An RMS spread (m or degrees) and the degrees of freedom it was measured with."""
-
-    rms: float
-    df: float
-
-
-LOCAL_EVIDENCE = 0.02
-"""A reference available at some of an object's placements only adds a state
-there: its F test is taken at the significance level divided by the number of
-such candidates at that step (Bonferroni), and at most this fraction of it
-(0.05 → 0.001), so that one of many such candidates agreeing by chance does
-not; and never from two placements."""
-
-OWN_PRECISION_DF = 6
-"""Degrees of freedom from which an object's own tightest spread may be its
-precision (four placements on a table): fewer agree as closely as chance
-makes them (:func:`_own_precisions`)."""
-SIMILAR_PRECISION = 2.0
-"""An object's own precision counts where another object's lies within this
-factor of it (:func:`_own_precisions`)."""
-MIN_POSITION_PRECISION = 1e-4  # m: noise-free data still has a scale for ties
-MIN_ORIENTATION_PRECISION = 0.05  # deg
-FALLBACK_PRECISION = (0.003, 0.5)  # m, deg: when no object was placed twice
-
-
-@dataclass(frozen=True, slots=True)
 class _StateKey:
     """What makes a state: object, position reference and cluster, orientation
     reference and cluster (cluster −1: orientation unknown)."""
@@ -158,78 +104,6 @@ class _StateKey:
     position_cluster: int
     orientation_reference: str | None
     orientation_cluster: int
-
-
-@dataclass(frozen=True, slots=True)
-class _Placement:
-    demo: int
-    step: int
-    pose: Pose
-
-
-class DemonstrationWorld:
-    """Per-demonstration lookup of where every object and landmark was."""
-
-    def __init__(self, demonstrations: Sequence[Demonstration]):
-        # Per demonstration and object: the step indices of its moves, and its poses.
-        self.moves: list[dict[str, tuple[list[int], list[Pose]]]] = []
-        self.landmarks = [d.landmark_poses() for d in demonstrations]
-        self.initial = [d.initial_poses() for d in demonstrations]
-        self.geometry = demonstrated_shapes(demonstrations)
-        for demo in demonstrations:
-            moves: dict[str, tuple[list[int], list[Pose]]] = {}
-            for index, step in enumerate(demo.steps):
-                steps, poses = moves.setdefault(step.object, ([], []))
-                steps.append(index)
-                poses.append(step.pose)
-            self.moves.append(moves)
-
-    def pose(self, demo: int, name: str, step: int) -> Pose | None:
-        """``name``'s placement when ``step`` happens (docs/learning.md).
-
-        The placement current at the step; for an object placed only after the
-        step, its first placement; for one never moved, its initial pose.
-        """
-        if name in self.landmarks[demo]:
-            return self.landmarks[demo][name]
-        history = self.moves[demo].get(name)
-        if history:
-            steps, poses = history
-            moved_before = bisect_left(steps, step)
-            return poses[moved_before - 1] if moved_before else poses[0]
-        return self.initial[demo].get(name)
-
-    def yaw_period(self, name: str | None) -> float:
-        """``name``'s symmetry about its own z axis (deg; 0: any turn); 360° (none)
-        where its geometry is unknown, and for a landmark: its yaw is given, not
-        tracked, so its frame is the one given (a tray has a front, whatever
-        its shape's symmetry)."""
-        if name is None or any(name in landmarks for landmarks in self.landmarks):
-            return 360.0
-        return yaw_period(self.geometry.get(name))
-
-    def own_symmetry(self, name: str, quats: np.ndarray) -> np.ndarray:
-        """``name``'s orientations (absolute or relative to a reference) compared
-        modulo its shape's symmetry: a box's half turns about its axes (and quarter
-        turns where two extents agree), a cylinder's turns about its axis and
-        flip, a sphere's every turn; none for other or unknown shapes."""
-        shape = self.geometry.get(name)
-        if shape is None or shape.shape not in {"box", "cylinder", "sphere"}:
-            return quats
-        if shape.shape == "sphere":
-            return np.tile([0.0, 0.0, 0.0, 1.0], (len(quats), 1))
-        if shape.shape == "cylinder":
-            return rotations.axis_modulo_flip(quats)
-        return rotations.modulo_group(quats, rotations.box_symmetries(shape.size))
-
-    def available(self, demo: int, name: str, step: int) -> bool:
-        """Whether ``name`` may serve as a reference at ``step`` of ``demo``."""
-        if name in self.landmarks[demo]:
-            return True
-        history = self.moves[demo].get(name)
-        if history:
-            return history[0][0] < step
-        return name in self.initial[demo]
 
 
 def generate_states(
@@ -614,9 +488,6 @@ ANYWHERE_NOTE = "anywhere"
 PLACED_NOTE = "at its place"
 """How the notes on an anywhere decision begin: placed anywhere, or at the mean
 of its placements (:func:`_placed_anywhere`)."""
-FOLLOWS_NOTE = "turns with "
-"""How a note on an orientation that follows its position's reference begins
-(:meth:`_Chooser.follow_note`)."""
 
 
 def _placed_anywhere(
@@ -733,438 +604,3 @@ def _relative_table(
             relative[(obj, kind, reference)] = values
             if kind == "position":
                 framed[(obj, reference)] = in_frame
-
-
-def estimate_precision(
-    relative: dict[tuple[str, Kind, str | None], np.ndarray],
-    settings: StateGenerationSettings,
-) -> Precision:
-    """The placement precision of the demonstrations (docs/learning.md), unless set.
-
-    For every object placed at least twice, the RMS spread of its placements
-    relative to the candidate that explains them best as one cluster (the
-    lowest trace of the sample covariance over absolute, the landmarks and
-    the objects placed before it in every demonstration — ``relative`` holds
-    just those: the best of many candidates that were never available would
-    be low by chance); the precision is the median of these over the
-    objects (the lower one of an even count: with two objects, the more
-    precise). An object placed where it is meant to go, relative to what it is
-    meant to go with, scatters by the teacher's precision; the median keeps
-    objects with several places (whose best single cluster is wide) from
-    inflating it. A virtual environment gives well under a millimetre,
-    people teleoperating a robot centimetres. Without any object placed
-    twice, :data:`FALLBACK_PRECISION`.
-    """
-    return _precision({kind: _tightest(relative, kind, settings) for kind in KINDS}, settings)
-
-
-def _precision(
-    tightest: dict[Kind, dict[str, _Spread]], settings: StateGenerationSettings
-) -> Precision:
-    """:func:`estimate_precision` from each object's tightest spread, per kind; with
-    the degrees of freedom of the median one (an estimate from that object's
-    placements, not the truth)."""
-    found: dict[Kind, _Spread] = {}
-    for kind, best in tightest.items():
-        fallback = FALLBACK_PRECISION[0 if kind == "position" else 1]
-        ranked = sorted(best.values())
-        found[kind] = ranked[(len(ranked) - 1) // 2] if ranked else _Spread(fallback, UNBOUNDED_DF)
-    position = _floored(found["position"], MIN_POSITION_PRECISION)
-    orientation = _floored(found["orientation"], MIN_ORIENTATION_PRECISION)
-    set_position, set_orientation = settings.position_noise, settings.orientation_noise
-    return Precision(
-        position=position.rms if set_position is None else set_position,
-        orientation=orientation.rms if set_orientation is None else set_orientation,
-        position_estimated=set_position is None,
-        orientation_estimated=set_orientation is None,
-        position_df=position.df if set_position is None else UNBOUNDED_DF,
-        orientation_df=orientation.df if set_orientation is None else UNBOUNDED_DF,
-    )
-
-
-def _own_precisions(
-    tightest: dict[str, _Spread], median: float, median_df: float
-) -> dict[str, _Spread]:
-    """The precision each object's decisions are judged by.
-
-    The median object's (:func:`estimate_precision`), or the object's own
-    tightest spread where that is lower — red stands on wood to 0.6 mm while
-    wood and green scatter by centimetres (the shipped blocks) — or where the
-    object's own is measured (:data:`OWN_PRECISION_DF`) and another object is
-    placed about as precisely (:data:`SIMILAR_PRECISION`): a task may mix
-    objects put down to 2 mm relative to others with objects put on spots to
-    2 cm, and one median precision would judge half of them wrongly. An
-    object alone at its precision is judged by the median: a can put
-    anywhere on the table that happened to land in two regions 80 cm apart
-    is not two places of 8 cm while everything else is placed to 2 mm.
-    """
-    common = _Spread(median, median_df)
-    own: dict[str, _Spread] = {}
-    for obj, spread in tightest.items():
-        confirmed = spread.df >= OWN_PRECISION_DF and any(
-            spread.rms / SIMILAR_PRECISION <= other.rms <= spread.rms * SIMILAR_PRECISION
-            for name, other in tightest.items()
-            if name != obj
-        )
-        own[obj] = spread if confirmed else min(spread, common)
-    return own
-
-
-def _floored(spread: _Spread, least: float) -> _Spread:
-    """``spread`` raised to at least ``least`` — noise-free data still have a scale
-    for ties — and then known exactly (no degrees of freedom to doubt it by)."""
-    return spread if spread.rms >= least else _Spread(least, UNBOUNDED_DF)
-
-
-def _tightest(
-    relative: dict[tuple[str, Kind, str | None], np.ndarray],
-    kind: Kind,
-    settings: StateGenerationSettings,
-) -> dict[str, _Spread]:
-    """Per object placed at least twice: its RMS spread relative to the candidate
-    that explains it best (``relative`` holds the candidates), and its degrees
-    of freedom, (placements − 1) × the axes they vary along. For positions a
-    few well-separated places count too (:func:`_grouped_spreads`): an object
-    put in one of two slots 15 cm apart scatters by its teacher's precision
-    within each slot, not by 75 mm — which, as the median of three objects,
-    was once the precision and merged the slots."""
-    by_object: dict[str, list[np.ndarray]] = {}
-    for (obj, what, _), values in relative.items():
-        if what == kind and len(values) >= 2:
-            by_object.setdefault(obj, []).append(values)
-    best: dict[str, _Spread] = {}
-    for obj, candidates in by_object.items():
-        for values in candidates:
-            space: Space = PositionSpace(values) if kind == "position" else RotationSpace(values)
-            _, spread = space.stats(np.arange(len(values)))
-            found = _Spread(math.sqrt(spread), (len(values) - 1) * space.dims)
-            if obj not in best or found < best[obj]:
-                best[obj] = found
-        if kind == "position":
-            grouped = _grouped_spreads(np.stack(candidates), settings)
-            if grouped is not None and grouped < best[obj]:
-                best[obj] = grouped
-    return best
-
-
-GROUP_GAP = 4.0
-"""Groups of placements count as separate places in the precision estimate only
-where every two centres lie at least this many pooled RMS spreads apart (and at
-least ``position_separation``): two slots 11 cm apart, each scattered by 2 cm,
-do; a continuum cut by K-means does not (neighbouring pieces of a uniform
-stretch lie about 3.5 RMS apart)."""
-GROUP_MAX_PLACES = 3
-"""At most this many places per object in the precision estimate."""
-
-
-def _grouped_spreads(candidates: np.ndarray, settings: StateGenerationSettings) -> _Spread | None:
-    """The lowest pooled within-group RMS spread of one object's positions ``(B, n,
-    3)`` (relative to B candidates) split into 2..:data:`GROUP_MAX_PLACES`
-    groups of at least two placements whose centres lie :data:`GROUP_GAP`
-    spreads apart and that one cluster explains far worse (an F test at
-    ``CONSISTENCY_LEVEL``); ``None`` where no split qualifies. Degrees of freedom:
-    (placements − groups) × varying axes. One batched K-means per group count."""
-    _, n, _ = candidates.shape
-    best: _Spread | None = None
-    generator = np.random.default_rng(settings.seed)
-    for c in range(2, min(GROUP_MAX_PLACES, n // 2) + 1):
-        labels = kmeans_batch(candidates, c, settings.n_init, 100, generator)
-        for values, label in zip(candidates, labels, strict=True):
-            sizes = np.bincount(label, minlength=c)
-            if sizes.min() < 2:
-                continue
-            space = PositionSpace(values)
-            centres, spreads = cluster_stats(space, label, c)
-            pooled = sum((k - 1) * v for k, v in zip(sizes, spreads, strict=True)) / (n - c)
-            gap = max(settings.position_separation, GROUP_GAP * math.sqrt(pooled))
-            if closest_pair(space.distance, centres) < gap:
-                continue
-            # ... and only where the groups explain the placements far better than
-            # one cluster does (an F test at 0.1 %): four or six placements of one
-            # spot fall into two tight-looking groups often enough by chance.
-            df_one, df_groups = (n - 1) * space.dims, (n - c) * space.dims
-            if spread_of(values) < f_critical(CONSISTENCY_LEVEL, df_one, df_groups) * pooled:
-                continue
-            found = _Spread(math.sqrt(pooled), df_groups)
-            if best is None or found < best:
-                best = found
-    return best
-
-
-def _score_references(
-    obj: str,
-    kind: Kind,
-    candidates: list[str | None],
-    settings: StateGenerationSettings,
-    precision: _Spread,
-    relative: dict[tuple[str, Kind, str | None], np.ndarray],
-) -> list[ReferenceScore]:
-    """Eq. (2) for every candidate reference that is defined at every placement."""
-    separation = (
-        settings.position_separation if kind == "position" else settings.orientation_separation
-    )
-    references: list[str | None] = []
-    spaces: list[Space] = []
-    for reference in candidates:
-        values = relative.get((obj, kind, reference))
-        if values is None:
-            continue
-        references.append(reference)
-        spaces.append(PositionSpace(values) if kind == "position" else RotationSpace(values))
-    if not spaces:
-        return []
-    clusterings = select_clusterings(
-        spaces,
-        separation=separation,
-        noise=precision.rms,
-        noise_df=precision.df,
-        n_init=settings.n_init,
-        seed=settings.seed,
-        max_clusters=settings.max_clusters,
-        significance=settings.significance,
-    )
-    return [
-        ReferenceScore(obj, kind, reference, clustering, _mean_distance(kind, space.values))
-        for reference, space, clustering in zip(references, spaces, clusterings, strict=True)
-    ]
-
-
-def _relative_values(
-    kind: Kind, obj: str, own: list[_Placement], reference: str | None, world: DemonstrationWorld
-) -> tuple[np.ndarray | None, bool]:
-    """``obj``'s placements relative to ``reference`` (docs/learning.md): positions in the
-    reference's frame where it has an orientation at every placement (turned
-    back by its orientation, taken modulo its symmetry), else in world axes;
-    orientations ``R_ref⁻¹·R_obj``, modulo ``obj``'s own symmetry. Returns the
-    values (``None`` where the reference is not defined at every placement)
-    and whether positions are in the reference's frame."""
-    ref_poses = [None if reference is None else world.pose(p.demo, reference, p.step) for p in own]
-    if reference is not None and any(r is None for r in ref_poses):
-        return None, False
-    ref_quats: np.ndarray | None = None
-    oriented = all(r is not None and r.orientation is not None for r in ref_poses)
-    if reference is not None and oriented:
-        # The reference's frame modulo its symmetry: in every demonstration the
-        # copy in which the object's placements agree (a kit tray at 10° and at
-        # 170° is one frame for what lies on it), for positions and
-        # orientations alike.
-        positions = np.array([p.pose.position for p in own], dtype=float)
-        centres = np.array([r.position for r in ref_poses if r is not None], dtype=float)
-        ref_quats = rotations.frames_agreeing(
-            np.array([r.orientation for r in ref_poses if r is not None], dtype=float),
-            positions - centres,
-            world.yaw_period(reference),
-        )
-    if kind == "position":
-        positions = np.array([p.pose.position for p in own], dtype=float)
-        if reference is None:
-            return positions, False
-        offsets = positions - np.array([r.position for r in ref_poses if r is not None])
-        if ref_quats is None:
-            return np.asarray(offsets, dtype=float), False
-        return rotations.rotate_vectors(rotations.quat_inverse(ref_quats), offsets), True
-    quats = np.array([p.pose.orientation for p in own], dtype=float)
-    if reference is not None:
-        if ref_quats is None:
-            return None, False
-        quats = rotations.relative_quats(ref_quats, quats)
-    return world.own_symmetry(obj, quats), False
-
-
-def _mean_distance(kind: Kind, values: np.ndarray) -> float:
-    if kind == "position":
-        return float(np.linalg.norm(values, axis=1).mean())
-    return float(np.degrees(2.0 * np.arccos(np.clip(np.abs(values[:, 3]), 0.0, 1.0))).mean())
-
-
-@dataclass(frozen=True, slots=True)
-class _Chooser:
-    """One object's reference choice for one kind (docs/learning.md).
-
-    First the object's **own** choice among the candidates available at every
-    one of its placements (absolute, landmarks, objects always placed before
-    it — a choice that adds no state): the best-scoring one and those it does
-    not outscore (:func:`~demoplan.learning.clustering.outscores`) are tied,
-    and the tie goes to fewer clusters, then to absolute, then to the nearest
-    reference (a nut to the peg it sits on, not to the other peg that moves
-    with it). A placement takes another reference — one available only at its
-    step — only where that reference outscores the object's own choice and
-    the best of those (:meth:`at`). So the fork is placed relative to the
-    glass only where the glass stands already *and* explains it better than
-    the plate does everywhere (Table II, state J).
-    """
-
-    scores: list[ReferenceScore]
-    own: ReferenceScore
-    best: ReferenceScore
-    everywhere: set[str]
-    noise: _Spread
-    significance: float
-
-    @classmethod
-    def of(
-        cls,
-        scores: list[ReferenceScore],
-        everywhere: set[str],
-        noise: _Spread,
-        significance: float,
-    ) -> _Chooser:
-        steady = [s for s in scores if s.reference is None or s.reference in everywhere]
-        best = min(steady, key=lambda s: s.clustering.score)
-        own = min(
-            (s for s in steady if not _beats(best, s, noise, significance)),
-            key=lambda s: (
-                s.clustering.n_clusters,
-                s.reference is not None,
-                s.distance,
-                s.reference or "",
-            ),
-        )
-        return cls(scores, own, best, everywhere, noise, significance)
-
-    def at(self, placement: _Placement, world: DemonstrationWorld) -> ReferenceScore:
-        """The reference of one placement: the object's own choice, or a reference
-        available only at its step that outscores it (the best of those; ties:
-        fewer clusters, then the nearest reference)."""
-        candidates = [
-            s
-            for s in self.scores
-            if s.reference is not None
-            and s.reference not in self.everywhere
-            and world.available(placement.demo, s.reference, placement.step)
-        ]
-        # Bonferroni over the candidates, and at most LOCAL_EVIDENCE of the level;
-        # and never from two placements: their spread can be as small as chance makes it.
-        level = self.significance * min(LOCAL_EVIDENCE, 1.0 / max(1, len(candidates)))
-        if self.significance > 0 and len(self.own.clustering.labels) < 3:
-            return self.own
-        local = [
-            s
-            for s in candidates
-            if _beats(s, self.own, self.noise, level, local=True)
-            and _beats(s, self.best, self.noise, level, local=True)
-        ]
-        if not local:
-            return self.own
-        top = min(local, key=lambda s: s.clustering.score)
-        return min(
-            (s for s in local if not _beats(top, s, self.noise, self.significance)),
-            key=lambda s: (s.clustering.n_clusters, s.distance, s.reference or ""),
-        )
-
-    def following(self, chosen: ReferenceScore, reference: str | None) -> ReferenceScore | None:
-        """An orientation that follows its position's ``reference`` (docs/learning.md,
-        *A thing in a box turns with the box*): where the orientation's own
-        choice ``chosen`` is a tie within the precision that ``reference`` is part
-        of — neither the best-scoring reference nor ``chosen`` outscores it,
-        with no more clusters — the orientation is taken relative to the same
-        reference as the position. ``None`` where the data decided (the
-        reference turned between demonstrations and explains the orientations
-        worse), where the choice was a reference available at this step only,
-        or where ``reference`` has no orientation to follow."""
-        if reference is None or chosen is not self.own or chosen.reference == reference:
-            return None
-        same = next((s for s in self.scores if s.reference == reference), None)
-        if (
-            same is None
-            or same.clustering.n_clusters > chosen.clustering.n_clusters
-            or _beats(self.best, same, self.noise, self.significance)
-            or _beats(chosen, same, self.noise, self.significance)
-        ):
-            return None
-        return same
-
-    def follow_note(self, follows: ReferenceScore) -> str:
-        """The words for an orientation that :meth:`following` took from its position's
-        reference: *never seen turned* where the world explains the orientations
-        as well to within the precision (the reference kept its yaw as far as the
-        precision tells); *not told apart from the world* where it explains them
-        worse by more than the precision but not by the F test (too few
-        demonstrations: two need a 19-fold variance); else a tie with another
-        reference."""
-        absolute = next((s for s in self.scores if s.reference is None), None)
-        if absolute is not None and _tied(absolute, follows, self.noise, self.significance):
-            if abs(absolute.rms - follows.rms) < self.noise.rms:
-                return f"{FOLLOWS_NOTE}{follows.reference}: never seen turned"
-            return (
-                f"{FOLLOWS_NOTE}{follows.reference}: not told apart from the world by "
-                "these demonstrations"
-            )
-        return f"{FOLLOWS_NOTE}{follows.reference}: a tie within the precision"
-
-
-def _tied(a: ReferenceScore, b: ReferenceScore, noise: _Spread, significance: float) -> bool:
-    """Neither of two references outscores the other (:func:`_beats`)."""
-    return not _beats(a, b, noise, significance) and not _beats(b, a, noise, significance)
-
-
-def _beats(
-    better: ReferenceScore,
-    worse: ReferenceScore,
-    noise: _Spread,
-    significance: float,
-    *,
-    local: bool = False,
-) -> bool:
-    """:func:`~demoplan.learning.clustering.outscores` for two references; a
-    ``local`` one (available at some placements only, adding states there)
-    must win by the F test against the other reference alone — it never wins
-    because the other one scatters beyond the precision: one of many such
-    candidates explains an outlier better by chance."""
-    return outscores(
-        (worse.clustering.score, worse.clustering.df),
-        (better.clustering.score, better.clustering.df),
-        noise=noise.rms,
-        significance=significance,
-        noise_df=noise.df,
-        against_precision=not local,
-    )
-
-
-def _margins(
-    kind: Kind,
-    chosen: ReferenceScore,
-    scores: list[ReferenceScore],
-    placement: _Placement,
-    world: DemonstrationWorld,
-    precision: float,
-) -> dict[str, float]:
-    """How far each decision of one placement was from going the other way, in units
-    of the precision: the runner-up reference's RMS spread minus the chosen one's
-    (negative: a lower-spread reference was set aside as a tie, for fewer
-    states), and the nearest other cluster count's minus the chosen count's."""
-    out: dict[str, float] = {}
-    others = [
-        s.rms
-        for s in scores
-        if s is not chosen
-        and (s.reference is None or world.available(placement.demo, s.reference, placement.step))
-    ]
-    if others:
-        out[f"{kind} reference"] = (min(others) - chosen.rms) / precision
-    counts = [
-        math.sqrt(score)
-        for c, score in chosen.clustering.tried
-        if score is not None and c != chosen.clustering.n_clusters
-    ]
-    if counts:
-        out[f"{kind} clusters"] = (min(counts) - chosen.rms) / precision
-    return out
-
-
-def _position(values: np.ndarray, reference: str | None, in_frame: bool) -> StatePosition:
-    """A state's mean relative position and its spread (members only)."""
-    mean, spread = PositionSpace(values).stats(np.arange(len(values)))
-    x, y, z = (float(v) for v in mean)
-    return StatePosition(
-        reference=reference, value=(x, y, z), spread=spread, in_reference_frame=in_frame
-    )
-
-
-def _orientation(values: np.ndarray | None, reference: str | None) -> StateOrientation:
-    """A state's mean relative orientation and its spread; unknown when ``values`` is None."""
-    if values is None:
-        return StateOrientation(reference=None, value=None, spread=0.0)
-    mean, spread = RotationSpace(values).stats(np.arange(len(values)))
-    qx, qy, qz, qw = mean
-    return StateOrientation(reference=reference, value=(qx, qy, qz, qw), spread=spread)

@@ -621,6 +621,110 @@ def _hough_starts(
     return found
 
 
+_Square = tuple[np.ndarray, float, float]  # (u, v, θ, s) on its crop, coverage, RMS misfit
+
+
+@dataclass(frozen=True, slots=True)
+class _SquareSearch:
+    """What fitting squares in any region of one image needs."""
+
+    image_shape: tuple[int, ...]
+    lightness: np.ndarray
+    side_px: tuple[float, float]
+    min_area: float
+    settings: PerceptionSettings
+    px_per_m: float
+
+
+def _fit_from(
+    alpha: np.ndarray, start: Hypothesis, factor: int, coarse: np.ndarray
+) -> tuple[np.ndarray, float, float, float]:
+    """:func:`_fit` from a Hough start (on a mask shrunk by ``factor``: refined at full size)."""
+    if factor == 1:
+        return _fit(alpha, start)
+    params, *_ = _fit(coarse, start, good_enough=0.15, tolerance=1e-4)
+    u, v, theta, side = params
+    full = Hypothesis(u * factor, v * factor, theta, side * factor, start.votes)
+    return _fit(alpha, full, FIT_BAND, turns=(0.0,))
+
+
+def _why_no_block(
+    search: _SquareSearch,
+    region: ColourRegion,
+    alpha: np.ndarray,
+    fit: tuple[np.ndarray, float, float, float],
+) -> tuple[str, str] | None:
+    """Why a fitted square is no block, in order: :func:`_failure`, a region running on
+    along the image's border, no seam parting it from the rest; ``None``: it is one."""
+    params, coverage, rms, free = fit
+    shape, settings, side_px = search.image_shape, search.settings, search.side_px
+    beyond = _beyond_image(params, region.offset, alpha.shape, shape)
+    why = _failure(params, coverage, rms, free, side_px, settings, search.px_per_m, beyond)
+    if why is None and _runs_on_along_border(region.alpha, params, region.offset, shape):
+        why = "cut by the border", "its region runs on along the image's border"
+    if why is None:
+        seamless = seamless_side(search.lightness, alpha, region.offset, params)
+        why = None if seamless is None else ("no seam", seamless)
+    return why
+
+
+def _next_square(
+    search: _SquareSearch, region: ColourRegion, alpha: np.ndarray, where: str
+) -> tuple[_Square | None, list[tuple[str, str]]]:
+    """The first Hough candidate in ``alpha`` fitting a block (or ``None``); why others did not."""
+    # a region of area A holds squares no larger than √A
+    largest = min(search.side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
+    sides = (search.side_px[0], max(search.side_px[0], largest))
+    base = max(1, int(search.side_px[0] // HOUGH_SIDE_PX))
+    failures: list[tuple[str, str]] = []
+    for start, factor, coarse in _hough_starts(alpha, sides, base, where):
+        check_time(where)
+        fit = _fit_from(alpha, start, factor, coarse)
+        why = _why_no_block(search, region, alpha, fit)
+        if why is None:
+            return fit[:3], failures
+        failures.append(why)
+    return None, failures
+
+
+def _without_square(alpha: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """``alpha`` with the square ``params``, grown by 3 px, taken out."""
+    height, width = alpha.shape
+    uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
+    grown = params.copy()
+    grown[3] += 3.0
+    return alpha * (1.0 - _square_alpha(grown, uu, vv))
+
+
+def _squares_in_region(
+    search: _SquareSearch, region: ColourRegion, where: str, parts: list[RejectedPart] | None
+) -> list[_Square]:
+    """The blocks' squares in a colour region, each taken out before the next is sought;
+    none when they explain too little of it. What is left unfit goes to ``parts``."""
+    alpha = region.alpha.copy()
+    squares: list[_Square] = []
+    for attempt in range(8):
+        if (alpha > 0.5).sum() < search.min_area:
+            if parts is not None and attempt == 0:  # its side faces left too little
+                small = ("too small", f"{int((alpha > 0.5).sum())} px of top face")
+                parts += _unfit(alpha, region, [small], search.min_area)
+            break
+        square, failures = _next_square(search, region, alpha, where)
+        if square is None:
+            if parts is not None:
+                parts += _unfit(alpha, region, failures, search.min_area)
+            break
+        squares.append(square)
+        alpha = _without_square(alpha, square[0])
+    explained = _explained_share(region.alpha, [params for params, _, _ in squares])
+    if explained < MIN_EXPLAINED_SHARE:
+        if parts is not None:
+            why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
+            parts += _unfit(region.alpha, region, [why], search.min_area)
+        return []
+    return squares
+
+
 def detect_blocks(
     image: np.ndarray,
     camera: Camera,
@@ -641,7 +745,7 @@ def detect_blocks(
         largest_block=side_px[1] ** 2,
     )
     lightness = image_lightness(image)
-    base = max(1, int(side_px[0] // HOUGH_SIDE_PX))
+    search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
         # a budget set by the caller (demoplan.budget), if any, read before every
@@ -653,65 +757,8 @@ def detect_blocks(
         )
         check_time(where)
         report_progress("colour regions", done, len(regions))
-        alpha = region.alpha.copy()
-        first_found = len(found)
-        for attempt in range(8):
-            if (alpha > 0.5).sum() < min_area:
-                if parts is not None and attempt == 0:  # its side faces left too little
-                    small = ("too small", f"{int((alpha > 0.5).sum())} px of top face")
-                    parts += _unfit(alpha, region, [small], min_area)
-                break
-            # a region of area A holds squares no larger than √A
-            largest = min(side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
-            accepted = None
-            failures: list[tuple[str, str]] = []
-            sides = (side_px[0], max(side_px[0], largest))
-            for start, factor, coarse in _hough_starts(alpha, sides, base, where):
-                check_time(where)
-                if factor == 1:
-                    params, coverage, rms, free = _fit(alpha, start)
-                else:  # a rough fit where the Hough transform ran, refined at full resolution
-                    params, *_ = _fit(coarse, start, good_enough=0.15, tolerance=1e-4)
-                    full = Hypothesis(
-                        params[0] * factor,
-                        params[1] * factor,
-                        params[2],
-                        params[3] * factor,
-                        start.votes,
-                    )
-                    params, coverage, rms, free = _fit(alpha, full, FIT_BAND, turns=(0.0,))
-                beyond = _beyond_image(params, region.offset, alpha.shape, image.shape)
-                why = _failure(
-                    params, coverage, rms, free, side_px, settings, camera.px_per_m, beyond
-                )
-                if why is None and _runs_on_along_border(
-                    region.alpha, params, region.offset, image.shape
-                ):
-                    why = "cut by the border", "its region runs on along the image's border"
-                if why is None:
-                    seamless = seamless_side(lightness, alpha, region.offset, params)
-                    why = None if seamless is None else ("no seam", seamless)
-                if why is None:
-                    accepted = params, coverage, rms
-                    break
-                failures.append(why)
-            if accepted is None:
-                if parts is not None:
-                    parts += _unfit(alpha, region, failures, min_area)
-                break
-            params, coverage, rms = accepted
-            found.append((region, params, coverage, rms))
-            height, width = alpha.shape
-            uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
-            grown = params.copy()
-            grown[3] += 3.0
-            alpha = alpha * (1.0 - _square_alpha(grown, uu, vv))
-        explained = _explained_share(region.alpha, [f[1] for f in found[first_found:]])
-        if explained < MIN_EXPLAINED_SHARE:
-            del found[first_found:]
-            if parts is not None:
-                why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
-                parts += _unfit(region.alpha, region, [why], min_area)
+        squares = _squares_in_region(search, region, where, parts)
+        found += [(region, params, coverage, rms) for params, coverage, rms in squares]
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])

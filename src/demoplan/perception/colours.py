@@ -41,6 +41,7 @@ from scipy.spatial.distance import cdist
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
+from demoplan.perception.masks import CROSS, dilate, erode, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
 
 __all__ = [
@@ -175,7 +176,7 @@ class _Recorder:
         dim = lightness[core] < np.median(lightness[core])
         shade[core] = ((classes == -2) | (classes == -3)) & dim
         why = "dark or grey in a coloured region"
-        self(_dilate(shade, 3), rows, cols, "side face or shadow", why)
+        self(dilate(shade, 3), rows, cols, "side face or shadow", why)
 
     def side_faces(
         self,
@@ -190,7 +191,7 @@ class _Recorder:
             return
         mask = np.zeros_like(core)
         mask[core] = darker
-        self(_dilate(mask, 3), *where, "side face", why, colour)
+        self(dilate(mask, 3), *where, "side face", why, colour)
 
 
 def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
@@ -349,6 +350,152 @@ def _second_tables(
     return found
 
 
+@dataclass(frozen=True, slots=True)
+class _ImageColours:
+    """What the regions of every connected component of an image are found from."""
+
+    image: np.ndarray
+    lab: np.ndarray
+    distinct: np.ndarray
+    threshold: float
+    table: np.ndarray
+    names: list[str]
+    chroma: np.ndarray
+    coloured_image: bool
+    min_area: float
+    record: _Recorder
+
+
+@dataclass(frozen=True, slots=True)
+class _Crop:
+    """A connected component's box (5 px around it): its pixels (RGB, a*b*, L*), its
+    core pixels and the table's colour in a ring around it (RGB, a*b*)."""
+
+    rows: slice
+    cols: slice
+    member: np.ndarray
+    pixels: np.ndarray
+    chroma: np.ndarray
+    lightness: np.ndarray
+    core: np.ndarray
+    ground: np.ndarray
+    ground_ab: np.ndarray
+
+
+# A colour's top face: the colour, its mean RGB, its RGB change from the table, the
+# L* of the top face and of the side faces (None: none seen), its a*b* change.
+_Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray]
+
+
+def _component_crop(
+    c: _ImageColours, labels: np.ndarray, index: int, box: tuple[int, int, int, int]
+) -> _Crop | None:
+    """Component ``index``'s crop, or ``None`` (recorded) when too little of it is
+    clearly coloured."""
+    x, y, w, h = box
+    height, width = labels.shape
+    rows = slice(max(0, y - 5), min(height, y + h + 5))
+    cols = slice(max(0, x - 5), min(width, x + w + 5))
+    member = labels[rows, cols] == index
+    # core: clearly foreground and two pixels in from the region's rim, where
+    # anti-aliased pixels mix the table's colour into the object's
+    core = erode(member, 2) & (c.distinct[rows, cols] > c.threshold)
+    if core.sum() < c.min_area:
+        c.record(member, rows, cols, "thin or faint", f"{int(core.sum())} clearly coloured px")
+        return None
+    pixels = c.image[rows, cols].astype(float)
+    filled = fill_holes(member)
+    ring = dilate(filled, 4) & ~dilate(filled, 1)
+    ground = np.median(pixels[ring], axis=0) if ring.any() else c.table
+    chroma = c.lab[rows, cols, 1:]
+    ground_ab = np.median(chroma[ring], axis=0) if ring.any() else np.zeros(2)
+    lightness = c.lab[rows, cols, 0]
+    return _Crop(rows, cols, member, pixels, chroma, lightness, core, ground, ground_ab)
+
+
+def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
+    """The colours of a component's core pixels that may be a block's (each with
+    its core pixels); shades and glare left out."""
+    classified = _classify(k.pixels[k.core], c.chroma)
+    classes = _unnamed_split(classified, k.chroma[k.core], c.min_area)
+    if c.coloured_image:
+        c.record.shade(classes, k.core, k.lightness, k.rows, k.cols)
+        classes[_glare(classes, k.lightness, k.core, c.min_area)] = -3
+    classes = _smoothed_classes(classes, k.core)
+    present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
+    return _without_rims(present, k.core, c.min_area)
+
+
+def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]) -> list[_Face]:
+    """Each colour's top face; its side faces (darker by L*) are recorded as dropped."""
+    core_pixels, core_chroma = k.pixels[k.core], k.chroma[k.core]
+    core_offsets, core_lightness = core_pixels - k.ground, k.lightness[k.core]
+    faces: list[_Face] = []
+    for colour, chosen in _one_colour_merged(present, core_chroma):
+        top_face, side_faces = _lightness_modes(core_lightness[chosen])
+        on_top = chosen.copy()
+        if side_faces is not None:
+            on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
+            why = f"L* {side_faces:.0f} under {top_face:.0f}"
+            c.record.side_faces(k.core, chosen & ~on_top, (k.rows, k.cols), why, colour)
+        change = core_offsets[on_top].mean(axis=0)
+        mean_rgb = core_pixels[on_top].mean(axis=0)
+        change_ab = (core_chroma[on_top] - k.ground_ab).mean(axis=0)
+        faces.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
+    return faces
+
+
+def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -> np.ndarray:
+    """How much each pixel of the crop is ``face``'s (0–1): its colour change from
+    the table against the face's, in chroma too, and its L* from side to top face."""
+    _, _, change, top_face, side_faces, change_ab = face
+    projection = ((k.pixels - k.ground) @ change) / max(float(change @ change), 1e-9)
+    alpha: np.ndarray = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
+    if c.coloured_image:
+        # and in chroma alone: a shadow beside the block darkens the table,
+        # which the RGB projection would take for a part of a dark block
+        chroma_part = ((k.chroma - k.ground_ab) @ change_ab) / max(
+            float(change_ab @ change_ab), 1e-9
+        )
+        chroma_alpha = chroma_part / _full_level(chroma_part[on_class])
+        alpha = np.minimum(alpha, np.clip(chroma_alpha, 0.0, 1.0))
+    if side_faces is not None:
+        ramp = (k.lightness - side_faces) / (top_face - side_faces)
+        alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
+    return alpha
+
+
+def _component_regions(
+    c: _ImageColours, labels: np.ndarray, index: int, box: tuple[int, int, int, int]
+) -> list[ColourRegion]:
+    """The colour regions of one connected component: one per colour with a top face."""
+    k = _component_crop(c, labels, index, box)
+    if k is None:
+        return []
+    present = _block_colours(c, k)
+    if not present:
+        c.record(k.member, k.rows, k.cols, "no block colour", "dark, grey or mixed colours")
+        return []
+    faces = _top_faces(c, k, present)
+    # nearest class, judged on the colour change from the table under each pixel
+    offsets = (k.pixels - k.ground).reshape(-1, 3)
+    nearest = _nearest_class(offsets, [face[2] for face in faces], k.member.shape)
+    grown = dilate(k.member, 1)
+    regions: list[ColourRegion] = []
+    for n, face in enumerate(faces):
+        colour, centre, top_face = face[0], face[1], face[3]
+        on_class = k.core & (nearest == n)
+        alpha = _face_alpha(c, k, face, on_class) * (nearest == n) * grown
+        # enclosed by this class's own clearly coloured pixels: a glint on a red
+        # cube in a row of yellow ones is the red top's, the yellow beside it not
+        glare = _highlights(k.pixels, k.lightness, top_face, centre, on_class, c.min_area)
+        alpha[glare] = 1.0
+        alpha = _without_strands(alpha, c.min_area)
+        rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
+        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha))
+    return regions
+
+
 def colour_regions(
     image: np.ndarray,
     *,
@@ -366,7 +513,6 @@ def colour_regions(
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
     distinct, lab, threshold, coloured_image = _distinctness(image)
-    lightness = lab[..., 0]
     record = _Recorder(rejected, min_area)
     if largest_block is not None and coloured_image:
         _second_tables(distinct, lab, threshold, largest_block, record)
@@ -374,89 +520,18 @@ def colour_regions(
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
     names, chroma = _palette(palette)
-    regions: list[ColourRegion] = []
-    height, width = labels.shape
+    colours = _ImageColours(
+        image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
+    )
     areas = stats[1:count, cv2.CC_STAT_AREA]
     if rejected is not None:  # smaller than a block: noise, a speck
         for index in np.flatnonzero(areas < min_area) + 1:
             record.speck(labels, int(index), tuple(int(v) for v in stats[index]))
+    regions: list[ColourRegion] = []
     for index in np.flatnonzero(areas >= min_area) + 1:
         x, y, w, h, _ = (int(value) for value in stats[index])
         check_time(where)
-        rows = slice(max(0, y - 5), min(height, y + h + 5))
-        cols = slice(max(0, x - 5), min(width, x + w + 5))
-        member = labels[rows, cols] == index
-        filled = _fill_holes(member)
-        crop = image[rows, cols].astype(float)
-        far = distinct[rows, cols]
-        # core: clearly foreground and two pixels in from the region's rim, where
-        # anti-aliased pixels mix the table's colour into the object's
-        core = _erode(member, 2) & (far > threshold)
-        if core.sum() < min_area:
-            record(member, rows, cols, "thin or faint", f"{int(core.sum())} clearly coloured px")
-            continue
-        ring = _dilate(filled, 4) & ~_dilate(filled, 1)
-        ground = np.median(crop[ring], axis=0) if ring.any() else table
-        chroma_crop = lab[rows, cols, 1:]
-        ground_ab = np.median(chroma_crop[ring], axis=0) if ring.any() else np.zeros(2)
-        core_pixels = crop[core]
-        classes = _unnamed_split(_classify(core_pixels, chroma), chroma_crop[core], min_area)
-        if coloured_image:
-            record.shade(classes, core, lightness[rows, cols], rows, cols)
-            classes[_glare(classes, lightness[rows, cols], core, min_area)] = -3
-        classes = _smoothed_classes(classes, core)
-        present = _present_classes(classes, names, min_area, coloured_image)
-        present = _without_rims(present, core, min_area)
-        if not present:
-            record(member, rows, cols, "no block colour", "dark, grey or mixed colours")
-            continue
-        offsets = (crop - ground).reshape(-1, 3)
-        core_offsets = core_pixels - ground
-        core_chroma = chroma_crop[core]
-        present = _one_colour_merged(present, core_chroma)
-        core_lightness = lightness[rows, cols][core]
-        classes_found = []
-        for colour, chosen in present:
-            top_face, side_faces = _lightness_modes(core_lightness[chosen])
-            on_top = chosen.copy()
-            if side_faces is not None:
-                on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
-                why = f"L* {side_faces:.0f} under {top_face:.0f}"
-                record.side_faces(core, chosen & ~on_top, (rows, cols), why, colour)
-            change = core_offsets[on_top].mean(axis=0)
-            mean_rgb = core_pixels[on_top].mean(axis=0)
-            change_ab = (core_chroma[on_top] - ground_ab).mean(axis=0)
-            classes_found.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
-        # nearest class, judged on the colour change from the table under each pixel
-        nearest = _nearest_class(offsets, [found[2] for found in classes_found], member.shape)
-        grown = _dilate(member, 1)
-        for k, (colour, centre, c, top_face, side_faces, c_ab) in enumerate(classes_found):
-            on_class = core & (nearest == k)
-            projection = ((crop - ground) @ c) / max(float(c @ c), 1e-9)
-            alpha = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
-            if coloured_image:
-                # and in chroma alone: a shadow beside the block darkens the table,
-                # which the RGB projection would take for a part of a dark block
-                chroma_part = ((chroma_crop - ground_ab) @ c_ab) / max(float(c_ab @ c_ab), 1e-9)
-                chroma_alpha = chroma_part / _full_level(chroma_part[on_class])
-                alpha = np.minimum(alpha, np.clip(chroma_alpha, 0.0, 1.0))
-            if side_faces is not None:
-                ramp = (lightness[rows, cols] - side_faces) / (top_face - side_faces)
-                alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
-            alpha = alpha * (nearest == k) * grown
-            # enclosed by this class's own clearly coloured pixels: a glint on a red
-            # cube in a row of yellow ones is the red top's, the yellow beside it not
-            glare = _highlights(crop, lightness[rows, cols], top_face, centre, on_class, min_area)
-            alpha[glare] = 1.0
-            alpha = _without_strands(alpha, min_area)
-            regions.append(
-                ColourRegion(
-                    colour,
-                    (float(centre[0]), float(centre[1]), float(centre[2])),
-                    (rows.start, cols.start),
-                    alpha,
-                )
-            )
+        regions += _component_regions(colours, labels, int(index), (x, y, w, h))
     return regions, table
 
 
@@ -476,8 +551,8 @@ def _highlights(
     tinted, beside a dark or saturated block), and holes in those smaller than a
     block (a marker drawn on the block, a glint's white centre)."""
     whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
-    enclosed = _fill_holes(core)
-    glare: np.ndarray = (whiter & enclosed) | _small_parts(enclosed & ~core, min_area)
+    enclosed = fill_holes(core)
+    glare: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
     return glare
 
 
@@ -550,8 +625,8 @@ def _without_strands(alpha: np.ndarray, min_area: float) -> np.ndarray:
     if np.array_equal(kept, mask):
         return alpha
     for _ in range(steps + 1):
-        kept = cv2.bitwise_and(cv2.dilate(kept, _CROSS), mask)
-    kept = cv2.dilate(kept, _CROSS, iterations=2)
+        kept = cv2.bitwise_and(cv2.dilate(kept, CROSS), mask)
+    kept = cv2.dilate(kept, CROSS, iterations=2)
     trimmed: np.ndarray = alpha * kept
     return trimmed
 
@@ -653,7 +728,7 @@ def _without_rims(
     for colour, chosen in present:
         mask = np.zeros_like(core)
         mask[core] = chosen
-        if _erode(mask, steps).sum() >= min_area / 4:
+        if erode(mask, steps).sum() >= min_area / 4:
             faces.append((colour, chosen))
     return faces or [max(present, key=lambda found: int(found[1].sum()))]
 
@@ -681,48 +756,6 @@ def _nearest_class(
     )
     nearest: np.ndarray = np.argmin(smoothed, axis=-1)
     return nearest
-
-
-_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
-
-
-def _erode(mask: np.ndarray, steps: int) -> np.ndarray:
-    """``mask`` eroded ``steps`` times by the 4-neighbour cross (outside is empty),
-    as ``scipy.ndimage.binary_erosion(mask, iterations=steps)``, with OpenCV."""
-    eroded = cv2.erode(
-        mask.astype(np.uint8),
-        _CROSS,
-        iterations=steps,
-        borderType=cv2.BORDER_CONSTANT,
-        borderValue=0,
-    )
-    return np.asarray(eroded, dtype=bool)
-
-
-def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
-    """``mask`` dilated ``steps`` times by the 4-neighbour cross, with OpenCV."""
-    return np.asarray(cv2.dilate(mask.astype(np.uint8), _CROSS, iterations=steps), dtype=bool)
-
-
-def _small_parts(mask: np.ndarray, min_area: float) -> np.ndarray:
-    """The connected parts of ``mask`` smaller than ``min_area`` pixels."""
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
-    small = stats[:, cv2.CC_STAT_AREA] < min_area
-    small[0] = False
-    parts: np.ndarray = small[labels]
-    return parts
-
-
-def _fill_holes(mask: np.ndarray) -> np.ndarray:
-    """``mask`` with its holes filled: the parts of its outside that do not reach the
-    crop's border (4-connected, as ``scipy.ndimage.binary_fill_holes``)."""
-    count, labels = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)
-    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-    enclosed = np.ones(count, dtype=bool)
-    enclosed[border] = False
-    enclosed[0] = False  # the mask itself
-    filled: np.ndarray = mask | enclosed[labels]
-    return filled
 
 
 def _glare(
