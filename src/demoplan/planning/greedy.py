@@ -296,12 +296,7 @@ def _without(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
     if target == source:  # the next move would bring it back: drop both
         rest = rest[:following] + rest[following + 1 :]
         return rest if valid_moves(c, rest) else None
-    for grasp in c.grasps_of[obj]:
-        patched = list(rest)
-        patched[following] = (obj, source, target, grasp)
-        if valid_moves(c, patched):
-            return patched
-    return None
+    return _with_move(c, rest, following, (obj, source, target))
 
 
 def _sooner(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
@@ -317,8 +312,17 @@ def _sooner(c: Compiled, plan: list[Move], index: int) -> list[Move] | None:
     if target == source:
         return None
     rest = plan[:following] + plan[following + 1 :]
+    return _with_move(c, rest, index, (obj, source, target))
+
+
+def _with_move(
+    c: Compiled, plan: list[Move], index: int, move: tuple[int, int, int]
+) -> list[Move] | None:
+    """``plan`` with move ``index`` replaced by ``move`` (object, source,
+    target) with the first of its object's grasps that keeps the plan valid."""
+    obj, source, target = move
     for grasp in c.grasps_of[obj]:
-        patched = list(rest)
+        patched = list(plan)
         patched[index] = (obj, source, target, grasp)
         if valid_moves(c, patched):
             return patched
