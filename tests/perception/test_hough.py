@@ -70,6 +70,34 @@ def test_the_vote_is_the_same_one_side_at_a_time(
     assert abs(best.side - side) <= 2 * hough.S_BIN
 
 
+@settings(max_examples=10, deadline=None)
+@given(squares, st.integers(1, 400), st.integers(1, 400))
+def test_the_empty_part_of_a_crop_neither_changes_the_vote_nor_costs_bins(
+    square: tuple[float, float, float, float], above: int, right: int
+) -> None:
+    """A square's mask with empty rows added above it and columns to its right (its
+    pixels keep their coordinates, counted from the bottom-left): the same
+    hypotheses, votes and all, from an accumulator of as many bins — only the
+    window the votes fall in is filled (a region's crop is mostly empty when its
+    outline is a ring or a thin L round the table)."""
+    mask = square_mask(*square, shape=(90, 110))
+    padded = np.pad(mask, ((above, 0), (0, right)))
+    assert hough_squares(padded, (20.0, 40.0)) == hough_squares(mask, (20.0, 40.0))
+    bins = []
+    for crop in (mask, padded):
+        u, v, nu, nv, g = hough.edge_pixels(crop)
+        theta_bin = np.floor((np.degrees(np.arctan2(nv, nu)) % 90.0) / hough.THETA_BIN + 0.5)
+        height, width = crop.shape
+        shape = (30, -(-height // 2), -(-width // 2))
+        steps = [np.arange(-15.0 + 1.0, 15.0, 2.0)]
+        sides = np.array([30.0])
+        accumulator, corner = hough._votes(
+            (u, v, nu, nv, g), theta_bin.astype(np.intp) % 30, sides, steps, shape
+        )
+        bins.append((accumulator.shape, corner))
+    assert bins[0] == bins[1]
+
+
 def test_no_edges_no_hypotheses() -> None:
     assert hough_squares(np.zeros((40, 40)), (20.0, 30.0)) == []
     assert hough_squares(np.ones((40, 40)), (20.0, 30.0)) == []

@@ -13,6 +13,7 @@ keeps those the mask bears out.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -89,15 +90,21 @@ def hough_squares(
     theta_bin = np.floor(theta / THETA_BIN + 0.5).astype(np.intp) % n_theta
     # the centres an edge point votes for, for side s: every 2 px along the edge within s/2
     steps = [np.arange(-s / 2 + XY_BIN / 2, s / 2, XY_BIN) for s in sides]
-    per_side = max((n_theta + 2) * (shape[1] + 1) * shape[2], u.size * max(map(len, steps)))
+    reach = _reach((u, v, nu, nv), (float(sides[0]), float(sides[-1])), shape)
+    window_cells = (reach[1] - reach[0]) * (reach[3] - reach[2])
+    per_side = max((n_theta + 2) * window_cells, u.size * max(map(len, steps)))
     chunk = max(1, MAX_CELLS // per_side)
     found: list[tuple[np.ndarray, ...]] = []
     for first in range(0, sides.size, chunk):
         if check is not None:
             check()
         block = slice(first, first + chunk)
-        accumulator = _votes((u, v, nu, nv, g), theta_bin, sides[block], steps[block], shape)
+        accumulator, (row0, col0) = _votes(
+            (u, v, nu, nv, g), theta_bin, sides[block], steps[block], shape
+        )
         votes, rows, cols, thetas = _side_maxima(accumulator, 10 * peaks)
+        rows += row0
+        cols += col0
         side = np.broadcast_to(sides[block, None], votes.shape)
         found.append(tuple(a.ravel() for a in (votes, rows, cols, thetas, side)))
     votes, rows, cols, thetas, side = (np.concatenate(a) for a in zip(*found, strict=True))
@@ -127,17 +134,48 @@ def hough_squares(
     return best
 
 
+def _reach(
+    edges: tuple[np.ndarray, ...], sides: tuple[float, float], shape: tuple[int, int, int]
+) -> tuple[int, int, int, int]:
+    """The centre bins (first and past-the-last row, then column) that the edge points
+    (u, v, n_u, n_v) can vote for with a side in ``sides``, and their neighbours,
+    within the crop's ``shape``: for side s a point's centres run along the segment
+    s/2 inside, s/2 either way, so those for every side lie between the segments of
+    the smallest and the largest side. An estimate (the block's own votes set
+    its window, :func:`_votes`), which sizes the blocks of sides."""
+    u, v, nu, nv = edges
+    corners_u, corners_v = [], []
+    for side in sides:
+        for along in (-side / 2, side / 2):
+            corners_u.append(u - side / 2 * nu - along * nv)
+            corners_v.append(v - side / 2 * nv + along * nu)
+    all_u, all_v = np.concatenate(corners_u), np.concatenate(corners_v)
+    _, n_y, n_x = shape
+    row0 = min(n_y, max(0, math.floor(float(all_v.min()) / XY_BIN) - 1))
+    row1 = max(row0, min(n_y, math.floor(float(all_v.max()) / XY_BIN) + 2))
+    col0 = min(n_x, max(0, math.floor(float(all_u.min()) / XY_BIN) - 1))
+    col1 = max(col0, min(n_x, math.floor(float(all_u.max()) / XY_BIN) + 2))
+    return row0, row1, col0, col1
+
+
 def _votes(
     edges: tuple[np.ndarray, ...],
     theta_bin: np.ndarray,
     sides: np.ndarray,
     steps: list[np.ndarray],
     shape: tuple[int, int, int],
-) -> np.ndarray:
+) -> tuple[np.ndarray, tuple[int, int]]:
     """The accumulator over (s, θ, y, x) for ``sides``, its votes shared with the
     neighbouring θ and centre bins: edge point (u, v) with outward normal n votes,
     for each side s, for the centres s/2 inside it along −n and ``steps`` along
-    the edge, weighted by its gradient ``g``."""
+    the edge, weighted by its gradient ``g``.
+
+    Only the window of centre bins the votes fall in, and one bin around it, is
+    filled and filtered — every bin outside it gets no share of any vote — and
+    returned with its first row and column: a region whose outline is a small part
+    of its crop (a ring, a thin L round the table, a few blocks far apart) costs
+    its votes' reach, not its crop's area. The values are those of the whole
+    crop's accumulator, bin for bin."""
     u, v, nu, nv, g = edges
     n_theta, n_y, n_x = shape
     # (edge, (side, step)) pairs; in bins (halving is exact: these are the
@@ -150,13 +188,20 @@ def _votes(
     cy = ((v[:, None] - half[None, :] * nv[:, None]) / XY_BIN)[:, side_of]
     cy += along[None, :] * nu[:, None]
     inside = (cx >= 0) & (cx < n_x) & (cy >= 0) & (cy < n_y)
+    col = cx[inside].astype(np.intp)
+    row = cy[inside].astype(np.intp)
+    if col.size == 0:  # no centre inside the crop: one empty bin per side
+        return np.zeros((sides.size, n_theta, 1, 1), dtype=np.float32), (0, 0)
+    row0, col0 = max(0, int(row.min()) - 1), max(0, int(col.min()) - 1)
+    n_y = min(n_y, int(row.max()) + 2) - row0
+    n_x = min(n_x, int(col.max()) + 2) - col0
     # bins (s, θ, y, x) with a θ bin before and after (wrapped copies) and an empty
     # row after each θ slice, so that two 2-D filters do the sharing below
     slice_of = side_of[None, :] * (n_theta + 2) + theta_bin[:, None] + 1
     index = slice_of[inside] * (n_y + 1)
-    index += cy[inside].astype(np.intp)
+    index += row - row0
     index *= n_x
-    index += cx[inside].astype(np.intp)
+    index += col - col0
     weight = np.broadcast_to(g[:, None], inside.shape)[inside]
     cells = sides.size * (n_theta + 2) * (n_y + 1) * n_x
     # filtered in single precision: half the memory to stream through (the votes are
@@ -177,12 +222,13 @@ def _votes(
     # the θ slices apart)
     rows = cv2.sepFilter2D(by_theta.reshape(-1, n_x), cv2.CV_32F, share, share, borderType=border)
     shared: np.ndarray = np.asarray(rows).reshape(accumulator.shape)[:, 1 : n_theta + 1, :n_y]
-    return shared
+    return shared, (row0, col0)
 
 
 def _side_maxima(accumulator: np.ndarray, best: int) -> tuple[np.ndarray, ...]:
     """Per side, the ``best`` strongest centres: their votes, rows and columns (bins,
-    from the bottom) and their best θ bin."""
+    from the bottom) and their best θ bin; strongest first, equal votes in the order
+    of their rows and columns (the same whatever window of bins was filled)."""
     n_sides, _, n_y, n_x = accumulator.shape
     strongest = accumulator.max(axis=1).reshape(n_sides, -1)
     best = min(best, n_y * n_x)
@@ -190,7 +236,16 @@ def _side_maxima(accumulator: np.ndarray, best: int) -> tuple[np.ndarray, ...]:
     # near the end of an array of mostly equal values (a region's empty bins) is
     # NumPy's introselect's slow case, ten times slower on an accumulator
     top = np.argpartition(-strongest, best - 1, axis=1)[:, :best]
+    least = np.take_along_axis(strongest, top, axis=1).min(axis=1)
+    for tied in np.flatnonzero(np.count_nonzero(strongest >= least[:, None], axis=1) > best):
+        # more bins hold the least vote taken than were taken: the first of them in order
+        above = np.flatnonzero(strongest[tied] > least[tied])
+        equal = np.flatnonzero(strongest[tied] == least[tied])
+        top[tied] = np.concatenate([above, equal[: best - above.size]])
+    votes = np.take_along_axis(strongest, top, axis=1)
+    order = np.lexsort((top, -votes), axis=1)
+    top = np.take_along_axis(top, order, axis=1)
     rows, cols = np.divmod(top, n_x)
     side = np.arange(n_sides)[:, None]
     thetas = accumulator[side, :, rows, cols].argmax(axis=2)  # the best θ at each
-    return np.take_along_axis(strongest, top, axis=1), rows, cols, thetas
+    return np.take_along_axis(votes, order, axis=1), rows, cols, thetas
