@@ -248,7 +248,7 @@ def calibrate(
     ] = False,
 ) -> None:
     """Calibrate a camera from markers on the table: the image → table homography."""
-    from demoplan.commands.execution import calibrate as calibrate_camera
+    from demoplan.commands.perception import calibrate as calibrate_camera
 
     with reported_errors():
         done = calibrate_camera(
@@ -354,7 +354,7 @@ def perceive(
 ) -> None:
     """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s),
     or with --sequence the demonstration camera frames show."""
-    from demoplan.commands.execution import perceive as perceive_image
+    from demoplan.commands.perception import perceive as perceive_image
 
     with reported_errors():
         if sequence:
@@ -454,7 +454,7 @@ def _perceive_sequence(
     json_output: bool,
 ) -> None:
     """``perceive --sequence``: the demonstration, as a table of its steps."""
-    from demoplan.commands.execution import perceive_sequence
+    from demoplan.commands.perception import perceive_sequence
 
     with working("Perceiving frames…"):
         found = perceive_sequence(
