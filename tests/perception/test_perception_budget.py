@@ -2,19 +2,25 @@
 read in every expensive loop — between colour regions, before every Hough
 transform and fit, and between the blocks of sides a Hough transform votes for —
 so wherever it runs out, perception stops there with exit 4 and one line saying
-where the time went. No test here depends on the machine's speed: the clock is
-made to run out after a given number of readings, or the budget is zero."""
+where the time went. And the whole command's start-up: ``demoplan perceive``
+imports neither SciPy nor matplotlib nor the stages it does not run. No test
+here depends on the machine's speed: the clock is made to run out after a given
+number of readings, or the budget is zero; imports are counted, not timed."""
 
 from __future__ import annotations
 
 import contextlib
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+from scipy.spatial.distance import cdist
 
 from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
@@ -22,6 +28,7 @@ from demoplan.perception import hough
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
+from demoplan.perception.masks import distances
 from tests.hostile.harness import check_refused, run
 
 PHOTOS = Path(__file__).parents[1] / "data" / "photos"
@@ -129,3 +136,75 @@ def test_a_zero_budget_on_a_real_photograph_is_exit_4_and_one_line(
     )
     check_refused(answer, ["--timeout 0 s"], codes={4})
     assert not out.exists()
+
+
+IMPORTED_AFTER = """
+import runpy, sys
+sys.argv = ["demoplan", *sys.argv[1:]]
+try:
+    runpy.run_module("demoplan", run_name="__main__")
+except SystemExit as stop:
+    sys.__stderr__.write(f"exit {stop.code}\\n")
+sys.__stderr__.write(" ".join(sorted(sys.modules)) + "\\n")
+"""
+"""Runs ``demoplan ARGS`` as ``python -m demoplan`` does and writes its exit code and
+then every module it imported to stderr."""
+
+NOT_FOR_PERCEIVE = (
+    "scipy",
+    "matplotlib",
+    "demoplan.execution",
+    "demoplan.scenes",
+    "demoplan.studio",
+    "demoplan.experiments",
+    "demoplan.evaluation",
+)
+"""What ``demoplan perceive`` of one top view has no use for: SciPy alone was a
+third of its start-up (about 0.4 s CPU), the rest is other commands' stages."""
+
+
+@pytest.mark.parametrize("name", ["mrhan_phone", LARGEST])
+def test_demoplan_perceive_imports_only_what_it_needs(name: str, tmp_path: Path) -> None:
+    """``demoplan perceive PHOTO --px-per-m S --origin 0 0`` — a photograph with blocks
+    and one without (exit 1): the modules the whole command imported hold none of
+    :data:`NOT_FOR_PERCEIVE` (the start-up is part of the command's time)."""
+    photo = load_labelled(PHOTOS / f"{name}.json")
+    args = [str(photo.image), "--px-per-m", f"{photo.px_per_m:g}", "--origin", "0", "0"]
+    done = subprocess.run(
+        [sys.executable, "-c", IMPORTED_AFTER, "perceive", *args],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        check=False,
+        timeout=300,
+    )
+    *_, exit_line, modules = done.stderr.splitlines()
+    assert exit_line == ("exit 0" if photo.needed else "exit 1"), done.stderr
+    imported = modules.split()
+    assert "demoplan.perception.blocks" in imported  # it did perceive
+    unwanted = [m for m in imported if m.split(".")[0] in NOT_FOR_PERCEIVE]
+    unwanted += [m for m in imported if ".".join(m.split(".")[:2]) in NOT_FOR_PERCEIVE]
+    assert unwanted == []
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.integers(1, 4).flatmap(
+        lambda d: st.tuples(
+            hnp.arrays(
+                np.float64, st.tuples(st.integers(1, 50), st.just(d)), elements=st.floats(-300, 300)
+            ),
+            hnp.arrays(
+                np.float64, st.tuples(st.integers(1, 6), st.just(d)), elements=st.floats(-2, 2)
+            ),
+        )
+    )
+)
+def test_the_colour_distances_are_scipy_s_to_the_last_bit(
+    arrays: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """The distances colours are classified by (computed without importing SciPy)
+    are ``cdist``'s exactly: a pixel on a tie between two palette colours goes the
+    same way."""
+    points, centres = arrays
+    assert np.array_equal(distances(points, centres), cdist(points, centres))

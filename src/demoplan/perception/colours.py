@@ -36,12 +36,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
-from scipy.spatial.distance import cdist
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
-from demoplan.perception.masks import CROSS, dilate, erode, fill_holes, small_parts
+from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
 
 __all__ = [
@@ -251,7 +249,7 @@ def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
     red, green, blue = pixels[:, 0], pixels[:, 1], pixels[:, 2]
     top = np.maximum(np.maximum(red, green), blue)
     normal = pixels / np.maximum(top, 1.0)[:, None]
-    distance = cdist(normal, chroma)
+    distance = distances(normal, chroma)
     labels: np.ndarray = np.argmin(distance, axis=1)
     nearest = distance[np.arange(labels.size), labels]
     labels[nearest > MAX_CHROMA_DISTANCE] = UNNAMED  # no plain colour
@@ -701,7 +699,7 @@ def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
     centres = np.stack([points[np.argmin(along)], points[np.argmax(along)]])
     first = np.ones(len(points), dtype=bool)
     for _ in range(steps):
-        distance = cdist(points, centres)
+        distance = distances(points, centres)
         first = distance[:, 0] <= distance[:, 1]
         if first.all() or not first.any():
             return None
@@ -769,10 +767,10 @@ def _glare(
     bright = core_lightness > np.median(core_lightness) + 4.0
     candidates = np.zeros(core.shape, dtype=bool)
     candidates[core] = bright
-    labels, count = ndimage.label(candidates)
-    if count == 0:
+    count, labels = cv2.connectedComponents(candidates.astype(np.uint8), connectivity=4)
+    if count == 1:  # the background alone
         return np.zeros(classes.shape, dtype=bool)
-    sizes = np.bincount(labels.ravel(), minlength=count + 1)
+    sizes = np.bincount(labels.ravel(), minlength=count)
     small = sizes < 1.5 * min_area
     small[0] = False
     glare: np.ndarray = small[labels][core]

@@ -33,7 +33,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
-from scipy.optimize import linear_sum_assignment
 
 from demoplan.perception.blocks import DetectedBlock
 
@@ -216,6 +215,10 @@ class BlockTracker:
                 )
                 cost = distance + _AWAY * (distance > self.still)
                 cost -= _FIRST * np.array([[b.name in moved_last] for b in blocks], dtype=float)
+                # SciPy's optimiser, imported here: a picture's first perception (one
+                # `demoplan perceive`) has no blocks known yet and never gets here
+                from scipy.optimize import linear_sum_assignment
+
                 for row, column in zip(*linear_sum_assignment(cost), strict=True):
                     names[column] = blocks[row].name
             for d, name in zip(found, names, strict=True):
