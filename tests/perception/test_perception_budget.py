@@ -25,6 +25,7 @@ from scipy.spatial.distance import cdist
 from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
 from demoplan.perception import hough
+from demoplan.perception.camera import Camera
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
@@ -208,3 +209,21 @@ def test_the_colour_distances_are_scipy_s_to_the_last_bit(
     same way."""
     points, centres = arrays
     assert np.array_equal(distances(points, centres), cdist(points, centres))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.floats(1.0, 1e5),
+    st.tuples(st.floats(-10.0, 10.0), st.floats(-10.0, 10.0)),
+    st.integers(1, 5000),
+    hnp.arrays(np.int32, st.tuples(st.integers(1, 60), st.just(2)), elements=st.integers(0, 5000)),
+)
+def test_an_outline_goes_to_the_world_as_each_of_its_points_does(
+    px_per_m: float, origin: tuple[float, float], height: int, outline: np.ndarray
+) -> None:
+    """A rejected region's outline (whole pixels, x right, y down) converted at once
+    gives, to the last bit, what :meth:`Camera.to_world` gives for each point's
+    pixel centre (the overlays and the rejections' outlines do not move)."""
+    camera = Camera(px_per_m, origin)
+    each = tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
+    assert camera.image_outline_to_world(outline, height) == each

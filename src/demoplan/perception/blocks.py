@@ -276,10 +276,7 @@ def _unfit(
 
 def _in_world(part: RejectedPart, camera: Camera, height: int) -> Rejection:
     """A rejected part's outlines from image pixels (x right, y down) to the world."""
-    pieces = tuple(
-        tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
-        for outline in part.outlines
-    )
+    pieces = tuple(camera.image_outline_to_world(outline, height) for outline in part.outlines)
     return Rejection(part.reason, part.detail, part.colour, pieces)
 
 

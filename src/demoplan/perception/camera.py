@@ -34,6 +34,18 @@ class Camera:
         """(u, v) in pixels from the bottom-left corner (v up) → world (x, y)."""
         return self.origin[0] + u / self.px_per_m, self.origin[1] + v / self.px_per_m
 
+    def image_outline_to_world(
+        self, outline: np.ndarray, height: int
+    ) -> tuple[tuple[float, float], ...]:
+        """An outline's points (x right, y down: whole pixels of an image ``height``
+        rows tall, N × 2) → the world (x, y) of their pixels' centres: what
+        :meth:`to_world` gives for each, with NumPy (a photograph's rejected regions
+        have tens of thousands of outline points)."""
+        points = np.asarray(outline, dtype=float).reshape(-1, 2)
+        xs = self.origin[0] + (points[:, 0] + 0.5) / self.px_per_m
+        ys = self.origin[1] + (height - points[:, 1] - 0.5) / self.px_per_m
+        return tuple(zip(xs.tolist(), ys.tolist(), strict=True))
+
     def to_pixels(self, x: float, y: float) -> tuple[float, float]:
         """World (x, y) → (u, v) in pixels from the bottom-left corner (v up)."""
         return (x - self.origin[0]) * self.px_per_m, (y - self.origin[1]) * self.px_per_m
