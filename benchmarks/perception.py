@@ -876,7 +876,28 @@ def photo_table(outcomes: Sequence[PhotoOutcome], real: Sequence[RealRun] = ()) 
             _medians([c.cpu_seconds for c in commands]),
             f"{max(c.peak_mb for c in commands):.0f} max" if commands else "",
         )
+        table.add_row("real, ratios", *[""] * 6, *_ratios(outcomes, real), "")
     return table
+
+
+def _ratio(numerator: float | None, denominator: float | None) -> str:
+    if numerator is None or not denominator:
+        return ""
+    return f"{numerator / denominator:.1f}{TIMES}"
+
+
+def _ratios(outcomes: Sequence[PhotoOutcome], real: Sequence[RealRun]) -> tuple[str, ...]:
+    """The ratios of the medians, which a shared machine's load moves less than the
+    times: a real photograph's time and CPU in process to a render's, the command's
+    wall and CPU time to the same photographs' CPU in process."""
+    in_process = median([r.cpu_seconds for r in real])
+    commands = [r.command for r in real if r.command is not None]
+    return (
+        _ratio(median([r.run.seconds for r in real]), median([o.seconds for o in outcomes])),
+        _ratio(in_process, median([o.cpu_seconds for o in outcomes])),
+        _ratio(median([c.seconds for c in commands]), in_process),
+        _ratio(median([c.cpu_seconds for c in commands]), in_process),
+    )
 
 
 def real_targets(
@@ -1071,10 +1092,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     photos = []
     real: list[RealRun] = []
+    load_before = load_after = os.getloadavg()
     if args.photos or args.real:
         run_photo(PHOTO_SEED_BASE + WARM_UP_SEED)  # warm-up: OpenCV's Lab tables
         photos = [run_photo(PHOTO_SEED_BASE + args.seed + i) for i in range(args.photos)]
+        load_before = os.getloadavg()
         real = real_photographs(args.commands) if args.real else []
+        load_after = os.getloadavg()
         console.print(photo_table(photos, real))
         console.print(
             "Renders: found: true blocks with a detection within 5 mm (matched by nearest "
@@ -1088,10 +1112,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             "waits for a core. command: the whole 'python -m demoplan perceive IMAGE "
             "--px-per-m S --origin 0 0' in a process of its own (start, imports, the table "
             "printed), its wall time, its own user + system CPU and peak resident memory "
-            "(os.wait4). Images: benchmarks/README.md.",
+            "(os.wait4). ratios: of the medians — real to renders (time, cpu), the command's "
+            "wall and CPU time to the CPU in process. Images: benchmarks/README.md.",
             highlight=False,
             style="dim",
         )
+        if real:
+            console.print(
+                "Load average (1, 5, 15 min) before the real photographs "
+                f"{' / '.join(f'{x:.2f}' for x in load_before)}, after "
+                f"{' / '.join(f'{x:.2f}' for x in load_after)} on {os.cpu_count()} CPUs",
+                highlight=False,
+            )
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     call_mb = photo_memory(PHOTO_SEED_BASE + args.seed) if photos else None
 
@@ -1138,6 +1170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             ],
             "photos": [asdict(o) for o in photos],
             "real_photographs": [asdict(r) for r in real],
+            "load_average_around_real": [list(load_before), list(load_after)],
             "peak_rss_mb": peak_mb,
             "photo_call_peak_mb": call_mb,
             "targets": [asdict(t) for t in goals],
