@@ -355,7 +355,7 @@ class _SquareModel:
     def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q_u, q_v, distance): the points in the square's frame, and their
         ≈ signed distance to its outline."""
-        u, v, theta, side = params
+        u, v, theta, side = params.tolist()  # Python floats: cheaper scalars
         c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
         du, dv = self.us - u, self.vs - v
         qu = c * du + s * dv
@@ -374,7 +374,7 @@ class _SquareModel:
         if self._last is not None and self._last[0] == key:
             return self._last[1]
         qu, qv, distance = self.frame(params)
-        residual = np.clip(0.5 - distance / self.ramp, 0.0, 1.0) - self.target
+        residual = np.minimum(np.maximum(0.5 - distance / self.ramp, 0.0), 1.0) - self.target
         root = np.sqrt(1.0 + np.square(residual / self.f_scale))
         self._last = key, (qu, qv, distance, residual, root)
         return self._last[1]
@@ -382,7 +382,7 @@ class _SquareModel:
     def cost(self, params: np.ndarray) -> float:
         """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f)."""
         root = self._evaluated(params)[4]
-        return float(self.f_scale**2 * np.sum(root - 1.0))
+        return float(self.f_scale**2 * (root - 1.0).sum())
 
     def normal_equations(self, params: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """(cost, JᵀWJ, JᵀWr) at ``params``: W the iteratively reweighted least
@@ -391,7 +391,7 @@ class _SquareModel:
         q the pixel in the square's own frame; off it, constant (scaled by the
         ramp's width when it is wider)."""
         qu, qv, distance, residual, root = self._evaluated(params)
-        cost = float(self.f_scale**2 * np.sum(root - 1.0))
+        cost = float(self.f_scale**2 * (root - 1.0).sum())
         # the ramp's ends included (one-sided there): a square whose edges lie on
         # pixel borders, as a Hough bin's centre at 0° puts them, has every pixel
         # centre at an end, and would see no gradient at all
@@ -445,13 +445,15 @@ def _least_squares(
     params = start.astype(float)
     cost, matrix, gradient = model.normal_equations(params)
     metric = 1.0 / np.square(scale)
+    metric_matrix = np.diag(metric)
     damping = 1e-3 * float(np.max(np.diag(matrix) / metric, initial=0.0)) or 1e-3
     growth = 2.0
+    # np.any and np.linalg.norm's values without their wrappers (thousands of steps)
     for _ in range(max_steps):
-        if not np.any(gradient):
+        if not gradient.any():
             break  # no pixel on the ramp (or all matched): nothing moves the square
         try:
-            step = np.linalg.solve(matrix + damping * np.diag(metric), -gradient)
+            step = np.linalg.solve(matrix + damping * metric_matrix, -gradient)
         except np.linalg.LinAlgError:
             damping *= growth
             growth *= 2.0
@@ -468,8 +470,9 @@ def _least_squares(
         ratio = (cost - trial_cost) / predicted if predicted > 0 else 1.0
         damping *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
         growth = 2.0
-        small_step = np.linalg.norm(step / scale) < tolerance * (
-            tolerance + np.linalg.norm(params / scale)
+        scaled_step, scaled = step / scale, params / scale
+        small_step = math.sqrt(scaled_step @ scaled_step) < tolerance * (
+            tolerance + math.sqrt(scaled @ scaled)
         )
         small_change = max(cost - trial_cost, predicted) < tolerance * cost
         params = trial
