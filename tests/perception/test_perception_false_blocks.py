@@ -118,3 +118,67 @@ def test_a_board_crossed_by_cables_is_no_block(seed: int) -> None:
     for block in truth:
         nearest = min(found, key=lambda f: math.dist((f.x, f.y), (block.x, block.y)))
         assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001
+
+
+_FAR_FROM = {  # where the blocks go (a camera's origin, width, height) away from an edge
+    "left": (Camera(1000.0, (0.2, 0.07)), 280, 260),
+    "right": (Camera(1000.0, (0.02, 0.07)), 280, 260),
+    "top": (Camera(1000.0, (0.07, 0.02)), 360, 180),
+    "bottom": (Camera(1000.0, (0.07, 0.2)), 360, 180),
+}
+
+
+def _arm_from_the_border(
+    image: np.ndarray, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
+) -> None:
+    """Paint an arm of one ``colour`` reaching in from ``edge`` of ``image``: ``wide``
+    px across, straight for ``reach`` px, then rounded (a half disc), its middle at
+    ``centre`` of the border's length (a robot arm, a sleeve coming into view);
+    within ``frayed`` px of the border, every other 4 × 4 px cell of it is left
+    unpainted (a paler, glaring part of the arm that is not foreground there)."""
+    height, width = image.shape[:2]
+    upright = edge in ("left", "right")  # the arm runs along x
+    along_x, along_y = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+    depth = {"left": along_x, "right": width - along_x, "top": along_y, "bottom": height - along_y}
+    place = along_y if upright else along_x
+    middle = centre * (height if upright else width)
+    off = np.abs(place - middle)
+    inside = (off <= wide / 2) & (depth[edge] <= reach)
+    inside |= np.hypot(off, depth[edge] - reach) <= wide / 2
+    cells = (along_x // 4 + along_y // 4) % 2 == 1
+    inside &= ~(cells & (depth[edge] <= frayed))
+    tint = np.asarray(COLOURS[colour], dtype=float)
+    noise = np.random.default_rng(wide * reach).normal(0.0, 2.0, image.shape)
+    image[inside] = np.clip(np.rint(tint + noise), 0, 255).astype(np.uint8)[inside]
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    edge=st.sampled_from(("left", "right", "top", "bottom")),
+    wide=st.integers(100, 160),
+    reach=st.integers(10, 60),
+    centre=st.floats(0.3, 0.7),
+    colour=st.sampled_from(("green", "blue", "yellow")),
+    frayed=st.integers(0, 8),
+)
+def test_an_arm_reaching_in_from_the_border_is_no_block(
+    seed: int, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
+) -> None:
+    """An arm of one colour reaching in from the border, wider than the largest block
+    (the robot arm of langtable_real, a pale panel at the top of the photograph): a
+    square fitted into it along the border has the arm running on beside it there
+    (frayed along the border or not) and its side on the border shows no table — no
+    block's top shows whole. No block is reported in it; the red blocks away from it
+    are found as without it."""
+    rng = np.random.default_rng(seed)
+    camera, width, height = _FAR_FROM[edge]
+    truth = random_blocks(int(rng.integers(1, 3)), camera, width, height, rng, colours=("red",))
+    image = render_blocks(truth, CAMERA, WIDTH, HEIGHT, noise=2.0, rng=rng)
+    _arm_from_the_border(image, edge, wide, reach, centre, colour, frayed)
+    found = detect_blocks(image, CAMERA)
+    assert [f.colour for f in found if f.colour != "red"] == []
+    assert len(found) == len(truth)
+    for block in truth:
+        nearest = min(found, key=lambda f: math.dist((f.x, f.y), (block.x, block.y)))
+        assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001

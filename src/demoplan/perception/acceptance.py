@@ -1,6 +1,7 @@
 """When a square fitted in a colour region is a block, beyond its own fit: the
-image's border (a square past it, a region running on along it) and the share of
-its region that the squares accepted in it explain.
+image's border (a square past it, a region running on along it, an outline past it
+that shows no table) and the share of its region that the squares accepted in it
+explain.
 
 :func:`demoplan.perception.blocks.detect_blocks` checks a fit's coverage, misfit
 and free outline first, then these.
@@ -17,6 +18,7 @@ __all__ = [
     "MIN_EXPLAINED_SHARE",
     "beyond_image",
     "explained_share",
+    "free_outline_seen",
     "runs_on_along_border",
 ]
 
@@ -58,7 +60,8 @@ def beyond_image(
 
 
 _BORDER_BAND = 3.0
-"""Px in from the image's border in which a square's region is looked at along it."""
+"""Px in from the image's border in which a square's stretch along it is taken, and
+the least depth in which its region is looked at beside it."""
 
 
 def runs_on_along_border(
@@ -66,12 +69,14 @@ def runs_on_along_border(
 ) -> bool:
     """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
     of ``image`` rows × columns) reaches past a border of the image along which its
-    region runs on beyond it: the mask holds (α > ½) within :data:`_BORDER_BAND` px
-    of that border over most of a stretch a quarter side long (at least 3 px), 2 px
-    past either end of the square's own stretch there. Such a square is a piece of
-    something cut by the border — a strip of table, a board's edge, a row of things —
-    not a block whose top shows whole: a block poking past the border ends with the
-    square along it."""
+    region runs on beyond it: the mask holds (α > ½) within a quarter side (at least
+    :data:`_BORDER_BAND` px) of that border over most of a stretch a quarter side long
+    (at least 3 px), 2 px past either end of the square's own stretch there. Such a
+    square is a piece of something cut by the border — a strip of table, a board's
+    edge, a row of things, an arm reaching in — not a block whose top shows whole: a
+    block poking past the border ends with the square along it. (Not only the pixels
+    at the border: there a pale or glaring part of an arm may fray the mask, as at
+    the top of langtable_real.)"""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     row0, col0 = offset
@@ -83,7 +88,7 @@ def runs_on_along_border(
     ys = (y - (s * along + c * across)).ravel()
     reach = max(3.0, side / 4)
     stretch = np.arange(2.0, 2.0 + reach) + 0.5
-    depths = np.arange(_BORDER_BAND) + 0.5
+    depths = np.arange(max(_BORDER_BAND, reach)) + 0.5
     # each border: the points' depth in from it and place along it; whether it is
     # upright (left, right) and the image's extent there (0 for left and top)
     edges = (
@@ -110,6 +115,10 @@ def runs_on_along_border(
                 & (points_along >= 0)
                 & (points_along < length)
             )
+            # the square's own pixels (2 px around it too) are not its region beside it
+            du, dv = px - x, y - py
+            own = np.maximum(np.abs(c * du + s * dv), np.abs(c * dv - s * du)) < side / 2 + 2
+            within &= ~own
             held = np.zeros(px.shape, dtype=bool)
             held[within] = alpha[rows[within], cols[within]] > 0.5
             if held.any(axis=0).mean() > 0.5:
@@ -135,3 +144,34 @@ def explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
         return 1.0
     area = int(np.count_nonzero(alpha > 0.5))
     return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
+
+
+def free_outline_seen(
+    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
+) -> float:
+    """The share of the square ``params``'s outline (on the crop ``alpha`` at
+    ``offset`` in an image of ``image`` rows × columns) that is seen to border on
+    table: of its points 2 px out (nine along each side), those within the image,
+    where the mask is empty (α < ½; past the crop is table). A point past the
+    image's border shows nothing: a square fitted inside something larger that the
+    border cuts (a robot arm reaching in from the edge) has its side there on the
+    border, not on table. 0 when no point is seen."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    along = np.linspace(-0.4, 0.4, 9) * side
+    out = side / 2 + 2.0
+    normals = np.array([(c, s), (-c, -s), (-s, c), (s, -c)])
+    nu, nv = normals[:, :1], normals[:, 1:]
+    pu = ((u + out * nu) - along * nv).ravel()
+    pv = ((v + out * nv) + along * nu).ravel()
+    crop_rows, crop_cols = alpha.shape
+    row0, col0 = offset
+    xs, ys = col0 + pu, row0 + crop_rows - pv  # image x (right), y (down)
+    seen = (xs >= 0) & (xs < image[1]) & (ys >= 0) & (ys < image[0])
+    if not seen.any():
+        return 0.0
+    cols, rows = pu.astype(np.intp), (crop_rows - pv).astype(np.intp)  # as the fit's own
+    within = seen & (rows >= 0) & (rows < crop_rows) & (cols >= 0) & (cols < crop_cols)
+    held = np.zeros(pu.shape, dtype=bool)
+    held[within] = alpha[rows[within], cols[within]] >= 0.5
+    return int(np.count_nonzero(seen & ~held)) / int(np.count_nonzero(seen))

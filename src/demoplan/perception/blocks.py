@@ -38,6 +38,7 @@ from demoplan.perception.acceptance import (
     MIN_EXPLAINED_SHARE,
     beyond_image,
     explained_share,
+    free_outline_seen,
     runs_on_along_border,
 )
 from demoplan.perception.camera import Camera
@@ -545,10 +546,12 @@ def _why_no_block(
     alpha: np.ndarray,
     fit: tuple[np.ndarray, float, float, float],
 ) -> tuple[str, str] | None:
-    """Why a fitted square is no block, in order: :func:`_failure`, a region running on
-    along the image's border, no seam parting it from the rest; ``None``: it is one."""
-    params, coverage, rms, free = fit
+    """Why a fitted square is no block, in order: :func:`_failure` (its free outline
+    counted where the image shows it), a region running on along the image's border,
+    no seam parting it from the rest; ``None``: it is one."""
+    params, coverage, rms, _ = fit
     shape, settings, side_px = search.image_shape, search.settings, search.side_px
+    free = free_outline_seen(alpha, params, region.offset, shape)
     beyond = beyond_image(params, region.offset, alpha.shape, shape)
     why = _failure(params, coverage, rms, free, side_px, settings, search.px_per_m, beyond)
     if why is None and runs_on_along_border(region.alpha, params, region.offset, shape):
