@@ -182,3 +182,100 @@ def test_an_arm_reaching_in_from_the_border_is_no_block(
     for block in truth:
         nearest = min(found, key=lambda f: math.dist((f.x, f.y), (block.x, block.y)))
         assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001
+
+
+def _fill_square(
+    image: np.ndarray, x: float, y: float, yaw: float, side: float, rgb: np.ndarray
+) -> None:
+    """Fill a square (centre ``x``, ``y`` in px, x right, y down; ``yaw`` counter-
+    clockwise with y up; ``side`` px) of ``image`` with ``rgb``, anti-aliased."""
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    h = side / 2
+    corners = [
+        (x + c * a - s * b, y - (s * a + c * b)) for a, b in ((-h, -h), (h, -h), (h, h), (-h, h))
+    ]
+    points = np.rint(np.array(corners) * 16).astype(np.int32)
+    colour = tuple(float(v) for v in np.clip(rgb, 0, 255))
+    cv2.fillPoly(image, [points], colour, cv2.LINE_AA, shift=4)
+
+
+_TABLES = {"blue": (62, 96, 150), "green": (70, 120, 80)}  # coloured table tops (RGB)
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    table=st.sampled_from(sorted(_TABLES)),
+    light=st.floats(0.45, 0.8),
+    away=st.floats(0.95, 1.2),
+)
+def test_a_cube_s_shadow_on_a_coloured_table_is_no_block(
+    seed: int, table: str, light: float, away: float
+) -> None:
+    """On a coloured table top (blue, green) a cube's shadow is the table's colour,
+    darker, and so differs from the table in chroma too (it is foreground, unlike
+    a shadow on a grey board); beside the cube (a low light: a square about a side
+    away) it is as square as the cube. It is no block (the ``side_faces`` and
+    ``tilted`` families' false blocks on the blue table); the cubes are found."""
+    rng = np.random.default_rng(seed)
+    truth = random_blocks(
+        int(rng.integers(1, 4)),
+        Camera(1000.0, (0.08, 0.08)),
+        340,
+        240,
+        rng,
+        sides=(0.035, 0.05),
+        gap=0.06,
+        colours=("red", "yellow"),
+    )
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = _TABLES[table]
+    towards = math.radians(float(rng.uniform(0.0, 360.0)))
+    for block in truth:  # shadows first, the cubes over them
+        x, y = block.x * 1000 - 0.5, HEIGHT - block.y * 1000 - 0.5
+        side = block.side * 1000
+        sx, sy = x + away * side * math.cos(towards), y - away * side * math.sin(towards)
+        _fill_square(image, sx, sy, block.yaw, side, np.asarray(_TABLES[table]) * light)
+    for block in truth:
+        x, y = block.x * 1000 - 0.5, HEIGHT - block.y * 1000 - 0.5
+        _fill_square(image, x, y, block.yaw, block.side * 1000, np.asarray(COLOURS[block.colour]))
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == len(truth), [(f.colour, f.x, f.y) for f in found]
+    for block in truth:
+        nearest = min(found, key=lambda f: math.dist((f.x, f.y), (block.x, block.y)))
+        assert math.dist((nearest.x, nearest.y), (block.x, block.y)) < 0.001
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    colour=st.sampled_from(("red", "green", "blue", "yellow")),
+    light=st.floats(0.35, 0.65),
+    towards=st.integers(0, 3),
+)
+def test_a_side_face_as_large_as_its_top_is_no_block(
+    seed: int, colour: str, light: float, towards: int
+) -> None:
+    """A camera low and off to the side sees a cube's side face nearly as large as
+    its top, beside it: the top's colour, darker (lit less). Were it taken for a cube
+    of its own, it would be a block beside the top, one side away (the
+    ``side_faces`` family's false blocks); it is no block, and the top is found."""
+    rng = np.random.default_rng(seed)
+    side = float(rng.uniform(40.0, 55.0))
+    x, y, yaw = (
+        float(rng.uniform(150, 350)),
+        float(rng.uniform(130, 270)),
+        float(rng.uniform(-40, 40)),
+    )
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = (128, 128, 128)
+    rgb = np.asarray(COLOURS[colour], dtype=float)
+    turn = math.radians(yaw + 90.0 * towards)
+    face_x, face_y = x + side * math.cos(turn), y - side * math.sin(turn)
+    _fill_square(image, face_x, face_y, yaw, side, rgb * light)
+    _fill_square(image, x, y, yaw, side, rgb)
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == 1, [(f.colour, f.x, f.y, f.side) for f in found]
+    assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), (x, y)) < 1.0

@@ -51,6 +51,12 @@ from demoplan.perception.colours import (
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
 from demoplan.perception.seams import image_lightness, seamless_side
+from demoplan.perception.side_faces import (
+    ImageSquare,
+    corners_in_image,
+    side_faces_beside_tops,
+    table_shadows,
+)
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks", "named_by_colour"]
 
@@ -113,7 +119,7 @@ class Rejection:
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
     square``, ``no free sides``, ``cut by the border``, ``no seam``, ``larger than its
-    squares``; ``covered`` from the tracker), ``detail`` the measure behind
+    squares``, ``shadow``; ``covered`` from the tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -653,9 +659,39 @@ def detect_blocks(
         report_progress("colour regions", done, len(regions))
         squares = _squares_in_region(search, region, where, parts)
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
+    found = _without_side_faces(image, found, parts)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
+
+
+_Found = tuple[ColourRegion, np.ndarray, float, float]  # a square on its region's crop
+
+
+def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
+    """A square on its region's crop (u right, v up from the crop's bottom) in the
+    image: its centre x right, y down (px), θ, side."""
+    row0, col0 = region.offset
+    u, v, theta, side = (float(p) for p in params)
+    return col0 + u, row0 + region.alpha.shape[0] - v, theta, side
+
+
+def _without_side_faces(
+    image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None
+) -> list[_Found]:
+    """``found`` without the shadows on a coloured table and the side faces beside
+    their tops (:mod:`demoplan.perception.side_faces`), which go to ``parts``."""
+    in_image = [_in_image(region, params) for region, params, _, _ in found]
+    colours = [np.asarray(region.rgb) for region, _, _, _ in found]
+    shadows = table_shadows(image, in_image, colours)
+    side_faces = side_faces_beside_tops(image, in_image)
+    dropped = {index: ("shadow", why) for index, why in shadows.items()}
+    dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
+    if parts is not None:
+        for index, (reason, detail) in dropped.items():
+            corners = corners_in_image(in_image[index])
+            parts.append(RejectedPart(reason, detail, found[index][0].colour, (corners,)))
+    return [square for index, square in enumerate(found) if index not in dropped]
 
 
 def _named_in_world(
