@@ -33,6 +33,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from demoplan.budget import check_time, report_progress
+from demoplan.perception.acceptance import (
+    MAX_BEYOND_SHARE,
+    MIN_EXPLAINED_SHARE,
+    beyond_image,
+    explained_share,
+    free_outline_seen,
+    runs_on_along_border,
+)
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import (
     REPORTED_SHARE,
@@ -43,6 +51,12 @@ from demoplan.perception.colours import (
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
 from demoplan.perception.seams import image_lightness, seamless_side
+from demoplan.perception.side_faces import (
+    ImageSquare,
+    corners_in_image,
+    side_faces_beside_tops,
+    table_shadows,
+)
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks", "named_by_colour"]
 
@@ -105,7 +119,7 @@ class Rejection:
     ``thin or faint``, ``side face or shadow``, ``no block colour``, ``side
     face``, ``table``, ``no square``, ``too large``, ``not filled``, ``not
     square``, ``no free sides``, ``cut by the border``, ``no seam``, ``larger than its
-    squares``; ``covered`` from the tracker), ``detail`` the measure behind
+    squares``, ``shadow``; ``covered`` from the tracker), ``detail`` the measure behind
     it; ``outlines`` its pieces' outlines (one, mostly) in world (x, y),
     metres, on the plane the image shows."""
 
@@ -144,122 +158,6 @@ def _failure(
             "its centre beyond the image" if beyond >= 1 else f"{beyond:.0%} of it beyond the image"
         )
     return None
-
-
-MAX_BEYOND_SHARE = 0.5
-"""A fitted square whose centre lies past the image's border (more than half of it
-beyond, for a square along the border) is no block: what the image shows is a
-part of whatever is there (a block, a strip of table ruled into squares, cut by
-the border), its size and centre not seen — and the fit, run off the image, has
-nothing there to check it. A block cut less (a clipped corner, a side) keeps its
-centre in view and is fitted from what shows."""
-
-_SAMPLES = (np.arange(32) + 0.5) / 32 - 0.5
-"""Points across a square (as fractions of its side) that measure its share beyond the image."""
-
-
-def _beyond_image(
-    params: np.ndarray, offset: tuple[int, int], crop: tuple[int, ...], image: tuple[int, ...]
-) -> float:
-    """The share of the square ``params`` (on a crop of ``crop`` rows × columns at
-    ``offset`` in an image of ``image`` rows × columns) that lies past the image's
-    border (0 when it lies inside), from 32 × 32 points over it; 1 when its centre
-    does."""
-    u, v, theta, side = (float(p) for p in params)
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    row0, col0 = offset
-    height, width = image[0], image[1]
-    reach = abs(side) * math.sqrt(0.5)
-    x, y = col0 + u, row0 + crop[0] - v  # image x (right), y (down) of the centre
-    if reach <= min(x, y, width - x, height - y):
-        return 0.0
-    if not (0 <= x <= width and 0 <= y <= height):
-        return 1.0  # the centre is out of view (more than half, along a border)
-    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
-    xs = x + c * along - s * across
-    ys = y - (s * along + c * across)
-    outside = (xs < 0) | (xs > width) | (ys < 0) | (ys > height)
-    return float(outside.mean())
-
-
-_BORDER_BAND = 3.0
-"""Px in from the image's border in which a square's region is looked at along it."""
-
-
-def _runs_on_along_border(
-    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
-) -> bool:
-    """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
-    of ``image`` rows × columns) reaches past a border of the image along which its
-    region runs on beyond it: the mask holds (α > ½) within :data:`_BORDER_BAND` px
-    of that border over most of a stretch a quarter side long (at least 3 px), 2 px
-    past either end of the square's own stretch there. Such a square is a piece of
-    something cut by the border — a strip of table, a board's edge, a row of things —
-    not a block whose top shows whole: a block poking past the border ends with the
-    square along it."""
-    u, v, theta, side = (float(p) for p in params)
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    row0, col0 = offset
-    crop_rows, crop_cols = alpha.shape
-    height, width = image[0], image[1]
-    x, y = col0 + u, row0 + crop_rows - v
-    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
-    xs = (x + c * along - s * across).ravel()
-    ys = (y - (s * along + c * across)).ravel()
-    reach = max(3.0, side / 4)
-    stretch = np.arange(2.0, 2.0 + reach) + 0.5
-    depths = np.arange(_BORDER_BAND) + 0.5
-    # each border: the points' depth in from it and place along it; whether it is
-    # upright (left, right) and the image's extent there (0 for left and top)
-    edges = (
-        (xs, ys, True, 0),
-        (width - xs, ys, True, width),
-        (ys, xs, False, 0),
-        (height - ys, xs, False, height),
-    )
-    for depth, place, upright, far in edges:
-        if not np.any(depth < 0):
-            continue  # the square stays inside this border
-        near = place[depth < _BORDER_BAND]
-        length = height if upright else width
-        for ends in (near.min() - stretch, near.max() + stretch):
-            points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
-            px, py = (points_in, points_along) if upright else (points_along, points_in)
-            cols = np.floor(px - col0).astype(np.intp)
-            rows = np.floor(py - row0).astype(np.intp)
-            within = (
-                (rows >= 0)
-                & (rows < crop_rows)
-                & (cols >= 0)
-                & (cols < crop_cols)
-                & (points_along >= 0)
-                & (points_along < length)
-            )
-            held = np.zeros(px.shape, dtype=bool)
-            held[within] = alpha[rows[within], cols[within]] > 0.5
-            if held.any(axis=0).mean() > 0.5:
-                return True
-    return False
-
-
-MIN_EXPLAINED_SHARE = 0.5
-"""The least share of a colour region the squares accepted in it must cover
-(their areas over its pixels with α > ½) for them to stand. Seen from above, a
-block's region is its top face and what shows of its sides in its colour (less
-than its top; most of it the side-face test drops), so its top covers at least
-half of it, and touching blocks of one colour each cover their part. A region
-mostly left when its squares are cut out is something larger — a wooden board,
-a table patch crossed by cables — in which squares were fitted between its
-marks: it holds no block (``larger than its squares``)."""
-
-
-def _explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
-    """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
-    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge)."""
-    if not squares:
-        return 1.0
-    area = int(np.count_nonzero(alpha > 0.5))
-    return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
 
 
 def _unfit(
@@ -654,13 +552,15 @@ def _why_no_block(
     alpha: np.ndarray,
     fit: tuple[np.ndarray, float, float, float],
 ) -> tuple[str, str] | None:
-    """Why a fitted square is no block, in order: :func:`_failure`, a region running on
-    along the image's border, no seam parting it from the rest; ``None``: it is one."""
-    params, coverage, rms, free = fit
+    """Why a fitted square is no block, in order: :func:`_failure` (its free outline
+    counted where the image shows it), a region running on along the image's border,
+    no seam parting it from the rest; ``None``: it is one."""
+    params, coverage, rms, _ = fit
     shape, settings, side_px = search.image_shape, search.settings, search.side_px
-    beyond = _beyond_image(params, region.offset, alpha.shape, shape)
+    free = free_outline_seen(alpha, params, region.offset, shape)
+    beyond = beyond_image(params, region.offset, alpha.shape, shape)
     why = _failure(params, coverage, rms, free, side_px, settings, search.px_per_m, beyond)
-    if why is None and _runs_on_along_border(region.alpha, params, region.offset, shape):
+    if why is None and runs_on_along_border(region.alpha, params, region.offset, shape):
         why = "cut by the border", "its region runs on along the image's border"
     if why is None:
         seamless = seamless_side(search.lightness, alpha, region.offset, params)
@@ -716,7 +616,7 @@ def _squares_in_region(
             break
         squares.append(square)
         alpha = _without_square(alpha, square[0])
-    explained = _explained_share(region.alpha, [params for params, _, _ in squares])
+    explained = explained_share(region.alpha, [params for params, _, _ in squares])
     if explained < MIN_EXPLAINED_SHARE:
         if parts is not None:
             why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
@@ -759,9 +659,39 @@ def detect_blocks(
         report_progress("colour regions", done, len(regions))
         squares = _squares_in_region(search, region, where, parts)
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
+    found = _without_side_faces(image, found, parts)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
+
+
+_Found = tuple[ColourRegion, np.ndarray, float, float]  # a square on its region's crop
+
+
+def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
+    """A square on its region's crop (u right, v up from the crop's bottom) in the
+    image: its centre x right, y down (px), θ, side."""
+    row0, col0 = region.offset
+    u, v, theta, side = (float(p) for p in params)
+    return col0 + u, row0 + region.alpha.shape[0] - v, theta, side
+
+
+def _without_side_faces(
+    image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None
+) -> list[_Found]:
+    """``found`` without the shadows on a coloured table and the side faces beside
+    their tops (:mod:`demoplan.perception.side_faces`), which go to ``parts``."""
+    in_image = [_in_image(region, params) for region, params, _, _ in found]
+    colours = [np.asarray(region.rgb) for region, _, _, _ in found]
+    shadows = table_shadows(image, in_image, colours)
+    side_faces = side_faces_beside_tops(image, in_image)
+    dropped = {index: ("shadow", why) for index, why in shadows.items()}
+    dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
+    if parts is not None:
+        for index, (reason, detail) in dropped.items():
+            corners = corners_in_image(in_image[index])
+            parts.append(RejectedPart(reason, detail, found[index][0].colour, (corners,)))
+    return [square for index, square in enumerate(found) if index not in dropped]
 
 
 def _named_in_world(

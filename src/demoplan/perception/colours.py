@@ -445,7 +445,8 @@ def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
 
 def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -> np.ndarray:
     """How much each pixel of the crop is ``face``'s (0–1): its colour change from
-    the table against the face's, in chroma too, and its L* from side to top face."""
+    the table against the face's, in chroma too, and its L* from side to top face
+    (full from the lower quartile of the top's core pixels, :data:`FULL_LEVEL_SHARE`)."""
     _, _, change, top_face, side_faces, change_ab = face
     projection = ((k.pixels - k.ground) @ change) / max(float(change @ change), 1e-9)
     alpha: np.ndarray = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
@@ -458,7 +459,9 @@ def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -
         chroma_alpha = chroma_part / _full_level(chroma_part[on_class])
         alpha = np.minimum(alpha, np.clip(chroma_alpha, 0.0, 1.0))
     if side_faces is not None:
-        ramp = (k.lightness - side_faces) / (top_face - side_faces)
+        on_top = on_class & (k.lightness >= (top_face + side_faces) / 2)
+        full = np.quantile(k.lightness[on_top], FULL_LEVEL_SHARE) if on_top.any() else top_face
+        ramp = (k.lightness - side_faces) / max(float(full) - side_faces, 1e-9)
         alpha = np.minimum(alpha, np.clip(ramp, 0.0, 1.0))
     return alpha
 

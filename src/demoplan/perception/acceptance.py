@@ -1,0 +1,177 @@
+"""When a square fitted in a colour region is a block, beyond its own fit: the
+image's border (a square past it, a region running on along it, an outline past it
+that shows no table) and the share of its region that the squares accepted in it
+explain.
+
+:func:`demoplan.perception.blocks.detect_blocks` checks a fit's coverage, misfit
+and free outline first, then these.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "MAX_BEYOND_SHARE",
+    "MIN_EXPLAINED_SHARE",
+    "beyond_image",
+    "explained_share",
+    "free_outline_seen",
+    "runs_on_along_border",
+]
+
+
+MAX_BEYOND_SHARE = 0.5
+"""A fitted square whose centre lies past the image's border (more than half of it
+beyond, for a square along the border) is no block: what the image shows is a
+part of whatever is there (a block, a strip of table ruled into squares, cut by
+the border), its size and centre not seen — and the fit, run off the image, has
+nothing there to check it. A block cut less (a clipped corner, a side) keeps its
+centre in view and is fitted from what shows."""
+
+_SAMPLES = (np.arange(32) + 0.5) / 32 - 0.5
+"""Points across a square (as fractions of its side) that measure its share beyond the image."""
+
+
+def beyond_image(
+    params: np.ndarray, offset: tuple[int, int], crop: tuple[int, ...], image: tuple[int, ...]
+) -> float:
+    """The share of the square ``params`` (on a crop of ``crop`` rows × columns at
+    ``offset`` in an image of ``image`` rows × columns) that lies past the image's
+    border (0 when it lies inside), from 32 × 32 points over it; 1 when its centre
+    does."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    height, width = image[0], image[1]
+    reach = abs(side) * math.sqrt(0.5)
+    x, y = col0 + u, row0 + crop[0] - v  # image x (right), y (down) of the centre
+    if reach <= min(x, y, width - x, height - y):
+        return 0.0
+    if not (0 <= x <= width and 0 <= y <= height):
+        return 1.0  # the centre is out of view (more than half, along a border)
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = x + c * along - s * across
+    ys = y - (s * along + c * across)
+    outside = (xs < 0) | (xs > width) | (ys < 0) | (ys > height)
+    return float(outside.mean())
+
+
+_BORDER_BAND = 3.0
+"""Px in from the image's border in which a square's stretch along it is taken, and
+the least depth in which its region is looked at beside it."""
+
+
+def runs_on_along_border(
+    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
+) -> bool:
+    """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
+    of ``image`` rows × columns) reaches past a border of the image along which its
+    region runs on beyond it: the mask holds (α > ½) within a quarter side (at least
+    :data:`_BORDER_BAND` px) of that border over most of a stretch a quarter side long
+    (at least 3 px), 2 px past either end of the square's own stretch there. Such a
+    square is a piece of something cut by the border — a strip of table, a board's
+    edge, a row of things, an arm reaching in — not a block whose top shows whole: a
+    block poking past the border ends with the square along it. (Not only the pixels
+    at the border: there a pale or glaring part of an arm may fray the mask, as at
+    the top of langtable_real.)"""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    row0, col0 = offset
+    crop_rows, crop_cols = alpha.shape
+    height, width = image[0], image[1]
+    x, y = col0 + u, row0 + crop_rows - v
+    along, across = np.meshgrid(_SAMPLES * side, _SAMPLES * side)
+    xs = (x + c * along - s * across).ravel()
+    ys = (y - (s * along + c * across)).ravel()
+    reach = max(3.0, side / 4)
+    stretch = np.arange(2.0, 2.0 + reach) + 0.5
+    depths = np.arange(max(_BORDER_BAND, reach)) + 0.5
+    # each border: the points' depth in from it and place along it; whether it is
+    # upright (left, right) and the image's extent there (0 for left and top)
+    edges = (
+        (xs, ys, True, 0),
+        (width - xs, ys, True, width),
+        (ys, xs, False, 0),
+        (height - ys, xs, False, height),
+    )
+    for depth, place, upright, far in edges:
+        if not np.any(depth < 0):
+            continue  # the square stays inside this border
+        near = place[depth < _BORDER_BAND]
+        length = height if upright else width
+        for ends in (near.min() - stretch, near.max() + stretch):
+            points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
+            px, py = (points_in, points_along) if upright else (points_along, points_in)
+            cols = np.floor(px - col0).astype(np.intp)
+            rows = np.floor(py - row0).astype(np.intp)
+            within = (
+                (rows >= 0)
+                & (rows < crop_rows)
+                & (cols >= 0)
+                & (cols < crop_cols)
+                & (points_along >= 0)
+                & (points_along < length)
+            )
+            # the square's own pixels (2 px around it too) are not its region beside it
+            du, dv = px - x, y - py
+            own = np.maximum(np.abs(c * du + s * dv), np.abs(c * dv - s * du)) < side / 2 + 2
+            within &= ~own
+            held = np.zeros(px.shape, dtype=bool)
+            held[within] = alpha[rows[within], cols[within]] > 0.5
+            if held.any(axis=0).mean() > 0.5:
+                return True
+    return False
+
+
+MIN_EXPLAINED_SHARE = 0.5
+"""The least share of a colour region the squares accepted in it must cover
+(their areas over its pixels with α > ½) for them to stand. Seen from above, a
+block's region is its top face and what shows of its sides in its colour (less
+than its top; most of it the side-face test drops), so its top covers at least
+half of it, and touching blocks of one colour each cover their part. A region
+mostly left when its squares are cut out is something larger — a wooden board,
+a table patch crossed by cables — in which squares were fitted between its
+marks: it holds no block (``larger than its squares``)."""
+
+
+def explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
+    """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
+    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge)."""
+    if not squares:
+        return 1.0
+    area = int(np.count_nonzero(alpha > 0.5))
+    return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
+
+
+def free_outline_seen(
+    alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
+) -> float:
+    """The share of the square ``params``'s outline (on the crop ``alpha`` at
+    ``offset`` in an image of ``image`` rows × columns) that is seen to border on
+    table: of its points 2 px out (nine along each side), those within the image,
+    where the mask is empty (α < ½; past the crop is table). A point past the
+    image's border shows nothing: a square fitted inside something larger that the
+    border cuts (a robot arm reaching in from the edge) has its side there on the
+    border, not on table. 0 when no point is seen."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    along = np.linspace(-0.4, 0.4, 9) * side
+    out = side / 2 + 2.0
+    normals = np.array([(c, s), (-c, -s), (-s, c), (s, -c)])
+    nu, nv = normals[:, :1], normals[:, 1:]
+    pu = ((u + out * nu) - along * nv).ravel()
+    pv = ((v + out * nv) + along * nu).ravel()
+    crop_rows, crop_cols = alpha.shape
+    row0, col0 = offset
+    xs, ys = col0 + pu, row0 + crop_rows - pv  # image x (right), y (down)
+    seen = (xs >= 0) & (xs < image[1]) & (ys >= 0) & (ys < image[0])
+    if not seen.any():
+        return 0.0
+    cols, rows = pu.astype(np.intp), (crop_rows - pv).astype(np.intp)  # as the fit's own
+    within = seen & (rows >= 0) & (rows < crop_rows) & (cols >= 0) & (cols < crop_cols)
+    held = np.zeros(pu.shape, dtype=bool)
+    held[within] = alpha[rows[within], cols[within]] >= 0.5
+    return int(np.count_nonzero(seen & ~held)) / int(np.count_nonzero(seen))
