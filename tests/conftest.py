@@ -20,7 +20,7 @@ import pytest
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
 from demoplan.planning.problem import Problem
-from tests.support import background
+from tests.support import background, forkserver
 from tests.support.fixed_problems import load_fixed
 from tests.support.shared_experiments import ExperimentsRun
 
@@ -192,6 +192,7 @@ def pytest_xdist_node_collection_finished(node: Any, ids: list[str]) -> None:
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
+    forkserver.stop_servers()  # this process's (tests/hostile/harness.py starts it)
     for process in _started.values():  # only ours, by their Popen objects
         if process is not None:
             background.stop(process)
