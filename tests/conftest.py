@@ -83,10 +83,8 @@ SLOW = (
     "tests/evaluation/test_evaluate.py::test_evaluate_s_usage_errors",
     "tests/evaluation/test_evaluate.py::test_a_settings_file_out_of_bounds",
     "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
-    "tests/evaluation/test_evaluate.py::test_bad_input_is_one_line",
     "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
     "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
-    "tests/evaluation/test_evaluate.py::test_a_model_without_shapes_is_refused",
     # Single tests of 2 s of CPU or more: 20 s or more of a quick loop's
     # --durations on two cores shared with a load of about 20 (its CPU time was
     # a ninth of its summed durations); each package keeps its other tests.
