@@ -405,27 +405,35 @@ def _child(argv: list[bytes], cwd: str, env: dict[str, str], fds: list[int]) -> 
 def _new_stdio() -> None:
     """``sys.stdin``, ``stdout`` and ``stderr`` made anew on fds 0, 1, 2, as the
     interpreter makes them at its start (Python/pylifecycle.c ``create_stdio``):
-    buffered, line-buffered on a terminal (stderr always), the server's
+    buffered by the file's block size unless ``PYTHONUNBUFFERED`` (stdin
+    always), line-buffered on a terminal (stderr always), the server's
     encoding and error handlers (its environment is the command's)."""
     import io
 
+    buffered = not getattr(
+        sys.stdout, "write_through", False
+    )  # as the server's start made it (PYTHONUNBUFFERED)
     made: list[io.TextIOWrapper[Any]] = []
     for fd, name, old in (
         (0, "<stdin>", sys.stdin),
         (1, "<stdout>", sys.stdout),
         (2, "<stderr>", sys.stderr),
     ):
-        raw = io.FileIO(fd, "rb" if fd == 0 else "wb", closefd=False)
-        buffered: Any = io.BufferedReader(raw) if fd == 0 else io.BufferedWriter(raw)
+        reading = fd == 0
+        buffer: Any = io.open(  # noqa: UP020, SIM115 - a buffer, as the interpreter opens it
+            fd, "rb" if reading else "wb", buffering=-1 if buffered or reading else 0, closefd=False
+        )
+        raw = buffer.raw if hasattr(buffer, "raw") else buffer
         text = io.TextIOWrapper(
-            buffered,
+            buffer,
             encoding=old.encoding,
             errors=old.errors,
             newline="\n",
-            line_buffering=raw.isatty() or fd == 2,
+            line_buffering=buffered and (raw.isatty() or fd == 2),
+            write_through=not buffered and not reading,
         )
         raw.name = name
-        text.mode = "r" if fd == 0 else "w"  # type: ignore[misc]
+        text.mode = "r" if reading else "w"  # type: ignore[misc]
         made.append(text)
     sys.stdin, sys.stdout, sys.stderr = made
     sys.__stdin__, sys.__stdout__, sys.__stderr__ = made  # type: ignore[misc]

@@ -37,6 +37,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("forkserver")
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
     shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
     learned = forkserver.fresh(CASES["learn"], folder, _env(), timeout=TIMEOUT)
     assert learned.returncode == 0, learned.stderr
     shutil.copy(folder / "model.json", os.fsdecode(os.fsencode(folder) + b"/odd-\xff.json"))
@@ -80,6 +81,11 @@ def test_stdin_and_a_full_disk_reach_the_forked_command(
         forked = _forked([b"show", b"model.json"], workspace, stdout_file=full)
         assert forked == _fresh([b"show", b"model.json"], workspace, stdout_file=full)
     assert forked[0] == 1 and b"standard output" in forked[2], forked
+    with Path("/dev/full").open("wb") as full:  # the lean path, buffered as the executable's
+        solve = [b"solve", b"problem.xml", b"--timeout", b"inf"]
+        assert _forked(solve, workspace, stdout_file=full) == _fresh(
+            solve, workspace, stdout_file=full
+        )
 
 
 def test_another_environment_starts_the_command_fresh(
