@@ -54,8 +54,7 @@ def run(
     start could matter (tests/support/forkserver.py). ``stdout_path``: a file
     to send stdout to (``/dev/full``)."""
     argv = [os.fsencode(a) if not isinstance(a, bytes) else a for a in args]
-    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env = forkserver.command_env()
     started = time.monotonic()
     out_file = Path(stdout_path).open("wb") if stdout_path else None  # noqa: SIM115
     try:

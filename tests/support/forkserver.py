@@ -179,6 +179,15 @@ def _lasting(env: Mapping[str, str]) -> dict[str, str]:
     return {key: value for key, value in env.items() if key not in PER_TEST}
 
 
+def command_env() -> dict[str, str]:
+    """The environment tests run ``demoplan`` in: this process's, 100 columns,
+    every warning shown (one printed would break a one-line error), bytecode
+    written as a user's would be."""
+    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
 def stop_servers() -> None:
     """Stop this process's server (they also end when this process does)."""
     for server in _servers.values():

@@ -45,7 +45,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _env() -> dict[str, str]:
-    return dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
+    return forkserver.command_env()
 
 
 def _forked(args: list[bytes], folder: Path, **options: object) -> tuple[int, bytes, bytes]:
