@@ -39,15 +39,9 @@ RENDERING_AND_PARSING = {
     "demoplan.execution.executor.ExecutionSettings",
     # a scene document parsed as `plan` parses it (the studio's requests)
     "demoplan.scenes.scene.scene_from_document",
-    # a scene as a value to hand to the command layer, and the yaw of a pose
-    "demoplan.scenes.scene.Scene",
-    "demoplan.scenes.scene.SceneObject",
-    "demoplan.scenes.scene.yaw_of",
     # the constraint graph as the report draws it
     "demoplan.learning.constraints.goal_order",
     "demoplan.learning.constraints.visit_sequence",
-    # the shipped examples a front end starts from
-    "demoplan.experiments.runs.examples_dir",
 }
 
 

@@ -66,6 +66,12 @@ class Pose:
         """Orientation as extrinsic x-y-z Euler angles in degrees, or ``None``."""
         return None if self.orientation is None else rpy_from_quat(self.orientation)
 
+    @property
+    def yaw(self) -> float:
+        """The yaw in degrees: the rotation about z of :attr:`rpy` (0 when the
+        orientation is unknown)."""
+        return 0.0 if self.orientation is None else rpy_from_quat(self.orientation)[2]
+
 
 @dataclass(frozen=True, slots=True)
 class ObjectGeometry:

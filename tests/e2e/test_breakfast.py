@@ -360,7 +360,6 @@ def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
     from shapely import box as shapely_box
 
     from demoplan.scenes.geometry import footprint
-    from demoplan.scenes.scene import yaw_of
     from tests.support.breakfast import TRAY, carried_tray_scene, laid_out
 
     trays = ((0.2, 0.0, 90.0), (0.8, 0.0, 90.0), (0.5, 0.36, 0.0), (0.5, -0.36, 0.0))
@@ -384,7 +383,7 @@ def test_an_anywhere_tray_that_cannot_stay_goes_to_the_nearest_clear_place(
     kettle_box = shapely_box(0.44, -0.06, 0.56, 0.06)
     tray_shape = scene.object("tray").geometry
     assert tray_shape is not None
-    outline = footprint(tray_shape, tray.position, yaw_of(tray))
+    outline = footprint(tray_shape, tray.position, tray.yaw)
     assert outline.intersection(kettle_box).area < 1e-6, "the tray stands on the kettle's place"
     # nearest clear place: the tray's half-length in y (it keeps its yaw) beyond the kettle
     distance = math.dist(tray.position[:2], (0.5, 0.0))

@@ -237,7 +237,6 @@ def test_a_random_layout_is_a_function_of_its_seed_and_can_be_grasped(
     experiment: str, seed: int, clutter: int
 ) -> None:
     from demoplan.model import footprint
-    from demoplan.scenes.scene import yaw_of
 
     model = _model(experiment)
     layout = LayoutSettings(clutter=clutter)
@@ -252,7 +251,7 @@ def test_a_random_layout_is_a_function_of_its_seed_and_can_be_grasped(
         assert obj.geometry is not None
         x, y, z = obj.pose.position
         assert x0 <= x <= x1 and y0 <= y <= y1
-        outlines[obj.name] = (z, footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose)))
+        outlines[obj.name] = (z, footprint(obj.geometry, obj.pose.position, obj.pose.yaw))
     on_table = [(n, o) for n, (z, o) in outlines.items() if z < 1e-9]
     reach = 2 * layout.finger_radius + 0.01 - 1e-6  # a gripper's reach apart
     for i, (a, first) in enumerate(on_table):
@@ -281,7 +280,6 @@ def test_a_random_layout_moves_and_turns_the_lunch_box_keeping_its_shape(
     outline in the workspace, and no object on the table within a gripper's
     reach of it; the layout is a function of its seed."""
     from demoplan.model import footprint
-    from demoplan.scenes.scene import yaw_of
 
     model = _lunch_model()
     layout = LayoutSettings(clutter=clutter)
@@ -293,7 +291,7 @@ def test_a_random_layout_moves_and_turns_the_lunch_box_keeping_its_shape(
     (pose,) = (p for name, p in scene.landmarks if name == "lunchbox")
     taught = [dict(d.landmarks)["lunchbox"] for d in model.demonstrations]
     assert all(math.dist(pose.position, t.position) > 1e-9 for t in taught)  # moved
-    outline = footprint(dict(scene.landmark_geometry)["lunchbox"], pose.position, yaw_of(pose))
+    outline = footprint(dict(scene.landmark_geometry)["lunchbox"], pose.position, pose.yaw)
     (x0, y0), (x1, y1) = workspace_box(model, layout.margin)
     bx0, by0, bx1, by1 = outline.bounds
     assert x0 - 1e-9 <= bx0 and bx1 <= x1 + 1e-9 and y0 - 1e-9 <= by0 and by1 <= y1 + 1e-9
@@ -301,7 +299,7 @@ def test_a_random_layout_moves_and_turns_the_lunch_box_keeping_its_shape(
     for obj in scene.objects:
         assert obj.geometry is not None
         if obj.pose.position[2] < 1e-9:
-            at = footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose))
+            at = footprint(obj.geometry, obj.pose.position, obj.pose.yaw)
             assert at.distance(outline) >= reach, obj.name
 
 

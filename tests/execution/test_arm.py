@@ -28,7 +28,7 @@ from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.prepared import prepare
-from demoplan.scenes.scene import Scene, complete_geometry, load_scene, yaw_of
+from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -72,7 +72,7 @@ def _assert_done_on_target(report: RunReport) -> None:
     for name, target in last.items():
         final = report.final.poses[name]
         assert math.dist(final.position, target.position) < 0.01, name
-        turn = (yaw_of(final) - yaw_of(target) + 180.0) % 360.0 - 180.0
+        turn = (final.yaw - target.yaw + 180.0) % 360.0 - 180.0
         assert abs(turn) < 5.0, (name, turn)
 
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.model import Pose, footprint
-from demoplan.scenes.scene import Scene, scene_from_document, yaw_of
+from demoplan.scenes.scene import Scene, scene_from_document
 
 BLOCK = [0.04, 0.04, 0.04]
 
@@ -76,7 +76,7 @@ def test_a_dropped_block_rests_on_the_box_or_on_the_table_never_across_its_edge(
     pose = _dropped(world)
     (_, box_pose) = scene.landmarks[0]
     box = footprint(dict(scene.landmark_geometry)["lunchbox"], box_pose.position, yaw)
-    block = footprint(scene.objects[0].geometry, pose.position, yaw_of(pose))  # type: ignore[arg-type]
+    block = footprint(scene.objects[0].geometry, pose.position, pose.yaw)  # type: ignore[arg-type]
     covered = block.intersection(box).area / block.area
     if pose.position[2] > 0:
         assert pose.position[2] == pytest.approx(height) and covered == pytest.approx(1.0)

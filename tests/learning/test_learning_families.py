@@ -24,7 +24,7 @@ from demoplan.experiments.paper import PAPER_TABLE_II as LIBRARY_TABLE_II
 from demoplan.learning.settings import PAPER_SETTINGS
 from demoplan.model import Demonstration, Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
-from demoplan.scenes.scene import Scene, SceneObject, yaw_of
+from demoplan.scenes.scene import Scene, SceneObject
 from demoplan.scenes.targets import candidate_goals
 from tests.support.learning_families import (
     PAPER_ORDERS,
@@ -145,7 +145,7 @@ def offsets_in_tray_frame(family: Family) -> dict[str, np.ndarray]:
         )
         for step in demo.steps:
             if step.object != "tray":
-                local = rotate(-yaw_of(tray), np.subtract(step.pose.position, tray.position)[:2])
+                local = rotate(-tray.yaw, np.subtract(step.pose.position, tray.position)[:2])
                 rows.setdefault(step.object, []).append(
                     np.array([*local, step.pose.position[2] - tray.position[2]])
                 )
@@ -221,7 +221,7 @@ def test_items_targets_follow_the_trays_target_pose(
                 continue
             assert tray_target is not None, "the tray must come before its items"
             want = np.array(tray_target.position[:2]) + rotate(
-                yaw_of(tray_target), offsets[subtask.object][:2]
+                tray_target.yaw, offsets[subtask.object][:2]
             )
             error = math.dist(subtask.pose.position[:2], want)
             assert error <= 0.003, f"{subtask.object}: target {error * 1000:.1f} mm off"

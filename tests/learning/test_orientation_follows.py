@@ -21,7 +21,6 @@ from demoplan import learn
 from demoplan.learning.tables import diagnostic_lines, state_rows
 from demoplan.model import Pose, TaskModel
 from demoplan.rotations import quat_from_yaw
-from demoplan.scenes.scene import yaw_of
 from demoplan.scenes.targets import candidate_goals
 from tests.support.fixture_families import (
     ITEM_PERIOD,
@@ -66,8 +65,8 @@ def check_targets(
             want_xy = np.array(place) + rotate(turn, np.array(task.offsets[name]))
             error = math.dist(subtask.pose.position[:2], want_xy)
             assert error <= 0.003 + 3 * task.sigma, f"{name}: {error * 1000:.1f} mm off"
-            off = yaw_error(yaw_of(subtask.pose), turn + task.yaws[name], ITEM_PERIOD)
-            assert off <= 1.5, f"{name}: yaw {yaw_of(subtask.pose):.1f}°, {off:.1f}° off"
+            off = yaw_error(subtask.pose.yaw, turn + task.yaws[name], ITEM_PERIOD)
+            assert off <= 1.5, f"{name}: yaw {subtask.pose.yaw:.1f}°, {off:.1f}° off"
 
 
 @settings(max_examples=25, deadline=None)

@@ -29,7 +29,7 @@ from demoplan.scenes.geometry import (
     supports,
 )
 from demoplan.scenes.problems import build_problem
-from demoplan.scenes.scene import Gripper, Scene, SceneObject, yaw_of
+from demoplan.scenes.scene import Gripper, Scene, SceneObject
 from demoplan.scenes.targets import candidate_goals
 from tests.support.planning_families import grasp_collides
 
@@ -280,8 +280,8 @@ def test_orientation_through_its_reference() -> None:
     )
     (candidate,) = candidate_goals(model, scene)
     a_target, b_target = (s.pose for s in candidate.subtasks)
-    assert yaw_of(a_target) == pytest.approx(30.0)  # no learned orientation: kept
-    assert yaw_of(b_target) == pytest.approx(40.0)  # 30 + 10 through a
+    assert a_target.yaw == pytest.approx(30.0)  # no learned orientation: kept
+    assert b_target.yaw == pytest.approx(40.0)  # 30 + 10 through a
 
 
 def test_landmark_reference_prefers_the_scene() -> None:

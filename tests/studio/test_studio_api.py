@@ -32,7 +32,6 @@ from demoplan.learning.modelfile import load_model
 from demoplan.learning.tables import state_rows
 from demoplan.model import ObjectGeometry, footprint
 from demoplan.plotting.colours import assign_colours
-from demoplan.scenes.scene import yaw_of
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.learning.test_orientation_follows import lunch_documents
@@ -117,7 +116,7 @@ def test_a_template_is_its_examples_first_initial_layout(
     colours = assign_colours([*layout["objects"], *layout["landmarks"]])
     for name, pose in first.initial:
         assert layout["poses"][name]["position"] == pytest.approx(list(pose.position))
-        assert layout["poses"][name]["yaw"] == pytest.approx(yaw_of(pose), abs=1e-6)
+        assert layout["poses"][name]["yaw"] == pytest.approx(pose.yaw, abs=1e-6)
         assert layout["objects"][name]["size"] == pytest.approx(list(geometry[name].size))
         assert layout["objects"][name]["colour"] == colours[name]
     # the table holds every pose of the task's demonstrations

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from demoplan.commands.objects import objects_from_document, scene_document
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, footprint
-from demoplan.scenes.scene import scene_from_document, yaw_of
+from demoplan.scenes.scene import scene_from_document
 from demoplan.studio.app import create_app
 from tests.studio.test_studio_api import one_line_error, work
 from tests.support.studio_browser import ROOT
@@ -86,7 +86,7 @@ def test_objects_saved_are_listed_and_read_back_with_colour_mass_and_type(
     scene = scene_from_document(scene_document(answer["document"], "lunch.json"), "lunch.json")
     assert scene.object("cookie").type == "biscuit"
     assert dict(scene.landmark_geometry)["lunchbox"].size == (0.26, 0.18, BOX_HEIGHT)
-    assert yaw_of(scene.object("juice").pose) == pytest.approx(30.0)
+    assert scene.object("juice").pose.yaw == pytest.approx(30.0)
 
 
 def test_an_objects_file_keeps_lengths_without_the_pages_float_noise(

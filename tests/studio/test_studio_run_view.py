@@ -33,7 +33,6 @@ from demoplan.commands.execution import run
 from demoplan.commands.learning import learn_files
 from demoplan.execution.faults import Faults
 from demoplan.execution.report import RunReport
-from demoplan.scenes.scene import yaw_of
 from demoplan.studio import worker
 from demoplan.studio.app import create_app
 from demoplan.studio.jobs import LAST_RUN_FILE
@@ -207,7 +206,7 @@ def test_every_event_shows_the_world_the_run_observed_and_the_run_ends_on_its_fi
         for name, pose in report.final.poses.items():
             shown = result["world"]["objects"][name]
             assert shown["position"] == pytest.approx(list(pose.position), abs=1e-9)
-            assert shown["yaw"] == pytest.approx(yaw_of(pose), abs=1e-5)
+            assert shown["yaw"] == pytest.approx(pose.yaw, abs=1e-5)
         # a dropped object is seen where it fell (the world's own record of the
         # fault), not at the target the plan had for it
         dropped = [f for f in report.injected if f.kind == "drop" and f.position is not None]

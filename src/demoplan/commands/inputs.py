@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 __all__ = [
     "STREAM_SUFFIXES",
     "is_pose_stream",
+    "load_examples",
     "load_inputs",
     "model_named",
     "task_and_scene",
@@ -42,6 +43,15 @@ def is_pose_stream(path: Path) -> bool:
     if path.is_dir():
         return (path / "metadata.yaml").is_file()
     return path.suffix.lower() in STREAM_SUFFIXES or path.name == "metadata.yaml"
+
+
+def load_examples(names: Iterable[str]) -> list[Demonstration]:
+    """The demonstrations of the shipped examples (``names`` are paths inside
+    the examples folder, e.g. ``set_table/demonstration-1.json``), read as
+    :func:`load_inputs` reads them."""
+    from demoplan.experiments.runs import examples_dir
+
+    return load_inputs([examples_dir() / name for name in names])
 
 
 def load_inputs(

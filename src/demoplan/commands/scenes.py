@@ -1,8 +1,10 @@
 """What the studio shows while a user moves objects (docs/studio-api.md): a
-learned task's targets in the scene on the table (``targets``), and what stands
-on an object that is picked up and moves with it (``carried_by``, for a drop).
+learned task's targets in the scene on the table (``targets``), what stands on
+an object that is picked up and moves with it (``carried_by``), where a released
+object comes to rest (``drop``) and whether a landmark may be put down
+(``place_landmark``).
 
-Both resolve the scene as ``plan`` does — the same preparation, the same
+All resolve the scene as ``plan`` does — the same preparation, the same
 support rule (docs/scenes.md) — so that the page shows what planning would do.
 """
 
@@ -11,12 +13,21 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3
-from demoplan.scenes.geometry import GeometrySettings, Location, supports
+from demoplan.model import Pose, TaskModel
+from demoplan.scenes.drops import Landing, Standing, carried_by, landing, landmark_clear
+from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.prepared import prepare
-from demoplan.scenes.scene import Scene
+from demoplan.scenes.scene import Scene, final_layout
 
-__all__ = ["Standing", "Target", "carried_by", "targets"]
+__all__ = [
+    "Landing",
+    "Standing",
+    "Target",
+    "carried_by",
+    "drop",
+    "place_landmark",
+    "targets",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,18 +40,12 @@ class Target:
     pose: Pose
 
 
-@dataclass(frozen=True, slots=True)
-class Standing:
-    """An object where it stands: its bottom centre, its yaw (deg), its shape."""
-
-    position: Vector3
-    yaw: float
-    geometry: ObjectGeometry
-
-
-def targets(model: TaskModel, scene: Scene) -> tuple[Target, ...]:
+def targets(model: TaskModel, scene: Scene | None) -> tuple[Target, ...]:
     """The states of the first candidate goal resolved in ``scene`` (clutter
-    allowed, as ``plan`` allows it); none when the scene has no candidate."""
+    allowed, as ``plan`` allows it; no scene: the first demonstration's final
+    layout); none when the scene has no candidate."""
+    if scene is None:
+        scene = final_layout(model.demonstrations[0])
     prepared = prepare(model, scene, clutter=True)
     if not prepared.candidates:
         return ()
@@ -50,20 +55,26 @@ def targets(model: TaskModel, scene: Scene) -> tuple[Target, ...]:
     )
 
 
-def carried_by(
-    name: str, standing: Mapping[str, Standing], settings: GeometrySettings
-) -> frozenset[str]:
-    """The objects standing on ``name``, directly or on each other: they move
-    with it (the support rule of :func:`demoplan.scenes.geometry.supports`)."""
-    locations = [
-        Location(n, thing.position, thing.yaw, "current", (n,), (thing.geometry,))
-        for n, thing in standing.items()
-    ]
-    pairs, _ = supports(locations, settings)
-    carried: set[str] = set()
-    frontier = {name}
-    while frontier:
-        below = frontier
-        frontier = {upper for upper, lower in pairs if lower in below} - carried - {name}
-        carried |= frontier
-    return frozenset(carried)
+def drop(
+    name: str,
+    position: tuple[float, float],
+    yaw: float,
+    objects: Mapping[str, Standing],
+    landmarks: Mapping[str, Standing],
+) -> Landing:
+    """Where object ``name`` comes to rest released over ``position`` at ``yaw``
+    among ``objects`` and ``landmarks`` standing on the table
+    (:func:`demoplan.scenes.drops.landing`, the scene's default settings)."""
+    return landing(name, position, yaw, objects, landmarks, GeometrySettings())
+
+
+def place_landmark(
+    name: str,
+    moved: Standing,
+    objects: Mapping[str, Standing],
+    landmarks: Mapping[str, Standing],
+) -> Standing:
+    """Landmark ``name`` put down as ``moved``, when it stands clear of every
+    object and other landmark (:func:`demoplan.scenes.drops.landmark_clear`)."""
+    landmark_clear(name, moved, objects, landmarks, GeometrySettings())
+    return moved

@@ -37,7 +37,7 @@ from demoplan.model import (
     footprint,
 )
 from demoplan.scenes.landmarks import moved_landmarks
-from demoplan.scenes.scene import Scene, scene_from_document, yaw_of
+from demoplan.scenes.scene import Scene, scene_from_document
 from demoplan.scenes.table import demonstrated_workspace
 
 __all__ = ["LayoutSettings", "random_scene", "random_scene_document", "workspace_box"]
@@ -71,7 +71,7 @@ def workspace_box(
     outlines = [
         shapely.Point(pose.position[0], pose.position[1])
         if shape is None
-        else footprint(shape, pose.position, yaw_of(pose))
+        else footprint(shape, pose.position, pose.yaw)
         for pose, shape in demonstrated_workspace(model)
     ]
     x0, y0, x1, y1 = shapely.union_all(outlines).bounds
@@ -123,7 +123,7 @@ class _Layout:
         for name, pose in model.demonstrations[0].landmarks:
             shape = shapes.get(name)
             x, y, z = pose.position
-            place = (x, y, z, yaw_of(pose))
+            place = (x, y, z, pose.yaw)
             if name in moved:
                 place = self._landmark_place(shape, z) or place
             self.landmark_places[name] = place

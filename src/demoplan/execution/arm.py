@@ -86,7 +86,7 @@ from demoplan.execution.faults import Faults
 from demoplan.execution.physics import scene_xml
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.scenes.geometry import half_extent
-from demoplan.scenes.scene import DEFAULT_GRASPS, Scene, yaw_of
+from demoplan.scenes.scene import DEFAULT_GRASPS, Scene
 
 logger = logging.getLogger(__name__)
 
@@ -337,7 +337,7 @@ class ArmWorld(ArmMoves):
         top = pose.position[2] + self.geometry[obj].size[2]
         x, y = pose.position[0], pose.position[1]
         if missed:
-            angle = math.radians(yaw_of(pose) + axis + 90.0)
+            angle = math.radians(pose.yaw + axis + 90.0)
             x, y = x + 0.03 * math.cos(angle), y + 0.03 * math.sin(angle)
         self._switch_tool("suction")
         logger.info("arm: over %s at (%.3f, %.3f) and down onto its top", obj, x, y)
@@ -367,7 +367,7 @@ class ArmWorld(ArmMoves):
                 f"{obj} is {200 * half:.1f} cm across grasp {axis:g}°; "
                 f"the jaws open to {100 * JAW_STROKE:.1f} cm"
             )
-        across = yaw_of(pose) + axis
+        across = pose.yaw + axis
         yaw = self.cup_yaw + ((across - self.cup_yaw + 90.0) % 180.0) - 90.0
         x, y = pose.position[0], pose.position[1]
         if missed:
@@ -397,7 +397,7 @@ class ArmWorld(ArmMoves):
         if self._touching(obj) or (self.tool == "fingers" and self._in_the_jaws(obj)):
             self.held = obj
             self.grip = np.linalg.inv(self._cup_frame()) @ self._object_frame(obj)
-            self.grip_yaw = yaw_of(self._pose(obj)) - self.cup_yaw
+            self.grip_yaw = self._pose(obj).yaw - self.cup_yaw
 
     def _tool_for(self, obj: str) -> Tool:
         """The tool that takes ``obj`` (:func:`choose_tool`; the suction cup for
@@ -535,7 +535,7 @@ class ArmWorld(ArmMoves):
         obj = self.held
         shape = self.geometry[obj]
         target = np.eye(4)
-        target[:3, :3] = _yaw_matrix(yaw_of(pose))
+        target[:3, :3] = _yaw_matrix(pose.yaw)
         target[:3, 3] = [
             pose.position[0],
             pose.position[1],

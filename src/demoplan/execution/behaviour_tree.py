@@ -47,7 +47,6 @@ from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import bounding_radius, yaw_difference
 from demoplan.scenes.plan import ChosenPlan, ScenePlan
 from demoplan.scenes.problems import SceneProblem
-from demoplan.scenes.scene import yaw_of
 
 __all__ = [
     "ATTEMPTS",
@@ -461,7 +460,7 @@ class _Binding:
             where = ", ".join(f"{v:.3f}" for v in pose.position)
             return f"at ({where}), {100 * error:.1f} cm from its target"
         if _flag(blackboard, "check_yaw") and obj in observation.geometry:
-            turn = yaw_difference(observation.geometry[obj], yaw_of(pose), yaw_of(target))
+            turn = yaw_difference(observation.geometry[obj], pose.yaw, target.yaw)
             if turn > float(blackboard.get_string("yaw_tolerance")):
                 return f"turned {turn:.1f}° from its target"
         return None

@@ -29,7 +29,7 @@ from demoplan.model import ObjectGeometry, Pose
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 from demoplan.rotations import quat_from_yaw
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 
 PERCEIVED_COLOURS = ("red", "green", "blue", "yellow", "wood")
 """The block colours the top camera tells apart (as in demoplan.plotting.colours)."""
@@ -65,7 +65,7 @@ class CameraWorld:
                 o.pose.position[0],
                 o.pose.position[1],
                 o.pose.position[2],
-                ((yaw_of(o.pose) + 45.0) % 90.0) - 45.0,
+                ((o.pose.yaw + 45.0) % 90.0) - 45.0,
                 o.geometry.size[0] if o.geometry else 0.04,
                 o.kind,
             )

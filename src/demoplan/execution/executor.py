@@ -65,7 +65,7 @@ from demoplan.scenes.prepared import (
     prepare_observed,
 )
 from demoplan.scenes.problems import SceneProblem, build_problem, pose_of
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import surroundings_of
 from demoplan.wording import plural
 
@@ -695,7 +695,7 @@ def _turned(
     pose = observation.poses.get(obj)
     if shape is None or pose is None or location not in _oriented(problem):
         return None
-    turn = yaw_difference(shape, yaw_of(pose), problem.location(location).yaw)
+    turn = yaw_difference(shape, pose.yaw, problem.location(location).yaw)
     return turn if turn > tolerance else None
 
 

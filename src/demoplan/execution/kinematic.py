@@ -18,7 +18,7 @@ from demoplan.execution.world import Observation
 from demoplan.model import LEVEL_TOLERANCE, SUPPORT_FRACTION, ObjectGeometry, Pose, footprint
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.geometry import bounding_radius, finger_offset
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 
 __all__ = ["OBSTACLE", "KinematicWorld"]
 
@@ -52,7 +52,7 @@ class KinematicWorld:
         shapes = dict(scene.landmark_geometry)
         self.platforms = [  # landmarks with a size: what falls on one lands on its top
             (
-                footprint(shapes[name], pose.position, yaw_of(pose)),
+                footprint(shapes[name], pose.position, pose.yaw),
                 pose.position[2] + shapes[name].size[2],
             )
             for name, pose in scene.landmarks
@@ -129,7 +129,7 @@ class KinematicWorld:
                     obj,
                     float(self.rng.uniform(x0, x1)),
                     float(self.rng.uniform(y0, y1)),
-                    yaw_of(before),
+                    before.yaw,
                 )
                 if math.dist(landed.position, before.position) < DISPLACEMENT:
                     self.poses[obj] = before  # no clear spot away from it: no fault
@@ -188,7 +188,7 @@ class KinematicWorld:
                 angle = start + 2 * math.pi * k / 24
                 px, py = x + distance * math.cos(angle), y + distance * math.sin(angle)
                 if x0 <= px <= x1 and y0 <= py <= y1 and self._clear(px, py, shape, 0.002):
-                    yaw = yaw_of(target) + float(self.rng.uniform(-10, 10))
+                    yaw = target.yaw + float(self.rng.uniform(-10, 10))
                     z = self._ground(px, py, shape, yaw)
                     if z is not None:
                         return Pose((px, py, z), quat_from_yaw(yaw))
@@ -208,14 +208,14 @@ class KinematicWorld:
         outline (the support rule of docs/scenes.md, as the planner has it)."""
         pose, shape = self.poses[obj], self.geometry[obj]
         top = pose.position[2] + shape.size[2]
-        below = footprint(shape, pose.position, yaw_of(pose))
+        below = footprint(shape, pose.position, pose.yaw)
         standing = []
         for other, p in self.poses.items():
             if other == obj or abs(p.position[2] - top) >= LEVEL_TOLERANCE:
                 continue
             if p.position[2] <= pose.position[2] + shape.size[2] / 2:
                 continue
-            upper = footprint(self.geometry[other], p.position, yaw_of(p))
+            upper = footprint(self.geometry[other], p.position, p.yaw)
             if upper.intersection(below).area >= SUPPORT_FRACTION * upper.area:
                 standing.append(other)
         return standing
@@ -265,7 +265,7 @@ class KinematicWorld:
         ``yaw`` (default: as it was when picked up)."""
         shape = self.geometry[obj]
         if yaw is None:
-            yaw = yaw_of(self.picked_from) if self.picked_from is not None else 0.0
+            yaw = self.picked_from.yaw if self.picked_from is not None else 0.0
         yaw += float(self.rng.uniform(-10, 10))
         (x0, y0), (x1, y1) = self.region
         best = None

@@ -38,7 +38,7 @@ from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
 from demoplan.plotting.colours import NAMED, assign_colours, object_rgba
 from demoplan.scenes.geometry import half_extent
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 
 __all__ = ["MujocoWorld", "scene_xml"]
 
@@ -437,7 +437,7 @@ class MujocoWorld:
             return
         pose = where if where is not None else self._pose(obj)  # where it is believed to be
         shape = self.geometry[obj]
-        yaw = yaw_of(pose) + axis
+        yaw = pose.yaw + axis
         half = half_extent(shape, axis)
         centre = np.array(
             [pose.position[0], pose.position[1], pose.position[2] + shape.size[2] / 2]
@@ -471,14 +471,14 @@ class MujocoWorld:
         body = self._body(obj)
         self.grip_axis = axis
         self.grip_offset = np.array(self.data.xpos[body]) - self._hand_body()
-        self.grip_yaw = yaw_of(self._pose(obj)) - self.hand_yaw
+        self.grip_yaw = self._pose(obj).yaw - self.hand_yaw
 
     def put_down(self, obj: str, pose: Pose) -> None:
         self.oracle.actions += 1
         if self.held != obj:
             return
         shape = self.geometry[obj]
-        target_yaw = yaw_of(pose) - self.grip_yaw
+        target_yaw = pose.yaw - self.grip_yaw
         x, y, z = pose.position
         self._sync_oracle()
         travel = self._travel_height()
@@ -649,7 +649,7 @@ class MujocoWorld:
         obj = self.held
         shape = self.geometry[obj]
         hand = self._hand()
-        yaw = yaw_of(spot) - self.grip_yaw
+        yaw = spot.yaw - self.grip_yaw
         above = np.array(
             [spot.position[0], spot.position[1], spot.position[2] + shape.size[2] / 2 + 0.012]
         )

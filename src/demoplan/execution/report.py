@@ -16,7 +16,7 @@ from demoplan.execution.faults import InjectedFault
 from demoplan.execution.world import Observation
 from demoplan.model import Pose
 from demoplan.planning.problem import Action
-from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict, yaw_of
+from demoplan.scenes.scene import Scene, SceneObject, scene_to_dict
 
 __all__ = [
     "ExecutedAction",
@@ -158,7 +158,7 @@ class RunReport:
                     "step": e.step,
                     "action": [e.action.kind, e.action.object, e.action.location, e.action.grasp],
                     "position": [round(v, 6) for v in e.pose.position],
-                    "yaw": round(yaw_of(e.pose), 3),
+                    "yaw": round(e.pose.yaw, 3),
                     "plan": e.plan,
                     "ok": e.ok,
                 }

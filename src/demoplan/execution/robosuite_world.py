@@ -36,7 +36,7 @@ from demoplan.execution.robosuite_scene import (
 )
 from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 
 __all__ = ["RobosuiteWorld"]
 
@@ -127,7 +127,7 @@ class RobosuiteWorld:
         target = self.objects[obj]
         pose = object_pose(self.env, target)
         point = self._grip_point(target, pose)
-        reached = self.hand.finger_yaws_within_reach([yaw_of(pose) + axis], point)
+        reached = self.hand.finger_yaws_within_reach([pose.yaw + axis], point)
         if not reached:
             self.motion_failures.append(f"the wrist cannot turn the fingers to grasp {obj}")
             return
@@ -147,7 +147,7 @@ class RobosuiteWorld:
         frame = self.hand.frame
         bottom = np.array(object_pose(self.env, target).position) + [0.0, 0.0, table_top(self.env)]
         self.offset = frame.T @ (bottom - self.hand.position)
-        self.turn = yaw_of(object_pose(self.env, target)) - self.hand.finger_yaw
+        self.turn = object_pose(self.env, target).yaw - self.hand.finger_yaw
 
     def put_down(self, obj: str, pose: Pose) -> None:
         if self.held != obj:
@@ -187,9 +187,9 @@ class RobosuiteWorld:
             peg_pose, shape = peg
             if shape.shape == "cylinder":
                 return [k * FREE_YAW_STEP for k in range(round(360.0 / FREE_YAW_STEP))]
-            return [yaw_of(peg_pose) + k * 90.0 for k in range(4)]
+            return [peg_pose.yaw + k * 90.0 for k in range(4)]
         period = target.geometry.yaw_period or FREE_YAW_STEP
-        return [yaw_of(pose) + k * period for k in range(round(360.0 / period))]
+        return [pose.yaw + k * period for k in range(round(360.0 / period))]
 
     def _peg_under(self, pose: Pose) -> tuple[Pose, ObjectGeometry] | None:
         """The landmark whose footprint holds ``pose``'s point (a peg), with its shape."""

@@ -17,7 +17,7 @@ import numpy as np
 
 from demoplan.errors import InputError
 from demoplan.model import Pose, TaskModel, demonstrated_shapes
-from demoplan.scenes.scene import Scene, complete_geometry, yaw_of
+from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.wording import did_you_mean
 
 __all__ = [
@@ -146,7 +146,7 @@ def _movement(poses: list[Pose], tolerance: tuple[float, float]) -> str | None:
     """How far apart ``poses`` lie, in words, when beyond ``tolerance`` (m, deg); else None."""
     positions = np.array([pose.position for pose in poses], dtype=float)
     distance = float(np.max(np.linalg.norm(positions - positions[0], axis=1)))
-    yaws = [yaw_of(pose) for pose in poses if pose.orientation is not None]
+    yaws = [pose.yaw for pose in poses if pose.orientation is not None]
     turn = 0.0  # a landmark's frame is as given: no symmetry
     if len(yaws) > 1:
         turn = max(abs((y - yaws[0] + 180.0) % 360.0 - 180.0) for y in yaws)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from demoplan.model import ObjectGeometry, Pose, Vector3, footprint
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.problems import SceneProblem, build_problem
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import Surroundings, landmarks_of
 from demoplan.scenes.targets import Candidate
 
@@ -145,7 +145,7 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
                 obj.name,
                 obj.geometry,
                 obj.pose.position,
-                yaw_of(obj.pose),
+                obj.pose.yaw,
                 here,
                 grasps,
                 resting_on,
@@ -157,7 +157,7 @@ def preview_scene(scene: Scene, settings: GeometrySettings = GeometrySettings())
         scene.source,
         tuple(objects),
         tuple(
-            LandmarkPreview(name, pose.position, yaw_of(pose), shape)
+            LandmarkPreview(name, pose.position, pose.yaw, shape)
             for name, pose, shape in landmarks_of(scene)
         ),
         spots,
@@ -179,11 +179,11 @@ def _landmark_under(
     bottom = pose.position[2]
     if bottom <= settings.level_tolerance:
         return ()
-    outline = footprint(geometry, pose.position, yaw_of(pose))
+    outline = footprint(geometry, pose.position, pose.yaw)
     for landmark, at, shape in landmarks_of(scene):
         if shape is None or abs(at.position[2] + shape.size[2] - bottom) > settings.level_tolerance:
             continue
-        top = footprint(shape, at.position, yaw_of(at))
+        top = footprint(shape, at.position, at.yaw)
         if outline.intersection(top).area >= settings.support_fraction * outline.area:
             return (landmark,)
     return ()

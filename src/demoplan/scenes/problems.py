@@ -43,7 +43,7 @@ from demoplan.scenes.geometry import (
 )
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.overhang import OVERHANG_TOLERANCE, overhang, overhang_obstacles
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.simulated_collisions import (
     CollisionComparison,
     checked_pairs,
@@ -232,7 +232,7 @@ def _current_locations(
             Location(
                 name,
                 obj.pose.position,
-                yaw_of(obj.pose),
+                obj.pose.yaw,
                 "current",
                 (obj.name,),
                 (shapes[obj.name],),
@@ -263,7 +263,7 @@ def _add_target_locations(
                 Location(
                     name,
                     subtask.pose.position,
-                    yaw_of(subtask.pose),
+                    subtask.pose.yaw,
                     "target",
                     (subtask.object,),
                     (shape,),
@@ -277,7 +277,7 @@ def _add_target_locations(
             locations[index] = Location(
                 name,
                 subtask.pose.position,
-                yaw_of(subtask.pose),
+                subtask.pose.yaw,
                 kind,
                 users,
                 tuple(shapes[o] for o in users),
@@ -432,12 +432,12 @@ position, yaw, shape and the scene's field that says so."""
 def _standing(scene: Scene, shapes: dict[str, ObjectGeometry]) -> Standing:
     landmark_shapes = dict(scene.landmark_geometry)
     standing = {
-        name: (pose.position, yaw_of(pose), landmark_shapes[name], f"landmarks.{name}")
+        name: (pose.position, pose.yaw, landmark_shapes[name], f"landmarks.{name}")
         for name, pose in scene.landmarks
         if name in landmark_shapes
     }
     standing.update(
-        (obj.name, (obj.pose.position, yaw_of(obj.pose), shapes[obj.name], f"objects.{obj.name}"))
+        (obj.name, (obj.pose.position, obj.pose.yaw, shapes[obj.name], f"objects.{obj.name}"))
         for obj in scene.objects
     )
     return standing
@@ -509,13 +509,13 @@ def _turned_to_fit(
                 continue
             if abs(other.pose.position[2] - subtask.pose.position[2]) > settings.level_tolerance:
                 continue
-            if mine.intersects(outline(other, yaw_of(other.pose))):
+            if mine.intersects(outline(other, other.pose.yaw)):
                 return True
         return False
 
     turned = []
     for subtask in subtasks:
-        yaw = yaw_of(subtask.pose)
+        yaw = subtask.pose.yaw
         if subtask.turnable and (clashes(subtask, yaw) or hangs(subtask, yaw)):
             for yaw in TURNS:
                 if not clashes(subtask, yaw) and not hangs(subtask, yaw):
@@ -529,7 +529,7 @@ def _turned_to_fit(
         field = previous[3] if previous else f"objects.{subtask.object}"
         where[subtask.object] = (
             subtask.pose.position,
-            yaw_of(subtask.pose),
+            subtask.pose.yaw,
             shapes[subtask.object],
             field,
         )
@@ -542,7 +542,7 @@ def landmark_tops(scene: Scene) -> list[tuple[BaseGeometry, float]]:
     shapes = dict(scene.landmark_geometry)
     return [
         (
-            footprint(shapes[name], pose.position, yaw_of(pose)),
+            footprint(shapes[name], pose.position, pose.yaw),
             pose.position[2] + shapes[name].size[2],
         )
         for name, pose in scene.landmarks
@@ -579,7 +579,7 @@ def _coinciding(
             continue
         if (
             not subtask.turnable
-            and yaw_difference(shape, loc.yaw, yaw_of(subtask.pose)) > settings.merge_angle
+            and yaw_difference(shape, loc.yaw, subtask.pose.yaw) > settings.merge_angle
         ):
             continue  # the object stands there but turned: it must be put down again
         distance = math.dist(loc.position[:2], position[:2])

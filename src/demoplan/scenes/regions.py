@@ -20,7 +20,6 @@ from shapely.ops import nearest_points
 from demoplan.learning.regions import in_compartment, local_point
 from demoplan.model import Compartment, ObjectGeometry, Pose, Vector3
 from demoplan.rotations import rotate_vectors
-from demoplan.scenes.scene import yaw_of
 
 __all__ = ["WALL_CLEARANCE", "region_target"]
 
@@ -67,7 +66,7 @@ def region_target(
     if standing is not None and in_compartment(local_point(standing.position, landmark), region):
         return standing.position
     centre = local_point(mean, landmark)
-    hx, hy = _half_extents(shape, yaw - yaw_of(landmark))
+    hx, hy = _half_extents(shape, yaw - landmark.yaw)
     x0, y0, _, x1, y1, _ = region
     ix = min(hx + WALL_CLEARANCE, (x1 - x0) / 2)
     iy = min(hy + WALL_CLEARANCE, (y1 - y0) / 2)

@@ -42,8 +42,14 @@ from demoplan.documents.poses import (
 from demoplan.documents.units import check_document
 from demoplan.errors import InputError
 from demoplan.fileio import check_format, describe_validation_error, read_document
-from demoplan.model import ObjectGeometry, Pose, TaskModel, Vector3, demonstrated_shapes
-from demoplan.rotations import rpy_from_quat
+from demoplan.model import (
+    Demonstration,
+    ObjectGeometry,
+    Pose,
+    TaskModel,
+    Vector3,
+    demonstrated_shapes,
+)
 
 __all__ = [
     "COLOUR",
@@ -52,11 +58,11 @@ __all__ = [
     "Scene",
     "SceneObject",
     "complete_geometry",
+    "final_layout",
     "load_scene",
     "scene_from_document",
     "scene_of_objects_file",
     "scene_to_dict",
-    "yaw_of",
 ]
 
 MAX_GRIPPER = 0.5  # m: finger radius or clearance beyond this is a unit mistake
@@ -129,9 +135,24 @@ class Scene:
         return tuple(name for name, _ in self.landmarks)
 
 
-def yaw_of(pose: Pose) -> float:
-    """The pose's yaw in degrees (0 when the orientation is unknown)."""
-    return 0.0 if pose.orientation is None else rpy_from_quat(pose.orientation)[2]
+def final_layout(demonstration: Demonstration) -> Scene:
+    """``demonstration``'s layout after its last step, as a scene (the studio
+    shows a learned task's targets there when no scene is given)."""
+    poses = demonstration.initial_poses()
+    for step in demonstration.steps:
+        poses[step.object] = step.pose
+    geometry = demonstration.geometry()
+    landmarks = demonstration.landmark_poses()
+    return Scene(
+        objects=tuple(
+            SceneObject(name, pose, geometry.get(name))
+            for name, pose in poses.items()
+            if name not in landmarks
+        ),
+        landmarks=tuple(landmarks.items()),
+        landmark_geometry=tuple((n, g) for n, g in geometry.items() if n in landmarks),
+        source="the first demonstration's final layout",
+    )
 
 
 class _Schema(BaseModel):

@@ -36,7 +36,7 @@ from demoplan.scenes.geometry import (
     location_footprint,
     spot_reach,
 )
-from demoplan.scenes.scene import Gripper, Scene, yaw_of
+from demoplan.scenes.scene import Gripper, Scene
 
 __all__ = [
     "Surroundings",
@@ -63,7 +63,7 @@ class Surroundings:
     def landmark_outlines(self) -> list[BaseGeometry]:
         """The outlines of the landmarks whose size is known (free space keeps off them)."""
         return [
-            footprint(shape, pose.position, yaw_of(pose))
+            footprint(shape, pose.position, pose.yaw)
             for _, pose, shape in self.landmarks
             if shape
         ]
@@ -106,7 +106,7 @@ def workspace_table(
     outlines = [
         shapely.Point(pose.position[0], pose.position[1])
         if shape is None
-        else footprint(shape, pose.position, yaw_of(pose))
+        else footprint(shape, pose.position, pose.yaw)
         for pose, shape in surroundings.workspace
     ]
     x0, y0, x1, y1 = shapely.union_all(outlines).bounds
@@ -129,7 +129,7 @@ def infer_table(
         if shape is None:
             outlines.append(shapely.Point(pose.position[0], pose.position[1]))
         else:
-            outlines.append(footprint(shape, pose.position, yaw_of(pose)))
+            outlines.append(footprint(shape, pose.position, pose.yaw))
     x0, y0, x1, y1 = shapely.union_all(outlines).bounds
     widest = max((bounding_radius(s) for s in shapes), default=0.0)
     margin = max(settings.table_margin, 2 * spot_reach(widest, gripper) + settings.grid_step)

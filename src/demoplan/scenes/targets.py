@@ -52,7 +52,7 @@ from demoplan.scenes.geometry import footprint
 from demoplan.scenes.landmarks import landmark_poses
 from demoplan.scenes.overhang import Support, demonstrated_supports
 from demoplan.scenes.regions import region_target
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 from demoplan.scenes.table import (
     Surroundings,
     demonstrated_workspace,
@@ -217,7 +217,7 @@ class _Resolver:
                         (x, y, z),
                         self.current.get(state.object),
                         self.sizes.get(state.object) or self.geometry.get(state.object),
-                        yaw_of(Pose((0.0, 0.0, 0.0), self.orientation(state))),
+                        Pose((0.0, 0.0, 0.0), self.orientation(state)).yaw,
                         self.reach,
                     )
                 )
@@ -381,7 +381,7 @@ def _anywhere_places(
     resolver.targets.clear()
     moved = {s.object for s in visits}
     landmark_outlines = [
-        footprint(shape, pose.position, yaw_of(pose))
+        footprint(shape, pose.position, pose.yaw)
         for _, pose, shape in landmarks_of(scene)
         if shape is not None
     ]
@@ -396,13 +396,13 @@ def _anywhere_places(
             places[name] = here.position
             continue
         blocked = [
-            footprint(other_shape, pose.position, yaw_of(pose))
+            footprint(other_shape, pose.position, pose.yaw)
             for other, pose in targets
             if other != name
             and name not in follows.get(other, set())
             and (other_shape := _shape(scene, other)) is not None
         ]
-        yaw = yaw_of(Pose(here.position, resolver.orientation(state)))
+        yaw = Pose(here.position, resolver.orientation(state)).yaw
         if here.position[2] <= STANDING_ON_TABLE and _clear(shape, here.position, yaw, blocked):
             places[name] = here.position
             continue
@@ -411,7 +411,7 @@ def _anywhere_places(
             places[name] = (mean[0], mean[1], mean[2])
             continue
         staying = [
-            footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose))
+            footprint(obj.geometry, obj.pose.position, obj.pose.yaw)
             for obj in scene.objects
             if obj.name not in moved and obj.geometry is not None
         ]

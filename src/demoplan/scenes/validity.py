@@ -21,7 +21,7 @@ import shapely
 from demoplan.errors import InputError
 from demoplan.model import ObjectGeometry, Pose, TaskModel, demonstrated_shapes, footprint
 from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 
 __all__ = ["check_landmark_overlaps", "hollow_landmarks"]
 
@@ -40,8 +40,8 @@ def _meets(
     high = min(pose.position[2] + shape.size[2], at.position[2] + body.size[2])
     if high - low <= settings.level_tolerance:
         return False
-    inner = footprint(shape, pose.position, yaw_of(pose)).buffer(-settings.touch_tolerance)
-    outer = footprint(body, at.position, yaw_of(at)).buffer(-settings.touch_tolerance)
+    inner = footprint(shape, pose.position, pose.yaw).buffer(-settings.touch_tolerance)
+    outer = footprint(body, at.position, at.yaw).buffer(-settings.touch_tolerance)
     return bool(inner.intersects(outer))
 
 
@@ -84,7 +84,7 @@ def check_landmark_overlaps(
         return
     outlines = np.array(
         [
-            footprint(obj.geometry, obj.pose.position, yaw_of(obj.pose)).buffer(
+            footprint(obj.geometry, obj.pose.position, obj.pose.yaw).buffer(
                 -settings.touch_tolerance
             )
             for obj in objects
@@ -99,7 +99,7 @@ def check_landmark_overlaps(
     for name, at, body in bodies:
         low, high = at.position[2], at.position[2] + body.size[2]
         level = (np.minimum(tops, high) - np.maximum(bottoms, low)) > settings.level_tolerance
-        outline = footprint(body, at.position, yaw_of(at)).buffer(-settings.touch_tolerance)
+        outline = footprint(body, at.position, at.yaw).buffer(-settings.touch_tolerance)
         clash = np.flatnonzero(level & shapely.intersects(outline, outlines))
         if len(clash):
             obj = objects[int(clash[0])]

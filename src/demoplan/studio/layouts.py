@@ -13,7 +13,7 @@ degrees) and ``table`` (the rectangle drawn: ``origin`` and ``size``).
 from __future__ import annotations
 
 import random
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,12 +21,11 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 from demoplan.commands.objects import ObjectsFile
-from demoplan.commands.scenes import Standing, carried_by
+from demoplan.commands.scenes import Standing, drop, place_landmark
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry, Pose, footprint
 from demoplan.plotting.colours import assign_colours
-from demoplan.scenes.geometry import GeometrySettings
-from demoplan.scenes.scene import Scene, yaw_of
+from demoplan.scenes.scene import Scene
 from demoplan.studio.requests import Layout
 from demoplan.studio.workfolder import FileMissingError
 from demoplan.wording import plural
@@ -76,8 +75,7 @@ EMPTY_TABLE = {"origin": [0.0, 0.0], "size": [0.8, 0.6]}
 def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]:
     """The template's initial layout: the first demonstration's ``initial``, or
     with ``seed`` its objects scattered (:func:`scattered`)."""
-    from demoplan.commands.inputs import load_inputs
-    from demoplan.experiments.runs import examples_dir
+    from demoplan.commands.inputs import load_examples
 
     template = next((t for t in TEMPLATES if t.id == template_id), None)
     if template is None:
@@ -92,7 +90,7 @@ def template_layout(template_id: str, seed: int | None = None) -> dict[str, Any]
             "poses": {},
             "table": EMPTY_TABLE,
         }
-    demonstrations = load_inputs([examples_dir() / template.example])
+    demonstrations = load_examples([template.example])
     layout = layout_of_demonstration(demonstrations[0], demonstrations, template.id)
     if seed is None:
         return layout
@@ -254,47 +252,11 @@ def scattered(layout: Layout, seed: int) -> dict[str, Any]:
 def dropped_pose(
     layout: Layout, name: str, position: tuple[float, float], yaw: float
 ) -> dict[str, Any]:
-    """Where ``name`` comes to rest released over ``position`` at ``yaw``: on
-    the highest top under it that holds it up (an object or a landmark whose
-    outline covers at least the support share of its own), else on the table.
-
-    Things do not pass through each other: a release whose outline overlaps
-    something standing higher than where it would rest, by more than the touch
-    tolerance (a box's rim it barely covers, an apple beside its landing spot),
-    is refused, as is landing on
-    what stands on ``name`` (it moves with it) and an object of unknown size."""
-    settings = GeometrySettings()
-    shapes = {n: _known(layout, n) for n in layout.objects}
-    if name not in shapes:
-        raise InputError(
-            f"unknown object {name!r}; expected one of {sorted(shapes)}", field="object"
-        )
-    riders = _carried(layout, shapes, name, settings)
-    moved = footprint(shapes[name], position, yaw)
-    core = moved.buffer(-settings.touch_tolerance)  # a graze within the tolerance is a touch
-    area = moved.area
-    landing: list[tuple[float, str]] = []
-    touched: list[tuple[float, str]] = []  # (top, name) of everything the outline overlaps
-    for other, outline, _, top in _things(layout, shapes, exclude=name):
-        if moved.intersection(outline).area >= settings.support_fraction * area:
-            landing.append((top, other))
-        if core.intersects(outline) and other not in riders:
-            touched.append((top, other))
-    top, support = max(landing) if landing else (0.0, None)
-    if support is not None and support in riders:
-        raise InputError(
-            f"{name!r} would land on {support!r}, which stands on it and moves with it; "
-            "a place clear of what it carries expected",
-            field="position",
-        )
-    blocking = sorted(other for height, other in touched if height > top + 1e-6)
-    if blocking:
-        raise InputError(
-            f"{name!r} would pass through {', '.join(map(repr, blocking))}; "
-            "a free place, or one on top of a single thing, expected",
-            field="position",
-        )
-    return {"pose": {"position": [position[0], position[1], top], "yaw": yaw}, "on": support}
+    """Where ``name`` comes to rest released over ``position`` at ``yaw``
+    (:func:`demoplan.commands.scenes.drop`): its pose and what it stands on.
+    Every object's size is needed (an InputError naming the first without)."""
+    rest = drop(name, position, yaw, *_standing(layout))
+    return {"pose": {"position": list(rest.position), "yaw": rest.yaw}, "on": rest.on}
 
 
 def placed_landmark(
@@ -302,7 +264,7 @@ def placed_landmark(
 ) -> dict[str, Any]:
     """``name``'s landmark moved to ``position`` at ``yaw``: it stands on the
     table, and may not be put down on or through an object or another landmark
-    (an InputError naming them)."""
+    (:func:`demoplan.commands.scenes.place_landmark`)."""
     mark = layout.landmarks.get(name)
     if mark is None:
         raise InputError(
@@ -312,47 +274,23 @@ def placed_landmark(
     pose = {"position": [position[0], position[1], 0.0], "yaw": yaw}
     if mark.size is None:
         return {"pose": pose}
-    shapes = {n: _known(layout, n) for n in layout.objects}
-    core = footprint(_geometry(mark.shape, mark.size), position, yaw).buffer(
-        -GeometrySettings().touch_tolerance
-    )
-    hit = sorted(
-        other
-        for other, outline, _, _ in _things(layout, shapes, exclude=name)
-        if core.intersects(outline)
-    )
-    if hit:
-        raise InputError(
-            f"landmark {name!r} would be put down on {', '.join(map(repr, hit))}; "
-            "a clear place on the table expected (move the objects first)",
-            field="position",
-        )
+    moved = Standing((position[0], position[1], 0.0), yaw, _geometry(mark.shape, mark.size))
+    place_landmark(name, moved, *_standing(layout))
     return {"pose": pose}
 
 
-def _things(
-    layout: Layout, shapes: Mapping[str, ObjectGeometry], exclude: str
-) -> Iterator[tuple[str, BaseGeometry, float, float]]:
-    """Every object and sized landmark but ``exclude``: name, outline, bottom, top."""
-    for other, shape in shapes.items():
-        if other != exclude:
-            pose = layout.poses[other]
-            bottom = pose.xyz[2]
-            yield other, footprint(shape, pose.xyz, pose.yaw), bottom, bottom + shape.size[2]
-    for mark_name, mark in layout.landmarks.items():
-        if mark_name != exclude and mark.size is not None:
-            outline = footprint(_geometry(mark.shape, mark.size), mark.xyz, mark.yaw)
-            yield mark_name, outline, mark.xyz[2], mark.xyz[2] + mark.size[2]
-
-
-def _carried(
-    layout: Layout, shapes: Mapping[str, ObjectGeometry], name: str, settings: GeometrySettings
-) -> set[str]:
-    """The objects standing on ``name``, directly or on each other (they move with it)."""
-    standing = {
-        n: Standing(layout.poses[n].xyz, layout.poses[n].yaw, shape) for n, shape in shapes.items()
+def _standing(layout: Layout) -> tuple[dict[str, Standing], dict[str, Standing]]:
+    """The layout's objects (each must have a size) and its sized landmarks, where they stand."""
+    objects = {
+        n: Standing(layout.poses[n].xyz, layout.poses[n].yaw, _known(layout, n))
+        for n in layout.objects
     }
-    return set(carried_by(name, standing, settings))
+    landmarks = {
+        n: Standing(mark.xyz, mark.yaw, _geometry(mark.shape, mark.size))
+        for n, mark in layout.landmarks.items()
+        if mark.size is not None
+    }
+    return objects, landmarks
 
 
 def _known(layout: Layout, name: str) -> ObjectGeometry:
@@ -371,7 +309,7 @@ def _geometry(shape: str, size: list[float]) -> ObjectGeometry:
 def _outline(shape: ObjectGeometry | None, pose: Pose) -> BaseGeometry:
     if shape is None:
         return shapely.Point(pose.position[0], pose.position[1])
-    return footprint(shape, pose.position, yaw_of(pose))
+    return footprint(shape, pose.position, pose.yaw)
 
 
 def _table(outlines: list[BaseGeometry]) -> dict[str, Any]:
@@ -406,10 +344,10 @@ def _landmark(geometry: ObjectGeometry | None, pose: Pose, colour: str) -> dict[
         "shape": geometry.shape if geometry is not None else "box",
         "size": list(geometry.size) if geometry is not None else None,
         "position": list(pose.position),
-        "yaw": round(yaw_of(pose), 6),
+        "yaw": round(pose.yaw, 6),
         "colour": colour,
     }
 
 
 def _pose(pose: Pose) -> dict[str, Any]:
-    return {"position": list(pose.position), "yaw": round(yaw_of(pose), 6)}
+    return {"position": list(pose.position), "yaw": round(pose.yaw, 6)}

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from demoplan.errors import DemoplanError, error_line
 from demoplan.model import Pose, TaskModel
-from demoplan.scenes.scene import Scene, SceneObject, yaw_of
+from demoplan.scenes.scene import Scene
 
 if TYPE_CHECKING:
     from demoplan.execution.report import RunEvent, RunReport
@@ -24,7 +24,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "event_json",
-    "final_scene",
     "finished_events",
     "model_json",
     "no_plan_json",
@@ -38,7 +37,7 @@ __all__ = [
 
 def pose_json(pose: Pose) -> dict[str, Any]:
     """``{"position": [x, y, z], "yaw": deg}``."""
-    return {"position": [float(v) for v in pose.position], "yaw": round(yaw_of(pose), 6)}
+    return {"position": [float(v) for v in pose.position], "yaw": round(pose.yaw, 6)}
 
 
 def model_json(model: TaskModel) -> dict[str, Any]:
@@ -99,30 +98,9 @@ def model_json(model: TaskModel) -> dict[str, Any]:
     } | ({"roles": roles} if roles else {})
 
 
-def final_scene(model: TaskModel) -> Scene:
-    """The first demonstration's layout after its last step, as a scene (where
-    the learned targets are shown when no scene is given)."""
-    demo = model.demonstrations[0]
-    poses = demo.initial_poses()
-    for step in demo.steps:
-        poses[step.object] = step.pose
-    geometry = demo.geometry()
-    landmarks = demo.landmark_poses()
-    return Scene(
-        objects=tuple(
-            SceneObject(name, pose, geometry.get(name))
-            for name, pose in poses.items()
-            if name not in landmarks
-        ),
-        landmarks=tuple(landmarks.items()),
-        landmark_geometry=tuple((n, g) for n, g in geometry.items() if n in landmarks),
-        source="the first demonstration's final layout",
-    )
-
-
-def targets_json(model: TaskModel, scene: Scene) -> list[dict[str, Any]]:
-    """The states of the first demonstration's goal resolved in ``scene``
-    (where planning would put each object)."""
+def targets_json(model: TaskModel, scene: Scene | None) -> list[dict[str, Any]]:
+    """The states of the first demonstration's goal resolved in ``scene`` (none:
+    the first demonstration's final layout), where planning would put each object."""
     from demoplan.commands.scenes import targets
 
     return [

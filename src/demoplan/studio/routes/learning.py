@@ -72,14 +72,14 @@ def _targets(model: Any, scene: Any) -> list[dict[str, Any]]:
     """The learned targets resolved in ``scene`` (the table as the page shows
     it, landmarks where they stand now); with no scene, or one that does not
     hold the model's objects, in the first demonstration's end."""
-    from demoplan.studio.views import final_scene, targets_json
+    from demoplan.studio.views import targets_json
 
     if scene is not None:
         try:
             return targets_json(model, scene)
         except DemoplanError:
             pass
-    return targets_json(model, final_scene(model))
+    return targets_json(model, None)
 
 
 def _learned(
