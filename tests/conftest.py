@@ -3,10 +3,13 @@ session: under pytest-xdist in a process of their own that the controller
 starts as soon as the workers have collected a test that reads one.
 
 And the order the tests are handed out in: pytest-xdist gives each worker the
-next tests of the collection as it finishes its own, so a long test collected
-late can leave one worker running it alone at the end. The long ones go
-first; the tests that read a shared result next (by then it is ready); the
-rest, short, fill in and end the run."""
+next test of the collection as it finishes its own (``--maxschedchunk=1`` in
+pyproject.toml: without it a worker is handed a quarter of its share at once,
+and the first quarter held every long test), so a long test collected late
+can leave one worker running it alone at the end. The long ones go first,
+longest first, so that the two workers take turns at them; the tests that
+read a shared result next (by then it is ready); the rest, short, fill in
+and end the run."""
 
 from __future__ import annotations
 
@@ -20,22 +23,36 @@ import pytest
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
 from demoplan.planning.problem import Problem
-from tests.support import background
+from tests.support import background, forkserver
 from tests.support.fixed_problems import load_fixed
 from tests.support.shared_experiments import ExperimentsRun
 
 LONG_FIRST = (
-    # Each 20 s to 90 s on two cores (the slowest of a full run's --durations):
-    "tests/execution/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
-    "tests/e2e/test_docs_shell.py::",
-    "tests/hostile/test_concurrency.py::",
-    "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
-    "tests/hostile/test_open_audit.py::test_run_with_video_and_frames_opens_its_inputs_only",
+    # The slowest of a full run's --durations (30 s to 240 s on two cores with a
+    # load of 12), longest first: under --maxschedchunk=1 (pyproject.toml) each
+    # worker takes the next one as it finishes its own.
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/tutorial.md]",
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/perception.md]",
+    "tests/evaluation/test_evaluate.py::test_ray_equals_a_serial_run",
     "tests/evaluation/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
-    "tests/execution/test_arm.py::test_experiment_",
+    "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/segmentation.md]",
+    "tests/hostile/test_concurrency.py::",
+    "tests/execution/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
+    "tests/evaluation/test_evaluate.py::test_a_killed_worker_s_run",
+    "tests/evaluation/test_evaluate.py::test_a_worker_killed_from_outside",
     "tests/execution/test_arm.py::test_kitting_on_the_arm",
-    "tests/scenes/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
+    "tests/evaluation/test_evaluate.py::test_a_journal_torn_by_a_killed_evaluation",
+    "tests/hostile/test_ray_addresses.py::test_a_running_head_is_joined",
+    "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
+    "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
+    "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
+    "tests/execution/test_arm.py::test_experiment_",
+    "tests/e2e/test_docs_shell.py::",
+    "tests/hostile/test_full_disk.py::test_a_full_disk_under_file_outputs",
     "tests/planning/test_pddl.py::test_fast_downward_optimal_lengths_match",
+    "tests/hostile/test_open_audit",
+    "tests/scenes/test_free_space.py::test_the_family_recovers_from_drops_and_blocks",
 )
 SHARED_FIXTURES = ("experiments_run",)
 
@@ -83,10 +100,8 @@ SLOW = (
     "tests/evaluation/test_evaluate.py::test_evaluate_s_usage_errors",
     "tests/evaluation/test_evaluate.py::test_a_settings_file_out_of_bounds",
     "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
-    "tests/evaluation/test_evaluate.py::test_bad_input_is_one_line",
     "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
     "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
-    "tests/evaluation/test_evaluate.py::test_a_model_without_shapes_is_refused",
     # Single tests of 2 s of CPU or more: 20 s or more of a quick loop's
     # --durations on two cores shared with a load of about 20 (its CPU time was
     # a ninth of its summed durations); each package keeps its other tests.
@@ -192,6 +207,7 @@ def pytest_xdist_node_collection_finished(node: Any, ids: list[str]) -> None:
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
+    forkserver.stop_servers()  # this process's (tests/hostile/harness.py starts it)
     for process in _started.values():  # only ours, by their Popen objects
         if process is not None:
             background.stop(process)

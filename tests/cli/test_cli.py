@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -14,14 +14,12 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 from demoplan.learning.modelfile import load_model, model_to_dict
+from tests.support import forkserver
 from tests.support.cli import invoke
 from tests.support.helpers import EXAMPLES, demo, raw, write
 from tests.support.learning_families import PAPER_TABLE_II, PAPER_TABLE_III
 
 SET_TABLE = EXAMPLES / "set_table"
-DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
-# Without the script (an unusual install), run the same entry point through python.
-COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
 
 
 def assert_one_line_error(result: Any, *fragments: str) -> str:
@@ -177,13 +175,11 @@ def test_usage_errors_exit_2(
 
 
 def run(*args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [*COMMAND, *map(str, args)],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        timeout=60,
-        check=False,
+    """``demoplan ARGS`` in a process of its own, forked from the tests' fork
+    server (tests/support/forkserver.py): its own exit code and streams."""
+    done = forkserver.run([os.fsencode(a) for a in args], cwd, forkserver.command_env(), timeout=60)
+    return subprocess.CompletedProcess(
+        done.args, done.returncode, done.stdout.decode(), done.stderr.decode()
     )
 
 
@@ -641,19 +637,14 @@ def test_show_prints_the_column_units(tmp_path: Path) -> None:
 
 
 def test_learn_json_in_a_real_process_prints_only_json(tmp_path: Path) -> None:
-    out = subprocess.run(
-        [
-            *COMMAND,
-            "learn",
-            str(EXAMPLES / "set_table"),
-            "-o",
-            str(tmp_path / "m.json"),
-            "--json",
-            "--paper",
-        ],
-        capture_output=True,
-        text=True,
-        check=False,
+    out = run(
+        "learn",
+        EXAMPLES / "set_table",
+        "-o",
+        tmp_path / "m.json",
+        "--json",
+        "--paper",
+        cwd=tmp_path,
     )
     assert out.returncode == 0
     assert out.stderr == ""

@@ -4,7 +4,9 @@ serial run, a killed worker's run retried or recorded, resume after Ctrl-C.
 Both paper experiments are evaluated over ``DEMOPLAN_EVALUATE_SCENES`` random
 layouts (default 10, as docs/execution.md says) × 2 seeds with faults
 in the kinematic world. One Ray session with 2 CPUs serves the whole module
-(its start-up costs seconds)."""
+(its start-up costs seconds). A command's answer to bad input is asked in
+process (``invoke``); a ``demoplan`` process of its own only where the
+process is what is tested: Ctrl-C, a terminal, Ray missing from its path."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import json
 import math
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -43,6 +46,7 @@ from demoplan.fileio import dump_json
 from demoplan.learning import learn
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
+from tests.support.cli import invoke
 from tests.support.helpers import wait_for_signal_handlers
 from tests.support.lunch_box import lunch_demonstrations
 
@@ -418,22 +422,35 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     assert no_ray.returncode == 2
     assert no_ray.stderr.count("\n") == 1
     assert "pip install 'demoplan[scale]'" in no_ray.stderr
-    both = _demoplan("evaluate", model, "--resume", str(tmp_path / "a"))
-    assert (both.returncode, both.stderr.count("\n")) == (2, 1)
-    nothing = _demoplan("evaluate", model, "--out", str(tmp_path / "b"), "--workers", "0")
-    assert (nothing.returncode, nothing.stderr.count("\n")) == (2, 1)
+    both = invoke("evaluate", model, "--resume", str(tmp_path / "a"))
+    assert (both.exit_code, both.stderr.count("\n")) == (2, 1)
+    nothing = invoke("evaluate", model, "--out", str(tmp_path / "b"), "--workers", "0")
+    assert (nothing.exit_code, nothing.stderr.count("\n")) == (2, 1)
     assert "no scenes" in nothing.stderr
-    too_many = _demoplan(
+    too_many = invoke(
         "evaluate", model, "--random-scenes", "500001", "--seeds", "2", "--out", str(tmp_path / "c")
     )
-    assert (too_many.returncode, too_many.stderr.count("\n")) == (2, 1)
+    assert (too_many.exit_code, too_many.stderr.count("\n")) == (2, 1)
     assert "--random-scenes: 1,000,002 runs (scenes × seeds); at most 1,000,000" in too_many.stderr
-    clutter = _demoplan(
+    clutter = invoke(
         "evaluate", model, "--random-scenes", "1", "--clutter", "21", "--out", str(tmp_path / "d")
     )
-    assert (clutter.returncode, clutter.stderr.count("\n")) == (2, 1)
+    assert (clutter.exit_code, clutter.stderr.count("\n")) == (2, 1)
     assert "--clutter: at most 20 expected" in clutter.stderr
     assert not (tmp_path / "c").exists() and not (tmp_path / "d").exists()
+
+
+@pytest.fixture(scope="module")
+def finished_evaluation(
+    model_files: dict[str, Path], tmp_path_factory: pytest.TempPathFactory
+) -> Path:
+    """A finished ``demoplan evaluate`` folder (one random scene), which tests copy."""
+    out = tmp_path_factory.mktemp("finished") / "eval"
+    made = invoke(
+        "evaluate", str(model_files["exp2"]), "--random-scenes", "1", "--workers", "0", "--out", out
+    )
+    assert made.exit_code == 0, made.stderr
+    return out
 
 
 @pytest.mark.parametrize(
@@ -450,25 +467,15 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     ],
 )
 def test_a_settings_file_out_of_bounds_is_refused_on_resume(
-    model_files: dict[str, Path], tmp_path: Path, field: str, value: Any, expected: str
+    finished_evaluation: Path, tmp_path: Path, field: str, value: Any, expected: str
 ) -> None:
     out = tmp_path / "eval"
-    made = _demoplan(
-        "evaluate",
-        str(model_files["exp2"]),
-        "--random-scenes",
-        "1",
-        "--workers",
-        "0",
-        "--out",
-        str(out),
-    )
-    assert made.returncode == 0, made.stderr
+    shutil.copytree(finished_evaluation, out)
     settings = json.loads((out / "evaluation.json").read_text())
     settings[field] = value
     (out / "evaluation.json").write_text(json.dumps(settings))
-    resumed = _demoplan("evaluate", "--resume", str(out), "--workers", "0")
-    assert resumed.returncode == 1
+    resumed = invoke("evaluate", "--resume", str(out), "--workers", "0")
+    assert resumed.exit_code == 1
     assert resumed.stderr.startswith(f"demoplan: error: {out / 'evaluation.json'}: {field}: ")
     assert expected in resumed.stderr and resumed.stderr.count("\n") == 1
 
@@ -525,17 +532,17 @@ def test_bad_input_is_one_line_naming_the_file_and_writes_nothing(
         )
     )
     out = tmp_path / "out"
-    done = _demoplan(
+    done = invoke(
         "evaluate", str(model_files["exp2"]), str(lacking), "--workers", "0", "--out", str(out)
     )
-    assert (done.returncode, done.stderr.count("\n")) == (1, 1)
+    assert (done.exit_code, done.stderr.count("\n")) == (1, 1)
     assert str(lacking) in done.stderr and "green" in done.stderr
     assert not out.exists()
     broken = tmp_path / "broken"
     broken.mkdir()
     (broken / "evaluation.json").write_text("{oops")
-    done = _demoplan("evaluate", "--resume", str(broken), "--workers", "0")
-    assert (done.returncode, done.stderr.count("\n")) == (1, 1)
+    done = invoke("evaluate", "--resume", str(broken), "--workers", "0")
+    assert (done.exit_code, done.stderr.count("\n")) == (1, 1)
     assert "evaluation.json" in done.stderr
 
 
@@ -710,12 +717,12 @@ def test_a_model_without_shapes_is_refused_for_random_layouts_in_one_line(tmp_pa
     demos = tmp_path / "no-shapes.json"
     demos.write_text(json.dumps(data))
     model = tmp_path / "model.json"
-    assert _demoplan("learn", str(demos), "-o", str(model)).returncode == 0
+    assert invoke("learn", str(demos), "-o", str(model)).exit_code == 0
     out = tmp_path / "eval"
-    done = _demoplan(
+    done = invoke(
         "evaluate", str(model), "--random-scenes", "1", "--workers", "0", "--out", str(out)
     )
-    assert done.returncode == 1
+    assert done.exit_code == 1
     assert done.stderr.startswith(f"demoplan: error: {model}: demonstrations: ")
     assert "no shape or size" in done.stderr and done.stderr.count("\n") == 1
     assert "Traceback" not in done.stderr

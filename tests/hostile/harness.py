@@ -5,14 +5,14 @@ from __future__ import annotations
 import hashlib
 import os
 import stat
-import subprocess
-import sys
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
+from tests.support import forkserver
+
+DEMOPLAN = forkserver.DEMOPLAN  # the installed console script
 EXIT_CODES = {0, 1, 2, 3, 4}  # docs/cli.md (130 / 143: interrupted, tested apart)
 REFUSED = {1, 2, 3, 4}
 HANG_SECONDS = 60.0
@@ -49,23 +49,17 @@ def run(
     stdout_path: str | None = None,
 ) -> Answer:
     """Run ``demoplan ARGS`` in a process of its own (special files can block a
-    reader, so nothing runs in the test's process). ``stdout_path``: a file to
-    send stdout to (``/dev/full``)."""
+    reader, so nothing runs in the test's process): forked from the tests' fork
+    server, which has imported what the commands import, unless the process's
+    start could matter (tests/support/forkserver.py). ``stdout_path``: a file
+    to send stdout to (``/dev/full``)."""
     argv = [os.fsencode(a) if not isinstance(a, bytes) else a for a in args]
-    env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env = forkserver.command_env()
     started = time.monotonic()
     out_file = Path(stdout_path).open("wb") if stdout_path else None  # noqa: SIM115
     try:
-        completed = subprocess.run(
-            [os.fsencode(DEMOPLAN), *argv],
-            cwd=cwd,
-            input=stdin,
-            stdout=out_file if out_file else subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            timeout=timeout,
-            env=env,
-            check=False,
+        completed = forkserver.run(
+            argv, cwd, env, timeout=timeout, stdin=stdin, stdout_file=out_file
         )
     finally:
         if out_file:

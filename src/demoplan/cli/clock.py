@@ -14,6 +14,7 @@ __all__ = [
     "command_budget",
     "mark_command_start",
     "mark_process_start",
+    "restart_process_clock",
 ]
 
 DEFAULT_TIMEOUT = PLANNING_SECONDS
@@ -31,6 +32,14 @@ def mark_process_start() -> None:
     """The executable's own command: its clock runs from the process start."""
     global _started_by_main
     _started_by_main = True
+
+
+def restart_process_clock() -> None:
+    """The process starts now: for a process forked from one that imported this
+    module earlier (the tests' fork server, tests/support/forkserver.py), whose
+    command's clock should run from the fork, as a new process's would."""
+    global _command_started
+    _command_started = time.monotonic()
 
 
 def mark_command_start() -> None:

@@ -1,0 +1,101 @@
+"""A command forked from the tests' fork server answers as the executable
+started fresh does (tests/support/forkserver.py): the same exit code, stdout
+and stderr, byte for byte — on a success, a refusal, a usage error, input on
+stdin, stdout on a full disk, a file name that is not UTF-8, and a planning
+budget that runs out (the clock counts from the fork)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tests.support import forkserver
+from tests.support.helpers import EXAMPLES
+
+pytestmark = pytest.mark.slow  # each case also starts the executable fresh
+
+CASES = {
+    "learn": [b"learn", b"demos.json", b"--paper", b"-o", b"model.json"],
+    "show-json": [b"show", b"model.json", b"--json"],
+    "plan": [b"plan", b"model.json", b"scene.json"],
+    "plan-out-of-time": [b"plan", b"model.json", b"scene.json", b"--timeout", b"0"],
+    "run": [b"run", b"model.json", b"scene.json"],
+    "missing-file": [b"plan", b"model.json", b"missing.json"],
+    "not-utf8-name": [b"show", b"odd-\xff.json"],
+    "usage-error": [b"plan", b"model.json", b"--timeout", b"soon"],
+    "no-such-command": [b"bogus"],
+    "help": [b"plan", b"--help"],
+}
+TIMEOUT = 120.0
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("forkserver")
+    shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
+    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
+    learned = forkserver.fresh(CASES["learn"], folder, _env(), timeout=TIMEOUT)
+    assert learned.returncode == 0, learned.stderr
+    shutil.copy(folder / "model.json", os.fsdecode(os.fsencode(folder) + b"/odd-\xff.json"))
+    return folder
+
+
+def _env() -> dict[str, str]:
+    return forkserver.command_env()
+
+
+def _forked(args: list[bytes], folder: Path, **options: object) -> tuple[int, bytes, bytes]:
+    before = forkserver.started["forked"]
+    answer = forkserver.run(args, folder, _env(), timeout=TIMEOUT, **options)  # type: ignore[arg-type]
+    assert forkserver.started["forked"] == before + 1, "not forked: the server did not serve"
+    return answer.returncode, answer.stdout, answer.stderr
+
+
+def _fresh(args: list[bytes], folder: Path, **options: object) -> tuple[int, bytes, bytes]:
+    answer = forkserver.fresh(args, folder, _env(), timeout=TIMEOUT, **options)  # type: ignore[arg-type]
+    return answer.returncode, answer.stdout, answer.stderr
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_forked_command_answers_as_a_fresh_one(
+    workspace: Path, name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    assert _forked(CASES[name], workspace) == _fresh(CASES[name], workspace)
+
+
+def test_stdin_and_a_full_disk_reach_the_forked_command(
+    workspace: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    scene = (workspace / "scene.json").read_bytes()
+    args = [b"plan", b"model.json", b"/dev/stdin"]
+    forked = _forked(args, workspace, stdin=scene)
+    assert forked == _fresh(args, workspace, stdin=scene)
+    assert forked[0] == 1 and b"/dev/stdin: not a regular file" in forked[2], forked
+    with Path("/dev/full").open("wb") as full:
+        forked = _forked([b"show", b"model.json"], workspace, stdout_file=full)
+        assert forked == _fresh([b"show", b"model.json"], workspace, stdout_file=full)
+    assert forked[0] == 1 and b"standard output" in forked[2], forked
+    with Path("/dev/full").open("wb") as full:  # the lean path, buffered as the executable's
+        solve = [b"solve", b"problem.xml", b"--timeout", b"inf"]
+        assert _forked(solve, workspace, stdout_file=full) == _fresh(
+            solve, workspace, stdout_file=full
+        )
+
+
+def test_another_environment_starts_the_command_fresh(
+    workspace: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A variable libraries may read at import (here MuJoCo's backend) is not
+    the server's: the command starts as the executable."""
+    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    _forked(CASES["missing-file"], workspace)  # the server runs
+    monkeypatch.setenv("MUJOCO_GL", "bogus")
+    before = dict(forkserver.started)
+    forkserver.run(CASES["missing-file"], workspace, _env(), timeout=TIMEOUT)
+    assert forkserver.started == {**before, "fresh": before["fresh"] + 1}
