@@ -103,6 +103,9 @@ def run_solve(options: SolveOptions) -> int:
     from demoplan.wording import printable_lines
 
     sys.stdout.write(printable_lines(text))
+    # The plan reaches stdout before the note reaches stderr: a full disk or a
+    # closed pipe is then the command's one line (main), with no note before it.
+    sys.stdout.flush()
     sys.stderr.write(printable_lines(note))
     return 0
 
