@@ -8,9 +8,12 @@ object (a nut at its handle), closes, lifts, and asks robosuite whether both
 finger pads touch it (``env._check_grasp``): if not, the hand opens and the
 executor sees the object still standing. A put-down carries the object at a
 travel height above everything, turns it to the target's yaw (of the turns
-its shape allows, the one the wrist reaches with the grip nearest the
-robot's base), corrects the hand by where the object is seen to hang,
-lowers it towards 5 mm above its target until its support stops it, opens,
+its shape allows and the wrist reaches, the one whose hand goes lowest
+between the bins' walls, then the one with the grip nearest the robot's
+base), corrects the hand by where the object is seen to hang,
+lowers it towards 5 mm above its target until its support stops it (or,
+where the hand would strike a bin's walls, no lower than it clears them:
+:mod:`demoplan.execution.robosuite_clearance`), opens,
 and retreats upwards: robosuite counts a placement only with the gripper
 away from the object. The world acts on what it observes itself: the pose a
 grasp is given (``where``) is not used.
@@ -23,9 +26,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from demoplan.execution.robosuite_clearance import lowest_grip
 from demoplan.execution.robosuite_motion import PandaHand, hand_frame
 from demoplan.execution.robosuite_scene import (
     EnvObject,
+    bin_walls,
     env_objects,
     landmarks,
     make_environment,
@@ -78,6 +83,7 @@ class RobosuiteWorld:
         found = landmarks(self.env)
         self.landmarks, self.landmark_geometry = found.poses, found.shapes
         self.landmark_tops = found.tops
+        self.walls = bin_walls(found, table_top(self.env))
         self.held: str | None = None
         self.offset = np.zeros(3)  # the held object's bottom from the grip site, hand frame
         self.turn = 0.0  # its yaw minus the fingers'
@@ -166,15 +172,30 @@ class RobosuiteWorld:
             self.motion_failures.append(f"the wrist cannot turn {obj} to its target")
             return
         base = self.hand.base_position[:2]
-        fingers, grip = min(placements, key=lambda p: float(np.linalg.norm(p[1][:2] - base)))
+        fingers, grip = min(
+            placements,
+            key=lambda p: (
+                round(self._drop(p[0], p[1]), 3),
+                float(np.linalg.norm(p[1][:2] - base)),
+            ),
+        )
         travel = self._travel_height(obj)
         self._move([*self.hand.position[:2], travel])
         self._move([grip[0], grip[1], travel], fingers)
         grip = self._aligned(obj, bottom, grip, travel)
+        grip[2] += self._drop(fingers, grip)
         self._move(grip, stop_on_contact=True)
         self.hand.open()
         self.held = None
         self._move([grip[0], grip[1], grip[2] + RETREAT])
+
+    def _drop(self, fingers: float, grip: np.ndarray) -> float:
+        """m: how far above ``grip`` the grip site must stay for the hand, its
+        fingers along ``fingers`` (deg), to keep above the bins' walls
+        (:func:`~demoplan.execution.robosuite_clearance.lowest_grip`); 0 where
+        it clears them."""
+        lowest = lowest_grip(self.hand.shape, grip[:2], fingers, self.walls)
+        return max(0.0, lowest - float(grip[2]))
 
     def _target_yaws(self, obj: str, pose: Pose) -> list[float]:
         """The yaws (deg) ``obj`` may take at ``pose``: the target's, turned by
