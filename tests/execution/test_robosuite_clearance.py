@@ -10,8 +10,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from demoplan.execution.robosuite_clearance import HAND_MARGIN, HandShape, Wall, lowest_grip
-from demoplan.execution.robosuite_scene import GRIPPER_OPENING, EnvObject, grasp_axes
-from demoplan.model import ObjectGeometry
+from demoplan.execution.robosuite_scene import (
+    GRIPPER_OPENING,
+    EnvLandmarks,
+    EnvObject,
+    bin_walls,
+    grasp_axes,
+)
+from demoplan.model import ObjectGeometry, Pose
 
 PANDA = HandShape(half_length=0.104, half_width=0.032, bottom=0.026)
 """About robosuite 1.5.2's Panda hand (the world measures its own from the model)."""
@@ -108,3 +114,26 @@ def test_an_object_is_grasped_only_across_a_side_the_gripper_spans(
     assert grasp_axes(_object((slim, slim, height))) == (0.0, 90.0)
     assert grasp_axes(_object((wide, wide, height))) == (0.0, 90.0)  # none spans: as before
     assert grasp_axes(_object((slim, slim, height), handle=3)) == (90.0,)  # a nut: its handle
+
+
+@given(top=st.floats(-0.5, 1.5), yaw=st.floats(-179.0, 179.0))
+def test_the_walls_are_the_bins_parts_in_the_world(top: float, yaw: float) -> None:
+    """A bin's walls and dividers, and nothing else (a peg, another bin's
+    body), turned with their landmark, their top lifted by the table's."""
+    quarter = (0.0, 0.0, math.sin(math.radians(yaw) / 2), math.cos(math.radians(yaw) / 2))
+    wall = ObjectGeometry("box", (0.02, 0.5, 0.1))
+    found = EnvLandmarks(
+        poses=(
+            ("bin2", Pose((0.1, 0.28, -0.02), quarter)),
+            ("bin2_wall1", Pose((-0.1, 0.28, -0.02), quarter)),
+            ("peg1", Pose((0.2, 0.1, 0.0), quarter)),
+        ),
+        shapes=(("bin2_wall1", wall), ("peg1", ObjectGeometry("box", (0.02, 0.02, 0.1)))),
+        compartments=(("bin2", ((-0.1, -0.1, 0.0, 0.1, 0.1, 0.08),)),),
+        tops={"bin2": 0.08, "bin2_wall1": 0.08, "peg1": 0.1},
+    )
+    (only,) = bin_walls(found, top)
+    assert only.centre == (-0.1, 0.28)
+    assert only.half_size == (0.01, 0.25)
+    assert math.isclose(only.yaw, yaw, abs_tol=1e-9)
+    assert math.isclose(only.top, top + 0.08, abs_tol=1e-12)
