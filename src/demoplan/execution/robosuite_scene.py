@@ -197,10 +197,54 @@ def _bounds(env: Any, body: int, geoms: list[int]) -> tuple[np.ndarray, np.ndarr
     return every.min(axis=0), every.max(axis=0)
 
 
+ROUND = 1.05
+"""A mesh whose points lie no farther from its box's vertical axis than this
+times the box's half width is round (PickPlace's can: a cylinder, not a box
+whose corners would overlap its neighbours)."""
+
+MESH = 7
+"""mjGEOM_MESH."""
+
+
+def _round_meshes(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether ``geoms`` are meshes with a square footprint (``low``,
+    ``high``: their box, body frame) whose vertices stay within :data:`ROUND`
+    times its half width from its vertical axis: a round object (a square
+    box's corners lie √2 times as far)."""
+    model, data = env.sim.model, env.sim.data
+    width, depth = (float(v) for v in high[:2] - low[:2])
+    if not all(int(model.geom_type[g]) == MESH for g in geoms) or max(width, depth) > ROUND * min(
+        width, depth
+    ):
+        return False  # not meshes, or a footprint longer than it is wide
+    origin = np.asarray(data.body_xpos[body])
+    frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
+    centre = (low[:2] + high[:2]) / 2
+    half = float(max(high[:2] - low[:2])) / 2
+    for g in geoms:
+        mesh = int(model.geom_dataid[g])
+        first, count = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+        local = np.asarray(model.mesh_vert[first : first + count])
+        world = (
+            np.asarray(data.geom_xpos[g]) + local @ np.asarray(data.geom_xmat[g]).reshape(3, 3).T
+        )
+        points = (world - origin) @ frame
+        if float(np.linalg.norm(points[:, :2] - centre, axis=1).max()) > ROUND * half:
+            return False
+    return True
+
+
 def _geometry(
-    model: Any, geoms: list[int], low: np.ndarray, high: np.ndarray, mass: float | None
+    model: Any,
+    geoms: list[int],
+    low: np.ndarray,
+    high: np.ndarray,
+    mass: float | None,
+    round_mesh: bool = False,
 ) -> ObjectGeometry:
-    cylinders = all(int(model.geom_type[g]) == 5 for g in geoms)  # mjGEOM_CYLINDER
+    """A box of the bounding box's size, or a cylinder where the geoms are
+    cylinders or ``round_mesh``."""
+    cylinders = round_mesh or all(int(model.geom_type[g]) == 5 for g in geoms)  # mjGEOM_CYLINDER
     size = tuple(round(float(v), 6) for v in high - low)
     return ObjectGeometry("cylinder" if cylinders else "box", (size[0], size[1], size[2]), mass)
 
@@ -221,11 +265,9 @@ def env_objects(env: Any) -> list[EnvObject]:
         mass = float(sum(model.body_mass[b] for b in _subtree(model, body)))
         handle_site = obj.important_sites.get("handle")
         handle = None if handle_site is None else int(model.site_name2id(handle_site))
-        out.append(
-            EnvObject(
-                obj.name, body, obj, handle, float(low[2]), _geometry(model, geoms, low, high, mass)
-            )
-        )
+        rounded = _round_meshes(env, body, geoms, low, high)
+        geometry = _geometry(model, geoms, low, high, mass, rounded)
+        out.append(EnvObject(obj.name, body, obj, handle, float(low[2]), geometry))
     return out
 
 
