@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from demoplan.execution.robosuite_clearance import HandShape
+
 __all__ = ["PandaHand"]
 
 POSITION_SCALE = 0.05
@@ -76,6 +78,35 @@ class PandaHand:
         self.wrist = int(robot._ref_joint_pos_indexes[-1])
         self.grip = -1.0  # open
         self.steps = 0
+        self.shape = self._housing()
+
+    def _housing(self) -> HandShape:
+        """The hand's housing (the gripper's root body's colliding geoms, its
+        fingers left out) as a box in the grip site's frame, from the compiled
+        model's bounding boxes (``geom_aabb``)."""
+        model, data = self.env.sim.model, self.env.sim.data
+        root = int(model.body_name2id(self.gripper_model.root_body))
+        signs = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+        corners = []
+        for g in range(model.ngeom):
+            if int(model.geom_bodyid[g]) != root or not (
+                int(model.geom_contype[g]) or int(model.geom_conaffinity[g])
+            ):
+                continue
+            box = np.asarray(model.geom_aabb[g])
+            local = box[:3] + signs * box[3:]
+            world = (
+                np.asarray(data.geom_xpos[g])
+                + local @ np.asarray(data.geom_xmat[g]).reshape(3, 3).T
+            )
+            corners.append((world - self.position) @ self.frame)  # the site's z points down
+        every = np.concatenate(corners)
+        low, high = every.min(axis=0), every.max(axis=0)
+        return HandShape(
+            half_length=float(max(-low[0], high[0])),
+            half_width=float(max(-low[1], high[1])),
+            bottom=float(-high[2]),
+        )
 
     # -- reading ------------------------------------------------------------------------
 

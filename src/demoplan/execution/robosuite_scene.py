@@ -27,8 +27,9 @@ import numpy as np
 
 from demoplan.documents.compartments import WALL_HEIGHT, compartments
 from demoplan.errors import UsageError
+from demoplan.execution.robosuite_clearance import Wall
 from demoplan.model import Compartment, ObjectGeometry, Pose
-from demoplan.scenes.scene import SceneObject
+from demoplan.scenes.scene import DEFAULT_GRASPS, SceneObject
 from demoplan.segmentation.readers.support import EXCLUDED_LANDMARKS
 
 __all__ = [
@@ -36,8 +37,10 @@ __all__ = [
     "ENVIRONMENTS",
     "EnvLandmarks",
     "EnvObject",
+    "bin_walls",
     "check_installed",
     "environment_name",
+    "grasp_axes",
     "landmarks",
     "make_environment",
     "object_pose",
@@ -74,6 +77,12 @@ BIN_FLOOR = 0.02
 HANDLE_GRASPS = (90.0,)
 """A nut is taken at its handle, the fingers across it (the handle runs along
 the nut's x axis)."""
+
+GRIPPER_OPENING = 0.078
+"""m: the gap between the Panda's finger pads when open (its pads' collision
+boxes stand 3.9 cm either side of the grip site): an object is grasped only
+across a side narrower than this (PickPlace's cereal box, 10 cm by 3 cm, only
+across its 3 cm)."""
 
 
 def environment_name(sim: str) -> str:
@@ -188,10 +197,54 @@ def _bounds(env: Any, body: int, geoms: list[int]) -> tuple[np.ndarray, np.ndarr
     return every.min(axis=0), every.max(axis=0)
 
 
+ROUND = 1.05
+"""A mesh whose points lie no farther from its box's vertical axis than this
+times the box's half width is round (PickPlace's can: a cylinder, not a box
+whose corners would overlap its neighbours)."""
+
+MESH = 7
+"""mjGEOM_MESH."""
+
+
+def _round_meshes(env: Any, body: int, geoms: list[int], low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether ``geoms`` are meshes with a square footprint (``low``,
+    ``high``: their box, body frame) whose vertices stay within :data:`ROUND`
+    times its half width from its vertical axis: a round object (a square
+    box's corners lie √2 times as far)."""
+    model, data = env.sim.model, env.sim.data
+    width, depth = (float(v) for v in high[:2] - low[:2])
+    if not all(int(model.geom_type[g]) == MESH for g in geoms) or max(width, depth) > ROUND * min(
+        width, depth
+    ):
+        return False  # not meshes, or a footprint longer than it is wide
+    origin = np.asarray(data.body_xpos[body])
+    frame = np.asarray(data.body_xmat[body]).reshape(3, 3)
+    centre = (low[:2] + high[:2]) / 2
+    half = float(max(high[:2] - low[:2])) / 2
+    for g in geoms:
+        mesh = int(model.geom_dataid[g])
+        first, count = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+        local = np.asarray(model.mesh_vert[first : first + count])
+        world = (
+            np.asarray(data.geom_xpos[g]) + local @ np.asarray(data.geom_xmat[g]).reshape(3, 3).T
+        )
+        points = (world - origin) @ frame
+        if float(np.linalg.norm(points[:, :2] - centre, axis=1).max()) > ROUND * half:
+            return False
+    return True
+
+
 def _geometry(
-    model: Any, geoms: list[int], low: np.ndarray, high: np.ndarray, mass: float | None
+    model: Any,
+    geoms: list[int],
+    low: np.ndarray,
+    high: np.ndarray,
+    mass: float | None,
+    round_mesh: bool = False,
 ) -> ObjectGeometry:
-    cylinders = all(int(model.geom_type[g]) == 5 for g in geoms)  # mjGEOM_CYLINDER
+    """A box of the bounding box's size, or a cylinder where the geoms are
+    cylinders or ``round_mesh``."""
+    cylinders = round_mesh or all(int(model.geom_type[g]) == 5 for g in geoms)  # mjGEOM_CYLINDER
     size = tuple(round(float(v), 6) for v in high - low)
     return ObjectGeometry("cylinder" if cylinders else "box", (size[0], size[1], size[2]), mass)
 
@@ -212,11 +265,9 @@ def env_objects(env: Any) -> list[EnvObject]:
         mass = float(sum(model.body_mass[b] for b in _subtree(model, body)))
         handle_site = obj.important_sites.get("handle")
         handle = None if handle_site is None else int(model.site_name2id(handle_site))
-        out.append(
-            EnvObject(
-                obj.name, body, obj, handle, float(low[2]), _geometry(model, geoms, low, high, mass)
-            )
-        )
+        rounded = _round_meshes(env, body, geoms, low, high)
+        geometry = _geometry(model, geoms, low, high, mass, rounded)
+        out.append(EnvObject(obj.name, body, obj, handle, float(low[2]), geometry))
     return out
 
 
@@ -230,13 +281,22 @@ def object_pose(env: Any, obj: EnvObject) -> Pose:
     return Pose((float(point[0]), float(point[1]), float(point[2]) - table_top(env)), (x, y, z, w))
 
 
+def grasp_axes(obj: EnvObject) -> tuple[float, ...]:
+    """The finger axes (deg, the object's frame) ``obj`` is taken with: a nut's
+    across its handle; else those of the default two (0°, 90°) across a side
+    the open gripper spans (:data:`GRIPPER_OPENING`), both where neither is."""
+    if obj.handle is not None:
+        return HANDLE_GRASPS
+    spanned = tuple(
+        axis for axis in DEFAULT_GRASPS if obj.geometry.size[round(axis) // 90] < GRIPPER_OPENING
+    )
+    return spanned or DEFAULT_GRASPS
+
+
 def scene_objects(env: Any, objects: list[EnvObject]) -> tuple[SceneObject, ...]:
-    """The objects as a scene's: pose, geometry, and a nut's grasp across its handle."""
+    """The objects as a scene's: pose, geometry, and the grasps :func:`grasp_axes` allows."""
     return tuple(
-        SceneObject(o.name, object_pose(env, o), o.geometry, grasps=HANDLE_GRASPS)
-        if o.handle is not None
-        else SceneObject(o.name, object_pose(env, o), o.geometry)
-        for o in objects
+        SceneObject(o.name, object_pose(env, o), o.geometry, grasps=grasp_axes(o)) for o in objects
     )
 
 
@@ -297,6 +357,28 @@ def landmarks(env: Any) -> EnvLandmarks:
             size = tuple(round(float(v), 6) for v in hi - lo)
             shapes.append((part, ObjectGeometry("box", (size[0], size[1], size[2]))))
     return EnvLandmarks(tuple(poses), tuple(shapes), tuple(found), tops)
+
+
+def bin_walls(found: EnvLandmarks, table_top: float) -> tuple[Wall, ...]:
+    """The walls and dividers of ``found``'s bins (``bin2_wall3``…) as the
+    hand must keep clear of them, in the world (``table_top``: world z of
+    demoplan's z = 0)."""
+    shapes = dict(found.shapes)
+    containers = tuple(f"{name}_wall" for name, _ in found.compartments)
+    walls = []
+    for name, pose in found.poses:
+        if not name.startswith(containers):
+            continue
+        size = shapes[name].size
+        walls.append(
+            Wall(
+                (pose.position[0], pose.position[1]),
+                (size[0] / 2, size[1] / 2),
+                pose.yaw,
+                pose.position[2] + size[2] + table_top,
+            )
+        )
+    return tuple(walls)
 
 
 def _landmark_pose(env: Any, body: int, local: np.ndarray) -> Pose:

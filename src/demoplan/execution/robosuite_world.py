@@ -4,16 +4,21 @@ its Panda, and judged by robosuite (``env._check_success()``).
 The world is the environment after ``reset(seed)`` and a few idle steps (its
 objects are dropped onto the table at reset). Observing reads ``sim.data``
 (:mod:`demoplan.execution.robosuite_scene`); a grasp comes down on the
-object (a nut at its handle), closes, lifts, and asks robosuite whether both
-finger pads touch it (``env._check_grasp``): if not, the hand opens and the
-executor sees the object still standing. A put-down carries the object at a
-travel height above everything, turns it to the target's yaw (of the turns
-its shape allows, the one the wrist reaches with the grip nearest the
-robot's base), corrects the hand by where the object is seen to hang,
-lowers it towards 5 mm above its target until its support stops it, opens,
-and retreats upwards: robosuite counts a placement only with the gripper
-away from the object. The world acts on what it observes itself: the pose a
-grasp is given (``where``) is not used.
+object (a nut at its handle; across another of the object's grasps, noted
+among the motions refused, where the hand would come down on a taller
+neighbour or a bin's wall and that grasp's would not), closes, lifts, and
+asks robosuite whether both finger pads touch it (``env._check_grasp``): if
+not, the hand opens and the executor sees the object still standing. A
+put-down carries the object at a travel height above everything, turns it to
+the target's yaw (of the turns its shape allows and the wrist reaches, the
+one whose hand goes lowest between the bins' walls, then the one with the
+grip nearest the robot's base), corrects the hand by where the object is
+seen to hang, lowers it towards 5 mm above its target until its support
+stops it (or, where the hand would strike a bin's walls, no lower than it
+clears them: :mod:`demoplan.execution.robosuite_clearance`), opens, and
+retreats upwards: robosuite counts a placement only with the gripper away
+from the object. The world acts on what it observes itself: the pose a grasp
+is given (``where``) is not used.
 """
 
 from __future__ import annotations
@@ -23,10 +28,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from demoplan.execution.robosuite_clearance import Wall, lowest_grip
 from demoplan.execution.robosuite_motion import PandaHand, hand_frame
 from demoplan.execution.robosuite_scene import (
     EnvObject,
+    bin_walls,
     env_objects,
+    grasp_axes,
     landmarks,
     make_environment,
     object_pose,
@@ -78,6 +86,7 @@ class RobosuiteWorld:
         found = landmarks(self.env)
         self.landmarks, self.landmark_geometry = found.poses, found.shapes
         self.landmark_tops = found.tops
+        self.walls = bin_walls(found, table_top(self.env))
         self.held: str | None = None
         self.offset = np.zeros(3)  # the held object's bottom from the grip site, hand frame
         self.turn = 0.0  # its yaw minus the fingers'
@@ -127,6 +136,14 @@ class RobosuiteWorld:
         target = self.objects[obj]
         pose = object_pose(self.env, target)
         point = self._grip_point(target, pose)
+        struck = self._struck(obj, point, pose.yaw + axis)
+        clear = [a for a in grasp_axes(target) if not self._struck(obj, point, pose.yaw + a)]
+        if struck and clear:
+            self.motion_failures.append(
+                f"refused {obj} across {axis:g}° (the hand would strike {struck}): "
+                f"took it across {clear[0]:g}°"
+            )
+            axis = clear[0]
         reached = self.hand.finger_yaws_within_reach([pose.yaw + axis], point)
         if not reached:
             self.motion_failures.append(f"the wrist cannot turn the fingers to grasp {obj}")
@@ -166,15 +183,30 @@ class RobosuiteWorld:
             self.motion_failures.append(f"the wrist cannot turn {obj} to its target")
             return
         base = self.hand.base_position[:2]
-        fingers, grip = min(placements, key=lambda p: float(np.linalg.norm(p[1][:2] - base)))
+        fingers, grip = min(
+            placements,
+            key=lambda p: (
+                round(self._drop(p[0], p[1]), 3),
+                float(np.linalg.norm(p[1][:2] - base)),
+            ),
+        )
         travel = self._travel_height(obj)
         self._move([*self.hand.position[:2], travel])
         self._move([grip[0], grip[1], travel], fingers)
         grip = self._aligned(obj, bottom, grip, travel)
+        grip[2] += self._drop(fingers, grip)
         self._move(grip, stop_on_contact=True)
         self.hand.open()
         self.held = None
         self._move([grip[0], grip[1], grip[2] + RETREAT])
+
+    def _drop(self, fingers: float, grip: np.ndarray) -> float:
+        """m: how far above ``grip`` the grip site must stay for the hand, its
+        fingers along ``fingers`` (deg), to keep above the bins' walls
+        (:func:`~demoplan.execution.robosuite_clearance.lowest_grip`); 0 where
+        it clears them."""
+        lowest = lowest_grip(self.hand.shape, grip[:2], fingers, self.walls)
+        return max(0.0, lowest - float(grip[2]))
 
     def _target_yaws(self, obj: str, pose: Pose) -> list[float]:
         """The yaws (deg) ``obj`` may take at ``pose``: the target's, turned by
@@ -241,6 +273,25 @@ class RobosuiteWorld:
         """robosuite's grasp check: both finger pads touch ``obj``."""
         target = self.objects[obj]
         return self.hand.grasping(target.model)
+
+    def _struck(self, obj: str, point: np.ndarray, fingers: float) -> str:
+        """What the hand, lowered to grasp ``obj`` at ``point`` with the fingers
+        along ``fingers`` (deg), would come down on: another object standing
+        higher than the hand's bottom there (a tall box it would knock over;
+        PickPlace seed 30: the cereal box, grasping the bread beside it) or a
+        bin's wall, named; "" where nothing."""
+        for name, other in self.objects.items():
+            if name == obj:
+                continue
+            where = object_pose(self.env, other)
+            half = (other.geometry.size[0] / 2, other.geometry.size[1] / 2)
+            top = where.position[2] + other.geometry.size[2] + table_top(self.env)
+            body = Wall((where.position[0], where.position[1]), half, where.yaw, top)
+            if lowest_grip(self.hand.shape, point[:2], fingers, [body]) > point[2]:
+                return name
+        if lowest_grip(self.hand.shape, point[:2], fingers, self.walls) > point[2]:
+            return "a bin's wall"
+        return ""
 
     def _grip_point(self, obj: EnvObject, pose: Pose) -> np.ndarray:
         """Where the grip site closes on ``obj`` (world): a nut's handle, else
