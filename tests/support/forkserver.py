@@ -182,9 +182,11 @@ def _lasting(env: Mapping[str, str]) -> dict[str, str]:
 def command_env() -> dict[str, str]:
     """The environment tests run ``demoplan`` in: this process's, 100 columns,
     every warning shown (one printed would break a one-line error), bytecode
-    written as a user's would be."""
+    written and standard output buffered as a user's would be (a harness's
+    ``PYTHONUNBUFFERED`` hid a note printed before a full disk's error)."""
     env = dict(os.environ, COLUMNS="100", PYTHONWARNINGS="default")
     env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.pop("PYTHONUNBUFFERED", None)
     return env
 
 
