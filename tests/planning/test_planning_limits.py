@@ -123,7 +123,7 @@ def _run_alone(command: list[str], folder: Path) -> tuple[int, str, int]:
 
 
 def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
-    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
+    problem = parking_problem(20, 3, **PARKING_FAMILIES["parking-crowded"])  # no tight plan
     for search in ("astar", "bfs"):
         with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
             solve(problem, search, Budget(max_states=5000), optimal=True)  # no clock to race
