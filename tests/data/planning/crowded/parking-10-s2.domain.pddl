@@ -1,4 +1,4 @@
-(define (domain demoplan-parking-20)
+(define (domain demoplan-parking-10)
   (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions :existential-preconditions)
   (:types item location grip subgoal)
   (:predicates
