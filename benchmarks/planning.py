@@ -147,7 +147,7 @@ wall time, median of 3, the exit code and the answer's line; the target is
 under 1 s each (before the clock and the node limit were read inside
 compilation, the reasons without search and successor generation: 14.8 s and
 16 s). Beside it, what reading the limits costs: the clock reads of one
-in-process ``solve`` of parking-crowded N = 20 (seed 3, the default 2 s
+in-process ``solve`` of crowded-stacks N = 20 (seed 2, the default 2 s
 budget) counted, times the cost of one read (``Clock.stop``, timed over a
 million), as a share of that solve's time.
 """
@@ -1742,7 +1742,7 @@ def limit_timings(root: Path, console: Console, repeats: int = 3) -> dict[str, A
     )
     cost = clock_read_cost()
     console.print(
-        f"Reading the limits: {cost['reads']:,} clock reads in one solve of parking-crowded "
+        f"Reading the limits: {cost['reads']:,} clock reads in one solve of crowded-stacks "
         f"N = 20 ({cost['solve_s']:.2f} s), {1e9 * cost['read_s']:.0f} ns each: "
         f"{100 * cost['share']:.2f} % of the solve",
         highlight=False,
@@ -1784,13 +1784,13 @@ def startup(root: Path, console: Console) -> dict[str, Any]:
 
 def clock_read_cost() -> dict[str, float]:
     """Clock reads (``Clock.stop``, ``Clock.expired``) counted during one solve of
-    parking-crowded N = 20, seed 3 (not proved within it), and the time of one read."""
+    crowded-stacks N = 20, seed 2 (not proved within it), and the time of one read."""
     import timeit
 
     from demoplan.budget import Budget, Clock
     from demoplan.planning.search import solve
 
-    problem = parking_problem(20, 3, **PARKING_FAMILIES["parking-crowded"])
+    problem = parking_problem(20, 2, **CROWDED_FAMILIES["crowded-stacks"])
     reads = 0
     stop, expired = Clock.stop, Clock.expired
 

@@ -226,7 +226,7 @@ class _Events:
         for place in self.final_occupant:
             to_fill |= 1 << place
         playing = _PlayOut(self, _linear(closure), in_the_way)
-        return playing.run(0, at, occupied, to_fill)
+        return playing.run(at, occupied, to_fill)
 
     def _empty_at(self, event: int, obj: int, places: int) -> _Precedences | None:
         """The precedences that keep ``places`` empty at ``event`` (a move of
@@ -256,33 +256,50 @@ class _PlayOut:
         self.plan: list[Move] = []
         self.dead_ends = 0
 
-    def run(self, index: int, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
-        """The moves from event ``index`` of the order on, with the objects at
-        ``at``; None where none of the places tried works out."""
+    def run(self, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
+        """The moves of the order, the objects starting at ``at``; None where
+        no place tried works out. Iterative (an order has thousands of events
+        on a thousand objects): a choice point is kept for each object sent
+        away with places left to try."""
         c = self.events.c
-        if index == len(self.order):
-            return list(self.plan) if c.is_goal(tuple(at), c.all_subgoals) else None
-        obj, _, target = self.events.moves[self.order[index]]
-        source = at[obj]
-        others = occupied & ~(1 << source)
-        grasps = [g for g in c.grasps_of[obj] if c.grasp_ok(occupied, source, g)]
-        targets = [target] if target >= 0 else self._spots(obj, source, others, grasps, to_fill)
-        for place in targets:
-            usable = [g for g in grasps if place != source and c.put_ok(others, place, g)]
-            if not usable:
+        choices: list[tuple[int, list[int], int, int, int, list[int]]] = []
+        index, places = 0, None
+        while True:
+            if index == len(self.order) and c.is_goal(tuple(at), c.all_subgoals):
+                return self.plan
+            move = None
+            if index < len(self.order):
+                obj, _, target = self.events.moves[self.order[index]]
+                source = at[obj]
+                others = occupied & ~(1 << source)
+                grasps = [g for g in c.grasps_of[obj] if c.grasp_ok(occupied, source, g)]
+                if places is None:
+                    places = (
+                        [target]
+                        if target >= 0
+                        else self._spots(obj, source, others, grasps, to_fill)
+                    )
+                while places and move is None:
+                    place = places.pop(0)
+                    usable = [g for g in grasps if place != source and c.put_ok(others, place, g)]
+                    if usable:
+                        move = (obj, source, place, usable[0])
+                if move is not None and places:
+                    choices.append((index, list(at), occupied, to_fill, len(self.plan), places))
+            if move is not None:
+                self.plan.append(move)
+                obj, _, place, _ = move
+                at[obj] = place
+                occupied = occupied & ~(1 << move[1]) | 1 << place
+                if c.goal[obj] == place:
+                    to_fill &= ~(1 << place)
+                index, places = index + 1, None
                 continue
-            self.plan.append((obj, source, place, usable[0]))
-            at[obj] = place
-            filled = to_fill & ~(1 << place) if c.goal[obj] == place else to_fill
-            found = self.run(index + 1, at, others | 1 << place, filled)
-            at[obj] = source
-            self.plan.pop()
-            if found is not None:
-                return found
-            self.dead_ends += 1
-            if self.dead_ends >= PLAY_OUTS:
+            self.dead_ends += 1  # back up to the last object sent away with places left
+            if not choices or self.dead_ends >= PLAY_OUTS:
                 return None
-        return None
+            index, at, occupied, to_fill, length, places = choices.pop()
+            del self.plan[length:]
 
     def _spots(
         self, obj: int, source: int, others: int, grasps: list[int], to_fill: int
