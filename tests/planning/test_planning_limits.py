@@ -17,7 +17,12 @@ from demoplan.planning.budget import Budget
 from demoplan.planning.search import solve
 from demoplan.planning.xml import load_problem, save_problem
 from tests.planning.test_solve_cli import PAPER
-from tests.support.planning_families import PARKING_FAMILIES, parking_problem, ring_problem
+from tests.support.planning_families import (
+    CROWDED_FAMILIES,
+    PARKING_FAMILIES,
+    parking_problem,
+    ring_problem,
+)
 
 
 def test_a_thousand_objects_answer_within_the_budget(tmp_path: Path) -> None:
@@ -123,7 +128,7 @@ def _run_alone(command: list[str], folder: Path) -> tuple[int, str, int]:
 
 
 def test_the_state_limit_stops_a_search_instead_of_memory_running_out() -> None:
-    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
+    problem = parking_problem(20, 2, **CROWDED_FAMILIES["crowded-stacks"])  # no tight plan
     for search in ("astar", "bfs"):
         with pytest.raises(LimitReachedError, match="memory limit of 5000 states"):
             solve(problem, search, Budget(max_states=5000), optimal=True)  # no clock to race

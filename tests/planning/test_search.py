@@ -20,7 +20,7 @@ from demoplan.planning.strips import InvalidPlanError, validate
 from demoplan.planning.xml import load_problem
 from tests.support.helpers import EXAMPLES
 from tests.support.planning_families import (
-    PARKING_FAMILIES,
+    CROWDED_FAMILIES,
     blocks_problem,
     parking_problem,
     table_problem,
@@ -98,8 +98,9 @@ def test_limits_stop_the_search_with_exit_code_4() -> None:
 
 
 def test_an_unproved_plan_comes_with_its_bound_or_exit_4_when_proof_is_demanded() -> None:
-    # a crowded grid: a plan of 70 actions, a bound of 64, no proof in 50 nodes
-    problem = parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"])
+    # a crowded grid with stacked caps (no tight plan: stacked places): a plan of 82
+    # actions, a bound of 72, no proof in 50 nodes
+    problem = parking_problem(20, 2, **CROWDED_FAMILIES["crowded-stacks"])
     # The first plan (greedy, 0.6 s here) gets most of the 6 s: room for a loaded
     # machine; the proof is refused by the node limit, not the clock.
     plan = solve(problem, budget=Budget(max_nodes=50, timeout=6))

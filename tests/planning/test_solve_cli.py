@@ -15,7 +15,7 @@ from demoplan.planning.xml import load_problem, save_problem
 from tests.planning.test_problem_xml import BOMB
 from tests.support.cli import invoke
 from tests.support.helpers import EXAMPLES
-from tests.support.planning_families import PARKING_FAMILIES, parking_problem
+from tests.support.planning_families import CROWDED_FAMILIES, parking_problem
 
 PAPER = EXAMPLES / "planning" / "paper-example.xml"
 LINE = re.compile(r"(GRASP|PUT_DOWN) (\S+) (\S+) (\S+)")
@@ -111,12 +111,12 @@ def test_no_plan_found_by_search(tmp_path: Path, search: str) -> None:
 
 @pytest.mark.parametrize("search", ["astar", "bfs"])
 def test_max_nodes_limit_exits_4(search: str, tmp_path: Path) -> None:
-    """A problem whose plan (70 actions) needs many expansions: the node limit
+    """A problem whose plan (82 actions) needs many expansions: the node limit
     holds in every phase (the greedy first plan's too), so one expansion finds
     no plan. ``--timeout 10``: ten times what the phases need, so the node
     limit stops the search, not the clock."""
     path = tmp_path / "parking.xml"
-    save_problem(parking_problem(20, 0, **PARKING_FAMILIES["parking-crowded"]), path)
+    save_problem(parking_problem(20, 2, **CROWDED_FAMILIES["crowded-stacks"]), path)
     args = ("--search", search, "--max-nodes", "1", "--optimal", "--timeout", "10")
     line = one_line_error(
         invoke("solve", path, *args),

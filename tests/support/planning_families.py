@@ -29,6 +29,7 @@ import numpy as np
 from demoplan.planning.problem import Problem
 
 __all__ = [
+    "CROWDED_FAMILIES",
     "PARKING_FAMILIES",
     "blocks_problem",
     "collision_facts",
@@ -246,6 +247,25 @@ grid barely larger than the objects: the hardest we generate, beyond the
 planner's reach at 20–30 objects — some draws defeat Fast Downward's
 lama-first too)."""
 
+CROWDED_FAMILIES: dict[str, dict[str, float]] = {
+    "crowded-swaps": {"cycled": 0.9, "distractors": 0.4, "on_grid": 0.5, "density": 1.4},
+    "crowded-distractors": {"cycled": 0.6, "distractors": 0.6, "on_grid": 0.5, "density": 1.6},
+    "crowded-stacks": {
+        "cycled": 0.7,
+        "distractors": 0.3,
+        "on_grid": 0.5,
+        "density": 1.5,
+        "stacked": 0.2,
+    },
+}
+"""Crowded tables for the comparison with lama-first (issue 44;
+``tests/data/planning/crowded/``): parking forced by swaps and 3-cycles *and*
+distractors on goal places, on a grid barely larger than the objects —
+``crowded-swaps`` nearly every object in a cycle, ``crowded-distractors``
+more distractors than cycles, ``crowded-stacks`` parking-crowded with caps
+stacked on a fifth of the objects (which the tight phase does not take: it
+plans flat problems only)."""
+
 
 def parking_problem(
     n_objects: int,
@@ -275,6 +295,7 @@ def parking_draw(
     distractors: float = 0.2,
     on_grid: float = 0.3,
     density: float = 2.0,
+    stacked: float = 0.0,
 ) -> Problem:
     """A table problem where parking is forced (see the module docstring); it
     may be unsolvable (:func:`parking_problem` draws until it is not on its face).
@@ -286,7 +307,9 @@ def parking_draw(
     ``distractors × n_objects`` extra objects without a goal (``distractor1``
     …) stand on other goal places; of the rest, a share ``on_grid`` start on
     free grid cells (in the way of their neighbours' grasps), the others on a
-    side table.
+    side table. ``stacked × n_objects`` further distractors (``cap1`` …) stand
+    on top of objects with a goal (a ``support`` fact): each must be lifted
+    off, and parked, before the object under it can be grasped.
     """
     generator = np.random.default_rng(rng)
     objects = [f"obj{i + 1}" for i in range(n_objects)]
@@ -327,6 +350,17 @@ def parking_draw(
             start[obj] = name
     names = objects + [f"distractor{i + 1}" for i in range(len(distractor_places))]
     starts = [s for s in start if s is not None] + distractor_places
+    supports: list[tuple[str, str]] = []
+    if stacked > 0:
+        capped = generator.permutation(n_objects)[: round(stacked * n_objects)]
+        for index, under in enumerate(capped):
+            lower = starts[int(under)]
+            upper = f"loc{len(locations) + 1}"
+            x, y, _ = locations[lower]
+            locations[upper] = (x, y, BLOCK)
+            supports.append((upper, lower))
+            names.append(f"cap{index + 1}")
+            starts.append(upper)
     assert len(starts) == len(names)
     return _problem(
         f"parking-{n_objects}",
@@ -336,6 +370,7 @@ def parking_draw(
         goal,
         n_freespace,
         free_y=-0.45,
+        supports=supports,
     )
 
 

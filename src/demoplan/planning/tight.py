@@ -50,6 +50,11 @@ MAX_CHOICES = 512
 """Choices of the feedback set tried before giving up (no refutation)."""
 MAX_NODES = 20_000
 """Branchings of the grasp search, over all choices, before giving up."""
+PARKING_TRIED = 4
+"""Places tried per object sent away when an order is played out."""
+PLAY_OUTS = 256
+"""Dead ends of one order's play-out before it is given up (unknown, not a
+refutation: the order exists, its play-out was not found)."""
 
 _Precedences = tuple[tuple[int, int], ...]  # (earlier event, later event) pairs
 
@@ -206,11 +211,13 @@ class _Events:
     def realize(
         self, positions: tuple[int, ...], closure: list[int], in_the_way: list[int]
     ) -> list[Move] | None:
-        """The events in an order of ``closure`` as real moves — an object
-        sent away goes to the free place that gets in the way of the fewest
-        grasps and is no goal still to be filled — checked by the operators'
-        own tests; None if a move is not possible as things then stand."""
-        c = self.c
+        """The events in an order of ``closure`` as real moves, checked by the
+        operators' own tests; None if no play-out tried works. An object sent
+        away goes to a free place that is no goal still to be filled, those in
+        the way of the fewest grasps first; where a later move is then not
+        possible, the play-out backs up to the last object sent away and tries
+        its next place (:data:`PARKING_TRIED` places each, :data:`PLAY_OUTS`
+        dead ends in all)."""
         at = list(positions)
         occupied = 0
         for location in at:
@@ -218,31 +225,8 @@ class _Events:
         to_fill = 0
         for place in self.final_occupant:
             to_fill |= 1 << place
-        plan: list[Move] = []
-        for event in _linear(closure):
-            obj, _, target = self.moves[event]
-            source = at[obj]
-            others = occupied & ~(1 << source)
-            grasps = [g for g in c.grasps_of[obj] if c.grasp_ok(occupied, source, g)]
-            if target < 0:
-                spots = [
-                    (to_fill >> place & 1, in_the_way[place], place)
-                    for place in range(len(c.locations))
-                    if place not in (source, c.goal[obj])  # its goal comes with its own move
-                    and any(c.put_ok(others, place, g) for g in grasps)
-                ]
-                if not spots:
-                    return None
-                target = min(spots)[2]
-            usable = [g for g in grasps if target != source and c.put_ok(others, target, g)]
-            if not usable:
-                return None
-            plan.append((obj, source, target, usable[0]))
-            at[obj] = target
-            occupied = others | 1 << target
-            if c.goal[obj] == target:
-                to_fill &= ~(1 << target)
-        return plan if c.is_goal(tuple(at), c.all_subgoals) else None
+        playing = _PlayOut(self, _linear(closure), in_the_way)
+        return playing.run(at, occupied, to_fill)
 
     def _empty_at(self, event: int, obj: int, places: int) -> _Precedences | None:
         """The precedences that keep ``places`` empty at ``event`` (a move of
@@ -261,6 +245,75 @@ class _Events:
             if final is not None and final != obj:
                 demands.append((event, self.arrive[final]))
         return tuple(demands)
+
+
+class _PlayOut:
+    """A depth-first play-out of ordered events (:meth:`_Events.realize`):
+    the only choices are where the objects sent away go."""
+
+    def __init__(self, events: _Events, order: list[int], in_the_way: list[int]):
+        self.events, self.order, self.in_the_way = events, order, in_the_way
+        self.plan: list[Move] = []
+        self.dead_ends = 0
+
+    def run(self, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
+        """The moves of the order, the objects starting at ``at``; None where
+        no place tried works out. Iterative (an order has thousands of events
+        on a thousand objects): a choice point is kept for each object sent
+        away with places left to try."""
+        c = self.events.c
+        choices: list[tuple[int, list[int], int, int, int, list[int]]] = []
+        index, places = 0, None
+        while True:
+            if index == len(self.order) and c.is_goal(tuple(at), c.all_subgoals):
+                return self.plan
+            move = None
+            if index < len(self.order):
+                obj, _, target = self.events.moves[self.order[index]]
+                source = at[obj]
+                others = occupied & ~(1 << source)
+                grasps = [g for g in c.grasps_of[obj] if c.grasp_ok(occupied, source, g)]
+                if places is None:
+                    places = (
+                        [target]
+                        if target >= 0
+                        else self._spots(obj, source, others, grasps, to_fill)
+                    )
+                while places and move is None:
+                    place = places.pop(0)
+                    usable = [g for g in grasps if place != source and c.put_ok(others, place, g)]
+                    if usable:
+                        move = (obj, source, place, usable[0])
+                if move is not None and places:
+                    choices.append((index, list(at), occupied, to_fill, len(self.plan), places))
+            if move is not None:
+                self.plan.append(move)
+                obj, _, place, _ = move
+                at[obj] = place
+                occupied = occupied & ~(1 << move[1]) | 1 << place
+                if c.goal[obj] == place:
+                    to_fill &= ~(1 << place)
+                index, places = index + 1, None
+                continue
+            self.dead_ends += 1  # back up to the last object sent away with places left
+            if not choices or self.dead_ends >= PLAY_OUTS:
+                return None
+            index, at, occupied, to_fill, length, places = choices.pop()
+            del self.plan[length:]
+
+    def _spots(
+        self, obj: int, source: int, others: int, grasps: list[int], to_fill: int
+    ) -> list[int]:
+        """Where ``obj`` may be sent away: free places that are no goal still to
+        be filled first, then those in the way of the fewest grasps."""
+        c = self.events.c
+        spots = sorted(
+            (to_fill >> place & 1, self.in_the_way[place], place)
+            for place in range(len(c.locations))
+            if place not in (source, c.goal[obj])  # its goal comes with its own move
+            and any(c.put_ok(others, place, g) for g in grasps)
+        )
+        return [place for _, _, place in spots[:PARKING_TRIED]]
 
 
 @dataclass(slots=True)

@@ -1,0 +1,43 @@
+(define (domain demoplan-parking-10)
+  (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions :existential-preconditions)
+  (:types item location grip subgoal)
+  (:predicates
+    (handempty)
+    (located ?o - item ?l - location)
+    (free ?l - location)
+    (occupied ?l - location)
+    (holding ?o - item ?g - grip)
+    (allowed ?o - item ?g - grip)
+    (guarded ?l - location ?g - grip)
+    (guard ?l - location ?g - grip ?m1 ?m2 - location)
+  )
+  (:action grasp
+    :parameters (?o - item ?l - location ?g - grip)
+    :precondition (and
+      (handempty)
+      (located ?o ?l)
+      (allowed ?o ?g)
+      (or (not (guarded ?l ?g)) (exists (?b1 ?b2 - location) (and (guard ?l ?g ?b1 ?b2) (free ?b1) (free ?b2))))
+    )
+    :effect (and
+      (not (handempty))
+      (not (located ?o ?l))
+      (not (occupied ?l))
+      (free ?l)
+      (holding ?o ?g)
+    ))
+  (:action put-down
+    :parameters (?o - item ?l - location ?g - grip)
+    :precondition (and
+      (holding ?o ?g)
+      (free ?l)
+      (or (not (guarded ?l ?g)) (exists (?b1 ?b2 - location) (and (guard ?l ?g ?b1 ?b2) (free ?b1) (free ?b2))))
+    )
+    :effect (and
+      (handempty)
+      (located ?o ?l)
+      (occupied ?l)
+      (not (free ?l))
+      (not (holding ?o ?g))
+    ))
+)
