@@ -162,6 +162,9 @@ def _arm_from_the_border(
     colour=st.sampled_from(("green", "blue", "yellow")),
     frayed=st.integers(0, 8),
 )
+# a square whose side lies on the border (0.4 px in), free on one of its three seen
+# sides and at two corners where the arm's rounded end turns away
+@example(seed=0, edge="left", wide=100, reach=55, centre=0.5, colour="green", frayed=1)
 def test_an_arm_reaching_in_from_the_border_is_no_block(
     seed: int, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
 ) -> None:

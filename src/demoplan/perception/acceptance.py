@@ -151,11 +151,16 @@ def free_outline_seen(
 ) -> float:
     """The share of the square ``params``'s outline (on the crop ``alpha`` at
     ``offset`` in an image of ``image`` rows × columns) that is seen to border on
-    table: of its points 2 px out (nine along each side), those within the image,
-    where the mask is empty (α < ½; past the crop is table). A point past the
-    image's border shows nothing: a square fitted inside something larger that the
-    border cuts (a robot arm reaching in from the edge) has its side there on the
-    border, not on table. 0 when no point is seen."""
+    table: of its points 2 px out (nine along each side), all of them, those within
+    the image where the mask is empty (α < ½; past the crop is table). A point past
+    the image's border shows nothing: a square fitted inside something larger that
+    the border cuts (a robot arm reaching in from the edge) has its side there on the
+    border, not on table. Such a point counts as not free, and it stays in the
+    count: the share is of the whole outline, as for a square inside the image, so
+    the least free share asks for as many free sides there. (Counted over the
+    points seen only, one free side of the three seen beside a border is a third
+    of them, and two corners where a rounded arm's end turns away from the other
+    sides lift it over the least free share.)"""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     along = np.linspace(-0.4, 0.4, 9) * side
@@ -168,10 +173,8 @@ def free_outline_seen(
     row0, col0 = offset
     xs, ys = col0 + pu, row0 + crop_rows - pv  # image x (right), y (down)
     seen = (xs >= 0) & (xs < image[1]) & (ys >= 0) & (ys < image[0])
-    if not seen.any():
-        return 0.0
     cols, rows = pu.astype(np.intp), (crop_rows - pv).astype(np.intp)  # as the fit's own
     within = seen & (rows >= 0) & (rows < crop_rows) & (cols >= 0) & (cols < crop_cols)
     held = np.zeros(pu.shape, dtype=bool)
     held[within] = alpha[rows[within], cols[within]] >= 0.5
-    return int(np.count_nonzero(seen & ~held)) / int(np.count_nonzero(seen))
+    return int(np.count_nonzero(seen & ~held)) / int(pu.size)
