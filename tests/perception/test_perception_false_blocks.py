@@ -165,6 +165,8 @@ def _arm_from_the_border(
 # a square whose side lies on the border (0.4 px in), free on one of its three seen
 # sides and at two corners where the arm's rounded end turns away
 @example(seed=0, edge="left", wide=100, reach=55, centre=0.5, colour="green", frayed=1)
+# a square 4 px in from the border, its side there on the arm's frayed band (no mask)
+@example(seed=0, edge="left", wide=101, reach=47, centre=0.5, colour="green", frayed=5)
 def test_an_arm_reaching_in_from_the_border_is_no_block(
     seed: int, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
 ) -> None:

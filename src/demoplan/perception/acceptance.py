@@ -68,15 +68,20 @@ def runs_on_along_border(
     alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
 ) -> bool:
     """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
-    of ``image`` rows × columns) reaches past a border of the image along which its
-    region runs on beyond it: the mask holds (α > ½) within a quarter side (at least
+    of ``image`` rows × columns) reaches past a border of the image, or comes within
+    the depth its region is looked at beside it, along which its region runs on
+    beyond it: the mask holds (α > ½) within a quarter side (at least
     :data:`_BORDER_BAND` px) of that border over most of a stretch a quarter side long
-    (at least 3 px), 2 px past either end of the square's own stretch there. Such a
+    (at least 3 px), 2 px past either end of the square's own stretch there (its
+    points within :data:`_BORDER_BAND` px of its nearest to the border). Such a
     square is a piece of something cut by the border — a strip of table, a board's
     edge, a row of things, an arm reaching in — not a block whose top shows whole: a
     block poking past the border ends with the square along it. (Not only the pixels
     at the border: there a pale or glaring part of an arm may fray the mask, as at
-    the top of langtable_real.)"""
+    the top of langtable_real — and a square fitted into the arm then stops short of
+    the frayed band, its side there seen on "table" that is the arm's glare; the
+    band is as deep as the region is looked at beside the square, so a square within
+    it is checked as one past the border.)"""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     row0, col0 = offset
@@ -98,9 +103,9 @@ def runs_on_along_border(
         (height - ys, xs, False, height),
     )
     for depth, place, upright, far in edges:
-        if not np.any(depth < 0):
-            continue  # the square stays inside this border
-        near = place[depth < _BORDER_BAND]
+        if not np.any(depth < depths[-1]):
+            continue  # the square stays further from this border than its region is looked at
+        near = place[depth < depth.min() + _BORDER_BAND]
         length = height if upright else width
         for ends in (near.min() - stretch, near.max() + stretch):
             points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
