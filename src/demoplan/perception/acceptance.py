@@ -73,7 +73,8 @@ def runs_on_along_border(
     beyond it: the mask holds (α > ½) within a quarter side (at least
     :data:`_BORDER_BAND` px) of that border over most of a stretch a quarter side long
     (at least 3 px), 2 px past either end of the square's own stretch there (its
-    points within :data:`_BORDER_BAND` px of its nearest to the border). Such a
+    points within :data:`_BORDER_BAND` px of the border, or of its nearest to it
+    when it stays inside). Such a
     square is a piece of something cut by the border — a strip of table, a board's
     edge, a row of things, an arm reaching in — not a block whose top shows whole: a
     block poking past the border ends with the square along it. (Not only the pixels
@@ -105,7 +106,7 @@ def runs_on_along_border(
     for depth, place, upright, far in edges:
         if not np.any(depth < depths[-1]):
             continue  # the square stays further from this border than its region is looked at
-        near = place[depth < depth.min() + _BORDER_BAND]
+        near = place[depth < max(0.0, float(depth.min())) + _BORDER_BAND]
         length = height if upright else width
         for ends in (near.min() - stretch, near.max() + stretch):
             points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
