@@ -162,6 +162,11 @@ def _arm_from_the_border(
     colour=st.sampled_from(("green", "blue", "yellow")),
     frayed=st.integers(0, 8),
 )
+# a square whose side lies on the border (0.4 px in), free on one of its three seen
+# sides and at two corners where the arm's rounded end turns away
+@example(seed=0, edge="left", wide=100, reach=55, centre=0.5, colour="green", frayed=1)
+# a square 4 px in from the border, its side there on the arm's frayed band (no mask)
+@example(seed=0, edge="left", wide=101, reach=47, centre=0.5, colour="green", frayed=5)
 def test_an_arm_reaching_in_from_the_border_is_no_block(
     seed: int, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
 ) -> None:
@@ -197,6 +202,33 @@ def _fill_square(
     points = np.rint(np.array(corners) * 16).astype(np.int32)
     colour = tuple(float(v) for v in np.clip(rgb, 0, 255))
     cv2.fillPoly(image, [points], colour, cv2.LINE_AA, shift=4)
+
+
+@settings(max_examples=10, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    side=st.floats(30.0, 70.0),
+    inside=st.floats(0.55, 1.0),
+    yaw=st.floats(-10.0, 10.0),
+)
+@example(seed=8, side=68.24, inside=0.64, yaw=6.57)
+def test_a_block_cut_by_the_border_is_found(
+    seed: int, side: float, inside: float, yaw: float
+) -> None:
+    """A block alone at the left border, ``inside`` of its top in view (the rest
+    past the border): the border rules above (its side there not free, its region
+    looked at along the border) leave it a block — nothing runs on beside it along
+    the border. It is found, at its centre. (A square fitted inside it, smaller and
+    past the border too, is the piece its region runs on beyond.)"""
+    rng = np.random.default_rng(seed)
+    x, y = inside * side - side / 2, float(rng.uniform(100, 300))
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = (128, 128, 128)
+    _fill_square(image, x, y, yaw, side, np.asarray(COLOURS["red"], dtype=float))
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == 1, [(f.colour, f.x, f.y, f.side) for f in found]
+    assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), (x, y)) < 3.0
 
 
 _TABLES = {"blue": (62, 96, 150), "green": (70, 120, 80)}  # coloured table tops (RGB)

@@ -68,15 +68,21 @@ def runs_on_along_border(
     alpha: np.ndarray, params: np.ndarray, offset: tuple[int, int], image: tuple[int, ...]
 ) -> bool:
     """Whether the square ``params`` (on the crop ``alpha`` at ``offset`` in an image
-    of ``image`` rows × columns) reaches past a border of the image along which its
-    region runs on beyond it: the mask holds (α > ½) within a quarter side (at least
+    of ``image`` rows × columns) reaches past a border of the image, or comes within
+    the depth its region is looked at beside it, along which its region runs on
+    beyond it: the mask holds (α > ½) within a quarter side (at least
     :data:`_BORDER_BAND` px) of that border over most of a stretch a quarter side long
-    (at least 3 px), 2 px past either end of the square's own stretch there. Such a
+    (at least 3 px), 2 px past either end of the square's own stretch there (its
+    points within :data:`_BORDER_BAND` px of the border, or of its nearest to it
+    when it stays inside). Such a
     square is a piece of something cut by the border — a strip of table, a board's
     edge, a row of things, an arm reaching in — not a block whose top shows whole: a
     block poking past the border ends with the square along it. (Not only the pixels
     at the border: there a pale or glaring part of an arm may fray the mask, as at
-    the top of langtable_real.)"""
+    the top of langtable_real — and a square fitted into the arm then stops short of
+    the frayed band, its side there seen on "table" that is the arm's glare; the
+    band is as deep as the region is looked at beside the square, so a square within
+    it is checked as one past the border.)"""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     row0, col0 = offset
@@ -98,9 +104,9 @@ def runs_on_along_border(
         (height - ys, xs, False, height),
     )
     for depth, place, upright, far in edges:
-        if not np.any(depth < 0):
-            continue  # the square stays inside this border
-        near = place[depth < _BORDER_BAND]
+        if not np.any(depth < depths[-1]):
+            continue  # the square stays further from this border than its region is looked at
+        near = place[depth < max(0.0, float(depth.min())) + _BORDER_BAND]
         length = height if upright else width
         for ends in (near.min() - stretch, near.max() + stretch):
             points_along, points_in = np.meshgrid(ends, np.abs(far - depths))
@@ -151,11 +157,16 @@ def free_outline_seen(
 ) -> float:
     """The share of the square ``params``'s outline (on the crop ``alpha`` at
     ``offset`` in an image of ``image`` rows × columns) that is seen to border on
-    table: of its points 2 px out (nine along each side), those within the image,
-    where the mask is empty (α < ½; past the crop is table). A point past the
-    image's border shows nothing: a square fitted inside something larger that the
-    border cuts (a robot arm reaching in from the edge) has its side there on the
-    border, not on table. 0 when no point is seen."""
+    table: of its points 2 px out (nine along each side), all of them, those within
+    the image where the mask is empty (α < ½; past the crop is table). A point past
+    the image's border shows nothing: a square fitted inside something larger that
+    the border cuts (a robot arm reaching in from the edge) has its side there on the
+    border, not on table. Such a point counts as not free, and it stays in the
+    count: the share is of the whole outline, as for a square inside the image, so
+    the least free share asks for as many free sides there. (Counted over the
+    points seen only, one free side of the three seen beside a border is a third
+    of them, and two corners where a rounded arm's end turns away from the other
+    sides lift it over the least free share.)"""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     along = np.linspace(-0.4, 0.4, 9) * side
@@ -168,10 +179,8 @@ def free_outline_seen(
     row0, col0 = offset
     xs, ys = col0 + pu, row0 + crop_rows - pv  # image x (right), y (down)
     seen = (xs >= 0) & (xs < image[1]) & (ys >= 0) & (ys < image[0])
-    if not seen.any():
-        return 0.0
     cols, rows = pu.astype(np.intp), (crop_rows - pv).astype(np.intp)  # as the fit's own
     within = seen & (rows >= 0) & (rows < crop_rows) & (cols >= 0) & (cols < crop_cols)
     held = np.zeros(pu.shape, dtype=bool)
     held[within] = alpha[rows[within], cols[within]] >= 0.5
-    return int(np.count_nonzero(seen & ~held)) / int(np.count_nonzero(seen))
+    return int(np.count_nonzero(seen & ~held)) / int(pu.size)
