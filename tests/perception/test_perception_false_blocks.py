@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -152,7 +153,7 @@ def _arm_from_the_border(
     image[inside] = np.clip(np.rint(tint + noise), 0, 255).astype(np.uint8)[inside]
 
 
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=12, deadline=None, derandomize=True)
 @given(
     seed=st.integers(0, 10_000),
     edge=st.sampled_from(("left", "right", "top", "bottom")),
@@ -176,6 +177,23 @@ def test_an_arm_reaching_in_from_the_border_is_no_block(
     (frayed along the border or not) and its side on the border shows no table — no
     block's top shows whole. No block is reported in it; the red blocks away from it
     are found as without it."""
+    _no_block_in_the_arm(seed, edge, wide, reach, centre, colour, frayed)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="not yet: an 88 px square in a 100 px arm frayed 5 px deep at the border "
+    "(misfit 0.198; the arm runs on only 11 px beside it)",
+)
+def test_an_arm_barely_wider_than_a_block_frayed_at_the_border_is_no_block() -> None:
+    """A draw of the property above that fails today (found at 100 examples with
+    --hypothesis-seed=3): the family's narrowest arm, frayed deepest."""
+    _no_block_in_the_arm(0, "left", 100, 53, 0.5, "green", 5)
+
+
+def _no_block_in_the_arm(
+    seed: int, edge: str, wide: int, reach: int, centre: float, colour: str, frayed: int
+) -> None:
     rng = np.random.default_rng(seed)
     camera, width, height = _FAR_FROM[edge]
     truth = random_blocks(int(rng.integers(1, 3)), camera, width, height, rng, colours=("red",))
