@@ -64,14 +64,14 @@ def _fresh(args: list[bytes], folder: Path, **options: object) -> tuple[int, byt
 def test_a_forked_command_answers_as_a_fresh_one(
     workspace: Path, name: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    monkeypatch.setenv("DEMOPLAN_TEST_FORK", "1")
     assert _forked(CASES[name], workspace) == _fresh(CASES[name], workspace)
 
 
 def test_stdin_and_a_full_disk_reach_the_forked_command(
     workspace: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    monkeypatch.setenv("DEMOPLAN_TEST_FORK", "1")
     scene = (workspace / "scene.json").read_bytes()
     args = [b"plan", b"model.json", b"/dev/stdin"]
     forked = _forked(args, workspace, stdin=scene)
@@ -93,7 +93,7 @@ def test_another_environment_starts_the_command_fresh(
 ) -> None:
     """A variable libraries may read at import (here MuJoCo's backend) is not
     the server's: the command starts as the executable."""
-    monkeypatch.delenv("DEMOPLAN_TEST_FRESH", raising=False)
+    monkeypatch.setenv("DEMOPLAN_TEST_FORK", "1")
     _forked(CASES["missing-file"], workspace)  # the server runs
     monkeypatch.setenv("MUJOCO_GL", "bogus")
     before = dict(forkserver.started)
