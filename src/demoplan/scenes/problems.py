@@ -248,7 +248,7 @@ def _add_target_locations(
     shapes: dict[str, ObjectGeometry],
     names: StableNames,
     settings: GeometrySettings,
-    standing: Standing | None = None,
+    standing: ShapesInPlace | None = None,
 ) -> dict[str, str]:
     """The subtasks' targets added to ``locations``: a target at a location made
     for an object of the same shape and size is that location, any other a
@@ -402,7 +402,7 @@ def _overhangs(
     locations: list[Location],
     target_of: dict[str, str],
     shapes: dict[str, ObjectGeometry],
-    standing: Standing,
+    standing: ShapesInPlace,
 ) -> list[str]:
     """Targets that hang over what held them up in the demonstrations
     (:func:`~demoplan.scenes.overhang.overhang_obstacles`), at their locations'
@@ -424,12 +424,12 @@ def _overhangs(
     return overhang_obstacles(placements, standing, scene.source)
 
 
-Standing = dict[str, tuple[Vector3, float, ObjectGeometry, str]]
+ShapesInPlace = dict[str, tuple[Vector3, float, ObjectGeometry, str]]
 """Where each landmark with a size and each object stands at the start:
 position, yaw, shape and the scene's field that says so."""
 
 
-def _standing(scene: Scene, shapes: dict[str, ObjectGeometry]) -> Standing:
+def _standing(scene: Scene, shapes: dict[str, ObjectGeometry]) -> ShapesInPlace:
     landmark_shapes = dict(scene.landmark_geometry)
     standing = {
         name: (pose.position, pose.yaw, landmark_shapes[name], f"landmarks.{name}")
@@ -478,7 +478,7 @@ def _turned_to_fit(
     subtasks: tuple[Subtask, ...],
     shapes: dict[str, ObjectGeometry],
     settings: GeometrySettings,
-    standing: Standing,
+    standing: ShapesInPlace,
 ) -> list[Subtask]:
     """Subtasks whose orientation was never learned keep the object's current yaw
     unless their outline there would overlap another target's, or hang over what
