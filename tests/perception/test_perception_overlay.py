@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from demoplan.commands.execution import perceive
+from demoplan.commands.perception import perceive
 from demoplan.perception.blocks import PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.calibrated import perceive_photograph
 from demoplan.perception.calibration import MarkerLayout, calibrate

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from demoplan.cli import app
-from demoplan.commands.execution import perceive
+from demoplan.commands.perception import perceive
 from demoplan.errors import UsageError
 from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.sizes import SIDE_TOLERANCE, block_sizes

@@ -1,6 +1,6 @@
 """``run``: a learned task carried out in simulation (paper §IV.C, execution
 with replanning). The perception commands (``perceive``, ``calibrate``) are in
-:mod:`demoplan.commands.perception` and named here too."""
+:mod:`demoplan.commands.perception`."""
 
 from __future__ import annotations
 
@@ -11,14 +11,6 @@ from typing import Any
 
 from demoplan.budget import Clock
 from demoplan.commands.inputs import model_named, task_and_scene
-from demoplan.commands.perception import (
-    Calibrated,
-    Perceived,
-    PerceivedSequence,
-    calibrate,
-    perceive,
-    perceive_sequence,
-)
 from demoplan.errors import UsageError
 from demoplan.execution.executor import ExecutionSettings, RunEvent, RunReport, execute
 from demoplan.execution.faults import Faults
@@ -32,12 +24,6 @@ from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene
 
 __all__ = [
-    "Calibrated",
-    "Perceived",
-    "PerceivedSequence",
-    "calibrate",
-    "perceive",
-    "perceive_sequence",
     "remove_unfinished_video",
     "run",
 ]
