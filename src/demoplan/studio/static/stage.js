@@ -202,6 +202,23 @@ export function sameObjects(a, b) {
   return names(a) === names(b);
 }
 
+// Whether layout `b` holds the things of layout `a`: the same objects, each
+// the same in `keys` (a size that `b` leaves to the model, null, matches any).
+// A scene loaded for planning must be planned with its own sizes and masses,
+// not with those of same-named objects on the table before.
+export const PLANNED_KEYS = ["shape", "size", "type"];
+export const DRAWN_KEYS = [...PLANNED_KEYS, "mass", "density", "colour"];
+
+export function sameThings(a, b, keys) {
+  if (!sameObjects(a, b)) return false;
+  const same = (u, v) => JSON.stringify(u ?? null) === JSON.stringify(v ?? null);
+  return Object.entries(b.objects).every(([name, geometry]) => {
+    const known = a.objects[name];
+    if (state.clutter.includes(name) || !known) return true;
+    return keys.every((key) => (key === "size" && geometry.size == null) || same(known[key], geometry[key]));
+  });
+}
+
 export function corners(table_) {
   const [x0, y0] = table_.origin;
   return {
