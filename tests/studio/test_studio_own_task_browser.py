@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -166,29 +167,43 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
     plan = tab.locator('[data-testid="plan"] > li').all_inner_texts()
     put = [line.split()[1] for line in plan if line.startswith("PUT_DOWN")]
     assert sorted(put) == sorted(IN_CADDY) and put[-1] == "cup"
+    tab.get_by_label("Scene name").fill("new-place.json")  # for `demoplan run`
+    page.button("Save scene").click()
+    page.settle()
+    assert json.loads((workdir / "new-place.json").read_text())["landmarks"]["caddy"]["yaw"] == 75
 
+    run_in_page(page, "kinematic", within=3e-4, turned_within=0.5)
+    page.screenshot("own-task-run")
+    if os.environ.get("DEMOPLAN_STUDIO_SCREENSHOTS") == "1":
+        # the figure of the arm's run, checked as the kinematic one (to its tolerances)
+        run_in_page(page, "arm", within=2e-3, turned_within=1.0)
+        page.screenshot("own-task-arm")
+
+
+def run_in_page(page: Studio, sim: str, within: float, turned_within: float) -> None:
+    """Run in the Run view on ``sim``: the run ends green, and the final world
+    it observed has each thing where it was taught in the caddy's frame
+    (``within`` m), on the caddy, turned with it (``turned_within`` degrees)."""
+    tab = page.tab
     page.view("4 · Run")
+    tab.locator("#sim").select_option(sim)
+    tab.evaluate("document.querySelector('#run-state').dataset.state = 'asked'")
     page.button("Run").click()
     tab.wait_for_selector(
-        '#run-state[data-state="done"], #run-state[data-state="failed"]', timeout=60_000
+        '#run-state[data-state="done"], #run-state[data-state="failed"]', timeout=120_000
     )
     page.settle()
-    assert tab.locator("#run-state").get_attribute("data-state") == "done"
+    assert tab.locator("#run-state").get_attribute("data-state") == "done", page.alert()
     assert tab.locator('[data-testid="timeline"] > li').last.get_attribute("data-look") == "done"
-    # the final world as the run observed it: each thing where it was taught
-    # in the caddy's frame, turned with the caddy
     half = (CADDY[0] / 2, CADDY[1] / 2)
     for name, (_, _, turn) in IN_CADDY.items():
         x, y, z, yaw = page.pose(name)
         local = in_box(NEW_CADDY, (x, y))
-        assert local == pytest.approx(taught(name), abs=1e-3), name
+        assert local == pytest.approx(taught(name), abs=within), name
         assert abs(local[0]) < half[0] and abs(local[1]) < half[1], name
-        assert z == pytest.approx(CADDY[2], abs=1e-6), name
+        assert z == pytest.approx(CADDY[2], abs=within), name
         if turn is not None:  # a box's yaw, taken modulo a half turn
             relative = (yaw - NEW_CADDY[2] - turn) % 180
-            assert min(relative, 180 - relative) < 0.5, (name, yaw)
-    assert math.isclose(
-        float(tab.locator('#table [data-landmark="caddy"]').get_attribute("data-yaw") or "nan"),
-        NEW_CADDY[2],
-    )
-    page.screenshot("own-task-run")
+            assert min(relative, 180 - relative) < turned_within, (name, yaw)
+    landmark = tab.locator('#table [data-landmark="caddy"]')
+    assert math.isclose(float(landmark.get_attribute("data-yaw") or "nan"), NEW_CADDY[2])
