@@ -336,6 +336,7 @@ def cup_and_caddy(cup: dict[str, Any]) -> dict[str, Any]:
     """An objects file: ``cup`` beside a caddy."""
     cup = {"shape": "cylinder", "position": [0.3, 0.1, 0.0], "yaw": 0.0} | cup
     caddy = {"shape": "box", "size": [0.28, 0.18, 0.03], "position": [0.3, 0.4, 0.0], "yaw": 0.0}
+    caddy["colour"] = "#27ae60"
     return {"format": "demoplan/objects-1", "objects": {"cup": cup}, "landmarks": {"caddy": caddy}}
 
 
@@ -343,12 +344,14 @@ def test_a_scene_loaded_for_planning_is_planned_with_its_own_sizes_and_masses(
     lunch: tuple[Studio, Path],
 ) -> None:
     """Same names, other things: the Plan view's start is the file's cup, not
-    the cup on the table before (a run on the arm would carry the wrong one)."""
+    the cup on the table before (a run on the arm would carry the wrong one);
+    same things: the table's colours."""
     page, workdir = lunch
     tab = page.tab
     write_json(workdir / "small.json", cup_and_caddy({"size": [0.07, 0.07, 0.09], "mass": 0.15}))
     write_json(workdir / "big.json", cup_and_caddy({"size": [0.095, 0.095, 0.1], "mass": 0.9}))
     plain = cup_and_caddy({"size": [0.095, 0.095, 0.1]}) | {"format": "demoplan/scene-1"}
+    del plain["landmarks"]["caddy"]["colour"]  # a scene names no colours
     write_json(workdir / "plain.json", plain)
     tab.reload()
     tab.wait_for_selector('body[data-ready="true"]')
@@ -371,3 +374,9 @@ def test_a_scene_loaded_for_planning_is_planned_with_its_own_sizes_and_masses(
     # the table now holds the big cup: a scene that gives no mass is wood, as for `plan`
     assert "mass" not in planned_cup("plain.json")
     assert planned_cup("small.json")["size"] == [0.07, 0.07, 0.09]
+    # a scene of the same things (the page's own, saved above) gives no colours:
+    # its caddy is drawn in the colour the table's has
+    tab.get_by_label("Scene file").select_option("start-small.json")
+    page.button("Load scene").click()
+    page.settle()
+    assert tab.locator('#table [data-landmark="caddy"] rect').get_attribute("fill") == "#27ae60"

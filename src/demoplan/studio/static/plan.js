@@ -2,7 +2,7 @@
 
 import { ApiError, get, post } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, plural, say, state } from "./common.js";
-import { DRAWN_KEYS, PLANNED_KEYS, keepInView, layoutWith, place, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
+import { DRAWN_KEYS, PLANNED_KEYS, inTableColours, keepInView, layoutWith, place, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
 import { snap } from "./table.js";
 import { refreshFiles } from "./files.js";
 import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
@@ -81,7 +81,7 @@ export async function loadPlanScene() {
     startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
   }
   state.plan.poses = clone(answer.layout.poses);
-  state.plan.landmarks = clone(answer.layout.landmarks || {});
+  state.plan.landmarks = scene ? inTableColours(answer.layout.landmarks) : clone(answer.layout.landmarks || {});
   keepInView(state.plan.poses);
   state.plan.extras = scene ? sceneExtras(answer.document) : null;
   clearPlan();

@@ -6,7 +6,7 @@
 import { ApiError, del, get, post } from "./api.js";
 import { $, alarm, clone, guarded, plural, say, state } from "./common.js";
 import { chosenModel, sceneDocument, sceneExtras } from "./plan.js";
-import { PLANNED_KEYS, keepInView, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
+import { PLANNED_KEYS, inTableColours, keepInView, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
 import { startDemonstration } from "./teach.js";
 
 // Polls in a row that may fail (a busy server) before the run is given up as lost.
@@ -225,7 +225,7 @@ export async function restoreLastRun() {
     startDemonstration(clone(layout), "The table of the last run.");
   }
   state.plan.poses = clone(layout.poses);
-  state.plan.landmarks = clone(layout.landmarks || {}); // where the run's landmarks stood
+  state.plan.landmarks = inTableColours(layout.landmarks); // where the run's landmarks stood
   state.plan.extras = sceneExtras({ format: "demoplan/scene-1", ...record.scene });
   keepInView(state.plan.poses);
   for (const [id, value] of [["faults", record.faults || ""], ["run-seed", String(record.seed || 0)]]) $(id).value = value;

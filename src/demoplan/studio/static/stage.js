@@ -234,6 +234,15 @@ export function sameThings(a, b, keys) {
   });
 }
 
+// A start's landmarks drawn in the colours of the table's landmarks of the
+// same names: a scene file (or the last run's) gives no colours, only poses.
+export function inTableColours(marks) {
+  const known = (state.layout && state.layout.landmarks) || {};
+  const out = clone(marks || {});
+  for (const [name, mark] of Object.entries(out)) if (known[name] && known[name].colour) mark.colour = known[name].colour;
+  return out;
+}
+
 export function corners(table_) {
   const [x0, y0] = table_.origin;
   return {
