@@ -126,6 +126,7 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
             assert page.alert() == ""
             assert page.pose(name)[2] == pytest.approx(CADDY[2])  # on the caddy
         if k == 1:
+            assert name_drawn_over_things(page, "caddy")
             page.screenshot("own-task-teach")
         tab.get_by_label("File name").fill(f"caddy-{k + 1}.json")
         page.button("Save").click()
@@ -178,6 +179,21 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
         # the figure of the arm's run, checked as the kinematic one (to its tolerances)
         run_in_page(page, "arm", within=2e-3, turned_within=1.0)
         page.screenshot("own-task-arm")
+
+
+def name_drawn_over_things(page: Studio, landmark: str) -> bool:
+    """Whether the landmark's name is painted after (over) every object on the table."""
+    over: bool = page.tab.evaluate(
+        """(name) => {
+          const label = [...document.querySelectorAll("#table .landmark-labels text")]
+            .find((t) => t.textContent === name);
+          const things = [...document.querySelectorAll("#table [data-object]")];
+          return !!label && things.length > 0 && things.every((thing) =>
+            !!(thing.compareDocumentPosition(label) & Node.DOCUMENT_POSITION_FOLLOWING));
+        }""",
+        landmark,
+    )
+    return over
 
 
 def run_in_page(page: Studio, sim: str, within: float, turned_within: float) -> None:
