@@ -132,7 +132,12 @@ def run(
         bool, typer.Option("--json", help="Print the run report as JSON.")
     ] = False,
     frames: Annotated[
-        Path | None, typer.Option(help="Write top-view PNG frames and a storyboard here.")
+        Path | None,
+        typer.Option(
+            help="Write PNG frames and a storyboard here: kinematic draws the table from "
+            "above; mujoco and arm render the simulator's 3-D view from a fixed camera at an "
+            "angle; robosuite:ENV its agentview camera."
+        ),
     ] = None,
     max_replans: Annotated[int, typer.Option(min=0, help="Give up after this many replans.")] = 25,
     perception: Annotated[
