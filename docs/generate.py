@@ -34,6 +34,7 @@ from pydantic import BaseModel
 from demoplan.budget import Clock
 from demoplan.cli import app
 from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
+from demoplan.documents.colours import COLOUR_FORMS
 from demoplan.documents.masses import MAX_DENSITY, MIN_DENSITY
 from demoplan.documents.poses import (
     MAX_ANGLE,
@@ -101,6 +102,7 @@ from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import (
     MAX_GRIPPER,
     _GripperSchema,
+    _LandmarkSchema,
     _ObjectSchema,
     _RobotSchema,
     _SceneSchema,
@@ -385,7 +387,24 @@ SCENE_OBJECT = FieldTable(
         "type": "the kind of object it is (`plate`); any instance of a type may fill the "
         "model's roles of that type, the planner chooses which "
         "([planning.md](planning.md#identical-objects)); default: its name",
+        "colour": f"{COLOUR_FORMS}, e.g. `\"#d62728\"` or `[0.84, 0.15, 0.16]`: the colour "
+        "every renderer draws it in — `run --frames` (the kinematic top views, MuJoCo's and "
+        "the arm's pictures), `--video`, the storyboard, `plan --plot`, the studio. Default: "
+        "the colour demoplan gives its name (`red` is red, another name a colour of a "
+        "palette of 20, distinct within the task). Anything else is one error line naming "
+        "the file and the field (`objects.cup.colour`, exit 1)",
     },
+)
+SCENE_LANDMARK = FieldTable(
+    "Scene landmark",
+    _LandmarkSchema,
+    {
+        **LANDMARK.meaning,
+        "colour": f"{COLOUR_FORMS}: the colour every renderer draws it in, as an object's "
+        "(default: the figures' sandy landmark colour); anything else is one error line "
+        "naming the file and the field (`landmarks.caddy.colour`, exit 1)",
+    },
+    noun="landmark",
 )
 GRIPPER = FieldTable(
     "Gripper",
@@ -568,6 +587,7 @@ FIELD_TABLES = (
     OBJECTS_FILE,
     SCENE,
     SCENE_OBJECT,
+    SCENE_LANDMARK,
     GRIPPER,
     TABLE,
     ROBOT,
@@ -1413,6 +1433,7 @@ def scene_section() -> str:
             fenced("json", (ROOT / PYRAMID).read_text(encoding="utf-8")),
             field_table(SCENE),
             field_table(SCENE_OBJECT),
+            field_table(SCENE_LANDMARK),
             field_table(GRIPPER),
             field_table(TABLE),
             field_table(ROBOT),
@@ -1444,17 +1465,15 @@ def studio_objects_section() -> str:
             f"## {TITLES['studio_objects']}",
             "The things of a task of your own, as the studio's **Save objects** writes "
             'them and its Teach view starts from (docs/studio.md, "Your own objects"): '
-            f"a {link('scene', 'scene')} — every object with its `shape`, `size`, `mass` or "
-            "`density`, `type` and where it stands at the start; every landmark with its "
-            "`shape`, `size` and pose — in which an object or a landmark may also name its "
-            "`colour` (`#rrggbb`; default: the colour every demoplan figure gives it). It is "
-            "read by the scene reader, so every field means and is checked as in a scene, "
-            "and every object must give its `size`; a colour that is not `#rrggbb` is one "
-            "error line naming the file and the field (`objects.pear.colour`). Every command "
+            f"a {link('scene', 'scene')} — every object with its `shape`, `size`, `colour`, "
+            "`mass` or `density`, `type` and where it stands at the start; every landmark "
+            "with its `shape`, `size`, `colour` and pose (the colours chosen in the page). It "
+            "is read by the scene reader, so every field means and is checked as in a scene "
+            "(a colour too), and every object must give its `size`. Every command "
             "that reads a scene (`show`, `plan`, `problem`, `export`, `run`, `evaluate`) "
-            "reads an objects file as the scene it starts from, its colours checked and "
-            "left out; the studio's **Save scene** writes a plain scene, with the start as "
-            "its Plan view shows it. A lunch box "
+            "reads an objects file as the scene it starts from, in its colours; the "
+            "studio's **Save scene** writes a scene, with the start as its Plan view shows "
+            "it and every thing's colour. A lunch box "
             "(tests/studio/test_studio_own_objects_browser.py), shortened:",
             fenced("json", STUDIO_OBJECTS_EXAMPLE),
         ]

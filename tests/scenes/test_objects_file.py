@@ -1,6 +1,6 @@
 """The objects file the studio's *Save objects* writes (``demoplan/objects-1``,
 docs/formats.md "Objects file") is read by ``plan`` and ``run`` as the scene it
-starts from, its colours checked and left out."""
+starts from, its colours read as a scene's (every renderer draws them)."""
 
 from __future__ import annotations
 
@@ -46,7 +46,9 @@ def test_plan_reads_an_objects_file_as_the_scene_it_starts_from(tmp_path: Path) 
             entry.pop("colour", None)
     scene.write_text(json.dumps(plain))
 
-    assert load_scene(objects) == replace(load_scene(scene), source=str(objects))
+    read = load_scene(objects)
+    assert read.given_colours == {name: colour.lower() for name, colour in COLOURS.items()}
+    assert replace(read, colours=()) == replace(load_scene(scene), source=str(objects))
     runner = CliRunner()
     options = ["--json", "--timeout", "inf"]
     from_objects = runner.invoke(app, ["plan", str(model), str(objects), *options])

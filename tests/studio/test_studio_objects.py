@@ -147,7 +147,11 @@ def test_the_objects_file_shown_in_formats_md_is_read() -> None:
     section = page.split("## Objects file (`demoplan/objects-1`)")[1]
     example = section.split("```json")[1].split("```")[0]
     read = objects_from_document(json.loads(example), "formats.md")
-    assert dict(read.colours) == {"sandwich": "#d9a441", "cookie": "#7f5539", "lunchbox": "#2e86c1"}
+    assert read.scene.given_colours == {
+        "sandwich": "#d9a441",
+        "cookie": "#7f5539",
+        "lunchbox": "#2e86c1",
+    }
     assert read.scene.object("cookie").type == "biscuit"
 
 

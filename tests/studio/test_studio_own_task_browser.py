@@ -171,7 +171,15 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
     tab.get_by_label("Scene name").fill("new-place.json")  # for `demoplan run`
     page.button("Save scene").click()
     page.settle()
-    assert json.loads((workdir / "new-place.json").read_text())["landmarks"]["caddy"]["yaw"] == 75
+    saved = json.loads((workdir / "new-place.json").read_text())
+    assert saved["landmarks"]["caddy"]["yaw"] == 75
+    # the colours chosen, for every renderer of `demoplan run` (the arm's too)
+    given = {
+        name: entry.get("colour")
+        for group in ("objects", "landmarks")
+        for name, entry in saved[group].items()
+    }
+    assert given == {name: colour for name, _, _, _, colour, _ in THINGS}
 
     run_in_page(page, "kinematic", within=3e-4, turned_within=0.5)
     page.screenshot("own-task-run")

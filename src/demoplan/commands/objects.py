@@ -2,10 +2,10 @@
 docs/formats.md "Objects file") — the things of a task, each with its shape,
 size, colour, mass and type, and the landmarks, standing where the task starts.
 
-An objects file is a scene (``demoplan/scene-1``) whose objects and landmarks
-may also name their ``colour``: it is read by the scene parser, so that a name,
-a size, a mass or a pose means in it what it means in a scene, and ``plan`` and
-``run`` read it as the scene it starts from (:func:`demoplan.scenes.scene.load_scene`).
+An objects file is a scene (``demoplan/scene-1``) in which every object gives
+its size: it is read by the scene parser, so that a name, a size, a mass, a
+colour or a pose means in it what it means in a scene, and ``plan`` and ``run``
+read it as the scene it starts from (:func:`demoplan.scenes.scene.load_scene`).
 """
 
 from __future__ import annotations
@@ -20,11 +20,10 @@ __all__ = ["ObjectsFile", "objects_from_document", "scene_document"]
 
 @dataclass(frozen=True, slots=True)
 class ObjectsFile:
-    """What an objects file holds: its start as a scene, and the colours it names."""
+    """What an objects file holds: its start as a scene (with the colours it
+    names), and the masses as it gives them."""
 
     scene: Scene
-    colours: tuple[tuple[str, str], ...]
-    """(name, ``#rrggbb``) for each object or landmark that names its colour."""
     masses: tuple[tuple[str, str, float], ...]
     """(name, ``mass`` or ``density``, value) as the file gives them (kg, kg/m³)."""
 
@@ -33,12 +32,9 @@ def objects_from_document(document: dict[str, Any], source: str) -> ObjectsFile:
     """Read a ``demoplan/objects-1`` document (one error line naming ``source``
     and the field otherwise)."""
     scene = scene_from_document(scene_of_objects_file(document, source), source)
-    colours: list[tuple[str, str]] = []
     masses: list[tuple[str, str, float]] = []
     for group in ("objects", "landmarks"):
         for name, entry in (document.get(group) or {}).items():
-            if entry.get("colour") is not None:
-                colours.append((name, entry["colour"].lower()))
             for key in ("mass", "density"):
                 value = entry.get(key)
                 if isinstance(value, int | float) and not isinstance(value, bool):
@@ -50,11 +46,11 @@ def objects_from_document(document: dict[str, Any], source: str) -> ObjectsFile:
                 source=source,
                 field=f"objects.{name}.size",
             )
-    return ObjectsFile(scene, tuple(colours), tuple(masses))
+    return ObjectsFile(scene, tuple(masses))
 
 
 def scene_document(document: dict[str, Any], source: str) -> dict[str, Any]:
-    """The scene an objects file starts from, as ``plan`` and ``run`` read it:
-    the document without its colours (checked first, :func:`objects_from_document`)."""
+    """The scene an objects file starts from, as ``plan`` and ``run`` read it
+    (checked first, :func:`objects_from_document`)."""
     objects_from_document(document, source)
     return scene_of_objects_file(document, source)

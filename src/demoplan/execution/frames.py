@@ -130,7 +130,8 @@ class FrameWriter:
         from demoplan.plotting.figures import draw_landmarks, object_patch
         from demoplan.plotting.labels import add_label
 
-        assign_colours([*self.targets, *observation.poses])  # as every figure of the task
+        given = self.scene.given_colours if self.scene is not None else {}
+        assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task
         if self.scene is not None:
             draw_landmarks(ax, self.scene)
         for name, pose in self.targets.items():

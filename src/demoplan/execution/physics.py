@@ -36,7 +36,7 @@ from demoplan.execution.kinematic import OBSTACLE, KinematicWorld
 from demoplan.execution.world import Observation
 from demoplan.model import WOOD_DENSITY, ObjectGeometry, Pose
 from demoplan.perception.camera import Camera
-from demoplan.plotting.colours import NAMED, assign_colours, object_rgba
+from demoplan.plotting.colours import NAMED, assign_colours, object_colour, rgba
 from demoplan.scenes.geometry import half_extent
 from demoplan.scenes.scene import Scene
 
@@ -85,7 +85,8 @@ beside the object (the fingers open 8 cm from the centre)."""
 
 
 LANDMARK_RGBA = "0.85 0.79 0.66 1"
-"""A landmark's colour in renders: the figures' sandy landmark colour."""
+"""A landmark's colour in renders where its scene gives none: the figures'
+sandy landmark colour."""
 
 
 def _quat_wxyz(yaw_deg: float) -> list[float]:
@@ -115,30 +116,32 @@ def scene_xml(
     orthographic camera ``top`` looking straight down at (x, y) whose picture is
     ``height_m`` metres high."""
     bodies = []
-    assign_colours(obj.name for obj in scene.objects)  # the figures' colours
+    assign_colours(scene.names, scene.given_colours)  # the figures' colours
     # Bodies get internal names (``_object3``): a scene's names can be anything.
     for index, obj in enumerate(scene.objects):
         assert obj.geometry is not None
         x, y, z = obj.pose.position
         half = obj.geometry.size[2] / 2
         w, qx, qy, qz = _wxyz(obj.pose)
-        rgba = object_rgba(rendered_colour(scene, obj.name))
+        colour = rgba(rendered_colour(scene, obj.name))
         bodies.append(
             f'<body name="_object{index}" pos="{x} {y} {z + half}" quat="{w} {qx} {qy} {qz}">'
-            f'<freejoint/><geom {_geom(obj.geometry)} mass="{obj.geometry.kg}" rgba="{rgba}" '
+            f'<freejoint/><geom {_geom(obj.geometry)} mass="{obj.geometry.kg}" rgba="{colour}" '
             'friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
     shapes = dict(scene.landmark_geometry)
+    given = scene.given_colours
     for index, (name, pose) in enumerate(scene.landmarks):
         if name not in shapes:
             continue  # a landmark with no size is only a reference, nothing to stand on
         x, y, z = pose.position
         w, qx, qy, qz = _wxyz(pose)
         # Static (no joint): a tray things stand on, drawn in every render.
+        colour = rgba(given[name]) if name in given else LANDMARK_RGBA
         bodies.append(
             f'<body name="_landmark{index}" pos="{x} {y} {z + shapes[name].size[2] / 2}" '
             f'quat="{w} {qx} {qy} {qz}"><geom {_geom(shapes[name])} '
-            f'rgba="{LANDMARK_RGBA}" friction="0.8 0.01 0.0005" condim="4"/></body>'
+            f'rgba="{colour}" friction="0.8 0.01 0.0005" condim="4"/></body>'
         )
     for k in range(OBSTACLES):
         s = OBSTACLE.size[0] / 2
@@ -220,11 +223,15 @@ def _wxyz(pose: Pose) -> tuple[float, float, float, float]:
 
 
 def rendered_colour(scene: Scene, name: str) -> str:
-    """What an object's colour in renders follows: its type where that names a
-    colour (``red`` and ``red2``, both of type ``red``, are both red — the top
-    camera tells blocks apart by colour), else its name."""
+    """An object's colour in renders (``#rrggbb``): the one its scene file gives
+    (the colour a user chose in the studio); else its type's where that names
+    a colour (``red`` and ``red2``, both of type ``red``, are both red — the top
+    camera tells blocks apart by colour); else the figures' colour of its name."""
+    given = scene.given_colours.get(name)
+    if given is not None:
+        return given
     kind = next((o.kind for o in scene.objects if o.name == name), name)
-    return kind if kind in NAMED else name
+    return object_colour(kind if kind in NAMED else name)
 
 
 class MujocoWorld:
@@ -557,8 +564,8 @@ class MujocoWorld:
             shape = self.geometry.get(name)
             if shape is None or scene.ngeom >= scene.maxgeom:
                 continue
-            rgba = object_rgba(rendered_colour(self.scene, name))
-            red, green, blue, _ = (float(v) for v in rgba.split())
+            colour = rgba(rendered_colour(self.scene, name))
+            red, green, blue, _ = (float(v) for v in colour.split())
             x, y, z = pose.position
             half = np.array(shape.size, dtype=float) / 2
             matrix = np.zeros(9)

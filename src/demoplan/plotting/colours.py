@@ -2,10 +2,12 @@
 command, so that ``learn``'s figure, ``plan --plot`` and ``run --frames`` of
 one task agree.
 
-An object named after a colour (``red``, ``wood``) gets that colour, and so
-does a numbered one (``red2``, ``red-2``, the role ``red#2``: identical
-blocks as perception and learning name them). Any
-other gets a colour of :data:`CYCLE` chosen from its name alone (a stable
+An object whose scene file gives its ``colour`` (the studio writes the colour a
+user chose) has that colour in every renderer: :func:`assign_colours` takes the
+given colours first. Any other object named after a colour (``red``, ``wood``)
+gets that colour, and so does a numbered one (``red2``, ``red-2``, the role
+``red#2``: identical blocks as perception and learning name them). Any other
+gets a colour of :data:`CYCLE` chosen from its name alone (a stable
 hash), so it does not depend on which object happened to be drawn first;
 where two objects of one task would share a colour, :func:`assign_colours`,
 given the task's objects, moves the later name (in sorted order) to the next
@@ -17,9 +19,9 @@ from __future__ import annotations
 
 import re
 import zlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
-__all__ = ["CYCLE", "NAMED", "assign_colours", "object_colour", "object_rgba"]
+__all__ = ["CYCLE", "NAMED", "assign_colours", "object_colour", "object_rgba", "rgba"]
 
 NAMED = {
     "red": "#d62728",
@@ -59,11 +61,15 @@ CYCLE = (
     "#9c6644",
 )
 _assigned: dict[str, str] = {}
+_given: dict[str, str] = {}
 
 
 def object_colour(name: str) -> str:
-    """``name``'s colour as ``#rrggbb``: its own where it names one, else the one
+    """``name``'s colour as ``#rrggbb``: the one its file gives (as last passed
+    to :func:`assign_colours`), else its own where it names one, else the one
     :func:`assign_colours` gave it, else its preferred cycle colour."""
+    if name in _given:
+        return _given[name]
     named = _named(name)
     if named is not None:
         return named
@@ -81,15 +87,24 @@ def _named(name: str) -> str | None:
     return NAMED.get(numbered.group(1)) if numbered else None
 
 
-def assign_colours(names: Iterable[str]) -> dict[str, str]:
+def assign_colours(
+    names: Iterable[str], given: Mapping[str, str] | None = None
+) -> dict[str, str]:
     """Colours for the objects of one task, distinct where the cycle allows:
-    in sorted order, each name takes its preferred colour, or the next one in
-    the cycle that no other of ``names`` has. Remembered for
-    :func:`object_colour` for the rest of the process."""
-    unique = sorted(set(names))
-    taken = {colour for n in unique if (colour := _named(n)) is not None}
+    each of ``given`` (name → ``#rrggbb``, the colours a scene file gives) its
+    own; the others, in sorted order, the colour they name, else their
+    preferred colour or the next one in the cycle that no other of ``names``
+    has. Remembered for :func:`object_colour` for the rest of the process (a
+    name not in ``given`` forgets a colour given before)."""
+    given = given or {}
+    unique = sorted(set(names) | set(given))
+    taken = {colour for n in unique if (colour := given.get(n) or _named(n)) is not None}
     colours: dict[str, str] = {}
     for name in unique:
+        if name in given:
+            colours[name] = _given[name] = given[name].lower()
+            continue
+        _given.pop(name, None)
         named = _named(name)
         if named is not None:
             colours[name] = named
@@ -112,6 +127,11 @@ def _preferred(name: str) -> str:
 
 def object_rgba(name: str) -> str:
     """:func:`object_colour` as MuJoCo's ``rgba`` attribute (``"r g b 1"``)."""
-    hex_colour = object_colour(name).lstrip("#")
+    return rgba(object_colour(name))
+
+
+def rgba(colour: str) -> str:
+    """``#rrggbb`` as MuJoCo's ``rgba`` attribute (``"r g b 1"``)."""
+    hex_colour = colour.lstrip("#")
     red, green, blue = (int(hex_colour[k : k + 2], 16) / 255 for k in (0, 2, 4))
     return f"{red:.3f} {green:.3f} {blue:.3f} 1"

@@ -102,18 +102,18 @@ def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha
 
 
 LANDMARK_COLOUR = "#d9c9a8"
-"""Landmarks (a tray, a fixture) are drawn in one sandy colour, hatched, under everything."""
+"""Landmarks (a tray, a fixture) are drawn hatched, under all, sandy unless given a colour."""
 
 
 def draw_landmarks(ax: Axes, scene: Scene, *, side: bool = False) -> None:
     """The scene's landmarks that have a size, from above (or from the side),
-    under the objects, each named."""
-    shapes = dict(scene.landmark_geometry)
+    under the objects, each named, in its given colour (else :data:`LANDMARK_COLOUR`)."""
+    shapes, given = dict(scene.landmark_geometry), scene.given_colours
     for name, pose in scene.landmarks:
         if name not in shapes:
             continue
         draw = side_patch if side else object_patch
-        patch = draw(pose, shapes[name], LANDMARK_COLOUR, 0.6)
+        patch = draw(pose, shapes[name], given.get(name, LANDMARK_COLOUR), 0.6)
         patch.set_hatch("//")
         patch.set_zorder(0.5)
         ax.add_patch(patch)
@@ -399,7 +399,7 @@ def plot_scene_plan(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = assign_colours(obj.name for obj in scene.objects)
+    colours = assign_colours(scene.names, scene.given_colours)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     final = {obj.name: obj.pose for obj in scene.objects}
     moves = []
@@ -504,7 +504,7 @@ def plot_scene_targets(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 5))
-    colours = assign_colours(obj.name for obj in scene.objects)
+    colours = assign_colours(scene.names, scene.given_colours)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     draw_landmarks(ax, scene)
     targets = []
@@ -673,7 +673,7 @@ def plot_scene_side(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 3))
-    colours = assign_colours(obj.name for obj in scene.objects)
+    colours = assign_colours(scene.names, scene.given_colours)
     geometry = {obj.name: obj.geometry for obj in scene.objects}
     final = {obj.name: obj.pose for obj in scene.objects}
     moves: list[tuple[str, Pose, Pose]] = []

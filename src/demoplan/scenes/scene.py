@@ -13,7 +13,9 @@ the object's frame; default ``[0, 90]``: two orthogonal side grasps, as the
 paper's blocks have); ``"landmarks"`` (static poses used as references); and
 ``"table": {"min": [x, y], "max": [x, y]}`` (where free space may be generated).
 An object's size may be left out when the task model knows it from the
-demonstrations (:func:`complete_geometry`).
+demonstrations (:func:`complete_geometry`). An object or a landmark may name its
+``"colour"`` (``"#d62728"`` or ``[r, g, b]`` in 0–1): every renderer draws it in
+that colour (:func:`demoplan.plotting.colours.assign_colours`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from demoplan.documents.colours import parse_colour
 from demoplan.documents.masses import with_mass
 from demoplan.documents.poses import (
     LENGTH_SCALE,
@@ -52,7 +55,6 @@ from demoplan.model import (
 )
 
 __all__ = [
-    "COLOUR",
     "DEFAULT_GRASPS",
     "Gripper",
     "Scene",
@@ -115,6 +117,9 @@ class Scene:
     landmark_geometry: tuple[tuple[str, ObjectGeometry], ...] = ()
     """The shape and size of landmarks that have one (a tray): things stand on
     their top, and figures draw them."""
+    colours: tuple[tuple[str, str], ...] = ()
+    """(name, ``#rrggbb``) of each object and landmark whose file gives its
+    colour; the others take the figures' palette."""
     reach: float | None = None
     """m: how far from ``robot``'s base (horizontally) the hand puts things down,
     where a world knows it (robosuite's Panda); a region goal's target is chosen
@@ -133,6 +138,11 @@ class Scene:
     @property
     def landmark_names(self) -> tuple[str, ...]:
         return tuple(name for name, _ in self.landmarks)
+
+    @property
+    def given_colours(self) -> dict[str, str]:
+        """Name → ``#rrggbb`` of the objects and landmarks the file gives a colour."""
+        return dict(self.colours)
 
 
 def final_layout(demonstration: Demonstration) -> Scene:
@@ -166,11 +176,30 @@ class _ObjectSchema(PoseSchema):
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
     type: TypeName | None = None
+    colour: str | list[Number] | None = None  # read as "#rrggbb" (documents.colours)
 
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float] | None) -> list[float] | None:
         return None if size is None else positive_extents(size)
+
+    @field_validator("colour", mode="before")
+    @classmethod
+    def _colour(cls, colour: Any) -> str | None:
+        return None if colour is None else parse_colour(colour)
+
+
+class _LandmarkSchema(LandmarkSchema):
+    colour: str | list[Number] | None = None  # as an object's
+
+    @field_validator("colour", mode="before")
+    @classmethod
+    def _colour(cls, colour: Any) -> str | None:
+        return None if colour is None else parse_colour(colour)
+
+    def pose(self, units: UnitsSchema) -> Pose:
+        plain = LandmarkSchema.model_validate(self.model_dump(exclude={"colour"}))
+        return plain.pose(units)
 
 
 class _GripperSchema(_Schema):
@@ -200,7 +229,7 @@ class _SceneSchema(_Schema):
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
     objects: dict[str, _ObjectSchema]
-    landmarks: dict[str, LandmarkSchema] = {}
+    landmarks: dict[str, _LandmarkSchema] = {}
     freespace: list[list[Coordinate]] | None = None
     gripper: _GripperSchema = _GripperSchema()
     table: _TableSchema | None = None
@@ -282,6 +311,12 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         table=table,
         source=source,
         robot=robot,
+        colours=tuple(
+            (name, str(entry.colour))
+            for entries in (parsed.objects, parsed.landmarks)
+            for name, entry in entries.items()
+            if entry.colour is not None
+        ),
     )
 
 
@@ -307,7 +342,9 @@ def _scene_object(
         )
     pose = pose_from_dict(
         PoseSchema(
-            **entry.model_dump(exclude={"size", "shape", "grasps", "mass", "density", "type"})
+            **entry.model_dump(
+                exclude={"size", "shape", "grasps", "mass", "density", "type", "colour"}
+            )
         ),
         parsed.units,
     )
@@ -356,37 +393,12 @@ def _freespace(parsed: _SceneSchema, scale: float, source: str) -> tuple[Vector3
     return freespace
 
 
-COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
-"""A colour in an objects file: ``#rrggbb``."""
-
-
 def scene_of_objects_file(document: dict[str, Any], source: str) -> dict[str, Any]:
     """The scene an objects file (``demoplan/objects-1``, docs/formats.md
-    "Objects file") starts from: the document as a ``demoplan/scene-1`` without
-    the ``colour`` its objects and landmarks may name (each checked to be
-    ``#rrggbb``; one error line naming ``source`` and the field otherwise)."""
+    "Objects file") starts from: the document as a ``demoplan/scene-1``, its
+    colours, sizes and masses read as a scene's."""
     check_format(document, {"objects"}, source)
-    scene: dict[str, Any] = {**document, "format": "demoplan/scene-1"}
-    for group in ("objects", "landmarks"):
-        entries = document.get(group)
-        if entries is None:
-            continue
-        if not isinstance(entries, dict):
-            raise InputError("an object of named entries expected", source=source, field=group)
-        stripped: dict[str, Any] = {}
-        for name, entry in entries.items():
-            if not isinstance(entry, dict):
-                raise InputError("an object expected", source=source, field=f"{group}.{name}")
-            colour = entry.get("colour")
-            if colour is not None and not (isinstance(colour, str) and COLOUR.match(colour)):
-                raise InputError(
-                    f"{colour!r} is not a colour; #rrggbb expected",
-                    source=source,
-                    field=f"{group}.{name}.colour",
-                )
-            stripped[name] = {k: v for k, v in entry.items() if k != "colour"}
-        scene[group] = stripped
-    return scene
+    return {**document, "format": "demoplan/scene-1"}
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -439,6 +451,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         if obj.type is not None:
             entry["type"] = obj.type
         objects[obj.name] = entry
+    colours = scene.given_colours
     out: dict[str, Any] = {"format": "demoplan/scene-1", "objects": objects}
     if scene.landmarks:
         shapes = dict(scene.landmark_geometry)
@@ -449,6 +462,9 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
                 entry["shape"] = shapes[name].shape
                 entry["size"] = list(shapes[name].size)
             out["landmarks"][name] = entry
+    for name, colour in colours.items():
+        group = out["landmarks"] if name in scene.landmark_names else objects
+        group[name]["colour"] = colour
     if scene.freespace is not None:
         out["freespace"] = [list(s) for s in scene.freespace]
     out["gripper"] = {

@@ -128,9 +128,10 @@ def layout_of_demonstration(
 
 def layout_of_scene(scene: Scene) -> dict[str, Any]:
     """The layout of a scene: its objects where they stand (size null where the
-    scene leaves it to the model), its landmarks, its table or one around all."""
+    scene leaves it to the model) in the colours it gives (else the figures'),
+    its landmarks, its table or one around all."""
     landmark_shapes = dict(scene.landmark_geometry)
-    colours = assign_colours([*scene.names, *scene.landmark_names])
+    colours = assign_colours([*scene.names, *scene.landmark_names], scene.given_colours)
     outlines = [_outline(o.geometry, o.pose) for o in scene.objects]
     outlines += [_outline(landmark_shapes.get(n), pose) for n, pose in scene.landmarks]
     if scene.table is not None:
@@ -162,10 +163,6 @@ def layout_of_objects(objects: ObjectsFile, name: str) -> dict[str, Any]:
     colours, masses and types it gives."""
     layout = layout_of_scene(objects.scene)
     layout["template"] = None
-    for thing, colour in objects.colours:
-        entry = layout["objects"].get(thing) or layout["landmarks"].get(thing)
-        if entry is not None:
-            entry["colour"] = colour
     for thing, key, value in objects.masses:
         if thing in layout["objects"]:
             layout["objects"][thing][key] = value

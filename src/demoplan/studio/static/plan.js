@@ -22,6 +22,7 @@ export function sceneDocument() {
     if (!pose) continue;
     objects[name] = { ...poseDocument(pose), size: geometry.size };
     if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
+    if (geometry.colour) objects[name].colour = geometry.colour; // every renderer draws it
     // a loaded scene file's masses are its own (its extras, below), not the table's
     for (const key of state.plan.extras ? ["type"] : ["mass", "density", "type"]) {
       if (geometry[key] != null) objects[name][key] = geometry[key];
@@ -41,6 +42,9 @@ export function sceneDocument() {
     scene.table = { min: [r4(x0), r4(y0)], max: [r4(x0 + w), r4(y0 + h)] };
   }
   const landmarks = landmarksDocument(state.plan.landmarks);
+  for (const [name, mark] of Object.entries(state.plan.landmarks || {})) {
+    if (landmarks[name] && mark.colour) landmarks[name].colour = mark.colour;
+  }
   if (Object.keys(landmarks).length) scene.landmarks = landmarks;
   return scene;
 }
@@ -81,7 +85,7 @@ export async function loadPlanScene() {
     startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
   }
   state.plan.poses = clone(answer.layout.poses);
-  state.plan.landmarks = scene ? inTableColours(answer.layout.landmarks) : clone(answer.layout.landmarks || {});
+  state.plan.landmarks = scene ? inTableColours(answer.layout, answer.document) : clone(answer.layout.landmarks || {});
   keepInView(state.plan.poses);
   state.plan.extras = scene ? sceneExtras(answer.document) : null;
   clearPlan();

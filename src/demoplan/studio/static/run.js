@@ -225,7 +225,7 @@ export async function restoreLastRun() {
     startDemonstration(clone(layout), "The table of the last run.");
   }
   state.plan.poses = clone(layout.poses);
-  state.plan.landmarks = inTableColours(layout.landmarks); // where the run's landmarks stood
+  state.plan.landmarks = inTableColours(layout, record.scene); // where the run's landmarks stood
   state.plan.extras = sceneExtras({ format: "demoplan/scene-1", ...record.scene });
   keepInView(state.plan.poses);
   for (const [id, value] of [["faults", record.faults || ""], ["run-seed", String(record.seed || 0)]]) $(id).value = value;

@@ -234,12 +234,20 @@ export function sameThings(a, b, keys) {
   });
 }
 
-// A start's landmarks drawn in the colours of the table's landmarks of the
-// same names: a scene file (or the last run's) gives no colours, only poses.
-export function inTableColours(marks) {
+// A scene's colours on the table: a colour its file gives (the page's Save
+// scene writes every thing's) is the thing's, the objects' on the table too;
+// a landmark the file gives none is drawn in the colour of the table's
+// landmark of that name (a scene written elsewhere names no colours).
+export function inTableColours(layout, document_) {
+  const given = (group, name) => Boolean(document_ && document_[group] && document_[group][name] && document_[group][name].colour);
   const known = (state.layout && state.layout.landmarks) || {};
-  const out = clone(marks || {});
-  for (const [name, mark] of Object.entries(out)) if (known[name] && known[name].colour) mark.colour = known[name].colour;
+  const out = clone(layout.landmarks || {});
+  for (const [name, mark] of Object.entries(out)) {
+    if (!given("landmarks", name) && known[name] && known[name].colour) mark.colour = known[name].colour;
+  }
+  for (const [name, geometry] of Object.entries(layout.objects || {})) {
+    if (given("objects", name) && state.layout && state.layout.objects[name]) state.layout.objects[name].colour = geometry.colour;
+  }
   return out;
 }
 

@@ -1,0 +1,34 @@
+"""An object's colour as a file gives it (docs/formats.md, scene ``colour``):
+``"#rrggbb"`` or ``[r, g, b]`` with each channel in 0–1, kept as ``#rrggbb``
+(lower case) — the form every renderer takes (:mod:`demoplan.plotting.colours`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+__all__ = ["COLOUR_FORMS", "HEX_COLOUR", "parse_colour"]
+
+HEX_COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
+COLOUR_FORMS = '"#rrggbb" or [r, g, b] with each in 0–1'
+"""What a colour field holds, as error lines say it."""
+
+
+def parse_colour(value: object) -> str:
+    """``value`` as ``#rrggbb``; a ValueError saying what was expected otherwise."""
+    if isinstance(value, str) and HEX_COLOUR.match(value):
+        return value.lower()
+    if (
+        isinstance(value, list | tuple)
+        and len(value) == 3
+        and all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+        and all(0.0 <= v <= 1.0 for v in value)
+    ):
+        return "#" + "".join(f"{round(float(v) * 255):02x}" for v in value)
+    shown = repr(value)
+    shown = shown if len(shown) <= 40 else shown[:40] + "…"
+    raise ValueError(f"{shown} is not a colour; {COLOUR_FORMS} expected")
