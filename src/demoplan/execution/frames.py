@@ -94,8 +94,21 @@ class FrameWriter:
             return None
         import matplotlib.pyplot as plt
 
-        from demoplan.plotting.backend import tight_layout
         from demoplan.plotting.output import save_figure
+
+        figure = self.storyboard_figure(max_panels)
+        path = self.folder / "storyboard.png"
+        save_figure(figure, path, dpi=90)
+        plt.close(figure)
+        self.written.append(path)
+        return path
+
+    def storyboard_figure(self, max_panels: int = 12) -> Any:
+        """The storyboard's figure: :meth:`storyboard_frames` in rows of four,
+        laid out (the caller closes it)."""
+        import matplotlib.pyplot as plt
+
+        from demoplan.plotting.backend import tight_layout
 
         picks = self.storyboard_frames(max_panels)
         columns = min(4, len(picks))
@@ -109,11 +122,7 @@ class FrameWriter:
             ax.set_visible(True)
             self._panel(ax, index)
         tight_layout(figure)
-        path = self.folder / "storyboard.png"
-        save_figure(figure, path, dpi=90)
-        plt.close(figure)
-        self.written.append(path)
-        return path
+        return figure
 
     def _panel(self, ax: Any, index: int) -> None:
         observation, caption = self.frames[index]
@@ -123,7 +132,7 @@ class FrameWriter:
             return
         ax.imshow(image)
         ax.set_axis_off()
-        ax.set_title(caption, fontsize=7, color=FAILED_COLOUR if index in self.failed else "black")
+        self._caption(ax, caption, index in self.failed)
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
         from demoplan.plotting.colours import assign_colours, object_colour
@@ -166,4 +175,12 @@ class FrameWriter:
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
-        ax.set_title(caption, fontsize=7, color=FAILED_COLOUR if failed else "black")
+        self._caption(ax, caption, failed)
+
+    @staticmethod
+    def _caption(ax: Any, caption: str, failed: bool) -> None:
+        """The frame's caption over it, its lines broken to fit the frame's
+        cell (a failure's reason is long), red where it shows a failure."""
+        from demoplan.plotting.captions import fit_title
+
+        fit_title(ax, caption, fontsize=7, color=FAILED_COLOUR if failed else "black")
