@@ -229,6 +229,7 @@ def test_saved_demonstrations_are_listed_and_read_back(client: TestClient) -> No
         "models": [],
         "objects": [],
         "scenes": ["fig4.json"],
+        "latest_model": None,
     }
     answer = client.get("/api/files/demonstration-2.json").json()
     assert answer["document"] == documents[1]

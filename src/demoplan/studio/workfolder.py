@@ -136,6 +136,18 @@ class WorkFolder:
                 found[kind].append(name)
         return found
 
+    def latest_model(self, models: list[str]) -> str | None:
+        """Of ``models`` (names the listing gives), the one written last — the
+        model learned most recently (by the page or ``demoplan learn``); the
+        later name where two were written at the same time; None for none."""
+        written: list[tuple[int, str]] = []
+        for name in models:
+            try:
+                written.append((self.path(name).stat().st_mtime_ns, name))
+            except (InputError, OSError):
+                continue
+        return max(written)[1] if written else None
+
     def source(self) -> dict[str, str] | None:
         keys = ("kind", "id")
         """The Teach view's source as last chosen (``{"kind", "id"}``), or None."""

@@ -33,8 +33,9 @@ def template(
 
 
 @router.get("/api/files")
-def files(folder: Folder) -> dict[str, list[str]]:
-    return folder.listing()
+def files(folder: Folder) -> dict[str, Any]:
+    listing = folder.listing()
+    return {**listing, "latest_model": folder.latest_model(listing["models"])}
 
 
 @router.get("/api/files/{name}")

@@ -43,7 +43,9 @@ export async function refreshFiles() {
   const current = models.value;
   models.replaceChildren();
   for (const name of state.files.models) models.appendChild(new Option(name, name));
+  // the model chosen stays; else the one learned last (not the first by name)
   if (state.files.models.includes(current)) models.value = current;
+  else if (state.files.latest_model) models.value = state.files.latest_model;
   $("workfolder").textContent = `work folder: ${plural(state.files.demonstrations.length, "demonstration")}, ` +
     `${plural(state.files.models.length, "model")}, ${plural(state.files.scenes.length, "scene")}`;
 }
