@@ -58,10 +58,12 @@ class FrameWriter:
         import matplotlib.pyplot as plt
 
         from demoplan.plotting.backend import tight_layout
+        from demoplan.plotting.captions import grow_for_titles
         from demoplan.plotting.output import save_figure
 
         figure, ax = plt.subplots(figsize=(4.5, 4.0))
         self._panel(ax, len(self.frames) - 1)
+        grow_for_titles(figure, [[ax]])
         tight_layout(figure)
         save_figure(figure, path, dpi=90)
         plt.close(figure)
@@ -109,6 +111,7 @@ class FrameWriter:
         import matplotlib.pyplot as plt
 
         from demoplan.plotting.backend import tight_layout
+        from demoplan.plotting.captions import grow_for_titles
 
         picks = self.storyboard_frames(max_panels)
         columns = min(4, len(picks))
@@ -121,6 +124,7 @@ class FrameWriter:
         for ax, index in zip(axes.flat, picks, strict=False):
             ax.set_visible(True)
             self._panel(ax, index)
+        grow_for_titles(figure, [list(row) for row in axes])
         tight_layout(figure)
         return figure
 

@@ -13,11 +13,16 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.text import Text
 
-__all__ = ["CELL_FRACTION", "fit_title", "wrap_to_width"]
+__all__ = ["CELL_FRACTION", "LINES_WITH_ROOM", "fit_title", "grow_for_titles", "wrap_to_width"]
 
 CELL_FRACTION = 0.9
 """The share of its cell's width a caption's widest line may take (the title
 stands centred over its axes, which tick labels may move off the cell's middle)."""
+
+
+LINES_WITH_ROOM = 2
+"""Title lines a row of panels has room for at its figure's size; each line
+more makes the figure taller by the line's height."""
 
 
 def wrap_to_width(text: str, width: float, measure: Callable[[str], float]) -> str:
@@ -62,3 +67,20 @@ def fit_title(ax: Axes, text: str, **style: Any) -> Text:
 
     title.set_text(wrap_to_width(text, width, measure))
     return title
+
+
+def grow_for_titles(figure: Any, rows: list[list[Axes]]) -> None:
+    """Make ``figure`` taller by the title lines beyond :data:`LINES_WITH_ROOM`
+    of each row's tallest title, so that its layout keeps the panels' size
+    and the titles stay inside the figure."""
+    extra = 0.0
+    for row in rows:
+        titles = [ax.title for ax in row if ax.get_visible()]
+        beyond = [
+            (t.get_text().count("\n") + 1 - LINES_WITH_ROOM) * float(t.get_fontsize()) * 1.2 / 72
+            for t in titles
+        ]
+        extra += max([0.0, *beyond])  # inches
+    if extra > 0:
+        width, height = figure.get_size_inches()
+        figure.set_size_inches(width, height + extra)
