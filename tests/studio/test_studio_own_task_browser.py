@@ -180,6 +180,10 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
         for name, entry in saved[group].items()
     }
     assert given == {name: colour for name, _, _, _, colour, _ in THINGS}
+    # and the page draws each in it, from above and from the side
+    for name, colour in given.items():
+        side = page.tab.locator(f'[data-height-of="{name}"]').first.get_attribute("fill")
+        assert side == colour, (name, side)
 
     run_in_page(page, "kinematic", within=3e-4, turned_within=0.5)
     page.screenshot("own-task-run")

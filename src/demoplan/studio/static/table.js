@@ -293,7 +293,7 @@ export class TableView {
       const r = el("rect", {
         x: ground + z * scale, y: this.py(t.pose.position[1] + hy),
         width: Math.max(1, hgt * scale), height: (2 * hy) / this.mpp,
-        fill: t.landmark ? "#d8d2c4" : t.geometry.colour || "#999", stroke: darker(t.geometry.colour),
+        fill: t.geometry.colour || (t.landmark ? "#d8d2c4" : "#999"), stroke: darker(t.geometry.colour),
         "fill-opacity": 0.85, "data-height-of": t.name,
       }, strip);
       const title = el("title", {}, r);
