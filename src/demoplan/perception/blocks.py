@@ -39,7 +39,9 @@ from demoplan.perception.acceptance import (
     beyond_image,
     explained_share,
     free_outline_seen,
+    rounded_misfit,
     runs_on_along_border,
+    shares_a_side,
 )
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import (
@@ -71,7 +73,8 @@ class PerceptionSettings:
     """Share of a fitted square's pixels the mask must cover."""
     max_residual: float = 0.2
     """RMS difference between mask and fitted square over its pixels, in coverage units
-    (the square's corners rounded as a cube's may be: :data:`CORNER_ROUNDING`)."""
+    (a lone square's corners rounded as a cube's may be:
+    :data:`~demoplan.perception.acceptance.CORNER_ROUNDING`)."""
     min_free_outline: float = 0.4
     """Share of the outline that must border on table (at least ~2 free sides)."""
     colours: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
@@ -447,46 +450,16 @@ def _coverage(alpha: np.ndarray, params: np.ndarray) -> float:
     return float(alpha[window][inside].mean()) if inside.any() else 0.0
 
 
-CORNER_ROUNDING = (0.0, 0.05, 0.1, 0.15)
-"""Radii (shares of the side) of the rounded corners a square's misfit is measured
-against, the least misfit taken: a rendered top has sharp corners, a photographed
-wooden cube's top corners rounded by its bevel and the lens's blur (the sharp
-square's misfit of 0.21–0.28 on cubes of armlab_mrhan4 came mostly from their
-corners). A circle's rounding is half the side, far past the largest."""
-
-
-def _rounded_misfit(mask: np.ndarray, qu: np.ndarray, qv: np.ndarray, side: float) -> float:
-    """The least RMS misfit of ``mask`` against the squares of ``side`` with the
-    corner radii :data:`CORNER_ROUNDING` (edges ramping over one pixel), over each
-    one's own pixels; ``qu``, ``qv`` the pixels' |coordinates| in the square's frame."""
-    best = 1.0
-    for share in CORNER_ROUNDING:
-        radius = share * side
-        du, dv = (
-            np.maximum(qu - (side / 2 - radius), 0.0),
-            np.maximum(qv - (side / 2 - radius), 0.0),
-        )
-        corner = (du > 0) & (dv > 0)
-        distance = np.where(corner, np.hypot(du, dv) - radius, np.maximum(qu, qv) - side / 2)
-        fitted = np.clip(0.5 - distance, 0.0, 1.0)
-        own = fitted > 0.01
-        if own.any():
-            best = min(best, float(np.sqrt(np.mean((fitted[own] - mask[own]) ** 2))))
-    return best
-
-
 def _measures(alpha: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, float, float, float]:
     """``params`` with the square's interior coverage, its RMS misfit over its own
-    pixels (its corners rounded as a cube's may be, :data:`CORNER_ROUNDING`) and its
-    share of free outline."""
+    pixels and its share of free outline."""
     uu, vv, window = _window(alpha.shape, params, params[3])
     mask = alpha[window]
-    inside = _square_alpha(params, uu, vv) > 0.99
+    fitted = _square_alpha(params, uu, vv)
+    inside = fitted > 0.99
     coverage = float(mask[inside].mean()) if inside.any() else 0.0
-    u, v, theta, side = (float(p) for p in params)
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    qu, qv = np.abs(c * (uu - u) + s * (vv - v)), np.abs(-s * (uu - u) + c * (vv - v))
-    rms = _rounded_misfit(mask, qu, qv, side)
+    own = fitted > 0.01
+    rms = float(np.sqrt(np.mean((fitted[own] - mask[own]) ** 2))) if own.any() else 1.0
     return params, coverage, rms, _outline_free(alpha, params)
 
 
@@ -599,6 +572,24 @@ def _why_no_block(
     return why
 
 
+def _with_rounded_corners(
+    alpha: np.ndarray, fit: tuple[np.ndarray, float, float, float], search: _SquareSearch
+) -> tuple[np.ndarray, float, float, float]:
+    """``fit`` with its misfit measured against its square's corners rounded as a
+    photographed cube's are (:func:`~demoplan.perception.acceptance.rounded_misfit`)
+    when the sharp square misfits and no side of it is shared with the rest of its
+    region (:func:`~demoplan.perception.acceptance.shares_a_side`) — and only then
+    decides (its size and coverage, checked first, pass)."""
+    params, coverage, rms, free = fit
+    low, high = search.side_px
+    settings = search.settings
+    if rms <= settings.max_residual or coverage < settings.min_coverage:
+        return fit
+    if not 0.8 * low <= params[3] <= 1.2 * high or shares_a_side(alpha, params):
+        return fit
+    return params, coverage, min(rms, rounded_misfit(alpha, params)), free
+
+
 def _next_square(
     search: _SquareSearch, region: ColourRegion, alpha: np.ndarray, where: str
 ) -> tuple[_Square | None, list[tuple[str, str]]]:
@@ -610,7 +601,7 @@ def _next_square(
     failures: list[tuple[str, str]] = []
     for start, factor, coarse in _hough_starts(alpha, sides, base, where):
         check_time(where)
-        fit = _fit_from(alpha, start, factor, coarse)
+        fit = _with_rounded_corners(alpha, _fit_from(alpha, start, factor, coarse), search)
         why = _why_no_block(search, region, alpha, fit)
         if why is None:
             return fit[:3], failures
