@@ -25,6 +25,7 @@ from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.scenes.scene import Scene, load_scene, scene_from_document, scene_to_dict
 from tests.support.lunch_box import LUNCH, lunch_demonstrations, lunch_scene
 
+ROOT = Path(__file__).resolve().parents[2]
 BLUE = "#1f5fbf"  # the user's blue sandwich; the palette gives it a pink red
 GREEN = "#27ae60"  # the user's green caddy (a landmark)
 
@@ -234,3 +235,24 @@ def test_mujoco_renders_the_given_colour(lunch_model: TaskModel) -> None:
     assert np.abs(seen - normalised(palette)).max() > 0.3
     plain = hue_at_sandwich(scene_from_document(coloured_document(), "scene.json"))
     assert np.abs(plain - normalised(palette)).max() < 0.15
+
+
+def test_camera_perception_refuses_a_block_given_another_colour_than_its_type() -> None:
+    """``--perception camera`` names blocks by the colour their type names: a red
+    block the scene paints blue would be seen as a blue one, so it is refused
+    in one line before the run (exit 2); painted its own red, it is accepted."""
+    pytest.importorskip("mujoco")
+    from demoplan.errors import UsageError
+    from demoplan.execution.camera_world import CameraWorld
+    from demoplan.execution.physics import MujocoWorld
+    from demoplan.plotting.colours import NAMED
+
+    document = json.loads((ROOT / "examples" / "scenes" / "pyramid-fig4.json").read_text())
+    document["objects"]["red"]["colour"] = BLUE
+    scene = scene_from_document(document, "pyramid.json")
+    with pytest.raises(UsageError, match=r"red is given another colour") as error:
+        CameraWorld(MujocoWorld(scene), scene)
+    assert error.value.exit_code == 2 and "\n" not in str(error.value)
+    document["objects"]["red"]["colour"] = NAMED["red"].upper()
+    same = scene_from_document(document, "pyramid.json")
+    assert CameraWorld(MujocoWorld(same), same).world.scene.given_colours == {"red": NAMED["red"]}

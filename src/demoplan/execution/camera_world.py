@@ -10,7 +10,8 @@ from the scene: a camera above cannot see what is under a block it never saw
 being covered.
 
 Blocks are told apart by colour: every object's type (its name, when it
-declares none) must be a colour the camera names. Several blocks of one colour
+declares none) must be a colour the camera names, and a scene may not give a
+block another colour than its type's (the camera would see that one). Several blocks of one colour
 (``red`` and ``red2``, both of type ``red``) look alike; each keeps its
 identity from picture to picture by proximity — to where it was last seen, or,
 for the block just put down, to where it was put (:meth:`BlockTracker.identify
@@ -28,6 +29,7 @@ from demoplan.execution.world import Observation
 from demoplan.model import ObjectGeometry, Pose
 from demoplan.perception.blocks import PerceptionSettings, detect_blocks
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
+from demoplan.plotting.colours import NAMED
 from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.scene import Scene
 
@@ -52,6 +54,17 @@ class CameraWorld:
                 "--perception camera tells blocks apart by colour: an object's type (its "
                 f"name, when it declares none) must be one of {colours}; "
                 f"{', '.join(plain)} {'is' if len(plain) == 1 else 'are'} not"
+            )
+        given = scene.given_colours
+        recoloured = [
+            o.name for o in scene.objects if o.name in given and given[o.name] != NAMED[o.kind]
+        ]
+        if recoloured:
+            raise UsageError(
+                "--perception camera tells blocks apart by the colour their type names; "
+                f"{', '.join(recoloured)} {'is' if len(recoloured) == 1 else 'are'} given "
+                "another colour in the scene (leave the colour out, or run with "
+                "--perception state)"
             )
         self.world = world
         sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]
