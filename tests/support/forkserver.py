@@ -244,14 +244,18 @@ def run(
     timeout: float,
     stdin: bytes | None = None,
     stdout_file: IO[bytes] | None = None,
+    server: CommandServer | None = None,
 ) -> subprocess.CompletedProcess[bytes]:
     """``demoplan ARGV`` in a process of its own, as :func:`subprocess.run` would
     start it (stdin: ``stdin`` or this process's; stdout: ``stdout_file`` or a
     pipe; stderr a pipe): a fork of this process's server where it serves
-    ``env``, else the executable (:func:`fresh`). Raises
+    ``env``, else the executable (:func:`fresh`). ``server``: a server of the
+    caller's own instead (:meth:`CommandServer.start`, in ``env``), for commands
+    that run at the same time (each server serves one at a time). Raises
     :class:`subprocess.TimeoutExpired` after killing a command that took
     longer than ``timeout``."""
-    server = _server_for(env)
+    if server is None:
+        server = _server_for(env)
     if server is None:
         started["fresh"] += 1
         return fresh(argv, cwd, env, timeout=timeout, stdin=stdin, stdout_file=stdout_file)
@@ -347,7 +351,9 @@ def _kill(
             server.sock.shutdown(socket.SHUT_RDWR)  # the asking thread reads EOF
         server.process.kill()
         asking.join()
-        stop_servers()
+        server.stop()
+        if _servers.get("only") is server:
+            _servers.clear()
 
 
 def fresh(
