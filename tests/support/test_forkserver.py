@@ -7,6 +7,7 @@ budget that runs out (the clock counts from the fork)."""
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 import socket
 import struct
@@ -17,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from tests.support import forkserver
+from tests.support import forkrelay, forkserver
 from tests.support.helpers import EXAMPLES
 
 pytestmark = pytest.mark.slow  # each case also starts the executable fresh
@@ -163,3 +164,25 @@ def test_a_command_out_of_time_is_killed_and_the_next_gets_its_own_answer(
         forkserver.run(CASES["plan"], workspace, _env(), timeout=0)
     assert forkserver._server_for(_env()) is server  # the same server, still in step
     assert _forked(CASES["missing-file"], workspace) == _fresh(CASES["missing-file"], workspace)
+
+
+@pytest.mark.parametrize("name", ["show-json", "missing-file", "usage-error", "help"])
+def test_a_shells_demoplan_is_forked_and_answers_as_a_fresh_one(
+    workspace: Path, name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The docs' shell blocks' ``demoplan`` (tests/support/forkrelay.py): the
+    shell sees a fresh process's exit code, stdout and stderr."""
+    monkeypatch.delenv("DEMOPLAN_TEST_FORK", raising=False)
+    args = [os.fsdecode(a) for a in CASES[name]]
+    with forkrelay.forked_demoplan(_env()) as env:
+        before = dict(forkrelay.relayed)
+        shell = subprocess.run(
+            ["bash", "-c", shlex.join(["demoplan", *args])],
+            cwd=workspace,
+            env=env,
+            capture_output=True,
+            timeout=TIMEOUT,
+            check=False,
+        )
+        assert forkrelay.relayed == {**before, "forked": before["forked"] + 1}
+    assert (shell.returncode, shell.stdout, shell.stderr) == _fresh(CASES[name], workspace)
