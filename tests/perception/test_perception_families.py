@@ -60,8 +60,9 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     "distractors": ("a shape that is no cube taken for blocks", ((2147483646, False),)),
     "hands": ("a top beside a hand missed", ((126342, False),)),
     "achromatic": (
-        "black, white and grey cubes are no candidate regions yet",
-        ((0, False), (1, True)),
+        "a black or grey cube missed: its side faces in its mask (with --side), or joined "
+        "to the board's dark disc",
+        ((5, True), (27, False)),
     ),
     "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
     "side_faces": (

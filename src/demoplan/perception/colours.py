@@ -39,6 +39,7 @@ import numpy as np
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
+from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
@@ -454,7 +455,22 @@ def colour_regions(
         x, y, w, h, _ = (int(value) for value in stats[index])
         check_time(where)
         regions += _component_regions(colours, labels, int(index), (x, y, w, h))
+    if coloured_image:  # black, white and grey blocks by lightness (without colour: above)
+        check_time(where)
+        for colour, rgb, offset, alpha in achromatic_regions(
+            image, lab, _covered(regions, foreground.shape), min_area, record
+        ):
+            regions.append(ColourRegion(colour, rgb, offset, alpha))
     return regions, table
+
+
+def _covered(regions: list[ColourRegion], shape: tuple[int, ...]) -> np.ndarray:
+    """The pixels of an image of ``shape`` that ``regions`` hold (α > ½)."""
+    covered = np.zeros(shape[:2], dtype=bool)
+    for region in regions:
+        (row, col), (rows, cols) = region.offset, region.alpha.shape
+        covered[row : row + rows, col : col + cols] |= region.alpha > 0.5
+    return covered
 
 
 def _highlights(
