@@ -1,21 +1,22 @@
 """Foreground, colour classes and soft masks of a top-view image.
 
-A pixel is foreground when its colour stands out from the table's: its
-distance in the CIELAB a*b* plane (chroma, brightness left out) from the
-table's a*b* — the median over the image, most of which is table — exceeds
-``max(min_chroma, 6 σ)``, σ the noise of that distance between neighbouring
-pixels. Lightness plays no part, so a grey board, black grid lines, black and
-white markers, shadows and grey or dark machinery are table, and a block in a
-shadow is still a block (an image without any colour — all channels equal —
-is judged by lightness instead). Each connected foreground region (OpenCV's
-connected components; regions smaller than a block are dropped at once) has
-its enclosed holes filled — a specular highlight is white, so not coloured,
-but lies inside the block (the top's colour with white added, or a hole
-smaller than a block in its clearly coloured pixels). The region is split by colour: its confidently
-coloured ("core") pixels are named by the nearest palette colour in
-brightness-free chromaticity (RGB divided by its largest channel, so shading
-does not change it), each colour with enough core pixels becomes a class, and
-every pixel of the region goes to the nearest class.
+A pixel is foreground when its colour stands out from the table's: its distance
+in the CIELAB a*b* plane (chroma, brightness left out) from the table's a*b* —
+the median over the image, most of which is table — exceeds
+``max(min_chroma, 6 σ)``, σ the noise of that distance between neighbouring pixels. Lightness plays
+no part, so a grey board, black grid lines, black and white markers, shadows and
+grey or dark machinery are table, and a block in a shadow is still a block (an
+image without any colour — all channels equal — is judged by lightness instead;
+black, white and grey blocks in an image with colour are found by lightness in
+:mod:`demoplan.perception.achromatic`). Each connected foreground region
+(OpenCV's connected components; regions smaller than a block are dropped at
+once) has its enclosed holes filled — a specular highlight is white, so not
+coloured, but lies inside the block (the top's colour with white added, or a
+hole smaller than a block in its clearly coloured pixels). The region is split
+by colour: its confidently coloured ("core") pixels are named by the nearest
+palette colour in brightness-free chromaticity (RGB divided by its largest
+channel, so shading does not change it), each colour with enough core pixels
+becomes a class, and every pixel of the region goes to the nearest class.
 
 For each class, a *soft mask* α ∈ [0, 1] says how much of a pixel the block's
 top face covers: where the pixel's colour lies between the table's around the
