@@ -344,6 +344,9 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
         classes[_glare(classes, k.lightness, k.core, c.min_area)] = -3
     classes = _smoothed_classes(classes, k.core)
     present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
+    # one colour between two names first: its two halves, speckled through each
+    # other by the noise, would each erode away as a rim
+    present = _one_colour_merged(present, k.chroma[k.core])
     return _without_rims(present, k.core, c.min_area)
 
 
