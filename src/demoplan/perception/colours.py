@@ -408,14 +408,18 @@ def _component_regions(
     offsets = (k.pixels - k.ground).reshape(-1, 3)
     nearest = _nearest_class(offsets, [face[2] for face in faces], k.member.shape)
     grown = dilate(k.member, 1)
+    owners = _hole_owners(k.core, nearest) if len(faces) > 1 else None
     regions: list[ColourRegion] = []
     for n, face in enumerate(faces):
         colour, centre, top_face = face[0], face[1], face[3]
         on_class = k.core & (nearest == n)
         alpha = _face_alpha(c, k, face, on_class) * (nearest == n) * grown
         # enclosed by this class's own clearly coloured pixels: a glint on a red
-        # cube in a row of yellow ones is the red top's, the yellow beside it not
-        glare = _highlights(k.pixels, k.lightness, top_face, centre, on_class, c.min_area)
+        # cube in a row of yellow ones is the red top's, the yellow beside it not;
+        # or by the region's, bordered mostly by this class (a glint near the
+        # seam, the rim between it and the neighbour thinner than the core's)
+        enclosing = on_class if owners is None else on_class | (owners == n)
+        glare = _highlights(k.pixels, k.lightness, top_face, centre, enclosing, c.min_area)
         alpha[glare] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
@@ -475,6 +479,26 @@ def _covered(regions: list[ColourRegion], shape: tuple[int, ...]) -> np.ndarray:
         (row, col), (rows, cols) = region.offset, region.alpha.shape
         covered[row : row + rows, col : col + cols] |= region.alpha > 0.5
     return covered
+
+
+def _hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+    """Per pixel of the holes in a region's clearly coloured pixels (``core``,
+    closed by a 5 × 5 square: the faint seam between two classes would open a hole
+    next to it to the outside), the class (``nearest``) that holds most of the ring
+    two pixels around its hole, −1 elsewhere: whose top a glint there is on."""
+    owners = np.full(core.shape, -1, dtype=np.intp)
+    # the seam between two classes (their mixed colours faint) closed first
+    closed = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
+    if not holes.any():
+        return owners
+    count, labels = cv2.connectedComponents(holes.astype(np.uint8), connectivity=8)
+    for index in range(1, count):
+        hole = labels == index
+        ring = dilate(hole, 2) & core
+        if ring.any():
+            owners[hole] = int(np.bincount(nearest[ring]).argmax())
+    return owners
 
 
 def _highlights(
