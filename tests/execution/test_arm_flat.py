@@ -27,7 +27,7 @@ from demoplan.execution.arm import (
     carries,
     choose_tool,
 )
-from demoplan.execution.arm_tools import _why_not_by_suction
+from demoplan.execution.arm_tools import _why_not_by_fingers, _why_not_by_suction
 from demoplan.scenes.scene import Scene, SceneObject
 from tests.support.lunch_box import LUNCH, lunch_demonstrations
 
@@ -134,6 +134,17 @@ def test_a_cup_that_fails_at_any_weight_is_not_said_to_fail_for_the_weight(
     assert "weighs" not in why, why
     assert why.startswith("the suction cup cannot carry it in a trial carry, even at 10 g: "), why
     assert "slipped from the suction cup" in why or "did not seal" in why, why
+
+
+def test_fingers_that_do_not_lift_a_heavy_cup_say_it_is_its_weight() -> None:
+    """A 7 kg cup 7 cm across (a tool caddy's, docs/studio.md): the fingers
+    lift the same cup at 50 g, so its weight is why they refuse it — not a
+    slip "even at 10 g", which the fingers do not lift in the simulation."""
+    why = _why_not_by_fingers(
+        ObjectGeometry("cylinder", (0.07, 0.07, 0.09), 7.0), 0.0, False, ArmWorld
+    )
+    assert why is not None
+    assert why.startswith("weighs 7 kg; the fingers (40 N) do not lift 1.25 times that"), why
 
 
 def test_the_lunch_box_task_at_its_default_weights_goes_by_the_arms_tools() -> None:

@@ -60,16 +60,16 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     "distractors": ("a shape that is no cube taken for blocks", ((2147483646, False),)),
     "hands": ("a top beside a hand missed", ((126342, False),)),
     "achromatic": (
-        "a black or grey cube missed: its side faces in its mask (with --side), or joined "
-        "to the board's dark disc",
-        ((5, True), (27, False)),
+        "with --side, a black or grey cube missed: its side faces, as dark as its top, "
+        "stay in its mask",
+        ((5, True), (21, True)),
     ),
     "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
     "side_faces": (
         "a top with its side face in one mask: the top alone covers under half of it",
         ((536870913, True),),
     ),
-    "tilted": ("tops across a 30° view: a top missed", ((2170, False),)),
+    "tilted": ("tops across a 30° view: a top missed", ((2170, True),)),
     "touching_rows": (
         "same-coloured cubes face to face are missed in rows",
         ((5, True), (12, False)),

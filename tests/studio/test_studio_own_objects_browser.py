@@ -14,13 +14,14 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.tables import state_rows
-from tests.support.studio_browser import VIEWPORT, Studio, studio_page
+from tests.support.studio_browser import VIEWPORT, Studio, studio_page, write_json
 
 pytestmark = pytest.mark.slow
 
@@ -329,3 +330,53 @@ def test_a_template_chosen_while_the_last_one_loads_is_the_one_shown(
     assert shown == ["green", "red", "wood"]
     assert "blocks" in tab.get_by_role("status").inner_text()
     assert tab.get_by_test_id("source").inner_text() == "In use: template blocks"
+
+
+def cup_and_caddy(cup: dict[str, Any]) -> dict[str, Any]:
+    """An objects file: ``cup`` beside a caddy."""
+    cup = {"shape": "cylinder", "position": [0.3, 0.1, 0.0], "yaw": 0.0} | cup
+    caddy = {"shape": "box", "size": [0.28, 0.18, 0.03], "position": [0.3, 0.4, 0.0], "yaw": 0.0}
+    caddy["colour"] = "#27ae60"
+    return {"format": "demoplan/objects-1", "objects": {"cup": cup}, "landmarks": {"caddy": caddy}}
+
+
+def test_a_scene_loaded_for_planning_is_planned_with_its_own_sizes_and_masses(
+    lunch: tuple[Studio, Path],
+) -> None:
+    """Same names, other things: the Plan view's start is the file's cup, not
+    the cup on the table before (a run on the arm would carry the wrong one);
+    same things: the table's colours."""
+    page, workdir = lunch
+    tab = page.tab
+    write_json(workdir / "small.json", cup_and_caddy({"size": [0.07, 0.07, 0.09], "mass": 0.15}))
+    write_json(workdir / "big.json", cup_and_caddy({"size": [0.095, 0.095, 0.1], "mass": 0.9}))
+    plain = cup_and_caddy({"size": [0.095, 0.095, 0.1]}) | {"format": "demoplan/scene-1"}
+    del plain["landmarks"]["caddy"]["colour"]  # a scene names no colours
+    write_json(workdir / "plain.json", plain)
+    tab.reload()
+    tab.wait_for_selector('body[data-ready="true"]')
+    page.load("small.json")
+
+    def planned_cup(file: str) -> dict[str, Any]:
+        tab.get_by_label("Scene file").select_option(file)
+        page.button("Load scene").click()
+        page.settle()
+        tab.get_by_label("Scene name").fill(f"start-{file}")
+        page.button("Save scene").click()
+        page.settle()
+        assert page.alert() == ""
+        cup: dict[str, Any] = json.loads((workdir / f"start-{file}").read_text())["objects"]["cup"]
+        return cup
+
+    page.view("3 · Plan")
+    big = planned_cup("big.json")
+    assert (big["size"], big["mass"]) == ([0.095, 0.095, 0.1], 0.9)
+    # the table now holds the big cup: a scene that gives no mass is wood, as for `plan`
+    assert "mass" not in planned_cup("plain.json")
+    assert planned_cup("small.json")["size"] == [0.07, 0.07, 0.09]
+    # a scene of the same things (the page's own, saved above) gives no colours:
+    # its caddy is drawn in the colour the table's has
+    tab.get_by_label("Scene file").select_option("start-small.json")
+    page.button("Load scene").click()
+    page.settle()
+    assert tab.locator('#table [data-landmark="caddy"] rect').get_attribute("fill") == "#27ae60"

@@ -48,10 +48,14 @@ the trial's are not the hardest. Measured (5 N cup, 4 cm block and 15 × 10 ×
 places 30–50 cm out as much, but the half turn behind the base before a top
 camera's picture (:meth:`~demoplan.execution.arm.ArmWorld.park`) only 0.35 kg (a 20 cm tall box
 0.32 kg): the margin covers that."""
-TRIAL_LIGHT = 0.01
-"""kg: the weight of a second trial carry when the first fails. Carried this
-light, the object's weight is why the tool loses it; not even this light,
-something else is, and the refusal says what the tool felt instead."""
+TRIAL_LIGHT: dict[Tool, float] = {"suction": 0.01, "fingers": 0.05}
+"""kg: the weight of a second trial carry when the first fails, per tool.
+Carried this light, the object's weight is why the tool loses it; not even
+this light, something else is, and the refusal says what the tool felt
+instead. The fingers' is the lightest they are measured to lift (an 8 × 9.5 cm
+cylinder of 5 g is not lifted, of 50 g it is: docs/execution.md): at 10 g a
+7 kg cup was said to have slipped from them "even at 10 g", not to be too
+heavy."""
 MIN_JAW_CLEARANCE = 0.002  # m: the least room the open jaws leave on either side
 FINGERTIP_GAP = 0.003  # m: the fingertips stop this far above what the object stands on
 TOOL_NAMES = {"suction": "suction cup", "fingers": "fingers"}
@@ -165,12 +169,12 @@ def _why_not_in_trial(
     if trial.refused:  # not the load: the arm could not make the motions
         return f"the {TOOL_NAMES[tool]} cannot carry it in a trial carry: {trial.refused[0]}"
     light = carry_in_trial(
-        replace(shape, mass=TRIAL_LIGHT), TRIAL_PICK, TRIAL_PLACE, tool, axis, arm
+        replace(shape, mass=TRIAL_LIGHT[tool]), TRIAL_PICK, TRIAL_PLACE, tool, axis, arm
     )
     if not light.carried:  # not its weight
         return (
             f"the {TOOL_NAMES[tool]} cannot carry it in a trial carry, even at "
-            f"{1000 * TRIAL_LIGHT:g} g: {light.what_went_wrong()}"
+            f"{1000 * TRIAL_LIGHT[tool]:g} g: {light.what_went_wrong()}"
         )
     what = (
         ("does not lift" if tool == "suction" else "do not lift")

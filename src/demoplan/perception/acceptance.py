@@ -1,7 +1,7 @@
-"""When a square fitted in a colour region is a block, beyond its own fit: the
-image's border (a square past it, a region running on along it, an outline past it
-that shows no table) and the share of its region that the squares accepted in it
-explain.
+"""When a square fitted in a colour region is a block, beyond its own fit: its
+corners rounded as a photographed cube's are, the image's border (a square past
+it, a region running on along it, an outline past it that shows no table) and the
+share of its region that the squares accepted in it explain.
 
 :func:`demoplan.perception.blocks.detect_blocks` checks a fit's coverage, misfit
 and free outline first, then these.
@@ -13,13 +13,18 @@ import math
 
 import numpy as np
 
+from demoplan.perception.opencv import cv2
+
 __all__ = [
+    "CORNER_ROUNDING",
     "MAX_BEYOND_SHARE",
     "MIN_EXPLAINED_SHARE",
     "beyond_image",
     "explained_share",
     "free_outline_seen",
+    "rounded_misfit",
     "runs_on_along_border",
+    "shares_a_side",
 ]
 
 
@@ -184,3 +189,75 @@ def free_outline_seen(
     held = np.zeros(pu.shape, dtype=bool)
     held[within] = alpha[rows[within], cols[within]] >= 0.5
     return int(np.count_nonzero(seen & ~held)) / int(pu.size)
+
+
+CORNER_ROUNDING = (0.05, 0.1, 0.15)
+"""Radii (shares of the side) of the rounded corners a lone square's misfit is also
+measured against, the least misfit taken (:func:`rounded_misfit`): a photographed
+wooden cube's top has its corners rounded by its bevel and the lens's blur, where
+the sharp square misfits it most (seven lone squares of armlab_mrhan4 misfit at
+0.203–0.224, at most 0.200 so; four more of its cubes found). A disc's rounding is
+half its side, far past the largest."""
+
+
+def rounded_misfit(alpha: np.ndarray, params: np.ndarray) -> float:
+    """The least RMS misfit of the mask ``alpha`` against the square ``params``
+    (u, v, θ, s on the crop; u right, v up from its bottom) with its corners
+    rounded at the radii :data:`CORNER_ROUNDING`, its edges ramping over one pixel,
+    over each rounded square's own pixels (those it covers at all)."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    height, width = alpha.shape
+    reach = (abs(side) / 2 + 0.5) * math.sqrt(2) + 2.0
+    row = height - v
+    rows = slice(max(0, math.floor(row - reach)), max(0, min(height, math.ceil(row + reach))))
+    cols = slice(max(0, math.floor(u - reach)), max(0, min(width, math.ceil(u + reach))))
+    uu, vv = np.meshgrid(
+        np.arange(cols.start, cols.stop) + 0.5, height - np.arange(rows.start, rows.stop) - 0.5
+    )
+    mask = alpha[rows, cols]
+    qu, qv = np.abs(c * (uu - u) + s * (vv - v)), np.abs(-s * (uu - u) + c * (vv - v))
+    best = 1.0
+    for share in CORNER_ROUNDING:
+        radius = share * side
+        du = np.maximum(qu - (side / 2 - radius), 0.0)
+        dv = np.maximum(qv - (side / 2 - radius), 0.0)
+        corner = (du > 0) & (dv > 0)
+        distance = np.where(corner, np.hypot(du, dv) - radius, np.maximum(qu, qv) - side / 2)
+        fitted = np.clip(0.5 - distance, 0.0, 1.0)
+        own = fitted > 0.01
+        if own.any():
+            best = min(best, float(np.sqrt(np.mean((fitted[own] - mask[own]) ** 2))))
+    return best
+
+
+_SIDE_POINTS = np.linspace(-0.4, 0.4, 17)
+"""Points along a side (shares of the side) at which the region is looked for beyond it."""
+
+
+def shares_a_side(alpha: np.ndarray, params: np.ndarray) -> bool:
+    """Whether the region ``alpha`` (its mask smoothed over 5 × 5 px) holds beyond a
+    whole side of the square ``params`` — at every point along it to a tenth of a
+    side from the corners, both 3 px and a quarter side out — as
+    :func:`~demoplan.perception.seams.seamless_side` asks before it looks for a
+    seam. Such a square is a piece of something longer (a 2:1 brick, a row of one
+    colour; a square across the seam of two flush cubes): its corners there are no
+    cube's corners, and it is judged sharp."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    smooth = cv2.blur(alpha.astype(np.float32), (5, 5))
+    height, width = alpha.shape
+    along = _SIDE_POINTS * side
+    for nu, nv in ((c, s), (-c, -s), (-s, c), (s, -c)):
+        held = True
+        for out in (side / 2 + 3.0, 3 * side / 4):
+            us = u - nv * along + nu * out
+            vs = v + nu * along + nv * out
+            cols, rows = np.floor(us).astype(np.intp), np.floor(height - vs).astype(np.intp)
+            within = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
+            if not within.all() or not np.all(smooth[rows, cols] > 0.5):
+                held = False
+                break
+        if held:
+            return True
+    return False

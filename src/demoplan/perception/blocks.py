@@ -39,7 +39,9 @@ from demoplan.perception.acceptance import (
     beyond_image,
     explained_share,
     free_outline_seen,
+    rounded_misfit,
     runs_on_along_border,
+    shares_a_side,
 )
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import (
@@ -70,7 +72,9 @@ class PerceptionSettings:
     min_coverage: float = 0.85
     """Share of a fitted square's pixels the mask must cover."""
     max_residual: float = 0.2
-    """RMS difference between mask and fitted square over its pixels, in coverage units."""
+    """RMS difference between mask and fitted square over its pixels, in coverage units
+    (a lone square's corners rounded as a cube's may be:
+    :data:`~demoplan.perception.acceptance.CORNER_ROUNDING`)."""
     min_free_outline: float = 0.4
     """Share of the outline that must border on table (at least ~2 free sides)."""
     colours: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
@@ -568,6 +572,24 @@ def _why_no_block(
     return why
 
 
+def _with_rounded_corners(
+    alpha: np.ndarray, fit: tuple[np.ndarray, float, float, float], search: _SquareSearch
+) -> tuple[np.ndarray, float, float, float]:
+    """``fit`` with its misfit measured against its square's corners rounded as a
+    photographed cube's are (:func:`~demoplan.perception.acceptance.rounded_misfit`)
+    when the sharp square misfits and no side of it is shared with the rest of its
+    region (:func:`~demoplan.perception.acceptance.shares_a_side`) — and only then
+    decides (its size and coverage, checked first, pass)."""
+    params, coverage, rms, free = fit
+    low, high = search.side_px
+    settings = search.settings
+    if rms <= settings.max_residual or coverage < settings.min_coverage:
+        return fit
+    if not 0.8 * low <= params[3] <= 1.2 * high or shares_a_side(alpha, params):
+        return fit
+    return params, coverage, min(rms, rounded_misfit(alpha, params)), free
+
+
 def _next_square(
     search: _SquareSearch, region: ColourRegion, alpha: np.ndarray, where: str
 ) -> tuple[_Square | None, list[tuple[str, str]]]:
@@ -579,7 +601,7 @@ def _next_square(
     failures: list[tuple[str, str]] = []
     for start, factor, coarse in _hough_starts(alpha, sides, base, where):
         check_time(where)
-        fit = _fit_from(alpha, start, factor, coarse)
+        fit = _with_rounded_corners(alpha, _fit_from(alpha, start, factor, coarse), search)
         why = _why_no_block(search, region, alpha, fit)
         if why is None:
             return fit[:3], failures

@@ -2,7 +2,7 @@
 
 import { ApiError, get, post } from "./api.js";
 import { $, SHAPES_IN_SCENES, alarm, clone, plural, say, state } from "./common.js";
-import { keepInView, layoutWith, place, redraw, registerView, sameObjects, stopAnimation } from "./stage.js";
+import { DRAWN_KEYS, PLANNED_KEYS, inTableColours, keepInView, layoutWith, place, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
 import { snap } from "./table.js";
 import { refreshFiles } from "./files.js";
 import { landmarksDocument, poseDocument, startDemonstration } from "./teach.js";
@@ -22,7 +22,10 @@ export function sceneDocument() {
     if (!pose) continue;
     objects[name] = { ...poseDocument(pose), size: geometry.size };
     if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
-    for (const key of ["mass", "density", "type"]) if (geometry[key] != null) objects[name][key] = geometry[key];
+    // a loaded scene file's masses are its own (its extras, below), not the table's
+    for (const key of state.plan.extras ? ["type"] : ["mass", "density", "type"]) {
+      if (geometry[key] != null) objects[name][key] = geometry[key];
+    }
   }
   const extras = state.plan.extras || { scene: {}, objects: {} };
   for (const [name, fields] of Object.entries(extras.objects)) {
@@ -71,13 +74,16 @@ export async function loadPlanScene() {
     alarm(`${name}: not a scene or a demonstration`);
     return;
   }
-  if (!state.layout || !sameObjects(state.layout, answer.layout)) {
+  // a scene file gives its masses beside the poses (kept as its extras); an
+  // objects file or a demonstration gives them, and its colours, in its layout
+  const scene = answer.document && answer.document.format === "demoplan/scene-1";
+  if (!state.layout || !sameThings(state.layout, answer.layout, scene ? PLANNED_KEYS : DRAWN_KEYS)) {
     startDemonstration(clone(answer.layout), `Loaded ${name}; the Teach view starts there too.`);
   }
   state.plan.poses = clone(answer.layout.poses);
-  state.plan.landmarks = clone(answer.layout.landmarks || {});
+  state.plan.landmarks = scene ? inTableColours(answer.layout.landmarks) : clone(answer.layout.landmarks || {});
   keepInView(state.plan.poses);
-  state.plan.extras = answer.document && answer.document.format === "demoplan/scene-1" ? sceneExtras(answer.document) : null;
+  state.plan.extras = scene ? sceneExtras(answer.document) : null;
   clearPlan();
   redraw();
   say(`The plan starts from ${name}.`);

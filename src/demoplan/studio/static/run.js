@@ -6,7 +6,7 @@
 import { ApiError, del, get, post } from "./api.js";
 import { $, alarm, clone, guarded, plural, say, state } from "./common.js";
 import { chosenModel, sceneDocument, sceneExtras } from "./plan.js";
-import { keepInView, redraw, registerView, sameObjects, stopAnimation } from "./stage.js";
+import { PLANNED_KEYS, inTableColours, keepInView, redraw, registerView, sameThings, stopAnimation } from "./stage.js";
 import { startDemonstration } from "./teach.js";
 
 // Polls in a row that may fail (a busy server) before the run is given up as lost.
@@ -216,16 +216,16 @@ export async function cancelRun() {
 
 // The run that ended last in the work folder, shown as it ended: the start
 // scene it ran from on the table (the Teach view starts there too when its
-// objects are others), its events, and its final world.
+// objects are others, or differ in shape or size), its events, and its final world.
 export async function restoreLastRun() {
   const record = await get("/api/last-run");
   if (!record) return; // no run has ended in this work folder yet
   const layout = record.layout;
-  if (!state.layout || !sameObjects(state.layout, layout)) {
+  if (!state.layout || !sameThings(state.layout, layout, PLANNED_KEYS)) {
     startDemonstration(clone(layout), "The table of the last run.");
   }
   state.plan.poses = clone(layout.poses);
-  state.plan.landmarks = clone(layout.landmarks || {}); // where the run's landmarks stood
+  state.plan.landmarks = inTableColours(layout.landmarks); // where the run's landmarks stood
   state.plan.extras = sceneExtras({ format: "demoplan/scene-1", ...record.scene });
   keepInView(state.plan.poses);
   for (const [id, value] of [["faults", record.faults || ""], ["run-seed", String(record.seed || 0)]]) $(id).value = value;

@@ -129,7 +129,9 @@ export function redraw() {
   };
   table.draw(shownPoses(), options);
   const captions = {
-    teach: "Teach: move the objects as the task should be done; each release is one step.",
+    teach: arranging()
+      ? "Teach: drag your objects where the task starts (not steps); then Save objects and teach."
+      : "Teach: move the objects as the task should be done; each release is one step.",
     learn: "Learn: the learned targets are drawn as outlines.",
     plan: state.plan.step > 0 ? `Plan: after action ${state.plan.step}.` : "Plan: the start scene.",
     run: state.run.step > 0 ? `Run: the world observed at event ${state.run.step}.` : "Run: the start scene.",
@@ -149,6 +151,13 @@ export function layoutWith(poses) {
   return { ...state.layout, objects, poses, landmarks: currentLandmarks() };
 }
 
+// Objects made or changed in the page and not yet saved, before the first
+// step: a drop arranges where the task starts (Save objects keeps it), it is
+// not a step (docs/studio.md "Your own objects").
+export function arranging() {
+  return state.view === "teach" && state.teach.edited && state.teach.steps.length === 0;
+}
+
 // Drop `name` at xy (metres) with `yaw`: the server says where it comes to rest.
 // amend: a turn or a nudge right after placing the same object changes that step.
 export async function place(name, xy, yaw, amend) {
@@ -156,7 +165,13 @@ export async function place(name, xy, yaw, amend) {
   const before = clone(poses[name]);
   const answer = await post("/api/drop", { layout: layoutWith(poses), object: name, position: xy, yaw });
   const pose = { position: answer.pose.position, yaw: answer.pose.yaw };
-  if (state.view === "teach") {
+  if (state.view === "teach" && arranging()) {
+    state.teach.poses[name] = pose;
+    state.teach.initial[name] = clone(pose);
+    keepInView(state.teach.poses);
+    say(`${name} starts at x ${fmt(pose.position[0])}, y ${fmt(pose.position[1])}, z ${fmt(pose.position[2])} m` +
+      (answer.on ? ` on ${answer.on}` : "") + ": not a step (the objects are not saved yet: Save objects, then teach)");
+  } else if (state.view === "teach") {
     const steps = state.teach.steps;
     const last = steps[steps.length - 1];
     const step = { object: name, position: pose.position, yaw: pose.yaw, on: answer.on };
@@ -200,6 +215,32 @@ export function cover(table_, poses, margin = 0.05) {
 export function sameObjects(a, b) {
   const names = (l) => Object.keys(l.objects).filter((n) => !state.clutter.includes(n)).sort().join(" ");
   return names(a) === names(b);
+}
+
+// Whether layout `b` holds the things of layout `a`: the same objects, each
+// the same in `keys` (a size that `b` leaves to the model, null, matches any).
+// A scene loaded for planning must be planned with its own sizes and masses,
+// not with those of same-named objects on the table before.
+export const PLANNED_KEYS = ["shape", "size", "type"];
+export const DRAWN_KEYS = [...PLANNED_KEYS, "mass", "density", "colour"];
+
+export function sameThings(a, b, keys) {
+  if (!sameObjects(a, b)) return false;
+  const same = (u, v) => JSON.stringify(u ?? null) === JSON.stringify(v ?? null);
+  return Object.entries(b.objects).every(([name, geometry]) => {
+    const known = a.objects[name];
+    if (state.clutter.includes(name) || !known) return true;
+    return keys.every((key) => (key === "size" && geometry.size == null) || same(known[key], geometry[key]));
+  });
+}
+
+// A start's landmarks drawn in the colours of the table's landmarks of the
+// same names: a scene file (or the last run's) gives no colours, only poses.
+export function inTableColours(marks) {
+  const known = (state.layout && state.layout.landmarks) || {};
+  const out = clone(marks || {});
+  for (const [name, mark] of Object.entries(out)) if (known[name] && known[name].colour) mark.colour = known[name].colour;
+  return out;
 }
 
 export function corners(table_) {

@@ -188,6 +188,12 @@ export class TableView {
       if (name === options.held) g.classList.add("held");
       if (options.interactive) g.classList.add("movable");
     }
+    // a landmark's name over the things standing in it (a caddy's, a box's)
+    const names = el("g", { class: "landmark-labels" }, this.svg);
+    for (const label of landmarks.querySelectorAll(".landmark > text.label")) {
+      const g = el("g", { transform: label.parentNode.getAttribute("transform") }, names);
+      g.appendChild(label);
+    }
     const outlines = el("g", { class: "outlines" }, this.svg);
     for (const target of options.outlines || []) {
       const geometry = layout.objects[target.object];
