@@ -69,6 +69,15 @@ a glyph printed on it (a frame, dots, a letter: a fifth of it or less)."""
 BESIDE_COLOURED = 0.25
 """A part with this share of its rim on a coloured region is that block's side
 face or its shadow (dark) or glare (bright)."""
+MARKER_FRAME_CONTRAST = 10.0
+"""A dark part whose surroundings (1–4 px out) are this much brighter than the
+table, L* in the median, is a marker's black square in its white frame (a black
+cube stands on the table or its own shadow); a frame too faint to be a bright
+part of its own (an over-exposed photograph, the table as pale) still shows so."""
+MARKER_CELL_SHARE = 0.15
+"""…or a dark part with two or more holes covering this share of it: a marker's
+white cells (its frame lost in a table as white: an over-exposed photograph). A
+glint on a black top is one hole, and small."""
 MIN_SOLIDITY = 0.85
 """A part (its holes filled) covering less of its convex hull is no block's top nor
 a row of them: a board's line crossings, an arm, a cable, a shadow's L."""
@@ -232,6 +241,15 @@ def _opened_at_own_scale(part: np.ndarray) -> np.ndarray:
     return largest
 
 
+def _white_cells(member: np.ndarray, filled: np.ndarray) -> tuple[int, float]:
+    """How many holes a dark part (``member``; ``filled`` its holes filled) has
+    and the share of its filled outline they cover (a marker's white cells)."""
+    holes = (filled & ~member).astype(np.uint8)
+    _, _, stats, _ = cv2.connectedComponentsWithStats(holes, connectivity=8)
+    sizable = stats[1:, cv2.CC_STAT_AREA] >= 0.01 * float(filled.sum())
+    return int(sizable.sum()), float(holes.sum()) / max(float(filled.sum()), 1.0)
+
+
 def _convex_hull(mask: np.ndarray) -> np.ndarray:
     """The convex hull of ``mask``'s pixels, as a mask of its shape."""
     hull = cv2.convexHull(cv2.findNonZero(mask.astype(np.uint8)))
@@ -329,6 +347,14 @@ def _region(
         return _Refusal("not compact", f"solidity {solidity:.2f}, {rect_fill:.0%} of its rectangle")
     if aspect > MAX_ASPECT:
         return _Refusal("elongated", f"a rectangle {aspect:.1f} times as long as wide")
+    if not bright:
+        frame = dilate(filled, 4) & ~dilate(filled, 1)
+        framed = float(np.median(crop_l[frame] - crop_table[frame]))
+        if framed >= MARKER_FRAME_CONTRAST:
+            return _Refusal("marker", f"a dark square framed L* {framed:.0f} over the table")
+        cells, share = _white_cells(member, filled)
+        if cells >= 2 and share >= MARKER_CELL_SHARE:
+            return _Refusal("marker", f"a dark square with {cells} white cells ({share:.0%})")
     rim = dilate(member, 3) & ~member
     beside = float(np.mean(coloured[rows, cols][rim]))
     if beside >= BESIDE_COLOURED:
