@@ -74,10 +74,12 @@ MARKER_FRAME_CONTRAST = 10.0
 table, L* in the median, is a marker's black square in its white frame (a black
 cube stands on the table or its own shadow); a frame too faint to be a bright
 part of its own (an over-exposed photograph, the table as pale) still shows so."""
-MARKER_CELL_SHARE = 0.15
-"""…or a dark part with two or more holes covering this share of it: a marker's
-white cells (its frame lost in a table as white: an over-exposed photograph). A
-glint on a black top is one hole, and small."""
+MARKER_CELL_SHARE = 0.25
+"""…or a dark part whose holes cover this share of it: a marker's white cells (its
+frame lost in a table as white: an over-exposed photograph). A glint on a black
+top is a hole of a few per cent."""
+MARKER_CELLS_SHARE = 0.15
+"""…or two holes or more covering this share of it (a glint is one hole)."""
 MIN_SOLIDITY = 0.85
 """A part (its holes filled) covering less of its convex hull is no block's top nor
 a row of them: a board's line crossings, an arm, a cable, a shadow's L."""
@@ -353,7 +355,7 @@ def _region(
         if framed >= MARKER_FRAME_CONTRAST:
             return _Refusal("marker", f"a dark square framed L* {framed:.0f} over the table")
         cells, share = _white_cells(member, filled)
-        if cells >= 2 and share >= MARKER_CELL_SHARE:
+        if share >= MARKER_CELL_SHARE or (cells >= 2 and share >= MARKER_CELLS_SHARE):
             return _Refusal("marker", f"a dark square with {cells} white cells ({share:.0%})")
     rim = dilate(member, 3) & ~member
     beside = float(np.mean(coloured[rows, cols][rim]))
