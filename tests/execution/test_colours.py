@@ -84,11 +84,14 @@ def test_a_colour_reads_in_either_form_and_is_written_back_as_rrggbb(
         ("objects", "sandwich", "red"),
         ("objects", "sandwich", "#d6272"),
         ("objects", "sandwich", "#gg2728"),
+        ("objects", "sandwich", "#d62728\n"),  # `$` alone matches before a last newline
+        ("objects", "sandwich", "#fff"),
         ("objects", "apple", [1.2, 0.0, 0.0]),
         ("objects", "apple", [0.5, 0.5]),
         ("objects", "apple", [214, 39, 40]),
         ("objects", "apple", [True, False, False]),
         ("landmarks", "lunchbox", 7),
+        ("landmarks", "lunchbox", "#d62728\n"),
     ],
 )
 def test_a_bad_colour_is_one_line_naming_the_file_and_the_field(

@@ -11,13 +11,15 @@ import re
 __all__ = ["COLOUR_FORMS", "HEX_COLOUR", "parse_colour"]
 
 HEX_COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
+"""``#rrggbb``, to be matched whole (:meth:`re.Pattern.fullmatch`: ``$`` alone
+also matches before a last newline); the studio's requests check the same."""
 COLOUR_FORMS = '"#rrggbb" or [r, g, b] with each in 0–1'
 """What a colour field holds, as error lines say it."""
 
 
 def parse_colour(value: object) -> str:
     """``value`` as ``#rrggbb``; a ValueError saying what was expected otherwise."""
-    if isinstance(value, str) and HEX_COLOUR.match(value):
+    if isinstance(value, str) and HEX_COLOUR.fullmatch(value):
         return value.lower()
     if (
         isinstance(value, list | tuple)
