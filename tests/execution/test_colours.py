@@ -90,6 +90,7 @@ def test_a_colour_reads_in_either_form_and_is_written_back_as_rrggbb(
         ("objects", "apple", [0.5, 0.5]),
         ("objects", "apple", [214, 39, 40]),
         ("objects", "apple", [True, False, False]),
+        ("objects", "apple", [10**400, 0, 0]),  # a JSON integer no float holds
         ("landmarks", "lunchbox", 7),
         ("landmarks", "lunchbox", "#d62728\n"),
     ],

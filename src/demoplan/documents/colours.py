@@ -5,7 +5,6 @@
 
 from __future__ import annotations
 
-import math
 import re
 
 __all__ = ["COLOUR_FORMS", "HEX_COLOUR", "parse_colour"]
@@ -24,10 +23,9 @@ def parse_colour(value: object) -> str:
     if (
         isinstance(value, list | tuple)
         and len(value) == 3
-        and all(
-            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            for v in value
-        )
+        # compared, not converted: NaN is in no range, and JSON's integers have
+        # no bound (10**400 overflows a float)
+        and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
         and all(0.0 <= v <= 1.0 for v in value)
     ):
         return "#" + "".join(f"{round(float(v) * 255):02x}" for v in value)
