@@ -6,8 +6,11 @@
 from __future__ import annotations
 
 import re
+from typing import Annotated
 
-__all__ = ["COLOUR_FORMS", "HEX_COLOUR", "parse_colour"]
+from pydantic import BeforeValidator
+
+__all__ = ["COLOUR_FORMS", "HEX_COLOUR", "GivenColour", "parse_colour"]
 
 HEX_COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
 """``#rrggbb``, to be matched whole (:meth:`re.Pattern.fullmatch`: ``$`` alone
@@ -32,3 +35,12 @@ def parse_colour(value: object) -> str:
     shown = repr(value)
     shown = shown if len(shown) <= 40 else shown[:40] + "…"
     raise ValueError(f"{shown} is not a colour; {COLOUR_FORMS} expected")
+
+
+def _given_colour(value: object) -> str | None:
+    return None if value is None else parse_colour(value)
+
+
+GivenColour = Annotated[str | None, BeforeValidator(_given_colour)]
+"""A document's ``colour`` field (a scene's object or landmark): ``#rrggbb``,
+or None where it gives none."""
