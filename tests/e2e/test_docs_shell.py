@@ -14,6 +14,11 @@ is still checked, only not the machine's speed (that is benchmarks/planning.py's
 
 The README's set-up commands (its first block, a plain ``` block) are what
 CI runs; they are not run again here.
+
+Each ``demoplan`` of a block is a process of its own forked from a fork
+server that has imported what the commands import (tests/support/forkrelay.py),
+not a fresh interpreter: its exit code and streams are a fresh process's
+(tests/support/test_forkserver.py), without a second of imports each.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.docs_blocks import ROOT, Block, blocks, documents, mismatch, without_time_limit
+from tests.support.forkrelay import forked_demoplan
 
 TIMEOUT = 900
 """Seconds per command: a hang guard only (an arm run takes 70-90 s alone, several
@@ -124,7 +130,7 @@ def test_the_documents_blocks_run_and_print_what_they_show(document: Path, tmp_p
     for name in SHARED:
         (tmp_path / name).symlink_to(ROOT / name)
     _provide(document, tmp_path)
-    env = _environment()
     last = [0]
-    for block in blocks(document):  # (the README's set-up block has no language: not run)
-        _run_block(block, tmp_path, env, last)
+    with forked_demoplan(_environment()) as env:  # each `demoplan` forked, not started fresh
+        for block in blocks(document):  # (the README's set-up block has no language: not run)
+            _run_block(block, tmp_path, env, last)

@@ -24,8 +24,15 @@ the executable itself (:func:`fresh`) whenever the start could matter:
   a fresh process would print in every command), changed the environment,
   started a thread, or imported MuJoCo, matplotlib or Ray (which keep state
   from their import: a GL backend, a config folder, a cluster address);
-* not ``DEMOPLAN_TEST_FORK=1``: the server is off by default (a full run hung in a
-  forked command's timeout path, cause not found yet).
+* ``DEMOPLAN_TEST_FORK=0`` (to compare, or to rule the server out).
+
+A full run once hung here: a command that refused its input at once ended
+before the asking thread had read the server's first reply (the child's
+pid), the first read took both replies and the exit code was lost; the
+command timed out, and under hypothesis the next example's replies went to
+the earlier command's thread, still reading. A reply is now read to its
+length and no further, and a command out of time leaves no reader behind
+(:func:`_kill`); test_forkserver.py forces both.
 
 The command clock (:mod:`demoplan.cli.clock`) counts from the process start,
 which for a child is the fork (:func:`demoplan.cli.clock.restart_process_clock`).
@@ -36,8 +43,10 @@ to a full disk and run out of time.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
+import signal
 import socket
 import struct
 import subprocess
@@ -75,6 +84,9 @@ PER_TEST = frozenset({"PYTEST_CURRENT_TEST"})
 """Variables that change from test to test and that no library reads: a
 request may differ from the server's environment in these (the child takes
 the request's)."""
+SERVER_SECONDS = 10.0
+"""How long the server may take to answer after a command's time ran out (it
+answers at once: its child is killed)."""
 _HEADER = struct.Struct("!Q")
 
 
@@ -84,17 +96,28 @@ def _send(sock: socket.socket, value: Any, fds: Sequence[int] = ()) -> None:
 
 
 def _receive(sock: socket.socket, fd_count: int = 0) -> tuple[Any, list[int]]:
-    message, fds, _, _ = socket.recv_fds(sock, 1 << 16, fd_count)
-    if not message:
+    """One message: its header, then exactly the bytes it announces — never
+    more. The server's two replies to a command (the child's pid, then its
+    exit code) arrive together when the command ends before the asking thread
+    reads the first (a refusal on a loaded machine); reading whatever the
+    socket held took both, unpickling the first dropped the second, and the
+    asker waited for an exit code already consumed."""
+    header, fds, _, _ = socket.recv_fds(sock, _HEADER.size, fd_count)
+    header += _exactly(sock, _HEADER.size - len(header)) if header else b""
+    if not header:
         raise EOFError("the fork server's socket closed")
-    (size,) = _HEADER.unpack_from(message)
-    data = message[_HEADER.size :]
+    (size,) = _HEADER.unpack(header)
+    return pickle.loads(_exactly(sock, size)), fds
+
+
+def _exactly(sock: socket.socket, size: int) -> bytes:
+    data = b""
     while len(data) < size:
         more = sock.recv(size - len(data))
         if not more:
             raise EOFError("the fork server's socket closed")
         data += more
-    return pickle.loads(data), fds
+    return data
 
 
 class CommandServer:
@@ -165,11 +188,9 @@ started = {"forked": 0, "fresh": 0}
 
 def _server_for(env: Mapping[str, str]) -> CommandServer | None:
     """This process's server if ``env`` is its environment (the first asked for
-    starts it); None: start the command fresh — always, unless
-    ``DEMOPLAN_TEST_FORK=1``: a full run hung in a forked command's timeout
-    path (the asking thread waited for a reply the idle server never sent;
-    tests/hostile/test_many_objects.py), cause not found yet."""
-    if os.environ.get("DEMOPLAN_TEST_FORK") != "1" or not hasattr(socket, "send_fds"):
+    starts it); None: start the command fresh (and always where
+    ``DEMOPLAN_TEST_FORK=0``)."""
+    if os.environ.get("DEMOPLAN_TEST_FORK") == "0" or not hasattr(socket, "send_fds"):
         return None
     if not _servers:
         _servers["only"] = CommandServer.start(env)
@@ -223,14 +244,18 @@ def run(
     timeout: float,
     stdin: bytes | None = None,
     stdout_file: IO[bytes] | None = None,
+    server: CommandServer | None = None,
 ) -> subprocess.CompletedProcess[bytes]:
     """``demoplan ARGV`` in a process of its own, as :func:`subprocess.run` would
     start it (stdin: ``stdin`` or this process's; stdout: ``stdout_file`` or a
     pipe; stderr a pipe): a fork of this process's server where it serves
-    ``env``, else the executable (:func:`fresh`). Raises
+    ``env``, else the executable (:func:`fresh`). ``server``: a server of the
+    caller's own instead (:meth:`CommandServer.start`, in ``env``), for commands
+    that run at the same time (each server serves one at a time). Raises
     :class:`subprocess.TimeoutExpired` after killing a command that took
     longer than ``timeout``."""
-    server = _server_for(env)
+    if server is None:
+        server = _server_for(env)
     if server is None:
         started["fresh"] += 1
         return fresh(argv, cwd, env, timeout=timeout, stdin=stdin, stdout_file=stdout_file)
@@ -261,13 +286,22 @@ def run(
             thread.daemon = True
             thread.start()
         pids: list[int] = []
-        waiting: list[int] = []
+        told = threading.Event()  # the child's pid came
+        answered: list[int] = []
+        failed: list[BaseException] = []
         done = threading.Event()
 
+        def on_pid(pid: int) -> None:
+            pids.append(pid)
+            told.set()
+
         def serve() -> None:
-            waiting.append(
-                server.run(argv, cwd, env, child_in, child_out, write_end, on_pid=pids.append)
-            )
+            try:
+                answered.append(
+                    server.run(argv, cwd, env, child_in, child_out, write_end, on_pid=on_pid)
+                )
+            except BaseException as exc:  # raised again in the test's thread
+                failed.append(exc)
             done.set()
 
         asking = threading.Thread(target=serve, daemon=True)
@@ -277,9 +311,7 @@ def run(
             os.close(fd)
         opened.clear()
         if not finished:
-            for pid in pids:
-                os.kill(pid, 9)
-            asking.join()
+            _kill(server, pids, told, asking)
             for thread in threads:
                 thread.join(5)
             raise subprocess.TimeoutExpired(
@@ -291,12 +323,37 @@ def run(
     finally:
         for fd in opened:
             os.close(fd)
+    if failed:
+        raise failed[0]
     return subprocess.CompletedProcess(
         [os.fsencode(DEMOPLAN), *argv],
-        waiting[0],
+        answered[0],
         None if stdout_file is not None else b"".join(out),
         b"".join(err),
     )
+
+
+def _kill(
+    server: CommandServer, pids: list[int], told: threading.Event, asking: threading.Thread
+) -> None:
+    """End a command that ran out of time: kill its child (once the server
+    has said which it is: the timeout may come before) and wait for the
+    server's exit code. A server that does not answer is stopped and
+    forgotten (the next command starts a new one): a thread left reading its
+    socket would take the next command's replies for this one's."""
+    if told.wait(SERVER_SECONDS):
+        for pid in pids:
+            with contextlib.suppress(ProcessLookupError):  # it ended meanwhile
+                os.kill(pid, signal.SIGKILL)
+    asking.join(SERVER_SECONDS)
+    if asking.is_alive():
+        with contextlib.suppress(OSError):
+            server.sock.shutdown(socket.SHUT_RDWR)  # the asking thread reads EOF
+        server.process.kill()
+        asking.join()
+        server.stop()
+        if _servers.get("only") is server:
+            _servers.clear()
 
 
 def fresh(

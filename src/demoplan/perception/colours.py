@@ -1,21 +1,22 @@
 """Foreground, colour classes and soft masks of a top-view image.
 
-A pixel is foreground when its colour stands out from the table's: its
-distance in the CIELAB a*b* plane (chroma, brightness left out) from the
-table's a*b* — the median over the image, most of which is table — exceeds
-``max(min_chroma, 6 σ)``, σ the noise of that distance between neighbouring
-pixels. Lightness plays no part, so a grey board, black grid lines, black and
-white markers, shadows and grey or dark machinery are table, and a block in a
-shadow is still a block (an image without any colour — all channels equal —
-is judged by lightness instead). Each connected foreground region (OpenCV's
-connected components; regions smaller than a block are dropped at once) has
-its enclosed holes filled — a specular highlight is white, so not coloured,
-but lies inside the block (the top's colour with white added, or a hole
-smaller than a block in its clearly coloured pixels). The region is split by colour: its confidently
-coloured ("core") pixels are named by the nearest palette colour in
-brightness-free chromaticity (RGB divided by its largest channel, so shading
-does not change it), each colour with enough core pixels becomes a class, and
-every pixel of the region goes to the nearest class.
+A pixel is foreground when its colour stands out from the table's: its distance
+in the CIELAB a*b* plane (chroma, brightness left out) from the table's a*b* —
+the median over the image, most of which is table — exceeds
+``max(min_chroma, 6 σ)``, σ the noise of that distance between neighbouring pixels. Lightness plays
+no part, so a grey board, black grid lines, black and white markers, shadows and
+grey or dark machinery are table, and a block in a shadow is still a block (an
+image without any colour — all channels equal — is judged by lightness instead;
+black, white and grey blocks in an image with colour are found by lightness in
+:mod:`demoplan.perception.achromatic`). Each connected foreground region
+(OpenCV's connected components; regions smaller than a block are dropped at
+once) has its enclosed holes filled — a specular highlight is white, so not
+coloured, but lies inside the block (the top's colour with white added, or a
+hole smaller than a block in its clearly coloured pixels). The region is split
+by colour: its confidently coloured ("core") pixels are named by the nearest
+palette colour in brightness-free chromaticity (RGB divided by its largest
+channel, so shading does not change it), each colour with enough core pixels
+becomes a class, and every pixel of the region goes to the nearest class.
 
 For each class, a *soft mask* α ∈ [0, 1] says how much of a pixel the block's
 top face covers: where the pixel's colour lies between the table's around the
@@ -39,17 +40,26 @@ import numpy as np
 
 from demoplan.budget import check_time
 from demoplan.errors import InputError
+from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
+from demoplan.perception.rejected_parts import (
+    REPORTED_SHARE,
+    PartRecorder,
+    RejectedPart,
+    outlines,
+)
 
 __all__ = [
     "PALETTE",
+    "REPORTED_SHARE",
     "ColourRegion",
     "RejectedPart",
     "colour_regions",
     "foreground",
     "load_palette",
     "name_colour",
+    "outlines",
 ]
 
 MAX_CHROMA_DISTANCE = 0.3
@@ -103,93 +113,6 @@ class ColourRegion:
     rgb: tuple[float, float, float]
     offset: tuple[int, int]
     alpha: np.ndarray
-
-
-@dataclass(frozen=True, slots=True)
-class RejectedPart:
-    """A foreground part that is no block, and why: ``reason`` a short phrase
-    (``too small``, ``thin or faint``, ``no block colour``, ``side face``, ``table``),
-    ``detail`` the measure behind it, ``outlines`` the outlines of its pieces in
-    image pixels (x right, y down, pixel centres at whole numbers), each N × 2."""
-
-    reason: str
-    detail: str
-    colour: str
-    outlines: tuple[np.ndarray, ...]
-
-
-REPORTED_SHARE = 0.1
-"""Parts smaller than this share of the smallest block's area (sensor noise,
-specks) are dropped without a record."""
-
-
-def outlines(mask: np.ndarray, min_area: float) -> list[np.ndarray]:
-    """The outer outlines (N × 2 pixel points, x right, y down) of ``mask``'s parts
-    of at least ``min_area`` pixels (OpenCV's contours)."""
-    contours, _ = cv2.findContours(
-        mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE
-    )
-    return [
-        c.reshape(-1, 2).astype(float)
-        for c in contours
-        if len(c) >= 3 and cv2.contourArea(c) + len(c) / 2 >= min_area
-    ]
-
-
-class _Recorder:
-    """Appends the parts :func:`colour_regions` drops to a list, when there is one
-    (nothing is computed otherwise)."""
-
-    def __init__(self, rejected: list[RejectedPart] | None, min_area: float):
-        self.rejected = rejected
-        self.min_area = min_area
-
-    def __call__(
-        self, mask: np.ndarray, rows: slice, cols: slice, reason: str, detail: str, colour: str = ""
-    ) -> None:
-        """``mask`` (on the crop ``rows`` × ``cols``), dropped for ``reason``: one
-        record, of the pieces that are not mere specks."""
-        if self.rejected is None:
-            return
-        shift = np.array([cols.start or 0, rows.start or 0])
-        pieces = tuple(o + shift for o in outlines(mask, REPORTED_SHARE * self.min_area))
-        if pieces:
-            self.rejected.append(RejectedPart(reason, detail, colour, pieces))
-
-    def speck(self, labels: np.ndarray, index: int, box: tuple[int, ...]) -> None:
-        """A connected foreground part smaller than a block (not mere noise)."""
-        x, y, w, h, area = box
-        if self.rejected is not None and area >= REPORTED_SHARE * self.min_area:
-            mask = labels[y : y + h, x : x + w] == index
-            self(mask, slice(y, y + h), slice(x, x + w), "too small", f"{area} px")
-
-    def shade(
-        self, classes: np.ndarray, core: np.ndarray, lightness: np.ndarray, rows: slice, cols: slice
-    ) -> None:
-        """Core pixels of a coloured region too dark or grey to be named, and darker
-        than most of it (a side face in shadow, a shadow): no class takes them."""
-        if self.rejected is None:
-            return
-        shade = np.zeros_like(core)
-        dim = lightness[core] < np.median(lightness[core])
-        shade[core] = ((classes == -2) | (classes == -3)) & dim
-        why = "dark or grey in a coloured region"
-        self(dilate(shade, 3), rows, cols, "side face or shadow", why)
-
-    def side_faces(
-        self,
-        core: np.ndarray,
-        darker: np.ndarray,
-        where: tuple[slice, slice],
-        why: str,
-        colour: str,
-    ) -> None:
-        """A class's darker lightness mode (``darker``, over its ``core`` pixels)."""
-        if self.rejected is None:
-            return
-        mask = np.zeros_like(core)
-        mask[core] = darker
-        self(dilate(mask, 3), *where, "side face", why, colour)
 
 
 def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
@@ -311,7 +234,7 @@ def _second_tables(
     lab: np.ndarray,
     threshold: float,
     largest_block: float,
-    record: _Recorder,
+    record: PartRecorder,
 ) -> bool:
     """Lowers ``distinct`` (in place) to the a*b* distance from a second table's
     colour over every region of :data:`TABLE_BLOCKS`' kind (a large, one-coloured
@@ -361,7 +284,7 @@ class _ImageColours:
     chroma: np.ndarray
     coloured_image: bool
     min_area: float
-    record: _Recorder
+    record: PartRecorder
 
 
 @dataclass(frozen=True, slots=True)
@@ -421,6 +344,9 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
         classes[_glare(classes, k.lightness, k.core, c.min_area)] = -3
     classes = _smoothed_classes(classes, k.core)
     present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
+    # one colour between two names first: its two halves, speckled through each
+    # other by the noise, would each erode away as a rim
+    present = _one_colour_merged(present, k.chroma[k.core])
     return _without_rims(present, k.core, c.min_area)
 
 
@@ -482,14 +408,18 @@ def _component_regions(
     offsets = (k.pixels - k.ground).reshape(-1, 3)
     nearest = _nearest_class(offsets, [face[2] for face in faces], k.member.shape)
     grown = dilate(k.member, 1)
+    owners = _hole_owners(k.core, nearest) if len(faces) > 1 else None
     regions: list[ColourRegion] = []
     for n, face in enumerate(faces):
         colour, centre, top_face = face[0], face[1], face[3]
         on_class = k.core & (nearest == n)
         alpha = _face_alpha(c, k, face, on_class) * (nearest == n) * grown
         # enclosed by this class's own clearly coloured pixels: a glint on a red
-        # cube in a row of yellow ones is the red top's, the yellow beside it not
-        glare = _highlights(k.pixels, k.lightness, top_face, centre, on_class, c.min_area)
+        # cube in a row of yellow ones is the red top's, the yellow beside it not;
+        # or by the region's, bordered mostly by this class (a glint near the
+        # seam, the rim between it and the neighbour thinner than the core's)
+        enclosing = on_class if owners is None else on_class | (owners == n)
+        glare = _highlights(k.pixels, k.lightness, top_face, centre, enclosing, c.min_area)
         alpha[glare] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
@@ -514,7 +444,7 @@ def colour_regions(
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
     distinct, lab, threshold, coloured_image = _distinctness(image)
-    record = _Recorder(rejected, min_area)
+    record = PartRecorder(rejected, min_area)
     if largest_block is not None and coloured_image:
         _second_tables(distinct, lab, threshold, largest_block, record)
     foreground = (distinct > threshold / 2).astype(np.uint8)
@@ -533,7 +463,42 @@ def colour_regions(
         x, y, w, h, _ = (int(value) for value in stats[index])
         check_time(where)
         regions += _component_regions(colours, labels, int(index), (x, y, w, h))
+    if coloured_image:  # black, white and grey blocks by lightness (without colour: above)
+        check_time(where)
+        for colour, rgb, offset, alpha in achromatic_regions(
+            image, lab, _covered(regions, foreground.shape), min_area, record
+        ):
+            regions.append(ColourRegion(colour, rgb, offset, alpha))
     return regions, table
+
+
+def _covered(regions: list[ColourRegion], shape: tuple[int, ...]) -> np.ndarray:
+    """The pixels of an image of ``shape`` that ``regions`` hold (α > ½)."""
+    covered = np.zeros(shape[:2], dtype=bool)
+    for region in regions:
+        (row, col), (rows, cols) = region.offset, region.alpha.shape
+        covered[row : row + rows, col : col + cols] |= region.alpha > 0.5
+    return covered
+
+
+def _hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+    """Per pixel of the holes in a region's clearly coloured pixels (``core``,
+    closed by a 5 × 5 square: the faint seam between two classes would open a hole
+    next to it to the outside), the class (``nearest``) that holds most of the ring
+    two pixels around its hole, −1 elsewhere: whose top a glint there is on."""
+    owners = np.full(core.shape, -1, dtype=np.intp)
+    # the seam between two classes (their mixed colours faint) closed first
+    closed = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
+    if not holes.any():
+        return owners
+    count, labels = cv2.connectedComponents(holes.astype(np.uint8), connectivity=8)
+    for index in range(1, count):
+        hole = labels == index
+        ring = dilate(hole, 2) & core
+        if ring.any():
+            owners[hole] = int(np.bincount(nearest[ring]).argmax())
+    return owners
 
 
 def _highlights(

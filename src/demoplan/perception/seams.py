@@ -29,8 +29,18 @@ _ALONG = np.linspace(-0.4, 0.4, 17)
 region goes on beyond it over its whole length: to a tenth of a side from each
 corner (a real block's corners are rounded by bevels and the JPEG's blur; a block
 slid along its neighbour by more than that shows a free end)."""
-_ACROSS = (-2.0, -1.0, 0.0, 1.0, 2.0)
-"""Offsets (px) across the side over which a seam, the darkest of them, is looked for."""
+SEAM_REACH = 0.1
+"""How far (in sides) across the fitted side a seam is looked for, the darkest line
+there: a square fitted to a row of one colour lies a few pixels off the seam
+between two cubes (their rims blur into one mask), and a cuboid has no seam
+anywhere near."""
+
+
+def _across(side: float) -> np.ndarray:
+    """Offsets (px) across a side of ``side`` px, every pixel to
+    :data:`SEAM_REACH` of it on either side (at least 2 px)."""
+    reach = max(2.0, round(SEAM_REACH * side))
+    return np.arange(-reach, reach + 1.0)
 
 
 def seamless_side(
@@ -42,7 +52,7 @@ def seamless_side(
     region's mask beyond it along its whole length, as far as a quarter of a side
     out (the mask averaged over 5 × 5 px), and the image's lightness
     (``lightness``, L*, the whole image) shows no seam there
-    (:data:`SEAM_CONTRAST`)."""
+    (:data:`SEAM_CONTRAST`, within :data:`SEAM_REACH` of the side)."""
     u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     height = alpha.shape[0]
@@ -60,7 +70,7 @@ def seamless_side(
             continue  # a free or partly free side: no longer thing along it
         profiles = [
             _sample(lightness, col0 + us + nu * out - 0.5, row0 + height - (vs + nv * out) - 0.5)
-            for out in (side / 4, 3 * side / 4, *(side / 2 + k for k in _ACROSS))
+            for out in (side / 4, 3 * side / 4, *(side / 2 + k for k in _across(side)))
         ]
         inner, outer, line = profiles[0], profiles[1], np.min(profiles[2:], axis=0)
         dip = float(np.median(np.minimum(inner, outer) - line))
