@@ -41,6 +41,7 @@ def _given_colour(value: object) -> str | None:
     return None if value is None else parse_colour(value)
 
 
-GivenColour = Annotated[str | None, BeforeValidator(_given_colour)]
-"""A document's ``colour`` field (a scene's object or landmark): ``#rrggbb``,
-or None where it gives none."""
+GivenColour = Annotated[str | list[float] | None, BeforeValidator(_given_colour)]
+"""A document's ``colour`` field (a scene's object or landmark), as a file may
+give it (a string or [r, g, b]: the generated docs/formats.md says so), read as
+``#rrggbb``, or None where it gives none."""

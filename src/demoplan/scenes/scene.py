@@ -298,7 +298,7 @@ def scene_from_document(data: dict[str, Any], source: str) -> Scene:
         source=source,
         robot=robot,
         colours=tuple(
-            (name, entry.colour)
+            (name, str(entry.colour))
             for entries in (parsed.objects, parsed.landmarks)
             for name, entry in entries.items()
             if entry.colour is not None
