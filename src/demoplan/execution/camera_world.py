@@ -56,15 +56,14 @@ class CameraWorld:
                 f"{', '.join(plain)} {'is' if len(plain) == 1 else 'are'} not"
             )
         given = scene.given_colours
-        recoloured = [
-            o.name for o in scene.objects if o.name in given and given[o.name] != NAMED[o.kind]
-        ]
-        if recoloured:
+        recoloured = [o for o in scene.objects if given.get(o.name, NAMED[o.kind]) != NAMED[o.kind]]
+        if recoloured:  # the first, named as every bad field is: file, field, what was expected
+            block = recoloured[0]
+            where = ": ".join(p for p in (scene.source, f"objects.{block.name}.colour") if p)
             raise UsageError(
-                "--perception camera tells blocks apart by the colour their type names; "
-                f"{', '.join(recoloured)} {'is' if len(recoloured) == 1 else 'are'} given "
-                "another colour in the scene (leave the colour out, or run with "
-                "--perception state)"
+                f"{where}: {given[block.name]} is another colour than its type {block.kind}'s "
+                f"({NAMED[block.kind]}), by which --perception camera tells blocks apart; "
+                "that colour or none expected (or run with --perception state)"
             )
         self.world = world
         sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]
