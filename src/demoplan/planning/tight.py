@@ -19,10 +19,13 @@ moment its first occupant leaves and the moment its final occupant arrives
 grasp demands precedences between events, and a tight plan needs one grasp
 per event with no cycle among all the precedences. Where a parked object
 stands in between is not known: it is taken to be in nobody's way, which
-only drops demands, so a refutation stays sound. Problems that stack (a
-place standing on another) are left out. The search for grasps propagates (an event with one
-grasp left takes it; one with none refutes the choice) and branches on the
-event with the fewest grasps left.
+only drops demands, so a refutation stays sound. Where places stack, a
+grasp also needs the places standing on its source empty (an object on top
+must have left first); that a put-down needs its support occupied is not
+demanded — again fewer demands, so a refutation stays sound, and the play-out
+below checks it with the real operators. The search for grasps propagates
+(an event with one grasp left takes it; one with none refutes the choice)
+and branches on the event with the fewest grasps left.
 
 When an order is found it is played out with the real operators (an object
 sent away goes to the free place in the way of the fewest grasps): a plan
@@ -79,11 +82,11 @@ def tight_plan(
     """A plan from this state with exactly as many moves as the feedback
     bound, which must also be the state's bound; or its refutation (module
     docstring). Neither when one may exist but was not built, or the check
-    does not apply: pending subgoals, stacked places, a precedence cycle too
-    large to enumerate, :data:`MAX_NODES` or the clock spent."""
+    does not apply: pending subgoals, a precedence cycle too large to
+    enumerate, :data:`MAX_NODES` or the clock spent."""
     c = bounds.c
     unknown = TightResult()
-    if any(c.below) or reached != c.all_subgoals:
+    if reached != c.all_subgoals:
         return unknown
     graph = bounds.precedence_graph(positions, reached)
     if graph is None:
@@ -305,15 +308,17 @@ class _PlayOut:
         self, obj: int, source: int, others: int, grasps: list[int], to_fill: int
     ) -> list[int]:
         """Where ``obj`` may be sent away: free places that are no goal still to
-        be filled first, then those in the way of the fewest grasps."""
+        be filled first, then those standing on no other place (an object
+        put on top keeps the one below from being grasped), then those in the
+        way of the fewest grasps."""
         c = self.events.c
         spots = sorted(
-            (to_fill >> place & 1, self.in_the_way[place], place)
+            (to_fill >> place & 1, c.below[place] != 0, self.in_the_way[place], place)
             for place in range(len(c.locations))
             if place not in (source, c.goal[obj])  # its goal comes with its own move
             and any(c.put_ok(others, place, g) for g in grasps)
         )
-        return [place for _, _, place in spots[:PARKING_TRIED]]
+        return [place for *_, place in spots[:PARKING_TRIED]]
 
 
 @dataclass(slots=True)
