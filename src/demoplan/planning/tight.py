@@ -28,7 +28,8 @@ below checks it with the real operators. The search for grasps propagates
 and branches on the event with the fewest grasps left.
 
 When an order is found it is played out with the real operators (an object
-sent away goes to the free place in the way of the fewest grasps): a plan
+sent away goes to a free place that leaves each later move of the order a
+grasp, and blocks the fewest of their grasps): a plan
 as long as the bound, so shortest. When every choice of F is refuted, no
 plan has as few moves as the bound: the bound is one more. The solver makes
 the check once, at the start, before any search (a few milliseconds on the
@@ -216,8 +217,9 @@ class _Events:
     ) -> list[Move] | None:
         """The events in an order of ``closure`` as real moves, checked by the
         operators' own tests; None if no play-out tried works. An object sent
-        away goes to a free place that is no goal still to be filled, those in
-        the way of the fewest grasps first; where a later move is then not
+        away goes to a free place that leaves every later move a grasp, no goal
+        still to be filled, those in the way of the fewest grasps first
+        (:meth:`_PlayOut._spots`); where a later move is then not
         possible, the play-out backs up to the last object sent away and tries
         its next place (:data:`PARKING_TRIED` places each, :data:`PLAY_OUTS`
         dead ends in all)."""
@@ -258,6 +260,22 @@ class _PlayOut:
         self.events, self.order, self.in_the_way = events, order, in_the_way
         self.plan: list[Move] = []
         self.dead_ends = 0
+        c = events.c
+        # Per event of the order: per grasp, the places an object must not
+        # stand at for it (blocking at the source or the target, on the
+        # source, the target or overlapping it).
+        self.forbidden: list[list[int]] = []
+        for event in order:
+            _, source, target = events.moves[event]
+            masks = []
+            for grasp in c.grasps_of[events.moves[event][0]]:
+                mask = 0
+                if source >= 0:
+                    mask |= c.block[source][grasp] | c.above[source]
+                if target >= 0:
+                    mask |= c.block[target][grasp] | c.exclusive[target] | 1 << target
+                masks.append(mask)
+            self.forbidden.append(masks)
 
     def run(self, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
         """The moves of the order, the objects starting at ``at``; None where
@@ -280,7 +298,7 @@ class _PlayOut:
                     places = (
                         [target]
                         if target >= 0
-                        else self._spots(obj, source, others, grasps, to_fill)
+                        else self._spots(index, source, others, grasps, to_fill)
                     )
                 while places and move is None:
                     place = places.pop(0)
@@ -305,20 +323,41 @@ class _PlayOut:
             del self.plan[length:]
 
     def _spots(
-        self, obj: int, source: int, others: int, grasps: list[int], to_fill: int
+        self, index: int, source: int, others: int, grasps: list[int], to_fill: int
     ) -> list[int]:
-        """Where ``obj`` may be sent away: free places that are no goal still to
-        be filled first, then those standing on no other place (an object
-        put on top keeps the one below from being grasped), then those in the
-        way of the fewest grasps."""
+        """Where the object of event ``index`` may be sent away: first free
+        places that leave every later event a grasp (until the object's own
+        next event, which takes it from there), then those that are no goal
+        still to be filled, stand on no other place (an object put on top
+        keeps the one below from being grasped), block no grasp of those
+        later events, and are in the way of the fewest grasps at all."""
         c = self.events.c
-        spots = sorted(
-            (to_fill >> place & 1, c.below[place] != 0, self.in_the_way[place], place)
-            for place in range(len(c.locations))
-            if place not in (source, c.goal[obj])  # its goal comes with its own move
-            and any(c.put_ok(others, place, g) for g in grasps)
-        )
-        return [place for *_, place in spots[:PARKING_TRIED]]
+        obj = self.events.moves[self.order[index]][0]
+        killing = hitting = 0  # places taking a later event's last grasp, or any grasp
+        for position in range(index + 1, len(self.order)):
+            if self.events.moves[self.order[position]][0] == obj:
+                break
+            every = -1
+            for mask in self.forbidden[position]:
+                every &= mask
+                hitting |= mask
+            killing |= every if self.forbidden[position] else 0
+        ranked = []
+        for place in range(len(c.locations)):
+            if place in (source, c.goal[obj]) or not any(
+                c.put_ok(others, place, g) for g in grasps
+            ):
+                continue  # its goal comes with its own move
+            key = (
+                killing >> place & 1,
+                to_fill >> place & 1,
+                c.below[place] != 0,
+                hitting >> place & 1,
+                self.in_the_way[place],
+            )
+            ranked.append((key, place))
+        ranked.sort()
+        return [place for _, place in ranked[:PARKING_TRIED]]
 
 
 @dataclass(slots=True)
