@@ -261,20 +261,26 @@ class _PlayOut:
         self.plan: list[Move] = []
         self.dead_ends = 0
         c = events.c
-        # Per event of the order: per grasp, the places an object must not
-        # stand at for it (blocking at the source or the target, on the
-        # source, the target or overlapping it).
+        # Per event of the order: per grasp the order leaves it (its demands
+        # kept by the order), the places an object must not stand at for it
+        # (blocking at the source or the target, on the source, the target or
+        # overlapping it).
+        at_position = {event: position for position, event in enumerate(order)}
         self.forbidden: list[list[int]] = []
         for event in order:
-            _, source, target = events.moves[event]
+            obj, source, target = events.moves[event]
             masks = []
-            for grasp in c.grasps_of[events.moves[event][0]]:
+            for grasp in c.grasps_of[obj]:
                 mask = 0
                 if source >= 0:
                     mask |= c.block[source][grasp] | c.above[source]
                 if target >= 0:
                     mask |= c.block[target][grasp] | c.exclusive[target] | 1 << target
-                masks.append(mask)
+                demands = events._empty_at(event, obj, mask)
+                if demands is not None and all(
+                    at_position[before] < at_position[later] for before, later in demands
+                ):
+                    masks.append(mask)
             self.forbidden.append(masks)
 
     def run(self, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
@@ -326,8 +332,9 @@ class _PlayOut:
         self, index: int, source: int, others: int, grasps: list[int], to_fill: int
     ) -> list[int]:
         """Where the object of event ``index`` may be sent away: first free
-        places that leave every later event a grasp (until the object's own
-        next event, which takes it from there), then those that are no goal
+        places that leave every later event one of the grasps the order
+        leaves it (until the object's own next event, which takes it from
+        there), then those that are no goal
         still to be filled, stand on no other place (an object put on top
         keeps the one below from being grasped), block no grasp of those
         later events, and are in the way of the fewest grasps at all."""
