@@ -357,6 +357,7 @@ def test_an_infinite_budget_gives_each_phase_a_finite_share() -> None:
 
     greedy = next(p for p in PHASES if p.name == "greedy")
     tight = next(p for p in PHASES if p.name == "tight")
+    assert greedy.share is not None
     for budget in (Budget(), Budget(timeout=math.inf)):
         left = _phase_clock(Clock(budget), greedy).remaining()
         assert left is not None and 0 < left <= greedy.share * _UNBOUNDED_SECONDS
