@@ -98,7 +98,7 @@ def test_limits_stop_the_search_with_exit_code_4() -> None:
 
 
 def test_an_unproved_plan_comes_with_its_bound_or_exit_4_when_proof_is_demanded() -> None:
-    # a crowded grid with stacked caps (no tight plan: stacked places): a plan of 82
+    # a crowded grid with stacked caps (the tight phase finds no plan): a plan of 82
     # actions, a bound of 72, no proof in 50 nodes
     problem = parking_problem(20, 2, **CROWDED_FAMILIES["crowded-stacks"])
     # The first plan (greedy, 0.6 s here) gets most of the 6 s: room for a loaded
@@ -357,6 +357,7 @@ def test_an_infinite_budget_gives_each_phase_a_finite_share() -> None:
 
     greedy = next(p for p in PHASES if p.name == "greedy")
     tight = next(p for p in PHASES if p.name == "tight")
+    assert greedy.share is not None
     for budget in (Budget(), Budget(timeout=math.inf)):
         left = _phase_clock(Clock(budget), greedy).remaining()
         assert left is not None and 0 < left <= greedy.share * _UNBOUNDED_SECONDS

@@ -19,13 +19,17 @@ moment its first occupant leaves and the moment its final occupant arrives
 grasp demands precedences between events, and a tight plan needs one grasp
 per event with no cycle among all the precedences. Where a parked object
 stands in between is not known: it is taken to be in nobody's way, which
-only drops demands, so a refutation stays sound. Problems that stack (a
-place standing on another) are left out. The search for grasps propagates (an event with one
-grasp left takes it; one with none refutes the choice) and branches on the
-event with the fewest grasps left.
+only drops demands, so a refutation stays sound. Where places stack, a
+grasp also needs the places standing on its source empty (an object on top
+must have left first); that a put-down needs its support occupied is not
+demanded — again fewer demands, so a refutation stays sound, and the play-out
+below checks it with the real operators. The search for grasps propagates
+(an event with one grasp left takes it; one with none refutes the choice)
+and branches on the event with the fewest grasps left.
 
 When an order is found it is played out with the real operators (an object
-sent away goes to the free place in the way of the fewest grasps): a plan
+sent away goes to a free place that leaves each later move of the order a
+grasp, and blocks the fewest of their grasps): a plan
 as long as the bound, so shortest. When every choice of F is refuted, no
 plan has as few moves as the bound: the bound is one more. The solver makes
 the check once, at the start, before any search (a few milliseconds on the
@@ -79,11 +83,11 @@ def tight_plan(
     """A plan from this state with exactly as many moves as the feedback
     bound, which must also be the state's bound; or its refutation (module
     docstring). Neither when one may exist but was not built, or the check
-    does not apply: pending subgoals, stacked places, a precedence cycle too
-    large to enumerate, :data:`MAX_NODES` or the clock spent."""
+    does not apply: pending subgoals, a precedence cycle too large to
+    enumerate, :data:`MAX_NODES` or the clock spent."""
     c = bounds.c
     unknown = TightResult()
-    if any(c.below) or reached != c.all_subgoals:
+    if reached != c.all_subgoals:
         return unknown
     graph = bounds.precedence_graph(positions, reached)
     if graph is None:
@@ -213,8 +217,9 @@ class _Events:
     ) -> list[Move] | None:
         """The events in an order of ``closure`` as real moves, checked by the
         operators' own tests; None if no play-out tried works. An object sent
-        away goes to a free place that is no goal still to be filled, those in
-        the way of the fewest grasps first; where a later move is then not
+        away goes to a free place that leaves every later move a grasp, no goal
+        still to be filled, those in the way of the fewest grasps first
+        (:meth:`_PlayOut._spots`); where a later move is then not
         possible, the play-out backs up to the last object sent away and tries
         its next place (:data:`PARKING_TRIED` places each, :data:`PLAY_OUTS`
         dead ends in all)."""
@@ -255,6 +260,28 @@ class _PlayOut:
         self.events, self.order, self.in_the_way = events, order, in_the_way
         self.plan: list[Move] = []
         self.dead_ends = 0
+        c = events.c
+        # Per event of the order: per grasp the order leaves it (its demands
+        # kept by the order), the places an object must not stand at for it
+        # (blocking at the source or the target, on the source, the target or
+        # overlapping it).
+        at_position = {event: position for position, event in enumerate(order)}
+        self.forbidden: list[list[int]] = []
+        for event in order:
+            obj, source, target = events.moves[event]
+            masks = []
+            for grasp in c.grasps_of[obj]:
+                mask = 0
+                if source >= 0:
+                    mask |= c.block[source][grasp] | c.above[source]
+                if target >= 0:
+                    mask |= c.block[target][grasp] | c.exclusive[target] | 1 << target
+                demands = events._empty_at(event, obj, mask)
+                if demands is not None and all(
+                    at_position[before] < at_position[later] for before, later in demands
+                ):
+                    masks.append(mask)
+            self.forbidden.append(masks)
 
     def run(self, at: list[int], occupied: int, to_fill: int) -> list[Move] | None:
         """The moves of the order, the objects starting at ``at``; None where
@@ -277,7 +304,7 @@ class _PlayOut:
                     places = (
                         [target]
                         if target >= 0
-                        else self._spots(obj, source, others, grasps, to_fill)
+                        else self._spots(index, source, others, grasps, to_fill)
                     )
                 while places and move is None:
                     place = places.pop(0)
@@ -302,18 +329,42 @@ class _PlayOut:
             del self.plan[length:]
 
     def _spots(
-        self, obj: int, source: int, others: int, grasps: list[int], to_fill: int
+        self, index: int, source: int, others: int, grasps: list[int], to_fill: int
     ) -> list[int]:
-        """Where ``obj`` may be sent away: free places that are no goal still to
-        be filled first, then those in the way of the fewest grasps."""
+        """Where the object of event ``index`` may be sent away: first free
+        places that leave every later event one of the grasps the order
+        leaves it (until the object's own next event, which takes it from
+        there), then those that are no goal
+        still to be filled, stand on no other place (an object put on top
+        keeps the one below from being grasped), block no grasp of those
+        later events, and are in the way of the fewest grasps at all."""
         c = self.events.c
-        spots = sorted(
-            (to_fill >> place & 1, self.in_the_way[place], place)
-            for place in range(len(c.locations))
-            if place not in (source, c.goal[obj])  # its goal comes with its own move
-            and any(c.put_ok(others, place, g) for g in grasps)
-        )
-        return [place for _, _, place in spots[:PARKING_TRIED]]
+        obj = self.events.moves[self.order[index]][0]
+        killing = hitting = 0  # places taking a later event's last grasp, or any grasp
+        for position in range(index + 1, len(self.order)):
+            if self.events.moves[self.order[position]][0] == obj:
+                break
+            every = -1
+            for mask in self.forbidden[position]:
+                every &= mask
+                hitting |= mask
+            killing |= every if self.forbidden[position] else 0
+        ranked = []
+        for place in range(len(c.locations)):
+            if place in (source, c.goal[obj]) or not any(
+                c.put_ok(others, place, g) for g in grasps
+            ):
+                continue  # its goal comes with its own move
+            key = (
+                killing >> place & 1,
+                to_fill >> place & 1,
+                c.below[place] != 0,
+                hitting >> place & 1,
+                self.in_the_way[place],
+            )
+            ranked.append((key, place))
+        ranked.sort()
+        return [place for _, place in ranked[:PARKING_TRIED]]
 
 
 @dataclass(slots=True)
