@@ -84,11 +84,15 @@ def test_a_colour_reads_in_either_form_and_is_written_back_as_rrggbb(
         ("objects", "sandwich", "red"),
         ("objects", "sandwich", "#d6272"),
         ("objects", "sandwich", "#gg2728"),
+        ("objects", "sandwich", "#d62728\n"),  # `$` alone matches before a last newline
+        ("objects", "sandwich", "#fff"),
         ("objects", "apple", [1.2, 0.0, 0.0]),
         ("objects", "apple", [0.5, 0.5]),
         ("objects", "apple", [214, 39, 40]),
         ("objects", "apple", [True, False, False]),
+        ("objects", "apple", [10**400, 0, 0]),  # a JSON integer no float holds
         ("landmarks", "lunchbox", 7),
+        ("landmarks", "lunchbox", "#d62728\n"),
     ],
 )
 def test_a_bad_colour_is_one_line_naming_the_file_and_the_field(
@@ -250,9 +254,12 @@ def test_camera_perception_refuses_a_block_given_another_colour_than_its_type() 
     document = json.loads((ROOT / "examples" / "scenes" / "pyramid-fig4.json").read_text())
     document["objects"]["red"]["colour"] = BLUE
     scene = scene_from_document(document, "pyramid.json")
-    with pytest.raises(UsageError, match=r"red is given another colour") as error:
+    with pytest.raises(UsageError) as error:
         CameraWorld(MujocoWorld(scene), scene)
     assert error.value.exit_code == 2 and "\n" not in str(error.value)
+    # the file, the field, the colour given and the one expected
+    assert str(error.value).startswith(f"pyramid.json: objects.red.colour: {BLUE} ")
+    assert f"type red's ({NAMED['red']})" in str(error.value)
     document["objects"]["red"]["colour"] = NAMED["red"].upper()
     same = scene_from_document(document, "pyramid.json")
     assert CameraWorld(MujocoWorld(same), same).world.scene.given_colours == {"red": NAMED["red"]}

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
 from demoplan.documents.demonstrations import load_demonstrations
-from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, object_rgba
+from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, rgba
 from demoplan.plotting.figures import plot_demonstration
 from tests.support.helpers import EXAMPLES
 
@@ -42,10 +42,9 @@ def test_an_object_has_one_colour_in_every_demonstration_figure() -> None:
 
 def test_named_colours_and_mujoco_rgba_agree() -> None:
     assert object_colour("red") == NAMED["red"]
-    red, green, blue, alpha = (float(v) for v in object_rgba("glass").split())
+    red, green, blue, alpha = (float(v) for v in rgba(object_colour("glass")).split())
     assert to_hex((red, green, blue)) == object_colour("glass") and alpha == 1.0
-    assert object_colour("glass") == object_colour("glass")
-    assert object_rgba("fork") != "0.6 0.6 0.7 1"  # no longer every plain name grey
+    assert rgba(object_colour("fork")) != "0.6 0.6 0.7 1"  # no longer every plain name grey
 
 
 names_strategy = st.lists(

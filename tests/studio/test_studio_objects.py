@@ -82,8 +82,14 @@ def test_objects_saved_are_listed_and_read_back_with_colour_mass_and_type(
         assert back["poses"][name]["yaw"] == pytest.approx(layout["poses"][name]["yaw"])
     box = back["landmarks"]["lunchbox"]
     assert box["size"] == [0.26, 0.18, BOX_HEIGHT] and box["colour"] == "#3070c0"
-    # its start is a scene as `plan` reads it: colours left out, masses and types kept
+    # its start is a scene as `plan` reads it: colours, masses and types kept
     scene = scene_from_document(scene_document(answer["document"], "lunch.json"), "lunch.json")
+    assert scene.given_colours == {
+        name: entry["colour"]
+        for group in ("objects", "landmarks")
+        for name, entry in layout[group].items()
+        if "colour" in entry
+    }
     assert scene.object("cookie").type == "biscuit"
     assert dict(scene.landmark_geometry)["lunchbox"].size == (0.26, 0.18, BOX_HEIGHT)
     assert scene.object("juice").pose.yaw == pytest.approx(30.0)

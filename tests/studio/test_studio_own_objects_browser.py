@@ -112,26 +112,43 @@ def lunch(tmp_path: Path) -> Iterator[tuple[Studio, Path]]:
         yield page, workdir
 
 
+def add_thing(
+    page: Studio,
+    name: str,
+    kind: str,
+    shape: str,
+    size: tuple[float, float, float],
+    colour: str,
+    mass: str,
+    kind_of: str = "",
+) -> None:
+    """Make a thing in **Your objects**, as a user fills the form: ``size`` in
+    cm, ``mass`` in kg (``"1050 kg/m3"``: a density; ``""``: none), ``kind``
+    ``object`` or ``landmark``, ``kind_of`` its type; the page takes it."""
+    tab = page.tab
+    tab.get_by_label("Kind").select_option(kind)
+    tab.get_by_label("Name", exact=True).fill(name)
+    tab.get_by_label("Shape").select_option(shape)
+    for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), size, strict=True):
+        tab.get_by_label(field, exact=True).fill(str(value))
+    tab.get_by_label("Colour").fill(colour)
+    weight, _, per_volume = mass.partition(" ")
+    tab.get_by_label("Mass (kg)").fill("" if per_volume else weight)
+    tab.get_by_label("or density (kg/m³)").fill(weight if per_volume else "")
+    tab.get_by_label("Type").fill(kind_of)
+    page.button("Add or change").click()
+    page.settle()
+    assert page.alert() == ""
+
+
 def make_things(page: Studio) -> None:
     tab = page.tab
     tab.get_by_label("Template").select_option("empty")
     page.settle()
     assert page.tab.locator("#table [data-object]").count() == 0
     tab.get_by_text("Your objects").click()
-    for name, kind, shape, size, colour, mass, kind_of in THINGS:
-        tab.get_by_label("Kind").select_option(kind)
-        tab.get_by_label("Name", exact=True).fill(name)
-        tab.get_by_label("Shape").select_option(shape)
-        for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), size, strict=True):
-            tab.get_by_label(field, exact=True).fill(str(value))
-        tab.get_by_label("Colour").fill(colour)
-        weight, _, per_volume = mass.partition(" ")
-        tab.get_by_label("Mass (kg)").fill("" if per_volume else weight)
-        tab.get_by_label("or density (kg/m³)").fill(weight if per_volume else "")
-        tab.get_by_label("Type").fill(kind_of)
-        page.button("Add or change").click()
-        page.settle()
-        assert page.alert() == ""
+    for thing in THINGS:
+        add_thing(page, *thing)
     # the juice was made too small: edit it
     page.button("Edit juice").click()
     tab.get_by_label("z (cm)", exact=True).fill("11")

@@ -21,7 +21,12 @@ import pytest
 
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
-from tests.studio.test_studio_own_objects_browser import in_box, in_world, move_landmark
+from tests.studio.test_studio_own_objects_browser import (
+    add_thing,
+    in_box,
+    in_world,
+    move_landmark,
+)
 from tests.support.studio_browser import Studio, studio_page
 
 pytestmark = pytest.mark.slow
@@ -79,17 +84,8 @@ def make_things(page: Studio) -> None:
     tab.get_by_label("Template").select_option("empty")
     page.settle()
     tab.get_by_text("Your objects").click()
-    for name, kind, shape, size, colour, mass in THINGS:
-        tab.get_by_label("Kind").select_option(kind)
-        tab.get_by_label("Name", exact=True).fill(name)
-        tab.get_by_label("Shape").select_option(shape)
-        for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), size, strict=True):
-            tab.get_by_label(field, exact=True).fill(str(value))
-        tab.get_by_label("Colour").fill(colour)
-        tab.get_by_label("Mass (kg)").fill(mass)
-        page.button("Add or change").click()
-        page.settle()
-        assert page.alert() == ""
+    for thing in THINGS:
+        add_thing(page, *thing)
     move_landmark(page, "caddy", *CADDY_POSES[0])
     for name, (x, y) in START.items():
         page.drag(name, x, y)

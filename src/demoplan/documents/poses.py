@@ -132,7 +132,7 @@ class LandmarkSchema(PoseSchema):
         return boxes
 
     def pose(self, units: UnitsSchema) -> Pose:
-        fields = self.model_dump(exclude={"shape", "size", "compartments"})
+        fields = self.model_dump(include=set(PoseSchema.model_fields))  # not a subclass's
         return pose_from_dict(PoseSchema(**fields), units)
 
     def compartment_boxes(self, units: UnitsSchema) -> tuple[Compartment, ...]:

@@ -56,15 +56,14 @@ class CameraWorld:
                 f"{', '.join(plain)} {'is' if len(plain) == 1 else 'are'} not"
             )
         given = scene.given_colours
-        recoloured = [
-            o.name for o in scene.objects if o.name in given and given[o.name] != NAMED[o.kind]
-        ]
-        if recoloured:
+        recoloured = [o for o in scene.objects if given.get(o.name, NAMED[o.kind]) != NAMED[o.kind]]
+        if recoloured:  # the first, named as every bad field is: file, field, what was expected
+            block = recoloured[0]
+            where = ": ".join(p for p in (scene.source, f"objects.{block.name}.colour") if p)
             raise UsageError(
-                "--perception camera tells blocks apart by the colour their type names; "
-                f"{', '.join(recoloured)} {'is' if len(recoloured) == 1 else 'are'} given "
-                "another colour in the scene (leave the colour out, or run with "
-                "--perception state)"
+                f"{where}: {given[block.name]} is another colour than its type {block.kind}'s "
+                f"({NAMED[block.kind]}), by which --perception camera tells blocks apart; "
+                "that colour or none expected (or run with --perception state)"
             )
         self.world = world
         sides = [o.geometry.size[0] for o in scene.objects if o.geometry is not None] or [0.04]
@@ -72,6 +71,7 @@ class CameraWorld:
         self.settings = settings or PerceptionSettings(
             min_side=0.85 * min(sides), max_side=1.15 * max(sides)
         )
+        _refuse_block_sized_landmarks(scene, self.settings)
         self.tracker = BlockTracker(
             TrackedBlock(
                 o.name,
@@ -139,3 +139,22 @@ class CameraWorld:
 
     def close(self) -> None:
         self.world.close()
+
+
+def _refuse_block_sized_landmarks(scene: Scene, settings: PerceptionSettings) -> None:
+    """Refuse, in one line naming the file and the field (exit 2), a landmark whose
+    footprint is a square of a block's size: from above the top camera sees it as
+    one more block (a 4 × 4 cm mat was taken for a block and the run ended blaming
+    a block's position the file never gave). A landmark larger or longer than a
+    block (a tray, a caddy) is told apart by its size."""
+    for name, geometry in scene.landmark_geometry:
+        width, depth = geometry.size[0], geometry.size[1]
+        square = geometry.shape == "box" and min(width, depth) >= 0.8 * max(width, depth)
+        if square and settings.min_side <= max(width, depth) <= settings.max_side:
+            where = ": ".join(p for p in (scene.source, f"landmarks.{name}.size") if p)
+            raise UsageError(
+                f"{where}: {width * 100:.1f} × {depth * 100:.1f} cm is a block's size "
+                f"({settings.min_side * 100:.1f}–{settings.max_side * 100:.1f} cm across), "
+                "which --perception camera would see as one more block; a landmark "
+                "larger or longer than the blocks expected (or run with --perception state)"
+            )

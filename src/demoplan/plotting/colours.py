@@ -21,7 +21,7 @@ import re
 import zlib
 from collections.abc import Iterable, Mapping
 
-__all__ = ["CYCLE", "NAMED", "assign_colours", "object_colour", "object_rgba", "rgba"]
+__all__ = ["CYCLE", "NAMED", "assign_colours", "object_colour", "rgba"]
 
 NAMED = {
     "red": "#d62728",
@@ -123,11 +123,6 @@ def assign_colours(
 
 def _preferred(name: str) -> str:
     return CYCLE[zlib.crc32(name.encode("utf-8", "surrogatepass")) % len(CYCLE)]
-
-
-def object_rgba(name: str) -> str:
-    """:func:`object_colour` as MuJoCo's ``rgba`` attribute (``"r g b 1"``)."""
-    return rgba(object_colour(name))
 
 
 def rgba(colour: str) -> str:

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from demoplan.documents.colours import parse_colour
+from demoplan.documents.colours import GivenColour
 from demoplan.documents.masses import with_mass
 from demoplan.documents.poses import (
     LENGTH_SCALE,
@@ -176,30 +176,16 @@ class _ObjectSchema(PoseSchema):
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
     type: TypeName | None = None
-    colour: str | list[Number] | None = None  # read as "#rrggbb" (documents.colours)
+    colour: GivenColour = None
 
     @field_validator("size")
     @classmethod
     def _positive(cls, size: list[float] | None) -> list[float] | None:
         return None if size is None else positive_extents(size)
 
-    @field_validator("colour", mode="before")
-    @classmethod
-    def _colour(cls, colour: Any) -> str | None:
-        return None if colour is None else parse_colour(colour)
-
 
 class _LandmarkSchema(LandmarkSchema):
-    colour: str | list[Number] | None = None  # as an object's
-
-    @field_validator("colour", mode="before")
-    @classmethod
-    def _colour(cls, colour: Any) -> str | None:
-        return None if colour is None else parse_colour(colour)
-
-    def pose(self, units: UnitsSchema) -> Pose:
-        plain = LandmarkSchema.model_validate(self.model_dump(exclude={"colour"}))
-        return plain.pose(units)
+    colour: GivenColour = None
 
 
 class _GripperSchema(_Schema):
@@ -341,11 +327,7 @@ def _scene_object(
             field=f"objects.{name}",
         )
     pose = pose_from_dict(
-        PoseSchema(
-            **entry.model_dump(
-                exclude={"size", "shape", "grasps", "mass", "density", "type", "colour"}
-            )
-        ),
+        PoseSchema(**entry.model_dump(include=set(PoseSchema.model_fields))),
         parsed.units,
     )
     if pose.position[2] < -0.005:

@@ -14,6 +14,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, StringConstraints, field_validator
 
+from demoplan.documents.colours import HEX_COLOUR
+
 __all__ = [
     "MAX_BODY_BYTES",
     "MAX_FILES",
@@ -92,7 +94,7 @@ class ShapeBody(_Body):
 
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Extent] | None = Field(min_length=3, max_length=3)
-    colour: str | None = Field(default=None, pattern=r"^#[0-9a-fA-F]{6}$")
+    colour: str | None = Field(default=None, pattern=HEX_COLOUR.pattern)
     mass: Annotated[float, Field(strict=True, gt=0, le=MAX_MASS_KG)] | None = None
     density: Annotated[float, Field(strict=True, gt=0, le=MAX_DENSITY)] | None = None
     type: TypeName | None = None
@@ -103,7 +105,7 @@ class LandmarkBody(PoseBody):
 
     shape: Literal["box", "cylinder", "sphere", "mesh"] = "box"
     size: list[Extent] | None = Field(default=None, min_length=3, max_length=3)
-    colour: str | None = Field(default=None, pattern=r"^#[0-9a-fA-F]{6}$")
+    colour: str | None = Field(default=None, pattern=HEX_COLOUR.pattern)
 
 
 class TableBody(_Body):

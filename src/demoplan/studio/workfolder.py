@@ -149,8 +149,8 @@ class WorkFolder:
         return max(written)[1] if written else None
 
     def source(self) -> dict[str, str] | None:
-        keys = ("kind", "id")
         """The Teach view's source as last chosen (``{"kind", "id"}``), or None."""
+        keys = ("kind", "id")
         try:
             data = json.loads((self.root / SOURCE_FILE).read_text(encoding="utf-8"))
         except (OSError, ValueError, RecursionError):
