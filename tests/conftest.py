@@ -114,6 +114,7 @@ SLOW = (
     "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
     "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
     "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
+    "tests/evaluation/test_ray_engine.py::",
     # Single tests of 2 s of CPU or more: 20 s or more of a quick loop's
     # --durations on two cores shared with a load of about 20 (its CPU time was
     # a ninth of its summed durations); each package keeps its other tests.

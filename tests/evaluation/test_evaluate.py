@@ -50,7 +50,7 @@ from demoplan.learning import learn
 from demoplan.learning.modelfile import load_model, model_to_dict
 from demoplan.model import TaskModel
 from tests.support.cli import invoke
-from tests.support.helpers import wait_for_signal_handlers
+from tests.support.helpers import interrupt_stopped, stopped_when, wait_for_signal_handlers
 from tests.support.lunch_box import lunch_demonstrations
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -367,10 +367,11 @@ def test_ctrl_c_keeps_the_finished_rows_and_resume_makes_the_others(
     if workers != "0":
         pytest.importorskip("ray")
     out = tmp_path / "eval"
-    # Runs enough that the evaluation is far from its end when the signal goes: about
-    # 9 s of runs either way (Ray's two workers are about 1.8 × the serial loop), so
-    # that a loaded machine pausing this test for seconds cannot let it finish first.
-    scenes = "60" if workers == "0" else "200"
+    # The evaluation runs in short steps, stopped between them (stopped_when), and
+    # the signal goes while it is stopped after its third row: it cannot finish
+    # first however long a loaded machine pauses this test, so 40 runs suffice
+    # (more than the three kept plus Ray's eight in flight).
+    scenes = "20"
     args = ["--random-scenes", scenes, "--seeds", "2", "--faults", FAULTS, "--workers", workers]
     process = subprocess.Popen(
         [
@@ -389,10 +390,12 @@ def test_ctrl_c_keeps_the_finished_rows_and_resume_makes_the_others(
     )
     wait_for_signal_handlers(process)
     journal = out / JOURNAL
-    while process.poll() is None and (not journal.exists() or journal.read_text().count("\n") < 3):
-        time.sleep(0.05)
-    assert process.poll() is None, "the evaluation ended before Ctrl-C"
-    process.send_signal(signal.SIGINT)
+
+    def three_rows() -> bool:
+        return journal.exists() and journal.read_text().count("\n") >= 3
+
+    assert stopped_when(process, three_rows), "the evaluation ended before Ctrl-C"
+    interrupt_stopped(process)
     _, err = process.communicate(timeout=120)
     assert process.returncode == 130, f"exit {process.returncode}: {err[-500:]}"
     assert f"--resume {out}" in err

@@ -6,6 +6,7 @@ import json
 import signal
 import subprocess
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -109,6 +110,48 @@ def raw(step: str) -> str:
 def write(path: Path, data: Any) -> Path:
     path.write_text(data if isinstance(data, str) else json.dumps(data), encoding="utf-8")
     return path
+
+
+def _wait_until_stopped(process: subprocess.Popen[str]) -> None:
+    """Wait until the kernel shows ``process`` stopped (``T`` in /proc's stat), or
+    ended: a SIGSTOP is sent at once but takes effect when the process is next
+    scheduled."""
+    stat = Path(f"/proc/{process.pid}/stat")
+    while process.poll() is None:
+        try:
+            state = stat.read_text().rpartition(")")[2].split()[0]
+        except (OSError, IndexError):
+            return
+        if state in ("T", "t", "Z", "X"):
+            return
+        time.sleep(0.001)
+
+
+def stopped_when(
+    process: subprocess.Popen[str], ready: Callable[[], bool], limit: float = 300.0
+) -> bool:
+    """Let ``process`` run in short steps, stopped (SIGSTOP) between them, until
+    ``ready()`` holds while it is stopped: True, and the process is left stopped
+    (:func:`interrupt_stopped` goes on); False if it ended first. Where a test
+    waits for a process to reach a point and then signals it, the process
+    cannot run to its end meanwhile, however long the test itself is paused —
+    so the process's work need not be long for the test to be sure."""
+    began = time.monotonic()
+    while process.poll() is None and time.monotonic() - began < limit:
+        process.send_signal(signal.SIGSTOP)
+        _wait_until_stopped(process)
+        if process.poll() is None and ready():
+            return True
+        process.send_signal(signal.SIGCONT)
+        time.sleep(0.02)
+    return False
+
+
+def interrupt_stopped(process: subprocess.Popen[str]) -> None:
+    """Ctrl-C (SIGINT) to a process :func:`stopped_when` left stopped: the
+    signal is pending while it is stopped and is its first event when it goes on."""
+    process.send_signal(signal.SIGINT)
+    process.send_signal(signal.SIGCONT)
 
 
 def wait_for_signal_handlers(process: subprocess.Popen[str], limit: float = 120.0) -> None:

@@ -237,7 +237,10 @@ class RayEngine:
                     else:
                         yield row
         finally:
-            for ref in pending:  # stopped (Ctrl-C, the caller closed us): the rest goes
+            # Stopped (Ctrl-C, the caller closed us): the rest goes — unless Ray has
+            # been shut down meanwhile (the session ended before this generator was
+            # closed), where ray.cancel would start a new local Ray of its own.
+            for ref in pending if ray.is_initialized() else ():
                 with contextlib.suppress(Exception):  # finished meanwhile, or its node gone
                     ray.cancel(ref, force=True)
             if started:
