@@ -131,7 +131,9 @@ def local_table_lightness(lightness: np.ndarray, side_px: float) -> np.ndarray:
     closed = cv2.morphologyEx(shrunk, cv2.MORPH_CLOSE, lines)
     # reflected at the border, not repeated: a grid line along the image's edge
     # repeated would fill half a window there
-    size = int(window) | 1
+    # at most twice the shrunk image across: an absurd --px-per-m asked for a
+    # window of kilometres (62 GB in OpenCV); wider adds only reflections
+    size = min(int(window), 2 * max(shrunk.shape) + 1) | 1
     half = size // 2
     padded = cv2.copyMakeBorder(closed, half, half, half, half, cv2.BORDER_REFLECT_101)
     median = cv2.medianBlur(padded, size)[half:-half, half:-half]
@@ -165,6 +167,8 @@ def achromatic_regions(
     ``min_area`` pixels (0.3 of the smallest block's area); the parts dropped (markers,
     parts not compact, at the border, beside a coloured block) go to ``record``."""
     side_px = float(np.sqrt(min_area / 0.3))
+    if side_px > min(image.shape[:2]):
+        return []  # no block fits in the image (an absurd --px-per-m or --side)
     blurred = np.asarray(cv2.blur(lab.astype(np.float32), (3, 3)))  # over the noise
     lightness = blurred[..., 0]
     table = local_table_lightness(lightness, side_px)
