@@ -30,9 +30,11 @@ from pathlib import Path
 
 from tests.support import forkserver
 
-SHELL_OWN = frozenset({"PWD", "OLDPWD", "SHLVL", "_"})
-"""Variables a shell sets for each command it starts (no library reads them at
-import): a request may differ from the server's environment in these."""
+SHELL_OWN = frozenset({"PWD", "OLDPWD", "SHLVL", "_", "PS1", "PS2"})
+"""Variables a shell sets for each command it starts, or drops (bash unsets the
+prompts ``PS1``/``PS2`` when it runs a script: a virtual environment's
+``activate`` exports ``PS1``) — no library reads them at import: a request may
+differ from the server's environment in these."""
 
 _SCRIPT = """\
 #!{python} -IS
