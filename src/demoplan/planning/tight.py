@@ -200,12 +200,7 @@ class _Events:
         for event, (obj, source, target) in enumerate(moves):
             options = []
             for grasp in c.grasps_of[obj]:
-                empty = 0
-                if source >= 0:
-                    empty |= c.block[source][grasp] | c.above[source]
-                if target >= 0:
-                    empty |= c.block[target][grasp] | c.exclusive[target] | 1 << target
-                demands = self._empty_at(event, obj, empty)
+                demands = self._empty_at(event, obj, _kept_empty(c, source, target, grasp))
                 if demands is not None:
                     options.append(demands)
             if not options:
@@ -271,11 +266,7 @@ class _PlayOut:
             obj, source, target = events.moves[event]
             masks = []
             for grasp in c.grasps_of[obj]:
-                mask = 0
-                if source >= 0:
-                    mask |= c.block[source][grasp] | c.above[source]
-                if target >= 0:
-                    mask |= c.block[target][grasp] | c.exclusive[target] | 1 << target
+                mask = _kept_empty(c, source, target, grasp)
                 demands = events._empty_at(event, obj, mask)
                 if demands is not None and all(
                     at_position[before] < at_position[later] for before, later in demands
@@ -458,6 +449,19 @@ def _linear(closure: list[int]) -> list[int]:
         order.append(event)
         left &= ~(1 << event)
     return order
+
+
+def _kept_empty(c: Compiled, source: int, target: int, grasp: int) -> int:
+    """The places (a bit mask) that must be empty for a move from ``source`` to
+    ``target`` (-1: none) with ``grasp``: those the grasp's hand sweeps at both
+    ends, the places above the source, the target's exclusive ones and the
+    target itself."""
+    empty = 0
+    if source >= 0:
+        empty |= c.block[source][grasp] | c.above[source]
+    if target >= 0:
+        empty |= c.block[target][grasp] | c.exclusive[target] | 1 << target
+    return empty
 
 
 def _in_the_way(c: Compiled) -> list[int]:
