@@ -65,10 +65,6 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         ((5, True), (21, True)),
     ),
     "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
-    "side_faces": (
-        "a top with its side face in one mask: the top alone covers under half of it",
-        ((536870913, True),),
-    ),
     "tilted": ("tops across a 30° view: a top missed", ((2170, True),)),
     "touching_rows": (
         "same-coloured cubes face to face are missed in rows",
@@ -108,6 +104,20 @@ def test_a_family_photograph_meets_the_issue_thresholds(
     ],
 )
 def test_a_family_not_met_yet_fails_where_it_was_seen_failing(
+    family: str, seed: int, side_given: bool
+) -> None:
+    _meets_the_thresholds(family, seed, side_given)
+
+
+@pytest.mark.parametrize(
+    ("family", "seed", "side_given"),
+    [
+        # a top whose side faces, darker and larger than it, stayed in its mask: it
+        # alone covered under half of the region (acceptance.explained_share)
+        ("side_faces", 536870913, True),
+    ],
+)
+def test_a_family_draw_once_failed_meets_the_issue_thresholds(
     family: str, seed: int, side_given: bool
 ) -> None:
     _meets_the_thresholds(family, seed, side_given)

@@ -654,7 +654,10 @@ def _squares_in_region(
             break
         squares.append(square)
         alpha = _without_square(alpha, square[0])
-    explained = explained_share(region.alpha, [params for params, _, _ in squares])
+    row0, col0 = region.offset
+    rows, cols = region.alpha.shape
+    lightness = search.lightness[row0 : row0 + rows, col0 : col0 + cols]
+    explained = explained_share(region.alpha, [params for params, _, _ in squares], lightness)
     if explained < MIN_EXPLAINED_SHARE:
         if parts is not None:
             why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
