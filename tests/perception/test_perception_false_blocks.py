@@ -429,3 +429,38 @@ def test_a_grained_top_beside_its_side_face_is_found_whole(
     assert len(found) == 1, [(f.colour, f.x, f.y, f.side) for f in found]
     assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), (x, y)) < 1.5
     assert abs(found[0].side * 1000 - side) < 2.0
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    light=st.floats(0.55, 0.75),
+    corner=st.sampled_from(((1, 1), (1, -1), (-1, 1), (-1, -1))),
+)
+def test_a_light_square_in_a_shadowed_patch_of_its_colour_is_no_block(
+    seed: int, light: float, corner: tuple[int, int]
+) -> None:
+    """A wooden table patch between dark things, most of it in shadow (``light`` of
+    the lit wood's light: 12 L* darker and more) and a lit square of it at one corner
+    (mrhan_touching, right): the square covers a fifth of the patch or less, too
+    little to be a cube's top however low the camera (its side faces would cover
+    more than four tops), so the shadowed wood is not taken for its side faces and
+    the patch is no block. The block beside it is found."""
+    rng = np.random.default_rng(seed)
+    side = float(rng.uniform(36.0, 46.0))
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = (128, 128, 128)
+    wood = np.asarray((190.0, 140.0, 90.0))
+    x0, y0 = float(rng.uniform(160, 220)), float(rng.uniform(130, 170))
+    patch = (x0 - 2.5 * side, y0 - 2.2 * side), (x0 + 2.5 * side, y0 + 2.2 * side)
+    _fill_rectangle(image, *patch, wood * light)
+    (left, top), (right, bottom) = patch
+    cx = left + side / 2 if corner[0] < 0 else right - side / 2
+    cy = top + side / 2 if corner[1] < 0 else bottom - side / 2
+    _fill_square(image, cx, cy, 0.0, side, wood)
+    block = (420.0, 80.0)
+    _fill_square(image, *block, 10.0, 40.0, np.asarray(COLOURS["blue"], dtype=float))
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == 1, [(f.colour, f.x * 1000, HEIGHT - f.y * 1000, f.side) for f in found]
+    assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), block) < 1.5

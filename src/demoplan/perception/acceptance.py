@@ -158,6 +158,16 @@ them (:func:`explained_share`); a board's or a table patch's body, as light as
 the squares fitted in it, stays unexplained."""
 
 
+MIN_TOP_SHARE = 0.2
+"""The least share of its region a cube's top covers by itself, its side faces in
+the region too: the `side_faces` family's camera (0.45 m up, focal length 630 px
+or more, its axis up to 300 px beyond the image) sweeps a top's side faces at most
+about 2.9 sides towards it, so top and side faces cover at most 1 + 2.9 × √2 ≈ 5
+tops. Under that, darker pixels are not counted as side faces: a wooden table
+with shadowed grain (mrhan_touching, right: a square of its light wood fitted
+between dark things covers 6 % of it) stays ``larger than its squares``."""
+
+
 def explained_share(
     alpha: np.ndarray, squares: list[np.ndarray], lightness: np.ndarray | None = None
 ) -> float:
@@ -166,13 +176,14 @@ def explained_share(
     With ``lightness`` (CIELAB L* over the same crop), the region's pixels
     :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* or more darker than the
     median over the squares' central halves are side faces of the squares' cubes and
-    count as explained (:data:`MIN_EXPLAINED_SHARE`)."""
+    count as explained (:data:`MIN_EXPLAINED_SHARE`) — when the squares cover at least
+    :data:`MIN_TOP_SHARE` of it by themselves."""
     if not squares:
         return 1.0
     held = alpha > 0.5
     area = int(np.count_nonzero(held))
     covered = sum(float(square[3]) ** 2 for square in squares)
-    if lightness is not None:
+    if lightness is not None and covered >= MIN_TOP_SHARE * area:
         faces = np.concatenate([_central_half(lightness, square) for square in squares])
         if faces.size:
             darker = held & (lightness <= float(np.median(faces)) - SIDE_FACE_GAP)
