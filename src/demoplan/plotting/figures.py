@@ -157,9 +157,10 @@ def plot_demonstration(
         _, ax = plt.subplots(figsize=(5, 5))
     geometry = demo.geometry()
     current = demo.initial_poses()
-    assign_colours([*(name for name, _ in demo.initial), *(step.object for step in demo.steps)])
+    given = demo.given_colours  # the file's colours, else the palette's
+    assign_colours([*(name for name, _ in demo.initial), *(s.object for s in demo.steps)], given)
     for name, pose in demo.landmarks:
-        patch = object_patch(pose, geometry.get(name), LANDMARK_COLOUR, 0.6)
+        patch = object_patch(pose, geometry.get(name), given.get(name, LANDMARK_COLOUR), 0.6)
         patch.set_hatch("//")
         patch.set_zorder(0.5)
         ax.add_patch(patch)
