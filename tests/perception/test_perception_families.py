@@ -65,6 +65,10 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         ((5, True), (21, True)),
     ),
     "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
+    "tipped_rows": (
+        "the faces of cubes lying tipped over in a row taken for tops",
+        ((1, False), (1, True)),
+    ),
     "touching_rows": (
         "same-coloured cubes face to face are missed in rows",
         ((5, True), (12, False)),
@@ -282,3 +286,41 @@ def test_shapes_and_hands_are_labelled_as_no_cubes() -> None:
     assert [e["kind"] for e in held.document["non_cubes"]] == ["hand and forearm"] * len(
         held.scene.hands
     )
+
+
+_EDGES = ((-1, -1), (-1, 1), (1, -1), (1, 1))
+"""The four long edges of a tipped row: ± its two rolled axes across."""
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_a_tipped_row_lies_on_the_table_shows_upturned_faces_and_is_no_cube(seed: int) -> None:
+    """A row of cubes lying tipped over rests on its lowest edge (no corner below the
+    table, one on it), is labelled as no cube, and shows each cube's colour: at the
+    middle of each cube seen from the camera (its highest edge, nearest the camera)
+    the photograph is nearer that cube's colour than the table's."""
+    case = family_case("tipped_rows", seed)
+    rows = case.scene.tipped
+    assert rows and len(case.label.blocks) == len(case.scene.cubes)
+    tipped = [e for e in case.document["non_cubes"] if "tipped" in e["kind"]]
+    assert len(tipped) == len(rows)
+    table = np.asarray(BACKGROUNDS[case.scene.background], dtype=float)
+    rig = case.scene.rig
+    for row in rows:
+        centre, along, first, second = row.frame()
+        heights = [float((centre + (j * first + k * second) * row.side / 2)[2]) for j, k in _EDGES]
+        assert min(heights) == pytest.approx(0.0, abs=1e-9)
+        for index, rgb in enumerate(row.rgbs):
+            middle = centre + (index - (len(row.colours) - 1) / 2) * row.side * along
+            edges = [middle + (j * first + k * second) * row.side / 2 for j, k in _EDGES]
+            highest = max(edges, key=lambda point: float(point[2]))
+            probe = (middle + highest) / 2  # on an upturned face, halfway to the top edge
+            u, v = rig.to_pixels(float(probe[0]), float(probe[1]), float(probe[2]))
+            row_px, col_px = round(rig.height_px - v - 0.5), round(u - 0.5)
+            if not (0 <= row_px < rig.height_px and 0 <= col_px < rig.width):
+                continue
+            seen = case.image[row_px, col_px].astype(float)
+            tint = seen / max(float(seen.max()), 1.0)  # the colour, whatever the shade
+            colour = np.asarray(rgb, dtype=float)
+            nearer = np.linalg.norm(tint - colour / colour.max())
+            assert nearer < np.linalg.norm(tint - table / table.max()), (seen, colour, table)
