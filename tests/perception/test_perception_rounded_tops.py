@@ -13,7 +13,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demoplan.perception.acceptance import CORNER_ROUNDING, shares_a_side, slanted_misfit
+from demoplan.perception.acceptance import CORNER_ROUNDING, shares_a_side
 from demoplan.perception.blocks import Rejection, detect_blocks
 from demoplan.perception.camera import Camera
 from demoplan.perception.labelled import load_labelled, perceive_labelled
@@ -146,69 +146,3 @@ def test_the_rounded_cubes_of_armlab_mrhan4_meet_the_issue_thresholds() -> None:
     assert run.exit_code == 0, run.error
     assert run.score.found >= 0.9 * run.score.needed, run.score
     assert run.score.false == 0, run.score
-
-
-def _slanted(side: float, squeeze: float, yaw: float, towards: float, seed: int) -> np.ndarray:
-    """A top view (as :func:`_render`, no blur) of a ``side`` px square turned by
-    ``yaw``, squeezed to ``squeeze`` of its extent along the direction ``towards``
-    (deg from the square's first edge), as a slanted camera foreshortens it, at the
-    image's centre."""
-    rng = np.random.default_rng(seed)
-    n = 4
-    xs, ys = np.meshgrid(
-        (np.arange(WIDTH * n) + 0.5) / n - WIDTH / 2, HEIGHT / 2 - (np.arange(HEIGHT * n) + 0.5) / n
-    )
-    a = math.radians(yaw + towards)
-    along, across = math.cos(a) * xs + math.sin(a) * ys, -math.sin(a) * xs + math.cos(a) * ys
-    along = along / squeeze  # the point on the square before the squeeze
-    px = math.cos(a) * along - math.sin(a) * across
-    py = math.sin(a) * along + math.cos(a) * across
-    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-    inside = (np.abs(c * px + s * py) <= side / 2) & (np.abs(-s * px + c * py) <= side / 2)
-    cover = inside.reshape(HEIGHT, n, WIDTH, n).mean(axis=(1, 3))[..., None]
-    image = (1 - cover) * np.array(TABLE, float) + cover * np.array(COLOURS["red"], float)
-    image += rng.normal(0.0, 2.0, image.shape)
-    photo: np.ndarray = np.clip(np.rint(image), 0, 255).astype(np.uint8)
-    return photo
-
-
-@settings(max_examples=15, deadline=None)
-@given(
-    side=st.floats(40.0, 60.0),
-    squeeze=st.floats(0.7, 0.8),
-    yaw=st.floats(-45.0, 45.0),
-    diagonal=st.sampled_from((45.0, 135.0)),
-    seed=st.integers(0, 1000),
-)
-def test_a_top_seen_at_a_slant_along_its_diagonal_is_found(
-    side: float, squeeze: float, yaw: float, diagonal: float, seed: int
-) -> None:
-    """A camera tilted 30° sees a far top foreshortened to 0.7–0.8 of its extent
-    (the `tilted` family's seed 2170): squeezed along a diagonal, the square is a
-    rhombus with angles of 70–80° — the sharp square misfits it (0.2 and more), the
-    parallelogram it shows does not. One block, at its centre."""
-    image = _slanted(side, squeeze, yaw, diagonal, seed)
-    found = detect_blocks(image, CAMERA)
-    assert len(found) == 1, found
-    assert math.hypot(found[0].x * 1000 - WIDTH / 2, found[0].y * 1000 - HEIGHT / 2) < 1.5
-
-
-@settings(max_examples=15, deadline=None)
-@given(
-    side=st.floats(30.0, 60.0),
-    squeeze=st.floats(0.4, 0.75),
-    yaw=st.floats(-45.0, 45.0),
-    seed=st.integers(0, 1000),
-)
-def test_a_rectangle_is_no_square_seen_at_a_slant(
-    side: float, squeeze: float, yaw: float, seed: int
-) -> None:
-    """A square squeezed along an edge is a rectangle: a lying cuboid's top, a lying
-    cube's faces seen together. Its sides differ by more than the slack a
-    parallelogram's sides may: the slanted misfit does not take it (1: no such
-    parallelogram), whatever the square fitted in it."""
-    image = _slanted(side, squeeze, yaw, 0.0, seed)
-    alpha = (np.abs(image.astype(float) - TABLE).max(axis=2) > 40).astype(float)
-    # the square a fit would start from: the rectangle's centre, its area's side
-    square = np.array([WIDTH / 2, HEIGHT / 2, yaw, side * math.sqrt(squeeze)])
-    assert slanted_misfit(alpha, square) == 1.0

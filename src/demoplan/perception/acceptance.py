@@ -20,14 +20,12 @@ __all__ = [
     "CORNER_ROUNDING",
     "MAX_BEYOND_SHARE",
     "MIN_EXPLAINED_SHARE",
-    "MIN_FORESHORTENING",
     "beyond_image",
     "explained_share",
     "free_outline_seen",
     "rounded_misfit",
     "runs_on_along_border",
     "shares_a_side",
-    "slanted_misfit",
 ]
 
 
@@ -279,127 +277,6 @@ def rounded_misfit(alpha: np.ndarray, params: np.ndarray) -> float:
         if own.any():
             best = min(best, float(np.sqrt(np.mean((fitted[own] - mask[own]) ** 2))))
     return best
-
-
-MIN_FORESHORTENING = 0.65
-"""The least ratio of a parallelogram's narrowest to its widest extent (the singular
-values of its two edges) for it to be a square top seen at a slant
-(:func:`slanted_misfit`): a camera tilted up to 30° sees a top up to about 48°
-off its axis at the image's far edge, cos 48° ≈ 0.67 (the `tilted` family's
-farthest tops). A 2:1 cuboid lying down (0.5) or one 1.7 times as long as wide is
-narrower than that."""
-PARALLEL_SLACK = 0.12
-"""How far (a share of the mean side) a quadrilateral's opposite sides may differ
-as vectors for it to be a parallelogram (the near and the far side of a top seen
-from 1 m differ by a few per cent)."""
-
-
-def _edges_fitted(outline: np.ndarray, corners: np.ndarray) -> np.ndarray | None:
-    """The corners of the quadrilateral whose sides are lines fitted (least squares)
-    to the points of ``outline`` nearest each side of the rough ``corners`` (their
-    middle 80 %: away from a rounded corner), each corner where two sides meet; none
-    when a side has too few points or two sides are parallel."""
-    lines = []
-    middle = corners.mean(axis=0)
-    for k in range(4):
-        a, b = corners[k].astype(float), corners[(k + 1) % 4].astype(float)
-        along = b - a
-        length = float(np.linalg.norm(along))
-        if length < 2:
-            return None
-        rel = outline - a
-        t = rel @ along / length**2
-        off = np.abs(along[0] * rel[:, 1] - along[1] * rel[:, 0]) / length
-        near = outline[(t > 0.1) & (t < 0.9) & (off < 3.0)]
-        if len(near) < 3:
-            return None
-        vx, vy, x0, y0 = cv2.fitLine(near.astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
-        point, direction = np.array([x0, y0], dtype=float), np.array([vx, vy], dtype=float)
-        normal = np.array([-direction[1], direction[0]])
-        if normal @ (point - middle) < 0:
-            normal = -normal
-        # the outline runs through its outermost pixels' centres: the edge is half a pixel out
-        lines.append((point + 0.5 * normal, direction))
-    quad = np.empty((4, 2))
-    for k in range(4):
-        (p, d), (q, e) = lines[k - 1], lines[k]
-        cross = float(d[0] * e[1] - d[1] * e[0])
-        if abs(cross) < 1e-6:
-            return None
-        reach = float((q - p)[0] * e[1] - (q - p)[1] * e[0]) / cross
-        quad[k] = p + reach * d
-    return quad
-
-
-def _parallelogram(alpha: np.ndarray, params: np.ndarray) -> np.ndarray | None:
-    """The corners (4 × 2, the crop's columns and rows) of the quadrilateral that the
-    mask ``alpha`` (α > ½) shows around the square ``params``, when it is a
-    parallelogram (:data:`PARALLEL_SLACK`) no narrower than
-    :data:`MIN_FORESHORTENING` and of the square's area within a third; else none."""
-    u, v, _, side = (float(p) for p in params)
-    height, width = alpha.shape
-    reach = side * 0.75 + 3.0
-    row = height - v
-    rows = slice(max(0, math.floor(row - reach)), max(0, min(height, math.ceil(row + reach))))
-    cols = slice(max(0, math.floor(u - reach)), max(0, min(width, math.ceil(u + reach))))
-    held = np.ascontiguousarray(alpha[rows, cols] > 0.5, dtype=np.uint8)
-    contours, _ = cv2.findContours(held, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    if not contours:
-        return None
-    contour = max(contours, key=cv2.contourArea)
-    corners = cv2.approxPolyDP(contour, 0.04 * cv2.arcLength(contour, True), True)
-    if len(corners) != 4 or not cv2.isContourConvex(corners):
-        return None
-    quad = _edges_fitted(contour.reshape(-1, 2).astype(float), corners.reshape(4, 2))
-    if quad is None:
-        return None
-    quad += (cols.start, rows.start)
-    first, second = quad[1] - quad[0], quad[3] - quad[0]
-    mean_side = (np.linalg.norm(first) + np.linalg.norm(second)) / 2
-    if abs(np.linalg.norm(first) - np.linalg.norm(second)) > PARALLEL_SLACK * mean_side:
-        return None  # a rectangle: a cuboid's top, a lying cube's faces
-    if (
-        np.linalg.norm((quad[2] - quad[3]) - first) > PARALLEL_SLACK * mean_side
-        or np.linalg.norm((quad[2] - quad[1]) - second) > PARALLEL_SLACK * mean_side
-    ):
-        return None
-    narrowest, widest = np.linalg.svd(np.stack([first, second], 1), compute_uv=False)[::-1]
-    area = abs(float(first[0] * second[1] - first[1] * second[0]))
-    if narrowest < MIN_FORESHORTENING * widest or not 0.75 <= area / side**2 <= 1.33:
-        return None
-    return quad
-
-
-def slanted_misfit(alpha: np.ndarray, params: np.ndarray) -> float:
-    """The RMS misfit of the mask ``alpha`` against the parallelogram it shows around
-    the square ``params`` (u, v, θ, s on the crop; u right, v up from its bottom),
-    over that parallelogram's own pixels (edges anti-aliased), or 1 when it shows
-    none (:func:`_parallelogram`). A camera tilted from straight down sees a square
-    top as a parallelogram (over a cube's size the perspective's convergence is a
-    few per cent): turned 45° to the tilt, a rhombus whose angles are 70° and 110°
-    at 30° (the `tilted` family's seed 2170 with ``--side``: the square misfits it by
-    0.201–0.208). A rectangle as narrow as a lying 2:1 cuboid's top is no such top."""
-    quad = _parallelogram(alpha, params)
-    if quad is None:
-        return 1.0
-    height, width = alpha.shape
-    lo = np.floor(quad.min(axis=0)).astype(int) - 2
-    hi = np.ceil(quad.max(axis=0)).astype(int) + 3
-    c0, r0 = max(0, int(lo[0])), max(0, int(lo[1]))
-    c1, r1 = min(width, int(hi[0])), min(height, int(hi[1]))
-    if r1 <= r0 or c1 <= c0:
-        return 1.0
-    # drawn on a canvas 4 × finer and averaged: each pixel's share inside the edges
-    # (OpenCV puts a pixel's centre at its index: a pixel k spans k ± ½)
-    fine = np.zeros((4 * (r1 - r0), 4 * (c1 - c0)), dtype=np.uint8)
-    points = np.rint(((quad - (c0, r0) + 0.5) * 4 - 0.5) * 16).astype(np.int32)
-    cv2.fillPoly(fine, [points], 1, cv2.LINE_8, shift=4)
-    drawn = fine.reshape(r1 - r0, 4, c1 - c0, 4).mean(axis=(1, 3))
-    own = drawn > 0.01
-    if not own.any():
-        return 1.0
-    mask = alpha[r0:r1, c0:c1]
-    return float(np.sqrt(np.mean((drawn[own] - mask[own]) ** 2)))
 
 
 _SIDE_POINTS = np.linspace(-0.4, 0.4, 17)

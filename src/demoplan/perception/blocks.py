@@ -42,7 +42,6 @@ from demoplan.perception.acceptance import (
     rounded_misfit,
     runs_on_along_border,
     shares_a_side,
-    slanted_misfit,
 )
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import (
@@ -594,8 +593,6 @@ def _with_rounded_corners(
 ) -> tuple[np.ndarray, float, float, float]:
     """``fit`` with its misfit measured against its square's corners rounded as a
     photographed cube's are (:func:`~demoplan.perception.acceptance.rounded_misfit`)
-    and against the parallelogram a slanted view makes of a square
-    (:func:`~demoplan.perception.acceptance.slanted_misfit`), the least taken,
     when the sharp square misfits and no side of it is shared with the rest of its
     region (:func:`~demoplan.perception.acceptance.shares_a_side`) — and only then
     decides (its size and coverage, checked first, pass)."""
@@ -606,8 +603,7 @@ def _with_rounded_corners(
         return fit
     if not 0.8 * low <= params[3] <= 1.2 * high or shares_a_side(alpha, params):
         return fit
-    misfit = min(rms, rounded_misfit(alpha, params), slanted_misfit(alpha, params))
-    return params, coverage, misfit, free
+    return params, coverage, min(rms, rounded_misfit(alpha, params)), free
 
 
 def _next_square(
