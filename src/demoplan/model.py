@@ -140,12 +140,23 @@ def demonstrated_shapes(demonstrations: Iterable[Demonstration]) -> dict[str, Ob
     return shapes
 
 
-def demonstrated_colours(demonstrations: Iterable[Demonstration]) -> dict[str, str]:
-    """Each object's (and landmark's) colour as the first demonstration giving one has it."""
+def demonstrated_colours(
+    demonstrations: Iterable[Demonstration], roles: Iterable[Role] = ()
+) -> dict[str, str]:
+    """Each object's (and landmark's) colour as the first demonstration giving one
+    has it. A role's (``plate#1``, a model's ``roles``) is the colour of the
+    instance that filled it there, under that instance's name (``plate-a``): a
+    scene names instances, and a role is filled by different ones."""
+    filled = {
+        (index, role.name): instance
+        for role in roles
+        for index, instance in enumerate(role.instances)
+        if instance is not None
+    }
     colours: dict[str, str] = {}
-    for demo in demonstrations:
+    for index, demo in enumerate(demonstrations):
         for name, colour in demo.colours:
-            colours.setdefault(name, colour)
+            colours.setdefault(filled.get((index, name), name), colour)
     return colours
 
 

@@ -147,3 +147,23 @@ def test_a_scene_naming_no_colours_is_drawn_in_the_taught_ones(tmp_path: Path) -
         "sandwich": "#ff8800",
         "lunchbox": GREEN,
     }
+
+
+def test_a_scene_draws_identical_objects_in_the_colours_taught_for_them() -> None:
+    """Instances of a type given colours (a red and a blue plate, each filling
+    either role in turn) keep them in a scene naming those instances: the
+    model's demonstrations name roles (``plate#1``), a scene names instances."""
+    from demoplan.scenes.landmarks import complete_scene
+    from demoplan.scenes.scene import load_scene
+
+    identical = Path(__file__).parents[2] / "examples" / "identical"
+    document = json.loads((identical / "table-for-two.json").read_text())
+    colours = {"plate-a": "#ff0000", "plate-b": BLUE}
+    for demonstration in document["demonstrations"]:
+        for name, colour in colours.items():
+            demonstration["objects"][name]["colour"] = colour
+    model = learn(demonstrations_from_document(document, "table-for-two.json"))
+    assert {instance for role in model.roles for instance in role.instances} >= set(colours)
+    assert any(len(set(role.instances)) > 1 for role in model.roles if role.type == "plate")
+    scene = complete_scene(load_scene(identical / "table-scene.json"), model)
+    assert {n: c for n, c in scene.given_colours.items() if n.startswith("plate")} == colours

@@ -44,7 +44,7 @@ def complete_scene(scene: Scene, model: TaskModel) -> Scene:
     shapes = {name: known[name] for name in poses if name in known}
     shapes.update(scene.landmark_geometry)
     names = {*scene.names, *poses}
-    taught = demonstrated_colours(model.demonstrations)
+    taught = demonstrated_colours(model.demonstrations, model.roles)
     colours = {n: c for n, c in taught.items() if n in names} | scene.given_colours
     return replace(
         scene,
