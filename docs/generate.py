@@ -337,8 +337,9 @@ LANDMARK = FieldTable(
         "(the spaces its walls and dividers enclose all round); a scene's are not used",
         "colour": f"{COLOUR_FORMS}: the colour every renderer draws it in, as an object's "
         "(default: the figures' sandy landmark colour; a scene's landmark without one takes "
-        "the demonstrations'); anything else is one error line naming the file and the field "
-        "(`landmarks.caddy.colour`, exit 1)",
+        "the demonstrations'). In a demonstration it may stand under `objects` where the "
+        "landmark's size does, not in both places; anything else is one error line naming "
+        "the file and the field (`landmarks.caddy.colour`, exit 1)",
     },
     noun="landmark",
 )

@@ -167,3 +167,23 @@ def test_a_scene_draws_identical_objects_in_the_colours_taught_for_them() -> Non
     assert any(len(set(role.instances)) > 1 for role in model.roles if role.type == "plate")
     scene = complete_scene(load_scene(identical / "table-scene.json"), model)
     assert {n: c for n, c in scene.given_colours.items() if n.startswith("plate")} == colours
+
+
+def test_a_landmarks_colour_stands_once_where_its_size_stands_under_objects() -> None:
+    """A landmark whose size stands under ``objects`` (as ``import`` writes it)
+    may give its colour there too: read as the landmark's, written back under
+    ``landmarks`` and read again as the same demonstration; given in both
+    places, one line naming the landmark's field, as for its size."""
+    document = coloured(lunch_demonstrations()[0], sandwich=BLUE)
+    objects = document["objects"]
+    assert "size" in objects["lunchbox"]  # where demonstration_to_dict writes it
+    document["objects"] = {"lunchbox": {**objects.pop("lunchbox"), "colour": GREEN}, **objects}
+    demo = read(document)
+    assert demo.given_colours == {"sandwich": BLUE, "lunchbox": GREEN}
+    written = demonstration_to_dict(demo)
+    assert written["landmarks"]["lunchbox"]["colour"] == GREEN
+    assert read(json.loads(json.dumps(written))) == demo
+    document["landmarks"]["lunchbox"]["colour"] = GREEN
+    with pytest.raises(InputError) as caught:
+        read(document, "lunch.json")
+    assert str(caught.value).startswith("lunch.json: landmarks.lunchbox.colour: ")

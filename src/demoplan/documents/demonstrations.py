@@ -312,13 +312,31 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
             for name, entry in parsed.objects.items()
             if entry.type is not None and entry.type != name
         ),
-        colours=tuple(
-            (name, str(entry.colour))  # read as #rrggbb (GivenColour)
-            for entries in (parsed.objects, parsed.landmarks)
-            for name, entry in entries.items()
-            if entry.colour is not None
-        ),
+        colours=_colours(parsed, source, where),
     )
+
+
+def _colours(
+    parsed: DemonstrationSchema, source: str, where: str
+) -> tuple[tuple[str, str], ...]:
+    """The colours a demonstration gives (read as ``#rrggbb``, GivenColour):
+    its objects', then its landmarks' — the order :func:`demonstration_to_dict`
+    writes them in — a landmark's standing in its entry or, where its size
+    does, under ``objects``; given in both, an :class:`InputError`."""
+    for name, entry in parsed.landmarks.items():
+        elsewhere = parsed.objects.get(name)
+        if entry.colour is not None and elsewhere is not None and elsewhere.colour is not None:
+            raise InputError(
+                "a landmark's colour is given both here and under objects; once expected",
+                source=source,
+                field=f"{where}landmarks.{name}.colour",
+            )
+    objects = [(n, e.colour) for n, e in parsed.objects.items() if n not in parsed.landmarks]
+    landmarks = [
+        (n, e.colour if e.colour is not None else getattr(parsed.objects.get(n), "colour", None))
+        for n, e in parsed.landmarks.items()
+    ]
+    return tuple((n, str(c)) for n, c in [*objects, *landmarks] if c is not None)
 
 
 def load_demonstrations(paths: Iterable[str | Path]) -> list[Demonstration]:
