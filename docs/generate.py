@@ -1386,7 +1386,8 @@ def objects_section() -> str:
             "`learn` refuses it without a pose stream among its inputs: demonstration "
             "files carry their own `objects`. An entry's `type` declares identical objects "
             "(two tracked plates of type `plate`): it is written into the demonstration "
-            "too ([learning.md](learning.md#identical-objects)). JSON or YAML. The geometry of "
+            "too ([learning.md](learning.md#identical-objects)), and so is an entry's "
+            "`colour` (an object's or a tracked landmark's). JSON or YAML. The geometry of "
             "`examples/set_table/demonstration-1.json`:",
             fenced("json", compact_json(geometry)),
             field_table(OBJECTS_FILE),

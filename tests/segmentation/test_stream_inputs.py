@@ -311,3 +311,37 @@ def test_a_bag_is_in_metres(tmp_path: Path) -> None:
         invoke("segment", tmp_path / "bag", "-o", tmp_path / "o.json", "--units", "m").exit_code
         == 0
     )
+
+
+def test_an_objects_files_colours_are_written_into_the_demonstrations(tmp_path: Path) -> None:
+    """An objects file's ``colour`` (as a demonstration file's) is written into
+    what ``segment`` and ``import`` make, for an object and a landmark alike,
+    as its ``type`` is; it was read, checked and left out."""
+    from tests.segmentation.test_import import box_states, write_recording
+
+    geometry = tmp_path / "objects.json"
+    shapes = {n: {"shape": g.shape, "size": list(g.size)} for n, g in SET_TABLE[0].objects}
+    shapes["plate"]["colour"] = [1.0, 0.0, 0.0]
+    geometry.write_text(json.dumps({"objects": shapes}))
+    stream = EXAMPLES / "streams" / "set-table-1.csv"
+    result = invoke("segment", stream, "--objects-file", geometry, "-o", tmp_path / "seg.json")
+    assert result.exit_code == 0, result.output
+    (demo,) = load_demonstrations([tmp_path / "seg.json"])
+    assert demo.given_colours == {"plate": "#ff0000"}
+
+    recording = write_recording(tmp_path / "toy.hdf5", box_states())
+    geometry.write_text(
+        json.dumps(
+            {
+                "objects": {
+                    "box": {"shape": "box", "size": [0.1, 0.1, 0.1], "colour": "#1F5FBF"},
+                    "post": {"shape": "cylinder", "size": [0.04, 0.04, 0.2], "colour": "#27ae60"},
+                }
+            }
+        )
+    )
+    result = invoke("import", recording, "-o", tmp_path / "out", "--objects-file", geometry)
+    assert result.exit_code == 0, result.output
+    (imported,) = load_demonstrations([tmp_path / "out"])
+    assert "post" in dict(imported.landmarks)
+    assert imported.given_colours == {"box": "#1f5fbf", "post": "#27ae60"}

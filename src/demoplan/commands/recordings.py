@@ -13,9 +13,11 @@ from typing import Any
 from demoplan.budget import ProgressCallback
 from demoplan.documents.demonstrations import (
     demonstration_to_dict,
+    load_object_colours,
     load_object_geometry,
     load_object_types,
     with_declared_types,
+    with_given_colours,
 )
 from demoplan.errors import InputError, UsageError
 from demoplan.fileio import (
@@ -131,6 +133,7 @@ def import_recording(
     character) and kept inside ``output``."""
     geometry = None if objects_file is None else load_object_geometry(objects_file)
     types = {} if objects_file is None else load_object_types(objects_file)
+    colours = {} if objects_file is None else load_object_colours(objects_file)
     if name_prefix is not None and not re.fullmatch(r"[\w.+-]+", name_prefix):
         raise UsageError(f"--name-prefix {name_prefix!r}: letters, digits and . _ + - expected")
     items = import_recording_details(
@@ -153,7 +156,7 @@ def import_recording(
             target, [recording, *([objects_file] if objects_file is not None else [])]
         )
         targets[item.key] = target
-        demo = with_declared_types(item.demonstration, types)
+        demo = with_given_colours(with_declared_types(item.demonstration, types), colours)
         files.append((target, dump_json(demonstration_to_dict(demo))))
     if not files:
         problems = "; ".join(f"{i.key}: {i.problem}" for i in items)

@@ -50,9 +50,11 @@ __all__ = [
     "demonstrations_from_document",
     "demonstrations_from_path",
     "load_demonstrations",
+    "load_object_colours",
     "load_object_geometry",
     "load_object_types",
     "with_declared_types",
+    "with_given_colours",
 ]
 
 logger = logging.getLogger(__name__)
@@ -183,12 +185,23 @@ def load_object_geometry(
 def load_object_types(path: Path) -> dict[str, str]:
     """The ``type`` each entry of an objects file declares (objects of their own
     type left out): a stream's identical objects (docs/formats.md)."""
+    parsed = _objects_file(path)
+    return {n: e.type for n, e in parsed.objects.items() if e.type is not None and e.type != n}
+
+
+def load_object_colours(path: Path) -> dict[str, str]:
+    """The ``colour`` (``#rrggbb``) entries of an objects file give: written into
+    the demonstrations of the streams or recording it describes (docs/formats.md)."""
+    parsed = _objects_file(path)
+    return {n: str(e.colour) for n, e in parsed.objects.items() if e.colour is not None}
+
+
+def _objects_file(path: Path) -> ObjectsFileSchema:
     source = str(path)
     try:
-        parsed = ObjectsFileSchema.model_validate(read_document(path))
+        return ObjectsFileSchema.model_validate(read_document(path))
     except ValidationError as exc:
         raise describe_validation_error(exc, source) from None
-    return {n: e.type for n, e in parsed.objects.items() if e.type is not None and e.type != n}
 
 
 def with_declared_types(demo: Demonstration, types: Mapping[str, str]) -> Demonstration:
@@ -196,6 +209,16 @@ def with_declared_types(demo: Demonstration, types: Mapping[str, str]) -> Demons
     names = {n for n, _ in demo.objects} | set(demo.moved_objects)
     declared = tuple((n, t) for n, t in types.items() if n in names)
     return replace(demo, types=declared) if declared else demo
+
+
+def with_given_colours(demo: Demonstration, colours: Mapping[str, str]) -> Demonstration:
+    """``demo`` with the colours ``colours`` gives its objects (those with a
+    geometry: a file's ``objects``) and landmarks, in the order its file lists
+    them (:func:`demonstration_to_dict`: objects, then landmarks)."""
+    landmarks = [n for n, _ in demo.landmarks]
+    names = [*(n for n, _ in demo.objects if n not in landmarks), *landmarks]
+    given = tuple((n, colours[n]) for n in names if n in colours)
+    return replace(demo, colours=given) if given else demo
 
 
 def check_geometry_names(

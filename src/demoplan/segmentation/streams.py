@@ -21,6 +21,7 @@ from demoplan.documents.demonstrations import (
     check_geometry_names,
     check_measured_demonstration,
     with_declared_types,
+    with_given_colours,
 )
 from demoplan.errors import InputError
 from demoplan.model import Demonstration, ObjectGeometry
@@ -64,6 +65,12 @@ class StreamOptions:
         from demoplan.documents.demonstrations import load_object_types
 
         return {} if self.objects_file is None else load_object_types(self.objects_file)
+
+    def colours(self) -> dict[str, str]:
+        """The colours the objects file gives (none without a file)."""
+        from demoplan.documents.demonstrations import load_object_colours
+
+        return {} if self.objects_file is None else load_object_colours(self.objects_file)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -140,6 +147,6 @@ def demonstration_from_stream(
                 field="objects",
             )
     demo = found.to_demonstration(name or stream_name(path), objects=shapes, landmarks=chosen)
-    demo = with_declared_types(demo, options.types())
+    demo = with_given_colours(with_declared_types(demo, options.types()), options.colours())
     check_measured_demonstration(demo, str(path))
     return SegmentedStream(stream, found, demo)
