@@ -187,3 +187,22 @@ def test_a_landmarks_colour_stands_once_where_its_size_stands_under_objects() ->
     with pytest.raises(InputError) as caught:
         read(document, "lunch.json")
     assert str(caught.value).startswith("lunch.json: landmarks.lunchbox.colour: ")
+
+
+def test_demonstrations_giving_one_thing_two_colours_are_learned_with_a_warning(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Each demonstration's figure draws its own colours, a scene naming none
+    takes the first's, and learning says so once per thing (a colour changes
+    no plan: not refused, as a second size is)."""
+    demos = lunch_demonstrations()
+    blue, green = coloured(demos[0], sandwich=BLUE), coloured(demos[1], sandwich=GREEN)
+    same = coloured(demos[2], sandwich=BLUE, lunchbox=GREEN)
+    with caplog.at_level("WARNING"):
+        model = learn([read(blue, "one.json"), read(green, "two.json"), read(same, "three.json")])
+    lines = [r.getMessage() for r in caplog.records if "colour" in r.getMessage()]
+    assert lines == [
+        f"two.json: objects.sandwich.colour: {GREEN} here and {BLUE} in one.json; "
+        f"a scene naming no colour for it draws it in {BLUE}"
+    ]
+    assert [d.given_colours.get("sandwich") for d in model.demonstrations] == [BLUE, GREEN, BLUE]

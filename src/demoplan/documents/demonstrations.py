@@ -53,6 +53,7 @@ __all__ = [
     "load_object_colours",
     "load_object_geometry",
     "load_object_types",
+    "warn_differing_colours",
     "with_declared_types",
     "with_given_colours",
 ]
@@ -501,6 +502,33 @@ def check_demonstrations(demos: Sequence[Demonstration]) -> None:
                     f"{landmarks[step.object]}; a movable object expected",
                     source=demo.source or demo.name,
                     field=f"steps[{index}].object",
+                )
+
+
+def warn_differing_colours(demos: Sequence[Demonstration]) -> None:
+    """One warning line for each object or landmark two demonstrations give
+    different colours: each demonstration's figure draws its own, a scene
+    naming none takes the first's (docs/formats.md, ``colour``). Not refused,
+    as a differing size is: a colour changes no plan."""
+    first: dict[str, tuple[str, str]] = {}
+    warned: set[str] = set()
+    for demo in demos:
+        landmarks = {n for n, _ in demo.landmarks}
+        for name, colour in demo.colours:
+            known, where = first.setdefault(name, (colour, demo.source or demo.name))
+            if known != colour and name not in warned:
+                warned.add(name)
+                group = "landmarks" if name in landmarks else "objects"
+                logger.warning(
+                    "%s: %s.%s.colour: %s here and %s in %s; a scene naming no colour for "
+                    "it draws it in %s",
+                    demo.source or demo.name,
+                    group,
+                    name,
+                    colour,
+                    known,
+                    where,
+                    known,
                 )
 
 

@@ -12,7 +12,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Self
 
-from demoplan.documents.demonstrations import check_demonstrations
+from demoplan.documents.demonstrations import check_demonstrations, warn_differing_colours
 from demoplan.errors import InputError, NotFittedError
 from demoplan.graphs import find_cycle
 from demoplan.learning.constraints import (
@@ -90,6 +90,7 @@ class TaskModelLearner:
     def _refit(self, demos: list[Demonstration]) -> Self:
         """Learn from ``demos``; on an error the learner keeps its previous state."""
         check_demonstrations(demos)
+        warn_differing_colours(demos)
         correspondence = corresponding_roles(demos)
         learned_from = list(correspondence.demonstrations)
         generation = generate_states(learned_from, self.settings)
