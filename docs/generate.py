@@ -316,8 +316,10 @@ GEOMETRY = FieldTable(
         "model learned from it draws it in (`learn --plot`, `show`, the studio), and of a "
         "scene that names none for it (`plan --plot`, `run --frames`, MuJoCo, the arm); the "
         "studio's Teach view writes the colours a user chose. Default: the figures' palette. "
-        "Two demonstrations giving one thing different colours are learned with a warning "
-        "line: each demonstration's figure draws its own, a scene taking the first's. An "
+        "A demonstration giving a thing none draws it in the colour another of the task's "
+        "gives (`show`'s panels, as `plan` and `run`). Two demonstrations giving one thing "
+        "different colours are learned with a warning line: each demonstration's figure "
+        "draws its own, a scene taking the first's. An "
         "instance of a type (`plate-a`, learned as a role `plate#1`) keeps its colour in a "
         "scene naming it. Anything else is one error line naming the file and the field "
         "(`objects.cup.colour`, exit 1)",

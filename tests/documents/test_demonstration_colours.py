@@ -206,3 +206,26 @@ def test_demonstrations_giving_one_thing_two_colours_are_learned_with_a_warning(
         f"a scene naming no colour for it draws it in {BLUE}"
     ]
     assert [d.given_colours.get("sandwich") for d in model.demonstrations] == [BLUE, GREEN, BLUE]
+
+
+def test_the_models_figure_draws_a_thing_in_one_colour_where_one_demonstration_gives_it(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``show --plot``'s panels: a demonstration giving the sandwich no colour
+    draws it in the colour another gives (as plan and run draw it), not in the
+    palette's."""
+    from matplotlib.figure import Figure
+
+    from demoplan.plotting import figures
+
+    demos = lunch_demonstrations()
+    model = learn([read(coloured(demos[0], sandwich=BLUE)), *demos[1:]])
+    assert [d.given_colours for d in model.demonstrations] == [{"sandwich": BLUE}, {}, {}]
+    drawn: list[Figure] = []
+    monkeypatch.setattr(figures, "save_figure", lambda figure, _: drawn.append(figure))
+    figures.save_demonstrations(model, tmp_path / "model.png", "lunch")
+    (figure,) = drawn
+    panels = figure.axes[0::2]  # each demonstration above its constraints
+    assert len(panels) == len(demos)
+    for panel in panels:
+        assert BLUE in {to_hex(p.get_facecolor(), keep_alpha=False) for p in panel.patches}

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.learning.constraints import GoalOrder
-from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
+from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel, demonstrated_colours
 from demoplan.plotting.backend import tight_layout, use_agg
 from demoplan.plotting.captions import fit_title
 from demoplan.plotting.colours import assign_colours, object_colour
@@ -144,20 +144,23 @@ def plot_demonstration(
     title: str | None = None,
     states: Sequence[str] = (),
     instances: Mapping[str, str] | None = None,
+    task_colours: Mapping[str, str] | None = None,
 ) -> Axes:
     """Draw one demonstration from above: initial poses faint, each step's placement
     solid and numbered in the order it happened (with its learned state, when
     ``states`` gives one per step: ``2 B knife``), an arrow for every move.
     ``instances`` (role → instance, :func:`demonstration_instances`): a role's
     step names the instance that filled it, under the role (``1 A plate#1``,
-    ``← plate-b``)."""
+    ``← plate-b``). Each thing in the colour the demonstration gives it, else
+    in ``task_colours``' (the colours its task's other demonstrations give),
+    else the palette's."""
     import matplotlib.pyplot as plt
 
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
     geometry = demo.geometry()
     current = demo.initial_poses()
-    given = demo.given_colours  # the file's colours, else the palette's
+    given = {**(task_colours or {}), **demo.given_colours}  # else the palette's
     assign_colours([*(name for name, _ in demo.initial), *(s.object for s in demo.steps)], given)
     for name, pose in demo.landmarks:
         patch = object_patch(pose, geometry.get(name), given.get(name, LANDMARK_COLOUR), 0.6)
@@ -292,6 +295,7 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
     import matplotlib.pyplot as plt
 
     demos = model.demonstrations
+    colours = demonstrated_colours(demos)  # one per thing where a demonstration gives none
     fig = plt.figure(figsize=(4.2 * len(demos), 7.6))
     grid = fig.add_gridspec(2, len(demos), height_ratios=[4.4, 2.8])
     panels = []
@@ -304,6 +308,7 @@ def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
                 title=title,
                 states=model.sequences[k],
                 instances=demonstration_instances(model, k),
+                task_colours=colours,
             )
         )
         plot_constraints(model, k, fig.add_subplot(grid[1, k]))
