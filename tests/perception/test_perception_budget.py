@@ -162,13 +162,17 @@ NOT_FOR_PERCEIVE = (
 )
 """What ``demoplan perceive`` of one top view has no use for: SciPy alone was a
 third of its start-up (about 0.4 s CPU), the rest is other commands' stages."""
+NOT_FOR_A_TOP_VIEW = ("demoplan.perception.calibration", "demoplan.documents.poses")
+"""Modules ``demoplan perceive`` of a top view with ``--px-per-m`` has no use for: a
+calibration's and the pose documents' models (pydantic), 0.1 s of CPU each."""
 
 
 @pytest.mark.parametrize("name", ["mrhan_phone", LARGEST])
 def test_demoplan_perceive_imports_only_what_it_needs(name: str, tmp_path: Path) -> None:
     """``demoplan perceive PHOTO --px-per-m S --origin 0 0`` — a photograph with blocks
     and one without (exit 1): the modules the whole command imported hold none of
-    :data:`NOT_FOR_PERCEIVE` (the start-up is part of the command's time)."""
+    :data:`NOT_FOR_PERCEIVE` and :data:`NOT_FOR_A_TOP_VIEW` (the start-up is part of
+    the command's time)."""
     photo = load_labelled(PHOTOS / f"{name}.json")
     args = [str(photo.image), "--px-per-m", f"{photo.px_per_m:g}", "--origin", "0", "0"]
     done = subprocess.run(
@@ -185,6 +189,7 @@ def test_demoplan_perceive_imports_only_what_it_needs(name: str, tmp_path: Path)
     assert "demoplan.perception.blocks" in imported  # it did perceive
     unwanted = [m for m in imported if m.split(".")[0] in NOT_FOR_PERCEIVE]
     unwanted += [m for m in imported if ".".join(m.split(".")[:2]) in NOT_FOR_PERCEIVE]
+    unwanted += [m for m in imported if m in NOT_FOR_A_TOP_VIEW]
     assert unwanted == []
 
 
