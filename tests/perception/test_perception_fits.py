@@ -265,8 +265,9 @@ def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
     """Shapes that are no block and blocks with a corner cut away, started from a
     Hough-like square a quarter side off at most: where the fit stops after its
     blurred squares (no sharp fit run), the sharp fit it skipped (the stop switched
-    off) ends in no block either — too little covered, or misfitting even against
-    rounded corners; and what the stopped fit reports fails the block's limits too."""
+    off) ends in no block either — far from the start's size (the sides a vote
+    looks for: within 20 %), too little covered, or misfitting even against rounded
+    corners; and what the stopped fit reports fails the block's limits too."""
     alpha = _shape_mask(kind, side, theta, width * side)
     u, v = SHAPE[1] / 2 + offset[0] * side, SHAPE[0] / 2 + offset[1] * side
     start = Hypothesis(u, v, theta + offset[2], side, 1.0)
@@ -289,4 +290,9 @@ def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
         patch.setattr(blocks, "HOPELESS_MISFIT", math.inf)
         params, coverage, rms, _ = _fit(alpha, start)
     misfit = min(rms, rounded_misfit(alpha, params))
-    assert coverage < limits.min_coverage or misfit > limits.max_residual, (params, coverage, rms)
+    sized = 0.8 * side <= params[3] <= 1.2 * side  # a size the vote looked for
+    assert not sized or coverage < limits.min_coverage or misfit > limits.max_residual, (
+        params,
+        coverage,
+        rms,
+    )
