@@ -100,8 +100,9 @@ def test_a_hough_transform_reads_the_clock_between_its_blocks_of_sides() -> None
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(hough, "MAX_CELLS", 1)  # one side at a time
         found = hough_squares(mask, (40.0, 80.0), check=lambda: readings.append(1))
-        assert len(readings) == 21  # sides 40, 42, ..., 80
-        assert found and math.isclose(found[0].side, 60.0, abs_tol=2 * hough.S_BIN)
+        assert len(readings) == len(hough.side_bins(40.0, 80.0)) == 8  # 40, 44, ..., 77.9
+        step = max(hough.S_BIN, hough.SIDE_STEP * 60.0)
+        assert found and math.isclose(found[0].side, 60.0, abs_tol=step)
 
         def out_of_time() -> None:
             raise LimitReachedError("out of time")
