@@ -184,6 +184,7 @@ from demoplan.planning.pddl import action_from_pddl, save_pddl
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
+from planning_proof import PROOF_SECONDS, proof_benchmark
 from planning_startup import startup_timings
 
 # The repository root, for tests/support/planning_families.py (the problem families
@@ -1782,6 +1783,17 @@ def startup(root: Path, console: Console) -> dict[str, Any]:
     return {**found, "targets": [asdict(t) for t in targets]}
 
 
+def proofs(console: Console) -> dict[str, Any]:
+    """The share of crowded tables proved shortest within 10 s (:mod:`planning_proof`)."""
+
+    def make(family: str, n: int, seed: int) -> Problem:
+        return parking_problem(n, seed, **HARD_OPTIONS[family])
+
+    found, targets = proof_benchmark(make, console)
+    print_targets(console, targets)
+    return {**found, "targets": [asdict(t) for t in targets]}
+
+
 def clock_read_cost() -> dict[str, float]:
     """Clock reads (``Clock.stop``, ``Clock.expired``) counted during one solve of
     crowded-stacks N = 20, seed 2 (not proved within it), and the time of one read."""
@@ -1842,6 +1854,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help="only the start-up: demoplan solve of small problems against python -c pass",
     )
     parser.add_argument(
+        "--proof",
+        action="store_true",
+        help=f"only the proofs: in-process solve with a {PROOF_SECONDS:g} s budget on the four "
+        "crowded families at N = 10, 20 on three seed sets, the share proved shortest",
+    )
+    parser.add_argument(
         "--seed", type=int, default=0, help="seed of the table and blocks problems (default 0)"
     )
     parser.add_argument(
@@ -1888,7 +1906,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     unknown = [f for f in families if f not in ALL_FAMILIES]
     if unknown or not families:
         parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(ALL_FAMILIES)}")
-    alone = args.limits or args.startup
+    alone = args.limits or args.startup or args.proof
     args.families = [f for f in families if f in FAMILIES] if not alone else []
     args.hard_families = [f for f in families if f in HARD_FAMILIES] if not alone else []
     if args.timeout is not None and args.timeout <= 0:
@@ -1971,6 +1989,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{', '.join(map(str, args.hard_sizes))}, seeds {_seed_text(args.seeds)}, "
             f"timeout {args.hard_timeout:g} s per run"
         )
+    if args.proof:
+        runs.append(
+            f"proofs: in-process solve, {PROOF_SECONDS:g} s each, crowded families at "
+            "N = 10, 20 on three seed sets"
+        )
     console.print(
         f"demoplan planning benchmark — {'quick' if args.quick else 'full'} run: "
         + "; ".join(runs)
@@ -2015,9 +2038,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         if args.hard_families:
             document["hard"] = hard_benchmark(args, planners, root, console)
-        if not args.startup:
+        if args.proof:
+            document["proof"] = proofs(console)
+        if not args.startup and not args.proof:
             document["limits"] = limit_timings(root, console)
-        if not args.limits:
+        if not args.limits and not args.proof:
             document["startup"] = startup(root, console)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")
