@@ -37,13 +37,14 @@ def tight_at_start(problem: Problem) -> tuple[TightResult, int]:
 
 def check_against(problem: Problem, shortest: int | None) -> TightResult:
     """A tight plan is valid and shortest; a refutation leaves no plan of
-    feedback-bound length (``shortest``: the exact optimum in moves, None:
-    no plan at all)."""
+    feedback-bound length, and a plan that comes with it is one move longer
+    and shortest (``shortest``: the exact optimum in moves, None: no plan at
+    all)."""
     result, feedback = tight_at_start(problem)
     if result.moves is not None:
         c = compile_problem(problem)
         validate(problem, [a for move in result.moves for a in c.move_actions(*move)])
-        assert len(result.moves) == shortest == feedback
+        assert len(result.moves) == shortest == feedback + result.refuted
     if result.refuted:
         assert shortest is None or shortest > feedback
     return result
@@ -277,3 +278,18 @@ def test_searched_play_outs_are_valid_and_shortest_on_crowded_tables(
     for moves in plans:
         assert len(moves) == feedback
         validate(problem, [a for move in moves for a in c.move_actions(*move)])
+
+
+def test_a_refuted_bound_comes_with_a_plan_one_move_longer() -> None:
+    """crowded-distractors 20 seed 2020: no plan has the feedback bound's 33
+    moves (refuted), and the greedy plan of 70 actions stayed unproved even
+    with 300 s; with one more needy object parked too, a choice's order
+    plays out in 34 moves — 68 actions, shortest."""
+    problem = parking_problem(20, 2020, **CROWDED_FAMILIES["crowded-distractors"])
+    result, feedback = tight_at_start(problem)
+    assert feedback == 33 and result.refuted
+    assert result.moves is not None and len(result.moves) == feedback + 1
+    c = compile_problem(problem)
+    validate(problem, [a for move in result.moves for a in c.move_actions(*move)])
+    plan = solve(problem, budget=Budget(max_nodes=1, timeout=None))
+    assert (len(plan.actions), plan.optimal, plan.bound, plan.search) == (68, True, 68, "tight")

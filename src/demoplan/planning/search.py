@@ -264,12 +264,13 @@ def _actions(c: Compiled, moves: list[Move]) -> tuple[Action, ...]:
 def tight_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
     """A plan as long as the feedback bound, from an order of the moves of its
     rigid shape — shortest at once — or the proof that there is none, which
-    raises the bound by a move (:func:`~demoplan.planning.tight.tight_plan`)."""
+    raises the bound by a move, and then maybe a plan one move longer —
+    shortest too (:func:`~demoplan.planning.tight.tight_plan`)."""
     tight = tight_plan(bounds, c.start, c.start_reached, clock)
-    if tight.moves is not None:
-        return findings.shortest(tight.moves, c, "tight")
     if tight.refuted:
         findings.bound += 2
+    if tight.moves is not None:
+        return findings.shortest(tight.moves, c, "tight")
     return None
 
 

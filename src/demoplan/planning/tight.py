@@ -35,7 +35,9 @@ the orders their precedences allow are searched, choice by choice
 (:mod:`~demoplan.planning.playout`: a depth-first search that sends objects
 away only when no move home is possible, and drops a state where objects
 that never move again rule out a move still to come). When every choice of F
-is refuted, no plan has as few moves as the bound: the bound is one more. The solver makes
+is refuted, no plan has as few moves as the bound: the bound is one more.
+Then plans of that length are looked for in the same way, among shapes
+with one move more (:func:`_one_move_more`): one found is shortest. The solver makes
 the check once, at the start, before any search (a few milliseconds on the
 benchmark's hard families, where it settles all 64 problems: 63 plans, one
 refutation).
@@ -83,7 +85,8 @@ _Precedences = tuple[tuple[int, int], ...]  # (earlier event, later event) pairs
 class TightResult:
     """What :func:`tight_plan` found: ``moves``, a plan exactly as long as the
     feedback bound (so shortest); or ``refuted``, no such plan exists (the
-    bound is one move more); or neither (unknown)."""
+    bound is one move more) — with ``moves`` then a plan one move longer, so
+    shortest too; or neither (unknown)."""
 
     moves: list[Move] | None = None
     refuted: bool = False
@@ -98,9 +101,10 @@ def tight_plan(
 ) -> TightResult:
     """A plan from this state with exactly as many moves as the feedback
     bound, which must also be the state's bound; or its refutation (module
-    docstring). Neither when one may exist but was not built, or the check
-    does not apply: pending subgoals, a precedence cycle too large to
-    enumerate, :data:`MAX_NODES` or the clock spent."""
+    docstring), then a plan one move longer where one is found. Neither when
+    one may exist but was not built, or the check does not apply: pending
+    subgoals, a precedence cycle too large to enumerate, :data:`MAX_NODES`
+    or the clock spent."""
     c = bounds.c
     unknown = TightResult()
     if reached != c.all_subgoals:
@@ -115,17 +119,63 @@ def tight_plan(
     if choices is None:
         return unknown
     limits = _Limits(MAX_NODES, clock)
+    shapes = (
+        _Events(bounds, positions, needy, set(itertools.chain(*parked)), forced_objects)
+        for parked in choices
+    )
+    tight = _first_play_out(shapes, positions, limits)
+    if not tight.refuted:
+        return tight
+    minimum = _minimum_feedback_sets(after)
+    assert minimum is not None  # as above
+    longer = _first_play_out(
+        _one_move_more(bounds, positions, needy, forced_objects, minimum), positions, limits
+    )
+    return TightResult(moves=longer.moves, refuted=True)
+
+
+def _one_move_more(
+    bounds: LowerBounds,
+    positions: tuple[int, ...],
+    needy: list[int],
+    forced_objects: int,
+    minimum: Iterator[tuple[tuple[int, ...], ...]],
+) -> Iterator[_Events]:
+    """Shapes of plans one move longer than the feedback bound, for when no
+    plan has its length: per minimum feedback set F, each other needy object
+    parked too (it moves twice), then each idle object without a goal that
+    the bound does not force moved once. Not every such plan has one of
+    these shapes (an object of F may move three times; F may be a larger set
+    that holds no minimum one): a plan found is shortest, none found proves
+    nothing."""
+    c = bounds.c
+    for parked in minimum:
+        feedback_set = set(itertools.chain(*parked))
+        for obj in needy:
+            if obj not in feedback_set:
+                yield _Events(bounds, positions, needy, feedback_set | {obj}, forced_objects)
+        for obj in range(len(positions)):
+            if obj not in needy and c.goal[obj] < 0 and not forced_objects >> obj & 1:
+                yield _Events(bounds, positions, needy, feedback_set, forced_objects | 1 << obj)
+
+
+def _first_play_out(
+    shapes: Iterator[_Events], positions: tuple[int, ...], limits: _Limits
+) -> TightResult:
+    """The first of ``shapes`` with an order of its events that plays out:
+    each choice's fixed order first (:meth:`_Events.realize`), then a search
+    over the orders of those that did not play out (:meth:`_Events.search`).
+    ``refuted`` when the shapes ran out and none had an order."""
+    clock = limits.clock
     orderable, complete = False, True
     in_the_way: list[int] = []  # computed when first needed: a pass over every fact
     unplayed: list[tuple[_Events, list[int]]] = []  # orders the fixed play-out missed
-    for count, parked in enumerate(choices):
+    for count, events in enumerate(shapes):
         if clock.expired():
-            return unknown
+            return TightResult()
         if count >= MAX_CHOICES:
             complete = False
             break
-        parked_set = set(itertools.chain(*parked))
-        events = _Events(bounds, positions, needy, parked_set, forced_objects)
         if events.impossible:
             continue
         try:
@@ -136,7 +186,7 @@ def tight_plan(
         if closure is None:
             continue
         orderable = True
-        in_the_way = in_the_way or _in_the_way(c)
+        in_the_way = in_the_way or _in_the_way(events.c)
         moves = events.realize(positions, closure, in_the_way)
         if moves is not None:
             return TightResult(moves=moves)
@@ -149,10 +199,10 @@ def tight_plan(
         try:
             moves = events.search(positions, closure, in_the_way, budget)
         except OutOfNodesError:
-            return unknown
+            break
         if moves is not None:
             return TightResult(moves=moves)
-    return unknown
+    return TightResult()
 
 
 def _minimum_feedback_sets(
