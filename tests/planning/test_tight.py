@@ -20,18 +20,24 @@ from demoplan.planning.playout import NodeBudget
 from demoplan.planning.problem import Problem
 from demoplan.planning.search import solve
 from demoplan.planning.strips import validate
-from demoplan.planning.tight import TightResult, tight_plan
+from demoplan.planning.tight import TightResult, searched_plan, tight_plan
 from tests.planning.test_search import small_problems
 from tests.support.planning_families import CROWDED_FAMILIES, PARKING_FAMILIES, parking_problem
 
 
 def tight_at_start(problem: Problem) -> tuple[TightResult, int]:
-    """What tight_plan says at the start, and the feedback bound (moves)."""
+    """What tight_plan says at the start, then searched_plan where it left
+    something open (as the solver's tight and orders phases do), and the
+    feedback bound (moves)."""
     c = compile_problem(problem)
     bounds = LowerBounds(c)
     # No clock: the ordering stops at its own limits of choices and nodes, so
     # its answer does not depend on the machine's speed.
-    result = tight_plan(bounds, c.start, c.start_reached, Clock(Budget()))
+    clock = Clock(Budget())
+    result = tight_plan(bounds, c.start, c.start_reached, clock)
+    if result.moves is None and (result.refuted or result.ordered):
+        moves = searched_plan(bounds, c.start, c.start_reached, clock, result.refuted)
+        result = TightResult(moves=moves, refuted=result.refuted, ordered=result.ordered)
     return result, bounds.feedback(c.start, c.start_reached)
 
 
@@ -204,7 +210,7 @@ def test_orders_the_fixed_play_out_misses_are_searched(
     c = compile_problem(problem)
     validate(problem, [a for move in result.moves for a in c.move_actions(*move)])
     monkeypatch.setattr(tight, "SEARCH_NODES", 0)  # the fixed orders alone
-    assert tight_at_start(problem)[0] == TightResult()
+    assert tight_at_start(problem)[0] == TightResult(ordered=True)
 
 
 def searched_plans(problem: Problem) -> tuple[list[list[Move]], int] | None:

@@ -61,7 +61,7 @@ from demoplan.planning.playout import (
     Ranking,
 )
 
-__all__ = ["TightResult", "tight_plan"]
+__all__ = ["TightResult", "searched_plan", "tight_plan"]
 
 MAX_CHOICES = 512
 """Choices of the feedback set tried before giving up (no refutation)."""
@@ -85,11 +85,13 @@ _Precedences = tuple[tuple[int, int], ...]  # (earlier event, later event) pairs
 class TightResult:
     """What :func:`tight_plan` found: ``moves``, a plan exactly as long as the
     feedback bound (so shortest); or ``refuted``, no such plan exists (the
-    bound is one move more) — with ``moves`` then a plan one move longer, so
-    shortest too; or neither (unknown)."""
+    bound is one move more); or neither (unknown) — ``ordered`` then says
+    whether some choice's moves had an order, whose play-out
+    :func:`searched_plan` may still find."""
 
     moves: list[Move] | None = None
     refuted: bool = False
+    ordered: bool = False
 
 
 class _GiveUpError(Exception):
@@ -100,38 +102,63 @@ def tight_plan(
     bounds: LowerBounds, positions: tuple[int, ...], reached: int, clock: Clock
 ) -> TightResult:
     """A plan from this state with exactly as many moves as the feedback
-    bound, which must also be the state's bound; or its refutation (module
-    docstring), then a plan one move longer where one is found. Neither when
-    one may exist but was not built, or the check does not apply: pending
-    subgoals, a precedence cycle too large to enumerate, :data:`MAX_NODES`
-    or the clock spent."""
-    c = bounds.c
-    unknown = TightResult()
-    if reached != c.all_subgoals:
-        return unknown
-    graph = bounds.precedence_graph(positions, reached)
-    if graph is None:
-        return unknown
-    needy, after, forced_objects = graph
-    if bounds.estimate(positions, reached) != bounds.feedback(positions, reached):
-        return unknown  # another bound is larger: a plan that long has no rigid shape
-    choices = _minimum_feedback_sets(after)
-    if choices is None:
-        return unknown
-    limits = _Limits(MAX_NODES, clock)
+    bound, which must also be the state's bound, from each choice's fixed
+    order; or its refutation (module docstring). Neither when one may exist
+    but was not built, or the check does not apply: pending subgoals, a
+    precedence cycle too large to enumerate, :data:`MAX_NODES` or the clock
+    spent."""
+    shape = _rigid_shape(bounds, positions, reached)
+    if shape is None:
+        return TightResult()
+    needy, forced_objects, choices = shape
     shapes = (
         _Events(bounds, positions, needy, set(itertools.chain(*parked)), forced_objects)
         for parked in choices
     )
-    tight = _first_play_out(shapes, positions, limits)
-    if not tight.refuted:
-        return tight
-    minimum = _minimum_feedback_sets(after)
-    assert minimum is not None  # as above
-    longer = _first_play_out(
-        _one_move_more(bounds, positions, needy, forced_objects, minimum), positions, limits
+    return _first_play_out(shapes, positions, _Limits(MAX_NODES, clock), fixed=True, search=False)
+
+
+def searched_plan(
+    bounds: LowerBounds, positions: tuple[int, ...], reached: int, clock: Clock, refuted: bool
+) -> list[Move] | None:
+    """What :func:`tight_plan` left open, with more work: where it
+    ``refuted`` the feedback bound, a plan one move longer (:func:`_one_move_more`:
+    each shape's fixed order, then the orders searched); else a plan as long
+    as the bound from the orders its choices allow, searched
+    (:mod:`~demoplan.planning.playout`). Either is shortest; None proves
+    nothing."""
+    shape = _rigid_shape(bounds, positions, reached)
+    if shape is None:
+        return None
+    needy, forced_objects, choices = shape
+    limits = _Limits(MAX_NODES, clock)
+    if refuted:
+        shapes = _one_move_more(bounds, positions, needy, forced_objects, choices)
+        return _first_play_out(shapes, positions, limits, fixed=True, search=True).moves
+    minimum = (
+        _Events(bounds, positions, needy, set(itertools.chain(*parked)), forced_objects)
+        for parked in choices
     )
-    return TightResult(moves=longer.moves, refuted=True)
+    return _first_play_out(minimum, positions, limits, fixed=False, search=True).moves
+
+
+def _rigid_shape(
+    bounds: LowerBounds, positions: tuple[int, ...], reached: int
+) -> tuple[list[int], int, Iterator[tuple[tuple[int, ...], ...]]] | None:
+    """The needy objects, the idle ones forced to move (a mask) and the
+    minimum feedback sets of a plan as long as the feedback bound; None where
+    the check does not apply."""
+    c = bounds.c
+    if reached != c.all_subgoals:
+        return None
+    graph = bounds.precedence_graph(positions, reached)
+    if graph is None:
+        return None
+    needy, after, forced_objects = graph
+    if bounds.estimate(positions, reached) != bounds.feedback(positions, reached):
+        return None  # another bound is larger: a plan that long has no rigid shape
+    choices = _minimum_feedback_sets(after)
+    return None if choices is None else (needy, forced_objects, choices)
 
 
 def _one_move_more(
@@ -160,12 +187,18 @@ def _one_move_more(
 
 
 def _first_play_out(
-    shapes: Iterator[_Events], positions: tuple[int, ...], limits: _Limits
+    shapes: Iterator[_Events],
+    positions: tuple[int, ...],
+    limits: _Limits,
+    *,
+    fixed: bool,
+    search: bool,
 ) -> TightResult:
     """The first of ``shapes`` with an order of its events that plays out:
-    each choice's fixed order first (:meth:`_Events.realize`), then a search
-    over the orders of those that did not play out (:meth:`_Events.search`).
-    ``refuted`` when the shapes ran out and none had an order."""
+    with ``fixed``, each choice's fixed order (:meth:`_Events.realize`); with
+    ``search``, then a search over the orders of those not played out
+    (:meth:`_Events.search`). ``refuted`` when the shapes ran out and none
+    had an order; else ``ordered`` says whether one had."""
     clock = limits.clock
     orderable, complete = False, True
     in_the_way: list[int] = []  # computed when first needed: a pass over every fact
@@ -187,10 +220,10 @@ def _first_play_out(
             continue
         orderable = True
         in_the_way = in_the_way or _in_the_way(events.c)
-        moves = events.realize(positions, closure, in_the_way)
+        moves = events.realize(positions, closure, in_the_way) if fixed else None
         if moves is not None:
             return TightResult(moves=moves)
-        if len(unplayed) < SEARCHED_ORDERS and len(events.moves) <= MAX_EVENTS:
+        if search and len(unplayed) < SEARCHED_ORDERS and len(events.moves) <= MAX_EVENTS:
             unplayed.append((events, closure))
     if complete and not orderable:
         return TightResult(refuted=True)
@@ -202,7 +235,7 @@ def _first_play_out(
             break
         if moves is not None:
             return TightResult(moves=moves)
-    return TightResult()
+    return TightResult(ordered=orderable)
 
 
 def _minimum_feedback_sets(
