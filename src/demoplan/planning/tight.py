@@ -131,6 +131,8 @@ def searched_plan(
     if shape is None:
         return None
     needy, forced_objects, choices = shape
+    if not refuted and bounds.feedback(positions, reached) > MAX_EVENTS:
+        return None  # orders too long to search
     limits = _Limits(MAX_NODES, clock)
     if refuted:
         shapes = _one_move_more(bounds, positions, needy, forced_objects, choices)
