@@ -120,6 +120,7 @@ From the repository root, with demoplan installed (``pip install -e ".[dev]"``):
     python benchmarks/planning.py --fd /path/to/fast-downward.py --timeout 30
     python benchmarks/planning.py --limits         # only the limits below, ~1 min
     python benchmarks/planning.py --startup        # only the start-up figure, ~20 s
+    python benchmarks/planning.py --proof          # only the proofs within 10 s, ~2 min
 
 The crowded families (issue 44) run with them: ``crowded-swaps``,
 ``crowded-distractors`` and ``crowded-stacks``
@@ -132,14 +133,15 @@ runs them alone. Their hardest draws against lama-first are checked in by
 
 Start-up (issue 44)
 -------------------
-Every run that is not ``--limits`` ends with, and ``--startup`` runs alone
+Every run that is not ``--limits`` or ``--proof`` ends with, and ``--startup`` runs alone
 (:mod:`planning_startup`): ``demoplan solve`` of the paper's example,
 ``table_problem(7)`` and a 10-object ``parking`` draw, whole process, against
 ``python -c pass``, interleaved, median of 11; the target is within 2×.
 
 Every limit inside every loop (issue 44)
 ----------------------------------------
-Every run ends with, and ``--limits`` runs alone: ``demoplan solve`` of a
+Every run but ``--startup`` and ``--proof`` ends with, and ``--limits`` runs
+alone: ``demoplan solve`` of a
 1,000-object ring (:func:`tests.support.planning_families.ring_problem`: each object
 to its neighbour's goal place, each goal place blocking its neighbour's grasp)
 with ``--timeout 0`` and with ``--max-nodes 1 --timeout inf`` — whole-process
@@ -150,6 +152,14 @@ compilation, the reasons without search and successor generation: 14.8 s and
 in-process ``solve`` of crowded-stacks N = 20 (seed 2, the default 2 s
 budget) counted, times the cost of one read (``Clock.stop``, timed over a
 million), as a share of that solve's time.
+
+Proofs within 10 s (issue 44)
+-----------------------------
+``--proof`` runs alone (:mod:`planning_proof`): in-process ``solve`` with a
+10 s budget on the four crowded families at N = 10 and 20, on seeds 0–3,
+1000·s + N and 500–503 (the last chosen before any run on them); per
+problem the plan's length, its bound, proved or not, wall and CPU time, and
+the share proved shortest per seed set and in all against 95 %.
 """
 
 from __future__ import annotations
@@ -184,6 +194,7 @@ from demoplan.planning.pddl import action_from_pddl, save_pddl
 from demoplan.planning.problem import Action, Problem
 from demoplan.planning.strips import validate
 from demoplan.planning.xml import load_problem, save_problem
+from planning_proof import PROOF_SECONDS, proof_benchmark
 from planning_startup import startup_timings
 
 # The repository root, for tests/support/planning_families.py (the problem families
@@ -1782,6 +1793,17 @@ def startup(root: Path, console: Console) -> dict[str, Any]:
     return {**found, "targets": [asdict(t) for t in targets]}
 
 
+def proofs(console: Console) -> dict[str, Any]:
+    """The share of crowded tables proved shortest within 10 s (:mod:`planning_proof`)."""
+
+    def make(family: str, n: int, seed: int) -> Problem:
+        return parking_problem(n, seed, **HARD_OPTIONS[family])
+
+    found, targets = proof_benchmark(make, console)
+    print_targets(console, targets)
+    return {**found, "targets": [asdict(t) for t in targets]}
+
+
 def clock_read_cost() -> dict[str, float]:
     """Clock reads (``Clock.stop``, ``Clock.expired``) counted during one solve of
     crowded-stacks N = 20, seed 2 (not proved within it), and the time of one read."""
@@ -1842,6 +1864,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help="only the start-up: demoplan solve of small problems against python -c pass",
     )
     parser.add_argument(
+        "--proof",
+        action="store_true",
+        help=f"only the proofs: in-process solve with a {PROOF_SECONDS:g} s budget on the four "
+        "crowded families at N = 10, 20 on three seed sets, the share proved shortest",
+    )
+    parser.add_argument(
         "--seed", type=int, default=0, help="seed of the table and blocks problems (default 0)"
     )
     parser.add_argument(
@@ -1888,7 +1916,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     unknown = [f for f in families if f not in ALL_FAMILIES]
     if unknown or not families:
         parser.error(f"--families: {unknown or 'none'}; one or more of {', '.join(ALL_FAMILIES)}")
-    alone = args.limits or args.startup
+    alone = args.limits or args.startup or args.proof
     args.families = [f for f in families if f in FAMILIES] if not alone else []
     args.hard_families = [f for f in families if f in HARD_FAMILIES] if not alone else []
     if args.timeout is not None and args.timeout <= 0:
@@ -1971,6 +1999,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{', '.join(map(str, args.hard_sizes))}, seeds {_seed_text(args.seeds)}, "
             f"timeout {args.hard_timeout:g} s per run"
         )
+    if args.proof:
+        runs.append(
+            f"proofs: in-process solve, {PROOF_SECONDS:g} s each, crowded families at "
+            "N = 10, 20 on three seed sets"
+        )
     console.print(
         f"demoplan planning benchmark — {'quick' if args.quick else 'full'} run: "
         + "; ".join(runs)
@@ -2015,9 +2048,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         if args.hard_families:
             document["hard"] = hard_benchmark(args, planners, root, console)
-        if not args.startup:
+        if args.proof:
+            document["proof"] = proofs(console)
+        if not args.startup and not args.proof:
             document["limits"] = limit_timings(root, console)
-        if not args.limits:
+        if not args.limits and not args.proof:
             document["startup"] = startup(root, console)
     total = time.perf_counter() - started
     console.print(f"Total benchmark time: {total:.1f} s")

@@ -48,7 +48,7 @@ from demoplan.planning.parts import (
 )
 from demoplan.planning.plateau import plateau_moves
 from demoplan.planning.problem import Action, Plan, Problem
-from demoplan.planning.tight import tight_plan
+from demoplan.planning.tight import TightResult, searched_plan, tight_plan
 
 __all__ = [
     "PHASES",
@@ -146,7 +146,8 @@ def solve(
     """A plan for ``problem`` within ``budget``: shortest where it can be proved.
 
     ``astar`` runs the phases of :data:`PHASES` in turn, sharing the budget:
-    a tight plan (or its refutation), a greedy first plan, a dive for a plan
+    a tight plan (or its refutation), a greedy first plan, what the tight
+    phase left open searched further, a dive for a plan
     as long as the bound, groups that never meet solved apart, weighted A*
     passes that shorten the plan, and A* over moves for the proof.
 
@@ -161,9 +162,7 @@ def solve(
     return solve_within(problem, search, Clock(budget), optimal=optimal)
 
 
-def solve_within(
-    problem: Problem, search: str, clock: Clock, *, optimal: bool = False
-) -> Plan:
+def solve_within(problem: Problem, search: str, clock: Clock, *, optimal: bool = False) -> Plan:
     """:func:`solve` on a clock already running (a command's, or its share of
     one): the compilation and the checks for reasons without search count
     against it too."""
@@ -230,6 +229,7 @@ class Findings:
     bound: int  # a proven lower bound, in actions: no plan is shorter
     plan: tuple[Action, ...] | None = None  # the best plan found so far
     found_by: str = ""  # the phase that found it
+    tight: TightResult | None = None  # what the tight phase found, where it ran
 
     def elapsed(self) -> float:
         """Seconds since the search started."""
@@ -266,11 +266,25 @@ def tight_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findin
     rigid shape — shortest at once — or the proof that there is none, which
     raises the bound by a move (:func:`~demoplan.planning.tight.tight_plan`)."""
     tight = tight_plan(bounds, c.start, c.start_reached, clock)
+    findings.tight = tight
     if tight.moves is not None:
         return findings.shortest(tight.moves, c, "tight")
     if tight.refuted:
         findings.bound += 2
     return None
+
+
+def orders_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
+    """Once there is a first plan, what the tight phase left open, with more
+    work (:func:`~demoplan.planning.tight.searched_plan`): after a refutation,
+    a plan one move longer; where an order of the moves existed but its fixed
+    play-out did not, a search over the orders. Either is as long as the
+    bound, so shortest."""
+    tight = findings.tight
+    if tight is None or not (tight.refuted or tight.ordered):
+        return None
+    moves = searched_plan(bounds, c.start, c.start_reached, clock, tight.refuted)
+    return None if moves is None else findings.shortest(moves, c, "tight")
 
 
 def greedy_phase(c: Compiled, bounds: LowerBounds, clock: Clock, findings: Findings) -> Plan | None:
@@ -372,6 +386,7 @@ _IMPROVE_SHARE = 0.2
 PHASES: list[PhaseRow] = [
     PhaseRow("tight", tight_phase, 0.25, bounded=True),
     PhaseRow("greedy", greedy_phase, 1.0),
+    PhaseRow("orders", orders_phase, 0.3, bounded=True),
     PhaseRow("plateau", dive_phase, 0.3),
     PhaseRow("parts", parts_phase, 0.4),
     *(

@@ -30,8 +30,14 @@ and branches on the event with the fewest grasps left.
 When an order is found it is played out with the real operators (an object
 sent away goes to a free place that leaves each later move of the order a
 grasp, and blocks the fewest of their grasps): a plan
-as long as the bound, so shortest. When every choice of F is refuted, no
-plan has as few moves as the bound: the bound is one more. The solver makes
+as long as the bound, so shortest. Where no choice's fixed order plays out,
+the orders their precedences allow are searched, choice by choice
+(:mod:`~demoplan.planning.playout`: a depth-first search that sends objects
+away only when no move home is possible, and drops a state where objects
+that never move again rule out a move still to come). When every choice of F
+is refuted, no plan has as few moves as the bound: the bound is one more.
+Then plans of that length are looked for in the same way, among shapes
+with one move more (:func:`_one_move_more`): one found is shortest. The solver makes
 the check once, at the start, before any search (a few milliseconds on the
 benchmark's hard families, where it settles all 64 problems: 63 plans, one
 refutation).
@@ -40,15 +46,22 @@ refutation).
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 from demoplan.graphs import acyclic, strongly_connected
 from demoplan.planning.bounds import MAX_EXACT_COMPONENT, LowerBounds, Move
 from demoplan.planning.budget import Clock
 from demoplan.planning.compiled import Compiled
+from demoplan.planning.playout import (
+    MAX_EVENTS,
+    NodeBudget,
+    OutOfNodesError,
+    PlayOutSearch,
+    Ranking,
+)
 
-__all__ = ["TightResult", "tight_plan"]
+__all__ = ["TightResult", "searched_plan", "tight_plan"]
 
 MAX_CHOICES = 512
 """Choices of the feedback set tried before giving up (no refutation)."""
@@ -59,6 +72,11 @@ PARKING_TRIED = 4
 PLAY_OUTS = 256
 """Dead ends of one order's play-out before it is given up (unknown, not a
 refutation: the order exists, its play-out was not found)."""
+SEARCH_NODES = 20_000
+"""States the search over orders (:mod:`~demoplan.planning.playout`) may
+visit, over all choices, where the fixed order's play-out finds none."""
+SEARCHED_ORDERS = 64
+"""Orders (one per choice of the feedback set) kept for that search."""
 
 _Precedences = tuple[tuple[int, int], ...]  # (earlier event, later event) pairs
 
@@ -67,10 +85,13 @@ _Precedences = tuple[tuple[int, int], ...]  # (earlier event, later event) pairs
 class TightResult:
     """What :func:`tight_plan` found: ``moves``, a plan exactly as long as the
     feedback bound (so shortest); or ``refuted``, no such plan exists (the
-    bound is one move more); or neither (unknown)."""
+    bound is one move more); or neither (unknown) — ``ordered`` then says
+    whether some choice's moves had an order, whose play-out
+    :func:`searched_plan` may still find."""
 
     moves: list[Move] | None = None
     refuted: bool = False
+    ordered: bool = False
 
 
 class _GiveUpError(Exception):
@@ -81,45 +102,142 @@ def tight_plan(
     bounds: LowerBounds, positions: tuple[int, ...], reached: int, clock: Clock
 ) -> TightResult:
     """A plan from this state with exactly as many moves as the feedback
-    bound, which must also be the state's bound; or its refutation (module
-    docstring). Neither when one may exist but was not built, or the check
-    does not apply: pending subgoals, a precedence cycle too large to
-    enumerate, :data:`MAX_NODES` or the clock spent."""
+    bound, which must also be the state's bound, from each choice's fixed
+    order; or its refutation (module docstring). Neither when one may exist
+    but was not built, or the check does not apply: pending subgoals, a
+    precedence cycle too large to enumerate, :data:`MAX_NODES` or the clock
+    spent."""
+    shape = _rigid_shape(bounds, positions, reached)
+    if shape is None:
+        return TightResult()
+    needy, forced_objects, choices = shape
+    shapes = (
+        _Events(bounds, positions, needy, set(itertools.chain(*parked)), forced_objects)
+        for parked in choices
+    )
+    return _first_play_out(shapes, positions, _Limits(MAX_NODES, clock), fixed=True, search=False)
+
+
+def searched_plan(
+    bounds: LowerBounds, positions: tuple[int, ...], reached: int, clock: Clock, refuted: bool
+) -> list[Move] | None:
+    """What :func:`tight_plan` left open, with more work: where it
+    ``refuted`` the feedback bound, a plan one move longer (:func:`_one_move_more`:
+    each shape's fixed order, then the orders searched); else a plan as long
+    as the bound from the orders its choices allow, searched
+    (:mod:`~demoplan.planning.playout`). Either is shortest; None proves
+    nothing."""
+    shape = _rigid_shape(bounds, positions, reached)
+    if shape is None:
+        return None
+    needy, forced_objects, choices = shape
+    if not refuted and bounds.feedback(positions, reached) > MAX_EVENTS:
+        return None  # orders too long to search
+    limits = _Limits(MAX_NODES, clock)
+    if refuted:
+        shapes = _one_move_more(bounds, positions, needy, forced_objects, choices)
+        return _first_play_out(shapes, positions, limits, fixed=True, search=True).moves
+    minimum = (
+        _Events(bounds, positions, needy, set(itertools.chain(*parked)), forced_objects)
+        for parked in choices
+    )
+    return _first_play_out(minimum, positions, limits, fixed=False, search=True).moves
+
+
+def _rigid_shape(
+    bounds: LowerBounds, positions: tuple[int, ...], reached: int
+) -> tuple[list[int], int, Iterator[tuple[tuple[int, ...], ...]]] | None:
+    """The needy objects, the idle ones forced to move (a mask) and the
+    minimum feedback sets of a plan as long as the feedback bound; None where
+    the check does not apply."""
     c = bounds.c
-    unknown = TightResult()
     if reached != c.all_subgoals:
-        return unknown
+        return None
     graph = bounds.precedence_graph(positions, reached)
     if graph is None:
-        return unknown
+        return None
     needy, after, forced_objects = graph
     if bounds.estimate(positions, reached) != bounds.feedback(positions, reached):
-        return unknown  # another bound is larger: a plan that long has no rigid shape
+        return None  # another bound is larger: a plan that long has no rigid shape
     choices = _minimum_feedback_sets(after)
-    if choices is None:
-        return unknown
-    limits = _Limits(MAX_NODES, clock)
-    orderable = False
+    return None if choices is None else (needy, forced_objects, choices)
+
+
+def _one_move_more(
+    bounds: LowerBounds,
+    positions: tuple[int, ...],
+    needy: list[int],
+    forced_objects: int,
+    minimum: Iterator[tuple[tuple[int, ...], ...]],
+) -> Iterator[_Events]:
+    """Shapes of plans one move longer than the feedback bound, for when no
+    plan has its length: per minimum feedback set F, each other needy object
+    parked too (it moves twice), then each idle object without a goal that
+    the bound does not force moved once. Not every such plan has one of
+    these shapes (an object of F may move three times; F may be a larger set
+    that holds no minimum one): a plan found is shortest, none found proves
+    nothing."""
+    c = bounds.c
+    for parked in minimum:
+        feedback_set = set(itertools.chain(*parked))
+        for obj in needy:
+            if obj not in feedback_set:
+                yield _Events(bounds, positions, needy, feedback_set | {obj}, forced_objects)
+        for obj in range(len(positions)):
+            if obj not in needy and c.goal[obj] < 0 and not forced_objects >> obj & 1:
+                yield _Events(bounds, positions, needy, feedback_set, forced_objects | 1 << obj)
+
+
+def _first_play_out(
+    shapes: Iterator[_Events],
+    positions: tuple[int, ...],
+    limits: _Limits,
+    *,
+    fixed: bool,
+    search: bool,
+) -> TightResult:
+    """The first of ``shapes`` with an order of its events that plays out:
+    with ``fixed``, each choice's fixed order (:meth:`_Events.realize`); with
+    ``search``, then a search over the orders of those not played out
+    (:meth:`_Events.search`). ``refuted`` when the shapes ran out and none
+    had an order; else ``ordered`` says whether one had."""
+    clock = limits.clock
+    orderable, complete = False, True
     in_the_way: list[int] = []  # computed when first needed: a pass over every fact
-    for count, parked in enumerate(choices):
-        if count >= MAX_CHOICES or clock.expired():
-            return unknown
-        parked_set = set(itertools.chain(*parked))
-        events = _Events(bounds, positions, needy, parked_set, forced_objects)
+    unplayed: list[tuple[_Events, list[int]]] = []  # orders the fixed play-out missed
+    for count, events in enumerate(shapes):
+        if clock.expired():
+            return TightResult()
+        if count >= MAX_CHOICES:
+            complete = False
+            break
         if events.impossible:
             continue
         try:
             closure = _order(events.options, events.base, limits)
         except _GiveUpError:
-            return unknown
+            complete = False
+            break
         if closure is None:
             continue
         orderable = True
-        in_the_way = in_the_way or _in_the_way(c)
-        moves = events.realize(positions, closure, in_the_way)
+        in_the_way = in_the_way or _in_the_way(events.c)
+        moves = events.realize(positions, closure, in_the_way) if fixed else None
         if moves is not None:
             return TightResult(moves=moves)
-    return unknown if orderable else TightResult(refuted=True)
+        if search and len(unplayed) < SEARCHED_ORDERS and len(events.moves) <= MAX_EVENTS:
+            unplayed.append((events, closure))
+    if complete and not orderable:
+        return TightResult(refuted=True)
+    budget = NodeBudget(SEARCH_NODES, clock)
+    for events, closure in unplayed:
+        try:
+            moves = events.search(positions, closure, in_the_way, budget)
+        except OutOfNodesError:
+            break
+        if moves is not None:
+            return TightResult(moves=moves)
+    return TightResult(ordered=orderable)
 
 
 def _minimum_feedback_sets(
@@ -228,6 +346,45 @@ class _Events:
         playing = _PlayOut(self, _linear(closure), in_the_way)
         return playing.run(at, occupied, to_fill)
 
+    def search(
+        self,
+        positions: tuple[int, ...],
+        closure: list[int],
+        in_the_way: list[int],
+        budget: NodeBudget,
+    ) -> list[Move] | None:
+        """The events in any order ``closure`` allows, by depth-first search
+        (:class:`~demoplan.planning.playout.PlayOutSearch`): where the fixed
+        order of :meth:`realize` has no play-out, another order may."""
+        c = self.c
+        masks = []  # per event: what each grasp no unmoved object rules out keeps empty
+        for event, (obj, source, target) in enumerate(self.moves):
+            kept = [_kept_empty(c, source, target, g) for g in c.grasps_of[obj]]
+            masks.append([mask for mask in kept if self._empty_at(event, obj, mask) is not None])
+        per_event = [_waiting([event_masks]) for event_masks in masks]
+        to_fill = 0
+        for place in self.final_occupant:
+            to_fill |= 1 << place
+
+        def ranking(width: int) -> Ranking:
+            def rank(
+                obj: int, source: int, others: int, grasps: list[int], done: int, to_fill: int
+            ) -> list[int]:
+                killing = hitting = 0
+                for event, (every, union) in enumerate(per_event):
+                    if not done >> event & 1 and self.moves[event][0] != obj:
+                        killing |= every
+                        hitting |= union
+                waiting = killing, hitting
+                return _ranked_places(
+                    c, obj, source, others, grasps, to_fill, waiting, in_the_way, width
+                )
+
+            return rank
+
+        search = PlayOutSearch(c, self.moves, closure, masks, ranking)
+        return search.run(positions, to_fill, range(1, PARKING_TRIED + 1), budget)
+
     def _empty_at(self, event: int, obj: int, places: int) -> _Precedences | None:
         """The precedences that keep ``places`` empty at ``event`` (a move of
         ``obj``), or None if an object that never moves stands at one."""
@@ -329,33 +486,23 @@ class _PlayOut:
         still to be filled, stand on no other place (an object put on top
         keeps the one below from being grasped), block no grasp of those
         later events, and are in the way of the fewest grasps at all."""
-        c = self.events.c
         obj = self.events.moves[self.order[index]][0]
-        killing = hitting = 0  # places taking a later event's last grasp, or any grasp
+        waiting = []  # the grasps' masks of each later event, until the object's next
         for position in range(index + 1, len(self.order)):
             if self.events.moves[self.order[position]][0] == obj:
                 break
-            every = -1
-            for mask in self.forbidden[position]:
-                every &= mask
-                hitting |= mask
-            killing |= every if self.forbidden[position] else 0
-        ranked = []
-        for place in range(len(c.locations)):
-            if place in (source, c.goal[obj]) or not any(
-                c.put_ok(others, place, g) for g in grasps
-            ):
-                continue  # its goal comes with its own move
-            key = (
-                killing >> place & 1,
-                to_fill >> place & 1,
-                c.below[place] != 0,
-                hitting >> place & 1,
-                self.in_the_way[place],
-            )
-            ranked.append((key, place))
-        ranked.sort()
-        return [place for _, place in ranked[:PARKING_TRIED]]
+            waiting.append(self.forbidden[position])
+        return _ranked_places(
+            self.events.c,
+            obj,
+            source,
+            others,
+            grasps,
+            to_fill,
+            _waiting(waiting),
+            self.in_the_way,
+            PARKING_TRIED,
+        )
 
 
 @dataclass(slots=True)
@@ -449,6 +596,63 @@ def _linear(closure: list[int]) -> list[int]:
         order.append(event)
         left &= ~(1 << event)
     return order
+
+
+def _ranked_places(
+    c: Compiled,
+    obj: int,
+    source: int,
+    others: int,
+    grasps: list[int],
+    to_fill: int,
+    waiting: tuple[int, int],
+    in_the_way: list[int],
+    limit: int,
+) -> list[int]:
+    """The ``limit`` best free places ``obj`` (at ``source``, one of ``grasps``
+    usable) may be sent to. ``waiting``: the places that would take the last
+    grasp of an event still to come (killing), and those in the way of any of
+    its grasps (hitting). First the places that kill none, then those that are
+    no goal still to be filled, stand on no other place (an object put on top
+    keeps the one below from being grasped), hit none, and are in the way of
+    the fewest grasps at all. Its own goal is not one: it comes with its own
+    move."""
+    killing, hitting = waiting
+    ranked = sorted(
+        (
+            (
+                killing >> place & 1,
+                to_fill >> place & 1,
+                c.below[place] != 0,
+                hitting >> place & 1,
+                in_the_way[place],
+            ),
+            place,
+        )
+        for place in range(len(c.locations))
+        if place not in (source, c.goal[obj]) and not others >> place & 1
+    )
+    chosen: list[int] = []
+    for _, place in ranked:
+        if len(chosen) == limit:
+            break
+        if any(c.put_ok(others, place, g) for g in grasps):
+            chosen.append(place)
+    return chosen
+
+
+def _waiting(masks_per_event: Iterable[Sequence[int]]) -> tuple[int, int]:
+    """For :func:`_ranked_places`: the places in the way of every grasp of one
+    of the events (each given by the places its grasps need empty), and
+    those in the way of any grasp."""
+    killing = hitting = 0
+    for masks in masks_per_event:
+        every = -1
+        for mask in masks:
+            every &= mask
+            hitting |= mask
+        killing |= every if masks else 0
+    return killing, hitting
 
 
 def _kept_empty(c: Compiled, source: int, target: int, grasp: int) -> int:
