@@ -22,8 +22,12 @@ from demoplan.cli.perceiving import (
     parse_perceive_options,
     run_perceive,
 )
+from demoplan.commands.perception import calibrate
 from demoplan.perception.camera import Camera, save_image
+from demoplan.perception.pinhole import render_table
 from demoplan.perception.synthetic import SyntheticBlock, render_blocks
+from tests.perception.test_calibration import BLOCKS, MARKER_SIDE, MARKERS, markers_file
+from tests.perception.test_calibration import camera as oblique
 
 PHOTOS = Path(__file__).resolve().parents[1] / "data" / "photos"
 
@@ -51,18 +55,32 @@ def through_lean_path(
     return code, captured.out, captured.err
 
 
-@pytest.fixture
-def table(tmp_path: Path) -> Path:
-    """A top view of three blocks, two of one colour (a type column), 1 px = 1 mm."""
+@pytest.fixture(scope="module")
+def material(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A top view of three blocks, two of one colour (a type column), 1 px = 1 mm; a
+    bare table; a file that is no image; an oblique view of markers, its markers
+    file and the camera file calibrated from it."""
+    folder = tmp_path_factory.mktemp("material")
     blocks = [
         SyntheticBlock("red", 0.10, 0.10, 0.0, 0.04),
         SyntheticBlock("red", 0.20, 0.12, 20.0, 0.04),
         SyntheticBlock("blue", 0.15, 0.22, 5.0, 0.04),
     ]
     image = render_blocks(blocks, Camera(1000.0, (0.0, 0.0)), width=320, height=300, rng=3)
-    save_image(image, tmp_path / "table.png")
-    save_image(image * 0 + 200, tmp_path / "empty.png")  # a bare grey table
-    (tmp_path / "junk.png").write_bytes(b"not an image")
+    save_image(image, folder / "table.png")
+    save_image(image * 0 + 200, folder / "empty.png")  # a bare grey table
+    (folder / "junk.png").write_bytes(b"not an image")
+    view = render_table(oblique(20.0), BLOCKS, MARKERS, marker_side=MARKER_SIDE)
+    save_image(view, folder / "view.png")
+    calibrate(folder / "view.png", markers_file(folder), output=folder / "camera.json")
+    return folder
+
+
+@pytest.fixture
+def table(material: Path, tmp_path: Path) -> Path:
+    """A fresh copy of :func:`material` for one command line."""
+    for name, content in outcome(material).items():
+        (tmp_path / name).write_bytes(content)
     return tmp_path
 
 
@@ -78,6 +96,9 @@ LEAN = [
     ["table.png", "--px-per-m", "1000", "--origin", "nan", "0"],  # not finite
     ["table.png", "--px-per-m", "1000", "--origin", "0", "0", "--camera", "c.json"],
     ["table.png", "--camera", "missing.json"],
+    ["view.png", "--markers", "markers.json", "--side", "0.04", "--plot", "overlay.png"],
+    ["view.png", "--camera", "camera.json", "--json"],
+    ["view.png", "--camera", "markers.json"],  # not a camera file
     ["table.png", "--side", "0.04", "-o", "table.png"],  # would overwrite its input
     ["table.png", "--side", "0.04", "-o", "same.png", "--plot", "same.png"],
     ["table.png", "--side", "0.04", "--timeout", "0"],  # out of time: exit 4
