@@ -776,7 +776,10 @@ child of the benchmark's 250 MB process peaks at 250 MB whatever it does)."""
 def perceive_command(photo: LabelledPhoto) -> CommandRun:
     """``demoplan perceive IMAGE --px-per-m S --origin 0 0 --timeout T`` on ``photo``
     as a user runs it (``python -m demoplan``: the interpreter's start, the imports,
-    reading the image, perception and printing the table), timed as a whole."""
+    reading the image, perception and printing the table), timed as a whole. Its
+    output is not a terminal, so it takes the lean path a script's call takes
+    (argparse, perception and rich's table: no typer or pydantic,
+    ``demoplan.cli.perceiving``), as the "command" columns report it."""
     command = [sys.executable, "-m", "demoplan", "perceive", str(photo.image)]
     command += ["--px-per-m", f"{photo.px_per_m:g}", "--origin", "0", "0"]
     command += ["--timeout", f"{REAL_TIMEOUT:g}"]

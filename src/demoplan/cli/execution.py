@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from collections import Counter
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table
@@ -34,9 +33,6 @@ from demoplan.cli.common import (
 from demoplan.cli.render import print_run_report
 from demoplan.errors import UsageError
 from demoplan.wording import plural
-
-if TYPE_CHECKING:
-    from demoplan.perception.blocks import Rejection
 
 
 @contextmanager
@@ -359,6 +355,7 @@ def perceive(
 ) -> None:
     """Find the blocks in an image of the table (paper §V.B: Hough transform over x, y, θ, s),
     or with --sequence the demonstration camera frames show."""
+    from demoplan.cli.perceiving import print_perceived
     from demoplan.commands.perception import perceive as perceive_image
 
     with reported_errors():
@@ -406,44 +403,7 @@ def perceive(
         if json_output:
             print_json(found.document)
             return
-        table = Table(title=f"Blocks in {image_path.name}", title_justify="left")
-        types = {n: o.get("type") for n, o in found.document["objects"].items()}
-        typed = any(types.values())  # a type column only where a colour repeats
-        names = ("name", "type") if typed else ("name",)
-        for column in (*names, "x [m]", "y [m]", "z [m]", "yaw [deg]", "side [m]"):
-            table.add_column(column, justify="left" if column in names else "right")
-        for name, b in found.blocks.items():
-            table.add_row(
-                name,
-                *((types[name] or "",) if typed else ()),
-                f"{b.x:.4f}",
-                f"{b.y:.4f}",
-                f"{b.z:.3f}",
-                f"{b.yaw:.1f}",
-                f"{b.side:.4f}",
-            )
-        stdout.print(table)
-        stdout.print(f"scale from {found.scale}", markup=False, highlight=False, soft_wrap=True)
-        if plot is not None:
-            stdout.print(plain_text(_rejections_line(found.rejected, plot)), highlight=False)
-
-
-NOUNS = {"side face": "side faces", "side face or shadow": "side faces or shadows"}
-"""Reasons for a rejection that are nouns, and their plurals."""
-
-
-def _rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
-    """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``: most
-    first, ties in the order of the alphabet (the same line on every run)."""
-    counts = Counter(r.reason for r in rejected)
-    reasons = ", ".join(
-        plural(n, why, NOUNS[why]) if why in NOUNS else f"{n} {why}"
-        for why, n in sorted(counts.items(), key=lambda item: (-item[1], item[0]))
-    )
-    return (
-        f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
-        f"(drawn in {plot.name})"
-    )
+        print_perceived(stdout, found, image_path, plot)
 
 
 def _perceive_sequence(

@@ -1,4 +1,4 @@
-"""The ``demoplan`` executable: a lean path for ``demoplan solve``, typer for the rest.
+"""The ``demoplan`` executable: lean paths for ``solve`` and ``perceive``, typer for the rest.
 
 Importing typer, click, pydantic and rich costs about 0.4 s per process, twenty
 times what solving a small problem takes. Programs that call ``demoplan solve``
@@ -10,6 +10,8 @@ know or a value it would reject, an interactive terminal (which gets a
 spinner) — goes to the typer application in :mod:`demoplan.cli`, so help
 texts, usage errors and their exit codes come from one place. The two paths
 print the same plan, the same JSON and the same one-line errors (tested).
+``demoplan perceive`` of one image has its lean path in
+:mod:`demoplan.cli.perceiving`, taken on the same terms.
 """
 
 from __future__ import annotations
@@ -200,6 +202,14 @@ def _dispatch() -> int:
         if options is not None:
             sys.stdout.flush()
             return run_solve(options)
+    # perceive's table is as wide as a terminal is: the lean path prints for
+    # pipes and files only, typer's console for a terminal (and its progress bar)
+    if args[:1] == ["perceive"] and not sys.stderr.isatty() and not sys.stdout.isatty():
+        from demoplan.cli.perceiving import parse_perceive_options, run_perceive
+
+        seen = parse_perceive_options(args[1:])
+        if seen is not None:
+            return run_perceive(seen)
     from demoplan.cli.application import app
 
     try:

@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from demoplan.documents.colours import GivenColour
+from demoplan.documents.extents import MAX_DISTANCE_M, MAX_SIZE_M, MIN_SIZE_M
 from demoplan.errors import InputError
 from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw, unit_length_expected
@@ -155,12 +156,6 @@ class LandmarkSchema(PoseSchema):
         return ObjectGeometry(self.shape, (x, y, z))
 
 
-MAX_DISTANCE_M = 1000.0
-"""The farthest a position may lie from the origin on any axis: 1 km."""
-MIN_SIZE_M = 1e-4
-"""The smallest extent of an object: 0.1 mm."""
-MAX_SIZE_M = 10.0
-"""The largest extent of an object: 10 m."""
 
 
 def check_physical(document: Any, length: str, source: str, prefix: str = "") -> None:

@@ -69,9 +69,9 @@ def check_side(side: float | None) -> None:
     """``--side``, when given: a block's side in metres, within the size limit."""
     if side is None:
         return
-    # imported here: the pose documents' models (pydantic) are a tenth of a second
+    # not from the pose documents: their models (pydantic) are a tenth of a second
     # of demoplan perceive's start-up, which needs them for nothing else
-    from demoplan.documents.poses import MAX_SIZE_M
+    from demoplan.documents.extents import MAX_SIZE_M
 
     if not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
         raise UsageError(
