@@ -206,7 +206,9 @@ def test_every_figure_draws_the_tray(breakfast_model: TaskModel) -> None:
     matplotlib.use("Agg")
     from matplotlib.colors import to_rgba
 
-    from demoplan.plotting.figures import LANDMARK_COLOUR, plot_scene_plan, plot_scene_side
+    from demoplan.plotting.figures import plot_scene_plan
+    from demoplan.plotting.patches import LANDMARK_COLOUR
+    from demoplan.plotting.side_view import plot_scene_side
     from demoplan.scenes.landmarks import complete_scene
 
     scene = complete_scene(

@@ -140,8 +140,8 @@ class FrameWriter:
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
         from demoplan.plotting.colours import assign_colours, object_colour
-        from demoplan.plotting.figures import draw_landmarks, object_patch
         from demoplan.plotting.labels import add_label
+        from demoplan.plotting.patches import draw_landmarks, object_patch
 
         given = self.scene.given_colours if self.scene is not None else {}
         assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task

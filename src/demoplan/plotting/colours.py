@@ -87,9 +87,7 @@ def _named(name: str) -> str | None:
     return NAMED.get(numbered.group(1)) if numbered else None
 
 
-def assign_colours(
-    names: Iterable[str], given: Mapping[str, str] | None = None
-) -> dict[str, str]:
+def assign_colours(names: Iterable[str], given: Mapping[str, str] | None = None) -> dict[str, str]:
     """Colours for the objects of one task, distinct where the cycle allows:
     each of ``given`` (name → ``#rrggbb``, the colours a scene file gives) its
     own; the others, in sorted order, the colour they name, else their

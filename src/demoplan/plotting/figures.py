@@ -1,5 +1,6 @@
-"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left) and plans,
-and a side view of plans that stack.
+"""Top-view plots of demonstrations (like the paper's Fig. 3 and Fig. 4, left) and plans;
+a plan that stacks is drawn with its side view (:mod:`~demoplan.plotting.side_view`)
+beside it, both with :mod:`~demoplan.plotting.patches`.
 
 matplotlib is imported lazily (the ``plot`` extra); every function takes an
 optional ``ax`` and returns the axes it drew on.
@@ -13,13 +14,12 @@ none runs off its axes (:func:`place_boxes` is the placement itself).
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from demoplan.learning.constraints import GoalOrder
-from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel, demonstrated_colours
+from demoplan.model import Demonstration, TaskModel, demonstrated_colours
 from demoplan.plotting.backend import tight_layout, use_agg
 from demoplan.plotting.captions import fit_title
 from demoplan.plotting.colours import assign_colours, object_colour
@@ -33,7 +33,15 @@ from demoplan.plotting.labels import (
     role_label,
 )
 from demoplan.plotting.output import save_figure
-from demoplan.rotations import rpy_from_quat
+from demoplan.plotting.patches import (
+    LANDMARK_COLOUR,
+    draw_landmarks,
+    legend,
+    object_patch,
+    scene_label,
+    table_xy,
+)
+from demoplan.plotting.side_view import plan_stacks, plot_scene_side
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -53,88 +61,21 @@ __all__ = [
     "figure_renderer",
     "fill_panels",
     "object_colour",
-    "object_patch",
     "place_boxes",
     "place_labels",
-    "plan_stacks",
     "plot_constraints",
     "plot_demonstration",
     "plot_scene_plan",
-    "plot_scene_side",
     "plot_scene_targets",
     "role_label",
     "save_demonstrations",
     "save_no_plan",
     "save_scene_plan",
     "save_scene_targets",
-    "scene_label",
     "share_limits",
-    "side_patch",
 ]
 
 logger = logging.getLogger(__name__)
-
-
-def object_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
-    """The object's outline from above as a matplotlib patch."""
-    from matplotlib import patches
-
-    x, y, _ = pose.position
-    size = geometry.size if geometry else (0.03, 0.03, 0.03)
-    yaw = 0.0
-    if pose.orientation is not None:
-        qx, qy, qz, qw = pose.orientation
-        yaw = math.degrees(math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
-    if geometry is not None and geometry.shape in {"cylinder", "sphere"}:
-        return patches.Ellipse(
-            (x, y), size[0], size[1], angle=yaw, fc=colour, ec="k", alpha=alpha, lw=0.8
-        )
-    return patches.Rectangle(
-        (x - size[0] / 2, y - size[1] / 2),
-        size[0],
-        size[1],
-        angle=yaw,
-        rotation_point="center",
-        fc=colour,
-        ec="k",
-        alpha=alpha,
-        lw=0.8,
-    )
-
-
-LANDMARK_COLOUR = "#d9c9a8"
-"""Landmarks (a tray, a fixture) are drawn hatched, under all, sandy unless given a colour."""
-
-
-def draw_landmarks(ax: Axes, scene: Scene, *, side: bool = False) -> None:
-    """The scene's landmarks that have a size, from above (or from the side),
-    under the objects, each named, in its given colour (else :data:`LANDMARK_COLOUR`)."""
-    shapes, given = dict(scene.landmark_geometry), scene.given_colours
-    for name, pose in scene.landmarks:
-        if name not in shapes:
-            continue
-        draw = side_patch if side else object_patch
-        patch = draw(pose, shapes[name], given.get(name, LANDMARK_COLOUR), 0.6)
-        patch.set_hatch("//")
-        patch.set_zorder(0.5)
-        ax.add_patch(patch)
-        if side:
-            add_label(ax, name, _side_middle(pose, shapes[name]), fontsize=7, color="0.3")
-        else:
-            corner = _landmark_corner(pose, shapes[name])
-            add_label(ax, name, corner, fontsize=7, color="0.3", ha="left", va="bottom")
-
-
-def _landmark_corner(pose: Pose, geometry: ObjectGeometry) -> tuple[float, float]:
-    """A point just inside the landmark's first corner: its name there stays
-    clear of what stands on its middle."""
-    x, y, _ = pose.position
-    yaw = 0.0 if pose.orientation is None else math.radians(rpy_from_quat(pose.orientation)[2])
-    dx, dy = -0.4 * geometry.size[0], -0.4 * geometry.size[1]
-    return (
-        x + dx * math.cos(yaw) - dy * math.sin(yaw),
-        y + dx * math.sin(yaw) + dy * math.cos(yaw),
-    )
 
 
 def plot_demonstration(
@@ -167,7 +108,7 @@ def plot_demonstration(
         patch.set_hatch("//")
         patch.set_zorder(0.5)
         ax.add_patch(patch)
-        add_label(ax, name, _xy(pose.position), fontsize=7, color="0.3")
+        add_label(ax, name, table_xy(pose.position), fontsize=7, color="0.3")
     for name, pose in demo.initial:
         ax.add_patch(object_patch(pose, geometry.get(name), object_colour(name), 0.2))
     for number, step in enumerate(demo.steps, start=1):
@@ -201,7 +142,7 @@ def plot_demonstration(
     ax.set_ylabel("y [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.set_title(title or demo.name, fontsize=9)
-    _legend(
+    legend(
         ax,
         [
             ("faint", "where the objects stood"),
@@ -425,13 +366,13 @@ def plot_scene_plan(
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
     for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
         ax.add_patch(object_patch(pose, geometry[name], colours[name], 0.85))
-        add_label(ax, scene_label(name, roles), _xy(pose.position), fontsize=7)
+        add_label(ax, scene_label(name, roles), table_xy(pose.position), fontsize=7)
     rad = 0.15
     for number, (name, start, end) in enumerate(moves, 1):
         ax.annotate(
             "",
-            xy=_xy(end),
-            xytext=_xy(start),
+            xy=table_xy(end),
+            xytext=table_xy(start),
             arrowprops={
                 "arrowstyle": "->",
                 "color": colours[name],
@@ -442,20 +383,20 @@ def plot_scene_plan(
         add_label(
             ax,
             str(number),
-            _arc_middle(_xy(start), _xy(end), rad),
+            _arc_middle(table_xy(start), table_xy(end), rad),
             fontsize=7,
             color=colours[name],
             fontweight="bold",
         )
     for spot in spots:
-        add_label(ax, spot.name, _xy(spot.position), fontsize=6, color="0.5")
+        add_label(ax, spot.name, table_xy(spot.position), fontsize=6, color="0.5")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.08)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(title or f"Plan: {len(moves)} moves", fontsize=9)
-    _legend(
+    legend(
         ax,
         [
             ("faint", "where the objects stand now"),
@@ -465,28 +406,6 @@ def plot_scene_plan(
         ],
     )
     return ax
-
-
-def _legend(ax: Axes, entries: list[tuple[str, str]]) -> None:
-    """A legend of what the marks mean (not of the objects: their names are
-    written on them): ``faint``/``solid`` shapes, ``arrow``s, dashed ``outline``s,
-    ``dashed`` circles."""
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Patch
-
-    handles: list[Any] = []
-    for mark, text in entries:
-        if mark == "faint":
-            handles.append(Patch(fc="0.5", alpha=0.25, ec="0.5", label=text))
-        elif mark == "solid":
-            handles.append(Patch(fc="0.5", alpha=0.85, ec="black", label=text))
-        elif mark == "arrow":
-            handles.append(Line2D([], [], color="0.3", marker=">", lw=1.2, label=text))
-        elif mark == "outline":
-            handles.append(Patch(fill=False, ls="--", ec="0.3", label=text))
-        else:
-            handles.append(Circle((0, 0), 1, fill=False, ls="--", ec="0.6", label=text))
-    ax.legend(handles=handles, loc="best", fontsize=6, framealpha=0.8)
 
 
 def plot_scene_targets(
@@ -527,10 +446,10 @@ def plot_scene_targets(
                 outline.set_linestyle("--")
                 outline.set_linewidth(1.2)
                 ax.add_patch(outline)
-                targets.append((name, _xy(spot.position)))
+                targets.append((name, table_xy(spot.position)))
     for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
         ax.add_patch(object_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.85))
-        add_label(ax, scene_label(obj.name, roles), _xy(obj.pose.position), fontsize=7)
+        add_label(ax, scene_label(obj.name, roles), table_xy(obj.pose.position), fontsize=7)
     filled = {instance: role for role, instance in (roles or {}).items()}
     for name, xy in targets:  # placed after the objects' names, which stay on their objects
         owner = filled.get(name, name)
@@ -617,180 +536,6 @@ def save_scene_plan(
         save_figure(figure, path)
     finally:
         plt.close(figure)
-
-
-LEVEL_TOLERANCE = 0.001
-"""Heights (m) closer than this are one level: the plan's objects stack where any
-stands or is put down higher than this above the lowest."""
-
-
-def plan_stacks(scene: Scene, problem: SceneProblem, plan: Plan) -> bool:
-    """Whether an object of the scene stands, or is put down by the plan, on
-    another level than the rest (its bottom's z differs): a top view hides that."""
-    heights = [obj.pose.position[2] for obj in scene.objects]
-    heights += [problem.location(a.location).position[2] for a in plan.actions]
-    return bool(heights) and max(heights) - min(heights) > LEVEL_TOLERANCE
-
-
-def side_patch(pose: Pose, geometry: ObjectGeometry | None, colour: str, alpha: float) -> Any:
-    """The object's outline seen from the side (looking along y: x across, z up;
-    ``pose``'s z is its bottom) as a matplotlib patch: a box's x extent as it
-    is turned, a cylinder's diameter, a sphere's circle."""
-    from matplotlib import patches
-
-    x, _, z = pose.position
-    size = geometry.size if geometry else (0.03, 0.03, 0.03)
-    if geometry is not None and geometry.shape in {"cylinder", "sphere"}:
-        across = size[0]
-    else:
-        yaw = 0.0
-        if pose.orientation is not None:
-            qx, qy, qz, qw = pose.orientation
-            yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
-        across = abs(size[0] * math.cos(yaw)) + abs(size[1] * math.sin(yaw))
-    if geometry is not None and geometry.shape == "sphere":
-        return patches.Ellipse(
-            (x, z + size[2] / 2), across, size[2], fc=colour, ec="k", alpha=alpha, lw=0.8
-        )
-    return patches.Rectangle(
-        (x - across / 2, z), across, size[2], fc=colour, ec="k", alpha=alpha, lw=0.8
-    )
-
-
-def plot_scene_side(
-    scene: Scene,
-    problem: SceneProblem,
-    plan: Plan,
-    ax: Axes | None = None,
-    title: str | None = None,
-    roles: Mapping[str, str] | None = None,
-) -> Axes:
-    """A plan in its scene from the side (x across, height z up, the table at
-    z = 0): where the objects stand now (faint), where the plan leaves them
-    (solid), where a move puts an object down on its way (dashed outline), and
-    each move as a numbered arrow: up from the top of the object where it is
-    picked up, across above everything (move n at the n-th level), down to
-    where its top is once put down, so that unstacking and stacking show.
-    ``roles`` (role → instance): as :func:`plot_scene_plan`."""
-    import matplotlib.pyplot as plt
-
-    from demoplan.scenes.problems import pose_of
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(6, 3))
-    colours = assign_colours(scene.names, scene.given_colours)
-    geometry = {obj.name: obj.geometry for obj in scene.objects}
-    final = {obj.name: obj.pose for obj in scene.objects}
-    moves: list[tuple[str, Pose, Pose]] = []
-    for grasp, put in zip(plan.actions[::2], plan.actions[1::2], strict=True):
-        source = pose_of(problem.location(grasp.location))
-        target = pose_of(problem.location(put.location))
-        moves.append((put.object, source, target))
-        final[put.object] = target
-    last = {name: k for k, (name, _, _) in enumerate(moves)}
-    ax.axhline(0.0, color="0.4", lw=0.8)
-    draw_landmarks(ax, scene, side=True)
-    for obj in sorted(scene.objects, key=lambda o: o.pose.position[2]):
-        ax.add_patch(side_patch(obj.pose, geometry[obj.name], colours[obj.name], 0.25))
-    between = False
-    for k, (name, _, target) in enumerate(moves):
-        if last[name] != k:  # put down on its way, moved again later
-            outline = side_patch(target, geometry[name], colours[name], 1.0)
-            outline.set_fill(False)
-            outline.set_edgecolor(colours[name])
-            outline.set_linestyle("--")
-            outline.set_zorder(1.5)  # over the solid shapes it may stand behind
-            ax.add_patch(outline)
-            between = True
-    for name, pose in sorted(final.items(), key=lambda item: item[1].position[2]):
-        ax.add_patch(side_patch(pose, geometry[name], colours[name], 0.85))
-        add_label(ax, scene_label(name, roles), _side_middle(pose, geometry[name]), fontsize=7)
-    tops = [obj.pose.position[2] + _height(obj.geometry) for obj in scene.objects]
-    tops += [target.position[2] + _height(geometry[name]) for name, _, target in moves]
-    highest = max(tops, default=0.05)
-    spacing = 0.1 * highest
-    carry = _draw_side_moves(ax, moves, geometry, colours, highest, spacing)
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.margins(x=0.08)
-    ax.set_ylim(-0.5 * spacing, carry + 2.5 * spacing)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("height z [m]")
-    ax.grid(True, lw=0.3, alpha=0.5)
-    ax.set_title(title or "From the side: the height of each move", fontsize=9)
-    entries = [
-        ("faint", "where the objects stand now"),
-        ("solid", "where the plan leaves them"),
-        ("arrow", "move n of the plan"),
-    ]
-    if between:
-        entries.append(("outline", "put down on its way"))
-    _legend(ax, entries)
-    return ax
-
-
-def _draw_side_moves(
-    ax: Axes,
-    moves: Sequence[tuple[str, Pose, Pose]],
-    geometry: Mapping[str, ObjectGeometry | None],
-    colours: Mapping[str, str],
-    highest: float,
-    spacing: float,
-) -> float:
-    """Each move as a numbered arrow (:func:`plot_scene_side`); the height of
-    the highest carry."""
-    carry = highest
-    for number, (name, source, target) in enumerate(moves, 1):
-        # Lifted from the top of where it stood, carried above everything (each
-        # move a level higher than the one before), set down with its top where
-        # the arrow ends.
-        (x0, z0), (x1, z1) = _side_top(source, geometry[name]), _side_top(target, geometry[name])
-        carry = highest + (number + 0.5) * spacing
-        ax.plot([x0, x0, x1], [z0, carry, carry], color=colours[name], lw=1.2)
-        ax.annotate(
-            "",
-            xy=(x1, z1),
-            xytext=(x1, carry),
-            arrowprops={"arrowstyle": "->", "color": colours[name], "lw": 1.2, "shrinkA": 0},
-        )
-        add_label(
-            ax,
-            str(number),
-            ((x0 + x1) / 2, carry),
-            offset=(0.0, 1.5),
-            va="bottom",
-            fontsize=7,
-            color=colours[name],
-            fontweight="bold",
-        )
-    return carry
-
-
-def scene_label(name: str, roles: Mapping[str, str] | None) -> str:
-    """A scene object's label: ``plate#1 ← plate-b`` where ``roles`` (role →
-    instance) has it fill a role of another name, else its name."""
-    for role, instance in (roles or {}).items():
-        if instance == name:
-            return role_label(role, instance)
-    return name
-
-
-def _xy(position: Sequence[float]) -> tuple[float, float]:
-    return (float(position[0]), float(position[1]))
-
-
-def _height(geometry: ObjectGeometry | None) -> float:
-    return geometry.size[2] if geometry else 0.03
-
-
-def _side_middle(pose: Pose, geometry: ObjectGeometry | None) -> tuple[float, float]:
-    """The middle of an object seen from the side: (x, z halfway up)."""
-    return (float(pose.position[0]), float(pose.position[2]) + _height(geometry) / 2)
-
-
-def _side_top(pose: Pose, geometry: ObjectGeometry | None) -> tuple[float, float]:
-    """The top of an object seen from the side: (x, z of its top)."""
-    return (float(pose.position[0]), float(pose.position[2]) + _height(geometry))
 
 
 def _arc_middle(
