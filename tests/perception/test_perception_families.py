@@ -60,9 +60,9 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     "distractors": ("a shape that is no cube taken for blocks", ((2147483646, False),)),
     "hands": ("a top beside a hand missed", ((126342, False),)),
     "achromatic": (
-        "with --side, a black or grey cube missed: its side faces, as dark as its top, "
-        "stay in its mask",
-        ((5, True), (21, True)),
+        "with --side, a black or grey cube missed: a board's grid line along its top "
+        "(darker than the top) stays in its mask, a glint's rim notches it",
+        ((21, True), (40, True)),
     ),
     "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
     "side_faces": (

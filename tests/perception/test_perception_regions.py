@@ -18,6 +18,7 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import name_colour
 from demoplan.perception.labelled import load_labelled, perceive_labelled
+from demoplan.perception.masks import close
 from demoplan.perception.synthetic import COLOURS, TABLE
 
 CAMERA = Camera(1000.0, (0.0, 0.0))  # 1 px = 1 mm
@@ -438,3 +439,18 @@ def test_an_empty_board_with_its_markers_holds_no_block(exposure: float) -> None
     found = detect_blocks(image, Camera(px_per_m, (0.0, 0.0)), PerceptionSettings(), rejected)
     assert found == []
     assert sum(r.reason == "marker" for r in rejected) >= 4
+
+
+@settings(max_examples=30, deadline=None)
+@given(side=st.integers(3, 40), margin=st.integers(0, 12), radius=st.integers(1, 12))
+def test_a_closing_adds_nothing_to_a_square_near_its_crops_border(
+    side: int, margin: int, radius: int
+) -> None:
+    """A square is its own closing by any disc, however near the crop's border it
+    lies: the crop's outside is empty. (OpenCV's closing erodes with the outside
+    full: a black cube's crop, 10 px around it, closed by a disc of radius 10, kept
+    bands along the crop's edges — 19 % of its area, then taken for a marker's
+    white cells: the achromatic family's seed 5 with --side.)"""
+    mask = np.zeros((side + 2 * margin, side + 2 * margin), dtype=bool)
+    mask[margin : margin + side, margin : margin + side] = True
+    assert np.array_equal(close(mask, radius), mask)

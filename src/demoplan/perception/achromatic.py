@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.perception.masks import dilate, erode, fill_holes
+from demoplan.perception.masks import close, dilate, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
 
@@ -346,8 +346,7 @@ def _region(
         member = _without_side_faces(member, crop_l, part.regrown)
         opened &= member
     # a glint's hole, opened to the outside by a crack of its rim, closed
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (4 * part.regrown + 1,) * 2)
-    filled = fill_holes(cv2.morphologyEx(member.astype(np.uint8), cv2.MORPH_CLOSE, disc) > 0)
+    filled = fill_holes(close(member, 2 * part.regrown))
     solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(fill_holes(opened)))
     if solidity < MIN_SOLIDITY or rect_fill < MIN_RECT_FILL:
         return _Refusal("not compact", f"solidity {solidity:.2f}, {rect_fill:.0%} of its rectangle")
