@@ -64,7 +64,11 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         "(darker than the top) stays in its mask, a glint's rim notches it",
         ((21, True), (40, True)),
     ),
-    "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
+    "patterned": (
+        "a white top with a black glyph missed: the glyph breaks its white part, "
+        "or is taken for its side faces",
+        ((0, False), (6, False)),
+    ),
     "side_faces": (
         "a top with its side face in one mask: the top alone covers under half of it",
         ((536870913, True),),

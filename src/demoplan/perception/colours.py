@@ -41,7 +41,7 @@ import numpy as np
 from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
-from demoplan.perception.highlights import glare, highlights, hole_owners
+from demoplan.perception.highlights import glare, highlights, hole_owners, printed
 from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
@@ -289,7 +289,7 @@ class _ImageColours:
 @dataclass(frozen=True, slots=True)
 class _Crop:
     """A connected component's box (5 px around it): its pixels (RGB, a*b*, L*), its
-    core pixels and the table's colour in a ring around it (RGB, a*b*); ``offsets``
+    core pixels and the table's colour in a ring around it (RGB, a*b*, L*); ``offsets``
     the pixels' RGB change from that table colour (every face's soft mask and the
     nearest class read it: taken once)."""
 
@@ -302,6 +302,7 @@ class _Crop:
     core: np.ndarray
     ground: np.ndarray
     ground_ab: np.ndarray
+    ground_lightness: float
     offsets: np.ndarray
 
 
@@ -333,8 +334,21 @@ def _component_crop(
     chroma = c.lab[rows, cols, 1:]
     ground_ab = np.median(chroma[ring], axis=0) if ring.any() else np.zeros(2)
     lightness = c.lab[rows, cols, 0]
+    ground_lightness = float(np.median(lightness[ring])) if ring.any() else 50.0
     offsets = pixels - ground
-    return _Crop(rows, cols, member, pixels, chroma, lightness, core, ground, ground_ab, offsets)
+    return _Crop(
+        rows,
+        cols,
+        member,
+        pixels,
+        chroma,
+        lightness,
+        core,
+        ground,
+        ground_ab,
+        ground_lightness,
+        offsets,
+    )
 
 
 def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
@@ -422,8 +436,9 @@ def _component_regions(
         # or by the region's, bordered mostly by this class (a glint near the
         # seam, the rim between it and the neighbour thinner than the core's)
         enclosing = on_class if owners is None else on_class | (owners == n)
-        on_top = highlights(k.pixels, k.lightness, top_face, centre, enclosing, c.min_area)
+        on_top = highlights(k.pixels, k.lightness, (top_face, centre), enclosing, c.min_area)
         alpha[on_top] = 1.0
+        alpha[printed(alpha, k.lightness, k.ground_lightness)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
         regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha))

@@ -10,7 +10,7 @@ import numpy as np
 from demoplan.perception.masks import dilate, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
 
-__all__ = ["GLARE_SLACK", "glare", "highlights", "hole_owners"]
+__all__ = ["GLARE_SLACK", "PRINTED_CONTRAST", "glare", "highlights", "hole_owners", "printed"]
 
 GLARE_SLACK = 8.0
 """Grey levels a highlight's channel may fall under the top face's mean (noise)."""
@@ -46,22 +46,55 @@ def hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
 def highlights(
     crop: np.ndarray,
     lightness: np.ndarray,
-    top_face: float,
-    top_rgb: np.ndarray,
+    top: tuple[float, np.ndarray],
     core: np.ndarray,
     min_area: float,
 ) -> np.ndarray:
     """Which pixels of a one-class region's crop (RGB ``crop``, L* ``lightness``)
     are a specular highlight on its block, so covered by its top face: the top
-    face's colour (``top_rgb``, L* ``top_face``) with white added — every channel
-    at least the top's, brighter than it — enclosed by the block's clearly
-    coloured pixels (``core``; a region may hold patches of a grey table, faintly
-    tinted, beside a dark or saturated block), and holes in those smaller than a
+    face's colour (``top``: its L* and mean RGB) with white added — every channel
+    at least the top's, brighter than it — enclosed by the block's
+    clearly coloured pixels (``core``; a region may hold patches of a grey table,
+    faintly tinted, beside a dark or saturated block), holes in those smaller than a
     block (a marker drawn on the block, a glint's white centre)."""
+    top_face, top_rgb = top
     whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
     enclosed = fill_holes(core)
     on_top: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
     return on_top
+
+
+PRINTED_CONTRAST = 12.0
+"""L* by which a hole in a top's coloured pixels differs from the table around the
+region (its median), at least, to be printed on the top rather than table seen
+through a ring of blocks (a black letter on a yellow top is 50 L* or more under
+white paper, a white one on a red top as far over a blue table)."""
+
+
+def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) -> np.ndarray:
+    """The holes in a top's soft mask (``alpha`` over ½) that are something printed
+    on it — a letter, a frame, dots, dark on a pale top or pale on a dark one, which
+    a top's colour does not cover: each hole covering under half of the mask with
+    its holes filled (a letter is a small share of its face) whose median L*
+    (``lightness``) differs from the table's around the region
+    (``table_lightness``) by :data:`PRINTED_CONTRAST` or more (table seen within a
+    ring of blocks, or between a block and a pen line drawn up to it, is the
+    table's lightness)."""
+    mask = alpha > 0.5
+    enclosed = fill_holes(mask)
+    holes = enclosed & ~mask
+    found = np.zeros(holes.shape, dtype=bool)
+    if not holes.any():
+        return found
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=8)
+    limit = 0.5 * float(enclosed.sum())
+    for index in np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] < limit) + 1:
+        x, y, w, h, _ = (int(value) for value in stats[index])
+        rows, cols = slice(y, y + h), slice(x, x + w)
+        hole = labels[rows, cols] == index
+        if abs(float(np.median(lightness[rows, cols][hole])) - table_lightness) >= PRINTED_CONTRAST:
+            found[rows, cols] |= hole
+    return found
 
 
 def glare(
