@@ -61,8 +61,8 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     "hands": ("a top beside a hand missed", ((126342, False),)),
     "achromatic": (
         "with --side, a black or grey cube missed: a board's grid line along its top "
-        "(darker than the top) stays in its mask, a glint's rim notches it",
-        ((21, True), (40, True)),
+        "(darker than the top) stays in its mask; a grey top split into fragments",
+        ((21, True), (29, True)),
     ),
     "patterned": (
         "a white top with a black glyph missed: the glyph breaks its white part, "
@@ -112,6 +112,26 @@ def test_a_family_photograph_meets_the_issue_thresholds(
     ],
 )
 def test_a_family_not_met_yet_fails_where_it_was_seen_failing(
+    family: str, seed: int, side_given: bool
+) -> None:
+    _meets_the_thresholds(family, seed, side_given)
+
+
+MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
+    # family: draws (seed, --side given) of a family not met yet that it once failed on
+    "achromatic": ((5, True), (23, True), (40, True)),
+    "patterned": ((1, False), (1, True), (4, False)),
+}
+"""Draws of the families in :data:`NOT_YET` that were seen failing and are met now
+(a crop's closing, a glint's notch, a printed letter): kept met while the rest of
+their family is not."""
+
+
+@pytest.mark.parametrize(
+    ("family", "seed", "side_given"),
+    [(family, seed, side) for family, draws in sorted(MET_SINCE.items()) for seed, side in draws],
+)
+def test_a_draw_once_failed_meets_the_issue_thresholds(
     family: str, seed: int, side_given: bool
 ) -> None:
     _meets_the_thresholds(family, seed, side_given)

@@ -347,7 +347,9 @@ def _region(
         opened &= member
     # a glint's hole, opened to the outside by a crack of its rim, closed
     filled = fill_holes(close(member, 2 * part.regrown))
-    solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(fill_holes(opened)))
+    # a glint's rim at a black top's edge opens its hole to the outside: closed too
+    closed = fill_holes(close(opened, 2 * part.regrown))
+    solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(closed))
     if solidity < MIN_SOLIDITY or rect_fill < MIN_RECT_FILL:
         return _Refusal("not compact", f"solidity {solidity:.2f}, {rect_fill:.0%} of its rectangle")
     if aspect > MAX_ASPECT:
