@@ -370,21 +370,29 @@ _NEUTRAL = {"black": (30, 30, 33), "grey": (105, 105, 108), "white": (238, 238, 
 
 
 def _lone_neutral_cube(
-    colour: str, background: str, x: float, y: float, yaw: float, seed: int
+    colour: str,
+    background: str,
+    x: float,
+    y: float,
+    yaw: float,
+    seed: int,
+    pattern: str = "",
+    settings: PerceptionSettings = PerceptionSettings(),
 ) -> tuple[list[DetectedBlock], float, float, float, list[Rejection]]:
-    """One black, white or grey cube (4 cm) rendered on ``background`` as the
-    generated photographs are, perceived: the blocks, the truth's centre (u, v px)
-    and side (px), and the parts rejected."""
+    """One black, white or grey cube (4 cm; ``pattern`` printed on its top) rendered
+    on ``background`` as the generated photographs are, perceived (with
+    ``settings``): the blocks, the truth's centre (u, v px) and side (px), and the
+    parts rejected."""
     from demoplan.perception.photo_families_scene import Cube, PhotoScene, render_scene
     from demoplan.perception.photos import PhotoRig
 
     rig = PhotoRig(height=1.2, nadir=(0.3, 0.2))
-    cube = Cube(colour, _NEUTRAL[colour], x, y, yaw, 0.04)
+    cube = Cube(colour, _NEUTRAL[colour], x, y, yaw, 0.04, pattern=pattern)
     scene = PhotoScene(rig, (cube,), background=background)
     image, (truth,) = render_scene(scene, np.random.default_rng(seed))
     px_per_m = rig.scale_at(*rig.to_table(rig.width / 2, rig.height_px / 2, 0.04), 0.04)
     rejected: list[Rejection] = []
-    found = detect_blocks(image, Camera(px_per_m, (0.0, 0.0)), PerceptionSettings(), rejected)
+    found = detect_blocks(image, Camera(px_per_m, (0.0, 0.0)), settings, rejected)
     pixels = [(b.x * px_per_m - 0.5, image.shape[0] - b.y * px_per_m - 0.5) for b in found]
     near = [
         b
@@ -493,3 +501,28 @@ def test_a_black_letter_printed_on_a_top_is_its_top(
     image = _paint(shapes + [(bar, (25, 25, 25)) for bar in bars], _rng(seed))
     found = detect_blocks(image, CAMERA)
     _assert_one_whole_block(found, centre, side)
+
+
+@settings(max_examples=6, deadline=None)
+@given(
+    glyph=st.sampled_from(("T", "E", "L", "H")),
+    x=st.floats(0.15, 0.45),
+    y=st.floats(0.08, 0.32),
+    yaw=st.floats(0.0, 90.0),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_a_white_cube_with_a_black_letter_on_the_board_is_one_white_block(
+    glyph: str, x: float, y: float, yaw: float, seed: int
+) -> None:
+    """A black letter printed on a white top (dark through, a quarter of the face
+    or less) is the top's: the white cube on the grey board is found by its
+    lightness with ``--side 0.04``, one block within 0.6 of its side of its
+    centre, and nothing else. (Without: the opening at 0.3 of a side broke the white part around the
+    letter's bars, and the cube was `not compact` or lost in fragments — the
+    patterned family's seed 5. Not yet: on white paper a white top stands out by a
+    few L* only, under the bright threshold; on a blue table, where its chroma
+    finds it, the letter is taken for its side faces — seed 6.)"""
+    with_side = PerceptionSettings(min_side=0.034, max_side=0.046)  # --side 0.04
+    near, others, _, _, _ = _lone_neutral_cube("white", "board", x, y, yaw, seed, glyph, with_side)
+    assert len(near) == 1 and others == 0, (near, others)
+    assert near[0].colour == "white"

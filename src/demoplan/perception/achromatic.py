@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.perception.masks import close, dilate, erode, fill_holes
+from demoplan.perception.masks import close, dilate, erode, fill_holes, small_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
 
@@ -185,6 +185,8 @@ def achromatic_regions(
     regions: list[AchromaticRegion] = []
     for is_bright, mask in ((True, bright), (False, dark)):
         mask &= ~dilate(markers, 2)  # a marker's white and black cells are no blocks
+        if is_bright:
+            mask |= _printed_on_white(mask, dark, side_px)
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)
         count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
         for index in range(1, count):
@@ -230,6 +232,35 @@ def _markers(
             markers[rows, cols] |= filled
             record(filled, rows, cols, "marker", f"a bright square {dark.mean():.0%} dark inside")
     return markers
+
+
+PRINTED_DARK_SHARE = 0.5
+"""A hole in a white part is a letter printed on a white top when this share of it
+or more is dark (under :data:`DARK_RATIO` of the table): a letter's bars are dark
+through, their blurred rims aside (three quarters of a generated letter's hole);
+the code of a small marker on a white card, its ring blurred into its white
+centre, is dark over a third of its hole (the development set's AprilTags)."""
+
+
+def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.ndarray:
+    """What is printed on white tops (a letter: dark, so no part of the ``bright``
+    mask): the holes of a bright part smaller than a block of the smallest side
+    (``side_px``), each :data:`PRINTED_DARK_SHARE` ``dark`` or more, where they cover
+    under :data:`MARKER_DARK_SHARE` of the part with its holes filled (a marker's
+    black cells cover more)."""
+    filled = fill_holes(bright)
+    holes = small_parts(filled & ~bright, side_px**2)
+    if not holes.any():
+        return holes
+    count, labels = cv2.connectedComponents(holes.astype(np.uint8), connectivity=8)
+    sizes = np.bincount(labels.ravel(), minlength=count)
+    darker = np.bincount(labels[holes & dark], minlength=count)
+    holes &= (darker >= PRINTED_DARK_SHARE * sizes)[labels]
+    count, labels = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
+    areas = np.bincount(labels.ravel(), minlength=count)
+    held = np.bincount(labels[holes], minlength=count)
+    printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[labels]
+    return printed
 
 
 def _opened_at_own_scale(part: np.ndarray) -> np.ndarray:
