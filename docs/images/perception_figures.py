@@ -39,7 +39,14 @@ from demoplan.perception.blocks import (
     detect_blocks,
 )
 from demoplan.perception.colours import _distinctness, colour_regions
-from demoplan.perception.hough import S_BIN, THETA_BIN, XY_BIN, edge_pixels, hough_squares
+from demoplan.perception.hough import (
+    S_BIN,
+    SIDE_STEP,
+    THETA_BIN,
+    XY_BIN,
+    edge_pixels,
+    hough_squares,
+)
 from demoplan.perception.opencv import cv2
 from demoplan.perception.overlay import Drawn, draw_overlay, top_view_to_image
 from demoplan.perception.photos import PhotoRig, render_photo, top_camera
@@ -157,7 +164,8 @@ def hough_figure(image: np.ndarray, camera_px: float) -> None:
         right.plot(peak.u, peak.v, "r+" if rank else "w+", markersize=12, mew=2)
     right.set_title(
         f"votes at s = {s:.0f} px, best θ per centre bin\n(bins {THETA_BIN:.0f}° × "
-        f"{XY_BIN:.0f} px × {S_BIN:.0f} px; +: the peaks, white the strongest)",
+        f"{XY_BIN:.0f} px, sides {S_BIN:.0f} px or {SIDE_STEP:.0%} apart; +: the peaks, "
+        "white the strongest)",
         fontsize=9,
     )
     for axes in (left, right):

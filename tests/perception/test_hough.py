@@ -67,7 +67,7 @@ def test_the_vote_is_the_same_one_side_at_a_time(
     assert abs(best.u - u) <= 2 * hough.XY_BIN and abs(best.v - v) <= 2 * hough.XY_BIN
     turn = abs(((best.theta - theta + 45.0) % 90.0) - 45.0)
     assert turn <= 2 * hough.THETA_BIN
-    assert abs(best.side - side) <= 2 * hough.S_BIN
+    assert abs(best.side - side) <= 2 * max(hough.S_BIN, hough.SIDE_STEP * side)  # two bins
 
 
 @settings(max_examples=10, deadline=None)

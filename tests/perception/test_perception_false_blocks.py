@@ -6,12 +6,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from demoplan.perception.blocks import PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.camera import Camera
+from demoplan.perception.labelled import FOUND_WITHIN
 from demoplan.perception.opencv import cv2
 from demoplan.perception.synthetic import COLOURS, random_blocks, render_blocks
 
@@ -180,14 +180,11 @@ def test_an_arm_reaching_in_from_the_border_is_no_block(
     _no_block_in_the_arm(seed, edge, wide, reach, centre, colour, frayed)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="not yet: an 88 px square in a 100 px arm frayed 5 px deep at the border "
-    "(misfit 0.198; the arm runs on only 11 px beside it)",
-)
 def test_an_arm_barely_wider_than_a_block_frayed_at_the_border_is_no_block() -> None:
-    """A draw of the property above that fails today (found at 100 examples with
-    --hypothesis-seed=3): the family's narrowest arm, frayed deepest."""
+    """A draw of the property above (found at 100 examples with --hypothesis-seed=3):
+    the family's narrowest arm, frayed deepest. It failed — an 88 px square in the
+    100 px arm, misfit 0.198, the arm running on only 11 px beside it — until the
+    vote's side bins grew with the side (no block is reported in the arm since)."""
     _no_block_in_the_arm(0, "left", 100, 53, 0.5, "green", 5)
 
 
@@ -331,6 +328,60 @@ def test_a_side_face_as_large_as_its_top_is_no_block(
     assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), (x, y)) < 1.0
 
 
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    colour=st.sampled_from(("red", "green", "blue", "yellow")),
+    light=st.floats(0.15, 0.3),
+    reach=st.floats(1.0, 1.6),
+    towards=st.floats(0.0, 360.0),
+)
+def test_a_top_beside_side_faces_larger_than_itself_is_found(
+    seed: int, colour: str, light: float, reach: float, towards: float
+) -> None:
+    """A camera low and far off to the side (the ``side_faces`` family: 0.45 m up, its
+    axis beyond the image) sees a cube's side faces swept ``reach`` of a side towards
+    it, larger than the top together: two faces of the top's colour lit less
+    (``light`` and a tenth more), left in the top's colour region when they are not
+    told apart by lightness there. The top covers under half of that region, yet it
+    is no larger thing's piece: its side faces are darker than it by more than the
+    side-face gap and count as explained. One block, found as the issue scores a top
+    (its centre within 0.6 of the side of the top's centre; the region's own centre
+    lies half a side or more off it): the faces left in its mask may pull its fit —
+    a dark blue face swept 1.5 sides took a 47 px top's square to 64 px, 6 px off."""
+    rng = np.random.default_rng(seed)
+    side = float(rng.uniform(40.0, 55.0))
+    x, y = float(rng.uniform(170, 330)), float(rng.uniform(150, 250))
+    yaw = float(rng.uniform(-45, 45))
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = (128, 128, 128)
+    rgb = np.asarray(COLOURS[colour], dtype=float)
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    h = side / 2
+    corners = np.array(
+        [(x + c * a - s * b, y - (s * a + c * b)) for a, b in ((-h, -h), (h, -h), (h, h), (-h, h))]
+    )
+    turn = math.radians(towards)
+    sweep = reach * side * np.array([math.cos(turn), -math.sin(turn)])
+    shades = iter((light, 1.1 * light))
+    for k in range(4):
+        a, b = corners[k], corners[(k + 1) % 4]
+        outward = np.array([b[1] - a[1], a[0] - b[0]])  # y down: clockwise on screen
+        if outward @ (np.array([x, y]) - (a + b) / 2) > 0:
+            outward = -outward
+        if outward @ sweep <= 0:
+            continue  # a face turned away from the camera
+        quad = np.rint(np.array([a, b, b + sweep, a + sweep]) * 16).astype(np.int32)
+        shade = next(shades)
+        cv2.fillPoly(image, [quad], tuple(float(v) for v in rgb * shade), cv2.LINE_AA, shift=4)
+    _fill_square(image, x, y, yaw, side, rgb)
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == 1, [(f.colour, f.x, f.y, f.side) for f in found]
+    centre = (found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5)
+    assert math.dist(centre, (x, y)) < FOUND_WITHIN * side
+
+
 def _fill_rectangle(
     image: np.ndarray, corner: tuple[float, float], far: tuple[float, float], rgb: np.ndarray
 ) -> None:
@@ -376,3 +427,38 @@ def test_a_grained_top_beside_its_side_face_is_found_whole(
     assert len(found) == 1, [(f.colour, f.x, f.y, f.side) for f in found]
     assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), (x, y)) < 1.5
     assert abs(found[0].side * 1000 - side) < 2.0
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    light=st.floats(0.55, 0.75),
+    corner=st.sampled_from(((1, 1), (1, -1), (-1, 1), (-1, -1))),
+)
+def test_a_light_square_in_a_shadowed_patch_of_its_colour_is_no_block(
+    seed: int, light: float, corner: tuple[int, int]
+) -> None:
+    """A wooden table patch between dark things, most of it in shadow (``light`` of
+    the lit wood's light: 12 L* darker and more) and a lit square of it at one corner
+    (mrhan_touching, right): the square covers a fifth of the patch or less, too
+    little to be a cube's top however low the camera (its side faces would cover
+    more than four tops), so the shadowed wood is not taken for its side faces and
+    the patch is no block. The block beside it is found."""
+    rng = np.random.default_rng(seed)
+    side = float(rng.uniform(36.0, 46.0))
+    image = np.empty((HEIGHT, WIDTH, 3), dtype=float)
+    image[:] = (128, 128, 128)
+    wood = np.asarray((190.0, 140.0, 90.0))
+    x0, y0 = float(rng.uniform(160, 220)), float(rng.uniform(130, 170))
+    patch = (x0 - 2.5 * side, y0 - 2.2 * side), (x0 + 2.5 * side, y0 + 2.2 * side)
+    _fill_rectangle(image, *patch, wood * light)
+    (left, top), (right, bottom) = patch
+    cx = left + side / 2 if corner[0] < 0 else right - side / 2
+    cy = top + side / 2 if corner[1] < 0 else bottom - side / 2
+    _fill_square(image, cx, cy, 0.0, side, wood)
+    block = (420.0, 80.0)
+    _fill_square(image, *block, 10.0, 40.0, np.asarray(COLOURS["blue"], dtype=float))
+    image += rng.normal(0.0, 2.0, image.shape)
+    found = detect_blocks(np.clip(np.rint(image), 0, 255).astype(np.uint8), CAMERA)
+    assert len(found) == 1, [(f.colour, f.x * 1000, HEIGHT - f.y * 1000, f.side) for f in found]
+    assert math.dist((found[0].x * 1000 - 0.5, HEIGHT - found[0].y * 1000 - 0.5), block) < 1.5

@@ -7,10 +7,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
 
+from demoplan.perception import blocks
+from demoplan.perception.acceptance import rounded_misfit
 from demoplan.perception.blocks import (
     MIN_CORE_COVERAGE,
     PerceptionSettings,
@@ -215,3 +218,81 @@ def test_a_start_on_table_is_not_fitted_and_reports_its_own_square() -> None:
     assert list(params) == [100.0, 55.0, 10.0, 30.0]
     assert coverage < PerceptionSettings().min_coverage
     assert rms > PerceptionSettings().max_residual
+
+
+def _shape_mask(kind: str, side: float, theta: float, width: float) -> np.ndarray:
+    """A soft mask of a shape that is no block, centred in the crop: a square's
+    outline ``width`` px wide (a ring), a disc, an L of two bars, a bar — or a block:
+    a square with 15 % of it cut away at a corner, ``width`` px wide."""
+    uu, vv = _grid()
+    u, v = SHAPE[1] / 2, SHAPE[0] / 2
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    qu, qv = c * (uu - u) + s * (vv - v), -s * (uu - u) + c * (vv - v)
+    outside = np.maximum(np.abs(qu), np.abs(qv)) - side / 2  # ≈ signed distance
+    if kind == "ring":
+        distance = np.maximum(outside, -width - outside)
+    elif kind == "disc":
+        distance = np.hypot(qu, qv) - side / 2
+    elif kind == "L":
+        bar_u = np.maximum(np.abs(qu) - side / 2, np.abs(qv + side / 2 - width / 2) - width / 2)
+        bar_v = np.maximum(np.abs(qv) - side / 2, np.abs(qu + side / 2 - width / 2) - width / 2)
+        distance = np.minimum(bar_u, bar_v)
+    elif kind == "block":
+        height = 0.15 * side * side / width
+        notch = np.maximum(qu - (side / 2 - width), qv - (side / 2 - height))
+        distance = np.maximum(outside, -notch)
+    else:  # a bar across
+        distance = np.maximum(np.abs(qu) - side, np.abs(qv) - width / 2)
+    soft: np.ndarray = np.clip(0.5 - distance, 0.0, 1.0)
+    return soft
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.sampled_from(["ring", "disc", "L", "bar", "block"]),
+    st.floats(20.0, 40.0),  # side
+    st.floats(0.0, 89.9),  # θ
+    st.floats(0.15, 0.45),  # bar or ring width, a share of the side
+    st.tuples(st.floats(-0.25, 0.25), st.floats(-0.25, 0.25), st.floats(-3.0, 3.0)),
+)
+def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
+    kind: str,
+    side: float,
+    theta: float,
+    width: float,
+    offset: tuple[float, float, float],
+) -> None:
+    """Shapes that are no block and blocks with a corner cut away, started from a
+    Hough-like square a quarter side off at most: where the fit stops after its
+    blurred squares (no sharp fit run), the sharp fit it skipped (the stop switched
+    off) ends in no block either — far from the start's size (the sides a vote
+    looks for: within 20 %), too little covered, or misfitting even against rounded
+    corners; and what the stopped fit reports fails the block's limits too."""
+    alpha = _shape_mask(kind, side, theta, width * side)
+    u, v = SHAPE[1] / 2 + offset[0] * side, SHAPE[0] / 2 + offset[1] * side
+    start = Hypothesis(u, v, theta + offset[2], side, 1.0)
+    limits = PerceptionSettings()
+    tolerances: list[float] = []
+
+    def recorded(*args: object, **kwargs: object) -> tuple[np.ndarray, float]:
+        tolerances.append(float(args[3]))  # type: ignore[arg-type]
+        return _least_squares(*args, **kwargs)  # type: ignore[arg-type]
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(blocks, "_least_squares", recorded)
+        stopped = _fit(alpha, start)
+    if 1e-6 in tolerances or not tolerances:
+        return  # fitted sharp (or not fitted at all: its core uncovered)
+    _, coverage, rms, _ = stopped
+    assert coverage < limits.min_coverage or rms > limits.max_residual
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(blocks, "HOPELESS_COVERAGE", 0.0)
+        patch.setattr(blocks, "HOPELESS_MISFIT", math.inf)
+        params, coverage, rms, _ = _fit(alpha, start)
+    misfit = min(rms, rounded_misfit(alpha, params))
+    sized = 0.8 * side <= params[3] <= 1.2 * side  # a size the vote looked for
+    assert not sized or coverage < limits.min_coverage or misfit > limits.max_residual, (
+        params,
+        coverage,
+        rms,
+    )

@@ -70,8 +70,6 @@ def perceive(
     picture with what was found and what was rejected drawn on it (PNG; both
     files are written only when both are made); ``colours``: a palette file of
     colours to add or move (docs/formats.md)."""
-    from demoplan.perception.calibrated import calibration_for, perceive_photograph
-    from demoplan.perception.calibration import load_calibration, load_markers
     from demoplan.perception.camera import encode_png
 
     _check_mapping(px_per_m, origin, camera, markers, side, one_picture=True)
@@ -87,6 +85,11 @@ def perceive(
         seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
         scale = seen.scale
     else:
+        # imported here: a calibration's file models (pydantic) are a tenth of a
+        # second of a plain top view's start-up
+        from demoplan.perception.calibrated import calibration_for, perceive_photograph
+        from demoplan.perception.calibration import load_calibration, load_markers
+
         reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
         seen = perceive_photograph(image, calibration_for(image, reference), **options)
         scale = f"the camera file {camera}" if camera else f"the markers in the image ({markers})"

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from demoplan.perception.colours import SIDE_FACE_GAP
 from demoplan.perception.opencv import cv2
 
 __all__ = [
@@ -145,16 +146,63 @@ than its top; most of it the side-face test drops), so its top covers at least
 half of it, and touching blocks of one colour each cover their part. A region
 mostly left when its squares are cut out is something larger — a wooden board,
 a table patch crossed by cables — in which squares were fitted between its
-marks: it holds no block (``larger than its squares``)."""
+marks: it holds no block (``larger than its squares``).
+
+A camera low and off to the side sees a cube's side faces as large as its top or
+larger (the `side_faces` family: 0.45 m up, its axis beyond the image), and when
+they stay in the top's colour class the top alone covers under half of its
+region. Those side faces are the top's material lit less: the region's pixels
+:data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* or more darker than the
+squares' own faces are taken for side faces, explained by the squares beside
+them (:func:`explained_share`); a board's or a table patch's body, as light as
+the squares fitted in it, stays unexplained."""
 
 
-def explained_share(alpha: np.ndarray, squares: list[np.ndarray]) -> float:
+MIN_TOP_SHARE = 0.2
+"""The least share of its region a cube's top covers by itself, its side faces in
+the region too: the `side_faces` family's camera (0.45 m up, focal length 630 px
+or more, its axis up to 300 px beyond the image) sweeps a top's side faces at most
+about 2.9 sides towards it, so top and side faces cover at most 1 + 2.9 × √2 ≈ 5
+tops. Under that, darker pixels are not counted as side faces: a wooden table
+with shadowed grain (mrhan_touching, right: a square of its light wood fitted
+between dark things covers 6 % of it) stays ``larger than its squares``."""
+
+
+def explained_share(
+    alpha: np.ndarray, squares: list[np.ndarray], lightness: np.ndarray | None = None
+) -> float:
     """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
-    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge)."""
+    (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge).
+    With ``lightness`` (CIELAB L* over the same crop), the region's pixels
+    :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* or more darker than the
+    median over the squares' central halves are side faces of the squares' cubes and
+    count as explained (:data:`MIN_EXPLAINED_SHARE`) — when the squares cover at least
+    :data:`MIN_TOP_SHARE` of it by themselves."""
     if not squares:
         return 1.0
-    area = int(np.count_nonzero(alpha > 0.5))
-    return sum(float(square[3]) ** 2 for square in squares) / max(area, 1)
+    held = alpha > 0.5
+    area = int(np.count_nonzero(held))
+    covered = sum(float(square[3]) ** 2 for square in squares)
+    if lightness is not None and covered >= MIN_TOP_SHARE * area:
+        faces = np.concatenate([_central_half(lightness, square) for square in squares])
+        if faces.size:
+            darker = held & (lightness <= float(np.median(faces)) - SIDE_FACE_GAP)
+            return min(1.0, (covered + int(np.count_nonzero(darker))) / max(area, 1))
+    return covered / max(area, 1)
+
+
+def _central_half(values: np.ndarray, square: np.ndarray) -> np.ndarray:
+    """``values`` (a crop) at 8 × 8 points over the central half (by side) of the
+    square (u, v, θ, s; u right, v up from the crop's bottom) that lie on the crop."""
+    u, v, theta, side = (float(p) for p in square)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    steps = ((np.arange(8) + 0.5) / 8 * 0.5 - 0.25) * side
+    along, across = np.meshgrid(steps, steps)
+    cols = np.floor(u + c * along - s * across).astype(np.intp).ravel()
+    rows = np.floor(values.shape[0] - (v + s * along + c * across)).astype(np.intp).ravel()
+    within = (rows >= 0) & (rows < values.shape[0]) & (cols >= 0) & (cols < values.shape[1])
+    inside: np.ndarray = values[rows[within], cols[within]]
+    return inside
 
 
 def free_outline_seen(

@@ -473,8 +473,9 @@ def colour_regions(
         image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
     )
     areas = stats[1:count, cv2.CC_STAT_AREA]
-    if rejected is not None:  # smaller than a block: noise, a speck
-        for index in np.flatnonzero(areas < min_area) + 1:
+    if rejected is not None:  # smaller than a block: noise, a speck (reported from a size on)
+        specks = (areas < min_area) & (areas >= REPORTED_SHARE * min_area)
+        for index in np.flatnonzero(specks) + 1:
             record.speck(labels, int(index), tuple(int(v) for v in stats[index]))
     regions: list[ColourRegion] = []
     for index in np.flatnonzero(areas >= min_area) + 1:

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
-from demoplan.documents.poses import MAX_SIZE_M
 from demoplan.errors import InputError, UsageError
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.camera import Camera, load_image
@@ -68,7 +67,13 @@ def seen_now(
 
 def check_side(side: float | None) -> None:
     """``--side``, when given: a block's side in metres, within the size limit."""
-    if side is not None and not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
+    if side is None:
+        return
+    # imported here: the pose documents' models (pydantic) are a tenth of a second
+    # of demoplan perceive's start-up, which needs them for nothing else
+    from demoplan.documents.poses import MAX_SIZE_M
+
+    if not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
         raise UsageError(
             f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
             "(an object's largest extent, docs/limits.md)"

@@ -20,7 +20,10 @@ The families (:data:`FAMILIES`, each a function of a random generator):
   the image's centre only);
 - ``distractors``: cylinders, cuboids, stars and pentagons of the cubes'
   colours beside the cubes — none is a block; about one photograph in seven
-  has shapes only.
+  has shapes only;
+- ``tipped_rows``: rows of two to four cubes of different colours lying tipped
+  over (rolled 30–45° about the row), each cube showing a lit face and a darker
+  strip, beside standing cubes — no face of a row is a top (mrhan_stacks).
 
 A top face less than :data:`PARTIAL_BELOW` in view (a cube on it, a hand over
 it, the image's border through it) is ``partial`` (it need not be found); one
@@ -55,6 +58,7 @@ from demoplan.perception.photo_families_scene import (
     Shape,
     render_scene,
 )
+from demoplan.perception.photo_families_tipped import TippedRow
 from demoplan.perception.photos import PhotoRig
 from demoplan.perception.synthetic import COLOURS
 
@@ -364,6 +368,36 @@ def distractors(rng: np.random.Generator) -> PhotoScene:
     return PhotoScene(rig, tuple(cubes), shapes=tuple(shapes), background=background)
 
 
+def tipped_rows(rng: np.random.Generator) -> PhotoScene:
+    """One to three rows of two to four cubes lying tipped over, neighbours of other
+    colours, rolled 30–45° about the row, and two to five standing cubes."""
+    rig, background = _rig(rng), _background(rng)
+    layout = _Layout(rig, rng, background)
+    rows = []
+    for _ in range(int(rng.integers(1, 4))):
+        count = int(rng.integers(2, 5))
+        spot = layout.spot(count * SIDE / 2 + 0.2 * SIDE)
+        if spot is None:
+            break
+        names: list[str] = []
+        while len(names) < count:
+            name = layout.colour(CHROMATIC)
+            if not names or name != names[-1]:
+                names.append(name)
+        rows.append(
+            TippedRow(
+                *spot,
+                float(rng.uniform(0, 180)),
+                float(rng.uniform(30, 45)) * (1 if rng.random() < 0.5 else -1),
+                SIDE,
+                tuple(names),
+                tuple(CHROMATIC[name] for name in names),
+            )
+        )
+    cubes = _lone_cubes(layout, int(rng.integers(2, 6)), CHROMATIC)
+    return PhotoScene(rig, tuple(cubes), tipped=tuple(rows), background=background)
+
+
 FAMILIES: dict[str, Callable[[np.random.Generator], PhotoScene]] = {
     "touching_rows": touching_rows,
     "stacks": stacks,
@@ -375,6 +409,7 @@ FAMILIES: dict[str, Callable[[np.random.Generator], PhotoScene]] = {
     "small": small,
     "tilted": tilted,
     "distractors": distractors,
+    "tipped_rows": tipped_rows,  # last: the others' seeds stay theirs
 }
 """Each family's scene from a random generator (module docstring)."""
 
@@ -454,6 +489,16 @@ def _document(
             {
                 "colour": shape.colour,
                 "kind": shape.kind,
+                "u": round(u - 0.5, 2),
+                "v": round(rig.height_px - v - 0.5, 2),
+            }
+        )
+    for row in scene.tipped:
+        u, v = rig.to_pixels(row.x, row.y, row.top())
+        non_cubes.append(
+            {
+                "colour": "/".join(row.colours),
+                "kind": f"a row of {len(row.colours)} cubes lying tipped over ({row.roll:.0f} deg)",
                 "u": round(u - 0.5, 2),
                 "v": round(rig.height_px - v - 0.5, 2),
             }

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from demoplan.perception.opencv import cv2
+from demoplan.perception.photo_families_tipped import TippedRow, pixels_of, tipped_faces
 from demoplan.perception.photos import BOARD, PhotoRig, canvas_points, draw_board, lens_and_sensor
 
 __all__ = [
@@ -208,7 +209,8 @@ class Hand:
 @dataclass(frozen=True, slots=True)
 class PhotoScene:
     """What a generated photograph shows: the camera and table (``rig``), the
-    cubes, the shapes that are no cubes, hands, the table's surface (a
+    cubes, the shapes that are no cubes, hands, rows of cubes lying tipped over
+    (no cubes' tops either), the table's surface (a
     :data:`BACKGROUNDS` name), the exposure (a gain: over 1 colours clip) and the
     chance of a glint on each top."""
 
@@ -216,6 +218,7 @@ class PhotoScene:
     cubes: tuple[Cube, ...]
     shapes: tuple[Shape, ...] = ()
     hands: tuple[Hand, ...] = ()
+    tipped: tuple[TippedRow, ...] = ()
     background: str = "board"
     exposure: float = 1.0
     glints: float = 0.5
@@ -276,12 +279,13 @@ def _prisms(scene: PhotoScene) -> list[_Prism]:
     ]
     solids += [_Prism(s.footprint(), 0.0, s.height, s.rgb, 0) for s in scene.shapes]
     eye = np.array(scene.rig.camera_centre())
+    return sorted(solids, key=lambda p: _distance(p, eye), reverse=True)  # the farthest first
 
-    def distance(prism: _Prism) -> float:
-        centre = prism.footprint.mean(axis=0)
-        return float(np.linalg.norm(eye - np.array([*centre, prism.bottom + prism.height])))
 
-    return sorted(solids, key=distance, reverse=True)  # the farthest first
+def _distance(prism: _Prism, eye: np.ndarray) -> float:
+    """From the camera's centre ``eye`` (x, y, z) to the middle of ``prism``'s top."""
+    centre = prism.footprint.mean(axis=0)
+    return float(np.linalg.norm(eye - np.array([*centre, prism.bottom + prism.height])))
 
 
 def _draw_prism(canvas: _Canvas, prism: _Prism, tint: float, eye: np.ndarray) -> None:
@@ -328,6 +332,7 @@ def _shadows(canvas: _Canvas, scene: PhotoScene) -> None:
     shadow = np.zeros(canvas.faces.shape, np.uint8)
     outlines = [(c.footprint(), c.top) for c in scene.cubes if c.z == 0]
     outlines += [(s.footprint(), s.height) for s in scene.shapes]
+    outlines += [(row.footprint(), row.top()) for row in scene.tipped]
     for footprint, height in outlines:
         hull = cv2.convexHull(
             np.concatenate([footprint, footprint + LIGHT * height]).astype(np.float32)
@@ -355,8 +360,20 @@ def render_scene(
         draw_board(canvas.rgb, rig, rng, supersample=supersample)
     _shadows(canvas, scene)
     eye = np.array(rig.camera_centre()[:2])
+    # the tipped rows' faces drawn among the prisms, farthest first (they draw no
+    # random numbers: scenes without them render as before)
+    eye_3d = np.array(rig.camera_centre())
+    faces = sorted(
+        (face for row in scene.tipped for face in tipped_faces(row, eye_3d)),
+        key=lambda face: -face[0],
+    )
     for prism in _prisms(scene):
+        while faces and faces[0][0] >= _distance(prism, eye_3d):
+            _, corners, colour = faces.pop(0)
+            canvas.fill(pixels_of(rig, corners, supersample), colour)
         _draw_prism(canvas, prism, float(rng.uniform(0.93, 1.07)), eye)
+    for _, corners, colour in faces:
+        canvas.fill(pixels_of(rig, corners, supersample), colour)
     for hand in scene.hands:
         shade = float(rng.uniform(0.95, 1.05))
         skin = tuple(int(c) for c in np.clip(np.asarray(hand.rgb) * shade, 0, 255))
