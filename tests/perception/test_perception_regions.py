@@ -485,13 +485,13 @@ def _printed(centre: Point, yaw: float, side: float, glyph: str) -> list[np.ndar
     side=_poses["side"],
     seed=_poses["seed"],
     colour=st.sampled_from(("yellow", "green", "red")),
-    glyph=st.sampled_from(("T", "E", "L", "frame")),
+    glyph=st.sampled_from(("T", "E", "L", "H")),
 )
 def test_a_black_letter_printed_on_a_top_is_its_top(
     centre: Point, yaw: float, side: float, seed: int, colour: str, glyph: str
 ) -> None:
-    """A black letter or frame printed on a top (up to a quarter of its face, within
-    a sixth of a side of its edge: an alphabet block's) is a hole in its colour's
+    """A black letter printed on a top (up to a quarter of its face, within a
+    sixth of a side of its edge: an alphabet block's) is a hole in its colour's
     mask unlike the table around it, so the top's: the block is found whole,
     where it is, its size kept. (Without: the letter's bar and the strip of top
     beyond it were opened off as a strand, and the square fitted was a part of
