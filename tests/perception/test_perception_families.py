@@ -60,11 +60,15 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     "distractors": ("a shape that is no cube taken for blocks", ((2147483646, False),)),
     "hands": ("a top beside a hand missed", ((126342, False),)),
     "achromatic": (
-        "with --side, a black or grey cube missed: its side faces, as dark as its top, "
-        "stay in its mask",
-        ((5, True), (21, True)),
+        "with --side, a black or grey cube missed: a board's grid line along its top "
+        "(darker than the top) stays in its mask; a grey top split into fragments",
+        ((21, True), (29, True)),
     ),
-    "patterned": ("a printed glyph splits a top's mask", ((0, False), (1, True))),
+    "patterned": (
+        "a top with a frame printed on it, a white top with black dots missed (as a "
+        "marker's code is not filled), or its glyph taken for its side faces",
+        ((0, False), (6, False)),
+    ),
     "tipped_rows": (
         "the faces of cubes lying tipped over in a row taken for tops",
         ((1, False), (1, True)),
@@ -108,13 +112,22 @@ def test_a_family_not_met_yet_fails_where_it_was_seen_failing(
     _meets_the_thresholds(family, seed, side_given)
 
 
+MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
+    # family: draws (seed, --side given) it once failed on and meets now
+    "achromatic": ((5, True), (23, True), (40, True)),
+    "patterned": ((1, False), (4, False), (4, True), (16, False), (19, False)),
+    # a top whose side faces, darker and larger than it, stayed in its mask: it
+    # alone covered under half of the region (acceptance.explained_share)
+    "side_faces": ((536870913, True),),
+}
+"""Draws seen failing and met now (a crop's closing, a glint's notch, a letter
+printed on a coloured or a white top, a top's side faces): kept met, also while
+the rest of their family (in :data:`NOT_YET`) is not."""
+
+
 @pytest.mark.parametrize(
     ("family", "seed", "side_given"),
-    [
-        # a top whose side faces, darker and larger than it, stayed in its mask: it
-        # alone covered under half of the region (acceptance.explained_share)
-        ("side_faces", 536870913, True),
-    ],
+    [(family, seed, side) for family, draws in sorted(MET_SINCE.items()) for seed, side in draws],
 )
 def test_a_family_draw_once_failed_meets_the_issue_thresholds(
     family: str, seed: int, side_given: bool

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.perception.masks import dilate, erode, fill_holes
+from demoplan.perception.masks import close, dilate, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
 
@@ -185,6 +185,8 @@ def achromatic_regions(
     regions: list[AchromaticRegion] = []
     for is_bright, mask in ((True, bright), (False, dark)):
         mask &= ~dilate(markers, 2)  # a marker's white and black cells are no blocks
+        if is_bright:
+            mask |= _printed_on_white(mask, dark, side_px)
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)
         count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
         for index in range(1, count):
@@ -230,6 +232,40 @@ def _markers(
             markers[rows, cols] |= filled
             record(filled, rows, cols, "marker", f"a bright square {dark.mean():.0%} dark inside")
     return markers
+
+
+PRINTED_DARK_SHARE = 0.5
+"""A hole in a white part is a letter printed on a white top when this share of it
+or more is dark (under :data:`DARK_RATIO` of the table): a letter's bars are dark
+through, their blurred rims aside (three quarters of a generated letter's hole);
+the code of a small marker on a white card, its ring blurred into its white
+centre, is dark over a third of its hole (the development set's AprilTags)."""
+
+
+def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.ndarray:
+    """What is printed on white tops (a letter: dark, so no part of the ``bright``
+    mask): the holes of a bright part smaller than a block of the smallest side
+    (``side_px``), each :data:`PRINTED_DARK_SHARE` ``dark`` or more, where they cover
+    under :data:`MARKER_DARK_SHARE` of the part with its holes filled (a marker's
+    black cells cover more). One labelling of the image's non-bright pixels finds
+    the holes (those not reaching the border), their sizes and dark shares; the
+    parts are labelled only when a hole is taken."""
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        (~bright).astype(np.uint8), connectivity=4
+    )
+    sizes = stats[:, cv2.CC_STAT_AREA]
+    darker = np.bincount(labels[dark & ~bright], minlength=count)
+    taken = (sizes < side_px**2) & (darker >= PRINTED_DARK_SHARE * sizes)
+    taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    if not taken.any():
+        return np.zeros(bright.shape, dtype=bool)
+    holes: np.ndarray = taken[labels]
+    filled = bright | holes
+    count, parts = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
+    areas = np.bincount(parts.ravel(), minlength=count)
+    held = np.bincount(parts[holes], minlength=count)
+    printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[parts]
+    return printed
 
 
 def _opened_at_own_scale(part: np.ndarray) -> np.ndarray:
@@ -346,9 +382,10 @@ def _region(
         member = _without_side_faces(member, crop_l, part.regrown)
         opened &= member
     # a glint's hole, opened to the outside by a crack of its rim, closed
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (4 * part.regrown + 1,) * 2)
-    filled = fill_holes(cv2.morphologyEx(member.astype(np.uint8), cv2.MORPH_CLOSE, disc) > 0)
-    solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(fill_holes(opened)))
+    filled = fill_holes(close(member, 2 * part.regrown))
+    # a glint's rim at a black top's edge opens its hole to the outside: closed too
+    closed = fill_holes(close(opened, 2 * part.regrown))
+    solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(closed))
     if solidity < MIN_SOLIDITY or rect_fill < MIN_RECT_FILL:
         return _Refusal("not compact", f"solidity {solidity:.2f}, {rect_fill:.0%} of its rectangle")
     if aspect > MAX_ASPECT:

@@ -41,7 +41,8 @@ import numpy as np
 from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
-from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes, small_parts
+from demoplan.perception.highlights import glare, highlights, hole_owners, printed
+from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
     REPORTED_SHARE,
@@ -79,8 +80,6 @@ group of blocks is that large and of one colour; its pixels of that colour are
 table too."""
 MAX_PALETTE_COLOURS = 64
 """Colours a palette file may add: a camera tells a few dozen apart at best."""
-GLARE_SLACK = 8.0
-"""Grey levels a highlight's channel may fall under the top face's mean (noise)."""
 UNNAMED = -4
 """The class of colours no plain colour is near (``block``); the unnamed colours of one
 region that differ are the classes −4, −5, … (:func:`_unnamed_split`)."""
@@ -290,7 +289,7 @@ class _ImageColours:
 @dataclass(frozen=True, slots=True)
 class _Crop:
     """A connected component's box (5 px around it): its pixels (RGB, a*b*, L*), its
-    core pixels and the table's colour in a ring around it (RGB, a*b*); ``offsets``
+    core pixels and the table's colour in a ring around it (RGB, a*b*, L*); ``offsets``
     the pixels' RGB change from that table colour (every face's soft mask and the
     nearest class read it: taken once)."""
 
@@ -303,6 +302,7 @@ class _Crop:
     core: np.ndarray
     ground: np.ndarray
     ground_ab: np.ndarray
+    ground_lightness: float
     offsets: np.ndarray
 
 
@@ -334,8 +334,21 @@ def _component_crop(
     chroma = c.lab[rows, cols, 1:]
     ground_ab = np.median(chroma[ring], axis=0) if ring.any() else np.zeros(2)
     lightness = c.lab[rows, cols, 0]
+    ground_lightness = float(np.median(lightness[ring])) if ring.any() else 50.0
     offsets = pixels - ground
-    return _Crop(rows, cols, member, pixels, chroma, lightness, core, ground, ground_ab, offsets)
+    return _Crop(
+        rows,
+        cols,
+        member,
+        pixels,
+        chroma,
+        lightness,
+        core,
+        ground,
+        ground_ab,
+        ground_lightness,
+        offsets,
+    )
 
 
 def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
@@ -345,7 +358,7 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     classes = _unnamed_split(classified, k.chroma[k.core], c.min_area)
     if c.coloured_image:
         c.record.shade(classes, k.core, k.lightness, k.rows, k.cols)
-        classes[_glare(classes, k.lightness, k.core, c.min_area)] = -3
+        classes[glare(classes, k.lightness, k.core, c.min_area)] = -3
     classes = _smoothed_classes(classes, k.core)
     present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
     # one colour between two names first: its two halves, speckled through each
@@ -412,7 +425,7 @@ def _component_regions(
     offsets = k.offsets.reshape(-1, 3)
     nearest = _nearest_class(offsets, [face[2] for face in faces], k.member.shape)
     grown = dilate(k.member, 1)
-    owners = _hole_owners(k.core, nearest) if len(faces) > 1 else None
+    owners = hole_owners(k.core, nearest) if len(faces) > 1 else None
     regions: list[ColourRegion] = []
     for n, face in enumerate(faces):
         colour, centre, top_face = face[0], face[1], face[3]
@@ -423,8 +436,9 @@ def _component_regions(
         # or by the region's, bordered mostly by this class (a glint near the
         # seam, the rim between it and the neighbour thinner than the core's)
         enclosing = on_class if owners is None else on_class | (owners == n)
-        glare = _highlights(k.pixels, k.lightness, top_face, centre, enclosing, c.min_area)
-        alpha[glare] = 1.0
+        on_top = highlights(k.pixels, k.lightness, (top_face, centre), enclosing, c.min_area)
+        alpha[on_top] = 1.0
+        alpha[printed(alpha, k.lightness, k.ground_lightness)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
         regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha))
@@ -484,54 +498,6 @@ def _covered(regions: list[ColourRegion], shape: tuple[int, ...]) -> np.ndarray:
         (row, col), (rows, cols) = region.offset, region.alpha.shape
         covered[row : row + rows, col : col + cols] |= region.alpha > 0.5
     return covered
-
-
-def _hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
-    """Per pixel of the holes in a region's clearly coloured pixels (``core``,
-    closed by a 5 × 5 square: the faint seam between two classes would open a hole
-    next to it to the outside), the class (``nearest``) that holds most of the ring
-    two pixels around its hole, −1 elsewhere: whose top a glint there is on."""
-    owners = np.full(core.shape, -1, dtype=np.intp)
-    # the seam between two classes (their mixed colours faint) closed first
-    closed = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
-    holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
-    if not holes.any():
-        return owners
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        holes.astype(np.uint8), connectivity=8
-    )
-    height, width = core.shape
-    for index in range(1, count):
-        # the hole's box and the ring's 2 px around it: the dilation reaches no farther
-        x, y, w, h = (int(value) for value in stats[index, :4])
-        rows = slice(max(0, y - 2), min(height, y + h + 2))
-        cols = slice(max(0, x - 2), min(width, x + w + 2))
-        hole = labels[rows, cols] == index
-        ring = dilate(hole, 2) & core[rows, cols]
-        if ring.any():
-            owners[rows, cols][hole] = int(np.bincount(nearest[rows, cols][ring]).argmax())
-    return owners
-
-
-def _highlights(
-    crop: np.ndarray,
-    lightness: np.ndarray,
-    top_face: float,
-    top_rgb: np.ndarray,
-    core: np.ndarray,
-    min_area: float,
-) -> np.ndarray:
-    """Which pixels of a one-class region's crop (RGB ``crop``, L* ``lightness``)
-    are a specular highlight on its block, so covered by its top face: the top
-    face's colour (``top_rgb``, L* ``top_face``) with white added — every channel
-    at least the top's, brighter than it — enclosed by the block's clearly
-    coloured pixels (``core``; a region may hold patches of a grey table, faintly
-    tinted, beside a dark or saturated block), and holes in those smaller than a
-    block (a marker drawn on the block, a glint's white centre)."""
-    whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
-    enclosed = fill_holes(core)
-    glare: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
-    return glare
 
 
 def _present_classes(
@@ -746,27 +712,6 @@ def _class_score(offsets: np.ndarray, change: np.ndarray) -> np.ndarray:
         squares += off_line * off_line
     score: np.ndarray = np.sqrt(squares) - 0.25 * along / math.sqrt(length2)
     return score
-
-
-def _glare(
-    classes: np.ndarray, lightness: np.ndarray, core: np.ndarray, min_area: float
-) -> np.ndarray:
-    """Which core pixels are a specular highlight: brighter than most of the region
-    (white mixed in; it may then look like another colour, a glint on yellow like
-    wood), in patches smaller than a block (a yellow block beside a blue one is a
-    block's size)."""
-    core_lightness = lightness[core]
-    bright = core_lightness > np.median(core_lightness) + 4.0
-    candidates = np.zeros(core.shape, dtype=bool)
-    candidates[core] = bright
-    count, labels = cv2.connectedComponents(candidates.astype(np.uint8), connectivity=4)
-    if count == 1:  # the background alone
-        return np.zeros(classes.shape, dtype=bool)
-    sizes = np.bincount(labels.ravel(), minlength=count)
-    small = sizes < 1.5 * min_area
-    small[0] = False
-    glare: np.ndarray = small[labels][core]
-    return glare
 
 
 def _lightness_modes(values: np.ndarray) -> tuple[float, float | None]:

@@ -10,7 +10,7 @@ import numpy as np
 
 from demoplan.perception.opencv import cv2
 
-__all__ = ["CROSS", "dilate", "distances", "erode", "fill_holes", "small_parts"]
+__all__ = ["CROSS", "close", "dilate", "distances", "erode", "fill_holes", "small_parts"]
 
 CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 """The 4-neighbour cross (3 × 3) the masks are eroded and dilated by."""
@@ -32,6 +32,21 @@ def erode(mask: np.ndarray, steps: int) -> np.ndarray:
 def dilate(mask: np.ndarray, steps: int) -> np.ndarray:
     """``mask`` dilated ``steps`` times by the 4-neighbour cross, with OpenCV."""
     return np.asarray(cv2.dilate(mask.astype(np.uint8), CROSS, iterations=steps), dtype=bool)
+
+
+def close(mask: np.ndarray, radius: int) -> np.ndarray:
+    """``mask`` closed by a disc ``radius`` pixels out from its centre, the crop's
+    outside empty: OpenCV's closing erodes with the outside full, so a mask
+    dilated up to the crop's border kept all it had grown there (a black cube's
+    crop, 10 px around it, closed by a disc of radius 10, grew 19 % of its area
+    in bands along the crop's edges — then taken for a marker's white cells)."""
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+    padded = cv2.copyMakeBorder(
+        mask.astype(np.uint8), radius, radius, radius, radius, cv2.BORDER_CONSTANT, value=0
+    )
+    closed = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, disc)
+    height, width = mask.shape
+    return np.asarray(closed[radius : radius + height, radius : radius + width], dtype=bool)
 
 
 def small_parts(mask: np.ndarray, min_area: float) -> np.ndarray:

@@ -1,0 +1,122 @@
+"""What lies on a coloured top face though it is not the face's colour: a
+specular highlight (white added to the face's colour) and what is printed on it,
+found by :mod:`demoplan.perception.colours` as holes in a region's clearly
+coloured pixels and given back to the top that encloses them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from demoplan.perception.masks import dilate, fill_holes, small_parts
+from demoplan.perception.opencv import cv2
+
+__all__ = ["GLARE_SLACK", "PRINTED_CONTRAST", "glare", "highlights", "hole_owners", "printed"]
+
+GLARE_SLACK = 8.0
+"""Grey levels a highlight's channel may fall under the top face's mean (noise)."""
+
+
+def hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+    """Per pixel of the holes in a region's clearly coloured pixels (``core``,
+    closed by a 5 × 5 square: the faint seam between two classes would open a hole
+    next to it to the outside), the class (``nearest``) that holds most of the ring
+    two pixels around its hole, −1 elsewhere: whose top a glint there is on."""
+    owners = np.full(core.shape, -1, dtype=np.intp)
+    # the seam between two classes (their mixed colours faint) closed first
+    closed = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
+    if not holes.any():
+        return owners
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        holes.astype(np.uint8), connectivity=8
+    )
+    height, width = core.shape
+    for index in range(1, count):
+        # the hole's box and the ring's 2 px around it: the dilation reaches no farther
+        x, y, w, h = (int(value) for value in stats[index, :4])
+        rows = slice(max(0, y - 2), min(height, y + h + 2))
+        cols = slice(max(0, x - 2), min(width, x + w + 2))
+        hole = labels[rows, cols] == index
+        ring = dilate(hole, 2) & core[rows, cols]
+        if ring.any():
+            owners[rows, cols][hole] = int(np.bincount(nearest[rows, cols][ring]).argmax())
+    return owners
+
+
+def highlights(
+    crop: np.ndarray,
+    lightness: np.ndarray,
+    top: tuple[float, np.ndarray],
+    core: np.ndarray,
+    min_area: float,
+) -> np.ndarray:
+    """Which pixels of a one-class region's crop (RGB ``crop``, L* ``lightness``)
+    are a specular highlight on its block, so covered by its top face: the top
+    face's colour (``top``: its L* and mean RGB) with white added — every channel
+    at least the top's, brighter than it — enclosed by the block's
+    clearly coloured pixels (``core``; a region may hold patches of a grey table,
+    faintly tinted, beside a dark or saturated block), holes in those smaller than a
+    block (a marker drawn on the block, a glint's white centre)."""
+    top_face, top_rgb = top
+    whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
+    enclosed = fill_holes(core)
+    on_top: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
+    return on_top
+
+
+PRINTED_CONTRAST = 12.0
+"""L* by which a hole in a top's coloured pixels differs from the table around the
+region (its median), at least, to be printed on the top rather than table seen
+through a ring of blocks (a black letter on a yellow top is 50 L* or more under
+white paper, a white one on a red top as far over a blue table)."""
+
+
+def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) -> np.ndarray:
+    """The holes in a top's soft mask (``alpha`` over ½) that are something printed
+    on it — a letter, dots, dark on a pale top or pale on a dark one, which a top's
+    colour does not cover: each hole in one piece round no piece of the mask (the
+    dark code of an AprilTag on a tinted card rings the card's centre; so does a
+    frame printed on a top, which is not filled either), covering under half of the
+    mask with its holes filled (a letter is a small share of its face), whose median L*
+    (``lightness``) differs from the table's around the region
+    (``table_lightness``) by :data:`PRINTED_CONTRAST` or more (table seen within a
+    ring of blocks, or between a block and a pen line drawn up to it, is the
+    table's lightness)."""
+    mask = alpha > 0.5
+    enclosed = fill_holes(mask)
+    holes = enclosed & ~mask
+    found = np.zeros(holes.shape, dtype=bool)
+    if not holes.any():
+        return found
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=8)
+    limit = 0.5 * float(enclosed.sum())
+    for index in np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] < limit) + 1:
+        x, y, w, h, _ = (int(value) for value in stats[index])
+        rows, cols = slice(y, y + h), slice(x, x + w)
+        hole = labels[rows, cols] == index
+        if fill_holes(hole).sum() > hole.sum():
+            continue  # a ring round a piece of the top: a marker's code on a card
+        if abs(float(np.median(lightness[rows, cols][hole])) - table_lightness) >= PRINTED_CONTRAST:
+            found[rows, cols] |= hole
+    return found
+
+
+def glare(
+    classes: np.ndarray, lightness: np.ndarray, core: np.ndarray, min_area: float
+) -> np.ndarray:
+    """Which core pixels are a specular highlight: brighter than most of the region
+    (white mixed in; it may then look like another colour, a glint on yellow like
+    wood), in patches smaller than a block (a yellow block beside a blue one is a
+    block's size)."""
+    core_lightness = lightness[core]
+    bright = core_lightness > np.median(core_lightness) + 4.0
+    candidates = np.zeros(core.shape, dtype=bool)
+    candidates[core] = bright
+    count, labels = cv2.connectedComponents(candidates.astype(np.uint8), connectivity=4)
+    if count == 1:  # the background alone
+        return np.zeros(classes.shape, dtype=bool)
+    sizes = np.bincount(labels.ravel(), minlength=count)
+    small = sizes < 1.5 * min_area
+    small[0] = False
+    found: np.ndarray = small[labels][core]
+    return found
