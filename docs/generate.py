@@ -102,7 +102,6 @@ from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import (
     MAX_GRIPPER,
     _GripperSchema,
-    _LandmarkSchema,
     _ObjectSchema,
     _RobotSchema,
     _SceneSchema,
@@ -313,6 +312,12 @@ GEOMETRY = FieldTable(
         "are of one kind; default: its name, an object of its own kind. Instances of a type "
         "have one shape and size; their names need not match between demonstrations "
         "([learning.md](learning.md#identical-objects))",
+        "colour": f"{COLOUR_FORMS}: the colour every figure of the demonstration and of the "
+        "model learned from it draws it in (`learn --plot`, `show`, the studio), and of a "
+        "scene that names none for it (`plan --plot`, `run --frames`, MuJoCo, the arm); the "
+        "studio's Teach view writes the colours a user chose. Default: the figures' palette. "
+        "Anything else is one error line naming the file and the field "
+        "(`objects.cup.colour`, exit 1)",
     },
 )
 LANDMARK = FieldTable(
@@ -330,6 +335,10 @@ LANDMARK = FieldTable(
         "floor to its rim; learning makes placements inside one a region goal "
         "(docs/learning.md, \"Region goals\"). `import` writes them for a recording's bins "
         "(the spaces its walls and dividers enclose all round); a scene's are not used",
+        "colour": f"{COLOUR_FORMS}: the colour every renderer draws it in, as an object's "
+        "(default: the figures' sandy landmark colour; a scene's landmark without one takes "
+        "the demonstrations'); anything else is one error line naming the file and the field "
+        "(`landmarks.caddy.colour`, exit 1)",
     },
     noun="landmark",
 )
@@ -390,21 +399,10 @@ SCENE_OBJECT = FieldTable(
         "colour": f"{COLOUR_FORMS}, e.g. `\"#d62728\"` or `[0.84, 0.15, 0.16]`: the colour "
         "every renderer draws it in — `run --frames` (the kinematic top views, MuJoCo's and "
         "the arm's pictures), `--video`, the storyboard, `plan --plot`, the studio. Default: "
-        "the colour demoplan gives its name (`red` is red, another name a colour of a "
-        "palette of 20, distinct within the task). Anything else is one error line naming "
-        "the file and the field (`objects.cup.colour`, exit 1)",
+        "the demonstrations' colour for it, else the colour demoplan gives its name (`red` is "
+        "red, another name a colour of a palette of 20, distinct within the task). Anything "
+        "else is one error line naming the file and the field (`objects.cup.colour`, exit 1)",
     },
-)
-SCENE_LANDMARK = FieldTable(
-    "Scene landmark",
-    _LandmarkSchema,
-    {
-        **LANDMARK.meaning,
-        "colour": f"{COLOUR_FORMS}: the colour every renderer draws it in, as an object's "
-        "(default: the figures' sandy landmark colour); anything else is one error line "
-        "naming the file and the field (`landmarks.caddy.colour`, exit 1)",
-    },
-    noun="landmark",
 )
 GRIPPER = FieldTable(
     "Gripper",
@@ -587,7 +585,6 @@ FIELD_TABLES = (
     OBJECTS_FILE,
     SCENE,
     SCENE_OBJECT,
-    SCENE_LANDMARK,
     GRIPPER,
     TABLE,
     ROBOT,
@@ -1433,7 +1430,6 @@ def scene_section() -> str:
             fenced("json", (ROOT / PYRAMID).read_text(encoding="utf-8")),
             field_table(SCENE),
             field_table(SCENE_OBJECT),
-            field_table(SCENE_LANDMARK),
             field_table(GRIPPER),
             field_table(TABLE),
             field_table(ROBOT),

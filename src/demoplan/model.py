@@ -140,6 +140,15 @@ def demonstrated_shapes(demonstrations: Iterable[Demonstration]) -> dict[str, Ob
     return shapes
 
 
+def demonstrated_colours(demonstrations: Iterable[Demonstration]) -> dict[str, str]:
+    """Each object's (and landmark's) colour as the first demonstration giving one has it."""
+    colours: dict[str, str] = {}
+    for demo in demonstrations:
+        for name, colour in demo.colours:
+            colours.setdefault(name, colour)
+    return colours
+
+
 @dataclass(frozen=True, slots=True)
 class Step:
     """One subtask of a segmented demonstration: ``object`` moved and released at ``pose``."""
@@ -168,6 +177,10 @@ class Demonstration:
     """Declared types (object name → type) of objects that are one of several
     interchangeable instances (two plates, three red blocks); an object not
     listed is of its own type, its name (docs/formats.md)."""
+    colours: tuple[tuple[str, str], ...] = ()
+    """The colours the file gives its objects and landmarks (name → ``#rrggbb``,
+    docs/formats.md ``colour``): every figure of the demonstration and of the
+    model learned from it draws them; the others take the figures' palette."""
 
     def renamed(self, renaming: Mapping[str, str]) -> Demonstration:
         """This demonstration with objects renamed (``renaming``: old → new name;
@@ -182,7 +195,13 @@ class Demonstration:
             objects=tuple((name(n), g) for n, g in self.objects),
             initial=tuple((name(n), p) for n, p in self.initial),
             types=tuple((name(n), t) for n, t in self.types),
+            colours=tuple((name(n), c) for n, c in self.colours),
         )
+
+    @property
+    def given_colours(self) -> dict[str, str]:
+        """Name → ``#rrggbb`` of the objects and landmarks the file gives a colour."""
+        return dict(self.colours)
 
     def type_of(self, name: str) -> str:
         """``name``'s type: as declared, else its name."""

@@ -349,3 +349,29 @@ def test_the_report_section_has_the_roles_table(model: TaskModel, seatings: list
     assert header in text
     for row in expected_rows(seatings):
         assert "| " + " | ".join(row) + " |" in text
+
+
+def test_the_no_plan_figures_reason_is_wrapped_within_its_width() -> None:
+    """Why there is no plan stands under the title in lines as wide as the
+    axes' cell, a long file path broken inside itself (it was cut at 90
+    characters whatever the figure's width, and a path wider than that ran off)."""
+    import matplotlib.pyplot as plt
+
+    from demoplan.plotting.figures import plot_scene_targets
+    from demoplan.plotting.labels import figure_renderer
+    from demoplan.scenes.preview import preview_scene
+    from demoplan.scenes.scene import load_scene
+
+    scene = load_scene(EXAMPLES / "scenes" / "pyramid-fig4.json")
+    problem = preview_scene(scene).problem
+    path = "/home/user/" + "a-very-long-folder-name/" * 12 + "scene.json"
+    reason = f"{path}: objects.red.position: no free space left on the table " * 3
+    figure, ax = plt.subplots(figsize=(4, 4))
+    plot_scene_targets(scene, problem, reason, ax, title="No plan")
+    title = ax.title
+    lines = title.get_text().split("\n")
+    assert lines[0] == "No plan" and len(lines) > 4
+    assert "".join(lines[1:]).replace(" ", "") == reason.replace(" ", "")  # every character kept
+    extent = title.get_window_extent(figure_renderer(figure))  # type: ignore[arg-type]
+    assert extent.width <= figure.bbox.width
+    plt.close(figure)

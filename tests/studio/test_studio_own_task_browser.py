@@ -109,6 +109,7 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
     for name, (x, y) in START.items():  # the start as arranged
         assert objects["objects"][name]["position"] == [x, y, 0.0]
 
+    chosen = {name: colour for name, _, _, _, colour, _ in THINGS}
     for k, (box, order) in enumerate(zip(CADDY_POSES, ORDERS, strict=True)):
         if k > 0:
             page.button("New demonstration").click()
@@ -131,12 +132,18 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
         saved = json.loads((workdir / f"caddy-{k + 1}.json").read_text())
         assert [s["object"] for s in saved["steps"]] == order
         assert saved["initial"]["cup"]["position"] == [*START["cup"], 0]
+        assert {  # the colours chosen, for every figure of the task learned from it
+            name: entry.get("colour")
+            for group in ("objects", "landmarks")
+            for name, entry in saved[group].items()
+        } == chosen
 
     page.view("2 · Learn")
     page.button("Learn").click()
     page.settle()
     assert page.alert() == ""
     model = load_model(workdir / "model.json")
+    assert [d.given_colours for d in model.demonstrations] == [chosen] * 3
     cli = learn_model([workdir / f"caddy-{k}.json" for k in (1, 2, 3)])
     assert (model.states, model.constraints) == (cli.states, cli.constraints)
     states = {s.object: s for s in model.states}
@@ -175,7 +182,7 @@ def test_tools_and_a_cup_into_a_turned_caddy_taught_learned_planned_and_run(
         for group in ("objects", "landmarks")
         for name, entry in saved[group].items()
     }
-    assert given == {name: colour for name, _, _, _, colour, _ in THINGS}
+    assert given == chosen
     # and the page draws each in it, from above and from the side
     for name, colour in given.items():
         side = page.tab.locator(f'[data-height-of="{name}"]').first.get_attribute("fill")

@@ -124,12 +124,13 @@ class DemonstrationsSchema(_Schema):
 def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
     """A demonstration in the file form of docs/formats.md (metres, quaternions)."""
     out: dict[str, Any] = {"format": "demoplan/demonstration-1", "name": demo.name}
-    types = dict(demo.types)
+    types, colours, landmarks = dict(demo.types), demo.given_colours, dict(demo.landmarks)
     if demo.objects:
         out["objects"] = {
             n: {"shape": g.shape, "size": list(g.size)}
             | ({} if g.mass is None else {"mass": g.mass})
             | ({"type": types[n]} if n in types else {})
+            | ({"colour": colours[n]} if n in colours and n not in landmarks else {})
             for n, g in demo.objects
         }
     if demo.landmarks:
@@ -137,6 +138,7 @@ def demonstration_to_dict(demo: Demonstration) -> dict[str, Any]:
         out["landmarks"] = {
             n: pose_to_dict(p)
             | ({"compartments": [list(c) for c in compartments[n]]} if n in compartments else {})
+            | ({"colour": colours[n]} if n in colours else {})
             for n, p in demo.landmarks
         }
     if demo.initial:
@@ -309,6 +311,12 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
             (name, entry.type)
             for name, entry in parsed.objects.items()
             if entry.type is not None and entry.type != name
+        ),
+        colours=tuple(
+            (name, str(entry.colour))  # read as #rrggbb (GivenColour)
+            for entries in (parsed.objects, parsed.landmarks)
+            for name, entry in entries.items()
+            if entry.colour is not None
         ),
     )
 

@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from demoplan.documents.colours import GivenColour
 from demoplan.errors import InputError
 from demoplan.model import Compartment, ObjectGeometry, Pose
 from demoplan.rotations import canonical_quat, quat_from_rpy, quat_from_yaw, unit_length_expected
@@ -99,6 +100,7 @@ class ObjectSchema(_Schema):
     type: TypeName | None = None
     mass: Number | None = Field(default=None, gt=0)  # kg (demoplan.documents.masses)
     density: Number | None = Field(default=None, gt=0)  # kg/m³
+    colour: GivenColour = None  # every figure draws it (demoplan.documents.colours)
 
     @field_validator("size")
     @classmethod
@@ -117,6 +119,7 @@ class LandmarkSchema(PoseSchema):
     """Its open interiors (a bin's compartments): ``[x_low, y_low, z_low, x_high,
     y_high, z_high]`` in its frame from its position; learning makes a placement
     inside one a region goal (docs/learning.md, "Region goals")."""
+    colour: GivenColour = None
 
     @field_validator("size")
     @classmethod

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, ObjectGeometry, Pose, TaskModel
 from demoplan.plotting.backend import tight_layout, use_agg
+from demoplan.plotting.captions import fit_title
 from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.plotting.labels import (
     BoxPlacement,
@@ -156,9 +157,10 @@ def plot_demonstration(
         _, ax = plt.subplots(figsize=(5, 5))
     geometry = demo.geometry()
     current = demo.initial_poses()
-    assign_colours([*(name for name, _ in demo.initial), *(step.object for step in demo.steps)])
+    given = demo.given_colours  # the file's colours, else the palette's
+    assign_colours([*(name for name, _ in demo.initial), *(s.object for s in demo.steps)], given)
     for name, pose in demo.landmarks:
-        patch = object_patch(pose, geometry.get(name), LANDMARK_COLOUR, 0.6)
+        patch = object_patch(pose, geometry.get(name), given.get(name, LANDMARK_COLOUR), 0.6)
         patch.set_hatch("//")
         patch.set_zorder(0.5)
         ax.add_patch(patch)
@@ -495,8 +497,6 @@ def plot_scene_targets(
     their objects, the free-space spots, and why there is no plan (wrapped
     under the title). ``roles`` (role → instance): as :func:`plot_scene_plan`;
     a role's target is named after the role."""
-    import textwrap
-
     import matplotlib.pyplot as plt
     from matplotlib import patches
 
@@ -536,7 +536,7 @@ def plot_scene_targets(
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     heading = title or "No plan"
-    ax.set_title(heading + "\n" + textwrap.fill(reason, 90), fontsize=8)
+    fit_title(ax, f"{heading}\n{reason}", fontsize=8)  # the reason wrapped to the width
     return ax
 
 

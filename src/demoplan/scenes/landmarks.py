@@ -5,7 +5,8 @@ Its pose comes from the scene. A scene may leave out only a landmark that
 stood still in every demonstration recording it (within :data:`LANDMARK_STILL`):
 falling back to one demonstration's pose for a landmark that moved would put
 everything relative to it in the wrong place, silently. Its shape and size
-(if known) come from the scene, else from the demonstrations.
+(if known) come from the scene, else from the demonstrations; so do the
+colours of objects and landmarks (a file's ``colour``, docs/formats.md).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 
 from demoplan.errors import InputError
-from demoplan.model import Pose, TaskModel, demonstrated_shapes
+from demoplan.model import Pose, TaskModel, demonstrated_colours, demonstrated_shapes
 from demoplan.scenes.scene import Scene, complete_geometry
 from demoplan.wording import did_you_mean
 
@@ -33,17 +34,23 @@ logger = logging.getLogger(__name__)
 
 def complete_scene(scene: Scene, model: TaskModel) -> Scene:
     """``scene`` with every object's geometry (:func:`complete_geometry`), every
-    landmark's pose (:func:`landmark_poses`) and the shape of every landmark
-    the scene or the demonstrations give one for."""
+    landmark's pose (:func:`landmark_poses`), the shape of every landmark
+    the scene or the demonstrations give one for, and the colours they give
+    (the scene's own first: a thing taught red stays red in a scene that
+    names no colour)."""
     scene = complete_geometry(scene, model)
     poses = landmark_poses(model, scene)
     known = demonstrated_shapes(model.demonstrations)
     shapes = {name: known[name] for name in poses if name in known}
     shapes.update(scene.landmark_geometry)
+    names = {*scene.names, *poses}
+    taught = demonstrated_colours(model.demonstrations)
+    colours = {n: c for n, c in taught.items() if n in names} | scene.given_colours
     return replace(
         scene,
         landmarks=tuple(poses.items()),
         landmark_geometry=tuple((n, shapes[n]) for n in poses if n in shapes),
+        colours=tuple(colours.items()),
     )
 
 

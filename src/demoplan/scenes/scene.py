@@ -184,10 +184,6 @@ class _ObjectSchema(PoseSchema):
         return None if size is None else positive_extents(size)
 
 
-class _LandmarkSchema(LandmarkSchema):
-    colour: GivenColour = None
-
-
 class _GripperSchema(_Schema):
     finger_radius: Number = Field(default=0.02, gt=0)
     clearance: Number = Field(default=0.0, ge=0)
@@ -215,7 +211,7 @@ class _SceneSchema(_Schema):
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
     objects: dict[str, _ObjectSchema]
-    landmarks: dict[str, _LandmarkSchema] = {}
+    landmarks: dict[str, LandmarkSchema] = {}
     freespace: list[list[Coordinate]] | None = None
     gripper: _GripperSchema = _GripperSchema()
     table: _TableSchema | None = None

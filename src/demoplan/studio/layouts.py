@@ -107,7 +107,7 @@ def layout_of_demonstration(
     geometry = demonstration.geometry()
     landmark_names = {name for name, _ in demonstration.landmarks}
     objects = {n: g for n, g in geometry.items() if n not in landmark_names}
-    colours = assign_colours([*objects, *landmark_names])
+    colours = assign_colours([*objects, *landmark_names], demonstration.given_colours)
     poses = demonstration.initial_poses()
     outlines: list[BaseGeometry] = []
     for demo in [demonstration, *context]:

@@ -42,9 +42,6 @@ export function sceneDocument() {
     scene.table = { min: [r4(x0), r4(y0)], max: [r4(x0 + w), r4(y0 + h)] };
   }
   const landmarks = landmarksDocument(state.plan.landmarks);
-  for (const [name, mark] of Object.entries(state.plan.landmarks || {})) {
-    if (landmarks[name] && mark.colour) landmarks[name].colour = mark.colour;
-  }
   if (Object.keys(landmarks).length) scene.landmarks = landmarks;
   return scene;
 }

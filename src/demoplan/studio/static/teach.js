@@ -97,6 +97,7 @@ export function landmarksDocument(marks = null) {
   for (const [name, mark] of Object.entries(marks || state.layout.landmarks || {})) {
     out[name] = { ...poseDocument(mark), shape: mark.shape || "box" };
     if (mark.size) out[name].size = mark.size;
+    if (mark.colour) out[name].colour = mark.colour; // every figure of the task draws it
   }
   return out;
 }
@@ -106,7 +107,7 @@ export function demonstrationDocument() {
   for (const [name, geometry] of Object.entries(state.layout.objects)) {
     if (state.clutter.includes(name)) continue;
     objects[name] = { shape: geometry.shape, size: geometry.size };
-    for (const key of ["type", "mass", "density"]) if (geometry[key] != null) objects[name][key] = geometry[key];
+    for (const key of ["type", "mass", "density", "colour"]) if (geometry[key] != null) objects[name][key] = geometry[key];
   }
   const initial = {};
   for (const [name, pose] of Object.entries(state.teach.initial)) initial[name] = poseDocument(pose);
@@ -160,6 +161,7 @@ export function teachSceneDocument() {
     objects[name] = { ...poseDocument(pose), size: geometry.size };
     if (SHAPES_IN_SCENES.has(geometry.shape)) objects[name].shape = geometry.shape;
     if (geometry.type != null) objects[name].type = geometry.type;
+    if (geometry.colour) objects[name].colour = geometry.colour;
   }
   const scene = { objects };
   const landmarks = landmarksDocument();
