@@ -37,29 +37,27 @@ for new failing draws, ``python -m pytest --hypothesis-profile explore``; a
 draw found that way is kept as a named case of its test (tests/README.md)."""
 
 LONG_FIRST = (
-    # The slowest tests, longest first (pytest --durations at -n 0 on two cores
-    # shared with a load of 5-13, after the fork server, the docs' forked
-    # commands and the smaller Ray sets): under --maxschedchunk=1
-    # (pyproject.toml) each worker takes the next one as it finishes its own.
-    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/tutorial.md]",
-    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/perception.md]",
-    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[README.md]",
+    # The slowest tests, longest first (CPU seconds of each test and its
+    # processes at -n 0, after one storyboard per evaluation whose storyboards
+    # no test reads): under --maxschedchunk=1 (pyproject.toml) each worker takes
+    # the next one as it finishes its own.
     "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/execution.md]",
-    "tests/evaluation/test_evaluate.py::test_ray_equals_a_serial_run",
     "tests/execution/test_arm_mass.py::test_the_check_agrees_with_the_physics_at_length",
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[README.md]",
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/tutorial.md]",
+    "tests/evaluation/test_evaluate.py::test_ray_equals_a_serial_run",
+    "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/perception.md]",
+    "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
     "tests/e2e/test_docs_shell.py::test_the_documents_blocks_run_and_print_what_they_show[docs/segmentation.md]",
+    "tests/execution/test_arm.py::test_experiment_2_on_vision",
     "tests/evaluation/test_evaluate.py::test_ctrl_c_keeps_the_finished_rows",
+    "tests/hostile/test_concurrency.py::",
     "tests/execution/test_arm.py::test_kitting_on_the_arm",
+    "tests/execution/test_arm.py::test_experiment_",
+    "tests/hostile/test_ray_addresses.py::test_a_running_head_is_joined",
+    "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
     "tests/evaluation/test_evaluate.py::test_a_killed_worker_s_run",
     "tests/evaluation/test_evaluate.py::test_a_worker_killed_from_outside",
-    "tests/hostile/test_concurrency.py::",
-    "tests/evaluation/test_evaluate.py::test_every_run_repeats_with_demoplan_run",
-    "tests/hostile/test_ray_addresses.py::test_a_running_head_is_joined",
-    "tests/execution/test_arm.py::test_an_obstacle_on_a_thin_parts_target",
-    "tests/evaluation/test_evaluate.py::test_a_journal_torn_by_a_killed_evaluation",
-    "tests/evaluation/test_evaluate.py::test_a_terminal_sees_runs_done",
-    "tests/evaluation/test_evaluate.py::test_the_worst_runs_link_their_storyboard",
-    "tests/execution/test_arm.py::test_experiment_",
     "tests/e2e/test_docs_shell.py::",
     "tests/hostile/test_full_disk.py::test_a_full_disk_under_file_outputs",
     "tests/planning/test_pddl.py::test_fast_downward_optimal_lengths_match",

@@ -33,6 +33,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from demoplan.commands import evaluation as evaluation_command
 from demoplan.commands.evaluation import engine_for, evaluate, run_one, settings_from_options
 from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, UsageError
@@ -90,11 +91,24 @@ def ray_session() -> Iterator[Any]:
     ray.shutdown()
 
 
+@pytest.fixture
+def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An evaluation in process draws the storyboard of its worst run only, not
+    of its five worst: each is that run made again frame by frame, 2–8 s of CPU,
+    most of an evaluation of a few kinematic runs. For tests of the rows, the
+    engines, the journal and resuming; every step of an evaluation still runs
+    (a storyboard drawn after the runs, its link in the page).
+    test_the_worst_runs_link_their_storyboard_as_demoplan_run_frames_draws_it
+    checks the five."""
+    monkeypatch.setattr(evaluation_command, "STORYBOARDS", 1)
+
+
 def _rows_file(folder: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in (folder / ROWS).read_text().splitlines()]
 
 
 @pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))
+@pytest.mark.usefixtures("one_storyboard")
 def test_ray_equals_a_serial_run(
     experiment: str, model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
@@ -134,6 +148,7 @@ def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> Ru
     return run_one(model, spec)
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
     model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
@@ -165,6 +180,7 @@ def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
     return run_one(model, spec)
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
@@ -187,6 +203,7 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     assert sum(r.status == "success" for r in done.rows) == 5
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_resume_after_ctrl_c_makes_only_the_missing_runs(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:
@@ -350,9 +367,19 @@ def test_the_wilson_interval_holds_the_rate(n: int, data: st.DataObject) -> None
         assert low - 1e-12 <= k / n <= high + 1e-12
 
 
-def _demoplan(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+ONE_STORYBOARD = (
+    "import runpy, demoplan.commands.evaluation as command; command.STORYBOARDS = 1; "
+    "runpy.run_module('demoplan', run_name='__main__', alter_sys=True)"
+)
+"""``python -m demoplan`` whose evaluations draw the worst run's storyboard only
+(one_storyboard), for a process whose storyboards a test does not read."""
+
+
+def _demoplan(
+    *args: str, env: dict[str, str] | None = None, storyboards: bool = True
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "demoplan", *args],
+        [sys.executable, *(["-m", "demoplan"] if storyboards else ["-c", ONE_STORYBOARD]), *args],
         capture_output=True,
         text=True,
         env={**os.environ, **(env or {})},
@@ -403,7 +430,9 @@ def test_ctrl_c_keeps_the_finished_rows_and_resume_makes_the_others(
     kept = (out / ROWS).read_text().splitlines()
     assert 3 <= len(kept) < total
     assert not journal.exists()
-    done = _demoplan("evaluate", "--resume", str(out), "--workers", workers, "--json")
+    done = _demoplan(
+        "evaluate", "--resume", str(out), "--workers", workers, "--json", storyboards=False
+    )
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert summary["runs"] == total
@@ -489,6 +518,7 @@ def test_a_settings_file_out_of_bounds_is_refused_on_resume(
     assert expected in resumed.stderr and resumed.stderr.count("\n") == 1
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:
@@ -568,6 +598,7 @@ def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
     )
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_out_is_a_new_or_empty_folder(model_files: dict[str, Path], tmp_path: Path) -> None:
     chosen = settings_from_options(
         model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
@@ -592,8 +623,8 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
 
     master, terminal = pty.openpty()
     args = ["--random-scenes", "5", "--seeds", "2", "--workers", "0", "--out", str(tmp_path / "o")]
-    process = subprocess.Popen(
-        [sys.executable, "-m", "demoplan", "evaluate", str(model_files["exp2"]), *args],
+    process = subprocess.Popen(  # the worst run's storyboard only (ONE_STORYBOARD)
+        [sys.executable, "-c", ONE_STORYBOARD, "evaluate", str(model_files["exp2"]), *args],
         stdout=subprocess.PIPE,
         stderr=terminal,
         env={**os.environ, "COLUMNS": "120", "TERM": "xterm"},
@@ -615,6 +646,7 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
     assert re.search(r"\d:\d\d:\d\d", text)  # the time left
 
 
+@pytest.mark.usefixtures("one_storyboard")
 def test_a_journal_torn_by_a_killed_evaluation_is_resumed(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:

@@ -265,8 +265,10 @@ def test_the_check_agrees_with_the_physics(shape: ObjectGeometry, where: tuple[P
 
 @pytest.mark.slow
 @settings(
-    max_examples=16, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
-)
+    max_examples=10, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)  # Four objects by the cup, four by the fingers (across either axis), two refused (0.6 and
+# 1 kg). Draws 11-15 of 16 were the tenth mutated (the same 1 kg box by the fingers, its
+# places moved by centimetres) and the 16th a third refused cylinder: 18 s of CPU, no new case.
 @given(shape=_objects, where=_placements())
 def test_the_check_agrees_with_the_physics_at_length(
     shape: ObjectGeometry, where: tuple[Pose, Pose]
