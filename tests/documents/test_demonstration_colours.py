@@ -27,12 +27,9 @@ from demoplan.plotting.colours import assign_colours
 from demoplan.plotting.figures import plot_demonstration
 from demoplan.scenes.scene import scene_from_document
 from demoplan.studio.layouts import layout_of_demonstration
-from tests.support.lunch_box import lunch_demonstrations
+from tests.support.lunch_box import BLUE, GREEN, coloured_document, lunch_demonstrations
 
 matplotlib.use("Agg")
-
-BLUE = "#1f5fbf"  # the user's blue sandwich; the palette gives it another colour
-GREEN = "#27ae60"  # the user's green lunch box (a landmark)
 
 
 def coloured(demo: Demonstration, **colours: Any) -> dict[str, Any]:
@@ -133,7 +130,6 @@ def test_a_scene_naming_no_colours_is_drawn_in_the_taught_ones(tmp_path: Path) -
     and the plan's figure draws them."""
     from demoplan.commands.planning import plan
     from demoplan.plotting.figures import plot_scene_plan
-    from tests.execution.test_colours import coloured_document
 
     model = learn(
         [read(coloured(d, sandwich=BLUE, lunchbox=GREEN)) for d in lunch_demonstrations()]

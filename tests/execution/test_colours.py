@@ -23,30 +23,14 @@ from demoplan.learning import learn
 from demoplan.model import TaskModel
 from demoplan.plotting.colours import assign_colours, object_colour
 from demoplan.scenes.scene import Scene, load_scene, scene_from_document, scene_to_dict
-from tests.support.lunch_box import LUNCH, lunch_demonstrations, lunch_scene
+from tests.support.lunch_box import BLUE, GREEN, coloured_document, lunch_demonstrations
 
 ROOT = Path(__file__).resolve().parents[2]
-BLUE = "#1f5fbf"  # the user's blue sandwich; the palette gives it a pink red
-GREEN = "#27ae60"  # the user's green caddy (a landmark)
 
 
 @pytest.fixture(scope="module")
 def lunch_model() -> TaskModel:
     return learn(lunch_demonstrations())
-
-
-def coloured_document(**colours: Any) -> dict[str, Any]:
-    """The lunch box's start as a scene file, every thing with its size, the
-    things named in ``colours`` with that ``colour``."""
-    document = scene_to_dict(lunch_scene())
-    for name, entry in document["objects"].items():
-        shape, size, _ = LUNCH[name]
-        entry.update(shape=shape, size=list(size))
-    for group in ("objects", "landmarks"):
-        for name, entry in document[group].items():
-            if name in colours:
-                entry["colour"] = colours[name]
-    return document
 
 
 def hex_of(rgb: tuple[float, float, float]) -> str:

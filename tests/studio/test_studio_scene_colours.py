@@ -15,8 +15,8 @@ from fastapi.testclient import TestClient
 
 from demoplan.plotting.colours import assign_colours
 from demoplan.studio.app import create_app
-from tests.execution.test_colours import BLUE, GREEN, coloured_document
 from tests.studio.test_studio_api import one_line_error, work
+from tests.support.lunch_box import BLUE, GREEN, coloured_document
 
 
 @pytest.fixture

@@ -8,8 +8,10 @@ import math
 from typing import Any
 
 from demoplan.documents.demonstrations import demonstrations_from_document
-from demoplan.scenes.scene import Scene, scene_from_document
+from demoplan.scenes.scene import Scene, scene_from_document, scene_to_dict
 
+BLUE = "#1f5fbf"  # a user's blue sandwich; the palette gives it a pink red
+GREEN = "#27ae60"  # a user's green lunch box (a landmark)
 LUNCH_BOX = (0.26, 0.18, 0.02)
 LUNCH = {  # name: shape, size, place in the box's frame (x, y, z above its top, yaw)
     "sandwich": ("box", (0.10, 0.10, 0.03), (-0.06, 0.02, 0.0, 0.0)),
@@ -74,3 +76,17 @@ def lunch_scene() -> Scene:
         },
         "lunch.json",
     )
+
+
+def coloured_document(**colours: Any) -> dict[str, Any]:
+    """The lunch box's start as a scene file, every thing with its size, the
+    things named in ``colours`` with that ``colour``."""
+    document = scene_to_dict(lunch_scene())
+    for name, entry in document["objects"].items():
+        shape, size, _ = LUNCH[name]
+        entry.update(shape=shape, size=list(size))
+    for group in ("objects", "landmarks"):
+        for name, entry in document[group].items():
+            if name in colours:
+                entry["colour"] = colours[name]
+    return document
