@@ -16,7 +16,6 @@ print the same plan, the same JSON and the same one-line errors (tested).
 
 from __future__ import annotations
 
-import argparse
 import errno
 import os
 import sys
@@ -24,8 +23,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-# First: the command clock starts when this module is imported, at process start.
 from demoplan.cli.clock import mark_command_start, mark_process_start
+
+# First: the command clock starts when this module is imported, at process start.
+from demoplan.cli.lean_parser import DeclinedError, LeanParser
 from demoplan.cli.solving import SolveOptions, solve_text
 from demoplan.frontends.interrupts import (
     INTERRUPTED_EXIT,
@@ -51,20 +52,11 @@ SOLVE_OPTIONS = ("--json", "--search", "--max-nodes", "--timeout", "--optimal")
 """Options of ``demoplan solve`` the lean path parses (the test checks typer's match)."""
 
 
-class _DeclinedError(Exception):
-    """The lean parser leaves this command line to typer."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        raise _DeclinedError(message)
-
-
 def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     """Options of ``demoplan solve ARGS``, or None when typer should handle them."""
     if any(arg in ("-h", "--help") for arg in args):
         return None
-    parser = _Parser(prog="demoplan solve", add_help=False, allow_abbrev=False)
+    parser = LeanParser(prog="demoplan solve", add_help=False, allow_abbrev=False)
     parser.add_argument("problem", type=Path)
     parser.add_argument("--json", dest="json_output", action="store_true")
     from demoplan.planning.search import SEARCHES  # needed next anyway, to solve
@@ -75,7 +67,7 @@ def parse_solve_options(args: Sequence[str]) -> SolveOptions | None:
     parser.add_argument("--optimal", action="store_true")
     try:
         parsed = parser.parse_args(list(args))
-    except _DeclinedError:
+    except DeclinedError:
         return None
     max_nodes: int | None = parsed.max_nodes
     timeout: float | None = parsed.timeout

@@ -15,7 +15,6 @@ same table, JSON and one-line errors with the same exit codes (tested).
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections import Counter
@@ -25,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from demoplan.budget import PERCEPTION_TIMEOUT
+from demoplan.cli.lean_parser import DeclinedError, LeanParser
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -78,15 +78,6 @@ class PerceiveOptions:
     plot: Path | None = None
 
 
-class _DeclinedError(Exception):
-    """The lean parser leaves this command line to typer."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        raise _DeclinedError(message)
-
-
 def _number(text: str) -> float:
     """A float as click reads one (``float()``); anything else is declined."""
     return float(text)
@@ -98,7 +89,7 @@ def parse_perceive_options(args: Sequence[str]) -> PerceiveOptions | None:
     ``--`` or an argument starting with ``-`` where a value is expected."""
     if any(arg in ("-h", "--help", "--") for arg in args):
         return None
-    parser = _Parser(prog="demoplan perceive", add_help=False, allow_abbrev=False)
+    parser = LeanParser(prog="demoplan perceive", add_help=False, allow_abbrev=False)
     parser.add_argument("image", type=Path)
     parser.add_argument("--px-per-m", type=_number, default=None)
     parser.add_argument("--origin", type=_number, nargs=2, default=None)
@@ -111,7 +102,7 @@ def parse_perceive_options(args: Sequence[str]) -> PerceiveOptions | None:
     parser.add_argument("--plot", type=Path, default=None)
     try:
         parsed = parser.parse_args(list(args))
-    except _DeclinedError:
+    except DeclinedError:
         return None
     px_per_m: float | None = parsed.px_per_m
     side: float | None = parsed.side
