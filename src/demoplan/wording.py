@@ -6,7 +6,14 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
-__all__ = ["did_you_mean", "plural", "printable", "printable_json", "printable_lines"]
+__all__ = [
+    "did_you_mean",
+    "json_document",
+    "plural",
+    "printable",
+    "printable_json",
+    "printable_lines",
+]
 
 
 def printable(text: str) -> str:
@@ -24,6 +31,15 @@ def printable_lines(text: str) -> str:
     consoles write (:mod:`demoplan.cli.common`) goes through it, so a name
     printed anywhere — a table cell, a plan's actions — never drives the terminal."""
     return "\n".join(printable(line) for line in text.split("\n"))
+
+
+def json_document(data: object) -> str:
+    """``data`` as a command prints it with ``--json``: indented, non-ASCII kept,
+    NaN refused (ValueError), every character that is not printable escaped
+    (:func:`printable_json`), a line break at the end."""
+    import json
+
+    return printable_json(json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False)) + "\n"
 
 
 def printable_json(text: str) -> str:

@@ -3,7 +3,6 @@ errors to exit codes, progress, and the options several commands take."""
 
 from __future__ import annotations
 
-import json
 import logging
 import sys
 from collections.abc import Iterator
@@ -196,10 +195,9 @@ def _main(
 
 
 def print_json(data: Any) -> None:
-    from demoplan.wording import printable_json
+    from demoplan.wording import json_document
 
-    text = json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False)
-    sys.stdout.write(printable_json(text) + "\n")
+    sys.stdout.write(json_document(data))
 
 
 FRAME_OPTION = typer.Option(

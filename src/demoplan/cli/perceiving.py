@@ -153,7 +153,9 @@ def run_perceive(options: PerceiveOptions) -> int:
             plot=options.plot,
         )
         if options.json_output:
-            _print_json(found.document)
+            from demoplan.wording import json_document
+
+            sys.stdout.write(json_document(found.document))
         else:
             from demoplan.cli.consoles import TextConsole
 
@@ -177,15 +179,6 @@ def _silence_library_warnings() -> None:
 
     logging.captureWarnings(True)
     logging.getLogger("py.warnings").setLevel(logging.CRITICAL)
-
-
-def _print_json(data: object) -> None:
-    import json
-
-    from demoplan.wording import printable_json
-
-    text = json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False)
-    sys.stdout.write(printable_json(text) + "\n")
 
 
 def print_perceived(console: Console, found: Perceived, image: Path, plot: Path | None) -> None:
