@@ -53,6 +53,7 @@ from demoplan.perception.colours import (
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
 from demoplan.perception.seams import image_lightness, seamless_side
+from demoplan.perception.shapes import square_shaped
 from demoplan.perception.side_faces import (
     ImageSquare,
     corners_in_image,
@@ -667,6 +668,9 @@ def _squares_in_region(
             break
         squares.append(square)
         alpha = _without_square(alpha, square[0])
+    squares, not_square = square_shaped(region, squares)
+    if parts is not None:
+        parts += not_square
     row0, col0 = region.offset
     rows, cols = region.alpha.shape
     lightness = search.lightness[row0 : row0 + rows, col0 : col0 + cols]
