@@ -418,6 +418,7 @@ def _fit(
     turns: tuple[float, ...] = (0.0,),
     good_enough: float = 0.08,
     tolerance: float = 1e-6,
+    ignore: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float, float, float]:
     """Robust least-squares fit of a one-pixel-ramp square to the soft mask near
     ``start`` (:func:`_least_squares`): (u, v, θ, s), the interior coverage, the RMS
@@ -444,6 +445,8 @@ def _fit(
         inner = np.array([start.u, start.v, start.theta, max(start.side - 2 * band, 0.0)])
         uu, vv, window = _window(alpha.shape, outline, outline[3])
         near = (_square_alpha(outline, uu, vv) > 0) & (_square_alpha(inner, uu, vv) < 1)
+    if ignore is not None:  # pixels an occluder hides (demoplan.perception.occlusion)
+        near &= ~ignore[window]
     target = alpha[window][near]
     model = _SquareModel(uu[near], vv[near], target, f_scale=0.3)
     scale = np.array([1.0, 1.0, 2.0, 1.0])
