@@ -52,6 +52,7 @@ from demoplan.perception.colours import (
     outlines,
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.occlusion import Candidate, tops_behind
 from demoplan.perception.seams import image_lightness, seamless_side
 from demoplan.perception.shapes import square_shaped
 from demoplan.perception.side_faces import (
@@ -569,6 +570,7 @@ class _SquareSearch:
     min_area: float
     settings: PerceptionSettings
     px_per_m: float
+    hidden: list[Candidate] = field(default_factory=list)  # see tops_behind
 
 
 def _fit_from(
@@ -638,6 +640,8 @@ def _next_square(
         why = _why_no_block(search, region, alpha, fit)
         if why is None:
             return fit[:3], failures
+        if why[0] in ("not square", "not filled"):
+            search.hidden.append((region, alpha, fit))
         failures.append(why)
     return None, failures
 
@@ -704,6 +708,7 @@ def detect_blocks(
         palette=settings.colours,
         rejected=parts,
         largest_block=side_px[1] ** 2,
+        second_tables=(tables := np.zeros(image.shape[:2], dtype=bool)),
     )
     lightness = image_lightness(image)
     search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
@@ -720,6 +725,7 @@ def detect_blocks(
         report_progress("colour regions", done, len(regions))
         squares = _squares_in_region(search, region, where, parts)
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
+    found += tops_behind(search, regions, tables, found, _why_no_block, _fit, parts)
     found = _without_side_faces(image, found, parts)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]

@@ -234,10 +234,12 @@ def _second_tables(
     threshold: float,
     largest_block: float,
     record: PartRecorder,
+    into: np.ndarray | None = None,
 ) -> bool:
     """Lowers ``distinct`` (in place) to the a*b* distance from a second table's
     colour over every region of :data:`TABLE_BLOCKS`' kind (a large, one-coloured
-    region at the border); whether there was one."""
+    region at the border); whether there was one. Their pixels are set in
+    ``into`` (bool, the image's rows × columns) when it is given."""
     foreground = (distinct > threshold / 2).astype(np.uint8)
     # joined over thin dark lines (a table ruled into squares, a plank's seams):
     # closed by a 7 × 7 square first
@@ -265,6 +267,8 @@ def _second_tables(
         a, b = (float(c) for c in colour)
         why = f"a*b* ({a:.0f}, {b:.0f}) over {area / largest_block:.0f} largest blocks' area"
         record(near, rows, cols, "table", why)
+        if into is not None:
+            into[rows, cols] |= near
         crop = distinct[rows, cols]
         crop[member] = np.minimum(crop[member], distance[member])
     return found
@@ -452,19 +456,23 @@ def colour_regions(
     palette: Palette | None = None,
     rejected: list[RejectedPart] | None = None,
     largest_block: float | None = None,
+    second_tables: np.ndarray | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
     when given, gets the parts dropped on the way, each with why. With
     ``largest_block`` (the largest block's area, px²) a second table around the
-    first (:data:`TABLE_BLOCKS`) is table too."""
+    first (:data:`TABLE_BLOCKS`) is table too, its pixels set in ``second_tables``
+    (bool, the image's rows × columns) when that is given: a hand and forearm
+    reaching in from the border may be one, and hide a top
+    (:mod:`demoplan.perception.occlusion`)."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
     distinct, lab, threshold, coloured_image = _distinctness(image)
     record = PartRecorder(rejected, min_area)
     if largest_block is not None and coloured_image:
-        _second_tables(distinct, lab, threshold, largest_block, record)
+        _second_tables(distinct, lab, threshold, largest_block, record, second_tables)
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
