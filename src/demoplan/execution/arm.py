@@ -175,6 +175,7 @@ class ArmWorld(ArmMoves):
         self.tcp = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, "arm/tcp")
         self.pad = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "arm/pad")
         self.arm_bodies = arm_bodies(mujoco, self.model)
+        self.arm_geoms = np.isin(self.model.geom_bodyid, sorted(self.arm_bodies))
         self.motion = ArmMotion(
             mujoco, self.model, self.kinematics, self.joints, self.arm_bodies, self.tcp
         )
