@@ -35,7 +35,7 @@ from demoplan.plotting.colours import assign_colours
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.learning.test_orientation_follows import lunch_documents
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
@@ -454,16 +454,6 @@ def test_a_run_without_faults_puts_every_block_on_its_target(client: TestClient)
     assert len(learned["states"]) == 3
 
 
-ONE_MOVE = {
-    "wood": {"position": [0.340, 0.040, 0.0], "yaw": 0, "size": [0.04, 0.04, 0.04]},
-    "green": {"position": [0.404, 0.044, 0.0], "yaw": 0.5, "size": [0.04, 0.04, 0.04]},
-    "red": {"position": [0.320, 0.130, 0.0], "yaw": 0, "size": [0.04, 0.04, 0.04]},
-}
-"""Fig. 4's blocks with wood and green already where demonstration 2's goal
-puts them: the plan is one move (red onto them), an arm run of about 4 s of
-CPU instead of Fig. 4's four moves (10 s)."""
-
-
 @pytest.mark.slow
 def test_two_arm_runs_one_after_the_other_each_record_a_video(client: TestClient) -> None:
     # each run renders in a process of its own: a second MuJoCo renderer in
@@ -471,7 +461,7 @@ def test_two_arm_runs_one_after_the_other_each_record_a_video(client: TestClient
     pytest.importorskip("mujoco")
     pytest.importorskip("imageio_ffmpeg")
     save_blocks_and_learn(client)
-    body = {"model": "model.json", "scene": scene_body(objects=ONE_MOVE), "sim": "arm"}
+    body = {"model": "model.json", "scene": scene_body(ONE_MOVE_SCENE), "sim": "arm"}
     for _ in range(2):
         state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=6000)
         assert state["state"] == "done", state
