@@ -185,6 +185,7 @@ SLOW = (
     "tests/learning/test_learning_families.py::test_the_order_of_the_demonstrations_does_not_matter",
     "tests/perception/test_perception_budget.py::test_a_budget_running_out_anywhere_in_a_real",
     "tests/perception/test_perception_instances.py::test_the_blocks_experiment_with_a_second_red",
+    "tests/perception/test_perception_occlusion.py::test_a_top_a_fingertip_is_over",
     "tests/perception/test_perception_regions.py::test_a_lone_black_white_or_grey_cube",
     "tests/perception/test_perception_sequence.py::test_cli_with_a_camera_file",
     "tests/perception/test_perception_sequence.py::test_no_frames_and_still_pictures_are_one_line",
