@@ -368,7 +368,38 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     # one colour between two names first: its two halves, speckled through each
     # other by the noise, would each erode away as a rim
     present = _one_colour_merged(present, k.chroma[k.core])
-    return _without_rims(present, k.core, c.min_area)
+    return _without_rims(_without_shadows(c, k, present), k.core, c.min_area)
+
+
+SHADOW_LIGHT = (0.35, 0.85)
+"""A shadow on a coloured table keeps this share of the table's light, every
+channel alike within :data:`SHADOW_TINT` (a shadow darkens, it does not tint)."""
+SHADOW_TINT = 1.2
+
+
+def _without_shadows(
+    c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
+) -> list[tuple[str, np.ndarray]]:
+    """``present`` without the colours that are the coloured table's around the
+    component, darker (:data:`SHADOW_LIGHT`, :data:`SHADOW_TINT`): a cube's shadow on
+    a blue table is foreground by its chroma, and as a class of the component it
+    took the pixels of a white or grey top beside it, which has no chroma of its own
+    (the top then went to the black, white and grey regions' search)."""
+    if math.hypot(*(float(v) for v in k.ground_ab)) < MIN_CHROMA or k.ground.min() <= 0:
+        return present
+    kept = []
+    for colour, chosen in present:
+        shares = k.pixels[k.core][chosen].mean(axis=0) / k.ground
+        light, tint = float(shares.mean()), float(shares.max() / max(float(shares.min()), 1e-9))
+        if SHADOW_LIGHT[0] <= light <= SHADOW_LIGHT[1] and tint <= SHADOW_TINT:
+            held = np.zeros(k.core.shape, dtype=bool)
+            held[k.core] = chosen
+            c.record(
+                held, k.rows, k.cols, "shadow", f"the table's colour at {light:.0%} of its light"
+            )
+        else:
+            kept.append((colour, chosen))
+    return kept
 
 
 def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]) -> list[_Face]:
