@@ -58,8 +58,8 @@ SEEDS = st.integers(0, 2**31 - 1)
 NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     # family: (what is missed, draws (seed, --side given) on which the detector fails today)
     "hands": (
-        "a yellow or purple top beside a forearm of a near colour missed: skin and top "
-        "share one region",
+        "a yellow or purple top beside a forearm missed: the forearm's pixels that its "
+        "second table leaves foreground join the top's class",
         ((1, True), (9, False), (9, True)),
     ),
     "achromatic": (
