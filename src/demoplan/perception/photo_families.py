@@ -23,7 +23,10 @@ The families (:data:`FAMILIES`, each a function of a random generator):
   has shapes only;
 - ``tipped_rows``: rows of two to four cubes of different colours lying tipped
   over (rolled 30–45° about the row), each cube showing a lit face and a darker
-  strip, beside standing cubes — no face of a row is a top (mrhan_stacks).
+  strip, beside standing cubes — no face of a row is a top;
+- ``towers``: towers of three to five cubes of different colours off the nadir,
+  under a camera of a phone's focal length: their lower cubes' side faces,
+  squarish near the image's edge, are no tops (mrhan_stacks, bottom right).
 
 A top face less than :data:`PARTIAL_BELOW` in view (a cube on it, a hand over
 it, the image's border through it) is ``partial`` (it need not be found); one
