@@ -80,7 +80,7 @@ def _one_cube(u: float, v: float, yaw: float, colour: str) -> tuple[np.ndarray, 
     return image, rig, cube
 
 
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=8, deadline=None)
 @given(
     angle=st.floats(0.0, 2 * math.pi),
     reach=st.floats(280.0, 330.0),
