@@ -358,13 +358,14 @@ def literal_texts(figure: Figure) -> None:
     notation (a log axis writes ``$10^{2}$``)."""
     from matplotlib.text import Text
 
+    texts = figure.findobj(Text)  # walking an axis makes its ticks for its tick locations
     ticks = set()
     for ax in figure.axes:
         for axis in (ax.xaxis, ax.yaxis):
             ticks.add(id(axis.offsetText))
-            for tick in [*axis.get_major_ticks(), *axis.get_minor_ticks()]:
+            for tick in [*axis.majorTicks, *axis.minorTicks]:  # made: not located again
                 ticks.update((id(tick.label1), id(tick.label2)))
-    for text in figure.findobj(Text):
+    for text in texts:
         if id(text) not in ticks:
             text.set_usetex(False)
             text.set_parse_math(False)
