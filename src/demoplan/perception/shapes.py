@@ -146,19 +146,22 @@ def in_image(region: ColourRegion, params: np.ndarray) -> tuple[float, float, fl
 
 
 def square_shaped(
-    region: ColourRegion, squares: list[tuple[np.ndarray, float, float]]
-) -> tuple[list[tuple[np.ndarray, float, float]], list[RejectedPart]]:
+    region: ColourRegion,
+    squares: list[tuple[np.ndarray, float, float]],
+    parts: list[RejectedPart] | None,
+) -> list[tuple[np.ndarray, float, float]]:
     """The squares (u, v, θ, s on ``region``'s crop, coverage, misfit) found in
-    ``region`` whose thing is square (:func:`outlines_not_square`), and the others
-    as rejected parts: ``not square``, its corners."""
+    ``region`` whose thing is square (:func:`outlines_not_square`); the others go
+    to ``parts`` (when given) as rejected: ``not square``, its corners."""
     refused = outlines_not_square(region.alpha > 0.5, [params for params, _, _ in squares])
-    parts = [
-        RejectedPart(
-            "not square",
-            corners,
-            region.colour,
-            (corners_in_image(in_image(region, squares[i][0])),),
-        )
-        for i, corners in refused.items()
-    ]
-    return [square for i, square in enumerate(squares) if i not in refused], parts
+    if parts is not None:
+        parts += [
+            RejectedPart(
+                "not square",
+                corners,
+                region.colour,
+                (corners_in_image(in_image(region, squares[i][0])),),
+            )
+            for i, corners in refused.items()
+        ]
+    return [square for i, square in enumerate(squares) if i not in refused]
