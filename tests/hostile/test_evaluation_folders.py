@@ -12,6 +12,7 @@ from typing import Any
 
 import pytest
 
+from demoplan.commands import evaluation as evaluation_command
 from demoplan.commands.evaluation import evaluate, settings_from_options
 from demoplan.errors import InputError
 from demoplan.evaluation.plan import read_settings
@@ -24,15 +25,27 @@ SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """An evaluation of two runs, made here one after the other."""
+    """An evaluation of two runs, made here one after the other, with the
+    storyboard of its worst run only (no test here reads storyboards; each is
+    that run made again frame by frame, most of the evaluation's CPU —
+    tests/evaluation/test_evaluate.py's ``one_storyboard``)."""
     folder = tmp_path_factory.mktemp("evaluation")
     model = folder / "model.json"
     save_model(paper_model("set_table"), model)
     settings = settings_from_options(
         model, [SCENE], random_scenes=0, seeds=2, faults=None, sim="kinematic", clutter=0
     )
-    evaluate(settings, folder / "out")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(evaluation_command, "STORYBOARDS", 1)
+        evaluate(settings, folder / "out")
     return folder / "out"
+
+
+@pytest.fixture(autouse=True)
+def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Resuming keeps ``finished``'s one storyboard rather than drawing the
+    second worst run's."""
+    monkeypatch.setattr(evaluation_command, "STORYBOARDS", 1)
 
 
 def _copy(finished: Path, tmp_path: Path) -> Path:

@@ -34,7 +34,7 @@ from hypothesis import strategies as st
 from demoplan.fileio import MANIFEST
 from tests.hostile.harness import check_refused, fingerprint, run
 from tests.segmentation.test_import import MODEL, box_states
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE
 
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))
 needs_video = pytest.mark.skipif(not HAVE_VIDEO, reason="MuJoCo or imageio-ffmpeg not installed")
@@ -62,7 +62,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     demoplan wrote (with its manifest)."""
     folder = tmp_path_factory.mktemp("output-folders")
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
-    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(ONE_MOVE_SCENE, folder / "scene.json")  # a frame per step: the fewer the cheaper
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
     answer = run([*RUN, "--frames", "frames"], folder)
     assert answer.code == 0, answer

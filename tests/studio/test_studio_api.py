@@ -35,7 +35,7 @@ from demoplan.plotting.colours import assign_colours
 from demoplan.studio.app import create_app
 from demoplan.studio.layouts import SCATTER_GAP
 from tests.learning.test_orientation_follows import lunch_documents
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"
 COMMAND = [str(DEMOPLAN)] if DEMOPLAN.exists() else [sys.executable, "-m", "demoplan.cli"]
@@ -461,7 +461,7 @@ def test_two_arm_runs_one_after_the_other_each_record_a_video(client: TestClient
     pytest.importorskip("mujoco")
     pytest.importorskip("imageio_ffmpeg")
     save_blocks_and_learn(client)
-    body = {"model": "model.json", "scene": scene_body(), "sim": "arm"}
+    body = {"model": "model.json", "scene": scene_body(ONE_MOVE_SCENE), "sim": "arm"}
     for _ in range(2):
         state = wait_for(client, client.post("/api/runs", json=body).json()["run"], tries=6000)
         assert state["state"] == "done", state

@@ -19,6 +19,10 @@ from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+ONE_MOVE_SCENE = Path(__file__).resolve().parents[1] / "data" / "scenes" / "pyramid-one-move.json"
+"""Fig. 4's blocks with wood and green already at demonstration 2's goal: the
+blocks model plans one move (red onto them) — a run for tests that need one,
+not its length (a third of Fig. 4's four moves' CPU, frames and video)."""
 
 # Table II: state, object, relative position, (x, y) — the library's transcription.
 UNTIMED = ExecutionSettings(budget=Budget())
