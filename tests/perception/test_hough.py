@@ -182,3 +182,34 @@ def test_a_large_block_is_voted_for_on_a_shrunk_mask_and_fitted_at_full_resoluti
     turn = math.radians(abs(((block.yaw - truth.yaw + 45.0) % 90.0) - 45.0))
     assert turn * side / 2 * camera.px_per_m < 0.05
     assert abs(block.side - side) < 1e-4
+
+
+@settings(max_examples=15, deadline=None)
+@given(squares, squares, st.integers(0, 200), st.integers(0, 120))
+def test_parts_of_a_mask_far_apart_are_voted_for_apart_with_the_same_result(
+    first: tuple[float, float, float, float],
+    second: tuple[float, float, float, float],
+    right: int,
+    up: int,
+) -> None:
+    """Two squares in one crop, the second ``right`` and ``up`` px off: their edge
+    points are voted for in groups of their own when no vote of one reaches the
+    other's bins (:func:`hough._clusters`), and the hypotheses, votes and all, are
+    those of one window over both (every edge point in one group)."""
+    shape = (100 + up, 110 + right)
+    u, v, theta, side = second
+    mask = np.maximum(
+        square_mask(*first, shape=shape), square_mask(u + right, v + up, theta, side, shape)
+    )
+    sides = (20.0, 40.0)
+    edges = hough.edge_pixels(mask)
+    bins = (30, -(-shape[0] // 2), -(-shape[1] // 2))
+    groups = hough._clusters(edges[0], edges[1], 40.0, bins)
+    assert sorted(np.concatenate(groups).tolist()) == list(range(edges[0].size))
+    if math.hypot(right, up) > 110 + 2 * 40.0:  # farther than both reaches (and the squares)
+        assert len(groups) == 2
+    alone = hough_squares(mask, sides)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(hough, "_clusters", lambda u, *_: [np.arange(u.size)])
+        together = hough_squares(mask, sides)
+    assert alone == together

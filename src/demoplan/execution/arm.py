@@ -178,6 +178,7 @@ class ArmWorld(ArmMoves):
         self.motion = ArmMotion(
             mujoco, self.model, self.kinematics, self.joints, self.arm_bodies, self.tcp
         )
+        self.arm_geoms = self.motion.arm_geoms
         home = np.array(HOME)
         self.data.qpos[self.joints] = home
         self.data.ctrl[self.servos] = home
@@ -231,17 +232,12 @@ class ArmWorld(ArmMoves):
         mine = {self.pad} if self.tool == "suction" else self.finger_geoms
         if self.tool == "fingers" and float(np.min(data.qpos[self.finger_joints])) < 0.001:
             return False
-        touching = set()
-        for contact in data.contact[: data.ncon]:
-            pair = (int(contact.geom1), int(contact.geom2))
-            for geom, other in (pair, pair[::-1]):
-                if (
-                    geom in mine
-                    and int(self.model.geom_bodyid[other]) == body
-                    and contact.dist < contact.includemargin  # pushing: not the pad's outer band
-                ):
-                    touching.add(geom)
-        return bool(touching)
+        contacts = data.contact  # as arrays: reading each contact as an object costs more
+        # pushing: not the pad's outer band
+        pairs = contacts.geom[contacts.dist < contacts.includemargin]
+        by_tool = np.isin(pairs, sorted(mine))
+        on_obj = self.model.geom_bodyid[pairs] == body
+        return bool((by_tool & on_obj[:, ::-1]).any())
 
     def _lifted(self, name: str) -> bool:
         """Held by the tool (sealed on the cup, or in the jaws) and off whatever

@@ -77,6 +77,8 @@ class ArmMotion:
         self.kinematics = kinematics
         self.joints = list(joints)
         self.arm_bodies = arm_bodies
+        self.arm_geoms = np.isin(model.geom_bodyid, sorted(arm_bodies))
+        """Per geom of ``model``: True where it is on the arm."""
         self.tcp = tcp
         self.scratch = mujoco.MjData(model)
 
@@ -144,15 +146,26 @@ class ArmMotion:
                 scratch.qpos[address + 3 : address + 7] = quat
             mujoco.mj_forward(model, scratch)
             lands = landing and index >= len(path) - LANDING_WAYPOINTS
-            for contact in scratch.contact[: scratch.ncon]:
-                if contact.dist > contact.includemargin - PENETRATION:
-                    continue
-                first = int(model.geom_bodyid[contact.geom1])
-                second = int(model.geom_bodyid[contact.geom2])
+            for first, second in self._arm_or_load_contacts(scratch, load):
                 found = self._offending(first, second, load, allowed, lands, label)
                 if found is not None:
                     return found
         return None
+
+    def _arm_or_load_contacts(self, data: Any, load: Load | None) -> list[list[int]]:
+        """The body pairs of the contacts in ``data`` deeper than
+        :data:`PENETRATION`, in MuJoCo's order, that may be collisions: between
+        an arm body and another, or touching the load (:meth:`_offending` finds
+        nothing in the others). Read as MuJoCo's arrays: reading each contact
+        as an object cost more than posing the arm."""
+        contacts = data.contact
+        pairs = contacts.geom[~(contacts.dist > contacts.includemargin - PENETRATION)]
+        bodies = self.model.geom_bodyid[pairs]
+        on_arm = self.arm_geoms[pairs]
+        held = load.body if load is not None else -1
+        relevant = (on_arm[:, 0] != on_arm[:, 1]) | (bodies == held).any(axis=1)
+        result: list[list[int]] = bodies[relevant].tolist()
+        return result
 
     def _offending(
         self,

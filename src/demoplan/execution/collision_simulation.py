@@ -88,6 +88,7 @@ def simulated_collision_facts(
     kinematics = ArmKinematics(mujoco, base)
     joints = arm_joints(mujoco, model)
     arm = arm_bodies(mujoco, model)
+    on_arm = np.isin(model.geom_bodyid, sorted(arm))
     location_of = {
         mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"_location{i}"): i
         for i in range(len(locations))
@@ -108,16 +109,24 @@ def simulated_collision_facts(
             for q in poses:
                 data.qpos[joints] = q
                 mujoco.mj_forward(model, data)
-                for contact in data.contact[: data.ncon]:
-                    if contact.dist >= contact.includemargin:
-                        continue
-                    first = int(model.geom_bodyid[contact.geom1])
-                    second = int(model.geom_bodyid[contact.geom2])
-                    for mine, other in ((first, second), (second, first)):
-                        if mine in arm and other in location_of and location_of[other] != index:
-                            hit.add(location_of[other])
+                for first, second in _arm_contacts(data, model, on_arm):
+                    other = second if first in arm else first
+                    if other in location_of and location_of[other] != index:
+                        hit.add(location_of[other])
             facts += [(loc.name, locations[j].name, grasp) for j in sorted(hit)]
     return facts, unreachable
+
+
+def _arm_contacts(data: Any, model: Any, on_arm: np.ndarray) -> list[list[int]]:
+    """The body pairs of the active contacts in ``data`` (closer than their
+    margin) between an arm geom (``on_arm``: per geom) and another, in
+    MuJoCo's order. Read as arrays: reading each contact as an object costs
+    more than posing the arm."""
+    contacts = data.contact
+    pairs = contacts.geom[contacts.dist < contacts.includemargin]
+    pairs = pairs[on_arm[pairs[:, 0]] != on_arm[pairs[:, 1]]]
+    result: list[list[int]] = model.geom_bodyid[pairs].tolist()
+    return result
 
 
 def _approach(

@@ -59,6 +59,7 @@ from demoplan.perception.side_faces import (
     side_faces_beside_tops,
     table_shadows,
 )
+from demoplan.perception.stack_sides import lower_side_faces
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks", "named_by_colour"]
 
@@ -733,14 +734,19 @@ def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
 def _without_side_faces(
     image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None
 ) -> list[_Found]:
-    """``found`` without the shadows on a coloured table and the side faces beside
-    their tops (:mod:`demoplan.perception.side_faces`), which go to ``parts``."""
+    """``found`` without the shadows on a coloured table, the side faces beside
+    their tops (:mod:`demoplan.perception.side_faces`) and the side faces of a
+    stack's lower cubes (:mod:`demoplan.perception.stack_sides`), which go to
+    ``parts``."""
     in_image = [_in_image(region, params) for region, params, _, _ in found]
     colours = [np.asarray(region.rgb) for region, _, _, _ in found]
     shadows = table_shadows(image, in_image, colours)
     side_faces = side_faces_beside_tops(image, in_image)
     dropped = {index: ("shadow", why) for index, why in shadows.items()}
     dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
+    kept = [index for index in range(len(found)) if index not in dropped]
+    lower = lower_side_faces(image, [in_image[index] for index in kept])
+    dropped |= {kept[i]: ("side face", why) for i, why in lower.items()}
     if parts is not None:
         for index, (reason, detail) in dropped.items():
             corners = corners_in_image(in_image[index])

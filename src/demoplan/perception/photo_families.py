@@ -23,7 +23,10 @@ The families (:data:`FAMILIES`, each a function of a random generator):
   has shapes only;
 - ``tipped_rows``: rows of two to four cubes of different colours lying tipped
   over (rolled 30–45° about the row), each cube showing a lit face and a darker
-  strip, beside standing cubes — no face of a row is a top (mrhan_stacks).
+  strip, beside standing cubes — no face of a row is a top;
+- ``towers``: towers of three to five cubes of different colours off the nadir,
+  under a camera of a phone's focal length: their lower cubes' side faces,
+  squarish near the image's edge, are no tops (mrhan_stacks, bottom right).
 
 A top face less than :data:`PARTIAL_BELOW` in view (a cube on it, a hand over
 it, the image's border through it) is ``partial`` (it need not be found); one
@@ -398,6 +401,57 @@ def tipped_rows(rng: np.random.Generator) -> PhotoScene:
     return PhotoScene(rig, tuple(cubes), tipped=tuple(rows), background=background)
 
 
+def towers(rng: np.random.Generator) -> PhotoScene:
+    """One or two towers three to five cubes high, each cube of another colour than
+    the one below it, standing a third of the focal length or more from the
+    camera's nadir, their tops wholly in the image, and two to five lone cubes; the
+    camera 0.9–1.15 m up with a phone's or a depth camera's focal length (900–1100
+    px at 1280 px across: a lower cube's side face is r / f as deep as wide, r px
+    from the nadir, squarish at the image's edge — mrhan_stacks' 100 and 185 mm
+    stacks near the board's edge; at the other families' 2000 px a thin band)."""
+    rig = PhotoRig(
+        height=float(rng.uniform(0.9, 1.15)),
+        focal=float(rng.uniform(900, 1100)),
+        nadir_px=(float(rng.uniform(300, 980)), float(rng.uniform(150, 570))),
+    )
+    background = _background(rng)
+    layout = _Layout(rig, rng, background)
+    cubes: list[Cube] = []
+    for _ in range(int(rng.integers(1, 3))):
+        count = int(rng.integers(3, 6))
+        for _ in range(100):
+            spot = layout.spot(0.8 * SIDE)
+            if spot is None:
+                break
+            foot = np.array(rig.to_pixels(*spot, 0.0))
+            top = np.array(rig.to_pixels(*spot, count * SIDE))
+            reach = 0.8 * SIDE * rig.scale_at(*spot, count * SIDE)
+            if math.dist(foot, rig.nadir_px) >= rig.focal / 3 and _within(rig, top, reach + 50.0):
+                break
+            layout.taken.pop()  # too near the nadir, or its top out of view
+            spot = None
+        if spot is None:
+            continue
+        names: list[str] = []
+        while len(names) < count:
+            name = layout.colour(CHROMATIC)
+            if not names or name != names[-1]:
+                names.append(name)
+        yaw = float(rng.uniform(-45, 45))
+        for level, name in enumerate(names):
+            turn = float(rng.uniform(-3, 3)) if level else 0.0
+            cubes.append(Cube(name, CHROMATIC[name], *spot, yaw + turn, SIDE, level * SIDE))
+    cubes += _lone_cubes(layout, int(rng.integers(2, 6)), CHROMATIC)
+    return PhotoScene(rig, tuple(cubes), background=background)
+
+
+def _within(rig: PhotoRig, point: np.ndarray, margin: float) -> bool:
+    """Whether the image point ``point`` (px) lies ``margin`` px or more inside the image."""
+    return bool(
+        margin <= point[0] <= rig.width - margin and margin <= point[1] <= rig.height_px - margin
+    )
+
+
 FAMILIES: dict[str, Callable[[np.random.Generator], PhotoScene]] = {
     "touching_rows": touching_rows,
     "stacks": stacks,
@@ -409,7 +463,8 @@ FAMILIES: dict[str, Callable[[np.random.Generator], PhotoScene]] = {
     "small": small,
     "tilted": tilted,
     "distractors": distractors,
-    "tipped_rows": tipped_rows,  # last: the others' seeds stay theirs
+    "tipped_rows": tipped_rows,
+    "towers": towers,  # last: the others' seeds stay theirs
 }
 """Each family's scene from a random generator (module docstring)."""
 

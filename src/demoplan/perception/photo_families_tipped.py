@@ -1,9 +1,10 @@
 """Rows of cubes lying tipped over, for the generated photograph families: a
 tower of two to four cubes of different colours fallen on its side and rolled
 about its long axis, so that each cube shows two faces upwards — a lit one and
-a darker strip — and its neighbours in the row are other colours (mrhan_stacks,
-bottom right: none of those faces is a cube's top, and a person labelling the
-photograph marks the rows as no cubes).
+a darker strip — and its neighbours in the row are other colours: none of
+those faces is a cube's top. (Made for mrhan_stacks' bottom right, labelled at
+first as two such rows; its depth frame shows two standing stacks there — the
+`towers` family — but rows lying so are a case a table may hold.)
 
 A row is a convex box cut into cubes: each cube is drawn as the faces the camera
 sees (outward normal towards the camera's centre), shaded by how far the face

@@ -26,8 +26,19 @@ def use_agg() -> None:
 
 def tight_layout(figure: Any) -> None:
     """``figure.tight_layout()``, its texts made literal first: laying a figure
-    out measures every text, and a name holding TeX markup fails to measure."""
+    out measures every text, and a name holding TeX markup fails to measure.
+    The figure keeps no layout engine: saving it draws it once."""
+    import matplotlib
+
     from demoplan.plotting.labels import literal_texts
 
     literal_texts(figure)
     figure.tight_layout()
+    # matplotlib keeps a placeholder layout engine after tight_layout, and a
+    # figure with an engine is laid out again (a whole draw, unrendered)
+    # before every savefig; the layout is done: no engine is kept, whatever
+    # the rc settings would put in its place
+    with matplotlib.rc_context(
+        {"figure.autolayout": False, "figure.constrained_layout.use": False}
+    ):
+        figure.set_layout_engine(None)

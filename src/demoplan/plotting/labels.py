@@ -358,13 +358,14 @@ def literal_texts(figure: Figure) -> None:
     notation (a log axis writes ``$10^{2}$``)."""
     from matplotlib.text import Text
 
+    texts = figure.findobj(Text)  # walking an axis makes its ticks for its tick locations
     ticks = set()
     for ax in figure.axes:
         for axis in (ax.xaxis, ax.yaxis):
             ticks.add(id(axis.offsetText))
-            for tick in [*axis.get_major_ticks(), *axis.get_minor_ticks()]:
+            for tick in [*axis.majorTicks, *axis.minorTicks]:  # made: not located again
                 ticks.update((id(tick.label1), id(tick.label2)))
-    for text in figure.findobj(Text):
+    for text in texts:
         if id(text) not in ticks:
             text.set_usetex(False)
             text.set_parse_math(False)
@@ -401,7 +402,7 @@ def place_labels(figure: Figure) -> list[Annotation]:
                 state.leader = None
     if not axes_labels:
         return []
-    figure.draw_without_rendering()  # layout, aspect and the legends' "best" places
+    _lay_out(figure, [ax for ax, _ in axes_labels])
     renderer = figure_renderer(figure)
     to_points = 72.0 / figure.dpi
     gap = LABEL_GAP_POINTS / to_points
@@ -463,6 +464,23 @@ def _text_box(text: Any, renderer: RendererBase) -> Box:
         px0, py0, px1, py1 = _box(patch.get_window_extent(renderer))
         x0, y0, x1, y1 = min(x0, px0), min(y0, py0), max(x1, px1), max(y1, py1)
     return (x0, y0, x1, y1)
+
+
+def _lay_out(figure: Figure, axes: list[Axes]) -> None:
+    """Lay ``figure`` out as drawing it would, for what placing the labels of
+    ``axes`` reads: where each of them stands, its limits, its legend's place.
+    A figure with a layout engine, an axes placed by a locator or one with a
+    legend (``loc="best"`` is found while drawing) is drawn, unrendered;
+    otherwise each axes' limits and aspect are all the drawing would settle
+    for them (a run's frame is saved with one draw less)."""
+    if figure.get_layout_engine() is not None or any(
+        ax.get_axes_locator() is not None or ax.get_legend() is not None for ax in axes
+    ):
+        figure.draw_without_rendering()
+        return
+    for ax in axes:
+        ax.viewLim  # noqa: B018 (the property brings autoscaled limits up to date)
+        ax.apply_aspect()
 
 
 def _freeze_legend(ax: Axes, legend: Any, renderer: RendererBase) -> None:
