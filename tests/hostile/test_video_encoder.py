@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.hostile.harness import check_refused, fingerprint, run
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE
 
 pytestmark = [
     pytest.mark.slow,
@@ -48,7 +48,7 @@ sys.exit(status)
 def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("video")
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
-    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(ONE_MOVE_SCENE, folder / "scene.json")  # a video of any run: the shortest
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
     from demoplan.execution.encoder import FrameEncoder
     from demoplan.execution.video_output import complete_mp4
