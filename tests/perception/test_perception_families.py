@@ -129,6 +129,10 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)
     "side_faces": ((536870913, True),),
+    # a row's next top of one hue, a little darker, read as the end cube's side
+    # strip: the strips pointed along the rows, the nadir hundreds of px off, and a
+    # row's cube of another colour was taken for a stack's side face (stack_sides)
+    "touching_rows": ((2, False), (3, False), (3, True)),
 }
 """Draws seen failing and met now (a crop's closing, a glint's notch, a letter
 printed on a coloured or a white top, a top's side faces): kept met, also while

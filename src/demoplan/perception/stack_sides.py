@@ -124,7 +124,10 @@ def _top_colour(lab: np.ndarray, square: ImageSquare) -> tuple[float, float, flo
 
 
 def side_strip(
-    lab: np.ndarray, square: ImageSquare, top: tuple[float, float, float] | None = None
+    lab: np.ndarray,
+    square: ImageSquare,
+    top: tuple[float, float, float] | None = None,
+    others: Sequence[ImageSquare] = (),
 ) -> SideStrip | None:
     """``square``'s own side strip in ``lab`` (:func:`_lab` of the image): the pixels
     of its material lit less (L* at least
@@ -135,9 +138,11 @@ def side_strip(
     is the outline swept towards the nadir, so its centroid lies on that line
     through the top's centre; its length is how far it reaches past the outline
     (95th percentile; seen along the nadir's way past a side, across it past a
-    corner). ``None`` for an achromatic top or a strip under
-    :data:`MIN_STRIP` of its side."""
-    x, y, theta, side = square
+    corner). The ``others`` squares' insides are no strip: a touching
+    neighbour's top of the hue, a little darker, would point along its row
+    (touching_rows), not at the nadir. ``None`` for an achromatic top or a strip
+    under :data:`MIN_STRIP` of its side."""
+    x, y, _, side = square
     lightness, a, b = _top_colour(lab, square) if top is None else top
     if math.hypot(a, b) < MIN_CHROMA:
         return None
@@ -154,9 +159,10 @@ def side_strip(
         & (hue_cosine >= math.cos(math.radians(MAX_HUE_TURN)))
     )
     yy, xx = np.mgrid[rows, cols]
+    box = _box(xx, yy, square)
     dx, dy = xx + 0.5 - x, yy + 0.5 - y
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    box = np.maximum(np.abs(c * dx - s * dy), np.abs(s * dx + c * dy)) / (side / 2)
+    for other in others:
+        material &= _box(xx, yy, other) >= 1.0
     # opened: a top's outline drawn darker (a render's edge, a bevel) is no strip
     opened = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     material = opened > 0
@@ -169,6 +175,17 @@ def side_strip(
     direction = math.atan2(float(centroid[1]), float(centroid[0]))
     length = float(np.percentile(box[strip] - 1.0, 95)) * side / 2  # past the outline
     return SideStrip(direction, length) if length >= MIN_STRIP * side else None
+
+
+def _box(xx: np.ndarray, yy: np.ndarray, square: ImageSquare) -> np.ndarray:
+    """Per pixel (columns ``xx``, rows ``yy``): its distance from ``square``'s centre
+    in the square's own axes (the larger of the two), a share of the half side (1:
+    on the outline)."""
+    x, y, theta, side = square
+    dx, dy = xx + 0.5 - x, yy + 0.5 - y
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    box: np.ndarray = np.maximum(np.abs(c * dx - s * dy), np.abs(s * dx + c * dy)) / (side / 2)
+    return box
 
 
 def nadir_of(
@@ -274,7 +291,10 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
         return {}
     lab = _lab(image)
     colours = [_top_colour(lab, square) for square in squares]
-    strips = [side_strip(lab, sq, colour) for sq, colour in zip(squares, colours, strict=True)]
+    strips = [
+        side_strip(lab, sq, colour, [*squares[:index], *squares[index + 1 :]])
+        for index, (sq, colour) in enumerate(zip(squares, colours, strict=True))
+    ]
     nadir = nadir_of(squares, strips)
     if nadir is None:
         return {}
