@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from demoplan.perception.blocks import PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.camera import Camera
-from demoplan.perception.labelled import load_labelled
+from demoplan.perception.labelled import load_labelled, perceive_labelled
 from demoplan.perception.photo_families import CHROMATIC
 from demoplan.perception.photo_families_scene import Cube, PhotoScene, render_scene
 from demoplan.perception.photos import PhotoRig
@@ -146,3 +146,77 @@ def test_a_tower_family_draw_keeps_its_lower_side_faces_out(seed: int) -> None:
     for side_given in (False, True):
         run = perceive_case(case, side_given=side_given)
         assert run.score.false == 0 and run.score.found == run.score.needed, run.score
+
+
+def _four_cubes_and(small: str, tmp_path: Path) -> Path:
+    """A photograph (as :func:`_one_cube`'s camera) of four 40 mm cubes and, 420 px
+    right of the nadir, an orange square about 0.7 of their side: a standing 28 mm
+    cube (``small="cube"``) or a flat patch painted on the table (``"patch"``)."""
+    import cv2
+    from PIL import Image
+
+    rig = PhotoRig(focal=1000.0, height=1.0, nadir=(0.0, 0.0), nadir_px=(640.0, 360.0))
+    cubes = []
+    for (u, v), name in zip(
+        ((440, 210), (840, 210), (440, 510), (840, 510)), ("red", "green", "blue", "yellow"),
+        strict=True,
+    ):
+        x, y = rig.to_table(u, 720.0 - v, 0.04)
+        cubes.append(Cube(name, CHROMATIC[name], x, y, 10.0, 0.04))
+    if small == "cube":
+        x, y = rig.to_table(1060.0, 360.0, 0.028)
+        cubes.append(Cube("orange", CHROMATIC["orange"], x, y, 20.0, 0.028))
+    scene = PhotoScene(rig, tuple(cubes), background="paper", glints=0.0)
+    image, _ = render_scene(scene, np.random.default_rng(0))
+    if small == "patch":
+        image = image.copy()
+        turn = math.radians(20.0)
+        corners = [
+            (
+                1060 + 15 * (math.cos(turn) * a - math.sin(turn) * b),
+                360 + 15 * (math.sin(turn) * a + math.cos(turn) * b),
+            )
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+        ]
+        cv2.fillPoly(image, [np.array(corners, np.int32)], CHROMATIC["orange"])
+    path = tmp_path / f"{small}.png"
+    Image.fromarray(image).save(path)
+    return path
+
+
+@pytest.mark.parametrize("small", ["cube", "patch"])
+def test_a_square_off_every_block_size_is_a_block_when_it_stands(
+    small: str, tmp_path: Path
+) -> None:
+    """Without --side, a square 0.7 of the only block size (four 40 mm cubes) is no
+    block size; a standing 28 mm cube shows its own side strip towards the nadir the
+    others' strips meet at, so it is kept (demoplan.perception.sizes), a flat patch
+    of its colour and size has none and is rejected as `not a block size`."""
+    from demoplan.perception.images import perceive_top_view
+
+    found = perceive_top_view(_four_cubes_and(small, tmp_path), 1000.0, (0.0, 0.0))
+    colours = sorted(block.colour for block in found.blocks.values())
+    odd = [r.colour for r in found.rejected if r.reason == "not a block size"]
+    if small == "cube":
+        assert colours == ["blue", "green", "orange", "red", "yellow"] and not odd
+    else:
+        assert colours == ["blue", "green", "red", "yellow"] and odd == ["orange"]
+
+
+def test_mrhan_stacks_lone_small_cube_on_the_table_is_a_block() -> None:
+    """mrhan_stacks' lone small blue cube on the table (label (404, 565) px, 23 px;
+    fitted 21 px) is 0.81 of the least side of the small cubes' group — those stand
+    on 65 mm columns, nearer the camera — and stands (its own strip towards the
+    nadir): found, and every labelled top with it, no false block."""
+    from demoplan.perception.images import perceive_top_view
+
+    photo = load_labelled(PHOTOS / "mrhan_stacks.json")
+    found = perceive_top_view(photo.image, photo.px_per_m, (0.0, 0.0))
+    pixels = [
+        (b.x * photo.px_per_m - 0.5, photo.height - b.y * photo.px_per_m - 0.5)
+        for b in found.blocks.values()
+    ]
+    assert min(math.dist(p, (404, 565)) for p in pixels) < 0.6 * 23
+    assert not [r for r in found.rejected if r.reason == "not a block size"]
+    run = perceive_labelled(photo)
+    assert run.score.found == run.score.needed == 11 and run.score.false == 0, run.score

@@ -162,7 +162,9 @@ def perceive_top_view(
         if side is None and before is None:
             # the blocks' size from the photograph (with a picture before, the strips
             # left in view of covered blocks are the tracker's to place)
-            detected, odd = held_to_sizes(detected, block_sizes([d.side for d in detected]))
+            detected, odd = held_to_sizes(
+                detected, block_sizes([d.side for d in detected]), seen=(picture, camera)
+            )
             rejected += odd
         blocks = tracker.update(detected)
     scale = f"--px-per-m {px_per_m:g}, origin {origin[0]:g} {origin[1]:g}"
@@ -247,7 +249,7 @@ def _perceive_at_cube_scale(
             source=str(image),
         )
     px_per_m = sizes[0][0] / side
-    kept, odd = held_to_sizes(found, sizes, unit="px")
+    kept, odd = held_to_sizes(found, sizes, unit="px", seen=(picture, Camera(1.0)))
     detected = [in_scale(d, px_per_m, origin) for d in kept]
     rejected = [rejection_in_scale(r, px_per_m, origin) for r in [*rejected, *odd]]
     blocks = BlockTracker().update(detected)

@@ -6,7 +6,10 @@ given ``--side``) of its median — and a group of two or more squares, or the
 largest group, is a block size; a square of no such size (a coloured patch, a
 box lid, the top of something else) is not a block and is rejected with why
 (``not a block size``) when it lies more than 15 % outside the span of the
-block sizes' groups. With ``--side`` and no other scale, the largest group's
+block sizes' groups and does not stand as the photograph's cubes do (its own
+side strip towards their nadir, :mod:`demoplan.perception.stack_sides`: a cube
+of its own size, on the table farther from the camera than a group of raised
+ones). With ``--side`` and no other scale, the largest group's
 median side in pixels is that side: the scale of a camera looking straight down
 (:func:`demoplan.perception.images.perceive_top_view`).
 """
@@ -16,8 +19,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from demoplan.perception.blocks import DetectedBlock, Rejection, named_by_colour
+from demoplan.perception.camera import Camera
 from demoplan.perception.overlay import square_corners
+from demoplan.perception.stack_sides import standing_tops
 
 __all__ = [
     "SIDE_TOLERANCE",
@@ -25,6 +32,7 @@ __all__ = [
     "held_to_sizes",
     "in_scale",
     "rejection_in_scale",
+    "standing_blocks",
 ]
 
 SIDE_TOLERANCE = 0.15
@@ -62,24 +70,34 @@ def held_to_sizes(
     sizes: Sequence[tuple[float, float, float]],
     unit: str = "mm",
     tolerance: float = SIDE_TOLERANCE,
+    seen: tuple[np.ndarray, Camera] | None = None,
 ) -> tuple[list[DetectedBlock], list[Rejection]]:
     """The blocks whose side lies within the span of the block sizes (from the
     smallest side of a block size's group to the largest) or within
     ``tolerance`` of it — the sides between two sizes included: a cube nearer
     the camera (on a stack, or under a tilted one) looks larger — renamed as the
     detector names them (``red``, ``red2``, … in order); the others rejected as
-    ``not a block size``. Sides in metres, shown in ``unit`` (``mm``, or ``px``
-    for an image whose scale is not known yet)."""
+    ``not a block size`` — unless, with the photograph and its camera
+    (``seen``), it stands as the photograph's cubes do
+    (:func:`~demoplan.perception.stack_sides.standing_tops`: its own side strip
+    towards the nadir, so it has a height): a cube of its own size, not a flat
+    patch (mrhan_stacks' lone small cube on the table, 21 px, 0.81 of the
+    smallest group's least side: small cubes on 65 mm columns, nearer the
+    camera). Sides in metres, shown in ``unit`` (``mm``, or ``px`` for an image
+    whose scale is not known yet)."""
     if not sizes:
         return list(blocks), []
     low = min(size[1] for size in sizes) * (1 - tolerance)
     high = max(size[2] for size in sizes) * (1 + tolerance)
+    standing: frozenset[int] = frozenset()
+    if seen is not None and any(not low <= block.side <= high for block in blocks):
+        standing = standing_blocks(seen[0], blocks, seen[1])
     kept: list[DetectedBlock] = []
     rejected: list[Rejection] = []
     factor = 1000.0 if unit == "mm" else 1.0
     shown = " / ".join(f"{size[0] * factor:.0f}" for size in sizes)
-    for block in blocks:
-        if low <= block.side <= high:
+    for index, block in enumerate(blocks):
+        if low <= block.side <= high or index in standing:
             kept.append(block)
             continue
         outline = tuple(
@@ -88,6 +106,19 @@ def held_to_sizes(
         detail = f"side {block.side * factor:.0f} {unit}, the blocks here {shown} {unit}"
         rejected.append(Rejection("not a block size", detail, block.colour, (outline,)))
     return named_by_colour(kept), rejected
+
+
+def standing_blocks(
+    image: np.ndarray, blocks: Sequence[DetectedBlock], camera: Camera
+) -> frozenset[int]:
+    """The indices of ``blocks`` (found in ``image`` through ``camera``) whose tops
+    stand as the photograph's cubes do (:func:`~demoplan.perception.stack_sides.standing_tops`)."""
+    height = image.shape[0]
+    squares = []
+    for block in blocks:
+        u, v = camera.to_pixels(block.x, block.y)
+        squares.append((u, height - v, block.yaw, block.side * camera.px_per_m))
+    return standing_tops(image, squares)
 
 
 def in_scale(block: DetectedBlock, px_per_m: float, origin: tuple[float, float]) -> DetectedBlock:

@@ -36,7 +36,7 @@ from demoplan.perception.colours import MIN_CHROMA, SIDE_FACE_GAP, foreground
 from demoplan.perception.opencv import cv2
 from demoplan.perception.side_faces import MAX_HUE_TURN, ImageSquare
 
-__all__ = ["Nadir", "SideStrip", "lower_side_faces", "nadir_of", "side_strip"]
+__all__ = ["Nadir", "SideStrip", "lower_side_faces", "nadir_of", "side_strip", "standing_tops"]
 
 _RAYS = (-0.25, 0.0, 0.25)
 """Parallel rays (shares of the top's side across the way to the nadir) whose median
@@ -291,11 +291,7 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
         return {}
     lab = _lab(image)
     colours = [_top_colour(lab, square) for square in squares]
-    strips = [
-        side_strip(lab, sq, colour, [*squares[:index], *squares[index + 1 :]])
-        for index, (sq, colour) in enumerate(zip(squares, colours, strict=True))
-    ]
-    nadir = nadir_of(squares, strips)
+    strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:
         return {}
     held = foreground(image)
@@ -322,6 +318,37 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
                     f"{nadir.y:.0f}), beside that top's side strip",
                 )
     return found
+
+
+def _strips_and_nadir(
+    lab: np.ndarray, squares: Sequence[ImageSquare], colours: Sequence[tuple[float, float, float]]
+) -> tuple[list[SideStrip | None], Nadir | None]:
+    """Each of ``squares``' own side strip (:func:`side_strip`, the others' insides
+    left out) and the nadir they point at (:func:`nadir_of`)."""
+    strips = [
+        side_strip(lab, sq, colour, [*squares[:index], *squares[index + 1 :]])
+        for index, (sq, colour) in enumerate(zip(squares, colours, strict=True))
+    ]
+    return strips, nadir_of(squares, strips)
+
+
+def standing_tops(image: np.ndarray, squares: Sequence[ImageSquare]) -> frozenset[int]:
+    """The indices of ``squares`` (accepted in ``image``) that stand as the
+    photograph's cubes do: each shows its own side strip towards the nadir the
+    strips of all of them point at (:func:`nadir_of`) — it has a height, so it is
+    no flat patch. None without a nadir."""
+    if len(squares) < 3:
+        return frozenset()
+    lab = _lab(image)
+    colours = [_top_colour(lab, square) for square in squares]
+    strips, nadir = _strips_and_nadir(lab, squares, colours)
+    if nadir is None:
+        return frozenset()
+    return frozenset(
+        index
+        for index, (square, strip) in enumerate(zip(squares, strips, strict=True))
+        if _stands(square, strip, nadir)
+    )
 
 
 def _neighbour_top(top: tuple[float, float, float], face: tuple[float, float, float]) -> bool:
