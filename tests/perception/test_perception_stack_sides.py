@@ -6,6 +6,7 @@ line from a top towards the nadir, on the stack's strip, is no top."""
 from __future__ import annotations
 
 import math
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from demoplan.perception.photos import PhotoRig
 from demoplan.perception.stack_sides import (
     MAX_MISS,
     SideStrip,
+    _foreground_run,
     _lab,
     nadir_of,
     side_strip,
@@ -146,3 +148,30 @@ def test_a_tower_family_draw_keeps_its_lower_side_faces_out(seed: int) -> None:
     for side_given in (False, True):
         run = perceive_case(case, side_given=side_given)
         assert run.score.false == 0 and run.score.found == run.score.needed, run.score
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    centre=st.tuples(st.floats(0, 79), st.floats(0, 59)),
+    angle=st.floats(0.0, 2 * math.pi),
+    side=st.floats(4.0, 30.0),
+)
+def test_a_stacks_run_towards_a_far_nadir_is_walked_to_the_border_only(
+    centre: tuple[float, float], angle: float, side: float
+) -> None:
+    """Strips a degree apart meet hundreds of thousands of pixels away: the run of
+    foreground towards such a nadir is the run towards one just past the border
+    (no foreground lies beyond it), and walking it holds no more memory than the
+    image's own rays need (it held 3 × 8 bytes and more a pixel of the way)."""
+    held = np.ones((60, 80), dtype=bool)
+    top = (centre[0], centre[1], 0.0, side)
+    toward = np.array([math.cos(angle), math.sin(angle)])
+    near = _foreground_run(held, top, toward, math.hypot(80, 60) + side)
+    tracemalloc.start()
+    try:
+        far = _foreground_run(held, top, toward, 2e6)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert far == near
+    assert peak < 1_000_000

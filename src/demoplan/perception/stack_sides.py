@@ -336,8 +336,11 @@ def _foreground_run(
 ) -> float:
     """How far (px from ``top``'s centre) the foreground ``held`` runs on from it towards
     the nadir (``toward``, ``distance`` px away), gaps of up to :data:`MAX_SEAM` of
-    its side bridged: the median over three parallel rays."""
-    steps = np.arange(0.0, distance)
+    its side bridged: the median over three parallel rays. The rays are walked to
+    the nadir or off the image, whichever comes first: strips a degree apart meet
+    hundreds of thousands of pixels away, and no foreground runs past the border."""
+    off_image = math.hypot(*held.shape[:2]) + top[3]  # from a centre on the image
+    steps = np.arange(0.0, min(distance, off_image))
     across = np.multiply(_RAYS, top[3])[:, None]
     xs = top[0] + toward[0] * steps[None, :] - toward[1] * across
     ys = top[1] + toward[1] * steps[None, :] + toward[0] * across
