@@ -25,6 +25,7 @@ from demoplan.perception.stack_sides import (
     SideStrip,
     _foreground_run,
     _lab,
+    lower_side_faces,
     nadir_of,
     side_strip,
 )
@@ -175,3 +176,38 @@ def test_a_stacks_run_towards_a_far_nadir_is_walked_to_the_border_only(
         tracemalloc.stop()
     assert far == near
     assert peak < 1_000_000
+
+
+_ODD_SQUARES = [
+    (40.0, 30.0, 0.0, 0.0),
+    (40.0, 30.0, 0.0, -3.0),
+    (40.0, 30.0, 0.0, math.nan),
+    (40.0, 30.0, 0.0, math.inf),
+    (40.0, 30.0, math.nan, 12.0),
+    (math.nan, 30.0, 0.0, 12.0),
+    (40.0, math.inf, 0.0, 12.0),
+    (-1e9, 1e9, 0.0, 12.0),
+]
+
+
+@pytest.mark.parametrize("size", [(1, 1), (60, 80)])
+def test_squares_of_no_size_or_not_finite_are_no_strips_and_no_side_faces(
+    size: tuple[int, int],
+) -> None:
+    """The rule is given accepted squares; should it be given a square of no size,
+    not finite or far off the image, on a coloured image of any size, it measures
+    no strip there and tells no side face by it (a square of no size raised
+    OpenCV's error, an infinite one Python's)."""
+    image = np.zeros((*size, 3), dtype=np.uint8)
+    image[...] = (200, 40, 40)
+    image[size[0] // 2 :] = (120, 20, 20)  # a darker strip of the hue
+    lab = _lab(image)
+    for square in _ODD_SQUARES:
+        assert side_strip(lab, square) is None, square
+    squares = [*_ODD_SQUARES, (10.0, 10.0, 0.0, 12.0), (40.0, 20.0, 5.0, 12.0)]
+    found = lower_side_faces(image, squares)
+    assert all(_measurable(squares[index]) for index in found)
+
+
+def _measurable(square: tuple[float, float, float, float]) -> bool:
+    return all(map(math.isfinite, square)) and square[3] > 0
