@@ -6,6 +6,7 @@ line from a top towards the nadir, on the stack's strip, is no top."""
 from __future__ import annotations
 
 import math
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,9 @@ from demoplan.perception.photos import PhotoRig
 from demoplan.perception.stack_sides import (
     MAX_MISS,
     SideStrip,
+    _foreground_run,
     _lab,
+    lower_side_faces,
     nadir_of,
     side_strip,
 )
@@ -220,3 +223,65 @@ def test_mrhan_stacks_lone_small_cube_on_the_table_is_a_block() -> None:
     assert not [r for r in found.rejected if r.reason == "not a block size"]
     run = perceive_labelled(photo)
     assert run.score.found == run.score.needed == 11 and run.score.false == 0, run.score
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    centre=st.tuples(st.floats(0, 79), st.floats(0, 59)),
+    angle=st.floats(0.0, 2 * math.pi),
+    side=st.floats(4.0, 30.0),
+)
+def test_a_stacks_run_towards_a_far_nadir_is_walked_to_the_border_only(
+    centre: tuple[float, float], angle: float, side: float
+) -> None:
+    """Strips a degree apart meet hundreds of thousands of pixels away: the run of
+    foreground towards such a nadir is the run towards one just past the border
+    (no foreground lies beyond it), and walking it holds no more memory than the
+    image's own rays need (it held 3 × 8 bytes and more a pixel of the way)."""
+    held = np.ones((60, 80), dtype=bool)
+    top = (centre[0], centre[1], 0.0, side)
+    toward = np.array([math.cos(angle), math.sin(angle)])
+    near = _foreground_run(held, top, toward, math.hypot(80, 60) + side)
+    tracemalloc.start()
+    try:
+        far = _foreground_run(held, top, toward, 2e6)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert far == near
+    assert peak < 1_000_000
+
+
+_ODD_SQUARES = [
+    (40.0, 30.0, 0.0, 0.0),
+    (40.0, 30.0, 0.0, -3.0),
+    (40.0, 30.0, 0.0, math.nan),
+    (40.0, 30.0, 0.0, math.inf),
+    (40.0, 30.0, math.nan, 12.0),
+    (math.nan, 30.0, 0.0, 12.0),
+    (40.0, math.inf, 0.0, 12.0),
+    (-1e9, 1e9, 0.0, 12.0),
+]
+
+
+@pytest.mark.parametrize("size", [(1, 1), (60, 80)])
+def test_squares_of_no_size_or_not_finite_are_no_strips_and_no_side_faces(
+    size: tuple[int, int],
+) -> None:
+    """The rule is given accepted squares; should it be given a square of no size,
+    not finite or far off the image, on a coloured image of any size, it measures
+    no strip there and tells no side face by it (a square of no size raised
+    OpenCV's error, an infinite one Python's)."""
+    image = np.zeros((*size, 3), dtype=np.uint8)
+    image[...] = (200, 40, 40)
+    image[size[0] // 2 :] = (120, 20, 20)  # a darker strip of the hue
+    lab = _lab(image)
+    for square in _ODD_SQUARES:
+        assert side_strip(lab, square) is None, square
+    squares = [*_ODD_SQUARES, (10.0, 10.0, 0.0, 12.0), (40.0, 20.0, 5.0, 12.0)]
+    found = lower_side_faces(image, squares)
+    assert all(_measurable(squares[index]) for index in found)
+
+
+def _measurable(square: tuple[float, float, float, float]) -> bool:
+    return all(map(math.isfinite, square)) and square[3] > 0

@@ -104,10 +104,17 @@ def _runs(held: np.ndarray, first: int, gap: int) -> np.ndarray:
     return lengths
 
 
+def _measurable(square: ImageSquare) -> bool:
+    """Whether ``square`` has a size and is finite: one to measure."""
+    return all(math.isfinite(value) for value in square) and square[3] > 0
+
+
 def _top_colour(lab: np.ndarray, square: ImageSquare) -> tuple[float, float, float]:
     """The L*, a*, b* of ``square``'s top: over 8 × 8 points on its central half, the
     upper quartile of L* (a fit that covers some of its own side strip is read by
-    its lit part) and the median a*, b*."""
+    its lit part) and the median a*, b* (black for a square not :func:`_measurable`)."""
+    if not _measurable(square):
+        return 0.0, 0.0, 0.0
     x, y, theta, side = square
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
     steps = ((np.arange(8) + 0.5) / 8 * 0.5 - 0.25) * side
@@ -140,8 +147,11 @@ def side_strip(
     (95th percentile; seen along the nadir's way past a side, across it past a
     corner). The ``others`` squares' insides are no strip: a touching
     neighbour's top of the hue, a little darker, would point along its row
-    (touching_rows), not at the nadir. ``None`` for an achromatic top or a strip
-    under :data:`MIN_STRIP` of its side."""
+    (touching_rows), not at the nadir. ``None`` for an achromatic top, a strip
+    under :data:`MIN_STRIP` of its side, or a square of no size or not wholly
+    finite (nothing to measure)."""
+    if not _measurable(square):
+        return None
     x, y, _, side = square
     lightness, a, b = _top_colour(lab, square) if top is None else top
     if math.hypot(a, b) < MIN_CHROMA:
@@ -162,7 +172,8 @@ def side_strip(
     box = _box(xx, yy, square)
     dx, dy = xx + 0.5 - x, yy + 0.5 - y
     for other in others:
-        material &= _box(xx, yy, other) >= 1.0
+        if _measurable(other):
+            material &= _box(xx, yy, other) >= 1.0
     # opened: a top's outline drawn darker (a render's edge, a bevel) is no strip
     opened = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     material = opened > 0
@@ -383,8 +394,11 @@ def _foreground_run(
 ) -> float:
     """How far (px from ``top``'s centre) the foreground ``held`` runs on from it towards
     the nadir (``toward``, ``distance`` px away), gaps of up to :data:`MAX_SEAM` of
-    its side bridged: the median over three parallel rays."""
-    steps = np.arange(0.0, distance)
+    its side bridged: the median over three parallel rays. The rays are walked to
+    the nadir or off the image, whichever comes first: strips a degree apart meet
+    hundreds of thousands of pixels away, and no foreground runs past the border."""
+    off_image = math.hypot(*held.shape[:2]) + top[3]  # from a centre on the image
+    steps = np.arange(0.0, min(distance, off_image))
     across = np.multiply(_RAYS, top[3])[:, None]
     xs = top[0] + toward[0] * steps[None, :] - toward[1] * across
     ys = top[1] + toward[1] * steps[None, :] + toward[0] * across
