@@ -334,11 +334,22 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
 def _strips_and_nadir(
     lab: np.ndarray, squares: Sequence[ImageSquare], colours: Sequence[tuple[float, float, float]]
 ) -> tuple[list[SideStrip | None], Nadir | None]:
-    """Each of ``squares``' own side strip (:func:`side_strip`, the others' insides
-    left out) and the nadir they point at (:func:`nadir_of`)."""
+    """Each of ``squares``' own side strip (:func:`side_strip`, the insides of the
+    others lit as a neighbour's top of its hue left out: :func:`_neighbour_top`)
+    and the nadir they point at (:func:`nadir_of`). A lower cube's side face,
+    darker, stays in: the fit of one may take in the top's own strip."""
     strips = [
-        side_strip(lab, sq, colour, [*squares[:index], *squares[index + 1 :]])
-        for index, (sq, colour) in enumerate(zip(squares, colours, strict=True))
+        side_strip(
+            lab,
+            sq,
+            colour,
+            [
+                other
+                for index, other in enumerate(squares)
+                if index != own and _neighbour_top(colour, colours[index])
+            ],
+        )
+        for own, (sq, colour) in enumerate(zip(squares, colours, strict=True))
     ]
     return strips, nadir_of(squares, strips)
 
