@@ -16,9 +16,13 @@ from hypothesis import strategies as st
 mujoco = pytest.importorskip("mujoco")
 
 from demoplan.execution.arm import ArmWorld  # noqa: E402
-from demoplan.execution.arm_motion import PENETRATION, ArmMotion, Load  # noqa: E402
+from demoplan.execution.arm_motion import (  # noqa: E402
+    PENETRATION,
+    ArmMotion,
+    Load,
+    arm_contacts,
+)
 from demoplan.execution.arm_moves import ArmMoves  # noqa: E402
-from demoplan.execution.collision_simulation import _arm_contacts  # noqa: E402
 
 _GEOM = st.tuples(
     st.sampled_from(("box", "sphere", "capsule")),
@@ -155,7 +159,7 @@ def test_the_simulated_collision_facts_see_the_contacts_the_per_contact_loop_saw
                 expected.add(other)
     on_arm = np.isin(model.geom_bodyid, sorted(arm))
     actual = {
-        second if first in arm else first for first, second in _arm_contacts(data, model, on_arm)
+        second if first in arm else first for first, second in arm_contacts(data, model, on_arm)
     }
     assert actual == expected
 

@@ -192,3 +192,15 @@ class ArmMotion:
 
 def xyz(point: np.ndarray) -> str:
     return f"({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f})"
+
+
+def arm_contacts(data: Any, model: Any, on_arm: np.ndarray) -> list[list[int]]:
+    """The body pairs of the active contacts in ``data`` (closer than their
+    margin) between an arm geom (``on_arm``: per geom) and another, in
+    MuJoCo's order. Read as arrays: reading each contact as an object costs
+    more than posing the arm."""
+    contacts = data.contact
+    pairs = contacts.geom[contacts.dist < contacts.includemargin]
+    pairs = pairs[on_arm[pairs[:, 0]] != on_arm[pairs[:, 1]]]
+    result: list[list[int]] = model.geom_bodyid[pairs].tolist()
+    return result

@@ -13,7 +13,14 @@ from typing import Any
 import numpy as np
 
 from demoplan.execution.arm_model import FINGER_REACH, HOME, ArmKinematics
-from demoplan.execution.arm_motion import ArmMotion, Load, MotionError, wrapped, xyz
+from demoplan.execution.arm_motion import (
+    ArmMotion,
+    Load,
+    MotionError,
+    arm_contacts,
+    wrapped,
+    xyz,
+)
 from demoplan.execution.arm_tools import Tool
 from demoplan.execution.physics import MujocoWorld
 
@@ -115,14 +122,12 @@ class ArmMoves(MujocoWorld):
         arrays and only those between an arm geom and another geom are looked
         at one by one (reading each contact as an object cost more than the
         step itself)."""
-        contacts = self.data.contact
-        pairs = contacts.geom[contacts.dist < contacts.includemargin]  # active: touching
-        pairs = pairs[self.arm_geoms[pairs[:, 0]] != self.arm_geoms[pairs[:, 1]]]
-        if not len(pairs):
+        pairs = arm_contacts(self.data, self.model, self.arm_geoms)
+        if not pairs:
             return
         held = self._body(self.held) if self.held is not None else -1
         allowed = self._body(self.allowed) if self.allowed is not None else -2
-        for first, second in self.model.geom_bodyid[pairs].tolist():
+        for first, second in pairs:
             other = second if first in self.arm_bodies else first
             if other not in (held, allowed):
                 label = f"the arm touched {self._body_label(other)} at {self.simulated:.2f} s"

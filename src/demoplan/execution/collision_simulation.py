@@ -37,6 +37,7 @@ from demoplan.execution.arm_model import (
     arm_joints,
     attach_arm,
 )
+from demoplan.execution.arm_motion import arm_contacts
 from demoplan.model import ObjectGeometry
 from demoplan.scenes.geometry import Location
 from demoplan.scenes.scene import Scene
@@ -109,24 +110,12 @@ def simulated_collision_facts(
             for q in poses:
                 data.qpos[joints] = q
                 mujoco.mj_forward(model, data)
-                for first, second in _arm_contacts(data, model, on_arm):
+                for first, second in arm_contacts(data, model, on_arm):
                     other = second if first in arm else first
                     if other in location_of and location_of[other] != index:
                         hit.add(location_of[other])
             facts += [(loc.name, locations[j].name, grasp) for j in sorted(hit)]
     return facts, unreachable
-
-
-def _arm_contacts(data: Any, model: Any, on_arm: np.ndarray) -> list[list[int]]:
-    """The body pairs of the active contacts in ``data`` (closer than their
-    margin) between an arm geom (``on_arm``: per geom) and another, in
-    MuJoCo's order. Read as arrays: reading each contact as an object costs
-    more than posing the arm."""
-    contacts = data.contact
-    pairs = contacts.geom[contacts.dist < contacts.includemargin]
-    pairs = pairs[on_arm[pairs[:, 0]] != on_arm[pairs[:, 1]]]
-    result: list[list[int]] = model.geom_bodyid[pairs].tolist()
-    return result
 
 
 def _approach(
