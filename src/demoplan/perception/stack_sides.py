@@ -173,7 +173,7 @@ def side_strip(
     dx, dy = xx + 0.5 - x, yy + 0.5 - y
     for other in others:
         if _measurable(other):
-            material &= _box(xx, yy, other) >= 1.0
+            _outside(material, other, rows.start, cols.start)
     # opened: a top's outline drawn darker (a render's edge, a bevel) is no strip
     opened = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     material = opened > 0
@@ -186,6 +186,24 @@ def side_strip(
     direction = math.atan2(float(centroid[1]), float(centroid[0]))
     length = float(np.percentile(box[strip] - 1.0, 95)) * side / 2  # past the outline
     return SideStrip(direction, length) if length >= MIN_STRIP * side else None
+
+
+def _outside(held: np.ndarray, square: ImageSquare, row0: int, col0: int) -> None:
+    """``held`` (a crop whose first row and column are ``row0``, ``col0`` of the
+    image) left only outside ``square`` (or on its outline: :func:`_box` ≥ 1), in
+    place. Only the crop's pixels within the square's reach (its centre's distance
+    to a corner, and a pixel more) are looked at: a pixel farther out is outside
+    it, whatever its turn — the same mask as :func:`_box` over the whole crop."""
+    x, y, _, side = square
+    reach = side / math.sqrt(2) + 1.0
+    rows = slice(max(row0, math.floor(y - reach)), min(row0 + held.shape[0], math.ceil(y + reach)))
+    cols = slice(max(col0, math.floor(x - reach)), min(col0 + held.shape[1], math.ceil(x + reach)))
+    if rows.start >= rows.stop or cols.start >= cols.stop:
+        return
+    yy, xx = np.mgrid[rows, cols]
+    held[rows.start - row0 : rows.stop - row0, cols.start - col0 : cols.stop - col0] &= (
+        _box(xx, yy, square) >= 1.0
+    )
 
 
 def _box(xx: np.ndarray, yy: np.ndarray, square: ImageSquare) -> np.ndarray:
