@@ -223,6 +223,11 @@ def foreground(image: np.ndarray) -> np.ndarray:
     the core of :func:`colour_regions`' regions), specks of noise removed (an
     opening by a 3 × 3 square)."""
     distinct, _, threshold, _ = _distinctness(image)
+    return _foreground(distinct, threshold)
+
+
+def _foreground(distinct: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`foreground` from the image's :func:`_distinctness` and its threshold."""
     mask = (distinct > threshold).astype(np.uint8)
     opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     return np.asarray(opened, dtype=bool)
@@ -488,6 +493,7 @@ def colour_regions(
     rejected: list[RejectedPart] | None = None,
     largest_block: float | None = None,
     second_tables: np.ndarray | None = None,
+    held: np.ndarray | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
@@ -496,12 +502,15 @@ def colour_regions(
     first (:data:`TABLE_BLOCKS`) is table too, its pixels set in ``second_tables``
     (bool, the image's rows × columns) when that is given: a hand and forearm
     reaching in from the border may be one, and hide a top
-    (:mod:`demoplan.perception.occlusion`)."""
+    (:mod:`demoplan.perception.occlusion`). ``held`` (bool, rows × columns), when
+    given, is set to :func:`foreground` (measured once for both)."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
     distinct, lab, threshold, coloured_image = _distinctness(image)
     record = PartRecorder(rejected, min_area)
+    if held is not None:  # before a second table lowers ``distinct``
+        held[...] = _foreground(distinct, threshold)
     if largest_block is not None and coloured_image:
         _second_tables(distinct, lab, threshold, largest_block, record, second_tables)
     foreground = (distinct > threshold / 2).astype(np.uint8)
