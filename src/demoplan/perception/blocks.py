@@ -400,6 +400,7 @@ def detect_blocks(
         rejected=parts,
         largest_block=side_px[1] ** 2,
         second_tables=(tables := np.zeros(image.shape[:2], dtype=bool)),
+        held=(held := np.zeros(image.shape[:2], dtype=bool)),
     )
     lightness = image_lightness(image)
     search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
@@ -417,7 +418,7 @@ def detect_blocks(
         squares = _squares_in_region(search, region, where, parts)
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
     found += tops_behind(search, regions, tables, found, _why_no_block, fit_square, parts)
-    found = _without_side_faces(image, found, parts)
+    found = _without_side_faces(image, found, parts, held)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
@@ -435,12 +436,13 @@ def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
 
 
 def _without_side_faces(
-    image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None
+    image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None, held: np.ndarray
 ) -> list[_Found]:
     """``found`` without the shadows on a coloured table, the side faces beside
     their tops (:mod:`demoplan.perception.side_faces`) and the side faces of a
     stack's lower cubes (:mod:`demoplan.perception.stack_sides`), which go to
-    ``parts``."""
+    ``parts`` (``held``: the image's foreground,
+    :func:`~demoplan.perception.colours.foreground`)."""
     in_image = [_in_image(region, params) for region, params, _, _ in found]
     colours = [np.asarray(region.rgb) for region, _, _, _ in found]
     shadows = table_shadows(image, in_image, colours)
@@ -448,7 +450,7 @@ def _without_side_faces(
     dropped = {index: ("shadow", why) for index, why in shadows.items()}
     dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
     kept = [index for index in range(len(found)) if index not in dropped]
-    lower = lower_side_faces(image, [in_image[index] for index in kept])
+    lower = lower_side_faces(image, [in_image[index] for index in kept], held)
     dropped |= {kept[i]: ("side face", why) for i, why in lower.items()}
     if parts is not None:
         for index, (reason, detail) in dropped.items():

@@ -303,7 +303,9 @@ def _miss(start: np.ndarray, direction: np.ndarray, point: np.ndarray) -> float:
     return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
 
 
-def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[int, str]:
+def lower_side_faces(
+    image: np.ndarray, squares: Sequence[ImageSquare], held: np.ndarray | None = None
+) -> dict[int, str]:
     """The indices of ``squares`` (accepted in ``image``) that are side faces of a
     stack's lower cubes, each with why: a square whose centre lies on the line from
     a top to the nadir (within half the top's side of it), nearer the nadir than the
@@ -315,7 +317,8 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
     it, or the table), the square not lit as a neighbour's top of its hue
     (:func:`_neighbour_top`), and within the foreground
     (:func:`~demoplan.perception.colours.foreground`) that runs on from the top
-    towards the nadir without a gap. Nothing without a nadir (:func:`nadir_of`)."""
+    towards the nadir without a gap (``held``, when the caller has it). Nothing
+    without a nadir (:func:`nadir_of`)."""
     if len(squares) < 3:
         return {}
     lab = _lab(image)
@@ -323,7 +326,7 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
     strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:
         return {}
-    held = foreground(image)
+    held = foreground(image) if held is None else held
     standing = [_stands(sq, strip, nadir) for sq, strip in zip(squares, strips, strict=True)]
     found: dict[int, str] = {}
     for top, upright, colour in zip(squares, standing, colours, strict=True):
