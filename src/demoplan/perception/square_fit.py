@@ -69,7 +69,10 @@ def square_window(
     """The pixel centres (u, v) of the part of a crop of ``shape`` that holds every
     pixel a square at ``params``'s centre with ``side`` touches (its one-pixel ramp
     included), and those rows and columns: a fit's sums over that part are its sums
-    over the crop, the same values in the same order."""
+    over the crop, the same values in the same order. u is one row (1 × columns), v
+    one column (rows × 1): they broadcast to the part's pixels (an expression of
+    both, as :func:`square_alpha`, has its values pixel for pixel; the grid of both
+    is not built)."""
     height, width = shape
     reach = (abs(side) / 2 + 0.5) * math.sqrt(2) + 2.0
     u, v = float(params[0]), float(params[1])
@@ -84,9 +87,8 @@ def square_window(
         cols = slice(
             min(width, max(0, math.floor(u - reach))), max(0, min(width, math.ceil(u + reach)))
         )
-    uu, vv = np.meshgrid(
-        np.arange(cols.start, cols.stop) + 0.5, height - np.arange(rows.start, rows.stop) - 0.5
-    )
+    uu = (np.arange(cols.start, cols.stop) + 0.5)[None, :]
+    vv = (height - np.arange(rows.start, rows.stop) - 0.5)[:, None]
     return uu, vv, (rows, cols)
 
 
@@ -297,7 +299,8 @@ def fit_square(
         near = (square_alpha(outline, uu, vv) > 0) & (square_alpha(inner, uu, vv) < 1)
     near = near if ignore is None else near & ~ignore[window]  # hidden (occlusion.py)
     target = alpha[window][near]
-    model = SquareModel(uu[near], vv[near], target, f_scale=0.3)
+    us, vs = (np.broadcast_to(grid, near.shape)[near] for grid in (uu, vv))
+    model = SquareModel(us, vs, target, f_scale=0.3)
     scale = np.array([1.0, 1.0, 2.0, 1.0])
     first = np.array([start.u, start.v, start.theta, start.side])
     if band is None:
