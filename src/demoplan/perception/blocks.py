@@ -53,8 +53,9 @@ from demoplan.perception.colours import (
     outlines,
 )
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.occlusion import Candidate, tops_behind
-from demoplan.perception.seams import image_lightness, seamless_side
+from demoplan.perception.seams import seamless_side
 from demoplan.perception.shapes import square_shaped
 from demoplan.perception.side_faces import (
     ImageSquare,
@@ -386,10 +387,14 @@ def detect_blocks(
     camera: Camera,
     settings: PerceptionSettings = PerceptionSettings(),
     rejected: list[Rejection] | None = None,
+    measures: ImageMeasures | None = None,
 ) -> list[DetectedBlock]:
     """Every square block in ``image`` (H × W × 3, top view), in world coordinates;
     ``rejected``, when given, gets the coloured regions found to be no block, each
-    with why (:class:`Rejection`)."""
+    with why (:class:`Rejection`). ``measures``: the image's
+    (:mod:`demoplan.perception.image_measures`), when the caller shares them with
+    stages of its own; each stage here takes its conversions of the image from them."""
+    measures = ImageMeasures(image) if measures is None else measures
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
     parts: list[RejectedPart] | None = None if rejected is None else []
@@ -401,8 +406,9 @@ def detect_blocks(
         largest_block=side_px[1] ** 2,
         second_tables=(tables := np.zeros(image.shape[:2], dtype=bool)),
         held=(held := np.zeros(image.shape[:2], dtype=bool)),
+        lab8=measures.lab8,
     )
-    lightness = image_lightness(image)
+    lightness = measures.lightness
     search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     for done, region in enumerate(regions):
@@ -418,7 +424,7 @@ def detect_blocks(
         squares = _squares_in_region(search, region, where, parts)
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
     found += tops_behind(search, regions, tables, found, _why_no_block, fit_square, parts)
-    found = _without_side_faces(image, found, parts, held)
+    found = _without_side_faces(measures, found, parts, held)
     if rejected is not None and parts is not None:
         rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
     return _named_in_world(found, camera, image.shape[0])
@@ -436,7 +442,7 @@ def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
 
 
 def _without_side_faces(
-    image: np.ndarray, found: list[_Found], parts: list[RejectedPart] | None, held: np.ndarray
+    measures: ImageMeasures, found: list[_Found], parts: list[RejectedPart] | None, held: np.ndarray
 ) -> list[_Found]:
     """``found`` without the shadows on a coloured table, the side faces beside
     their tops (:mod:`demoplan.perception.side_faces`) and the side faces of a
@@ -445,12 +451,12 @@ def _without_side_faces(
     :func:`~demoplan.perception.colours.foreground`)."""
     in_image = [_in_image(region, params) for region, params, _, _ in found]
     colours = [np.asarray(region.rgb) for region, _, _, _ in found]
-    shadows = table_shadows(image, in_image, colours)
-    side_faces = side_faces_beside_tops(image, in_image)
+    shadows = table_shadows(measures.image, in_image, colours)
+    side_faces = side_faces_beside_tops(measures.image, in_image)
     dropped = {index: ("shadow", why) for index, why in shadows.items()}
     dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
     kept = [index for index in range(len(found)) if index not in dropped]
-    lower = lower_side_faces(image, [in_image[index] for index in kept], held)
+    lower = lower_side_faces(measures, [in_image[index] for index in kept], held)
     dropped |= {kept[i]: ("side face", why) for i, why in lower.items()}
     if parts is not None:
         for index, (reason, detail) in dropped.items():

@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from demoplan.perception.colours import MIN_CHROMA, SIDE_FACE_GAP, foreground
+from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.opencv import cv2
 from demoplan.perception.side_faces import MAX_HUE_TURN, ImageSquare
 
@@ -76,9 +77,9 @@ class Nadir(NamedTuple):
 
 
 def _lab(image: np.ndarray) -> np.ndarray:
-    """CIELAB (L* 0–100) of ``image`` (H × W × 3, 8-bit RGB), smoothed over 3 × 3 px."""
-    smooth = cv2.blur(np.ascontiguousarray(image, dtype=np.uint8), (3, 3))
-    return np.asarray(cv2.cvtColor(smooth.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab))
+    """CIELAB (L* 0–100) of ``image`` (H × W × 3, 8-bit RGB), smoothed over 3 × 3 px
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.smooth_lab`)."""
+    return ImageMeasures(image).smooth_lab
 
 
 def _at(values: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -304,7 +305,9 @@ def _miss(start: np.ndarray, direction: np.ndarray, point: np.ndarray) -> float:
 
 
 def lower_side_faces(
-    image: np.ndarray, squares: Sequence[ImageSquare], held: np.ndarray | None = None
+    image: np.ndarray | ImageMeasures,
+    squares: Sequence[ImageSquare],
+    held: np.ndarray | None = None,
 ) -> dict[int, str]:
     """The indices of ``squares`` (accepted in ``image``) that are side faces of a
     stack's lower cubes, each with why: a square whose centre lies on the line from
@@ -318,15 +321,17 @@ def lower_side_faces(
     (:func:`_neighbour_top`), and within the foreground
     (:func:`~demoplan.perception.colours.foreground`) that runs on from the top
     towards the nadir without a gap (``held``, when the caller has it). Nothing
-    without a nadir (:func:`nadir_of`)."""
+    without a nadir (:func:`nadir_of`). ``image``: the photograph, or its measures
+    (:mod:`demoplan.perception.image_measures`)."""
     if len(squares) < 3:
         return {}
-    lab = _lab(image)
+    measures = measures_of(image)
+    lab = measures.smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
     strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:
         return {}
-    held = foreground(image) if held is None else held
+    held = foreground(measures.image) if held is None else held
     standing = [_stands(sq, strip, nadir) for sq, strip in zip(squares, strips, strict=True)]
     found: dict[int, str] = {}
     for top, upright, colour in zip(squares, standing, colours, strict=True):
@@ -375,14 +380,17 @@ def _strips_and_nadir(
     return strips, nadir_of(squares, strips)
 
 
-def standing_tops(image: np.ndarray, squares: Sequence[ImageSquare]) -> frozenset[int]:
+def standing_tops(
+    image: np.ndarray | ImageMeasures, squares: Sequence[ImageSquare]
+) -> frozenset[int]:
     """The indices of ``squares`` (accepted in ``image``) that stand as the
     photograph's cubes do: each shows its own side strip towards the nadir the
     strips of all of them point at (:func:`nadir_of`) — it has a height, so it is
-    no flat patch. None without a nadir."""
+    no flat patch. None without a nadir. ``image``: the photograph, or its measures
+    (:mod:`demoplan.perception.image_measures`)."""
     if len(squares) < 3:
         return frozenset()
-    lab = _lab(image)
+    lab = measures_of(image).smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
     strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:
