@@ -23,6 +23,7 @@ from demoplan.perception.square_fit import (
     fit_square,
     least_squares,
     square_alpha,
+    square_window,
 )
 
 SHAPE = (110, 130)
@@ -296,3 +297,26 @@ def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
         coverage,
         rms,
     )
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    square=st.tuples(
+        st.floats(-30, 160), st.floats(-30, 140), st.floats(0, 90), st.floats(0.5, 90)
+    )
+)
+def test_a_squares_window_holds_every_pixel_it_touches_with_the_same_values(
+    square: tuple[float, float, float, float],
+) -> None:
+    """The fit, the cut-out of a found square and the occluded tops' measures look at
+    the part of a crop square_window gives: the square over it (its u a row, its v
+    a column, broadcast) is the square over the whole crop there, value for value,
+    and nothing of the square lies outside it."""
+    params = np.array(square)
+    uu, vv = _grid()
+    whole = square_alpha(params, uu, vv)
+    part_u, part_v, window = square_window(SHAPE, params, params[3])
+    assert np.array_equal(square_alpha(params, part_u, part_v), whole[window])
+    outside = np.ones(SHAPE, dtype=bool)
+    outside[window] = False
+    assert not whole[outside].any()
