@@ -42,6 +42,7 @@ from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.highlights import glare, highlights, hole_owners, printed
+from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
@@ -195,13 +196,17 @@ def _largest_channel_spread(pixels: np.ndarray) -> int:
     return int(np.asarray(spread).max(initial=0))
 
 
-def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
+def _distinctness(
+    image: np.ndarray, lab8: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
     distance; L* difference in an image without colour), the image in CIELAB, and the
-    foreground threshold; whether the image has colour at all."""
+    foreground threshold; whether the image has colour at all. ``lab8``: the image's
+    8-bit CIELAB, when measured before
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.lab8`)."""
     # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
     # scaled back by one affine transform of the pixels
-    lab8 = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    lab8 = ImageMeasures(image).lab8 if lab8 is None else lab8
     lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
     coloured = _largest_channel_spread(image[::4, ::4]) > 2
@@ -223,6 +228,11 @@ def foreground(image: np.ndarray) -> np.ndarray:
     the core of :func:`colour_regions`' regions), specks of noise removed (an
     opening by a 3 × 3 square)."""
     distinct, _, threshold, _ = _distinctness(image)
+    return _foreground(distinct, threshold)
+
+
+def _foreground(distinct: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`foreground` from the image's :func:`_distinctness` and its threshold."""
     mask = (distinct > threshold).astype(np.uint8)
     opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     return np.asarray(opened, dtype=bool)
@@ -488,6 +498,8 @@ def colour_regions(
     rejected: list[RejectedPart] | None = None,
     largest_block: float | None = None,
     second_tables: np.ndarray | None = None,
+    held: np.ndarray | None = None,
+    lab8: np.ndarray | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
@@ -496,12 +508,16 @@ def colour_regions(
     first (:data:`TABLE_BLOCKS`) is table too, its pixels set in ``second_tables``
     (bool, the image's rows × columns) when that is given: a hand and forearm
     reaching in from the border may be one, and hide a top
-    (:mod:`demoplan.perception.occlusion`)."""
+    (:mod:`demoplan.perception.occlusion`). ``held`` (bool, rows × columns), when
+    given, is set to :func:`foreground` (measured once for both); ``lab8``: the
+    image's 8-bit CIELAB, when measured before (:func:`_distinctness`)."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
-    distinct, lab, threshold, coloured_image = _distinctness(image)
+    distinct, lab, threshold, coloured_image = _distinctness(image, lab8)
     record = PartRecorder(rejected, min_area)
+    if held is not None:  # before a second table lowers ``distinct``
+        held[...] = _foreground(distinct, threshold)
     if largest_block is not None and coloured_image:
         _second_tables(distinct, lab, threshold, largest_block, record, second_tables)
     foreground = (distinct > threshold / 2).astype(np.uint8)
