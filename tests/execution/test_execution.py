@@ -23,7 +23,7 @@ from demoplan.model import ObjectGeometry, TaskModel
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.support.cli import invoke
-from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.helpers import EXAMPLES, paper_model, seeded_start
 
 BLOCKS_SCENE = EXAMPLES / "scenes" / "pyramid-fig4.json"
 TABLE_SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
@@ -108,10 +108,11 @@ def test_monte_carlo_recoverable_faults_always_finish(
     task: str, request: pytest.FixtureRequest
 ) -> None:
     """drop 0.2, displace 0.1 (the issue's rates): every run reaches the goal."""
-    setup = request.getfixturevalue(task)
-    seeds = range(12 if task == "table" else 30)
-    for seed in seeds:
-        report, _ = run(setup, parse_faults("drop=0.2,displace=0.1"), seed)
+    model, scene = setup = request.getfixturevalue(task)
+    prepared, first = seeded_start(model, scene)
+    faults = parse_faults("drop=0.2,displace=0.1")
+    for seed in range(12 if task == "table" else 30):
+        report = execute(model, prepared, KinematicWorld(scene, faults, seed), first=first)
         assert_finished(report, setup[0])
 
 
@@ -269,11 +270,12 @@ def test_faults_are_reported_as_they_happened_and_detected_as_their_kind(
     model, scene = blocks if task == "blocks" else table
     expected = {"misplace": {"misplaced"}, "grasp": {"grasp"}, "displace": {"moved"}}
     expected["block"] = {"new_object"}
+    prepared, first = seeded_start(model, scene)
     for kind, detected_as in expected.items():
         injected = detected = 0
         for seed in range(8):
             world = KinematicWorld(scene, Faults(**{kind: 0.3}), seed)
-            report = execute(model, prepare(model, scene, clutter=True), world, ExecutionSettings())
+            report = execute(model, prepared, world, ExecutionSettings(), first=first)
             assert report.success, (kind, seed, report.reason)
             assert report.injected == tuple(world.injected)
             assert {f.kind for f in report.injected} <= {kind}

@@ -42,7 +42,7 @@ from demoplan.scenes.preview import preview_scene
 from demoplan.scenes.problems import SceneProblem
 from demoplan.scenes.scene import Scene, SceneObject, complete_geometry, load_scene
 from tests.support.cli import invoke
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, seeded_start
 
 KIT = EXAMPLES / "kitting"
 KIT_SCENE = KIT / "scene-manual-on-motor.json"
@@ -113,9 +113,10 @@ def test_kitting_recovers_from_drops_and_blocks(tray: bool, kit: TaskModel, tmp_
     faults = parse_faults("drop=0.3,block=0.3")
     failed = []
     injected = 0
+    prepared, first = seeded_start(kit, scene)
     for seed in range(1, 21):
         world = KinematicWorld(scene, faults, seed)
-        report = execute(kit, prepare(kit, scene, clutter=True), world)
+        report = execute(kit, prepared, world, first=first)
         injected += len(report.injected)
         if not report.success:
             failed.append((seed, report.reason))
@@ -369,8 +370,7 @@ def test_the_family_recovers_from_drops_and_blocks(task: tuple[TaskModel, Scene]
     where the table has room, and the replan finds a spot for it)."""
     model, scene = task
     faults = parse_faults("drop=0.3,block=0.3")
+    prepared, first = seeded_start(model, scene)
     for seed in range(1, 21):
-        report = execute(
-            model, prepare(model, scene, clutter=True), KinematicWorld(scene, faults, seed)
-        )
+        report = execute(model, prepared, KinematicWorld(scene, faults, seed), first=first)
         assert report.success, (seed, report.reason)

@@ -8,7 +8,7 @@ import subprocess
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +17,11 @@ from demoplan.execution.executor import ExecutionSettings
 from demoplan.experiments.paper import PAPER_TABLE_II
 from demoplan.model import Demonstration, Pose, Step, TaskModel
 from demoplan.rotations import quat_from_yaw
+
+if TYPE_CHECKING:
+    from demoplan.scenes.plan import ChosenPlan
+    from demoplan.scenes.prepared import PreparedScene
+    from demoplan.scenes.scene import Scene
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 ONE_MOVE_SCENE = Path(__file__).resolve().parents[1] / "data" / "scenes" / "pyramid-one-move.json"
@@ -32,6 +37,21 @@ others) runs out of time building plans, and the test would measure the
 machine instead of the behaviour."""
 
 TABLE_II = [(r.id, r.object, r.position_reference, r.position) for r in PAPER_TABLE_II]
+
+
+def seeded_start(
+    model: TaskModel, scene: Scene, settings: ExecutionSettings = ExecutionSettings()
+) -> tuple[PreparedScene, ChosenPlan]:
+    """What every seeded run starting in ``scene`` begins with: the scene prepared
+    (objects the model never saw allowed) and the first plan, made once for a loop
+    over seeds and passed to ``execute(..., first=...)``. Each run would make the
+    same: the first plan depends on neither the seed nor the faults, which act only
+    once the run has begun, and every replan is still made in every run."""
+    from demoplan.execution.executor import first_plan
+    from demoplan.scenes.prepared import prepare
+
+    prepared = prepare(model, scene, clutter=True, settings=settings.geometry)
+    return prepared, first_plan(model, prepared, settings)
 
 
 def paper_model(example: str) -> TaskModel:
