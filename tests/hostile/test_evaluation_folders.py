@@ -18,20 +18,21 @@ from demoplan.errors import InputError
 from demoplan.evaluation.plan import read_settings
 from demoplan.evaluation.results import read_rows
 from demoplan.learning.modelfile import save_model
-from tests.support.helpers import EXAMPLES, paper_model
+from tests.support.helpers import ONE_MOVE_SCENE, paper_model
 
-SCENE = EXAMPLES / "scenes" / "set-table-cluttered.json"
+SCENE = ONE_MOVE_SCENE
 
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """An evaluation of two runs, made here one after the other, with the
-    storyboard of its worst run only (no test here reads storyboards; each is
-    that run made again frame by frame, most of the evaluation's CPU —
+    """An evaluation of two runs of one move (the checks read the folder, not
+    what its runs did), made here one after the other, with the storyboard of
+    its worst run only (no test here reads storyboards; each is that run made
+    again frame by frame, most of the evaluation's CPU —
     tests/evaluation/test_evaluate.py's ``one_storyboard``)."""
     folder = tmp_path_factory.mktemp("evaluation")
     model = folder / "model.json"
-    save_model(paper_model("set_table"), model)
+    save_model(paper_model("blocks/demonstrations.json"), model)
     settings = settings_from_options(
         model, [SCENE], random_scenes=0, seeds=2, faults=None, sim="kinematic", clutter=0
     )
@@ -95,7 +96,7 @@ def test_a_tampered_row_is_one_line(finished: Path, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "entry", ["evaluation.json", "runs.jsonl", "scenes", "scenes/set-table-cluttered.json"]
+    "entry", ["evaluation.json", "runs.jsonl", "scenes", f"scenes/{SCENE.name}"]
 )
 def test_a_link_in_the_folder_is_refused(finished: Path, tmp_path: Path, entry: str) -> None:
     out = _copy(finished, tmp_path)
