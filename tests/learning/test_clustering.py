@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -19,8 +20,16 @@ from demoplan.learning.clustering import (
 )
 from demoplan.rotations import quat_from_yaw
 
-sklearn_cluster = pytest.importorskip("sklearn.cluster", reason="scikit-learn is the cross-check")
-sklearn_metrics = pytest.importorskip("sklearn.metrics")
+
+def _scikit_learn() -> tuple[ModuleType, ModuleType]:
+    """scikit-learn's clustering and metrics, the cross-check, imported by the
+    tests that use them (it brings scipy.stats: ~1 s at every worker's
+    collection otherwise), skipping only them where it is missing."""
+    reason = "scikit-learn is the cross-check"
+    return (
+        pytest.importorskip("sklearn.cluster", reason=reason),
+        pytest.importorskip("sklearn.metrics", reason=reason),
+    )
 
 
 def _blobs(rng: np.random.Generator, centres: int, per: int, spread: float) -> np.ndarray:
@@ -30,6 +39,7 @@ def _blobs(rng: np.random.Generator, centres: int, per: int, spread: float) -> n
 
 @pytest.mark.parametrize("seed", range(10))
 def test_kmeans_matches_scikit_learn_on_separated_blobs(seed: int) -> None:
+    sklearn_cluster, sklearn_metrics = _scikit_learn()
     rng = np.random.default_rng(seed)
     c = int(rng.integers(2, 6))
     points = _blobs(rng, c, int(rng.integers(2, 12)), 0.01)
@@ -44,6 +54,7 @@ def test_kmeans_is_as_good_as_scikit_learn_on_arbitrary_data() -> None:
     """Lloyd's algorithm finds local optima; over many random problems ours
     (8 vectorised restarts) is at least as good as scikit-learn's (4 restarts)
     on the median, and rarely much worse on any one."""
+    sklearn_cluster, _ = _scikit_learn()
     ratios = []
     for seed in range(150):
         rng = np.random.default_rng(seed)
