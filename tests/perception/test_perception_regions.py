@@ -18,7 +18,7 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import name_colour
 from demoplan.perception.labelled import load_labelled, perceive_labelled
-from demoplan.perception.masks import close
+from demoplan.perception.masks import TableReach, close, dilate
 from demoplan.perception.photo_families_scene import Cube, PhotoScene, render_scene
 from demoplan.perception.photos import PhotoRig
 from demoplan.perception.synthetic import COLOURS, TABLE
@@ -558,3 +558,37 @@ def test_a_white_top_on_a_blue_table_is_not_its_shadows(
     centre = ((truth.u + 0.5) / px_per_m, (image.shape[0] - truth.v - 0.5) / px_per_m)
     assert len(found) == 1, found
     assert math.dist((found[0].x, found[0].y), centre) < 0.25 * 0.04
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    side=st.integers(24, 90),
+    depth=st.integers(40, 120),
+    specks=st.lists(st.tuples(st.integers(0, 297), st.integers(0, 397)), max_size=40),
+)
+def test_a_second_tables_reach_is_a_side_from_its_body_not_from_its_specks(
+    side: int, depth: int, specks: list[tuple[int, int]]
+) -> None:
+    """A second table reaching in from the left border (``depth`` px), with specks of
+    its colour up to 3 px across elsewhere (a board's pixels near its chroma): the
+    reach holds every pixel a side from the table's body (less the erosion's sixth
+    of a side; a side from the image's border) and none farther than a side from
+    it, whatever the specks; a class's
+    strays are the reach beyond a rim (a sixth of a side) of its named pixels."""
+    tables = np.zeros((300, 400), dtype=bool)
+    tables[:, :depth] = True
+    for row, col in specks:
+        tables[row : row + 3, col : col + 3] = True
+    reach = TableReach(tables, float(side))
+    cols = np.arange(400)[None, :].repeat(300, axis=0)
+    beyond = cols - (depth - 1)  # px right of the table's last column
+    rows = slice(side, 300 - side)  # the body is eroded from the image's border too
+    assert reach.mask[rows][beyond[rows] <= side - side // 6 - 1].all()
+    assert not reach.mask[beyond > side + 1].any()
+    named = np.zeros((300, 400), dtype=bool)
+    named[140:160, depth + 5 : depth + 25] = True  # a cube's named pixels beside it
+    strays = reach.strays(slice(0, 300), slice(0, 400), named)
+    assert strays is not None
+    near_named = dilate(named, reach.rim)
+    assert not (strays & near_named).any()
+    assert np.array_equal(strays, reach.mask & ~near_named)
