@@ -63,8 +63,8 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         ((21, True), (29, True)),
     ),
     "patterned": (
-        "a top with a frame printed on it, a white top with black dots missed (as a "
-        "marker's code is not filled)",
+        "a white top with black dots (their blurred holes a third dark, as a marker's "
+        "code on a white card) or a frame missed; a letter on an orange top on the board",
         ((0, False), (2, True)),
     ),
     "tipped_rows": (
@@ -123,7 +123,18 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
     # count in its size: demoplan.perception.masks.TableReach)
     "hands": ((126342, False), (126342, True), (1, True), (9, False), (9, True)),
     "achromatic": ((5, True), (23, True), (40, True)),
-    "patterned": ((1, False), (4, False), (4, True), (16, False), (19, False), (6, False)),
+    # a frame printed round a coloured top rings the plain face inside it, larger
+    # than the ring: filled as the top's (demoplan.perception.highlights.printed)
+    "patterned": (
+        (1, False),
+        (4, False),
+        (4, True),
+        (16, False),
+        (19, False),
+        (6, False),
+        (1, True),
+        (9, True),
+    ),
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)
     "side_faces": ((536870913, True),),

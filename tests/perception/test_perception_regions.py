@@ -505,6 +505,33 @@ def test_a_black_letter_printed_on_a_top_is_its_top(
     _assert_one_whole_block(found, centre, side)
 
 
+@settings(max_examples=8, deadline=None)
+@given(
+    centre=_poses["centre"],
+    yaw=_poses["yaw"],
+    side=st.floats(50.0, 70.0),
+    seed=_poses["seed"],
+    colour=st.sampled_from(("yellow", "green", "red", "blue")),
+)
+def test_a_frame_printed_on_a_top_is_its_top(
+    centre: Point, yaw: float, side: float, seed: int, colour: str
+) -> None:
+    """A black frame printed round a top's face (0.34-0.42 of a side out from its
+    centre, as an alphabet block's border) rings the plain face inside it, a larger
+    piece than the ring itself: it is the top's, and the block is found whole, its
+    size kept. (Without: the frame was not filled — a marker's code rings its white
+    centre too — the thin rim outside it went as a strand, and the square fitted
+    was the face inside the frame, 0.68 of the side: too small with ``--side``.)
+    Sides of 50 px and more (the patterned family's are 53-70): the rim outside
+    the frame is 0.08 of the side, and under 4 px the blur leaves it no pixel over
+    half the top's colour, so the frame rings nothing (30 px tops: not found whole)."""
+    bars = _printed(centre, yaw, side, "frame")
+    shapes = [(_rectangle(centre, yaw, side, side), COLOURS[colour])]
+    image = _paint(shapes + [(bar, (25, 25, 25)) for bar in bars], _rng(seed))
+    found = detect_blocks(image, CAMERA)
+    _assert_one_whole_block(found, centre, side)
+
+
 @settings(max_examples=6, deadline=None)
 @given(
     glyph=st.sampled_from(("T", "E", "L", "H")),
