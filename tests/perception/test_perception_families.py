@@ -63,9 +63,9 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         ((21, True), (29, True)),
     ),
     "patterned": (
-        "a white top with black dots (their blurred holes a third dark, as a marker's "
-        "code on a white card) or a frame missed; a letter on an orange top on the board",
-        ((0, False), (2, True)),
+        "a white top with a frame printed on it missed (no ring is filled in a white "
+        "part); a letter on an orange top on the board",
+        ((0, True), (2, True)),
     ),
     "tipped_rows": (
         "the faces of cubes lying tipped over in a row taken for tops",
@@ -134,6 +134,7 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         (6, False),
         (1, True),
         (9, True),
+        (0, False),  # dots on a white top: spots under a tenth of its part are filled
     ),
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)
