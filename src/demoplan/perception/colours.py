@@ -42,6 +42,7 @@ from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.highlights import glare, highlights, hole_owners, printed
+from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.masks import CROSS, TableReach, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
@@ -116,9 +117,7 @@ class ColourRegion:
 
     @property
     def counted(self) -> np.ndarray:
-        """``alpha`` without its ``strays`` (what a second table left foreground
-        beside it, :class:`~demoplan.perception.masks.TableReach`): what the
-        region's size is judged by (``larger than its squares``)."""
+        """``alpha`` less its ``strays`` (:class:`~.masks.TableReach`): what its size is."""
         return self.alpha if self.strays is None else self.alpha * ~self.strays
 
 
@@ -203,13 +202,17 @@ def _largest_channel_spread(pixels: np.ndarray) -> int:
     return int(np.asarray(spread).max(initial=0))
 
 
-def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
+def _distinctness(
+    image: np.ndarray, lab8: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
     distance; L* difference in an image without colour), the image in CIELAB, and the
-    foreground threshold; whether the image has colour at all."""
+    foreground threshold; whether the image has colour at all. ``lab8``: the image's
+    8-bit CIELAB, when measured before
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.lab8`)."""
     # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
     # scaled back by one affine transform of the pixels
-    lab8 = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    lab8 = ImageMeasures(image).lab8 if lab8 is None else lab8
     lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
     coloured = _largest_channel_spread(image[::4, ::4]) > 2
@@ -231,6 +234,11 @@ def foreground(image: np.ndarray) -> np.ndarray:
     the core of :func:`colour_regions`' regions), specks of noise removed (an
     opening by a 3 × 3 square)."""
     distinct, _, threshold, _ = _distinctness(image)
+    return _foreground(distinct, threshold)
+
+
+def _foreground(distinct: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`foreground` from the image's :func:`_distinctness` and its threshold."""
     mask = (distinct > threshold).astype(np.uint8)
     opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     return np.asarray(opened, dtype=bool)
@@ -319,9 +327,8 @@ class _Crop:
     offsets: np.ndarray
 
 
-# A colour's top face: the colour, its mean RGB, its RGB change from the table, the
-# L* of the top face and of the side faces (None: none seen), its a*b* change, its
-# core pixels (those named its colour, on the crop).
+# A colour's top face: colour, mean RGB, RGB change from the table, L* of the top and
+# side faces (None: none seen), a*b* change, its core pixels named its colour (crop).
 _Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray, np.ndarray]
 
 
@@ -488,9 +495,8 @@ def _component_regions(
         alpha[printed(alpha, k.lightness, k.ground_lightness)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
-        offset = (k.rows.start, k.cols.start)
         strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])
-        regions.append(ColourRegion(colour, rgb, offset, alpha, strays))
+        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha, strays))
     return regions
 
 
@@ -502,6 +508,8 @@ def colour_regions(
     rejected: list[RejectedPart] | None = None,
     largest_block: float | None = None,
     second_tables: np.ndarray | None = None,
+    held: np.ndarray | None = None,
+    lab8: np.ndarray | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
@@ -510,12 +518,16 @@ def colour_regions(
     first (:data:`TABLE_BLOCKS`) is table too, its pixels set in ``second_tables``
     (bool, the image's rows × columns) when that is given: a hand and forearm
     reaching in from the border may be one, and hide a top
-    (:mod:`demoplan.perception.occlusion`)."""
+    (:mod:`demoplan.perception.occlusion`). ``held`` (bool, rows × columns), when
+    given, is set to :func:`foreground` (measured once for both); ``lab8``: the
+    image's 8-bit CIELAB, when measured before (:func:`_distinctness`)."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
-    distinct, lab, threshold, coloured_image = _distinctness(image)
+    distinct, lab, threshold, coloured_image = _distinctness(image, lab8)
     record = PartRecorder(rejected, min_area)
+    if held is not None:  # before a second table lowers ``distinct``
+        held[...] = _foreground(distinct, threshold)
     tables = np.zeros(image.shape[:2], dtype=bool) if second_tables is None else second_tables
     reach = None
     if largest_block is not None and coloured_image:  # noqa: SIM102 (mypy narrows largest_block)
