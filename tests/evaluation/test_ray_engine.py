@@ -23,28 +23,6 @@ import pytest
 from demoplan.evaluation.engine import RayEngine
 from demoplan.evaluation.runs import RunSpec, error_row
 
-
-def test_rows_closed_after_ray_was_shut_down_start_no_new_ray() -> None:
-    ray = pytest.importorskip("ray")
-    if ray.is_initialized():  # a Ray another module of this process left running
-        ray.shutdown()
-    specs = [RunSpec(f"random-{k}", None, k) for k in range(20)]
-    engine = RayEngine(workers=1, in_flight=2)
-    runner = partial(error_row, reason="made by the test")  # a row at once, in any worker
-    try:
-        with engine.session():
-            rows = engine.rows(specs, runner)
-            assert isinstance(rows, Generator)
-            first = next(rows)
-            assert first.run_id == "random-0/seed-0"
-        assert not ray.is_initialized()
-        rows.close()  # its runs still in flight when the session ended
-        assert not ray.is_initialized()
-    finally:
-        if ray.is_initialized():
-            ray.shutdown()
-
-
 SPECS = [RunSpec(f"random-{k}", None, k) for k in range(20)]
 RUNNER = partial(error_row, reason="made by the test")  # a row at once, in any worker
 
@@ -55,24 +33,29 @@ def _watch_cancel(ray: Any, monkeypatch: pytest.MonkeyPatch) -> list[Any]:
     return cancelled
 
 
-@pytest.mark.slow
-def test_runs_in_flight_on_a_ray_of_its_own_end_with_it_uncancelled(
+def test_rows_on_the_engine_s_own_ray_closed_in_or_after_its_session_cancel_nothing(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    """Closed within the session (a Ctrl-C while runs are in flight), the runs
+    go with the session's Ray, uncancelled; closed after it, they start no new
+    Ray. One Ray for both."""
     ray = pytest.importorskip("ray")
-    if ray.is_initialized():
+    if ray.is_initialized():  # a Ray another module of this process left running
         ray.shutdown()
     cancelled = _watch_cancel(ray, monkeypatch)
     engine = RayEngine(workers=1, in_flight=2)
     try:
         with engine.session():
-            rows = engine.rows(SPECS, RUNNER)
-            assert isinstance(rows, Generator)
-            assert next(rows).run_id == "random-0/seed-0"
-            rows.close()  # stopped with a run in flight, the session's Ray still up
+            stopped = engine.rows(SPECS, RUNNER)
+            late = engine.rows(SPECS, RUNNER)
+            assert isinstance(stopped, Generator) and isinstance(late, Generator)
+            assert next(stopped).run_id == next(late).run_id == "random-0/seed-0"
+            stopped.close()  # with a run in flight, the session's Ray still up
             assert ray.is_initialized()
+        assert not ray.is_initialized()  # the runs in flight went with the Ray
+        late.close()  # its runs still in flight when the session ended
+        assert not ray.is_initialized()
         assert cancelled == []
-        assert not ray.is_initialized()  # the run in flight went with the Ray
     finally:
         if ray.is_initialized():
             ray.shutdown()
