@@ -68,8 +68,10 @@ def plural(count: int, noun: str, many: str | None = None) -> str:
 
 def did_you_mean(name: str, candidates: Iterable[str]) -> str:
     """``"; did you mean 'Tray'?"`` when one of ``candidates`` is ``name`` in
-    other letter case, or a near spelling of it (difflib's ratio ≥ 0.75, case
-    ignored); else ``""``. For an error line about an unknown name."""
+    other letter case, or a near spelling of it (difflib's ratio ≥ 0.75, or
+    two neighbouring letters swapped — ``mgu`` for ``mug``, whose ratio is
+    only 2/3; case ignored); else ``""``. For an error line about an unknown
+    name."""
     pool = [c for c in dict.fromkeys(candidates) if c != name]
     folded: dict[str, str] = {}
     for candidate in pool:
@@ -78,5 +80,19 @@ def did_you_mean(name: str, candidates: Iterable[str]) -> str:
     match = folded.get(key)
     if match is None:
         close = difflib.get_close_matches(key, list(folded), n=1, cutoff=0.75)
-        match = folded[close[0]] if close else None
+        swapped = [c for c in folded if _neighbours_swapped(key, c)]
+        match = folded[close[0]] if close else folded[swapped[0]] if swapped else None
     return "" if match is None else f"; did you mean {match!r}?"
+
+
+def _neighbours_swapped(typed: str, meant: str) -> bool:
+    """Whether ``typed`` is ``meant`` with two neighbouring letters swapped."""
+    if len(typed) != len(meant):
+        return False
+    differ = [k for k, (a, b) in enumerate(zip(typed, meant, strict=True)) if a != b]
+    return (
+        len(differ) == 2
+        and differ[1] == differ[0] + 1
+        and typed[differ[0]] == meant[differ[1]]
+        and typed[differ[1]] == meant[differ[0]]
+    )

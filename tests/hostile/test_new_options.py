@@ -39,13 +39,16 @@ from tests.hostile.harness import (
     private_device,
     run,
 )
-from tests.support.helpers import EXAMPLES
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE
 from tests.support.shared_experiments import ExperimentsRun
 
 HAVE_VIDEO = all(importlib.util.find_spec(m) for m in ("mujoco", "imageio_ffmpeg"))
 needs_video = pytest.mark.skipif(not HAVE_VIDEO, reason="MuJoCo or imageio-ffmpeg not installed")
 MUJOCO = ["--sim", "mujoco"]
 RUN = ["run", "model.json", "scene.json"]
+ONE_MOVE = ["run", "model.json", "one-move.json"]
+"""A run of one move, for the videos that are made: where a video goes and how
+it ends is the same for any run, and a frame per step makes it short."""
 ESCAPE = "\x1b[31mESC"  # a terminal escape sequence as an object name
 
 
@@ -96,6 +99,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("new-options")
     shutil.copy(EXAMPLES / "blocks" / "demonstrations.json", folder / "demos.json")
     shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
+    shutil.copy(ONE_MOVE_SCENE, folder / "one-move.json")
     assert run(["learn", "demos.json", "--paper", "-o", "model.json"], folder).code == 0
     model = (folder / "model.json").read_text()
     (folder / "oak-model.json").write_text(model.replace('"wood"', '"oak"'))  # no wood in it
@@ -358,7 +362,7 @@ def test_run_a_hostile_video(
 def test_run_a_video_where_it_cannot_be_written(workspace: Path, tmp_path: Path, path: str) -> None:
     folder = _case(workspace, tmp_path)
     before = fingerprint(folder)
-    answer = run([*RUN, *MUJOCO, "--video", path], folder, timeout=60)
+    answer = run([*ONE_MOVE, *MUJOCO, "--video", path], folder, timeout=60)
     after = fingerprint(folder)
     if path == "missing/run.mp4":  # made like the folder of any other output, or refused
         check_answer(answer, before, after, [path], {0, 1}, outputs=("missing",))
@@ -371,7 +375,7 @@ def test_run_a_video_where_it_cannot_be_written(workspace: Path, tmp_path: Path,
 def test_run_a_video_into_a_folder_named_like_one(workspace: Path, tmp_path: Path) -> None:
     folder = _case(workspace, tmp_path)
     before = fingerprint(folder)
-    answer = run([*RUN, *MUJOCO, "--video", "vid.mp4"], folder, timeout=60)
+    answer = run([*ONE_MOVE, *MUJOCO, "--video", "vid.mp4"], folder, timeout=60)
     check_answer(answer, before, fingerprint(folder), ["vid.mp4"], {1, 2})
 
 
@@ -381,7 +385,7 @@ def test_run_a_video_into_a_link_to_dev_full(workspace: Path, tmp_path: Path) ->
     folder = _case(workspace, tmp_path)
     (folder / "full.mp4").symlink_to(private_device(tmp_path / "full", "full"))
     before = fingerprint(folder)
-    answer = run([*RUN, *MUJOCO, "--video", "full.mp4"], folder, timeout=60)
+    answer = run([*ONE_MOVE, *MUJOCO, "--video", "full.mp4"], folder, timeout=60)
     assert (folder / "full.mp4").is_symlink(), f"the link was replaced: {answer}"
     check_answer(answer, before, fingerprint(folder), ["full.mp4"], {1})
 
@@ -398,7 +402,7 @@ def test_run_a_video_works(workspace: Path, tmp_path: Path) -> None:
     """The control for the cases above: one complete MP4 and nothing else."""
     folder = _case(workspace, tmp_path)
     before = fingerprint(folder)
-    answer = run([*RUN, *MUJOCO, "--video", "run.mp4"], folder, timeout=60)
+    answer = run([*ONE_MOVE, *MUJOCO, "--video", "run.mp4"], folder, timeout=60)
     check_answer(answer, before, fingerprint(folder), [], {0}, outputs=("run.mp4",))
     assert _complete_mp4(folder / "run.mp4")
 

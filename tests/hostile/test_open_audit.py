@@ -42,6 +42,7 @@ from tests.hostile.file_audit import (
 from tests.hostile.harness import Answer, check_clean, check_refused, run
 from tests.hostile.test_recordings import valid_recording
 from tests.segmentation.test_import import MODEL, box_states, write_recording
+from tests.support.helpers import ONE_MOVE_SCENE
 from tests.support.shared_experiments import USERS_NOTES, ExperimentsRun
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -314,10 +315,11 @@ def test_run_kinematic_with_frames_opens_its_inputs_only(
     name: str, caches: Path, blocks_model: Path
 ) -> None:
     """The kinematic simulation draws its frames with matplotlib; the frames
-    folder is named with odd characters and a user's folder stands beside it."""
+    folder is named with odd characters and a user's folder stands beside it.
+    One move (a frame per step): the files opened are those of any run."""
     with folder() as root:
         scene = root / "scene.json"
-        shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", scene)
+        shutil.copy(ONE_MOVE_SCENE, scene)
         beside = root / "work" / f"{name}-notes"
         beside.mkdir()
         (beside / "frame-001.png").write_bytes(b"the user's")
@@ -334,11 +336,12 @@ def test_run_with_video_and_frames_opens_its_inputs_only(
     caches: Path, blocks_model: Path, tmp_path: Path
 ) -> None:
     """MuJoCo (the video records the physics simulation), rendered with EGL;
-    a link planted beside the video where a careless part file would go."""
+    a link planted beside the video where a careless part file would go.
+    One move: the files opened are those of any run."""
     root = tmp_path
     (root / "work").mkdir()
     scene = root / "scene 'é'.json"
-    shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", scene)
+    shutil.copy(ONE_MOVE_SCENE, scene)
     victim = root / "victim.txt"
     victim.write_text("the user's file")
     out = root / "work" / "out $x"

@@ -20,6 +20,7 @@ from demoplan.perception.camera import Camera, save_image
 from demoplan.perception.filmed import render_demonstration
 from tests.hostile.file_audit import Allowed, audit_environment, audited
 from tests.hostile.harness import check_clean
+from tests.support.helpers import ONE_MOVE_SCENE
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -103,11 +104,12 @@ def test_evaluate_opens_its_model_scene_and_folder_only(
     blocks: tuple[Path, str], caches: Path, tmp_path: Path
 ) -> None:
     """Here, one run after the other (``--workers 0``): Ray's own processes
-    read their installation, which is not demoplan's doing."""
+    read their installation, which is not demoplan's doing. Runs of one move:
+    an evaluation opens the same files (rows, scenes, storyboards) for any."""
     model, _ = blocks
     root = _root(tmp_path)
     scene = root / "scene.json"
-    shutil.copy(PYRAMID, scene)
+    shutil.copy(ONE_MOVE_SCENE, scene)
     secret = root / "secret.json"
     shutil.copy(PYRAMID, secret)
     out = root / "work" / "evaluation"

@@ -20,13 +20,12 @@ from demoplan.perception.blocks import (
     OCTAVE_END,
     OCTAVE_SLACK,
     PerceptionSettings,
-    _fit,
     _octaves,
-    _square_alpha,
     detect_blocks,
 )
 from demoplan.perception.camera import Camera
 from demoplan.perception.hough import Hypothesis, hough_squares
+from demoplan.perception.square_fit import fit_square, square_alpha
 from demoplan.perception.synthetic import SyntheticBlock, render_blocks
 
 
@@ -36,7 +35,7 @@ def square_mask(
     """A soft mask of one square (u, v from the crop's bottom-left corner, px)."""
     height, width = shape
     uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
-    return _square_alpha(np.array([u, v, theta, side]), uu, vv)
+    return square_alpha(np.array([u, v, theta, side]), uu, vv)
 
 
 squares = st.tuples(
@@ -114,12 +113,12 @@ def test_the_fit_reports_the_whole_crop(
     u, v, theta, side = square
     mask = square_mask(u + left, v + below, theta, side, shape=(100 + below, 120 + left))
     start = Hypothesis(u + left + 1.0, v + below - 1.0, theta + 1.0, side + 1.0, 1.0)
-    params, coverage, rms, free = _fit(mask, start)
+    params, coverage, rms, free = fit_square(mask, start)
     assert math.dist(params[:2], (u + left, v + below)) < 0.01
     assert abs(params[3] - side) < 0.01
     height, width = mask.shape
     uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
-    model = _square_alpha(params, uu, vv)
+    model = square_alpha(params, uu, vv)
     assert coverage == pytest.approx(float(mask[model > 0.99].mean()), abs=1e-12)
     own = model > 0.01
     assert rms == pytest.approx(float(np.sqrt(np.mean((model[own] - mask[own]) ** 2))), abs=1e-12)

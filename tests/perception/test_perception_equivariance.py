@@ -8,6 +8,7 @@ import math
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -49,9 +50,9 @@ def stacks_squares() -> tuple[np.ndarray, list[ImageSquare]]:
     image = np.asarray(Image.open(photo.image).convert("RGB"))
     given: list[list[ImageSquare]] = []
 
-    def spy(image: np.ndarray, squares: list[ImageSquare]) -> dict[int, str]:
+    def spy(image: Any, squares: list[ImageSquare], *shared: Any) -> dict[int, str]:
         given.append(list(squares))
-        return lower_side_faces(image, squares)
+        return lower_side_faces(image, squares, *shared)
 
     with pytest.MonkeyPatch.context() as patched:
         patched.setattr(blocks_module, "lower_side_faces", spy)

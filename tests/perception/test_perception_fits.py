@@ -1,4 +1,4 @@
-"""The sub-pixel square fit of demoplan.perception.blocks: its own robust
+"""The sub-pixel square fit of demoplan.perception.square_fit: its own robust
 least-squares solver against SciPy's on the same objective, where it converges
 from, and the coverage test that spares it the hopeless starts."""
 
@@ -12,18 +12,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
 
-from demoplan.perception import blocks
+from demoplan.perception import square_fit
 from demoplan.perception.acceptance import rounded_misfit
-from demoplan.perception.blocks import (
-    MIN_CORE_COVERAGE,
-    PerceptionSettings,
-    _coverage,
-    _fit,
-    _least_squares,
-    _square_alpha,
-    _SquareModel,
-)
+from demoplan.perception.blocks import PerceptionSettings
 from demoplan.perception.hough import Hypothesis
+from demoplan.perception.square_fit import (
+    MIN_CORE_COVERAGE,
+    SquareModel,
+    core_coverage,
+    fit_square,
+    least_squares,
+    square_alpha,
+    square_window,
+)
 
 SHAPE = (110, 130)
 
@@ -36,7 +37,7 @@ def _grid(shape: tuple[int, int] = SHAPE) -> tuple[np.ndarray, np.ndarray]:
 def _noisy_square(square: tuple[float, float, float, float], noise: float, seed: int) -> np.ndarray:
     """A soft mask of one square with sensor-like noise, clipped to [0, 1]."""
     uu, vv = _grid()
-    alpha = _square_alpha(np.array(square), uu, vv)
+    alpha = square_alpha(np.array(square), uu, vv)
     noisy = alpha + np.random.default_rng(seed).normal(0.0, noise, alpha.shape)
     clipped: np.ndarray = np.clip(noisy, 0.0, 1.0)
     return clipped
@@ -83,10 +84,10 @@ def test_the_solver_reaches_scipys_minimum_of_the_same_robust_cost(
     uu, vv = _grid()
     u, v, theta, side = square
     start = np.array([u + offset[0], v + offset[1], theta + offset[2], side])
-    near = _square_alpha(start + [0.0, 0.0, 0.0, 5.0], uu, vv) > 0
-    model = _SquareModel(uu[near], vv[near], alpha[near], f_scale=0.3)
+    near = square_alpha(start + [0.0, 0.0, 0.0, 5.0], uu, vv) > 0
+    model = SquareModel(uu[near], vv[near], alpha[near], f_scale=0.3)
     scale = np.array([1.0, 1.0, 2.0, 1.0])
-    mine, cost = _least_squares(model, start, scale, 1e-8)
+    mine, cost = least_squares(model, start, scale, 1e-8)
 
     def jacobian(params: np.ndarray) -> np.ndarray:
         """The residual's Jacobian, dense, from the model's frame."""
@@ -154,7 +155,7 @@ def test_the_fit_finds_the_square_from_a_start_a_hough_bin_off(
         side + grow,
         1.0,
     )
-    params, coverage, rms, free = _fit(alpha, start)
+    params, coverage, rms, free = fit_square(alpha, start)
     assert math.dist(params[:2], (u, v)) < 0.1
     assert abs(params[3] - side) < 0.1
     assert abs((params[2] - theta + 45.0) % 90.0 - 45.0) < 1 / 3
@@ -198,14 +199,14 @@ def test_a_start_within_a_quarter_side_of_a_block_is_fitted(
     low_v = -side / 2 + where_v * (side - height)
     # erased: the pixels whose centre lies in it (about its area, to a pixel's rim)
     erased = (qu >= low_u) & (qu < low_u + width) & (qv >= low_v) & (qv < low_v + height)
-    whole = _square_alpha(np.array(square), uu, vv)
+    whole = square_alpha(np.array(square), uu, vv)
     alpha = np.where(erased, 0.0, whole)
     inside = whole > 0.99
     if alpha[inside].mean() < PerceptionSettings().min_coverage:
         return  # the pixel grid erased a little more than 15 % of the interior
     centre = (u + side * (along * c - across * s), v + side * (along * s + across * c))
     core = np.array([*centre, theta, side / 2])
-    assert _coverage(alpha, core) >= MIN_CORE_COVERAGE
+    assert core_coverage(alpha, core) >= MIN_CORE_COVERAGE
 
 
 def test_a_start_on_table_is_not_fitted_and_reports_its_own_square() -> None:
@@ -214,7 +215,7 @@ def test_a_start_on_table_is_not_fitted_and_reports_its_own_square() -> None:
     which fails the coverage a block needs."""
     alpha = _noisy_square((60.0, 55.0, 10.0, 30.0), 0.0, 0)
     start = Hypothesis(100.0, 55.0, 10.0, 30.0, 1.0)
-    params, coverage, rms, _ = _fit(alpha, start)
+    params, coverage, rms, _ = fit_square(alpha, start)
     assert list(params) == [100.0, 55.0, 10.0, 30.0]
     assert coverage < PerceptionSettings().min_coverage
     assert rms > PerceptionSettings().max_residual
@@ -276,19 +277,19 @@ def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
 
     def recorded(*args: object, **kwargs: object) -> tuple[np.ndarray, float]:
         tolerances.append(float(args[3]))  # type: ignore[arg-type]
-        return _least_squares(*args, **kwargs)  # type: ignore[arg-type]
+        return least_squares(*args, **kwargs)  # type: ignore[arg-type]
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(blocks, "_least_squares", recorded)
-        stopped = _fit(alpha, start)
+        patch.setattr(square_fit, "least_squares", recorded)
+        stopped = fit_square(alpha, start)
     if 1e-6 in tolerances or not tolerances:
         return  # fitted sharp (or not fitted at all: its core uncovered)
     _, coverage, rms, _ = stopped
     assert coverage < limits.min_coverage or rms > limits.max_residual
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(blocks, "HOPELESS_COVERAGE", 0.0)
-        patch.setattr(blocks, "HOPELESS_MISFIT", math.inf)
-        params, coverage, rms, _ = _fit(alpha, start)
+        patch.setattr(square_fit, "HOPELESS_COVERAGE", 0.0)
+        patch.setattr(square_fit, "HOPELESS_MISFIT", math.inf)
+        params, coverage, rms, _ = fit_square(alpha, start)
     misfit = min(rms, rounded_misfit(alpha, params))
     sized = 0.8 * side <= params[3] <= 1.2 * side  # a size the vote looked for
     assert not sized or coverage < limits.min_coverage or misfit > limits.max_residual, (
@@ -296,3 +297,26 @@ def test_a_fit_stopped_as_hopeless_would_have_found_no_block(
         coverage,
         rms,
     )
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    square=st.tuples(
+        st.floats(-30, 160), st.floats(-30, 140), st.floats(0, 90), st.floats(0.5, 90)
+    )
+)
+def test_a_squares_window_holds_every_pixel_it_touches_with_the_same_values(
+    square: tuple[float, float, float, float],
+) -> None:
+    """The fit, the cut-out of a found square and the occluded tops' measures look at
+    the part of a crop square_window gives: the square over it (its u a row, its v
+    a column, broadcast) is the square over the whole crop there, value for value,
+    and nothing of the square lies outside it."""
+    params = np.array(square)
+    uu, vv = _grid()
+    whole = square_alpha(params, uu, vv)
+    part_u, part_v, window = square_window(SHAPE, params, params[3])
+    assert np.array_equal(square_alpha(params, part_u, part_v), whole[window])
+    outside = np.ones(SHAPE, dtype=bool)
+    outside[window] = False
+    assert not whole[outside].any()

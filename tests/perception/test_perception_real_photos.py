@@ -191,7 +191,7 @@ def test_the_budget_is_read_before_every_hough_transform_and_every_fit(seed: int
     from demoplan.perception.hough import hough_squares as real_hough
 
     events: list[str] = []
-    real_fit = blocks_module._fit
+    real_fit = blocks_module.fit_square
 
     def check(where: str = "") -> None:
         events.append("check")
@@ -208,7 +208,7 @@ def test_the_budget_is_read_before_every_hough_transform_and_every_fit(seed: int
     with pytest.MonkeyPatch.context() as patched:
         patched.setattr(blocks_module, "check_time", check)
         patched.setattr(blocks_module, "hough_squares", hough)
-        patched.setattr(blocks_module, "_fit", fit)
+        patched.setattr(blocks_module, "fit_square", fit)
         truth, image = _board_in_a_table(seed, "wood", (0, 0, 0, 0), grid=False)
         # a disc (no square: every candidate is tried) beside the blocks
         rows, cols = np.ogrid[:480, :640]

@@ -23,14 +23,36 @@ from demoplan.perception.photos import PhotoRig
 from demoplan.perception.stack_sides import (
     MAX_MISS,
     SideStrip,
+    _box,
     _foreground_run,
     _lab,
+    _outside,
     lower_side_faces,
     nadir_of,
     side_strip,
 )
 
 PHOTOS = Path(__file__).parents[1] / "data" / "photos"
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    square=st.tuples(
+        st.floats(-40, 110), st.floats(-40, 100), st.floats(0, 90), st.floats(0.5, 70)
+    ),
+    corner=st.tuples(st.integers(0, 40), st.integers(0, 40)),
+)
+def test_a_tops_inside_left_out_within_its_reach_is_its_inside_over_the_whole_crop(
+    square: tuple[float, float, float, float], corner: tuple[int, int]
+) -> None:
+    """A side strip leaves another top's inside out over the pixels within the top's
+    reach only (_outside): the same mask as the top's box measured over every
+    pixel of the crop, wherever the top lies — on it, across its border, off it."""
+    row0, col0 = corner
+    held = np.ones((45, 60), dtype=bool)
+    _outside(held, square, row0, col0)
+    yy, xx = np.mgrid[row0 : row0 + 45, col0 : col0 + 60]
+    assert np.array_equal(held, _box(xx, yy, square) >= 1.0)
 
 
 @settings(max_examples=40, deadline=None)

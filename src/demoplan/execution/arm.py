@@ -611,7 +611,7 @@ class ArmWorld(ArmMoves):
         low, high = REACH
         out = (
             f"at {_xy(pose)} is out of the arm's reach ({distance:.2f} m from its "
-            f"base at ({bx:.3f}, {by:.3f}); the cup reaches {low:.2f}–{high:.2f} m)"
+            f"base at ({bx:.3f}, {by:.3f}); the suction cup reaches {low:.2f}–{high:.2f} m)"
         )
         if not low <= distance <= high:
             return out

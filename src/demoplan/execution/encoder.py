@@ -14,6 +14,7 @@ that into one error line and removes the file (docs/limits.md "Outputs").
 from __future__ import annotations
 
 import collections
+import os
 import subprocess
 import threading
 from fractions import Fraction
@@ -28,6 +29,12 @@ QUALITY_CRF = 25
 """libx264's constant rate factor (imageio-ffmpeg's default quality 5 of 10)."""
 FINISH_SECONDS = 120.0
 """How long ffmpeg may take to finish its file once the last frame is sent."""
+
+
+def _leads_its_session() -> bool:
+    """Whether this process leads its own session (no terminal's Ctrl-C
+    reaches its group)."""
+    return os.getsid(0) == os.getpid()
 
 
 class FrameEncoder:
@@ -64,13 +71,16 @@ class FrameEncoder:
             str(path),
         ]
         self.size = size
-        # A session of its own: Ctrl-C reaches demoplan, which stops ffmpeg.
+        # At a terminal, a session of its own: Ctrl-C reaches demoplan, which
+        # stops ffmpeg. A process leading its own session (the studio's run
+        # worker, cancelled by signalling its group) keeps ffmpeg in its group,
+        # so that nothing of the run outlives the group's SIGKILL.
         self._process = subprocess.Popen(
             command,
             stdin=subprocess.PIPE,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
-            start_new_session=True,
+            start_new_session=not _leads_its_session(),
         )
         self._errors: collections.deque[str] = collections.deque(maxlen=20)
         stderr = self._process.stderr

@@ -90,6 +90,7 @@ class TaskModelLearner:
     def _refit(self, demos: list[Demonstration]) -> Self:
         """Learn from ``demos``; on an error the learner keeps its previous state."""
         check_demonstrations(demos)
+        _refuse_two_tasks(demos)
         warn_differing_colours(demos)
         correspondence = corresponding_roles(demos)
         learned_from = list(correspondence.demonstrations)
@@ -219,6 +220,44 @@ def update(
     merged = replace(model.settings, **(settings or {}), require=texts)
     known = instance_demonstrations(model.demonstrations, model.roles)
     return TaskModelLearner(merged).fit([*known, *demonstrations]).model_
+
+
+def _refuse_two_tasks(demos: Sequence[Demonstration]) -> None:
+    """Demonstrations that move no object in common, not even through others
+    (one moving a and b, one b and c, one c: one task), are two tasks: an
+    InputError naming both groups (exit 1). Learned together they made a model
+    whose goals need both tasks' objects at once, in a scene no demonstration
+    ever had, and every plan failed on a missing object (a work folder of two
+    tasks, every demonstration ticked in the studio's Learn view). Objects
+    are compared by type (instances of a type are one task's); a
+    demonstration that moves nothing joins no group."""
+    moving = [(demo, {demo.type_of(n) for n in demo.moved_objects}) for demo in demos]
+    groups: list[tuple[list[Demonstration], set[str]]] = []
+    for demo, moved in moving:
+        if not moved:
+            continue
+        joined = [g for g in groups if g[1] & moved]
+        merged = ([demo], set(moved))
+        for group in joined:
+            groups.remove(group)
+            merged = (group[0] + merged[0], group[1] | merged[1])
+        groups.append(merged)
+    if len(groups) < 2:
+        return
+    first, second = sorted(groups, key=lambda g: demos.index(g[0][0]))[:2]
+
+    def named(group: tuple[list[Demonstration], set[str]]) -> str:
+        demo = min(group[0], key=demos.index)
+        return f"{demo.source or demo.name} ({', '.join(sorted(group[1]))})"
+
+    lead = min(second[0], key=demos.index)
+    raise InputError(
+        f"moves none of the objects of {named(first)}: "
+        f"{', '.join(sorted(second[1]))}; one task's demonstrations expected, "
+        "which move some objects in common — learn each task on its own",
+        source=lead.source or lead.name,
+        field="steps",
+    )
 
 
 def _refuse_cycles(

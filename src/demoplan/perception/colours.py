@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +42,8 @@ from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.highlights import glare, highlights, hole_owners, printed
-from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes
+from demoplan.perception.image_measures import ImageMeasures
+from demoplan.perception.masks import CROSS, TableReach, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
     REPORTED_SHARE,
@@ -112,6 +113,12 @@ class ColourRegion:
     rgb: tuple[float, float, float]
     offset: tuple[int, int]
     alpha: np.ndarray
+    strays: np.ndarray | None = None
+
+    @property
+    def counted(self) -> np.ndarray:
+        """``alpha`` less its ``strays`` (:class:`~.masks.TableReach`): what its size is."""
+        return self.alpha if self.strays is None else self.alpha * ~self.strays
 
 
 def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
@@ -195,13 +202,17 @@ def _largest_channel_spread(pixels: np.ndarray) -> int:
     return int(np.asarray(spread).max(initial=0))
 
 
-def _distinctness(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
+def _distinctness(
+    image: np.ndarray, lab8: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """Per pixel, how far its colour stands out from the table's (CIELAB a*b*
     distance; L* difference in an image without colour), the image in CIELAB, and the
-    foreground threshold; whether the image has colour at all."""
+    foreground threshold; whether the image has colour at all. ``lab8``: the image's
+    8-bit CIELAB, when measured before
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.lab8`)."""
     # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
     # scaled back by one affine transform of the pixels
-    lab8 = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
+    lab8 = ImageMeasures(image).lab8 if lab8 is None else lab8
     lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
     coloured = _largest_channel_spread(image[::4, ::4]) > 2
@@ -223,6 +234,11 @@ def foreground(image: np.ndarray) -> np.ndarray:
     the core of :func:`colour_regions`' regions), specks of noise removed (an
     opening by a 3 × 3 square)."""
     distinct, _, threshold, _ = _distinctness(image)
+    return _foreground(distinct, threshold)
+
+
+def _foreground(distinct: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`foreground` from the image's :func:`_distinctness` and its threshold."""
     mask = (distinct > threshold).astype(np.uint8)
     opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     return np.asarray(opened, dtype=bool)
@@ -288,6 +304,7 @@ class _ImageColours:
     coloured_image: bool
     min_area: float
     record: PartRecorder
+    reach: TableReach | None = None  # near a second table, if any
 
 
 @dataclass(frozen=True, slots=True)
@@ -310,9 +327,9 @@ class _Crop:
     offsets: np.ndarray
 
 
-# A colour's top face: the colour, its mean RGB, its RGB change from the table, the
-# L* of the top face and of the side faces (None: none seen), its a*b* change.
-_Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray]
+# A colour's top face: colour, mean RGB, RGB change from the table, L* of the top and
+# side faces (None: none seen), a*b* change, its core pixels named its colour (crop).
+_Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray, np.ndarray]
 
 
 def _component_crop(
@@ -417,7 +434,9 @@ def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
         change = core_offsets[on_top].mean(axis=0)
         mean_rgb = core_pixels[on_top].mean(axis=0)
         change_ab = (core_chroma[on_top] - k.ground_ab).mean(axis=0)
-        faces.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
+        named = np.zeros(k.core.shape, dtype=bool)
+        named[k.core] = chosen
+        faces.append((colour, mean_rgb, change, top_face, side_faces, change_ab, named))
     return faces
 
 
@@ -425,7 +444,7 @@ def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -
     """How much each pixel of the crop is ``face``'s (0–1): its colour change from
     the table against the face's, in chroma too, and its L* from side to top face
     (full from the lower quartile of the top's core pixels, :data:`FULL_LEVEL_SHARE`)."""
-    _, _, change, top_face, side_faces, change_ab = face
+    _, _, change, top_face, side_faces, change_ab, _ = face
     projection = (k.offsets @ change) / max(float(change @ change), 1e-9)
     alpha: np.ndarray = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
     if c.coloured_image:
@@ -476,7 +495,8 @@ def _component_regions(
         alpha[printed(alpha, k.lightness, k.ground_lightness)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
-        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha))
+        strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])
+        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha, strays))
     return regions
 
 
@@ -488,6 +508,8 @@ def colour_regions(
     rejected: list[RejectedPart] | None = None,
     largest_block: float | None = None,
     second_tables: np.ndarray | None = None,
+    held: np.ndarray | None = None,
+    lab8: np.ndarray | None = None,
 ) -> tuple[list[ColourRegion], np.ndarray]:
     """The colour regions of ``image`` (H × W × 3) with at least ``min_area`` core
     pixels, and the table colour (the median colour of the image); ``rejected``,
@@ -496,14 +518,21 @@ def colour_regions(
     first (:data:`TABLE_BLOCKS`) is table too, its pixels set in ``second_tables``
     (bool, the image's rows × columns) when that is given: a hand and forearm
     reaching in from the border may be one, and hide a top
-    (:mod:`demoplan.perception.occlusion`)."""
+    (:mod:`demoplan.perception.occlusion`). ``held`` (bool, rows × columns), when
+    given, is set to :func:`foreground` (measured once for both); ``lab8``: the
+    image's 8-bit CIELAB, when measured before (:func:`_distinctness`)."""
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any
-    distinct, lab, threshold, coloured_image = _distinctness(image)
+    distinct, lab, threshold, coloured_image = _distinctness(image, lab8)
     record = PartRecorder(rejected, min_area)
-    if largest_block is not None and coloured_image:
-        _second_tables(distinct, lab, threshold, largest_block, record, second_tables)
+    if held is not None:  # before a second table lowers ``distinct``
+        held[...] = _foreground(distinct, threshold)
+    tables = np.zeros(image.shape[:2], dtype=bool) if second_tables is None else second_tables
+    reach = None
+    if largest_block is not None and coloured_image:  # noqa: SIM102 (mypy narrows largest_block)
+        if _second_tables(distinct, lab, threshold, largest_block, record, tables):
+            reach = TableReach(tables, math.sqrt(largest_block))
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
@@ -511,6 +540,7 @@ def colour_regions(
     colours = _ImageColours(
         image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
     )
+    colours = replace(colours, reach=reach)
     areas = stats[1:count, cv2.CC_STAT_AREA]
     if rejected is not None:  # smaller than a block: noise, a speck (reported from a size on)
         specks = (areas < min_area) & (areas >= REPORTED_SHARE * min_area)

@@ -18,6 +18,7 @@ from demoplan.errors import InputError, UsageError
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
+from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.overlay import Drawn, draw_overlay, square_corners, top_view_to_image
 from demoplan.perception.sizes import (
     SIDE_TOLERANCE,
@@ -157,13 +158,14 @@ def perceive_top_view(
                 TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side, b.colour) for b in earlier
             )
         picture = load_image(image)
+        measures = ImageMeasures(picture)  # converted once for every stage
         rejected: list[Rejection] = []
-        detected = detect_blocks(picture, camera, settings, rejected)
+        detected = detect_blocks(picture, camera, settings, rejected, measures)
         if side is None and before is None:
             # the blocks' size from the photograph (with a picture before, the strips
             # left in view of covered blocks are the tracker's to place)
             detected, odd = held_to_sizes(
-                detected, block_sizes([d.side for d in detected]), seen=(picture, camera)
+                detected, block_sizes([d.side for d in detected]), seen=(measures, camera)
             )
             rejected += odd
         blocks = tracker.update(detected)
@@ -240,7 +242,8 @@ def _perceive_at_cube_scale(
             settings, min_side=MIN_SIDE_PX, max_side=max(MIN_SIDE_PX, MAX_SIDE_SHARE * shorter)
         )
         rejected: list[Rejection] = []
-        found = detect_blocks(picture, Camera(1.0), in_pixels, rejected)
+        measures = ImageMeasures(picture)  # converted once for every stage
+        found = detect_blocks(picture, Camera(1.0), in_pixels, rejected, measures)
     sizes = block_sizes([d.side for d in found])
     if not sizes:
         raise InputError(
@@ -249,7 +252,7 @@ def _perceive_at_cube_scale(
             source=str(image),
         )
     px_per_m = sizes[0][0] / side
-    kept, odd = held_to_sizes(found, sizes, unit="px", seen=(picture, Camera(1.0)))
+    kept, odd = held_to_sizes(found, sizes, unit="px", seen=(measures, Camera(1.0)))
     detected = [in_scale(d, px_per_m, origin) for d in kept]
     rejected = [rejection_in_scale(r, px_per_m, origin) for r in [*rejected, *odd]]
     blocks = BlockTracker().update(detected)

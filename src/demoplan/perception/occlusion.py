@@ -31,6 +31,7 @@ import numpy as np
 from demoplan.perception.colours import ColourRegion, RejectedPart
 from demoplan.perception.hough import Hypothesis
 from demoplan.perception.shapes import in_image, square_pixels
+from demoplan.perception.square_fit import square_window
 
 __all__ = [
     "MAX_HIDDEN_SHARE",
@@ -94,12 +95,13 @@ def occluders(
 def seen_fit(alpha: np.ndarray, fit: Fit, hidden: np.ndarray) -> Fit | None:
     """``fit`` with its coverage and misfit measured over the pixels of its square
     that ``hidden`` (bool, on the crop of ``alpha``) does not hide; ``None`` when
-    none is hidden or more than :data:`MAX_HIDDEN_SHARE` of it is."""
+    none is hidden or more than :data:`MAX_HIDDEN_SHARE` of it is. Measured over the
+    part of the crop the square touches (:func:`~demoplan.perception.square_fit.square_window`)."""
     params, _, _, free = fit
     u, v, theta, side = (float(p) for p in params)
-    height, width = alpha.shape
+    uu, vv, window = square_window(alpha.shape, params, side)
+    alpha, hidden = alpha[window], hidden[window]
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    uu, vv = np.meshgrid(np.arange(width) + 0.5, height - np.arange(height) - 0.5)
     du, dv = uu - u, vv - v
     distance = np.maximum(np.abs(c * du + s * dv), np.abs(-s * du + c * dv)) - side / 2
     fitted = np.clip(0.5 - distance, 0.0, 1.0)  # the one-pixel-ramp square of the fit

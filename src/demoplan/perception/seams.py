@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.opencv import cv2
 
 __all__ = ["SEAM_CONTRAST", "image_lightness", "seamless_side"]
@@ -81,9 +82,9 @@ def seamless_side(
 
 
 def image_lightness(image: np.ndarray) -> np.ndarray:
-    """CIELAB L* (0–100, float32) of an RGB image (H × W × 3, 8-bit)."""
-    lab = cv2.cvtColor(np.ascontiguousarray(image, dtype=np.uint8), cv2.COLOR_RGB2Lab)
-    return np.asarray(lab[..., 0], dtype=np.float32) * np.float32(100.0 / 255.0)
+    """CIELAB L* (0–100, float32) of an RGB image (H × W × 3, 8-bit):
+    :attr:`~demoplan.perception.image_measures.ImageMeasures.lightness`."""
+    return ImageMeasures(image).lightness
 
 
 def _sample_mask(alpha: np.ndarray, us: np.ndarray, vs: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ import numpy as np
 
 from demoplan.perception.blocks import DetectedBlock, Rejection, named_by_colour
 from demoplan.perception.camera import Camera
+from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.overlay import square_corners
 from demoplan.perception.stack_sides import standing_tops
 
@@ -70,7 +71,7 @@ def held_to_sizes(
     sizes: Sequence[tuple[float, float, float]],
     unit: str = "mm",
     tolerance: float = SIDE_TOLERANCE,
-    seen: tuple[np.ndarray, Camera] | None = None,
+    seen: tuple[np.ndarray | ImageMeasures, Camera] | None = None,
 ) -> tuple[list[DetectedBlock], list[Rejection]]:
     """The blocks whose side lies within the span of the block sizes (from the
     smallest side of a block size's group to the largest) or within
@@ -109,11 +110,12 @@ def held_to_sizes(
 
 
 def standing_blocks(
-    image: np.ndarray, blocks: Sequence[DetectedBlock], camera: Camera
+    image: np.ndarray | ImageMeasures, blocks: Sequence[DetectedBlock], camera: Camera
 ) -> frozenset[int]:
     """The indices of ``blocks`` (found in ``image`` through ``camera``) whose tops
-    stand as the photograph's cubes do (:func:`~demoplan.perception.stack_sides.standing_tops`)."""
-    height = image.shape[0]
+    stand as the photograph's cubes do (:func:`~demoplan.perception.stack_sides.standing_tops`;
+    ``image`` the photograph or its measures, :mod:`demoplan.perception.image_measures`)."""
+    height = measures_of(image).image.shape[0]
     squares = []
     for block in blocks:
         u, v = camera.to_pixels(block.x, block.y)

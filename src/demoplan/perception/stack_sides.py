@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from demoplan.perception.colours import MIN_CHROMA, SIDE_FACE_GAP, foreground
+from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.opencv import cv2
 from demoplan.perception.side_faces import MAX_HUE_TURN, ImageSquare
 
@@ -76,9 +77,9 @@ class Nadir(NamedTuple):
 
 
 def _lab(image: np.ndarray) -> np.ndarray:
-    """CIELAB (L* 0–100) of ``image`` (H × W × 3, 8-bit RGB), smoothed over 3 × 3 px."""
-    smooth = cv2.blur(np.ascontiguousarray(image, dtype=np.uint8), (3, 3))
-    return np.asarray(cv2.cvtColor(smooth.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab))
+    """CIELAB (L* 0–100) of ``image`` (H × W × 3, 8-bit RGB), smoothed over 3 × 3 px
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.smooth_lab`)."""
+    return ImageMeasures(image).smooth_lab
 
 
 def _at(values: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +174,7 @@ def side_strip(
     dx, dy = xx + 0.5 - x, yy + 0.5 - y
     for other in others:
         if _measurable(other):
-            material &= _box(xx, yy, other) >= 1.0
+            _outside(material, other, rows.start, cols.start)
     # opened: a top's outline drawn darker (a render's edge, a bevel) is no strip
     opened = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     material = opened > 0
@@ -186,6 +187,24 @@ def side_strip(
     direction = math.atan2(float(centroid[1]), float(centroid[0]))
     length = float(np.percentile(box[strip] - 1.0, 95)) * side / 2  # past the outline
     return SideStrip(direction, length) if length >= MIN_STRIP * side else None
+
+
+def _outside(held: np.ndarray, square: ImageSquare, row0: int, col0: int) -> None:
+    """``held`` (a crop whose first row and column are ``row0``, ``col0`` of the
+    image) left only outside ``square`` (or on its outline: :func:`_box` ≥ 1), in
+    place. Only the crop's pixels within the square's reach (its centre's distance
+    to a corner, and a pixel more) are looked at: a pixel farther out is outside
+    it, whatever its turn — the same mask as :func:`_box` over the whole crop."""
+    x, y, _, side = square
+    reach = side / math.sqrt(2) + 1.0
+    rows = slice(max(row0, math.floor(y - reach)), min(row0 + held.shape[0], math.ceil(y + reach)))
+    cols = slice(max(col0, math.floor(x - reach)), min(col0 + held.shape[1], math.ceil(x + reach)))
+    if rows.start >= rows.stop or cols.start >= cols.stop:
+        return
+    yy, xx = np.mgrid[rows, cols]
+    held[rows.start - row0 : rows.stop - row0, cols.start - col0 : cols.stop - col0] &= (
+        _box(xx, yy, square) >= 1.0
+    )
 
 
 def _box(xx: np.ndarray, yy: np.ndarray, square: ImageSquare) -> np.ndarray:
@@ -285,7 +304,11 @@ def _miss(start: np.ndarray, direction: np.ndarray, point: np.ndarray) -> float:
     return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
 
 
-def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[int, str]:
+def lower_side_faces(
+    image: np.ndarray | ImageMeasures,
+    squares: Sequence[ImageSquare],
+    held: np.ndarray | None = None,
+) -> dict[int, str]:
     """The indices of ``squares`` (accepted in ``image``) that are side faces of a
     stack's lower cubes, each with why: a square whose centre lies on the line from
     a top to the nadir (within half the top's side of it), nearer the nadir than the
@@ -297,15 +320,18 @@ def lower_side_faces(image: np.ndarray, squares: Sequence[ImageSquare]) -> dict[
     it, or the table), the square not lit as a neighbour's top of its hue
     (:func:`_neighbour_top`), and within the foreground
     (:func:`~demoplan.perception.colours.foreground`) that runs on from the top
-    towards the nadir without a gap. Nothing without a nadir (:func:`nadir_of`)."""
+    towards the nadir without a gap (``held``, when the caller has it). Nothing
+    without a nadir (:func:`nadir_of`). ``image``: the photograph, or its measures
+    (:mod:`demoplan.perception.image_measures`)."""
     if len(squares) < 3:
         return {}
-    lab = _lab(image)
+    measures = measures_of(image)
+    lab = measures.smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
     strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:
         return {}
-    held = foreground(image)
+    held = foreground(measures.image) if held is None else held
     standing = [_stands(sq, strip, nadir) for sq, strip in zip(squares, strips, strict=True)]
     found: dict[int, str] = {}
     for top, upright, colour in zip(squares, standing, colours, strict=True):
@@ -354,14 +380,17 @@ def _strips_and_nadir(
     return strips, nadir_of(squares, strips)
 
 
-def standing_tops(image: np.ndarray, squares: Sequence[ImageSquare]) -> frozenset[int]:
+def standing_tops(
+    image: np.ndarray | ImageMeasures, squares: Sequence[ImageSquare]
+) -> frozenset[int]:
     """The indices of ``squares`` (accepted in ``image``) that stand as the
     photograph's cubes do: each shows its own side strip towards the nadir the
     strips of all of them point at (:func:`nadir_of`) — it has a height, so it is
-    no flat patch. None without a nadir."""
+    no flat patch. None without a nadir. ``image``: the photograph, or its measures
+    (:mod:`demoplan.perception.image_measures`)."""
     if len(squares) < 3:
         return frozenset()
-    lab = _lab(image)
+    lab = measures_of(image).smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
     strips, nadir = _strips_and_nadir(lab, squares, colours)
     if nadir is None:

@@ -15,6 +15,9 @@ __all__ = ["breadth_first_search"]
 # BFS state: object locations (-1 for the held one), held (object, grasp, where it
 # was taken from — or -1, see below) or None, reached.
 _BfsState = tuple[tuple[int, ...], tuple[int, int, int] | None, int]
+# The action that reached a state, as indices: (GRASP?, object, location, grasp).
+# Most successors are seen before, so the Action itself is made only for the plan.
+_Move = tuple[bool, int, int, int]
 
 
 def breadth_first_search(
@@ -32,7 +35,7 @@ def breadth_first_search(
         if len(set(places)) < len(places):
             revisits |= 1 << obj
     start: _BfsState = (c.start, None, c.start_reached)
-    parents: dict[_BfsState, tuple[_BfsState, Action] | None] = {start: None}
+    parents: dict[_BfsState, tuple[_BfsState, _Move] | None] = {start: None}
     queue = deque([(start, 0)])
     expanded = 0
     while queue:
@@ -40,7 +43,7 @@ def breadth_first_search(
         positions, held, reached = state
         if held is None and c.is_goal(positions, reached):
             return SearchOutcome(
-                _unwind(parents, state), expanded, len(parents), False, bound=depth
+                _unwind(c, parents, state), expanded, len(parents), False, bound=depth
             )
         limit = clock.stop(expanded, len(parents))
         if limit:  # every state fewer actions away was tried: no plan is shorter
@@ -50,20 +53,19 @@ def breadth_first_search(
         for location in positions:
             if location >= 0:
                 occupied |= 1 << location
-        successors: list[tuple[_BfsState, Action]] = []
+        successors: list[tuple[_BfsState, _Move]] = []
         if held is None:
             for obj, location in enumerate(positions):
                 for grasp in c.grasps_of[obj]:
                     if c.grasp_ok(occupied, location, grasp):
                         moved = positions[:obj] + (-1,) + positions[obj + 1 :]
-                        action = Action(
-                            "GRASP", c.objects[obj], c.locations[location], c.grasps[grasp]
-                        )
                         # Where it came from matters only to an object with two subgoals at
                         # one place: for any other, putting it back gives the state before
                         # the GRASP, already seen, so duplicate detection drops it.
                         source = location if revisits >> obj & 1 else -1
-                        successors.append(((moved, (obj, grasp, source), reached), action))
+                        successors.append(
+                            ((moved, (obj, grasp, source), reached), (True, obj, location, grasp))
+                        )
         else:
             obj, grasp, source = held
             for location in range(n_locations):
@@ -73,22 +75,22 @@ def breadth_first_search(
                 if now_reached < 0:
                     continue
                 placed = positions[:obj] + (location,) + positions[obj + 1 :]
-                action = Action("PUT_DOWN", c.objects[obj], c.locations[location], c.grasps[grasp])
-                successors.append(((placed, None, now_reached), action))
-        for successor, action in successors:
+                successors.append(((placed, None, now_reached), (False, obj, location, grasp)))
+        for successor, move in successors:
             if successor not in parents:
-                parents[successor] = (state, action)
+                parents[successor] = (state, move)
                 queue.append((successor, depth + 1))
     return SearchOutcome(None, expanded, len(parents), True)
 
 
 def _unwind(
-    parents: dict[_BfsState, tuple[_BfsState, Action] | None], state: _BfsState
+    c: Compiled, parents: dict[_BfsState, tuple[_BfsState, _Move] | None], state: _BfsState
 ) -> tuple[Action, ...]:
     actions: list[Action] = []
     link = parents[state]
     while link is not None:
-        state, action = link
-        actions.append(action)
+        state, (grasping, obj, location, grasp) = link
+        kind = "GRASP" if grasping else "PUT_DOWN"
+        actions.append(Action(kind, c.objects[obj], c.locations[location], c.grasps[grasp]))
         link = parents[state]
     return tuple(reversed(actions))

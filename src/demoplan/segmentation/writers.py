@@ -169,7 +169,11 @@ def _write_tf_topics(
     transform_type = msg["geometry_msgs/msg/TransformStamped"]
     transform3 = msg["geometry_msgs/msg/Transform"]
     vector, quaternion = msg["geometry_msgs/msg/Vector3"], msg["geometry_msgs/msg/Quaternion"]
-    positions, quats = poses
+    # Python floats once for all rows (a NumPy row per transform cost most of a
+    # bag of thousands of frames), and each frame's parent once per message.
+    position_rows: list[list[float]] = poses[0].tolist()
+    quat_rows: list[list[float]] = poses[1].tolist()
+    parents = [parent_of.get(name, frame) for name in names]
     for topic, chosen in (("/tf", ~is_static), ("/tf_static", is_static)):
         rows = np.flatnonzero(chosen)
         if not rows.size and topic == "/tf_static":
@@ -179,17 +183,22 @@ def _write_tf_topics(
         runs = np.flatnonzero(np.r_[True, stamps[rows][1:] != stamps[rows][:-1]])
         for run in np.split(rows, runs[1:]):
             stamp = int(stamps[run[0]])
-            transforms = [
-                transform_type(
-                    header=header(stamp, parent_of.get(names[i], frame)),
-                    child_frame_id=names[i],
-                    transform=transform3(
-                        translation=vector(*map(float, positions[i])),
-                        rotation=quaternion(*map(float, quats[i])),
-                    ),
+            headers: dict[str, Any] = {}
+            transforms = []
+            for i in run.tolist():
+                parent = parents[i]
+                if parent not in headers:
+                    headers[parent] = header(stamp, parent)
+                transforms.append(
+                    transform_type(
+                        header=headers[parent],
+                        child_frame_id=names[i],
+                        transform=transform3(
+                            translation=vector(*position_rows[i]),
+                            rotation=quaternion(*quat_rows[i]),
+                        ),
+                    )
                 )
-                for i in run.tolist()
-            ]
             message = msg[TF_TYPE](transforms=transforms)
             writer.write(connection, stamp, store.serialize_cdr(message, TF_TYPE))
 

@@ -19,8 +19,10 @@ Why a process, and why a plain subprocess rather than ``multiprocessing``:
   video's private folder removed) — then SIGKILL after
   :data:`TERMINATE_GRACE_S` to whatever is left of the group.
 - Each run is a session and process group of its own (``start_new_session``),
-  and ffmpeg is kept in it (``IMAGEIO_FFMPEG_NO_PREVENT_SIGINT``: imageio-ffmpeg
-  otherwise gives ffmpeg a group of its own), so ``killpg`` leaves no
+  and ffmpeg is kept in it (:class:`~demoplan.execution.encoder.FrameEncoder`
+  gives ffmpeg a session of its own only under a process that does not lead
+  its session, one a terminal's Ctrl-C reaches; ``IMAGEIO_FFMPEG_NO_PREVENT_SIGINT``
+  does the same for imageio-ffmpeg's own writers), so ``killpg`` leaves no
   grandchild behind; the group is swept with SIGKILL whenever the worker ends.
 - JSON lines over a pipe survive a killed child (at worst a cut last line,
   ignored); a ``multiprocessing`` queue shares a lock with the child that a

@@ -136,6 +136,27 @@ function freePlace(size, shape) {
   return [snap(right + 0.03 + hx), snap(state.layout.table.origin[1] + 0.03 + hy)];
 }
 
+// m³ of the solid the physics simulates (ObjectGeometry.volume): a box, a
+// sphere of the largest extent, a cylinder of the larger of x and y.
+function solidVolume(shape, [x, y, z]) {
+  if (shape === "box") return x * y * z;
+  if (shape === "sphere") return (4 / 3) * Math.PI * (Math.max(x, y, z) / 2) ** 3;
+  return Math.PI * (Math.max(x, y) / 2) ** 2 * z;
+}
+
+// A number to four significant digits as Python's "{:.4g}" writes it
+// (3.979e+05, 301.6, 0.9549), so that the page and the file's check agree.
+function fourDigits(value) {
+  const exponent = Math.floor(Math.log10(Math.abs(value)));
+  const trimmed = (text) => (text.includes(".") ? text.replace(/\.?0+$/, "") : text);
+  if (exponent < -4 || exponent >= 4) {
+    const [mantissa, power] = value.toExponential(3).split("e");
+    const sign = power.startsWith("-") ? "-" : "+";
+    return `${trimmed(mantissa)}e${sign}${power.replace(/^[-+]/, "").padStart(2, "0")}`;
+  }
+  return trimmed(value.toPrecision(4));
+}
+
 export function addThing() {
   if (!startCanChange()) return;
   const kind = $("thing-kind").value;
@@ -167,6 +188,16 @@ export function addThing() {
   }
   if (mass !== "" && density !== "") {
     alarm("Mass (kg) or density (kg/m³): one of them expected, not both");
+    return;
+  }
+  const volume = solidVolume(shape, size);
+  const implied = Number(mass) / volume;
+  if (mass !== "" && !(implied >= 1.2 && implied <= 22600)) {
+    // as the objects file's check says it (documents/masses.py): 120 typed for 120 g
+    alarm(
+      `Mass (kg): ${Number(mass)} kg in ${fourDigits(volume * 1e6)} cm³ is a mean density of ` +
+        `${fourDigits(implied)} kg/m³; between 1.2 (air) and 22600 (osmium) expected`,
+    );
     return;
   }
   const colour = $("thing-colour").value;

@@ -1,0 +1,62 @@
+"""A newcomer's slips in **Your objects** are caught when the thing is
+added, not later: a plate's mass typed in grams (120 for 0.12 kg) made a
+plate of 120 kg, shown as such in the list, and only **Save objects** said
+that its density could not be. Now **Add or change** refuses it, with the
+mean density and the range, as the saved file's check does."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.support.studio_browser import Studio, studio_page
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture
+def page(tmp_path: Path) -> Iterator[Studio]:
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    with studio_page(workdir, tmp_path) as studio:
+        studio.tab.get_by_label("Template").select_option("empty")
+        studio.settle()
+        studio.tab.get_by_text("Your objects").click()
+        yield studio
+
+
+def fill(page: Studio, name: str, shape: str, size: tuple[float, float, float], mass: str) -> None:
+    tab = page.tab
+    tab.get_by_label("Kind").select_option("object")
+    tab.get_by_label("Name", exact=True).fill(name)
+    tab.get_by_label("Shape").select_option(shape)
+    for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), size, strict=True):
+        tab.get_by_label(field, exact=True).fill(str(value))
+    tab.get_by_label("Mass (kg)").fill(mass)
+    page.button("Add or change").click()
+    page.settle()
+
+
+@pytest.mark.parametrize(
+    ("shape", "size", "mass", "density"),
+    [
+        ("cylinder", (16, 16, 1.5), "120", "3.979e+05"),  # grams for kilograms
+        ("box", (10, 6, 4), "1000", "4.167e+06"),
+        ("sphere", (10, 10, 10), "0.0005", "0.9549"),  # lighter than air
+    ],
+)
+def test_a_mass_no_material_has_is_refused_when_added(
+    page: Studio, shape: str, size: tuple[float, float, float], mass: str, density: str
+) -> None:
+    fill(page, "plate", shape, size, mass)
+    assert f"a mean density of {density} kg/m³" in page.alert()
+    assert "between 1.2 (air) and 22600 (osmium) expected" in page.alert()
+    assert page.tab.locator("#table [data-object]").count() == 0
+
+
+def test_a_plate_of_a_tenth_of_a_kilogram_is_added(page: Studio) -> None:
+    fill(page, "plate", "cylinder", (16, 16, 1.5), "0.1")
+    assert page.alert() == ""
+    assert "plate: cylinder 16 × 16 × 1.5 cm, 0.1 kg" in page.tab.locator("#things").inner_text()
