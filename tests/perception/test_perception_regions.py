@@ -18,7 +18,7 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera
 from demoplan.perception.colours import name_colour
 from demoplan.perception.labelled import load_labelled, perceive_labelled
-from demoplan.perception.masks import close
+from demoplan.perception.masks import TableReach, close, dilate
 from demoplan.perception.photo_families_scene import Cube, PhotoScene, render_scene
 from demoplan.perception.photos import PhotoRig
 from demoplan.perception.synthetic import COLOURS, TABLE
@@ -505,6 +505,33 @@ def test_a_black_letter_printed_on_a_top_is_its_top(
     _assert_one_whole_block(found, centre, side)
 
 
+@settings(max_examples=8, deadline=None)
+@given(
+    centre=_poses["centre"],
+    yaw=_poses["yaw"],
+    side=st.floats(50.0, 70.0),
+    seed=_poses["seed"],
+    colour=st.sampled_from(("yellow", "green", "red", "blue")),
+)
+def test_a_frame_printed_on_a_top_is_its_top(
+    centre: Point, yaw: float, side: float, seed: int, colour: str
+) -> None:
+    """A black frame printed round a top's face (0.34-0.42 of a side out from its
+    centre, as an alphabet block's border) rings the plain face inside it, a larger
+    piece than the ring itself: it is the top's, and the block is found whole, its
+    size kept. (Without: the frame was not filled — a marker's code rings its white
+    centre too — the thin rim outside it went as a strand, and the square fitted
+    was the face inside the frame, 0.68 of the side: too small with ``--side``.)
+    Sides of 50 px and more (the patterned family's are 53-70): the rim outside
+    the frame is 0.08 of the side, and under 4 px the blur leaves it no pixel over
+    half the top's colour, so the frame rings nothing (30 px tops: not found whole)."""
+    bars = _printed(centre, yaw, side, "frame")
+    shapes = [(_rectangle(centre, yaw, side, side), COLOURS[colour])]
+    image = _paint(shapes + [(bar, (25, 25, 25)) for bar in bars], _rng(seed))
+    found = detect_blocks(image, CAMERA)
+    _assert_one_whole_block(found, centre, side)
+
+
 @settings(max_examples=6, deadline=None)
 @given(
     glyph=st.sampled_from(("T", "E", "L", "H")),
@@ -526,6 +553,35 @@ def test_a_white_cube_with_a_black_letter_on_the_board_is_one_white_block(
     finds it, the letter is taken for its side faces — seed 6.)"""
     with_side = PerceptionSettings(min_side=0.034, max_side=0.046)  # --side 0.04
     near, others, _, _, _ = _lone_neutral_cube("white", "board", x, y, yaw, seed, glyph, with_side)
+    assert len(near) == 1 and others == 0, (near, others)
+    assert near[0].colour == "white"
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    background=st.sampled_from(("board", "paper")),
+    side_given=st.booleans(),
+    x=st.floats(0.15, 0.45),
+    y=st.floats(0.08, 0.32),
+    yaw=st.floats(0.0, 90.0),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_a_white_cube_with_black_dots_is_one_white_block(
+    background: str, side_given: bool, x: float, y: float, yaw: float, seed: int
+) -> None:
+    """Five black dots printed on a white top (each 0.12 of a side across) are the
+    top's: the cube on the board or on white paper is one white block within 0.6 of
+    its side of its centre, with ``--side 0.04`` or without, and nothing else.
+    (Without: a dot's blurred hole in the white part is dark over a third of it,
+    under the half a letter's is, so it was not filled, the white between the dots
+    and the edge broke at the opening, and the top was `not compact` — the
+    patterned family's seed 0 on paper, seed 18 on the board.)"""
+    settings_ = (
+        PerceptionSettings(min_side=0.034, max_side=0.046) if side_given else PerceptionSettings()
+    )
+    near, others, _, _, _ = _lone_neutral_cube(
+        "white", background, x, y, yaw, seed, "dots", settings_
+    )
     assert len(near) == 1 and others == 0, (near, others)
     assert near[0].colour == "white"
 
@@ -558,3 +614,37 @@ def test_a_white_top_on_a_blue_table_is_not_its_shadows(
     centre = ((truth.u + 0.5) / px_per_m, (image.shape[0] - truth.v - 0.5) / px_per_m)
     assert len(found) == 1, found
     assert math.dist((found[0].x, found[0].y), centre) < 0.25 * 0.04
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    side=st.integers(24, 90),
+    depth=st.integers(40, 120),
+    specks=st.lists(st.tuples(st.integers(0, 297), st.integers(0, 397)), max_size=40),
+)
+def test_a_second_tables_reach_is_a_side_from_its_body_not_from_its_specks(
+    side: int, depth: int, specks: list[tuple[int, int]]
+) -> None:
+    """A second table reaching in from the left border (``depth`` px), with specks of
+    its colour up to 3 px across elsewhere (a board's pixels near its chroma): the
+    reach holds every pixel a side from the table's body (less the erosion's sixth
+    of a side; a side from the image's border) and none farther than a side from
+    it, whatever the specks; a class's
+    strays are the reach beyond a rim (a sixth of a side) of its named pixels."""
+    tables = np.zeros((300, 400), dtype=bool)
+    tables[:, :depth] = True
+    for row, col in specks:
+        tables[row : row + 3, col : col + 3] = True
+    reach = TableReach(tables, float(side))
+    cols = np.arange(400)[None, :].repeat(300, axis=0)
+    beyond = cols - (depth - 1)  # px right of the table's last column
+    rows = slice(side, 300 - side)  # the body is eroded from the image's border too
+    assert reach.mask[rows][beyond[rows] <= side - side // 6 - 1].all()
+    assert not reach.mask[beyond > side + 1].any()
+    named = np.zeros((300, 400), dtype=bool)
+    named[140:160, depth + 5 : depth + 25] = True  # a cube's named pixels beside it
+    strays = reach.strays(slice(0, 300), slice(0, 400), named)
+    assert strays is not None
+    near_named = dilate(named, reach.rim)
+    assert not (strays & near_named).any()
+    assert np.array_equal(strays, reach.mask & ~near_named)

@@ -30,6 +30,7 @@ from demoplan.model import TaskModel
 from tests.support.studio_browser import (
     ROOT,
     Studio,
+    chromium_browser,
     scene_of_initial,
     studio_page,
     write_json,
@@ -43,13 +44,21 @@ BLOCKS = ROOT / "examples" / "blocks" / "demonstrations.json"
 FIG4 = ROOT / "examples" / "scenes" / "pyramid-fig4.json"
 
 
+@pytest.fixture(scope="module")
+def shared_browser() -> Iterator[Any]:
+    """One chromium for the module's pages (a launch is about a second of CPU);
+    each test's page opens in a context of its own."""
+    with chromium_browser() as launched:
+        yield launched
+
+
 @pytest.fixture
-def studio(tmp_path: Path) -> Iterator[tuple[Studio, Path]]:
+def studio(tmp_path: Path, shared_browser: Any) -> Iterator[tuple[Studio, Path]]:
     workdir = tmp_path / "work"
     workdir.mkdir()
     artifacts = tmp_path / "artifacts"
     artifacts.mkdir()
-    with studio_page(workdir, artifacts) as page:
+    with studio_page(workdir, artifacts, shared_browser) as page:
         yield page, workdir
 
 

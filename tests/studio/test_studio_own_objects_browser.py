@@ -21,7 +21,13 @@ import pytest
 from demoplan.commands.learning import learn_model
 from demoplan.learning.modelfile import load_model
 from demoplan.learning.tables import state_rows
-from tests.support.studio_browser import VIEWPORT, Studio, studio_page, write_json
+from tests.support.studio_browser import (
+    VIEWPORT,
+    Studio,
+    chromium_browser,
+    studio_page,
+    write_json,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -104,11 +110,18 @@ def move_landmark(page: Studio, name: str, x: float, y: float, yaw: float) -> No
     assert landmark_pose(page, name) == pytest.approx((x, y, yaw), abs=1e-9)
 
 
+@pytest.fixture(scope="module")
+def shared_browser() -> Iterator[Any]:
+    """One chromium for the module's pages; each test's page opens in a context of its own."""
+    with chromium_browser() as launched:
+        yield launched
+
+
 @pytest.fixture
-def lunch(tmp_path: Path) -> Iterator[tuple[Studio, Path]]:
+def lunch(tmp_path: Path, shared_browser: Any) -> Iterator[tuple[Studio, Path]]:
     workdir = tmp_path / "work"
     workdir.mkdir()
-    with studio_page(workdir, tmp_path) as page:
+    with studio_page(workdir, tmp_path, shared_browser) as page:
         yield page, workdir
 
 

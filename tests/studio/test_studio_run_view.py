@@ -36,8 +36,7 @@ from demoplan.execution.report import RunReport
 from demoplan.studio import worker
 from demoplan.studio.app import create_app
 from demoplan.studio.jobs import LAST_RUN_FILE
-from tests.support.browser import CHROMIUM_ARGS
-from tests.support.studio_browser import ROOT, VIEWPORT, Studio, chromium
+from tests.support.studio_browser import ROOT, VIEWPORT, Studio, chromium_browser
 
 BLOCKS = ROOT / "examples" / "blocks" / "demonstrations.json"
 FIG4 = ROOT / "examples" / "scenes" / "pyramid-fig4.json"
@@ -87,19 +86,22 @@ def serving(app: FastAPI) -> Iterator[tuple[str, threading.Event]]:
         assert not thread.is_alive(), "the studio server did not stop"
 
 
-@contextmanager
-def browsing(artifacts: Path) -> Iterator[Any]:
-    """Chromium, closed at the end; pages are opened with :func:`open_page`."""
-    executable = chromium()
-    from playwright.sync_api import sync_playwright
+@pytest.fixture(scope="module")
+def module_chromium() -> Iterator[Any]:
+    """One chromium for the module's tests (a launch is about a second of CPU)."""
+    with chromium_browser() as launched:
+        yield launched
 
-    artifacts.mkdir(exist_ok=True)
-    with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
-        try:
-            yield browser
-        finally:
-            browser.close()
+
+@pytest.fixture
+def browser(module_chromium: Any, tmp_path: Path) -> Iterator[Any]:
+    """The module's chromium for one test, its artifacts folder made; every page
+    the test opened (each in a context of its own: :func:`open_page`) is
+    closed after it, so that none polls on through the next test."""
+    (tmp_path / "art").mkdir(exist_ok=True)
+    yield module_chromium
+    for context in list(module_chromium.contexts):
+        context.close()
 
 
 def open_page(browser: Any, url: str, artifacts: Path) -> Studio:
@@ -184,9 +186,9 @@ def command_layer_run(workdir: Path, faults: Faults, seed: int) -> tuple[RunRepo
 
 @pytest.mark.slow
 def test_every_event_shows_the_world_the_run_observed_and_the_run_ends_on_its_final_world(
-    workdir: Path, tmp_path: Path
+    workdir: Path, tmp_path: Path, browser: Any
 ) -> None:
-    with serving(create_app(workdir)) as (url, _), browsing(tmp_path / "art") as browser:
+    with serving(create_app(workdir)) as (url, _):
         page = open_page(browser, url, tmp_path / "art")
         run_id = start_run(page, DROPS, DROPS_SEED)
         wait_until_over(page)
@@ -237,9 +239,9 @@ def test_every_event_shows_the_world_the_run_observed_and_the_run_ends_on_its_fi
 
 @pytest.mark.slow
 def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
-    workdir: Path, tmp_path: Path
+    workdir: Path, tmp_path: Path, browser: Any
 ) -> None:
-    with serving(create_app(workdir)) as (url, _), browsing(tmp_path / "art") as browser:
+    with serving(create_app(workdir)) as (url, _):
         page = open_page(browser, url, tmp_path / "art")
         run_id = start_run(page, "grasp=1", 0)
         wait_until_over(page)
@@ -270,11 +272,13 @@ def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
 
 
 @pytest.mark.slow
-def test_the_badge_leaves_running_when_the_studio_stops(workdir: Path, tmp_path: Path) -> None:
+def test_the_badge_leaves_running_when_the_studio_stops(
+    workdir: Path, tmp_path: Path, browser: Any
+) -> None:
     app = create_app(workdir)
     # a run that never ends by itself: a worker that waits for the studio to go
     app.state.jobs.worker = (sys.executable, "-c", "import sys; sys.stdin.buffer.read()")
-    with browsing(tmp_path / "art") as browser, serving(app) as (url, stop):
+    with serving(app) as (url, stop):
         page = open_page(browser, url, tmp_path / "art")
         start_run(page, "", 0)
         badge = page.tab.locator("#run-state")
@@ -294,36 +298,35 @@ def test_the_badge_leaves_running_when_the_studio_stops(workdir: Path, tmp_path:
 
 @pytest.mark.slow
 def test_a_page_opened_again_shows_the_last_run_of_the_work_folder(
-    workdir: Path, tmp_path: Path
+    workdir: Path, tmp_path: Path, browser: Any
 ) -> None:
     artifacts = tmp_path / "art"
-    with browsing(artifacts) as browser:
-        with serving(create_app(workdir)) as (url, _):
-            page = open_page(browser, url, artifacts)
-            run_id = start_run(page, DROPS, DROPS_SEED)
-            wait_until_over(page)
-            status = api(url, f"/api/runs/{run_id}")
-            page.tab.close()
-        assert (workdir / LAST_RUN_FILE).is_file()
-        # a studio started again on the work folder, a page opened anew
-        with serving(create_app(workdir)) as (url, _):
-            record = api(url, "/api/last-run")
-            assert record["run"] == run_id and record["events"] == status["events"]
-            page = open_page(browser, url, artifacts)
-            page.view("Run")
-            events = status["events"]
-            timeline = page.tab.locator('[data-testid="timeline"] > li')
-            kinds = [timeline.nth(k).get_attribute("data-kind") for k in range(timeline.count())]
-            assert kinds == [e["kind"] for e in events]
-            assert timeline.last.inner_text() == f"✓ {events[-1]['text']}"
-            assert page.tab.locator("#run-state").get_attribute("data-state") == "done"
-            assert (
-                page.tab.locator("#run-step-out").inner_text() == f"{len(events)} / {len(events)}"
-            )
-            assert_shows(page, status["result"]["world"])
-            show_event(page, 1)  # the start it ran from
-            assert_shows(page, events[0]["world"])
-            assert page.errors == []
+    with serving(create_app(workdir)) as (url, _):
+        page = open_page(browser, url, artifacts)
+        run_id = start_run(page, DROPS, DROPS_SEED)
+        wait_until_over(page)
+        status = api(url, f"/api/runs/{run_id}")
+        page.tab.close()
+    assert (workdir / LAST_RUN_FILE).is_file()
+    # a studio started again on the work folder, a page opened anew
+    with serving(create_app(workdir)) as (url, _):
+        record = api(url, "/api/last-run")
+        assert record["run"] == run_id and record["events"] == status["events"]
+        page = open_page(browser, url, artifacts)
+        page.view("Run")
+        events = status["events"]
+        timeline = page.tab.locator('[data-testid="timeline"] > li')
+        kinds = [timeline.nth(k).get_attribute("data-kind") for k in range(timeline.count())]
+        assert kinds == [e["kind"] for e in events]
+        assert timeline.last.inner_text() == f"✓ {events[-1]['text']}"
+        assert page.tab.locator("#run-state").get_attribute("data-state") == "done"
+        assert (
+            page.tab.locator("#run-step-out").inner_text() == f"{len(events)} / {len(events)}"
+        )
+        assert_shows(page, status["result"]["world"])
+        show_event(page, 1)  # the start it ran from
+        assert_shows(page, events[0]["world"])
+        assert page.errors == []
 
 
 def test_a_record_that_is_not_a_run_is_refused_in_one_line(workdir: Path) -> None:

@@ -1,8 +1,8 @@
 """Fixed problems checked in as files under tests/data, each drawn by a
 function kept here so the file can be made again and checked.
 
-A draw can take long (the crowded parking problem: about 15 s of CPU, drawn
-until it is not unsolvable on its face), so the tests read the file
+A draw can take many tries (the crowded parking problem: 51 draws until one
+is not unsolvable on its face, about 1 s of CPU), so the tests read the file
 (:func:`load_fixed`), and one slow test (tests/support/test_fixed_problems.py) checks
 that drawing again gives the very same file. To write them again after a
 change to a family::

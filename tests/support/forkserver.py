@@ -161,11 +161,16 @@ class CommandServer:
         stdout: int,
         stderr: int,
         on_pid: Any,
+        on_sent: Any = None,
     ) -> int:
         """The command's exit code (minus the signal's number when one killed
-        it, as :mod:`subprocess` says); ``on_pid`` is told the child's pid."""
+        it, as :mod:`subprocess` says); ``on_pid`` is told the child's pid,
+        ``on_sent`` (if given) called once the server holds the request and
+        its copies of the streams."""
         request = {"argv": list(argv), "cwd": str(cwd), "env": dict(env)}
         _send(self.sock, request, [stdin, stdout, stderr])
+        if on_sent is not None:
+            on_sent()
         pid, _ = _receive(self.sock)
         on_pid(pid)
         code, _ = _receive(self.sock)
@@ -184,6 +189,8 @@ class CommandServer:
 _servers: dict[str, CommandServer | None] = {}  # this process's (one)
 started = {"forked": 0, "fresh": 0}
 """How this process's commands were started (for a report)."""
+killed: list[int] = []
+"""The forked commands killed when their time ran out (their pids)."""
 
 
 def _server_for(env: Mapping[str, str]) -> CommandServer | None:
@@ -289,6 +296,7 @@ def run(
         told = threading.Event()  # the child's pid came
         answered: list[int] = []
         failed: list[BaseException] = []
+        sent = threading.Event()  # the server holds the request and the streams
         done = threading.Event()
 
         def on_pid(pid: int) -> None:
@@ -298,7 +306,16 @@ def run(
         def serve() -> None:
             try:
                 answered.append(
-                    server.run(argv, cwd, env, child_in, child_out, write_end, on_pid=on_pid)
+                    server.run(
+                        argv,
+                        cwd,
+                        env,
+                        child_in,
+                        child_out,
+                        write_end,
+                        on_pid=on_pid,
+                        on_sent=sent.set,
+                    )
                 )
             except BaseException as exc:  # raised again in the test's thread
                 failed.append(exc)
@@ -306,6 +323,11 @@ def run(
 
         asking = threading.Thread(target=serve, daemon=True)
         asking.start()
+        # The streams are closed here only once the server holds its copies: closed
+        # before (a time limit of 0), the request went out with closed descriptors,
+        # was never served, and the time-out waited SERVER_SECONDS for a child's pid.
+        # (A server that does not take the request is stopped by _kill.)
+        sent.wait(SERVER_SECONDS)
         finished = done.wait(timeout)
         for fd in opened:  # the child has its copies: EOF comes when it (and its children) close
             os.close(fd)
@@ -345,6 +367,7 @@ def _kill(
         for pid in pids:
             with contextlib.suppress(ProcessLookupError):  # it ended meanwhile
                 os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
     asking.join(SERVER_SECONDS)
     if asking.is_alive():
         with contextlib.suppress(OSError):

@@ -53,18 +53,37 @@ def studio_server(workdir: Path) -> Iterator[str]:
 
 
 @contextmanager
-def studio_page(workdir: Path, artifacts: Path) -> Iterator[Studio]:
-    """A studio on ``workdir`` served in a thread and opened in one chromium tab,
-    ready (``body[data-ready]``); the page may log no error while it is used."""
+def chromium_browser() -> Iterator[Any]:
+    """Debian's chromium under Playwright, for the studio pages opened in it —
+    one per test, or one a module's tests share (each page in a context of its
+    own: its storage, cookies and cache fresh, as in a new browser)."""
     executable = chromium()
     from playwright.sync_api import sync_playwright
 
-    with studio_server(workdir) as url, sync_playwright() as playwright:
+    with sync_playwright() as playwright:
         launched = playwright.chromium.launch(
             executable_path=executable, args=browser.CHROMIUM_ARGS
         )
         try:
-            tab = launched.new_page(viewport=VIEWPORT)
+            yield launched
+        finally:
+            launched.close()
+
+
+@contextmanager
+def studio_page(workdir: Path, artifacts: Path, shared: Any = None) -> Iterator[Studio]:
+    """A studio on ``workdir`` served in a thread and opened in a chromium tab
+    of a new browser context, ready (``body[data-ready]``); the page may log no
+    error while it is used. ``shared``: a browser of :func:`chromium_browser`
+    to open it in (else one is launched for this page alone)."""
+    if shared is None:
+        with chromium_browser() as launched, studio_page(workdir, artifacts, launched) as page:
+            yield page
+        return
+    with studio_server(workdir) as url:
+        context = shared.new_context(viewport=VIEWPORT)
+        try:
+            tab = context.new_page()
             page = Studio(tab, artifacts)
             tab.goto(url)
             tab.wait_for_selector('body[data-ready="true"]')
@@ -72,7 +91,7 @@ def studio_page(workdir: Path, artifacts: Path) -> Iterator[Studio]:
             yield page
             assert page.errors == []
         finally:
-            launched.close()
+            context.close()
 
 
 class Studio:
@@ -100,7 +119,8 @@ class Studio:
         return x, y, z, yaw
 
     def steps(self) -> int:
-        return self.tab.locator('[data-testid="steps"] > li').count()
+        count: int = self.tab.locator('[data-testid="steps"] > li').count()
+        return count
 
     def pixel(self, x: float, y: float) -> tuple[float, float]:
         """The viewport point of world point (x, y), from the documented scale."""

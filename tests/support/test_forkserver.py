@@ -162,8 +162,10 @@ def test_a_command_out_of_time_is_killed_and_the_next_gets_its_own_answer(
     _forked(CASES["missing-file"], workspace)  # the server runs
     server = forkserver._server_for(_env())
     assert server is not None
+    killed = len(forkserver.killed)
     with pytest.raises(subprocess.TimeoutExpired):
         forkserver.run(CASES["plan"], workspace, _env(), timeout=0)
+    assert len(forkserver.killed) == killed + 1  # the command was forked, then killed
     assert forkserver._server_for(_env()) is server  # the same server, still in step
     assert _forked(CASES["missing-file"], workspace) == _fresh(CASES["missing-file"], workspace)
 

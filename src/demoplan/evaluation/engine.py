@@ -158,6 +158,11 @@ def _first_line(exc: BaseException) -> str:
     return type(exc).__name__ + (f": {lines[0][:300]}" if lines else "")
 
 
+_own_ray: list[bool] = [False]
+"""Whether the Ray this process is connected to was started (or joined) by a
+:class:`RayEngine`, which shuts it down (disconnects) when its runs end."""
+
+
 def _call(runner: Runner, spec: RunSpec) -> RunRow:
     """The Ray task's body (module level: workers import it)."""
     return runner(spec)
@@ -187,7 +192,7 @@ class RayEngine:
             yield
         finally:
             if started:
-                ray.shutdown()
+                _shut_down(ray)
 
     def _start(self, ray: Any) -> bool:
         """Start a local Ray, or join ``address`` (checked first: it answers as
@@ -212,6 +217,7 @@ class RayEngine:
             raise UsageError(f"{where}: Ray says {_first_line(exc)}") from None
         finally:
             quiet.setLevel(level)
+        _own_ray[0] = True
         return True
 
     def rows(self, specs: Sequence[RunSpec], runner: Runner) -> Iterator[RunRow]:
@@ -237,14 +243,20 @@ class RayEngine:
                     else:
                         yield row
         finally:
-            # Stopped (Ctrl-C, the caller closed us): the rest goes — unless Ray has
-            # been shut down meanwhile (the session ended before this generator was
-            # closed), where ray.cancel would start a new local Ray of its own.
-            for ref in pending if ray.is_initialized() else ():
+            # Stopped (Ctrl-C, the caller closed us): the runs in flight go. On a Ray
+            # of our own they go with it — a local Ray is shut down, a cluster joined
+            # by --address ends this driver's tasks when it disconnects — and are not
+            # cancelled: ray.cancel racing a task that finishes at that moment fails
+            # a check in Ray's core worker ("Tried to complete task that was not
+            # pending", ray-project/ray#54798), which ends the whole process with
+            # exit 1 instead of the Ctrl-C's 130. A Ray that outlives the evaluation
+            # (running in this process before it) has them cancelled — unless it has
+            # been shut down meanwhile, where ray.cancel would start a new local Ray.
+            for ref in pending if ray.is_initialized() and not _own_ray[0] else ():
                 with contextlib.suppress(Exception):  # finished meanwhile, or its node gone
                     ray.cancel(ref, force=True)
             if started:
-                ray.shutdown()
+                _shut_down(ray)
 
     def _outcome(self, ray: Any, ref: Any, spec: RunSpec, attempt: int) -> RunRow | None:
         """The run's row, or None when its worker died and a retry is left."""
@@ -259,3 +271,9 @@ class RayEngine:
                 return None
             return error_row(spec, f"the worker died in each of {attempt} attempts", attempt)
         return replace(row, attempts=attempt)
+
+
+def _shut_down(ray: Any) -> None:
+    """Shut down (or disconnect from) the Ray a RayEngine started or joined."""
+    _own_ray[0] = False
+    ray.shutdown()

@@ -255,8 +255,11 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     )
     sizes = stats[:, cv2.CC_STAT_AREA]
     darker = np.bincount(labels[dark & ~bright], minlength=count)
-    taken = (sizes < side_px**2) & (darker >= PRINTED_DARK_SHARE * sizes)
+    taken = sizes < side_px**2
     taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    if not taken.any():
+        return np.zeros(bright.shape, dtype=bool)
+    taken &= (darker >= PRINTED_DARK_SHARE * sizes) | _spots(bright, labels, taken, sizes)
     if not taken.any():
         return np.zeros(bright.shape, dtype=bool)
     holes: np.ndarray = taken[labels]
@@ -266,6 +269,29 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     held = np.bincount(parts[holes], minlength=count)
     printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[parts]
     return printed
+
+
+PRINTED_SPOT_SHARE = 0.1
+"""A hole in a white part covering under this share of the part (its holes filled)
+is a spot printed on a white top whatever its darkness: blurred, a dot's dark core
+is a third of its hole (a generated top's five dots: 4-5 % of the top each),
+under :data:`PRINTED_DARK_SHARE`; a small marker's code on a white card is as
+dark a share but covers 29-50 % of the card (the development set's AprilTags)."""
+
+
+def _spots(
+    bright: np.ndarray, labels: np.ndarray, small: np.ndarray, sizes: np.ndarray
+) -> np.ndarray:
+    """Which of the holes (``labels`` of the non-``bright`` pixels, ``small`` those
+    of a block's size or less, ``sizes`` their areas) cover under
+    :data:`PRINTED_SPOT_SHARE` of the bright part round them, its small holes filled."""
+    holes = small[labels]
+    count, parts = cv2.connectedComponents((bright | holes).astype(np.uint8), connectivity=8)
+    areas = np.bincount(parts.ravel(), minlength=count)
+    part_of = np.zeros(small.shape[0], dtype=np.intp)
+    part_of[labels[holes]] = parts[holes]
+    spots: np.ndarray = small & (sizes < PRINTED_SPOT_SHARE * areas[part_of])
+    return spots
 
 
 def _opened_at_own_scale(part: np.ndarray) -> np.ndarray:

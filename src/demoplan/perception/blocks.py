@@ -373,7 +373,7 @@ def _squares_in_region(
     row0, col0 = region.offset
     rows, cols = region.alpha.shape
     lightness = search.lightness[row0 : row0 + rows, col0 : col0 + cols]
-    explained = explained_share(region.alpha, [params for params, _, _ in squares], lightness)
+    explained = explained_share(region.counted, [params for params, _, _ in squares], lightness)
     if explained < MIN_EXPLAINED_SHARE:
         if parts is not None:
             why = ("larger than its squares", f"its squares cover {explained:.0%} of it")

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +43,7 @@ from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.highlights import glare, highlights, hole_owners, printed
 from demoplan.perception.image_measures import ImageMeasures
-from demoplan.perception.masks import CROSS, dilate, distances, erode, fill_holes
+from demoplan.perception.masks import CROSS, TableReach, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import (
     REPORTED_SHARE,
@@ -113,6 +113,12 @@ class ColourRegion:
     rgb: tuple[float, float, float]
     offset: tuple[int, int]
     alpha: np.ndarray
+    strays: np.ndarray | None = None
+
+    @property
+    def counted(self) -> np.ndarray:
+        """``alpha`` less its ``strays`` (:class:`~.masks.TableReach`): what its size is."""
+        return self.alpha if self.strays is None else self.alpha * ~self.strays
 
 
 def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
@@ -298,6 +304,7 @@ class _ImageColours:
     coloured_image: bool
     min_area: float
     record: PartRecorder
+    reach: TableReach | None = None  # near a second table, if any
 
 
 @dataclass(frozen=True, slots=True)
@@ -320,9 +327,9 @@ class _Crop:
     offsets: np.ndarray
 
 
-# A colour's top face: the colour, its mean RGB, its RGB change from the table, the
-# L* of the top face and of the side faces (None: none seen), its a*b* change.
-_Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray]
+# A colour's top face: colour, mean RGB, RGB change from the table, L* of the top and
+# side faces (None: none seen), a*b* change, its core pixels named its colour (crop).
+_Face = tuple[str, np.ndarray, np.ndarray, float, float | None, np.ndarray, np.ndarray]
 
 
 def _component_crop(
@@ -427,7 +434,9 @@ def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
         change = core_offsets[on_top].mean(axis=0)
         mean_rgb = core_pixels[on_top].mean(axis=0)
         change_ab = (core_chroma[on_top] - k.ground_ab).mean(axis=0)
-        faces.append((colour, mean_rgb, change, top_face, side_faces, change_ab))
+        named = np.zeros(k.core.shape, dtype=bool)
+        named[k.core] = chosen
+        faces.append((colour, mean_rgb, change, top_face, side_faces, change_ab, named))
     return faces
 
 
@@ -435,7 +444,7 @@ def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -
     """How much each pixel of the crop is ``face``'s (0–1): its colour change from
     the table against the face's, in chroma too, and its L* from side to top face
     (full from the lower quartile of the top's core pixels, :data:`FULL_LEVEL_SHARE`)."""
-    _, _, change, top_face, side_faces, change_ab = face
+    _, _, change, top_face, side_faces, change_ab, _ = face
     projection = (k.offsets @ change) / max(float(change @ change), 1e-9)
     alpha: np.ndarray = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
     if c.coloured_image:
@@ -486,7 +495,8 @@ def _component_regions(
         alpha[printed(alpha, k.lightness, k.ground_lightness)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
-        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha))
+        strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])
+        regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha, strays))
     return regions
 
 
@@ -518,8 +528,11 @@ def colour_regions(
     record = PartRecorder(rejected, min_area)
     if held is not None:  # before a second table lowers ``distinct``
         held[...] = _foreground(distinct, threshold)
-    if largest_block is not None and coloured_image:
-        _second_tables(distinct, lab, threshold, largest_block, record, second_tables)
+    tables = np.zeros(image.shape[:2], dtype=bool) if second_tables is None else second_tables
+    reach = None
+    if largest_block is not None and coloured_image:  # noqa: SIM102 (mypy narrows largest_block)
+        if _second_tables(distinct, lab, threshold, largest_block, record, tables):
+            reach = TableReach(tables, math.sqrt(largest_block))
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
@@ -527,6 +540,7 @@ def colour_regions(
     colours = _ImageColours(
         image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
     )
+    colours = replace(colours, reach=reach)
     areas = stats[1:count, cv2.CC_STAT_AREA]
     if rejected is not None:  # smaller than a block: noise, a speck (reported from a size on)
         specks = (areas < min_area) & (areas >= REPORTED_SHARE * min_area)

@@ -74,9 +74,11 @@ white paper, a white one on a red top as far over a blue table)."""
 def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) -> np.ndarray:
     """The holes in a top's soft mask (``alpha`` over ½) that are something printed
     on it — a letter, dots, dark on a pale top or pale on a dark one, which a top's
-    colour does not cover: each hole in one piece round no piece of the mask (the
-    dark code of an AprilTag on a tinted card rings the card's centre; so does a
-    frame printed on a top, which is not filled either), covering under half of the
+    colour does not cover: each hole in one piece round no piece of the mask, or
+    round a piece at least its own size (a frame printed round a top rings the
+    plain face inside it, 1.9 times the frame's area; the dark code of an AprilTag
+    on a tinted card rings the card's white centre, half its own area in
+    mrhan_stacks, and is not filled: a false block), covering under half of the
     mask with its holes filled (a letter is a small share of its face), whose median L*
     (``lightness``) differs from the table's around the region
     (``table_lightness``) by :data:`PRINTED_CONTRAST` or more (table seen within a
@@ -94,8 +96,9 @@ def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) ->
         x, y, w, h, _ = (int(value) for value in stats[index])
         rows, cols = slice(y, y + h), slice(x, x + w)
         hole = labels[rows, cols] == index
-        if fill_holes(hole).sum() > hole.sum():
-            continue  # a ring round a piece of the top: a marker's code on a card
+        ringed = int(fill_holes(hole).sum()) - int(hole.sum())
+        if 0 < ringed < hole.sum():
+            continue  # a ring round a smaller piece of the top: a marker's code on a card
         if abs(float(np.median(lightness[rows, cols][hole])) - table_lightness) >= PRINTED_CONTRAST:
             found[rows, cols] |= hole
     return found
