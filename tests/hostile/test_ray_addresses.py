@@ -10,9 +10,11 @@ import importlib.util
 import json
 import os
 import re
+import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -111,9 +113,14 @@ def test_the_command_leaves_nothing_to_resume(model: Path, tmp_path: Path) -> No
 def ray_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """A real Ray head on this machine (``ray start --head --block``, its own
     temporary folder; ended by ending that command), without token
-    authentication (the tests and the head share no token)."""
+    authentication (the tests and the head share no token). The folder is a
+    short one of its own: Ray's sockets live in it, and a socket's path may not
+    exceed 107 bytes — pytest's basetemp under xdist
+    (``/tmp/pytest-of-root/pytest-1015/popen-gw0/ray0/session_…/sockets/plasma_store``)
+    passes that once its run counter has four digits."""
     port = _free_port()
-    folder = tmp_path_factory.mktemp("ray")
+    folder = Path(tempfile.mkdtemp(prefix="ray-"))
+    log = tmp_path_factory.mktemp("ray-head") / "head.log"
     env = {**os.environ, "RAY_AUTH_MODE": "disabled"}
     ray = Path(sys.executable).with_name("ray")
     head = subprocess.Popen(
@@ -127,12 +134,15 @@ def ray_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
             "--include-dashboard=false",
             f"--temp-dir={folder}",
         ],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+        stdout=log.open("wb"),
+        stderr=subprocess.STDOUT,
         env=env,
     )
     try:
         for _ in range(120):  # a hang guard: the head opens its port within seconds
+            if head.poll() is not None:
+                tail = log.read_text(errors="replace").strip().splitlines()[-1:]
+                pytest.fail(f"the Ray head ended ({head.returncode}): {tail}")
             try:
                 socket.create_connection(("127.0.0.1", port), timeout=1).close()
                 break
@@ -144,6 +154,7 @@ def ray_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     finally:
         head.terminate()
         head.wait(timeout=60)
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def test_a_running_head_is_joined_by_address_and_never_breaks_local_workers(
