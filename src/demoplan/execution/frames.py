@@ -9,6 +9,7 @@ and a caption with the action just done.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +22,26 @@ __all__ = ["FrameWriter"]
 
 FAILED_COLOUR = "#b00020"
 """The caption colour of a frame that shows a failure."""
+
+FRAME_INCHES = (4.5, 4.0)
+"""A frame's size before its caption's extra lines."""
+
+MARGINS = ("left", "bottom", "right", "top", "wspace", "hspace")
+"""A figure's subplot parameters (its layout sets them)."""
+
+
+@dataclass
+class _TopView:
+    """The figure the top-view frames of a run are drawn on, one after the
+    other: its axes, the targets' colours its unmoving parts were drawn in,
+    its margins before any layout, and the ids of the artists of the frame
+    drawn last."""
+
+    figure: Any
+    ax: Any
+    colours: tuple[str, ...]
+    margins: dict[str, float]
+    moving: set[int]
 
 
 class FrameWriter:
@@ -49,6 +70,7 @@ class FrameWriter:
         self.images: list[Any] = []
         self.written: list[Path] = []
         self._limits: tuple[float, float, float, float] | None = None
+        self._top_view: _TopView | None = None  # the figure reused by the top-view frames
 
     def capture(self, observation: Observation, caption: str, image: Any = None) -> None:
         """A frame: the simulator's own picture when it renders one, else a top view."""
@@ -61,13 +83,55 @@ class FrameWriter:
         from demoplan.plotting.captions import grow_for_titles
         from demoplan.plotting.output import save_figure
 
-        figure, ax = plt.subplots(figsize=(4.5, 4.0))
-        self._panel(ax, len(self.frames) - 1)
-        grow_for_titles(figure, [[ax]])
-        tight_layout(figure)
-        save_figure(figure, path, dpi=90)
-        plt.close(figure)
+        if image is None:
+            figure, ax = self._top_view_axes(observation)
+            self._draw_moving(ax, observation, caption, len(self.frames) - 1 in self.failed)
+            grow_for_titles(figure, [[ax]])
+            tight_layout(figure)
+            save_figure(figure, path, dpi=90)
+        else:
+            figure, ax = plt.subplots(figsize=FRAME_INCHES)
+            self._panel(ax, len(self.frames) - 1)
+            grow_for_titles(figure, [[ax]])
+            tight_layout(figure)
+            save_figure(figure, path, dpi=90)
+            plt.close(figure)
         self.written.append(path)
+
+    def _top_view_axes(self, observation: Observation) -> tuple[Any, Any]:
+        """The figure of the top-view frames, its unmoving parts drawn (the
+        landmarks, the targets, the limits, the axes' ticks): made for the first
+        frame, reused by the others as long as the targets keep their colours
+        (the moving parts of the last frame taken away, the figure its first
+        size again). A fresh figure per frame drew the same picture, its ticks
+        and its unmoving parts made again each time."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        from demoplan.plotting.colours import assign_colours, object_colour
+        from demoplan.plotting.labels import remove_leaders
+
+        given = self.scene.given_colours if self.scene is not None else {}
+        assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task
+        colours = tuple(object_colour(name) for name in self.targets)
+        view = self._top_view
+        if view is not None and view.colours == colours:
+            remove_leaders(view.ax)
+            for artist in [*view.ax.get_children()]:
+                if id(artist) in view.moving:
+                    artist.remove()
+            view.moving.clear()
+            view.figure.set_size_inches(*FRAME_INCHES)
+            view.figure.subplots_adjust(**view.margins)  # laid out from where a new one starts
+            return view.figure, view.ax
+        figure = Figure(figsize=FRAME_INCHES)
+        FigureCanvasAgg(figure)
+        ax = figure.subplots()
+        params = figure.subplotpars
+        margins = {side: getattr(params, side) for side in MARGINS}
+        self._draw_still(ax, observation)
+        self._top_view = _TopView(figure, ax, colours, margins, set())
+        return figure, ax
 
     def mark_failure(self, text: str) -> None:
         """The last frame shows a failure (``text``: what was seen): it is kept in
@@ -139,12 +203,19 @@ class FrameWriter:
         self._caption(ax, caption, index in self.failed)
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
-        from demoplan.plotting.colours import assign_colours, object_colour
-        from demoplan.plotting.labels import add_label
-        from demoplan.plotting.patches import draw_landmarks, object_patch
+        from demoplan.plotting.colours import assign_colours
 
         given = self.scene.given_colours if self.scene is not None else {}
         assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task
+        self._draw_still(ax, observation)
+        self._draw_moving(ax, observation, caption, failed)
+
+    def _draw_still(self, ax: Any, observation: Observation) -> None:
+        """What every top view of the run shows alike: the landmarks, the
+        targets as dashed outlines, the run's limits (the colours assigned)."""
+        from demoplan.plotting.colours import object_colour
+        from demoplan.plotting.patches import draw_landmarks, object_patch
+
         if self.scene is not None:
             draw_landmarks(ax, self.scene)
         for name, pose in self.targets.items():
@@ -153,14 +224,6 @@ class FrameWriter:
             patch.set_linestyle("--")
             patch.set_edgecolor(object_colour(name))
             ax.add_patch(patch)
-        for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
-            geometry: ObjectGeometry | None = observation.geometry.get(name)
-            ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
-            add_label(ax, name, (pose.position[0], pose.position[1]), fontsize=6)
-        if observation.held:
-            ax.text(
-                0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
-            )
         if self._limits is None:
             points = [p.position for p in observation.poses.values()] + [
                 p.position for p in self.targets.values()
@@ -179,6 +242,27 @@ class FrameWriter:
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
+
+    def _draw_moving(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
+        """What a top view shows of its moment: the objects where they stand
+        (lowest first), each named, the held one named, the caption."""
+        from demoplan.plotting.colours import object_colour
+        from demoplan.plotting.labels import add_label
+        from demoplan.plotting.patches import object_patch
+
+        before = {id(artist) for artist in ax.get_children()}
+        for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
+            geometry: ObjectGeometry | None = observation.geometry.get(name)
+            ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
+            add_label(ax, name, (pose.position[0], pose.position[1]), fontsize=6)
+        if observation.held:
+            ax.text(
+                0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
+            )
+        if self._top_view is not None and self._top_view.ax is ax:
+            self._top_view.moving.update(
+                id(artist) for artist in ax.get_children() if id(artist) not in before
+            )
         self._caption(ax, caption, failed)
 
     @staticmethod

@@ -32,6 +32,7 @@ __all__ = [
     "literal_texts",
     "place_boxes",
     "place_labels",
+    "remove_leaders",
     "role_label",
 ]
 
@@ -369,6 +370,17 @@ def literal_texts(figure: Figure) -> None:
         if id(text) not in ticks:
             text.set_usetex(False)
             text.set_parse_math(False)
+
+
+def remove_leaders(ax: Axes) -> None:
+    """Take away the leader lines :func:`place_labels` drew for ``ax``'s
+    labels: the axes is as it was before its labels were placed (a figure
+    drawn again with other artists, as a run's frames are)."""
+    for text in list(ax.texts):
+        state = _LABELS.get(text)
+        if state is not None and state.leader is not None:
+            state.leader.remove()
+            state.leader = None
 
 
 def place_labels(figure: Figure) -> list[Annotation]:
