@@ -9,6 +9,7 @@ and a caption with the action just done.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,15 +32,15 @@ MARGINS = ("left", "bottom", "right", "top", "wspace", "hspace")
 
 
 @dataclass
-class _TopView:
-    """The figure the top-view frames of a run are drawn on, one after the
-    other: its axes, the targets' colours its unmoving parts were drawn in,
-    its margins before any layout, and the ids of the artists of the frame
-    drawn last."""
+class _Frame:
+    """The figure a run's frames are drawn on, one after the other: its axes,
+    the look its unmoving parts were drawn for (top view and the targets'
+    colours, or a picture's size), its margins before any layout, and the ids
+    of the artists of the frame drawn last."""
 
     figure: Any
     ax: Any
-    colours: tuple[str, ...]
+    look: tuple[object, ...]
     margins: dict[str, float]
     moving: set[int]
 
@@ -70,67 +71,74 @@ class FrameWriter:
         self.images: list[Any] = []
         self.written: list[Path] = []
         self._limits: tuple[float, float, float, float] | None = None
-        self._top_view: _TopView | None = None  # the figure reused by the top-view frames
+        self._frame: _Frame | None = None  # the figure the frames are drawn on, reused
 
     def capture(self, observation: Observation, caption: str, image: Any = None) -> None:
         """A frame: the simulator's own picture when it renders one, else a top view."""
         self.frames.append((observation, caption))
         self.images.append(image)
         path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
-        import matplotlib.pyplot as plt
-
         from demoplan.plotting.backend import tight_layout
         from demoplan.plotting.captions import grow_for_titles
+        from demoplan.plotting.colours import assign_colours, object_colour
         from demoplan.plotting.output import save_figure
 
+        failed = len(self.frames) - 1 in self.failed
+        look: tuple[object, ...]
         if image is None:
-            figure, ax = self._top_view_axes(observation)
-            self._draw_moving(ax, observation, caption, len(self.frames) - 1 in self.failed)
-            grow_for_titles(figure, [[ax]])
-            tight_layout(figure)
-            save_figure(figure, path, dpi=90)
+            given = self.scene.given_colours if self.scene is not None else {}
+            assign_colours(
+                [*self.targets, *observation.poses], given
+            )  # as every figure of the task
+            look = ("top view", *(object_colour(name) for name in self.targets))
+            figure, ax = self._frame_axes(look, lambda ax: self._draw_still(ax, observation))
+            before = {id(artist) for artist in ax.get_children()}
+            self._draw_moving(ax, observation, caption, failed)
         else:
-            figure, ax = plt.subplots(figsize=FRAME_INCHES)
-            self._panel(ax, len(self.frames) - 1)
-            grow_for_titles(figure, [[ax]])
-            tight_layout(figure)
-            save_figure(figure, path, dpi=90)
-            plt.close(figure)
+            shape = getattr(image, "shape", None)  # an array's; anything else: a new figure
+            look = ("picture", shape, str(image.dtype)) if shape is not None else (object(),)
+            figure, ax = self._frame_axes(look, lambda ax: None)
+            before = {id(artist) for artist in ax.get_children()}
+            self._draw_picture(ax, image, caption, failed)
+        assert self._frame is not None
+        self._frame.moving = {id(a) for a in ax.get_children() if id(a) not in before}
+        grow_for_titles(figure, [[ax]])
+        tight_layout(figure)
+        save_figure(figure, path, dpi=90)
         self.written.append(path)
 
-    def _top_view_axes(self, observation: Observation) -> tuple[Any, Any]:
-        """The figure of the top-view frames, its unmoving parts drawn (the
-        landmarks, the targets, the limits, the axes' ticks): made for the first
-        frame, reused by the others as long as the targets keep their colours
-        (the moving parts of the last frame taken away, the figure its first
-        size again). A fresh figure per frame drew the same picture, its ticks
-        and its unmoving parts made again each time."""
+    def _frame_axes(
+        self, look: tuple[object, ...], draw_still: Callable[[Any], None]
+    ) -> tuple[Any, Any]:
+        """The figure the frames are drawn on, ``draw_still`` (what every frame
+        of this ``look`` shows alike) drawn on it: made for the first frame,
+        reused by the next ones of the same look (the targets' colours, the
+        picture's size), the moving parts of the last frame taken away, its
+        size and margins a new figure's again. A fresh figure per frame drew
+        the same picture, its axes, ticks and unmoving parts made again each
+        time."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        from demoplan.plotting.colours import assign_colours, object_colour
         from demoplan.plotting.labels import remove_leaders
 
-        given = self.scene.given_colours if self.scene is not None else {}
-        assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task
-        colours = tuple(object_colour(name) for name in self.targets)
-        view = self._top_view
-        if view is not None and view.colours == colours:
-            remove_leaders(view.ax)
-            for artist in [*view.ax.get_children()]:
-                if id(artist) in view.moving:
+        frame = self._frame
+        if frame is not None and frame.look == look:
+            remove_leaders(frame.ax)
+            for artist in [*frame.ax.get_children()]:
+                if id(artist) in frame.moving:
                     artist.remove()
-            view.moving.clear()
-            view.figure.set_size_inches(*FRAME_INCHES)
-            view.figure.subplots_adjust(**view.margins)  # laid out from where a new one starts
-            return view.figure, view.ax
+            frame.moving = set()
+            frame.figure.set_size_inches(*FRAME_INCHES)
+            frame.figure.subplots_adjust(**frame.margins)  # laid out from where a new one starts
+            return frame.figure, frame.ax
         figure = Figure(figsize=FRAME_INCHES)
         FigureCanvasAgg(figure)
         ax = figure.subplots()
         params = figure.subplotpars
         margins = {side: getattr(params, side) for side in MARGINS}
-        self._draw_still(ax, observation)
-        self._top_view = _TopView(figure, ax, colours, margins, set())
+        draw_still(ax)
+        self._frame = _Frame(figure, ax, look, margins, set())
         return figure, ax
 
     def mark_failure(self, text: str) -> None:
@@ -197,10 +205,14 @@ class FrameWriter:
         image = self.images[index]
         if image is None:
             self._draw(ax, observation, caption, index in self.failed)
-            return
+        else:
+            self._draw_picture(ax, image, caption, index in self.failed)
+
+    def _draw_picture(self, ax: Any, image: Any, caption: str, failed: bool) -> None:
+        """The simulator's own picture, with its caption."""
         ax.imshow(image)
         ax.set_axis_off()
-        self._caption(ax, caption, index in self.failed)
+        self._caption(ax, caption, failed)
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
         from demoplan.plotting.colours import assign_colours
@@ -250,7 +262,6 @@ class FrameWriter:
         from demoplan.plotting.labels import add_label
         from demoplan.plotting.patches import object_patch
 
-        before = {id(artist) for artist in ax.get_children()}
         for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
             geometry: ObjectGeometry | None = observation.geometry.get(name)
             ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
@@ -258,10 +269,6 @@ class FrameWriter:
         if observation.held:
             ax.text(
                 0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
-            )
-        if self._top_view is not None and self._top_view.ax is ax:
-            self._top_view.moving.update(
-                id(artist) for artist in ax.get_children() if id(artist) not in before
             )
         self._caption(ax, caption, failed)
 
