@@ -9,6 +9,8 @@ and a caption with the action just done.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +23,26 @@ __all__ = ["FrameWriter"]
 
 FAILED_COLOUR = "#b00020"
 """The caption colour of a frame that shows a failure."""
+
+FRAME_INCHES = (4.5, 4.0)
+"""A frame's size before its caption's extra lines."""
+
+MARGINS = ("left", "bottom", "right", "top", "wspace", "hspace")
+"""A figure's subplot parameters (its layout sets them)."""
+
+
+@dataclass
+class _Frame:
+    """The figure a run's frames are drawn on, one after the other: its axes,
+    the look its unmoving parts were drawn for (top view and the targets'
+    colours, or a picture's size), its margins before any layout, and the ids
+    of the artists of the frame drawn last."""
+
+    figure: Any
+    ax: Any
+    look: tuple[object, ...]
+    margins: dict[str, float]
+    moving: set[int]
 
 
 class FrameWriter:
@@ -49,25 +71,75 @@ class FrameWriter:
         self.images: list[Any] = []
         self.written: list[Path] = []
         self._limits: tuple[float, float, float, float] | None = None
+        self._frame: _Frame | None = None  # the figure the frames are drawn on, reused
 
     def capture(self, observation: Observation, caption: str, image: Any = None) -> None:
         """A frame: the simulator's own picture when it renders one, else a top view."""
         self.frames.append((observation, caption))
         self.images.append(image)
         path = self.folder / f"frame-{len(self.frames) - 1:04d}.png"
-        import matplotlib.pyplot as plt
-
         from demoplan.plotting.backend import tight_layout
         from demoplan.plotting.captions import grow_for_titles
+        from demoplan.plotting.colours import assign_colours, object_colour
         from demoplan.plotting.output import save_figure
 
-        figure, ax = plt.subplots(figsize=(4.5, 4.0))
-        self._panel(ax, len(self.frames) - 1)
+        failed = len(self.frames) - 1 in self.failed
+        look: tuple[object, ...]
+        if image is None:
+            given = self.scene.given_colours if self.scene is not None else {}
+            assign_colours(
+                [*self.targets, *observation.poses], given
+            )  # as every figure of the task
+            look = ("top view", *(object_colour(name) for name in self.targets))
+            figure, ax = self._frame_axes(look, lambda ax: self._draw_still(ax, observation))
+            before = {id(artist) for artist in ax.get_children()}
+            self._draw_moving(ax, observation, caption, failed)
+        else:
+            shape = getattr(image, "shape", None)  # an array's; anything else: a new figure
+            look = ("picture", shape, str(image.dtype)) if shape is not None else (object(),)
+            figure, ax = self._frame_axes(look, lambda ax: None)
+            before = {id(artist) for artist in ax.get_children()}
+            self._draw_picture(ax, image, caption, failed)
+        assert self._frame is not None
+        self._frame.moving = {id(a) for a in ax.get_children() if id(a) not in before}
         grow_for_titles(figure, [[ax]])
         tight_layout(figure)
         save_figure(figure, path, dpi=90)
-        plt.close(figure)
         self.written.append(path)
+
+    def _frame_axes(
+        self, look: tuple[object, ...], draw_still: Callable[[Any], None]
+    ) -> tuple[Any, Any]:
+        """The figure the frames are drawn on, ``draw_still`` (what every frame
+        of this ``look`` shows alike) drawn on it: made for the first frame,
+        reused by the next ones of the same look (the targets' colours, the
+        picture's size), the moving parts of the last frame taken away, its
+        size and margins a new figure's again. A fresh figure per frame drew
+        the same picture, its axes, ticks and unmoving parts made again each
+        time."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        from demoplan.plotting.labels import remove_leaders
+
+        frame = self._frame
+        if frame is not None and frame.look == look:
+            remove_leaders(frame.ax)
+            for artist in [*frame.ax.get_children()]:
+                if id(artist) in frame.moving:
+                    artist.remove()
+            frame.moving = set()
+            frame.figure.set_size_inches(*FRAME_INCHES)
+            frame.figure.subplots_adjust(**frame.margins)  # laid out from where a new one starts
+            return frame.figure, frame.ax
+        figure = Figure(figsize=FRAME_INCHES)
+        FigureCanvasAgg(figure)
+        ax = figure.subplots()
+        params = figure.subplotpars
+        margins = {side: getattr(params, side) for side in MARGINS}
+        draw_still(ax)
+        self._frame = _Frame(figure, ax, look, margins, set())
+        return figure, ax
 
     def mark_failure(self, text: str) -> None:
         """The last frame shows a failure (``text``: what was seen): it is kept in
@@ -133,18 +205,29 @@ class FrameWriter:
         image = self.images[index]
         if image is None:
             self._draw(ax, observation, caption, index in self.failed)
-            return
+        else:
+            self._draw_picture(ax, image, caption, index in self.failed)
+
+    def _draw_picture(self, ax: Any, image: Any, caption: str, failed: bool) -> None:
+        """The simulator's own picture, with its caption."""
         ax.imshow(image)
         ax.set_axis_off()
-        self._caption(ax, caption, index in self.failed)
+        self._caption(ax, caption, failed)
 
     def _draw(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
-        from demoplan.plotting.colours import assign_colours, object_colour
-        from demoplan.plotting.labels import add_label
-        from demoplan.plotting.patches import draw_landmarks, object_patch
+        from demoplan.plotting.colours import assign_colours
 
         given = self.scene.given_colours if self.scene is not None else {}
         assign_colours([*self.targets, *observation.poses], given)  # as every figure of the task
+        self._draw_still(ax, observation)
+        self._draw_moving(ax, observation, caption, failed)
+
+    def _draw_still(self, ax: Any, observation: Observation) -> None:
+        """What every top view of the run shows alike: the landmarks, the
+        targets as dashed outlines, the run's limits (the colours assigned)."""
+        from demoplan.plotting.colours import object_colour
+        from demoplan.plotting.patches import draw_landmarks, object_patch
+
         if self.scene is not None:
             draw_landmarks(ax, self.scene)
         for name, pose in self.targets.items():
@@ -153,14 +236,6 @@ class FrameWriter:
             patch.set_linestyle("--")
             patch.set_edgecolor(object_colour(name))
             ax.add_patch(patch)
-        for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
-            geometry: ObjectGeometry | None = observation.geometry.get(name)
-            ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
-            add_label(ax, name, (pose.position[0], pose.position[1]), fontsize=6)
-        if observation.held:
-            ax.text(
-                0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
-            )
         if self._limits is None:
             points = [p.position for p in observation.poses.values()] + [
                 p.position for p in self.targets.values()
@@ -179,6 +254,22 @@ class FrameWriter:
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
+
+    def _draw_moving(self, ax: Any, observation: Observation, caption: str, failed: bool) -> None:
+        """What a top view shows of its moment: the objects where they stand
+        (lowest first), each named, the held one named, the caption."""
+        from demoplan.plotting.colours import object_colour
+        from demoplan.plotting.labels import add_label
+        from demoplan.plotting.patches import object_patch
+
+        for name, pose in sorted(observation.poses.items(), key=lambda item: item[1].position[2]):
+            geometry: ObjectGeometry | None = observation.geometry.get(name)
+            ax.add_patch(object_patch(pose, geometry, object_colour(name), 0.85))
+            add_label(ax, name, (pose.position[0], pose.position[1]), fontsize=6)
+        if observation.held:
+            ax.text(
+                0.02, 0.02, f"in the hand: {observation.held}", transform=ax.transAxes, fontsize=7
+            )
         self._caption(ax, caption, failed)
 
     @staticmethod

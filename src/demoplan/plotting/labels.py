@@ -32,6 +32,7 @@ __all__ = [
     "literal_texts",
     "place_boxes",
     "place_labels",
+    "remove_leaders",
     "role_label",
 ]
 
@@ -356,19 +357,32 @@ def literal_texts(figure: Figure) -> None:
     read from a file may hold ``$`` (``$\\sqrt{$`` would fail to parse,
     ``$x$`` would show an italic x). Tick labels keep matplotlib's own
     notation (a log axis writes ``$10^{2}$``)."""
+    from matplotlib.axis import Axis
     from matplotlib.text import Text
 
-    texts = figure.findobj(Text)  # walking an axis makes its ticks for its tick locations
-    ticks = set()
-    for ax in figure.axes:
-        for axis in (ax.xaxis, ax.yaxis):
-            ticks.add(id(axis.offsetText))
-            for tick in [*axis.majorTicks, *axis.minorTicks]:  # made: not located again
-                ticks.update((id(tick.label1), id(tick.label2)))
-    for text in texts:
-        if id(text) not in ticks:
-            text.set_usetex(False)
-            text.set_parse_math(False)
+    # the figure's artists, walked as figure.findobj(Text) walks them but for
+    # an axis: of its children (its label, its offset text, its ticks) only
+    # the label is taken; the rest is tick labels, and walking the ticks
+    # would make them for the axis' tick locations (a whole axis' ticks made
+    # before the drawing needs them, or for an axis never drawn)
+    stack: list[Any] = [figure]
+    while stack:
+        artist = stack.pop()
+        if isinstance(artist, Text):
+            artist.set_usetex(False)
+            artist.set_parse_math(False)
+        stack.extend([artist.label] if isinstance(artist, Axis) else artist.get_children())
+
+
+def remove_leaders(ax: Axes) -> None:
+    """Take away the leader lines :func:`place_labels` drew for ``ax``'s
+    labels: the axes is as it was before its labels were placed (a figure
+    drawn again with other artists, as a run's frames are)."""
+    for text in list(ax.texts):
+        state = _LABELS.get(text)
+        if state is not None and state.leader is not None:
+            state.leader.remove()
+            state.leader = None
 
 
 def place_labels(figure: Figure) -> list[Annotation]:
