@@ -5,6 +5,7 @@ a task with a ``mug`` reads "the cup reaches" as the mug's reach."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 from pathlib import Path
@@ -15,8 +16,10 @@ from typer.testing import CliRunner
 
 from demoplan.cli import app
 
-pytest.importorskip("mujoco")
-pytest.importorskip("mink")
+pytestmark = pytest.mark.skipif(
+    any(importlib.util.find_spec(name) is None for name in ("mujoco", "mink")),
+    reason="the arm needs MuJoCo and mink (the sim extra)",
+)  # looked up, not imported: MuJoCo imported here, at collection, fixes its GL too early
 
 OBJECTS = {
     "plate": {"shape": "cylinder", "size": [0.16, 0.16, 0.015], "mass": 0.1},
