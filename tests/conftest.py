@@ -13,7 +13,6 @@ and end the run."""
 
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 import tempfile
@@ -22,11 +21,6 @@ from typing import Any
 
 import pytest
 from hypothesis import settings
-
-# MuJoCo reads MUJOCO_GL once, when it is first imported: a test module that imports it
-# (importorskip) before demoplan.execution.physics sets it would leave every later render
-# in that worker without an OpenGL context. Set here, before any test module loads.
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 import demoplan.perception.opencv  # noqa: F401  (cv2 first loaded without leaving "" in LD_LIBRARY_PATH)
 from demoplan.planning.problem import Problem
