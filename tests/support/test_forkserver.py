@@ -53,6 +53,16 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder
 
 
+@pytest.fixture(autouse=True)
+def _a_server_of_this_environment() -> None:
+    """Each test here checks what the server answers, so it starts from a server
+    of the environment the worker has now: one started earlier in this worker
+    may have ended, or the environment have changed since (a library setting a
+    variable at its import), and every command would then start fresh."""
+    if forkserver._server_for(forkserver.command_env()) is None:
+        forkserver.stop_servers()
+
+
 def _env() -> dict[str, str]:
     return forkserver.command_env()
 
