@@ -8,19 +8,28 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from tests.support.studio_browser import Studio, studio_page
+from tests.support.studio_browser import Studio, chromium_browser, studio_page
 
 pytestmark = pytest.mark.slow
 
 
+@pytest.fixture(scope="module")
+def shared_browser() -> Iterator[Any]:
+    """One chromium for the module's pages (a launch is about a second of CPU);
+    each test's page opens in a context of its own on a studio of its own."""
+    with chromium_browser() as launched:
+        yield launched
+
+
 @pytest.fixture
-def page(tmp_path: Path) -> Iterator[Studio]:
+def page(tmp_path: Path, shared_browser: Any) -> Iterator[Studio]:
     workdir = tmp_path / "work"
     workdir.mkdir()
-    with studio_page(workdir, tmp_path) as studio:
+    with studio_page(workdir, tmp_path, shared_browser) as studio:
         studio.tab.get_by_label("Template").select_option("empty")
         studio.settle()
         studio.tab.get_by_text("Your objects").click()
