@@ -501,7 +501,8 @@ def _component_regions(
         others = None if len(faces) == 1 else k.core & (nearest != n)
         alpha[printed(alpha, k.lightness, k.ground_lightness, others)] = 1.0
         if unlit is not None:  # the glint rule filled holes: judged as they were too
-            alpha[printed(unlit, k.lightness, k.ground_lightness, others)] = 1.0
+            changed = on_top & (unlit <= 0.5)
+            alpha[printed(unlit, k.lightness, k.ground_lightness, others, changed)] = 1.0
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
         strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])

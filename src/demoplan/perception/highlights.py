@@ -76,6 +76,7 @@ def printed(
     lightness: np.ndarray,
     table_lightness: float,
     elsewhere: np.ndarray | None = None,
+    touching: np.ndarray | None = None,
 ) -> np.ndarray:
     """The holes in a top's soft mask (``alpha`` over ½) that are something printed
     on it — a letter, dots, dark on a pale top or pale on a dark one, which a top's
@@ -91,7 +92,8 @@ def printed(
     table's lightness). A hole mostly of ``elsewhere`` (the clearly coloured pixels
     of the region's other classes) is their face, not printed on this one: a yellow
     face inside a dark frame printed on it, the frame's blurred colour a class of
-    its own."""
+    its own. With ``touching``, only the holes with a pixel of it are judged (those
+    the glint rule changed: the others were judged as it left them)."""
     mask = alpha > 0.5
     enclosed = fill_holes(mask)
     holes = enclosed & ~mask
@@ -104,6 +106,8 @@ def printed(
         x, y, w, h, _ = (int(value) for value in stats[index])
         rows, cols = slice(y, y + h), slice(x, x + w)
         hole = labels[rows, cols] == index
+        if touching is not None and not touching[rows, cols][hole].any():
+            continue
         ringed = int(fill_holes(hole).sum()) - int(hole.sum())
         if 0 < ringed < hole.sum():
             continue  # a ring round a smaller piece of the top: a marker's code on a card
