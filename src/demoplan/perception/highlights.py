@@ -71,7 +71,13 @@ through a ring of blocks (a black letter on a yellow top is 50 L* or more under
 white paper, a white one on a red top as far over a blue table)."""
 
 
-def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) -> np.ndarray:
+def printed(
+    alpha: np.ndarray,
+    lightness: np.ndarray,
+    table_lightness: float,
+    elsewhere: np.ndarray | None = None,
+    touching: np.ndarray | None = None,
+) -> np.ndarray:
     """The holes in a top's soft mask (``alpha`` over ½) that are something printed
     on it — a letter, dots, dark on a pale top or pale on a dark one, which a top's
     colour does not cover: each hole in one piece round no piece of the mask, or
@@ -83,7 +89,11 @@ def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) ->
     (``lightness``) differs from the table's around the region
     (``table_lightness``) by :data:`PRINTED_CONTRAST` or more (table seen within a
     ring of blocks, or between a block and a pen line drawn up to it, is the
-    table's lightness)."""
+    table's lightness). A hole mostly of ``elsewhere`` (the clearly coloured pixels
+    of the region's other classes) is their face, not printed on this one: a yellow
+    face inside a dark frame printed on it, the frame's blurred colour a class of
+    its own. With ``touching``, only the holes with a pixel of it are judged (those
+    the glint rule changed: the others were judged as it left them)."""
     mask = alpha > 0.5
     enclosed = fill_holes(mask)
     holes = enclosed & ~mask
@@ -96,9 +106,13 @@ def printed(alpha: np.ndarray, lightness: np.ndarray, table_lightness: float) ->
         x, y, w, h, _ = (int(value) for value in stats[index])
         rows, cols = slice(y, y + h), slice(x, x + w)
         hole = labels[rows, cols] == index
+        if touching is not None and not touching[rows, cols][hole].any():
+            continue
         ringed = int(fill_holes(hole).sum()) - int(hole.sum())
         if 0 < ringed < hole.sum():
             continue  # a ring round a smaller piece of the top: a marker's code on a card
+        if elsewhere is not None and 2 * int(elsewhere[rows, cols][hole].sum()) >= hole.sum():
+            continue  # another class's face
         if abs(float(np.median(lightness[rows, cols][hole])) - table_lightness) >= PRINTED_CONTRAST:
             found[rows, cols] |= hole
     return found
