@@ -41,7 +41,7 @@ import numpy as np
 from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
-from demoplan.perception.highlights import glare, highlights, hole_owners, printed
+from demoplan.perception.highlights import fill_glints_and_prints, glare, highlights, hole_owners
 from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.masks import CROSS, TableReach, dilate, distances, erode, fill_holes
 from demoplan.perception.opencv import cv2
@@ -491,18 +491,8 @@ def _component_regions(
         # seam, the rim between it and the neighbour thinner than the core's)
         enclosing = on_class if owners is None else on_class | (owners == n)
         on_top = highlights(k.pixels, k.lightness, (top_face, centre), enclosing, c.min_area)
-        # what is printed on the top (highlights.printed), its holes judged as the
-        # glint rule left them and as they were before it: a letter's body, no
-        # colour, is a hole in the top's coloured pixels that rule fills, and its
-        # blurred edge (the top's colour mixed with black, under half the top's)
-        # is left a broken ring of thin holes, each as light as a grey board
-        unlit = alpha.copy() if (on_top & (alpha <= 0.5)).any() else None
-        alpha[on_top] = 1.0
         others = None if len(faces) == 1 else k.core & (nearest != n)
-        alpha[printed(alpha, k.lightness, k.ground_lightness, others)] = 1.0
-        if unlit is not None:  # the glint rule filled holes: judged as they were too
-            changed = on_top & (unlit <= 0.5)
-            alpha[printed(unlit, k.lightness, k.ground_lightness, others, changed)] = 1.0
+        fill_glints_and_prints(alpha, on_top, k.lightness, k.ground_lightness, others)
         alpha = _without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
         strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])

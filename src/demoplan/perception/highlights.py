@@ -137,3 +137,24 @@ def glare(
     small[0] = False
     found: np.ndarray = small[labels][core]
     return found
+
+
+def fill_glints_and_prints(
+    alpha: np.ndarray,
+    glints: np.ndarray,
+    lightness: np.ndarray,
+    table_lightness: float,
+    elsewhere: np.ndarray | None,
+) -> None:
+    """Fills, in a top's soft mask ``alpha``, the ``glints`` (:func:`highlights`)
+    and what is printed on the top (:func:`printed`), its holes judged as the glint
+    rule left them and, where that rule filled any, as they were before it: a
+    letter's body, no colour, is a hole in the top's coloured pixels that the glint
+    rule fills, and its blurred edge (the top's colour mixed with black, under half
+    the top's) is left a broken ring of thin holes, each as light as a grey board."""
+    unlit = alpha.copy() if (glints & (alpha <= 0.5)).any() else None
+    alpha[glints] = 1.0
+    alpha[printed(alpha, lightness, table_lightness, elsewhere)] = 1.0
+    if unlit is not None:  # judged as they were too, only the holes the rule changed
+        changed = glints & (unlit <= 0.5)
+        alpha[printed(unlit, lightness, table_lightness, elsewhere, changed)] = 1.0
