@@ -103,6 +103,13 @@ def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(evaluation_command, "STORYBOARDS", 1)
 
 
+def _no_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The evaluations from here on draw no storyboard: for a second evaluation
+    of the same runs in a test (one_storyboard's), whose worst run's storyboard
+    would be drawn again, the same way, after its engine's session."""
+    monkeypatch.setattr(evaluation_command, "STORYBOARDS", 0)
+
+
 def _rows_file(folder: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in (folder / ROWS).read_text().splitlines()]
 
@@ -110,12 +117,18 @@ def _rows_file(folder: Path) -> list[dict[str, Any]]:
 @pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))
 @pytest.mark.usefixtures("one_storyboard")
 def test_ray_equals_a_serial_run(
-    experiment: str, model_files: dict[str, Path], ray_session: Any, tmp_path: Path
+    experiment: str,
+    model_files: dict[str, Path],
+    ray_session: Any,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     scenes = RAY_SCENES[experiment]
     options = {"random_scenes": scenes, "seeds": 2, "faults": FAULTS, "sim": "kinematic"}
     chosen = settings_from_options(model_files[experiment], [], clutter=0, **options)  # type: ignore[arg-type]
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
+    assert [b.endswith("storyboard.png") for b in serial.storyboards.values()] == [True]
+    _no_storyboard(monkeypatch)  # the worst run's, drawn once (serial's): its rows are Ray's
     parallel = evaluate(chosen, tmp_path / "ray", engine=RayEngine(max_retries=1))
     assert serial.planned == parallel.planned == 2 * scenes
     for done in (serial, parallel):
@@ -150,7 +163,10 @@ def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> Ru
 
 @pytest.mark.usefixtures("one_storyboard")
 def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
-    model_files: dict[str, Path], ray_session: Any, tmp_path: Path
+    model_files: dict[str, Path],
+    ray_session: Any,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     model = load_model(model_files["exp2"])
     chosen = settings_from_options(
@@ -170,6 +186,7 @@ def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
     assert len(done.rows) == len({r.run_id for r in done.rows}) == done.planned == 8
     killed = {r.run_id: r for r in done.rows}["random-2/seed-5"]
     assert (killed.status, killed.attempts) == ("success", 2)
+    _no_storyboard(monkeypatch)  # the reference's rows only
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
     assert [r.outcome() for r in done.rows] == [r.outcome() for r in serial.rows]
 
@@ -182,7 +199,10 @@ def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
 
 @pytest.mark.usefixtures("one_storyboard")
 def test_a_killed_worker_s_run_is_retried_or_an_error_row(
-    model_files: dict[str, Path], ray_session: Any, tmp_path: Path
+    model_files: dict[str, Path],
+    ray_session: Any,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     model = load_model(model_files["exp2"])
     chosen = settings_from_options(
@@ -194,6 +214,7 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
     retried = {r.run_id: r for r in done.rows}["random-1/seed-2"]
     assert (retried.status, retried.attempts) == ("success", 2)
+    _no_storyboard(monkeypatch)  # the rows of the second evaluation only
     always = partial(_crash_always, "random-2/seed-5", model)
     done = evaluate(chosen, tmp_path / "always", engine=RayEngine(max_retries=1), runner=always)
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
