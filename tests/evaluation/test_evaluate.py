@@ -388,19 +388,22 @@ def test_the_wilson_interval_holds_the_rate(n: int, data: st.DataObject) -> None
         assert low - 1e-12 <= k / n <= high + 1e-12
 
 
-ONE_STORYBOARD = (
-    "import runpy, demoplan.commands.evaluation as command; command.STORYBOARDS = 1; "
+NO_STORYBOARDS = (
+    "import runpy, demoplan.commands.evaluation as command; command.STORYBOARDS = 0; "
     "runpy.run_module('demoplan', run_name='__main__', alter_sys=True)"
 )
-"""``python -m demoplan`` whose evaluations draw the worst run's storyboard only
-(one_storyboard), for a process whose storyboards a test does not read."""
+"""``python -m demoplan`` whose evaluations draw no storyboard, for a process
+whose storyboards a test does not read (each is its run made again frame by
+frame; the step is drawn in process by the tests that use one_storyboard, and
+its five by
+test_the_worst_runs_link_their_storyboard_as_demoplan_run_frames_draws_it)."""
 
 
 def _demoplan(
     *args: str, env: dict[str, str] | None = None, storyboards: bool = True
 ) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, *(["-m", "demoplan"] if storyboards else ["-c", ONE_STORYBOARD]), *args],
+        [sys.executable, *(["-m", "demoplan"] if storyboards else ["-c", NO_STORYBOARDS]), *args],
         capture_output=True,
         text=True,
         env={**os.environ, **(env or {})},
@@ -505,9 +508,18 @@ def finished_evaluation(
 ) -> Path:
     """A finished ``demoplan evaluate`` folder (one random scene), which tests copy."""
     out = tmp_path_factory.mktemp("finished") / "eval"
-    made = invoke(
-        "evaluate", str(model_files["exp2"]), "--random-scenes", "1", "--workers", "0", "--out", out
-    )
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _no_storyboard(monkeypatch)  # the tests read its settings file
+        made = invoke(
+            "evaluate",
+            str(model_files["exp2"]),
+            "--random-scenes",
+            "1",
+            "--workers",
+            "0",
+            "--out",
+            out,
+        )
     assert made.exit_code == 0, made.stderr
     return out
 
@@ -539,9 +551,8 @@ def test_a_settings_file_out_of_bounds_is_refused_on_resume(
     assert expected in resumed.stderr and resumed.stderr.count("\n") == 1
 
 
-@pytest.mark.usefixtures("one_storyboard")
 def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
-    model_files: dict[str, Path], tmp_path: Path
+    model_files: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from demoplan.budget import Budget
     from demoplan.commands.execution import run
@@ -552,6 +563,7 @@ def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
     chosen = settings_from_options(  # 4 runs of seconds each, a drop among their faults
         model_files["exp1"], [], random_scenes=2, seeds=2, faults=FAULTS, sim="kinematic", clutter=1
     )
+    _no_storyboard(monkeypatch)  # the page's rows and repeat commands are read, no storyboard
     done = evaluate(chosen, tmp_path / "eval")
     for row in done.rows:
         report = run(
@@ -644,8 +656,8 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
 
     master, terminal = pty.openpty()
     args = ["--random-scenes", "5", "--seeds", "2", "--workers", "0", "--out", str(tmp_path / "o")]
-    process = subprocess.Popen(  # the worst run's storyboard only (ONE_STORYBOARD)
-        [sys.executable, "-c", ONE_STORYBOARD, "evaluate", str(model_files["exp2"]), *args],
+    process = subprocess.Popen(  # no storyboard (NO_STORYBOARDS)
+        [sys.executable, "-c", NO_STORYBOARDS, "evaluate", str(model_files["exp2"]), *args],
         stdout=subprocess.PIPE,
         stderr=terminal,
         env={**os.environ, "COLUMNS": "120", "TERM": "xterm"},
