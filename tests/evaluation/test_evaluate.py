@@ -103,6 +103,13 @@ def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(evaluation_command, "STORYBOARDS", 1)
 
 
+@pytest.fixture
+def no_storyboards(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An evaluation in process draws no storyboard: for tests of what a
+    storyboard does not touch (a folder refused, which runs a resume makes)."""
+    _no_storyboard(monkeypatch)
+
+
 def _no_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
     """The evaluations from here on draw no storyboard: for a second evaluation
     of the same runs in a test (one_storyboard's), whose worst run's storyboard
@@ -224,7 +231,7 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     assert sum(r.status == "success" for r in done.rows) == 5
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_resume_after_ctrl_c_makes_only_the_missing_runs(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:
@@ -631,7 +638,7 @@ def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
     )
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_out_is_a_new_or_empty_folder(model_files: dict[str, Path], tmp_path: Path) -> None:
     chosen = settings_from_options(
         model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
@@ -679,7 +686,7 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
     assert re.search(r"\d:\d\d:\d\d", text)  # the time left
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_journal_torn_by_a_killed_evaluation_is_resumed(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:
