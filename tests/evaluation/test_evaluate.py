@@ -133,8 +133,11 @@ def test_ray_equals_a_serial_run(
     scenes = RAY_SCENES[experiment]
     options = {"random_scenes": scenes, "seeds": 2, "faults": FAULTS, "sim": "kinematic"}
     chosen = settings_from_options(model_files[experiment], [], clutter=0, **options)  # type: ignore[arg-type]
+    if experiment == "exp1":  # a set-table storyboard is ~5 s of CPU: exp2's is drawn
+        _no_storyboard(monkeypatch)
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
-    assert [b.endswith("storyboard.png") for b in serial.storyboards.values()] == [True]
+    if experiment == "exp2":
+        assert [b.endswith("storyboard.png") for b in serial.storyboards.values()] == [True]
     _no_storyboard(monkeypatch)  # the worst run's, drawn once (serial's): its rows are Ray's
     parallel = evaluate(chosen, tmp_path / "ray", engine=RayEngine(max_retries=1))
     assert serial.planned == parallel.planned == 2 * scenes
