@@ -106,7 +106,8 @@ def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.fixture
 def no_storyboards(monkeypatch: pytest.MonkeyPatch) -> None:
     """An evaluation in process draws no storyboard: for tests of what a
-    storyboard does not touch (a folder refused, which runs a resume makes)."""
+    storyboard does not touch (a folder refused, which runs a resume makes,
+    a killed worker's run made again)."""
     _no_storyboard(monkeypatch)
 
 
@@ -171,12 +172,9 @@ def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> Ru
     return run_one(model, spec)
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
-    model_files: dict[str, Path],
-    ray_session: Any,
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
+    model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
     model = load_model(model_files["exp2"])
     chosen = settings_from_options(
@@ -196,7 +194,6 @@ def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
     assert len(done.rows) == len({r.run_id for r in done.rows}) == done.planned == 8
     killed = {r.run_id: r for r in done.rows}["random-2/seed-5"]
     assert (killed.status, killed.attempts) == ("success", 2)
-    _no_storyboard(monkeypatch)  # the reference's rows only
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
     assert [r.outcome() for r in done.rows] == [r.outcome() for r in serial.rows]
 
@@ -207,12 +204,9 @@ def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
     return run_one(model, spec)
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_killed_worker_s_run_is_retried_or_an_error_row(
-    model_files: dict[str, Path],
-    ray_session: Any,
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
+    model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
     model = load_model(model_files["exp2"])
     chosen = settings_from_options(
@@ -224,7 +218,6 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
     retried = {r.run_id: r for r in done.rows}["random-1/seed-2"]
     assert (retried.status, retried.attempts) == ("success", 2)
-    _no_storyboard(monkeypatch)  # the rows of the second evaluation only
     always = partial(_crash_always, "random-2/seed-5", model)
     done = evaluate(chosen, tmp_path / "always", engine=RayEngine(max_retries=1), runner=always)
     assert len(done.rows) == len({r.run_id for r in done.rows}) == 6
