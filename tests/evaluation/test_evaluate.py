@@ -103,6 +103,21 @@ def one_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(evaluation_command, "STORYBOARDS", 1)
 
 
+@pytest.fixture
+def no_storyboards(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An evaluation in process draws no storyboard: for tests of what a
+    storyboard does not touch (a folder refused, which runs a resume makes,
+    a killed worker's run made again)."""
+    _no_storyboard(monkeypatch)
+
+
+def _no_storyboard(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The evaluations from here on draw no storyboard: for a second evaluation
+    of the same runs in a test (one_storyboard's), whose worst run's storyboard
+    would be drawn again, the same way, after its engine's session."""
+    monkeypatch.setattr(evaluation_command, "STORYBOARDS", 0)
+
+
 def _rows_file(folder: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in (folder / ROWS).read_text().splitlines()]
 
@@ -110,12 +125,21 @@ def _rows_file(folder: Path) -> list[dict[str, Any]]:
 @pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))
 @pytest.mark.usefixtures("one_storyboard")
 def test_ray_equals_a_serial_run(
-    experiment: str, model_files: dict[str, Path], ray_session: Any, tmp_path: Path
+    experiment: str,
+    model_files: dict[str, Path],
+    ray_session: Any,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     scenes = RAY_SCENES[experiment]
     options = {"random_scenes": scenes, "seeds": 2, "faults": FAULTS, "sim": "kinematic"}
     chosen = settings_from_options(model_files[experiment], [], clutter=0, **options)  # type: ignore[arg-type]
+    if experiment == "exp1":  # a set-table storyboard is ~5 s of CPU: exp2's is drawn
+        _no_storyboard(monkeypatch)
     serial = evaluate(chosen, tmp_path / "serial", engine=SerialEngine())
+    if experiment == "exp2":
+        assert [b.endswith("storyboard.png") for b in serial.storyboards.values()] == [True]
+    _no_storyboard(monkeypatch)  # the worst run's, drawn once (serial's): its rows are Ray's
     parallel = evaluate(chosen, tmp_path / "ray", engine=RayEngine(max_retries=1))
     assert serial.planned == parallel.planned == 2 * scenes
     for done in (serial, parallel):
@@ -148,7 +172,7 @@ def _hang_once(folder: Path, victim: str, model: TaskModel, spec: RunSpec) -> Ru
     return run_one(model, spec)
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_worker_killed_from_outside_mid_run_makes_its_run_start_again(
     model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
@@ -180,7 +204,7 @@ def _crash_always(victim: str, model: TaskModel, spec: RunSpec) -> RunRow:
     return run_one(model, spec)
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     model_files: dict[str, Path], ray_session: Any, tmp_path: Path
 ) -> None:
@@ -203,7 +227,7 @@ def test_a_killed_worker_s_run_is_retried_or_an_error_row(
     assert sum(r.status == "success" for r in done.rows) == 5
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_resume_after_ctrl_c_makes_only_the_missing_runs(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:
@@ -367,19 +391,22 @@ def test_the_wilson_interval_holds_the_rate(n: int, data: st.DataObject) -> None
         assert low - 1e-12 <= k / n <= high + 1e-12
 
 
-ONE_STORYBOARD = (
-    "import runpy, demoplan.commands.evaluation as command; command.STORYBOARDS = 1; "
+NO_STORYBOARDS = (
+    "import runpy, demoplan.commands.evaluation as command; command.STORYBOARDS = 0; "
     "runpy.run_module('demoplan', run_name='__main__', alter_sys=True)"
 )
-"""``python -m demoplan`` whose evaluations draw the worst run's storyboard only
-(one_storyboard), for a process whose storyboards a test does not read."""
+"""``python -m demoplan`` whose evaluations draw no storyboard, for a process
+whose storyboards a test does not read (each is its run made again frame by
+frame; the step is drawn in process by the tests that use one_storyboard, and
+its five by
+test_the_worst_runs_link_their_storyboard_as_demoplan_run_frames_draws_it)."""
 
 
 def _demoplan(
     *args: str, env: dict[str, str] | None = None, storyboards: bool = True
 ) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, *(["-m", "demoplan"] if storyboards else ["-c", ONE_STORYBOARD]), *args],
+        [sys.executable, *(["-m", "demoplan"] if storyboards else ["-c", NO_STORYBOARDS]), *args],
         capture_output=True,
         text=True,
         env={**os.environ, **(env or {})},
@@ -484,9 +511,18 @@ def finished_evaluation(
 ) -> Path:
     """A finished ``demoplan evaluate`` folder (one random scene), which tests copy."""
     out = tmp_path_factory.mktemp("finished") / "eval"
-    made = invoke(
-        "evaluate", str(model_files["exp2"]), "--random-scenes", "1", "--workers", "0", "--out", out
-    )
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _no_storyboard(monkeypatch)  # the tests read its settings file
+        made = invoke(
+            "evaluate",
+            str(model_files["exp2"]),
+            "--random-scenes",
+            "1",
+            "--workers",
+            "0",
+            "--out",
+            out,
+        )
     assert made.exit_code == 0, made.stderr
     return out
 
@@ -518,9 +554,8 @@ def test_a_settings_file_out_of_bounds_is_refused_on_resume(
     assert expected in resumed.stderr and resumed.stderr.count("\n") == 1
 
 
-@pytest.mark.usefixtures("one_storyboard")
 def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
-    model_files: dict[str, Path], tmp_path: Path
+    model_files: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from demoplan.budget import Budget
     from demoplan.commands.execution import run
@@ -531,6 +566,7 @@ def test_every_run_repeats_with_demoplan_run_and_the_page_sums_them_up(
     chosen = settings_from_options(  # 4 runs of seconds each, a drop among their faults
         model_files["exp1"], [], random_scenes=2, seeds=2, faults=FAULTS, sim="kinematic", clutter=1
     )
+    _no_storyboard(monkeypatch)  # the page's rows and repeat commands are read, no storyboard
     done = evaluate(chosen, tmp_path / "eval")
     for row in done.rows:
         report = run(
@@ -598,7 +634,7 @@ def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
     )
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_out_is_a_new_or_empty_folder(model_files: dict[str, Path], tmp_path: Path) -> None:
     chosen = settings_from_options(
         model_files["exp2"], [], random_scenes=1, seeds=1, faults="", sim="kinematic", clutter=0
@@ -623,8 +659,8 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
 
     master, terminal = pty.openpty()
     args = ["--random-scenes", "5", "--seeds", "2", "--workers", "0", "--out", str(tmp_path / "o")]
-    process = subprocess.Popen(  # the worst run's storyboard only (ONE_STORYBOARD)
-        [sys.executable, "-c", ONE_STORYBOARD, "evaluate", str(model_files["exp2"]), *args],
+    process = subprocess.Popen(  # no storyboard (NO_STORYBOARDS)
+        [sys.executable, "-c", NO_STORYBOARDS, "evaluate", str(model_files["exp2"]), *args],
         stdout=subprocess.PIPE,
         stderr=terminal,
         env={**os.environ, "COLUMNS": "120", "TERM": "xterm"},
@@ -646,7 +682,7 @@ def test_a_terminal_sees_runs_done_successes_and_the_time_left(
     assert re.search(r"\d:\d\d:\d\d", text)  # the time left
 
 
-@pytest.mark.usefixtures("one_storyboard")
+@pytest.mark.usefixtures("no_storyboards")
 def test_a_journal_torn_by_a_killed_evaluation_is_resumed(
     model_files: dict[str, Path], tmp_path: Path
 ) -> None:

@@ -24,10 +24,9 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
-from demoplan.cli import app
 from tests.hostile.harness import ERROR_PREFIX, EXIT_CODES, HANG_SECONDS, NOT_SEEN, fingerprint
+from tests.support.cli import invoke
 from tests.support.helpers import EXAMPLES
 
 HOSTILE_VALUES: list[Any] = [
@@ -66,9 +65,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(EXAMPLES / "scenes" / "pyramid-fig4.json", folder / "scene.json")
     shutil.copy(EXAMPLES / "planning" / "paper-example.xml", folder / "problem.xml")
     shutil.copy(EXAMPLES / "streams" / "set-table-1.csv", folder / "stream.csv")
-    result = CliRunner().invoke(
-        app, ["learn", str(folder / "demos.json"), "--paper", "-o", str(folder / "model.json")]
-    )
+    result = invoke("learn", folder / "demos.json", "--paper", "-o", folder / "model.json")
     assert result.exit_code == 0, result.output
     return folder
 
@@ -160,7 +157,7 @@ def _run(workspace: Path, name: str, text: str, args: Callable[[Path, Path], lis
         hostile.write_text(text, encoding="utf-8", errors="surrogateescape")
         before = fingerprint(folder)
         started = time.monotonic()
-        result = CliRunner().invoke(app, args(folder, hostile))
+        result = invoke(*args(folder, hostile))
         _check(result, started, hostile, folder, before)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
