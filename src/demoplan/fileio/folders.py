@@ -63,7 +63,6 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
     before the work and again before the swap, and never removed. Leaving
     the block by an exception removes the private folder and the folders
     made for it: ``target`` is as it was."""
-    import shutil
 
     target = Path(target)
     check_output_folder(target)
@@ -73,15 +72,22 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
         _proven_outputs(target)  # refused before any work
     parent = target.parent if str(target.parent) else Path()
     made: list[Path] = []
+    # SIGINT and SIGTERM held back from making the folder until the block that
+    # removes it is entered: a signal between mkdtemp's mkdir and its return left
+    # the private folder behind (a Ctrl-C that landed in the mkdir call, seen once
+    # in test_interrupt_any's run --frames)
+    previous = _hold_signals()
     try:
         made = make_folders(parent)
         building = Path(
             tempfile.mkdtemp(prefix=f".{short_name(target.name)}.", suffix=".tmp", dir=parent)
         )
     except OSError as exc:
-        remove_made_folders(made)
+        _discard(None, made)
+        _restore_signals(previous)
         raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     try:
+        _restore_signals(previous)  # a signal held back is raised here, in the block
         yield building
         _write_manifest(building, writer)
         building.chmod(0o777 & ~current_umask())  # a folder as mkdir makes it, not mkdtemp's 0700
@@ -89,21 +95,46 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
             _proven_outputs(target)  # again: the work took time, a file may have come
         _swap_in(building, target)
     except InputError as exc:  # name the file as the user will know it, not the temporary one
-        shutil.rmtree(building, ignore_errors=True)
-        remove_made_folders(made)
+        _discard(building, made)
         inside = exc.source is not None and exc.source.startswith(str(building))
         if not inside:
             raise
         shown = str(target) + exc.source[len(str(building)) :]  # type: ignore[index]
         raise InputError(exc.message, source=shown, field=exc.field) from None
     except OSError as exc:
-        shutil.rmtree(building, ignore_errors=True)
-        remove_made_folders(made)
+        _discard(building, made)
         raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     except BaseException:
-        shutil.rmtree(building, ignore_errors=True)
-        remove_made_folders(made)
+        _discard(building, made)
         raise
+
+
+def _hold_signals() -> set[int]:
+    """Hold SIGINT and SIGTERM back (this thread); the mask before, to restore."""
+    import signal
+
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+
+
+def _restore_signals(previous: set[int]) -> None:
+    import signal
+
+    signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _discard(building: Path | None, made: list[Path]) -> None:
+    """Remove the private folder and the folders made for it, with SIGINT and
+    SIGTERM held back: a second signal (or the redelivery of the first,
+    demoplan.frontends.interrupts) cannot cut the removal short."""
+    import shutil
+
+    previous = _hold_signals()
+    try:
+        if building is not None:
+            shutil.rmtree(building, ignore_errors=True)
+        remove_made_folders(made)
+    finally:
+        _restore_signals(previous)
 
 
 def _swap_in(building: Path, target: Path) -> None:
@@ -111,12 +142,9 @@ def _swap_in(building: Path, target: Path) -> None:
     new private folder first (put back if the second rename fails); then
     remove what the old folder's manifest proves demoplan wrote. SIGINT and
     SIGTERM are held back throughout. OSError if a rename fails."""
-    import signal
-
     parent = target.parent if str(target.parent) else Path()
     aside: Path | None = None
-    held = {signal.SIGINT, signal.SIGTERM}
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    previous = _hold_signals()
     try:
         if os.path.lexists(target):
             aside = Path(
@@ -142,7 +170,7 @@ def _swap_in(building: Path, target: Path) -> None:
             with suppress(OSError):
                 aside.rmdir()
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        _restore_signals(previous)
 
 
 def _sha256(path: Path) -> str:
