@@ -719,7 +719,7 @@ def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
         if first.all() or not first.any():
             return None
         moved = np.stack([points[first].mean(axis=0), points[~first].mean(axis=0)])
-        if np.allclose(moved, centres):
+        if np.all(np.abs(moved - centres) <= 1e-8 + 1e-5 * np.abs(centres)):  # np.allclose's test
             break
         centres = moved
     return first
