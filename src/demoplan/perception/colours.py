@@ -351,9 +351,9 @@ def _component_crop(
     pixels = c.image[rows, cols].astype(float)
     filled = fill_holes(member)
     ring = dilate(filled, 4) & ~dilate(filled, 1)
-    ground = np.median(pixels[ring], axis=0) if ring.any() else c.table
+    ground = np.median(c.image[rows, cols][ring].T, axis=1) if ring.any() else c.table
     chroma = c.lab[rows, cols, 1:]
-    ground_ab = np.median(chroma[ring], axis=0) if ring.any() else np.zeros(2)
+    ground_ab = np.median(chroma[ring].T, axis=1) if ring.any() else np.zeros(2)
     lightness = c.lab[rows, cols, 0]
     ground_lightness = float(np.median(lightness[ring])) if ring.any() else 50.0
     offsets = pixels - ground
