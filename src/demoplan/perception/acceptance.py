@@ -15,6 +15,7 @@ import numpy as np
 
 from demoplan.perception.colours import SIDE_FACE_GAP
 from demoplan.perception.opencv import cv2
+from demoplan.perception.square_fit import outline_points
 
 __all__ = [
     "CORNER_ROUNDING",
@@ -220,14 +221,7 @@ def free_outline_seen(
     points seen only, one free side of the three seen beside a border is a third
     of them, and two corners where a rounded arm's end turns away from the other
     sides lift it over the least free share.)"""
-    u, v, theta, side = (float(p) for p in params)
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    along = np.linspace(-0.4, 0.4, 9) * side
-    out = side / 2 + 2.0
-    normals = np.array([(c, s), (-c, -s), (-s, c), (s, -c)])
-    nu, nv = normals[:, :1], normals[:, 1:]
-    pu = ((u + out * nu) - along * nv).ravel()
-    pv = ((v + out * nv) + along * nu).ravel()
+    pu, pv = outline_points(params)
     crop_rows, crop_cols = alpha.shape
     row0, col0 = offset
     xs, ys = col0 + pu, row0 + crop_rows - pv  # image x (right), y (down)

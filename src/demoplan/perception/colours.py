@@ -25,8 +25,7 @@ half covered is a half-mix). A cube seen off-centre shows side faces of its
 own colour, darker than its top (lit from above): when a class's lightness
 falls into two modes far apart, the brighter is the top face and α also ramps
 from the darker mode's lightness (0) to the brighter's (1), so the side faces
-drop out and the top face, whose size is the block's side, is what the Hough
-transform sees.
+drop out and the top face, whose size is the block's side, is what the Hough transform sees.
 """
 
 from __future__ import annotations
@@ -273,10 +272,11 @@ def _second_tables(
         area = int(member.sum())
         if area <= TABLE_BLOCKS * largest_block:
             continue
-        chroma = lab[rows, cols, 1:][member]
-        colour = np.median(chroma[:: max(1, chroma.shape[0] // 20000)], axis=0)
-        distance = np.hypot(*(lab[rows, cols, 1:] - colour).transpose(2, 0, 1))
-        near = member & (distance <= threshold)
+        taken = np.divmod(np.flatnonzero(member)[:: max(1, area // 20000)], member.shape[1])
+        colour = np.median(lab[rows, cols][taken][:, 1:], axis=0)  # every (area // 20000)th
+        distance = np.hypot(*(lab[rows, cols, k][member] - colour[k - 1] for k in (1, 2)))
+        near = member.copy()
+        near[member] = distance <= threshold
         if near.sum() < 0.5 * area:  # of many colours: not a table
             continue
         found = True
@@ -286,7 +286,7 @@ def _second_tables(
         if into is not None:
             into[rows, cols] |= near
         crop = distinct[rows, cols]
-        crop[member] = np.minimum(crop[member], distance[member])
+        crop[member] = np.minimum(crop[member], distance)
     return found
 
 
@@ -351,9 +351,9 @@ def _component_crop(
     pixels = c.image[rows, cols].astype(float)
     filled = fill_holes(member)
     ring = dilate(filled, 4) & ~dilate(filled, 1)
-    ground = np.median(pixels[ring], axis=0) if ring.any() else c.table
+    ground = np.median(c.image[rows, cols][ring].T, axis=1) if ring.any() else c.table
     chroma = c.lab[rows, cols, 1:]
-    ground_ab = np.median(chroma[ring], axis=0) if ring.any() else np.zeros(2)
+    ground_ab = np.median(chroma[ring].T, axis=1) if ring.any() else np.zeros(2)
     lightness = c.lab[rows, cols, 0]
     ground_lightness = float(np.median(lightness[ring])) if ring.any() else 50.0
     offsets = pixels - ground
@@ -719,7 +719,7 @@ def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
         if first.all() or not first.any():
             return None
         moved = np.stack([points[first].mean(axis=0), points[~first].mean(axis=0)])
-        if np.allclose(moved, centres):
+        if np.all(np.abs(moved - centres) <= 1e-8 + 1e-5 * np.abs(centres)):  # np.allclose's test
             break
         centres = moved
     return first

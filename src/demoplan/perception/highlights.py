@@ -58,7 +58,10 @@ def highlights(
     faintly tinted, beside a dark or saturated block), holes in those smaller than a
     block (a marker drawn on the block, a glint's white centre)."""
     top_face, top_rgb = top
-    whiter = (lightness > top_face) & np.all(crop >= top_rgb - GLARE_SLACK, axis=-1)
+    floor = top_rgb - GLARE_SLACK
+    whiter = lightness > top_face
+    for channel in range(crop.shape[-1]):  # every channel at least the top's: one at a time
+        whiter &= crop[..., channel] >= floor[channel]
     enclosed = fill_holes(core)
     on_top: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
     return on_top

@@ -28,6 +28,7 @@ __all__ = [
     "least_squares",
     "measures",
     "outline_free",
+    "outline_points",
     "square_alpha",
     "square_window",
 ]
@@ -44,17 +45,26 @@ def square_alpha(params: np.ndarray, uu: np.ndarray, vv: np.ndarray) -> np.ndarr
     return ramp
 
 
-def outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
-    """Share of points just outside the square's outline (2 px out) where the mask
-    is empty: a block has free sides, a square fitted inside a bigger blob has none."""
-    u, v, theta, side = params
+def outline_points(params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The points (u, v) 2 px outside the outline of the square ``params``: nine
+    along each side (from −0.4 to 0.4 of the side about its middle), the four sides
+    one after the other — where :func:`outline_free` and
+    :func:`demoplan.perception.acceptance.free_outline_seen` look for table."""
+    u, v, theta, side = (float(p) for p in params)
     c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
-    t = np.linspace(-0.4, 0.4, 9) * side
+    along = np.linspace(-0.4, 0.4, 9) * side
     out = side / 2 + 2.0
     normals = np.array([(c, s), (-c, -s), (-s, c), (s, -c)])
     nu, nv = normals[:, :1], normals[:, 1:]
-    pu = ((u + out * nu) - t * nv).ravel()
-    pv = ((v + out * nv) + t * nu).ravel()
+    pu = ((u + out * nu) - along * nv).ravel()
+    pv = ((v + out * nv) + along * nu).ravel()
+    return pu, pv
+
+
+def outline_free(alpha: np.ndarray, params: np.ndarray) -> float:
+    """Share of points just outside the square's outline (2 px out) where the mask
+    is empty: a block has free sides, a square fitted inside a bigger blob has none."""
+    pu, pv = outline_points(params)
     height, width = alpha.shape
     cols, rows = pu.astype(np.intp), (height - pv).astype(np.intp)  # truncated, as int()
     within = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
