@@ -25,6 +25,7 @@ none of them reads the paper's tables that the test changes.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import sys
@@ -109,6 +110,12 @@ class ArmRun:
     frames: str
     vision: bool
     result: Any
+    reports: tuple[tuple[str, Any], ...] = ()
+    """Each of its runs of :func:`demoplan.execution.runner.run_task`, in order,
+    with its perception: the filmed run (``"state"``), then with ``vision``
+    the run on what the top camera sees (``"camera"``) — the arm's run
+    reports, which tests/execution/test_arm.py reads instead of running the
+    same runs again."""
 
 
 @dataclass(frozen=True)
@@ -213,6 +220,9 @@ class ExperimentsRun:
         return replay
 
 
+ARM_PACKAGES = ("mujoco", "mink", "dm_control")
+"""What :func:`demoplan.experiments.runs.execute_experiment` needs to run the arm."""
+
 NO_BROWSER = ("DISPLAY", "WAYLAND_DISPLAY", "TERM", "BROWSER")
 """Without these no web browser is found: ``--open`` says to open the page by hand."""
 
@@ -238,8 +248,26 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     execute = experiments.execute_experiment
 
     def recorded(title: str, model: Any, scene: Any, frames: Path, vision: bool) -> Any:
-        result = execute(title, model, scene, frames, vision)
-        run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result)
+        reports: list[tuple[str, Any]] = []
+        if not all(importlib.util.find_spec(m) for m in ARM_PACKAGES):  # no arm runs
+            result = execute(title, model, scene, frames, vision)
+            run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result)
+            return result
+        import demoplan.execution.runner as runner  # as execute_experiment imports it
+
+        run_task = runner.run_task
+
+        def recording_run(*arguments: Any, **keywords: Any) -> Any:
+            report = run_task(*arguments, **keywords)
+            reports.append((keywords.get("perception", "state"), report))
+            return report
+
+        runner.run_task = recording_run  # type: ignore[assignment]
+        try:
+            result = execute(title, model, scene, frames, vision)
+        finally:
+            runner.run_task = run_task  # type: ignore[assignment]
+        run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result, tuple(reports))
         return result
 
     def observe(figure: Any, renderer: Any, path: Path) -> None:
