@@ -74,7 +74,6 @@ LONG_FIRST = (
     "tests/hostile/test_open_audit.py::test_segment_opens_the_stream_only",
     "tests/hostile/test_recordings.py::test_a_recording_pointing_to_another_file",
     "tests/studio/test_studio_run_view.py::test_every_event_shows_the_world",
-    "tests/experiments/test_experiments.py::test_a_mismatch_with_the_paper_is_reported",
     "tests/hostile/test_many_objects.py::test_a_tf_tree_of_thousands_of_frames",
     "tests/hostile/test_open_audit.py::test_plan_opens_the_model_and_the_scene_only",
     "tests/hostile/test_video_encoder.py::test_an_encoder_that_fails",

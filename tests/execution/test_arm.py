@@ -30,6 +30,7 @@ from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
+from tests.support.shared_experiments import ExperimentsRun
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 pytest.importorskip("mujoco", reason="MuJoCo is not installed (pip install -e '.[sim]')")
@@ -76,20 +77,36 @@ def _assert_done_on_target(report: RunReport) -> None:
         assert abs(turn) < 5.0, (name, turn)
 
 
-def test_experiment_2_on_the_arm(blocks: TaskModel) -> None:
-    """§V.B executed by the arm: demonstration 2's goal, 4 moves, the pyramid stands."""
-    report = run_task(blocks, prepare(blocks, load_scene(BLOCKS)), sim="arm", settings=UNTIMED)
+def _shared_runs(
+    experiments_run: ExperimentsRun, title: str, model: TaskModel, scene: Path
+) -> dict[str, RunReport]:
+    """The arm's run reports of the session's ``demoplan experiments`` run
+    (tests/support/shared_experiments.py) for ``title``, by perception — after
+    checking the run was given this file's very model and scene. They are the
+    runs these tests made themselves before, on the command's default planning
+    budget instead of none (``UNTIMED``): a machine too loaded to plan these
+    scenes within it fails the run's own checks (tests/experiments) as well."""
+    assert title in experiments_run.arm_runs, experiments_run.stderr[-3000:]
+    arm = experiments_run.arm_runs[title]
+    assert (arm.model, arm.scene) == (model, load_scene(scene)), title
+    return dict(arm.reports)
+
+
+def test_experiment_2_on_the_arm(blocks: TaskModel, experiments_run: ExperimentsRun) -> None:
+    """§V.B executed by the arm: demonstration 2's goal, 4 moves, the pyramid
+    stands (the shared experiments run's filmed run)."""
+    report = _shared_runs(experiments_run, "Experiment 2 (blocks)", blocks, BLOCKS)["state"]
     _assert_done_on_target(report)
     assert report.goal == 1 and report.first_plan_length == 8
     assert report.final.poses["red"].position[2] == pytest.approx(0.04, abs=0.003)
 
 
-def test_experiment_1_on_the_arm(set_table: TaskModel) -> None:
+def test_experiment_1_on_the_arm(set_table: TaskModel, experiments_run: ExperimentsRun) -> None:
     """The paper's set-table task: 5–8 mm cutlery, a 3 mm napkin on the plate —
-    what the floating hand's pads cannot lift, the suction cup takes."""
-    report = run_task(
-        set_table, prepare(set_table, load_scene(SET_TABLE)), sim="arm", settings=UNTIMED
-    )
+    what the floating hand's pads cannot lift, the suction cup takes (the
+    shared experiments run's filmed run)."""
+    runs = _shared_runs(experiments_run, "Experiment 1 (set table)", set_table, SET_TABLE)
+    report = runs["state"]
     _assert_done_on_target(report)
     assert report.final.poses["napkin"].position[2] > 0.01  # on the plate
 
@@ -103,15 +120,12 @@ def test_kitting_on_the_arm(kit: TaskModel) -> None:
     assert math.dist(manual.position[:2], pcb.position[:2]) < 0.01
 
 
-def test_experiment_2_on_vision_with_the_arm(blocks: TaskModel) -> None:
-    """The arm acting on what the top camera sees (Hough-transform blocks)."""
-    report = run_task(
-        blocks,
-        prepare(blocks, load_scene(BLOCKS)),
-        sim="arm",
-        perception="camera",
-        settings=UNTIMED,
-    )
+def test_experiment_2_on_vision_with_the_arm(
+    blocks: TaskModel, experiments_run: ExperimentsRun
+) -> None:
+    """The arm acting on what the top camera sees (Hough-transform blocks; the
+    shared experiments run's run on vision)."""
+    report = _shared_runs(experiments_run, "Experiment 2 (blocks)", blocks, BLOCKS)["camera"]
     assert report.success, (report.reason, report.failures)
     assert report.collisions == ()
 

@@ -15,7 +15,7 @@ from demoplan.experiments import run_experiments
 from demoplan.fileio import MANIFEST
 from demoplan.learning.modelfile import load_model
 from tests.support.browser import CHROMIUM_ARGS, chromium
-from tests.support.shared_experiments import ExperimentsRun
+from tests.support.shared_experiments import RECORDED_STAGES, ExperimentsRun
 
 
 @pytest.fixture(scope="module")
@@ -104,8 +104,12 @@ def test_a_mismatch_with_the_paper_is_reported(
     changed[0] = "A-B-C-D-E-G-F"
     monkeypatch.setattr(experiments, "PAPER_TABLE_III", tuple(changed))
     # The arm (most of the minutes) is given the very same model and scene as in
-    # the session's run, which the replay checks: its runs are that run's.
+    # the session's run, which the replay checks: its runs are that run's. So are
+    # the segmentation and the fresh draws (called with the same arguments; they
+    # read neither table the test changes): learning and planning run again.
     monkeypatch.setattr(experiments, "execute_experiment", experiments_run.replaying_the_arm())
+    for stage in RECORDED_STAGES:
+        monkeypatch.setattr(experiments, stage, experiments_run.replaying(stage))
     result = run_experiments(tmp_path)
     failed = [c for c in result.checks if not c.ok]
     assert [(c.name, c.paper, c.ours) for c in failed] == [

@@ -16,14 +16,16 @@ The run is audited too (tests/hostile/test_open_audit.py): the job runs under
 report before it starts (:func:`plant_the_users_file`), and the run records
 what its harness itself writes and the environment it was given.
 
-The arm's runs are recorded with their inputs (:class:`ArmRun`): a test that
-runs the experiments again with a changed paper table (the mismatch test) may
-replay them where the arm is given the very same model and scene — its result
-does not depend on the paper's tables.
+The arm's runs are recorded with their inputs (:class:`ArmRun`), and so are
+the segmentation of the recorded stream and the precision study (:class:`Recorded`):
+a test that runs the experiments again with a changed paper table (the
+mismatch test) may replay them where they are given the very same inputs —
+none of them reads the paper's tables that the test changes.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import sys
@@ -108,6 +110,35 @@ class ArmRun:
     frames: str
     vision: bool
     result: Any
+    reports: tuple[tuple[str, Any], ...] = ()
+    """Each of its runs of :func:`demoplan.execution.runner.run_task`, in order,
+    with its perception: the filmed run (``"state"``), then with ``vision``
+    the run on what the top camera sees (``"camera"``) — the arm's run
+    reports, which tests/execution/test_arm.py reads instead of running the
+    same runs again."""
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """One call of a stage without the arm in the shared run —
+    :func:`demoplan.experiments.runs.segment_experiment` or
+    :func:`~demoplan.experiments.runs.precision_study`: its arguments after the
+    report folder, and what it returned (its files are in the report folder,
+    by the names the result gives)."""
+
+    arguments: tuple[Any, ...]
+    keywords: dict[str, Any]
+    result: Any
+
+    def files(self) -> tuple[str, ...]:
+        """The files the stage wrote into the report folder."""
+        names = (getattr(self.result, "stream_file", None), self.result.figure)
+        return tuple(name for name in names if name is not None)
+
+
+RECORDED_STAGES = ("segment_experiment", "precision_study")
+"""The stages of ``demoplan.experiments`` besides the arm that the shared run
+records and :meth:`ExperimentsRun.replaying` gives back."""
 
 
 USERS_FILE = "experiment1-notes.txt"
@@ -140,6 +171,7 @@ class ExperimentsRun:
     environment: dict[str, str] = field(default_factory=dict)
     figures: dict[str, list[AxesRecord]] = field(default_factory=dict)
     arm_runs: dict[str, ArmRun] = field(default_factory=dict)
+    stages: dict[str, Recorded] = field(default_factory=dict)
 
     @property
     def users_file(self) -> Path:
@@ -172,6 +204,24 @@ class ExperimentsRun:
 
         return replay
 
+    def replaying(self, stage: str) -> Callable[..., Any]:
+        """A stand-in for the stage ``stage`` (one of :data:`RECORDED_STAGES`)
+        that gives this run's result, after checking it was called with the
+        very same arguments (and copies the files it wrote into the folder
+        it is given)."""
+        recorded = self.stages[stage]
+
+        def replay(out: Path, *arguments: Any, **keywords: Any) -> Any:
+            assert (arguments, keywords) == (recorded.arguments, recorded.keywords), stage
+            for name in recorded.files():
+                shutil.copy(self.report / name, Path(out) / name)
+            return recorded.result
+
+        return replay
+
+
+ARM_PACKAGES = ("mujoco", "mink", "dm_control")
+"""What :func:`demoplan.experiments.runs.execute_experiment` needs to run the arm."""
 
 NO_BROWSER = ("DISPLAY", "WAYLAND_DISPLAY", "TERM", "BROWSER")
 """Without these no web browser is found: ``--open`` says to open the page by hand."""
@@ -198,8 +248,26 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
     execute = experiments.execute_experiment
 
     def recorded(title: str, model: Any, scene: Any, frames: Path, vision: bool) -> Any:
-        result = execute(title, model, scene, frames, vision)
-        run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result)
+        reports: list[tuple[str, Any]] = []
+        if not all(importlib.util.find_spec(m) for m in ARM_PACKAGES):  # no arm runs
+            result = execute(title, model, scene, frames, vision)
+            run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result)
+            return result
+        import demoplan.execution.runner as runner  # as execute_experiment imports it
+
+        run_task = runner.run_task
+
+        def recording_run(*arguments: Any, **keywords: Any) -> Any:
+            report = run_task(*arguments, **keywords)
+            reports.append((keywords.get("perception", "state"), report))
+            return report
+
+        runner.run_task = recording_run  # type: ignore[assignment]
+        try:
+            result = execute(title, model, scene, frames, vision)
+        finally:
+            runner.run_task = run_task  # type: ignore[assignment]
+        run.arm_runs[title] = ArmRun(model, scene, frames.name, vision, result, tuple(reports))
         return result
 
     def observe(figure: Any, renderer: Any, path: Path) -> None:
@@ -207,7 +275,19 @@ def run_experiments_once(folder: Path) -> ExperimentsRun:
         inside = Path(*(folder / path).relative_to(folder).parts[1:])  # folder: the cwd
         run.figures[inside.as_posix()] = axes_records(figure, renderer)
 
+    def recording(stage: str) -> Callable[..., Any]:
+        call = getattr(experiments, stage)
+
+        def record(out: Path, *arguments: Any, **keywords: Any) -> Any:
+            result = call(out, *arguments, **keywords)
+            run.stages[stage] = Recorded(arguments, keywords, result)
+            return result
+
+        return record
+
     experiments.execute_experiment = recorded  # type: ignore[assignment]
+    for stage in RECORDED_STAGES:
+        setattr(experiments, stage, recording(stage))
     sys.argv = ["demoplan", "experiments", "--out", "report", "--open"]
     with (
         (folder / CAPTURED[0]).open("wb") as out,
