@@ -64,7 +64,7 @@ from demoplan.perception.side_faces import (
     table_shadows,
 )
 from demoplan.perception.square_fit import fit_square, square_alpha, square_window
-from demoplan.perception.stack_sides import lower_side_faces
+from demoplan.perception.stack_sides import lower_side_faces, upturned_faces
 
 __all__ = ["DetectedBlock", "PerceptionSettings", "Rejection", "detect_blocks", "named_by_colour"]
 
@@ -456,6 +456,9 @@ def _without_side_faces(
     dropped = {index: ("shadow", why) for index, why in shadows.items()}
     dropped |= {i: ("side face", why) for i, why in side_faces.items() if i not in dropped}
     kept = [index for index in range(len(found)) if index not in dropped]
+    upturned = upturned_faces(measures, [in_image[index] for index in kept])
+    dropped |= {kept[i]: ("side face", why) for i, why in upturned.items()}
+    kept = [index for index in kept if index not in dropped]
     lower = lower_side_faces(measures, [in_image[index] for index in kept], held)
     dropped |= {kept[i]: ("side face", why) for i, why in lower.items()}
     if parts is not None:

@@ -37,7 +37,15 @@ from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.opencv import cv2
 from demoplan.perception.side_faces import MAX_HUE_TURN, ImageSquare
 
-__all__ = ["Nadir", "SideStrip", "lower_side_faces", "nadir_of", "side_strip", "standing_tops"]
+__all__ = [
+    "Nadir",
+    "SideStrip",
+    "lower_side_faces",
+    "nadir_of",
+    "side_strip",
+    "standing_tops",
+    "upturned_faces",
+]
 
 _RAYS = (-0.25, 0.0, 0.25)
 """Parallel rays (shares of the top's side across the way to the nadir) whose median
@@ -363,7 +371,12 @@ def _strips_and_nadir(
     """Each of ``squares``' own side strip (:func:`side_strip`, the insides of the
     others lit as a neighbour's top of its hue left out: :func:`_neighbour_top`)
     and the nadir they point at (:func:`nadir_of`). A lower cube's side face,
-    darker, stays in: the fit of one may take in the top's own strip."""
+    darker, stays in: the fit of one may take in the top's own strip. The last
+    answer is kept (for the same ``lab`` array and squares): the detector asks
+    :func:`upturned_faces` and then :func:`lower_side_faces` of the same squares."""
+    key = tuple(squares)
+    if _LAST and _LAST[0][0] is lab and _LAST[0][1] == key:
+        return list(_LAST[0][2]), _LAST[0][3]
     strips = [
         side_strip(
             lab,
@@ -377,7 +390,16 @@ def _strips_and_nadir(
         )
         for own, (sq, colour) in enumerate(zip(squares, colours, strict=True))
     ]
-    return strips, nadir_of(squares, strips)
+    nadir = nadir_of(squares, strips)
+    _LAST[:] = [(lab, key, tuple(strips), nadir)]
+    return strips, nadir
+
+
+_LAST: list[
+    tuple[np.ndarray, tuple[ImageSquare, ...], tuple[SideStrip | None, ...], Nadir | None]
+] = []
+"""The last :func:`_strips_and_nadir` answer: its ``lab`` array (held, so that it is
+the same array, not one at its address), squares, strips and nadir."""
 
 
 def standing_tops(
@@ -400,6 +422,62 @@ def standing_tops(
         for index, (square, strip) in enumerate(zip(squares, strips, strict=True))
         if _stands(square, strip, nadir)
     )
+
+
+WIDEST_VIEW = 90.0
+"""Degrees: the widest field of view across an image's longer side taken for its
+camera (a phone's or a depth camera's is 60–75°): its focal length is at least
+half that side, the least for which :func:`upturned_faces` bounds a side strip."""
+
+
+def upturned_faces(
+    image: np.ndarray | ImageMeasures, squares: Sequence[ImageSquare]
+) -> dict[int, str]:
+    """The indices of ``squares`` (accepted in ``image``) whose own side strip no
+    standing cube shows there, each with why: a face turned up on something lying
+    on the table (a row of cubes tipped over shows each cube's lit face and a deep,
+    darker strip beside it). A standing cube's top of side ``a`` px, ``r`` px from
+    the nadir, shows its side face as a strip towards the nadir ``a · r / f`` px
+    deep (``f``: the focal length in px; the strip is the cube's height seen from
+    the camera's height, as the top's side is its width); ``f`` is at least half
+    the image's longer side (:data:`WIDEST_VIEW`). A strip that points away from
+    the nadir (over 90°) and runs deeper than ``r / f`` of the side, and
+    :data:`MIN_STRIP` more (the fit's and the outline's slack), but less than
+    0.71 of the side and :data:`MIN_STRIP` more (one face of a cube lying on an
+    edge is under 0.71 of the side across; a deeper strip is more than one face
+    — a neighbour's top of its hue darker), is not a top's.
+    Judged only where three strips or more meet at no nadir (:func:`nadir_of`):
+    the nadir is then taken at the image's centre, the camera straight down, as
+    the scale from the cube size takes it. (A lone cube's strip says nothing of
+    the camera: a phone held at an angle shows a side face half a side deep on
+    any side of a top; where a tilted camera's cubes show strips, they meet.)
+    (Where they meet, rows of touching cubes may have put it hundreds of px off
+    — their strips are the next cube's top — and a row's middle cube, a strip
+    deep, would be taken for a face turned up.)"""
+    if not squares:
+        return {}
+    lab = measures_of(image).smooth_lab
+    colours = [_top_colour(lab, square) for square in squares]
+    strips, found = _strips_and_nadir(lab, squares, colours)
+    if found is not None or sum(strip is not None for strip in strips) < 3:
+        return {}  # the strips' own nadir (lower_side_faces judges by it), or too few
+    height, width = lab.shape[:2]
+    nadir = Nadir(width / 2, height / 2)
+    focal = max(height, width) / 2 / math.tan(math.radians(WIDEST_VIEW / 2))
+    upturned: dict[int, str] = {}
+    for index, (square, strip) in enumerate(zip(squares, strips, strict=True)):
+        if strip is None:
+            continue
+        distance = math.hypot(nadir.x - square[0], nadir.y - square[1])
+        deepest = distance / focal + MIN_STRIP
+        miss = _miss(np.array(square[:2]), _unit(strip.direction), np.array(nadir))
+        if miss > 90.0 and deepest * square[3] < strip.length < (0.71 + MIN_STRIP) * square[3]:
+            upturned[index] = (
+                f"a face turned up, no top: its darker strip {strip.length:.0f} px deep "
+                f"points away from the camera's nadir at ({nadir.x:.0f}, {nadir.y:.0f}), "
+                f"where a standing cube's shows {deepest * square[3]:.0f} px at most"
+            )
+    return upturned
 
 
 def _neighbour_top(top: tuple[float, float, float], face: tuple[float, float, float]) -> bool:
