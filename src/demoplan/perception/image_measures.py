@@ -13,7 +13,9 @@ code that stage ran before, and kept — the same values, a full-image conversio
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -27,6 +29,10 @@ class ImageMeasures:
 
     def __init__(self, image: np.ndarray) -> None:
         self.image = image
+        self.answers: dict[Hashable, Any] = {}
+        """What a stage worked out about this photograph that another stage asks
+        again, by a key that starts with the stage's own name: made once per
+        photograph, gone with it."""
 
     @cached_property
     def lab8(self) -> np.ndarray:

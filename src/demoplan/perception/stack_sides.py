@@ -336,7 +336,7 @@ def lower_side_faces(
     measures = measures_of(image)
     lab = measures.smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
-    strips, nadir = _strips_and_nadir(lab, squares, colours)
+    strips, nadir = _strips_and_nadir(measures, squares, colours)
     if nadir is None:
         return {}
     held = foreground(measures.image) if held is None else held
@@ -366,18 +366,22 @@ def lower_side_faces(
 
 
 def _strips_and_nadir(
-    lab: np.ndarray, squares: Sequence[ImageSquare], colours: Sequence[tuple[float, float, float]]
-) -> tuple[list[SideStrip | None], Nadir | None]:
+    measures: ImageMeasures,
+    squares: Sequence[ImageSquare],
+    colours: Sequence[tuple[float, float, float]],
+) -> tuple[tuple[SideStrip | None, ...], Nadir | None]:
     """Each of ``squares``' own side strip (:func:`side_strip`, the insides of the
     others lit as a neighbour's top of its hue left out: :func:`_neighbour_top`)
     and the nadir they point at (:func:`nadir_of`). A lower cube's side face,
-    darker, stays in: the fit of one may take in the top's own strip. The last
-    answer is kept (for the same ``lab`` array and squares): the detector asks
+    darker, stays in: the fit of one may take in the top's own strip. Made once
+    per photograph and squares (``measures.answers``): the detector asks
     :func:`upturned_faces` and then :func:`lower_side_faces` of the same squares."""
-    key = tuple(squares)
-    if _LAST and _LAST[0][0] is lab and _LAST[0][1] == key:
-        return list(_LAST[0][2]), _LAST[0][3]
-    strips = [
+    key = ("stack_sides.strips", tuple(squares))
+    known: tuple[tuple[SideStrip | None, ...], Nadir | None] | None = measures.answers.get(key)
+    if known is not None:
+        return known
+    lab = measures.smooth_lab
+    strips = tuple(
         side_strip(
             lab,
             sq,
@@ -389,17 +393,10 @@ def _strips_and_nadir(
             ],
         )
         for own, (sq, colour) in enumerate(zip(squares, colours, strict=True))
-    ]
-    nadir = nadir_of(squares, strips)
-    _LAST[:] = [(lab, key, tuple(strips), nadir)]
-    return strips, nadir
-
-
-_LAST: list[
-    tuple[np.ndarray, tuple[ImageSquare, ...], tuple[SideStrip | None, ...], Nadir | None]
-] = []
-"""The last :func:`_strips_and_nadir` answer: its ``lab`` array (held, so that it is
-the same array, not one at its address), squares, strips and nadir."""
+    )
+    known = strips, nadir_of(squares, strips)
+    measures.answers[key] = known
+    return known
 
 
 def standing_tops(
@@ -412,9 +409,9 @@ def standing_tops(
     (:mod:`demoplan.perception.image_measures`)."""
     if len(squares) < 3:
         return frozenset()
-    lab = measures_of(image).smooth_lab
-    colours = [_top_colour(lab, square) for square in squares]
-    strips, nadir = _strips_and_nadir(lab, squares, colours)
+    measures = measures_of(image)
+    colours = [_top_colour(measures.smooth_lab, square) for square in squares]
+    strips, nadir = _strips_and_nadir(measures, squares, colours)
     if nadir is None:
         return frozenset()
     return frozenset(
@@ -456,9 +453,10 @@ def upturned_faces(
     deep, would be taken for a face turned up.)"""
     if not squares:
         return {}
-    lab = measures_of(image).smooth_lab
+    measures = measures_of(image)
+    lab = measures.smooth_lab
     colours = [_top_colour(lab, square) for square in squares]
-    strips, found = _strips_and_nadir(lab, squares, colours)
+    strips, found = _strips_and_nadir(measures, squares, colours)
     if found is not None or sum(strip is not None for strip in strips) < 3:
         return {}  # the strips' own nadir (lower_side_faces judges by it), or too few
     height, width = lab.shape[:2]
