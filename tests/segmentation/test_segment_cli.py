@@ -89,17 +89,38 @@ def test_segment_bad_stream_exits_1(tmp_path: Path) -> None:
 # --------------------------------------------------------------------------- TF trees
 
 
-@pytest.fixture(scope="module")
-def robot_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A demonstration's objects under a static table on a moving odom (map → odom → table)."""
-    world = stream_from_demonstration(SET_TABLE[0], rate_hz=30, noise_m=0.002, start_time=10.0)
+def _robot_bag(folder: Path, seed: int) -> Path:
+    """A demonstration's objects under a static table on a moving odom (map → odom →
+    table), its 2 mm noise drawn from ``seed``."""
+    world = stream_from_demonstration(
+        SET_TABLE[0], rate_hz=30, noise_m=0.002, start_time=10.0, rng=seed
+    )
     relative, parents, static = robot_tree(world)
-    path = tmp_path_factory.mktemp("robot") / "bag"
+    path = folder / "bag"
     write_bag(relative, path, storage="mcap", parents=parents, static=static)
     return path
 
 
-def test_segment_and_learn_a_robot_bag(robot_bag: Path, tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def robot_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The robot bag of one fixed draw: a run of the suite passes or fails on the
+    code, not on the noise (unseeded, it failed one of three fresh-clone runs: the
+    napkin's step missed, as with seed 27's noise below)."""
+    return _robot_bag(tmp_path_factory.mktemp("robot"), seed=0)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="found by a fresh-clone run whose bag drew its noise unseeded: with seed 27's "
+    "2 mm noise the last step (the napkin) is not segmented (1 of seeds 0-29); cause not "
+    "found yet",
+)
+def test_a_robot_bag_of_seed_27_is_segmented_whole(tmp_path: Path) -> None:
+    _segmented_as_the_demonstration(_robot_bag(tmp_path, seed=27), tmp_path)
+
+
+def _segmented_as_the_demonstration(bag: Path, tmp_path: Path) -> None:
     geometry = tmp_path / "objects.yaml"
     geometry.write_text(
         "units: {length: cm}\nobjects:\n"
@@ -109,7 +130,7 @@ def test_segment_and_learn_a_robot_bag(robot_bag: Path, tmp_path: Path) -> None:
         + "  plate: {shape: cylinder, size: [26, 26, 2]}\n"
     )
     result = invoke(
-        "segment", robot_bag, "-o", tmp_path / "demo.json", "--frame", "map",
+        "segment", bag, "-o", tmp_path / "demo.json", "--frame", "map",
         "--objects", "plate,knife,fork,spoon,glass,food,napkin", "--objects-file", geometry,
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
@@ -118,6 +139,9 @@ def test_segment_and_learn_a_robot_bag(robot_bag: Path, tmp_path: Path) -> None:
     assert dict(demo.objects)["plate"].shape == "cylinder"
     assert dict(demo.objects)["plate"].size == pytest.approx((0.26, 0.26, 0.02))
 
+
+def test_segment_and_learn_a_robot_bag(robot_bag: Path, tmp_path: Path) -> None:
+    _segmented_as_the_demonstration(robot_bag, tmp_path)
     result = invoke("learn", robot_bag, "--objects", "[!b]*", "-o", tmp_path / "m.json", "--json")
     assert result.exit_code == 0, result.stderr
 
