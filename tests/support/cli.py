@@ -9,27 +9,16 @@ and the same command serves every call, as one process's click command would."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import typer.main
 import typer.testing
 from typer.testing import CliRunner, Result
 
 from demoplan.cli import app
+from tests.support.forkserver import converting_once
 
-_convert = typer.main.get_command
-_built: list[Any] = []
-
-
-def _get_command(typer_instance: typer.Typer) -> Any:
-    if typer_instance is not app:
-        return _convert(typer_instance)
-    if not _built:
-        _built.append(_convert(app))
-    return _built[0]
-
-
-typer.testing._get_command = _get_command  # what CliRunner.invoke converts with
+# what CliRunner.invoke converts with
+typer.testing._get_command = converting_once(app, typer.main.get_command)
 
 
 def invoke(*args: str | Path | float) -> Result:

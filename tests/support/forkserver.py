@@ -52,9 +52,14 @@ import struct
 import subprocess
 import sys
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any, TypeVar
+
+if TYPE_CHECKING:
+    import typer
+
+Command = TypeVar("Command")
 
 DEMOPLAN = Path(sys.executable).parent / "demoplan"  # the installed console script
 PRELOAD = (
@@ -456,13 +461,28 @@ def _build_command_line() -> None:
 
     from demoplan.cli.application import app
 
-    built = typer.main.get_command(app)
-    convert = typer.main.get_command
-
-    def get_command(instance: Any) -> Any:
-        return built if instance is app else convert(instance)
-
+    get_command = converting_once(app, typer.main.get_command)
+    get_command(app)  # built here, before any fork
     typer.main.get_command = get_command  # what Typer.__call__ calls
+
+
+def converting_once(
+    app: typer.Typer, convert: Callable[[typer.Typer], Command]
+) -> Callable[[typer.Typer], Command]:
+    """``convert`` (typer's conversion of an application into its click command)
+    made once for ``app`` and that command returned on every later call; any other
+    application converted as before. The fork server and the tests' in-process runner
+    (tests/support/cli.py) both put it in typer's place."""
+    built: list[Command] = []
+
+    def get_command(instance: typer.Typer) -> Command:
+        if instance is not app:
+            return convert(instance)
+        if not built:
+            built.append(convert(app))
+        return built[0]
+
+    return get_command
 
 
 def _child(argv: list[bytes], cwd: str, env: dict[str, str], fds: list[int]) -> None:
