@@ -222,6 +222,9 @@ def test_an_unreachable_scene_is_refused_in_one_line(blocks_file: Path, tmp_path
     assert result.exit_code == 1, result.output
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and "out of the arm's reach" in lines[0] and "red" in lines[0]
+    # the first place's reason, not one per place: the others counted
+    assert lines[0].count("out of the arm's reach") == 1, lines
+    assert "; so are 6 more of the plan's 7 places (green, red, wood)" in lines[0], lines
 
 
 def test_an_object_in_the_arms_base_is_refused(blocks_file: Path, tmp_path: Path) -> None:
@@ -247,6 +250,28 @@ def test_a_too_heavy_object_is_refused(kit: TaskModel, tmp_path: Path) -> None:
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and "cable weighs 6.28 kg; the suction cup" in lines[0], lines
     assert "the fingers (40 N) do not lift it either" in lines[0], lines
+
+
+def test_a_tray_too_far_from_the_parts_is_refused_in_one_reason(
+    kit: TaskModel, tmp_path: Path
+) -> None:
+    """The kit's tray 1.35 m beside the parts: no base of the arm reaches both
+    the parts and their slots. One line, exit 1, with the one thing to change
+    (the two places farthest apart and how far apart they are) instead of a
+    reason per place out of reach, each saying the same."""
+    scene = json.loads(KIT.read_text())
+    scene["landmarks"]["tray"]["position"] = [1.8, 0.05, 0.0]
+    path = tmp_path / "far-tray.json"
+    path.write_text(json.dumps(scene))
+    model = tmp_path / "kit.json"
+    save_model(kit, model)
+    result = _run_cli(model, path)
+    assert result.exit_code == 1, result.output
+    (line,) = result.output.strip().splitlines()
+    assert line.startswith(f"demoplan: error: {path}: objects: cannot be carried out"), line
+    assert " m apart; the suction cup reaches 0.22–0.60 m from the arm's base" in line, line
+    assert line.count("out of the arm's reach") == 0 and line.count(" at (") == 2, line
+    assert "places are out of its reach): bring them closer together" in line, line
 
 
 def test_an_object_without_a_flat_top_goes_by_the_fingers_or_is_refused(blocks: TaskModel) -> None:

@@ -242,6 +242,10 @@ class _FramedWorld:
         check = getattr(self._world, "why_not_reachable", None)
         return None if check is None else check(obj, pose)
 
+    def why_not_reachable_together(self, places: Any) -> str | None:
+        check = getattr(self._world, "why_not_reachable_together", None)
+        return None if check is None else check(places)
+
     @property
     def injected(self) -> Any:  # the simulated world's faults, for the report
         return getattr(self._world, "injected", ())
