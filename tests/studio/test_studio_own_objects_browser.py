@@ -410,3 +410,80 @@ def test_a_scene_loaded_for_planning_is_planned_with_its_own_sizes_and_masses(
     page.button("Load scene").click()
     page.settle()
     assert tab.locator('#table [data-landmark="caddy"] rect').get_attribute("fill") == "#27ae60"
+
+
+def desk(mat: tuple[float, float, float], things: dict[str, tuple[float, float]]) -> dict[str, Any]:
+    """An objects file: a desk mat turned ``mat`` (x, y, yaw) with a book, a
+    mug and a phone standing on it, each at its (x, y) in the mat's frame."""
+    sizes = {"book": [0.17, 0.12, 0.025], "mug": [0.08, 0.08, 0.1], "phone": [0.14, 0.07, 0.008]}
+    objects = {
+        name: {
+            "shape": "cylinder" if name == "mug" else "box",
+            "size": sizes[name],
+            "position": [*in_world(mat, local), 0.004],
+            "yaw": mat[2],
+        }
+        for name, local in things.items()
+    }
+    deskmat = {"shape": "box", "size": [0.36, 0.26, 0.004], "position": [mat[0], mat[1], 0.0]}
+    deskmat |= {"yaw": mat[2], "colour": "#16a085"}
+    return {"format": "demoplan/objects-1", "objects": objects, "landmarks": {"deskmat": deskmat}}
+
+
+def label_covers(page: Studio, landmark: str) -> list[str]:
+    """The things whose drawing the landmark's name overlaps on the page (and
+    ``"off the table"`` where it leaves the table's picture)."""
+    covered: list[str] = page.tab.evaluate(
+        """(name) => {
+          const label = [...document.querySelectorAll("#table .landmark-labels text")]
+            .find((t) => t.textContent === name);
+          const l = label.getBoundingClientRect();
+          const page = document.querySelector("#table").getBoundingClientRect();
+          const over = (a, b) => a.left < b.right && b.left < a.right && a.top < b.bottom
+            && b.top < a.bottom;
+          const things = [...document.querySelectorAll("#table [data-object]")]
+            .filter((thing) => over(l, thing.getBoundingClientRect()))
+            .map((thing) => thing.dataset.object);
+          const inside = l.left >= page.left && l.right <= page.right && l.top >= page.top
+            && l.bottom <= page.bottom;
+          return inside ? things : [...things, "off the table"];
+        }""",
+        landmark,
+    )
+    return covered
+
+
+def test_a_landmarks_name_covers_none_of_the_things_on_it(
+    lunch: tuple[Studio, Path],
+) -> None:
+    """The desk mat's name where its top edge is free (inside it, as always),
+    else beside the mat: never over a thing standing on it — the mug under the
+    spot inside its top edge, and the end of a desk planned with the mat turned
+    110° (the mug and the phone there: the name was drawn across both)."""
+    page, workdir = lunch
+    tab = page.tab
+    free = desk((0.40, 0.30, 0.0), {"book": (-0.08, -0.04), "mug": (0.10, -0.06)})
+    under = desk((0.40, 0.30, 0.0), {"book": (-0.08, -0.04), "mug": (0.0, 0.09)})
+    turned = desk(
+        (0.30, 0.38, 110.0), {"book": (-0.08, 0.04), "mug": (0.08, -0.08), "phone": (0.11, 0.05)}
+    )
+    for name, document in (("free", free), ("under", under), ("turned", turned)):
+        write_json(workdir / f"{name}.json", document)
+    tab.reload()
+    tab.wait_for_selector('body[data-ready="true"]')
+    for name in ("free", "under", "turned"):
+        page.load(f"{name}.json")
+        assert page.alert() == ""
+        assert tab.locator("#table [data-object]").count() == len(
+            json.loads((workdir / f"{name}.json").read_text())["objects"]
+        )
+        assert label_covers(page, "deskmat") == [], name
+        label = tab.locator("#table .landmark-labels text")
+        mat = tab.locator('#table [data-landmark="deskmat"]').bounding_box()
+        box = label.bounding_box()
+        assert mat is not None and box is not None
+        if name == "free":  # inside the mat's top edge, where it always was
+            assert mat["y"] < box["y"] < mat["y"] + mat["height"] / 4, (mat, box)
+        # near the mat: within a label's height of its outline
+        assert mat["x"] - box["width"] - 12 <= box["x"] <= mat["x"] + mat["width"] + 12
+        assert mat["y"] - 30 <= box["y"] <= mat["y"] + mat["height"] + 30
