@@ -29,7 +29,7 @@ from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE, UNTIMED, paper_model
 from tests.support.shared_experiments import ExperimentsRun
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -405,3 +405,32 @@ def test_an_obstacle_on_a_thin_parts_target_is_cleared_and_the_wrist_recovers() 
     )
     assert [f.kind for f in report.injected] == ["block"]
     _assert_done_on_target(report)
+
+
+def test_the_end_frame_shows_the_last_thing_put_down_not_the_arm_over_it(
+    blocks: TaskModel, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--frames``: the arm turns round behind its base before the end frame
+    is rendered (it stood over red, the last block put down, its wrist hiding
+    it); the report is the run's as it ended — no motion refused, no contact."""
+    from demoplan.execution import runner
+
+    pictured: list[tuple[bool, float]] = []  # per frame: the arm parked, the cup from red
+    render = runner._picture
+
+    def picture(world: Any) -> Any:
+        red = world.observe().poses.get("red")  # none while held
+        if red is not None:
+            pictured.append((world.parked, math.dist(world._cup()[0][:2], red.position[:2])))
+        return render(world)
+
+    monkeypatch.setattr(runner, "_picture", picture)
+    scene = load_scene(ONE_MOVE_SCENE)
+    report = run_task(
+        blocks, prepare(blocks, scene), sim="arm", settings=UNTIMED, frames=tmp_path / "frames"
+    )
+    _assert_done_on_target(report)
+    assert report.motions_refused == () and report.collisions == ()
+    parked, away = pictured[-1]  # the end frame's
+    assert parked and away > 0.3, pictured
+    assert (tmp_path / "frames" / "storyboard.png").is_file()
