@@ -487,3 +487,46 @@ def test_a_landmarks_name_covers_none_of_the_things_on_it(
         # near the mat: within a label's height of its outline
         assert mat["x"] - box["width"] - 12 <= box["x"] <= mat["x"] + mat["width"] + 12
         assert mat["y"] - 30 <= box["y"] <= mat["y"] + mat["height"] + 30
+
+
+def test_a_thing_made_when_the_row_is_full_is_put_on_the_table_clear_of_the_others(
+    lunch: tuple[Studio, Path],
+) -> None:
+    """Things made in the page go in a row along the table's front edge; a desk
+    mat made after five desk things no longer fits in that row, and it is put
+    on the table where it touches nothing (it hung 28 cm over the table's right
+    edge, half out of the picture)."""
+    from demoplan.studio.layouts import EMPTY_TABLE
+
+    page, _ = lunch
+    tab = page.tab
+    tab.get_by_label("Template").select_option("empty")
+    page.settle()
+    tab.get_by_text("Your objects").click()
+    desk_things = [
+        ("charger", "object", "box", (8, 8, 1), "#34495e", "0.1"),
+        ("phone", "object", "box", (14, 7, 0.8), "#2c3e50", "0.18"),
+        ("book", "object", "box", (17, 12, 2.5), "#c0392b", "0.3"),
+        ("pen_holder", "object", "box", (7, 5, 10), "#8e44ad", "0.15"),
+        ("mug", "object", "cylinder", (8, 8, 10), "#ecf0f1", "0.3"),
+        ("deskmat", "landmark", "box", (36, 26, 0.4), "#16a085", ""),
+    ]
+    for thing in desk_things:
+        add_thing(page, *thing)
+    (x0, y0), (width, depth) = EMPTY_TABLE["origin"], EMPTY_TABLE["size"]
+    boxes = {}
+    for name, kind, _, size, _, _ in desk_things:
+        if kind == "landmark":
+            x, y, yaw = landmark_pose(page, name)
+        else:
+            x, y, _, yaw = page.pose(name)
+        assert yaw == 0
+        hx, hy = size[0] / 200, size[1] / 200
+        boxes[name] = (x - hx, y - hy, x + hx, y + hy)
+    for name, (left, bottom, right, top) in boxes.items():
+        assert x0 <= left and right <= x0 + width, (name, boxes[name])
+        assert y0 <= bottom and top <= y0 + depth, (name, boxes[name])
+    mat = boxes.pop("deskmat")
+    for name, box in boxes.items():
+        apart = box[2] <= mat[0] or box[0] >= mat[2] or box[3] <= mat[1] or box[1] >= mat[3]
+        assert apart, (name, box, mat)
