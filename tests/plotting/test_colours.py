@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 from typing import Any
 
 import matplotlib
@@ -17,7 +18,16 @@ from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
 from demoplan.documents.demonstrations import load_demonstrations
-from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, rgba
+from demoplan.plotting.colours import (
+    CYCLE,
+    INK_LUMINANCE,
+    NAMED,
+    assign_colours,
+    ink,
+    luminance,
+    object_colour,
+    rgba,
+)
 from demoplan.plotting.figures import plot_demonstration
 from tests.support.helpers import EXAMPLES
 
@@ -98,3 +108,48 @@ def test_numbered_instances_of_a_colour_get_that_colour() -> None:
     assigned = assign_colours(["red", "red2", "plate#1", "plate#2"])
     assert assigned["red"] == assigned["red2"] == NAMED["red"]
     assert assigned["plate#1"] != assigned["plate#2"]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 0xFFFFFF))
+def test_ink_is_the_colour_itself_or_the_same_hue_dark_enough_to_see_on_white(code: int) -> None:
+    colour = f"#{code:06x}"
+    drawn = ink(colour)
+    assert luminance(drawn) <= INK_LUMINANCE + 1e-9
+    if luminance(colour) <= INK_LUMINANCE:
+        assert drawn == colour
+    else:  # each channel scaled alike: the same hue, darker
+        before = [int(colour[k : k + 2], 16) for k in (1, 3, 5)]
+        after = [int(drawn[k : k + 2], 16) for k in (1, 3, 5)]
+        scale = max(after) / max(before)
+        assert all(abs(b * scale - a) <= 1.0 for b, a in zip(before, after, strict=True))
+        assert luminance(drawn) > INK_LUMINANCE - 0.02  # no darker than it must be
+
+
+def test_a_white_mugs_moves_are_drawn_dark_enough_to_see_from_above_and_from_the_side() -> None:
+    """A new user's desk (tests/data/desk) with a mug the user made white
+    (#ecf0f1): its move's arrow and number in the plan figure and the side
+    view were white on white. Every arrow and number of a move is now at most
+    INK_LUMINANCE; the mug's own patches keep its colour."""
+    import demoplan
+    from demoplan.plotting.figures import plot_scene_plan
+    from demoplan.plotting.side_view import plot_scene_side
+
+    desk = Path(__file__).resolve().parents[1] / "data" / "desk"
+    model = demoplan.learn([desk / f"desk-{k}.json" for k in (1, 2, 3)])
+    result = demoplan.plan(model, desk / "new-desk.json")
+    chosen = result.chosen
+    _, (top, side) = plt.subplots(1, 2)
+    plot_scene_plan(result.scene, chosen.problem, chosen.plan, top)
+    plot_scene_side(result.scene, chosen.problem, chosen.plan, side)
+    for ax in (top, side):
+        arrows = [text.arrow_patch for text in ax.texts if getattr(text, "arrow_patch", None)]
+        numbers = [text for text in ax.texts if text.get_text().isdigit()]
+        assert len(arrows) == 5 and len(numbers) == 5
+        drawn = [to_hex(a.get_edgecolor()) for a in arrows] + [
+            to_hex(t.get_color()) for t in numbers
+        ]
+        assert max(luminance(colour) for colour in drawn) <= INK_LUMINANCE, drawn
+        assert ink("#ecf0f1") in drawn  # the mug's, darkened
+    assert "#ecf0f1" in {to_hex(patch.get_facecolor()) for patch in top.patches}
+    plt.close("all")

@@ -22,7 +22,7 @@ from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, TaskModel, demonstrated_colours
 from demoplan.plotting.backend import tight_layout, use_agg
 from demoplan.plotting.captions import fit_title
-from demoplan.plotting.colours import assign_colours, object_colour
+from demoplan.plotting.colours import assign_colours, ink, object_colour
 from demoplan.plotting.labels import (
     BoxPlacement,
     Leader,
@@ -120,7 +120,7 @@ def plot_demonstration(
                 "",
                 (x, y),
                 start.position[:2],
-                arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
+                arrowprops={"arrowstyle": "->", "color": ink(colour), "lw": 0.8, "alpha": 0.6},
             )
         ax.add_patch(object_patch(step.pose, geometry.get(step.object), colour, 0.85))
         state = f"{states[number - 1]} " if number <= len(states) else ""
@@ -375,7 +375,7 @@ def plot_scene_plan(
             xytext=table_xy(start),
             arrowprops={
                 "arrowstyle": "->",
-                "color": colours[name],
+                "color": ink(colours[name]),
                 "lw": 1.2,
                 "connectionstyle": f"arc3,rad={rad}",
             },
@@ -385,7 +385,7 @@ def plot_scene_plan(
             str(number),
             _arc_middle(table_xy(start), table_xy(end), rad),
             fontsize=7,
-            color=colours[name],
+            color=ink(colours[name]),
             fontweight="bold",
         )
     for spot in spots:
