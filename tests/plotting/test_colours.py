@@ -152,4 +152,46 @@ def test_a_white_mugs_moves_are_drawn_dark_enough_to_see_from_above_and_from_the
         assert max(luminance(colour) for colour in drawn) <= INK_LUMINANCE, drawn
         assert ink("#ecf0f1") in drawn  # the mug's, darkened
     assert "#ecf0f1" in {to_hex(patch.get_facecolor()) for patch in top.patches}
+    # where there is no plan: the targets as dashed outlines, the mug's too
+    from demoplan.plotting.figures import plot_scene_targets
+
+    ax = plot_scene_targets(result.scene, chosen.problem, "no plan")
+    dashed = [p for p in ax.patches if p.get_linestyle() == "--" and p.get_fill() is False]
+    outlines = [to_hex(p.get_edgecolor()) for p in dashed if to_hex(p.get_edgecolor()) != "#999999"]
+    assert ink("#ecf0f1") in outlines, outlines
+    assert max(luminance(colour) for colour in outlines) <= INK_LUMINANCE, outlines
+    plt.close("all")
+
+
+def test_a_white_mugs_target_outline_is_drawn_dark_enough_to_see_in_run_frames(
+    tmp_path: Path,
+) -> None:
+    """``run --frames`` (kinematic) draws each target as a dashed outline in its
+    object's colour: the white mug's was white on white. Its outline now at
+    most INK_LUMINANCE; the mug itself still in its own colour."""
+    from demoplan.execution.frames import FrameWriter
+    from demoplan.execution.world import Observation
+    from demoplan.model import ObjectGeometry, Pose
+    from demoplan.scenes.scene import scene_from_document
+
+    mug = ObjectGeometry("cylinder", (0.08, 0.08, 0.1))
+    scene = scene_from_document(
+        {
+            "format": "demoplan/scene-1",
+            "objects": {
+                "mug": {"position": [0.6, 0.1, 0.0], "size": [0.08, 0.08, 0.1]}
+                | {"shape": "cylinder", "colour": "#ecf0f1"}
+            },
+        },
+        "desk.json",
+    )
+    writer = FrameWriter(tmp_path, {"mug": Pose((0.3, 0.4, 0.0))}, scene)
+    standing = Observation({"mug": Pose((0.6, 0.1, 0.0))}, None, {"mug": mug})
+    writer.capture(standing, "start")
+    assert writer._frame is not None
+    patches = writer._frame.ax.patches
+    dashed = [p for p in patches if p.get_linestyle() == "--"]
+    assert len(dashed) == 1
+    assert luminance(to_hex(dashed[0].get_edgecolor())) <= INK_LUMINANCE
+    assert "#ecf0f1" in {to_hex(p.get_facecolor()) for p in patches}
     plt.close("all")

@@ -442,7 +442,7 @@ def plot_scene_targets(
             for name in spot.objects:
                 outline = object_patch(pose_of(spot), geometry.get(name), colours[name], 1.0)
                 outline.set_fill(False)
-                outline.set_edgecolor(colours[name])
+                outline.set_edgecolor(ink(colours[name]))
                 outline.set_linestyle("--")
                 outline.set_linewidth(1.2)
                 ax.add_patch(outline)

@@ -86,7 +86,7 @@ def plot_scene_side(
         if last[name] != k:  # put down on its way, moved again later
             outline = side_patch(target, geometry[name], colours[name], 1.0)
             outline.set_fill(False)
-            outline.set_edgecolor(colours[name])
+            outline.set_edgecolor(ink(colours[name]))
             outline.set_linestyle("--")
             outline.set_zorder(1.5)  # over the solid shapes it may stand behind
             ax.add_patch(outline)
