@@ -620,7 +620,8 @@ def _out_of_reach(
         return [f"{apart} ({count}): bring them closer together"]
     (label, why), *more = out
     of = ", ".join(sorted({other.split()[0] for other, _ in more}))
-    return [f"{label} {why}; so are {len(more)} more of the plan's {len(places)} places ({of})"]
+    verb = "is" if len(more) == 1 else "are"
+    return [f"{label} {why}; so {verb} {len(more)} more of the plan's {len(places)} places ({of})"]
 
 
 def _xy(pose: Pose) -> str:
