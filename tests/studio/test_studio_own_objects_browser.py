@@ -530,3 +530,48 @@ def test_a_thing_made_when_the_row_is_full_is_put_on_the_table_clear_of_the_othe
     for name, box in boxes.items():
         apart = box[2] <= mat[0] or box[0] >= mat[2] or box[3] <= mat[1] or box[1] >= mat[3]
         assert apart, (name, box, mat)
+
+
+def test_a_constraint_edge_passes_through_no_other_state(lunch: tuple[Studio, Path]) -> None:
+    """The desk's constraints (tests/data/desk): A<B, B<E, C<E, D<E drawn in
+    layers put C, B and E on one row, and C → E was a straight line through B,
+    read as 'the book before the phone'. An edge that would pass through
+    another state bends round it."""
+    import shutil
+
+    page, workdir = lunch
+    desk = Path(__file__).resolve().parents[1] / "data" / "desk"
+    for k in (1, 2, 3):
+        shutil.copyfile(desk / f"desk-{k}.json", workdir / f"desk-{k}.json")
+    tab = page.tab
+    tab.reload()
+    tab.wait_for_selector('body[data-ready="true"]')
+    page.view("2 · Learn")
+    page.button("Learn").click()
+    page.settle()
+    assert page.alert() == ""
+    crossings: list[str] = tab.evaluate(
+        """() => {
+          const centre = new Map([...document.querySelectorAll("#graph [data-state]")].map((g) => {
+            const [x, y] = g.getAttribute("transform").match(/-?[0-9.]+/g).map(Number);
+            return [g.dataset.state, [x, y]];
+          }));
+          const found = [];
+          for (const edge of document.querySelectorAll("#graph [data-edge]")) {
+            const [a, b] = edge.dataset.edge.split(" ");
+            const length = edge.getTotalLength();
+            for (let k = 0; k <= 50; k += 1) {
+              const p = edge.getPointAtLength((k / 50) * length);
+              for (const [n, [x, y]] of centre) {
+                if (n !== a && n !== b && Math.hypot(p.x - x, p.y - y) < 15) {
+                  found.push(`${a} → ${b} through ${n}`);
+                }
+              }
+            }
+          }
+          return [...new Set(found)];
+        }"""
+    )
+    edges = tab.locator("#graph [data-edge]").evaluate_all("els => els.map(e => e.dataset.edge)")
+    assert sorted(edges) == ["A B", "B E", "C E", "D E"]
+    assert crossings == []
