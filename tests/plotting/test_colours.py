@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -195,3 +196,39 @@ def test_a_white_mugs_target_outline_is_drawn_dark_enough_to_see_in_run_frames(
     assert luminance(to_hex(dashed[0].get_edgecolor())) <= INK_LUMINANCE
     assert "#ecf0f1" in {to_hex(p.get_facecolor()) for p in patches}
     plt.close("all")
+
+
+def test_a_constraint_arrow_passes_through_no_other_state_in_the_figure() -> None:
+    """The desk's constraints A<B, B<E, C<E, D<E: C, B and E stand on one row
+    of the layered graph (show --plot, the report), and C → E was drawn
+    straight through B, read as 'the book before the phone'. Each arrow now
+    keeps off every state but its own two."""
+    import demoplan
+    from demoplan.plotting.figures import plot_constraints
+
+    desk = Path(__file__).resolve().parents[1] / "data" / "desk"
+    model = demoplan.learn([desk / f"desk-{k}.json" for k in (1, 2, 3)])
+    figure, ax = plt.subplots(figsize=(6, 3))
+    plot_constraints(model, 0, ax)
+    figure.canvas.draw()
+    centres = {
+        text.get_text(): ax.transData.transform(text.xy)
+        for text in ax.texts
+        if text.get_bbox_patch() is not None
+    }
+    assert sorted(centres) == ["A", "B", "C", "D", "E"]
+    crossed = []
+    for text in ax.texts:
+        arrow = getattr(text, "arrow_patch", None)
+        if arrow is None:
+            continue
+        tail, head = ax.transData.transform(text.xyann), ax.transData.transform(text.xy)
+        start = min(centres, key=lambda n: float(np.hypot(*(centres[n] - tail))))
+        end = min(centres, key=lambda n: float(np.hypot(*(centres[n] - head))))
+        path = arrow.get_path().interpolated(40).vertices  # display coordinates
+        for name, centre in centres.items():
+            near = min(float(np.hypot(*(p - centre))) for p in path) < 11  # within its circle
+            if near and name not in (start, end):
+                crossed.append(f"{start} -> {end} through {name}")
+    assert crossed == []
+    plt.close(figure)

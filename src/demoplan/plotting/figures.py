@@ -14,6 +14,7 @@ none runs off its axes (:func:`place_boxes` is the placement itself).
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -198,6 +199,7 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
                 "color": "0.35",
                 "shrinkA": 11,
                 "shrinkB": 11,
+                "connectionstyle": f"arc3,rad={_bend(position, x, y)}",
             },
         )
     for label, (px, py) in position.items():
@@ -225,6 +227,24 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
     ax.axis("off")
     ax.set_title(constraint_caption(order), fontsize=8)
     return ax
+
+
+def _bend(position: Mapping[str, tuple[float, float]], start: str, end: str) -> float:
+    """How much the edge ``start`` → ``end`` of :func:`plot_constraints` bends
+    (``arc3``'s rad): 0, a straight line, unless it would pass through another
+    state's circle (C → E straight through B reads as C → B → E); then bent
+    round it, away from it."""
+    (x1, y1), (x2, y2) = position[start], position[end]
+    dx, dy = x2 - x1, y2 - y1
+    length = math.hypot(dx, dy) or 1.0
+    for label, (x, y) in position.items():
+        if label in (start, end):
+            continue
+        t = min(1.0, max(0.0, ((x - x1) * dx + (y - y1) * dy) / length**2))
+        if math.hypot(x1 + t * dx - x, y1 + t * dy - y) < 0.3:
+            left = dx * (y - y1) - dy * (x - x1) >= 0  # the state left of the way, or on it
+            return 0.35 if left else -0.35  # arc3 bends a positive rad to the right
+    return 0.0
 
 
 def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
