@@ -536,7 +536,8 @@ def test_a_constraint_edge_passes_through_no_other_state(lunch: tuple[Studio, Pa
     """The desk's constraints (tests/data/desk): A<B, B<E, C<E, D<E drawn in
     layers put C, B and E on one row, and C → E was a straight line through B,
     read as 'the book before the phone'. An edge that would pass through
-    another state bends round it."""
+    another state bends round it. On the table, no two states' letters
+    overlap (stacked targets' letters side by side)."""
     import shutil
 
     page, workdir = lunch
@@ -546,6 +547,7 @@ def test_a_constraint_edge_passes_through_no_other_state(lunch: tuple[Studio, Pa
     tab = page.tab
     tab.reload()
     tab.wait_for_selector('body[data-ready="true"]')
+    page.load("desk-1.json")  # the desk on the table, for its targets
     page.view("2 · Learn")
     page.button("Learn").click()
     page.settle()
@@ -575,3 +577,16 @@ def test_a_constraint_edge_passes_through_no_other_state(lunch: tuple[Studio, Pa
     edges = tab.locator("#graph [data-edge]").evaluate_all("els => els.map(e => e.dataset.edge)")
     assert sorted(edges) == ["A B", "B E", "C E", "D E"]
     assert crossings == []
+    # the states' letters on the table: the charger's A and the phone's B
+    # (on the charger) were written on one spot, one over the other
+    letters = tab.locator("#table .outline-label").evaluate_all(
+        """els => els.map((e) => {
+          const r = e.getBoundingClientRect();
+          return [e.textContent, r.left, r.top, r.right, r.bottom];
+        })"""
+    )
+    assert sorted(letter[0] for letter in letters) == ["A", "B", "C", "D", "E"]
+    for k, (first, *a) in enumerate(letters):
+        for second, *b in letters[k + 1 :]:
+            apart = a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1]
+            assert apart, (first, second, letters)

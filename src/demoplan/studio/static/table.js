@@ -205,6 +205,7 @@ export class TableView {
       }
     }
     const outlines = el("g", { class: "outlines" }, this.svg);
+    const lettered = []; // where each state's letter went: stacked targets' side by side
     for (const target of options.outlines || []) {
       const geometry = layout.objects[target.object];
       if (!geometry) continue;
@@ -213,7 +214,11 @@ export class TableView {
       g.dataset.x = String(round6(target.position[0]));
       g.dataset.y = String(round6(target.position[1]));
       g.dataset.yaw = String(round6(target.yaw || 0));
-      const label = el("text", { x: this.px(target.position[0]) + 4, y: this.py(target.position[1]) - 4, class: "outline-label" }, outlines);
+      let x = this.px(target.position[0]) + 4;
+      const y = this.py(target.position[1]) - 4;
+      while (lettered.some(([lx, ly]) => Math.abs(lx - x) < 9 && Math.abs(ly - y) < 11)) x += 10;
+      lettered.push([x, y]);
+      const label = el("text", { x, y, class: "outline-label" }, outlines);
       label.textContent = target.state;
     }
     if (focused) {
