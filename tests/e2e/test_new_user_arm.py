@@ -76,6 +76,8 @@ def test_a_tray_out_of_reach_names_the_suction_cup_not_the_mug(tmp_path: Path) -
     assert result.exit_code == 1, result.output
     lines = result.output.strip().splitlines()
     assert len(lines) == 1, lines
-    assert "mug put down at" in lines[0] and "is out of the arm's reach" in lines[0]
+    # the one thing to change: the tray 1.3 m from where the plate and mug start
+    assert "standing at (0.120, 0.120) and " in lines[0] and " put down at (1.6" in lines[0]
+    assert " m apart; the suction cup reaches" in lines[0]
     assert "the cup reaches" not in lines[0]
     assert "the suction cup reaches 0.22–0.60 m" in lines[0]

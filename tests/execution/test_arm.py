@@ -29,7 +29,7 @@ from demoplan.learning.modelfile import save_model
 from demoplan.model import ObjectGeometry, Pose, TaskModel
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
-from tests.support.helpers import EXAMPLES, UNTIMED, paper_model
+from tests.support.helpers import EXAMPLES, ONE_MOVE_SCENE, UNTIMED, paper_model
 from tests.support.shared_experiments import ExperimentsRun
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -42,6 +42,7 @@ from demoplan.execution.runner import run_task
 BLOCKS = EXAMPLES / "scenes" / "pyramid-fig4.json"
 SET_TABLE = EXAMPLES / "scenes" / "set-table-cluttered.json"
 KIT = EXAMPLES / "kitting" / "scene-manual-on-motor.json"
+DESK = Path(__file__).resolve().parents[1] / "data" / "desk"
 
 
 @pytest.fixture(scope="module")
@@ -222,6 +223,9 @@ def test_an_unreachable_scene_is_refused_in_one_line(blocks_file: Path, tmp_path
     assert result.exit_code == 1, result.output
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and "out of the arm's reach" in lines[0] and "red" in lines[0]
+    # the first place's reason, not one per place: the others counted
+    assert lines[0].count("out of the arm's reach") == 1, lines
+    assert "; so are 6 more of the plan's 7 places (green, red, wood)" in lines[0], lines
 
 
 def test_an_object_in_the_arms_base_is_refused(blocks_file: Path, tmp_path: Path) -> None:
@@ -247,6 +251,28 @@ def test_a_too_heavy_object_is_refused(kit: TaskModel, tmp_path: Path) -> None:
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and "cable weighs 6.28 kg; the suction cup" in lines[0], lines
     assert "the fingers (40 N) do not lift it either" in lines[0], lines
+
+
+def test_a_tray_too_far_from_the_parts_is_refused_in_one_reason(
+    kit: TaskModel, tmp_path: Path
+) -> None:
+    """The kit's tray 1.35 m beside the parts: no base of the arm reaches both
+    the parts and their slots. One line, exit 1, with the one thing to change
+    (the two places farthest apart and how far apart they are) instead of a
+    reason per place out of reach, each saying the same."""
+    scene = json.loads(KIT.read_text())
+    scene["landmarks"]["tray"]["position"] = [1.8, 0.05, 0.0]
+    path = tmp_path / "far-tray.json"
+    path.write_text(json.dumps(scene))
+    model = tmp_path / "kit.json"
+    save_model(kit, model)
+    result = _run_cli(model, path)
+    assert result.exit_code == 1, result.output
+    (line,) = result.output.strip().splitlines()
+    assert line.startswith(f"demoplan: error: {path}: objects: cannot be carried out"), line
+    assert " m apart; the suction cup reaches 0.22–0.60 m from the arm's base" in line, line
+    assert line.count("out of the arm's reach") == 0 and line.count(" at (") == 2, line
+    assert "places are out of its reach): bring them closer together" in line, line
 
 
 def test_an_object_without_a_flat_top_goes_by_the_fingers_or_is_refused(blocks: TaskModel) -> None:
@@ -380,3 +406,51 @@ def test_an_obstacle_on_a_thin_parts_target_is_cleared_and_the_wrist_recovers() 
     )
     assert [f.kind for f in report.injected] == ["block"]
     _assert_done_on_target(report)
+
+
+def test_the_end_frame_shows_the_last_thing_put_down_not_the_arm_over_it(
+    blocks: TaskModel, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--frames``: the arm turns round behind its base before the end frame
+    is rendered (it stood over red, the last block put down, its wrist hiding
+    it); the report is the run's as it ended — no motion refused, no contact."""
+    from demoplan.execution import runner
+
+    pictured: list[tuple[bool, float]] = []  # per frame: the arm parked, the cup from red
+    render = runner._picture
+
+    def picture(world: Any) -> Any:
+        red = world.observe().poses.get("red")  # none while held
+        if red is not None:
+            pictured.append((world.parked, math.dist(world._cup()[0][:2], red.position[:2])))
+        return render(world)
+
+    monkeypatch.setattr(runner, "_picture", picture)
+    scene = load_scene(ONE_MOVE_SCENE)
+    report = run_task(
+        blocks, prepare(blocks, scene), sim="arm", settings=UNTIMED, frames=tmp_path / "frames"
+    )
+    _assert_done_on_target(report)
+    assert report.motions_refused == () and report.collisions == ()
+    parked, away = pictured[-1]  # the end frame's
+    assert parked and away > 0.3, pictured
+    assert (tmp_path / "frames" / "storyboard.png").is_file()
+
+
+def test_a_desk_taught_in_the_studio_runs_on_the_arm_with_no_motion_refused() -> None:
+    """A new user's desk (tests/data/desk): after the book is put down, the
+    arm's posture over it cannot rise straight to the height it crosses at
+    towards the pen holder (a new posture on the way). The rise is made by a
+    checked joint-space move instead; the grasp was refused three times,
+    then the book moved off and back (17 actions, 3 replans). Every thing ends
+    on the mat turned as taught: the pen holder and the phone across it."""
+    model = learn(load_demonstrations([DESK / f"desk-{k}.json" for k in (1, 2, 3)]))
+    scene = load_scene(DESK / "new-desk.json")
+    report = run_task(model, prepare(model, scene), sim="arm", settings=UNTIMED)
+    _assert_done_on_target(report)
+    assert report.replans == 0 and len(report.actions) == 10, report.failures
+    mat = 110.0
+    turned = {"charger": 0.0, "phone": 90.0, "book": 0.0, "pen_holder": 90.0}
+    for name, turn in turned.items():
+        relative = (report.final.poses[name].yaw - mat - turn) % 180
+        assert min(relative, 180 - relative) < 1.0, (name, report.final.poses[name].yaw)

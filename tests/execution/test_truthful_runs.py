@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -138,3 +139,41 @@ def test_a_run_that_succeeds_says_so_in_its_last_event(blocks: TaskModel, scene:
         report.reason,
     )
     assert report.to_json()["status"] == "succeeded" and report.to_json()["exit_code"] == 0
+
+
+def test_places_out_of_reach_are_one_reason_whatever_their_number() -> None:
+    """One place out of reach: its reason; two: the first's reason and the
+    other counted (grammatical for one); without a world that tells why
+    several are (too far apart), never a reason per place."""
+    from types import SimpleNamespace
+
+    from demoplan.execution.executor import _out_of_reach
+    from demoplan.planning.problem import Action
+
+    where = {"loc1": (0.1, 0.1), "loc2": (0.9, 0.1), "loc3": (0.9, 0.5), "loc4": (0.5, 0.3)}
+    problem: Any = SimpleNamespace(
+        location=lambda name: SimpleNamespace(position=(*where[name], 0.0), yaw=0.0)
+    )
+    far = {"loc2", "loc3"}
+
+    def reachable(obj: str, pose: Pose) -> str | None:
+        x, y = pose.position[:2]
+        name = next(n for n, p in where.items() if p == (x, y))
+        return f"at ({x:.3f}, {y:.3f}) is out of the arm's reach" if name in far else None
+
+    actions = [
+        Action("GRASP", "cup", "loc1", "grasp1"),
+        Action("PUT_DOWN", "cup", "loc2", "grasp1"),
+        Action("GRASP", "pen", "loc4", "grasp2"),
+        Action("PUT_DOWN", "pen", "loc3", "grasp2"),
+    ]
+    world: Any = SimpleNamespace()  # tells nothing about places together
+    (line,) = _out_of_reach(world, actions, problem, reachable)
+    assert line == (
+        "cup put down at (0.900, 0.100) is out of the arm's reach; "
+        "so is 1 more of the plan's 4 places (pen)"
+    )
+    far = {"loc2"}
+    assert _out_of_reach(world, actions, problem, reachable) == [
+        "cup put down at (0.900, 0.100) is out of the arm's reach"
+    ]

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -17,7 +19,16 @@ from hypothesis import strategies as st
 from matplotlib.colors import to_hex
 
 from demoplan.documents.demonstrations import load_demonstrations
-from demoplan.plotting.colours import CYCLE, NAMED, assign_colours, object_colour, rgba
+from demoplan.plotting.colours import (
+    CYCLE,
+    INK_LUMINANCE,
+    NAMED,
+    assign_colours,
+    ink,
+    luminance,
+    object_colour,
+    rgba,
+)
 from demoplan.plotting.figures import plot_demonstration
 from tests.support.helpers import EXAMPLES
 
@@ -98,3 +109,126 @@ def test_numbered_instances_of_a_colour_get_that_colour() -> None:
     assigned = assign_colours(["red", "red2", "plate#1", "plate#2"])
     assert assigned["red"] == assigned["red2"] == NAMED["red"]
     assert assigned["plate#1"] != assigned["plate#2"]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 0xFFFFFF))
+def test_ink_is_the_colour_itself_or_the_same_hue_dark_enough_to_see_on_white(code: int) -> None:
+    colour = f"#{code:06x}"
+    drawn = ink(colour)
+    assert luminance(drawn) <= INK_LUMINANCE + 1e-9
+    if luminance(colour) <= INK_LUMINANCE:
+        assert drawn == colour
+    else:  # each channel scaled alike: the same hue, darker
+        before = [int(colour[k : k + 2], 16) for k in (1, 3, 5)]
+        after = [int(drawn[k : k + 2], 16) for k in (1, 3, 5)]
+        scale = max(after) / max(before)
+        assert all(abs(b * scale - a) <= 1.0 for b, a in zip(before, after, strict=True))
+        assert luminance(drawn) > INK_LUMINANCE - 0.02  # no darker than it must be
+
+
+def test_a_white_mugs_moves_are_drawn_dark_enough_to_see_from_above_and_from_the_side() -> None:
+    """A new user's desk (tests/data/desk) with a mug the user made white
+    (#ecf0f1): its move's arrow and number in the plan figure and the side
+    view were white on white. Every arrow and number of a move is now at most
+    INK_LUMINANCE; the mug's own patches keep its colour."""
+    import demoplan
+    from demoplan.plotting.figures import plot_scene_plan
+    from demoplan.plotting.side_view import plot_scene_side
+
+    desk = Path(__file__).resolve().parents[1] / "data" / "desk"
+    model = demoplan.learn([desk / f"desk-{k}.json" for k in (1, 2, 3)])
+    result = demoplan.plan(model, desk / "new-desk.json")
+    chosen = result.chosen
+    _, (top, side) = plt.subplots(1, 2)
+    plot_scene_plan(result.scene, chosen.problem, chosen.plan, top)
+    plot_scene_side(result.scene, chosen.problem, chosen.plan, side)
+    for ax in (top, side):
+        arrows = [text.arrow_patch for text in ax.texts if getattr(text, "arrow_patch", None)]
+        numbers = [text for text in ax.texts if text.get_text().isdigit()]
+        assert len(arrows) == 5 and len(numbers) == 5
+        drawn = [to_hex(a.get_edgecolor()) for a in arrows] + [
+            to_hex(t.get_color()) for t in numbers
+        ]
+        assert max(luminance(colour) for colour in drawn) <= INK_LUMINANCE, drawn
+        assert ink("#ecf0f1") in drawn  # the mug's, darkened
+    assert "#ecf0f1" in {to_hex(patch.get_facecolor()) for patch in top.patches}
+    # where there is no plan: the targets as dashed outlines, the mug's too
+    from demoplan.plotting.figures import plot_scene_targets
+
+    ax = plot_scene_targets(result.scene, chosen.problem, "no plan")
+    dashed = [p for p in ax.patches if p.get_linestyle() == "--" and p.get_fill() is False]
+    outlines = [to_hex(p.get_edgecolor()) for p in dashed if to_hex(p.get_edgecolor()) != "#999999"]
+    assert ink("#ecf0f1") in outlines, outlines
+    assert max(luminance(colour) for colour in outlines) <= INK_LUMINANCE, outlines
+    plt.close("all")
+
+
+def test_a_white_mugs_target_outline_is_drawn_dark_enough_to_see_in_run_frames(
+    tmp_path: Path,
+) -> None:
+    """``run --frames`` (kinematic) draws each target as a dashed outline in its
+    object's colour: the white mug's was white on white. Its outline now at
+    most INK_LUMINANCE; the mug itself still in its own colour."""
+    from demoplan.execution.frames import FrameWriter
+    from demoplan.execution.world import Observation
+    from demoplan.model import ObjectGeometry, Pose
+    from demoplan.scenes.scene import scene_from_document
+
+    mug = ObjectGeometry("cylinder", (0.08, 0.08, 0.1))
+    scene = scene_from_document(
+        {
+            "format": "demoplan/scene-1",
+            "objects": {
+                "mug": {"position": [0.6, 0.1, 0.0], "size": [0.08, 0.08, 0.1]}
+                | {"shape": "cylinder", "colour": "#ecf0f1"}
+            },
+        },
+        "desk.json",
+    )
+    writer = FrameWriter(tmp_path, {"mug": Pose((0.3, 0.4, 0.0))}, scene)
+    standing = Observation({"mug": Pose((0.6, 0.1, 0.0))}, None, {"mug": mug})
+    writer.capture(standing, "start")
+    assert writer._frame is not None
+    patches = writer._frame.ax.patches
+    dashed = [p for p in patches if p.get_linestyle() == "--"]
+    assert len(dashed) == 1
+    assert luminance(to_hex(dashed[0].get_edgecolor())) <= INK_LUMINANCE
+    assert "#ecf0f1" in {to_hex(p.get_facecolor()) for p in patches}
+    plt.close("all")
+
+
+def test_a_constraint_arrow_passes_through_no_other_state_in_the_figure() -> None:
+    """The desk's constraints A<B, B<E, C<E, D<E: C, B and E stand on one row
+    of the layered graph (show --plot, the report), and C → E was drawn
+    straight through B, read as 'the book before the phone'. Each arrow now
+    keeps off every state but its own two."""
+    import demoplan
+    from demoplan.plotting.figures import plot_constraints
+
+    desk = Path(__file__).resolve().parents[1] / "data" / "desk"
+    model = demoplan.learn([desk / f"desk-{k}.json" for k in (1, 2, 3)])
+    figure, ax = plt.subplots(figsize=(6, 3))
+    plot_constraints(model, 0, ax)
+    figure.canvas.draw()
+    centres = {
+        text.get_text(): ax.transData.transform(text.xy)
+        for text in ax.texts
+        if text.get_bbox_patch() is not None
+    }
+    assert sorted(centres) == ["A", "B", "C", "D", "E"]
+    crossed = []
+    for text in ax.texts:
+        arrow = getattr(text, "arrow_patch", None)
+        if arrow is None:
+            continue
+        tail, head = ax.transData.transform(text.xyann), ax.transData.transform(text.xy)
+        start = min(centres, key=lambda n: float(np.hypot(*(centres[n] - tail))))
+        end = min(centres, key=lambda n: float(np.hypot(*(centres[n] - head))))
+        path = arrow.get_path().interpolated(40).vertices  # display coordinates
+        for name, centre in centres.items():
+            near = min(float(np.hypot(*(p - centre))) for p in path) < 11  # within its circle
+            if near and name not in (start, end):
+                crossed.append(f"{start} -> {end} through {name}")
+    assert crossed == []
+    plt.close(figure)

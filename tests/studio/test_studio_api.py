@@ -417,6 +417,34 @@ def test_no_plan_is_an_answer_with_the_command_lines_reason(client: TestClient) 
     assert body["no_plan"]["figure"] is None or "<svg" in body["no_plan"]["figure"]
 
 
+def test_an_error_about_the_start_names_the_plan_views_start_not_a_field_scene(
+    client: TestClient,
+) -> None:
+    """The scene of a plan or a run is the page's start, no file of the user's:
+    its errors name it as the page does (``the Plan view's start: objects: …``),
+    never by the request's field ``scene`` the user never typed."""
+    save_blocks_and_learn(client)
+    lacking = scene_body()
+    del lacking["objects"]["red"]
+    expected = "the Plan view's start: objects: the task model needs red"
+    detail = one_line_error(
+        client.post("/api/plan", json={"model": "model.json", "scene": lacking}), 422, expected
+    )
+    assert detail.startswith(expected)
+    bad_yaw = scene_body(landmarks={"tray": {"position": [0.3, 0.3, 0.0], "yaw": "x"}})
+    detail = one_line_error(
+        client.post("/api/runs", json={"model": "model.json", "scene": bad_yaw}), 422
+    )
+    assert detail.startswith("the Plan view's start: landmarks.tray.yaw: "), detail
+    learned = client.post("/api/learn", json={"output": "model.json", "scene": bad_yaw})
+    assert one_line_error(learned, 422).startswith("the Learn view's table: landmarks.tray.yaw: ")
+    # in the run's own process (the model's objects are checked there, not before it starts)
+    started = client.post("/api/runs", json={"model": "model.json", "scene": lacking})
+    assert started.status_code == 202, started.text
+    state = wait_for(client, started.json()["run"])
+    assert state["state"] == "failed" and state["error"].startswith(expected), state
+
+
 def wait_for(client: TestClient, run: str, tries: int = 3000) -> dict[str, Any]:
     """The run's state once it has ended; polled every 0.1 s up to ``tries``
     times, a hang guard (a kinematic run takes seconds unloaded, a loaded

@@ -620,6 +620,26 @@ class ArmWorld(ArmMoves):
                 return out
         return None
 
+    def why_not_reachable_together(self, places: Sequence[tuple[str, Pose]]) -> str | None:
+        """Why no base of the arm reaches all of ``places`` (what each is, its
+        pose): the two farthest apart lie more than the cup reaches across
+        (twice :data:`~demoplan.execution.arm_model.REACH`'s outer bound); else None."""
+        far: tuple[float, str, str] = (0.0, "", "")
+        for k, (first, a) in enumerate(places):
+            for second, b in places[k + 1 :]:
+                apart = math.dist(a.position[:2], b.position[:2])
+                if apart > far[0]:
+                    far = (apart, first, second)
+        apart, first, second = far
+        low, high = REACH
+        if apart <= 2 * high:
+            return None
+        return (
+            f"{first} and {second} are {apart:.2f} m apart; the suction cup reaches "
+            f"{low:.2f}–{high:.2f} m from the arm's base, so no place for the base "
+            "reaches both"
+        )
+
 
 def choose_tool(shape: ObjectGeometry, axes: tuple[float, ...] = DEFAULT_GRASPS) -> ToolChoice:
     """The tool that carries an object of ``shape`` (its size and mass) whose

@@ -177,7 +177,11 @@ class ArmMoves(MujocoWorld):
         height = max(self._travel_height((float(here[0]), float(here[1])), goal_xy), low)
         try:
             here, _ = self._cup()
-            self._go([here[0], here[1], max(height, here[2])])
+            up = np.array([here[0], here[1], max(height, here[2])])
+            try:
+                self._go(up)
+            except MotionError:  # not even straight up: a new posture right above
+                self._swing_to(up, self.cup_yaw)
             self._swing_to(np.array([goal_xy[0], goal_xy[1], height]), yaw)
         except MotionError:
             raise MotionError(problem) from None

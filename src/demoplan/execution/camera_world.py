@@ -119,6 +119,10 @@ class CameraWorld:
         check = getattr(self.world, "why_not_reachable", None)
         return None if check is None else check(obj, pose)
 
+    def why_not_reachable_together(self, places: Sequence[tuple[str, Pose]]) -> str | None:
+        check = getattr(self.world, "why_not_reachable_together", None)
+        return None if check is None else check(places)
+
     @property
     def injected(self) -> list[InjectedFault]:
         """The faults the simulated world injected (the camera does not see them)."""

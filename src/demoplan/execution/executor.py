@@ -577,22 +577,55 @@ def _check_feasible(
         moved = dict.fromkeys(a.object for a in actions if a.kind == "GRASP")
         reasons += [f"{obj} {why}" for obj in moved if (why := graspable(obj))]
     if reachable is not None and not reasons:
-        seen = set()
-        for action in actions:
-            if (action.object, action.location) in seen:
-                continue
-            seen.add((action.object, action.location))
-            pose = pose_of(problem.location(action.location))
-            why = reachable(action.object, pose)
-            if why:
-                where = "standing" if action.kind == "GRASP" else "put down"
-                reasons.append(f"{action.object} {where} {why}")
+        reasons += _out_of_reach(world, actions, problem, reachable)
     if reasons:
         raise InputError(
             "cannot be carried out by this robot: " + "; ".join(reasons),
             source=source,
             field="objects",
         )
+
+
+def _out_of_reach(
+    world: World,
+    actions: list[Action],
+    problem: SceneProblem,
+    reachable: Callable[[str, Pose], str | None],
+) -> list[str]:
+    """The plan's places (an object standing where it is grasped, put down where
+    it goes) the robot cannot reach, in one sentence: the one place's reason;
+    for several, why no base reaches them all where the world can tell
+    (``why_not_reachable_together``: two of them too far apart), else the
+    first one's reason and how many more, of which objects — not a reason per
+    place, each saying the same."""
+    places: list[tuple[str, Pose]] = []
+    out: list[tuple[str, str]] = []
+    seen = set()
+    for action in actions:
+        if (action.object, action.location) in seen:
+            continue
+        seen.add((action.object, action.location))
+        pose = pose_of(problem.location(action.location))
+        where = "standing" if action.kind == "GRASP" else "put down"
+        places.append((f"{action.object} {where} at {_xy(pose)}", pose))
+        why = reachable(action.object, pose)
+        if why:
+            out.append((f"{action.object} {where}", why))
+    if len(out) <= 1:
+        return [f"{label} {why}" for label, why in out]
+    together = getattr(world, "why_not_reachable_together", None)
+    apart = None if together is None else together(places)
+    if apart:
+        count = f"{len(out)} of the plan's {len(places)} places are out of its reach"
+        return [f"{apart} ({count}): bring them closer together"]
+    (label, why), *more = out
+    of = ", ".join(sorted({other.split()[0] for other, _ in more}))
+    verb = "is" if len(more) == 1 else "are"
+    return [f"{label} {why}; so {verb} {len(more)} more of the plan's {len(places)} places ({of})"]
+
+
+def _xy(pose: Pose) -> str:
+    return f"({pose.position[0]:.3f}, {pose.position[1]:.3f})"
 
 
 GraspKey = tuple[str, float, int, int]

@@ -225,7 +225,7 @@ class FrameWriter:
     def _draw_still(self, ax: Any, observation: Observation) -> None:
         """What every top view of the run shows alike: the landmarks, the
         targets as dashed outlines, the run's limits (the colours assigned)."""
-        from demoplan.plotting.colours import object_colour
+        from demoplan.plotting.colours import ink, object_colour
         from demoplan.plotting.patches import draw_landmarks, object_patch
 
         if self.scene is not None:
@@ -234,7 +234,7 @@ class FrameWriter:
             shape = observation.geometry.get(name)
             patch = object_patch(pose, shape, "none", 1.0)
             patch.set_linestyle("--")
-            patch.set_edgecolor(object_colour(name))
+            patch.set_edgecolor(ink(object_colour(name)))  # a white mug's seen on white
             ax.add_patch(patch)
         if self._limits is None:
             points = [p.position for p in observation.poses.values()] + [

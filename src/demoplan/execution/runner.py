@@ -148,6 +148,17 @@ def run_task(
             writer = FrameWriter(frames, scene=scene)
         heard = _listener(world, writer, on_event)
         report = execute(model, prepared, _FramedWorld(world, writer), settings, heard, first)
+        simulated: Any = getattr(world, "world", world)
+        # the run as it ended, before the robot steps out of the picture
+        ended = replace(
+            report,
+            world=world.name,
+            collisions=tuple(getattr(simulated, "collisions", ())),
+            motions_refused=tuple(getattr(simulated, "motion_failures", ())),
+            simulated_seconds=getattr(simulated, "simulated", None),
+        )
+        if writer is not None or recording is not None:
+            _step_aside(simulated)
         written: tuple[str, ...] = ()
         if writer is not None:
             writer.capture(report.final, "end", _picture(world))
@@ -156,15 +167,19 @@ def run_task(
         finished = True
     finally:
         _close_world(world, recording, finished)
-    simulated: Any = getattr(world, "world", world)
-    return replace(
-        report,
-        frames=written,
-        world=world.name,
-        collisions=tuple(getattr(simulated, "collisions", ())),
-        motions_refused=tuple(getattr(simulated, "motion_failures", ())),
-        simulated_seconds=getattr(simulated, "simulated", None),
-    )
+    return replace(ended, frames=written)
+
+
+def _step_aside(simulator: Any) -> None:
+    """The robot out of the picture once the run is over, so that the end frame
+    and the video's last seconds show what it did rather than the arm over the
+    thing it put down last: a simulator that parks (the arm turned round
+    behind its base, the floating hand beside the table) does. It is no part
+    of the task: the report is the run's as it ended, and a park the arm's
+    checks refuse leaves it where it stands."""
+    park = getattr(simulator, "park", None)
+    if park is not None:
+        park()
 
 
 def _start_video(world: World, video: Path) -> VideoOutput:
@@ -241,6 +256,10 @@ class _FramedWorld:
     def why_not_reachable(self, obj: str, pose: Any) -> str | None:
         check = getattr(self._world, "why_not_reachable", None)
         return None if check is None else check(obj, pose)
+
+    def why_not_reachable_together(self, places: Any) -> str | None:
+        check = getattr(self._world, "why_not_reachable_together", None)
+        return None if check is None else check(places)
 
     @property
     def injected(self) -> Any:  # the simulated world's faults, for the report

@@ -14,6 +14,7 @@ none runs off its axes (:func:`place_boxes` is the placement itself).
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,7 +23,7 @@ from demoplan.learning.constraints import GoalOrder
 from demoplan.model import Demonstration, TaskModel, demonstrated_colours
 from demoplan.plotting.backend import tight_layout, use_agg
 from demoplan.plotting.captions import fit_title
-from demoplan.plotting.colours import assign_colours, object_colour
+from demoplan.plotting.colours import assign_colours, ink, object_colour
 from demoplan.plotting.labels import (
     BoxPlacement,
     Leader,
@@ -120,7 +121,7 @@ def plot_demonstration(
                 "",
                 (x, y),
                 start.position[:2],
-                arrowprops={"arrowstyle": "->", "color": colour, "lw": 0.8, "alpha": 0.6},
+                arrowprops={"arrowstyle": "->", "color": ink(colour), "lw": 0.8, "alpha": 0.6},
             )
         ax.add_patch(object_patch(step.pose, geometry.get(step.object), colour, 0.85))
         state = f"{states[number - 1]} " if number <= len(states) else ""
@@ -198,6 +199,7 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
                 "color": "0.35",
                 "shrinkA": 11,
                 "shrinkB": 11,
+                "connectionstyle": f"arc3,rad={_bend(position, x, y)}",
             },
         )
     for label, (px, py) in position.items():
@@ -225,6 +227,24 @@ def plot_constraints(model: TaskModel, goal: int, ax: Axes | None = None) -> Axe
     ax.axis("off")
     ax.set_title(constraint_caption(order), fontsize=8)
     return ax
+
+
+def _bend(position: Mapping[str, tuple[float, float]], start: str, end: str) -> float:
+    """How much the edge ``start`` → ``end`` of :func:`plot_constraints` bends
+    (``arc3``'s rad): 0, a straight line, unless it would pass through another
+    state's circle (C → E straight through B reads as C → B → E); then bent
+    round it, away from it."""
+    (x1, y1), (x2, y2) = position[start], position[end]
+    dx, dy = x2 - x1, y2 - y1
+    length = math.hypot(dx, dy) or 1.0
+    for label, (x, y) in position.items():
+        if label in (start, end):
+            continue
+        t = min(1.0, max(0.0, ((x - x1) * dx + (y - y1) * dy) / length**2))
+        if math.hypot(x1 + t * dx - x, y1 + t * dy - y) < 0.3:
+            left = dx * (y - y1) - dy * (x - x1) >= 0  # the state left of the way, or on it
+            return 0.35 if left else -0.35  # arc3 bends a positive rad to the right
+    return 0.0
 
 
 def save_demonstrations(model: TaskModel, path: Path, heading: str) -> None:
@@ -375,7 +395,7 @@ def plot_scene_plan(
             xytext=table_xy(start),
             arrowprops={
                 "arrowstyle": "->",
-                "color": colours[name],
+                "color": ink(colours[name]),
                 "lw": 1.2,
                 "connectionstyle": f"arc3,rad={rad}",
             },
@@ -385,7 +405,7 @@ def plot_scene_plan(
             str(number),
             _arc_middle(table_xy(start), table_xy(end), rad),
             fontsize=7,
-            color=colours[name],
+            color=ink(colours[name]),
             fontweight="bold",
         )
     for spot in spots:
@@ -442,7 +462,7 @@ def plot_scene_targets(
             for name in spot.objects:
                 outline = object_patch(pose_of(spot), geometry.get(name), colours[name], 1.0)
                 outline.set_fill(False)
-                outline.set_edgecolor(colours[name])
+                outline.set_edgecolor(ink(colours[name]))
                 outline.set_linestyle("--")
                 outline.set_linewidth(1.2)
                 ax.add_patch(outline)

@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from demoplan.model import ObjectGeometry, Pose
-from demoplan.plotting.colours import assign_colours
+from demoplan.plotting.colours import assign_colours, ink
 from demoplan.plotting.labels import add_label
 from demoplan.plotting.patches import (
     draw_landmarks,
@@ -86,7 +86,7 @@ def plot_scene_side(
         if last[name] != k:  # put down on its way, moved again later
             outline = side_patch(target, geometry[name], colours[name], 1.0)
             outline.set_fill(False)
-            outline.set_edgecolor(colours[name])
+            outline.set_edgecolor(ink(colours[name]))
             outline.set_linestyle("--")
             outline.set_zorder(1.5)  # over the solid shapes it may stand behind
             ax.add_patch(outline)
@@ -135,12 +135,13 @@ def _draw_side_moves(
         # the arrow ends.
         (x0, z0), (x1, z1) = side_top(source, geometry[name]), side_top(target, geometry[name])
         carry = highest + (number + 0.5) * spacing
-        ax.plot([x0, x0, x1], [z0, carry, carry], color=colours[name], lw=1.2)
+        line = ink(colours[name])
+        ax.plot([x0, x0, x1], [z0, carry, carry], color=line, lw=1.2)
         ax.annotate(
             "",
             xy=(x1, z1),
             xytext=(x1, carry),
-            arrowprops={"arrowstyle": "->", "color": colours[name], "lw": 1.2, "shrinkA": 0},
+            arrowprops={"arrowstyle": "->", "color": line, "lw": 1.2, "shrinkA": 0},
         )
         add_label(
             ax,
@@ -149,7 +150,7 @@ def _draw_side_moves(
             offset=(0.0, 1.5),
             va="bottom",
             fontsize=7,
-            color=colours[name],
+            color=line,
             fontweight="bold",
         )
     return carry

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from demoplan.scenes.plan import SceneLimitReachedError, SceneNoPlanError, ScenePlan
 
 __all__ = [
+    "LEARN_TABLE",
+    "PLAN_START",
     "event_json",
     "finished_events",
     "model_json",
@@ -33,6 +35,12 @@ __all__ = [
     "targets_json",
     "world_json",
 ]
+
+PLAN_START = "the Plan view's start"
+"""The name an error gives the scene the Plan view plans and the Run view runs:
+the page's start, which may be no file's (a scene loaded, then changed)."""
+LEARN_TABLE = "the Learn view's table"
+"""The name an error gives the table the Learn view draws the targets on."""
 
 
 def pose_json(pose: Pose) -> dict[str, Any]:

@@ -114,9 +114,14 @@ def _run(request: dict[str, Any], protocol: IO[str]) -> dict[str, Any]:
     from demoplan.execution.faults import parse_faults
     from demoplan.execution.report import RunEvent
     from demoplan.scenes.scene import scene_from_document
-    from demoplan.studio.views import event_json, finished_events, run_result_json
+    from demoplan.studio.views import (
+        PLAN_START,
+        event_json,
+        finished_events,
+        run_result_json,
+    )
 
-    scene = scene_from_document({"format": "demoplan/scene-1", **request["scene"]}, "scene")
+    scene = scene_from_document({"format": "demoplan/scene-1", **request["scene"]}, PLAN_START)
     video = Path(request["video"]) if request.get("video") else None
     events: list[dict[str, Any]] = []
 

@@ -44,11 +44,12 @@ def model_path(folder: WorkFolder, name: str) -> Path:
     return path
 
 
-def scene_of(document: dict[str, Any], field: str) -> Any:
-    """A scene document read by the project's scene parser (as ``plan`` reads a file)."""
+def scene_of(document: dict[str, Any], source: str) -> Any:
+    """A scene document read by the project's scene parser (as ``plan`` reads a
+    file), its errors naming it ``source`` (``views.PLAN_START``, ``views.LEARN_TABLE``)."""
     from demoplan.scenes.scene import scene_from_document
 
-    return scene_from_document({"format": "demoplan/scene-1", **document}, field)
+    return scene_from_document({"format": "demoplan/scene-1", **document}, source)
 
 
 def one_line(text: str) -> str:

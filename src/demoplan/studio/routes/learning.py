@@ -12,6 +12,7 @@ from fastapi import APIRouter
 from demoplan.errors import DemoplanError, InputError
 from demoplan.studio.requests import LearnRequest, PlanRequest
 from demoplan.studio.routes.depends import Folder, Runs, logged_warnings, model_path, scene_of
+from demoplan.studio.views import LEARN_TABLE, PLAN_START
 from demoplan.studio.workfolder import FileConflictError, FileMissingError, WorkFolder
 
 __all__ = ["router"]
@@ -24,7 +25,7 @@ def learn(body: LearnRequest, folder: Folder, jobs: Runs) -> dict[str, Any]:
     from demoplan.commands.learning import learn_files
 
     paths, output = _learn_files(body, folder)
-    scene = scene_of(body.scene, "scene") if body.scene is not None else None
+    scene = scene_of(body.scene, LEARN_TABLE) if body.scene is not None else None
     with jobs.working(), logged_warnings() as logged:
         model = learn_files(paths, output=output).model
     with jobs.working():
@@ -39,7 +40,7 @@ def plan(body: PlanRequest, folder: Folder, jobs: Runs) -> dict[str, Any]:
     from demoplan.studio.views import no_plan_json, plan_json
 
     model = model_path(folder, body.model)
-    scene = scene_of(body.scene, "scene")
+    scene = scene_of(body.scene, PLAN_START)
     try:
         with jobs.working():
             result = plan_task(model, scene, clutter=body.clutter)

@@ -14,6 +14,7 @@ from fastapi.responses import FileResponse
 from demoplan.errors import DemoplanError, InputError
 from demoplan.studio.requests import RunRequest
 from demoplan.studio.routes.depends import Folder, Runs, model_path, one_line, scene_of
+from demoplan.studio.views import PLAN_START
 from demoplan.studio.workfolder import FileMissingError, WorkFolder
 
 __all__ = ["MEDIA_SUFFIXES", "router"]
@@ -71,7 +72,7 @@ def last_run(jobs: Runs) -> dict[str, Any] | None:
     if record is None:
         return None
     try:
-        layout = layout_of_scene(scene_of(record["scene"], "scene"))
+        layout = layout_of_scene(scene_of(record["scene"], PLAN_START))
     except DemoplanError as exc:
         raise FileMissingError(
             f"run: the last run's scene cannot be drawn ({one_line(str(exc))})"
@@ -84,7 +85,7 @@ def _check_run(body: RunRequest) -> None:
     starts (the run's process reads them again)."""
     from demoplan.execution.faults import parse_faults
 
-    scene_of(body.scene, "scene")
+    scene_of(body.scene, PLAN_START)
     try:
         parse_faults(body.faults or None)
     except DemoplanError as exc:

@@ -61,11 +61,33 @@ export function drawGraph(svg, graph, objectOf = {}) {
     const length = Math.hypot(x2 - x1, y2 - y1) || 1;
     const ux = (x2 - x1) / length;
     const uy = (y2 - y1) / length;
-    const line = el("line", {
-      x1: x1 + ux * radius, y1: y1 + uy * radius, x2: x2 - ux * radius, y2: y2 - uy * radius,
-      class: "edge", "marker-end": "url(#arrow)", "data-edge": `${a} ${b}`,
-    }, svg);
-    el("title", {}, line).textContent = `${a} before ${b}`;
+    // a node the straight line would pass through (C → E through B reads as
+    // C → B → E): the edge bends round it, away from it
+    const crossed = nodes.filter((n) => n !== a && n !== b).map((n) => where.get(n)).find(([x, y]) => {
+      const t = Math.max(0, Math.min(1, ((x - x1) * ux + (y - y1) * uy) / length));
+      return Math.hypot(x1 + t * (x2 - x1) - x, y1 + t * (y2 - y1) - y) < radius + 6;
+    });
+    let edge;
+    if (crossed) {
+      const side = (crossed[0] - x1) * -uy + (crossed[1] - y1) * ux > 0 ? -1 : 1; // away from it
+      const bend = 2 * (radius + 9);
+      const cx = (x1 + x2) / 2 - uy * bend * side;
+      const cy = (y1 + y2) / 2 + ux * bend * side;
+      const from = Math.hypot(cx - x1, cy - y1);
+      const to = Math.hypot(x2 - cx, y2 - cy);
+      const start = [x1 + ((cx - x1) / from) * radius, y1 + ((cy - y1) / from) * radius];
+      const end = [x2 - ((x2 - cx) / to) * radius, y2 - ((y2 - cy) / to) * radius];
+      edge = el("path", {
+        d: `M ${start[0]} ${start[1]} Q ${cx} ${cy} ${end[0]} ${end[1]}`,
+        class: "edge", "marker-end": "url(#arrow)", "data-edge": `${a} ${b}`,
+      }, svg);
+    } else {
+      edge = el("line", {
+        x1: x1 + ux * radius, y1: y1 + uy * radius, x2: x2 - ux * radius, y2: y2 - uy * radius,
+        class: "edge", "marker-end": "url(#arrow)", "data-edge": `${a} ${b}`,
+      }, svg);
+    }
+    el("title", {}, edge).textContent = `${a} before ${b}`;
   }
   for (const n of nodes) {
     const [x, y] = where.get(n);

@@ -123,17 +123,35 @@ function removeThing(name, kind) {
 
 // Right of everything on the table: a free place for a new thing.
 function freePlace(size, shape) {
-  let right = state.layout.table.origin[0];
+  const [x0, y0] = state.layout.table.origin;
+  const [width, depth] = state.layout.table.size;
+  let right = x0;
+  const boxes = []; // [left, bottom, right, top] of every thing on the table
   const things = [
     ...Object.entries(state.teach.poses).map(([n, p]) => [state.layout.objects[n], p]),
     ...Object.values(state.layout.landmarks || {}).map((m) => [m, m]),
   ];
   for (const [geometry, pose] of things) {
     if (!geometry || !geometry.size) continue;
-    right = Math.max(right, pose.position[0] + halfExtents(geometry.shape, geometry.size, pose.yaw)[0]);
+    const [ex, ey] = halfExtents(geometry.shape, geometry.size, pose.yaw);
+    const [x, y] = pose.position;
+    boxes.push([x - ex, y - ey, x + ex, y + ey]);
+    right = Math.max(right, x + ex);
   }
   const [hx, hy] = halfExtents(shape, size, 0);
-  return [snap(right + 0.03 + hx), snap(state.layout.table.origin[1] + 0.03 + hy)];
+  const beside = [snap(right + 0.03 + hx), snap(y0 + 0.03 + hy)];
+  if (beside[0] + hx <= x0 + width) return beside;
+  // no room left of the table's right edge: the first free spot on the table,
+  // 3 cm clear of everything, row by row from the bottom left
+  const gap = 0.03;
+  const clear = (cx, cy) => boxes.every(([l, b, r, t]) =>
+    cx + hx + gap <= l || cx - hx - gap >= r || cy + hy + gap <= b || cy - hy - gap >= t);
+  for (let cy = y0 + gap + hy; cy + hy <= y0 + depth + 1e-9; cy += 0.01) {
+    for (let cx = x0 + gap + hx; cx + hx <= x0 + width + 1e-9; cx += 0.01) {
+      if (clear(cx, cy)) return [snap(cx), snap(cy)];
+    }
+  }
+  return beside; // a full table: beside it, to be dragged on
 }
 
 // m³ of the solid the physics simulates (ObjectGeometry.volume): a box, a

@@ -188,13 +188,24 @@ export class TableView {
       if (name === options.held) g.classList.add("held");
       if (options.interactive) g.classList.add("movable");
     }
-    // a landmark's name over the things standing in it (a caddy's, a box's)
+    // a landmark's name over the things standing in it (a caddy's, a box's),
+    // where it covers none of them
     const names = el("g", { class: "landmark-labels" }, this.svg);
+    const things = order.map((name) => this.footprintBox(
+      layout.objects[name], this.drag && this.drag.name === name ? this.drag.pose : poses[name],
+    ));
     for (const label of landmarks.querySelectorAll(".landmark > text.label")) {
+      const name = label.parentNode.dataset.landmark;
       const g = el("g", { transform: label.parentNode.getAttribute("transform") }, names);
       g.appendChild(label);
+      const mark = this.landmarks()[name];
+      if (mark && mark.size) {
+        const pose = this.drag && this.drag.name === name ? this.drag.pose : mark;
+        this.placeLabel(label, mark, pose, things);
+      }
     }
     const outlines = el("g", { class: "outlines" }, this.svg);
+    const lettered = []; // where each state's letter went: stacked targets' side by side
     for (const target of options.outlines || []) {
       const geometry = layout.objects[target.object];
       if (!geometry) continue;
@@ -203,13 +214,63 @@ export class TableView {
       g.dataset.x = String(round6(target.position[0]));
       g.dataset.y = String(round6(target.position[1]));
       g.dataset.yaw = String(round6(target.yaw || 0));
-      const label = el("text", { x: this.px(target.position[0]) + 4, y: this.py(target.position[1]) - 4, class: "outline-label" }, outlines);
+      let x = this.px(target.position[0]) + 4;
+      const y = this.py(target.position[1]) - 4;
+      while (lettered.some(([lx, ly]) => Math.abs(lx - x) < 9 && Math.abs(ly - y) < 11)) x += 10;
+      lettered.push([x, y]);
+      const label = el("text", { x, y, class: "outline-label" }, outlines);
       label.textContent = target.state;
     }
     if (focused) {
       this.svg.querySelector(`[data-object="${CSS.escape(focused)}"],[data-landmark="${CSS.escape(focused)}"]`)?.focus();
     }
     this.drawHeights(poses);
+  }
+
+  // A thing's footprint on the page: [left, top, right, bottom] in SVG units.
+  footprintBox(geometry, pose) {
+    const [hx, hy] = halfExtents(geometry.shape, geometry.size, pose.yaw);
+    const x = this.px(pose.position[0]);
+    const y = this.py(pose.position[1]);
+    return [x - hx / this.mpp, y - hy / this.mpp, x + hx / this.mpp, y + hy / this.mpp];
+  }
+
+  // A landmark's name where it covers no thing on the table: inside its top
+  // edge as always where that is free, else just outside it — above, below,
+  // left, right — else where it covers the least; always on the page.
+  placeLabel(label, mark, pose, things) {
+    const [hx, hy] = halfExtents(mark.shape, mark.size, pose.yaw).map((h) => h / this.mpp);
+    const d = mark.size[1] / this.mpp;
+    const cx = this.px(pose.position[0]);
+    const cy = this.py(pose.position[1]);
+    const width = label.getComputedTextLength() || 6.5 * label.textContent.length;
+    const tall = 11; // px: the labels' font size (studio.css)
+    const candidates = [
+      [0, -d / 2 + 12],
+      [0, -hy - 4],
+      [0, hy + tall + 2],
+      [-hx - width / 2 - 4, 4],
+      [hx + width / 2 + 4, 4],
+    ];
+    const covered = ([dx, dy]) => {
+      const box = [cx + dx - width / 2, cy + dy - tall, cx + dx + width / 2, cy + dy + 2];
+      const off = box[0] < 0 || box[1] < 0 || box[2] > this.widthPx || box[3] > this.heightPx;
+      let area = 0;
+      for (const [l, t, r, b] of things) {
+        area += Math.max(0, Math.min(r, box[2]) - Math.max(l, box[0])) *
+          Math.max(0, Math.min(b, box[3]) - Math.max(t, box[1]));
+      }
+      return off ? Infinity : area;
+    };
+    let best = candidates[0];
+    let least = covered(best);
+    for (const candidate of candidates.slice(1)) {
+      if (least === 0) break;
+      const area = covered(candidate);
+      if (area < least) [best, least] = [candidate, area];
+    }
+    label.setAttribute("x", String(best[0]));
+    label.setAttribute("y", String(best[1]));
   }
 
   drawGrid() {
