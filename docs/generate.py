@@ -819,6 +819,11 @@ RUN_JSON = Output(
         "extra_actions": ("integer", "actions beyond the first plan's"),
         "reached": ("array of strings", "subgoals reached"),
         "pose_errors": ("object", "per goal object, its distance from its target at the end (m)"),
+        "turn_errors_deg": (
+            "object",
+            "per goal object whose target's orientation was learned, its turn from the"
+            " target's yaw at the end (deg, given its symmetry; none for a cylinder)",
+        ),
         "steps": ("array", "each executed action with the pose it used (below)"),
         "seconds": ("number", "time the run took"),
         "frames": ("array of strings", "images written with `--frames`"),

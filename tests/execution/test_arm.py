@@ -454,3 +454,5 @@ def test_a_desk_taught_in_the_studio_runs_on_the_arm_with_no_motion_refused() ->
     for name, turn in turned.items():
         relative = (report.final.poses[name].yaw - mat - turn) % 180
         assert min(relative, 180 - relative) < 1.0, (name, report.final.poses[name].yaw)
+    assert report.turn_errors.keys() == turned.keys()  # the mug, a cylinder: none
+    assert max(report.turn_errors.values()) < 1.0, report.turn_errors

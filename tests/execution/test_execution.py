@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -12,14 +13,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import demoplan
+from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, UsageError
-from demoplan.execution.executor import ExecutionSettings, execute
+from demoplan.execution.executor import ExecutionSettings, _turn_errors, execute, first_plan
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.report import RunReport
 from demoplan.fileio import MANIFEST
+from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
-from demoplan.model import ObjectGeometry, TaskModel
+from demoplan.model import ObjectGeometry, Pose, TaskModel
+from demoplan.rotations import quat_from_yaw
 from demoplan.scenes.prepared import prepare
 from demoplan.scenes.scene import Scene, complete_geometry, load_scene
 from tests.support.cli import invoke
@@ -380,3 +384,38 @@ def test_what_stands_on_a_block_is_what_overlaps_it_not_what_is_near(
     world.grasp("lower", 0.0)
     overlap = lower.intersection(footprint(geometry, (shift, 0.0), 0.0)).area
     assert (world.held is None) == (overlap >= 0.05 * 0.04**2)
+
+
+DESK = Path(__file__).resolve().parents[1] / "data" / "desk"
+
+
+def test_a_run_reports_each_oriented_things_turn_from_its_target() -> None:
+    """Where a target's orientation was learned (the desk's things turn with the
+    mat, tests/data/desk), the run's report gives each thing's turn from it (deg,
+    given its symmetry) beside its distance, in its JSON and its last line; the
+    mug, a cylinder, has none (every turn of it looks the same)."""
+    model = learn(load_demonstrations([DESK / f"desk-{k}.json" for k in (1, 2, 3)]))
+    scene = complete_geometry(load_scene(DESK / "new-desk.json"), model)
+    prepared = prepare(model, scene)
+    report = execute(model, prepared, KinematicWorld(scene))
+    assert report.success
+    assert set(report.turn_errors) == {"charger", "phone", "book", "pen_holder"}
+    assert max(report.turn_errors.values()) < 1e-6
+    assert report.to_json()["turn_errors_deg"].keys() == report.turn_errors.keys()
+    problem = first_plan(model, prepared, ExecutionSettings()).problem  # the run's
+    phone = report.final.poses["phone"]
+    for turn, seen in ((30.0, 30.0), (170.0, 10.0)):  # a 14 × 7 cm box: 180° symmetry
+        turned = Pose(phone.position, quat_from_yaw(phone.yaw + turn))
+        observation = replace(report.final, poses={**report.final.poses, "phone": turned})
+        assert _turn_errors(problem, observation)["phone"] == pytest.approx(seen, abs=1e-6)
+
+
+def test_the_run_command_prints_the_turns_beside_the_distances(tmp_path: Path) -> None:
+    model = tmp_path / "desk.json"
+    demos = [DESK / f"desk-{k}.json" for k in (1, 2, 3)]
+    assert invoke("learn", *demos, "-o", model).exit_code == 0
+    result = invoke("run", model, DESK / "new-desk.json")
+    assert result.exit_code == 0, result.stderr
+    last = result.stdout.strip().splitlines()[-1]
+    assert "phone 0.0 mm 0.0°" in last and "pen_holder 0.0 mm 0.0°" in last
+    assert last.endswith("mug 0.0 mm"), last

@@ -194,8 +194,8 @@ def print_scene_preview(preview: Any, decimals: int) -> None:
     stdout.print(table)
     for landmark in preview.landmarks:
         shape = landmark.geometry
-        size = "" if shape is None else f", {shape.shape} " + " × ".join(
-            f"{v:g}" for v in shape.size
+        size = (
+            "" if shape is None else f", {shape.shape} " + " × ".join(f"{v:g}" for v in shape.size)
         )
         say(
             f"Landmark {landmark.name} at {xyz_text(landmark.position, decimals)}, "
@@ -310,7 +310,11 @@ def print_run_report(report: Any) -> None:
     if judged is not None:
         say(f"robosuite's success check: {'passed' if judged else 'FAILED'}")
     verdict = "success" if report.success else "FAILED"
-    errors = ", ".join(f"{k} {1000 * v:.1f} mm" for k, v in report.pose_errors.items())
+    turns = getattr(report, "turn_errors", {})
+    errors = ", ".join(
+        f"{k} {1000 * v:.1f} mm" + (f" {turns[k]:.1f}°" if k in turns else "")
+        for k, v in report.pose_errors.items()
+    )
     stdout.print(
         f"{verdict}: {report.reason}; {plural(len(report.actions), 'action')} "
         f"({report.first_plan_length} planned first), {plural(report.replans, 'replan')}; "

@@ -49,7 +49,7 @@ from demoplan.planning.problem import Action, Plan
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.binding import Binding, bind_model
-from demoplan.scenes.geometry import GeometrySettings, yaw_difference
+from demoplan.scenes.geometry import GeometrySettings, symmetry, yaw_difference
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import (
     ChosenPlan,
@@ -409,6 +409,7 @@ class _Run:
             for obj, loc in problem.problem.goal
             if obj in final.poses
         }
+        turns = _turn_errors(problem, final)
         self.emit(
             RunEvent(
                 "done",
@@ -429,6 +430,7 @@ class _Run:
             reason=reason,
             first_plan_length=self.first_length,
             pose_errors=errors,
+            turn_errors=turns,
             reached=tuple(sorted(self.reached)),
             seconds=time.perf_counter() - self.started,
             world=world.name,
@@ -717,6 +719,21 @@ def _oriented(problem: SceneProblem) -> set[str]:
     """Locations of targets whose orientation was learned (yaw matters there)."""
     turnable = {s.label: s.turnable for s in problem.candidate.subtasks}
     return {s.location for s in problem.problem.subgoals if not turnable.get(s.id, True)}
+
+
+def _turn_errors(problem: SceneProblem, observation: Observation) -> dict[str, float]:
+    """How far (deg) each goal object whose target's orientation was learned is
+    turned from it in ``observation``, given its symmetry (none for the others, nor
+    for a shape every turn leaves looking the same: a cylinder)."""
+    oriented = _oriented(problem)
+    return {
+        obj: yaw_difference(shape, observation.poses[obj].yaw, problem.location(loc).yaw)
+        for obj, loc in problem.problem.goal
+        if loc in oriented
+        and obj in observation.poses
+        and (shape := observation.geometry.get(obj)) is not None
+        and symmetry(shape) > 0.0
+    }
 
 
 def _turned(

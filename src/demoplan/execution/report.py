@@ -103,6 +103,10 @@ class RunReport:
     reason: str = ""
     first_plan_length: int = 0
     pose_errors: dict[str, float] = field(default_factory=dict)
+    """Each goal object's distance (m) from its target at the end."""
+    turn_errors: dict[str, float] = field(default_factory=dict)
+    """Each goal object's turn (deg) from its target's yaw at the end, given its
+    symmetry — only where the target's orientation was learned (it matters there)."""
     reached: tuple[str, ...] = ()
     seconds: float = 0.0
     world: str = ""
@@ -153,6 +157,7 @@ class RunReport:
             "extra_actions": max(0, len(self.actions) - self.first_plan_length),
             "reached": list(self.reached),
             "pose_errors": {k: round(v, 6) for k, v in self.pose_errors.items()},
+            "turn_errors_deg": {k: round(v, 3) for k, v in self.turn_errors.items()},
             "steps": [
                 {
                     "step": e.step,
