@@ -40,7 +40,9 @@ objects at once give two moves):
    it can go down), or when it is above the table (z = 0, docs/formats.md) and
    above no object or landmark whose top it could stand on (from
    ``geometry``; an object of unknown size within 10 cm beneath may be the
-   support).
+   support). The objects beneath are read over the times the rest's pose was
+   read (at least the last ``pose_window_s`` of them), robustly as in 4., not
+   from one sample.
 6. **The end of the stream.** A recording that stops right after the last
    release still gives that placement: the samples at the end within
    :attr:`~SegmentationSettings.settle_radius` of the last ones (or 4 × the
@@ -330,10 +332,18 @@ class _Supports:
         self.geometry = geometry
         self.landmarks = landmarks
         self.tolerance = settings.support_tolerance
+        self.window = settings.pose_window_s
 
-    def supported(self, name: str, pose: Pose, time: float) -> bool | None:
+    def supported(self, name: str, pose: Pose, start: float, end: float) -> bool | None:
         """True on a support, False above known supports only, None where an
-        object of unknown size lies beneath (it may be the support)."""
+        object of unknown size lies beneath (it may be the support).
+
+        ``pose`` was read from the object's samples from ``start`` to ``end``
+        (s); every other object is read over the same times (stretched back to
+        ``pose_window_s`` before ``end`` when shorter: a rest cut short by the
+        end of the recording), robustly as a rest pose (the median, then the
+        mean of the samples near it), not from one sample: one sample's noise
+        (3 σ is 6 mm with 2 mm noise) would use up most of ``support_tolerance``."""
         x, y, z = pose.position
         if abs(z) <= self.tolerance:
             return True
@@ -341,11 +351,7 @@ class _Supports:
         others: list[tuple[str, Pose]] = list(self.landmarks.items())
         for track in self.stream.tracks:
             if track.name != name and len(track):
-                i = min(int(np.searchsorted(track.times, time)), len(track) - 1)
-                q = None if track.orientations is None else track.orientations[i]
-                x0, y0, z0 = (float(v) for v in track.positions[i])
-                quat = None if q is None else tuple(float(v) for v in q)
-                others.append((track.name, Pose((x0, y0, z0), quat)))  # type: ignore[arg-type]
+                others.append((track.name, self._pose_over(track, start, end)))
         for other, where in others:
             size = self.geometry.get(other)
             dx, dy = x - where.position[0], y - where.position[1]
@@ -362,6 +368,19 @@ class _Supports:
             if abs(z - top) <= self.tolerance:
                 return True
         return None if unknown else False
+
+    def _pose_over(self, track: ObjectTrack, start: float, end: float) -> Pose:
+        """``track``'s robust pose over its samples from ``start`` to ``end`` (s);
+        its sample nearest ``end`` when it has none there."""
+        a = int(np.searchsorted(track.times, min(start, end - self.window), side="left"))
+        b = int(np.searchsorted(track.times, end, side="right"))
+        if b <= a:
+            a = min(int(np.searchsorted(track.times, end)), len(track) - 1)
+            b = a + 1
+        orientations = None if track.orientations is None else track.orientations[a:b]
+        if self.geometry.get(track.name) is None:
+            orientations = None  # only a known footprint is turned by its yaw
+        return _robust_pose(track.positions[a:b], orientations)
 
 
 @dataclass(frozen=True, slots=True)
@@ -463,8 +482,8 @@ def _segment_track(
     starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
     # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
     rest_ends = np.concatenate((starts, [last_rest_end]))
-    poses = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings)
-    hover = _pauses_in_the_air(track, starts, ends, rest_ends, poses, settings, supports)
+    poses, spans = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings)
+    hover = _pauses_in_the_air(track, starts, ends, poses, spans, settings, supports)
     moves, nudges, pushes, initial = _steps_nudges_and_pushes(
         track, starts, ends, poses, hover, forced, settings
     )
@@ -524,34 +543,40 @@ def _rest_poses(
     rest_starts: IntArray,
     rest_ends: IntArray,
     settings: SegmentationSettings,
-) -> list[Pose | None]:
+) -> tuple[list[Pose | None], list[tuple[float, float]]]:
     """Step 4 of the module docstring: the pose of each rest (samples
-    ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples."""
+    ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples,
+    and the times (first, last sample) it was read over."""
     times, positions, orientations = track.times, track.positions, track.orientations
-
-    def rest_pose(k: int) -> Pose | None:
-        a, b = int(rest_starts[k]), int(rest_ends[k])
+    poses: list[Pose | None] = []
+    spans: list[tuple[float, float]] = []
+    for a, b in zip(rest_starts.tolist(), rest_ends.tolist(), strict=True):
         if b <= a:
-            return None
+            poses.append(None)
+            spans.append((math.nan, math.nan))
+            continue
         a = _settled_start(times, positions, a, b, settings)
         b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
-        return _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
-
-    return [rest_pose(k) for k in range(len(rest_starts))]
+        poses.append(
+            _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
+        )
+        spans.append((float(times[a]), float(times[b - 1])))
+    return poses, spans
 
 
 def _pauses_in_the_air(
     track: ObjectTrack,
     starts: IntArray,
     ends: IntArray,
-    rest_ends: IntArray,
     poses: list[Pose | None],
+    spans: list[tuple[float, float]],
     settings: SegmentationSettings,
     supports: _Supports,
 ) -> list[bool]:
     """Step 5 of the module docstring: whether each rest is in the air (not a
-    placement: the move through it continues)."""
-    times, positions = track.times, track.positions
+    placement: the move through it continues); the objects beneath are read
+    over the times the rest's pose was read (``spans``)."""
+    positions = track.positions
     hover = [False] * (starts.size + 1)
     for k in range(1, starts.size + 1):
         pose = poses[k]
@@ -563,8 +588,7 @@ def _pauses_in_the_air(
             drop = pose.position[2] - (after.position[2] if after else pose.position[2])
             hover[k] = rise < settings.min_lift and drop >= settings.min_lift
         if not hover[k]:
-            at = float(times[int(rest_ends[k]) - 1])
-            hover[k] = supports.supported(track.name, pose, at) is False
+            hover[k] = supports.supported(track.name, pose, *spans[k]) is False
     return hover
 
 
@@ -675,7 +699,7 @@ def _settle_at_the_end(
     if first_still < n:
         pose = _robust_pose(positions[first_still:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
-        below = supports.supported(track.name, pose, float(times[-1]))
+        below = supports.supported(track.name, pose, float(times[first_still]), float(times[-1]))
         # Coming to a stop: at least two samples there, the last two slower than
         # start_speed (a min-jerk set-down ends at rest even when the samples
         # before it, at 20 Hz, are still on the way down).
