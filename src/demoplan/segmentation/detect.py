@@ -85,7 +85,8 @@ from demoplan.documents.demonstrations import demonstration_to_dict
 from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
+from demoplan.rotations import angle_between
+from demoplan.segmentation.rests import Supports, robust_pose
 from demoplan.segmentation.settings import SegmentationSettings
 from demoplan.segmentation.types import ObjectTrack, PoseStream, check_object_count
 
@@ -106,15 +107,12 @@ logger = logging.getLogger(__name__)
 
 MIN_FINAL_REST_SAMPLES = 3
 MIN_HALF_WINDOW_SAMPLES = 4  # a half window shorter than this is widened (sparse samples)
-INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
-MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
 MIN_SAMPLE_STEP = 1e-5
 """Seconds between samples, at least (median of a track): 100,000 samples a
 second, fifty times a fast motion-capture system. The windows of the
 segmentation are seconds long, so samples nanoseconds apart (times written
 in ns, or in s but scaled) made windows of billions of samples: segment ran
 for minutes or asked for 400 GB."""
-UNKNOWN_FOOTPRINT_M = 0.1  # an object of unknown size this close beneath may be a support
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,7 +271,7 @@ def segment(
     settings = settings or SegmentationSettings()
     check_object_count(len(stream.tracks), "objects", stream.source, None)
     _check_sample_steps(stream)
-    supports = _Supports(stream, geometry or {}, landmarks or {}, settings)
+    supports = Supports(stream, geometry or {}, landmarks or {}, settings)
     moves: list[Move] = []
     nudges: list[Move] = []
     pushes: list[Move] = []
@@ -315,72 +313,6 @@ def _check_sample_steps(stream: PoseStream) -> None:
                 "(convert times written in ms, µs or ns)",
                 source=stream.source,
             )
-
-
-class _Supports:
-    """What an object at rest stands on: the table (z = 0), or the top of an object
-    (at that time) or landmark beneath it, from their geometry."""
-
-    def __init__(
-        self,
-        stream: PoseStream,
-        geometry: Mapping[str, ObjectGeometry],
-        landmarks: Mapping[str, Pose],
-        settings: SegmentationSettings,
-    ):
-        self.stream = stream
-        self.geometry = geometry
-        self.landmarks = landmarks
-        self.tolerance = settings.support_tolerance
-        self.window = settings.pose_window_s
-
-    def supported(self, name: str, pose: Pose, start: float, end: float) -> bool | None:
-        """True on a support, False above known supports only, None where an
-        object of unknown size lies beneath (it may be the support).
-
-        ``pose`` was read from the object's samples from ``start`` to ``end``
-        (s); every other object is read over the same times (stretched back to
-        ``pose_window_s`` before ``end`` when shorter: a rest cut short by the
-        end of the recording), robustly as a rest pose (the median, then the
-        mean of the samples near it), not from one sample: one sample's noise
-        (3 σ is 6 mm with 2 mm noise) would use up most of ``support_tolerance``."""
-        x, y, z = pose.position
-        if abs(z) <= self.tolerance:
-            return True
-        unknown = False
-        others: list[tuple[str, Pose]] = list(self.landmarks.items())
-        for track in self.stream.tracks:
-            if track.name != name and len(track):
-                others.append((track.name, self._pose_over(track, start, end)))
-        for other, where in others:
-            size = self.geometry.get(other)
-            dx, dy = x - where.position[0], y - where.position[1]
-            if size is None:
-                unknown |= math.hypot(dx, dy) < UNKNOWN_FOOTPRINT_M and where.position[2] < z
-                continue
-            turned = where.orientation
-            yaw = 0.0 if turned is None else math.radians(rpy_from_quat(turned)[2])
-            u = math.cos(yaw) * dx + math.sin(yaw) * dy
-            v = -math.sin(yaw) * dx + math.cos(yaw) * dy
-            if abs(u) > size.size[0] / 2 or abs(v) > size.size[1] / 2:
-                continue
-            top = where.position[2] + size.size[2]
-            if abs(z - top) <= self.tolerance:
-                return True
-        return None if unknown else False
-
-    def _pose_over(self, track: ObjectTrack, start: float, end: float) -> Pose:
-        """``track``'s robust pose over its samples from ``start`` to ``end`` (s);
-        its sample nearest ``end`` when it has none there."""
-        a = int(np.searchsorted(track.times, min(start, end - self.window), side="left"))
-        b = int(np.searchsorted(track.times, end, side="right"))
-        if b <= a:
-            a = min(int(np.searchsorted(track.times, end)), len(track) - 1)
-            b = a + 1
-        orientations = None if track.orientations is None else track.orientations[a:b]
-        if self.geometry.get(track.name) is None:
-            orientations = None  # only a known footprint is turned by its yaw
-        return _robust_pose(track.positions[a:b], orientations)
 
 
 @dataclass(frozen=True, slots=True)
@@ -469,7 +401,7 @@ def _runs(mask: NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
 
 
 def _segment_track(
-    track: ObjectTrack, settings: SegmentationSettings, supports: _Supports
+    track: ObjectTrack, settings: SegmentationSettings, supports: Supports
 ) -> _TrackResult:
     """One object's track → its moves, nudges and pushes (steps 1–7 of the module docstring)."""
     n = len(track)
@@ -558,7 +490,7 @@ def _rest_poses(
         a = _settled_start(times, positions, a, b, settings)
         b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
         poses.append(
-            _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
+            robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
         )
         spans.append((float(times[a]), float(times[b - 1])))
     return poses, spans
@@ -571,7 +503,7 @@ def _pauses_in_the_air(
     poses: list[Pose | None],
     spans: list[tuple[float, float]],
     settings: SegmentationSettings,
-    supports: _Supports,
+    supports: Supports,
 ) -> list[bool]:
     """Step 5 of the module docstring: whether each rest is in the air (not a
     placement: the move through it continues); the objects beneath are read
@@ -613,7 +545,7 @@ def _steps_nudges_and_pushes(
     if reference is None:
         # Moving when the track begins: measure the first move from where the track starts.
         b = int(np.searchsorted(times, times[0] + settings.pose_window_s, side="right"))
-        reference = _robust_pose(positions[:b], None if orientations is None else orientations[:b])
+        reference = robust_pose(positions[:b], None if orientations is None else orientations[:b])
     previous = 0  # the rest the current move started from
     first = 0  # the first hysteresis move of the current move
     for k in range(starts.size):
@@ -671,7 +603,7 @@ def _settle_at_the_end(
     starts: IntArray,
     ends: IntArray,
     settings: SegmentationSettings,
-    supports: _Supports,
+    supports: Supports,
 ) -> tuple[IntArray, IntArray, int]:
     """Cut the last move short where the object already lies still at the end of the stream.
 
@@ -697,7 +629,7 @@ def _settle_at_the_end(
     window = int(np.searchsorted(times, times[-1] - settings.pose_window_s, side="left"))
     first_still = max(_settled_from(positions, window, n, settings), int(starts[-1]) + 1)
     if first_still < n:
-        pose = _robust_pose(positions[first_still:], None)
+        pose = robust_pose(positions[first_still:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
         below = supports.supported(track.name, pose, float(times[first_still]), float(times[-1]))
         # Coming to a stop: at least two samples there, the last two slower than
@@ -782,15 +714,3 @@ def _is_step(before: Pose, after: Pose, settings: SegmentationSettings) -> bool:
     if before.orientation is not None and after.orientation is not None:
         return angle_between(before.orientation, after.orientation) >= settings.min_angle_deg
     return False
-
-
-def _robust_pose(positions: FloatArray, orientations: FloatArray | None) -> Pose:
-    """Step 4: median, then the mean of the samples within 3 median distances of it."""
-    median = np.median(positions, axis=0)
-    distance = np.linalg.norm(positions - median, axis=1)
-    radius = max(INLIER_FACTOR * float(np.median(distance)), MIN_INLIER_RADIUS)
-    inliers = distance <= radius
-    mean = positions[inliers].mean(axis=0)
-    orientation = None if orientations is None else mean_quat(orientations[inliers])
-    x, y, z = (float(v) for v in mean)
-    return Pose((x, y, z), orientation)
