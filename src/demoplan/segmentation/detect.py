@@ -420,11 +420,16 @@ def _segment_track(
         track, starts, ends, poses, hover, forced, settings
     )
     if starts.size and hover[starts.size]:
+        last, (first, _) = poses[-1], spans[-1]
+        assert last is not None
         logger.warning(
-            "%s: held in the air at the end of the stream (t = %.3f s); "
-            "its last move is not a step",
+            "%s: at rest from t = %.2f s to the end of the stream (t = %.2f s), %s: "
+            "taken as held in the air, so its last move (from t = %.2f s) is not a step",
             track.name,
+            first,
             times[-1],
+            _off_support(supports, track.name, last, *spans[-1]),
+            times[starts[-1]],
         )
     return _TrackResult(moves, nudges, pushes, initial, speed)
 
@@ -631,7 +636,8 @@ def _settle_at_the_end(
     if first_still < n:
         pose = robust_pose(positions[first_still:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
-        below = supports.supported(track.name, pose, float(times[first_still]), float(times[-1]))
+        span = float(times[first_still]), float(times[-1])
+        below = supports.supported(track.name, pose, *span)
         # Coming to a stop: at least two samples there, the last two slower than
         # start_speed (a min-jerk set-down ends at rest even when the samples
         # before it, at 20 Hz, are still on the way down).
@@ -642,12 +648,39 @@ def _settle_at_the_end(
             ends = ends.copy()
             ends[-1] = first_still - 1
             return starts, ends, n
+        if below is False and supports.nearest_top(track.name, pose, *span) is not None:
+            logger.warning(
+                "%s: its last samples (t = %.2f–%.2f s) lie %s: still carried, or set "
+                "down where the sizes given say nothing is; its last move is not a step",
+                track.name,
+                times[first_still],
+                times[-1],
+                _off_support(supports, track.name, pose, *span),
+            )
+            return starts[:-1], ends[:-1], int(starts[-1])
     logger.warning(
         "%s: still moving at the end of the stream (t = %.3f s); its last move is not a step",
         track.name,
         times[-1],
     )
     return starts[:-1], ends[:-1], int(starts[-1])
+
+
+def _off_support(supports: Supports, name: str, pose: Pose, start: float, end: float) -> str:
+    """Why a rest at ``pose`` is on no support, for a warning: its height and the
+    nearest top of known size beneath it."""
+    z = pose.position[2]
+    near = supports.nearest_top(name, pose, start, end)
+    beneath = (
+        "nothing of known size beneath"
+        if near is None
+        else f"{near[0]}'s top beneath at {near[1] * 1000:.1f} mm, {abs(z - near[1]) * 1000:.1f} "
+        "mm away"
+    )
+    return (
+        f"{z * 1000:.1f} mm high, on no support within support_tolerance "
+        f"({supports.tolerance * 1000:g} mm; {beneath})"
+    )
 
 
 def _settled_from(positions: FloatArray, a: int, b: int, settings: SegmentationSettings) -> int:

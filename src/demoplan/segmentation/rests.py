@@ -4,7 +4,7 @@ stands on (:mod:`demoplan.segmentation.detect`, steps 4 and 5)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,30 +64,52 @@ class Supports:
         end of the recording), robustly as a rest pose (the median, then the
         mean of the samples near it), not from one sample: one sample's noise
         (3 σ is 6 mm with 2 mm noise) would use up most of ``support_tolerance``."""
-        x, y, z = pose.position
+        z = pose.position[2]
         if abs(z) <= self.tolerance:
             return True
         unknown = False
-        others: list[tuple[str, Pose]] = list(self.landmarks.items())
-        for track in self.stream.tracks:
-            if track.name != name and len(track):
-                others.append((track.name, self._pose_over(track, start, end)))
+        for _, top in self._beneath(name, pose, start, end):
+            if top is None:
+                unknown = True
+            elif abs(z - top) <= self.tolerance:
+                return True
+        return None if unknown else False
+
+    def nearest_top(
+        self, name: str, pose: Pose, start: float, end: float
+    ) -> tuple[str, float] | None:
+        """The object or landmark of known size beneath ``pose`` whose top (z, m)
+        is nearest it, read as :meth:`supported` reads them; None without one."""
+        tops = [(o, t) for o, t in self._beneath(name, pose, start, end) if t is not None]
+        return min(tops, key=lambda item: abs(pose.position[2] - item[1]), default=None)
+
+    def _beneath(
+        self, name: str, pose: Pose, start: float, end: float
+    ) -> Iterator[tuple[str, float | None]]:
+        """Each object or landmark beneath ``pose`` and its top (z), or None for
+        an object of unknown size within ``UNKNOWN_FOOTPRINT_M`` and lower."""
+        x, y, z = pose.position
+        others: Iterable[tuple[str, Pose]] = (
+            *self.landmarks.items(),
+            *(
+                (track.name, self._pose_over(track, start, end))
+                for track in self.stream.tracks
+                if track.name != name and len(track)
+            ),
+        )
         for other, where in others:
             size = self.geometry.get(other)
             dx, dy = x - where.position[0], y - where.position[1]
             if size is None:
-                unknown |= math.hypot(dx, dy) < UNKNOWN_FOOTPRINT_M and where.position[2] < z
+                if math.hypot(dx, dy) < UNKNOWN_FOOTPRINT_M and where.position[2] < z:
+                    yield other, None
                 continue
             turned = where.orientation
             yaw = 0.0 if turned is None else math.radians(rpy_from_quat(turned)[2])
             u = math.cos(yaw) * dx + math.sin(yaw) * dy
             v = -math.sin(yaw) * dx + math.cos(yaw) * dy
-            if abs(u) > size.size[0] / 2 or abs(v) > size.size[1] / 2:
-                continue
-            top = where.position[2] + size.size[2]
-            if abs(z - top) <= self.tolerance:
-                return True
-        return None if unknown else False
+            if abs(u) <= size.size[0] / 2 and abs(v) <= size.size[1] / 2:
+                yield other, where.position[2] + size.size[2]
 
     def _pose_over(self, track: ObjectTrack, start: float, end: float) -> Pose:
         """``track``'s robust pose over its samples from ``start`` to ``end`` (s);
