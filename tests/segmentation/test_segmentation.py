@@ -227,7 +227,7 @@ def test_a_rest_the_sizes_given_put_on_no_support_is_named_in_a_warning(
     assert warning.startswith("napkin: ") and warning.endswith("is not a step")
     assert "on no support within support_tolerance (10 mm; plate's top beneath at 3" in warning
     high = float(warning.split(" mm high")[0].rsplit(" ", 1)[1])
-    assert 12 < high < 18  # the napkin's rest, 15 mm
+    assert abs(high - 15) < 5  # the napkin's rest (15 mm), from 2 or more samples of 2 mm noise
 
 
 def test_a_track_that_begins_mid_move_still_gives_the_step_but_no_initial_pose() -> None:

@@ -615,7 +615,8 @@ def _settle_at_the_end(
     A recording often stops a few samples after the last release (robosuite's
     stop 0.05 s after it), too soon for the windowed speed to fall: the
     samples at the end within :attr:`~SegmentationSettings.settle_radius` of
-    the last ones are the final rest when the object lies there on a support
+    the last ones are the final rest when the object lies there (its pose read
+    from where it is as low as it gets, as step 4 reads it) on a support
     (the table, or a known support beneath it; one sample is enough) or, on
     an object of unknown size, when there are at least two of them and the
     last two are no faster than ``start_speed``. Otherwise the object is still
@@ -634,9 +635,12 @@ def _settle_at_the_end(
     window = int(np.searchsorted(times, times[-1] - settings.pose_window_s, side="left"))
     first_still = max(_settled_from(positions, window, n, settings), int(starts[-1]) + 1)
     if first_still < n:
-        pose = robust_pose(positions[first_still:], None)
+        # Read as step 4 reads the rest (so the two checks of it agree): from
+        # where it is as low as it gets, not from where the last lowering began.
+        a = _settled_start(times, positions, first_still, n, settings)
+        pose = robust_pose(positions[a:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
-        span = float(times[first_still]), float(times[-1])
+        span = float(times[a]), float(times[-1])
         below = supports.supported(track.name, pose, *span)
         # Coming to a stop: at least two samples there, the last two slower than
         # start_speed (a min-jerk set-down ends at rest even when the samples
