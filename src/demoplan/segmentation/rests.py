@@ -21,6 +21,7 @@ __all__ = ["Supports", "robust_pose"]
 INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
 MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
 UNKNOWN_FOOTPRINT_M = 0.1  # an object of unknown size this close beneath may be a support
+NEAR_MARGIN_M = 0.05  # m beyond its reach at a rest's end: an object read as a support
 
 
 def robust_pose(positions: FloatArray, orientations: FloatArray | None) -> Pose:
@@ -94,7 +95,7 @@ class Supports:
             *(
                 (track.name, self._pose_over(track, start, end))
                 for track in self.stream.tracks
-                if track.name != name and len(track)
+                if track.name != name and len(track) and self._near(track, x, y, end)
             ),
         )
         for other, where in others:
@@ -110,6 +111,19 @@ class Supports:
             v = -math.sin(yaw) * dx + math.cos(yaw) * dy
             if abs(u) <= size.size[0] / 2 and abs(v) <= size.size[1] / 2:
                 yield other, where.position[2] + size.size[2]
+
+    def _near(self, track: ObjectTrack, x: float, y: float, end: float) -> bool:
+        """Whether ``track``'s sample at ``end`` is within reach of (x, y): its
+        footprint's half diagonal (``UNKNOWN_FOOTPRINT_M`` without a size) and
+        ``NEAR_MARGIN_M`` more. Only these are read over the window: an object
+        that far from the rest at its end is no support of it (and reading
+        every object over every rest's window cost 6 × the segmentation of 200
+        objects resting off the table)."""
+        i = min(int(np.searchsorted(track.times, end)), len(track) - 1)
+        size = self.geometry.get(track.name)
+        reach = UNKNOWN_FOOTPRINT_M if size is None else math.hypot(*size.size[:2]) / 2
+        px, py = (float(v) for v in track.positions[i, :2])
+        return math.hypot(x - px, y - py) <= reach + NEAR_MARGIN_M
 
     def _pose_over(self, track: ObjectTrack, start: float, end: float) -> Pose:
         """``track``'s robust pose over its samples from ``start`` to ``end`` (s);
