@@ -414,7 +414,8 @@ def _segment_track(
     starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
     # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
     rest_ends = np.concatenate((starts, [last_rest_end]))
-    poses, spans = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings)
+    noise = _noise_sigma(positions[:, 2])
+    poses, spans = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings, noise)
     hover = _pauses_in_the_air(track, starts, ends, poses, spans, settings, supports)
     moves, nudges, pushes, initial = _steps_nudges_and_pushes(
         track, starts, ends, poses, hover, forced, settings
@@ -480,10 +481,12 @@ def _rest_poses(
     rest_starts: IntArray,
     rest_ends: IntArray,
     settings: SegmentationSettings,
+    noise: float,
 ) -> tuple[list[Pose | None], list[tuple[float, float]]]:
     """Step 4 of the module docstring: the pose of each rest (samples
     ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples,
-    and the times (first, last sample) it was read over."""
+    and the times (first, last sample) it was read over; ``noise`` is the
+    track's height noise σ (m, :func:`_settled_start`)."""
     times, positions, orientations = track.times, track.positions, track.orientations
     poses: list[Pose | None] = []
     spans: list[tuple[float, float]] = []
@@ -492,7 +495,7 @@ def _rest_poses(
             poses.append(None)
             spans.append((math.nan, math.nan))
             continue
-        a = _settled_start(times, positions, a, b, settings)
+        a = _settled_start(times, positions, a, b, settings, noise)
         b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
         poses.append(
             robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
@@ -637,7 +640,9 @@ def _settle_at_the_end(
     if first_still < n:
         # Read as step 4 reads the rest (so the two checks of it agree): from
         # where it is as low as it gets, not from where the last lowering began.
-        a = _settled_start(times, positions, first_still, n, settings)
+        a = _settled_start(
+            times, positions, first_still, n, settings, _noise_sigma(positions[:, 2])
+        )
         pose = robust_pose(positions[a:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
         span = float(times[a]), float(times[-1])
@@ -710,7 +715,12 @@ def _settled_from(positions: FloatArray, a: int, b: int, settings: SegmentationS
 
 
 def _settled_start(
-    times: FloatArray, positions: FloatArray, a: int, b: int, settings: SegmentationSettings
+    times: FloatArray,
+    positions: FloatArray,
+    a: int,
+    b: int,
+    settings: SegmentationSettings,
+    noise: float = 0.0,
 ) -> int:
     """Where the pose of the rest ``a:b`` is read (step 4): its first sample as low as
     the rest gets (within ``min_lift / 2`` of its lowest height, heights median-filtered
@@ -718,7 +728,10 @@ def _settled_start(
     object is at rest from there on; an object held still in the air before
     it is set down, or lifted a little and set down again (too slowly for the
     speed thresholds), reaches it last, and a later slide at the same height
-    (an unnoticed nudge) does not shift the pose."""
+    (an unnoticed nudge) does not shift the pose. ``noise``: the track's height
+    noise σ (m), a floor under the rest's own estimate — a rest of a few samples
+    (a recording stopped right after the release) tells too little of it, and
+    its one low sample would be read as the rest."""
     z = positions[a:b, 2]
     if z.size < 3:
         return a
@@ -727,12 +740,20 @@ def _settled_start(
     padded = np.pad(z, half, mode="edge")
     smooth = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
     # Margins above the sensor noise (σ from second differences, as _settled_from).
-    sigma = 1.4826 * float(np.median(np.abs(np.diff(z, n=2)))) / math.sqrt(6.0)
+    sigma = max(_noise_sigma(z), noise)
     low = smooth <= smooth.min() + max(settings.min_lift / 2.0, 4.0 * sigma)
     raised = np.flatnonzero(smooth >= smooth.min() + max(settings.min_lift, 8.0 * sigma))
     if raised.size:  # set down again after being held up: read it after that
         low[: raised[-1]] = False
     return a + int(np.argmax(low))
+
+
+def _noise_sigma(z: FloatArray) -> float:
+    """Sensor noise σ of heights ``z`` from their second differences (white noise
+    gives σ·√6, smooth motion next to nothing); 0 for fewer than 3."""
+    if z.size < 3:
+        return 0.0
+    return 1.4826 * float(np.median(np.abs(np.diff(z, n=2)))) / math.sqrt(6.0)
 
 
 def _speed_of(times: FloatArray, positions: FloatArray) -> float:
