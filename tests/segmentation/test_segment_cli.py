@@ -110,13 +110,13 @@ def robot_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="found by a fresh-clone run whose bag drew its noise unseeded: with seed 27's "
-    "2 mm noise the last step (the napkin) is not segmented (1 of seeds 0-29); cause not "
-    "found yet",
-)
 def test_a_robot_bag_of_seed_27_is_segmented_whole(tmp_path: Path) -> None:
+    """Found by a fresh-clone run whose bag drew its noise unseeded: with seed 27's
+    2 mm noise the napkin's step, the last, was lost (1 of seeds 0-29). The napkin
+    rests on the plate at 14.9 mm; the plate's height was read from its last
+    sample alone, 6.5 mm high (3.2 σ), so with the objects file's 2 cm plate its
+    top was 26.5 mm, 11.6 mm above the napkin, beyond support_tolerance (10 mm):
+    the rest was taken for a pause in the air. The family: test_robot_bag_families."""
     _segmented_as_the_demonstration(_robot_bag(tmp_path, seed=27), tmp_path)
 
 

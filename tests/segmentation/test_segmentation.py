@@ -206,6 +206,30 @@ def test_an_object_still_moving_at_the_end_gives_no_step(caplog: pytest.LogCaptu
     assert "still moving" in caplog.text
 
 
+@pytest.mark.parametrize("end_rest_s", [1.5, 0.05])
+def test_a_rest_the_sizes_given_put_on_no_support_is_named_in_a_warning(
+    end_rest_s: float, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The napkin rests on the plate at 1.5 cm; an objects file with a 3.5 cm
+    plate puts the plate's top 2 cm above it, beyond support_tolerance (1 cm):
+    the rest cannot be a placement, and the warning says where the napkin lay,
+    when, and which top it was measured against — whether the recording goes
+    on 1.5 s after the release or stops 0.05 s after it."""
+    demo = SET_TABLE[0]
+    stream = stream_from_demonstration(
+        demo, rate_hz=30, noise_m=0.002, rng=0, end_rest_s=end_rest_s
+    )
+    geometry = {name: ObjectGeometry("box", (0.05, 0.05, 0.02)) for name in stream.objects}
+    geometry["plate"] = ObjectGeometry("cylinder", (0.26, 0.26, 0.035))
+    found = segment(stream, geometry=geometry)
+    assert [m.object for m in found.moves] == [s.object for s in demo.steps][:-1]
+    (warning,) = [r.getMessage() for r in caplog.records if r.name.endswith("detect")]
+    assert warning.startswith("napkin: ") and warning.endswith("is not a step")
+    assert "on no support within support_tolerance (10 mm; plate's top beneath at 3" in warning
+    high = float(warning.split(" mm high")[0].rsplit(" ", 1)[1])
+    assert abs(high - 15) < 5  # the napkin's rest (15 mm), from 2 or more samples of 2 mm noise
+
+
 def test_a_track_that_begins_mid_move_still_gives_the_step_but_no_initial_pose() -> None:
     demo = Demonstration(
         "late", (Step("a", Pose((0.6, 0.4, 0.0))),), initial=(("a", Pose((0.1, 0.1, 0.0))),)

@@ -40,7 +40,9 @@ objects at once give two moves):
    it can go down), or when it is above the table (z = 0, docs/formats.md) and
    above no object or landmark whose top it could stand on (from
    ``geometry``; an object of unknown size within 10 cm beneath may be the
-   support).
+   support). The objects beneath are read over the times the rest's pose was
+   read (at least the last ``pose_window_s`` of them), robustly as in 4., not
+   from one sample.
 6. **The end of the stream.** A recording that stops right after the last
    release still gives that placement: the samples at the end within
    :attr:`~SegmentationSettings.settle_radius` of the last ones (or 4 × the
@@ -83,7 +85,8 @@ from demoplan.documents.demonstrations import demonstration_to_dict
 from demoplan.errors import InputError
 from demoplan.fileio import dump_json, write_atomic
 from demoplan.model import Demonstration, ObjectGeometry, Pose, Step
-from demoplan.rotations import angle_between, mean_quat, rpy_from_quat
+from demoplan.rotations import angle_between
+from demoplan.segmentation.rests import Supports, robust_pose
 from demoplan.segmentation.settings import SegmentationSettings
 from demoplan.segmentation.types import ObjectTrack, PoseStream, check_object_count
 
@@ -104,15 +107,12 @@ logger = logging.getLogger(__name__)
 
 MIN_FINAL_REST_SAMPLES = 3
 MIN_HALF_WINDOW_SAMPLES = 4  # a half window shorter than this is widened (sparse samples)
-INLIER_FACTOR = 3.0  # inliers lie within this many median distances of the median
-MIN_INLIER_RADIUS = 1e-4  # m: noise-free streams have a MAD of 0
 MIN_SAMPLE_STEP = 1e-5
 """Seconds between samples, at least (median of a track): 100,000 samples a
 second, fifty times a fast motion-capture system. The windows of the
 segmentation are seconds long, so samples nanoseconds apart (times written
 in ns, or in s but scaled) made windows of billions of samples: segment ran
 for minutes or asked for 400 GB."""
-UNKNOWN_FOOTPRINT_M = 0.1  # an object of unknown size this close beneath may be a support
 
 
 @dataclass(frozen=True, slots=True)
@@ -271,7 +271,7 @@ def segment(
     settings = settings or SegmentationSettings()
     check_object_count(len(stream.tracks), "objects", stream.source, None)
     _check_sample_steps(stream)
-    supports = _Supports(stream, geometry or {}, landmarks or {}, settings)
+    supports = Supports(stream, geometry or {}, landmarks or {}, settings)
     moves: list[Move] = []
     nudges: list[Move] = []
     pushes: list[Move] = []
@@ -313,55 +313,6 @@ def _check_sample_steps(stream: PoseStream) -> None:
                 "(convert times written in ms, µs or ns)",
                 source=stream.source,
             )
-
-
-class _Supports:
-    """What an object at rest stands on: the table (z = 0), or the top of an object
-    (at that time) or landmark beneath it, from their geometry."""
-
-    def __init__(
-        self,
-        stream: PoseStream,
-        geometry: Mapping[str, ObjectGeometry],
-        landmarks: Mapping[str, Pose],
-        settings: SegmentationSettings,
-    ):
-        self.stream = stream
-        self.geometry = geometry
-        self.landmarks = landmarks
-        self.tolerance = settings.support_tolerance
-
-    def supported(self, name: str, pose: Pose, time: float) -> bool | None:
-        """True on a support, False above known supports only, None where an
-        object of unknown size lies beneath (it may be the support)."""
-        x, y, z = pose.position
-        if abs(z) <= self.tolerance:
-            return True
-        unknown = False
-        others: list[tuple[str, Pose]] = list(self.landmarks.items())
-        for track in self.stream.tracks:
-            if track.name != name and len(track):
-                i = min(int(np.searchsorted(track.times, time)), len(track) - 1)
-                q = None if track.orientations is None else track.orientations[i]
-                x0, y0, z0 = (float(v) for v in track.positions[i])
-                quat = None if q is None else tuple(float(v) for v in q)
-                others.append((track.name, Pose((x0, y0, z0), quat)))  # type: ignore[arg-type]
-        for other, where in others:
-            size = self.geometry.get(other)
-            dx, dy = x - where.position[0], y - where.position[1]
-            if size is None:
-                unknown |= math.hypot(dx, dy) < UNKNOWN_FOOTPRINT_M and where.position[2] < z
-                continue
-            turned = where.orientation
-            yaw = 0.0 if turned is None else math.radians(rpy_from_quat(turned)[2])
-            u = math.cos(yaw) * dx + math.sin(yaw) * dy
-            v = -math.sin(yaw) * dx + math.cos(yaw) * dy
-            if abs(u) > size.size[0] / 2 or abs(v) > size.size[1] / 2:
-                continue
-            top = where.position[2] + size.size[2]
-            if abs(z - top) <= self.tolerance:
-                return True
-        return None if unknown else False
 
 
 @dataclass(frozen=True, slots=True)
@@ -450,7 +401,7 @@ def _runs(mask: NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
 
 
 def _segment_track(
-    track: ObjectTrack, settings: SegmentationSettings, supports: _Supports
+    track: ObjectTrack, settings: SegmentationSettings, supports: Supports
 ) -> _TrackResult:
     """One object's track → its moves, nudges and pushes (steps 1–7 of the module docstring)."""
     n = len(track)
@@ -463,17 +414,23 @@ def _segment_track(
     starts, ends, last_rest_end = _settle_at_the_end(track, starts, ends, settings, supports)
     # Rests: before the first move, between moves, after the last one (index ranges, end excl.).
     rest_ends = np.concatenate((starts, [last_rest_end]))
-    poses = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings)
-    hover = _pauses_in_the_air(track, starts, ends, rest_ends, poses, settings, supports)
+    noise = _noise_sigma(positions[:, 2])
+    poses, spans = _rest_poses(track, np.concatenate(([0], ends + 1)), rest_ends, settings, noise)
+    hover = _pauses_in_the_air(track, starts, ends, poses, spans, settings, supports)
     moves, nudges, pushes, initial = _steps_nudges_and_pushes(
         track, starts, ends, poses, hover, forced, settings
     )
     if starts.size and hover[starts.size]:
+        last, (first, _) = poses[-1], spans[-1]
+        assert last is not None
         logger.warning(
-            "%s: held in the air at the end of the stream (t = %.3f s); "
-            "its last move is not a step",
+            "%s: at rest from t = %.2f s to the end of the stream (t = %.2f s), %s: "
+            "taken as held in the air, so its last move (from t = %.2f s) is not a step",
             track.name,
+            first,
             times[-1],
+            _off_support(supports, track.name, last, *spans[-1]),
+            times[starts[-1]],
         )
     return _TrackResult(moves, nudges, pushes, initial, speed)
 
@@ -524,34 +481,42 @@ def _rest_poses(
     rest_starts: IntArray,
     rest_ends: IntArray,
     settings: SegmentationSettings,
-) -> list[Pose | None]:
+    noise: float,
+) -> tuple[list[Pose | None], list[tuple[float, float]]]:
     """Step 4 of the module docstring: the pose of each rest (samples
-    ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples."""
+    ``rest_starts[k] … rest_ends[k] − 1``), None for a rest without samples,
+    and the times (first, last sample) it was read over; ``noise`` is the
+    track's height noise σ (m, :func:`_settled_start`)."""
     times, positions, orientations = track.times, track.positions, track.orientations
-
-    def rest_pose(k: int) -> Pose | None:
-        a, b = int(rest_starts[k]), int(rest_ends[k])
+    poses: list[Pose | None] = []
+    spans: list[tuple[float, float]] = []
+    for a, b in zip(rest_starts.tolist(), rest_ends.tolist(), strict=True):
         if b <= a:
-            return None
-        a = _settled_start(times, positions, a, b, settings)
+            poses.append(None)
+            spans.append((math.nan, math.nan))
+            continue
+        a = _settled_start(times, positions, a, b, settings, noise)
         b = min(b, int(np.searchsorted(times, times[a] + settings.pose_window_s, side="right")))
-        return _robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
-
-    return [rest_pose(k) for k in range(len(rest_starts))]
+        poses.append(
+            robust_pose(positions[a:b], None if orientations is None else orientations[a:b])
+        )
+        spans.append((float(times[a]), float(times[b - 1])))
+    return poses, spans
 
 
 def _pauses_in_the_air(
     track: ObjectTrack,
     starts: IntArray,
     ends: IntArray,
-    rest_ends: IntArray,
     poses: list[Pose | None],
+    spans: list[tuple[float, float]],
     settings: SegmentationSettings,
-    supports: _Supports,
+    supports: Supports,
 ) -> list[bool]:
     """Step 5 of the module docstring: whether each rest is in the air (not a
-    placement: the move through it continues)."""
-    times, positions = track.times, track.positions
+    placement: the move through it continues); the objects beneath are read
+    over the times the rest's pose was read (``spans``)."""
+    positions = track.positions
     hover = [False] * (starts.size + 1)
     for k in range(1, starts.size + 1):
         pose = poses[k]
@@ -563,8 +528,7 @@ def _pauses_in_the_air(
             drop = pose.position[2] - (after.position[2] if after else pose.position[2])
             hover[k] = rise < settings.min_lift and drop >= settings.min_lift
         if not hover[k]:
-            at = float(times[int(rest_ends[k]) - 1])
-            hover[k] = supports.supported(track.name, pose, at) is False
+            hover[k] = supports.supported(track.name, pose, *spans[k]) is False
     return hover
 
 
@@ -589,7 +553,7 @@ def _steps_nudges_and_pushes(
     if reference is None:
         # Moving when the track begins: measure the first move from where the track starts.
         b = int(np.searchsorted(times, times[0] + settings.pose_window_s, side="right"))
-        reference = _robust_pose(positions[:b], None if orientations is None else orientations[:b])
+        reference = robust_pose(positions[:b], None if orientations is None else orientations[:b])
     previous = 0  # the rest the current move started from
     first = 0  # the first hysteresis move of the current move
     for k in range(starts.size):
@@ -647,14 +611,15 @@ def _settle_at_the_end(
     starts: IntArray,
     ends: IntArray,
     settings: SegmentationSettings,
-    supports: _Supports,
+    supports: Supports,
 ) -> tuple[IntArray, IntArray, int]:
     """Cut the last move short where the object already lies still at the end of the stream.
 
     A recording often stops a few samples after the last release (robosuite's
     stop 0.05 s after it), too soon for the windowed speed to fall: the
     samples at the end within :attr:`~SegmentationSettings.settle_radius` of
-    the last ones are the final rest when the object lies there on a support
+    the last ones are the final rest when the object lies there (its pose read
+    from where it is as low as it gets, as step 4 reads it) on a support
     (the table, or a known support beneath it; one sample is enough) or, on
     an object of unknown size, when there are at least two of them and the
     last two are no faster than ``start_speed``. Otherwise the object is still
@@ -673,9 +638,15 @@ def _settle_at_the_end(
     window = int(np.searchsorted(times, times[-1] - settings.pose_window_s, side="left"))
     first_still = max(_settled_from(positions, window, n, settings), int(starts[-1]) + 1)
     if first_still < n:
-        pose = _robust_pose(positions[first_still:], None)
+        # Read as step 4 reads the rest (so the two checks of it agree): from
+        # where it is as low as it gets, not from where the last lowering began.
+        a = _settled_start(
+            times, positions, first_still, n, settings, _noise_sigma(positions[:, 2])
+        )
+        pose = robust_pose(positions[a:], None)
         on = abs(pose.position[2]) <= settings.support_tolerance
-        below = supports.supported(track.name, pose, float(times[-1]))
+        span = float(times[a]), float(times[-1])
+        below = supports.supported(track.name, pose, *span)
         # Coming to a stop: at least two samples there, the last two slower than
         # start_speed (a min-jerk set-down ends at rest even when the samples
         # before it, at 20 Hz, are still on the way down).
@@ -686,12 +657,39 @@ def _settle_at_the_end(
             ends = ends.copy()
             ends[-1] = first_still - 1
             return starts, ends, n
+        if below is False and supports.nearest_top(track.name, pose, *span) is not None:
+            logger.warning(
+                "%s: its last samples (t = %.2f–%.2f s) lie %s: still carried, or set "
+                "down where the sizes given say nothing is; its last move is not a step",
+                track.name,
+                times[first_still],
+                times[-1],
+                _off_support(supports, track.name, pose, *span),
+            )
+            return starts[:-1], ends[:-1], int(starts[-1])
     logger.warning(
         "%s: still moving at the end of the stream (t = %.3f s); its last move is not a step",
         track.name,
         times[-1],
     )
     return starts[:-1], ends[:-1], int(starts[-1])
+
+
+def _off_support(supports: Supports, name: str, pose: Pose, start: float, end: float) -> str:
+    """Why a rest at ``pose`` is on no support, for a warning: its height and the
+    nearest top of known size beneath it."""
+    z = pose.position[2]
+    near = supports.nearest_top(name, pose, start, end)
+    beneath = (
+        "nothing of known size beneath"
+        if near is None
+        else f"{near[0]}'s top beneath at {near[1] * 1000:.1f} mm, {abs(z - near[1]) * 1000:.1f} "
+        "mm away"
+    )
+    return (
+        f"{z * 1000:.1f} mm high, on no support within support_tolerance "
+        f"({supports.tolerance * 1000:g} mm; {beneath})"
+    )
 
 
 def _settled_from(positions: FloatArray, a: int, b: int, settings: SegmentationSettings) -> int:
@@ -717,7 +715,12 @@ def _settled_from(positions: FloatArray, a: int, b: int, settings: SegmentationS
 
 
 def _settled_start(
-    times: FloatArray, positions: FloatArray, a: int, b: int, settings: SegmentationSettings
+    times: FloatArray,
+    positions: FloatArray,
+    a: int,
+    b: int,
+    settings: SegmentationSettings,
+    noise: float = 0.0,
 ) -> int:
     """Where the pose of the rest ``a:b`` is read (step 4): its first sample as low as
     the rest gets (within ``min_lift / 2`` of its lowest height, heights median-filtered
@@ -725,7 +728,10 @@ def _settled_start(
     object is at rest from there on; an object held still in the air before
     it is set down, or lifted a little and set down again (too slowly for the
     speed thresholds), reaches it last, and a later slide at the same height
-    (an unnoticed nudge) does not shift the pose."""
+    (an unnoticed nudge) does not shift the pose. ``noise``: the track's height
+    noise σ (m), a floor under the rest's own estimate — a rest of a few samples
+    (a recording stopped right after the release) tells too little of it, and
+    its one low sample would be read as the rest."""
     z = positions[a:b, 2]
     if z.size < 3:
         return a
@@ -734,12 +740,20 @@ def _settled_start(
     padded = np.pad(z, half, mode="edge")
     smooth = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
     # Margins above the sensor noise (σ from second differences, as _settled_from).
-    sigma = 1.4826 * float(np.median(np.abs(np.diff(z, n=2)))) / math.sqrt(6.0)
+    sigma = max(_noise_sigma(z), noise)
     low = smooth <= smooth.min() + max(settings.min_lift / 2.0, 4.0 * sigma)
     raised = np.flatnonzero(smooth >= smooth.min() + max(settings.min_lift, 8.0 * sigma))
     if raised.size:  # set down again after being held up: read it after that
         low[: raised[-1]] = False
     return a + int(np.argmax(low))
+
+
+def _noise_sigma(z: FloatArray) -> float:
+    """Sensor noise σ of heights ``z`` from their second differences (white noise
+    gives σ·√6, smooth motion next to nothing); 0 for fewer than 3."""
+    if z.size < 3:
+        return 0.0
+    return 1.4826 * float(np.median(np.abs(np.diff(z, n=2)))) / math.sqrt(6.0)
 
 
 def _speed_of(times: FloatArray, positions: FloatArray) -> float:
@@ -758,15 +772,3 @@ def _is_step(before: Pose, after: Pose, settings: SegmentationSettings) -> bool:
     if before.orientation is not None and after.orientation is not None:
         return angle_between(before.orientation, after.orientation) >= settings.min_angle_deg
     return False
-
-
-def _robust_pose(positions: FloatArray, orientations: FloatArray | None) -> Pose:
-    """Step 4: median, then the mean of the samples within 3 median distances of it."""
-    median = np.median(positions, axis=0)
-    distance = np.linalg.norm(positions - median, axis=1)
-    radius = max(INLIER_FACTOR * float(np.median(distance)), MIN_INLIER_RADIUS)
-    inliers = distance <= radius
-    mean = positions[inliers].mean(axis=0)
-    orientation = None if orientations is None else mean_quat(orientations[inliers])
-    x, y, z = (float(v) for v in mean)
-    return Pose((x, y, z), orientation)
