@@ -20,6 +20,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
+from scipy.ndimage import binary_fill_holes
 from scipy.spatial.distance import cdist
 
 from demoplan import budget
@@ -29,7 +30,7 @@ from demoplan.perception.camera import Camera
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
-from demoplan.perception.masks import distances
+from demoplan.perception.masks import distances, fill_holes
 from tests.hostile.harness import check_refused, run
 
 PHOTOS = Path(__file__).parents[1] / "data" / "photos"
@@ -233,3 +234,14 @@ def test_an_outline_goes_to_the_world_as_each_of_its_points_does(
     camera = Camera(px_per_m, origin)
     each = tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
     assert camera.image_outline_to_world(outline, height) == each
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 40), st.integers(1, 40)), elements=st.booleans()),
+)
+def test_holes_are_filled_as_scipy_fills_them(mask: np.ndarray) -> None:
+    """The holes of a mask (filled without importing SciPy, by one flood fill of its
+    outside) are ``binary_fill_holes``' exactly: the outside's parts, 4-connected,
+    that do not reach the crop's border."""
+    assert np.array_equal(fill_holes(mask), binary_fill_holes(mask))
