@@ -88,7 +88,10 @@ class TableReach:
 
 
 def small_parts(mask: np.ndarray, min_area: float) -> np.ndarray:
-    """The connected parts of ``mask`` smaller than ``min_area`` pixels."""
+    """The connected parts of ``mask`` smaller than ``min_area`` pixels (all of it,
+    unlabelled, when it is smaller than that altogether: a top's holes mostly are)."""
+    if np.count_nonzero(mask) < min_area:
+        return np.asarray(mask, dtype=bool)
     _, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     small = stats[:, cv2.CC_STAT_AREA] < min_area
     small[0] = False
