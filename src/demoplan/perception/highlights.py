@@ -132,6 +132,8 @@ def glare(
     bright = core_lightness > np.median(core_lightness) + 4.0
     candidates = np.zeros(core.shape, dtype=bool)
     candidates[core] = bright
+    if np.count_nonzero(bright) < 1.5 * min_area:  # every patch smaller than them all
+        return bright
     count, labels = cv2.connectedComponents(candidates.astype(np.uint8), connectivity=4)
     if count == 1:  # the background alone
         return np.zeros(classes.shape, dtype=bool)
