@@ -30,7 +30,8 @@ from demoplan.perception.camera import Camera
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
-from demoplan.perception.masks import distances, fill_holes
+from demoplan.perception.masks import SHORT_LABELS, distances, fill_holes, labelled_parts
+from demoplan.perception.opencv import cv2
 from tests.hostile.harness import check_refused, run
 
 PHOTOS = Path(__file__).parents[1] / "data" / "photos"
@@ -245,3 +246,38 @@ def test_holes_are_filled_as_scipy_fills_them(mask: np.ndarray) -> None:
     outside) are ``binary_fill_holes``' exactly: the outside's parts, 4-connected,
     that do not reach the crop's border."""
     assert np.array_equal(fill_holes(mask), binary_fill_holes(mask))
+
+
+def _same_parts_as_int32_labels(mask: np.ndarray, connectivity: int) -> None:
+    count, labels, stats = labelled_parts(mask, connectivity)
+    expected = cv2.connectedComponentsWithStats(
+        mask.astype(np.uint8), connectivity=connectivity, ltype=cv2.CV_32S
+    )
+    assert count == expected[0]
+    assert np.array_equal(labels, expected[1])
+    assert np.array_equal(stats, expected[2])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 60), st.integers(1, 60)), elements=st.booleans()),
+    st.sampled_from([4, 8]),
+)
+def test_parts_labelled_in_16_bits_are_those_labelled_in_32(
+    mask: np.ndarray, connectivity: int
+) -> None:
+    """A sparse mask's parts, labelled in 16 bits for speed, have the labels (in the
+    same order) and the boxes and areas that 32-bit labels give them."""
+    _same_parts_as_int32_labels(mask, connectivity)
+
+
+@pytest.mark.parametrize("extra", [-1, 0, 1])
+def test_a_mask_of_as_many_pixels_as_16_bits_hold_is_labelled_right(extra: int) -> None:
+    """Around the mask size where the labels go from 16 to 32 bits, each pixel of a
+    checkerboard a part of its own (4-connected): the labels are still right."""
+    side = 512
+    board = (np.add.outer(np.arange(side), np.arange(side)) % 2 == 0).ravel()
+    kept = np.flatnonzero(board)[: SHORT_LABELS + extra]
+    mask = np.zeros(side * side, dtype=bool)
+    mask[kept] = True
+    _same_parts_as_int32_labels(mask.reshape(side, side), 4)
