@@ -127,7 +127,7 @@ def glare(
     wood), in patches smaller than a block (a yellow block beside a blue one is a
     block's size)."""
     core_lightness = lightness[core]
-    bright = core_lightness > np.median(core_lightness) + 4.0
+    bright: np.ndarray = core_lightness > np.median(core_lightness) + 4.0
     candidates = np.zeros(core.shape, dtype=bool)
     candidates[core] = bright
     if np.count_nonzero(bright) < 1.5 * min_area:  # every patch smaller than them all
