@@ -26,7 +26,7 @@ from scipy.spatial.distance import cdist
 from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
 from demoplan.perception import hough
-from demoplan.perception.camera import Camera
+from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
@@ -281,3 +281,36 @@ def test_a_mask_of_as_many_pixels_as_16_bits_hold_is_labelled_right(extra: int) 
     mask = np.zeros(side * side, dtype=bool)
     mask[kept] = True
     _same_parts_as_int32_labels(mask.reshape(side, side), 4)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    hnp.arrays(
+        np.uint8, st.tuples(st.integers(1, 30), st.integers(1, 30), st.sampled_from([3, 4]))
+    ),
+    st.booleans(),
+)
+def test_a_png_decoded_by_opencv_has_pils_pixels(
+    tmp_path_factory: pytest.TempPathFactory, pixels: np.ndarray, optimised: bool
+) -> None:
+    """An 8-bit RGB or RGBA PNG (decoded by OpenCV, for speed) loads as PIL reads it,
+    alpha dropped, the colours under it kept."""
+    from PIL import Image
+
+    path = tmp_path_factory.mktemp("png") / "image.png"
+    Image.fromarray(pixels).save(path, optimize=optimised)
+    with Image.open(path) as opened:
+        expected = np.asarray(opened.convert("RGB"))
+    assert np.array_equal(load_image(path), expected)
+
+
+def test_the_development_photographs_load_as_pil_reads_them() -> None:
+    """The development set's photographs (8-bit RGB PNGs, decoded by OpenCV) load
+    with PIL's pixels."""
+    from PIL import Image
+
+    for label in sorted(PHOTOS.glob("*.json")):
+        image = load_labelled(label).image
+        with Image.open(image) as opened:
+            expected = np.asarray(opened.convert("RGB"))
+        assert np.array_equal(load_image(image), expected), image.name
