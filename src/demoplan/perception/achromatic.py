@@ -250,10 +250,10 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     black cells cover more). One labelling of the image's non-bright pixels finds
     the holes (those not reaching the border), their sizes and dark shares; the
     parts are labelled only when a hole is taken."""
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        (~bright).astype(np.uint8), connectivity=4
-    )
-    sizes = stats[:, cv2.CC_STAT_AREA]
+    # the sizes counted from the labels: the image is mostly not bright, and OpenCV's
+    # stats of so many labelled pixels cost more than the count
+    count, labels = cv2.connectedComponents((~bright).astype(np.uint8), connectivity=4)
+    sizes = np.bincount(labels.ravel(), minlength=count)
     darker = np.bincount(labels[dark & ~bright], minlength=count)
     taken = sizes < side_px**2
     taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
@@ -263,9 +263,8 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     if not taken.any():
         return np.zeros(bright.shape, dtype=bool)
     holes: np.ndarray = taken[labels]
-    filled = bright | holes
-    count, parts = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
-    areas = np.bincount(parts.ravel(), minlength=count)
+    count, parts, stats = labelled_parts(bright | holes)
+    areas = stats[:, cv2.CC_STAT_AREA]
     held = np.bincount(parts[holes], minlength=count)
     printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[parts]
     return printed
@@ -286,8 +285,8 @@ def _spots(
     of a block's size or less, ``sizes`` their areas) cover under
     :data:`PRINTED_SPOT_SHARE` of the bright part round them, its small holes filled."""
     holes = small[labels]
-    count, parts = cv2.connectedComponents((bright | holes).astype(np.uint8), connectivity=8)
-    areas = np.bincount(parts.ravel(), minlength=count)
+    _, parts, stats = labelled_parts(bright | holes)
+    areas = stats[:, cv2.CC_STAT_AREA]
     part_of = np.zeros(small.shape[0], dtype=np.intp)
     part_of[labels[holes]] = parts[holes]
     spots: np.ndarray = small & (sizes < PRINTED_SPOT_SHARE * areas[part_of])
