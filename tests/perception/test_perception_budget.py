@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import random
 import subprocess
 import sys
 from pathlib import Path
@@ -27,6 +28,7 @@ from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
 from demoplan.perception import hough
 from demoplan.perception.camera import Camera, load_image
+from demoplan.perception.colours import CLASS_SMOOTHING, _smoothed_classes
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
@@ -314,3 +316,27 @@ def test_the_development_photographs_load_as_pil_reads_them() -> None:
         with Image.open(image) as opened:
             expected = np.asarray(opened.convert("RGB"))
         assert np.array_equal(load_image(image), expected), image.name
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 30), st.integers(1, 30)), elements=st.booleans()),
+    st.integers(1, 4),
+    st.randoms(use_true_random=False),
+)
+def test_the_classes_smoothed_by_counts_are_those_by_mean(
+    core: np.ndarray, kinds: int, draw: random.Random
+) -> None:
+    """Each core pixel's class, the most common in the square around it, counted in
+    8 bits, is the one whose 0/1 mask's mean over the square (a float blur) is
+    largest, the first of a tie the same."""
+    classes = np.array([draw.randrange(kinds) for _ in range(int(core.sum()))])
+    labels = np.unique(classes)
+    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
+    means = []
+    for label in labels:
+        mask = np.zeros(core.shape, dtype=np.float32)
+        mask[core] = classes == label
+        means.append(np.asarray(cv2.blur(mask, size))[core])
+    expected = classes if labels.size < 2 else labels[np.argmax(np.stack(means, axis=1), axis=1)]
+    assert np.array_equal(_smoothed_classes(classes, core), expected)

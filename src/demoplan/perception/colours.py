@@ -610,17 +610,17 @@ def _full_level(values: np.ndarray) -> float:
 def _smoothed_classes(classes: np.ndarray, core: np.ndarray) -> np.ndarray:
     """The core pixels' classes (``classes``, over ``core``'s pixels), each the
     most common among the core pixels of :data:`CLASS_SMOOTHING`'s square around
-    it: a face's pixels whose colour the noise or the texture put nearer another
-    palette colour (a blue cube's speckles of violet) take their face's."""
+    it (counted in 8 bits): a face's pixels whose colour the noise or the texture
+    put nearer another palette colour (a blue cube's speckles of violet) take their face's."""
     labels = np.unique(classes)
     if labels.size < 2:
         return classes
     size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
     votes = []
     for label in labels:
-        mask = np.zeros(core.shape, dtype=np.float32)
+        mask = np.zeros(core.shape, dtype=np.uint8)
         mask[core] = classes == label
-        votes.append(np.asarray(cv2.blur(mask, size))[core])
+        votes.append(np.asarray(cv2.boxFilter(mask, -1, size, normalize=False))[core])
     smoothed: np.ndarray = labels[np.argmax(np.stack(votes, axis=1), axis=1)]
     return smoothed
 
