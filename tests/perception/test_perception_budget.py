@@ -273,6 +273,18 @@ def test_parts_labelled_in_16_bits_are_those_labelled_in_32(
     _same_parts_as_int32_labels(mask, connectivity)
 
 
+def test_a_photographs_sparse_parts_are_labelled_right_in_16_bits() -> None:
+    """A photograph-sized mask (1600 × 1200) with a few hundred parts spread over
+    every row, 8- and 4-connected: the 16-bit labels are the 32-bit ones, whatever
+    the stripes OpenCV may label the rows in."""
+    rng = np.random.default_rng(3)
+    mask = np.zeros((1600, 1200), dtype=bool)
+    for row, col in zip(rng.integers(0, 1597, 400), rng.integers(0, 1197, 400), strict=True):
+        mask[row : row + rng.integers(1, 4), col : col + rng.integers(1, 4)] = True
+    for connectivity in (4, 8):
+        _same_parts_as_int32_labels(mask, connectivity)
+
+
 @pytest.mark.parametrize("extra", [-1, 0, 1])
 def test_a_mask_of_as_many_pixels_as_16_bits_hold_is_labelled_right(extra: int) -> None:
     """Around the mask size where the labels go from 16 to 32 bits, each pixel of a
