@@ -189,12 +189,13 @@ def _in_world(parts: list[RejectedPart], camera: Camera, height: int) -> list[Re
     outlines = [np.asarray(o, dtype=float).reshape(-1, 2) for p in parts for o in p.outlines]
     points = np.concatenate(outlines) if outlines else np.zeros((0, 2))
     world = camera.image_outline_to_world(points, height)
-    rejections, start, taken = [], 0, iter(outlines)
+    rejections, start, first = [], 0, 0
     for part in parts:
         pieces = []
-        for _, outline in zip(part.outlines, taken, strict=False):
+        for outline in outlines[first : first + len(part.outlines)]:
             pieces.append(world[start : start + len(outline)])
             start += len(outline)
+        first += len(part.outlines)
         rejections.append(Rejection(part.reason, part.detail, part.colour, tuple(pieces)))
     return rejections
 
