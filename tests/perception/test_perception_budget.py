@@ -273,6 +273,18 @@ def test_parts_labelled_in_16_bits_are_those_labelled_in_32(
     _same_parts_as_int32_labels(mask, connectivity)
 
 
+@pytest.mark.parametrize("connectivity", [4, 8])
+def test_a_photographs_dense_foreground_is_labelled_right_in_16_bits(connectivity: int) -> None:
+    """A photograph-sized foreground (1280 × 720, half its pixels set in blobs and
+    specks: far more than 65,535 pixels, fewer runs): its 16-bit labels are the
+    32-bit ones."""
+    rng = np.random.default_rng(5)
+    noise = cv2.blur(rng.random((720, 1280)).astype(np.float32), (25, 25))
+    mask = noise > np.median(noise)
+    assert labelled_parts(mask)[1].dtype == np.uint16  # labelled in 16 bits
+    _same_parts_as_int32_labels(mask, connectivity)
+
+
 def test_a_photographs_sparse_parts_are_labelled_right_in_16_bits() -> None:
     """A photograph-sized mask (1600 × 1200) with a few hundred parts spread over
     every row, 8- and 4-connected: the 16-bit labels are the 32-bit ones, whatever
@@ -286,9 +298,10 @@ def test_a_photographs_sparse_parts_are_labelled_right_in_16_bits() -> None:
 
 
 @pytest.mark.parametrize("extra", [-1, 0, 1])
-def test_a_mask_of_as_many_pixels_as_16_bits_hold_is_labelled_right(extra: int) -> None:
-    """Around the mask size where the labels go from 16 to 32 bits, each pixel of a
-    checkerboard a part of its own (4-connected): the labels are still right."""
+def test_a_mask_of_as_many_runs_as_16_bits_hold_is_labelled_right(extra: int) -> None:
+    """Around the number of runs of set pixels where the labels go from 16 to 32
+    bits, each pixel of a checkerboard a run and a part of its own (4-connected):
+    the labels are still right."""
     side = 512
     board = (np.add.outer(np.arange(side), np.arange(side)) % 2 == 0).ravel()
     kept = np.flatnonzero(board)[: SHORT_LABELS + extra]
