@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import random
 import subprocess
 import sys
 from pathlib import Path
@@ -20,16 +21,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
+from scipy.ndimage import binary_fill_holes
 from scipy.spatial.distance import cdist
 
 from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
 from demoplan.perception import hough
-from demoplan.perception.camera import Camera
+from demoplan.perception.camera import Camera, load_image
+from demoplan.perception.colours import CLASS_SMOOTHING, _smoothed_classes
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
-from demoplan.perception.masks import distances
+from demoplan.perception.masks import SHORT_LABELS, distances, fill_holes, labelled_parts
+from demoplan.perception.opencv import cv2
 from tests.hostile.harness import check_refused, run
 
 PHOTOS = Path(__file__).parents[1] / "data" / "photos"
@@ -233,3 +237,131 @@ def test_an_outline_goes_to_the_world_as_each_of_its_points_does(
     camera = Camera(px_per_m, origin)
     each = tuple(camera.to_world(float(x) + 0.5, height - float(y) - 0.5) for x, y in outline)
     assert camera.image_outline_to_world(outline, height) == each
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 40), st.integers(1, 40)), elements=st.booleans()),
+)
+def test_holes_are_filled_as_scipy_fills_them(mask: np.ndarray) -> None:
+    """The holes of a mask (filled without importing SciPy, by one flood fill of its
+    outside) are ``binary_fill_holes``' exactly: the outside's parts, 4-connected,
+    that do not reach the crop's border."""
+    assert np.array_equal(fill_holes(mask), binary_fill_holes(mask))
+
+
+def _same_parts_as_int32_labels(mask: np.ndarray, connectivity: int) -> None:
+    count, labels, stats = labelled_parts(mask, connectivity)
+    expected = cv2.connectedComponentsWithStats(
+        mask.astype(np.uint8), connectivity=connectivity, ltype=cv2.CV_32S
+    )
+    assert count == expected[0]
+    assert np.array_equal(labels, expected[1])
+    assert np.array_equal(stats, expected[2])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 60), st.integers(1, 60)), elements=st.booleans()),
+    st.sampled_from([4, 8]),
+)
+def test_parts_labelled_in_16_bits_are_those_labelled_in_32(
+    mask: np.ndarray, connectivity: int
+) -> None:
+    """A sparse mask's parts, labelled in 16 bits for speed, have the labels (in the
+    same order) and the boxes and areas that 32-bit labels give them."""
+    _same_parts_as_int32_labels(mask, connectivity)
+
+
+@pytest.mark.parametrize("connectivity", [4, 8])
+def test_a_photographs_dense_foreground_is_labelled_right_in_16_bits(connectivity: int) -> None:
+    """A photograph-sized foreground (1280 × 720, half its pixels set in blobs and
+    specks: far more than 65,535 pixels, fewer runs): its 16-bit labels are the
+    32-bit ones."""
+    rng = np.random.default_rng(5)
+    noise = cv2.blur(rng.random((720, 1280)).astype(np.float32), (25, 25))
+    mask = noise > np.median(noise)
+    assert labelled_parts(mask)[1].dtype == np.uint16  # labelled in 16 bits
+    _same_parts_as_int32_labels(mask, connectivity)
+
+
+def test_a_photographs_sparse_parts_are_labelled_right_in_16_bits() -> None:
+    """A photograph-sized mask (1600 × 1200) with a few hundred parts spread over
+    every row, 8- and 4-connected: the 16-bit labels are the 32-bit ones, whatever
+    the stripes OpenCV may label the rows in."""
+    rng = np.random.default_rng(3)
+    mask = np.zeros((1600, 1200), dtype=bool)
+    for row, col in zip(rng.integers(0, 1597, 400), rng.integers(0, 1197, 400), strict=True):
+        mask[row : row + rng.integers(1, 4), col : col + rng.integers(1, 4)] = True
+    for connectivity in (4, 8):
+        _same_parts_as_int32_labels(mask, connectivity)
+
+
+@pytest.mark.parametrize("extra", [-1, 0, 1])
+def test_a_mask_of_as_many_runs_as_16_bits_hold_is_labelled_right(extra: int) -> None:
+    """Around the number of runs of set pixels where the labels go from 16 to 32
+    bits, each pixel of a checkerboard a run and a part of its own (4-connected):
+    the labels are still right."""
+    side = 512
+    board = (np.add.outer(np.arange(side), np.arange(side)) % 2 == 0).ravel()
+    kept = np.flatnonzero(board)[: SHORT_LABELS + extra]
+    mask = np.zeros(side * side, dtype=bool)
+    mask[kept] = True
+    _same_parts_as_int32_labels(mask.reshape(side, side), 4)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    hnp.arrays(
+        np.uint8, st.tuples(st.integers(1, 30), st.integers(1, 30), st.sampled_from([3, 4]))
+    ),
+    st.booleans(),
+)
+def test_a_png_decoded_by_opencv_has_pils_pixels(
+    tmp_path_factory: pytest.TempPathFactory, pixels: np.ndarray, optimised: bool
+) -> None:
+    """An 8-bit RGB or RGBA PNG (decoded by OpenCV, for speed) loads as PIL reads it,
+    alpha dropped, the colours under it kept."""
+    from PIL import Image
+
+    path = tmp_path_factory.mktemp("png") / "image.png"
+    Image.fromarray(pixels).save(path, optimize=optimised)
+    with Image.open(path) as opened:
+        expected = np.asarray(opened.convert("RGB"))
+    assert np.array_equal(load_image(path), expected)
+
+
+def test_the_development_photographs_load_as_pil_reads_them() -> None:
+    """The development set's photographs (8-bit RGB PNGs, decoded by OpenCV) load
+    with PIL's pixels."""
+    from PIL import Image
+
+    for label in sorted(PHOTOS.glob("*.json")):
+        image = load_labelled(label).image
+        with Image.open(image) as opened:
+            expected = np.asarray(opened.convert("RGB"))
+        assert np.array_equal(load_image(image), expected), image.name
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    hnp.arrays(np.bool_, st.tuples(st.integers(1, 30), st.integers(1, 30)), elements=st.booleans()),
+    st.integers(1, 4),
+    st.randoms(use_true_random=False),
+)
+def test_the_classes_smoothed_by_counts_are_those_by_mean(
+    core: np.ndarray, kinds: int, draw: random.Random
+) -> None:
+    """Each core pixel's class, the most common in the square around it, counted in
+    8 bits, is the one whose 0/1 mask's mean over the square (a float blur) is
+    largest, the first of a tie the same."""
+    classes = np.array([draw.randrange(kinds) for _ in range(int(core.sum()))])
+    labels = np.unique(classes)
+    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
+    means = []
+    for label in labels:
+        mask = np.zeros(core.shape, dtype=np.float32)
+        mask[core] = classes == label
+        means.append(np.asarray(cv2.blur(mask, size))[core])
+    expected = classes if labels.size < 2 else labels[np.argmax(np.stack(means, axis=1), axis=1)]
+    assert np.array_equal(_smoothed_classes(classes, core), expected)

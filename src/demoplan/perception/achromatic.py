@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from demoplan.perception.masks import close, dilate, erode, fill_holes
+from demoplan.perception.masks import close, dilate, erode, fill_holes, labelled_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
 
@@ -188,7 +188,7 @@ def achromatic_regions(
         if is_bright:
             mask |= _printed_on_white(mask, dark, side_px)
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+        count, labels, stats = labelled_parts(opened)
         for index in range(1, count):
             x, y, w, h, area = (int(value) for value in stats[index])
             if area < smallest_top:
@@ -220,7 +220,7 @@ def _markers(
     holds its cells) is more than :data:`MARKER_DARK_SHARE` dark inside (L* under
     :data:`DARK_RATIO` of the ``table``'s); their hulls, each recorded."""
     markers = np.zeros(bright.shape, dtype=bool)
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(bright.astype(np.uint8), connectivity=8)
+    _, labels, stats = labelled_parts(bright)
     for index in np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= smallest_top / 2) + 1:
         x, y, w, h, _ = (int(value) for value in stats[index])
         rows, cols = slice(y, y + h), slice(x, x + w)
@@ -250,10 +250,10 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     black cells cover more). One labelling of the image's non-bright pixels finds
     the holes (those not reaching the border), their sizes and dark shares; the
     parts are labelled only when a hole is taken."""
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        (~bright).astype(np.uint8), connectivity=4
-    )
-    sizes = stats[:, cv2.CC_STAT_AREA]
+    # the sizes counted from the labels: the image is mostly not bright, and OpenCV's
+    # stats of so many labelled pixels cost more than the count
+    count, labels = cv2.connectedComponents((~bright).astype(np.uint8), connectivity=4)
+    sizes = np.bincount(labels.ravel(), minlength=count)
     darker = np.bincount(labels[dark & ~bright], minlength=count)
     taken = sizes < side_px**2
     taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
@@ -263,9 +263,8 @@ def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> n
     if not taken.any():
         return np.zeros(bright.shape, dtype=bool)
     holes: np.ndarray = taken[labels]
-    filled = bright | holes
-    count, parts = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
-    areas = np.bincount(parts.ravel(), minlength=count)
+    count, parts, stats = labelled_parts(bright | holes)
+    areas = stats[:, cv2.CC_STAT_AREA]
     held = np.bincount(parts[holes], minlength=count)
     printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[parts]
     return printed
@@ -286,8 +285,8 @@ def _spots(
     of a block's size or less, ``sizes`` their areas) cover under
     :data:`PRINTED_SPOT_SHARE` of the bright part round them, its small holes filled."""
     holes = small[labels]
-    count, parts = cv2.connectedComponents((bright | holes).astype(np.uint8), connectivity=8)
-    areas = np.bincount(parts.ravel(), minlength=count)
+    _, parts, stats = labelled_parts(bright | holes)
+    areas = stats[:, cv2.CC_STAT_AREA]
     part_of = np.zeros(small.shape[0], dtype=np.intp)
     part_of[labels[holes]] = parts[holes]
     spots: np.ndarray = small & (sizes < PRINTED_SPOT_SHARE * areas[part_of])
@@ -302,7 +301,7 @@ def _opened_at_own_scale(part: np.ndarray) -> np.ndarray:
     steps = max(1, round(math.sqrt(float(part.sum())) * OPENING_SIDES / 2))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     opened = cv2.morphologyEx(part.astype(np.uint8), cv2.MORPH_OPEN, disc)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    count, labels, stats = labelled_parts(opened)
     if count < 2:
         return part
     largest: np.ndarray = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
@@ -313,7 +312,7 @@ def _white_cells(member: np.ndarray, filled: np.ndarray) -> tuple[int, float]:
     """How many holes a dark part (``member``; ``filled`` its holes filled) has
     and the share of its filled outline they cover (a marker's white cells)."""
     holes = (filled & ~member).astype(np.uint8)
-    _, _, stats, _ = cv2.connectedComponentsWithStats(holes, connectivity=8)
+    _, _, stats = labelled_parts(holes)
     sizable = stats[1:, cv2.CC_STAT_AREA] >= 0.01 * float(filled.sum())
     return int(sizable.sum()), float(holes.sum()) / max(float(filled.sum()), 1.0)
 
@@ -363,7 +362,7 @@ def _without_side_faces(member: np.ndarray, lightness: np.ndarray, steps: int) -
     top = fill_holes(member & (lightness > cut / 2.55))  # a glint within stays
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     opened = cv2.morphologyEx(top.astype(np.uint8), cv2.MORPH_OPEN, disc)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    count, labels, stats = labelled_parts(opened)
     if count < 2:
         return member
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))

@@ -182,10 +182,22 @@ def _unfit(
     return [RejectedPart(reason, detail, region.colour, pieces)] if pieces else []
 
 
-def _in_world(part: RejectedPart, camera: Camera, height: int) -> Rejection:
-    """A rejected part's outlines from image pixels (x right, y down) to the world."""
-    pieces = tuple(camera.image_outline_to_world(outline, height) for outline in part.outlines)
-    return Rejection(part.reason, part.detail, part.colour, pieces)
+def _in_world(parts: list[RejectedPart], camera: Camera, height: int) -> list[Rejection]:
+    """Rejected parts' outlines from image pixels (x right, y down) to the world: the
+    points of all converted at once (a photograph's thousand parts, one by one, cost
+    half as much again), then parted by outline."""
+    outlines = [np.asarray(o, dtype=float).reshape(-1, 2) for p in parts for o in p.outlines]
+    points = np.concatenate(outlines) if outlines else np.zeros((0, 2))
+    world = camera.image_outline_to_world(points, height)
+    rejections, start, first = [], 0, 0
+    for part in parts:
+        pieces = []
+        for outline in outlines[first : first + len(part.outlines)]:
+            pieces.append(world[start : start + len(outline)])
+            start += len(outline)
+        first += len(part.outlines)
+        rejections.append(Rejection(part.reason, part.detail, part.colour, tuple(pieces)))
+    return rejections
 
 
 def _shrink(alpha: np.ndarray, factor: int) -> np.ndarray:
@@ -426,7 +438,7 @@ def detect_blocks(
     found += tops_behind(search, regions, tables, found, _why_no_block, fit_square, parts)
     found = _without_side_faces(measures, found, parts, held)
     if rejected is not None and parts is not None:
-        rejected += [_in_world(part, camera, image.shape[0]) for part in parts]
+        rejected += _in_world(parts, camera, image.shape[0])
     return _named_in_world(found, camera, image.shape[0])
 
 

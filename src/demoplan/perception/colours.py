@@ -42,14 +42,17 @@ from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
 from demoplan.perception.highlights import fill_glints_and_prints, glare, highlights, hole_owners
 from demoplan.perception.image_measures import ImageMeasures
-from demoplan.perception.masks import CROSS, TableReach, dilate, distances, erode, fill_holes
-from demoplan.perception.opencv import cv2
-from demoplan.perception.rejected_parts import (
-    REPORTED_SHARE,
-    PartRecorder,
-    RejectedPart,
-    outlines,
+from demoplan.perception.masks import (
+    CROSS,
+    TableReach,
+    dilate,
+    distances,
+    erode,
+    fill_holes,
+    labelled_parts,
 )
+from demoplan.perception.opencv import cv2
+from demoplan.perception.rejected_parts import REPORTED_SHARE, PartRecorder, RejectedPart, outlines
 
 __all__ = [
     "PALETTE",
@@ -105,8 +108,7 @@ class ColourRegion:
 
     ``alpha`` is the soft mask on the crop ``rows × cols`` of the image
     (``offset`` = its top-left pixel); ``rgb`` the class's mean colour (its top
-    face's when side faces were told apart).
-    """
+    face's when side faces were told apart)."""
 
     colour: str
     rgb: tuple[float, float, float]
@@ -259,7 +261,7 @@ def _second_tables(
     # joined over thin dark lines (a table ruled into squares, a plank's seams):
     # closed by a 7 × 7 square first
     joined = cv2.morphologyEx(foreground, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
+    count, labels, stats = labelled_parts(joined)
     height, width = labels.shape
     found = False
     for index in range(1, count):
@@ -357,19 +359,8 @@ def _component_crop(
     lightness = c.lab[rows, cols, 0]
     ground_lightness = float(np.median(lightness[ring])) if ring.any() else 50.0
     offsets = pixels - ground
-    return _Crop(
-        rows,
-        cols,
-        member,
-        pixels,
-        chroma,
-        lightness,
-        core,
-        ground,
-        ground_ab,
-        ground_lightness,
-        offsets,
-    )
+    seen = (rows, cols, member, pixels, chroma, lightness, core)
+    return _Crop(*seen, ground, ground_ab, ground_lightness, offsets)
 
 
 def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
@@ -535,7 +526,7 @@ def colour_regions(
             reach = TableReach(tables, math.sqrt(largest_block))
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(foreground, connectivity=8)
+    count, labels, stats = labelled_parts(foreground)
     names, chroma = _palette(palette)
     colours = _ImageColours(
         image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
@@ -610,17 +601,17 @@ def _full_level(values: np.ndarray) -> float:
 def _smoothed_classes(classes: np.ndarray, core: np.ndarray) -> np.ndarray:
     """The core pixels' classes (``classes``, over ``core``'s pixels), each the
     most common among the core pixels of :data:`CLASS_SMOOTHING`'s square around
-    it: a face's pixels whose colour the noise or the texture put nearer another
-    palette colour (a blue cube's speckles of violet) take their face's."""
+    it (counted in 8 bits): a face's pixels whose colour the noise or the texture
+    put nearer another palette colour (a blue cube's speckles of violet) take their face's."""
     labels = np.unique(classes)
     if labels.size < 2:
         return classes
     size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
     votes = []
     for label in labels:
-        mask = np.zeros(core.shape, dtype=np.float32)
+        mask = np.zeros(core.shape, dtype=np.uint8)
         mask[core] = classes == label
-        votes.append(np.asarray(cv2.blur(mask, size))[core])
+        votes.append(np.asarray(cv2.boxFilter(mask, -1, size, normalize=False))[core])
     smoothed: np.ndarray = labels[np.argmax(np.stack(votes, axis=1), axis=1)]
     return smoothed
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from demoplan.perception.masks import dilate, fill_holes, small_parts
+from demoplan.perception.masks import dilate, fill_holes, labelled_parts, small_parts
 from demoplan.perception.opencv import cv2
 
 __all__ = ["GLARE_SLACK", "PRINTED_CONTRAST", "glare", "highlights", "hole_owners", "printed"]
@@ -27,9 +27,7 @@ def hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
     holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
     if not holes.any():
         return owners
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        holes.astype(np.uint8), connectivity=8
-    )
+    count, labels, stats = labelled_parts(holes)
     height, width = core.shape
     for index in range(1, count):
         # the hole's box and the ring's 2 px around it: the dilation reaches no farther
@@ -103,7 +101,7 @@ def printed(
     found = np.zeros(holes.shape, dtype=bool)
     if not holes.any():
         return found
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=8)
+    _, labels, stats = labelled_parts(holes)
     limit = 0.5 * float(enclosed.sum())
     for index in np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] < limit) + 1:
         x, y, w, h, _ = (int(value) for value in stats[index])
@@ -129,9 +127,11 @@ def glare(
     wood), in patches smaller than a block (a yellow block beside a blue one is a
     block's size)."""
     core_lightness = lightness[core]
-    bright = core_lightness > np.median(core_lightness) + 4.0
+    bright: np.ndarray = core_lightness > np.median(core_lightness) + 4.0
     candidates = np.zeros(core.shape, dtype=bool)
     candidates[core] = bright
+    if np.count_nonzero(bright) < 1.5 * min_area:  # every patch smaller than them all
+        return bright
     count, labels = cv2.connectedComponents(candidates.astype(np.uint8), connectivity=4)
     if count == 1:  # the background alone
         return np.zeros(classes.shape, dtype=bool)
