@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.perception.fused_lines import fused_lines
 from demoplan.perception.highlights import framed_on_white
 from demoplan.perception.masks import close, dilate, erode, fill_holes
 from demoplan.perception.opencv import cv2
@@ -202,7 +203,7 @@ def achromatic_regions(
                 record(labels[rows, cols] == index, rows, cols, "cut by the border", why)
                 continue
             held = framed if is_bright else None
-            part = _Part(labels, index, (x, y, w, h), mask, (steps + 1) // 2, held)
+            part = _Part(labels, index, (x, y, w, h), mask, (steps + 1) // 2, held, side_px)
             found = _region(image, lightness, table, part, is_bright, coloured)
             if isinstance(found, _Refusal):
                 record(labels[rows, cols] == index, rows, cols, found.reason, found.detail)
@@ -383,7 +384,7 @@ class _Part:
     frames printed on white tops with what they ring
     (:func:`~demoplan.perception.highlights.framed_on_white`): wholly its top, though
     dark (a frame's outer edge lies within a few px of the top's outline, where the
-    soft mask follows the lightness)."""
+    soft mask follows the lightness); ``side_px`` the smallest block's side."""
 
     labels: np.ndarray
     index: int
@@ -391,6 +392,7 @@ class _Part:
     mask: np.ndarray
     regrown: int
     framed: np.ndarray | None = None
+    side_px: float = 0.0
 
 
 def _region(
@@ -410,8 +412,13 @@ def _region(
     rows = slice(max(0, y - pad), min(height, y + h + pad))
     cols = slice(max(0, x - pad), min(width, x + w + pad))
     opened = part.labels[rows, cols] == part.index
+    if not bright:  # a grid line fused along a black top's side is no part of it
+        lines = fused_lines(part.labels, part.index, part.mask, (rows, cols), part.side_px)
+        opened &= ~lines
     # the opening's rounded corners given back (and short stubs of the lines it cut)
     member = dilate(opened, part.regrown) & part.mask[rows, cols]
+    if not bright:
+        member &= ~lines
     crop_l, crop_table = lightness[rows, cols], table[rows, cols]
     if not bright:
         member = _without_side_faces(member, crop_l, part.regrown)
