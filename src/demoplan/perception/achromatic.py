@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.perception.fused_lines import fused_lines
+from demoplan.perception.highlights import framed_on_white
 from demoplan.perception.masks import close, dilate, erode, fill_holes, labelled_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
@@ -183,10 +185,12 @@ def achromatic_regions(
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     height, width = lightness.shape
     regions: list[AchromaticRegion] = []
+    framed = np.zeros(bright.shape, dtype=bool)
     for is_bright, mask in ((True, bright), (False, dark)):
         mask &= ~dilate(markers, 2)  # a marker's white and black cells are no blocks
         if is_bright:
-            mask |= _printed_on_white(mask, dark, side_px)
+            framed = framed_on_white(mask, dark, side_px)  # held whole: see _Part
+            mask |= _printed_on_white(mask, dark, side_px) | framed
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)
         count, labels, stats = labelled_parts(opened)
         for index in range(1, count):
@@ -198,7 +202,8 @@ def achromatic_regions(
                 why = "a black, white or grey part at the image's border"
                 record(labels[rows, cols] == index, rows, cols, "cut by the border", why)
                 continue
-            part = _Part(labels, index, (x, y, w, h), mask, (steps + 1) // 2)
+            held = framed if is_bright else None
+            part = _Part(labels, index, (x, y, w, h), mask, (steps + 1) // 2, held, side_px)
             found = _region(image, lightness, table, part, is_bright, coloured)
             if isinstance(found, _Refusal):
                 record(labels[rows, cols] == index, rows, cols, found.reason, found.detail)
@@ -374,13 +379,19 @@ def _without_side_faces(member: np.ndarray, lightness: np.ndarray, steps: int) -
 class _Part:
     """One part of the opened mask: its ``index`` in ``labels`` and its ``box``
     (x, y, w, h); ``mask`` the mask before the opening and ``regrown`` how many
-    steps its corners are grown back into it."""
+    steps its corners are grown back into it; ``framed`` (a bright part's) the
+    frames printed on white tops with what they ring
+    (:func:`~demoplan.perception.highlights.framed_on_white`): wholly its top, though
+    dark (a frame's outer edge lies within a few px of the top's outline, where the
+    soft mask follows the lightness); ``side_px`` the smallest block's side."""
 
     labels: np.ndarray
     index: int
     box: tuple[int, int, int, int]
     mask: np.ndarray
     regrown: int
+    framed: np.ndarray | None = None
+    side_px: float = 0.0
 
 
 def _region(
@@ -400,8 +411,13 @@ def _region(
     rows = slice(max(0, y - pad), min(height, y + h + pad))
     cols = slice(max(0, x - pad), min(width, x + w + pad))
     opened = part.labels[rows, cols] == part.index
+    if not bright:  # a grid line fused along a black top's side is no part of it
+        lines = fused_lines(part.labels, part.index, part.mask, (rows, cols), part.side_px)
+        opened &= ~lines
     # the opening's rounded corners given back (and short stubs of the lines it cut)
     member = dilate(opened, part.regrown) & part.mask[rows, cols]
+    if not bright:
+        member &= ~lines
     crop_l, crop_table = lightness[rows, cols], table[rows, cols]
     if not bright:
         member = _without_side_faces(member, crop_l, part.regrown)
@@ -439,6 +455,8 @@ def _region(
         alpha = (crop_l - cut) / min(float(full), -1e-6)
     alpha = np.clip(alpha, 0.0, 1.0) * dilate(filled, 1)
     alpha[erode(filled, 2)] = 1.0  # within: a glint, a glyph, the top's shading
+    if part.framed is not None:
+        alpha[part.framed[rows, cols] & filled] = 1.0
     top = float(np.median(crop_l[core]))
     colour = "white" if bright else "black" if top < BLACK_BELOW else "grey"
     mean = image[rows, cols][core].mean(axis=0)

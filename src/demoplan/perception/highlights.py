@@ -1,7 +1,9 @@
 """What lies on a coloured top face though it is not the face's colour: a
 specular highlight (white added to the face's colour) and what is printed on it,
 found by :mod:`demoplan.perception.colours` as holes in a region's clearly
-coloured pixels and given back to the top that encloses them."""
+coloured pixels and given back to the top that encloses them; and a frame printed
+round a white top's face (:func:`framed_on_white`), which
+:mod:`demoplan.perception.achromatic` gives back to the top."""
 
 from __future__ import annotations
 
@@ -10,7 +12,16 @@ import numpy as np
 from demoplan.perception.masks import dilate, fill_holes, labelled_parts, small_parts
 from demoplan.perception.opencv import cv2
 
-__all__ = ["GLARE_SLACK", "PRINTED_CONTRAST", "glare", "highlights", "hole_owners", "printed"]
+__all__ = [
+    "FRAMED_BRIGHT_SHARE",
+    "GLARE_SLACK",
+    "PRINTED_CONTRAST",
+    "framed_on_white",
+    "glare",
+    "highlights",
+    "hole_owners",
+    "printed",
+]
 
 GLARE_SLACK = 8.0
 """Grey levels a highlight's channel may fall under the top face's mean (noise)."""
@@ -161,3 +172,50 @@ def fill_glints_and_prints(
     if unlit is not None:  # judged as they were too, only the holes the rule changed
         changed = glints & (unlit <= 0.5)
         alpha[printed(unlit, lightness, table_lightness, elsewhere, changed)] = 1.0
+
+
+FRAMED_BRIGHT_SHARE = 0.5
+"""A dark ring's hole is a white top's face inside a frame printed on it when this
+share of the hole or more is bright (the face, its blurred edge beside the frame
+aside: 81-87 % of a generated frame's hole)."""
+
+
+def framed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.ndarray:
+    """The frames printed round white tops' faces, each with its hole and the two
+    pixels of blur round it (between the frame and the top's rim, neither dark nor
+    bright): a part of ``dark`` that rings one hole of a block's size
+    or less (``side_px``, the smallest block's side) which is :data:`FRAMED_BRIGHT_SHARE`
+    ``bright`` or more, and covers less than that hole (a frame is a thin ring of
+    one width along the top's outline; a black top's glint, a marker's white cells
+    are holes smaller than the dark round them). On white paper the top's rim
+    outside the frame is as light as the paper and the frame is thinner than the
+    opening of :func:`~demoplan.perception.achromatic.achromatic_regions` takes: the
+    white face inside it alone, 0.68 of the side, is too small a top; the frame's
+    outside is the top's (0.84 of the side on a generated top, its rim beyond it)."""
+    found = np.zeros(bright.shape, dtype=bool)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        (~dark).astype(np.uint8), connectivity=4
+    )
+    sizes = stats[:, cv2.CC_STAT_AREA]
+    lit = np.bincount(labels[bright & ~dark], minlength=count)
+    taken = (sizes < side_px**2) & (lit >= FRAMED_BRIGHT_SHARE * sizes)
+    taken[0] = False  # the dark pixels themselves
+    taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    if not taken.any():
+        return found
+    _, rings, ring_stats, _ = cv2.connectedComponentsWithStats(
+        dark.astype(np.uint8), connectivity=8
+    )
+    height, width = dark.shape
+    for index in np.flatnonzero(taken):
+        x, y, w, h = (int(value) for value in stats[index, :4])
+        pad = max(3, round(0.2 * side_px))  # the ring's width, and its blur, round the hole
+        rows = slice(max(0, y - pad), min(height, y + h + pad))
+        cols = slice(max(0, x - pad), min(width, x + w + pad))
+        hole = labels[rows, cols] == index
+        around = np.unique(rings[rows, cols][dilate(hole, 1) & dark[rows, cols]])
+        if around.size != 1 or ring_stats[around[0], cv2.CC_STAT_AREA] >= sizes[index]:
+            continue  # no one ring round it, or one as large as the hole: no frame
+        ring = rings[rows, cols] == around[0]
+        found[rows, cols] |= fill_holes(dilate(ring, 2) | hole)
+    return found
