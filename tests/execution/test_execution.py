@@ -15,10 +15,11 @@ from hypothesis import strategies as st
 import demoplan
 from demoplan.documents.demonstrations import load_demonstrations
 from demoplan.errors import InputError, UsageError
-from demoplan.execution.executor import ExecutionSettings, _turn_errors, execute, first_plan
+from demoplan.execution.executor import ExecutionSettings, execute, first_plan
 from demoplan.execution.faults import Faults, parse_faults
 from demoplan.execution.kinematic import KinematicWorld
 from demoplan.execution.report import RunReport
+from demoplan.execution.turns import turn_errors
 from demoplan.fileio import MANIFEST
 from demoplan.learning import learn
 from demoplan.learning.modelfile import save_model
@@ -407,7 +408,7 @@ def test_a_run_reports_each_oriented_things_turn_from_its_target() -> None:
     for turn, seen in ((30.0, 30.0), (170.0, 10.0)):  # a 14 × 7 cm box: 180° symmetry
         turned = Pose(phone.position, quat_from_yaw(phone.yaw + turn))
         observation = replace(report.final, poses={**report.final.poses, "phone": turned})
-        assert _turn_errors(problem, observation)["phone"] == pytest.approx(seen, abs=1e-6)
+        assert turn_errors(problem, observation)["phone"] == pytest.approx(seen, abs=1e-6)
 
 
 def test_the_run_command_prints_the_turns_beside_the_distances(tmp_path: Path) -> None:

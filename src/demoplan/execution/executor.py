@@ -43,13 +43,14 @@ from demoplan.execution.report import (
     RunReport,
     observed_scene,
 )
+from demoplan.execution.turns import turn_errors, turned_beyond
 from demoplan.execution.world import Observation, World
 from demoplan.model import Pose, TaskModel
 from demoplan.planning.problem import Action, Plan
 from demoplan.planning.search import Budget
 from demoplan.planning.strips import Rules
 from demoplan.scenes.binding import Binding, bind_model
-from demoplan.scenes.geometry import GeometrySettings, symmetry, yaw_difference
+from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.naming import StableNames
 from demoplan.scenes.plan import (
     ChosenPlan,
@@ -323,7 +324,7 @@ class _Run:
         observation = world.observe()
         failure = _check_action(action, target, expected, observation, settings, step)
         if failure is None and action.kind == "PUT_DOWN":
-            turn = _turned(
+            turn = turned_beyond(
                 problem, observation, action.object, action.location, settings.yaw_tolerance
             )
             if turn is not None:
@@ -409,7 +410,7 @@ class _Run:
             for obj, loc in problem.problem.goal
             if obj in final.poses
         }
-        turns = _turn_errors(problem, final)
+        turns = turn_errors(problem, final)
         self.emit(
             RunEvent(
                 "done",
@@ -710,43 +711,9 @@ def _goal_holds(
             or _distance(pose, pose_of(problem.location(loc))) > settings.position_tolerance
         ):
             return False
-        if _turned(problem, observation, obj, loc, settings.yaw_tolerance) is not None:
+        if turned_beyond(problem, observation, obj, loc, settings.yaw_tolerance) is not None:
             return False
     return True
-
-
-def _oriented(problem: SceneProblem) -> set[str]:
-    """Locations of targets whose orientation was learned (yaw matters there)."""
-    turnable = {s.label: s.turnable for s in problem.candidate.subtasks}
-    return {s.location for s in problem.problem.subgoals if not turnable.get(s.id, True)}
-
-
-def _turn_errors(problem: SceneProblem, observation: Observation) -> dict[str, float]:
-    """How far (deg) each goal object whose target's orientation was learned is
-    turned from it in ``observation``, given its symmetry (none for the others, nor
-    for a shape every turn leaves looking the same: a cylinder)."""
-    oriented = _oriented(problem)
-    return {
-        obj: yaw_difference(shape, observation.poses[obj].yaw, problem.location(loc).yaw)
-        for obj, loc in problem.problem.goal
-        if loc in oriented
-        and obj in observation.poses
-        and (shape := observation.geometry.get(obj)) is not None
-        and symmetry(shape) > 0.0
-    }
-
-
-def _turned(
-    problem: SceneProblem, observation: Observation, obj: str, location: str, tolerance: float
-) -> float | None:
-    """How far (deg) ``obj`` is turned from ``location``'s yaw, where that matters
-    and it is more than ``tolerance``; else None."""
-    shape = observation.geometry.get(obj)
-    pose = observation.poses.get(obj)
-    if shape is None or pose is None or location not in _oriented(problem):
-        return None
-    turn = yaw_difference(shape, pose.yaw, problem.location(location).yaw)
-    return turn if turn > tolerance else None
 
 
 def _check_action(
