@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from demoplan.perception.fit_kernel import robust_cost, robust_least_squares
 from demoplan.perception.hough import Hypothesis
 
 __all__ = [
@@ -161,9 +162,10 @@ class SquareModel:
         return self._last[1]
 
     def cost(self, params: np.ndarray) -> float:
-        """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f)."""
-        self._evaluated(params)
-        return self._last_cost
+        """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f),
+        compiled (:func:`demoplan.perception.fit_kernel.robust_cost`; the same
+        formula as :meth:`normal_equations`' cost, summed in another order)."""
+        return robust_cost(self.us, self.vs, self.target, self.f_scale, self.ramp, params)
 
     def normal_equations(self, params: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """(cost, JᵀWJ, JᵀWr) at ``params``: W the iteratively reweighted least
@@ -231,46 +233,12 @@ def least_squares(
     when a kept step moves the scaled parameters by less than ``tolerance`` of
     their size, or lowers the cost by less than ``tolerance`` of it as predicted
     (SciPy's ``xtol`` and ``ftol``), or when no damping makes a step that lowers
-    it."""
-    params = start.astype(float)
-    cost, matrix, gradient = model.normal_equations(params)
-    metric = 1.0 / np.square(scale)
-    metric_matrix = np.diag(metric)
-    damping = 1e-3 * float(np.max(np.diag(matrix) / metric, initial=0.0)) or 1e-3
-    growth = 2.0
-    # np.any and np.linalg.norm's values without their wrappers (thousands of steps)
-    for _ in range(max_steps):
-        if not gradient.any():
-            break  # no pixel on the ramp (or all matched): nothing moves the square
-        try:
-            step = np.linalg.solve(matrix + damping * metric_matrix, -gradient)
-        except np.linalg.LinAlgError:
-            damping *= growth
-            growth *= 2.0
-            continue
-        trial = params + step
-        trial_cost = model.cost(trial)
-        predicted = 0.5 * float(step @ (damping * metric * step - gradient))
-        if not trial_cost < cost:
-            damping *= growth
-            growth *= 2.0
-            if damping > 1e12:
-                break
-            continue
-        ratio = (cost - trial_cost) / predicted if predicted > 0 else 1.0
-        damping *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
-        growth = 2.0
-        scaled_step, scaled = step / scale, params / scale
-        small_step = math.sqrt(scaled_step @ scaled_step) < tolerance * (
-            tolerance + math.sqrt(scaled @ scaled)
-        )
-        small_change = max(cost - trial_cost, predicted) < tolerance * cost
-        params = trial
-        if small_step or small_change:
-            cost = trial_cost
-            break
-        cost, matrix, gradient = model.normal_equations(params)
-    return params, cost
+    it. Compiled (:func:`demoplan.perception.fit_kernel.robust_least_squares`): a
+    photograph's fits are thousands of steps over a few thousand pixels each."""
+    pixels = model.us, model.vs, model.target
+    return robust_least_squares(
+        *pixels, model.f_scale, model.ramp, start, scale, tolerance, max_steps
+    )
 
 
 def fit_square(
