@@ -1,6 +1,8 @@
 """The compiled inner loops of perception against the NumPy formulas they replace: the
 square fit's cost, normal equations, 4 × 4 solve and Levenberg–Marquardt steps
-(demoplan.perception.fit_kernel, to rounding: the sums run in another order)."""
+(demoplan.perception.fit_kernel, to rounding: the sums run in another order) and the
+Hough vote's counts (demoplan.perception.hough_kernel, to the last bit: the same
+sums in the same order)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from demoplan.perception import fit_kernel
+from demoplan.perception import fit_kernel, hough
+from demoplan.perception.hough_kernel import vote_counts
 from demoplan.perception.square_fit import SquareModel, square_alpha, square_window
 
 SCALE = np.array([1.0, 1.0, 2.0, 1.0])
@@ -151,3 +154,77 @@ def test_the_compiled_fit_steps_as_the_numpy_one(
     )
     np.testing.assert_allclose(mine, theirs, rtol=0, atol=1e-7)
     assert cost == pytest.approx(their_cost, rel=1e-9, abs=1e-12 * us.size)
+
+
+def _numpy_counts(
+    edges: tuple[np.ndarray, ...],
+    theta_bin: np.ndarray,
+    sides: np.ndarray,
+    steps: list[np.ndarray],
+    crop: tuple[int, int],
+) -> tuple[np.ndarray, tuple[int, int]] | None:
+    """The vote's counts in NumPy (the code the kernel replaced): every (edge, side,
+    step) pair's centre, those inside the crop binned in their window, bincount."""
+    u, v, nu, nv, g = edges
+    n_theta = round(90.0 / hough.THETA_BIN)
+    n_y, n_x = crop
+    side_of = np.repeat(np.arange(sides.size), [len(s) for s in steps])
+    along = np.concatenate(steps) / hough.XY_BIN
+    half = sides / 2
+    cx = ((u[:, None] - half[None, :] * nu[:, None]) / hough.XY_BIN)[:, side_of]
+    cx -= along[None, :] * nv[:, None]
+    cy = ((v[:, None] - half[None, :] * nv[:, None]) / hough.XY_BIN)[:, side_of]
+    cy += along[None, :] * nu[:, None]
+    inside = (cx >= 0) & (cx < n_x) & (cy >= 0) & (cy < n_y)
+    col = cx[inside].astype(np.intp)
+    row = cy[inside].astype(np.intp)
+    if col.size == 0:
+        return None
+    row0, col0 = max(0, int(row.min()) - 1), max(0, int(col.min()) - 1)
+    n_y = min(n_y, int(row.max()) + 2) - row0
+    n_x = min(n_x, int(col.max()) + 2) - col0
+    slice_of = side_of[None, :] * (n_theta + 2) + theta_bin[:, None] + 1
+    index = slice_of[inside] * (n_y + 1)
+    index += row - row0
+    index *= n_x
+    index += col - col0
+    weight = np.broadcast_to(g[:, None], inside.shape)[inside]
+    cells = sides.size * (n_theta + 2) * (n_y + 1) * n_x
+    total = np.bincount(index, weights=weight, minlength=cells).astype(np.float32)
+    return total.reshape(sides.size, n_theta + 2, n_y + 1, n_x), (row0, col0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(0, 60),
+    st.floats(4.0, 30.0),
+    st.integers(1, 4),
+    st.tuples(st.integers(1, 40), st.integers(1, 40)),
+)
+def test_the_compiled_vote_counts_are_numpys_to_the_last_bit(
+    seed: int, points: int, low: float, n_sides: int, crop: tuple[int, int]
+) -> None:
+    """Edge points anywhere near a crop (some of their votes inside it, some not, or
+    none): the same window, and the same single-precision counts bin for bin."""
+    rng = np.random.default_rng(seed)
+    n_y, n_x = crop
+    u = rng.uniform(-10.0, 2 * n_x + 10.0, points)
+    v = rng.uniform(-10.0, 2 * n_y + 10.0, points)
+    angle = rng.uniform(0.0, 2 * math.pi, points)
+    nu, nv, g = np.cos(angle), np.sin(angle), rng.uniform(0.1, 2.0, points)
+    theta_bin = np.floor(np.degrees(angle) % 90.0 / hough.THETA_BIN + 0.5).astype(np.intp) % 30
+    sides = hough.side_bins(low, low * 1.5)[:n_sides]
+    steps = [np.arange(-s / 2 + hough.XY_BIN / 2, s / 2, hough.XY_BIN) for s in sides]
+    side_of = np.repeat(np.arange(sides.size), [len(s) for s in steps])
+    along = np.concatenate(steps) / hough.XY_BIN
+    edges = (u, v, nu, nv, g)
+    theirs = _numpy_counts(edges, theta_bin, sides, steps, crop)
+    mine = vote_counts(edges, theta_bin, sides, along, side_of, 30, crop, hough.XY_BIN)
+    if theirs is None:
+        assert mine is None
+        return
+    assert mine is not None
+    assert mine[1] == theirs[1]
+    assert mine[0].dtype == np.float32
+    np.testing.assert_array_equal(mine[0], theirs[0])

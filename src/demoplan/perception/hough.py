@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.perception.hough_kernel import vote_counts
 from demoplan.perception.opencv import cv2
 
 __all__ = ["Hypothesis", "hough_squares", "side_bins"]
@@ -265,38 +266,21 @@ def _votes(
     of its crop (a ring, a thin L round the table, a few blocks far apart) costs
     its votes' reach, not its crop's area. The values are those of the whole
     crop's accumulator, bin for bin."""
-    u, v, nu, nv, g = edges
     n_theta, n_y, n_x = shape
     # (edge, (side, step)) pairs; in bins (halving is exact: these are the
     # centres' coordinates / XY_BIN to the last bit)
     side_of = np.repeat(np.arange(sides.size), [len(s) for s in steps])
     along = np.concatenate(steps) / XY_BIN
-    half = sides / 2
-    cx = ((u[:, None] - half[None, :] * nu[:, None]) / XY_BIN)[:, side_of]
-    cx -= along[None, :] * nv[:, None]
-    cy = ((v[:, None] - half[None, :] * nv[:, None]) / XY_BIN)[:, side_of]
-    cy += along[None, :] * nu[:, None]
-    inside = (cx >= 0) & (cx < n_x) & (cy >= 0) & (cy < n_y)
-    col = cx[inside].astype(np.intp)
-    row = cy[inside].astype(np.intp)
-    if col.size == 0:  # no centre inside the crop: one empty bin per side
+    counted = vote_counts(edges, theta_bin, sides, along, side_of, n_theta, (n_y, n_x), XY_BIN)
+    if counted is None:  # no centre inside the crop: one empty bin per side
         return np.zeros((sides.size, n_theta, 1, 1), dtype=np.float32), (0, 0)
-    row0, col0 = max(0, int(row.min()) - 1), max(0, int(col.min()) - 1)
-    n_y = min(n_y, int(row.max()) + 2) - row0
-    n_x = min(n_x, int(col.max()) + 2) - col0
     # bins (s, θ, y, x) with a θ bin before and after (wrapped copies) and an empty
-    # row after each θ slice, so that two 2-D filters do the sharing below
-    slice_of = side_of[None, :] * (n_theta + 2) + theta_bin[:, None] + 1
-    index = slice_of[inside] * (n_y + 1)
-    index += row - row0
-    index *= n_x
-    index += col - col0
-    weight = np.broadcast_to(g[:, None], inside.shape)[inside]
-    cells = sides.size * (n_theta + 2) * (n_y + 1) * n_x
-    # filtered in single precision: half the memory to stream through (the votes are
-    # sums of gradient strengths, ~1 each; 24 bits keep them to a millionth)
-    total = np.bincount(index, weights=weight, minlength=cells).astype(np.float32)
-    accumulator = total.reshape(sides.size, n_theta + 2, n_y + 1, n_x)
+    # row after each θ slice, so that two 2-D filters do the sharing below; the
+    # votes summed in double precision and filtered in single: half the memory to
+    # stream through (the votes are sums of gradient strengths, ~1 each; 24 bits
+    # keep them to a millionth)
+    accumulator, (row0, col0) = counted
+    n_y, n_x = accumulator.shape[2] - 1, accumulator.shape[3]
     # neighbouring θ bins share an edge's votes when θ falls near a bin border (θ wraps)
     accumulator[:, 0] = accumulator[:, n_theta]
     accumulator[:, n_theta + 1] = accumulator[:, 1]

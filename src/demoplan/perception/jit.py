@@ -1,6 +1,6 @@
 """Functions compiled to machine code with numba, typed for mypy.
 
-Perception's inner loops (the square fit's steps) run over
+Perception's inner loops (the square fit's steps, the Hough vote's counts) run over
 thousands of pixels thousands of times per photograph: written as loops and
 compiled, one pass replaces dozens of NumPy calls whose overhead was their time.
 numba compiles a function on its first call for the types it is given (about
