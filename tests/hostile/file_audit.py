@@ -32,7 +32,8 @@ Read (an open without write access, a folder listed):
     traced process, ``/proc/cpuinfo``, ``/proc/meminfo``, ``/proc/stat``,
     ``/proc/sys/vm/overcommit_memory`` (the C library's allocator),
     ``/proc/sys/crypto/fips_enabled`` (OpenSSL's, loaded with OpenCV),
-    ``/proc/filesystems`` (the behaviour tree engine's runtime), the CPU
+    ``/proc/filesystems`` (the behaviour tree engine's runtime), ``/proc/mounts``
+    (llvmlite, numba's compiler, when it loads), the CPU
     topology under ``/sys/devices/system/cpu`` and the control group's
     limits under ``/sys/fs/cgroup`` (NumPy's BLAS and the libraries count
     the cores they may use); ``/sys/devices`` and ``/sys/bus`` only for the
@@ -356,6 +357,7 @@ SYSTEM_READS = (
     "/proc/sys/vm/overcommit_memory",
     "/proc/sys/crypto/fips_enabled",  # OpenSSL's libcrypto (loaded with OpenCV) asks
     "/proc/filesystems",  # the C++ runtime of the behaviour tree engine asks (run --bt)
+    "/proc/mounts",  # llvmlite, numba's compiler (perception's compiled loops), on loading
     "/sys/devices/system/cpu",
     "/sys/fs/cgroup",
     "/dev/null",

@@ -157,7 +157,6 @@ sys.__stderr__.write(" ".join(sorted(sys.modules)) + "\\n")
 then every module it imported to stderr."""
 
 NOT_FOR_PERCEIVE = (
-    "scipy",
     "matplotlib",
     "demoplan.execution",
     "demoplan.scenes",
@@ -165,8 +164,12 @@ NOT_FOR_PERCEIVE = (
     "demoplan.experiments",
     "demoplan.evaluation",
 )
-"""What ``demoplan perceive`` of one top view has no use for: SciPy alone was a
-third of its start-up (about 0.4 s CPU), the rest is other commands' stages."""
+"""What ``demoplan perceive`` of one top view has no use for: other commands' stages
+and plotting. (SciPy was a third of its start-up, about 0.4 s of CPU, and demoplan's
+perception still uses none of it; numba, which compiles the square fit and the Hough
+vote (demoplan/perception/jit.py), imports ``scipy.linalg`` on its first call
+whatever the compiled functions use: its start is measured as part of the command
+in benchmarks/perception.py.)"""
 NOT_FOR_A_TOP_VIEW = ("demoplan.perception.calibration", "demoplan.documents.poses")
 """Modules ``demoplan perceive`` of a top view with ``--px-per-m`` has no use for: a
 calibration's and the pose documents' models (pydantic), 0.1 s of CPU each."""
