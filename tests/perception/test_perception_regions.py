@@ -319,6 +319,25 @@ def test_a_glint_on_a_block_beside_one_of_another_colour_is_its_top(
 
 @pytest.mark.xfail(
     strict=True,
+    reason="found by a run of the property above (on 646cf85 too): a blue block turned "
+    "45° whose +x side a pen line of its colour frames, starting at its corners — the "
+    "line's ends touching the corners raise the fit's misfit to 0.22 (0.2 allowed): 'not "
+    "square'",
+)
+def test_a_pen_line_from_a_diamonds_corners_leaves_it_a_block() -> None:
+    """A known defect, kept in view (the property above draws other cases)."""
+    test_table_between_a_dark_block_and_a_pen_line_stays_table.hypothesis.inner_test(  # type: ignore[attr-defined]
+        centre=(166.375, 134.375),
+        yaw=-45.0,
+        side=30.5625,
+        seed=3,
+        colour="blue",
+        patch=0.875,
+    )
+
+
+@pytest.mark.xfail(
+    strict=True,
     reason="found by the test above on a random draw (on main too): a glint reaching a "
     "yellow top's corner is not enclosed by its clearly coloured pixels, the top is lost "
     "(about 1 random draw in 30)",
@@ -615,6 +634,19 @@ def test_a_white_cube_with_black_dots_is_one_white_block(
     )
     assert len(near) == 1 and others == 0, (near, others)
     assert near[0].colour == "white"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="found by a run of the property above (on 646cf85 too): a white top with dots "
+    "on white paper, without --side, barely brighter than the paper (a person sees it at "
+    "once): its white part misfits a square (0.31), 'not square'",
+)
+def test_a_white_cube_with_dots_on_paper_lit_as_the_paper_is_one_white_block() -> None:
+    """A known defect, kept in view (the property above draws other cases)."""
+    test_a_white_cube_with_black_dots_is_one_white_block.hypothesis.inner_test(  # type: ignore[attr-defined]
+        background="paper", side_given=False, x=0.25, y=0.25, yaw=0.0, seed=2563
+    )
 
 
 @settings(max_examples=6, deadline=None, derandomize=True)  # see the docstring
