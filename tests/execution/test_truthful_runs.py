@@ -124,6 +124,35 @@ def test_a_run_that_ends_on_a_refused_motion_names_it(blocks: TaskModel, scene: 
     assert f"({failure.note}) (3 times); then gave up after 2 replans" in report.reason
 
 
+def test_a_grasp_the_arm_refused_says_the_arm_never_went(blocks: TaskModel, scene: Scene) -> None:
+    """A grasp whose motion the robot refused (a world's ``motion_failures``) is
+    reported as a motion not made — ``X was not grasped: the arm refused the motion
+    (why)`` — not only as an object missing from the hand; the run then goes on."""
+
+    class RefusingOnce(KinematicWorld):
+        motion_failures: list[str]
+
+        def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
+            if not self.motion_failures:  # the first grasp: refused, nothing moves
+                self.actions += 1
+                self.motion_failures.append("the arm would swing through a new posture")
+                return
+            super().grasp(obj, axis, where)
+
+    world = RefusingOnce(scene)
+    world.motion_failures = []
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world)
+    assert report.success
+    (failure,) = report.failures
+    obj = report.actions[failure.step - 1].action.object
+    assert failure.kind == "grasp"
+    assert failure.detail == (
+        f"{obj} was not grasped: the arm refused the motion "
+        "(the arm would swing through a new posture)"
+    )
+    assert failure.note == "the arm would swing through a new posture"
+
+
 def test_a_run_that_succeeds_says_so_in_its_last_event(blocks: TaskModel, scene: Scene) -> None:
     events: list[RunEvent] = []
     report = execute(

@@ -331,7 +331,14 @@ class _Run:
                 detail = f"{action.object} is turned {turn:.1f}° from its target"
                 failure = Failure(step, FailureKind.MISPLACED, detail)
         notes = _notes_since(world, noticed)
-        if failure is not None and notes:  # what the robot itself noticed going wrong
+        refused = list(getattr(world, "motion_failures", ()))[
+            noticed[ROBOT_NOTES.index("motion_failures")] :
+        ]
+        if failure is not None and failure.kind == FailureKind.GRASP and refused:
+            # the arm never went: say so, not only that the object is not in the hand
+            detail = f"{action.object} was not grasped: the arm refused the motion ({refused[-1]})"
+            failure = replace(failure, detail=detail, note=refused[-1])
+        elif failure is not None and notes:  # what the robot itself noticed going wrong
             failure = replace(failure, detail=f"{failure.detail} ({notes[-1]})", note=notes[-1])
         self.executed.append(ExecutedAction(step, action, target, self.plan_index, failure is None))
         if failure is None:
