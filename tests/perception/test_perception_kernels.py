@@ -61,8 +61,7 @@ def _numpy_least_squares(
             growth *= 2.0
             continue
         trial = params + step
-        model.normal_equations(trial)
-        trial_cost = model._last_cost
+        trial_cost, _, _ = model.normal_equations(trial)
         predicted = 0.5 * float(step @ (damping * metric * step - gradient))
         if not trial_cost < cost:
             damping *= growth

@@ -116,9 +116,6 @@ class SquareModel:
         self.us, self.vs, self.target, self.f_scale = us, vs, target, f_scale
         self.ramp = ramp
         """The width (px) over which the square's edge ramps from 1 to 0."""
-        self._last: tuple[bytes, tuple[np.ndarray, ...]] | None = None
-        self._last_cost = math.nan
-        """The cost at the last parameters (:meth:`cost`)."""
 
     def frame(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q_u, q_v, distance): the points in the square's frame, and their
@@ -141,12 +138,7 @@ class SquareModel:
         return self._evaluated(params)[3]
 
     def _evaluated(self, params: np.ndarray) -> tuple[np.ndarray, ...]:
-        """(q_u, q_v, distance, residual, √(1 + (r / f)²)) at ``params``; those of
-        the last parameters asked for are kept: Levenberg–Marquardt asks for the
-        normal equations where it has just measured the cost of a step it takes."""
-        key = params.tobytes()
-        if self._last is not None and self._last[0] == key:
-            return self._last[1]
+        """(q_u, q_v, distance, residual, √(1 + (r / f)²)) at ``params``."""
         qu, qv, distance = self.frame(params)
         # min(max(½ − d / ramp, 0), 1) − target and √(1 + (r / f)²), in place
         residual = 0.5 - (distance if self.ramp == 1.0 else distance / self.ramp)
@@ -157,9 +149,7 @@ class SquareModel:
         np.square(root, out=root)
         root += 1.0
         np.sqrt(root, out=root)
-        self._last = key, (qu, qv, distance, residual, root)
-        self._last_cost = float(self.f_scale**2 * (root - 1.0).sum())
-        return self._last[1]
+        return qu, qv, distance, residual, root
 
     def cost(self, params: np.ndarray) -> float:
         """½ f² Σ ρ((r / f)²): the robust cost (SciPy's ``soft_l1``, ``f_scale`` f),
@@ -172,9 +162,10 @@ class SquareModel:
         squares weights ρ'(z) = 1 / √(1 + z) of the soft-L1 loss, J = ∂r / ∂(u, v, θ, s)
         exact — on the one-pixel ramp the model is ½ − (max(|q_u|, |q_v|) − s/2),
         q the pixel in the square's own frame; off it, constant (scaled by the
-        ramp's width when it is wider)."""
+        ramp's width when it is wider). In NumPy: the formulas the compiled fit
+        (:mod:`demoplan.perception.fit_kernel`) is tested against."""
         qu, qv, distance, residual, root = self._evaluated(params)
-        cost = self._last_cost
+        cost = float(self.f_scale**2 * (root - 1.0).sum())
         # the ramp's ends included (one-sided there): a square whose edges lie on
         # pixel borders, as a Hough bin's centre at 0° puts them, has every pixel
         # centre at an end, and would see no gradient at all
