@@ -193,9 +193,7 @@ def framed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.
     white face inside it alone, 0.68 of the side, is too small a top; the frame's
     outside is the top's (0.84 of the side on a generated top, its rim beyond it)."""
     found = np.zeros(bright.shape, dtype=bool)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        (~dark).astype(np.uint8), connectivity=4
-    )
+    count, labels, stats = labelled_parts(~dark, connectivity=4)
     sizes = stats[:, cv2.CC_STAT_AREA]
     lit = np.bincount(labels[bright & ~dark], minlength=count)
     taken = (sizes < side_px**2) & (lit >= FRAMED_BRIGHT_SHARE * sizes)
@@ -203,9 +201,7 @@ def framed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.
     taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
     if not taken.any():
         return found
-    _, rings, ring_stats, _ = cv2.connectedComponentsWithStats(
-        dark.astype(np.uint8), connectivity=8
-    )
+    _, rings, ring_stats = labelled_parts(dark)
     height, width = dark.shape
     for index in np.flatnonzero(taken):
         x, y, w, h = (int(value) for value in stats[index, :4])
