@@ -207,6 +207,8 @@ def test_an_oblique_photo_is_outlined_at_its_top_faces(tmp_path: Path) -> None:
         ("blank", [], 1),  # no block: a scene needs one
         ("blocks", ["-o", "{out}/same.png", "--plot", "{out}/same.png"], 2),
         ("blocks", ["--plot", "{out}/top.png"], 1),  # would overwrite the input
+        # the picture cannot be written (its name is a folder): the scene is not either
+        ("blocks", ["-o", "{out}/scene.json", "--plot", "{out}/sub"], 1),
     ],
 )
 def test_a_failing_perceive_writes_neither_file(
@@ -214,6 +216,7 @@ def test_a_failing_perceive_writes_neither_file(
 ) -> None:
     blocks = BLOCKS if content == "blocks" else []
     save_image(render_blocks(blocks, CAMERA, width=500, height=400, rng=1), tmp_path / "top.png")
+    (tmp_path / "sub").mkdir()
     before = sorted(p.name for p in tmp_path.iterdir())
     options = [e.format(out=tmp_path) for e in extra]
     if not any(o in options for o in ("-o", "--plot")):

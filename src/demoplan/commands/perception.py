@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import PERCEPTION_TIMEOUT
 from demoplan.errors import UsageError
-from demoplan.fileio import dump_json, refuse_overwriting_inputs, write_atomic, write_atomic_bytes
+from demoplan.fileio import StagedOutputs, dump_json, refuse_overwriting_inputs, write_atomic
 from demoplan.perception.blocks import Rejection
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.stacking import TrackedBlock, scene_document
@@ -96,10 +96,11 @@ def perceive(
     document = scene_document(seen.blocks)
     document["description"] = f"perceived in {image.name}; scale from {scale}"
     overlay = encode_png(seen.overlay) if seen.overlay is not None else None
-    if output is not None:
-        write_atomic(output, dump_json(document))
-    if plot is not None and overlay is not None:
-        write_atomic_bytes(plot, overlay)
+    with StagedOutputs() as outputs:  # the scene and its picture, both or neither
+        if output is not None:
+            outputs.add(output, dump_json(document).encode("utf-8", "backslashreplace"))
+        if plot is not None and overlay is not None:
+            outputs.add(plot, overlay)
     return Perceived(seen.blocks, document, seen.rejected, scale)
 
 
@@ -287,8 +288,9 @@ def calibrate(
     calibration = calibrate_image(picture, layout, source=str(image), intrinsics=camera)
     document = calibration_document(calibration)
     overlay = encode_png(calibration_overlay(picture, calibration)) if plot is not None else None
-    if output is not None:
-        write_atomic(output, dump_json(document))
-    if plot is not None and overlay is not None:
-        write_atomic_bytes(plot, overlay)
+    with StagedOutputs() as outputs:  # the calibration and its picture, both or neither
+        if output is not None:
+            outputs.add(output, dump_json(document).encode("utf-8", "backslashreplace"))
+        if plot is not None and overlay is not None:
+            outputs.add(plot, overlay)
     return Calibrated(calibration, document)
