@@ -10,7 +10,9 @@ import json
 import math
 import os
 import re
+import signal
 import stat
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -790,3 +792,22 @@ def test_write_atomic_refuses_a_socket_or_a_block_device(tmp_path: Path, kind: s
     assert str(node) in str(caught.value)
     assert is_kind(node.lstat().st_mode)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["node"]  # no temporary left
+
+
+def test_ctrl_c_as_a_staged_file_is_made_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ctrl_c_raises: None
+) -> None:
+    """Ctrl-C between mkstemp's open and its return (a run of `perceive -o` found
+    ``.p.json.XXXX.tmp`` left behind so) leaves no temporary file: the signal is
+    held back until the block that removes the file is entered."""
+    real_mkstemp = tempfile.mkstemp
+
+    def mkstemp_then_ctrl_c(*args: Any, **kwargs: Any) -> tuple[int, str]:
+        made = real_mkstemp(*args, **kwargs)
+        signal.raise_signal(signal.SIGINT)  # lands before mkstemp has returned
+        return made
+
+    monkeypatch.setattr(tempfile, "mkstemp", mkstemp_then_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(tmp_path / "scene.json", "{}")
+    assert sorted(tmp_path.iterdir()) == []

@@ -25,8 +25,10 @@ from demoplan.fileio.writing import (
     check_output_folder,
     current_umask,
     dump_json,
+    hold_signals,
     make_folders,
     remove_made_folders,
+    restore_signals,
     short_name,
     sync_folder,
     write_atomic,
@@ -76,7 +78,7 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
     # removes it is entered: a signal between mkdtemp's mkdir and its return left
     # the private folder behind (a Ctrl-C that landed in the mkdir call, seen once
     # in test_interrupt_any's run --frames)
-    previous = _hold_signals()
+    previous = hold_signals()
     try:
         made = make_folders(parent)
         building = Path(
@@ -84,10 +86,10 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
         )
     except OSError as exc:
         _discard(None, made)
-        _restore_signals(previous)
+        restore_signals(previous)
         raise InputError(f"cannot write ({os_reason(exc)})", source=str(target)) from None
     try:
-        _restore_signals(previous)  # a signal held back is raised here, in the block
+        restore_signals(previous)  # a signal held back is raised here, in the block
         yield building
         _write_manifest(building, writer)
         building.chmod(0o777 & ~current_umask())  # a folder as mkdir makes it, not mkdtemp's 0700
@@ -109,32 +111,19 @@ def staged_folder(target: Path, writer: str) -> Iterator[Path]:
         raise
 
 
-def _hold_signals() -> set[int]:
-    """Hold SIGINT and SIGTERM back (this thread); the mask before, to restore."""
-    import signal
-
-    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-
-
-def _restore_signals(previous: set[int]) -> None:
-    import signal
-
-    signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-
-
 def _discard(building: Path | None, made: list[Path]) -> None:
     """Remove the private folder and the folders made for it, with SIGINT and
     SIGTERM held back: a second signal (or the redelivery of the first,
     demoplan.frontends.interrupts) cannot cut the removal short."""
     import shutil
 
-    previous = _hold_signals()
+    previous = hold_signals()
     try:
         if building is not None:
             shutil.rmtree(building, ignore_errors=True)
         remove_made_folders(made)
     finally:
-        _restore_signals(previous)
+        restore_signals(previous)
 
 
 def _swap_in(building: Path, target: Path) -> None:
@@ -144,7 +133,7 @@ def _swap_in(building: Path, target: Path) -> None:
     SIGTERM are held back throughout. OSError if a rename fails."""
     parent = target.parent if str(target.parent) else Path()
     aside: Path | None = None
-    previous = _hold_signals()
+    previous = hold_signals()
     try:
         if os.path.lexists(target):
             aside = Path(
@@ -170,7 +159,7 @@ def _swap_in(building: Path, target: Path) -> None:
             with suppress(OSError):
                 aside.rmdir()
     finally:
-        _restore_signals(previous)
+        restore_signals(previous)
 
 
 def _sha256(path: Path) -> str:

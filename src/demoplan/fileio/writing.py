@@ -342,6 +342,21 @@ def write_atomic_bytes(path: Path, data: bytes) -> None:
         outputs.add(path, data)
 
 
+def hold_signals() -> set[int]:
+    """Hold SIGINT and SIGTERM back (this thread); the mask before, to restore."""
+    import signal
+
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+
+
+def restore_signals(previous: set[int]) -> None:
+    """Put back the signal mask ``previous`` (:func:`hold_signals`): a signal held
+    back meanwhile is delivered here."""
+    import signal
+
+    signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 def _write_temporary(path: Path, data: bytes) -> tuple[Path, list[Path]]:
     """``data`` in a new temporary file beside ``path`` with ``path``'s
     permissions, flushed to disk: the first half of an atomic write (the
@@ -353,22 +368,35 @@ def _write_temporary(path: Path, data: bytes) -> tuple[Path, list[Path]]:
         raise InputError("is a folder; a file name expected", source=display_path(path))
     folder = path.parent if str(path.parent) else Path()
     made: list[Path] = []
+    # SIGINT and SIGTERM held back from making the file until the block that
+    # removes it is entered (a signal landing in mkstemp, after its open and before
+    # it returned, left the file behind), and while it is removed
+    previous = hold_signals()
     try:
         made = make_folders(folder)
         fd, name = tempfile.mkstemp(prefix=f".{short_name(path.name)}.", suffix=".tmp", dir=folder)
     except OSError as exc:
         remove_made_folders(made)
+        restore_signals(previous)
         raise InputError(f"cannot write ({os_reason(exc)})", source=display_path(path)) from None
+    except BaseException:
+        restore_signals(previous)
+        raise
     temporary = Path(name)
     try:
         with os.fdopen(fd, "wb") as handle:
+            restore_signals(previous)  # a signal held back is raised here, in the block
             _set_mode(handle.fileno(), path)
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
     except BaseException as exc:
-        temporary.unlink(missing_ok=True)
-        remove_made_folders(made)
+        hold_signals()
+        try:
+            temporary.unlink(missing_ok=True)
+            remove_made_folders(made)
+        finally:
+            restore_signals(previous)
         if isinstance(exc, OSError):
             reason = os_reason(exc)
             raise InputError(f"cannot write ({reason})", source=display_path(path)) from None
