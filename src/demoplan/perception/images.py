@@ -83,8 +83,13 @@ def check_side(side: float | None) -> None:
 
 def check_top_view(px_per_m: float, origin: tuple[float, float]) -> None:
     """``--px-per-m`` and ``--origin``: finite, the origin within ±10 km."""
-    if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
-        raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+    if not math.isfinite(px_per_m):
+        raise UsageError(f"--px-per-m {px_per_m:g}: pixels per metre, a finite number expected")
+    if not all(map(math.isfinite, origin)) or max(map(abs, origin)) > 1e4:
+        raise UsageError(
+            f"--origin {origin[0]:g} {origin[1]:g}: the image's bottom-left corner in metres, "
+            "each a finite number within ±10,000 (10 km) expected"
+        )
 
 
 def perceive_files(
