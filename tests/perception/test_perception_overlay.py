@@ -204,7 +204,8 @@ def test_an_oblique_photo_is_outlined_at_its_top_faces(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("content", "extra", "code"),
     [
-        ("blank", [], 1),  # no block: a scene needs one
+        # the time budget spent (exit 4): nothing drawn, nothing written
+        ("blocks", ["--timeout", "0"], 4),
         ("blocks", ["-o", "{out}/same.png", "--plot", "{out}/same.png"], 2),
         ("blocks", ["--plot", "{out}/top.png"], 1),  # would overwrite the input
         # the picture cannot be written (its name is a folder): the scene is not either
@@ -227,6 +228,40 @@ def test_a_failing_perceive_writes_neither_file(
     assert result.exit_code == code, result.output
     assert result.stderr.count("\n") == 1 and result.stderr.startswith("demoplan: error: ")
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_no_blocks_found_writes_the_overlay_alone_never_the_scene(tmp_path: Path) -> None:
+    """Exit 1, "no blocks found": the overlay of what was rejected and why is its
+    diagnosis, so it is written — alone: the scene (-o) is not, there being no
+    scene; the one line says where the picture is. Before, neither was written
+    and the user could not see why nothing was found."""
+    blank = render_blocks([], CAMERA, width=500, height=400, rng=1)
+    save_image(with_distractors(blank), tmp_path / "top.png")
+    overlay, scene = tmp_path / "overlay.png", tmp_path / "scene.json"
+    result = invoke(
+        "perceive", tmp_path / "top.png", "--px-per-m", "1000", "--origin", "0", "0",
+        "-o", scene, "--plot", overlay,
+    )  # fmt: skip
+    assert result.exit_code == 1, result.output
+    (line,) = result.stderr.splitlines()
+    assert "no blocks found" in line and f"drawn in {overlay}" in line
+    assert not scene.exists()
+    drawn = load_image(overlay)
+    assert drawn.shape == blank.shape
+    # the small patch and the disc, rejected, are outlined in magenta
+    assert near_colour(drawn, pixel(CAMERA, 400, 0.12, 0.30 + 0.025), REJECTED_COLOUR, 4)
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_no_blocks_found_without_plot_writes_nothing(tmp_path: Path) -> None:
+    save_image(render_blocks([], CAMERA, width=500, height=400, rng=1), tmp_path / "top.png")
+    result = invoke(
+        "perceive", tmp_path / "top.png", "--px-per-m", "1000", "--origin", "0", "0",
+        "-o", tmp_path / "scene.json",
+    )  # fmt: skip
+    assert result.exit_code == 1 and "no blocks found" in result.stderr
+    assert "drawn in" not in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["top.png"]
 
 
 def pink_picture(folder: Path) -> tuple[Path, Camera]:

@@ -19,7 +19,13 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
 from demoplan.perception.image_measures import ImageMeasures
-from demoplan.perception.overlay import Drawn, draw_overlay, square_corners, top_view_to_image
+from demoplan.perception.overlay import (
+    Drawn,
+    NoBlocksError,
+    draw_overlay,
+    square_corners,
+    top_view_to_image,
+)
 from demoplan.perception.sizes import (
     SIDE_TOLERANCE,
     block_sizes,
@@ -190,17 +196,20 @@ def _perception(
 ) -> Perception:
     """What a picture showed, with the overlay drawn when asked for; an input error
     when there is no block."""
+    to_image = top_view_to_image(camera, picture.shape[0])
     if not blocks:
-        raise InputError(
+        raise NoBlocksError(
             "no blocks found; a scene needs at least one (is --px-per-m right? --side too strict?)",
             source=str(image),
+            overlay=draw_overlay(picture, [], [(r, 0.0) for r in rejected], to_image)
+            if overlay
+            else None,
         )
     seen, left = seen_now(blocks, detected)
     rejected += left
     drawn = None
     if overlay:
         found = [Drawn(b.name, b.x, b.y, b.yaw, b.side) for b in seen]
-        to_image = top_view_to_image(camera, picture.shape[0])
         drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image)
     return Perception(blocks, tuple(rejected), drawn, scale)
 
@@ -251,10 +260,14 @@ def _perceive_at_cube_scale(
         found = detect_blocks(picture, Camera(1.0), in_pixels, rejected, measures)
     sizes = block_sizes([d.side for d in found])
     if not sizes:
-        raise InputError(
+        in_pixels_to_image = top_view_to_image(Camera(1.0), picture.shape[0])
+        raise NoBlocksError(
             "no blocks found, so no scale from --side; a scene needs at least one "
             "(or give --px-per-m)",
             source=str(image),
+            overlay=draw_overlay(picture, [], [(r, 0.0) for r in rejected], in_pixels_to_image)
+            if overlay
+            else None,
         )
     px_per_m = sizes[0][0] / side
     kept, odd = held_to_sizes(found, sizes, unit="px", seen=(measures, Camera(1.0)))

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.errors import InputError
 from demoplan.perception.blocks import Rejection
 from demoplan.perception.camera import Camera
 
@@ -23,6 +24,7 @@ __all__ = [
     "FOUND_COLOUR",
     "REJECTED_COLOUR",
     "Drawn",
+    "NoBlocksError",
     "draw_overlay",
     "square_corners",
     "top_view_to_image",
@@ -49,6 +51,17 @@ class Drawn:
     yaw: float
     side: float
     height: float = 0.0
+
+
+class NoBlocksError(InputError):
+    """No block in the picture (exit 1), with the overlay of what was rejected
+    and why where one was asked for (``--plot``): that picture is the diagnosis
+    of a "no blocks found", and ``demoplan perceive`` writes it alone (never the
+    scene) on that exit."""
+
+    def __init__(self, message: str, *, source: str, overlay: np.ndarray | None):
+        super().__init__(message, source=source)
+        self.overlay = overlay
 
 
 def square_corners(x: float, y: float, yaw: float, side: float) -> np.ndarray:
