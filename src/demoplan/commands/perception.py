@@ -22,7 +22,7 @@ from demoplan.fileio import (
 )
 from demoplan.perception.blocks import Rejection
 from demoplan.perception.images import perceive_top_view
-from demoplan.perception.overlay import NoBlocksError
+from demoplan.perception.overlay import NoBlocksError, is_speck, speck_side
 from demoplan.perception.stacking import TrackedBlock, scene_document
 
 if TYPE_CHECKING:
@@ -51,6 +51,9 @@ class Perceived:
     scale: str = ""
     """Where the scale came from: ``--px-per-m …``, the cube size (``--side``),
     the camera file or the markers (the scene's ``description`` says it too)."""
+    specks: int = 0
+    """Of the rejections, the specks the overlay counts and does not draw
+    (:func:`~demoplan.perception.overlay.is_speck`); 0 without an overlay."""
 
 
 def perceive(
@@ -120,7 +123,11 @@ def perceive(
             outputs.add(output, dump_json(document).encode("utf-8", "backslashreplace"))
         if plot is not None and overlay is not None:
             outputs.add(plot, overlay)
-    return Perceived(seen.blocks, document, seen.rejected, scale)
+    specks = 0
+    if plot is not None:
+        side = speck_side([b.side for b in seen.blocks.values()])
+        specks = sum(is_speck(r, side) for r in seen.rejected)
+    return Perceived(seen.blocks, document, seen.rejected, scale, specks)
 
 
 @dataclass(frozen=True, slots=True)

@@ -29,7 +29,7 @@ from demoplan.perception.calibration import (
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
 from demoplan.perception.images import SIDE_TOLERANCE, Perception, check_side, seen_now
-from demoplan.perception.overlay import Drawn, NoBlocksError, draw_overlay
+from demoplan.perception.overlay import Drawn, NoBlocksError, draw_overlay, speck_side
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
 __all__ = [
@@ -210,5 +210,6 @@ def perceive_photograph(
             found,
             [(r, plane) for r in rejected],
             lambda points, at: table_to_photo(calibration, points, at),
+            speck_side([b.side for b in blocks.values()]),
         )
     return Perception(blocks, tuple(rejected), drawn)

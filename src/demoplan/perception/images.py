@@ -23,6 +23,7 @@ from demoplan.perception.overlay import (
     Drawn,
     NoBlocksError,
     draw_overlay,
+    speck_side,
     square_corners,
     top_view_to_image,
 )
@@ -210,7 +211,8 @@ def _perception(
     drawn = None
     if overlay:
         found = [Drawn(b.name, b.x, b.y, b.yaw, b.side) for b in seen]
-        drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image)
+        side = speck_side([b.side for b in blocks.values()])
+        drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image, side)
     return Perception(blocks, tuple(rejected), drawn, scale)
 
 
@@ -265,7 +267,9 @@ def _perceive_at_cube_scale(
             "no blocks found, so no scale from --side; a scene needs at least one "
             "(or give --px-per-m)",
             source=str(image),
-            overlay=draw_overlay(picture, [], [(r, 0.0) for r in rejected], in_pixels_to_image)
+            overlay=draw_overlay(
+                picture, [], [(r, 0.0) for r in rejected], in_pixels_to_image, MIN_SIDE_PX
+            )
             if overlay
             else None,
         )
