@@ -292,3 +292,13 @@ def test_a_recording_given_where_text_is_read_says_how_it_is_read(
     check_refused(answer, [name], codes={1})
     assert pointer in answer.stderr, answer
     assert "not UTF-8" not in answer.stderr, answer
+
+
+def test_a_folder_of_recordings_given_to_learn_says_how_they_are_read(tmp_path: Path) -> None:
+    """``learn FOLDER`` of HDF5 recordings answered that the folder holds no
+    demonstration files, without saying what reads them."""
+    (tmp_path / "recordings").mkdir()
+    _hdf5(tmp_path / "recordings" / "demo.hdf5")
+    answer = run(["learn", "recordings", "-o", "out.json"], tmp_path)
+    check_refused(answer, ["recordings"], codes={1})
+    assert "it holds demo.hdf5: demoplan import RECORDING -o FOLDER" in answer.stderr, answer
