@@ -153,6 +153,61 @@ def test_a_grasp_the_arm_refused_says_the_arm_never_went(blocks: TaskModel, scen
     assert failure.note == "the arm would swing through a new posture"
 
 
+class _RefusingGrasps(KinematicWorld):
+    """A world whose arm refuses every grasp of ``obj`` across the finger axes
+    ``axes`` (modulo 180°) — its check is deterministic: the same motion is
+    refused every time — and makes every other motion."""
+
+    def __init__(self, scene: Scene, obj: str, axes: set[float] | None):
+        super().__init__(scene)
+        self.obj, self.axes = obj, axes
+        self.motion_failures: list[str] = []
+        self.attempts: list[tuple[str, float]] = []
+
+    def grasp(self, obj: str, axis: float, where: Pose | None = None) -> None:
+        self.attempts.append((obj, axis % 180.0))
+        if obj == self.obj and (self.axes is None or axis % 180.0 in self.axes):
+            self.actions += 1  # refused: nothing moves
+            self.motion_failures.append(f"the arm would swing through a new posture ({axis:g}°)")
+            return
+        super().grasp(obj, axis, where)
+
+
+def test_a_refused_grasp_is_not_tried_again_another_grasp_is(
+    blocks: TaskModel, scene: Scene
+) -> None:
+    """A grasp whose motion the arm refused was retried unchanged up to
+    MAX_SAME_GRASP times (the same motion, refused each time) before another
+    grasp was planned: now the replan takes another grasp at once, and the
+    report counts the refusal once."""
+    first = execute(blocks, prepare(blocks, scene, clutter=True), KinematicWorld(scene))
+    obj = first.actions[0].action.object
+    world = _RefusingGrasps(scene, obj, {0.0})
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world)
+    assert report.success, report.reason
+    assert len(world.motion_failures) == 1, world.motion_failures
+    (failure,) = report.failures
+    assert failure.kind == "grasp" and failure.detail.startswith(f"{obj} was not grasped: ")
+    tried = [axis for name, axis in world.attempts if name == obj]
+    assert tried[0] == 0.0 and tried[1] != 0.0, tried
+
+
+def test_an_object_whose_every_grasp_the_arm_refuses_is_given_up_on_at_once(
+    blocks: TaskModel, scene: Scene
+) -> None:
+    """Each grasp of the object refused once, then the run stops naming it
+    (exit 4), not after three refusals of each."""
+    first = execute(blocks, prepare(blocks, scene, clutter=True), KinematicWorld(scene))
+    obj = first.actions[0].action.object
+    world = _RefusingGrasps(scene, obj, None)
+    report = execute(blocks, prepare(blocks, scene, clutter=True), world)
+    assert not report.success and report.exit_code == 4
+    tried = [axis for name, axis in world.attempts if name == obj]
+    assert len(tried) == len(set(tried)) == len(world.motion_failures), tried
+    assert f"then gave up on {obj}: the arm refused each of its grasps at (" in report.reason
+    assert report.reason.startswith(f"{obj} could not be grasped in {len(tried)} attempts")
+
+
 def test_a_run_that_succeeds_says_so_in_its_last_event(blocks: TaskModel, scene: Scene) -> None:
     events: list[RunEvent] = []
     report = execute(

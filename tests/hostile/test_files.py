@@ -11,6 +11,7 @@ newline or rich markup must work, or be refused in one line all the same.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 from collections.abc import Callable
@@ -241,3 +242,63 @@ def test_an_odd_file_name_works_or_is_refused_in_one_line(
     ]
     answer = run(args, folder)  # type: ignore[arg-type]
     check_clean(answer)
+
+
+def _hdf5(path: Path) -> Path:
+    import h5py
+    import numpy as np
+
+    with h5py.File(path, "w") as recording:  # a robosuite recording's outline
+        recording.create_dataset("data/demo_1/states", data=np.zeros((3, 4)))
+    return path
+
+
+def _sqlite(path: Path) -> Path:
+    import sqlite3
+
+    with contextlib.closing(sqlite3.connect(path)) as database, database:
+        database.execute("CREATE TABLE messages (id INTEGER PRIMARY KEY, data BLOB)")
+    return path
+
+
+def _mcap(path: Path) -> Path:
+    path.write_bytes(b"\x89MCAP0\r\n" + bytes(range(256)))  # MCAP's magic, then records
+    return path
+
+
+RECORDINGS = {
+    # kind: (make it, its name, what the one line must point to)
+    "hdf5": (_hdf5, "demo.hdf5", "demoplan import demo.hdf5 -o FOLDER"),
+    "hdf5-named-csv": (_hdf5, "demo.csv", "demoplan import demo.csv -o FOLDER"),
+    "sqlite-bag-storage": (_sqlite, "bag_0.sqlite", "its .db3 file"),
+    "mcap-bag-storage": (_mcap, "bag_0.bin", "its .mcap file"),
+}
+READ_AS_TEXT = [(command, kind) for command in ("learn", "segment") for kind in RECORDINGS]
+
+
+@pytest.mark.parametrize(
+    ("command", "kind"), READ_AS_TEXT, ids=[f"{c}-{k}" for c, k in READ_AS_TEXT]
+)
+def test_a_recording_given_where_text_is_read_says_how_it_is_read(
+    tmp_path: Path, command: str, kind: str
+) -> None:
+    """``segment demo.hdf5`` answered "not UTF-8 text …; a CSV pose stream
+    expected", which does not say that ``demoplan import`` reads robosuite's
+    and robomimic's recordings; a bag's storage file under another name, that
+    it is read by its folder or its own suffix."""
+    make, name, pointer = RECORDINGS[kind]
+    make(tmp_path / name)
+    answer = run([command, name, "-o", "out.json"], tmp_path)
+    check_refused(answer, [name], codes={1})
+    assert pointer in answer.stderr, answer
+    assert "not UTF-8" not in answer.stderr, answer
+
+
+def test_a_folder_of_recordings_given_to_learn_says_how_they_are_read(tmp_path: Path) -> None:
+    """``learn FOLDER`` of HDF5 recordings answered that the folder holds no
+    demonstration files, without saying what reads them."""
+    (tmp_path / "recordings").mkdir()
+    _hdf5(tmp_path / "recordings" / "demo.hdf5")
+    answer = run(["learn", "recordings", "-o", "out.json"], tmp_path)
+    check_refused(answer, ["recordings"], codes={1})
+    assert "it holds demo.hdf5: demoplan import RECORDING -o FOLDER" in answer.stderr, answer

@@ -169,3 +169,61 @@ def test_ctrl_c_at_a_random_moment(
         }
         assert changed <= set(outputs), f"changed {sorted(changed)} at {moment:.2f} s"
         assert all(_complete(folder / o) for o in changed), f"incomplete at {moment:.2f} s"
+
+
+END_MOMENTS = 4
+"""Moments drawn in the last few tenths of a second of ``perceive``'s life."""
+
+
+@pytest.fixture(scope="module")
+def perceive_to_its_end(
+    workspace: Path, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[float, str]:
+    """``perceive``'s own wall time, uninterrupted, and what it prints."""
+    folder = tmp_path_factory.mktemp("perceive-end")
+    shutil.copy(workspace / "top.png", folder / "top.png")
+    args, _, _ = COMMANDS["perceive"]
+    began = time.monotonic()
+    done = subprocess.run(
+        [DEMOPLAN, *args], cwd=folder, capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    return time.monotonic() - began, done.stdout
+
+
+@pytest.mark.parametrize("k", range(END_MOMENTS))
+def test_ctrl_c_at_the_end_of_a_command(
+    workspace: Path, perceive_to_its_end: tuple[float, str], tmp_path: Path, k: int
+) -> None:
+    """An outside pass's Ctrl-C in the last 50–300 ms of ``perceive`` exited 0:
+    the signal found the work done (the outputs written, the table printed)
+    and the interpreter ending. Either answer is right, each whole: exit 0 with
+    every output and the whole table, or exit 130 with the one line and the
+    outputs either all as they were or all complete — never exit 0 with an
+    output or the table missing."""
+    wall, answer = perceive_to_its_end
+    args, outputs, _ = COMMANDS["perceive"]
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder)
+    before = fingerprint(folder)
+    moment = wall - random.Random(f"end-{k}").uniform(-0.05, 0.35)
+    process = subprocess.Popen(
+        [DEMOPLAN, *args], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    time.sleep(max(moment, 0.15))
+    wait_for_signal_handlers(process)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=2 * HANG_SECONDS)
+    if process.returncode == 0:
+        assert out == answer, f"exit 0 after Ctrl-C at {moment:.2f} s without the whole table"
+        assert all(_complete(folder / o) for o in outputs), f"exit 0 at {moment:.2f} s"
+        assert err == "", err
+        return
+    assert process.returncode == 130, f"exit {process.returncode} at {moment:.2f} s: {err}"
+    assert err.splitlines()[-1:] == ["demoplan: interrupted"], err
+    after = fingerprint(folder)
+    changed = {p for p in set(after) ^ set(before)} | {
+        p for p in after if p in before and after[p] != before[p]
+    }
+    assert changed in (set(), set(outputs)), f"changed {sorted(changed)} at {moment:.2f} s"
+    assert all(_complete(folder / o) for o in changed), f"incomplete at {moment:.2f} s"

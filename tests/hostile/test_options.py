@@ -6,6 +6,7 @@ several outputs writes none of them when one fails."""
 from __future__ import annotations
 
 import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -26,8 +27,6 @@ CASES: list[tuple[list[str], str]] = (
     ]
     + [
         (["solve", "problem.xml", "--search", "dfs"], "--search"),
-        (["plan", "model.json", "scene.json", "--timeout", "-1"], "--timeout"),
-        (["plan", "model.json", "scene.json", "--timeout", "nan"], "--timeout"),
         (["plan", "model.json", "scene.json", "--plot", "bad.xyz"], "--plot"),
         (["plan", "model.json", "scene.json", "--plot", "folder"], "--plot"),
         (["plan", "model.json", "scene.json", "--freespace", "-1"], "--freespace"),
@@ -41,25 +40,12 @@ CASES: list[tuple[list[str], str]] = (
         (["run", "model.json", "scene.json", "--faults", "drop=nan"], "--faults"),
         (["run", "model.json", "scene.json", "--faults", "teleport=0.1"], "--faults"),
         (["run", "model.json", "scene.json", "--sim", "unreal"], "--sim"),
-        (["run", "model.json", "scene.json", "--timeout", "-5"], "--timeout"),
         (["run", "model.json", "scene.json", "--frames", "others"], "others"),
-        ([*PERCEIVE[:2], "--px-per-m", "0", "--origin", "0", "0"], "--px-per-m"),
-        ([*PERCEIVE[:2], "--px-per-m", "-5", "--origin", "0", "0"], "--px-per-m"),
-        ([*PERCEIVE[:2], "--px-per-m", "nan", "--origin", "0", "0"], "--px-per-m"),
-        ([*PERCEIVE[:2], "--px-per-m", "1e308", "--origin", "0", "0"], "--px-per-m"),
         ([*PERCEIVE[:2], "--px-per-m", "0.001", "--origin", "0", "0"], "is --px-per-m right?"),
         ([*PERCEIVE[:2], "--px-per-m", "1e7", "--origin", "0", "0"], "is --px-per-m right?"),
         ([*PERCEIVE, "--side", "0.0001"], "--side too strict?"),
-        ([*PERCEIVE[:2], "--px-per-m", "1000", "--origin", "nan", "0"], "--origin"),
-        ([*PERCEIVE[:2], "--px-per-m", "1000", "--origin", "1e308", "0"], "--origin"),
-        ([*PERCEIVE, "--side", "-1"], "--side"),
-        ([*PERCEIVE, "--side", "1e308"], "--side"),
-        ([*PERCEIVE, "--side", "nan"], "--side"),
         ([*PERCEIVE, "-o", "folder"], "folder"),
         ([*PERCEIVE, "--timeout", "0.0001"], "--timeout"),
-        (["learn", "demos.json", "-o", "out.json", "--position-noise", "-1"], "position"),
-        (["learn", "demos.json", "-o", "out.json", "--position-noise", "nan"], "position"),
-        (["learn", "demos.json", "-o", "out.json", "--position-noise", "1e308"], "position"),
         (["learn", "demos.json", "-o", "out.json", "--max-clusters", "-1"], "max"),
         (["learn", "demos.json", "-o", "out.json", "--significance", "2"], "significance"),
         (["learn", "demos.json", "-o", "out.json", "--require", "A<"], "require"),
@@ -69,7 +55,6 @@ CASES: list[tuple[list[str], str]] = (
         (["learn", "demos.json", "-o", "demos.json"], "demos.json"),
         (["learn", "demos.json"], "-o"),
         (["learn", "demos.json", "-o", "out.json", "--timeout", "0.0001"], "--timeout"),
-        (["learn", "demos.json", "-o", "out.json", "--timeout", "-1"], "--timeout"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "bad.xyz"], "--plot"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "folder"], "--plot"),
         (["segment", "stream.csv", "-o", "d.json", "--plot", "/proc/no/such.png"], "such.png"),
@@ -134,4 +119,80 @@ def test_a_hostile_option_is_refused_in_one_line(
     before = fingerprint(folder)
     answer = run(args, folder)
     check_refused(answer, [name])
+    assert fingerprint(folder) == before, f"files changed: {answer}"
+
+
+HOSTILE_NUMBERS = ("nan", "inf", "-inf", "0", "-1", "1e308")
+NUMBER_COMMANDS: dict[str, list[str]] = {
+    # a command whose float options the table gives: its arguments but the option
+    "run": ["run", "model.json", "scene.json"],
+    "perceive": PERCEIVE,
+    "export": ["export", "bt", "model.json", "scene.json", "-o", "t.xml"],
+    "learn": ["learn", "demos.json", "-o", "out.json"],
+    "solve": ["solve", "problem.xml"],
+    "plan": ["plan", "model.json", "scene.json"],
+}
+ACCEPTED = {
+    # values of HOSTILE_NUMBERS an option takes (the others are refused)
+    "--timeout": {"inf", "0", "1e308"},  # inf: no limit; 0: the least work
+    "--origin": {"0", "-1"},
+    "--significance": {"0"},  # the paper's plain comparison
+}
+
+
+def _float_options() -> list[tuple[str, str, int]]:
+    """(command, option, values it takes) of every float option of every command."""
+    import typer.main
+
+    from demoplan.cli.application import app
+
+    def walk(command: object, path: list[str]) -> Iterator[tuple[str, object]]:
+        for name, sub in getattr(command, "commands", {}).items():
+            yield from walk(sub, [*path, name])
+        if not hasattr(command, "commands"):
+            yield " ".join(path), command
+
+    return [
+        (path, param.opts[0], param.nargs)
+        for path, command in walk(typer.main.get_command(app), [])
+        for param in command.params  # type: ignore[attr-defined]
+        if "float" in str(param.type_descriptor.annotation) and param.opts[0].startswith("--")
+    ]
+
+
+FLOAT_OPTIONS = _float_options()
+NUMBER_CASES = [
+    (command, option, nargs, value)
+    for command, option, nargs in FLOAT_OPTIONS
+    for value in HOSTILE_NUMBERS
+    if value not in ACCEPTED.get(option, set())
+]
+
+
+def test_the_number_table_has_every_float_option() -> None:
+    assert {command for command, _, _ in FLOAT_OPTIONS} <= set(NUMBER_COMMANDS)
+    assert len(FLOAT_OPTIONS) >= 14  # the walk found them
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "nargs", "value"),
+    NUMBER_CASES,
+    ids=[f"{c} {o} {v}" for c, o, _, v in NUMBER_CASES],
+)
+def test_a_number_an_option_does_not_take_says_what_was_given_and_what_is_expected(
+    workspace: Path, tmp_path: Path, command: str, option: str, nargs: int, value: str
+) -> None:
+    """``--px-per-m nan`` answered "Input should be less than or equal to
+    10000000": NaN, an infinity, zero, a negative or a huge number is named
+    as given, with what the option takes."""
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder)
+    before = fingerprint(folder)
+    args = [*NUMBER_COMMANDS[command], option, value, *["0"] * (nargs - 1)]
+    answer = run(args, folder)
+    check_refused(answer, [option, option.lstrip("-").replace("-", "_")], codes={1, 2})
+    line = answer.stderr
+    assert value in line or f"{float(value):g}" in line, f"{value} not named: {line}"
+    assert "expected" in line, line
+    assert "Input should be" not in line, line
     assert fingerprint(folder) == before, f"files changed: {answer}"

@@ -25,7 +25,13 @@ from demoplan.perception.calibration import MarkerLayout, calibrate
 from demoplan.perception.camera import Camera, load_image, save_image
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.opencv import cv2
-from demoplan.perception.overlay import FOUND_COLOUR, REJECTED_COLOUR, square_corners
+from demoplan.perception.overlay import (
+    FOUND_COLOUR,
+    REJECTED_COLOUR,
+    is_speck,
+    speck_side,
+    square_corners,
+)
 from demoplan.perception.photos import PhotoRig, render_photo, top_camera
 from demoplan.perception.pinhole import PinholeCamera, render_table
 from demoplan.perception.synthetic import COLOURS, SyntheticBlock, render_blocks
@@ -152,8 +158,78 @@ def test_the_cli_says_what_was_rejected_in_one_line(tmp_path: Path) -> None:
         "--side", "0.04", "--plot", tmp_path / "overlay.png",
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
-    assert "2 regions rejected: 1 not square, 1 too small (drawn in overlay.png)" in result.stdout
+    assert (
+        "2 regions rejected: 1 not square, 1 too small (drawn in overlay.png, but 1 speck, "
+        "too small to show)" in result.stdout
+    )
     assert (tmp_path / "overlay.png").is_file()
+
+
+SPECKS = [
+    (0.03 + 0.04 * i, 0.03 + 0.04 * j)
+    for i in range(12)
+    for j in range(9)
+    if all(math.dist((0.03 + 0.04 * i, 0.03 + 0.04 * j), c) > 0.05 for c in
+           [(b.x, b.y) for b in BLOCKS] + [(0.45, 0.35)])
+]  # fmt: skip
+"""Places of specks 10 mm across: listed as too small (over a tenth of the
+smallest block's 0.3 area), under a ninth of a 40 mm block's top."""
+
+
+def with_specks(image: np.ndarray, px_per_m: float) -> np.ndarray:
+    """``image`` with a red speck 10 mm across at each of :data:`SPECKS`, and a
+    red patch 20 mm square at (0.45, 0.35): a quarter of a 40 mm block's top,
+    more than a speck."""
+    painted = image.copy()
+    height = painted.shape[0]
+    for x, y in SPECKS:
+        centre = (round(x * px_per_m), round(height - y * px_per_m))
+        cv2.circle(painted, centre, round(0.005 * px_per_m), COLOURS["red"], -1)
+    corner = (round(0.44 * px_per_m), round(height - 0.36 * px_per_m))
+    far = (round(0.46 * px_per_m), round(height - 0.34 * px_per_m))
+    cv2.rectangle(painted, corner, far, COLOURS["red"], -1)
+    return painted
+
+
+@pytest.mark.parametrize("px_per_m", [1000.0, 2000.0])
+def test_specks_are_counted_not_drawn_whatever_the_resolution(
+    tmp_path: Path, px_per_m: float
+) -> None:
+    """mrhan_stacks' overlay drew 865 "too small" parts, which buried the
+    rejections that matter: a rejected part under a ninth of a block's top
+    (its size relative to the blocks found, not in pixels) is not drawn, and
+    the overlay's legend and the command's line count them. The same table
+    photographed at twice the resolution gives the same count."""
+    camera = Camera(px_per_m, (0.0, 0.0))
+    width, height = round(0.5 * px_per_m), round(0.4 * px_per_m)
+    image = with_specks(render_blocks(BLOCKS, camera, width=width, height=height, rng=3), px_per_m)
+    save_image(image, tmp_path / "top.png")
+    result = invoke(
+        "perceive", tmp_path / "top.png", "--px-per-m", px_per_m, "--origin", "0", "0",
+        "--side", "0.04", "--plot", tmp_path / "overlay.png",
+    )  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    line = result.stdout.strip().splitlines()[-1]
+    specks = int(line.split(", but ")[1].split(" ")[0])
+    assert specks >= len(SPECKS), line
+    overlay = load_image(tmp_path / "overlay.png")
+    for x, y in SPECKS:  # a speck's place is left as it was: no outline, no label
+        rim = pixel(camera, height, x + 0.005, y)
+        assert not near_colour(overlay, rim, REJECTED_COLOUR, reach=1), (x, y)
+    # the patch, a quarter of a top, is outlined; the legend is at the bottom left
+    assert near_colour(overlay, pixel(camera, height, 0.44, 0.36), REJECTED_COLOUR, 3)
+    legend = overlay[height - round(0.03 * px_per_m) :, : round(0.25 * px_per_m)]
+    assert (np.abs(legend.astype(int) - REJECTED_COLOUR).max(axis=2) <= 40).sum() > 50
+    counts = {}
+    for scale in (1000.0, 2000.0):
+        cam = Camera(scale, (0.0, 0.0))
+        w, h = round(0.5 * scale), round(0.4 * scale)
+        picture = with_specks(render_blocks(BLOCKS, cam, width=w, height=h, rng=3), scale)
+        save_image(picture, tmp_path / f"at-{scale:g}.png")
+        found = perceive_top_view(tmp_path / f"at-{scale:g}.png", scale, (0.0, 0.0), side=SIDE)
+        side = speck_side([b.side for b in found.blocks.values()])
+        counts[scale] = sum(is_speck(r, side) for r in found.rejected)
+    assert counts[1000.0] == counts[2000.0] == specks
 
 
 def test_a_side_face_is_rejected_at_its_cubes_edge() -> None:
@@ -204,7 +280,8 @@ def test_an_oblique_photo_is_outlined_at_its_top_faces(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("content", "extra", "code"),
     [
-        ("blank", [], 1),  # no block: a scene needs one
+        # the time budget spent (exit 4): nothing drawn, nothing written
+        ("blocks", ["--timeout", "0"], 4),
         ("blocks", ["-o", "{out}/same.png", "--plot", "{out}/same.png"], 2),
         ("blocks", ["--plot", "{out}/top.png"], 1),  # would overwrite the input
         # the picture cannot be written (its name is a folder): the scene is not either
@@ -227,6 +304,40 @@ def test_a_failing_perceive_writes_neither_file(
     assert result.exit_code == code, result.output
     assert result.stderr.count("\n") == 1 and result.stderr.startswith("demoplan: error: ")
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_no_blocks_found_writes_the_overlay_alone_never_the_scene(tmp_path: Path) -> None:
+    """Exit 1, "no blocks found": the overlay of what was rejected and why is its
+    diagnosis, so it is written — alone: the scene (-o) is not, there being no
+    scene; the one line says where the picture is. Before, neither was written
+    and the user could not see why nothing was found."""
+    blank = render_blocks([], CAMERA, width=500, height=400, rng=1)
+    save_image(with_distractors(blank), tmp_path / "top.png")
+    overlay, scene = tmp_path / "overlay.png", tmp_path / "scene.json"
+    result = invoke(
+        "perceive", tmp_path / "top.png", "--px-per-m", "1000", "--origin", "0", "0",
+        "-o", scene, "--plot", overlay,
+    )  # fmt: skip
+    assert result.exit_code == 1, result.output
+    (line,) = result.stderr.splitlines()
+    assert "no blocks found" in line and f"drawn in {overlay}" in line
+    assert not scene.exists()
+    drawn = load_image(overlay)
+    assert drawn.shape == blank.shape
+    # the small patch and the disc, rejected, are outlined in magenta
+    assert near_colour(drawn, pixel(CAMERA, 400, 0.12, 0.30 + 0.025), REJECTED_COLOUR, 4)
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_no_blocks_found_without_plot_writes_nothing(tmp_path: Path) -> None:
+    save_image(render_blocks([], CAMERA, width=500, height=400, rng=1), tmp_path / "top.png")
+    result = invoke(
+        "perceive", tmp_path / "top.png", "--px-per-m", "1000", "--origin", "0", "0",
+        "-o", tmp_path / "scene.json",
+    )  # fmt: skip
+    assert result.exit_code == 1 and "no blocks found" in result.stderr
+    assert "drawn in" not in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["top.png"]
 
 
 def pink_picture(folder: Path) -> tuple[Path, Camera]:

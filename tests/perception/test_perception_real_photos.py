@@ -58,6 +58,36 @@ def test_the_development_set_is_five_labelled_photographs() -> None:
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_a_label_corrected_after_running_says_so(name: str) -> None:
+    """mrhan_stacks' label said ``labelled_before_running: true`` alone, though
+    two of its blocks were labelled after the detector had run (their entries
+    say ``correction``): a label with a corrected entry says what and why in its
+    ``corrected_after_running``, and the loader shows it; the others have none."""
+    import json
+
+    document = json.loads((PHOTOS / f"{name}.json").read_text(encoding="utf-8"))
+    corrected = [b for b in document["blocks"] if "correction" in b]
+    photo = _photo(name)
+    assert bool(corrected) == bool(photo.corrected_after_running)
+    assert photo.corrected_after_running == document.get("corrected_after_running", "")
+    if corrected:
+        assert f"{len(document['blocks'])} blocks" in photo.corrected_after_running
+
+
+def test_a_label_whose_correction_is_not_text_is_refused(tmp_path: Path) -> None:
+    import json
+
+    from demoplan.errors import InputError
+
+    document = json.loads((PHOTOS / "mrhan_touching.json").read_text(encoding="utf-8"))
+    document["image"] = str(PHOTOS / document["image"])
+    document["corrected_after_running"] = True
+    (tmp_path / "label.json").write_text(json.dumps(document))
+    with pytest.raises(InputError, match="corrected_after_running"):
+        load_labelled(tmp_path / "label.json")
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_a_development_photograph_meets_the_issue_thresholds(name: str) -> None:
     """As ``demoplan perceive PHOTO --px-per-m S --origin 0 0`` (no --side) reads it:
     at least 90 % of the labelled, non-partial tops found, at most one false block

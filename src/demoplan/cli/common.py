@@ -4,8 +4,9 @@ errors to exit codes, progress, and the options several commands take."""
 from __future__ import annotations
 
 import logging
+import math
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from enum import StrEnum
 from pathlib import Path
@@ -268,6 +269,41 @@ SceneArgument = Annotated[
 ]
 
 
+def bounded_number(low: float, high: float = math.inf, *, expected: str) -> Callable[[str], float]:
+    """typer's ``parser=`` of a float option taken from ``low`` to ``high``, both
+    included (the option's ``min`` and ``max``, which its help shows): a value
+    outside says what was given and what is ``expected`` — NaN, an infinity,
+    zero, a negative number each by name. typer's own range check answered
+    ``--px-per-m nan`` with "Input should be less than or equal to 10000000"."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise typer.BadParameter(f"{text!r} is not a number; {expected} expected") from None
+        if low <= value <= high:
+            return value
+        why = _out_of_range(value, low, high)
+        raise typer.BadParameter(f"{plain_text(text)} {why}; {expected} expected")
+
+    return parse
+
+
+def _out_of_range(value: float, low: float, high: float) -> str:
+    if math.isnan(value):
+        return "is not a number (NaN)"
+    if math.isinf(value):
+        return "is infinite" if value > 0 else "is minus infinity"
+    if value > high:
+        return f"is above {high:,.0f}" if high.is_integer() else f"is above {high:g}"
+    if value == 0:
+        return "is zero"
+    return "is negative" if value < 0 <= low else f"is below {low:,g}"
+
+
+TIMEOUT_EXPECTED = "seconds, 0 or more (inf: no limit),"
+
+
 def planning_timeout(what: str) -> Any:
     """The ``--timeout`` option of a planning command (``solve``, ``plan``,
     ``run``, ``export bt``): ``what`` its seconds are for; the default it names
@@ -277,6 +313,7 @@ def planning_timeout(what: str) -> Any:
     return typer.Option(
         "--timeout",
         min=0.0,
+        parser=bounded_number(0.0, expected=TIMEOUT_EXPECTED),
         show_default=False,
         help=f"{what} [default: {DEFAULT_TIMEOUT:g}] ('inf': no limit).",
     )

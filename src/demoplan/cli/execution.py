@@ -13,6 +13,7 @@ from rich.text import Text
 
 from demoplan.budget import PERCEPTION_TIMEOUT
 from demoplan.cli.common import (
+    TIMEOUT_EXPECTED,
     ClutterOption,
     CollisionsOption,
     CollisionSource,
@@ -21,6 +22,7 @@ from demoplan.cli.common import (
     PerceptionName,
     SimName,
     app,
+    bounded_number,
     geometry_settings,
     plain_text,
     planning_timeout,
@@ -297,7 +299,13 @@ def perceive(
     ],
     px_per_m: Annotated[
         float | None,
-        typer.Option("--px-per-m", min=1e-3, max=1e7, help="Pixels per metre (a top view)."),
+        typer.Option(
+            "--px-per-m",
+            min=1e-3,
+            max=1e7,
+            parser=bounded_number(1e-3, 1e7, expected="pixels per metre, 0.001 to 10,000,000,"),
+            help="Pixels per metre (a top view).",
+        ),
     ] = None,
     origin: Annotated[
         tuple[float, float] | None,
@@ -323,6 +331,7 @@ def perceive(
         float | None,
         typer.Option(
             min=1e-4,
+            parser=bounded_number(1e-4, expected="the blocks' side in metres, 0.0001 or more,"),
             help="The blocks' side (m), when known: sizes 15 % off it are not blocks. Alone "
             "(no --px-per-m, --camera, --markers) it gives a straight-down view's scale.",
         ),
@@ -330,7 +339,9 @@ def perceive(
     timeout: Annotated[
         float,
         typer.Option(
-            min=0.0, help="Seconds perception may take before it stops with exit 4 (inf: none)."
+            min=0.0,
+            parser=bounded_number(0.0, expected=TIMEOUT_EXPECTED),
+            help="Seconds perception may take before it stops with exit 4 (inf: none).",
         ),
     ] = PERCEPTION_TIMEOUT,
     plot: Annotated[

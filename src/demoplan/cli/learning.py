@@ -14,9 +14,11 @@ from demoplan.cli.common import (
     LANDMARKS_OPTION,
     OBJECTS_FILE_HELP,
     OBJECTS_OPTION,
+    TIMEOUT_EXPECTED,
     UNITS_OPTION,
     Units,
     app,
+    bounded_number,
     print_json,
     reported_errors,
     stderr,
@@ -30,6 +32,9 @@ from demoplan.cli.render import (
     print_scene_preview,
 )
 from demoplan.wording import plural
+
+DISTANCE_EXPECTED = "a distance in metres, above 0 and at most 10,"
+ANGLE_EXPECTED = "an angle in degrees, above 0 and at most 360,"
 
 
 class OrientationTies(StrEnum):
@@ -82,6 +87,7 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
+            parser=bounded_number(0.0, expected=DISTANCE_EXPECTED),
             help="Placement precision (RMS) in m: spreads closer than this are ties "
             "(default: estimated from the demonstrations).",
             show_default=False,
@@ -91,6 +97,7 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
+            parser=bounded_number(0.0, expected=ANGLE_EXPECTED),
             help="Orientation precision (RMS) in degrees (default: estimated).",
             show_default=False,
         ),
@@ -100,6 +107,7 @@ def learn(
         typer.Option(
             min=0.0,
             max=0.999,
+            parser=bounded_number(0.0, 0.999, expected="a test's level, from 0 to 0.999,"),
             help="Level of the F test a reference or a split must pass to add states "
             "(default 0.05; 0: the paper's plain comparison).",
             show_default=False,
@@ -109,6 +117,7 @@ def learn(
         float,
         typer.Option(
             min=0.0,
+            parser=bounded_number(0.0, expected=TIMEOUT_EXPECTED),
             help="Seconds learning may take before it stops with exit 4 (inf: no limit).",
         ),
     ] = LEARNING_TIMEOUT,
@@ -133,6 +142,7 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
+            parser=bounded_number(0.0, expected=DISTANCE_EXPECTED),
             help="Minimum distance between clusters in m (default 0.05).",
             show_default=False,
         ),
@@ -141,6 +151,7 @@ def learn(
         float | None,
         typer.Option(
             min=0.0,
+            parser=bounded_number(0.0, expected=ANGLE_EXPECTED),
             help="Minimum angle between clusters in degrees (default 15).",
             show_default=False,
         ),

@@ -189,7 +189,8 @@ def print_perceived(console: Console, found: Perceived, image: Path, plot: Path 
     console.print(blocks_table(found, image.name))
     console.print(f"scale from {found.scale}", markup=False, highlight=False, soft_wrap=True)
     if plot is not None:
-        console.print(plain_text(rejections_line(found.rejected, plot)), highlight=False)
+        line = rejections_line(found.rejected, plot, found.specks)
+        console.print(plain_text(line), highlight=False)
 
 
 def blocks_table(found: Perceived, image_name: str) -> Table:
@@ -219,9 +220,10 @@ NOUNS = {"side face": "side faces", "side face or shadow": "side faces or shadow
 """Reasons for a rejection that are nouns, and their plurals."""
 
 
-def rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
+def rejections_line(rejected: Sequence[Rejection], plot: Path, specks: int = 0) -> str:
     """``3 regions rejected: 2 side faces, 1 too small (drawn in overlay.png)``: most
-    first, ties in the order of the alphabet (the same line on every run)."""
+    first, ties in the order of the alphabet (the same line on every run); with
+    ``specks``, how many of them the overlay does not draw."""
     from demoplan.wording import plural
 
     counts = Counter(r.reason for r in rejected)
@@ -229,7 +231,8 @@ def rejections_line(rejected: Sequence[Rejection], plot: Path) -> str:
         plural(n, why, NOUNS[why]) if why in NOUNS else f"{n} {why}"
         for why, n in sorted(counts.items(), key=lambda item: (-item[1], item[0]))
     )
+    but = f", but {plural(specks, 'speck')}, too small to show" if specks else ""
     return (
         f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
-        f"(drawn in {plot.name})"
+        f"(drawn in {plot.name}{but})"
     )

@@ -12,10 +12,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from demoplan.budget import PERCEPTION_TIMEOUT
-from demoplan.errors import UsageError
-from demoplan.fileio import StagedOutputs, dump_json, refuse_overwriting_inputs, write_atomic
+from demoplan.errors import InputError, UsageError
+from demoplan.fileio import (
+    StagedOutputs,
+    dump_json,
+    refuse_overwriting_inputs,
+    write_atomic,
+    write_atomic_bytes,
+)
 from demoplan.perception.blocks import Rejection
 from demoplan.perception.images import perceive_top_view
+from demoplan.perception.overlay import NoBlocksError, is_speck, speck_side
 from demoplan.perception.stacking import TrackedBlock, scene_document
 
 if TYPE_CHECKING:
@@ -44,6 +51,9 @@ class Perceived:
     scale: str = ""
     """Where the scale came from: ``--px-per-m …``, the cube size (``--side``),
     the camera file or the markers (the scene's ``description`` says it too)."""
+    specks: int = 0
+    """Of the rejections, the specks the overlay counts and does not draw
+    (:func:`~demoplan.perception.overlay.is_speck`); 0 without an overlay."""
 
 
 def perceive(
@@ -81,18 +91,30 @@ def perceive(
         raise UsageError("-o and --plot name one file; two files expected")
     options: dict[str, Any] = {"before": before, "side": side, "timeout": timeout}
     options |= {"colours": colours, "overlay": plot is not None}
-    if camera is None and markers is None:  # a top view: its scale given, or the cubes'
-        seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
-        scale = seen.scale
-    else:
-        # imported here: a calibration's file models (pydantic) are a tenth of a
-        # second of a plain top view's start-up
-        from demoplan.perception.calibrated import calibration_for, perceive_photograph
-        from demoplan.perception.calibration import load_calibration, load_markers
+    try:
+        if camera is None and markers is None:  # a top view: its scale given, or the cubes'
+            seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
+            scale = seen.scale
+        else:
+            # imported here: a calibration's file models (pydantic) are a tenth of a
+            # second of a plain top view's start-up
+            from demoplan.perception.calibrated import calibration_for, perceive_photograph
+            from demoplan.perception.calibration import load_calibration, load_markers
 
-        reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
-        seen = perceive_photograph(image, calibration_for(image, reference), **options)
-        scale = f"the camera file {camera}" if camera else f"the markers in the image ({markers})"
+            reference = load_calibration(camera) if camera else load_markers(markers)  # type: ignore[arg-type]
+            seen = perceive_photograph(image, calibration_for(image, reference), **options)
+            scale = (
+                f"the camera file {camera}" if camera else f"the markers in the image ({markers})"
+            )
+    except NoBlocksError as exc:
+        if plot is None or exc.overlay is None:
+            raise
+        # the regions rejected and why: the diagnosis of "no blocks", written alone
+        write_atomic_bytes(plot, encode_png(exc.overlay))
+        raise InputError(
+            f"{exc.message}; the regions rejected, and why, are drawn in {plot}",
+            source=exc.source,
+        ) from None
     document = scene_document(seen.blocks)
     document["description"] = f"perceived in {image.name}; scale from {scale}"
     overlay = encode_png(seen.overlay) if seen.overlay is not None else None
@@ -101,7 +123,11 @@ def perceive(
             outputs.add(output, dump_json(document).encode("utf-8", "backslashreplace"))
         if plot is not None and overlay is not None:
             outputs.add(plot, overlay)
-    return Perceived(seen.blocks, document, seen.rejected, scale)
+    specks = 0
+    if plot is not None:
+        side = speck_side([b.side for b in seen.blocks.values()])
+        specks = sum(is_speck(r, side) for r in seen.rejected)
+    return Perceived(seen.blocks, document, seen.rejected, scale, specks)
 
 
 @dataclass(frozen=True, slots=True)

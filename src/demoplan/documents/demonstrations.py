@@ -394,7 +394,16 @@ def demonstrations_from_path(path: Path) -> list[Demonstration]:
             and p.is_file()
         )
         if not files:
-            raise InputError("folder holds no .json or .yaml demonstration files", source=str(path))
+            recordings = sorted(p.name for p in path.glob("*.hdf5") if not p.name.startswith("."))
+            hint = (
+                f" (it holds {recordings[0]}{' and others' if len(recordings) > 1 else ''}: "
+                "demoplan import RECORDING -o FOLDER makes a recording's demonstration files)"
+                if recordings
+                else ""
+            )
+            raise InputError(
+                f"folder holds no .json or .yaml demonstration files{hint}", source=str(path)
+            )
         _refuse_links_out_of(path, files)
     else:
         files = [path]

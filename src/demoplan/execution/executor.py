@@ -102,7 +102,9 @@ class ExecutionSettings:
 MAX_SAME_GRASP = 3
 """A grasp that failed is tried again identically (the same object, finger axis
 and place) at most twice: after its third failure the replan takes another
-grasp of the object, and the run stops, naming the object, when none is left."""
+grasp of the object, and the run stops, naming the object, when none is left.
+A grasp whose motion the arm refused is not tried again at all: the arm's
+check is deterministic, and the same motion would be refused again."""
 
 MISPLACED_WITHIN = 0.06
 """m: an object off its target by less than this was misplaced; farther, dropped."""
@@ -285,6 +287,8 @@ class _Run:
     plan_index: int = 0
     failed_grasps: dict[GraspKey, int] = field(default_factory=dict)
     """How often each grasp failed at each place."""
+    refused_grasps: set[GraspKey] = field(default_factory=set)
+    """The grasps whose motion the arm refused, at their place: never tried again there."""
     grasp_misses: list[tuple[str, float, Pose]] = field(default_factory=list)
     """Every grasp that failed, in order: the object, its finger axis and where it stood."""
     step: int = 0
@@ -359,6 +363,8 @@ class _Run:
         if action.kind == "GRASP" and failure.kind == FailureKind.GRASP:
             key = _grasp_key(action.object, grasp.axis, self.picked_from, settings)
             self.failed_grasps[key] = self.failed_grasps.get(key, 0) + 1
+            if refused:  # the arm never went: it would refuse the same motion again
+                self.refused_grasps.add(key)
             self.grasp_misses.append((action.object, grasp.axis, self.picked_from))
         held = world.observe().held
         if held is not None:
@@ -512,7 +518,7 @@ class _Run:
                 why = why or f"cannot plan in the observed world: {exc}"
                 continue
             built, refused = _without_failed_grasps(
-                built, self.failed_grasps, observation, settings, self.world
+                built, self.failed_grasps, self.refused_grasps, observation, settings, self.world
             )
             if refused:
                 why = why or refused
@@ -656,19 +662,21 @@ def _grasp_key(obj: str, axis: float, where: Pose, settings: ExecutionSettings) 
 def _without_failed_grasps(
     built: SceneProblem,
     failed: dict[GraspKey, int],
+    refused: set[GraspKey],
     observation: Observation,
     settings: ExecutionSettings,
     world: World,
 ) -> tuple[SceneProblem, str]:
-    """``built`` without the grasps that failed :data:`MAX_SAME_GRASP` times on
-    an object standing where it stood then (another grasp is planned instead);
-    with the reason to stop when such an object has no grasp left."""
+    """``built`` without the grasps that failed :data:`MAX_SAME_GRASP` times, or
+    whose motion the arm ``refused`` once, on an object standing where it stood
+    then (another grasp is planned instead); with the reason to stop when such
+    an object has no grasp left."""
     banned: dict[tuple[str, float], GraspKey] = {}
     for key, count in failed.items():
         obj = key[0]
         pose = observation.poses.get(obj)
         here = pose is not None and _grasp_key(obj, key[1], pose, settings) == key
-        if count >= MAX_SAME_GRASP and here:
+        if (count >= MAX_SAME_GRASP or key in refused) and here:
             banned[(obj, key[1])] = key
     if not banned:
         return built, ""
@@ -679,10 +687,17 @@ def _without_failed_grasps(
     for obj, _ in banned:
         if not any(o == obj for o, _ in allowed):
             pose = observation.poses[obj]
-            refused = list(getattr(world, "motion_failures", ()))
-            cause = f"; the last motion refused: {refused[-1]}" if refused else ""
+            motions = list(getattr(world, "motion_failures", ()))
+            cause = f"; the last motion refused: {motions[-1]}" if motions else ""
+            ways = {key in refused for (name, _), key in banned.items() if name == obj}
+            how = {
+                frozenset({False}): f"each of its grasps failed {MAX_SAME_GRASP} times",
+                frozenset({True}): "the arm refused each of its grasps",
+            }.get(
+                frozenset(ways), f"each of its grasps failed {MAX_SAME_GRASP} times or was refused"
+            )
             return built, (
-                f"gave up on {obj}: each of its grasps failed {MAX_SAME_GRASP} times at "
+                f"gave up on {obj}: {how} at "
                 f"({pose.position[0]:.3f}, {pose.position[1]:.3f}){cause}"
             )
     return replace(built, problem=replace(built.problem, allowed=allowed)), ""

@@ -8,6 +8,7 @@ import importlib
 import json
 import math
 import re
+import shlex
 import stat
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -79,14 +80,53 @@ def read_input_text(path: Path, expected: str, max_bytes: int = MAX_FILE_BYTES) 
     except OSError as exc:
         raise InputError(f"cannot read file ({os_reason(exc, path)})", source=source) from None
     except UnicodeDecodeError as exc:
+        container = binary_container(exc.object, source)
+        if container is not None:
+            kind, hint = container
+            raise InputError(
+                f"{kind}, not text; {expected} expected ({hint})", source=source
+            ) from None
         line = exc.object[: exc.start].count(b"\n") + 1
         raise InputError(
             f"not UTF-8 text (byte {exc.start} on line {line}); {expected} expected", source=source
         ) from None
     if "\x00" in text:
+        container = binary_container(text[:8192].encode(), source)
+        if container is not None:
+            kind, hint = container
+            raise InputError(f"{kind}, not text; {expected} expected ({hint})", source=source)
         line = text[: text.index("\x00")].count("\n") + 1
         raise InputError(f"a NUL byte on line {line}; {expected} expected", source=source)
     return text
+
+
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+"""An HDF5 file's first 8 bytes — or after a user block of 512, 1024, 2048… bytes."""
+
+_BAG_STORAGE = (
+    "a ROS 2 bag's storage? segment and learn read a bag from its folder, its "
+    "metadata.yaml or its {suffix} file"
+)
+
+
+def binary_container(data: bytes, source: str) -> tuple[str, str] | None:
+    """What a file that is not text is, and the way demoplan reads it, where its
+    first bytes say it is a recording: an HDF5 file (robosuite, robomimic:
+    ``demoplan import``), a ROS 2 bag's SQLite or MCAP storage (under another
+    name than ``.db3`` / ``.mcap``); else None. Given to a command that reads
+    text (``segment``, ``learn``), such a file is a common mistake, and "not
+    UTF-8 text" alone does not say what to do."""
+    if any(data[at : at + 8] == HDF5_SIGNATURE for at in (0, 512, 1024, 2048, 4096)):
+        return (
+            "an HDF5 file",
+            f"a robosuite / robomimic recording? demoplan import {shlex.quote(source)} -o FOLDER "
+            "makes its demonstration files",
+        )
+    if data.startswith(b"SQLite format 3\x00"):
+        return "an SQLite database", _BAG_STORAGE.format(suffix=".db3")
+    if data.startswith(b"\x89MCAP"):
+        return "an MCAP file", _BAG_STORAGE.format(suffix=".mcap")
+    return None
 
 
 MAX_YAML_BYTES = 2 * 1024 * 1024

@@ -16,6 +16,7 @@ __all__ = [
     "INTERRUPTED_EXIT",
     "TERMINATED_EXIT",
     "Terminated",
+    "ignore_signals",
     "interrupted_by_signal",
     "interrupted_exit_code",
     "on_signal",
@@ -41,6 +42,7 @@ def interrupted_exit_code(exc: KeyboardInterrupt) -> int:
 
 
 signals_received: list[int] = []  # SIGINT / SIGTERM, in the order they came
+_ended: list[bool] = []  # [True] once the command is over (ignore_signals)
 
 
 REDELIVERY_SECONDS = 0.25
@@ -53,9 +55,12 @@ _Function = TypeVar("_Function", bound=Callable[..., Any])
 def on_signal(signum: int, frame: object) -> None:
     """Ctrl-C or SIGTERM: remember it (a library may catch the exception and
     exit in its own way — typer turns Ctrl-C into a silent exit 130) and stop.
-    A timer raises it again if the exception is swallowed (:func:`_redeliver`)."""
+    A timer raises it again if the exception is swallowed (:func:`_redeliver`).
+    Once the command is over (:func:`ignore_signals`) the signal is ignored."""
     import signal
 
+    if _ended:
+        return
     signals_received.append(signum)
     _arm_redelivery(REDELIVERY_SECONDS)
     raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
@@ -101,6 +106,26 @@ def stop_redelivery() -> None:
 
     signal.setitimer(signal.ITIMER_REAL, 0)
     signal.signal(signal.SIGALRM, signal.SIG_IGN)
+
+
+def ignore_signals() -> None:
+    """The command is over: SIGINT and SIGTERM are ignored from here on.
+
+    A signal that had arrived before is in :data:`signals_received`, for the
+    caller to report. One that arrives now finds the work done (the outputs in
+    place, the answer printed) and the interpreter ending: there is nothing
+    left to stop, and raising it would only turn a finished command's exit into
+    a traceback. The first statement makes :func:`on_signal` ignore it, so that
+    no moment is left between the two where a signal's exception escapes the
+    caller: a signal whose handler runs inside ``signal.signal`` below (Python
+    runs the pending ones before it changes a handler) or a redelivery timer
+    firing meanwhile is ignored the same way."""
+    import signal
+
+    _ended.append(True)
+    stop_redelivery()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
 
 def redeliver_lost_signal(unraisable: Any) -> None:

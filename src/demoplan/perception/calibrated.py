@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 
 from demoplan.budget import PERCEPTION_TIMEOUT, time_budget
-from demoplan.errors import InputError
 from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Rejection, detect_blocks
 from demoplan.perception.calibration import (
     MarkerLayout,
@@ -30,7 +29,7 @@ from demoplan.perception.calibration import (
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
 from demoplan.perception.images import SIDE_TOLERANCE, Perception, check_side, seen_now
-from demoplan.perception.overlay import Drawn, draw_overlay
+from demoplan.perception.overlay import Drawn, NoBlocksError, draw_overlay, speck_side
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
 __all__ = [
@@ -187,8 +186,17 @@ def perceive_photograph(
         detected, plane = _detected(image, calibration, side, rejected, palette)
         blocks = tracker.update(detected)
     if not blocks:
-        raise InputError(
-            "no blocks found; a scene needs at least one (--side too strict?)", source=str(image)
+        raise NoBlocksError(
+            "no blocks found; a scene needs at least one (--side too strict?)",
+            source=str(image),
+            overlay=draw_overlay(
+                load_image(image),
+                [],
+                [(r, plane) for r in rejected],
+                lambda points, at: table_to_photo(calibration, points, at),
+            )
+            if overlay
+            else None,
         )
     seen, left = seen_now(blocks, detected)
     rejected += left
@@ -202,5 +210,6 @@ def perceive_photograph(
             found,
             [(r, plane) for r in rejected],
             lambda points, at: table_to_photo(calibration, points, at),
+            speck_side([b.side for b in blocks.values()]),
         )
     return Perception(blocks, tuple(rejected), drawn)

@@ -19,7 +19,14 @@ from demoplan.perception.blocks import DetectedBlock, PerceptionSettings, Reject
 from demoplan.perception.camera import Camera, load_image
 from demoplan.perception.colours import load_palette
 from demoplan.perception.image_measures import ImageMeasures
-from demoplan.perception.overlay import Drawn, draw_overlay, square_corners, top_view_to_image
+from demoplan.perception.overlay import (
+    Drawn,
+    NoBlocksError,
+    draw_overlay,
+    speck_side,
+    square_corners,
+    top_view_to_image,
+)
 from demoplan.perception.sizes import (
     SIDE_TOLERANCE,
     block_sizes,
@@ -83,8 +90,13 @@ def check_side(side: float | None) -> None:
 
 def check_top_view(px_per_m: float, origin: tuple[float, float]) -> None:
     """``--px-per-m`` and ``--origin``: finite, the origin within ±10 km."""
-    if not all(map(math.isfinite, (px_per_m, *origin))) or max(map(abs, origin)) > 1e4:
-        raise UsageError("--px-per-m and --origin must be finite, the origin within ±10 km")
+    if not math.isfinite(px_per_m):
+        raise UsageError(f"--px-per-m {px_per_m:g}: pixels per metre, a finite number expected")
+    if not all(map(math.isfinite, origin)) or max(map(abs, origin)) > 1e4:
+        raise UsageError(
+            f"--origin {origin[0]:g} {origin[1]:g}: the image's bottom-left corner in metres, "
+            "each a finite number within ±10,000 (10 km) expected"
+        )
 
 
 def perceive_files(
@@ -185,18 +197,22 @@ def _perception(
 ) -> Perception:
     """What a picture showed, with the overlay drawn when asked for; an input error
     when there is no block."""
+    to_image = top_view_to_image(camera, picture.shape[0])
     if not blocks:
-        raise InputError(
+        raise NoBlocksError(
             "no blocks found; a scene needs at least one (is --px-per-m right? --side too strict?)",
             source=str(image),
+            overlay=draw_overlay(picture, [], [(r, 0.0) for r in rejected], to_image)
+            if overlay
+            else None,
         )
     seen, left = seen_now(blocks, detected)
     rejected += left
     drawn = None
     if overlay:
         found = [Drawn(b.name, b.x, b.y, b.yaw, b.side) for b in seen]
-        to_image = top_view_to_image(camera, picture.shape[0])
-        drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image)
+        side = speck_side([b.side for b in blocks.values()])
+        drawn = draw_overlay(picture, found, [(r, 0.0) for r in rejected], to_image, side)
     return Perception(blocks, tuple(rejected), drawn, scale)
 
 
@@ -246,10 +262,16 @@ def _perceive_at_cube_scale(
         found = detect_blocks(picture, Camera(1.0), in_pixels, rejected, measures)
     sizes = block_sizes([d.side for d in found])
     if not sizes:
-        raise InputError(
+        in_pixels_to_image = top_view_to_image(Camera(1.0), picture.shape[0])
+        raise NoBlocksError(
             "no blocks found, so no scale from --side; a scene needs at least one "
             "(or give --px-per-m)",
             source=str(image),
+            overlay=draw_overlay(
+                picture, [], [(r, 0.0) for r in rejected], in_pixels_to_image, MIN_SIDE_PX
+            )
+            if overlay
+            else None,
         )
     px_per_m = sizes[0][0] / side
     kept, odd = held_to_sizes(found, sizes, unit="px", seen=(measures, Camera(1.0)))

@@ -59,6 +59,9 @@ class LabelledPhoto:
     px_per_m: float
     side_m: tuple[float, ...]
     blocks: tuple[LabelledBlock, ...]
+    corrected_after_running: str = ""
+    """What of the label was changed after a detector had run on the photograph,
+    and why (empty: labelled before any run, as it stands)."""
 
     @property
     def needed(self) -> int:
@@ -124,10 +127,19 @@ def load_labelled(path: str | Path) -> LabelledPhoto:
             raise InputError("pixel centre u, v expected", source=source, field=field)
         side_px = entry.get("side_px") or side_m[0] * px_per_m
         blocks.append(LabelledBlock(float(u), float(v), float(side_px), bool(entry.get("partial"))))
+    corrected = document.get("corrected_after_running", "")
+    if not isinstance(corrected, str):
+        raise InputError(
+            "what was corrected after running, and why, as text expected",
+            source=source,
+            field="corrected_after_running",
+        )
     image = label.parent / document["image"]
     with Image.open(image) as opened:
         width, height = opened.size
-    return LabelledPhoto(label.stem, image, width, height, px_per_m, side_m, tuple(blocks))
+    return LabelledPhoto(
+        label.stem, image, width, height, px_per_m, side_m, tuple(blocks), corrected
+    )
 
 
 def score_detections(photo: LabelledPhoto, centres: Sequence[tuple[float, float]]) -> PhotoScore:
