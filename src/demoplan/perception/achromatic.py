@@ -364,7 +364,10 @@ def _without_side_faces(member: np.ndarray, lightness: np.ndarray, steps: int) -
         return member
     if np.median(upper) < SIDE_FACE_RATIO * max(float(np.median(lower)), 1.0):
         return member
-    top = fill_holes(member & (lightness > cut / 2.55))  # a glint within stays
+    lit = member & (lightness > cut / 2.55)
+    # a glint within stays (no pixel of the dark mask); the side faces stay out, also
+    # where the part's outline, blurred with the table into the brighter mode, rings them
+    top = lit | (fill_holes(lit) & ~member)
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     opened = cv2.morphologyEx(top.astype(np.uint8), cv2.MORPH_OPEN, disc)
     count, labels, stats = labelled_parts(opened)
@@ -373,6 +376,45 @@ def _without_side_faces(member: np.ndarray, lightness: np.ndarray, steps: int) -
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     kept: np.ndarray = dilate(labels == largest, steps) & top
     return kept
+
+
+def _square_of(body: np.ndarray) -> np.ndarray:
+    """The smallest rectangle round ``body``'s pixels, as a mask of its shape."""
+    box = cv2.boxPoints(cv2.minAreaRect(cv2.findNonZero(body.astype(np.uint8))))
+    square = np.zeros(body.shape, dtype=np.uint8)
+    cv2.fillConvexPoly(square, np.rint(box).astype(np.int32), 1)
+    return square.astype(bool)
+
+
+def _rims_given_back(
+    member: np.ndarray, body: np.ndarray, part: _Part, crop: tuple[slice, slice], lines: np.ndarray
+) -> np.ndarray | None:
+    """The dark pixels (of ``part.mask``, not a fused line's) within the smallest
+    rectangle round a dark part's ``body`` when with ``member`` they enclose a glint
+    that ``member`` leaves open: a glint near a black or grey top's edge, whose rim
+    of top between it and the edge is thinner than the opening (which broke it: the
+    glint's hole became a notch). A glint is a round spot inside the top: a new hole
+    inside the rectangle less its margin (a gap between a grid line and the top lies
+    along the top's side) and no longer than :data:`MAX_ASPECT` times its width (a
+    gap between a line and a side face is a strip). ``None`` when there is none."""
+    rows, cols = crop
+    grow = part.regrown + 1
+    square = _square_of(body)
+    given: np.ndarray = part.mask[rows, cols] & dilate(square, grow) & ~lines
+    again = member | given
+    holes = fill_holes(again) & ~again & ~fill_holes(member)
+    if not holes.any():
+        return None
+    inside = erode(square, grow)
+    count, labels, stats = labelled_parts(holes)
+    for index in range(1, count):
+        hole = labels == index
+        if 2 * int((hole & inside).sum()) <= int(stats[index, cv2.CC_STAT_AREA]):
+            continue
+        (_, _), (width, height), _ = cv2.minAreaRect(cv2.findNonZero(hole.astype(np.uint8)))
+        if max(width, height) + 1 <= MAX_ASPECT * (min(width, height) + 1):
+            return given
+    return None
 
 
 @dataclass(frozen=True, slots=True)
@@ -422,11 +464,18 @@ def _region(
     if not bright:
         member = _without_side_faces(member, crop_l, part.regrown)
         opened &= member
-    # a glint's hole, opened to the outside by a crack of its rim, closed
-    filled = fill_holes(close(member, 2 * part.regrown))
     # a glint's rim at a black top's edge opens its hole to the outside: closed too
     closed = fill_holes(close(opened, 2 * part.regrown))
-    solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(closed))
+    body = _opened_at_own_scale(closed)
+    solidity, rect_fill, aspect = _compactness(body)
+    if not bright:
+        given = _rims_given_back(member, body, part, (rows, cols), lines)
+        if given is not None:
+            member |= given
+            closed = fill_holes(close(opened | given, 2 * part.regrown))
+            solidity, rect_fill, aspect = _compactness(_opened_at_own_scale(closed))
+    # a glint's hole, opened to the outside by a crack of its rim, closed
+    filled = fill_holes(close(member, 2 * part.regrown))
     if solidity < MIN_SOLIDITY or rect_fill < MIN_RECT_FILL:
         return _Refusal("not compact", f"solidity {solidity:.2f}, {rect_fill:.0%} of its rectangle")
     if aspect > MAX_ASPECT:
