@@ -156,6 +156,13 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         # (demoplan.perception.highlights.framed_on_white)
         (0, True),
         (7, True),
+        # a black H on a white top on paper: its hole, with its blurred rim 0.31 of the
+        # white part, was taken for a marker's cells, and without --side it is larger
+        # than a block of the smallest side; a letter's ink (its dark pixels) is judged
+        # against the marker share, and its size against none
+        # (demoplan.perception.achromatic._printed_on_white)
+        (28, False),
+        (28, True),
     ),
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)
