@@ -64,8 +64,10 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     ),
     "patterned": (
         "with --side a white frame on a blue top on the board (the blue rim outside it "
-        "broken, the frame rings nothing)",
-        ((14, True),),
+        "broken, the frame rings nothing); on the blue table a white top with dots, its "
+        "region 'not filled' (31 % of its square) and 'shadow' (42), and with --side a "
+        "yellow top with dots and a glint, 'not square' (misfit 0.21) (52)",
+        ((14, True), (42, False), (52, True)),
     ),
     "tipped_rows": (
         "the faces of cubes lying tipped over in a row taken for tops",
@@ -164,9 +166,11 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         (28, True),
         # a white top with dots on white paper lit 3 L* over it, bright in specks the
         # opening took: its faint pixels joined to its bright ones are its face too
-        # (demoplan.perception.highlights.lit_faces); its H neighbour as 28's
+        # (demoplan.perception.highlights.lit_faces); its H neighbour as 28's; 444
+        # with --side (a white E on paper): one of the hypothesis test's draws
         (29, False),
         (29, True),
+        (444, True),
     ),
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)
