@@ -77,10 +77,11 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         ),
     ),
     "patterned": (
-        "a white top on white paper with a letter or dots missed (lit as the paper, no "
-        "bright part holds it whole); with --side a white frame on a blue top on the board "
-        "(the blue rim outside it broken, the frame rings nothing)",
-        ((14, True), (29, False), (29, True)),
+        "with --side a white frame on a blue top on the board (the blue rim outside it "
+        "broken, the frame rings nothing); on the blue table a white top with dots, its "
+        "region 'not filled' (31 % of its square) and 'shadow' (42), and with --side a "
+        "yellow top with dots and a glint, 'not square' (misfit 0.21) (52)",
+        ((14, True), (42, False), (52, True)),
     ),
     "tipped_rows": (
         "the faces of cubes lying tipped over in a row taken for tops",
@@ -185,6 +186,20 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         # (demoplan.perception.highlights.framed_on_white)
         (0, True),
         (7, True),
+        # a black H on a white top on paper: its hole, with its blurred rim 0.31 of the
+        # white part, was taken for a marker's cells, and without --side it is larger
+        # than a block of the smallest side; a letter's ink (its dark pixels) is judged
+        # against the marker share, and its size against none
+        # (demoplan.perception.achromatic._printed_on_white)
+        (28, False),
+        (28, True),
+        # a white top with dots on white paper lit 3 L* over it, bright in specks the
+        # opening took: its faint pixels joined to its bright ones are its face too
+        # (demoplan.perception.highlights.lit_faces); its H neighbour as 28's; 444
+        # with --side (a white E on paper): one of the hypothesis test's draws
+        (29, False),
+        (29, True),
+        (444, True),
     ),
     # a top whose side faces, darker and larger than it, stayed in its mask: it
     # alone covered under half of the region (acceptance.explained_share)

@@ -636,14 +636,41 @@ def test_a_white_cube_with_black_dots_is_one_white_block(
     assert near[0].colour == "white"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="found by a run of the property above (on 646cf85 too): a white top with dots "
-    "on white paper, without --side, barely brighter than the paper (a person sees it at "
-    "once): its white part misfits a square (0.31), 'not square'",
+@settings(max_examples=6, deadline=None, derandomize=True)  # see the docstring
+@given(
+    side_given=st.booleans(),
+    x=st.floats(0.15, 0.45),
+    y=st.floats(0.08, 0.32),
+    yaw=st.floats(0.0, 90.0),
+    seed=st.integers(0, 2**31 - 1),
 )
+def test_a_white_cube_with_a_black_h_on_paper_is_one_white_block(
+    side_given: bool, x: float, y: float, yaw: float, seed: int
+) -> None:
+    """A black H printed on a white top (its bars 0.2 of the face) is the top's: the
+    cube on white paper is one white block within 0.6 of its side of its centre, with
+    ``--side 0.04`` or without, and nothing else. (Without: the H's hole in the white
+    part, its blurred rim with it, covers 0.31 of the part and was taken for a
+    marker's cells, and, without ``--side``, it is larger than a block of the
+    smallest side (2 cm: 1,190 px here) and was not judged at all: the white between
+    the bars and the edge broke at the opening — the patterned family's seed 29. Of
+    12 random draws, 6 cubes with and without ``--side``, 2 met before, 12 now.
+    Derandomized: the draws are fixed.)"""
+    settings_ = (
+        PerceptionSettings(min_side=0.034, max_side=0.046) if side_given else PerceptionSettings()
+    )
+    near, others, _, _, _ = _lone_neutral_cube("white", "paper", x, y, yaw, seed, "H", settings_)
+    assert len(near) == 1 and others == 0, (near, others)
+    assert near[0].colour == "white"
+
+
 def test_a_white_cube_with_dots_on_paper_lit_as_the_paper_is_one_white_block() -> None:
-    """A known defect, kept in view (the property above draws other cases)."""
+    """A white top with dots on white paper, without ``--side``, lit barely brighter
+    than the paper (a person sees it at once), is one white block: the pixels over
+    the paper by half the bright contrast joined to its bright ones are its face too
+    (:func:`~demoplan.perception.highlights.lit_faces`). (Without: its bright pixels
+    were specks, and the part the opening left misfit a square, 0.31: `not square` —
+    found by a run of the property above; the patterned family's seed 29.)"""
     test_a_white_cube_with_black_dots_is_one_white_block.hypothesis.inner_test(  # type: ignore[attr-defined]
         background="paper", side_given=False, x=0.25, y=0.25, yaw=0.0, seed=2563
     )

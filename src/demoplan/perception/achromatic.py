@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from demoplan.perception.fused_lines import fused_lines
-from demoplan.perception.highlights import framed_on_white
+from demoplan.perception.highlights import FAINT_SHARE, framed_on_white, lit_faces
 from demoplan.perception.masks import close, dilate, erode, fill_holes, labelled_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
@@ -177,7 +177,8 @@ def achromatic_regions(
     difference = lightness - table
     neutral = np.hypot(blurred[..., 1], blurred[..., 2]) < MAX_CHROMA
     free = ~dilate(coloured, 2) & neutral
-    bright = (difference > _bright_contrast(difference)) & free
+    contrast = _bright_contrast(difference)
+    bright = (difference > contrast) & free
     dark = (lightness < DARK_RATIO * table) & free
     smallest_top = MIN_TOP_SHARE * side_px**2
     markers = _markers(bright, lightness, table, smallest_top, record)
@@ -188,7 +189,9 @@ def achromatic_regions(
     framed = np.zeros(bright.shape, dtype=bool)
     for is_bright, mask in ((True, bright), (False, dark)):
         mask &= ~dilate(markers, 2)  # a marker's white and black cells are no blocks
-        if is_bright:
+        if is_bright:  # a white top lit a few L* over white paper: its faint pixels too
+            faint = (difference > FAINT_SHARE * contrast) & free & ~dilate(markers, 2)
+            mask |= lit_faces(faint, mask)
             framed = framed_on_white(mask, dark, side_px)  # held whole: see _Part
             mask |= _printed_on_white(mask, dark, side_px) | framed
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)
@@ -248,29 +251,40 @@ centre, is dark over a third of its hole (the development set's AprilTags)."""
 
 
 def _printed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.ndarray:
-    """What is printed on white tops (a letter: dark, so no part of the ``bright``
-    mask): the holes of a bright part smaller than a block of the smallest side
-    (``side_px``), each :data:`PRINTED_DARK_SHARE` ``dark`` or more, where they cover
-    under :data:`MARKER_DARK_SHARE` of the part with its holes filled (a marker's
-    black cells cover more). One labelling of the image's non-bright pixels finds
-    the holes (those not reaching the border), their sizes and dark shares; the
-    parts are labelled only when a hole is taken."""
+    """What is printed on white tops (a letter, dots: dark, so no part of the
+    ``bright`` mask): the holes of a bright part that are letters — each
+    :data:`PRINTED_DARK_SHARE` ``dark`` or more and ringing nothing (a small marker's
+    code on a white card rings the card's white cells) — or spots
+    (:func:`_spots`, among the holes smaller than a block of the smallest side,
+    ``side_px``), where their dark pixels (the ink) cover under
+    :data:`MARKER_DARK_SHARE` of the part with its holes filled (a marker's black
+    cells cover more). A letter is not bounded by the smallest block: printed on a
+    larger top it is larger (an H on a 4 cm top, 1,050 px with its blurred rim, over
+    the 930 px of a 2 cm block without ``--side``). One labelling of the image's
+    non-bright pixels finds the holes (those not reaching the border), their sizes
+    and dark shares; the parts are labelled only when a hole is taken."""
     # the sizes counted from the labels: the image is mostly not bright, and OpenCV's
     # stats of so many labelled pixels cost more than the count
     count, labels = cv2.connectedComponents((~bright).astype(np.uint8), connectivity=4)
     sizes = np.bincount(labels.ravel(), minlength=count)
     darker = np.bincount(labels[dark & ~bright], minlength=count)
-    taken = sizes < side_px**2
-    taken[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
-    if not taken.any():
+    enclosed = np.ones(count, dtype=bool)
+    enclosed[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    letters = enclosed & (darker >= PRINTED_DARK_SHARE * sizes)
+    if letters.any():  # none ringing a piece of white: a marker's code rings its cells
+        inked = letters[labels]
+        ringed = fill_holes(inked) & ~inked
+        letters[labels[dilate(ringed, 1) & inked]] = False
+    small = enclosed & (sizes < side_px**2)
+    if not (letters.any() or small.any()):
         return np.zeros(bright.shape, dtype=bool)
-    taken &= (darker >= PRINTED_DARK_SHARE * sizes) | _spots(bright, labels, taken, sizes)
+    taken = letters | (_spots(bright, labels, small, sizes) if small.any() else small)
     if not taken.any():
         return np.zeros(bright.shape, dtype=bool)
     holes: np.ndarray = taken[labels]
     count, parts, stats = labelled_parts(bright | holes)
     areas = stats[:, cv2.CC_STAT_AREA]
-    held = np.bincount(parts[holes], minlength=count)
+    held = np.bincount(parts[holes & dark], minlength=count)  # their ink
     printed: np.ndarray = holes & (held < MARKER_DARK_SHARE * areas)[parts]
     return printed
 
