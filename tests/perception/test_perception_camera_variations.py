@@ -189,9 +189,9 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[str, bool], ...]]] = {
     # variation: (what is missed, draws (photograph, --side given) failing today)
     "gain0.75": (
         "a third of a stop under: mrhan_touching's 2 × 2 group of dark purple and blue "
-        "cubes found as one 55 px square (the purple top's chroma against the table "
-        "falls from 18 to 14, the seams' from 11 to 8.5) and held out as no block "
-        "size, 4/9; mrhan_phone 4/6",
+        "cubes one colour region (the halves' mean a*b* 11.7 apart, under MIN_CHROMA; "
+        "15 at the photograph's exposure), one 55 px square held out as no block size, "
+        "and its dark red top taken for the orange cube's side face, 4/9; mrhan_phone 4/6",
         (("mrhan_touching", False), ("mrhan_phone", True)),
     ),
     "turn180": (
