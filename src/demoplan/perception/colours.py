@@ -40,6 +40,7 @@ import numpy as np
 from demoplan.budget import check_time
 from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
+from demoplan.perception.exposure import chroma_apart
 from demoplan.perception.highlights import fill_glints_and_prints, glare, highlights, hole_owners
 from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.masks import (
@@ -367,7 +368,7 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     """The colours of a component's core pixels that may be a block's (each with
     its core pixels); shades and glare left out."""
     classified = _classify(k.pixels[k.core], c.chroma)
-    classes = _unnamed_split(classified, k.chroma[k.core], c.min_area)
+    classes = _unnamed_split(classified, k.chroma[k.core], c.min_area, k.lightness[k.core])
     if c.coloured_image:
         c.record.shade(classes, k.core, k.lightness, k.rows, k.cols)
         classes[glare(classes, k.lightness, k.core, c.min_area)] = -3
@@ -375,7 +376,7 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
     # one colour between two names first: its two halves, speckled through each
     # other by the noise, would each erode away as a rim
-    present = _one_colour_merged(present, k.chroma[k.core])
+    present = _one_colour_merged(present, k.chroma[k.core], k.lightness[k.core])
     return _without_rims(_without_shadows(c, k, present), k.core, c.min_area)
 
 
@@ -415,7 +416,7 @@ def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
     core_pixels, core_chroma = k.pixels[k.core], k.chroma[k.core]
     core_offsets, core_lightness = k.offsets[k.core], k.lightness[k.core]
     faces: list[_Face] = []
-    for colour, chosen in _one_colour_merged(present, core_chroma):
+    for colour, chosen in _one_colour_merged(present, core_chroma, core_lightness):
         top_face, side_faces = _lightness_modes(core_lightness[chosen])
         on_top = chosen.copy()
         if side_faces is not None:
@@ -636,23 +637,24 @@ def _without_strands(alpha: np.ndarray, min_area: float) -> np.ndarray:
 
 
 def _one_colour_merged(
-    present: list[tuple[str, np.ndarray]], core_chroma: np.ndarray
+    present: list[tuple[str, np.ndarray]], core_chroma: np.ndarray, light: np.ndarray
 ) -> list[tuple[str, np.ndarray]]:
     """The classes of a region with those of one colour merged: two classes whose
-    mean a*b* (over their core pixels; ``core_chroma``, N × 2) lie less than
-    :data:`MIN_CHROMA` apart — no farther than the table is from a block it must
-    tell apart — are one colour that falls between two palette names (a dark red
-    between red and wood), its pixels split by the noise; the merged class takes
-    the name of the larger."""
+    mean a*b* (core pixels: ``core_chroma``, N × 2) lie less than :data:`MIN_CHROMA`
+    apart (two unnamed ones as lit to mid grey: L* ``light``, :mod:`~.exposure`) —
+    no farther than the table is from a block — are one colour that falls between
+    two palette names (a dark red between red and wood), its pixels split by the
+    noise; the merged class takes the name of the larger."""
     groups = sorted(present, key=lambda group: -int(group[1].sum()))  # the larger first
     merged = True
     while merged and len(groups) > 1:
         means = [np.mean(core_chroma[chosen], axis=0) for _, chosen in groups]
+        lit = [float(np.mean(light[c])) if n == "block" else 100.0 for n, c in groups]
         pairs = [
-            (first, second)
-            for first in range(len(groups))
-            for second in range(first + 1, len(groups))
-            if float(np.hypot(*(means[first] - means[second]))) < MIN_CHROMA
+            (i, j)
+            for i in range(len(groups))
+            for j in range(i + 1, len(groups))
+            if not chroma_apart(means[i], means[j], (lit[i], lit[j]), MIN_CHROMA)
         ]
         merged = bool(pairs)
         if merged:
@@ -662,11 +664,14 @@ def _one_colour_merged(
     return groups
 
 
-def _unnamed_split(classes: np.ndarray, core_chroma: np.ndarray, min_area: float) -> np.ndarray:
+def _unnamed_split(
+    classes: np.ndarray, core_chroma: np.ndarray, min_area: float, light: np.ndarray
+) -> np.ndarray:
     """The core pixels' classes (``classes``) with those no plain colour is near
     (:data:`UNNAMED`) parted by colour: halved again and again along their a*b*
     (``core_chroma``, N × 2) by two-means while the halves' means lie at least
-    :data:`MIN_CHROMA` apart — two colours, as far apart as a block from the table —
+    :data:`MIN_CHROMA` apart as lit to mid grey (:func:`~.exposure.chroma_apart`;
+    L* ``light``) — two colours, as far apart as a block from the table —
     and each half holds ``min_area`` pixels; the parts are the classes −4, −5, ….
     A dark red cube beside a bluish green one, neither near a palette colour, is
     then two classes, not one whose darker part (the red top) would be taken for
@@ -681,7 +686,8 @@ def _unnamed_split(classes: np.ndarray, core_chroma: np.ndarray, min_area: float
             done.append(part)
             continue
         means = [core_chroma[part][half].mean(axis=0) for half in (halves, ~halves)]
-        if float(np.hypot(*(means[0] - means[1]))) < MIN_CHROMA:
+        lights = [float(light[part][half].mean()) for half in (halves, ~halves)]
+        if not chroma_apart(means[0], means[1], (lights[0], lights[1]), MIN_CHROMA):
             done.append(part)
             continue
         parts += [part[halves], part[~halves]]
