@@ -141,6 +141,73 @@ def test_two_blocks_of_one_colour_parted_by_a_seam_are_both_found(
     assert _near(found, first, 2.0) and _near(found, second, 2.0)
 
 
+def _small_pair_beside_lone_cubes(
+    yaw: float, side: float, colour: str, seed: int, seam: bool
+) -> tuple[np.ndarray, Point, Point]:
+    """Two small cubes of one colour face to face (a seam's groove between them, or
+    none: a brick), turned ``yaw``, beside three lone cubes of their size in other
+    colours; the image and the pair's two centres."""
+    centre = (200.0, 150.0)
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    offset = (c * side / 2, -s * side / 2)
+    first = (centre[0] - offset[0], centre[1] - offset[1])
+    second = (centre[0] + offset[0], centre[1] + offset[1])
+    rgb = COLOURS[colour]
+    others = [name for name in _BLOCK_COLOURS if name != colour]
+    shapes = [(_rectangle(point, yaw, side, side), rgb) for point in (first, second)]
+    shapes += [
+        (_rectangle(point, 10.0 * k, side, side), COLOURS[others[k]])
+        for k, point in enumerate(((80.0, 70.0), (320.0, 70.0), (80.0, 230.0)))
+    ]
+    across = (-s * side / 2, -c * side / 2)
+    groove = (int(0.55 * rgb[0]), int(0.55 * rgb[1]), int(0.55 * rgb[2]))
+    line = (
+        (centre[0] - across[0], centre[1] - across[1]),
+        (centre[0] + across[0], centre[1] + across[1]),
+        1.0,
+        groove,
+    )
+    return _paint(shapes, _rng(seed), (line,) if seam else ()), first, second
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    yaw=_poses["yaw"],
+    side=st.floats(22.0, 27.0),
+    colour=_poses["colour"],
+    seed=_poses["seed"],
+)
+def test_two_small_blocks_of_one_colour_face_to_face_are_found_at_the_photos_size(
+    yaw: float, side: float, colour: str, seed: int
+) -> None:
+    """Two cubes of one colour parted by a seam, small for the sides looked for
+    (22–27 px where 20–80 px are): over that range the vote's best squares are
+    the pair's, not a cube's; the three lone cubes give the photograph's block
+    size, and at that size each of the pair is found (blocks._second_look)."""
+    image, first, second = _small_pair_beside_lone_cubes(yaw, side, colour, seed, seam=True)
+    found = detect_blocks(image, CAMERA)
+    assert len(found) == 5, [(b.name, b.x, b.y, b.side) for b in found]
+    assert _near(found, first, 2.0) and _near(found, second, 2.0)
+
+
+@settings(max_examples=8, deadline=None)
+@given(
+    yaw=_poses["yaw"],
+    side=st.floats(22.0, 27.0),
+    colour=_poses["colour"],
+    seed=_poses["seed"],
+)
+def test_a_small_brick_beside_cubes_of_its_width_stays_no_block(
+    yaw: float, side: float, colour: str, seed: int
+) -> None:
+    """The same pair without the seam is a 2:1 brick: looked at again at the cubes'
+    size, its ends share a whole side with no seam — still no block."""
+    image, first, second = _small_pair_beside_lone_cubes(yaw, side, colour, seed, seam=False)
+    found = detect_blocks(image, CAMERA)
+    assert len(found) == 3, [(b.name, b.x, b.y, b.side) for b in found]
+    assert not _near(found, first, 6.0) and not _near(found, second, 6.0)
+
+
 @settings(max_examples=8, deadline=None)
 @given(
     **_poses,

@@ -63,6 +63,7 @@ from demoplan.perception.side_faces import (
     side_faces_beside_tops,
     table_shadows,
 )
+from demoplan.perception.side_groups import SIDE_TOLERANCE, block_sizes
 from demoplan.perception.square_fit import fit_square, square_alpha, square_window
 from demoplan.perception.stack_sides import lower_side_faces, upturned_faces
 
@@ -363,9 +364,11 @@ def _without_square(alpha: np.ndarray, params: np.ndarray) -> np.ndarray:
 
 def _squares_in_region(
     search: _SquareSearch, region: ColourRegion, where: str, parts: list[RejectedPart] | None
-) -> list[_Square]:
+) -> tuple[list[_Square], bool]:
     """The blocks' squares in a colour region, each taken out before the next is sought;
-    none when they explain too little of it. What is left unfit goes to ``parts``."""
+    none when they explain too little of it or are not square-shaped. What is left
+    unfit goes to ``parts``. Second: whether any square was fitted (a region whose
+    squares were then judged no blocks was seen to be something else)."""
     alpha = region.alpha.copy()
     squares: list[_Square] = []
     for attempt in range(8):
@@ -381,6 +384,7 @@ def _squares_in_region(
             break
         squares.append(square)
         alpha = _without_square(alpha, square[0])
+    fitted = bool(squares)
     squares = square_shaped(region, squares, parts)
     row0, col0 = region.offset
     rows, cols = region.alpha.shape
@@ -390,8 +394,8 @@ def _squares_in_region(
         if parts is not None:
             why = ("larger than its squares", f"its squares cover {explained:.0%} of it")
             parts += _unfit(region.alpha, region, [why], search.min_area)
-        return []
-    return squares
+        return [], fitted
+    return squares, fitted
 
 
 def detect_blocks(
@@ -423,6 +427,8 @@ def detect_blocks(
     lightness = measures.lightness
     search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
+    region_parts: list[list[RejectedPart] | None] = []
+    unfitted: list[int] = []  # regions in which no square was fitted
     for done, region in enumerate(regions):
         # a budget set by the caller (demoplan.budget), if any, read before every
         # Hough transform and fit: one large region costs many of them
@@ -433,8 +439,14 @@ def detect_blocks(
         )
         check_time(where)
         report_progress("colour regions", done, len(regions))
-        squares = _squares_in_region(search, region, where, parts)
+        region_parts.append(None if parts is None else [])
+        squares, fitted = _squares_in_region(search, region, where, region_parts[-1])
         found += [(region, params, coverage, rms) for params, coverage, rms in squares]
+        if not fitted:
+            unfitted.append(done)
+    found += _second_look(search, regions, unfitted, found, region_parts)
+    if parts is not None:
+        parts += [part for own in region_parts if own is not None for part in own]
     found += tops_behind(search, regions, tables, found, _why_no_block, fit_square, parts)
     found = _without_side_faces(measures, found, parts, held)
     if rejected is not None and parts is not None:
@@ -443,6 +455,78 @@ def detect_blocks(
 
 
 _Found = tuple[ColourRegion, np.ndarray, float, float]  # a square on its region's crop
+
+
+SECOND_LOOK_SQUARES = 3
+"""Squares found of the photograph's block sizes before the regions with none are
+searched again at those sizes (:func:`_second_look`): a size seen once may be a
+patch's."""
+SEVERAL_CUBES = 1.5
+"""A region looked at again holds at least this many tops of the smallest block
+size (in area): a region of one top's size or less was searched at that size
+already, the wide range included it; only where several cubes make one region
+does the vote over the wide range prefer squares across them."""
+SECOND_LOOK_NARROWER = 1.25
+"""How many times narrower (largest over smallest side) the block sizes' span must
+be than the range searched for the second look to see anything new."""
+
+
+def _second_look(
+    search: _SquareSearch,
+    regions: Sequence[ColourRegion],
+    unfitted: Sequence[int],
+    found: list[_Found],
+    region_parts: list[list[RejectedPart] | None],
+) -> list[_Found]:
+    """The squares of the photograph's block sizes in the regions in which the
+    first search, over the whole range of sides, fitted none (``unfitted``):
+    searched again with the sides narrowed to each block size's median ± 15 %
+    (:func:`~demoplan.perception.side_groups.block_sizes` of the squares found
+    elsewhere), as a given ``--side`` narrows them. Two cubes of one colour face
+    to face are one region; over a wide range of sides the vote's strongest
+    squares are the pair's (a square across both, misfit 0.2) and no single cube
+    is tried, where at the cubes' own size each is (the ``small`` family: 25 mm
+    cubes in pairs, found with ``--side``, missed without).
+
+    Not looked at again: a region whose squares explained too little of it or
+    whose outline has other corners (it was seen to be something else: a
+    marker and its grid lines, a pentagon), and a region of less than
+    :data:`SEVERAL_CUBES` tops' area (a cube lying tipped over shows a face
+    smaller than a top, a rectangle that a square of the cubes' size takes for
+    one). Nothing changes when the range was that narrow already (``--side``)
+    or fewer than :data:`SECOND_LOOK_SQUARES` squares share a size. A region
+    found no block again keeps its first reasons; one in which squares are found
+    now has the second search's (``region_parts``, per region, replaced)."""
+    sides = [float(params[3]) for _, params, _, _ in found]
+    sizes = block_sizes(sides)
+    if not sizes:
+        return []
+    low = min(size[0] for size in sizes) * (1 - SIDE_TOLERANCE)
+    high = max(size[0] for size in sizes) * (1 + SIDE_TOLERANCE)
+    low, high = max(low, search.side_px[0]), min(high, search.side_px[1])
+    searched = search.side_px[1] / search.side_px[0]
+    shared = sum(low <= side <= high for side in sides)
+    if shared < SECOND_LOOK_SQUARES or low >= high or high / low * SECOND_LOOK_NARROWER > searched:
+        return []
+    narrowed = replace(search, side_px=(low, high))
+    several = SEVERAL_CUBES * min(size[0] for size in sizes) ** 2
+    more: list[_Found] = []
+    for index in unfitted:
+        region = regions[index]
+        if (region.alpha > 0.5).sum() < several:
+            continue
+        where = f" looking again at colour region {index + 1} of {len(regions)} at the blocks' size"
+        check_time(where)
+        own: list[RejectedPart] | None = None if region_parts[index] is None else []
+        hidden = len(search.hidden)
+        squares, _ = _squares_in_region(narrowed, region, where, own)
+        if not squares:
+            del search.hidden[hidden:]  # the first search's failures stand for it
+            continue
+        search.hidden[:] = [entry for entry in search.hidden if entry[0] is not region]
+        region_parts[index] = own
+        more += [(region, params, coverage, rms) for params, coverage, rms in squares]
+    return more
 
 
 def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:

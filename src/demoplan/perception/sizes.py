@@ -25,6 +25,7 @@ from demoplan.perception.blocks import DetectedBlock, Rejection, named_by_colour
 from demoplan.perception.camera import Camera
 from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.overlay import square_corners
+from demoplan.perception.side_groups import SIDE_TOLERANCE, block_sizes, within_sizes
 from demoplan.perception.stack_sides import standing_tops
 
 __all__ = [
@@ -35,35 +36,6 @@ __all__ = [
     "rejection_in_scale",
     "standing_blocks",
 ]
-
-SIDE_TOLERANCE = 0.15
-"""Sides this far off a block size (relative) are not of that size."""
-
-
-def block_sizes(
-    sides: Sequence[float], tolerance: float = SIDE_TOLERANCE
-) -> tuple[tuple[float, float, float], ...]:
-    """The block sizes among ``sides``, most squares first, each as (median,
-    smallest, largest side of its group): greedily, the side with the most
-    others within ``tolerance`` of it (ties: the smaller side) makes a group of
-    those; a group of two or more, or the first, counts."""
-    left = sorted(sides)
-    sizes: list[tuple[float, float, float]] = []
-    while left:
-        counts = [sum(_within(s, other, tolerance) for other in left) for s in left]
-        best = max(range(len(left)), key=lambda i: (counts[i], -left[i]))
-        group = [s for s in left if _within(left[best], s, tolerance)]
-        if sizes and len(group) < 2:
-            break
-        middle = len(group) // 2
-        median = group[middle] if len(group) % 2 else (group[middle - 1] + group[middle]) / 2
-        sizes.append((median, group[0], group[-1]))
-        left = [s for s in left if not _within(left[best], s, tolerance)]
-    return tuple(sizes)
-
-
-def _within(size: float, side: float, tolerance: float) -> bool:
-    return abs(side - size) <= tolerance * size
 
 
 def held_to_sizes(
@@ -88,8 +60,7 @@ def held_to_sizes(
     whose scale is not known yet)."""
     if not sizes:
         return list(blocks), []
-    low = min(size[1] for size in sizes) * (1 - tolerance)
-    high = max(size[2] for size in sizes) * (1 + tolerance)
+    low, high = within_sizes(sizes, tolerance)
     standing: frozenset[int] = frozenset()
     if seen is not None and any(not low <= block.side <= high for block in blocks):
         standing = standing_blocks(seen[0], blocks, seen[1])
