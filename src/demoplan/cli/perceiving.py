@@ -231,7 +231,7 @@ def rejections_line(rejected: Sequence[Rejection], plot: Path, specks: int = 0) 
         plural(n, why, NOUNS[why]) if why in NOUNS else f"{n} {why}"
         for why, n in sorted(counts.items(), key=lambda item: (-item[1], item[0]))
     )
-    but = f", but {plural(specks, 'speck')}, too small to show" if specks else ""
+    but = f"; {plural(specks, 'speck')} not drawn" if specks else ""
     return (
         f"{plural(len(rejected), 'region')} rejected{': ' if reasons else ''}{reasons} "
         f"(drawn in {plot.name}{but})"
