@@ -207,7 +207,10 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
     # a row's next top of one hue, a little darker, read as the end cube's side
     # strip: the strips pointed along the rows, the nadir hundreds of px off, and a
     # row's cube of another colour was taken for a stack's side face (stack_sides)
-    "touching_rows": ((2, False), (3, False), (3, True)),
+    # a square fitted at a row's end took the row's width (its tops and the side
+    # faces across it) and reached past the seam into the next top, cut short then:
+    # a block is fitted again up to the seams along its shared sides (blocks)
+    "touching_rows": ((2, False), (3, False), (3, True), (6, True), (12, True), (25, True)),
     # the lit faces of a row lying tipped over near the image's centre, each beside
     # a darker face a third of the side deep pointing away from the centre, where a
     # standing cube shows a few px: no tops (stack_sides.upturned_faces)

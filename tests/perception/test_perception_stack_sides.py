@@ -307,3 +307,28 @@ def test_squares_of_no_size_or_not_finite_are_no_strips_and_no_side_faces(
 
 def _measurable(square: tuple[float, float, float, float]) -> bool:
     return all(map(math.isfinite, square)) and square[3] > 0
+
+
+def test_a_glint_on_a_top_does_not_lift_its_lightness_over_a_neighbours() -> None:
+    """Two purple tops face to face in a row, lit alike, a white glint a third of a
+    side across on the first (as the renders' and real cubes' specular highlights):
+    the first top's lightness is read from its lit, coloured pixels, not the glint's,
+    so the second is lit as its neighbour's top and no stack's side face
+    (touching_rows seed 55: the glint read the first 12 L* over the second, which
+    was then rejected as a stack's side face)."""
+    from demoplan.perception.opencv import cv2
+    from demoplan.perception.stack_sides import _neighbour_top, _top_colour
+
+    image = np.zeros((120, 200, 3), dtype=np.uint8)
+    image[:] = (70, 90, 140)  # a blue table
+    side = 50
+    cv2.rectangle(image, (40, 35), (40 + side - 1, 35 + side - 1), (110, 60, 150), -1)
+    cv2.rectangle(image, (40 + side, 35), (40 + 2 * side - 1, 35 + side - 1), (100, 55, 138), -1)
+    glint = np.zeros(image.shape[:2], dtype=np.float32)
+    cv2.circle(glint, (65, 60), side // 6, 1.0, -1)
+    glint = cv2.GaussianBlur(glint, (0, 0), 2.0)[..., None]
+    image = (image * (1 - glint) + 250 * glint).astype(np.uint8)
+    lab = _lab(image)
+    first = _top_colour(lab, (64.5, 59.5, 0.0, float(side)))
+    second = _top_colour(lab, (64.5 + side, 59.5, 0.0, float(side)))
+    assert _neighbour_top(first, second), (first, second)

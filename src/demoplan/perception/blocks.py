@@ -55,7 +55,7 @@ from demoplan.perception.colours import (
 from demoplan.perception.hough import Hypothesis, hough_squares
 from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.occlusion import Candidate, tops_behind
-from demoplan.perception.seams import seamless_side
+from demoplan.perception.seams import seam_lines, seamless_side
 from demoplan.perception.shapes import square_shaped
 from demoplan.perception.side_faces import (
     ImageSquare,
@@ -330,6 +330,55 @@ def _with_rounded_corners(
     return params, coverage, min(rms, rounded_misfit(alpha, params)), free
 
 
+SEAM_INSIDE = 2.0
+"""Px inside a square's side that the groove of a seam along it may lie and the
+side still be taken as on it (the groove's darkest line and its blurred rims)."""
+
+
+def _on_its_seams(
+    search: _SquareSearch,
+    region: ColourRegion,
+    alpha: np.ndarray,
+    fit: tuple[np.ndarray, float, float, float],
+) -> tuple[np.ndarray, float, float, float]:
+    """``fit``, a block, fitted again up to the seams along the sides it shares with
+    the rest of its region when a seam's groove lies inside it by more than
+    :data:`SEAM_INSIDE`: beyond a seam is the next cube's top, so the mask there is
+    left out of the fit (a half-plane past the groove's line). In a row of one
+    colour the mask runs on across the seams and holds the cubes' side faces across
+    the row: a square fitted at the row's end took the row's width as its side and
+    reached past the seam into the next top, which was then cut short by it
+    (``touching_rows`` seed 6 with ``--side``: 68 px squares on 62 px tops, the
+    middle one lost). The new fit is kept when it is a block too."""
+    params = fit[0]
+    seams = [
+        seam
+        for seam in seam_lines(search.lightness, alpha, region.offset, params)
+        if seam[2] < -SEAM_INSIDE
+    ]
+    if not seams:
+        return fit
+    u, v, theta, side = (float(p) for p in params)
+    height, width = alpha.shape
+    uu = np.arange(width) + 0.5
+    vv = height - np.arange(height)[:, None] - 0.5
+    cut = alpha.astype(float)
+    start_u, start_v, start_side = u, v, side
+    for nu, nv, where in seams:
+        line = side / 2 + where  # from the centre along the side's outward normal
+        cut[(uu - u) * nu + (vv - v) * nv > line] = 0.0
+        start_u, start_v, start_side = (
+            start_u + nu * where / 2,
+            start_v + nv * where / 2,
+            start_side + where,
+        )
+    start = Hypothesis(start_u, start_v, theta, start_side, 0.0)
+    refit = fit_square(cut, start)
+    if _why_no_block(search, region, alpha, refit) is not None:
+        return fit
+    return refit
+
+
 def _next_square(
     search: _SquareSearch, region: ColourRegion, alpha: np.ndarray, where: str
 ) -> tuple[_Square | None, list[tuple[str, str]]]:
@@ -344,7 +393,7 @@ def _next_square(
         fit = _with_rounded_corners(alpha, _fit_from(alpha, start, factor, coarse), search)
         why = _why_no_block(search, region, alpha, fit)
         if why is None:
-            return fit[:3], failures
+            return _on_its_seams(search, region, alpha, fit)[:3], failures
         if why[0] in ("not square", "not filled"):
             search.hidden.append((region, alpha, fit))
         failures.append(why)

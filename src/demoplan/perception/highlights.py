@@ -75,8 +75,57 @@ def highlights(
     for channel in range(crop.shape[-1]):  # every channel at least the top's: one at a time
         whiter &= crop[..., channel] >= floor[channel]
     enclosed = fill_holes(core)
-    on_top: np.ndarray = (whiter & enclosed) | small_parts(enclosed & ~core, min_area)
+    on_top: np.ndarray = (whiter & _ringed_by_the_face(core, enclosed)) | small_parts(
+        enclosed & ~core, min_area
+    )
     return on_top
+
+
+STRAND = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+"""The disc whose opening takes a strand of a class's clearly coloured pixels off its
+face: a pen line or a cable a few px wide (the strands' opening of a top's mask,
+a third of the smallest side across, also takes the band of face between a
+letter printed on a top and its edge)."""
+
+
+def _ringed_by_the_face(core: np.ndarray, enclosed: np.ndarray) -> np.ndarray:
+    """``enclosed`` (``core`` with its holes filled) without the holes beside a face
+    of ``core`` that a strand of it rings more than the face does: over half of the
+    two pixels of core round the hole are pixels an opening by :data:`STRAND`
+    removes, and some are the face's (a class that is all strand, a thin rim round
+    a face its colour's other shade took, rings that face). A glint lies on the
+    top, its face round it; table seen between a top and a pen line of its colour
+    drawn up to its corners is ringed by the line, far thinner than a side (a blue
+    top's line enclosed a patch of tinted table, lighter than the top in every
+    channel, which was filled as a glint: a rectangle 1.9 sides long, "not
+    square"). A hole whose convex hull holds more of the face
+    than the hole's own area goes round a piece of the face: a frame printed on
+    the top (a white one, its rim outside thinner than :data:`STRAND`, the ring
+    whole or broken where the rim and the face inside it meet), it stays."""
+    holes = enclosed & ~core
+    if not holes.any():
+        return enclosed
+    face = np.asarray(cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_OPEN, STRAND), dtype=bool)
+    strands = core & ~face
+    if not strands.any():
+        return enclosed
+    kept = enclosed.copy()
+    count, labels, stats = labelled_parts(holes)
+    height, width = core.shape
+    for index in range(1, count):
+        x, y, w, h = (int(value) for value in stats[index, :4])
+        rows = slice(max(0, y - 2), min(height, y + h + 2))
+        cols = slice(max(0, x - 2), min(width, x + w + 2))
+        hole = labels[rows, cols] == index
+        hull = np.zeros(hole.shape, dtype=np.uint8)
+        cv2.fillConvexPoly(hull, cv2.convexHull(cv2.findNonZero(hole.astype(np.uint8))), 1)
+        if np.count_nonzero((hull > 0) & face[rows, cols]) >= np.count_nonzero(hole):
+            continue  # round a piece of the face larger than itself: a frame printed on it
+        ring = dilate(hole, 2) & core[rows, cols]
+        stranded = int(np.count_nonzero(ring & strands[rows, cols]))
+        if 2 * stranded > int(np.count_nonzero(ring)) and (ring & face[rows, cols]).any():
+            kept[rows, cols] &= ~hole  # beside a face, ringed by a strand of it: table
+    return kept
 
 
 PRINTED_CONTRAST = 12.0

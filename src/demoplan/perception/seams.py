@@ -13,13 +13,14 @@ is part of a longer thing.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
 from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.opencv import cv2
 
-__all__ = ["SEAM_CONTRAST", "image_lightness", "seamless_side"]
+__all__ = ["SEAM_CONTRAST", "image_lightness", "seam_lines", "seamless_side"]
 
 SEAM_CONTRAST = 3.0
 """L* by which a seam must be darker than both faces beside it (a groove, a gap),
@@ -35,6 +36,10 @@ SEAM_REACH = 0.1
 there: a square fitted to a row of one colour lies a few pixels off the seam
 between two cubes (their rims blur into one mask), and a cuboid has no seam
 anywhere near."""
+SEAM_SEARCH = 0.2
+"""How far (in sides) across a shared side :func:`seam_lines` looks for the
+groove's line, the faces taken half as far again beyond: within a quarter side,
+where :func:`seamless_side` takes the faces."""
 
 
 def _across(side: float) -> np.ndarray:
@@ -54,21 +59,10 @@ def seamless_side(
     out (the mask averaged over 5 × 5 px), and the image's lightness
     (``lightness``, L*, the whole image) shows no seam there
     (:data:`SEAM_CONTRAST`, within :data:`SEAM_REACH` of the side)."""
-    u, v, theta, side = (float(p) for p in params)
-    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    side = float(params[3])
     height = alpha.shape[0]
     row0, col0 = offset
-    along = _ALONG * side
-    smooth = np.asarray(cv2.blur(alpha.astype(np.float32), (5, 5)))  # over the face's speckles
-    for nu, nv in ((c, s), (-c, -s), (-s, c), (s, -c)):
-        # points along the side, ``out`` px from the centre: (u, v) on the crop
-        us = u - nv * along
-        vs = v + nu * along
-        if not all(
-            np.all(_sample_mask(smooth, us + nu * out, vs + nv * out))
-            for out in (side / 2 + 3.0, 3 * side / 4)
-        ):
-            continue  # a free or partly free side: no longer thing along it
+    for nu, nv, us, vs in _shared_sides(alpha, params):
         profiles = [
             _sample(lightness, col0 + us + nu * out - 0.5, row0 + height - (vs + nv * out) - 0.5)
             for out in (side / 4, 3 * side / 4, *(side / 2 + k for k in _across(side)))
@@ -79,6 +73,64 @@ def seamless_side(
         if dip < SEAM_CONTRAST and step < SEAM_CONTRAST:
             return f"a side shared without a seam (L* {dip:.0f} darker, {step:.0f} apart)"
     return None
+
+
+def seam_lines(
+    lightness: np.ndarray, alpha: np.ndarray, offset: tuple[int, int], params: np.ndarray
+) -> list[tuple[float, float, float]]:
+    """The grooves along the sides of the square ``params`` (as
+    :func:`seamless_side` takes it) that it shares with the rest of its region:
+    per such side, its outward normal (nu, nv) on the crop and how far out of the
+    side (px; negative: inside the square) the groove's darkest line lies — the
+    darkest line of the median profile across the side within
+    :data:`SEAM_SEARCH` of it, when that is darker by :data:`SEAM_CONTRAST` than
+    the faces beyond :data:`SEAM_SEARCH` either way. A square fitted to a row of
+    one colour may reach past the seam by more than :data:`SEAM_REACH`: the mask
+    runs on across it, and holds the cubes' side faces across the row."""
+    side = float(params[3])
+    height = alpha.shape[0]
+    row0, col0 = offset
+    search = max(2.0, round(SEAM_SEARCH * side))
+    across = np.arange(-search, search + 1.0)
+    faces = (-1.5 * search, 1.5 * search)
+    lines = []
+    for nu, nv, us, vs in _shared_sides(alpha, params):
+        profile = np.array(
+            [
+                np.median(
+                    _sample(
+                        lightness,
+                        col0 + us + nu * (side / 2 + k) - 0.5,
+                        row0 + height - (vs + nv * (side / 2 + k)) - 0.5,
+                    )
+                )
+                for k in (*faces, *across)
+            ]
+        )
+        darkest = int(np.argmin(profile[2:]))
+        if min(profile[0], profile[1]) - profile[2 + darkest] >= SEAM_CONTRAST:
+            lines.append((nu, nv, float(across[darkest])))
+    return lines
+
+
+def _shared_sides(
+    alpha: np.ndarray, params: np.ndarray
+) -> Iterator[tuple[float, float, np.ndarray, np.ndarray]]:
+    """Per side of ``params`` the region's mask runs on beyond along its whole
+    length (the mask averaged over 5 × 5 px held 3 px and a quarter side out): its
+    outward normal (nu, nv) and the points (us, vs) on the crop along it."""
+    u, v, theta, side = (float(p) for p in params)
+    c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+    along = _ALONG * side
+    smooth = np.asarray(cv2.blur(alpha.astype(np.float32), (5, 5)))  # over the face's speckles
+    for nu, nv in ((c, s), (-c, -s), (-s, c), (s, -c)):
+        us = u - nv * along
+        vs = v + nu * along
+        if all(
+            np.all(_sample_mask(smooth, us + nu * out, vs + nv * out))
+            for out in (side / 2 + 3.0, 3 * side / 4)
+        ):
+            yield nu, nv, us, vs
 
 
 def image_lightness(image: np.ndarray) -> np.ndarray:

@@ -120,8 +120,11 @@ def _measurable(square: ImageSquare) -> bool:
 
 def _top_colour(lab: np.ndarray, square: ImageSquare) -> tuple[float, float, float]:
     """The L*, a*, b* of ``square``'s top: over 8 × 8 points on its central half, the
-    upper quartile of L* (a fit that covers some of its own side strip is read by
-    its lit part) and the median a*, b* (black for a square not :func:`_measurable`)."""
+    upper quartile of L* of the more coloured half of them (a fit that covers some of
+    its own side strip is read by its lit part; a glint, white added, is no lit part:
+    on a purple top in a row it read the top 12 L* over its neighbour, which was then
+    taken for a stack's side face) and the median a*, b* (black for a square not
+    :func:`_measurable`)."""
     if not _measurable(square):
         return 0.0, 0.0, 0.0
     x, y, theta, side = square
@@ -132,8 +135,10 @@ def _top_colour(lab: np.ndarray, square: ImageSquare) -> tuple[float, float, flo
     points = seen[inside]
     if not points.size:
         return 0.0, 0.0, 0.0
+    chroma = np.hypot(points[:, 1], points[:, 2])
+    lit = points[chroma >= np.median(chroma)]  # a glint whitens, a side strip darkens
     return (
-        float(np.percentile(points[:, 0], 75)),
+        float(np.percentile(lit[:, 0], 75)),
         float(np.median(points[:, 1])),
         float(np.median(points[:, 2])),
     )
