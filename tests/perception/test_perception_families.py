@@ -6,13 +6,15 @@ scored as the real photographs are (demoplan.perception.labelled: a top face is
 found by a detection within 0.6 of its side of its centre).
 
 The acceptance is the issue's, by hypothesis over each family: at least 90 % of the
-labelled, non-partial top faces found and at most one false block per image (none
-in a photograph without cubes: the shapes photograph of the real set), with
-``--side`` given or not. Each example renders one 1280 × 720 image and perceives
-it, so the counts are small and failing examples are not shrunk (a smaller seed is
-no simpler a photograph). The other tests check the families' truth itself: where
-the labels put the tops, how much of a face is in view, the tilted camera's mapping,
-and that a saved case reads back as the real photographs' labels do."""
+labelled, non-partial top faces found and at most one false block per image (none in
+a photograph without cubes: the shapes photograph of the real set), with ``--side``
+given or not, for every family but those out of reach (:data:`OUT_OF_REACH`); draws
+seen failing are named (:data:`NOT_YET`, strict xfails). Each example renders one
+1280 × 720 image and perceives it, so the counts are small and failing examples are
+not shrunk (a smaller seed is no simpler a photograph). The other tests check the
+families' truth itself: where the labels put the tops, how much of a face is in
+view, the tilted camera's mapping, and that a saved case reads back as the real
+photographs' labels do."""
 
 from __future__ import annotations
 
@@ -58,40 +60,39 @@ SEEDS = st.integers(0, 2**31 - 1)
 NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
     # family: (what is missed, draws (seed, --side given) on which the detector fails today)
     "achromatic": (
-        "a white top on white paper lit nearly as the paper (2.7-3.3 L* over it in the "
-        "median, at the bright contrast of 3: no bright part holds it whole; 46, 59, 64, "
-        "105); without --side a black top on "
-        "the board with grid lines fused to it (30: not square, the line 20 deg off its "
-        "side; 66: not compact)",
-        (
-            (30, False),
-            (46, False),
-            (46, True),
-            (59, False),
-            (59, True),
-            (64, False),
-            (64, True),
-            (66, False),
-            (105, False),
-            (105, True),
-        ),
+        "without --side a black top on the board with grid lines fused to it (30: not "
+        "square, the line 20 deg off its side; 66: not compact)",
+        ((30, False), (66, False)),
     ),
     "patterned": (
         "with --side a white frame on a blue top on the board (the blue rim outside it "
         "broken, the frame rings nothing); on the blue table a white top with dots, its "
         "region 'not filled' (31 % of its square) and 'shadow' (42), and with --side a "
-        "yellow top with dots and a glint, 'not square' (misfit 0.21) (52)",
-        ((14, True), (42, False), (52, True)),
+        "yellow top with dots and a glint, 'not square' (misfit 0.21) (52); a white top "
+        "with dots or a letter on the blue table beside its grey side face, one neutral "
+        "region 'not filled' (162408, a draw of the hypothesis test below)",
+        ((14, True), (42, False), (52, True), (162408, False)),
     ),
     "tipped_rows": (
         "the faces of cubes lying tipped over in a row taken for tops",
         ((2, False), (2, True)),
     ),
 }
-"""The families the detector does not meet yet (issue 41 is open), each with draws
-it fails on — named draws, not hypothesis's: its derandomized draws change with
-its version, so a strict xfail over them passed or failed by the version
-installed. The day one of these draws passes, its test says so (strict)."""
+"""Draws seen failing while developing, by family, each with what is missed (not
+every failing draw: the benchmark below gives the rate) — named draws, not
+hypothesis's: its derandomized draws change with its version, so a
+strict xfail over them passed or failed by the version installed. The day one of
+these draws passes, its test says so (strict). How often each family fails over
+many seeds: ``python benchmarks/perception_families.py --first 0 --last 80``."""
+
+OUT_OF_REACH = {
+    "tipped_rows": "a cube lying tipped over is a standing cube seen off the camera's "
+    "axis to one picture without the camera's position (docs/perception.md, Limits)",
+    "patterned": "not met yet: the hypothesis test's draw 162408 without --side fails (in NOT_YET)",
+}
+"""Families left out of the hypothesis acceptance, with why: ``tipped_rows`` is not
+one of the cases the real photographs' thresholds are asked of and is documented
+as a limit; ``patterned`` fails one of the test's own draws today (issue 41 open)."""
 
 
 def _meets_the_thresholds(family: str, seed: int, side_given: bool) -> None:
@@ -103,7 +104,7 @@ def _meets_the_thresholds(family: str, seed: int, side_given: bool) -> None:
     assert score.false <= (1 if score.needed else 0), (case.name, side_given, score)
 
 
-@pytest.mark.parametrize("family", sorted(set(FAMILIES) - set(NOT_YET)))
+@pytest.mark.parametrize("family", sorted(set(FAMILIES) - set(OUT_OF_REACH)))
 @settings(EXPENSIVE, max_examples=4, derandomize=True)  # the same draws for one hypothesis
 @given(seed=SEEDS, side_given=st.booleans())
 def test_a_family_photograph_meets_the_issue_thresholds(
@@ -162,6 +163,13 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         (40, False),
         (70, True),
         (72, False),
+        # a white top on white paper lit 2.7-3.3 L* over it (at the bright contrast of
+        # 3): its faint pixels joined to its bright ones are its face
+        # (demoplan.perception.highlights.lit_faces)
+        (46, False),
+        (46, True),
+        (64, True),
+        (105, False),
     ),
     # a frame printed round a coloured top rings the plain face inside it, larger
     # than the ring: filled as the top's (demoplan.perception.highlights.printed)
