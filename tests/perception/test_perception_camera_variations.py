@@ -188,7 +188,7 @@ def test_a_photograph_mirrored_or_turned_meets_the_thresholds(
 NOT_YET: dict[str, tuple[str, tuple[tuple[str, bool], ...]]] = {
     # variation: (what is missed, draws (photograph, --side given) failing today)
     "gain0.75": (
-        "a third of a stop under: mrhan_touching 8/9, its dark red top taken for the "
+        "the encoded values x 0.75: mrhan_touching 8/9, its dark red top taken for the "
         "orange cube's darker side face (named colours: their plain a*b* distance; its "
         "dark blue and purple group, one region before demoplan.perception.exposure, is "
         "found); mrhan_phone 4/6 (not looked into)",

@@ -27,7 +27,7 @@ def _touching_pair(gain: float) -> np.ndarray:
 
 @pytest.mark.parametrize("gain", [1.0, 0.85, 0.75])
 def test_two_dark_colours_touching_stay_two_regions_under_less_light(gain: float) -> None:
-    """a third of a stop under (gain 0.75) their a*b* lie 9 apart, under
+    """at gain 0.75 (the encoded values × 0.75) their a*b* lie 9 apart, under
     MIN_CHROMA (and at gain 1 under it too): held to it unscaled, they were one
     region whose square spans both."""
     regions, _ = colour_regions(_touching_pair(gain), min_area=300.0)

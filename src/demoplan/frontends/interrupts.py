@@ -120,9 +120,9 @@ def ignore_signals() -> None:
     caller: a signal whose handler runs inside ``signal.signal`` below (Python
     runs the pending ones before it changes a handler) or a redelivery timer
     firing meanwhile is ignored the same way."""
+    _ended.append(True)
     import signal
 
-    _ended.append(True)
     stop_redelivery()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)

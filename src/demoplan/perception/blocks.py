@@ -529,9 +529,10 @@ def _second_look(
 ) -> list[_Found]:
     """The squares of the photograph's block sizes in the regions in which the
     first search, over the whole range of sides, fitted none (``unfitted``):
-    searched again with the sides narrowed to each block size's median ± 15 %
-    (:func:`~demoplan.perception.side_groups.block_sizes` of the squares found
-    elsewhere), as a given ``--side`` narrows them. Two cubes of one colour face
+    searched again with the sides narrowed to the block sizes of the squares found
+    elsewhere (:func:`~demoplan.perception.side_groups.block_sizes`) — from the
+    smallest size's median less 15 % to the largest's plus 15 %, as a given
+    ``--side`` narrows them about its side. Two cubes of one colour face
     to face are one region; over a wide range of sides the vote's strongest
     squares are the pair's (a square across both, misfit 0.2) and no single cube
     is tried, where at the cubes' own size each is (the ``small`` family: 25 mm
@@ -543,7 +544,7 @@ def _second_look(
     :data:`SEVERAL_CUBES` tops' area (a cube lying tipped over shows a face
     smaller than a top, a rectangle that a square of the cubes' size takes for
     one). Nothing changes when the range was that narrow already (``--side``)
-    or fewer than :data:`SECOND_LOOK_SQUARES` squares share a size. A region
+    or fewer than :data:`SECOND_LOOK_SQUARES` of the squares found lie in it. A region
     found no block again keeps its first reasons; one in which squares are found
     now has the second search's (``region_parts``, per region, replaced)."""
     sides = [float(params[3]) for _, params, _, _ in found]
@@ -572,7 +573,10 @@ def _second_look(
         if not squares:
             del search.hidden[hidden:]  # the first search's failures stand for it
             continue
-        search.hidden[:] = [entry for entry in search.hidden if entry[0] is not region]
+        # the first search's failures give way to the second's
+        search.hidden[:] = [
+            entry for entry in search.hidden[:hidden] if entry[0] is not region
+        ] + search.hidden[hidden:]
         region_parts[index] = own
         more += [(region, params, coverage, rms) for params, coverage, rms in squares]
     return more

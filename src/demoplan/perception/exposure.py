@@ -3,8 +3,9 @@
 Under more or less light (a longer or shorter exposure, a brighter or darker
 day) every surface's XYZ scales alike, so its CIELAB a* and b* scale with
 ``L* + 16`` (all three are cube roots of the light): a dark purple cube beside a
-dark blue one is as different in hue a third of a stop under, but its a*b*
-distance from its neighbour shrinks by a fifth (mrhan_touching: from 15 to 12).
+dark blue one is as different in hue under less light, but its a*b* distance
+from its neighbour shrinks with it (mrhan_touching, its encoded values × 0.75:
+from 15 to 11.7).
 A rule that parts two colours when their a*b* lie a fixed distance apart then
 parts them in one exposure and merges them in the next. :func:`chroma_apart`
 holds two dark colours to that distance scaled as their light is — as far apart

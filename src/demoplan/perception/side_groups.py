@@ -1,7 +1,8 @@
 """The block sizes among the sides of squares: a table of cubes holds few sizes.
 
 The squares the detector accepts are grouped by side — a group is the sides
-within :data:`SIDE_TOLERANCE` (15 %, as for a given ``--side``) of its median —
+within :data:`SIDE_TOLERANCE` (15 %, as for a given ``--side``) of the side with
+the most others that near it —
 and a group of two or more squares, or the largest group, is a block size. Used
 by the detector itself (:mod:`demoplan.perception.blocks`: a second look at the
 regions with no square, at the sizes found) and after it
