@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from demoplan.perception.fused_lines import fused_lines
-from demoplan.perception.highlights import FAINT_SHARE, framed_on_white, lit_faces
+from demoplan.perception.highlights import framed_on_white
 from demoplan.perception.masks import close, dilate, erode, fill_holes, labelled_parts
 from demoplan.perception.opencv import cv2
 from demoplan.perception.rejected_parts import PartRecorder
@@ -177,8 +177,7 @@ def achromatic_regions(
     difference = lightness - table
     neutral = np.hypot(blurred[..., 1], blurred[..., 2]) < MAX_CHROMA
     free = ~dilate(coloured, 2) & neutral
-    contrast = _bright_contrast(difference)
-    bright = (difference > contrast) & free
+    bright = (difference > _bright_contrast(difference)) & free
     dark = (lightness < DARK_RATIO * table) & free
     smallest_top = MIN_TOP_SHARE * side_px**2
     markers = _markers(bright, lightness, table, smallest_top, record)
@@ -189,9 +188,7 @@ def achromatic_regions(
     framed = np.zeros(bright.shape, dtype=bool)
     for is_bright, mask in ((True, bright), (False, dark)):
         mask &= ~dilate(markers, 2)  # a marker's white and black cells are no blocks
-        if is_bright:  # a white top lit a few L* over white paper: its faint pixels too
-            faint = (difference > FAINT_SHARE * contrast) & free & ~dilate(markers, 2)
-            mask |= lit_faces(faint, mask)
+        if is_bright:
             framed = framed_on_white(mask, dark, side_px)  # held whole: see _Part
             mask |= _printed_on_white(mask, dark, side_px) | framed
         opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, disc)

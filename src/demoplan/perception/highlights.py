@@ -3,8 +3,7 @@ specular highlight (white added to the face's colour) and what is printed on it,
 found by :mod:`demoplan.perception.colours` as holes in a region's clearly
 coloured pixels and given back to the top that encloses them; and a frame printed
 round a white top's face (:func:`framed_on_white`), which
-:mod:`demoplan.perception.achromatic` gives back to the top, as it gives a white
-top lit a few L* over white paper its faint pixels (:func:`lit_faces`)."""
+:mod:`demoplan.perception.achromatic` gives back to the top."""
 
 from __future__ import annotations
 
@@ -14,7 +13,6 @@ from demoplan.perception.masks import dilate, fill_holes, labelled_parts, small_
 from demoplan.perception.opencv import cv2
 
 __all__ = [
-    "FAINT_SHARE",
     "FRAMED_BRIGHT_SHARE",
     "GLARE_SLACK",
     "PRINTED_CONTRAST",
@@ -22,7 +20,6 @@ __all__ = [
     "glare",
     "highlights",
     "hole_owners",
-    "lit_faces",
     "printed",
 ]
 
@@ -267,28 +264,3 @@ def framed_on_white(bright: np.ndarray, dark: np.ndarray, side_px: float) -> np.
         ring = rings[rows, cols] == around[0]
         found[rows, cols] |= fill_holes(dilate(ring, 2) | hole)
     return found
-
-
-FAINT_SHARE = 0.5
-"""A pixel is faint when it is over the table's level by this share of the bright
-contrast (4 of the table's own spreads about its level, 3 L* at least): 2 spreads
-or more, which the table's pixels pass about one in 44 (a normal spread), in
-specks apart (a share of pixels under 0.59 does not join across an image in
-4-connectivity)."""
-
-
-def lit_faces(faint: np.ndarray, bright: np.ndarray) -> np.ndarray:
-    """The parts of ``faint`` (pixels over the table's level by :data:`FAINT_SHARE`
-    of the bright contrast) that hold a ``bright`` pixel. A white top's face is lit
-    evenly, its pixels over the table by the same few L*: where some are bright, the
-    faint ones joined to them are the same face's, lowered by the noise. On white
-    paper a white top lit 3-4 L* over the paper (the bright contrast there is 3) is
-    bright in specks only, which the opening of
-    :func:`~demoplan.perception.achromatic.achromatic_regions` takes: the top was
-    lost. Its darker rim (the cube's rounded edges), its side faces and its shadow
-    part it from the paper's faint specks."""
-    count, labels = cv2.connectedComponents(faint.astype(np.uint8), connectivity=4)
-    held = np.bincount(labels[bright & faint], minlength=count) > 0
-    held[0] = False  # the pixels not faint
-    faces: np.ndarray = held[labels]
-    return faces
