@@ -852,32 +852,6 @@ def test_a_glint_near_a_grey_tops_edge_leaves_it_one_block(
     assert len(near) == 1 and len(found) == 1, (pixels, (truth.u, truth.v))
 
 
-def test_a_black_tops_side_face_ringed_by_its_blurred_outline_is_left_out() -> None:
-    """A black top (L* 8) and its side face (L* 3, in shade) on the board (L* 55), the
-    whole part ringed by its outline blurred with the board (L* 20: under the dark
-    ratio, over the side face's mode): the side face is left out of the part and a
-    glint inside the top (pixels the dark mask does not hold) stays in it. Before,
-    the top's holes were filled whatever they held, and the ring of outline made the
-    side face one of them (the achromatic family's seeds 40 and 72 without
-    ``--side``, 70 with it: the top and its side faces one part, "not square")."""
-    from demoplan.perception.achromatic import _without_side_faces
-
-    lightness = np.full((80, 100), 55.0, dtype=np.float32)
-    member = np.zeros(lightness.shape, dtype=bool)
-    member[14:66, 14:86] = True
-    lightness[member] = 20.0  # the outline's ring, a px wide
-    lightness[15:65, 35:85] = 8.0  # the top
-    lightness[15:65, 15:35] = 3.0  # its side face
-    glint = np.zeros(member.shape, dtype=bool)
-    glint[35:41, 55:61] = True
-    lightness[glint] = 60.0
-    member &= ~glint  # a glint is no dark pixel
-    lightness += np.random.default_rng(0).normal(0.0, 0.3, lightness.shape).astype(np.float32)
-    kept = _without_side_faces(member, lightness, 5)
-    assert not kept[15:65, 15:33].any()
-    assert kept[17:63, 37:83].all()  # the top, its glint with it
-
-
 @settings(max_examples=6, deadline=None)
 @given(
     pattern=st.sampled_from(("", "L", "T", "dots")),

@@ -375,10 +375,7 @@ def _without_side_faces(member: np.ndarray, lightness: np.ndarray, steps: int) -
         return member
     if np.median(upper) < SIDE_FACE_RATIO * max(float(np.median(lower)), 1.0):
         return member
-    lit = member & (lightness > cut / 2.55)
-    # a glint within stays (no pixel of the dark mask); the side faces stay out, also
-    # where the part's outline, blurred with the table into the brighter mode, rings them
-    top = lit | (fill_holes(lit) & ~member)
+    top = fill_holes(member & (lightness > cut / 2.55))  # a glint within stays
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     opened = cv2.morphologyEx(top.astype(np.uint8), cv2.MORPH_OPEN, disc)
     count, labels, stats = labelled_parts(opened)
