@@ -42,7 +42,8 @@ class CameraVariation:
     """One camera's (or day's) difference from the photograph as taken.
 
     ``gain`` multiplies the encoded (sRGB) values — not the light: 0.75 there is
-    about 0.8–0.9 of a stop under in linear light; ``white`` multiplies the red, green and blue values (a white balance);
+    about 0.8–0.9 of a stop under in linear light; ``white`` multiplies the red,
+    green and blue values (a white balance);
     ``gamma`` is the exponent of the tone curve; ``noise`` the sensor noise's σ
     in 8-bit levels; ``jpeg`` the JPEG quality (1–95; ``None``: not compressed);
     ``scale`` the resolution's factor (Lanczos); ``blur`` the σ (px, after
@@ -95,8 +96,9 @@ VARIATIONS: Mapping[str, CameraVariation] = {
     "cool": CameraVariation(white=(0.88, 1.0, 1.12)),
 }
 """The named variations the camera benchmark tables: each one parameter away from
-the photograph as taken (the encoded values × 0.75, about 0.8–0.9 of a stop under, is ``gain0.75``; ``warm`` is a
-tungsten-leaning white balance, ``cool`` a shade-leaning one)."""
+the photograph as taken (the encoded values × 0.75, about 0.8–0.9 of a stop
+under, is ``gain0.75``; ``warm`` is a tungsten-leaning white balance, ``cool`` a
+shade-leaning one)."""
 
 
 def _resized_shape(width: int, height: int, scale: float) -> tuple[int, int]:
