@@ -223,7 +223,6 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[str, bool], ...]]] = {
         "armlab_mrhan4 32/47, mrhan_stacks 8/11 (not looked into)",
         (("mrhan_touching", True),),
     ),
-    "scale0.6": ("mrhan_stacks 9/11 (not looked into)", (("mrhan_stacks", False),)),
     "scale0.8": (
         "mrhan_touching 7/9 without --side (not looked into)",
         (("mrhan_touching", False),),
@@ -250,6 +249,20 @@ def test_a_variation_not_held_yet_fails_where_it_was_seen_failing(
     _meets(name, VARIATIONS[key], side_given, tmp_path)
 
 
+HELD = ("scale0.6",)
+"""Named variations other than the orientations that every photograph meets (with
+--side too where its label names one size): 0.6 of the resolution since the
+second look at the block size (mrhan_stacks 9 → 10 of 11)."""
+
+
+@pytest.mark.parametrize("key", HELD)
+@pytest.mark.parametrize(("name", "side_given"), ORIENTED + (("mrhan_phone", False),))
+def test_a_held_variation_meets_the_thresholds(
+    tmp_path: Path, key: str, name: str, side_given: bool
+) -> None:
+    _meets(name, VARIATIONS[key], side_given, tmp_path)
+
+
 def test_every_named_variation_is_held_or_named_not_yet() -> None:
-    held = {"none", "mirror", "turn90"}
+    held = {"none", "mirror", "turn90", *HELD}
     assert set(VARIATIONS) == held | set(NOT_YET)
