@@ -7,6 +7,8 @@ round a white top's face (:func:`framed_on_white`), which
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 
 from demoplan.perception.masks import dilate, fill_holes, labelled_parts, small_parts
@@ -38,18 +40,26 @@ def hole_owners(core: np.ndarray, nearest: np.ndarray) -> np.ndarray:
     holes = fill_holes(np.asarray(closed, dtype=bool)) & ~core
     if not holes.any():
         return owners
+    for rows, cols, hole, ring in _holes_and_rings(holes, core):
+        if ring.any():
+            owners[rows, cols][hole] = int(np.bincount(nearest[rows, cols][ring]).argmax())
+    return owners
+
+
+def _holes_and_rings(
+    holes: np.ndarray, core: np.ndarray
+) -> Iterator[tuple[slice, slice, np.ndarray, np.ndarray]]:
+    """Each connected hole of ``holes`` in the window of its box and 2 px around it
+    (the dilation reaches no farther): the window's rows and columns, the hole there,
+    and its ring — the pixels of ``core`` within 2 px of it."""
     count, labels, stats = labelled_parts(holes)
     height, width = core.shape
     for index in range(1, count):
-        # the hole's box and the ring's 2 px around it: the dilation reaches no farther
         x, y, w, h = (int(value) for value in stats[index, :4])
         rows = slice(max(0, y - 2), min(height, y + h + 2))
         cols = slice(max(0, x - 2), min(width, x + w + 2))
         hole = labels[rows, cols] == index
-        ring = dilate(hole, 2) & core[rows, cols]
-        if ring.any():
-            owners[rows, cols][hole] = int(np.bincount(nearest[rows, cols][ring]).argmax())
-    return owners
+        yield rows, cols, hole, dilate(hole, 2) & core[rows, cols]
 
 
 def highlights(
@@ -107,18 +117,11 @@ def _ringed_by_the_face(core: np.ndarray, enclosed: np.ndarray) -> np.ndarray:
     if not strands.any():
         return enclosed
     kept = enclosed.copy()
-    count, labels, stats = labelled_parts(holes)
-    height, width = core.shape
-    for index in range(1, count):
-        x, y, w, h = (int(value) for value in stats[index, :4])
-        rows = slice(max(0, y - 2), min(height, y + h + 2))
-        cols = slice(max(0, x - 2), min(width, x + w + 2))
-        hole = labels[rows, cols] == index
+    for rows, cols, hole, ring in _holes_and_rings(holes, core):
         hull = np.zeros(hole.shape, dtype=np.uint8)
         cv2.fillConvexPoly(hull, cv2.convexHull(cv2.findNonZero(hole.astype(np.uint8))), 1)
         if np.count_nonzero((hull > 0) & face[rows, cols]) >= np.count_nonzero(hole):
             continue  # round a piece of the face larger than itself: a frame printed on it
-        ring = dilate(hole, 2) & core[rows, cols]
         stranded = int(np.count_nonzero(ring & strands[rows, cols]))
         if 2 * stranded > int(np.count_nonzero(ring)) and (ring & face[rows, cols]).any():
             kept[rows, cols] &= ~hole  # beside a face, ringed by a strand of it: table
