@@ -110,6 +110,31 @@ def test_a_cuboid_twice_as_long_as_wide_is_no_block(
     assert rejected
 
 
+Stroke = tuple[Point, Point, float, tuple[int, int, int]]
+
+
+def _seamed_pair(
+    centre: Point, yaw: float, side: float, rgb: tuple[int, int, int], seam_px: float
+) -> tuple[list[tuple[np.ndarray, tuple[int, int, int]]], Stroke, Point, Point]:
+    """Two squares of colour ``rgb`` side by side about ``centre``, flush, turned
+    ``yaw``: their shapes, the seam's groove between them (a stroke ``seam_px``
+    wide at 0.55 of their colour) and their two centres."""
+    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    offset = (c * side / 2, -s * side / 2)  # image x, y of half a side along the row
+    first = (centre[0] - offset[0], centre[1] - offset[1])
+    second = (centre[0] + offset[0], centre[1] + offset[1])
+    groove = (int(0.55 * rgb[0]), int(0.55 * rgb[1]), int(0.55 * rgb[2]))
+    across = (-s * side / 2, -c * side / 2)
+    seam = (
+        (centre[0] - across[0], centre[1] - across[1]),
+        (centre[0] + across[0], centre[1] + across[1]),
+        seam_px,
+        groove,
+    )
+    shapes = [(_rectangle(point, yaw, side, side), rgb) for point in (first, second)]
+    return shapes, seam, first, second
+
+
 @settings(max_examples=8, deadline=None)
 @given(**_poses)
 def test_two_blocks_of_one_colour_parted_by_a_seam_are_both_found(
@@ -118,27 +143,19 @@ def test_two_blocks_of_one_colour_parted_by_a_seam_are_both_found(
     """Two blocks of one colour side by side, flush (their outline the brick's of
     the test above), with the groove real blocks show between them: both found,
     each where it is."""
-    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-    offset = (c * side / 2, -s * side / 2)  # image x, y of half a side along the row
-    first = (centre[0] - offset[0], centre[1] - offset[1])
-    second = (centre[0] + offset[0], centre[1] + offset[1])
-    rgb = COLOURS[colour]
-    groove = (int(0.55 * rgb[0]), int(0.55 * rgb[1]), int(0.55 * rgb[2]))
-    across = (-s * side / 2, -c * side / 2)
-    seam = (
-        (centre[0] - across[0], centre[1] - across[1]),
-        (centre[0] + across[0], centre[1] + across[1]),
-        1.5,
-        groove,
-    )
-    image = _paint(
-        [(_rectangle(point, yaw, side, side), rgb) for point in (first, second)],
-        _rng(seed),
-        (seam,),
-    )
+    shapes, seam, first, second = _seamed_pair(centre, yaw, side, COLOURS[colour], 1.5)
+    image = _paint(shapes, _rng(seed), (seam,))
     found = detect_blocks(image, CAMERA)
     assert len(found) == 2, [(b.name, b.x, b.y, b.side) for b in found]
     assert _near(found, first, 2.0) and _near(found, second, 2.0)
+
+
+_small_pairs = {
+    "yaw": _poses["yaw"],
+    "side": st.floats(22.0, 27.0),  # small for the 20-80 px looked for
+    "colour": _poses["colour"],
+    "seed": _poses["seed"],
+}
 
 
 def _small_pair_beside_lone_cubes(
@@ -147,36 +164,17 @@ def _small_pair_beside_lone_cubes(
     """Two small cubes of one colour face to face (a seam's groove between them, or
     none: a brick), turned ``yaw``, beside three lone cubes of their size in other
     colours; the image and the pair's two centres."""
-    centre = (200.0, 150.0)
-    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-    offset = (c * side / 2, -s * side / 2)
-    first = (centre[0] - offset[0], centre[1] - offset[1])
-    second = (centre[0] + offset[0], centre[1] + offset[1])
-    rgb = COLOURS[colour]
+    shapes, line, first, second = _seamed_pair((200.0, 150.0), yaw, side, COLOURS[colour], 1.0)
     others = [name for name in _BLOCK_COLOURS if name != colour]
-    shapes = [(_rectangle(point, yaw, side, side), rgb) for point in (first, second)]
     shapes += [
         (_rectangle(point, 10.0 * k, side, side), COLOURS[others[k]])
         for k, point in enumerate(((80.0, 70.0), (320.0, 70.0), (80.0, 230.0)))
     ]
-    across = (-s * side / 2, -c * side / 2)
-    groove = (int(0.55 * rgb[0]), int(0.55 * rgb[1]), int(0.55 * rgb[2]))
-    line = (
-        (centre[0] - across[0], centre[1] - across[1]),
-        (centre[0] + across[0], centre[1] + across[1]),
-        1.0,
-        groove,
-    )
     return _paint(shapes, _rng(seed), (line,) if seam else ()), first, second
 
 
 @settings(max_examples=8, deadline=None)
-@given(
-    yaw=_poses["yaw"],
-    side=st.floats(22.0, 27.0),
-    colour=_poses["colour"],
-    seed=_poses["seed"],
-)
+@given(**_small_pairs)
 def test_two_small_blocks_of_one_colour_face_to_face_are_found_at_the_photos_size(
     yaw: float, side: float, colour: str, seed: int
 ) -> None:
@@ -191,12 +189,7 @@ def test_two_small_blocks_of_one_colour_face_to_face_are_found_at_the_photos_siz
 
 
 @settings(max_examples=8, deadline=None)
-@given(
-    yaw=_poses["yaw"],
-    side=st.floats(22.0, 27.0),
-    colour=_poses["colour"],
-    seed=_poses["seed"],
-)
+@given(**_small_pairs)
 def test_a_small_brick_beside_cubes_of_its_width_stays_no_block(
     yaw: float, side: float, colour: str, seed: int
 ) -> None:
