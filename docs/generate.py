@@ -1508,7 +1508,7 @@ def markers_section() -> str:
 
 
 def palette_section() -> str:
-    from demoplan.perception.colours import MAX_PALETTE_COLOURS, PALETTE
+    from demoplan.perception.palette import MAX_PALETTE_COLOURS, PALETTE
 
     built_in = ", ".join(f"`{name}`" for name in PALETTE)
     return blocks(

@@ -28,7 +28,7 @@ from demoplan import budget
 from demoplan.errors import DemoplanError, LimitReachedError
 from demoplan.perception import hough
 from demoplan.perception.camera import Camera, load_image
-from demoplan.perception.colours import CLASS_SMOOTHING, _smoothed_classes
+from demoplan.perception.colour_classes import CLASS_SMOOTHING, smoothed_classes
 from demoplan.perception.hough import hough_squares
 from demoplan.perception.images import perceive_top_view
 from demoplan.perception.labelled import load_labelled
@@ -367,4 +367,4 @@ def test_the_classes_smoothed_by_counts_are_those_by_mean(
         mask[core] = classes == label
         means.append(np.asarray(cv2.blur(mask, size))[core])
     expected = classes if labels.size < 2 else labels[np.argmax(np.stack(means, axis=1), axis=1)]
-    assert np.array_equal(_smoothed_classes(classes, core), expected)
+    assert np.array_equal(smoothed_classes(classes, core), expected)

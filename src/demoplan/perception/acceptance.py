@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from demoplan.perception.colours import SIDE_FACE_GAP
 from demoplan.perception.opencv import cv2
+from demoplan.perception.palette import SIDE_FACE_GAP
 from demoplan.perception.square_fit import outline_points
 
 __all__ = [
@@ -153,7 +153,7 @@ A camera low and off to the side sees a cube's side faces as large as its top or
 larger (the `side_faces` family: 0.45 m up, its axis beyond the image), and when
 they stay in the top's colour class the top alone covers under half of its
 region. Those side faces are the top's material lit less: the region's pixels
-:data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* or more darker than the
+:data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* or more darker than the
 squares' own faces are taken for side faces, explained by the squares beside
 them (:func:`explained_share`); a board's or a table patch's body, as light as
 the squares fitted in it, stays unexplained."""
@@ -175,7 +175,7 @@ def explained_share(
     """The share of the region ``alpha`` (pixels with α > ½) that the ``squares``
     (u, v, θ, s each) cover by their areas; 1 when none were found (nothing to judge).
     With ``lightness`` (CIELAB L* over the same crop), the region's pixels
-    :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* or more darker than the
+    :data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* or more darker than the
     median over the squares' central halves are side faces of the squares' cubes and
     count as explained (:data:`MIN_EXPLAINED_SHARE`) — when the squares cover at least
     :data:`MIN_TOP_SHARE` of it by themselves."""

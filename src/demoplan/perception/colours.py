@@ -31,28 +31,44 @@ drop out and the top face, whose size is the block's side, is what the Hough tra
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
 from demoplan.budget import check_time
-from demoplan.errors import InputError
 from demoplan.perception.achromatic import achromatic_regions
-from demoplan.perception.exposure import chroma_apart
+from demoplan.perception.colour_classes import (
+    FULL_LEVEL_SHARE,
+    full_level,
+    lightness_modes,
+    nearest_class,
+    one_colour_merged,
+    present_classes,
+    smoothed_classes,
+    unnamed_split,
+    without_rims,
+    without_strands,
+)
 from demoplan.perception.highlights import fill_glints_and_prints, glare, highlights, hole_owners
 from demoplan.perception.image_measures import ImageMeasures
 from demoplan.perception.masks import (
-    CROSS,
     TableReach,
     dilate,
-    distances,
     erode,
     fill_holes,
     labelled_parts,
 )
 from demoplan.perception.opencv import cv2
+from demoplan.perception.palette import (
+    MIN_CHROMA,
+    MIN_LIGHTNESS_CONTRAST,
+    PALETTE,
+    Palette,
+    classify,
+    load_palette,
+    name_colour,
+    palette_arrays,
+)
 from demoplan.perception.rejected_parts import REPORTED_SHARE, PartRecorder, RejectedPart, outlines
 
 __all__ = [
@@ -66,41 +82,12 @@ __all__ = [
     "name_colour",
     "outlines",
 ]
-
-MAX_CHROMA_DISTANCE = 0.3
-"""A colour farther than this (in RGB / max RGB) from every plain colour has no name."""
-MIN_CHROMA = 12.0
-"""Foreground: CIELAB a*b* distance from the table's colour (a grey card is ~0, a
-wooden block ~30, a saturated red ~70)."""
-MIN_LIGHTNESS_CONTRAST = 12.0
-"""Foreground in an image without colour: CIELAB L* difference from the table."""
-SIDE_FACE_GAP = 12.0
-"""L* between a class's two lightness modes for the darker one to be side faces."""
 TABLE_BLOCKS = 8.0
 """A foreground region that touches the image's border, covers more than this many
 of the largest blocks' areas and is mostly of one colour is a second table (the
 floor or a table around a board, the board being the image's median colour): no
 group of blocks is that large and of one colour; its pixels of that colour are
 table too."""
-MAX_PALETTE_COLOURS = 64
-"""Colours a palette file may add: a camera tells a few dozen apart at best."""
-UNNAMED = -4
-"""The class of colours no plain colour is near (``block``); the unnamed colours of one
-region that differ are the classes −4, −5, … (:func:`_unnamed_split`)."""
-_SPECIAL = {-2: "black", -3: "grey", UNNAMED: "block"}
-
-PALETTE: dict[str, tuple[float, float, float]] = {
-    # brightness-free chromaticity: RGB / max(RGB)
-    "red": (1.0, 0.2, 0.2),
-    "orange": (1.0, 0.55, 0.12),
-    "wood": (1.0, 0.75, 0.5),
-    "yellow": (1.0, 0.85, 0.18),
-    "green": (0.3, 1.0, 0.35),
-    "blue": (0.2, 0.42, 1.0),
-    "purple": (0.7, 0.35, 1.0),
-}
-
-Palette = Mapping[str, tuple[float, float, float]]
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,73 +108,6 @@ class ColourRegion:
     def counted(self) -> np.ndarray:
         """``alpha`` less its ``strays`` (:class:`~.masks.TableReach`): what its size is."""
         return self.alpha if self.strays is None else self.alpha * ~self.strays
-
-
-def load_palette(path: str | Path) -> dict[str, tuple[float, float, float]]:
-    """Colours to add to :data:`PALETTE` from a JSON (or YAML) file mapping a name to
-    the block's colour as the camera sees it, ``[R, G, B]`` in 0–255
-    (docs/perception.md, "Colour names"); stored as RGB / max RGB."""
-    from demoplan.fileio import display_path, read_document
-
-    source = display_path(Path(path))
-    document = read_document(Path(path))  # JSON, or YAML by extension; one-line errors
-    if not document:
-        raise InputError("a mapping of colour names to [R, G, B] expected", source=source)
-    if len(document) > MAX_PALETTE_COLOURS:
-        raise InputError(
-            f"{len(document)} colours; at most {MAX_PALETTE_COLOURS} expected", source=source
-        )
-    palette: dict[str, tuple[float, float, float]] = {}
-    for name, value in document.items():
-        field = str(name)
-        if not isinstance(name, str) or not name.isidentifier() or name.startswith("block"):
-            raise InputError(
-                "a colour name (letters, digits, _; not starting with 'block') expected",
-                source=source,
-                field=field,
-            )
-        if (
-            not isinstance(value, list)
-            or len(value) != 3
-            or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in value)
-            or not all(0 <= c <= 255 for c in value)
-            or max(value) <= 0
-        ):
-            raise InputError(
-                "[R, G, B] with each in 0–255 (not all 0) expected", source=source, field=field
-            )
-        top = float(max(value))
-        palette[name] = (value[0] / top, value[1] / top, value[2] / top)
-    return palette
-
-
-def name_colour(rgb: np.ndarray, palette: Palette | None = None) -> str:
-    """The plain colour name nearest to ``rgb`` (dark or grey: ``black`` / ``grey``;
-    ``block`` when no plain colour is near: docs/formats.md then names blocks block1, block2…)."""
-    names, chroma = _palette(palette)
-    label = int(_classify(np.asarray(rgb, dtype=float).reshape(1, 3), chroma)[0])
-    return names[label] if label >= 0 else _SPECIAL[label]
-
-
-def _palette(extra: Palette | None = None) -> tuple[list[str], np.ndarray]:
-    merged = dict(PALETTE)
-    merged.update(extra or {})
-    return list(merged), np.array(list(merged.values()), dtype=float)
-
-
-def _classify(pixels: np.ndarray, chroma: np.ndarray) -> np.ndarray:
-    """Palette index per pixel (N × 3 RGB); dark → -2, greyish → -3."""
-    red, green, blue = pixels[:, 0], pixels[:, 1], pixels[:, 2]
-    top = np.maximum(np.maximum(red, green), blue)
-    normal = pixels / np.maximum(top, 1.0)[:, None]
-    distance = distances(normal, chroma)
-    labels: np.ndarray = np.argmin(distance, axis=1)
-    nearest = distance[np.arange(labels.size), labels]
-    labels[nearest > MAX_CHROMA_DISTANCE] = UNNAMED  # no plain colour
-    # the smallest channel over the largest: near 1 for grey
-    labels[np.minimum(np.minimum(red, green), blue) / np.maximum(top, 1.0) > 0.82] = -3
-    labels[top < 60] = -2
-    return labels
 
 
 _LAB_SCALE = np.array(
@@ -367,17 +287,17 @@ def _component_crop(
 def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     """The colours of a component's core pixels that may be a block's (each with
     its core pixels); shades and glare left out."""
-    classified = _classify(k.pixels[k.core], c.chroma)
-    classes = _unnamed_split(classified, k.chroma[k.core], c.min_area, k.lightness[k.core])
+    classified = classify(k.pixels[k.core], c.chroma)
+    classes = unnamed_split(classified, k.chroma[k.core], c.min_area, k.lightness[k.core])
     if c.coloured_image:
         c.record.shade(classes, k.core, k.lightness, k.rows, k.cols)
         classes[glare(classes, k.lightness, k.core, c.min_area)] = -3
-    classes = _smoothed_classes(classes, k.core)
-    present = _present_classes(classes, c.names, c.min_area, c.coloured_image)
+    classes = smoothed_classes(classes, k.core)
+    present = present_classes(classes, c.names, c.min_area, c.coloured_image)
     # one colour between two names first: its two halves, speckled through each
     # other by the noise, would each erode away as a rim
-    present = _one_colour_merged(present, k.chroma[k.core], k.lightness[k.core])
-    return _without_rims(_without_shadows(c, k, present), k.core, c.min_area)
+    present = one_colour_merged(present, k.chroma[k.core], k.lightness[k.core])
+    return without_rims(_without_shadows(c, k, present), k.core, c.min_area)
 
 
 SHADOW_LIGHT = (0.35, 0.85)
@@ -416,8 +336,8 @@ def _top_faces(c: _ImageColours, k: _Crop, present: list[tuple[str, np.ndarray]]
     core_pixels, core_chroma = k.pixels[k.core], k.chroma[k.core]
     core_offsets, core_lightness = k.offsets[k.core], k.lightness[k.core]
     faces: list[_Face] = []
-    for colour, chosen in _one_colour_merged(present, core_chroma, core_lightness):
-        top_face, side_faces = _lightness_modes(core_lightness[chosen])
+    for colour, chosen in one_colour_merged(present, core_chroma, core_lightness):
+        top_face, side_faces = lightness_modes(core_lightness[chosen])
         on_top = chosen.copy()
         if side_faces is not None:
             on_top[chosen] = core_lightness[chosen] >= (top_face + side_faces) / 2
@@ -438,14 +358,14 @@ def _face_alpha(c: _ImageColours, k: _Crop, face: _Face, on_class: np.ndarray) -
     (full from the lower quartile of the top's core pixels, :data:`FULL_LEVEL_SHARE`)."""
     _, _, change, top_face, side_faces, change_ab, _ = face
     projection = (k.offsets @ change) / max(float(change @ change), 1e-9)
-    alpha: np.ndarray = np.clip(projection / _full_level(projection[on_class]), 0.0, 1.0)
+    alpha: np.ndarray = np.clip(projection / full_level(projection[on_class]), 0.0, 1.0)
     if c.coloured_image:
         # and in chroma alone: a shadow beside the block darkens the table,
         # which the RGB projection would take for a part of a dark block
         chroma_part = ((k.chroma - k.ground_ab) @ change_ab) / max(
             float(change_ab @ change_ab), 1e-9
         )
-        chroma_alpha = chroma_part / _full_level(chroma_part[on_class])
+        chroma_alpha = chroma_part / full_level(chroma_part[on_class])
         alpha = np.minimum(alpha, np.clip(chroma_alpha, 0.0, 1.0))
     if side_faces is not None:
         on_top = on_class & (k.lightness >= (top_face + side_faces) / 2)
@@ -469,7 +389,7 @@ def _component_regions(
     faces = _top_faces(c, k, present)
     # nearest class, judged on the colour change from the table under each pixel
     offsets = k.offsets.reshape(-1, 3)
-    nearest = _nearest_class(offsets, [face[2] for face in faces], k.member.shape)
+    nearest = nearest_class(offsets, [face[2] for face in faces], k.member.shape)
     grown = dilate(k.member, 1)
     owners = hole_owners(k.core, nearest) if len(faces) > 1 else None
     regions: list[ColourRegion] = []
@@ -485,7 +405,7 @@ def _component_regions(
         on_top = highlights(k.pixels, k.lightness, (top_face, centre), enclosing, c.min_area)
         others = None if len(faces) == 1 else k.core & (nearest != n)
         fill_glints_and_prints(alpha, on_top, k.lightness, k.ground_lightness, others)
-        alpha = _without_strands(alpha, c.min_area)
+        alpha = without_strands(alpha, c.min_area)
         rgb = (float(centre[0]), float(centre[1]), float(centre[2]))
         strays = None if c.reach is None else c.reach.strays(k.rows, k.cols, face[6])
         regions.append(ColourRegion(colour, rgb, (k.rows.start, k.cols.start), alpha, strays))
@@ -528,7 +448,7 @@ def colour_regions(
     foreground = (distinct > threshold / 2).astype(np.uint8)
     check_time(where)
     count, labels, stats = labelled_parts(foreground)
-    names, chroma = _palette(palette)
+    names, chroma = palette_arrays(palette)
     colours = _ImageColours(
         image, lab, distinct, threshold, table, names, chroma, coloured_image, min_area, record
     )
@@ -559,239 +479,3 @@ def _covered(regions: list[ColourRegion], shape: tuple[int, ...]) -> np.ndarray:
         (row, col), (rows, cols) = region.offset, region.alpha.shape
         covered[row : row + rows, col : col + cols] |= region.alpha > 0.5
     return covered
-
-
-def _present_classes(
-    classes: np.ndarray, names: list[str], min_area: float, coloured_image: bool
-) -> list[tuple[str, np.ndarray]]:
-    """The colours of a region's core pixels (``classes``, per pixel) that cover
-    at least ``min_area``, each with its pixels; in a coloured image not the
-    dark or grey ones (a coloured region's side faces, its shadow)."""
-    present = []
-    for label in np.unique(classes):
-        if label in (-2, -3) and coloured_image:
-            continue
-        chosen = classes == label
-        if chosen.sum() >= min_area:
-            colour = names[label] if label >= 0 else _SPECIAL[max(int(label), UNNAMED)]
-            present.append((colour, chosen))
-    return present
-
-
-FULL_LEVEL_SHARE = 0.25
-"""A class's soft mask is 1 from the level this share of its core pixels falls
-under (its top face's texture, grain and shading make the rest brighter or more
-coloured than the mean, the mean itself short of full for a quarter to half of the
-face); a pixel mixed with the table is below it."""
-
-CLASS_SMOOTHING = 5
-"""Side (px) of the square over which a pixel's distances to the classes are
-averaged before the nearest is taken: two near hues (blue and violet cubes side by
-side) are told apart by their faces, not pixel by pixel through the noise."""
-
-
-def _full_level(values: np.ndarray) -> float:
-    """The level of a soft mask's measure (a projection on the class's colour change)
-    that counts as fully covered: :data:`FULL_LEVEL_SHARE`'s quantile of the class's
-    core pixels, at most 1 (the class's mean change) and at least 0.5."""
-    if values.size == 0:
-        return 1.0
-    return float(np.clip(np.quantile(values, FULL_LEVEL_SHARE), 0.5, 1.0))
-
-
-def _smoothed_classes(classes: np.ndarray, core: np.ndarray) -> np.ndarray:
-    """The core pixels' classes (``classes``, over ``core``'s pixels), each the
-    most common among the core pixels of :data:`CLASS_SMOOTHING`'s square around
-    it (counted in 8 bits): a face's pixels whose colour the noise or the texture
-    put nearer another palette colour (a blue cube's speckles of violet) take their face's."""
-    labels = np.unique(classes)
-    if labels.size < 2:
-        return classes
-    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
-    votes = []
-    for label in labels:
-        mask = np.zeros(core.shape, dtype=np.uint8)
-        mask[core] = classes == label
-        votes.append(np.asarray(cv2.boxFilter(mask, -1, size, normalize=False))[core])
-    smoothed: np.ndarray = labels[np.argmax(np.stack(votes, axis=1), axis=1)]
-    return smoothed
-
-
-def _without_strands(alpha: np.ndarray, min_area: float) -> np.ndarray:
-    """``alpha`` without the strands that hang on its faces — a pen line drawn on
-    the board, a cable, a thin shadow or a sliver of side face: the parts of its
-    mask (α > ½) that an opening by a disc a sixth of the smallest block's side
-    across removes, regrown by that much within the mask (a square's corners come
-    back; a strand keeps a stub) and a pixel more for the soft edge."""
-    steps = max(1, round(math.sqrt(min_area / 0.3) / 6))
-    mask = (alpha > 0.5).astype(np.uint8)
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
-    kept = cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc)
-    if np.array_equal(kept, mask):
-        return alpha
-    for _ in range(steps + 1):
-        kept = cv2.bitwise_and(cv2.dilate(kept, CROSS), mask)
-    kept = cv2.dilate(kept, CROSS, iterations=2)
-    trimmed: np.ndarray = alpha * kept
-    return trimmed
-
-
-def _one_colour_merged(
-    present: list[tuple[str, np.ndarray]], core_chroma: np.ndarray, light: np.ndarray
-) -> list[tuple[str, np.ndarray]]:
-    """The classes of a region with those of one colour merged: two classes whose
-    mean a*b* (core pixels: ``core_chroma``, N × 2) lie less than :data:`MIN_CHROMA`
-    apart (two unnamed ones as lit to mid grey: L* ``light``, :mod:`~.exposure`) —
-    no farther than the table is from a block — are one colour that falls between
-    two palette names (a dark red between red and wood), its pixels split by the
-    noise; the merged class takes the name of the larger."""
-    groups = sorted(present, key=lambda group: -int(group[1].sum()))  # the larger first
-    merged = True
-    while merged and len(groups) > 1:
-        means = [np.mean(core_chroma[chosen], axis=0) for _, chosen in groups]
-        lit = [float(np.mean(light[c])) if n == "block" else 100.0 for n, c in groups]
-        pairs = [
-            (i, j)
-            for i in range(len(groups))
-            for j in range(i + 1, len(groups))
-            if not chroma_apart(means[i], means[j], (lit[i], lit[j]), MIN_CHROMA)
-        ]
-        merged = bool(pairs)
-        if merged:
-            first, second = pairs[0]
-            groups[first] = (groups[first][0], groups[first][1] | groups[second][1])
-            del groups[second]
-    return groups
-
-
-def _unnamed_split(
-    classes: np.ndarray, core_chroma: np.ndarray, min_area: float, light: np.ndarray
-) -> np.ndarray:
-    """The core pixels' classes (``classes``) with those no plain colour is near
-    (:data:`UNNAMED`) parted by colour: halved again and again along their a*b*
-    (``core_chroma``, N × 2) by two-means while the halves' means lie at least
-    :data:`MIN_CHROMA` apart as lit to mid grey (:func:`~.exposure.chroma_apart`;
-    L* ``light``) — two colours, as far apart as a block from the table —
-    and each half holds ``min_area`` pixels; the parts are the classes −4, −5, ….
-    A dark red cube beside a bluish green one, neither near a palette colour, is
-    then two classes, not one whose darker part (the red top) would be taken for
-    its side faces; one colour's noise splits it into halves far closer than that."""
-    unnamed = np.flatnonzero(classes == UNNAMED)
-    parts = [unnamed]
-    done: list[np.ndarray] = []
-    while parts:
-        part = parts.pop()
-        halves = _two_means(core_chroma[part])
-        if halves is None or min(halves.sum(), (~halves).sum()) < min_area:
-            done.append(part)
-            continue
-        means = [core_chroma[part][half].mean(axis=0) for half in (halves, ~halves)]
-        lights = [float(light[part][half].mean()) for half in (halves, ~halves)]
-        if not chroma_apart(means[0], means[1], (lights[0], lights[1]), MIN_CHROMA):
-            done.append(part)
-            continue
-        parts += [part[halves], part[~halves]]
-    split = classes.copy()
-    for number, part in enumerate(sorted(done, key=len, reverse=True)):
-        split[part] = UNNAMED - number
-    return split
-
-
-def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
-    """Which of ``points`` (N × 2) fall in the first of two clusters (Lloyd's
-    iterations from the two ends of their principal axis; deterministic), or
-    ``None`` when fewer than two points differ."""
-    if len(points) < 2:
-        return None
-    centred = points - points.mean(axis=0)
-    _, _, axes = np.linalg.svd(centred[:: max(1, len(points) // 4000)], full_matrices=False)
-    along = centred @ axes[0]
-    if float(along.max() - along.min()) <= 0:
-        return None
-    centres = np.stack([points[np.argmin(along)], points[np.argmax(along)]])
-    first = np.ones(len(points), dtype=bool)
-    for _ in range(steps):
-        distance = distances(points, centres)
-        first = distance[:, 0] <= distance[:, 1]
-        if first.all() or not first.any():
-            return None
-        moved = np.stack([points[first].mean(axis=0), points[~first].mean(axis=0)])
-        if np.all(np.abs(moved - centres) <= 1e-8 + 1e-5 * np.abs(centres)):  # np.allclose's test
-            break
-        centres = moved
-    return first
-
-
-def _without_rims(
-    present: list[tuple[str, np.ndarray]], core: np.ndarray, min_area: float
-) -> list[tuple[str, np.ndarray]]:
-    """The classes of a region that hold a face: a class whose core pixels
-    (``chosen``, over ``core``'s pixels) vanish when eroded by a sixth of the
-    smallest block's side is a rim or a strip — a block's edge where its colour
-    mixes with the table's (a violet block's rim looks blue), a side face of
-    another hue — and its pixels go to the classes that remain (the largest class
-    stays when none holds a face)."""
-    if len(present) < 2:
-        return present
-    steps = max(1, round(math.sqrt(min_area / 0.3) / 6))
-    faces = []
-    for colour, chosen in present:
-        mask = np.zeros_like(core)
-        mask[core] = chosen
-        if erode(mask, steps).sum() >= min_area / 4:
-            faces.append((colour, chosen))
-    return faces or [max(present, key=lambda found: int(found[1].sum()))]
-
-
-def _nearest_class(
-    offsets: np.ndarray, changes: list[np.ndarray], shape: tuple[int, ...]
-) -> np.ndarray:
-    """Per pixel of a crop of ``shape`` (its colour change from the table, N × 3),
-    the class whose change (``changes``) it is nearest to: off the change's line,
-    less a bonus for going far along it, averaged over :data:`CLASS_SMOOTHING`'s
-    square. All 0 with one class (nothing to compare)."""
-    if len(changes) == 1:
-        return np.zeros(shape, dtype=np.intp)
-    scores = np.stack([_class_score(offsets, c) for c in changes], axis=1).reshape(
-        *shape, len(changes)
-    )
-    size = (CLASS_SMOOTHING, CLASS_SMOOTHING)
-    smoothed = np.stack(
-        [cv2.blur(scores[..., k].astype(np.float32), size) for k in range(len(changes))], axis=-1
-    )
-    nearest: np.ndarray = np.argmin(smoothed, axis=-1)
-    return nearest
-
-
-def _class_score(offsets: np.ndarray, change: np.ndarray) -> np.ndarray:
-    """Per colour change from the table (``offsets``, N × 3): its distance off the
-    line of ``change`` less a quarter of how far it goes along it. The values of
-    ``norm(o − (o·c / c·c) c) − ¼ o·c / |c|`` to the last bit, at a fifth of the cost:
-    the dot product taken once, the residual's squares summed column by column
-    (as NumPy's norm sums the three in order) rather than through N × 3 temporaries."""
-    along = offsets @ change
-    length2 = max(float(change @ change), 1e-9)
-    t = along / length2
-    squares = np.zeros(offsets.shape[0])
-    for k in range(offsets.shape[1]):
-        off_line = offsets[:, k] - t * change[k]
-        squares += off_line * off_line
-    score: np.ndarray = np.sqrt(squares) - 0.25 * along / math.sqrt(length2)
-    return score
-
-
-def _lightness_modes(values: np.ndarray) -> tuple[float, float | None]:
-    """The top face's lightness (L*) and, when the class's lightness falls into two
-    modes at least :data:`SIDE_FACE_GAP` apart (Otsu's split), the side faces'."""
-    if values.size < 8:
-        return float(np.median(values)) if values.size else 0.0, None
-    as_bytes = np.clip(values * 2.55, 0, 255).astype(np.uint8).reshape(-1, 1)
-    split, _ = cv2.threshold(as_bytes, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
-    cut = split / 2.55
-    upper, lower = values[values > cut], values[values <= cut]
-    if upper.size < 8 or lower.size < 8:
-        return float(np.median(values)), None
-    top, side = float(np.median(upper)), float(np.median(lower))
-    if top - side < SIDE_FACE_GAP or upper.size < lower.size / 4:
-        return float(np.median(values)), None
-    return top, side

@@ -8,7 +8,7 @@ as large as the top (a camera low and off to the side, the `side_faces` and
 `tilted` families) the colour split of :mod:`demoplan.perception.colours` may
 leave one as a class of its own (a dark red is not red), and a square fits it.
 Two cubes face to face are lit alike, so their tops' lightness differs little;
-a face :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* darker than a
+a face :data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* darker than a
 square of its hue that it shares a side with is not a top. Only coloured faces
 are judged so: a grey face beside a white one may be a grey cube as well as the
 white cube's side, and hue does not tell them apart.
@@ -22,8 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from demoplan.perception.colours import MIN_CHROMA, SIDE_FACE_GAP
 from demoplan.perception.opencv import cv2
+from demoplan.perception.palette import MIN_CHROMA, SIDE_FACE_GAP
 
 __all__ = ["ImageSquare", "corners_in_image", "side_faces_beside_tops", "table_shadows"]
 
@@ -76,9 +76,9 @@ def _face_colour(image: np.ndarray, square: ImageSquare) -> _FaceColour:
 
 def _of_its_material(face: _FaceColour, top: _FaceColour) -> bool:
     """Whether ``face`` may be ``top``'s material lit less: at least
-    :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* darker, ``top`` coloured, and
+    :data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* darker, ``top`` coloured, and
     their hues within :data:`MAX_HUE_TURN` — or, a face too dark to show its hue
-    (chroma under twice :data:`~demoplan.perception.colours.MIN_CHROMA`), no channel
+    (chroma under twice :data:`~demoplan.perception.palette.MIN_CHROMA`), no channel
     brighter than the top's."""
     if top.lightness - face.lightness < SIDE_FACE_GAP or top.chroma < MIN_CHROMA:
         return False

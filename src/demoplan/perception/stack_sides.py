@@ -32,9 +32,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from demoplan.perception.colours import MIN_CHROMA, SIDE_FACE_GAP, foreground
+from demoplan.perception.colours import foreground
 from demoplan.perception.image_measures import ImageMeasures, measures_of
 from demoplan.perception.opencv import cv2
+from demoplan.perception.palette import MIN_CHROMA, SIDE_FACE_GAP
 from demoplan.perception.side_faces import MAX_HUE_TURN, ImageSquare
 
 __all__ = [
@@ -487,7 +488,7 @@ def _neighbour_top(top: tuple[float, float, float], face: tuple[float, float, fl
     """Whether ``face`` (L*, a*, b*) may be the top of a cube touching ``top``'s, in
     less light: both coloured, of one hue (within
     :data:`~demoplan.perception.side_faces.MAX_HUE_TURN`) and less than
-    :data:`~demoplan.perception.colours.SIDE_FACE_GAP` L* darker — not lit as a
+    :data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* darker — not lit as a
     side face is (touching_rows: a row of one colour, its far cubes darker)."""
     if min(math.hypot(top[1], top[2]), math.hypot(face[1], face[2])) < MIN_CHROMA:
         return False
