@@ -35,6 +35,7 @@ from demoplan.perception.sizes import (
     rejection_in_scale,
 )
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
+from demoplan.perception.working_resolution import factor_for_scale, factor_for_size, reduced
 
 __all__ = ["SIDE_TOLERANCE", "Perception", "perceive_files", "perceive_top_view", "seen_now"]
 
@@ -138,7 +139,11 @@ def perceive_top_view(
     straight down: the most common size of the squares found, in pixels, is
     ``side``; :func:`~demoplan.perception.sizes.block_sizes`). Without
     ``side`` (and ``before``) the blocks are held to the sizes most squares found
-    share (:func:`~demoplan.perception.sizes.block_sizes`): others are rejected."""
+    share (:func:`~demoplan.perception.sizes.block_sizes`): others are rejected.
+
+    A large photograph is looked at reduced by a whole factor
+    (:mod:`~demoplan.perception.working_resolution`; the overlay is drawn on the
+    reduction, and the scale's line says so)."""
     if px_per_m is None:
         if side is None:
             raise UsageError("the scale is needed: --px-per-m, or the blocks' --side")
@@ -150,7 +155,6 @@ def perceive_top_view(
     if px_per_m is None:
         assert side is not None
         return _perceive_at_cube_scale(image, side, origin, settings, before, timeout, overlay)
-    camera = Camera(px_per_m, origin)
     if side is not None:
         settings = replace(
             settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
@@ -164,12 +168,16 @@ def perceive_top_view(
         ),
         _memory_refused(image),
     ):
+        photograph = load_image(image)
+        factor = factor_for_scale(settings.min_side * px_per_m, photograph.shape)
+        camera = Camera(px_per_m / factor, origin)
         if before is not None:
-            earlier = detect_blocks(load_image(before), camera, settings)
+            earlier = detect_blocks(reduced(load_image(before), factor).picture, camera, settings)
             tracker = BlockTracker(
                 TrackedBlock(b.name, b.x, b.y, 0.0, b.yaw, b.side, b.colour) for b in earlier
             )
-        picture = load_image(image)
+        working = reduced(photograph, factor)
+        picture = working.picture
         measures = ImageMeasures(picture)  # converted once for every stage
         rejected: list[Rejection] = []
         detected = detect_blocks(picture, camera, settings, rejected, measures)
@@ -182,6 +190,7 @@ def perceive_top_view(
             rejected += odd
         blocks = tracker.update(detected)
     scale = f"--px-per-m {px_per_m:g}, origin {origin[0]:g} {origin[1]:g}"
+    scale += working.note(photograph.shape)
     return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
 
 
@@ -252,7 +261,9 @@ def _perceive_at_cube_scale(
         ),
         _memory_refused(image),
     ):
-        picture = load_image(image)
+        photograph = load_image(image)
+        working = reduced(photograph, factor_for_size(photograph.shape))
+        picture = working.picture
         shorter = min(picture.shape[:2])
         in_pixels = replace(
             settings, min_side=MIN_SIDE_PX, max_side=max(MIN_SIDE_PX, MAX_SIDE_SHARE * shorter)
@@ -278,10 +289,12 @@ def _perceive_at_cube_scale(
     detected = [in_scale(d, px_per_m, origin) for d in kept]
     rejected = [rejection_in_scale(r, px_per_m, origin) for r in [*rejected, *odd]]
     blocks = BlockTracker().update(detected)
+    factor = working.factor
     scale = (
-        f"the cube size: --side {side:g} m is {sizes[0][0]:.1f} px, {px_per_m:.1f} px/m "
-        f"(a camera looking straight down), origin {origin[0]:g} {origin[1]:g} at the "
-        "image's bottom-left corner"
+        f"the cube size: --side {side:g} m is {factor * sizes[0][0]:.1f} px, "
+        f"{factor * px_per_m:.1f} px/m (a camera looking straight down), origin "
+        f"{origin[0]:g} {origin[1]:g} at the image's bottom-left corner"
+        + working.note(photograph.shape)
     )
     camera = Camera(px_per_m, origin)
     return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
