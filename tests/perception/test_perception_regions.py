@@ -875,6 +875,40 @@ def test_a_white_top_on_a_blue_table_is_not_its_shadows(
     assert math.dist((found[0].x, found[0].y), centre) < 0.25 * 0.04
 
 
+@pytest.mark.parametrize("side_given", [False, True])
+@pytest.mark.parametrize(
+    ("x", "y", "seed"),
+    [(0.36, 0.336, 0), (0.36, 0.336, 1), (0.36, 0.336, 2), (0.55, 0.30, 0), (0.6, 0.06, 0)],
+)
+def test_a_white_cube_beside_its_grey_side_face_on_a_blue_table_is_a_white_block(
+    x: float, y: float, seed: int, side_given: bool
+) -> None:
+    """A white cube with dots on a blue table, 13-30 cm off the camera's foot (1.28 m
+    up, as the patterned family's draw 162408 has it): its top and its grey side face
+    have no chroma; only its rim, where its edges blur into the table and its
+    shadow, is coloured — bluish dark, the one class of its component, a rim that
+    holds no face. The cube is one white block within 0.6 of its side of its
+    centre, its side within a tenth of the top's, and nothing else. (Before, the rim's
+    class was a region whose soft mask took the white top and its grey side face as
+    its glint: a square of the top and side face, 0.88-1.22 of the top's side,
+    named ``block`` — or none, "not filled", in the family's draw.)"""
+    rig = PhotoRig(height=1.28, nadir=(0.32, 0.18), nadir_px=(301.0, 320.0))
+    cube = Cube("white", (238, 238, 234), x, y, -41.5 + 30 * seed, 0.04, pattern="dots")
+    scene = PhotoScene(rig, (cube,), background="blue", glints=0.0)
+    image, (truth,) = render_scene(scene, np.random.default_rng(seed))
+    px_per_m = rig.scale_at(*rig.to_table(rig.width / 2, rig.height_px / 2, 0.04), 0.04)
+    settings_ = (
+        PerceptionSettings(min_side=0.034, max_side=0.046) if side_given else PerceptionSettings()
+    )
+    found = detect_blocks(image, Camera(px_per_m, (0.0, 0.0)), settings_)
+    assert len(found) == 1, found
+    block = found[0]
+    u, v = block.x * px_per_m - 0.5, image.shape[0] - block.y * px_per_m - 0.5
+    assert math.dist((u, v), (truth.u, truth.v)) <= 0.6 * truth.side_px, (u, v, truth)
+    assert block.colour == "white", block
+    assert block.side * px_per_m == pytest.approx(truth.side_px, rel=0.1), block
+
+
 @settings(max_examples=30, deadline=None)
 @given(
     side=st.integers(24, 90),

@@ -184,16 +184,33 @@ def _two_means(points: np.ndarray, steps: int = 10) -> np.ndarray | None:
     return first
 
 
+NEUTRAL_CORE_SHARE = 0.5
+"""A region whose clearly coloured pixels the palette finds grey (no hue, light
+enough to tell: :func:`~demoplan.perception.palette.classify`'s −3) over this share,
+in an image with colour, is a white or grey cube on a coloured table when no class
+of it holds a face (:func:`without_rims`): its top and side faces have no chroma,
+only its rim, where its edges blur into the table and its shadow, has some. Pixels
+too dark to show a hue (−2) do not count: a dark green cube in a dim photograph is
+mostly such pixels, its green class a thin rim, and a block."""
+
+
 def without_rims(
-    present: list[tuple[str, np.ndarray]], core: np.ndarray, min_area: float
+    present: list[tuple[str, np.ndarray]], core: np.ndarray, min_area: float, neutral: float = 0.0
 ) -> list[tuple[str, np.ndarray]]:
     """The classes of a region that hold a face: a class whose core pixels
     (``chosen``, over ``core``'s pixels) vanish when eroded by a sixth of the
     smallest block's side is a rim or a strip — a block's edge where its colour
     mixes with the table's (a violet block's rim looks blue), a side face of
     another hue — and its pixels go to the classes that remain (the largest class
-    stays when none holds a face)."""
-    if len(present) < 2:
+    stays when none holds a face). None when none holds a face and over
+    :data:`NEUTRAL_CORE_SHARE` of the core is ``neutral`` (its share of grey
+    pixels, without hue): a white cube on a blue table is foreground by its chroma, but its
+    only class is its rim's, the table's blue mixed with the cube's edge and shadow
+    — whose soft mask, filling the white top and its grey side face as a glint of
+    the rim, was one region of both, "not filled" by a square (the patterned family's
+    draw 162408); the black, white and grey search finds the cube by its lightness."""
+    rims_only = neutral > NEUTRAL_CORE_SHARE
+    if len(present) < 2 and not (rims_only and present):
         return present
     steps = max(1, round(math.sqrt(min_area / 0.3) / 6))
     faces = []
@@ -202,7 +219,9 @@ def without_rims(
         mask[core] = chosen
         if erode(mask, steps).sum() >= min_area / 4:
             faces.append((colour, chosen))
-    return faces or [max(present, key=lambda found: int(found[1].sum()))]
+    if faces or rims_only:
+        return faces
+    return [max(present, key=lambda found: int(found[1].sum()))]
 
 
 def nearest_class(

@@ -297,7 +297,9 @@ def _block_colours(c: _ImageColours, k: _Crop) -> list[tuple[str, np.ndarray]]:
     # one colour between two names first: its two halves, speckled through each
     # other by the noise, would each erode away as a rim
     present = one_colour_merged(present, k.chroma[k.core], k.lightness[k.core])
-    return without_rims(_without_shadows(c, k, present), k.core, c.min_area)
+    # a white or grey cube on a coloured table: coloured at its rim alone
+    neutral = float(np.mean(classified == -3)) if c.coloured_image else 0.0
+    return without_rims(_without_shadows(c, k, present), k.core, c.min_area, neutral)
 
 
 SHADOW_LIGHT = (0.35, 0.85)
