@@ -460,6 +460,7 @@ def detect_blocks(
     (:mod:`demoplan.perception.image_measures`), when the caller shares them with
     stages of its own; each stage here takes its conversions of the image from them."""
     measures = ImageMeasures(image) if measures is None else measures
+    image = measures.image  # its colour cast divided out (demoplan.perception.white_balance)
     side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
     min_area = 0.3 * side_px[0] ** 2
     parts: list[RejectedPart] | None = None if rejected is None else []

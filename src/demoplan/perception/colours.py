@@ -131,10 +131,14 @@ def _distinctness(
     distance; L* difference in an image without colour), the image in CIELAB, and the
     foreground threshold; whether the image has colour at all. ``lab8``: the image's
     8-bit CIELAB, when measured before
-    (:attr:`~demoplan.perception.image_measures.ImageMeasures.lab8`)."""
+    (:attr:`~demoplan.perception.image_measures.ImageMeasures.lab8`); else measured
+    here, of the image with its table's colour cast divided out, as the detector
+    sees it (:mod:`~demoplan.perception.white_balance`)."""
     # 8-bit conversion (a table lookup, fast): L* scaled by 255/100, a* and b* by 1, +128;
     # scaled back by one affine transform of the pixels
-    lab8 = ImageMeasures(image).lab8 if lab8 is None else lab8
+    if lab8 is None:
+        measures = ImageMeasures(image)
+        image, lab8 = measures.image, measures.lab8
     lab = np.asarray(cv2.transform(lab8.astype(np.float32), _LAB_SCALE))
     sample = lab[::4, ::4].reshape(-1, 3)
     coloured = _largest_channel_spread(image[::4, ::4]) > 2
@@ -434,7 +438,12 @@ def colour_regions(
     reaching in from the border may be one, and hide a top
     (:mod:`demoplan.perception.occlusion`). ``held`` (bool, rows × columns), when
     given, is set to :func:`foreground` (measured once for both); ``lab8``: the
-    image's 8-bit CIELAB, when measured before (:func:`_distinctness`)."""
+    image's 8-bit CIELAB, when measured before (:func:`_distinctness`) of ``image`` as
+    given; without it, ``image`` is taken with its table's colour cast divided out
+    (:mod:`~demoplan.perception.white_balance`), as the detector takes it."""
+    if lab8 is None:
+        measures = ImageMeasures(image)
+        image, lab8 = measures.image, measures.lab8
     where = f" finding coloured regions in {image.shape[1]} × {image.shape[0]} pixels"
     table = np.median(image[::4, ::4].reshape(-1, 3), axis=0).astype(float)
     check_time(where)  # a budget set by the caller (demoplan.budget), if any

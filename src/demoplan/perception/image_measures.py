@@ -20,15 +20,19 @@ from typing import Any
 import numpy as np
 
 from demoplan.perception.opencv import cv2
+from demoplan.perception.white_balance import white_balanced
 
 __all__ = ["ImageMeasures", "measures_of"]
 
 
 class ImageMeasures:
-    """One RGB photograph (H × W × 3, 8-bit) and its conversions, each made once."""
+    """One RGB photograph (H × W × 3, 8-bit) and its conversions, each made once;
+    ``image`` is the photograph with its table's colour cast divided out
+    (:func:`~demoplan.perception.white_balance.white_balanced`: the photograph
+    itself when its table is grey, or of a colour no white balance explains)."""
 
     def __init__(self, image: np.ndarray) -> None:
-        self.image = image
+        self.image = white_balanced(image)
         self.answers: dict[Hashable, Any] = {}
         """What a stage worked out about this photograph that another stage asks
         again, by a key that starts with the stage's own name: made once per

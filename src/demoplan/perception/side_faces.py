@@ -22,6 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from demoplan.perception.exposure import chroma_at_mid_grey
 from demoplan.perception.opencv import cv2
 from demoplan.perception.palette import MIN_CHROMA, SIDE_FACE_GAP
 
@@ -78,11 +79,12 @@ def _of_its_material(face: _FaceColour, top: _FaceColour) -> bool:
     """Whether ``face`` may be ``top``'s material lit less: at least
     :data:`~demoplan.perception.palette.SIDE_FACE_GAP` L* darker, ``top`` coloured, and
     their hues within :data:`MAX_HUE_TURN` — or, a face too dark to show its hue
-    (chroma under twice :data:`~demoplan.perception.palette.MIN_CHROMA`), no channel
-    brighter than the top's."""
+    (chroma as lit to mid grey under twice :data:`~demoplan.perception.palette.MIN_CHROMA`:
+    :func:`~demoplan.perception.exposure.chroma_at_mid_grey`; less light shrinks a
+    colour's chroma with it), no channel brighter than the top's."""
     if top.lightness - face.lightness < SIDE_FACE_GAP or top.chroma < MIN_CHROMA:
         return False
-    if face.chroma < 2 * MIN_CHROMA:
+    if chroma_at_mid_grey(face.chroma, face.lightness) < 2 * MIN_CHROMA:
         return bool(np.all(face.rgb <= top.rgb))
     turn = math.degrees(math.atan2(face.b, face.a) - math.atan2(top.b, top.a))
     return abs((turn + 180.0) % 360.0 - 180.0) <= MAX_HUE_TURN
