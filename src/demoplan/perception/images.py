@@ -6,7 +6,7 @@ picture, or the pictures before and after the last move for stacking (paper
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,7 +36,16 @@ from demoplan.perception.sizes import (
 )
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 
-__all__ = ["SIDE_TOLERANCE", "Perception", "perceive_files", "perceive_top_view", "seen_now"]
+__all__ = [
+    "SIDE_TOLERANCE",
+    "Perception",
+    "Sides",
+    "given_sides",
+    "one_side",
+    "perceive_files",
+    "perceive_top_view",
+    "seen_now",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,19 +82,40 @@ def seen_now(
     return seen, left
 
 
-def check_side(side: float | None) -> None:
-    """``--side``, when given: a block's side in metres, within the size limit."""
+Sides = float | Sequence[float] | None
+"""``--side``: the blocks' side in metres, several sides (blocks of several sizes),
+or none given."""
+
+
+def given_sides(side: Sides) -> tuple[float, ...]:
+    """``side`` as a tuple of sides: empty when none is given."""
     if side is None:
-        return
+        return ()
+    return (float(side),) if isinstance(side, int | float) else tuple(map(float, side))
+
+
+def check_side(side: Sides) -> None:
+    """``--side``, when given: each a block's side in metres, within the size limit."""
     # not from the pose documents: their models (pydantic) are a tenth of a second
     # of demoplan perceive's start-up, which needs them for nothing else
     from demoplan.documents.extents import MAX_SIZE_M
 
-    if not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
-        raise UsageError(
-            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
-            "(an object's largest extent, docs/limits.md)"
-        )
+    for one in given_sides(side):
+        if not (math.isfinite(one) and 0 < one <= MAX_SIZE_M):
+            raise UsageError(
+                f"--side {one:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+                "(an object's largest extent, docs/limits.md)"
+            )
+
+
+def one_side(side: Sides, where: str) -> float | None:
+    """The one side given, or ``None``; a usage error naming the values when
+    several are given where one is needed (``where``: for what)."""
+    sides = given_sides(side)
+    if len(sides) > 1:
+        values = " ".join(f"--side {one:g}" for one in sides)
+        raise UsageError(f"{values}: one block size expected {where}")
+    return sides[0] if sides else None
 
 
 def check_top_view(px_per_m: float, origin: tuple[float, float]) -> None:
@@ -105,7 +135,7 @@ def perceive_files(
     origin: tuple[float, float],
     *,
     before: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     colours: Path | None = None,
 ) -> dict[str, TrackedBlock]:
@@ -121,7 +151,7 @@ def perceive_top_view(
     origin: tuple[float, float],
     *,
     before: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     colours: Path | None = None,
     overlay: bool = False,
@@ -134,26 +164,34 @@ def perceive_top_view(
     with ``overlay``, both drawn on the picture. An input error when there is no
     block: a scene needs one.
 
-    Without ``px_per_m`` the blocks' ``side`` gives the scale (a camera looking
+    ``side``: the blocks' side, or several (blocks of several sizes): squares are
+    looked for within 15 % of one of them
+    (:attr:`~demoplan.perception.blocks.PerceptionSettings.sides`).
+    Without ``px_per_m`` the blocks' one ``side`` gives the scale (a camera looking
     straight down: the most common size of the squares found, in pixels, is
     ``side``; :func:`~demoplan.perception.sizes.block_sizes`). Without
     ``side`` (and ``before``) the blocks are held to the sizes most squares found
     share (:func:`~demoplan.perception.sizes.block_sizes`): others are rejected."""
+    sides = given_sides(side)
     if px_per_m is None:
-        if side is None:
+        if not sides:
             raise UsageError("the scale is needed: --px-per-m, or the blocks' --side")
         check_top_view(1.0, origin)
     else:
         check_top_view(px_per_m, origin)
-    check_side(side)
+    check_side(sides)
     settings = PerceptionSettings(colours=load_palette(colours) if colours is not None else {})
     if px_per_m is None:
-        assert side is not None
-        return _perceive_at_cube_scale(image, side, origin, settings, before, timeout, overlay)
+        cube = one_side(sides, "for the scale of a view straight down (or --px-per-m)")
+        assert cube is not None
+        return _perceive_at_cube_scale(image, cube, origin, settings, before, timeout, overlay)
     camera = Camera(px_per_m, origin)
-    if side is not None:
+    if sides:
         settings = replace(
-            settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
+            settings,
+            min_side=(1 - SIDE_TOLERANCE) * min(sides),
+            max_side=(1 + SIDE_TOLERANCE) * max(sides),
+            sides=sides,
         )
     tracker = BlockTracker()
     with (
@@ -173,7 +211,7 @@ def perceive_top_view(
         measures = ImageMeasures(picture)  # converted once for every stage
         rejected: list[Rejection] = []
         detected = detect_blocks(picture, camera, settings, rejected, measures)
-        if side is None and before is None:
+        if not sides and before is None:
             # the blocks' size from the photograph (with a picture before, the strips
             # left in view of covered blocks are the tracker's to place)
             detected, odd = held_to_sizes(

@@ -165,10 +165,14 @@ def score_detections(photo: LabelledPhoto, centres: Sequence[tuple[float, float]
 
 
 def perceive_labelled(
-    photo: LabelledPhoto, *, timeout: float = math.inf, side: float | None = None
+    photo: LabelledPhoto,
+    *,
+    timeout: float = math.inf,
+    side: float | Sequence[float] | None = None,
 ) -> PhotoRun:
     """``photo`` perceived in process as ``demoplan perceive IMAGE --px-per-m S
-    --origin 0 0`` perceives it (with ``--timeout`` and ``--side``), scored."""
+    --origin 0 0`` perceives it (with ``--timeout`` and ``--side``, one side or
+    several), scored."""
     from demoplan.perception.images import perceive_top_view
 
     start = time.perf_counter()
