@@ -196,3 +196,17 @@ def test_several_sides_where_one_is_needed_are_one_line_naming_them(tmp_path: Pa
     camera.write_text("{}")
     with pytest.raises(UsageError, match="with --camera or --markers"):
         perceive(image, camera=camera, side=(0.07, 0.02))
+
+
+def test_the_blocks_are_the_same_when_no_rejections_are_recorded(tmp_path: Path) -> None:
+    """``perceive`` without recording the regions rejected (the command without
+    ``--plot`` shows none): the same blocks, no rejections — with them, the large
+    block's among others."""
+    image, cubes, between = _two_sizes(tmp_path)
+    recorded = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02))
+    spared = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02), rejections=False)
+    assert spared.blocks == recorded.blocks and spared.document == recorded.document
+    assert spared.rejected == () and any(r.colour == between.colour for r in recorded.rejected)
+    plot = tmp_path / "overlay.png"
+    plotted = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02), plot=plot, rejections=False)
+    assert plotted.rejected == recorded.rejected  # an overlay draws them

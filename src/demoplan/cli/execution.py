@@ -412,6 +412,7 @@ def perceive(
                 output=output,
                 plot=plot,
                 colours=colours,
+                rejections=plot is not None,  # shown only with --plot
             )
         if json_output:
             print_json(found.document)

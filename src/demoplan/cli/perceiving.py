@@ -152,6 +152,7 @@ def run_perceive(options: PerceiveOptions) -> int:
             timeout=options.timeout,
             output=options.output,
             plot=options.plot,
+            rejections=options.plot is not None,  # shown only with --plot
         )
         if options.json_output:
             from demoplan.wording import json_document

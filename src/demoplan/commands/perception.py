@@ -69,6 +69,7 @@ def perceive(
     output: Path | None = None,
     plot: Path | None = None,
     colours: Path | None = None,
+    rejections: bool = True,
 ) -> Perceived:
     """The blocks in ``image`` (paper §V.B: a Hough transform over x, y, θ, s):
     a top-down orthographic picture of ``px_per_m`` pixels per metre with its
@@ -81,7 +82,10 @@ def perceive(
     files are written only when both are made); ``colours``: a palette file of
     colours to add or move (docs/formats.md); ``side``: the blocks' side (m), or
     several when the table holds blocks of several sizes (a top view with
-    ``px_per_m``: one side for the scale alone, for a camera or markers file)."""
+    ``px_per_m``: one side for the scale alone, for a camera or markers file);
+    ``rejections`` false: a top view with ``px_per_m`` and no ``plot`` records
+    no regions rejected (``rejected`` empty; the blocks the same, the CPU of
+    their outlines spared: the command without ``--plot`` shows none)."""
     from demoplan.perception.camera import encode_png
 
     sides = given_sides(side)
@@ -100,6 +104,7 @@ def perceive(
     options |= {"colours": colours, "overlay": plot is not None}
     try:
         if camera is None and markers is None:  # a top view: its scale given, or the cubes'
+            options["rejections"] = rejections
             seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
             scale = seen.scale
         else:

@@ -155,6 +155,7 @@ def perceive_top_view(
     timeout: float = PERCEPTION_TIMEOUT,
     colours: Path | None = None,
     overlay: bool = False,
+    rejections: bool = True,
 ) -> Perception:
     """The blocks in ``image`` (a top-down orthographic picture, ``px_per_m``
     pixels per metre, its bottom-left corner at world ``origin``), by name;
@@ -162,7 +163,11 @@ def perceive_top_view(
     now covers stands under it; ``colours`` a palette file of colours to add
     (:func:`~demoplan.perception.colours.load_palette`); the regions rejected;
     with ``overlay``, both drawn on the picture. An input error when there is no
-    block: a scene needs one.
+    block: a scene needs one. With ``rejections`` false and no ``overlay`` (and
+    ``px_per_m``) the regions rejected are not recorded — ``demoplan perceive``
+    without ``--plot`` shows none: their outlines, hundreds of specks on a
+    photograph, cost 5–60 ms of its CPU — and ``rejected`` is empty; the blocks
+    are the same.
 
     ``side``: the blocks' side, or several (blocks of several sizes): squares are
     looked for within 15 % of one of them
@@ -210,7 +215,10 @@ def perceive_top_view(
         picture = load_image(image)
         measures = ImageMeasures(picture)  # converted once for every stage
         rejected: list[Rejection] = []
-        detected = detect_blocks(picture, camera, settings, rejected, measures)
+        recorded = rejections or overlay
+        detected = detect_blocks(
+            picture, camera, settings, rejected if recorded else None, measures
+        )
         if not sides and before is None:
             # the blocks' size from the photograph (with a picture before, the strips
             # left in view of covered blocks are the tracker's to place)
@@ -220,7 +228,8 @@ def perceive_top_view(
             rejected += odd
         blocks = tracker.update(detected)
     scale = f"--px-per-m {px_per_m:g}, origin {origin[0]:g} {origin[1]:g}"
-    return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
+    seen = _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
+    return seen if recorded else replace(seen, rejected=())
 
 
 def _perception(

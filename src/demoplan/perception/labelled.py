@@ -172,13 +172,13 @@ def perceive_labelled(
 ) -> PhotoRun:
     """``photo`` perceived in process as ``demoplan perceive IMAGE --px-per-m S
     --origin 0 0`` perceives it (with ``--timeout`` and ``--side``, one side or
-    several), scored."""
+    several; no ``--plot``: the regions rejected not recorded), scored."""
     from demoplan.perception.images import perceive_top_view
 
     start = time.perf_counter()
     try:
         found = perceive_top_view(
-            photo.image, photo.px_per_m, (0.0, 0.0), side=side, timeout=timeout
+            photo.image, photo.px_per_m, (0.0, 0.0), side=side, timeout=timeout, rejections=False
         )
     except DemoplanError as error:
         seconds = time.perf_counter() - start
