@@ -613,7 +613,7 @@ def _second_look(
     more: list[_Found] = []
     for index in unfitted:
         region = regions[index]
-        if (region.alpha > 0.5).sum() < several or not _searched_beyond(search, region, high):
+        if (region.alpha > 0.5).sum() < several:
             continue
         where = f" looking again at colour region {index + 1} of {len(regions)} at the blocks' size"
         check_time(where)
@@ -630,17 +630,6 @@ def _second_look(
         region_parts[index] = own
         more += [(region, params, coverage, rms) for params, coverage, rms in squares]
     return more
-
-
-def _searched_beyond(search: _SquareSearch, region: ColourRegion, high: float) -> bool:
-    """Whether the first search of ``region`` looked at sides over
-    :data:`SECOND_LOOK_NARROWER` times ``high`` (the largest side the second look
-    searches): it looked at none larger than a region of its area holds
-    (:func:`_next_square`, 1.2 √A), and where those were within the block sizes'
-    reach no square across several cubes outvoted a cube's own — the second look
-    would search the sides searched already."""
-    largest = min(search.side_px[1], 1.2 * math.sqrt(float(region.alpha.sum())))
-    return largest > SECOND_LOOK_NARROWER * high
 
 
 def _in_image(region: ColourRegion, params: np.ndarray) -> ImageSquare:
