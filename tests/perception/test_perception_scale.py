@@ -202,7 +202,7 @@ def test_the_blocks_are_the_same_when_no_rejections_are_recorded(tmp_path: Path)
     """``perceive`` without recording the regions rejected (the command without
     ``--plot`` shows none): the same blocks, no rejections — with them, the large
     block's among others."""
-    image, cubes, between = _two_sizes(tmp_path)
+    image, _, between = _two_sizes(tmp_path)
     recorded = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02))
     spared = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02), rejections=False)
     assert spared.blocks == recorded.blocks and spared.document == recorded.document
