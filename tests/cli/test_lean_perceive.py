@@ -102,6 +102,8 @@ LEAN = [
     ["table.png", "--side", "0.04", "-o", "table.png"],  # would overwrite its input
     ["table.png", "--side", "0.04", "-o", "same.png", "--plot", "same.png"],
     ["table.png", "--side", "0.04", "--timeout", "0"],  # out of time: exit 4
+    ["table.png", "--side", "0.04", "--side", "0.03", "--px-per-m", "1000", "--origin", "0", "0"],
+    ["table.png", "--side", "0.04", "--side", "0.03"],  # one size for the scale: exit 2
 ]
 """Command lines the lean path runs: successes and errors of perception itself."""
 
@@ -112,6 +114,7 @@ DECLINED = [
     ["table.png", "--px-per-m", "0", "--origin", "0", "0"],  # out of typer's range
     ["table.png", "--px-per-m", "nan", "--origin", "0", "0"],
     ["table.png", "--side", "-0.04"],
+    ["table.png", "--side", "0.04", "--side", "-0.03", "--px-per-m", "1000", "--origin", "0", "0"],
     ["table.png", "--side", "0.04", "--timeout", "-1"],
     ["table.png", "--origin", "0"],  # one number of two
     ["table.png", "table.png", "--side", "0.04"],  # two images
@@ -170,6 +173,8 @@ def test_parsed_options() -> None:
     assert options == PerceiveOptions(
         Path("a.png"), 800.0, (0.5, -1.0), json_output=True, output=Path("s.json")
     )
+    several = parse_perceive_options(["a.png", "--side", "0.038", "--side=0.025"])
+    assert several == PerceiveOptions(Path("a.png"), side=(0.038, 0.025))
 
 
 def test_the_lean_parser_knows_every_option_it_claims_and_declines_the_rest() -> None:

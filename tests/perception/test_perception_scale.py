@@ -147,3 +147,66 @@ def test_two_cube_sizes_on_a_real_photograph_are_both_kept() -> None:
             math.hypot(u - face.u, v - face.v) > FOUND_WITHIN * face.side_px
             for face in photo.blocks
         )
+
+
+def _two_sizes(tmp_path: Path) -> tuple[Path, list[SyntheticBlock], SyntheticBlock]:
+    """A top view (1000 px/m) of two 70 mm and two 20 mm cubes and a 42 mm block
+    between the two sizes (beyond 1.2 × the small size's window, under 0.8 × the
+    large one's)."""
+    cubes = [
+        SyntheticBlock("red", 0.10, 0.10, 20.0, 0.07),
+        SyntheticBlock("green", 0.40, 0.10, -10.0, 0.07),
+        SyntheticBlock("blue", 0.09, 0.30, 5.0, 0.02),
+        SyntheticBlock("yellow", 0.22, 0.31, -30.0, 0.02),
+    ]
+    between = SyntheticBlock("wood", 0.38, 0.29, 12.0, 0.042)
+    image = tmp_path / "two_sizes.png"
+    save_image(render_blocks([*cubes, between], Camera(1000.0, (0.0, 0.0)), rng=3), image)
+    return image, cubes, between
+
+
+def test_several_sides_find_the_cubes_of_each_and_no_block_between(tmp_path: Path) -> None:
+    """``--side 0.07 --side 0.02``: each size's cubes found at their sides, and the
+    42 mm block between the sizes rejected with both windows named; one side alone
+    misses the other size's cubes. (Searched from the smallest to the largest side
+    instead, 17–80 mm, the 42 mm block would pass.)"""
+    image, cubes, between = _two_sizes(tmp_path)
+    found = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02))
+    assert sorted(found.blocks) == sorted(c.colour for c in cubes)
+    for cube in cubes:
+        assert abs(found.blocks[cube.colour].side - cube.side) < 0.002
+    odd = [r for r in found.rejected if r.colour == between.colour]
+    assert odd and odd[0].reason in ("too small", "too large")
+    assert "14–28 / 48–97 mm allowed" in odd[0].detail
+    large = perceive(image, 1000.0, (0.0, 0.0), side=0.07)
+    assert {"blue", "yellow"}.isdisjoint(large.blocks)
+
+
+def test_several_sides_where_one_is_needed_are_one_line_naming_them(tmp_path: Path) -> None:
+    """The scale of a straight-down view comes from one block size, and a camera
+    file's top faces lie at one height: several sides there are a usage error
+    naming the values given (exit 2)."""
+    image, _, _ = _two_sizes(tmp_path)
+    with pytest.raises(UsageError, match=r"--side 0.07 --side 0.02: one block size expected"):
+        perceive(image, side=(0.07, 0.02))
+    result = CliRunner().invoke(app, ["perceive", str(image), "--side", "0.07", "--side", "0.02"])
+    assert result.exit_code == 2
+    assert "--side 0.07 --side 0.02: one block size expected" in result.output
+    camera = tmp_path / "camera.json"
+    camera.write_text("{}")
+    with pytest.raises(UsageError, match="with --camera or --markers"):
+        perceive(image, camera=camera, side=(0.07, 0.02))
+
+
+def test_the_blocks_are_the_same_when_no_rejections_are_recorded(tmp_path: Path) -> None:
+    """``perceive`` without recording the regions rejected (the command without
+    ``--plot`` shows none): the same blocks, no rejections — with them, the large
+    block's among others."""
+    image, _, between = _two_sizes(tmp_path)
+    recorded = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02))
+    spared = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02), rejections=False)
+    assert spared.blocks == recorded.blocks and spared.document == recorded.document
+    assert spared.rejected == () and any(r.colour == between.colour for r in recorded.rejected)
+    plot = tmp_path / "overlay.png"
+    plotted = perceive(image, 1000.0, (0.0, 0.0), side=(0.07, 0.02), plot=plot, rejections=False)
+    assert plotted.rejected == recorded.rejected  # an overlay draws them

@@ -328,12 +328,14 @@ def perceive(
         Path | None, typer.Option("--output", "-o", help="Also write the scene to this file.")
     ] = None,
     side: Annotated[
-        float | None,
+        list[float] | None,
         typer.Option(
             min=1e-4,
             parser=bounded_number(1e-4, expected="the blocks' side in metres, 0.0001 or more,"),
-            help="The blocks' side (m), when known: sizes 15 % off it are not blocks. Alone "
+            help="The blocks' side (m), when known: sizes 15 % off it are not blocks; "
+            "repeatable for blocks of several sizes (a top view with --px-per-m). Alone "
             "(no --px-per-m, --camera, --markers) it gives a straight-down view's scale.",
+            show_default=False,
         ),
     ] = None,
     timeout: Annotated[
@@ -410,6 +412,7 @@ def perceive(
                 output=output,
                 plot=plot,
                 colours=colours,
+                rejections=plot is not None,  # shown only with --plot
             )
         if json_output:
             print_json(found.document)
@@ -423,7 +426,7 @@ def _perceive_sequence(
     origin: tuple[float, float] | None,
     camera: Path | None,
     markers: Path | None,
-    side: float | None,
+    side: list[float] | None,
     timeout: float,
     output: Path | None,
     name: str | None,

@@ -73,7 +73,8 @@ class PerceiveOptions:
     markers: Path | None = None
     json_output: bool = False
     output: Path | None = None
-    side: float | None = None
+    side: tuple[float, ...] = ()
+    """The blocks' sides given (``--side``, repeatable): none, one or several."""
     timeout: float = PERCEPTION_TIMEOUT
     plot: Path | None = None
 
@@ -97,7 +98,7 @@ def parse_perceive_options(args: Sequence[str]) -> PerceiveOptions | None:
     parser.add_argument("--markers", type=Path, default=None)
     parser.add_argument("--json", dest="json_output", action="store_true")
     parser.add_argument("--output", "-o", type=Path, default=None)
-    parser.add_argument("--side", type=_number, default=None)
+    parser.add_argument("--side", type=_number, action="append", default=None)
     parser.add_argument("--timeout", type=_number, default=PERCEPTION_TIMEOUT)
     parser.add_argument("--plot", type=Path, default=None)
     try:
@@ -105,12 +106,12 @@ def parse_perceive_options(args: Sequence[str]) -> PerceiveOptions | None:
     except DeclinedError:
         return None
     px_per_m: float | None = parsed.px_per_m
-    side: float | None = parsed.side
+    side: tuple[float, ...] = tuple(parsed.side or ())
     timeout: float = parsed.timeout
     low, high = PX_PER_M_RANGE
     if (
         (px_per_m is not None and not low <= px_per_m <= high)  # also refuses NaN
-        or (side is not None and not (side >= SIDE_MIN and math.isfinite(side)))
+        or not all(one >= SIDE_MIN and math.isfinite(one) for one in side)
         or not timeout >= 0.0
     ):
         return None  # typer's range checks word the usage error
@@ -147,10 +148,11 @@ def run_perceive(options: PerceiveOptions) -> int:
             options.origin,
             camera=options.camera,
             markers=options.markers,
-            side=options.side,
+            side=options.side or None,
             timeout=options.timeout,
             output=options.output,
             plot=options.plot,
+            rejections=options.plot is not None,  # shown only with --plot
         )
         if options.json_output:
             from demoplan.wording import json_document

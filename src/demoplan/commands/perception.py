@@ -21,7 +21,7 @@ from demoplan.fileio import (
     write_atomic_bytes,
 )
 from demoplan.perception.blocks import Rejection
-from demoplan.perception.images import perceive_top_view
+from demoplan.perception.images import Sides, given_sides, one_side, perceive_top_view
 from demoplan.perception.overlay import NoBlocksError, is_speck, speck_side
 from demoplan.perception.stacking import TrackedBlock, scene_document
 
@@ -64,11 +64,12 @@ def perceive(
     camera: Path | None = None,
     markers: Path | None = None,
     before: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     output: Path | None = None,
     plot: Path | None = None,
     colours: Path | None = None,
+    rejections: bool = True,
 ) -> Perceived:
     """The blocks in ``image`` (paper §V.B: a Hough transform over x, y, θ, s):
     a top-down orthographic picture of ``px_per_m`` pixels per metre with its
@@ -79,10 +80,20 @@ def perceive(
     stands under it; ``output``: also write the scene there; ``plot``: the
     picture with what was found and what was rejected drawn on it (PNG; both
     files are written only when both are made); ``colours``: a palette file of
-    colours to add or move (docs/formats.md)."""
+    colours to add or move (docs/formats.md); ``side``: the blocks' side (m), or
+    several when the table holds blocks of several sizes (a top view with
+    ``px_per_m``: one side for the scale alone, for a camera or markers file);
+    ``rejections`` false: a top view with ``px_per_m`` and no ``plot`` records
+    no regions rejected (``rejected`` empty; the blocks the same, the CPU of
+    their outlines spared: the command without ``--plot`` shows none)."""
     from demoplan.perception.camera import encode_png
 
-    _check_mapping(px_per_m, origin, camera, markers, side, one_picture=True)
+    sides = given_sides(side)
+    _check_mapping(px_per_m, origin, camera, markers, sides or None, one_picture=True)
+    if camera is not None or markers is not None:  # the tops' height is one side
+        side = one_side(sides, "with --camera or --markers (the tops' height above the table)")
+    else:
+        side = sides or None
     inputs = [image, *(p for p in (before, camera, markers, colours) if p)]
     for target in (output, plot):
         if target is not None:
@@ -93,6 +104,7 @@ def perceive(
     options |= {"colours": colours, "overlay": plot is not None}
     try:
         if camera is None and markers is None:  # a top view: its scale given, or the cubes'
+            options["rejections"] = rejections
             seen = perceive_top_view(image, px_per_m, origin or (0.0, 0.0), **options)
             scale = seen.scale
         else:
@@ -147,7 +159,7 @@ def perceive_sequence(
     *,
     camera: Path | None = None,
     markers: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     output: Path | None = None,
     name: str | None = None,
@@ -165,6 +177,7 @@ def perceive_sequence(
     from demoplan.perception.sequence import demonstration_from_frames
 
     _check_mapping(px_per_m, origin, camera, markers)
+    side = one_side(side, "for a --sequence (the tracker's)")
     source = frame_source(frames)
     if output is not None:
         refuse_overwriting_inputs(output, [*frames, *(p for p in (camera, markers) if p)])
@@ -206,7 +219,7 @@ def _check_mapping(
     origin: tuple[float, float] | None,
     camera: Path | None,
     markers: Path | None,
-    side: float | None = None,
+    side: tuple[float, ...] | None = None,
     *,
     one_picture: bool = False,
 ) -> None:

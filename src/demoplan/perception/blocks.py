@@ -86,6 +86,10 @@ class PerceptionSettings:
     """Share of the outline that must border on table (at least ~2 free sides)."""
     colours: Mapping[str, tuple[float, float, float]] = field(default_factory=dict)
     """Colours added to the palette (:func:`~demoplan.perception.colours.load_palette`)."""
+    sides: tuple[float, ...] = ()
+    """The blocks' sides when given (``--side``, one or several sizes): squares are
+    looked for within :data:`~demoplan.perception.side_groups.SIDE_TOLERANCE` of
+    each, not between them; ``min_side`` and ``max_side`` are then not read."""
 
 
 TIMES = "\u00d7"  # the multiplication sign
@@ -145,19 +149,21 @@ def _failure(
     coverage: float,
     rms: float,
     free: float,
-    side_px: tuple[float, float],
+    windows: Sequence[tuple[float, float]],
     settings: PerceptionSettings,
     px_per_m: float,
     beyond: float = 0.0,
 ) -> tuple[str, str] | None:
     """Why a fitted square is no block (the acceptance of :func:`detect_blocks`,
-    checked in its order), or ``None``: it is one."""
-    side_mm = params[3] / px_per_m * 1000
-    allowed = f"{side_px[0] * 0.8 / px_per_m * 1000:.0f}–{side_px[1] * 1.2 / px_per_m * 1000:.0f}"
-    if params[3] < side_px[0] * 0.8:
-        return "too small", f"side {side_mm:.0f} mm, {allowed} mm allowed"
-    if params[3] > side_px[1] * 1.2:
-        return "too large", f"side {side_mm:.0f} mm, {allowed} mm allowed"
+    checked in its order), or ``None``: it is one. ``windows``: the sides searched
+    (px), one range or a given ``--side``'s each."""
+    off = _off_size(float(params[3]), windows)
+    if off is not None:
+        allowed = " / ".join(
+            f"{low * 0.8 / px_per_m * 1000:.0f}–{high * 1.2 / px_per_m * 1000:.0f}"
+            for low, high in windows
+        )
+        return off, f"side {params[3] / px_per_m * 1000:.0f} mm, {allowed} mm allowed"
     if coverage < settings.min_coverage:
         return "not filled", f"{coverage:.0%} of the square covered"
     if rms > settings.max_residual:
@@ -169,6 +175,23 @@ def _failure(
             "its centre beyond the image" if beyond >= 1 else f"{beyond:.0%} of it beyond the image"
         )
     return None
+
+
+def _off_size(side: float, windows: Sequence[tuple[float, float]]) -> str | None:
+    """``too small`` or ``too large`` for a square of ``side`` (px) outside every
+    window of sides searched (each from 0.8 of its smallest to 1.2 of its largest:
+    a fit may end a little off the vote's sides), or ``None``: within one. Between
+    two windows it is too large for the one below when nearer to it (in ratio)."""
+    spans = [(0.8 * low, 1.2 * high) for low, high in windows]
+    if any(low <= side <= high for low, high in spans):
+        return None
+    below = [high for _, high in spans if high < side]
+    above = [low for low, _ in spans if low > side]
+    if not below:
+        return "too small"
+    if not above:
+        return "too large"
+    return "too large" if side / max(below) < min(above) / side else "too small"
 
 
 def _unfit(
@@ -270,11 +293,17 @@ class _SquareSearch:
 
     image_shape: tuple[int, ...]
     lightness: np.ndarray
-    side_px: tuple[float, float]
+    windows: tuple[tuple[float, float], ...]
+    """The sides searched (px), smallest first: one range, or a given side's each."""
     min_area: float
     settings: PerceptionSettings
     px_per_m: float
     hidden: list[Candidate] = field(default_factory=list)  # see tops_behind
+
+    @property
+    def side_px(self) -> tuple[float, float]:
+        """The smallest and the largest side searched (px)."""
+        return self.windows[0][0], self.windows[-1][1]
 
 
 def _fit_from(
@@ -300,10 +329,10 @@ def _why_no_block(
     counted where the image shows it), a region running on along the image's border,
     no seam parting it from the rest; ``None``: it is one."""
     params, coverage, rms, _ = fit
-    shape, settings, side_px = search.image_shape, search.settings, search.side_px
+    shape, settings, windows = search.image_shape, search.settings, search.windows
     free = free_outline_seen(alpha, params, region.offset, shape)
     beyond = beyond_image(params, region.offset, alpha.shape, shape)
-    why = _failure(params, coverage, rms, free, side_px, settings, search.px_per_m, beyond)
+    why = _failure(params, coverage, rms, free, windows, settings, search.px_per_m, beyond)
     if why is None and runs_on_along_border(region.alpha, params, region.offset, shape):
         why = "cut by the border", "its region runs on along the image's border"
     if why is None:
@@ -321,11 +350,10 @@ def _with_rounded_corners(
     region (:func:`~demoplan.perception.acceptance.shares_a_side`) — and only then
     decides (its size and coverage, checked first, pass)."""
     params, coverage, rms, free = fit
-    low, high = search.side_px
     settings = search.settings
     if rms <= settings.max_residual or coverage < settings.min_coverage:
         return fit
-    if not 0.8 * low <= params[3] <= 1.2 * high or shares_a_side(alpha, params):
+    if _off_size(float(params[3]), search.windows) is not None or shares_a_side(alpha, params):
         return fit
     return params, coverage, min(rms, rounded_misfit(alpha, params)), free
 
@@ -385,10 +413,15 @@ def _next_square(
     """The first Hough candidate in ``alpha`` fitting a block (or ``None``); why others did not."""
     # a region of area A holds squares no larger than √A
     largest = min(search.side_px[1], 1.2 * math.sqrt(float(alpha.sum())))
-    sides = (search.side_px[0], max(search.side_px[0], largest))
-    base = max(1, int(search.side_px[0] // HOUGH_SIDE_PX))
+    starts: list[tuple[Hypothesis, int, np.ndarray]] = []
+    for number, (low, high) in enumerate(search.windows):
+        if number and low > largest:
+            break
+        base = max(1, int(low // HOUGH_SIDE_PX))
+        starts += _hough_starts(alpha, (low, max(low, min(high, largest))), base, where)
+    starts.sort(key=lambda f: -f[0].votes * f[1])
     failures: list[tuple[str, str]] = []
-    for start, factor, coarse in _hough_starts(alpha, sides, base, where):
+    for start, factor, coarse in starts:
         check_time(where)
         fit = _with_rounded_corners(alpha, _fit_from(alpha, start, factor, coarse), search)
         why = _why_no_block(search, region, alpha, fit)
@@ -461,7 +494,8 @@ def detect_blocks(
     stages of its own; each stage here takes its conversions of the image from them."""
     measures = ImageMeasures(image) if measures is None else measures
     image = measures.image  # its colour cast divided out (demoplan.perception.white_balance)
-    side_px = (settings.min_side * camera.px_per_m, settings.max_side * camera.px_per_m)
+    windows = _side_windows(settings, camera.px_per_m)
+    side_px = (windows[0][0], windows[-1][1])
     min_area = 0.3 * side_px[0] ** 2
     parts: list[RejectedPart] | None = None if rejected is None else []
     regions, _ = colour_regions(
@@ -475,7 +509,7 @@ def detect_blocks(
         lab8=measures.lab8,
     )
     lightness = measures.lightness
-    search = _SquareSearch(image.shape, lightness, side_px, min_area, settings, camera.px_per_m)
+    search = _SquareSearch(image.shape, lightness, windows, min_area, settings, camera.px_per_m)
     found: list[tuple[ColourRegion, np.ndarray, float, float]] = []
     region_parts: list[list[RejectedPart] | None] = []
     unfitted: list[int] = []  # regions in which no square was fitted
@@ -502,6 +536,22 @@ def detect_blocks(
     if rejected is not None and parts is not None:
         rejected += _in_world(parts, camera, image.shape[0])
     return _named_in_world(found, camera, image.shape[0])
+
+
+def _side_windows(settings: PerceptionSettings, px_per_m: float) -> tuple[tuple[float, float], ...]:
+    """The sides searched (px), smallest first: from ``min_side`` to ``max_side``, or
+    each given side (``sides``) ± :data:`~demoplan.perception.side_groups.SIDE_TOLERANCE`,
+    windows that overlap joined."""
+    if not settings.sides:
+        return ((settings.min_side * px_per_m, settings.max_side * px_per_m),)
+    windows: list[tuple[float, float]] = []
+    for side in sorted(settings.sides):
+        low, high = (1 - SIDE_TOLERANCE) * side * px_per_m, (1 + SIDE_TOLERANCE) * side * px_per_m
+        if windows and low <= windows[-1][1]:
+            windows[-1] = (windows[-1][0], max(high, windows[-1][1]))
+        else:
+            windows.append((low, high))
+    return tuple(windows)
 
 
 _Found = tuple[ColourRegion, np.ndarray, float, float]  # a square on its region's crop
@@ -550,7 +600,7 @@ def _second_look(
     now has the second search's (``region_parts``, per region, replaced)."""
     sides = [float(params[3]) for _, params, _, _ in found]
     sizes = block_sizes(sides)
-    if not sizes:
+    if not sizes or search.settings.sides:  # given sides are the block sizes
         return []
     low = min(size[0] for size in sizes) * (1 - SIDE_TOLERANCE)
     high = max(size[0] for size in sizes) * (1 + SIDE_TOLERANCE)
@@ -559,7 +609,7 @@ def _second_look(
     shared = sum(low <= side <= high for side in sides)
     if shared < SECOND_LOOK_SQUARES or low >= high or high / low * SECOND_LOOK_NARROWER > searched:
         return []
-    narrowed = replace(search, side_px=(low, high))
+    narrowed = replace(search, windows=((low, high),))
     several = SEVERAL_CUBES * min(size[0] for size in sizes) ** 2
     more: list[_Found] = []
     for index in unfitted:

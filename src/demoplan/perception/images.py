@@ -6,7 +6,7 @@ picture, or the pictures before and after the last move for stacking (paper
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -37,7 +37,17 @@ from demoplan.perception.sizes import (
 from demoplan.perception.stacking import BlockTracker, TrackedBlock
 from demoplan.perception.working_resolution import factor_for_scale, factor_for_size, reduced
 
-__all__ = ["SIDE_TOLERANCE", "Perception", "perceive_files", "perceive_top_view", "seen_now"]
+__all__ = [
+    "SIDE_TOLERANCE",
+    "Perception",
+    "Sides",
+    "blocks_in_top_view",
+    "given_sides",
+    "one_side",
+    "perceive_files",
+    "perceive_top_view",
+    "seen_now",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,19 +84,40 @@ def seen_now(
     return seen, left
 
 
-def check_side(side: float | None) -> None:
-    """``--side``, when given: a block's side in metres, within the size limit."""
+Sides = float | Sequence[float] | None
+"""``--side``: the blocks' side in metres, several sides (blocks of several sizes),
+or none given."""
+
+
+def given_sides(side: Sides) -> tuple[float, ...]:
+    """``side`` as a tuple of sides: empty when none is given."""
     if side is None:
-        return
+        return ()
+    return (float(side),) if isinstance(side, int | float) else tuple(map(float, side))
+
+
+def check_side(side: Sides) -> None:
+    """``--side``, when given: each a block's side in metres, within the size limit."""
     # not from the pose documents: their models (pydantic) are a tenth of a second
     # of demoplan perceive's start-up, which needs them for nothing else
     from demoplan.documents.extents import MAX_SIZE_M
 
-    if not (math.isfinite(side) and 0 < side <= MAX_SIZE_M):
-        raise UsageError(
-            f"--side {side:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
-            "(an object's largest extent, docs/limits.md)"
-        )
+    for one in given_sides(side):
+        if not (math.isfinite(one) and 0 < one <= MAX_SIZE_M):
+            raise UsageError(
+                f"--side {one:g}: a block's side in metres, at most {MAX_SIZE_M:g} m expected "
+                "(an object's largest extent, docs/limits.md)"
+            )
+
+
+def one_side(side: Sides, where: str) -> float | None:
+    """The one side given, or ``None``; a usage error naming the values when
+    several are given where one is needed (``where``: for what)."""
+    sides = given_sides(side)
+    if len(sides) > 1:
+        values = " ".join(f"--side {one:g}" for one in sides)
+        raise UsageError(f"{values}: one block size expected {where}")
+    return sides[0] if sides else None
 
 
 def check_top_view(px_per_m: float, origin: tuple[float, float]) -> None:
@@ -106,7 +137,7 @@ def perceive_files(
     origin: tuple[float, float],
     *,
     before: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     colours: Path | None = None,
 ) -> dict[str, TrackedBlock]:
@@ -122,10 +153,11 @@ def perceive_top_view(
     origin: tuple[float, float],
     *,
     before: Path | None = None,
-    side: float | None = None,
+    side: Sides = None,
     timeout: float = PERCEPTION_TIMEOUT,
     colours: Path | None = None,
     overlay: bool = False,
+    rejections: bool = True,
 ) -> Perception:
     """The blocks in ``image`` (a top-down orthographic picture, ``px_per_m``
     pixels per metre, its bottom-left corner at world ``origin``), by name;
@@ -133,9 +165,16 @@ def perceive_top_view(
     now covers stands under it; ``colours`` a palette file of colours to add
     (:func:`~demoplan.perception.colours.load_palette`); the regions rejected;
     with ``overlay``, both drawn on the picture. An input error when there is no
-    block: a scene needs one.
+    block: a scene needs one. With ``rejections`` false and no ``overlay`` (and
+    ``px_per_m``) the regions rejected are not recorded — ``demoplan perceive``
+    without ``--plot`` shows none: their outlines, hundreds of specks on a
+    photograph, cost 5–60 ms of its CPU — and ``rejected`` is empty; the blocks
+    are the same.
 
-    Without ``px_per_m`` the blocks' ``side`` gives the scale (a camera looking
+    ``side``: the blocks' side, or several (blocks of several sizes): squares are
+    looked for within 15 % of one of them
+    (:attr:`~demoplan.perception.blocks.PerceptionSettings.sides`).
+    Without ``px_per_m`` the blocks' one ``side`` gives the scale (a camera looking
     straight down: the most common size of the squares found, in pixels, is
     ``side``; :func:`~demoplan.perception.sizes.block_sizes`). Without
     ``side`` (and ``before``) the blocks are held to the sizes most squares found
@@ -144,20 +183,25 @@ def perceive_top_view(
     A large photograph is looked at reduced by a whole factor
     (:mod:`~demoplan.perception.working_resolution`; the overlay is drawn on the
     reduction, and the scale's line says so)."""
+    sides = given_sides(side)
     if px_per_m is None:
-        if side is None:
+        if not sides:
             raise UsageError("the scale is needed: --px-per-m, or the blocks' --side")
         check_top_view(1.0, origin)
     else:
         check_top_view(px_per_m, origin)
-    check_side(side)
+    check_side(sides)
     settings = PerceptionSettings(colours=load_palette(colours) if colours is not None else {})
     if px_per_m is None:
-        assert side is not None
-        return _perceive_at_cube_scale(image, side, origin, settings, before, timeout, overlay)
-    if side is not None:
+        cube = one_side(sides, "for the scale of a view straight down (or --px-per-m)")
+        assert cube is not None
+        return _perceive_at_cube_scale(image, cube, origin, settings, before, timeout, overlay)
+    if sides:
         settings = replace(
-            settings, min_side=(1 - SIDE_TOLERANCE) * side, max_side=(1 + SIDE_TOLERANCE) * side
+            settings,
+            min_side=(1 - SIDE_TOLERANCE) * min(sides),
+            max_side=(1 + SIDE_TOLERANCE) * max(sides),
+            sides=sides,
         )
     tracker = BlockTracker()
     with (
@@ -180,18 +224,44 @@ def perceive_top_view(
         picture = working.picture
         measures = ImageMeasures(picture)  # converted once for every stage
         rejected: list[Rejection] = []
-        detected = detect_blocks(picture, camera, settings, rejected, measures)
-        if side is None and before is None:
-            # the blocks' size from the photograph (with a picture before, the strips
-            # left in view of covered blocks are the tracker's to place)
-            detected, odd = held_to_sizes(
-                detected, block_sizes([d.side for d in detected]), seen=(measures, camera)
-            )
-            rejected += odd
+        recorded = rejections or overlay
+        # the blocks' size from the photograph (with a picture before, the strips
+        # left in view of covered blocks are the tracker's to place)
+        held = not sides and before is None
+        detected = blocks_in_top_view(
+            picture, camera, settings, held, rejected if recorded else None, measures
+        )
         blocks = tracker.update(detected)
     scale = f"--px-per-m {px_per_m:g}, origin {origin[0]:g} {origin[1]:g}"
     scale += working.note(photograph.shape)
-    return _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
+    seen = _perception(image, camera, picture, blocks, detected, rejected, overlay, scale)
+    return seen if recorded else replace(seen, rejected=())
+
+
+def blocks_in_top_view(
+    picture: np.ndarray,
+    camera: Camera,
+    settings: PerceptionSettings,
+    held: bool,
+    rejected: list[Rejection] | None = None,
+    measures: ImageMeasures | None = None,
+) -> list[DetectedBlock]:
+    """The blocks :func:`~demoplan.perception.blocks.detect_blocks` finds in
+    ``picture``, ``held`` to the block sizes most of them share
+    (:func:`~demoplan.perception.sizes.held_to_sizes`, when no size was given):
+    what ``demoplan perceive`` of a top view reports, for a picture in memory (the
+    generated families are scored on it). The squares of no block size are added
+    to ``rejected`` when it is given."""
+    measures = ImageMeasures(picture) if measures is None else measures
+    detected = detect_blocks(picture, camera, settings, rejected, measures)
+    if not held:
+        return detected
+    kept, odd = held_to_sizes(
+        detected, block_sizes([d.side for d in detected]), seen=(measures, camera)
+    )
+    if rejected is not None:
+        rejected += odd
+    return kept
 
 
 def _perception(

@@ -165,16 +165,20 @@ def score_detections(photo: LabelledPhoto, centres: Sequence[tuple[float, float]
 
 
 def perceive_labelled(
-    photo: LabelledPhoto, *, timeout: float = math.inf, side: float | None = None
+    photo: LabelledPhoto,
+    *,
+    timeout: float = math.inf,
+    side: float | Sequence[float] | None = None,
 ) -> PhotoRun:
     """``photo`` perceived in process as ``demoplan perceive IMAGE --px-per-m S
-    --origin 0 0`` perceives it (with ``--timeout`` and ``--side``), scored."""
+    --origin 0 0`` perceives it (with ``--timeout`` and ``--side``, one side or
+    several; no ``--plot``: the regions rejected not recorded), scored."""
     from demoplan.perception.images import perceive_top_view
 
     start = time.perf_counter()
     try:
         found = perceive_top_view(
-            photo.image, photo.px_per_m, (0.0, 0.0), side=side, timeout=timeout
+            photo.image, photo.px_per_m, (0.0, 0.0), side=side, timeout=timeout, rejections=False
         )
     except DemoplanError as error:
         seconds = time.perf_counter() - start
