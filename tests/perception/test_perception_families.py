@@ -85,8 +85,11 @@ NOT_YET: dict[str, tuple[str, tuple[tuple[int, bool], ...]]] = {
         "table, is not taken for print and opens to the edge) (52); a white top on white "
         "paper with a letter or dots lit as the paper, no bright part holding it whole (29; "
         "444 with --side, a white E; 2427, a white L 2.5 L* over the paper, a draw of the "
-        "hypothesis test below)",
+        "hypothesis test below); without --side, scored as the command reports it, a white "
+        "top with a frame fitted as a 24 mm square (its print's) where the cubes are 40 mm, "
+        "which the size check then rejects (0)",
         (
+            (0, False),
             (14, True),
             (29, False),
             (29, True),
@@ -196,7 +199,6 @@ MET_SINCE: dict[str, tuple[tuple[int, bool], ...]] = {
         (6, False),
         (1, True),
         (9, True),
-        (0, False),  # dots on a white top: spots under a tenth of its part are filled
         # a letter on an orange or yellow top on the grey board: its blurred edge, left
         # as thin holes as light as the board once the glint rule filled its body, is
         # judged with the body (the holes as they were before that rule: printed)

@@ -48,9 +48,9 @@ import numpy as np
 from demoplan.budget import time_budget
 from demoplan.errors import DemoplanError
 from demoplan.fileio import write_atomic
-from demoplan.perception.blocks import PerceptionSettings, detect_blocks
+from demoplan.perception.blocks import PerceptionSettings
 from demoplan.perception.camera import Camera, save_image
-from demoplan.perception.images import SIDE_TOLERANCE
+from demoplan.perception.images import SIDE_TOLERANCE, blocks_in_top_view
 from demoplan.perception.labelled import LabelledBlock, LabelledPhoto, PhotoRun, score_detections
 from demoplan.perception.photo_families_scene import (
     GLYPHS,
@@ -609,7 +609,9 @@ def perceive_case(
 ) -> PhotoRun:
     """``case`` perceived in process as ``demoplan perceive IMAGE --px-per-m S
     --origin 0 0`` (with ``--side`` the cubes' side when ``side_given``, and
-    ``--timeout``) perceives its saved image, scored against its label."""
+    ``--timeout``) perceives its saved image — the same detection and, without
+    ``--side``, the same size check (:func:`~.images.blocks_in_top_view`) —
+    scored against its label."""
     camera = Camera(case.label.px_per_m, (0.0, 0.0))
     settings = PerceptionSettings()
     if side_given:
@@ -620,7 +622,7 @@ def perceive_case(
     start = time.perf_counter()
     try:
         with time_budget(timeout, "perception stopped at its time budget{where}"):
-            found = detect_blocks(case.image, camera, settings)
+            found = blocks_in_top_view(case.image, camera, settings, held=not side_given)
     except DemoplanError as error:
         seconds = time.perf_counter() - start
         return PhotoRun(
