@@ -309,7 +309,11 @@ def describe_validation_error(error: ValidationError, source: str, prefix: str =
     for part in first["loc"]:
         if isinstance(part, int):
             path += f"[{part}]"
-        elif part not in {"function-after", "function-before", "function-wrap"}:
+        elif part in {"function-after", "function-before", "function-wrap", "[key]"}:
+            continue
+        elif not part or any(c.isspace() or not c.isprintable() for c in part):
+            path += f"[{part!r}]"  # a key of spaces, a line break or an escape: quoted
+        else:
             path += f".{part}" if path else str(part)
     message = str(first["msg"])
     if first["type"] == "missing":

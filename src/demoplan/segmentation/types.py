@@ -212,11 +212,16 @@ def check_object_count(count: int, what: str, source: str | None, field: str | N
 def check_stream_limits(stream: PoseStream) -> None:
     """Every position of ``stream`` finite and within 1 km of the origin on
     each axis (docs/limits.md, as a demonstration file's); one InputError
-    naming the object and the time. At most :data:`MAX_OBJECTS` objects."""
+    naming the object and the time. At most :data:`MAX_OBJECTS` objects, each
+    named as a demonstration file's (:mod:`demoplan.documents.names`: what is
+    segmented becomes one, and a name a plan cannot show is refused here, where
+    it is read, rather than by ``learn`` of the file ``segment`` wrote)."""
+    from demoplan.documents.names import check_object_name
     from demoplan.documents.poses import MAX_DISTANCE_M
 
     check_object_count(len(stream.tracks), "objects", stream.source, None)
     for track in stream:
+        check_object_name(track.name, stream.source, f"object {track.name!r}")
         far = np.flatnonzero(~(np.abs(track.positions) <= MAX_DISTANCE_M).all(axis=1))
         if far.size:
             x, y, z = (float(v) for v in track.positions[far[0]])
