@@ -32,6 +32,7 @@ from demoplan.wording import printable
 from tests.hostile import file_audit
 from tests.hostile.harness import Answer, check_refused, fingerprint, run
 from tests.segmentation.test_import import MODEL, box_states, write_recording
+from tests.support.helpers import EXAMPLES
 
 GENERATED = settings(
     max_examples=12,
@@ -550,3 +551,55 @@ def test_a_link_planted_in_the_output_folder_is_not_written_through(
     check_refused(answer, [str(link)], codes={1})
     assert "outside the folder" in answer.stderr, answer
     assert fingerprint(tmp_path) == before and victim.read_text() == "victim"
+
+
+# --------------------------------------------------------------------------- another kind
+
+
+def _other_kind(kind: str, root: Path) -> Path:
+    """A file (or bag folder) of ``kind`` that demoplan reads with another command."""
+    stream = PoseStream((carried_track("cup"),))
+    if kind in {"bag-folder", "metadata", "db3", "mcap"}:
+        write_bag(stream, root / "bag", kind="tf", storage="mcap" if kind == "mcap" else "sqlite3")
+        return {
+            "bag-folder": root / "bag",
+            "metadata": root / "bag" / "metadata.yaml",
+            "db3": root / "bag" / "bag.db3",
+            "mcap": root / "bag" / "bag.mcap",
+        }[kind]
+    if kind == "csv":
+        write_csv(stream, root / "stream.csv")
+        return root / "stream.csv"
+    if kind == "json":
+        (root / "demo.json").write_text((EXAMPLES / "blocks" / "demonstrations.json").read_text())
+        return root / "demo.json"
+    (root / "table.png").write_bytes((EXAMPLES / "perception" / "blocks-top.png").read_bytes())
+    return root / "table.png"
+
+
+OTHER_KINDS = {
+    # kind: what the one line must point to
+    "bag-folder": "demoplan segment",
+    "metadata": "demoplan segment",
+    "db3": "demoplan segment",
+    "mcap": "demoplan segment",
+    "csv": "demoplan segment",
+    "json": "demoplan learn",
+    "png": "demoplan perceive",
+}
+
+
+@pytest.mark.parametrize("kind", OTHER_KINDS)
+def test_import_of_a_file_another_command_reads_names_that_command(
+    kind: str, tmp_path: Path
+) -> None:
+    """``import`` given a bag (its folder, metadata.yaml or storage), a CSV pose
+    stream, a demonstration or a photograph: one line saying what it is and
+    which command reads it; nothing written. Before, h5py's "Unable to
+    synchronously open file (file signature not found)" or "is a folder"."""
+    path = _other_kind(kind, tmp_path)
+    answer = run(["import", path, "-o", tmp_path / "out"], tmp_path)
+    check_refused(answer, [str(path)], codes={1})
+    assert OTHER_KINDS[kind] in answer.stderr, answer
+    assert "signature" not in answer.stderr, answer
+    assert not (tmp_path / "out").exists()
