@@ -621,6 +621,35 @@ def test_bad_input_is_one_line_naming_the_file_and_writes_nothing(
     assert "evaluation.json" in done.stderr
 
 
+class _NoSession(SerialEngine):
+    """An engine that must not be started: a cluster started for a scene that is
+    then refused cost 5–10 s of Ray's start-up for nothing."""
+
+    def session(self) -> Any:
+        raise AssertionError("the engine was started before the scenes were read")
+
+
+@pytest.mark.parametrize("content", ["", "{oops", '{"format": "demoplan/scene-1", "objects": {}}'])
+def test_a_bad_scene_is_refused_before_any_engine_starts(
+    model_files: dict[str, Path], tmp_path: Path, content: str
+) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(content)
+    chosen = settings_from_options(
+        model_files["exp2"],
+        [bad],
+        random_scenes=1,
+        seeds=1,
+        faults=None,
+        sim="kinematic",
+        clutter=0,
+    )
+    with pytest.raises(InputError) as refused:
+        evaluate(chosen, tmp_path / "out", engine=_NoSession())
+    assert "bad.json" in str(refused.value)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))
 def test_some_layouts_stack_objects_and_some_do_not(experiment: str) -> None:
     model = _model(experiment)
