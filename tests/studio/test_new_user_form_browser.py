@@ -69,3 +69,26 @@ def test_a_plate_of_a_tenth_of_a_kilogram_is_added(page: Studio) -> None:
     fill(page, "plate", "cylinder", (16, 16, 1.5), "0.1")
     assert page.alert() == ""
     assert "plate: cylinder 16 × 16 × 1.5 cm, 0.1 kg" in page.tab.locator("#things").inner_text()
+
+
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [
+        ("loc3", "loc3 is a name demoplan gives locations and grasps"),
+        ("grasp12", "grasp12 is a name demoplan gives locations and grasps"),
+        ("freespace0", "freespace0 is a name demoplan gives locations and grasps"),
+        ("cup\u202e", "without spaces or '#' expected"),
+        ("cup\u00a0a", "without spaces or '#' expected"),
+    ],
+)
+def test_a_name_a_plan_cannot_show_is_refused_when_added(
+    page: Studio, name: str, said: str
+) -> None:
+    """``loc3`` was added to the table (the form checked spaces and '#' only),
+    and refused only by **Save objects**; a bidirectional override or a
+    no-break space passed the form too. The form now holds the rule every
+    file is read by (docs/formats.md, "Object names")."""
+    fill(page, name, "box", (4, 4, 4), "0.05")
+    assert said in page.alert()
+    assert page.tab.locator("#table [data-object]").count() == 0
+
