@@ -92,3 +92,14 @@ def test_a_name_a_plan_cannot_show_is_refused_when_added(
     assert said in page.alert()
     assert page.tab.locator("#table [data-object]").count() == 0
 
+
+def test_removing_a_thing_clears_what_a_refused_add_said(page: Studio) -> None:
+    """A refused **Add or change** left its alert standing over the next
+    actions: **Remove** said ``cup removed.`` under ``Name: … expected``."""
+    fill(page, "cup", "cylinder", (7, 7, 9), "0.15")
+    fill(page, "bad name", "box", (4, 4, 4), "0.05")
+    assert "Name:" in page.alert()
+    page.tab.get_by_role("button", name="Remove cup", exact=True).click()
+    page.settle()
+    assert page.alert() == ""
+    assert page.tab.locator("#status").inner_text() == "cup removed."

@@ -106,6 +106,7 @@ function startCanChange() {
 
 function removeThing(name, kind) {
   if (!startCanChange()) return;
+  alarm(""); // what a refused Add said is no longer the news
   if (kind === "landmark") delete state.layout.landmarks[name];
   else {
     delete state.layout.objects[name];
