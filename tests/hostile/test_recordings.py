@@ -603,3 +603,21 @@ def test_import_of_a_file_another_command_reads_names_that_command(
     assert OTHER_KINDS[kind] in answer.stderr, answer
     assert "signature" not in answer.stderr, answer
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [(b"", "an empty file"), (b"hello\n", "no HDF5 signature"), (bytes(range(256)), "signature")],
+)
+def test_import_of_a_file_that_is_no_hdf5_says_so_in_its_own_words(
+    content: bytes, said: str, tmp_path: Path
+) -> None:
+    """An empty file or one without HDF5's signature: one line in demoplan's
+    words, not h5py's "Unable to synchronously open file (file signature not
+    found)"."""
+    path = tmp_path / "demo.hdf5"
+    path.write_bytes(content)
+    answer = run(["import", path, "-o", tmp_path / "out"], tmp_path)
+    check_refused(answer, [str(path)], codes={1})
+    assert said in answer.stderr and "synchronously" not in answer.stderr, answer
+    assert not (tmp_path / "out").exists()

@@ -111,8 +111,9 @@ def _refuse_another_kind(path: Path, source: str) -> None:
         elif "," in text.split("\n", 1)[0] and "object" in text.split("\n", 1)[0]:
             what = "a CSV pose stream"
             how = f"demoplan segment {quoted} -o DEMO.json makes a demonstration of it"
-        else:
-            return
+        else:  # h5py would say "Unable to synchronously open file (file signature not found)"
+            what = "an empty file" if not head else "no HDF5 signature in its first bytes"
+            raise InputError(f"{what}; {EXPECTED} expected", source=source)
     raise InputError(f"{what}, not an HDF5 file; {EXPECTED} expected ({how})", source=source)
 
 
