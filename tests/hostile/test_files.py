@@ -313,6 +313,32 @@ def test_a_recording_given_where_text_is_read_says_how_it_is_read(
     assert sorted(f.name for f in tmp_path.iterdir()) == [name]
 
 
+DOCUMENTS_AS_STREAMS = [
+    # the file's name, its text, the command, what the one line must say
+    ("demo.json", "JSON", "segment", "demoplan learn demo.json -o MODEL.json"),
+    ("demo.yaml", "YAML", "segment", "demoplan learn demo.yaml -o MODEL.json"),
+    ("demo.csv", "JSON", "segment", "learn reads a demonstration from a .json"),
+    ("demo.csv", "JSON", "learn", "learn reads a demonstration from a .json"),
+    ("demo.txt", "JSON", "segment", "demoplan learn demo.txt -o MODEL.json"),
+]
+
+
+@pytest.mark.parametrize(("name", "text", "command", "pointer"), DOCUMENTS_AS_STREAMS)
+def test_a_demonstration_given_where_a_stream_is_read_says_what_reads_it(
+    tmp_path: Path, name: str, text: str, command: str, pointer: str
+) -> None:
+    """``segment demo.json`` answered ``line 1 (header): missing columns t,
+    object, x, y, z``: the file is a demonstration, which ``learn`` reads as
+    it is (and a demonstration named ``.csv`` is read as a stream)."""
+    demo = (EXAMPLES / "blocks" / "demonstrations.json").read_text()
+    body = demo if text == "JSON" else 'format: "demoplan/demonstration-1"\nsteps: []\n'
+    (tmp_path / name).write_text(body)
+    answer = run([command, name, "-o", "out.json"], tmp_path)
+    check_refused(answer, [name], codes={1})
+    assert "a JSON or YAML document, not a CSV pose stream" in answer.stderr, answer
+    assert pointer in answer.stderr and "missing column" not in answer.stderr, answer
+
+
 @pytest.mark.parametrize("kind", ["hdf5", "hdf5-named-csv"])
 def test_a_usage_error_of_import_names_no_other_command(tmp_path: Path, kind: str) -> None:
     """``import demo.hdf5`` without ``-o`` is the right command missing an
