@@ -497,6 +497,14 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     )
     assert (too_many.exit_code, too_many.stderr.count("\n")) == (2, 1)
     assert "--random-scenes: 1,000,002 runs (scenes × seeds); at most 1,000,000" in too_many.stderr
+    scene = tmp_path / "scene.json"
+    scene.write_text((ROOT / "examples" / "scenes" / "pyramid-fig4.json").read_text())
+    for seeds, named in (("99999999999999999999", "--seeds"), ("600000", "--seeds")):
+        args = ("evaluate", model, str(scene), "--random-scenes", "1", "--seeds", seeds)
+        many_seeds = invoke(*args, "--out", str(tmp_path / "c"))
+        # the seeds made them many: named, not --random-scenes (as before)
+        assert (many_seeds.exit_code, many_seeds.stderr.count("\n")) == (2, 1)
+        assert f"{named}: " in many_seeds.stderr and "random" not in many_seeds.stderr
     clutter = invoke(
         "evaluate", model, "--random-scenes", "1", "--clutter", "21", "--out", str(tmp_path / "d")
     )

@@ -170,10 +170,13 @@ def check_settings(settings: EvaluationSettings, source: str | None = None) -> N
             why = f"{settings.seeds:,} runs; at most {MAX_RUNS:,} expected"
             _refuse(why, source, "seeds" if source else "--seeds")
         return
-    runs = (len(settings.scenes) + settings.random_scenes) * settings.seeds
+    scenes = len(settings.scenes) + settings.random_scenes
+    runs = scenes * settings.seeds
     if runs > MAX_RUNS:
         why = f"{runs:,} runs (scenes × seeds); at most {MAX_RUNS:,} expected"
-        _refuse(why, source, "random_scenes" if source else "--random-scenes")
+        # the factor that made them many: the seeds, or the random layouts
+        name = "seeds" if settings.seeds > scenes or not settings.random_scenes else "random_scenes"
+        _refuse(why, source, name if source else f"--{name.replace('_', '-')}")
 
 
 def _refuse(message: str, source: str | None, field: str) -> None:
