@@ -6,12 +6,14 @@ mean density and the range, as the saved file's check does."""
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from tests.support.helpers import EXAMPLES
 from tests.support.studio_browser import Studio, chromium_browser, studio_page
 
 pytestmark = pytest.mark.slow
@@ -103,3 +105,35 @@ def test_removing_a_thing_clears_what_a_refused_add_said(page: Studio) -> None:
     page.settle()
     assert page.alert() == ""
     assert page.tab.locator("#status").inner_text() == "cup removed."
+
+
+@pytest.fixture
+def taught(tmp_path: Path, shared_browser: Any) -> Iterator[Studio]:
+    """A studio on a work folder holding the blocks' demonstrations and a
+    model file that is broken (a newcomer's hand edit)."""
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    shutil.copyfile(EXAMPLES / "blocks" / "demonstrations.json", workdir / "blocks.json")
+    (workdir / "model.json").write_text('{"format": "demoplan/model-1", "states": "oops"}')
+    with studio_page(workdir, tmp_path, shared_browser) as studio:
+        yield studio
+
+
+def test_a_refused_learn_or_plan_does_not_leave_its_progress_line(taught: Studio) -> None:
+    """Learn into a name the work folder refuses, Plan with a broken model:
+    the alert says why, and the status line no longer reads ``Learning…`` /
+    ``Planning…`` under it, as if the work went on."""
+    tab = taught.tab
+    taught.view("2 · Learn")
+    tab.get_by_label("Model file").fill("bad name.json")
+    taught.button("Learn").click()
+    taught.settle()
+    assert "bad name.json" in taught.alert()
+    assert tab.locator("#status").inner_text() == "Not learned."
+    taught.view("3 · Plan")
+    tab.get_by_label("Model", exact=True).select_option("model.json")
+    taught.button("Plan").click()
+    taught.settle()
+    assert "model.json" in taught.alert()
+    assert tab.locator("#status").inner_text() == "Not planned."
+    taught.errors.clear()  # the refused requests' 422s in the console
