@@ -302,6 +302,9 @@ def test_a_new_run_is_never_shown_as_the_last_one_while_it_starts(
         assert page.tab.locator('[data-testid="timeline"] > li').count() == 0
         wait_until_over(page)
         assert badge.get_attribute("data-state") == "failed"
+        # the failures one from the next: "…; step 2: grasp: …", not run together
+        summary = page.tab.locator("#run-summary").inner_text()
+        assert re.search(r"failures detected: step 1: grasp: [^;]+; step 2: grasp: ", summary)
         page.tab.get_by_label("Faults").fill("bogus=2")
         page.button("Run").click()
         page.settle()

@@ -111,8 +111,9 @@ function renderTimeline(status) {
 function summaryOf(status) {
   const r = status.result;
   if (r) {
-    const failures = `${plural(r.replans, "replan")}, ${plural(r.failures.length, "failure")} detected.` +
-      (r.failures.length ? ` ${r.failures.join(" ")}` : "");
+    // one failure from the next by "; " (a space alone ran "… after the grasp step 2: …" together)
+    const failures = `${plural(r.replans, "replan")}, ${plural(r.failures.length, "failure")} detected` +
+      (r.failures.length ? `: ${r.failures.join("; ")}.` : ".");
     return `${r.success ? "Success" : "Failed"}: ${r.reason}. ${failures}`;
   }
   if (status.state === "running") return `Running: ${plural(status.events.length, "event")} so far.`;
