@@ -137,3 +137,45 @@ def test_a_refused_learn_or_plan_does_not_leave_its_progress_line(taught: Studio
     assert "model.json" in taught.alert()
     assert tab.locator("#status").inner_text() == "Not planned."
     taught.errors.clear()  # the refused requests' 422s in the console
+
+
+def _world_box(page: Studio) -> tuple[float, float, float, float]:
+    """The world rectangle the table element draws: x0, y0, x1, y1 (metres)."""
+    table = page.tab.locator("#table")
+    box = table.bounding_box()
+    assert box is not None
+    per_pixel = float(table.get_attribute("data-metres-per-pixel") or "nan")
+    x0, y0 = (float(v) for v in (table.get_attribute("data-origin") or "").split())
+    return x0, y0, x0 + box["width"] * per_pixel, y0 + box["height"] * per_pixel
+
+
+def test_a_landmark_dragged_past_the_table_edge_stays_in_view(page: Studio) -> None:
+    """A box dragged to the table's far edge (its centre 1 cm inside the
+    drawn area) was put there and the drawing kept its size: the box stood
+    half outside it, and in the Run view, drawn the same, out of sight.
+    Objects grew the drawing; landmarks now do too."""
+    tab = page.tab
+    fill(page, "cup", "cylinder", (7, 7, 9), "0.15")
+    tab.get_by_label("Kind").select_option("landmark")
+    tab.get_by_label("Name", exact=True).fill("box")
+    tab.get_by_label("Shape").select_option("box")
+    for field, value in zip(("Size x (cm)", "y (cm)", "z (cm)"), (20, 12, 3), strict=True):
+        tab.get_by_label(field, exact=True).fill(str(value))
+    tab.get_by_label("Mass (kg)").fill("")
+    page.button("Add or change").click()
+    page.settle()
+    assert page.alert() == ""
+    x0, _, x1, y1 = _world_box(page)
+    mark = tab.locator('#table [data-landmark="box"]')
+    start = tuple(float(mark.get_attribute(f"data-{k}") or "nan") for k in ("x", "y"))
+    target = ((x0 + x1) / 2, y1 - 0.01)
+    mouse = tab.mouse
+    mouse.move(*page.pixel(start[0], start[1]))
+    mouse.down()
+    mouse.move(*page.pixel(*target), steps=4)
+    mouse.up()
+    page.settle()
+    assert page.alert() == ""
+    placed_y = float(mark.get_attribute("data-y") or "nan")
+    assert placed_y == pytest.approx(target[1], abs=2e-3)
+    assert _world_box(page)[3] >= placed_y + 0.05 - 1e-6  # the margin objects get
