@@ -621,3 +621,18 @@ def test_import_of_a_file_that_is_no_hdf5_says_so_in_its_own_words(
     check_refused(answer, [str(path)], codes={1})
     assert said in answer.stderr and "synchronously" not in answer.stderr, answer
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_bag_with_a_name_that_is_not_utf8_is_one_plain_line(storage: str, tmp_path: Path) -> None:
+    """A damaged bag whose message type reads ``tf2\\xffmsgs/…``: one line in
+    demoplan's words, not Python's "'utf-8' codec can't decode byte 0xff in
+    position 3: invalid start byte"; nothing written."""
+    write_bag(PoseStream((carried_track("cup"),)), tmp_path / "bag", kind="tf", storage=storage)
+    for part in (tmp_path / "bag").iterdir():
+        if part.suffix in {".mcap", ".db3"}:
+            part.write_bytes(part.read_bytes().replace(b"tf2_msgs", b"tf2\xffmsgs"))
+    answer = run(["segment", tmp_path / "bag", "-o", tmp_path / "demo.json"], tmp_path)
+    check_refused(answer, [str(tmp_path / "bag")], codes={1})
+    assert "codec" not in answer.stderr, answer
+    assert not (tmp_path / "demo.json").exists()
