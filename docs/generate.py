@@ -36,6 +36,7 @@ from demoplan.cli import app
 from demoplan.cli.launcher import INTERRUPTED_EXIT, TERMINATED_EXIT
 from demoplan.documents.colours import COLOUR_FORMS
 from demoplan.documents.masses import MAX_DENSITY, MIN_DENSITY
+from demoplan.documents.names import MAX_NAME_LENGTH
 from demoplan.documents.poses import (
     MAX_ANGLE,
     MAX_COORDINATE,
@@ -667,6 +668,8 @@ def type_text(node: Mapping[str, Any], plural: bool = False) -> str:
     words = {"number": "number", "integer": "integer", "string": "string", "boolean": "boolean"}
     if kind not in words:
         raise SystemExit(f"docs/generate.py: cannot describe the schema node {dict(node)}")
+    if kind == "string" and node.get("format") == "object-name":
+        return "[object name" + ("s" if plural else "") + "](#conventions)"
     text = words[kind] + ("s" if plural else "")
     if kind == "string" and node.get("minLength") == 1:
         text = "non-empty " + text
@@ -1151,6 +1154,16 @@ def conventions() -> str:
             f"Fields a schema does not name are {unknown}. Every problem is one line on "
             "stderr naming the "
             "file, the field and what was expected (exit code 1).",
+            "**Object names.** An object's or a landmark's name is a word of a plan "
+            "(`GRASP cup loc3 grasp5`): 1 to "
+            f"{MAX_NAME_LENGTH} printable characters, no space, tab or line break, no "
+            "control character (an escape sequence, a bidirectional override), and not "
+            "`loc`, `freespace` or `grasp` followed by digits (the names demoplan gives "
+            "locations and grasps). One rule (`demoplan.documents.names`) for "
+            "demonstrations, scenes, object geometry files, task models and the objects "
+            "of a pose stream or a recording: a name that breaks it is refused where it "
+            "is read, in one line naming the file and the field, the name escaped "
+            "(`objects['cup\\n']: 'cup\\n' holds a space, a tab or a line break; …`).",
             "**Writing.** Files are written whole or not at all: to a temporary file beside "
             "the target, then renamed over it. JSON is written indented, in UTF-8, in "
             "metres and degrees, with orientations as `quat`.",

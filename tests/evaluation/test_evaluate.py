@@ -497,6 +497,14 @@ def test_evaluate_s_usage_errors_are_one_line(model_files: dict[str, Path], tmp_
     )
     assert (too_many.exit_code, too_many.stderr.count("\n")) == (2, 1)
     assert "--random-scenes: 1,000,002 runs (scenes × seeds); at most 1,000,000" in too_many.stderr
+    scene = tmp_path / "scene.json"
+    scene.write_text((ROOT / "examples" / "scenes" / "pyramid-fig4.json").read_text())
+    for seeds, named in (("99999999999999999999", "--seeds"), ("600000", "--seeds")):
+        args = ("evaluate", model, str(scene), "--random-scenes", "1", "--seeds", seeds)
+        many_seeds = invoke(*args, "--out", str(tmp_path / "c"))
+        # the seeds made them many: named, not --random-scenes (as before)
+        assert (many_seeds.exit_code, many_seeds.stderr.count("\n")) == (2, 1)
+        assert f"{named}: " in many_seeds.stderr and "random" not in many_seeds.stderr
     clutter = invoke(
         "evaluate", model, "--random-scenes", "1", "--clutter", "21", "--out", str(tmp_path / "d")
     )
@@ -619,6 +627,35 @@ def test_bad_input_is_one_line_naming_the_file_and_writes_nothing(
     done = invoke("evaluate", "--resume", str(broken), "--workers", "0")
     assert (done.exit_code, done.stderr.count("\n")) == (1, 1)
     assert "evaluation.json" in done.stderr
+
+
+class _NoSession(SerialEngine):
+    """An engine that must not be started: a cluster started for a scene that is
+    then refused cost 5–10 s of Ray's start-up for nothing."""
+
+    def session(self) -> Any:
+        raise AssertionError("the engine was started before the scenes were read")
+
+
+@pytest.mark.parametrize("content", ["", "{oops", '{"format": "demoplan/scene-1", "objects": {}}'])
+def test_a_bad_scene_is_refused_before_any_engine_starts(
+    model_files: dict[str, Path], tmp_path: Path, content: str
+) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(content)
+    chosen = settings_from_options(
+        model_files["exp2"],
+        [bad],
+        random_scenes=1,
+        seeds=1,
+        faults=None,
+        sim="kinematic",
+        clutter=0,
+    )
+    with pytest.raises(InputError) as refused:
+        evaluate(chosen, tmp_path / "out", engine=_NoSession())
+    assert "bad.json" in str(refused.value)
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("experiment", sorted(EXPERIMENTS))

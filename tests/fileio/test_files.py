@@ -263,7 +263,7 @@ BAD_DEMONSTRATIONS: list[tuple[str, Any, str]] = [
         r"malformed JSON at line 1",
     ),
     ("empty file", "", r"malformed JSON"),
-    ("top-level list", "[]", r"expected an object"),
+    ("top-level list", "[]", r"an array at top level; an object"),
     ("missing position", demo([{"object": "plate"}]), r"steps\[0\]\.position: missing"),
     ("missing object", demo([{"position": [0, 0]}]), r"steps\[0\]\.object: missing"),
     ("missing steps", {"format": "demoplan/demonstration-1"}, r"steps: missing"),
@@ -732,7 +732,7 @@ def test_minimal_spec_model_loads() -> None:
 
 
 def test_read_document_refuses_non_objects(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match="expected an object"):
+    with pytest.raises(InputError, match="at top level expected"):
         read_document(write(tmp_path / "x.yaml", "- 1\n- 2\n"))
     assert read_document(write(tmp_path / "x.json", '{"a": 1.5}')) == {"a": 1.5}
 
@@ -811,3 +811,29 @@ def test_ctrl_c_as_a_staged_file_is_made_leaves_nothing(
     with pytest.raises(KeyboardInterrupt):
         write_atomic(tmp_path / "scene.json", "{}")
     assert sorted(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "said"),
+    [
+        ("empty.yaml", "", "an empty document (or null)"),
+        ("comment.yaml", "# nothing yet\n", "an empty document (or null)"),
+        ("null.json", "null", "an empty document (or null)"),
+        ("list.json", "[1, 2]", "an array at top level"),
+        ("list.yaml", "- a\n- b\n", "an array at top level"),
+        ("text.yaml", "just words\n", "a string at top level"),
+        ("number.json", "3.5", "a number at top level"),
+        ("true.json", "true", "true at top level"),
+    ],
+)
+def test_a_document_that_is_not_an_object_is_named_in_json_s_words(
+    tmp_path: Path, name: str, text: str, said: str
+) -> None:
+    """An empty YAML file said ``got NoneType``, a list ``got list``: Python's
+    words. Now what the document holds, and that an object is expected."""
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(InputError) as refused:
+        read_document(path)
+    message = str(refused.value)
+    assert said in message and "object" in message and "NoneType" not in message, message

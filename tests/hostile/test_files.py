@@ -273,25 +273,81 @@ RECORDINGS = {
     "sqlite-bag-storage": (_sqlite, "bag_0.sqlite", "its .db3 file"),
     "mcap-bag-storage": (_mcap, "bag_0.bin", "its .mcap file"),
 }
-READ_AS_TEXT = [(command, kind) for command in ("learn", "segment") for kind in RECORDINGS]
+OPTIONS = {
+    # the rest of the command line: a complete one, none, --json alone, an unknown option
+    "-o": ["-o", "out.json"],
+    "no-o": [],
+    "json": ["--json"],
+    "plot-no-o": ["--plot", "speeds.png"],
+    "unknown-option": ["-o", "out.json", "--no-such-option"],
+}
+READ_AS_TEXT = [
+    (command, kind, options)
+    for command in ("learn", "segment")
+    for kind in RECORDINGS
+    for options in OPTIONS
+    if not (command == "learn" and options == "plot-no-o")
+]
 
 
 @pytest.mark.parametrize(
-    ("command", "kind"), READ_AS_TEXT, ids=[f"{c}-{k}" for c, k in READ_AS_TEXT]
+    ("command", "kind", "options"),
+    READ_AS_TEXT,
+    ids=[f"{c}-{k}-{o}" for c, k, o in READ_AS_TEXT],
 )
 def test_a_recording_given_where_text_is_read_says_how_it_is_read(
-    tmp_path: Path, command: str, kind: str
+    tmp_path: Path, command: str, kind: str, options: str
 ) -> None:
     """``segment demo.hdf5`` answered "not UTF-8 text …; a CSV pose stream
     expected", which does not say that ``demoplan import`` reads robosuite's
     and robomimic's recordings; a bag's storage file under another name, that
-    it is read by its folder or its own suffix."""
+    it is read by its folder or its own suffix. Whatever the options: a usage
+    error found before the file is read (``segment demo.hdf5`` without ``-o``,
+    exit 2) says it too — before, it named the missing option alone."""
     make, name, pointer = RECORDINGS[kind]
     make(tmp_path / name)
-    answer = run([command, name, "-o", "out.json"], tmp_path)
-    check_refused(answer, [name], codes={1})
+    answer = run([command, name, *OPTIONS[options]], tmp_path)
+    check_refused(answer, [name], codes={1, 2})
     assert pointer in answer.stderr, answer
     assert "not UTF-8" not in answer.stderr, answer
+    assert sorted(f.name for f in tmp_path.iterdir()) == [name]
+
+
+DOCUMENTS_AS_STREAMS = [
+    # the file's name, its text, the command, what the one line must say
+    ("demo.json", "JSON", "segment", "demoplan learn demo.json -o MODEL.json"),
+    ("demo.yaml", "YAML", "segment", "demoplan learn demo.yaml -o MODEL.json"),
+    ("demo.csv", "JSON", "segment", "learn reads a demonstration from a .json"),
+    ("demo.csv", "JSON", "learn", "learn reads a demonstration from a .json"),
+    ("demo.txt", "JSON", "segment", "demoplan learn demo.txt -o MODEL.json"),
+]
+
+
+@pytest.mark.parametrize(("name", "text", "command", "pointer"), DOCUMENTS_AS_STREAMS)
+def test_a_demonstration_given_where_a_stream_is_read_says_what_reads_it(
+    tmp_path: Path, name: str, text: str, command: str, pointer: str
+) -> None:
+    """``segment demo.json`` answered ``line 1 (header): missing columns t,
+    object, x, y, z``: the file is a demonstration, which ``learn`` reads as
+    it is (and a demonstration named ``.csv`` is read as a stream)."""
+    demo = (EXAMPLES / "blocks" / "demonstrations.json").read_text()
+    body = demo if text == "JSON" else 'format: "demoplan/demonstration-1"\nsteps: []\n'
+    (tmp_path / name).write_text(body)
+    answer = run([command, name, "-o", "out.json"], tmp_path)
+    check_refused(answer, [name], codes={1})
+    assert "a JSON or YAML document, not a CSV pose stream" in answer.stderr, answer
+    assert pointer in answer.stderr and "missing column" not in answer.stderr, answer
+
+
+@pytest.mark.parametrize("kind", ["hdf5", "hdf5-named-csv"])
+def test_a_usage_error_of_import_names_no_other_command(tmp_path: Path, kind: str) -> None:
+    """``import demo.hdf5`` without ``-o`` is the right command missing an
+    option: its one line points to nothing else."""
+    make, name, _ = RECORDINGS[kind]
+    make(tmp_path / name)
+    answer = run(["import", name], tmp_path)
+    assert answer.code == 2 and "Missing option" in answer.stderr, answer
+    assert "demoplan import" not in answer.stderr.split("--help", 1)[1], answer
 
 
 def test_a_folder_of_recordings_given_to_learn_says_how_they_are_read(tmp_path: Path) -> None:

@@ -156,8 +156,9 @@ def test_a_full_disk_under_file_outputs(
         ["segment", "stream.csv", "-o", "FULL"],
         ["segment", "stream.csv", "-o", "d.json", "--plot", "FULL.png"],
         ["learn", "demos.json", "--paper", "-o", "FULL"],
+        ["export", "bt", "model.json", "scene.json", "-o", "t.xml", "--plot", "FULL.png"],
     ],
-    ids=["segment-o", "segment-plot", "learn-o"],
+    ids=["segment-o", "segment-plot", "learn-o", "export-plot"],
 )
 def test_a_full_device_is_an_error(workspace: Path, tmp_path: Path, args: list[str]) -> None:
     """A private ``/dev/full`` as an output: one line, exit 1, and the other
@@ -170,6 +171,46 @@ def test_a_full_device_is_an_error(workspace: Path, tmp_path: Path, args: list[s
     answer = run(args, folder)
     check_refused(answer, [full], codes={1})
     assert "no space left" in answer.stderr, answer
+    assert fingerprint(folder) == before, answer
+
+
+@pytest.fixture
+def read_only_disk(tmp_path: Path) -> Iterator[Path]:
+    """A read-only tmpfs (mounted ``ro``: a read-only folder stops root too)."""
+    where = tmp_path / "ro"
+    _mount(where, "64k,ro")
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", str(where)], check=False)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["plan", "model.json", "scene.json", "--plot", "RO/p.png"],
+        ["show", "model.json", "--plot", "RO/p.png"],
+        ["show", "scene.json", "--plot", "RO/p.png"],
+        ["export", "bt", "model.json", "scene.json", "-o", "t.xml", "--plot", "RO/p.png"],
+        ["segment", "stream.csv", "-o", "d.json", "--plot", "RO/p.png"],
+        ["learn", "demos.json", "--paper", "-o", "RO/m.json"],
+    ],
+    ids=["plan-plot", "show-model-plot", "show-scene-plot", "export-plot", "segment-plot", "learn"],
+)
+def test_a_read_only_folder_is_one_plain_line_and_nothing_written(
+    workspace: Path, tmp_path: Path, read_only_disk: Path, args: list[str]
+) -> None:
+    """An output in a read-only folder: ``FILE: cannot write (read-only file
+    system)``, the file named once (a figure said ``cannot write the plot
+    (FILE: cannot write (…))`` before), exit 1, and the command's other
+    output not written (``export -o t.xml`` was, before its drawing failed)."""
+    folder = tmp_path / "case"
+    shutil.copytree(workspace, folder)
+    before = fingerprint(folder)
+    answer = run([a.replace("RO", str(read_only_disk)) for a in args], folder)
+    check_refused(answer, [str(read_only_disk)], codes={1})
+    assert "cannot write (read-only file system)" in answer.stderr, answer
+    assert answer.stderr.count(str(read_only_disk)) == 1, answer
     assert fingerprint(folder) == before, answer
 
 

@@ -28,9 +28,11 @@ from hypothesis import strategies as st
 
 from demoplan.segmentation.types import ObjectTrack, PoseStream
 from demoplan.segmentation.writers import write_bag, write_csv
+from demoplan.wording import printable
 from tests.hostile import file_audit
 from tests.hostile.harness import Answer, check_refused, fingerprint, run
 from tests.segmentation.test_import import MODEL, box_states, write_recording
+from tests.support.helpers import EXAMPLES
 
 GENERATED = settings(
     max_examples=12,
@@ -400,10 +402,8 @@ def test_text_that_is_not_utf8_is_refused(attribute: str, tmp_path: Path) -> Non
 # --------------------------------------------------------------------------- text is text
 
 
-def test_names_with_tex_and_escapes_are_drawn_and_printed_literally(tmp_path: Path) -> None:
-    """A segmentation figure of objects named ``$\\sqrt{$`` and ``$x$ <ESC>[31m``:
-    drawn (not parsed as TeX), and the table on stdout shows the escape as text."""
-    names = ["$\\sqrt{$", "$x$ \x1b[31mred"]
+def _two_carried(names: list[str]) -> str:
+    """A CSV stream of two objects named ``names``, carried in opposite directions."""
     lines = ["t,object,x,y,z"]
     for i in range(400):
         t = i * 0.01
@@ -411,13 +411,39 @@ def test_names_with_tex_and_escapes_are_drawn_and_printed_literally(tmp_path: Pa
         z = 0.1 * np.sin(np.pi * min(max(t - 1.0, 0.0), 1.0))
         lines.append(f'{t:.2f},"{names[0]}",{x:.4f},0.2,{z:.4f}')
         lines.append(f'{t:.2f},"{names[1]}",{0.6 - x:.4f},0.5,{z:.4f}')
+    return "\n".join(lines) + "\n"
+
+
+def test_names_with_tex_are_drawn_and_printed_literally(tmp_path: Path) -> None:
+    """A segmentation figure of objects named ``$\\sqrt{$`` and ``$x$``:
+    drawn (not parsed as TeX), and the table on stdout shows them as written."""
     stream = tmp_path / "stream.csv"
-    stream.write_text("\n".join(lines) + "\n")
+    stream.write_text(_two_carried(["$\\sqrt{$", "$x$"]))
     answer = run(["segment", stream, "-o", "demo.json", "--plot", "speeds.png"], tmp_path)
     assert answer.code == 0, answer
     assert (tmp_path / "speeds.png").stat().st_size > 0
-    assert "\x1b" not in answer.stdout + answer.stderr, answer
-    assert "$\\sqrt{$" in answer.stdout and "\\x1b[31mred" in answer.stdout, answer
+    assert "$\\sqrt{$" in answer.stdout and "$x$" in answer.stdout, answer
+
+
+@pytest.mark.parametrize(
+    "name", ["$x$ \x1b[31mred", "cup\x1b[2J\x07\u202efake", "green apple", "loc3", "cup\tb"]
+)
+def test_a_stream_object_a_plan_cannot_name_is_refused_in_one_escaped_line(
+    name: str, tmp_path: Path
+) -> None:
+    """A CSV object named with an escape sequence, a space or a location's name
+    (docs/formats.md "Object names"): ``segment`` and ``learn`` of the stream
+    refuse it in one line naming the file and the object, escaped; nothing is
+    written. Before, ``segment`` wrote a demonstration ``learn`` then took (or,
+    now, would refuse) and printed the name escaped."""
+    stream = tmp_path / "stream.csv"
+    stream.write_text(_two_carried(["plate", name]))
+    for command in (["segment", stream, "-o", "demo.json"], ["learn", stream, "-o", "m.json"]):
+        answer = run(command, tmp_path)
+        check_refused(answer, [str(stream)], codes={1})
+        assert f"object {printable(repr(name))}" in answer.stderr, answer
+        assert not {c for c in answer.stderr + answer.stdout if not c.isprintable() and c != "\n"}
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["stream.csv"]
 
 
 def test_figure_texts_are_literal_but_tick_labels_keep_their_notation() -> None:
@@ -465,14 +491,18 @@ FRAME_NAMES = st.tuples(CONTROLS, NAMES).map(lambda p: "cup" + p[0] + p[1] + "x"
 
 @given(name=FRAME_NAMES.filter(lambda n: "/" not in n))
 @settings(max_examples=6, deadline=None, derandomize=True)
-def test_tf_frame_names_with_escapes_are_printed_as_text(name: str) -> None:
+def test_tf_frame_names_with_escapes_are_refused_in_one_escaped_line(name: str) -> None:
+    """A TF frame followed as an object, named with control characters: refused
+    where the bag is read, one line, no control character reaching the
+    terminal, nothing written (docs/formats.md "Object names")."""
     with folder() as root:
         write_bag(PoseStream((carried_track(name),)), root / "bag", kind="tf")
         answer = run(["segment", root / "bag", "-o", root / "demo.json"], root)
-        assert answer.code == 0, answer
+        check_refused(answer, [str(root / "bag")], codes={1})
+        assert "object name" in answer.stderr, answer
         controls = {c for c in answer.stdout + answer.stderr if not c.isprintable() and c != "\n"}
         assert not controls, f"{controls} reached the terminal: {answer}"
-        assert json.loads((root / "demo.json").read_text())["steps"][0]["object"] == name
+        assert not (root / "demo.json").exists()
 
 
 @pytest.mark.parametrize("kilometres", [5.0, 50.0])
@@ -489,10 +519,10 @@ def test_a_tf_tree_placing_an_object_kilometres_away_is_refused(
     assert not (tmp_path / "demo.json").exists()
 
 
-def test_a_warning_naming_an_object_is_one_escaped_line(tmp_path: Path) -> None:
-    """An object still moving when the stream ends is warned about by name:
-    the name's escape sequence and bell are written as text."""
-    name = "cup\x1b[2J\x07\u202efake"
+def test_a_warning_naming_an_object_names_it_on_one_line(tmp_path: Path) -> None:
+    """An object still moving when the stream ends is warned about by name,
+    one line a warning."""
+    name = "cup$x$"
     track = carried_track(name)
     moving = ObjectTrack(name, track.times[:150], track.positions[:150])  # cut mid-carry
     stream = PoseStream((carried_track("plate", 1.0), moving))
@@ -501,8 +531,7 @@ def test_a_warning_naming_an_object_is_one_escaped_line(tmp_path: Path) -> None:
     answer = run(["segment", path, "-o", tmp_path / "demo.json"], tmp_path)
     assert answer.code == 0, answer
     warnings = [line for line in answer.stderr.splitlines() if "WARNING" in line]
-    assert warnings and all("cup\\x1b[2J\\x07\\u202efake" in line for line in warnings), answer
-    assert not {c for c in answer.stderr + answer.stdout if not c.isprintable() and c != "\n"}
+    assert warnings and all(name in line for line in warnings), answer
 
 
 @pytest.mark.parametrize("planted", ["../victim.txt", "/nonexistent-demoplan/x.json", "loop"])
@@ -522,3 +551,88 @@ def test_a_link_planted_in_the_output_folder_is_not_written_through(
     check_refused(answer, [str(link)], codes={1})
     assert "outside the folder" in answer.stderr, answer
     assert fingerprint(tmp_path) == before and victim.read_text() == "victim"
+
+
+# --------------------------------------------------------------------------- another kind
+
+
+def _other_kind(kind: str, root: Path) -> Path:
+    """A file (or bag folder) of ``kind`` that demoplan reads with another command."""
+    stream = PoseStream((carried_track("cup"),))
+    if kind in {"bag-folder", "metadata", "db3", "mcap"}:
+        write_bag(stream, root / "bag", kind="tf", storage="mcap" if kind == "mcap" else "sqlite3")
+        return {
+            "bag-folder": root / "bag",
+            "metadata": root / "bag" / "metadata.yaml",
+            "db3": root / "bag" / "bag.db3",
+            "mcap": root / "bag" / "bag.mcap",
+        }[kind]
+    if kind == "csv":
+        write_csv(stream, root / "stream.csv")
+        return root / "stream.csv"
+    if kind == "json":
+        (root / "demo.json").write_text((EXAMPLES / "blocks" / "demonstrations.json").read_text())
+        return root / "demo.json"
+    (root / "table.png").write_bytes((EXAMPLES / "perception" / "blocks-top.png").read_bytes())
+    return root / "table.png"
+
+
+OTHER_KINDS = {
+    # kind: what the one line must point to
+    "bag-folder": "demoplan segment",
+    "metadata": "demoplan segment",
+    "db3": "demoplan segment",
+    "mcap": "demoplan segment",
+    "csv": "demoplan segment",
+    "json": "demoplan learn",
+    "png": "demoplan perceive",
+}
+
+
+@pytest.mark.parametrize("kind", OTHER_KINDS)
+def test_import_of_a_file_another_command_reads_names_that_command(
+    kind: str, tmp_path: Path
+) -> None:
+    """``import`` given a bag (its folder, metadata.yaml or storage), a CSV pose
+    stream, a demonstration or a photograph: one line saying what it is and
+    which command reads it; nothing written. Before, h5py's "Unable to
+    synchronously open file (file signature not found)" or "is a folder"."""
+    path = _other_kind(kind, tmp_path)
+    answer = run(["import", path, "-o", tmp_path / "out"], tmp_path)
+    check_refused(answer, [str(path)], codes={1})
+    assert OTHER_KINDS[kind] in answer.stderr, answer
+    assert "signature" not in answer.stderr, answer
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [(b"", "an empty file"), (b"hello\n", "no HDF5 signature"), (bytes(range(256)), "signature")],
+)
+def test_import_of_a_file_that_is_no_hdf5_says_so_in_its_own_words(
+    content: bytes, said: str, tmp_path: Path
+) -> None:
+    """An empty file or one without HDF5's signature: one line in demoplan's
+    words, not h5py's "Unable to synchronously open file (file signature not
+    found)"."""
+    path = tmp_path / "demo.hdf5"
+    path.write_bytes(content)
+    answer = run(["import", path, "-o", tmp_path / "out"], tmp_path)
+    check_refused(answer, [str(path)], codes={1})
+    assert said in answer.stderr and "synchronously" not in answer.stderr, answer
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_bag_with_a_name_that_is_not_utf8_is_one_plain_line(storage: str, tmp_path: Path) -> None:
+    """A damaged bag whose message type reads ``tf2\\xffmsgs/…``: one line in
+    demoplan's words, not Python's "'utf-8' codec can't decode byte 0xff in
+    position 3: invalid start byte"; nothing written."""
+    write_bag(PoseStream((carried_track("cup"),)), tmp_path / "bag", kind="tf", storage=storage)
+    for part in (tmp_path / "bag").iterdir():
+        if part.suffix in {".mcap", ".db3"}:
+            part.write_bytes(part.read_bytes().replace(b"tf2_msgs", b"tf2\xffmsgs"))
+    answer = run(["segment", tmp_path / "bag", "-o", tmp_path / "demo.json"], tmp_path)
+    check_refused(answer, [str(tmp_path / "bag")], codes={1})
+    assert "codec" not in answer.stderr, answer
+    assert not (tmp_path / "demo.json").exists()

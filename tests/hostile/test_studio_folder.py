@@ -15,6 +15,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from demoplan.studio.app import create_app
+from tests.hostile.harness import check_refused, run
 from tests.studio.test_studio_api import blocks_demonstrations, scene_body
 
 
@@ -87,3 +88,23 @@ def test_a_read_only_folder_is_named_as_such(
     )
     assert "was it made read-only?" in answer.json()["detail"]
     assert client.get("/api/files").status_code == 200  # reading still works
+
+
+@pytest.mark.parametrize(
+    ("make", "said"),
+    [
+        (lambda p: p.write_text("notes\n"), "is a file, not a folder; a work folder expected"),
+        (lambda p: p.symlink_to("/dev/null"), "is a device, pipe or socket, not a folder"),
+    ],
+    ids=["a-file", "a-device"],
+)
+def test_a_work_folder_that_is_a_file_is_named_as_such(
+    tmp_path: Path, make: Callable[[Path], Any], said: str
+) -> None:
+    """``studio --workdir notes.txt`` answered ``cannot make the work folder
+    (file exists)``, as if the folder were missing; it is a file."""
+    where = tmp_path / "notes.txt"
+    make(where)
+    answer = run(["studio", "--workdir", where, "--no-browser", "--port", "0"], tmp_path)
+    check_refused(answer, [str(where)], codes={1})
+    assert said in answer.stderr, answer

@@ -345,3 +345,37 @@ def test_an_objects_files_colours_are_written_into_the_demonstrations(tmp_path: 
     (imported,) = load_demonstrations([tmp_path / "out"])
     assert "post" in dict(imported.landmarks)
     assert imported.given_colours == {"box": "#1f5fbf", "post": "#27ae60"}
+
+
+@pytest.mark.parametrize(
+    ("change", "span"),
+    [
+        ("one row at t = 1e300", "1e+300 s"),
+        ("one row in ns", "s, from t = 0 s"),
+        ("every time in ns", "s, from t = 0 s"),
+    ],
+)
+def test_a_stream_whose_times_span_more_than_a_week_is_refused_in_one_line(
+    tmp_path: Path, change: str, span: str
+) -> None:
+    """A lone absurd time was read as it is: the glass's sample at t = 1e300 s
+    became its last pose, and ``segment`` found 8 steps in the set-table
+    stream of 7. A span beyond a week (docs/limits.md) is refused, naming the
+    first and the last sample; nothing is written."""
+    lines = (EXAMPLES / "streams" / "set-table-1.csv").read_text().splitlines()
+    rows = [line.split(",") for line in lines[1:]]
+    if change == "one row at t = 1e300":
+        rows[4][0] = "1e300"
+    elif change == "one row in ns":
+        rows[4][0] = str(round(float(rows[4][0]) * 1e9) + 10**9)
+    else:
+        rows = [[str(round(float(row[0]) * 1e9)), *row[1:]] for row in rows]
+    stream = tmp_path / "stream.csv"
+    stream.write_text("\n".join([lines[0], *(",".join(row) for row in rows)]) + "\n")
+    for command in ("segment", "learn"):
+        result = invoke(command, stream, "-o", tmp_path / "out.json")
+        assert result.exit_code == 1, result.output
+        assert result.stderr.count("\n") == 1, result.stderr
+        assert f"{stream}: t: its times span" in result.stderr, result.stderr
+        assert span in result.stderr and "at most 7 days" in result.stderr, result.stderr
+        assert not (tmp_path / "out.json").exists()

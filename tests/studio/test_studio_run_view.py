@@ -272,6 +272,49 @@ def test_a_run_that_does_not_reach_its_goal_is_shown_failed_with_its_reason(
 
 
 @pytest.mark.slow
+def test_a_new_run_is_never_shown_as_the_last_one_while_it_starts(
+    workdir: Path, tmp_path: Path, browser: Any
+) -> None:
+    """A run that ended green, then Run again with every grasp failing: from
+    the click on, the badge reads ``running`` and the timeline is empty —
+    before, the last run's green ``done`` and its events stood until the
+    request was answered (held back here for a second), so that a page read
+    then (or a test waiting for ``data-state`` to leave ``running``) took the
+    new, failing run for a success. A request refused (bad faults) puts the
+    last run back."""
+    with serving(create_app(workdir)) as (url, _):
+        page = open_page(browser, url, tmp_path / "art")
+        start_run(page, "", 0)
+        wait_until_over(page)
+        badge = page.tab.locator("#run-state")
+        assert badge.get_attribute("data-state") == "done"
+        events = page.tab.locator('[data-testid="timeline"] > li').count()
+
+        def slowly(route: Any) -> None:
+            time.sleep(1.0)
+            route.continue_()
+
+        page.tab.route("**/api/runs", slowly)
+        page.tab.get_by_label("Faults").fill("grasp=1")
+        page.button("Run").click()
+        assert badge.get_attribute("data-state") == "running"
+        assert badge.inner_text() == "running"
+        assert page.tab.locator('[data-testid="timeline"] > li').count() == 0
+        wait_until_over(page)
+        assert badge.get_attribute("data-state") == "failed"
+        # the failures one from the next: "…; step 2: grasp: …", not run together
+        summary = page.tab.locator("#run-summary").inner_text()
+        assert re.search(r"failures detected: step 1: grasp: [^;]+; step 2: grasp: ", summary)
+        page.tab.get_by_label("Faults").fill("bogus=2")
+        page.button("Run").click()
+        page.settle()
+        assert "bogus=2" in page.alert()
+        assert badge.get_attribute("data-state") == "failed"
+        assert page.tab.locator('[data-testid="timeline"] > li').count() > 0
+        assert events > 0
+
+
+@pytest.mark.slow
 def test_the_badge_leaves_running_when_the_studio_stops(
     workdir: Path, tmp_path: Path, browser: Any
 ) -> None:
@@ -320,9 +363,7 @@ def test_a_page_opened_again_shows_the_last_run_of_the_work_folder(
         assert kinds == [e["kind"] for e in events]
         assert timeline.last.inner_text() == f"✓ {events[-1]['text']}"
         assert page.tab.locator("#run-state").get_attribute("data-state") == "done"
-        assert (
-            page.tab.locator("#run-step-out").inner_text() == f"{len(events)} / {len(events)}"
-        )
+        assert page.tab.locator("#run-step-out").inner_text() == f"{len(events)} / {len(events)}"
         assert_shows(page, status["result"]["world"])
         show_event(page, 1)  # the start it ran from
         assert_shows(page, events[0]["world"])

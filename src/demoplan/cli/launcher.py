@@ -229,8 +229,47 @@ def _usage_error(exc: Any) -> int:
     message = " ".join(str(exc.format_message()).split()).rstrip(".") or "aborted"
     hint = f"; see {command} --help" if type(exc).__name__ != "Abort" else ""
     name = command.removeprefix("demoplan").strip() or "demoplan"
+    if context is not None and hint:
+        hint += _recording_hint(context.info_name, sys.argv[2:])
     sys.stderr.write(f"demoplan: error: {name}: {message}{hint}\n")
     return int(exc.exit_code) if exc.exit_code else 1
+
+
+_BAG_SUFFIXES = (".db3", ".mcap")
+
+
+def _recording_hint(command: str | None, args: Sequence[str]) -> str:
+    """`` (FILE: an HDF5 file: …)`` where a usage error's command line names a
+    recording that command does not read as such — an HDF5 file anywhere but
+    ``import``, a bag's SQLite or MCAP storage under another name —, so that
+    the way to read it is said whatever else was wrong (``segment demo.hdf5``
+    without ``-o``). Only regular files are looked at, their first bytes."""
+    import stat
+
+    from demoplan.fileio.reading import binary_container
+
+    for arg in args:
+        if arg.startswith("-"):
+            continue
+        try:
+            if not stat.S_ISREG(Path(arg).stat().st_mode):
+                continue
+            with Path(arg).open("rb") as handle:
+                head = handle.read(4104)
+        except (OSError, ValueError):
+            continue
+        found = binary_container(head, arg)
+        if found is None:
+            continue
+        kind, how = found
+        if kind == "an HDF5 file" and command == "import":
+            continue
+        if kind != "an HDF5 file" and arg.lower().endswith(_BAG_SUFFIXES):
+            continue
+        from demoplan.fileio import display_path
+
+        return f" ({display_path(arg)}: {kind}; {how})"
+    return ""
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,6 +18,7 @@ from demoplan.evaluation.plan import (
     check_settings,
     plan_runs,
     read_settings,
+    scene_documents,
     write_plan,
 )
 from demoplan.evaluation.report import write_report
@@ -159,9 +160,10 @@ def evaluate(
     if is_robosuite(settings.sim):
         check_installed(settings.sim)  # before anything is written
     model = load_model(settings.model)
+    documents = scene_documents(model, settings)  # a bad scene: refused before any cluster
     engine = engine or SerialEngine()
     with engine.session():  # a cluster that does not answer: nothing written
-        write_plan(out, model, settings)  # on resume: the scenes a stop left unwritten
+        write_plan(out, model, settings, documents)  # on resume: the scenes a stop left unwritten
         specs = plan_runs(out, settings)
         rows = read_rows(out)
         order = [spec.run_id for spec in specs]

@@ -21,7 +21,7 @@ from demoplan.execution.executor import ExecutionSettings
 from demoplan.execution.faults import Faults
 from demoplan.execution.runner import make_world
 from demoplan.execution.tree_checks import MAX_ATTEMPTS, check_tree
-from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs, write_atomic
+from demoplan.fileio import display_path, read_input_text, refuse_overwriting_inputs
 from demoplan.model import TaskModel
 from demoplan.scenes.geometry import GeometrySettings
 from demoplan.scenes.plan import ChosenPlan, ScenePlan
@@ -143,9 +143,11 @@ def export_behaviour_tree(
     plot: Path | None = None,
 ) -> ExportedTree:
     """Write :func:`behaviour_tree` to ``output`` (atomically; never over an
-    input) and, with ``plot``, its drawing there; nothing is written where
+    input) and, with ``plot``, its drawing there — both or neither
+    (:class:`~demoplan.fileio.StagedOutputs`); nothing is written where
     there is no plan."""
-    from demoplan.plotting.behaviour_tree import save_behaviour_tree
+    from demoplan.fileio import StagedOutputs
+    from demoplan.plotting.behaviour_tree import behaviour_tree_figure
     from demoplan.plotting.output import check_figure_path, figure_errors
 
     inputs = [p for p in (model, scene) if isinstance(p, Path)]
@@ -162,8 +164,9 @@ def export_behaviour_tree(
         budget=budget,
         settings=settings,
     )
-    write_atomic(output, xml)
-    if plot is not None:
-        with figure_errors(plot):
-            save_behaviour_tree(xml, plot)
+    with StagedOutputs() as outputs:  # the tree and its drawing, both or neither
+        outputs.add(output, xml.encode("utf-8", "backslashreplace"))  # as write_atomic
+        if plot is not None:
+            with figure_errors(plot):
+                outputs.add(plot, behaviour_tree_figure(xml, plot))
     return ExportedTree(output, xml, result)

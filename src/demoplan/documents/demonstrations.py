@@ -27,6 +27,7 @@ from pydantic import (
 )
 
 from demoplan.documents.masses import with_mass
+from demoplan.documents.names import ObjectName
 from demoplan.documents.poses import (
     LENGTH_SCALE,
     LandmarkSchema,
@@ -68,7 +69,7 @@ class _Schema(BaseModel):
 
 
 class StepSchema(PoseSchema):
-    object: str = Field(min_length=1)
+    object: ObjectName
 
 
 class ObjectsFileSchema(_Schema):
@@ -77,7 +78,7 @@ class ObjectsFileSchema(_Schema):
     format: str | None = None
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
-    objects: dict[str, ObjectSchema] = Field(min_length=1)
+    objects: dict[ObjectName, ObjectSchema] = Field(min_length=1)
 
 
 class DemonstrationSchema(_Schema):
@@ -85,9 +86,9 @@ class DemonstrationSchema(_Schema):
     name: str | None = None
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
-    objects: dict[str, ObjectSchema] = {}
-    landmarks: dict[str, LandmarkSchema] = {}
-    initial: dict[str, PoseSchema] = {}
+    objects: dict[ObjectName, ObjectSchema] = {}
+    landmarks: dict[ObjectName, LandmarkSchema] = {}
+    initial: dict[ObjectName, PoseSchema] = {}
     provenance: dict[str, StrictStr | StrictInt | StrictFloat] = {}
     steps: list[StepSchema]
 
@@ -340,9 +341,7 @@ def _one(data: dict[str, Any], source: str, prefix: str, default_name: str) -> D
     )
 
 
-def _colours(
-    parsed: DemonstrationSchema, source: str, where: str
-) -> tuple[tuple[str, str], ...]:
+def _colours(parsed: DemonstrationSchema, source: str, where: str) -> tuple[tuple[str, str], ...]:
     """The colours a demonstration gives (read as ``#rrggbb``, GivenColour):
     its objects', then its landmarks' — the order :func:`demonstration_to_dict`
     writes them in — a landmark's standing in its entry or, where its size

@@ -27,7 +27,14 @@ from demoplan.model import TaskModel
 from demoplan.scenes.scene import MAX_GRIPPER, complete_geometry, scene_from_document
 from demoplan.scenes.targets import check_scene_objects
 
-__all__ = ["SETTINGS", "EvaluationSettings", "plan_runs", "read_settings", "write_plan"]
+__all__ = [
+    "SETTINGS",
+    "EvaluationSettings",
+    "plan_runs",
+    "read_settings",
+    "scene_documents",
+    "write_plan",
+]
 
 SETTINGS = "evaluation.json"
 FORMAT = "demoplan/evaluation-1"
@@ -163,10 +170,13 @@ def check_settings(settings: EvaluationSettings, source: str | None = None) -> N
             why = f"{settings.seeds:,} runs; at most {MAX_RUNS:,} expected"
             _refuse(why, source, "seeds" if source else "--seeds")
         return
-    runs = (len(settings.scenes) + settings.random_scenes) * settings.seeds
+    scenes = len(settings.scenes) + settings.random_scenes
+    runs = scenes * settings.seeds
     if runs > MAX_RUNS:
         why = f"{runs:,} runs (scenes × seeds); at most {MAX_RUNS:,} expected"
-        _refuse(why, source, "random_scenes" if source else "--random-scenes")
+        # the factor that made them many: the seeds, or the random layouts
+        name = "seeds" if settings.seeds > scenes or not settings.random_scenes else "random_scenes"
+        _refuse(why, source, name if source else f"--{name.replace('_', '-')}")
 
 
 def _refuse(message: str, source: str | None, field: str) -> None:
@@ -175,7 +185,11 @@ def _refuse(message: str, source: str | None, field: str) -> None:
     raise InputError(message, source=source, field=field)
 
 
-def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
+def scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str, dict[str, Any]]:
+    """Every scene of the evaluation by name — the files given, read and checked
+    against the model, then the random layouts —, or the one InputError of the
+    first that is refused: read before any cluster is started or joined, so a
+    bad scene is one line at once (it waited for Ray, 5–10 s, before)."""
     documents: dict[str, dict[str, Any]] = {}
     if is_robosuite(settings.sim):  # robosuite's reset(seed) makes each run's scene
         return documents
@@ -201,12 +215,19 @@ def _scene_documents(model: TaskModel, settings: EvaluationSettings) -> dict[str
     return documents
 
 
-def write_plan(folder: Path, model: TaskModel, settings: EvaluationSettings) -> None:
+def write_plan(
+    folder: Path,
+    model: TaskModel,
+    settings: EvaluationSettings,
+    documents: dict[str, dict[str, Any]] | None = None,
+) -> None:
     """The settings (first: a folder with them is an evaluation's, to resume) and
     every scene's file not there yet, in ``folder`` — a layout is a function of
     its seed, so an evaluation stopped while writing them writes the same ones
-    when resumed. Every scene is checked before anything is written."""
-    documents = _scene_documents(model, settings)
+    when resumed. Every scene is checked before anything is written
+    (``documents``: :func:`scene_documents`' answer, when already read)."""
+    if documents is None:
+        documents = scene_documents(model, settings)
     if not (folder / SETTINGS).exists():
         write_atomic(folder / SETTINGS, dump_json(settings.to_json()))
     for name, document in documents.items():

@@ -129,6 +129,17 @@ def binary_container(data: bytes, source: str) -> tuple[str, str] | None:
     return None
 
 
+def _top_level(data: Any) -> str:
+    """What a document that is not an object holds, in JSON's words (not
+    Python's: ``NoneType``, ``list``)."""
+    if data is None:
+        return "an empty document (or null)"
+    if isinstance(data, bool):
+        return f"{str(data).lower()} at top level"
+    kinds = {list: "an array", str: "a string", int: "a number", float: "a number"}
+    return f"{kinds.get(type(data), 'a value')} at top level"
+
+
 MAX_YAML_BYTES = 2 * 1024 * 1024
 """Largest YAML document read: PyYAML parses and builds in Python (libyaml's
 parser too builds in Python), about 15–30 s a megabyte on the shared machine,
@@ -174,7 +185,8 @@ def read_document(path: Path) -> dict[str, Any]:
             raise InputError(f"malformed JSON: {_value_problem(exc)}", source=source) from None
     if not isinstance(data, dict):
         raise InputError(
-            f"expected an object (mapping) at top level, got {type(data).__name__}", source=source
+            f"{_top_level(data)}; an object ({{…}}, a mapping in YAML) at top level expected",
+            source=source,
         )
     try:
         _check_finite(data, source, "")
@@ -309,7 +321,11 @@ def describe_validation_error(error: ValidationError, source: str, prefix: str =
     for part in first["loc"]:
         if isinstance(part, int):
             path += f"[{part}]"
-        elif part not in {"function-after", "function-before", "function-wrap"}:
+        elif part in {"function-after", "function-before", "function-wrap", "[key]"}:
+            continue
+        elif not part or any(c.isspace() or not c.isprintable() for c in part):
+            path += f"[{part!r}]"  # a key of spaces, a line break or an escape: quoted
+        else:
             path += f".{part}" if path else str(part)
     message = str(first["msg"])
     if first["type"] == "missing":

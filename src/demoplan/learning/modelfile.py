@@ -30,6 +30,7 @@ from pydantic import (
 )
 
 from demoplan.documents.demonstrations import demonstration_to_dict, demonstrations_from_document
+from demoplan.documents.names import ObjectName
 from demoplan.documents.poses import Coordinate
 from demoplan.errors import InputError
 from demoplan.fileio import (
@@ -114,7 +115,7 @@ class _OrientationSchema(_Schema):
 
 class _StateSchema(_Schema):
     id: str = Field(pattern=r"^[A-Z]+$")
-    object: str = Field(min_length=1)
+    object: ObjectName
     position: _PositionSchema
     orientation: _OrientationSchema = _OrientationSchema()
     members: list[tuple[Integer, Integer]] = []
@@ -136,7 +137,7 @@ class _PrecisionSchema(_Schema):
 class _RoleSchema(_Schema):
     name: str = Field(min_length=1)
     type: str = Field(min_length=1)
-    instances: list[str | None]
+    instances: list[ObjectName | None]
 
 
 class _ModelSchema(_Schema):

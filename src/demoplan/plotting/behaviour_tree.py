@@ -16,7 +16,7 @@ from typing import Any
 
 from defusedxml.ElementTree import fromstring
 
-__all__ = ["save_behaviour_tree", "tree_rows"]
+__all__ = ["behaviour_tree_figure", "save_behaviour_tree", "tree_rows"]
 
 ROW_INCHES = 0.26
 INDENT = 1.0
@@ -75,12 +75,20 @@ def _describe(element: Any) -> tuple[str, str]:
 
 def save_behaviour_tree(xml: str, path: Path) -> None:
     """Draw the tree of ``xml`` into ``path`` (its extension: the format), atomically."""
+    from demoplan.fileio import write_atomic_bytes
+
+    write_atomic_bytes(path, behaviour_tree_figure(xml, path))
+
+
+def behaviour_tree_figure(xml: str, path: Path) -> bytes:
+    """The drawing of the tree of ``xml``, encoded in the format of ``path``'s
+    extension (written by the caller: ``export -o`` and ``--plot`` together)."""
     from demoplan.plotting.backend import use_agg
 
     use_agg()
     import matplotlib.pyplot as plt
 
-    from demoplan.plotting.output import save_figure
+    from demoplan.plotting.output import figure_bytes
 
     rows = tree_rows(xml)
     depth = max(r.depth for r in rows)
@@ -111,6 +119,6 @@ def save_behaviour_tree(xml: str, path: Path) -> None:
         ax.set_ylim(-len(rows), 1)
         ax.axis("off")
         figure.subplots_adjust(left=0.01, right=0.99, top=0.99, bottom=0.01)
-        save_figure(figure, path)
+        return figure_bytes(figure, path, 110)
     finally:
         plt.close(figure)

@@ -63,6 +63,8 @@ def figure_errors(path: Path) -> Iterator[None]:
         raise InputError(
             "matplotlib is not installed; pip install 'demoplan[plot]'", field="--plot"
         ) from None
+    except InputError:  # the atomic write's own one line, naming the file
+        raise
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot write the plot ({exc})", source=str(path)) from None
 

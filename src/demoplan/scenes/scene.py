@@ -21,7 +21,6 @@ that colour (:func:`demoplan.plotting.colours.assign_colours`).
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -30,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from demoplan.documents.colours import GivenColour
 from demoplan.documents.masses import with_mass
+from demoplan.documents.names import ObjectName
 from demoplan.documents.poses import (
     LENGTH_SCALE,
     Coordinate,
@@ -210,8 +210,8 @@ class _SceneSchema(_Schema):
     name: str | None = None
     description: str | None = None
     units: UnitsSchema = UnitsSchema()
-    objects: dict[str, _ObjectSchema]
-    landmarks: dict[str, LandmarkSchema] = {}
+    objects: dict[ObjectName, _ObjectSchema]
+    landmarks: dict[ObjectName, LandmarkSchema] = {}
     freespace: list[list[Coordinate]] | None = None
     gripper: _GripperSchema = _GripperSchema()
     table: _TableSchema | None = None
@@ -219,7 +219,7 @@ class _SceneSchema(_Schema):
 
     @field_validator("objects")
     @classmethod
-    def _some(cls, objects: dict[str, _ObjectSchema]) -> dict[str, _ObjectSchema]:
+    def _some(cls, objects: dict[ObjectName, _ObjectSchema]) -> dict[ObjectName, _ObjectSchema]:
         if not objects:
             raise ValueError("no objects; at least one expected")
         return objects
@@ -231,27 +231,6 @@ class _SceneSchema(_Schema):
             if len(spot) not in (2, 3):
                 raise ValueError(f"a free-space spot is [x, y] or [x, y, z], got {spot}")
         return spots
-
-
-_RESERVED = re.compile(r"^(loc|freespace|grasp)\d+$")
-
-
-def _check_name(name: str, source: str) -> None:
-    """Object names appear in plans (``GRASP red loc3 grasp5``): no spaces, and not
-    the names demoplan gives locations and grasps."""
-    if not name or any(c.isspace() or not c.isprintable() for c in name):
-        raise InputError(
-            "an object name without spaces or control characters expected (it appears in plans)",
-            source=source,
-            field=f"objects.{name}",
-        )
-    if _RESERVED.match(name):
-        raise InputError(
-            "is a name demoplan gives locations and grasps (loc…, freespace…, grasp…); "
-            "another name expected",
-            source=source,
-            field=f"objects.{name}",
-        )
 
 
 def scene_from_document(data: dict[str, Any], source: str) -> Scene:
@@ -308,7 +287,6 @@ def _scene_object(
     """One object of a scene document, checked (lengths to metres)."""
     scale = LENGTH_SCALE[parsed.units.length]
     to_deg = math.degrees if parsed.units.angle == "rad" else float
-    _check_name(name, source)
     if "#" in name and entry.type is None:
         raise InputError(
             "'#' names a role of a type (plate#1); an object name without '#' expected "

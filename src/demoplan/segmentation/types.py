@@ -27,6 +27,7 @@ FloatArray = NDArray[np.float64]
 
 __all__ = [
     "MAX_OBJECTS",
+    "MAX_SPAN_S",
     "FloatArray",
     "ObjectTrack",
     "PoseStream",
@@ -209,13 +210,28 @@ def check_object_count(count: int, what: str, source: str | None, field: str | N
         )
 
 
+MAX_SPAN_S = 7 * 24 * 3600.0
+"""Seconds from a stream's first sample to its last, at most: a week. A
+demonstration is minutes long and a day's recording holds hundreds; a span of
+years or of 1e300 s is a time in another unit, or one absurd time — which,
+read as it is, made a lone sample an object's last pose (a step that never
+happened: 8 steps for 7)."""
+
+
 def check_stream_limits(stream: PoseStream) -> None:
     """Every position of ``stream`` finite and within 1 km of the origin on
     each axis (docs/limits.md, as a demonstration file's); one InputError
-    naming the object and the time. At most :data:`MAX_OBJECTS` objects."""
+    naming the object and the time. At most :data:`MAX_OBJECTS` objects, each
+    named as a demonstration file's (:mod:`demoplan.documents.names`: what is
+    segmented becomes one, and a name a plan cannot show is refused here, where
+    it is read, rather than by ``learn`` of the file ``segment`` wrote)."""
+    from demoplan.documents.names import check_object_name
     from demoplan.documents.poses import MAX_DISTANCE_M
 
     check_object_count(len(stream.tracks), "objects", stream.source, None)
+    for track in stream:
+        check_object_name(track.name, stream.source, f"object {track.name!r}")
+    _check_span(stream)
     for track in stream:
         far = np.flatnonzero(~(np.abs(track.positions) <= MAX_DISTANCE_M).all(axis=1))
         if far.size:
@@ -227,6 +243,25 @@ def check_stream_limits(stream: PoseStream) -> None:
                 source=stream.source,
                 field=f"object {track.name!r}",
             )
+
+
+def _check_span(stream: PoseStream) -> None:
+    """The stream's times within :data:`MAX_SPAN_S` of one another, or one
+    InputError naming the earliest and the latest sample (object and time)."""
+    ends = [
+        (float(track.times[k]), track.name) for track in stream if track.times.size for k in (0, -1)
+    ]
+    if not ends:
+        return
+    (first, early), (last, late) = min(ends), max(ends)
+    if last - first > MAX_SPAN_S:
+        raise InputError(
+            f"its times span {last - first:.4g} s, from t = {first:.6g} s ({early!r}) to "
+            f"t = {last:.6g} s ({late!r}); a recording of at most {MAX_SPAN_S / 86400:g} days "
+            "expected, times in seconds (a documented limit: docs/limits.md)",
+            source=stream.source,
+            field="t",
+        )
 
 
 def normalise_quats(

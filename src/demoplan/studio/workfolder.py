@@ -68,6 +68,9 @@ class WorkFolder:
     """The folder the studio works in (made if missing)."""
 
     def __init__(self, root: Path) -> None:
+        if root.exists() and not root.is_dir():  # mkdir would say "file exists"
+            kind = "a file" if root.is_file() else "a device, pipe or socket"
+            raise InputError(f"is {kind}, not a folder; a work folder expected", source=str(root))
         try:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:

@@ -106,6 +106,12 @@ def load_bag(
                     samples.add_pose(names[connection.topic], message, timestamp, connection.topic)
     except InputError:
         raise
+    except UnicodeDecodeError as exc:  # Python's words ("'utf-8' codec can't decode…") are not
+        raise InputError(
+            f"cannot read ROS 2 bag (a name or type in it is not UTF-8, byte "
+            f"0x{exc.object[exc.start]:02x}: a damaged or cut file?)",
+            source=source,
+        ) from None
     except (AnyReaderError, OSError, ValueError, KeyError) as exc:
         raise InputError(f"cannot read ROS 2 bag ({exc})", source=source) from None
     except Exception as exc:  # rosbags' storage plugins raise their own error types

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import re
+import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -74,6 +75,7 @@ def load_csv(
     path = Path(path)
     source = str(path)
     text = read_input_text(path, "a CSV pose stream", MAX_STREAM_BYTES)
+    _refuse_a_document(text, source)
     declared = stream_units(text, units, source)
     table = _read_table(_data_lines(text, source), source)
     times = _number_column(table, "t")
@@ -93,6 +95,24 @@ def load_csv(
         return stream
     chosen = set(select_objects(objects, stream.objects, stream.objects, source=source))
     return PoseStream(tuple(t for t in stream.tracks if t.name in chosen), source)
+
+
+def _refuse_a_document(text: str, source: str) -> None:
+    """A JSON or YAML document — a demonstration, most likely — given where a
+    pose stream is read is said to be one, with what reads it (before, its
+    first line was refused as a CSV header lacking t, object, x, y, z)."""
+    start = text.lstrip("\ufeff \t\r\n")
+    if start.startswith(("{", "[")) or re.match(r"format:\s*['\"]?demoplan/", start):
+        how = (
+            "learn reads a demonstration from a .json, .yaml or .yml file"
+            if source.lower().endswith(".csv")
+            else f"demoplan learn {shlex.quote(source)} -o MODEL.json reads it as it is"
+        )
+        raise InputError(
+            f"a JSON or YAML document, not a CSV pose stream (a demonstration? {how}); a CSV "
+            f"header {_EXPECTED_HEADER} expected",
+            source=source,
+        )
 
 
 def _data_lines(text: str, source: str) -> list[tuple[int, str]]:

@@ -21,6 +21,7 @@ at most :data:`MAX_ARRAY_BYTES`) before reading it, so a dataset declaring
 from __future__ import annotations
 
 import os
+import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,6 +30,7 @@ from numpy.typing import NDArray
 
 from demoplan.errors import InputError
 from demoplan.fileio import require_regular_file
+from demoplan.fileio.reading import HDF5_SIGNATURE, binary_container
 
 if TYPE_CHECKING:
     import h5py
@@ -55,7 +57,14 @@ def open_recording(path: Path) -> h5py.File:
     import h5py
 
     source = str(path)
+    if Path(path).is_dir() and (Path(path) / "metadata.yaml").is_file():
+        raise InputError(
+            f"is a folder, a ROS 2 bag; {EXPECTED} expected (demoplan segment "
+            f"{shlex.quote(source)} -o DEMO.json makes a demonstration of a bag)",
+            source=source,
+        )
     require_regular_file(path, EXPECTED)
+    _refuse_another_kind(path, source)
     try:
         handle = h5py.File(path, "r")
     except OSError as exc:
@@ -69,6 +78,43 @@ def open_recording(path: Path) -> h5py.File:
         handle.close()
         raise
     return handle
+
+
+def _refuse_another_kind(path: Path, source: str) -> None:
+    """One line saying what ``path`` is and what reads it, where its first
+    bytes are not HDF5's and say it is a file demoplan reads otherwise: a
+    bag's storage or a CSV pose stream (``segment``), a JSON or YAML document
+    (``learn``), an image (``perceive``) — rather than h5py's "file signature
+    not found"."""
+    with Path(path).open("rb") as handle:
+        head = handle.read(4104)
+    if any(head[at : at + 8] == HDF5_SIGNATURE for at in (0, 512, 1024, 2048, 4096)):
+        return
+    quoted = shlex.quote(source)
+    found = binary_container(head, source)
+    text = head.decode("utf-8", "replace").lstrip("\ufeff \t\r\n")
+    if found is not None:
+        what = f"{found[0]}, a ROS 2 bag's storage"
+        how = f"demoplan segment {quoted} -o DEMO.json makes a demonstration of a bag"
+        if not source.lower().endswith((".db3", ".mcap")):
+            how = found[1]
+    elif text.startswith("rosbag2_bagfile_information"):
+        what = "a ROS 2 bag's metadata.yaml"
+        how = f"demoplan segment {quoted} -o DEMO.json makes a demonstration of a bag"
+    elif head.startswith((b"\x89PNG", b"\xff\xd8\xff")):
+        what = "an image"
+        how = f"a photograph of the table? demoplan perceive {quoted} finds its blocks"
+    else:
+        if text.startswith(("{", "format:", "---")):
+            what = "a JSON or YAML document"
+            how = f"a demonstration? demoplan learn {quoted} -o MODEL.json reads it as it is"
+        elif "," in text.split("\n", 1)[0] and "object" in text.split("\n", 1)[0]:
+            what = "a CSV pose stream"
+            how = f"demoplan segment {quoted} -o DEMO.json makes a demonstration of it"
+        else:  # h5py would say "Unable to synchronously open file (file signature not found)"
+            what = "an empty file" if not head else "no HDF5 signature in its first bytes"
+            raise InputError(f"{what}; {EXPECTED} expected", source=source)
+    raise InputError(f"{what}, not an HDF5 file; {EXPECTED} expected ({how})", source=source)
 
 
 _CHECKED: dict[tuple[int, ...], None] = {}

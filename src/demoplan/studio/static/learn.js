@@ -19,7 +19,13 @@ export async function learn() {
   say("Learning…");
   // the targets are drawn where the table stands now (its landmarks as placed)
   const scene = teachSceneDocument();
-  const result = await post("/api/learn", { files, output, scene: Object.keys(scene.objects).length ? scene : null });
+  let result;
+  try {
+    result = await post("/api/learn", { files, output, scene: Object.keys(scene.objects).length ? scene : null });
+  } catch (error) {
+    say("Not learned."); // not "Learning…" under the alert that says why
+    throw error;
+  }
   state.learn.result = result;
   renderLearned(result);
   await refreshFiles();

@@ -106,6 +106,7 @@ function startCanChange() {
 
 function removeThing(name, kind) {
   if (!startCanChange()) return;
+  alarm(""); // what a refused Add said is no longer the news
   if (kind === "landmark") delete state.layout.landmarks[name];
   else {
     delete state.layout.objects[name];
@@ -179,8 +180,13 @@ export function addThing() {
   if (!startCanChange()) return;
   const kind = $("thing-kind").value;
   const name = $("thing-name").value.trim();
-  if (!/^[^\s#]{1,60}$/.test(name)) {
+  // documents/names.py's rule, and the studio's 60 characters and no '#'
+  if (!/^[^\s#]{1,60}$/.test(name) || /[\p{C}\p{Z}]/u.test(name)) {
     alarm("Name: 1–60 characters without spaces or '#' expected (names appear in plans)");
+    return;
+  }
+  if (/^(loc|freespace|grasp)\d+$/.test(name)) {
+    alarm(`Name: ${name} is a name demoplan gives locations and grasps (loc…, freespace…, grasp…); another name expected`);
     return;
   }
   const other = kind === "landmark" ? state.layout.objects : state.layout.landmarks || {};

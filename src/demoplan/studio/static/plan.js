@@ -156,7 +156,13 @@ export async function makePlan() {
   const model = chosenModel();
   clearPlan();
   say("Planning…");
-  const result = await post("/api/plan", { model, scene: sceneDocument(), clutter: $("clutter").checked });
+  let result;
+  try {
+    result = await post("/api/plan", { model, scene: sceneDocument(), clutter: $("clutter").checked });
+  } catch (error) {
+    say("Not planned."); // not "Planning…" under the alert that says why
+    throw error;
+  }
   state.plan.result = result;
   if (result.no_plan) {
     $("no-plan").hidden = false;

@@ -111,8 +111,9 @@ function renderTimeline(status) {
 function summaryOf(status) {
   const r = status.result;
   if (r) {
-    const failures = `${plural(r.replans, "replan")}, ${plural(r.failures.length, "failure")} detected.` +
-      (r.failures.length ? ` ${r.failures.join(" ")}` : "");
+    // one failure from the next by "; " (a space alone ran "… after the grasp step 2: …" together)
+    const failures = `${plural(r.replans, "replan")}, ${plural(r.failures.length, "failure")} detected` +
+      (r.failures.length ? `: ${r.failures.join("; ")}.` : ".");
     return `${r.success ? "Success" : "Failed"}: ${r.reason}. ${failures}`;
   }
   if (status.state === "running") return `Running: ${plural(status.events.length, "event")} so far.`;
@@ -151,15 +152,41 @@ export async function startRun() {
     model, scene: sceneDocument(), faults: $("faults").value.trim(),
     seed: Number($("run-seed").value) || 0, sim: $("sim").value,
   };
-  const answer = await post("/api/runs", body);
-  state.run.id = answer.run;
+  // From the click on, the page shows this run, not the last one: while the
+  // request is answered, the badge of a run that ended green must not stand
+  // for one that is starting (it read `done` then). A refused request puts the
+  // last run back.
+  const last = { id: state.run.id, status: state.run.status };
+  state.run.id = null;
   state.run.status = { state: "running", events: [], result: null, error: null };
-  state.run.follow = true;
-  state.run.failedPolls = 0;
   $("timeline").replaceChildren();
   renderRun(true);
+  let answer;
+  try {
+    answer = await post("/api/runs", body);
+  } catch (error) {
+    state.run.id = last.id;
+    state.run.status = last.status;
+    $("timeline").replaceChildren();
+    if (last.status) renderRun(true);
+    else showNoRun();
+    throw error;
+  }
+  state.run.id = answer.run;
+  state.run.follow = true;
+  state.run.failedPolls = 0;
   say(`Run ${answer.run} started.`);
   state.run.poll = setInterval(() => guarded(pollRun), 300);
+}
+
+// The Run view before any run: the badge as the page starts it.
+function showNoRun() {
+  const badge = $("run-state");
+  badge.textContent = "idle";
+  badge.dataset.state = "idle";
+  $("cancel").disabled = true;
+  $("run").disabled = false;
+  $("run-summary").textContent = "";
 }
 
 export function stopPolling() {

@@ -94,6 +94,7 @@ export async function placeLandmark(name, xy, yaw) {
   try {
     const answer = await post("/api/landmark", { layout: layoutWith(currentPoses()), landmark: name, position: xy, yaw });
     marks[name] = { ...marks[name], position: answer.pose.position, yaw: answer.pose.yaw };
+    keepInView(marks); // dragged past the table's edge: still drawn (and in the Run view)
   } finally {
     redraw(); // refused: it is drawn where it stood
   }
