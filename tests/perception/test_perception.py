@@ -261,7 +261,10 @@ def test_a_decompression_bomb_is_refused(tmp_path: Path) -> None:
     header = struct.pack(">IIBBBBB", 60_000, 60_000, 1, 0, 0, 0, 0)
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IEND", b""))
     result = invoke("perceive", path, "--px-per-m", "1000", "--origin", "0", "0")
-    assert result.exit_code == 1 and "not a readable image" in result.stderr
+    assert result.exit_code == 1
+    # demoplan's words, naming the size and the limits (not PIL's "decompression bomb")
+    assert "not a readable image (60000 × 60000 pixels; at most 50,000,000" in result.stderr
+    assert "DOS" not in result.stderr
 
 
 def test_experiment_2_on_vision_in_mujoco() -> None:

@@ -55,7 +55,10 @@ def load_image(path: str | Path) -> np.ndarray:
     """An RGB image as ``uint8`` (H × W × 3); alpha is dropped, grey is made RGB."""
     from PIL import Image, UnidentifiedImageError
 
-    Image.MAX_IMAGE_PIXELS = MAX_PIXELS
+    # PIL's own bomb check would refuse a header past twice its limit in its words,
+    # before the size check below can name the size and the limits: that check
+    # runs on the header alone, before anything is decoded
+    Image.MAX_IMAGE_PIXELS = None
     require_regular_file(Path(path), "an image (PNG, JPEG)", MAX_IMAGE_BYTES)
     try:
         with Image.open(path) as opened:  # reads the header only
