@@ -108,6 +108,38 @@ def test_a_block_far_from_the_common_size_is_rejected_with_why(tmp_path: Path) -
     assert "side 65 mm, the blocks here 40 mm" in odd[0].detail
 
 
+def test_a_cube_measured_at_an_odd_size_is_looked_at_again_not_dropped() -> None:
+    """Family ``patterned``, seed 0, without ``--side``: the detector fits the
+    print on a 40 mm white top as a 24 mm square — its centre right, its size
+    not one of the photograph's. Looked at again there at the block sizes, the
+    cube is kept at the block size (every top the detector found is still
+    found, no block named twice) and nothing is rejected as not a block size.
+    (A 65 mm lid among 40 mm cubes is still rejected:
+    test_a_block_far_from_the_common_size_is_rejected_with_why.)"""
+    from demoplan.perception.blocks import PerceptionSettings, detect_blocks
+    from demoplan.perception.image_measures import ImageMeasures
+    from demoplan.perception.labelled import score_detections
+    from demoplan.perception.photo_families import family_case
+    from demoplan.perception.sizes import held_to_sizes, within_sizes
+
+    case = family_case("patterned", 0)
+    camera = Camera(case.label.px_per_m, (0.0, 0.0))
+    measures = ImageMeasures(case.image)
+    found = detect_blocks(case.image, camera, PerceptionSettings(), [], measures)
+    sizes = block_sizes([block.side for block in found])
+    low, high = within_sizes(sizes)
+    odd = [block for block in found if not low <= block.side <= high]
+    assert odd  # the print's square, or the case no longer shows what it is for
+    kept, rejected = held_to_sizes(found, sizes, seen=(measures, camera))
+    before = score_detections(case.label, [(b.x, b.y) for b in found])
+    after = score_detections(case.label, [(b.x, b.y) for b in kept])
+    assert after.found == before.found
+    assert after.false <= before.false
+    assert all(low <= block.side <= high for block in kept)
+    assert len({block.name for block in kept}) == len(kept)
+    assert not [r for r in rejected if r.reason == "not a block size"]
+
+
 def test_neither_a_scale_nor_the_cubes_size_is_one_line_and_exit_2(tmp_path: Path) -> None:
     image = tmp_path / "top.png"
     save_image(
