@@ -257,7 +257,10 @@ def blocks_in_top_view(
     if not held:
         return detected
     kept, odd = held_to_sizes(
-        detected, block_sizes([d.side for d in detected]), seen=(measures, camera)
+        detected,
+        block_sizes([d.side for d in detected]),
+        seen=(measures, camera),
+        colours=settings.colours,
     )
     if rejected is not None:
         rejected += odd
@@ -355,7 +358,9 @@ def _perceive_at_cube_scale(
             else None,
         )
     px_per_m = sizes[0][0] / side
-    kept, odd = held_to_sizes(found, sizes, unit="px", seen=(measures, Camera(1.0)))
+    kept, odd = held_to_sizes(
+        found, sizes, unit="px", seen=(measures, Camera(1.0)), colours=settings.colours
+    )
     detected = [in_scale(d, px_per_m, origin) for d in kept]
     rejected = [rejection_in_scale(r, px_per_m, origin) for r in [*rejected, *odd]]
     blocks = BlockTracker().update(detected)
