@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from demoplan.perception.faint_white import faint_white_tops
 from demoplan.perception.fused_lines import fused_lines
 from demoplan.perception.highlights import framed_on_white
 from demoplan.perception.masks import close, dilate, erode, fill_holes, labelled_parts
@@ -177,10 +178,14 @@ def achromatic_regions(
     difference = lightness - table
     neutral = np.hypot(blurred[..., 1], blurred[..., 2]) < MAX_CHROMA
     free = ~dilate(coloured, 2) & neutral
-    bright = (difference > _bright_contrast(difference)) & free
+    contrast = _bright_contrast(difference)
+    bright = (difference > contrast) & free
     dark = (lightness < DARK_RATIO * table) & free
     smallest_top = MIN_TOP_SHARE * side_px**2
     markers = _markers(bright, lightness, table, smallest_top, record)
+    if contrast <= MIN_BRIGHT_CONTRAST:  # a table as even as paper (faint_white)
+        faint = (difference, lightness, table, free)
+        bright |= faint_white_tops(*faint, bright, dark, dilate(markers, 2), side_px) & ~dark
     steps = max(1, round(side_px * OPENING_SIDES / 2))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * steps + 1, 2 * steps + 1))
     height, width = lightness.shape
