@@ -82,12 +82,16 @@ class FrameEncoder:
             stderr=subprocess.PIPE,
             start_new_session=not _leads_its_session(),
         )
-        self._errors: collections.deque[str] = collections.deque(maxlen=20)
-        stderr = self._process.stderr
-        assert stderr is not None
-        self._reader = threading.Thread(target=self._read_errors, args=(stderr,), daemon=True)
-        self._reader.start()
-        self._broken: str | None = None
+        try:  # a Ctrl-C from here on stops the ffmpeg just started (no one else could)
+            self._errors: collections.deque[str] = collections.deque(maxlen=20)
+            stderr = self._process.stderr
+            assert stderr is not None
+            self._reader = threading.Thread(target=self._read_errors, args=(stderr,), daemon=True)
+            self._reader.start()
+            self._broken: str | None = None
+        except BaseException:
+            self.kill()
+            raise
 
     def _read_errors(self, stream: IO[bytes]) -> None:
         """Keep ffmpeg's last error lines (drained as they come, so that a

@@ -140,7 +140,8 @@ def run_task(
     finished = False
     try:  # from here on the world is closed and the video finished or removed however it ends
         if video is not None:
-            recording = _start_video(world, video)
+            recording = VideoOutput(output_target(video, stream_ok=False)[0])
+            _start_video(world, recording)
         writer = None
         if frames is not None:
             from demoplan.execution.frames import FrameWriter
@@ -182,24 +183,19 @@ def _step_aside(simulator: Any) -> None:
         park()
 
 
-def _start_video(world: World, video: Path) -> VideoOutput:
-    """Start recording ``world`` into a private folder beside ``video``
-    (:class:`~demoplan.execution.video_output.VideoOutput`; the file is put at
-    ``video``, or at the file a link there names, once the run is finished:
-    :func:`_close_world`). A recording that cannot start leaves nothing and
-    is an input error (the caller closes the world)."""
-    output = VideoOutput(output_target(video, stream_ok=False)[0])
+def _start_video(world: World, output: VideoOutput) -> None:
+    """Start recording ``world`` into ``output``'s private folder beside the video
+    (:class:`~demoplan.execution.video_output.VideoOutput`; the file is put at its
+    target once the run is finished: :func:`_close_world`). A recording that
+    cannot start is an input error. However it ends — an error, or a Ctrl-C while
+    ffmpeg starts — the caller closes the world first (ffmpeg stopped) and then
+    removes the folder: removed while ffmpeg was still opening its file, the
+    folder could be left behind with that file in it."""
     simulator: Any = getattr(world, "world", world)  # a camera world films through its own
     try:
         simulator.record_video(output.recording)
     except (OSError, RuntimeError) as exc:  # ffmpeg could not start or open the file
-        error = output.error(_first_line(exc))
-        output.discard()
-        raise error from None
-    except BaseException:  # Ctrl-C while ffmpeg starts
-        output.discard()
-        raise
-    return output
+        raise output.error(_first_line(exc)) from None
 
 
 def _listener(

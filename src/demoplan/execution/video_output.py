@@ -67,6 +67,12 @@ class VideoOutput:
         except OSError as exc:
             remove_made_folders(self._made)
             raise self.error(os_reason(exc)) from None
+        except BaseException:  # a Ctrl-C held over the making comes as the hold ends
+            if hasattr(self, "_private"):
+                self.discard()
+            else:
+                remove_made_folders(self._made)
+            raise
         self.recording = self._private / _PARTIAL
 
     def error(self, reason: str) -> InputError:
