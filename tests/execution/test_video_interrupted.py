@@ -31,6 +31,11 @@ def test_a_ctrl_c_held_while_the_folder_is_made_leaves_nothing(
 
     monkeypatch.setattr(video_output, "make_folders", interrupted)
     target = tmp_path.joinpath(*made, "run.mp4")
-    with pytest.raises(KeyboardInterrupt):
-        VideoOutput(target)
+    # Python's own Ctrl-C (a test worker may ignore SIGINT)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            VideoOutput(target)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert list(tmp_path.iterdir()) == []
