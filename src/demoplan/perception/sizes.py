@@ -87,17 +87,16 @@ def held_to_sizes(
     standing: frozenset[int] = frozenset()
     if seen is not None and any(not low <= block.side <= high for block in blocks):
         standing = standing_blocks(seen[0], blocks, seen[1])
-    held = [
-        block
-        for index, block in enumerate(blocks)
-        if low <= block.side <= high or index in standing
-    ]
+    of_a_size = {
+        index for index, block in enumerate(blocks) if low <= block.side <= high
+    } | standing
+    held = [block for index, block in enumerate(blocks) if index in of_a_size]
     kept: list[DetectedBlock] = []
     rejected: list[Rejection] = []
     factor = 1000.0 if unit == "mm" else 1.0
     shown = " / ".join(f"{size[0] * factor:.0f}" for size in sizes)
     for index, block in enumerate(blocks):
-        if low <= block.side <= high or index in standing:
+        if index in of_a_size:
             kept.append(block)
             continue
         if seen is not None:
